@@ -1,0 +1,155 @@
+/*
+ * cablevib_ipc.h - C/C++ mirror of the cablevib-ipc message types (schema v1).
+ *
+ * The Rust crate cablevib-ipc (ipc-schema/) is the reference; its test tests/c_header.rs
+ * compiles this header and checks every size, alignment, offset, field type and constant
+ * against the Rust layout. Do not edit one without the other.
+ *
+ * Units: SI, in the field names: m (_m), N (_n), Hz (_hz), ns (_ns). Quaternions are
+ * [w, x, y, z], identity [1, 0, 0, 0]. Every *timestamp_ns is CLOCK_MONOTONIC in ns:
+ *     struct timespec ts; clock_gettime(CLOCK_MONOTONIC, &ts);
+ *     uint64_t now_ns = (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+ * reserved* fields are explicit padding: write 0.
+ *
+ * With iceoryx2-cxx, each struct carries IOX2_TYPE_NAME (the Rust #[type_name]); a peer built
+ * against another schema version is refused when it opens the service.
+ */
+#ifndef CABLEVIB_IPC_H
+#define CABLEVIB_IPC_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+/* ---- constants --------------------------------------------------------------------------- */
+
+#define CABLEVIB_SCHEMA_VERSION 1u
+#define CABLEVIB_MAX_CABLES 16
+#define CABLEVIB_MAX_STIFFNESS_DIM 6
+
+/* Service names (prefix them with "<instance>/" to run several instances). */
+#define CABLEVIB_SERVICE_POSE "cablevib/pose"         /* publish-subscribe, PoseSample     */
+#define CABLEVIB_SERVICE_T_MIN "cablevib/t_min"       /* publish-subscribe, TminSetpoint   */
+#define CABLEVIB_SERVICE_ESTIMATE "cablevib/estimate" /* publish-subscribe, EstimateSample */
+#define CABLEVIB_SERVICE_MARGIN "cablevib/margin"     /* request-response, MarginRequest -> MarginResponse */
+
+/* iceoryx2 type names; they end with "::v<CABLEVIB_SCHEMA_VERSION>". */
+#define CABLEVIB_TYPE_NAME_POSE_SAMPLE "cablevib::PoseSample::v1"
+#define CABLEVIB_TYPE_NAME_T_MIN_SETPOINT "cablevib::TminSetpoint::v1"
+#define CABLEVIB_TYPE_NAME_ESTIMATE_SAMPLE "cablevib::EstimateSample::v1"
+#define CABLEVIB_TYPE_NAME_MARGIN_REQUEST "cablevib::MarginRequest::v1"
+#define CABLEVIB_TYPE_NAME_MARGIN_RESPONSE "cablevib::MarginResponse::v1"
+
+/* Status codes (the uint32_t `status` fields). Values never change; treat unknown ones as
+ * "not valid". */
+typedef enum cablevib_status {
+    CABLEVIB_STATUS_OK = 0,
+    CABLEVIB_STATUS_TENSION_INFEASIBLE = 1,
+    CABLEVIB_STATUS_INVALID_INPUT = 2,
+    CABLEVIB_STATUS_NOT_CONVERGED = 3,
+    CABLEVIB_STATUS_RANK_DEFICIENT = 4,
+    CABLEVIB_STATUS_OUTSIDE_WORKSPACE = 5,
+    CABLEVIB_STATUS_NO_POSE_YET = 6,
+    CABLEVIB_STATUS_NON_UNIT_QUATERNION = 7,
+    CABLEVIB_STATUS_T_MIN_OUT_OF_RANGE = 8,
+    CABLEVIB_STATUS_INVALID_REQUEST = 9,
+    CABLEVIB_STATUS_INTERNAL_ERROR = 10
+} cablevib_status_t;
+
+#ifdef __cplusplus
+#define CABLEVIB_IOX2_TYPE_NAME(name) static constexpr const char* IOX2_TYPE_NAME = name;
+#define CABLEVIB_STATIC_ASSERT(cond, msg) static_assert(cond, msg)
+#else
+#define CABLEVIB_IOX2_TYPE_NAME(name)
+#define CABLEVIB_STATIC_ASSERT(cond, msg) _Static_assert(cond, msg)
+#endif
+
+/* ---- messages ---------------------------------------------------------------------------- */
+
+/* End-effector pose, controller -> cablevib on CABLEVIB_SERVICE_POSE. 80 bytes. */
+typedef struct cablevib_pose_sample {
+    CABLEVIB_IOX2_TYPE_NAME(CABLEVIB_TYPE_NAME_POSE_SAMPLE)
+    uint64_t sequence;           /* sender's sequence number, +1 per pose; echoed by the estimate */
+    uint64_t timestamp_ns;       /* sender's CLOCK_MONOTONIC, ns */
+    double position_m[3];        /* position in the base frame, m */
+    double orientation_wxyz[4];  /* unit quaternion [w, x, y, z] */
+    uint32_t flags;              /* reserved for flags: write 0 */
+    uint32_t reserved0;          /* padding: write 0 */
+} cablevib_pose_sample_t;
+
+/* Minimum-tension set-point, controller -> cablevib on CABLEVIB_SERVICE_T_MIN. 160 bytes.
+ * per_cable_count == 0: every cable uses t_min_n; otherwise cable i < per_cable_count uses
+ * per_cable_t_min_n[i] and the others t_min_n. Applies from the next cycle. */
+typedef struct cablevib_t_min_setpoint {
+    CABLEVIB_IOX2_TYPE_NAME(CABLEVIB_TYPE_NAME_T_MIN_SETPOINT)
+    uint64_t sequence;
+    uint64_t timestamp_ns;                          /* sender's CLOCK_MONOTONIC, ns */
+    double t_min_n;                                 /* N */
+    uint32_t per_cable_count;                       /* 0 = t_min_n for all */
+    uint32_t reserved0;                             /* padding: write 0 */
+    double per_cable_t_min_n[CABLEVIB_MAX_CABLES];  /* N */
+} cablevib_t_min_setpoint_t;
+
+/* Estimate, cablevib -> controller on CABLEVIB_SERVICE_ESTIMATE. 512 bytes.
+ * Echoes the answered pose's sequence and timestamp: compare pose_sequence with the last pose
+ * sent to tell fresh from stale. Values are meaningful only when status == CABLEVIB_STATUS_OK
+ * (frequencies are NaN otherwise). */
+typedef struct cablevib_estimate_sample {
+    CABLEVIB_IOX2_TYPE_NAME(CABLEVIB_TYPE_NAME_ESTIMATE_SAMPLE)
+    uint64_t pose_sequence;         /* sequence of the pose answered */
+    uint64_t pose_timestamp_ns;     /* timestamp_ns of that pose */
+    uint64_t receive_timestamp_ns;  /* cablevib's CLOCK_MONOTONIC when it took the pose */
+    uint64_t publish_timestamp_ns;  /* cablevib's CLOCK_MONOTONIC before publishing */
+    uint32_t status;                /* cablevib_status_t */
+    uint32_t cable_count;           /* valid entries of tensions_n */
+    double tensions_n[CABLEVIB_MAX_CABLES];  /* N */
+    double f1_hz;                   /* first natural frequency, Hz */
+    double ee_mode_hz;              /* frequency of the end-effector mode, Hz */
+    uint32_t stiffness_dim;         /* 3 (x, y, z) or 6 (x, y, z, rx, ry, rz) */
+    uint32_t reserved0;             /* padding: write 0 */
+    /* row-major, packed: entry (r, c) is stiffness[r * stiffness_dim + c];
+     * N/m, N*m/rad, N/rad */
+    double stiffness[CABLEVIB_MAX_STIFFNESS_DIM * CABLEVIB_MAX_STIFFNESS_DIM];
+    uint64_t compute_ns;            /* compute time of this estimate, ns */
+    uint32_t eigen_evaluations;
+    uint32_t tension_iterations;
+    double eigen_residual;          /* relative residual of the first eigenpair */
+    uint64_t skipped_poses;         /* poses skipped since start (a newer one was queued) */
+} cablevib_estimate_sample_t;
+
+/* Margin query, controller -> cablevib on CABLEVIB_SERVICE_MARGIN (request). 24 bytes. */
+typedef struct cablevib_margin_request {
+    CABLEVIB_IOX2_TYPE_NAME(CABLEVIB_TYPE_NAME_MARGIN_REQUEST)
+    uint64_t sequence;       /* echoed as request_sequence */
+    uint64_t timestamp_ns;   /* requester's CLOCK_MONOTONIC, ns */
+    double required_f1_hz;   /* required first natural frequency, Hz (> 0) */
+} cablevib_margin_request_t;
+
+/* Margin answer for the latest estimated pose (response). 64 bytes. NaN unless status OK. */
+typedef struct cablevib_margin_response {
+    CABLEVIB_IOX2_TYPE_NAME(CABLEVIB_TYPE_NAME_MARGIN_RESPONSE)
+    uint64_t request_sequence;  /* sequence of the request answered */
+    uint64_t pose_sequence;     /* pose the answer is based on (0 if none) */
+    uint32_t status;            /* cablevib_status_t */
+    uint32_t reserved0;         /* padding: write 0 */
+    double f1_hz;               /* Hz */
+    double margin_hz;           /* f1_hz - required_f1_hz, Hz */
+    double margin_ratio;        /* f1_hz / required_f1_hz */
+    double t_min_required_n;    /* T_min that would reach the requirement, N; NaN if unknown */
+    uint64_t timestamp_ns;      /* cablevib's CLOCK_MONOTONIC when answering, ns */
+} cablevib_margin_response_t;
+
+/* ---- layout checks (the Rust side asserts the same numbers) ------------------------------- */
+
+CABLEVIB_STATIC_ASSERT(sizeof(double) == 8, "cablevib_ipc.h needs 64-bit IEEE doubles");
+CABLEVIB_STATIC_ASSERT(sizeof(cablevib_pose_sample_t) == 80, "cablevib_pose_sample_t size");
+CABLEVIB_STATIC_ASSERT(offsetof(cablevib_pose_sample_t, flags) == 72, "cablevib_pose_sample_t layout");
+CABLEVIB_STATIC_ASSERT(sizeof(cablevib_t_min_setpoint_t) == 160, "cablevib_t_min_setpoint_t size");
+CABLEVIB_STATIC_ASSERT(offsetof(cablevib_t_min_setpoint_t, per_cable_t_min_n) == 32, "cablevib_t_min_setpoint_t layout");
+CABLEVIB_STATIC_ASSERT(sizeof(cablevib_estimate_sample_t) == 512, "cablevib_estimate_sample_t size");
+CABLEVIB_STATIC_ASSERT(offsetof(cablevib_estimate_sample_t, stiffness) == 192, "cablevib_estimate_sample_t layout");
+CABLEVIB_STATIC_ASSERT(offsetof(cablevib_estimate_sample_t, skipped_poses) == 504, "cablevib_estimate_sample_t layout");
+CABLEVIB_STATIC_ASSERT(sizeof(cablevib_margin_request_t) == 24, "cablevib_margin_request_t size");
+CABLEVIB_STATIC_ASSERT(sizeof(cablevib_margin_response_t) == 64, "cablevib_margin_response_t size");
+CABLEVIB_STATIC_ASSERT(offsetof(cablevib_margin_response_t, timestamp_ns) == 56, "cablevib_margin_response_t layout");
+
+#endif /* CABLEVIB_IPC_H */

@@ -1,0 +1,102 @@
+//! iceoryx2 service names.
+
+/// Publish-subscribe service of [`PoseSample`](crate::PoseSample)s (controller → cablevib).
+pub const SERVICE_POSE: &str = "cablevib/pose";
+/// Publish-subscribe service of [`TminSetpoint`](crate::TminSetpoint)s (controller → cablevib).
+pub const SERVICE_T_MIN: &str = "cablevib/t_min";
+/// Publish-subscribe service of [`EstimateSample`](crate::EstimateSample)s (cablevib → controller).
+pub const SERVICE_ESTIMATE: &str = "cablevib/estimate";
+/// Request-response service: [`MarginRequest`](crate::MarginRequest) →
+/// [`MarginResponse`](crate::MarginResponse).
+pub const SERVICE_MARGIN: &str = "cablevib/margin";
+
+/// Every base service name, in the order pose, T_min, estimate, margin.
+pub const ALL_SERVICES: [&str; 4] = [
+    SERVICE_POSE,
+    SERVICE_T_MIN,
+    SERVICE_ESTIMATE,
+    SERVICE_MARGIN,
+];
+
+/// `base` prefixed with an instance name: `"{instance}/{base}"`, or `base` itself when
+/// `instance` is empty. Several robots (or tests) then run side by side on one machine,
+/// e.g. `prefixed("left_arm", SERVICE_POSE) == "left_arm/cablevib/pose"`. Leading and
+/// trailing `/` of `instance` are ignored.
+pub fn prefixed(instance: &str, base: &str) -> String {
+    let instance = instance.trim_matches('/');
+    if instance.is_empty() {
+        base.to_owned()
+    } else {
+        format!("{instance}/{base}")
+    }
+}
+
+/// The four service names of one cablevib instance.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ServiceNames {
+    /// [`SERVICE_POSE`], prefixed.
+    pub pose: String,
+    /// [`SERVICE_T_MIN`], prefixed.
+    pub t_min: String,
+    /// [`SERVICE_ESTIMATE`], prefixed.
+    pub estimate: String,
+    /// [`SERVICE_MARGIN`], prefixed.
+    pub margin: String,
+}
+
+impl ServiceNames {
+    /// The names of instance `instance` (see [`prefixed`]; `""` gives the bare names).
+    pub fn new(instance: &str) -> ServiceNames {
+        ServiceNames {
+            pose: prefixed(instance, SERVICE_POSE),
+            t_min: prefixed(instance, SERVICE_T_MIN),
+            estimate: prefixed(instance, SERVICE_ESTIMATE),
+            margin: prefixed(instance, SERVICE_MARGIN),
+        }
+    }
+
+    /// The names in the order pose, T_min, estimate, margin.
+    pub fn all(&self) -> [&str; 4] {
+        [&self.pose, &self.t_min, &self.estimate, &self.margin]
+    }
+}
+
+impl Default for ServiceNames {
+    /// The bare names (no instance prefix).
+    fn default() -> ServiceNames {
+        ServiceNames::new("")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prefixing() {
+        assert_eq!(prefixed("", SERVICE_POSE), "cablevib/pose");
+        assert_eq!(prefixed("robot1", SERVICE_POSE), "robot1/cablevib/pose");
+        assert_eq!(
+            prefixed("/robot1/", SERVICE_MARGIN),
+            "robot1/cablevib/margin"
+        );
+        let names = ServiceNames::new("r");
+        assert_eq!(
+            names.all(),
+            [
+                "r/cablevib/pose",
+                "r/cablevib/t_min",
+                "r/cablevib/estimate",
+                "r/cablevib/margin"
+            ]
+        );
+        assert_eq!(ServiceNames::default().all(), ALL_SERVICES);
+    }
+
+    #[test]
+    fn names_are_valid_iceoryx2_service_names() {
+        for name in ServiceNames::new("some_instance").all() {
+            iceoryx2::prelude::ServiceName::new(name).expect("valid service name");
+        }
+    }
+}

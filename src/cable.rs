@@ -1,0 +1,514 @@
+//! Cable element models and their decomposition into scalar chains.
+//!
+//! Each cable is split into N equal elements from its anchor (node I of the first
+//! element) to the end-effector (node J of the last one), 3 translational DOF per node.
+//! Every element of a cable has the same chord, tension T (N) and length l = L/N (m), so
+//! every element has the same 3 × 3 stiffness block K_c (N/m) and the element matrices
+//!
+//! ```text
+//!     K_e = [ K_c  −K_c ; −K_c  K_c ],      M_e = (μ l / 6) [ 2I  I ; I  2I ]   (Eq. 16)
+//! ```
+//!
+//! - FEM element (Eqs. 16-18): K_c = EA/l · e eᵀ + T/l · (I − e eᵀ) (the sum of K_L and K_G).
+//! - Catenary element (Eqs. 19-32) in the cancellation-free form of reference/notes.md:
+//!   the flexibility F (m/N) in a local frame whose z axis points up (against gravity),
+//!   K_c = −F⁻¹ (F is negative definite in the paper's sign convention), rotated to the
+//!   global frame. Uses the chord as unstressed length L0 and the QP tension T0 (Step 3).
+//!
+//! With K_c = Σ_r k_r v_r v_rᵀ (eigen-decomposition), the cable's interior nodes decouple
+//! into scalar *chains*: uniform spring-mass chains with spring k_r (N/m) and consistent
+//! element mass m_e = μ l (kg), fixed at the anchor and attached to the end-effector along
+//! v_r. The FEM element has one axial chain (k = EA/l, direction e) and a transverse chain
+//! of multiplicity 2 (k = T/l, projector I − e eᵀ). See [`Chain`].
+
+use crate::scene::ElementKind;
+use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+
+/// Errors of the element models.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum CableError {
+    /// Tension not positive and finite.
+    #[error("cable tension {0} N must be finite and > 0")]
+    BadTension(f64),
+    /// The element cannot hang: a vertical element whose tension is below its own weight
+    /// (the catenary's low point would need a slack segment).
+    #[error("catenary element cannot carry its own weight (tension {tension_n} N, element weight {weight_n} N)")]
+    TooSlack {
+        /// Tension, N.
+        tension_n: f64,
+        /// Element weight γ L0, N.
+        weight_n: f64,
+    },
+    /// The flexibility matrix is singular or not definite (numerically broken input).
+    #[error("catenary flexibility matrix is not definite")]
+    NotDefinite,
+}
+
+/// FEM element stiffness block K_c = EA/l e eᵀ + T/l (I − e eᵀ), N/m.
+/// `geometric` = false drops the T/l term (axial springs only, the paper's ref. [7]).
+pub fn fem_block(
+    e: &Vector3<f64>,
+    length_m: f64,
+    ea_n: f64,
+    tension_n: f64,
+    geometric: bool,
+) -> Matrix3<f64> {
+    let eet = e * e.transpose();
+    let kt = if geometric { tension_n / length_m } else { 0.0 };
+    eet * (ea_n / length_m) + (Matrix3::identity() - eet) * kt
+}
+
+/// Flexibility matrix F (m/N) of the catenary element in its local frame (z up), in the
+/// cancellation-free form of reference/notes.md. `f` = (F1, F2, F3) is the force on the
+/// element at node I, `l0_m` the unstressed length, `ea_n` = EA, `gamma_n_m` the weight per
+/// length γ ≥ 0. Exact for γ = 0 and for vertical elements.
+pub fn catenary_flexibility(
+    f: &Vector3<f64>,
+    l0_m: f64,
+    ea_n: f64,
+    gamma_n_m: f64,
+) -> Result<Matrix3<f64>, CableError> {
+    let (f1, f2, f3) = (f.x, f.y, f.z);
+    let a = f3;
+    let b = f3 - gamma_n_m * l0_m;
+    let h2 = f1 * f1 + f2 * f2;
+    let ti = (h2 + a * a).sqrt();
+    let tj = (h2 + b * b).sqrt();
+    let s = ti + tj;
+    let q = if a * b >= 0.0 {
+        1.0 + (h2 + a * a + b * b) / (ti * tj + a * b)
+    } else {
+        if h2 <= 0.0 || !(h2 > 1e-24 * (a * a + b * b)) {
+            return Err(CableError::TooSlack {
+                tension_n: ti,
+                weight_n: gamma_n_m * l0_m,
+            });
+        }
+        (h2 + ti * tj - a * b) / h2
+    };
+    let den = s * ti * tj;
+    let b1 = l0_m * q / den;
+    let b2 = l0_m * (a + b) / den;
+    let x = l0_m * q / s;
+    let y = gamma_n_m * x;
+    let lam = if y.abs() < 1e-4 {
+        let y2 = y * y;
+        x * (1.0 - y2 / 6.0 + 3.0 * y2 * y2 / 40.0)
+    } else {
+        x * (y.asinh() / y)
+    };
+    let c = l0_m / ea_n;
+    let f11 = -c - lam + f1 * f1 * b1;
+    let f22 = -c - lam + f2 * f2 * b1;
+    let f12 = f1 * f2 * b1;
+    let f13 = f1 * b2;
+    let f23 = f2 * b2;
+    let f33 = -c - h2 * b1;
+    let m = Matrix3::new(f11, f12, f13, f12, f22, f23, f13, f23, f33);
+    if !m.iter().all(|v| v.is_finite()) {
+        return Err(CableError::NotDefinite);
+    }
+    Ok(m)
+}
+
+/// An orthonormal frame whose third column points up (against `gravity`); any frame when
+/// gravity is zero (the catenary element is then the rotation-invariant straight limit).
+pub fn up_frame(gravity_m_s2: &Vector3<f64>) -> Matrix3<f64> {
+    let g = gravity_m_s2.norm();
+    let up = if g > 0.0 {
+        -gravity_m_s2 / g
+    } else {
+        Vector3::z()
+    };
+    // Pick the coordinate axis least aligned with `up` to build x.
+    let seed = if up.x.abs() <= up.y.abs() && up.x.abs() <= up.z.abs() {
+        Vector3::x()
+    } else if up.y.abs() <= up.z.abs() {
+        Vector3::y()
+    } else {
+        Vector3::z()
+    };
+    let x = (seed - up * up.dot(&seed)).normalize();
+    let y = up.cross(&x);
+    Matrix3::from_columns(&[x, y, up])
+}
+
+/// Catenary element stiffness block (N/m, global frame, positive definite) for an element
+/// with chord `chord_m` from node I to node J, tension `t0_n`, EA and weight per length γ,
+/// in the frame `frame` from [`up_frame`].
+pub fn catenary_block(
+    chord_m: &Vector3<f64>,
+    t0_n: f64,
+    ea_n: f64,
+    gamma_n_m: f64,
+    frame: &Matrix3<f64>,
+) -> Result<Matrix3<f64>, CableError> {
+    if !(t0_n.is_finite() && t0_n > 0.0) {
+        return Err(CableError::BadTension(t0_n));
+    }
+    let l0 = chord_m.norm();
+    let local = frame.transpose() * chord_m;
+    let f = -local * (t0_n / l0);
+    let flex = catenary_flexibility(&f, l0, ea_n, gamma_n_m)?;
+    let neg = -flex;
+    let k_local = neg.cholesky().ok_or(CableError::NotDefinite)?.inverse();
+    let k = frame * k_local * frame.transpose();
+    Ok((k + k.transpose()) * 0.5)
+}
+
+/// How a chain is modelled.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ChainKind {
+    /// `n_el` equal elements, each with spring `k` (N/m) and consistent mass `m` (kg).
+    /// `m = 0`, `n_el = 1` is a massless spring.
+    Discrete {
+        /// Element spring, N/m.
+        k: f64,
+        /// Element mass, kg.
+        m: f64,
+        /// Number of elements.
+        n_el: usize,
+    },
+    /// Continuous string or bar: end stiffness S/L = `k_total` (N/m), mass μL = `m_total` (kg).
+    Continuous {
+        /// S/L, N/m.
+        k_total: f64,
+        /// μ L, kg.
+        m_total: f64,
+    },
+}
+
+/// One scalar chain of a cable: its model, its multiplicity (how many identical chains) and
+/// the projector onto its end-effector directions (rank = multiplicity).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Chain {
+    /// The chain's model.
+    pub kind: ChainKind,
+    /// Number of identical chains (1 or 2).
+    pub mult: u32,
+    /// Projector P (3 × 3) through which the chain loads the end-effector.
+    pub proj: Matrix3<f64>,
+}
+
+/// Dynamic stiffness of one scalar chain at λ = ω² (rad²/s²).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChainEval {
+    /// End dynamic stiffness s(λ), N/m.
+    pub s: f64,
+    /// ds/dλ, N/m per rad²/s² (= −kinetic-energy norm of the chain's forced shape, kg).
+    pub ds: f64,
+    /// Number of the chain's blocked (end held) eigenvalues below λ.
+    pub below: u32,
+}
+
+impl Chain {
+    /// Evaluate s(λ), s'(λ) and the blocked count: O(N) recurrence for discrete chains,
+    /// closed form for continuous ones. No allocation, bounded loop.
+    #[inline]
+    pub fn eval(&self, lambda: f64) -> ChainEval {
+        match self.kind {
+            ChainKind::Discrete { k, m, n_el } => eval_discrete(k, m, n_el, lambda),
+            ChainKind::Continuous { k_total, m_total } => eval_continuous(k_total, m_total, lambda),
+        }
+    }
+
+    /// The lowest blocked eigenvalue λ (rad²/s²) of the chain; ∞ when it has none.
+    pub fn first_pole(&self) -> f64 {
+        self.pole(1)
+    }
+
+    /// The j-th (1-based) blocked eigenvalue λ_j, rad²/s²; ∞ when it does not exist.
+    /// Discrete: λ_j = 6k(1 − cos θ_j) / (m (2 + cos θ_j)), θ_j = jπ/N. Continuous: (jπ)² k/m.
+    pub fn pole(&self, j: usize) -> f64 {
+        match self.kind {
+            ChainKind::Discrete { k, m, n_el } => {
+                if n_el < 2 || m <= 0.0 || j == 0 || j >= n_el {
+                    return f64::INFINITY;
+                }
+                let th = j as f64 * std::f64::consts::PI / n_el as f64;
+                let one_minus_c = 2.0 * (0.5 * th).sin().powi(2);
+                6.0 * k * one_minus_c / (m * (2.0 + th.cos()))
+            }
+            ChainKind::Continuous { k_total, m_total } => {
+                if m_total <= 0.0 || j == 0 {
+                    return f64::INFINITY;
+                }
+                let pj = j as f64 * std::f64::consts::PI;
+                pj * pj * k_total / m_total
+            }
+        }
+    }
+}
+
+/// Pivot recurrence of the uniform chain (interior diagonal 2α, off-diagonal β):
+/// p₁ = 2α, p_j = 2α − β²/p_{j−1}; s = α − β²/p_{N−1}; negative pivots = blocked count.
+#[inline]
+fn eval_discrete(k: f64, m: f64, n_el: usize, lambda: f64) -> ChainEval {
+    let alpha = k - lambda * m / 3.0;
+    let dalpha = -m / 3.0;
+    if n_el <= 1 {
+        return ChainEval {
+            s: alpha,
+            ds: dalpha,
+            below: 0,
+        };
+    }
+    let beta = -k - lambda * m / 6.0;
+    let dbeta = -m / 6.0;
+    let b2 = beta * beta;
+    let db2 = 2.0 * beta * dbeta;
+    let tiny = f64::EPSILON * k.abs().max(1e-300);
+    let mut p = 2.0 * alpha;
+    let mut dp = 2.0 * dalpha;
+    let mut below = 0u32;
+    for _ in 1..n_el - 1 {
+        if p == 0.0 {
+            p = tiny;
+        }
+        below += (p < 0.0) as u32;
+        let inv = 1.0 / p;
+        let t = b2 * inv;
+        let dt = (db2 - t * dp) * inv;
+        p = 2.0 * alpha - t;
+        dp = 2.0 * dalpha - dt;
+    }
+    if p == 0.0 {
+        p = tiny;
+    }
+    below += (p < 0.0) as u32;
+    let inv = 1.0 / p;
+    let t = b2 * inv;
+    let dt = (db2 - t * dp) * inv;
+    ChainEval {
+        s: alpha - t,
+        ds: dalpha - dt,
+        below,
+    }
+}
+
+/// Fixed-free string/bar: s = K φ cot φ with φ = √(λ m / K) (K = S/L, m = μL).
+#[inline]
+fn eval_continuous(k: f64, m: f64, lambda: f64) -> ChainEval {
+    if m <= 0.0 || lambda <= 0.0 {
+        return ChainEval {
+            s: k - lambda * m / 3.0,
+            ds: -m / 3.0,
+            below: 0,
+        };
+    }
+    let phi2 = lambda * m / k;
+    let phi = phi2.sqrt();
+    let below = (phi / std::f64::consts::PI).ceil() as u32 - 1;
+    if phi < 1e-3 {
+        // φ cot φ = 1 − φ²/3 − φ⁴/45 − 2φ⁶/945
+        let s = k * (1.0 - phi2 / 3.0 - phi2 * phi2 / 45.0 - 2.0 * phi2 * phi2 * phi2 / 945.0);
+        let ds = m * (-1.0 / 3.0 - 2.0 * phi2 / 45.0 - 6.0 * phi2 * phi2 / 945.0);
+        return ChainEval { s, ds, below };
+    }
+    let (sn, cs) = phi.sin_cos();
+    let cot = cs / sn;
+    let s = k * phi * cot;
+    // d(φ cot φ)/dφ = cot φ − φ / sin² φ ; dφ/dλ = φ / (2λ) = m / (2 k φ)
+    let dfdphi = cot - phi / (sn * sn);
+    let ds = k * dfdphi * m / (2.0 * k * phi);
+    ChainEval { s, ds, below }
+}
+
+/// The model of one cable at one pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CableModel {
+    /// Element stiffness block K_c, N/m (global frame). For continuous and massless models,
+    /// the block of the whole cable (N = 1).
+    pub kc: Matrix3<f64>,
+    /// Element mass μ l, kg (0 for massless cables).
+    pub element_mass_kg: f64,
+    /// Number of elements (1 for continuous and massless models).
+    pub n_el: usize,
+    /// Up to 3 chains.
+    pub chains: [Chain; 3],
+    /// Number of valid chains.
+    pub n_chains: usize,
+    /// Static end stiffness of this cable on the end-effector, N/m.
+    pub static_stiffness: Matrix3<f64>,
+}
+
+impl CableModel {
+    /// Build the model of a cable with unit vector `e` (anchor → end-effector), length
+    /// `length_m`, tension `tension_n`, axial rigidity `ea_n`, mass per length `mu_kg_m`,
+    /// weight per length `gamma_n_m` (sag), model `kind` with `n` elements. `frame` is
+    /// [`up_frame`] of the scene's gravity. `geometric` = false drops T/l (FEM, massless).
+    #[allow(clippy::too_many_arguments)]
+    pub fn build(
+        kind: ElementKind,
+        n: usize,
+        e: &Vector3<f64>,
+        length_m: f64,
+        tension_n: f64,
+        ea_n: f64,
+        mu_kg_m: f64,
+        gamma_n_m: f64,
+        frame: &Matrix3<f64>,
+        geometric: bool,
+    ) -> Result<CableModel, CableError> {
+        if !(tension_n.is_finite() && tension_n > 0.0) {
+            return Err(CableError::BadTension(tension_n));
+        }
+        let eet = e * e.transpose();
+        let perp = Matrix3::identity() - eet;
+        let t_geo = if geometric { tension_n } else { 0.0 };
+        let zero_chain = Chain {
+            kind: ChainKind::Discrete {
+                k: 0.0,
+                m: 0.0,
+                n_el: 1,
+            },
+            mult: 0,
+            proj: Matrix3::zeros(),
+        };
+        let mut chains = [zero_chain; 3];
+        let (kc, me, nel, nch) = match kind {
+            ElementKind::Fem | ElementKind::Massless => {
+                let (nel, me) = if kind == ElementKind::Fem {
+                    (n.max(1), mu_kg_m * length_m / n.max(1) as f64)
+                } else {
+                    (1, 0.0)
+                };
+                let l = length_m / nel as f64;
+                chains[0] = Chain {
+                    kind: ChainKind::Discrete {
+                        k: ea_n / l,
+                        m: me,
+                        n_el: nel,
+                    },
+                    mult: 1,
+                    proj: eet,
+                };
+                chains[1] = Chain {
+                    kind: ChainKind::Discrete {
+                        k: t_geo / l,
+                        m: me,
+                        n_el: nel,
+                    },
+                    mult: 2,
+                    proj: perp,
+                };
+                (fem_block(e, l, ea_n, tension_n, geometric), me, nel, 2)
+            }
+            ElementKind::Continuous => {
+                let mt = mu_kg_m * length_m;
+                chains[0] = Chain {
+                    kind: ChainKind::Continuous {
+                        k_total: ea_n / length_m,
+                        m_total: mt,
+                    },
+                    mult: 1,
+                    proj: eet,
+                };
+                chains[1] = Chain {
+                    kind: ChainKind::Continuous {
+                        k_total: t_geo / length_m,
+                        m_total: mt,
+                    },
+                    mult: 2,
+                    proj: perp,
+                };
+                (fem_block(e, length_m, ea_n, tension_n, geometric), mt, 1, 2)
+            }
+            ElementKind::Catenary => {
+                let nel = n.max(1);
+                let l = length_m / nel as f64;
+                // Chord from node I (anchor side) to node J: along e.
+                let kc = catenary_block(&(e * l), tension_n, ea_n, gamma_n_m, frame)?;
+                let me = mu_kg_m * l;
+                let eig = SymmetricEigen::new(kc);
+                for r in 0..3 {
+                    let v = eig.eigenvectors.column(r).into_owned();
+                    chains[r] = Chain {
+                        kind: ChainKind::Discrete {
+                            k: eig.eigenvalues[r],
+                            m: me,
+                            n_el: nel,
+                        },
+                        mult: 1,
+                        proj: v * v.transpose(),
+                    };
+                }
+                (kc, me, nel, 3)
+            }
+        };
+        let mut model = CableModel {
+            kc,
+            element_mass_kg: me,
+            n_el: nel,
+            chains,
+            n_chains: nch,
+            static_stiffness: Matrix3::zeros(),
+        };
+        let mut ks = Matrix3::zeros();
+        for c in &model.chains[..nch] {
+            ks += c.proj * c.eval(0.0).s;
+        }
+        model.static_stiffness = ks;
+        Ok(model)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn catenary_tends_to_straight_cable() {
+        // γ → 0: K = EA/L0 e eᵀ + T/(L0 (1 + T/EA)) (I − e eᵀ) (notes.md).
+        let frame = up_frame(&Vector3::new(0.0, 0.0, -9.81));
+        let e = Vector3::new(0.3, -0.5, 0.8).normalize();
+        let (l0, t, ea) = (0.25, 120.0, 1.0e6);
+        let exact = {
+            let eet = e * e.transpose();
+            eet * (ea / l0) + (Matrix3::identity() - eet) * (t / (l0 * (1.0 + t / ea)))
+        };
+        for gamma in [0.0, 1e-15, 1e-12, 1e-9] {
+            let k = catenary_block(&(e * l0), t, ea, gamma, &frame).unwrap();
+            let err = (k - exact).norm() / exact.norm();
+            assert!(err < 1e-12 + gamma * 1e2, "gamma {gamma}: {err}");
+        }
+    }
+
+    #[test]
+    fn vertical_catenary_is_finite_both_ways() {
+        let frame = up_frame(&Vector3::new(0.0, 0.0, -9.81));
+        for dir in [1.0, -1.0] {
+            let e = Vector3::new(0.0, 0.0, dir);
+            let k = catenary_block(&(e * 0.5), 100.0, 1e6, 0.25, &frame).unwrap();
+            assert!(k.iter().all(|v| v.is_finite()));
+            assert!(k.cholesky().is_some());
+            // No coupling between horizontal and vertical directions.
+            assert!(k[(0, 2)].abs() < 1e-9 * k.norm() && k[(1, 2)].abs() < 1e-9 * k.norm());
+        }
+    }
+
+    #[test]
+    fn discrete_chain_static_and_poles() {
+        let c = Chain {
+            kind: ChainKind::Discrete {
+                k: 400.0,
+                m: 0.01,
+                n_el: 8,
+            },
+            mult: 1,
+            proj: Matrix3::identity(),
+        };
+        let e0 = c.eval(0.0);
+        assert!((e0.s - 50.0).abs() < 1e-12);
+        for j in 1..8 {
+            let p = c.pole(j);
+            assert_eq!(c.eval(p * (1.0 - 1e-9)).below, j as u32 - 1);
+            assert_eq!(c.eval(p * (1.0 + 1e-9)).below, j as u32);
+        }
+        // Derivative against a central difference.
+        let l = 0.37 * c.pole(1);
+        let h = 1e-6 * l;
+        let fd = (c.eval(l + h).s - c.eval(l - h).s) / (2.0 * h);
+        assert!((fd - c.eval(l).ds).abs() < 1e-6 * fd.abs());
+    }
+}

@@ -1,0 +1,532 @@
+//! The per-cycle pipeline and the offline reference pipeline.
+//!
+//! [`Estimator`] owns every buffer of one cycle — geometry, the active-set tension solver,
+//! the cable models and the structured modal solver — sized in [`Estimator::new`].
+//! [`Estimator::update`] runs pose → kinematics → tension distribution → cable models →
+//! first mode and end-effector mode, and returns an [`Estimate`] whose
+//! [`Estimate::status`] says whether its numbers are valid. It never allocates, never
+//! blocks, and every loop in it is bounded; bad input and non-convergence come out as
+//! status codes, never as a panic, and a non-ok estimate carries NaN frequencies rather
+//! than stale ones.
+//!
+//! [`reference_analysis`] is the offline reference of the same model: Clarabel for the
+//! tensions, dense assembly and a dense generalized eigensolver for every frequency.
+
+use crate::cable::{up_frame, CableError, CableModel};
+use crate::kinematics::{Geometry, KinematicsError, Pose};
+use crate::modal::{self, lambda_to_hz, ModalError, ModalParams, ModalSolver, Root};
+use crate::scene::{ElementKind, Scene, MAX_CABLES};
+use crate::tension::{clarabel_reference, TensionError, TensionInfo, TensionParams, TensionSolver};
+use nalgebra::{Matrix3, Vector3};
+
+pub use cablevib_ipc::StatusCode as Status;
+
+/// Why a cycle's estimate is not ok (the detail behind [`Status`]). Copy, no allocation.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum EstimatorError {
+    /// Input rejected before any computation.
+    #[error("invalid input: {0}")]
+    Input(&'static str),
+    /// Kinematics failed.
+    #[error(transparent)]
+    Kinematics(#[from] KinematicsError),
+    /// Tension distribution failed.
+    #[error(transparent)]
+    Tension(#[from] TensionError),
+    /// Element model failed.
+    #[error(transparent)]
+    Cable(#[from] CableError),
+    /// Eigen solver failed.
+    #[error(transparent)]
+    Modal(#[from] ModalError),
+    /// The structure matrix has lower rank than the scene's design pose.
+    #[error("structure matrix rank {rank} < {expected}: the pose is singular")]
+    RankDeficient {
+        /// Rank at this pose.
+        rank: u32,
+        /// Rank at the scene's default pose.
+        expected: u32,
+    },
+}
+
+impl EstimatorError {
+    /// The status code this error is reported with.
+    pub fn status(&self) -> Status {
+        match self {
+            EstimatorError::Input(msg) => {
+                if msg.contains("quaternion") {
+                    Status::NonUnitQuaternion
+                } else if msg.contains("t_min") {
+                    Status::TminOutOfRange
+                } else if msg.contains("outside") {
+                    Status::OutsideWorkspace
+                } else {
+                    Status::InvalidInput
+                }
+            }
+            EstimatorError::Kinematics(KinematicsError::NonFinite) => Status::InvalidInput,
+            EstimatorError::Kinematics(KinematicsError::CableTooShort { .. }) => {
+                Status::OutsideWorkspace
+            }
+            EstimatorError::Tension(TensionError::Infeasible { .. }) => Status::TensionInfeasible,
+            EstimatorError::Tension(TensionError::InvalidBounds { .. }) => Status::TminOutOfRange,
+            EstimatorError::Tension(TensionError::NonFinite) => Status::InvalidInput,
+            EstimatorError::Tension(TensionError::NotConverged { .. }) => Status::NotConverged,
+            EstimatorError::Cable(_) => Status::RankDeficient,
+            EstimatorError::Modal(ModalError::NotPositiveDefinite(_)) => Status::RankDeficient,
+            EstimatorError::Modal(_) => Status::NotConverged,
+            EstimatorError::RankDeficient { .. } => Status::RankDeficient,
+        }
+    }
+}
+
+/// Parameters of the estimator.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EstimatorParams {
+    /// Tension solver parameters.
+    pub tension: TensionParams,
+    /// Eigen solver parameters.
+    pub modal: ModalParams,
+    /// A pose step larger than this (m) forces a cold start.
+    pub warm_jump_m: f64,
+    /// Tolerance on the quaternion norm.
+    pub quaternion_tol: f64,
+    /// How far outside the anchors' bounding box (m) a position may be before it is rejected.
+    pub workspace_margin_m: f64,
+    /// Compute the end-effector mode (costs a scan over the string modes below it).
+    pub ee_mode: bool,
+}
+
+impl Default for EstimatorParams {
+    fn default() -> Self {
+        EstimatorParams {
+            tension: TensionParams::default(),
+            modal: ModalParams::default(),
+            warm_jump_m: 0.02,
+            quaternion_tol: 1e-6,
+            workspace_margin_m: 0.0,
+            ee_mode: true,
+        }
+    }
+}
+
+/// The result of one cycle. Fixed size, Copy.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    /// Whether the numbers below are valid for this pose.
+    pub status: Status,
+    /// The detail when `status` is not ok.
+    pub error: Option<EstimatorError>,
+    /// Number of cables (valid entries of `tensions_n`).
+    pub n_cables: usize,
+    /// Cable tensions, N (for `TensionInfeasible`: the closest achievable, flagged).
+    pub tensions_n: [f64; MAX_CABLES],
+    /// First natural frequency of the whole model, Hz (NaN unless ok).
+    pub f1_hz: f64,
+    /// End-effector participation of the first mode (0 ..= 1).
+    pub f1_ee_participation: f64,
+    /// Frequency of the lowest mode with end-effector participation ≥ the scene's
+    /// threshold, Hz (NaN unless ok or when not computed).
+    pub ee_mode_hz: f64,
+    /// Its participation.
+    pub ee_mode_participation: f64,
+    /// Static end-effector stiffness, N/m (NaN unless ok).
+    pub stiffness_n_m: Matrix3<f64>,
+    /// Tension solver: active-set changes in this cycle.
+    pub tension_iterations: u32,
+    /// Tension solver: the previous active set was optimal again.
+    pub tension_warm: bool,
+    /// Evaluations of the dynamic stiffness D(λ) in this cycle.
+    pub eigen_evaluations: u32,
+    /// Relative residual |μ₁(D(λ₁))| / ‖D‖ of the first root.
+    pub eigen_residual: f64,
+    /// The first-mode iteration started cold.
+    pub cold_start: bool,
+}
+
+impl Estimate {
+    fn empty(n: usize) -> Estimate {
+        Estimate {
+            status: Status::NoPoseYet,
+            error: None,
+            n_cables: n,
+            tensions_n: [f64::NAN; MAX_CABLES],
+            f1_hz: f64::NAN,
+            f1_ee_participation: f64::NAN,
+            ee_mode_hz: f64::NAN,
+            ee_mode_participation: f64::NAN,
+            stiffness_n_m: Matrix3::repeat(f64::NAN),
+            tension_iterations: 0,
+            tension_warm: false,
+            eigen_evaluations: 0,
+            eigen_residual: f64::NAN,
+            cold_start: true,
+        }
+    }
+    /// Tensions of the cables, N.
+    pub fn tensions(&self) -> &[f64] {
+        &self.tensions_n[..self.n_cables]
+    }
+    /// True when the status is ok.
+    pub fn is_ok(&self) -> bool {
+        self.status == Status::Ok
+    }
+}
+
+/// The real-time estimator of one scene.
+#[derive(Debug, Clone)]
+pub struct Estimator {
+    scene: Scene,
+    params: EstimatorParams,
+    frame: Matrix3<f64>,
+    geometry: Geometry,
+    tension: TensionSolver,
+    models: Vec<CableModel>,
+    modal: ModalSolver,
+    expected_rank: u32,
+    bounds: (Vector3<f64>, Vector3<f64>),
+    last_ok_position: Option<Vector3<f64>>,
+    last_lambda1: f64,
+    estimate: Estimate,
+}
+
+/// Errors building an estimator.
+#[derive(Debug, thiserror::Error)]
+pub enum BuildError {
+    /// The scene's default pose is not solvable: the robot is unusable as described.
+    #[error("scene `{scene}` at its default pose: {source}")]
+    DefaultPose {
+        /// Scene name.
+        scene: String,
+        /// Why.
+        source: EstimatorError,
+    },
+}
+
+impl Estimator {
+    /// Build for a scene with default parameters (the scene's participation threshold).
+    pub fn new(scene: &Scene) -> Result<Estimator, BuildError> {
+        let mut p = EstimatorParams::default();
+        p.modal.ee_participation_min = scene.model.ee_participation_min;
+        Self::with_params(scene, p)
+    }
+
+    /// Build with explicit parameters. Allocates everything the cycle needs and checks
+    /// the scene's default pose.
+    pub fn with_params(scene: &Scene, params: EstimatorParams) -> Result<Estimator, BuildError> {
+        let n = scene.n_cables();
+        let zero = CableModel::build(
+            ElementKind::Massless,
+            1,
+            &Vector3::x(),
+            1.0,
+            1.0,
+            1.0,
+            0.0,
+            0.0,
+            &Matrix3::identity(),
+            true,
+        )
+        .expect("trivial model");
+        let mut est = Estimator {
+            scene: scene.clone(),
+            params,
+            frame: up_frame(&scene.gravity_m_s2),
+            geometry: Geometry::new(n),
+            tension: TensionSolver::new(n, params.tension),
+            models: vec![zero; n],
+            modal: ModalSolver::new(params.modal),
+            expected_rank: 0,
+            bounds: scene.frame_bounds_m(),
+            last_ok_position: None,
+            last_lambda1: f64::NAN,
+            estimate: Estimate::empty(n),
+        };
+        // Expected rank: the rank at the default pose.
+        est.geometry
+            .update(
+                scene.cables.iter().map(|c| &c.anchor_m),
+                &scene.ee_position_m,
+            )
+            .map_err(|e| BuildError::DefaultPose {
+                scene: scene.name.clone(),
+                source: e.into(),
+            })?;
+        est.tension
+            .solve(
+                &est.geometry,
+                &scene.wrench_n(),
+                scene.t_min_n,
+                scene.t_max_n,
+            )
+            .map_err(|e| BuildError::DefaultPose {
+                scene: scene.name.clone(),
+                source: e.into(),
+            })?;
+        est.expected_rank = est.tension.info().rank;
+        est.tension.reset_warm_start();
+        Ok(est)
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &EstimatorParams {
+        &self.params
+    }
+
+    /// The last estimate.
+    pub fn estimate(&self) -> &Estimate {
+        &self.estimate
+    }
+
+    /// The cable models of the last successful cycle.
+    pub fn cable_models(&self) -> &[CableModel] {
+        &self.models
+    }
+
+    /// Info of the last tension solve.
+    pub fn tension_info(&self) -> TensionInfo {
+        self.tension.info()
+    }
+
+    /// Forget every warm start: the next cycle starts cold.
+    pub fn reset(&mut self) {
+        self.last_ok_position = None;
+        self.last_lambda1 = f64::NAN;
+        self.tension.reset_warm_start();
+    }
+
+    /// One cycle: pose and T_min (N, the same for every cable) → estimate.
+    pub fn update(&mut self, pose: &Pose, t_min_n: f64) -> &Estimate {
+        let n = self.scene.n_cables();
+        let mut e = Estimate::empty(n);
+        match self.run(pose, t_min_n, &mut e) {
+            Ok(()) => {
+                e.status = Status::Ok;
+                self.last_ok_position = Some(pose.position_m);
+            }
+            Err(err) => {
+                e.status = err.status();
+                e.error = Some(err);
+                e.f1_hz = f64::NAN;
+                e.ee_mode_hz = f64::NAN;
+                e.stiffness_n_m = Matrix3::repeat(f64::NAN);
+                if e.status != Status::TensionInfeasible {
+                    e.tensions_n = [f64::NAN; MAX_CABLES];
+                }
+                self.last_ok_position = None;
+                self.last_lambda1 = f64::NAN;
+            }
+        }
+        self.estimate = e;
+        &self.estimate
+    }
+
+    fn run(&mut self, pose: &Pose, t_min_n: f64, e: &mut Estimate) -> Result<(), EstimatorError> {
+        let n = self.scene.n_cables();
+        if !pose.is_finite() {
+            return Err(EstimatorError::Input("non-finite pose"));
+        }
+        if !pose.has_unit_quaternion(self.params.quaternion_tol) {
+            return Err(EstimatorError::Input("quaternion is not of unit norm"));
+        }
+        if !(t_min_n.is_finite() && t_min_n >= 0.0 && t_min_n <= self.scene.t_max_n) {
+            return Err(EstimatorError::Input(
+                "t_min outside [0, t_max] or not finite",
+            ));
+        }
+        let m = self.params.workspace_margin_m;
+        let p = pose.position_m;
+        if (0..3).any(|i| p[i] < self.bounds.0[i] - m || p[i] > self.bounds.1[i] + m) {
+            return Err(EstimatorError::Input("position outside the anchors' frame"));
+        }
+        self.geometry
+            .update(self.scene.cables.iter().map(|c| &c.anchor_m), &p)?;
+        let warm = match self.last_ok_position {
+            Some(q) => (q - p).norm() <= self.params.warm_jump_m,
+            None => false,
+        };
+        if !warm {
+            self.tension.reset_warm_start();
+        }
+        let wrench = self.scene.wrench_n();
+        let res = self
+            .tension
+            .solve(&self.geometry, &wrench, t_min_n, self.scene.t_max_n)
+            .map(|_| ());
+        let info = self.tension.info();
+        e.tension_iterations = info.iterations;
+        e.tension_warm = info.warm_start_accepted;
+        e.tensions_n[..n].copy_from_slice(self.tension.tensions_n());
+        res?;
+        if info.rank < self.expected_rank {
+            return Err(EstimatorError::RankDeficient {
+                rank: info.rank,
+                expected: self.expected_rank,
+            });
+        }
+        let model = self.scene.model;
+        let g = self.scene.gravity_m_s2.norm();
+        for i in 0..n {
+            let c = &self.scene.cables[i];
+            self.models[i] = CableModel::build(
+                model.element,
+                model.elements_per_cable,
+                &self.geometry.unit[i],
+                self.geometry.length_m[i],
+                e.tensions_n[i],
+                c.ea_n(),
+                c.mass_per_length_kg_m,
+                c.mass_per_length_kg_m * g,
+                &self.frame,
+                true,
+            )?;
+        }
+        self.modal.load(&self.models, self.scene.ee_mass_kg);
+        let start = self.modal.evaluations();
+        let warm_l = if warm && self.last_lambda1.is_finite() {
+            Some(self.last_lambda1)
+        } else {
+            None
+        };
+        e.cold_start = warm_l.is_none();
+        let r1 = self.modal.first_root(warm_l);
+        let r1 = match r1 {
+            Ok(r) => r,
+            Err(err) => {
+                e.eigen_evaluations = self.modal.evaluations() - start;
+                return Err(err.into());
+            }
+        };
+        e.f1_hz = lambda_to_hz(r1.lambda);
+        e.f1_ee_participation = r1.ee_participation;
+        e.eigen_residual = r1.residual;
+        self.last_lambda1 = r1.lambda;
+        if self.params.ee_mode {
+            let ree = self.modal.ee_mode(&r1);
+            e.eigen_evaluations = self.modal.evaluations() - start;
+            let ree = ree?;
+            e.ee_mode_hz = lambda_to_hz(ree.lambda);
+            e.ee_mode_participation = ree.ee_participation;
+        }
+        e.eigen_evaluations = self.modal.evaluations() - start;
+        let mut k = Matrix3::zeros();
+        for cm in &self.models {
+            k += cm.static_stiffness;
+        }
+        e.stiffness_n_m = k;
+        Ok(())
+    }
+}
+
+/// Build the cable models of a scene for given geometry and tensions (allocates a Vec).
+pub fn build_models(
+    scene: &Scene,
+    geometry: &Geometry,
+    tensions_n: &[f64],
+) -> Result<Vec<CableModel>, CableError> {
+    let frame = up_frame(&scene.gravity_m_s2);
+    let g = scene.gravity_m_s2.norm();
+    (0..scene.n_cables())
+        .map(|i| {
+            let c = &scene.cables[i];
+            CableModel::build(
+                scene.model.element,
+                scene.model.elements_per_cable,
+                &geometry.unit[i],
+                geometry.length_m[i],
+                tensions_n[i],
+                c.ea_n(),
+                c.mass_per_length_kg_m,
+                c.mass_per_length_kg_m * g,
+                &frame,
+                true,
+            )
+        })
+        .collect()
+}
+
+/// Errors of the reference pipeline.
+#[derive(Debug, thiserror::Error)]
+pub enum AnalysisError {
+    /// Kinematics.
+    #[error(transparent)]
+    Kinematics(#[from] KinematicsError),
+    /// Tensions.
+    #[error(transparent)]
+    Tension(#[from] TensionError),
+    /// Element models.
+    #[error(transparent)]
+    Cable(#[from] CableError),
+    /// Eigen solve.
+    #[error(transparent)]
+    Modal(#[from] ModalError),
+}
+
+/// Everything the dense reference computes for one pose.
+#[derive(Debug, Clone)]
+pub struct ReferenceAnalysis {
+    /// Tensions from Clarabel, N.
+    pub tensions_n: Vec<f64>,
+    /// Every mode (dense).
+    pub modes: modal::DenseModes,
+    /// Degrees of freedom of the assembled model.
+    pub dof: usize,
+    /// Static end-effector stiffness, N/m.
+    pub stiffness_n_m: Matrix3<f64>,
+}
+
+/// The offline reference: Clarabel tensions, dense K and M, dense eigen-solve (with
+/// participations when `vectors`). For `continuous` scenes use the structured solver.
+pub fn reference_analysis(
+    scene: &Scene,
+    position_m: &Vector3<f64>,
+    t_min_n: f64,
+    vectors: bool,
+) -> Result<ReferenceAnalysis, AnalysisError> {
+    let mut g = Geometry::new(scene.n_cables());
+    g.update(scene.cables.iter().map(|c| &c.anchor_m), position_m)?;
+    let t = clarabel_reference(&g, &scene.wrench_n(), t_min_n, scene.t_max_n)?;
+    let models = build_models(scene, &g, &t)?;
+    let (k, m) = modal::assemble(&models, scene.ee_mass_kg)?;
+    let dof = k.nrows();
+    let modes = modal::dense_modes(&k, &m, scene.ee_mass_kg, vectors)?;
+    let stiffness_n_m = models
+        .iter()
+        .fold(Matrix3::zeros(), |a, cm| a + cm.static_stiffness);
+    Ok(ReferenceAnalysis {
+        tensions_n: t,
+        modes,
+        dof,
+        stiffness_n_m,
+    })
+}
+
+/// The structured solver run once (allocating; for offline use): tensions from the
+/// active-set solver, then f1 and the end-effector mode.
+pub fn structured_analysis(scene: &Scene, position_m: &Vector3<f64>, t_min_n: f64) -> Estimate {
+    match Estimator::new(scene) {
+        Ok(mut est) => *est.update(&Pose::at(*position_m), t_min_n),
+        Err(BuildError::DefaultPose { source, .. }) => {
+            let mut e = Estimate::empty(scene.n_cables());
+            e.status = source.status();
+            e.error = Some(source);
+            e
+        }
+    }
+}
+
+/// First root of the structured solver for given cable models (offline helper for tests).
+pub fn first_root_of(
+    models: &[CableModel],
+    ee_mass_kg: f64,
+    params: ModalParams,
+) -> Result<Root, ModalError> {
+    let mut s = ModalSolver::new(params);
+    s.load(models, ee_mass_kg);
+    s.first_root(None)
+}

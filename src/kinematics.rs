@@ -1,0 +1,151 @@
+//! Kinematics of a point-mass CDPR (paper Eqs. 1-5, all cables attached at the centroid).
+//!
+//! For cable i with anchor a_i and end-effector position p, the cable vector is
+//! l_i = p − a_i (anchor → end-effector), its length L_i = ‖l_i‖ (m) and its unit vector
+//! s_i = l_i / L_i. The structure matrix A = Jᵀ (3 × n) has columns s_i, and static
+//! equilibrium reads A T = w, with w the wrench the cables carry (N): m·g when they carry
+//! the end-effector's weight. (A cable pulls the end-effector towards its anchor, i.e.
+//! with force −T_i s_i; equilibrium −Σ T_i s_i + m g = 0 gives Σ T_i s_i = m g.)
+//! The moment rows of Eq. 5 vanish because every b_i = 0.
+
+use nalgebra::Vector3;
+
+/// End-effector pose: position (m) and orientation (unit quaternion w, x, y, z).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pose {
+    /// Position of the centroid, m.
+    pub position_m: Vector3<f64>,
+    /// Orientation as a unit quaternion [w, x, y, z] (ignored by point-mass scenes, but validated).
+    pub orientation_wxyz: [f64; 4],
+}
+
+impl Pose {
+    /// A pose at `position_m` with identity orientation.
+    pub fn at(position_m: Vector3<f64>) -> Pose {
+        Pose {
+            position_m,
+            orientation_wxyz: [1.0, 0.0, 0.0, 0.0],
+        }
+    }
+    /// Every component finite.
+    pub fn is_finite(&self) -> bool {
+        self.position_m.iter().all(|x| x.is_finite())
+            && self.orientation_wxyz.iter().all(|x| x.is_finite())
+    }
+    /// The quaternion's norm is 1 within `tol`.
+    pub fn has_unit_quaternion(&self, tol: f64) -> bool {
+        let n2: f64 = self.orientation_wxyz.iter().map(|q| q * q).sum();
+        (n2.sqrt() - 1.0).abs() <= tol
+    }
+}
+
+/// Errors of the kinematics.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum KinematicsError {
+    /// A cable is shorter than the minimum length (the pose is at an anchor).
+    #[error("cable {cable} is {length_m:.3e} m long (< {min_m:.1e} m): the end-effector is at its anchor")]
+    CableTooShort {
+        /// Cable index.
+        cable: usize,
+        /// Its length, m.
+        length_m: f64,
+        /// The smallest accepted length, m.
+        min_m: f64,
+    },
+    /// A non-finite position.
+    #[error("non-finite position")]
+    NonFinite,
+}
+
+/// Cable geometry at one pose, preallocated for a fixed number of cables.
+#[derive(Debug, Clone)]
+pub struct Geometry {
+    /// Unit vectors s_i (anchor → end-effector).
+    pub unit: Vec<Vector3<f64>>,
+    /// Cable chord lengths L_i, m.
+    pub length_m: Vec<f64>,
+}
+
+/// Smallest cable length accepted, m. Below it the element stiffness EA/L is meaningless.
+pub const MIN_CABLE_LENGTH_M: f64 = 1e-6;
+
+impl Geometry {
+    /// Allocate for `n` cables.
+    pub fn new(n: usize) -> Geometry {
+        Geometry {
+            unit: vec![Vector3::zeros(); n],
+            length_m: vec![0.0; n],
+        }
+    }
+
+    /// Number of cables.
+    pub fn n(&self) -> usize {
+        self.unit.len()
+    }
+
+    /// Recompute for anchors `anchors_m` and end-effector position `p_m`. No allocation.
+    pub fn update<'a>(
+        &mut self,
+        anchors_m: impl Iterator<Item = &'a Vector3<f64>>,
+        p_m: &Vector3<f64>,
+    ) -> Result<(), KinematicsError> {
+        if !p_m.iter().all(|x| x.is_finite()) {
+            return Err(KinematicsError::NonFinite);
+        }
+        for (i, a) in anchors_m.enumerate().take(self.unit.len()) {
+            let l = p_m - a;
+            let len = l.norm();
+            if len.is_nan() || len < MIN_CABLE_LENGTH_M {
+                return Err(KinematicsError::CableTooShort {
+                    cable: i,
+                    length_m: len,
+                    min_m: MIN_CABLE_LENGTH_M,
+                });
+            }
+            self.length_m[i] = len;
+            self.unit[i] = l / len;
+        }
+        Ok(())
+    }
+
+    /// Structure matrix entry A[r, i] = s_i[r].
+    pub fn a(&self, r: usize, i: usize) -> f64 {
+        self.unit[i][r]
+    }
+
+    /// A·T, N.
+    pub fn wrench_of(&self, t_n: &[f64]) -> Vector3<f64> {
+        self.unit
+            .iter()
+            .zip(t_n)
+            .fold(Vector3::zeros(), |acc, (s, t)| acc + s * *t)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn center_of_spatial_paper() {
+        let s = crate::scene::Scene::default_scene();
+        let mut g = Geometry::new(8);
+        g.update(s.cables.iter().map(|c| &c.anchor_m), &s.ee_position_m)
+            .unwrap();
+        let l = (1.25f64 * 1.25 * 3.0).sqrt();
+        for i in 0..8 {
+            assert!((g.length_m[i] - l).abs() < 1e-15);
+        }
+        assert!((g.unit[0].z + 1.0 / 3f64.sqrt()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn pose_at_anchor_is_an_error() {
+        let s = crate::scene::Scene::default_scene();
+        let mut g = Geometry::new(8);
+        let e = g
+            .update(s.cables.iter().map(|c| &c.anchor_m), &s.cables[2].anchor_m)
+            .unwrap_err();
+        assert!(matches!(e, KinematicsError::CableTooShort { cable: 2, .. }));
+    }
+}

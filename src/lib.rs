@@ -1,0 +1,8 @@
+//! cablevib (crate docs written with the model; see README).
+#![warn(missing_docs)]
+pub mod cable;
+pub mod estimator;
+pub mod kinematics;
+pub mod modal;
+pub mod scene;
+pub mod tension;

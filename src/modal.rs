@@ -1,0 +1,619 @@
+//! Natural frequencies: the dense reference and the structured real-time solver.
+//!
+//! The free vibration problem is K u = λ M u, λ = ω² (rad²/s²), f = ω / 2π (Hz)
+//! (paper Eqs. 33-35, with K and M in the right places).
+//!
+//! **Dense reference** ([`assemble`], [`dense_modes`]): the assembled K and M (3 DOF per
+//! interior node plus the end-effector node), reduced to a standard symmetric problem
+//! with the Cholesky factor of M, solved by a dense symmetric eigensolver. A backward
+//! stable solver has absolute eigenvalue error ≈ ε·λ_max, i.e. relative error
+//! ε·λ_max/λ on a mode λ ([`dense_relative_accuracy`]). Never on the real-time path.
+//!
+//! **Structured solver** ([`ModalSolver`]): each cable's interior nodes decouple into
+//! scalar chains ([`crate::cable::Chain`]); condensing them onto the end-effector gives
+//! its 3 × 3 dynamic stiffness
+//!
+//! ```text
+//!     D(λ) = Σ_chains s_c(λ) P_c − λ m_ee I,
+//! ```
+//!
+//! and the Wittrick-Williams count J(λ) = Σ_chains mult_c · (blocked eigenvalues of c
+//! below λ) + (negative eigenvalues of D(λ)) is the exact number of natural frequencies
+//! below λ. Below the lowest blocked eigenvalue λ_p every eigenvalue of D decreases
+//! (D' = −(mass norm) < 0) from D(0) (the static stiffness, positive definite) to −∞, so
+//! the first natural frequency is the unique root of the smallest eigenvalue μ₁(D(λ)) on
+//! (0, λ_p). It is found by Newton's method on g(λ) = μ₁(λ)(λ_p − λ) (which removes the
+//! pole), safeguarded by the bracket, warm-started from the last cycle, and certified by
+//! the count. A mode's end-effector participation is m_ee‖v‖² / vᵀ(−D'(λ))v for the null
+//! vector v of D(λ): the share of the mode's kinetic-energy norm carried by the
+//! end-effector's own mass.
+
+use crate::cable::{CableModel, Chain, ChainKind};
+use crate::scene::MAX_CABLES;
+use nalgebra::{DMatrix, Matrix3, SymmetricEigen, Vector3};
+
+/// Errors of the modal solvers.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum ModalError {
+    /// The static stiffness on the end-effector is not positive definite (slack cables, a
+    /// mechanism): there is a zero or negative frequency.
+    #[error(
+        "static end-effector stiffness is not positive definite (smallest eigenvalue {0:.3e} N/m)"
+    )]
+    NotPositiveDefinite(f64),
+    /// The bounded iteration ran out before the tolerance was met.
+    #[error("eigen iteration did not converge in {evaluations} evaluations (bracket [{lo:.6e}, {hi:.6e}] rad²/s²)")]
+    NoConvergence {
+        /// Evaluations of D(λ) done.
+        evaluations: u32,
+        /// Lower end of the last bracket, rad²/s².
+        lo: f64,
+        /// Upper end of the last bracket, rad²/s².
+        hi: f64,
+    },
+    /// No mode with enough end-effector participation within the scan bound.
+    #[error("no end-effector mode found within {0} pole intervals")]
+    NoEeMode(u32),
+    /// The dense mass matrix is not positive definite (bad input).
+    #[error("mass matrix is not positive definite")]
+    MassNotDefinite,
+    /// The model cannot be assembled densely (continuous cables).
+    #[error(
+        "the continuous model has no finite assembly; use fem or catenary for the dense reference"
+    )]
+    NotAssemblable,
+    /// The Wittrick-Williams certificate disagrees with the root found.
+    #[error("eigenvalue count check failed at λ = {0:.6e} rad²/s²")]
+    CountMismatch(f64),
+}
+
+/// Convert λ = ω² (rad²/s²) to Hz.
+#[inline]
+pub fn lambda_to_hz(lambda: f64) -> f64 {
+    lambda.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
+}
+
+/// Convert Hz to λ = ω² (rad²/s²).
+#[inline]
+pub fn hz_to_lambda(f_hz: f64) -> f64 {
+    let w = 2.0 * std::f64::consts::PI * f_hz;
+    w * w
+}
+
+/// Assemble the global K (N/m) and M (kg) of the cable models and the end-effector point
+/// mass. DOF order: end-effector (0..3), then for each cable its interior nodes from the
+/// anchor side. Anchors are fixed and carry no DOF.
+pub fn assemble(
+    models: &[CableModel],
+    ee_mass_kg: f64,
+) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
+    if models.iter().any(|m| {
+        m.chains[..m.n_chains]
+            .iter()
+            .any(|c| matches!(c.kind, ChainKind::Continuous { .. }))
+    }) {
+        return Err(ModalError::NotAssemblable);
+    }
+    let interior: usize = models.iter().map(|m| m.n_el - 1).sum();
+    let ndof = 3 + 3 * interior;
+    let mut k = DMatrix::<f64>::zeros(ndof, ndof);
+    let mut mm = DMatrix::<f64>::zeros(ndof, ndof);
+    for i in 0..3 {
+        mm[(i, i)] += ee_mass_kg;
+    }
+    let mut base = 3;
+    for cm in models {
+        let n = cm.n_el;
+        // node index j = 0 (anchor) ..= n (end-effector) → dof offset or None
+        let dof = |j: usize| -> Option<usize> {
+            if j == 0 {
+                None
+            } else if j == n {
+                Some(0)
+            } else {
+                Some(base + 3 * (j - 1))
+            }
+        };
+        let me = cm.element_mass_kg;
+        for el in 0..n {
+            let (a, b) = (dof(el), dof(el + 1));
+            let nodes = [(a, 0usize), (b, 1usize)];
+            for &(ra, ia) in &nodes {
+                for &(rb, ib) in &nodes {
+                    let (Some(ra), Some(rb)) = (ra, rb) else {
+                        continue;
+                    };
+                    let sign = if ia == ib { 1.0 } else { -1.0 };
+                    let mcoef = if ia == ib { me / 3.0 } else { me / 6.0 };
+                    for r in 0..3 {
+                        for c in 0..3 {
+                            k[(ra + r, rb + c)] += sign * cm.kc[(r, c)];
+                        }
+                        mm[(ra + r, rb + r)] += mcoef;
+                    }
+                }
+            }
+        }
+        base += 3 * (n - 1);
+    }
+    Ok((k, mm))
+}
+
+/// The full spectrum from the dense reference.
+#[derive(Debug, Clone)]
+pub struct DenseModes {
+    /// λ = ω², ascending, rad²/s².
+    pub lambda: Vec<f64>,
+    /// End-effector participation of each mode (0 ..= 1); empty when vectors were not asked.
+    pub ee_participation: Vec<f64>,
+    /// Largest |λ|, rad²/s² (sets the solver's absolute accuracy ε·λ_max).
+    pub lambda_max: f64,
+}
+
+impl DenseModes {
+    /// Frequencies in Hz, ascending.
+    pub fn frequencies_hz(&self) -> Vec<f64> {
+        self.lambda.iter().map(|&l| lambda_to_hz(l)).collect()
+    }
+    /// The lowest mode whose end-effector participation is at least `min` (index, λ).
+    pub fn first_ee_mode(&self, min: f64) -> Option<(usize, f64)> {
+        self.ee_participation
+            .iter()
+            .position(|&p| p >= min)
+            .map(|i| (i, self.lambda[i]))
+    }
+}
+
+/// Estimated relative accuracy of a dense f64 solve for eigenvalue λ: ε·λ_max/λ.
+pub fn dense_relative_accuracy(lambda: f64, lambda_max: f64) -> f64 {
+    f64::EPSILON * lambda_max / lambda.abs().max(f64::MIN_POSITIVE)
+}
+
+/// Dense generalized symmetric eigen-solve of K u = λ M u via M = L Lᵀ and
+/// C = L⁻¹ K L⁻ᵀ. With `vectors`, also each mode's end-effector participation
+/// m_ee‖u_ee‖² / uᵀ M u (the first three DOF are the end-effector's).
+pub fn dense_modes(
+    k: &DMatrix<f64>,
+    m: &DMatrix<f64>,
+    ee_mass_kg: f64,
+    vectors: bool,
+) -> Result<DenseModes, ModalError> {
+    let chol = m.clone().cholesky().ok_or(ModalError::MassNotDefinite)?;
+    let l = chol.l();
+    let linv_k = l
+        .solve_lower_triangular(k)
+        .ok_or(ModalError::MassNotDefinite)?;
+    let c = l
+        .solve_lower_triangular(&linv_k.transpose())
+        .ok_or(ModalError::MassNotDefinite)?;
+    let c = (&c + c.transpose()) * 0.5;
+    if !vectors {
+        let mut lambda: Vec<f64> = c.symmetric_eigenvalues().iter().copied().collect();
+        lambda.sort_by(|a, b| a.total_cmp(b));
+        let lambda_max = lambda.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+        return Ok(DenseModes {
+            lambda,
+            ee_participation: Vec::new(),
+            lambda_max,
+        });
+    }
+    let eig = SymmetricEigen::new(c);
+    let mut idx: Vec<usize> = (0..eig.eigenvalues.len()).collect();
+    idx.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let lt = l.transpose();
+    let y = &eig.eigenvectors;
+    let u = lt
+        .solve_upper_triangular(y)
+        .ok_or(ModalError::MassNotDefinite)?;
+    let mut lambda = Vec::with_capacity(idx.len());
+    let mut part = Vec::with_capacity(idx.len());
+    for &i in &idx {
+        lambda.push(eig.eigenvalues[i]);
+        let col = u.column(i);
+        let ee = col[0] * col[0] + col[1] * col[1] + col[2] * col[2];
+        let yn = y.column(i).norm_squared(); // = uᵀ M u
+        part.push(ee_mass_kg * ee / yn);
+    }
+    let lambda_max = lambda.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+    Ok(DenseModes {
+        lambda,
+        ee_participation: part,
+        lambda_max,
+    })
+}
+
+/// Parameters of the structured solver (finite bounds everywhere).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModalParams {
+    /// Largest number of D(λ) evaluations for one root.
+    pub max_evaluations: u32,
+    /// Relative step size at which Newton stops.
+    pub rel_tol: f64,
+    /// Largest number of pole intervals scanned for the end-effector mode.
+    pub max_scan_intervals: u32,
+    /// Smallest end-effector participation of an end-effector mode (0 < x ≤ 1).
+    pub ee_participation_min: f64,
+    /// Check the first root with the eigenvalue count (two more evaluations).
+    pub certify: bool,
+}
+
+impl Default for ModalParams {
+    fn default() -> Self {
+        ModalParams {
+            max_evaluations: 100,
+            rel_tol: 1e-12,
+            max_scan_intervals: 400,
+            ee_participation_min: 0.5,
+            certify: true,
+        }
+    }
+}
+
+/// One root found by the structured solver.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Root {
+    /// λ = ω², rad²/s².
+    pub lambda: f64,
+    /// End-effector participation of the mode (0 ..= 1).
+    pub ee_participation: f64,
+    /// Evaluations of D(λ) spent.
+    pub evaluations: u32,
+    /// |μ(λ)| / ‖D(λ)‖ at the answer (relative residual of the condensed problem).
+    pub residual: f64,
+}
+
+/// D(λ), D'(λ) and the blocked count at one λ.
+#[derive(Debug, Clone, Copy)]
+pub struct DynEval {
+    /// Dynamic stiffness D(λ), N/m.
+    pub d: Matrix3<f64>,
+    /// dD/dλ, kg.
+    pub dd: Matrix3<f64>,
+    /// Σ mult · blocked eigenvalues below λ.
+    pub below: u32,
+}
+
+/// Sorted eigen-decomposition of a symmetric 3 × 3 matrix (ascending).
+#[derive(Debug, Clone, Copy)]
+pub struct Eig3 {
+    /// Eigenvalues ascending.
+    pub values: [f64; 3],
+    /// Matching unit eigenvectors.
+    pub vectors: [Vector3<f64>; 3],
+}
+
+/// Symmetric 3 × 3 eigen-decomposition, sorted ascending. No allocation.
+pub fn eig3(a: &Matrix3<f64>) -> Eig3 {
+    let e = SymmetricEigen::new(*a);
+    let mut idx = [0usize, 1, 2];
+    idx.sort_by(|&i, &j| e.eigenvalues[i].total_cmp(&e.eigenvalues[j]));
+    Eig3 {
+        values: [
+            e.eigenvalues[idx[0]],
+            e.eigenvalues[idx[1]],
+            e.eigenvalues[idx[2]],
+        ],
+        vectors: [
+            e.eigenvectors.column(idx[0]).into_owned(),
+            e.eigenvectors.column(idx[1]).into_owned(),
+            e.eigenvectors.column(idx[2]).into_owned(),
+        ],
+    }
+}
+
+const MAX_CHAINS: usize = 3 * MAX_CABLES;
+
+/// The structured real-time eigen solver. `new` sizes everything; `load` copies the
+/// chains of one pose; the root finders never allocate and are bounded.
+#[derive(Debug, Clone)]
+pub struct ModalSolver {
+    params: ModalParams,
+    chains: [Chain; MAX_CHAINS],
+    n_chains: usize,
+    ee_mass_kg: f64,
+    next_pole: [usize; MAX_CHAINS],
+    evaluations: u32,
+}
+
+impl ModalSolver {
+    /// A solver with the given parameters.
+    pub fn new(params: ModalParams) -> ModalSolver {
+        let zero = Chain {
+            kind: ChainKind::Discrete {
+                k: 0.0,
+                m: 0.0,
+                n_el: 1,
+            },
+            mult: 0,
+            proj: Matrix3::zeros(),
+        };
+        ModalSolver {
+            params,
+            chains: [zero; MAX_CHAINS],
+            n_chains: 0,
+            ee_mass_kg: 0.0,
+            next_pole: [1; MAX_CHAINS],
+            evaluations: 0,
+        }
+    }
+
+    /// Parameters.
+    pub fn params(&self) -> &ModalParams {
+        &self.params
+    }
+
+    /// Replace the parameters.
+    pub fn set_params(&mut self, p: ModalParams) {
+        self.params = p;
+    }
+
+    /// Load the chains of the cable models at one pose and the end-effector mass (kg).
+    pub fn load(&mut self, models: &[CableModel], ee_mass_kg: f64) {
+        self.n_chains = 0;
+        for m in models {
+            for c in &m.chains[..m.n_chains] {
+                if self.n_chains < MAX_CHAINS {
+                    self.chains[self.n_chains] = *c;
+                    self.n_chains += 1;
+                }
+            }
+        }
+        self.ee_mass_kg = ee_mass_kg;
+    }
+
+    /// D(λ), D'(λ) and the blocked count.
+    #[inline]
+    pub fn eval(&mut self, lambda: f64) -> DynEval {
+        self.evaluations += 1;
+        let mut d = Matrix3::identity() * (-lambda * self.ee_mass_kg);
+        let mut dd = Matrix3::identity() * (-self.ee_mass_kg);
+        let mut below = 0u32;
+        for c in &self.chains[..self.n_chains] {
+            let e = c.eval(lambda);
+            d += c.proj * e.s;
+            dd += c.proj * e.ds;
+            below += c.mult * e.below;
+        }
+        DynEval { d, dd, below }
+    }
+
+    /// Number of natural frequencies strictly below λ (Wittrick-Williams).
+    pub fn count_below(&mut self, lambda: f64) -> u32 {
+        let e = self.eval(lambda);
+        let eg = eig3(&e.d);
+        e.below + eg.values.iter().filter(|&&v| v < 0.0).count() as u32
+    }
+
+    /// Static end-effector stiffness D(0), N/m.
+    pub fn static_stiffness(&mut self) -> Matrix3<f64> {
+        self.eval(0.0).d
+    }
+
+    /// The lowest blocked eigenvalue over all chains, rad²/s² (∞ when none).
+    pub fn lowest_pole(&self) -> f64 {
+        self.chains[..self.n_chains]
+            .iter()
+            .map(|c| c.first_pole())
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Participation of the mode at root λ with null vector v (unit).
+    fn participation(&self, dd: &Matrix3<f64>, v: &Vector3<f64>) -> f64 {
+        let kin = -(v.transpose() * dd * v)[(0, 0)];
+        if kin > 0.0 {
+            (self.ee_mass_kg / kin).min(1.0)
+        } else {
+            0.0
+        }
+    }
+
+    /// Root of the `branch`-th smallest eigenvalue of D on (lo, hi), where it is positive at
+    /// lo and negative at hi. `pole_hi` (≥ hi, may be ∞) is the pole bounding the interval
+    /// above; Newton runs on μ(λ)(pole_hi − λ) to remove it. `guess` starts the iteration.
+    fn branch_root(
+        &mut self,
+        branch: usize,
+        mut lo: f64,
+        mut hi: f64,
+        pole_hi: f64,
+        guess: f64,
+    ) -> Result<Root, ModalError> {
+        let start = self.evaluations;
+        let mut x = if guess > lo && guess < hi {
+            guess
+        } else if hi.is_finite() {
+            0.5 * (lo + hi)
+        } else {
+            2.0 * lo.max(1.0)
+        };
+        let tol = self.params.rel_tol;
+        loop {
+            if self.evaluations - start >= self.params.max_evaluations {
+                return Err(ModalError::NoConvergence {
+                    evaluations: self.evaluations - start,
+                    lo,
+                    hi,
+                });
+            }
+            let e = self.eval(x);
+            let eg = eig3(&e.d);
+            let mu = eg.values[branch];
+            let v = eg.vectors[branch];
+            let dmu = (v.transpose() * e.dd * v)[(0, 0)];
+            if mu > 0.0 {
+                lo = lo.max(x);
+            } else if mu < 0.0 {
+                hi = hi.min(x);
+            }
+            let scale = e.d.abs().max().max(f64::MIN_POSITIVE);
+            let (g, dg) = if pole_hi.is_finite() {
+                let w = pole_hi - x;
+                (mu * w, dmu * w - mu)
+            } else {
+                (mu, dmu)
+            };
+            let mut xn = if dg < 0.0 { x - g / dg } else { f64::NAN };
+            let collapsed = hi.is_finite() && (hi - lo) <= 4.0 * f64::EPSILON * x.abs();
+            let done =
+                mu == 0.0 || collapsed || (xn.is_finite() && (xn - x).abs() <= tol * x.abs());
+            if done {
+                let lambda = if mu == 0.0 || !(xn > lo && xn < hi) && collapsed {
+                    x
+                } else {
+                    xn
+                };
+                return Ok(Root {
+                    lambda,
+                    ee_participation: self.participation(&e.dd, &v),
+                    evaluations: self.evaluations - start,
+                    residual: mu.abs() / scale,
+                });
+            }
+            if !(xn > lo && xn < hi) {
+                xn = if hi.is_finite() {
+                    0.5 * (lo + hi)
+                } else {
+                    2.0 * x
+                };
+            }
+            x = xn;
+        }
+    }
+
+    /// The first natural frequency's λ (rad²/s²), warm-started from `warm` when given.
+    pub fn first_root(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
+        let start = self.evaluations;
+        let e0 = self.eval(0.0);
+        let eg0 = eig3(&e0.d);
+        if !(eg0.values[0] > 0.0) {
+            return Err(ModalError::NotPositiveDefinite(eg0.values[0]));
+        }
+        let lp = self.lowest_pole();
+        let guess = match warm {
+            Some(w) if w > 0.0 && w < lp => w,
+            _ => {
+                // Rayleigh estimate from λ = 0: μ(0)/(−μ'(0)).
+                let v = eg0.vectors[0];
+                let dmu = -(v.transpose() * e0.dd * v)[(0, 0)];
+                let g = eg0.values[0] / dmu.max(f64::MIN_POSITIVE);
+                if lp.is_finite() {
+                    g.min(0.999 * lp)
+                } else {
+                    g
+                }
+            }
+        };
+        let mut hi = lp;
+        if !lp.is_finite() {
+            // No poles: D = K − λ M_d is linear, μ₁ crosses zero; find an upper bracket.
+            let mut h = guess.max(1e-12) * 2.0;
+            let mut ok = false;
+            for _ in 0..200 {
+                let e = self.eval(h);
+                if eig3(&e.d).values[0] < 0.0 {
+                    ok = true;
+                    break;
+                }
+                h *= 4.0;
+            }
+            if !ok {
+                return Err(ModalError::NoConvergence {
+                    evaluations: self.evaluations - start,
+                    lo: 0.0,
+                    hi: h,
+                });
+            }
+            hi = h;
+        }
+        let mut r = self.branch_root(0, 0.0, hi, lp, guess)?;
+        if self.params.certify {
+            let below = self.count_below(r.lambda * (1.0 - 1e-10));
+            let above = self.count_below(r.lambda * (1.0 + 1e-10));
+            if below != 0 || above == 0 {
+                return Err(ModalError::CountMismatch(r.lambda));
+            }
+        }
+        r.evaluations = self.evaluations - start;
+        Ok(r)
+    }
+
+    /// The lowest mode whose end-effector participation is at least
+    /// [`ModalParams::ee_participation_min`]: scans the intervals between the chains'
+    /// blocked eigenvalues in ascending order and solves for each root of D in them.
+    /// `first` is the already-known first root (its interval is not solved again).
+    pub fn ee_mode(&mut self, first: &Root) -> Result<Root, ModalError> {
+        let start = self.evaluations;
+        let thr = self.params.ee_participation_min;
+        if first.ee_participation >= thr {
+            return Ok(*first);
+        }
+        for p in self.next_pole[..self.n_chains].iter_mut() {
+            *p = 1;
+        }
+        let mut a = 0.0f64;
+        let mut first_interval = true;
+        for _ in 0..self.params.max_scan_intervals {
+            // Next distinct pole above a.
+            let mut b = f64::INFINITY;
+            for i in 0..self.n_chains {
+                let mut j = self.next_pole[i];
+                let mut p = self.chains[i].pole(j);
+                while p <= a * (1.0 + 1e-12) && p.is_finite() {
+                    j += 1;
+                    p = self.chains[i].pole(j);
+                }
+                self.next_pole[i] = j;
+                b = b.min(p);
+            }
+            let lo = if a == 0.0 { 0.0 } else { a * (1.0 + 1e-9) };
+            let hi_eval = if b.is_finite() {
+                b * (1.0 - 1e-9)
+            } else {
+                f64::INFINITY
+            };
+            let na = if a == 0.0 {
+                0
+            } else {
+                let e = self.eval(lo);
+                eig3(&e.d).values.iter().filter(|&&v| v < 0.0).count()
+            };
+            let nb = if b.is_finite() {
+                let e = self.eval(hi_eval);
+                eig3(&e.d).values.iter().filter(|&&v| v < 0.0).count()
+            } else {
+                3
+            };
+            for branch in na..nb {
+                if first_interval && branch == 0 {
+                    continue; // the first root, already known to be below the threshold
+                }
+                let hi = if b.is_finite() {
+                    hi_eval
+                } else {
+                    f64::INFINITY
+                };
+                let guess = if hi.is_finite() {
+                    0.5 * (lo + hi)
+                } else {
+                    2.0 * lo.max(first.lambda)
+                };
+                let mut r = self.branch_root(branch, lo, hi, b, guess)?;
+                if r.ee_participation >= thr {
+                    r.evaluations = self.evaluations - start;
+                    return Ok(r);
+                }
+            }
+            first_interval = false;
+            if !b.is_finite() {
+                break;
+            }
+            a = b;
+        }
+        Err(ModalError::NoEeMode(self.params.max_scan_intervals))
+    }
+
+    /// Evaluations of D(λ) since the solver was built (a counter for statistics).
+    pub fn evaluations(&self) -> u32 {
+        self.evaluations
+    }
+}

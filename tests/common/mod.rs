@@ -1,0 +1,66 @@
+//! Shared helpers of the integration tests: the paper's tables and scene builders.
+#![allow(dead_code)]
+use cablevib::scene::{ElementKind, Scene};
+use nalgebra::Vector3;
+use serde_json::Value;
+
+/// The paper's tables with the faithful values (tests/data/paper_tables.json, a copy of
+/// shared/reference/paper_tables.json).
+pub fn tables() -> Value {
+    serde_json::from_str(include_str!("../data/paper_tables.json")).expect("valid json")
+}
+
+pub fn table(n: u64) -> Value {
+    tables()["tables"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t["table"].as_u64() == Some(n))
+        .unwrap()
+        .clone()
+}
+
+pub fn vec3(v: &Value) -> Vector3<f64> {
+    Vector3::new(
+        v[0].as_f64().unwrap(),
+        v[1].as_f64().unwrap(),
+        v[2].as_f64().unwrap(),
+    )
+}
+
+pub fn f64s(v: &Value) -> Vec<Option<f64>> {
+    v.as_array().unwrap().iter().map(|x| x.as_f64()).collect()
+}
+
+/// The shipped scene for a table, checked against the table's robot data.
+pub fn scene_for(t: &Value, element: ElementKind, n: usize, t_min: f64) -> Scene {
+    let robot = &t["robot"];
+    let mut s = if robot["gravity_carried_by_cables"].as_bool().unwrap() {
+        Scene::default_scene()
+    } else {
+        Scene::planar_paper()
+    };
+    let g = robot["g"].as_f64().unwrap();
+    assert_eq!(s.gravity_m_s2.norm(), g);
+    assert_eq!(s.ee_mass_kg, robot["ee_mass_kg"].as_f64().unwrap());
+    assert_eq!(s.t_max_n, robot["t_max_n"].as_f64().unwrap());
+    let anchors = robot["anchors"].as_array().unwrap();
+    assert_eq!(anchors.len(), s.n_cables());
+    for (c, a) in s.cables.iter().zip(anchors) {
+        assert_eq!(c.anchor_m, vec3(a));
+        assert_eq!(
+            c.youngs_modulus_pa,
+            robot["youngs_modulus_pa"].as_f64().unwrap()
+        );
+        assert_eq!(c.area_m2, robot["area_m2"].as_f64().unwrap());
+        let mu = robot["weight_per_length_n_per_m"].as_f64().unwrap() / g;
+        assert!((c.mass_per_length_kg_m - mu).abs() <= 1e-16 * mu);
+    }
+    s.ee_position_m = vec3(&t["ee_position"]);
+    s.t_min_n = t_min;
+    s.with_model(element, n)
+}
+
+pub fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
