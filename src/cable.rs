@@ -217,6 +217,40 @@ impl Chain {
         self.pole(1)
     }
 
+    /// The blocked eigenvalues just below and just above λ: (λ_j, λ_{j+1}) with j the number
+    /// of blocked eigenvalues ≤ λ (λ_0 = 0; ∞ when there is none above).
+    pub fn poles_around(&self, lambda: f64) -> (f64, f64) {
+        let j = match self.kind {
+            ChainKind::Discrete { k, m, n_el } => {
+                if n_el < 2 || m <= 0.0 || k <= 0.0 {
+                    return (0.0, f64::INFINITY);
+                }
+                let kp = k + lambda * m / 6.0;
+                let one_minus_c = 0.5 * lambda * m / kp;
+                let one_plus_c = (2.0 * k - lambda * m / 6.0) / kp;
+                if one_plus_c <= 0.0 {
+                    n_el - 1
+                } else {
+                    let theta = if one_minus_c <= 1.0 {
+                        2.0 * (0.5 * one_minus_c).sqrt().asin()
+                    } else {
+                        std::f64::consts::PI - 2.0 * (0.5 * one_plus_c).sqrt().asin()
+                    };
+                    ((n_el as f64 * theta / std::f64::consts::PI).floor() as usize).min(n_el - 1)
+                }
+            }
+            ChainKind::Continuous { k_total, m_total } => {
+                if m_total <= 0.0 || k_total <= 0.0 {
+                    return (0.0, f64::INFINITY);
+                }
+                ((lambda * m_total / k_total).max(0.0).sqrt() / std::f64::consts::PI).floor()
+                    as usize
+            }
+        };
+        let lo = if j == 0 { 0.0 } else { self.pole(j) };
+        (lo, self.pole(j + 1))
+    }
+
     /// The j-th (1-based) blocked eigenvalue λ_j, rad²/s²; ∞ when it does not exist.
     /// Discrete: λ_j = 6k(1 − cos θ_j) / (m (2 + cos θ_j)), θ_j = jπ/N. Continuous: (jπ)² k/m.
     pub fn pole(&self, j: usize) -> f64 {
@@ -240,10 +274,95 @@ impl Chain {
     }
 }
 
-/// Pivot recurrence of the uniform chain (interior diagonal 2α, off-diagonal β):
-/// p₁ = 2α, p_j = 2α − β²/p_{j−1}; s = α − β²/p_{N−1}; negative pivots = blocked count.
+/// Uniform chain in closed form (O(1) in N). With c = −α/β (α = k − λm/3, β = −k − λm/6),
+/// the end stiffness is s = α + β U_{N−2}(c)/U_{N−1}(c) (Chebyshev polynomials of the 2nd
+/// kind): for c = cos θ, U_{N−2}/U_{N−1} = sin((N−1)θ)/sin(Nθ); for c = −cosh φ (above the
+/// chain's cut-off λ > 12k/m), −sinh((N−1)φ)/sinh(Nφ). The blocked count is the number of
+/// θ_j = jπ/N below θ. dR/dc = −((2N−1) − sin((2N−1)θ)/sin θ)/(2 sin²(Nθ)), with a series
+/// where that difference cancels. θ and φ are computed from 1 − c and 1 + c, which are
+/// formed without cancellation.
 #[inline]
 fn eval_discrete(k: f64, m: f64, n_el: usize, lambda: f64) -> ChainEval {
+    let alpha = k - lambda * m / 3.0;
+    let dalpha = -m / 3.0;
+    if n_el <= 1 || m <= 0.0 || k <= 0.0 {
+        if n_el <= 1 || m <= 0.0 {
+            return ChainEval {
+                s: alpha,
+                ds: dalpha,
+                below: 0,
+            };
+        }
+        return eval_discrete_recurrence(k, m, n_el, lambda);
+    }
+    let beta = -k - lambda * m / 6.0;
+    let dbeta = -m / 6.0;
+    let kp = k + lambda * m / 6.0; // = −β > 0
+    let one_minus_c = 0.5 * lambda * m / kp;
+    let one_plus_c = (2.0 * k - lambda * m / 6.0) / kp;
+    let dc = -0.5 * m * k / (kp * kp);
+    let nf = n_el as f64;
+    let n2 = 2.0 * nf - 1.0;
+    let (r, drdc, below) = if one_plus_c > 0.0 {
+        let theta = if one_minus_c <= 1.0 {
+            2.0 * (0.5 * one_minus_c).sqrt().asin()
+        } else {
+            std::f64::consts::PI - 2.0 * (0.5 * one_plus_c).sqrt().asin()
+        };
+        if theta == 0.0 {
+            let r = (nf - 1.0) / nf;
+            let drdc = -n2 * (n2 * n2 - 1.0) / (12.0 * nf * nf);
+            (r, drdc, 0u32)
+        } else {
+            // sin θ and cos θ exactly from 1 ∓ c; one sin_cos for Nθ.
+            let c = 1.0 - one_minus_c;
+            let st = (one_minus_c * one_plus_c).sqrt();
+            let (sn, cn) = (nf * theta).sin_cos();
+            let sn1 = sn * c - cn * st; // sin((N−1)θ)
+            let r = sn1 / sn;
+            let diff = if n2 * theta < 1e-3 {
+                let t2 = theta * theta;
+                let a = n2 * (n2 * n2 - 1.0);
+                a * t2 / 6.0 - a * (3.0 * n2 * n2 - 7.0) * t2 * t2 / 360.0
+            } else {
+                // sin((2N−1)θ) = sin 2Nθ cos θ − cos 2Nθ sin θ
+                let s2 = 2.0 * sn * cn;
+                let c2 = 1.0 - 2.0 * sn * sn;
+                n2 - (s2 * c - c2 * st) / st
+            };
+            let drdc = -diff / (2.0 * sn * sn);
+            let below = ((nf * theta / std::f64::consts::PI).ceil() as i64 - 1)
+                .clamp(0, n_el as i64 - 1) as u32;
+            (r, drdc, below)
+        }
+    } else {
+        // c ≤ −1: c = −cosh φ, cosh φ − 1 = 2 sinh²(φ/2) = −(1 + c).
+        let phi = 2.0 * (0.5 * (-one_plus_c)).sqrt().asinh();
+        if phi == 0.0 {
+            return eval_discrete_recurrence(k, m, n_el, lambda);
+        }
+        let e = (-phi).exp();
+        let e2n = e.powi(2 * n_el as i32);
+        let e2n1 = e.powi(2 * (n_el as i32 - 1));
+        let r = -e * (1.0 - e2n1) / (1.0 - e2n);
+        // dR/dc = ½[(2N−1) − sinh((2N−1)φ)/sinh φ] / sinh²(Nφ), in scaled form.
+        let sh = phi.sinh();
+        let den = (1.0 - e2n) * (1.0 - e2n);
+        let term1 = n2 * 4.0 * e2n / den;
+        let term2 = 2.0 * e * (1.0 - e.powi(2 * (2 * n_el as i32 - 1))) / (sh * den);
+        (r, 0.5 * (term1 - term2), (n_el - 1) as u32)
+    };
+    ChainEval {
+        s: alpha + beta * r,
+        ds: dalpha + dbeta * r + beta * drdc * dc,
+        below,
+    }
+}
+
+/// Pivot recurrence of the uniform chain (interior diagonal 2α, off-diagonal β):
+/// p₁ = 2α, p_j = 2α − β²/p_{j−1}; s = α − β²/p_{N−1}; negative pivots = blocked count.
+/// O(N); the reference for the closed form and the fallback at its singular points.
+pub fn eval_discrete_recurrence(k: f64, m: f64, n_el: usize, lambda: f64) -> ChainEval {
     let alpha = k - lambda * m / 3.0;
     let dalpha = -m / 3.0;
     if n_el <= 1 {
@@ -485,6 +604,45 @@ mod tests {
             // No coupling between horizontal and vertical directions.
             assert!(k[(0, 2)].abs() < 1e-9 * k.norm() && k[(1, 2)].abs() < 1e-9 * k.norm());
         }
+    }
+
+    #[test]
+    fn closed_form_equals_recurrence() {
+        let mut worst = [0.0f64; 2];
+        for &n in &[2usize, 3, 5, 10, 40, 80, 200] {
+            for &(k, m) in &[(400.0, 0.01), (1.9e7, 1.4e-3), (3.0, 2e-3)] {
+                let cut = 12.0 * k / m;
+                for i in 0..400 {
+                    let lambda = cut * 1.3 * (i as f64 / 400.0).powi(3) + 1e-9 * cut * i as f64;
+                    let a = eval_discrete(k, m, n, lambda);
+                    let b = eval_discrete_recurrence(k, m, n, lambda);
+                    assert_eq!(a.below, b.below, "n {n} k {k} λ {lambda}");
+                    // s has absolute accuracy ~ε·N·k (cancellation α + βR), s' relative ε·N²·(pole factor).
+                    let es = (a.s - b.s).abs() / (k * (1.0 + b.s.abs() / k));
+                    let ed = (a.ds - b.ds).abs() / (m + b.ds.abs());
+                    assert!(
+                        es < 1e-11 * n as f64,
+                        "s: n {n} λ/cut {} {} vs {}",
+                        lambda / cut,
+                        a.s,
+                        b.s
+                    );
+                    assert!(
+                        ed < 1e-8 * (n * n) as f64,
+                        "ds: n {n} λ/cut {} {} vs {}",
+                        lambda / cut,
+                        a.ds,
+                        b.ds
+                    );
+                    worst[0] = worst[0].max(es);
+                    worst[1] = worst[1].max(ed);
+                }
+            }
+        }
+        eprintln!(
+            "closed form vs recurrence: s {:.2e}, s' {:.2e}",
+            worst[0], worst[1]
+        );
     }
 
     #[test]

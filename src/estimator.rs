@@ -352,6 +352,7 @@ impl Estimator {
         };
         if !warm {
             self.tension.reset_warm_start();
+            self.modal.reset_tracking();
         }
         let wrench = self.scene.wrench_n();
         let res = self
@@ -407,7 +408,7 @@ impl Estimator {
         e.eigen_residual = r1.residual;
         self.last_lambda1 = r1.lambda;
         if self.params.ee_mode {
-            let ree = self.modal.ee_mode(&r1);
+            let ree = self.modal.ee_mode_tracked(&r1, warm_l.is_some());
             e.eigen_evaluations = self.modal.evaluations() - start;
             let ree = ree?;
             e.ee_mode_hz = lambda_to_hz(ree.lambda);
