@@ -459,6 +459,11 @@ pub fn bench(a: &BenchArgs, allocations: AllocCounter) -> Result<(), CliError> {
             a.cycles
         );
         println!("  statuses: {names:?}");
+        let rc = est.rescan_counts();
+        println!(
+            "  end-effector mode rescans: cold {} lost {} participation {} collapsed {} none {} count {}",
+            rc[0], rc[1], rc[2], rc[3], rc[4], rc[5]
+        );
         if f1_min.0.is_finite() {
             println!(
                 "  f1 along the circle: min {:.6} Hz (cycle {}), max {:.6} Hz (cycle {})",

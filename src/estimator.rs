@@ -288,6 +288,11 @@ impl Estimator {
         &self.models
     }
 
+    /// End-effector rescans by reason (see [`ModalSolver::rescan_counts`]).
+    pub fn rescan_counts(&self) -> [u64; 6] {
+        self.modal.rescan_counts()
+    }
+
     /// Info of the last tension solve.
     pub fn tension_info(&self) -> TensionInfo {
         self.tension.info()

@@ -422,7 +422,23 @@ pub struct ModalSolver {
     evaluations: u32,
     /// Tracked end-effector mode: (λ, number of modes below it).
     ee_track: Option<(f64, u32)>,
+    /// Watched modes at or below the end-effector mode (participation ≥ p_watch at the
+    /// last scan): (λ, participation at the scan, participation now).
+    members: [(f64, f64, f64); MAX_MEMBERS],
+    n_members: usize,
+    /// Record roots with participation ≥ p_watch during a scan.
+    recording: bool,
+    /// Why end-effector rescans happened: [cold, lost, drift, order, no answer, count].
+    rescans: [u64; 6],
 }
+
+/// Largest number of watched modes.
+const MAX_MEMBERS: usize = 8;
+/// Modes up to the end-effector mode with participation ≥ P_WATCH × threshold are watched.
+const P_WATCH: f64 = 0.2;
+/// The watched modes may lose at most P_LOSS × threshold of participation in total since
+/// the last scan; an unwatched mode then holds < (P_WATCH + P_LOSS) × threshold.
+const P_LOSS: f64 = 0.7;
 
 impl ModalSolver {
     /// A solver with the given parameters.
@@ -444,6 +460,10 @@ impl ModalSolver {
             next_pole: [1; MAX_CHAINS],
             evaluations: 0,
             ee_track: None,
+            members: [(0.0, 0.0, 0.0); MAX_MEMBERS],
+            n_members: 0,
+            recording: false,
+            rescans: [0; 6],
         }
     }
 
@@ -650,18 +670,26 @@ impl ModalSolver {
     /// The lowest mode whose end-effector participation is at least
     /// [`ModalParams::ee_participation_min`]: scans the intervals between the chains'
     /// blocked eigenvalues in ascending order and solves for each root of D in them.
-    /// `first` is the already-known first root (its interval is not solved again).
+    /// `first` is the already-known first root (not solved again).
     pub fn ee_mode(&mut self, first: &Root) -> Result<Root, ModalError> {
-        let start = self.evaluations;
-        let thr = self.params.ee_participation_min;
-        if first.ee_participation >= thr {
+        if first.ee_participation >= self.params.ee_participation_min {
             return Ok(*first);
         }
-        for p in self.next_pole[..self.n_chains].iter_mut() {
-            *p = 1;
-        }
+        self.ee_scan(0.0, first.lambda, f64::INFINITY)
+    }
+
+    /// Scan upward from the pole interval containing `start` (rad²/s²) for the first root
+    /// with participation ≥ the threshold, skipping roots at or below `skip_to`, and giving up
+    /// above `limit`.
+    fn ee_scan(&mut self, start: f64, skip_to: f64, limit: f64) -> Result<Root, ModalError> {
+        let begin = self.evaluations;
+        let thr = self.params.ee_participation_min;
         let mut a = 0.0f64;
-        let mut first_interval = true;
+        for i in 0..self.n_chains {
+            let (lo, _) = self.chains[i].poles_around(start);
+            a = a.max(lo);
+            self.next_pole[i] = 1;
+        }
         for _ in 0..self.params.max_scan_intervals {
             // Next distinct pole above a.
             let mut b = f64::INFINITY;
@@ -675,45 +703,61 @@ impl ModalSolver {
                 self.next_pole[i] = j;
                 b = b.min(p);
             }
-            let lo = if a == 0.0 { 0.0 } else { a * (1.0 + 1e-9) };
+            if a > limit {
+                break;
+            }
+            // Evaluation points just inside (a, b): never past the middle of a narrow
+            // interval (nearly coincident poles of different chains).
+            let inset = |w: f64, x: f64| (1e-9 * x).min(0.25 * w);
+            let lo = if a == 0.0 { 0.0 } else { a + inset(b - a, a) };
             let hi_eval = if b.is_finite() {
-                b * (1.0 - 1e-9)
+                b - inset(b - a, b)
             } else {
                 f64::INFINITY
             };
-            let na = if a == 0.0 {
-                0
-            } else {
-                let e = self.eval(lo);
-                eig3(&e.d).values.iter().filter(|&&v| v < 0.0).count()
-            };
-            let nb = if b.is_finite() {
-                let e = self.eval(hi_eval);
-                eig3(&e.d).values.iter().filter(|&&v| v < 0.0).count()
-            } else {
-                3
-            };
-            for branch in na..nb {
-                if first_interval && branch == 0 {
-                    continue; // the first root, already known to be below the threshold
-                }
-                let hi = if b.is_finite() {
-                    hi_eval
+            let skip_interval = b.is_finite() && hi_eval <= skip_to * (1.0 + 1e-9);
+            if !skip_interval {
+                let na = if a == 0.0 {
+                    0
                 } else {
-                    f64::INFINITY
+                    let e = self.eval(lo);
+                    eig3(&e.d).values.iter().filter(|&&v| v < 0.0).count()
                 };
-                let guess = if hi.is_finite() {
-                    0.5 * (lo + hi)
+                let nb = if b.is_finite() {
+                    let e = self.eval(hi_eval);
+                    eig3(&e.d).values.iter().filter(|&&v| v < 0.0).count()
                 } else {
-                    2.0 * lo.max(first.lambda)
+                    3
                 };
-                let mut r = self.branch_root(branch, lo, hi, b, guess)?;
-                if r.ee_participation >= thr {
-                    r.evaluations = self.evaluations - start;
-                    return Ok(r);
+                for branch in na..nb {
+                    let hi = if b.is_finite() {
+                        hi_eval
+                    } else {
+                        f64::INFINITY
+                    };
+                    let guess = if hi.is_finite() {
+                        0.5 * (lo + hi)
+                    } else {
+                        2.0 * lo.max(skip_to).max(1.0)
+                    };
+                    let mut r = self.branch_root(branch, lo, hi, b, guess)?;
+                    if r.lambda <= skip_to * (1.0 + 1e-9) {
+                        continue;
+                    }
+                    if self.recording
+                        && r.ee_participation >= P_WATCH * thr
+                        && self.n_members < MAX_MEMBERS
+                    {
+                        self.members[self.n_members] =
+                            (r.lambda, r.ee_participation, r.ee_participation);
+                        self.n_members += 1;
+                    }
+                    if r.ee_participation >= thr {
+                        r.evaluations = self.evaluations - begin;
+                        return Ok(r);
+                    }
                 }
             }
-            first_interval = false;
             if !b.is_finite() {
                 break;
             }
@@ -738,41 +782,170 @@ impl ModalSolver {
     /// Forget the tracked end-effector mode (the next [`Self::ee_mode_tracked`] scans).
     pub fn reset_tracking(&mut self) {
         self.ee_track = None;
+        self.n_members = 0;
     }
 
-    /// The end-effector mode, tracked from the last cycle when `warm`: Newton on the branch
-    /// of D that vanished at the last cycle's root, inside its pole interval. The answer is
-    /// accepted when its participation is still above the threshold and the number of modes
-    /// below it (Wittrick-Williams count) is unchanged — a mode crossing it, or the
-    /// end-effector character moving to a neighbour (avoided crossing), fails one of the
-    /// two checks and triggers the full scan of [`Self::ee_mode`].
+    /// The end-effector mode, tracked from the last cycle when `warm`.
+    ///
+    /// A full scan ([`Self::ee_mode`]) records every root up to the end-effector mode whose
+    /// participation is at least 0.2 × the threshold (the *watched* modes). A warm cycle follows each watched
+    /// mode by Newton's method on its branch of D inside its pole interval, and answers the
+    /// lowest with participation ≥ the threshold. Participation moves between modes only
+    /// through avoided crossings, so an unwatched mode can reach the threshold only by
+    /// taking it from a watched one; a rescan is forced when the watched modes have lost more
+    /// than 0.7 × the threshold of participation in total since the scan (an unwatched mode
+    /// then holds < 0.9 × the threshold), when a watched mode is lost, when two collapse onto one root, or when the
+    /// Wittrick-Williams count of modes below the answer changes other than by a mode with
+    /// low participation arriving or leaving.
     pub fn ee_mode_tracked(&mut self, first: &Root, warm: bool) -> Result<Root, ModalError> {
         let start = self.evaluations;
         let thr = self.params.ee_participation_min;
         if first.ee_participation >= thr {
             self.ee_track = Some((first.lambda, 0));
+            self.n_members = 0;
             return Ok(*first);
         }
-        if let (true, Some((l0, below0))) = (warm, self.ee_track) {
-            if let Some(mut r) = self.track_root(l0) {
-                if r.ee_participation >= thr && self.count_below(r.lambda * (1.0 - 1e-10)) == below0
-                {
-                    self.ee_track = Some((r.lambda, below0));
-                    r.evaluations = self.evaluations - start;
-                    return Ok(r);
+        let mut reason = 0;
+        if let (true, Some((l_ee, below0))) = (warm, self.ee_track) {
+            if self.n_members > 0 {
+                match self.track_members(l_ee, below0, thr) {
+                    Ok(mut r) => {
+                        r.evaluations = self.evaluations - start;
+                        return Ok(r);
+                    }
+                    Err((why, window)) => {
+                        // Partial rescan: the watched modes below the window keep their
+                        // baselines; everything from the window up is scanned again.
+                        self.rescans[why] += 1;
+                        if let Some(mut r) = self.partial_rescan(window, 2.0 * l_ee, thr) {
+                            r.evaluations = self.evaluations - start;
+                            return Ok(r);
+                        }
+                        reason = 0;
+                    }
                 }
             }
         }
-        let mut r = self.ee_mode(first)?;
+        self.rescans[reason] += 1;
+        self.recording = true;
+        self.n_members = 0;
+        if first.ee_participation >= P_WATCH * thr {
+            self.members[0] = (first.lambda, first.ee_participation, first.ee_participation);
+            self.n_members = 1;
+        }
+        let r = self.ee_mode(first);
+        self.recording = false;
+        let mut r = r?;
         let below = self.count_below(r.lambda * (1.0 - 1e-10));
         self.ee_track = Some((r.lambda, below));
         r.evaluations = self.evaluations - start;
         Ok(r)
     }
 
+    /// Counters of end-effector rescans by reason: [cold start, watched mode lost,
+    /// participation lost, watched modes collapsed, no watched mode above the threshold,
+    /// count of modes below changed].
+    pub fn rescan_counts(&self) -> [u64; 6] {
+        self.rescans
+    }
+
+    /// Rescan from `window` (rad²/s²) upward, keeping the watched modes below it. None when
+    /// the scan fails (the caller then scans from zero).
+    fn partial_rescan(&mut self, window: f64, limit: f64, thr: f64) -> Option<Root> {
+        let mut keep = 0;
+        while keep < self.n_members && self.members[keep].0 < window {
+            keep += 1;
+        }
+        self.n_members = keep;
+        // A kept mode above the threshold is lower than anything in the window.
+        for i in 0..keep {
+            if self.members[i].2 >= thr {
+                let l = self.members[i].0;
+                let (r, _) = self.track_root(l)?;
+                let below = self.count_below(r.lambda * (1.0 - 1e-10));
+                self.ee_track = Some((r.lambda, below));
+                return Some(r);
+            }
+        }
+        self.recording = true;
+        let r = self.ee_scan(window, window * (1.0 - 1e-12), limit);
+        self.recording = false;
+        let r = r.ok()?;
+        let below = self.count_below(r.lambda * (1.0 - 1e-10));
+        self.ee_track = Some((r.lambda, below));
+        Some(r)
+    }
+
+    /// One warm step of the watched modes; Err((reason, window start)) when a rescan is
+    /// needed from that λ upward.
+    fn track_members(&mut self, l_ee: f64, below0: u32, thr: f64) -> Result<Root, (usize, f64)> {
+        let mut answer: Option<(Root, usize)> = None;
+        let mut prev = 0.0f64;
+        let mut lost = 0.0f64;
+        for i in 0..self.n_members {
+            let (l, p_scan, _) = self.members[i];
+            let window = 0.95 * l;
+            let (r, branch) = self.track_root(l).ok_or((1usize, window))?;
+            lost += (p_scan - r.ee_participation).max(0.0);
+            if lost > P_LOSS * thr {
+                return Err((2, window));
+            }
+            if r.lambda <= prev * (1.0 + 1e-9) {
+                return Err((3, 0.95 * prev.min(r.lambda)));
+            }
+            prev = r.lambda;
+            self.members[i].0 = r.lambda;
+            self.members[i].2 = r.ee_participation;
+            if answer.is_none() && r.ee_participation >= thr {
+                answer = Some((r, branch));
+            }
+        }
+        let (r, branch) = answer.ok_or((4usize, 0.95 * l_ee.min(prev)))?;
+        // The watched modes keep their order, so the answer is the same mode as before
+        // exactly when it was the end-effector mode at the last cycle.
+        let same = (r.lambda - l_ee).abs() <= 1e-3 * l_ee;
+        let below = self.count_below(r.lambda * (1.0 - 1e-10));
+        if same && below != below0 {
+            if below + 1 == below0 {
+                // A mode left upward through the answer: fine.
+            } else if below == below0 + 1 {
+                // A mode arrived from above: it must carry little participation.
+                match self.highest_root_below(r.lambda, branch) {
+                    Some(h) if h.ee_participation < P_WATCH * thr => {}
+                    _ => return Err((5, 0.95 * r.lambda)),
+                }
+            } else {
+                return Err((5, 0.95 * r.lambda));
+            }
+        }
+        self.ee_track = Some((r.lambda, below));
+        Ok(r)
+    }
+
+    /// The highest root below the root `l1` of branch `branch`, when it lies in the same
+    /// pole interval (branch − 1 changes sign between the interval's lower pole and l1).
+    fn highest_root_below(&mut self, l1: f64, branch: usize) -> Option<Root> {
+        if branch == 0 {
+            return None;
+        }
+        let (a, b) = self.pole_interval(l1);
+        let lo = if a == 0.0 {
+            0.0
+        } else {
+            a + (1e-9 * a).min(0.25 * (l1 - a))
+        };
+        let e = self.eval(lo);
+        if !(eig3(&e.d).values[branch - 1] > 0.0) {
+            return None;
+        }
+        let hi = l1 - (1e-13 * l1).min(0.25 * (l1 - lo));
+        self.branch_root(branch - 1, lo, hi, b, l1 - (1e-6 * l1).min(0.5 * (l1 - lo)))
+            .ok()
+    }
+
     /// Newton from l0 on the branch of D closest to vanishing there, kept inside the pole
     /// interval of l0; None when it leaves it or does not converge in the bound.
-    fn track_root(&mut self, l0: f64) -> Option<Root> {
+    fn track_root(&mut self, l0: f64) -> Option<(Root, usize)> {
         let (a, b) = self.pole_interval(l0);
         if !(l0 > a && l0 < b) {
             return None;
@@ -812,12 +985,15 @@ impl ModalSolver {
             }
             if mu == 0.0 || (xn - x).abs() <= self.params.rel_tol * x {
                 let scale = e.d.abs().max().max(f64::MIN_POSITIVE);
-                return Some(Root {
-                    lambda: xn,
-                    ee_participation: self.participation(&e.dd, &v),
-                    evaluations: 0,
-                    residual: mu.abs() / scale,
-                });
+                return Some((
+                    Root {
+                        lambda: xn,
+                        ee_participation: self.participation(&e.dd, &v),
+                        evaluations: 0,
+                        residual: mu.abs() / scale,
+                    },
+                    branch,
+                ));
             }
             x = xn;
             e = self.eval(x);
