@@ -430,15 +430,20 @@ pub struct ModalSolver {
     recording: bool,
     /// Why end-effector rescans happened: [cold, lost, drift, order, no answer, count].
     rescans: [u64; 6],
+    /// Warm cycles since the last full scan.
+    since_scan: u32,
 }
 
 /// Largest number of watched modes.
 const MAX_MEMBERS: usize = 8;
 /// Modes up to the end-effector mode with participation ≥ P_WATCH × threshold are watched.
 const P_WATCH: f64 = 0.2;
-/// The watched modes may lose at most P_LOSS × threshold of participation in total since
+/// The watched modes may lose at most P_LOSS × threshold of participation (net) since
 /// the last scan; an unwatched mode then holds < (P_WATCH + P_LOSS) × threshold.
 const P_LOSS: f64 = 0.7;
+/// A full rescan at least this often (cycles) bounds the slow drift of the total
+/// participation with the pose.
+const FULL_RESCAN_CYCLES: u32 = 2000;
 
 impl ModalSolver {
     /// A solver with the given parameters.
@@ -464,6 +469,7 @@ impl ModalSolver {
             n_members: 0,
             recording: false,
             rescans: [0; 6],
+            since_scan: 0,
         }
     }
 
@@ -827,6 +833,7 @@ impl ModalSolver {
             }
         }
         self.rescans[reason] += 1;
+        self.since_scan = 0;
         self.recording = true;
         self.n_members = 0;
         if first.ee_participation >= P_WATCH * thr {
@@ -857,6 +864,9 @@ impl ModalSolver {
             keep += 1;
         }
         self.n_members = keep;
+        if keep == 0 {
+            self.since_scan = 0;
+        }
         // A kept mode above the threshold is lower than anything in the window.
         for i in 0..keep {
             if self.members[i].2 >= thr {
@@ -881,14 +891,21 @@ impl ModalSolver {
     fn track_members(&mut self, l_ee: f64, below0: u32, thr: f64) -> Result<Root, (usize, f64)> {
         let mut answer: Option<(Root, usize)> = None;
         let mut prev = 0.0f64;
+        // Net participation the watched set gave away since the scan (what moves between
+        // watched modes cannot reach an unwatched one).
         let mut lost = 0.0f64;
+        let mut first_loser = f64::INFINITY;
+        self.since_scan += 1;
+        if self.since_scan > FULL_RESCAN_CYCLES {
+            return Err((2, 0.0));
+        }
         for i in 0..self.n_members {
             let (l, p_scan, _) = self.members[i];
             let window = 0.95 * l;
             let (r, branch) = self.track_root(l).ok_or((1usize, window))?;
-            lost += (p_scan - r.ee_participation).max(0.0);
-            if lost > P_LOSS * thr {
-                return Err((2, window));
+            lost += p_scan - r.ee_participation;
+            if r.ee_participation < p_scan {
+                first_loser = first_loser.min(window);
             }
             if r.lambda <= prev * (1.0 + 1e-9) {
                 return Err((3, 0.95 * prev.min(r.lambda)));
@@ -899,6 +916,9 @@ impl ModalSolver {
             if answer.is_none() && r.ee_participation >= thr {
                 answer = Some((r, branch));
             }
+        }
+        if lost > P_LOSS * thr {
+            return Err((2, first_loser.min(0.95 * l_ee)));
         }
         let (r, branch) = answer.ok_or((4usize, 0.95 * l_ee.min(prev)))?;
         // The watched modes keep their order, so the answer is the same mode as before
