@@ -389,7 +389,7 @@ impl Estimator {
                 c.mass_per_length_kg_m,
                 c.mass_per_length_kg_m * g,
                 &self.frame,
-                true,
+                model.geometric_stiffness,
             )?;
         }
         self.modal.load(&self.models, self.scene.ee_mass_kg);
@@ -450,7 +450,7 @@ pub fn build_models(
                 c.mass_per_length_kg_m,
                 c.mass_per_length_kg_m * g,
                 &frame,
-                true,
+                scene.model.geometric_stiffness,
             )
         })
         .collect()

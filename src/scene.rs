@@ -126,6 +126,9 @@ pub struct ModelSettings {
     /// Smallest share of modal kinetic energy carried by the end-effector's own mass for a
     /// mode to count as an "end-effector mode" (0 < x ≤ 1, default 0.5).
     pub ee_participation_min: f64,
+    /// Transverse geometric stiffness T/l of the cables (effect `geometric_stiffness`).
+    /// Off: axial springs only (the paper's ref. [7]).
+    pub geometric_stiffness: bool,
 }
 
 /// A validated robot description. All fields SI.
@@ -160,7 +163,19 @@ struct RawScene {
     cable: RawCableDefaults,
     tension: RawTension,
     model: RawModel,
+    #[serde(default)]
+    effects: Option<RawEffects>,
     cables: Vec<RawCable>,
+}
+
+/// `[effects]`: which physics the scene asks for; nothing switched off is computed.
+#[derive(Debug, Deserialize, Default, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+struct RawEffects {
+    geometric_stiffness: Option<bool>,
+    cable_mass: Option<bool>,
+    sag: Option<bool>,
+    rotation: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -309,6 +324,58 @@ impl Scene {
                 format!("must be in (0, 1], got {part}"),
             ));
         }
+        // Effects: cable_mass = false → massless springs; sag = true → catenary element.
+        let fx = raw.effects.unwrap_or_default();
+        let mut element = raw.model.element;
+        if let Some(mass) = fx.cable_mass {
+            match (mass, element) {
+                (false, _) => element = ElementKind::Massless,
+                (true, ElementKind::Massless) => {
+                    return Err(inv(
+                        "effects.cable_mass",
+                        "cable_mass = true contradicts model.element = \"massless\"".into(),
+                    ))
+                }
+                _ => {}
+            }
+        }
+        if let Some(sag) = fx.sag {
+            match (sag, element) {
+                (true, ElementKind::Fem) => element = ElementKind::Catenary,
+                (true, ElementKind::Catenary) => {}
+                (true, other) => {
+                    return Err(inv(
+                        "effects.sag",
+                        format!(
+                            "sag needs the catenary element; model.element = \"{}\" cannot sag",
+                            other.as_str()
+                        ),
+                    ))
+                }
+                (false, ElementKind::Catenary) => {
+                    return Err(inv(
+                        "effects.sag",
+                        "sag = false contradicts model.element = \"catenary\"".into(),
+                    ))
+                }
+                (false, _) => {}
+            }
+        }
+        if fx.rotation == Some(true) {
+            return Err(inv(
+                "effects.rotation",
+                "the rigid-body end-effector is not supported yet; use rotation = false (point mass)".into(),
+            ));
+        }
+        let geometric_stiffness = fx.geometric_stiffness.unwrap_or(true);
+        if !geometric_stiffness && element != ElementKind::Massless {
+            return Err(inv(
+                "effects.geometric_stiffness",
+                "without geometric stiffness a cable with mass has no transverse stiffness (its string modes are at 0 Hz); \
+                 switch it off only with cable_mass = false"
+                    .into(),
+            ));
+        }
         if raw.cables.len() < 2 {
             return Err(inv(
                 "cables",
@@ -402,9 +469,10 @@ impl Scene {
             t_min_n: t_min,
             t_max_n: t_max,
             model: ModelSettings {
-                element: raw.model.element,
+                element,
                 elements_per_cable: n as usize,
                 ee_participation_min: part,
+                geometric_stiffness,
             },
         })
     }
@@ -443,6 +511,9 @@ impl Scene {
     pub fn with_model(&self, element: ElementKind, elements_per_cable: usize) -> Scene {
         let mut s = self.clone();
         s.model.element = element;
+        if element != ElementKind::Massless {
+            s.model.geometric_stiffness = true;
+        }
         s.model.elements_per_cable = elements_per_cable.clamp(1, MAX_ELEMENTS_PER_CABLE);
         s
     }
@@ -465,6 +536,26 @@ mod tests {
         Scene::from_toml_str(text, "t.toml")
             .unwrap_err()
             .to_string()
+    }
+
+    #[test]
+    fn effects_select_the_model() {
+        let base = DEFAULT_SCENE_TOML;
+        let with = |fx: &str| Scene::from_toml_str(&format!("{base}\n[effects]\n{fx}\n"), "t.toml");
+        assert_eq!(
+            with("sag = true").unwrap().model.element,
+            ElementKind::Catenary
+        );
+        assert_eq!(
+            with("cable_mass = false").unwrap().model.element,
+            ElementKind::Massless
+        );
+        let m = with("cable_mass = false\ngeometric_stiffness = false").unwrap();
+        assert!(!m.model.geometric_stiffness);
+        let e = with("geometric_stiffness = false").unwrap_err().to_string();
+        assert!(e.contains("effects.geometric_stiffness"), "{e}");
+        let e = with("rotation = maybe").unwrap_err().to_string();
+        assert!(e.contains("rotation"), "{e}");
     }
 
     #[test]
