@@ -60,10 +60,21 @@ pub enum KinematicsError {
 /// Cable geometry at one pose, preallocated for a fixed number of cables.
 #[derive(Debug, Clone)]
 pub struct Geometry {
-    /// Unit vectors s_i (anchor → end-effector).
+    /// Unit vectors s_i (anchor → attachment point).
     pub unit: Vec<Vector3<f64>>,
     /// Cable chord lengths L_i, m.
     pub length_m: Vec<f64>,
+    /// Attachment points relative to the centroid in the world frame, r_i = R b_i, m
+    /// (zero for a point mass). The structure matrix's moment rows are r_i × s_i.
+    pub arm_m: Vec<Vector3<f64>>,
+}
+
+/// Rotation matrix of a unit quaternion [w, x, y, z] (normalised first).
+pub fn rotation_of(q_wxyz: &[f64; 4]) -> nalgebra::Matrix3<f64> {
+    let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+        q_wxyz[0], q_wxyz[1], q_wxyz[2], q_wxyz[3],
+    ));
+    q.to_rotation_matrix().into_inner()
 }
 
 /// Smallest cable length accepted, m. Below it the element stiffness EA/L is meaningless.
@@ -75,6 +86,7 @@ impl Geometry {
         Geometry {
             unit: vec![Vector3::zeros(); n],
             length_m: vec![0.0; n],
+            arm_m: vec![Vector3::zeros(); n],
         }
     }
 
@@ -93,7 +105,7 @@ impl Geometry {
             return Err(KinematicsError::NonFinite);
         }
         for (i, a) in anchors_m.enumerate().take(self.unit.len()) {
-            let l = p_m - a;
+            let l = p_m + self.arm_m[i] - a;
             let len = l.norm();
             if len.is_nan() || len < MIN_CABLE_LENGTH_M {
                 return Err(KinematicsError::CableTooShort {
@@ -108,9 +120,37 @@ impl Geometry {
         Ok(())
     }
 
-    /// Structure matrix entry A[r, i] = s_i[r].
+    /// Recompute for a rigid end-effector: attachment points `attach_body_m` (body frame)
+    /// rotated by `rot` (body → world). No allocation.
+    pub fn update_rigid<'a>(
+        &mut self,
+        anchors_m: impl Iterator<Item = &'a Vector3<f64>>,
+        attach_body_m: impl Iterator<Item = &'a Vector3<f64>>,
+        p_m: &Vector3<f64>,
+        rot: &nalgebra::Matrix3<f64>,
+    ) -> Result<(), KinematicsError> {
+        for (arm, b) in self.arm_m.iter_mut().zip(attach_body_m) {
+            *arm = rot * b;
+        }
+        self.update(anchors_m, p_m)
+    }
+
+    /// Structure matrix entry A[r, i]: s_i[r] for r < 3, (r_i × s_i)[r − 3] for r ≥ 3.
     pub fn a(&self, r: usize, i: usize) -> f64 {
-        self.unit[i][r]
+        if r < 3 {
+            self.unit[i][r]
+        } else {
+            self.arm_m[i].cross(&self.unit[i])[r - 3]
+        }
+    }
+
+    /// Moment of the tensions about the centroid, Σ T_i r_i × s_i, N·m.
+    pub fn moment_of(&self, t_n: &[f64]) -> Vector3<f64> {
+        self.unit
+            .iter()
+            .zip(&self.arm_m)
+            .zip(t_n)
+            .fold(Vector3::zeros(), |acc, ((s, r), t)| acc + r.cross(s) * *t)
     }
 
     /// A·T, N.

@@ -30,7 +30,7 @@
 
 use crate::cable::{CableModel, Chain, ChainKind};
 use crate::scene::MAX_CABLES;
-use nalgebra::{DMatrix, Matrix3, SymmetricEigen, Vector3};
+use nalgebra::{DMatrix, Matrix3, Matrix6, SymmetricEigen, Vector3, Vector6};
 
 /// Errors of the modal solvers.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
@@ -262,15 +262,71 @@ pub struct Root {
     pub residual: f64,
 }
 
-/// D(λ), D'(λ) and the blocked count at one λ.
+/// D(λ), D'(λ) and the blocked count at one λ. D is 3 × 3 (point mass, in the top-left
+/// block) or 6 × 6 (rigid body: translation then rotation).
 #[derive(Debug, Clone, Copy)]
 pub struct DynEval {
-    /// Dynamic stiffness D(λ), N/m.
-    pub d: Matrix3<f64>,
-    /// dD/dλ, kg.
-    pub dd: Matrix3<f64>,
+    /// Dynamic stiffness D(λ), N/m (N·m/rad in the rotational block).
+    pub d: Matrix6<f64>,
+    /// dD/dλ, kg (kg·m² in the rotational block).
+    pub dd: Matrix6<f64>,
     /// Σ mult · blocked eigenvalues below λ.
     pub below: u32,
+    /// 3 or 6.
+    pub dim: usize,
+}
+
+impl DynEval {
+    /// Sorted eigen-decomposition of D.
+    pub fn eig(&self) -> EigD {
+        if self.dim == 3 {
+            let e = eig3(&self.d.fixed_view::<3, 3>(0, 0).into_owned());
+            let mut out = EigD {
+                values: [f64::INFINITY; 6],
+                vectors: [Vector6::zeros(); 6],
+                n: 3,
+            };
+            for k in 0..3 {
+                out.values[k] = e.values[k];
+                out.vectors[k]
+                    .fixed_rows_mut::<3>(0)
+                    .copy_from(&e.vectors[k]);
+            }
+            out
+        } else {
+            let e = SymmetricEigen::new(self.d);
+            let mut idx = [0usize, 1, 2, 3, 4, 5];
+            idx.sort_by(|&i, &j| e.eigenvalues[i].total_cmp(&e.eigenvalues[j]));
+            let mut out = EigD {
+                values: [0.0; 6],
+                vectors: [Vector6::zeros(); 6],
+                n: 6,
+            };
+            for (k, &i) in idx.iter().enumerate() {
+                out.values[k] = e.eigenvalues[i];
+                out.vectors[k] = e.eigenvectors.column(i).into_owned();
+            }
+            out
+        }
+    }
+}
+
+/// Sorted eigen-decomposition of D (3 or 6 valid entries).
+#[derive(Debug, Clone, Copy)]
+pub struct EigD {
+    /// Eigenvalues ascending (entries ≥ n are +∞ or unused).
+    pub values: [f64; 6],
+    /// Matching unit eigenvectors.
+    pub vectors: [Vector6<f64>; 6],
+    /// Number of valid entries.
+    pub n: usize,
+}
+
+impl EigD {
+    /// Number of negative eigenvalues.
+    pub fn negatives(&self) -> usize {
+        self.values[..self.n].iter().filter(|&&v| v < 0.0).count()
+    }
 }
 
 /// Sorted eigen-decomposition of a symmetric 3 × 3 matrix (ascending).
@@ -410,14 +466,49 @@ pub fn eig3_jacobi(a: &Matrix3<f64>) -> Eig3 {
 
 const MAX_CHAINS: usize = 3 * MAX_CABLES;
 
+/// G = [I, −[r]×] (3 × 6): displacement of an attachment point at arm r (m) for an
+/// end-effector translation u and small rotation θ: δx = u + θ × r.
+pub fn attach_map(r: &Vector3<f64>) -> nalgebra::Matrix3x6<f64> {
+    let mut g = nalgebra::Matrix3x6::zeros();
+    g.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&Matrix3::identity());
+    g.fixed_view_mut::<3, 3>(0, 3)
+        .copy_from(&(-r.cross_matrix()));
+    g
+}
+
+/// Rotational geometric stiffness of the tensions on a rigid end-effector (N·m/rad):
+/// Σ_i T_i [−(s_i·r_i) I + sym(s_i r_iᵀ)], from the second-order motion of each arm r_i
+/// under a rotation while its cable force −T_i s_i stays put.
+pub fn rigid_geometric_stiffness(
+    units: &[Vector3<f64>],
+    arms_m: &[Vector3<f64>],
+    tensions_n: &[f64],
+) -> Matrix3<f64> {
+    let mut k = Matrix3::zeros();
+    for ((s, r), t) in units.iter().zip(arms_m).zip(tensions_n) {
+        let sr = s * r.transpose();
+        k += (Matrix3::identity() * (-s.dot(r)) + (sr + sr.transpose()) * 0.5) * *t;
+    }
+    k
+}
+
 /// The structured real-time eigen solver. `new` sizes everything; `load` copies the
 /// chains of one pose; the root finders never allocate and are bounded.
 #[derive(Debug, Clone)]
 pub struct ModalSolver {
     params: ModalParams,
     chains: [Chain; MAX_CHAINS],
+    /// Rigid body: each chain's projector through the attachment map, Gᵀ P G (6 × 6).
+    q6: [Matrix6<f64>; MAX_CHAINS],
     n_chains: usize,
     ee_mass_kg: f64,
+    /// 3 (point mass) or 6 (rigid body).
+    dim: usize,
+    /// Rigid-body mass matrix diag(m I, I_world), kg and kg·m².
+    m6: Matrix6<f64>,
+    /// Constant rigid-body geometric stiffness (rotational block), N·m/rad.
+    k6: Matrix6<f64>,
     next_pole: [usize; MAX_CHAINS],
     evaluations: u32,
     /// Tracked end-effector mode: (λ, number of modes below it).
@@ -460,8 +551,12 @@ impl ModalSolver {
         ModalSolver {
             params,
             chains: [zero; MAX_CHAINS],
+            q6: [Matrix6::zeros(); MAX_CHAINS],
             n_chains: 0,
             ee_mass_kg: 0.0,
+            dim: 3,
+            m6: Matrix6::zeros(),
+            k6: Matrix6::zeros(),
             next_pole: [1; MAX_CHAINS],
             evaluations: 0,
             ee_track: None,
@@ -495,34 +590,103 @@ impl ModalSolver {
             }
         }
         self.ee_mass_kg = ee_mass_kg;
+        self.dim = 3;
+        self.m6 = Matrix6::zeros();
+        self.m6
+            .fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(Matrix3::identity() * ee_mass_kg));
+        self.k6 = Matrix6::zeros();
+    }
+
+    /// Load for a rigid end-effector: cable i's end moves with G_i = [I, −[r_i]×] (arm r_i,
+    /// world frame, m); `inertia_kg_m2` is the world-frame inertia about the centroid and
+    /// `k_geo_rot` the rotational geometric stiffness (N·m/rad) of the tensions.
+    pub fn load_rigid(
+        &mut self,
+        models: &[CableModel],
+        ee_mass_kg: f64,
+        inertia_kg_m2: &Matrix3<f64>,
+        arms_m: &[Vector3<f64>],
+        k_geo_rot: &Matrix3<f64>,
+    ) {
+        self.load(models, ee_mass_kg);
+        self.dim = 6;
+        self.m6
+            .fixed_view_mut::<3, 3>(3, 3)
+            .copy_from(inertia_kg_m2);
+        self.k6.fixed_view_mut::<3, 3>(3, 3).copy_from(k_geo_rot);
+        let mut k = 0;
+        for (m, r) in models.iter().zip(arms_m) {
+            let g = attach_map(r);
+            for _ in 0..m.n_chains {
+                if k < MAX_CHAINS {
+                    self.q6[k] = g.transpose() * self.chains[k].proj * g;
+                    k += 1;
+                }
+            }
+        }
     }
 
     /// D(λ), D'(λ) and the blocked count.
     #[inline]
     pub fn eval(&mut self, lambda: f64) -> DynEval {
         self.evaluations += 1;
-        let mut d = Matrix3::identity() * (-lambda * self.ee_mass_kg);
-        let mut dd = Matrix3::identity() * (-self.ee_mass_kg);
         let mut below = 0u32;
-        for c in &self.chains[..self.n_chains] {
+        if self.dim == 3 {
+            let mut d = Matrix3::identity() * (-lambda * self.ee_mass_kg);
+            let mut dd = Matrix3::identity() * (-self.ee_mass_kg);
+            for c in &self.chains[..self.n_chains] {
+                let e = c.eval(lambda);
+                d += c.proj * e.s;
+                dd += c.proj * e.ds;
+                below += c.mult * e.below;
+            }
+            let mut d6 = Matrix6::zeros();
+            let mut dd6 = Matrix6::zeros();
+            d6.fixed_view_mut::<3, 3>(0, 0).copy_from(&d);
+            dd6.fixed_view_mut::<3, 3>(0, 0).copy_from(&dd);
+            return DynEval {
+                d: d6,
+                dd: dd6,
+                below,
+                dim: 3,
+            };
+        }
+        let mut d = self.k6 - self.m6 * lambda;
+        let mut dd = -self.m6;
+        for (c, q) in self.chains[..self.n_chains].iter().zip(&self.q6) {
             let e = c.eval(lambda);
-            d += c.proj * e.s;
-            dd += c.proj * e.ds;
+            d += q * e.s;
+            dd += q * e.ds;
             below += c.mult * e.below;
         }
-        DynEval { d, dd, below }
+        DynEval {
+            d,
+            dd,
+            below,
+            dim: 6,
+        }
     }
 
     /// Number of natural frequencies strictly below λ (Wittrick-Williams).
     pub fn count_below(&mut self, lambda: f64) -> u32 {
         let e = self.eval(lambda);
-        let eg = eig3(&e.d);
-        e.below + eg.values.iter().filter(|&&v| v < 0.0).count() as u32
+        e.below + e.eig().negatives() as u32
     }
 
-    /// Static end-effector stiffness D(0), N/m.
+    /// Static end-effector stiffness D(0), translational block, N/m.
     pub fn static_stiffness(&mut self) -> Matrix3<f64> {
+        self.eval(0.0).d.fixed_view::<3, 3>(0, 0).into_owned()
+    }
+
+    /// Static end-effector stiffness D(0) (6 × 6 for a rigid body; top-left 3 × 3 else).
+    pub fn static_stiffness6(&mut self) -> Matrix6<f64> {
         self.eval(0.0).d
+    }
+
+    /// 3 (point mass) or 6 (rigid body).
+    pub fn dim(&self) -> usize {
+        self.dim
     }
 
     /// The lowest blocked eigenvalue over all chains, rad²/s² (∞ when none).
@@ -533,11 +697,13 @@ impl ModalSolver {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// Participation of the mode at root λ with null vector v (unit).
-    fn participation(&self, dd: &Matrix3<f64>, v: &Vector3<f64>) -> f64 {
+    /// Participation of the mode at root λ with null vector v (unit): the end-effector's
+    /// share vᵀ M_ee v / vᵀ(−D'(λ))v of the mode's kinetic-energy norm.
+    fn participation(&self, dd: &Matrix6<f64>, v: &Vector6<f64>) -> f64 {
         let kin = -(v.transpose() * dd * v)[(0, 0)];
+        let own = (v.transpose() * self.m6 * v)[(0, 0)];
         if kin > 0.0 {
-            (self.ee_mass_kg / kin).min(1.0)
+            (own / kin).min(1.0)
         } else {
             0.0
         }
@@ -572,7 +738,7 @@ impl ModalSolver {
                 });
             }
             let e = self.eval(x);
-            let eg = eig3(&e.d);
+            let eg = e.eig();
             let mu = eg.values[branch];
             let v = eg.vectors[branch];
             let dmu = (v.transpose() * e.dd * v)[(0, 0)];
@@ -620,7 +786,7 @@ impl ModalSolver {
     pub fn first_root(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
         let start = self.evaluations;
         let e0 = self.eval(0.0);
-        let eg0 = eig3(&e0.d);
+        let eg0 = e0.eig();
         if !(eg0.values[0] > 0.0) {
             return Err(ModalError::NotPositiveDefinite(eg0.values[0]));
         }
@@ -646,7 +812,7 @@ impl ModalSolver {
             let mut ok = false;
             for _ in 0..200 {
                 let e = self.eval(h);
-                if eig3(&e.d).values[0] < 0.0 {
+                if e.eig().values[0] < 0.0 {
                     ok = true;
                     break;
                 }
@@ -727,13 +893,13 @@ impl ModalSolver {
                     0
                 } else {
                     let e = self.eval(lo);
-                    eig3(&e.d).values.iter().filter(|&&v| v < 0.0).count()
+                    e.eig().negatives()
                 };
                 let nb = if b.is_finite() {
                     let e = self.eval(hi_eval);
-                    eig3(&e.d).values.iter().filter(|&&v| v < 0.0).count()
+                    e.eig().negatives()
                 } else {
-                    3
+                    self.dim
                 };
                 for branch in na..nb {
                     let hi = if b.is_finite() {
@@ -955,7 +1121,7 @@ impl ModalSolver {
             a + (1e-9 * a).min(0.25 * (l1 - a))
         };
         let e = self.eval(lo);
-        if !(eig3(&e.d).values[branch - 1] > 0.0) {
+        if !(e.eig().values[branch - 1] > 0.0) {
             return None;
         }
         let hi = l1 - (1e-13 * l1).min(0.25 * (l1 - lo));
@@ -971,10 +1137,10 @@ impl ModalSolver {
             return None;
         }
         let e = self.eval(l0);
-        let eg = eig3(&e.d);
+        let eg = e.eig();
         let mut branch = 0;
         let mut best = f64::INFINITY;
-        for i in 0..3 {
+        for i in 0..eg.n {
             let v = eg.vectors[i];
             let d = -(v.transpose() * e.dd * v)[(0, 0)];
             let dist = eg.values[i].abs() / d.max(f64::MIN_POSITIVE);
@@ -1017,7 +1183,7 @@ impl ModalSolver {
             }
             x = xn;
             e = self.eval(x);
-            eg = eig3(&e.d);
+            eg = e.eig();
         }
         None
     }

@@ -28,7 +28,8 @@ use crate::kinematics::Geometry;
 use crate::scene::MAX_CABLES;
 use nalgebra::Vector3;
 
-const M: usize = 3;
+/// Largest number of equality rows: force (3) and moment (3).
+const M: usize = 6;
 
 /// Parameters of the active-set solver.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -90,15 +91,17 @@ pub enum TensionError {
     /// No tensions within the bounds produce the wrench.
     #[error(
         "tension infeasible: wrench component {} cannot be reached within [{t_min_n}, {t_max_n}] N; \
-         closest tensions leave a residual ({:.4}, {:.4}, {:.4}) N; cables at t_max: {}, at t_min: {}",
-        ["f_x", "f_y", "f_z"][*worst_component], residual_n[0], residual_n[1], residual_n[2],
+         closest tensions leave a residual force ({:.4}, {:.4}, {:.4}) N, moment ({:.4}, {:.4}, {:.4}) N·m; \
+         cables at t_max: {}, at t_min: {}",
+        ["f_x", "f_y", "f_z", "m_x", "m_y", "m_z"][*worst_component], residual_n[0], residual_n[1], residual_n[2],
+        residual_n[3], residual_n[4], residual_n[5],
         fmt_mask(*at_upper_mask), fmt_mask(*at_lower_mask)
     )]
     Infeasible {
-        /// Index (0 = x, 1 = y, 2 = z) of the wrench component with the largest residual.
+        /// Index (0-2 = force x, y, z; 3-5 = moment x, y, z) of the largest residual.
         worst_component: usize,
-        /// A·T_closest − w, N.
-        residual_n: [f64; 3],
+        /// A·T_closest − w: force (N) then moment (N·m).
+        residual_n: [f64; 6],
         /// Bit i set: cable i at T_max in the closest solution.
         at_upper_mask: u32,
         /// Bit i set: cable i at T_min in the closest solution.
@@ -214,11 +217,23 @@ impl TensionSolver {
         self.info
     }
 
-    /// Solve for geometry `g`, wrench `w_n` (N) and bounds [t_min_n, t_max_n] (N).
+    /// Solve for geometry `g`, force `w_n` (N, no moment) and bounds [t_min_n, t_max_n] (N).
     pub fn solve(
         &mut self,
         g: &Geometry,
         w_n: &Vector3<f64>,
+        t_min_n: f64,
+        t_max_n: f64,
+    ) -> Result<&[f64], TensionError> {
+        let w = [w_n.x, w_n.y, w_n.z, 0.0, 0.0, 0.0];
+        self.solve_wrench(g, &w, t_min_n, t_max_n)
+    }
+
+    /// Solve for geometry `g`, wrench `w` = (force N, moment N·m) and bounds (N).
+    pub fn solve_wrench(
+        &mut self,
+        g: &Geometry,
+        w_n: &[f64; 6],
         t_min_n: f64,
         t_max_n: f64,
     ) -> Result<&[f64], TensionError> {
@@ -229,6 +244,10 @@ impl TensionSolver {
         }
         if !w_n.iter().all(|x| x.is_finite())
             || g.unit
+                .iter()
+                .take(n)
+                .any(|s| !s.iter().all(|x| x.is_finite()))
+            || g.arm_m
                 .iter()
                 .take(n)
                 .any(|s| !s.iter().all(|x| x.is_finite()))
@@ -244,7 +263,7 @@ impl TensionSolver {
         let mut full = [[0.0; MAX_CABLES]; M];
         for (r, row) in full.iter_mut().enumerate() {
             for i in 0..n {
-                row[i] = g.unit[i][r];
+                row[i] = g.a(r, i);
             }
         }
         let scale = full
@@ -303,11 +322,14 @@ impl TensionSolver {
         }
         // Dependent rows (w must be consistent with them).
         let aw = g.wrench_of(&self.t[..n]);
+        let am = g.moment_of(&self.t[..n]);
+        let wnorm = w_n.iter().map(|x| x * x).sum::<f64>().sqrt();
         let mut res = 0.0f64;
         for r in 0..M {
-            let d = (aw[r] - w_n[r]).abs();
+            let got = if r < 3 { aw[r] } else { am[r - 3] };
+            let d = (got - w_n[r]).abs();
             res = res.max(d);
-            if dependent[r] && d > 1e-9 * (w_n.norm() + t_max_n * scale) {
+            if dependent[r] && d > 1e-9 * (wnorm + t_max_n * scale) {
                 self.have_warm = false;
                 return Err(self.closest_solution(g, w_n));
             }
@@ -542,7 +564,7 @@ impl TensionSolver {
                     self.info.iterations = iters;
                     return Err(TensionError::Infeasible {
                         worst_component: 0,
-                        residual_n: [0.0; 3],
+                        residual_n: [0.0; 6],
                         at_upper_mask: 0,
                         at_lower_mask: 0,
                         t_min_n: self.lo,
@@ -596,12 +618,17 @@ impl TensionSolver {
 
     /// The closest achievable wrench: min ½‖A T − w‖² + ½ρ‖T‖² over the box, by a bounded
     /// number of projected-gradient (FISTA) steps. Leaves the tensions in `self.t`.
-    fn closest_solution(&mut self, g: &Geometry, w_n: &Vector3<f64>) -> TensionError {
+    fn closest_solution(&mut self, g: &Geometry, w_n: &[f64; 6]) -> TensionError {
         let n = self.n;
         let (lo, hi) = (self.lo, self.hi);
-        // Lipschitz constant of the gradient: ‖A‖² ≤ trace(AᵀA) = n (unit columns).
+        // Lipschitz constant of the gradient: ‖A‖² ≤ trace(AᵀA) = Σ (1 + ‖r_i × s_i‖²).
         let rho = 1e-9;
-        let lip = n as f64 + rho;
+        let lip = (0..n)
+            .map(|i| 1.0 + g.arm_m[i].cross(&g.unit[i]).norm_squared())
+            .sum::<f64>()
+            + rho;
+        let wf = Vector3::new(w_n[0], w_n[1], w_n[2]);
+        let wm = Vector3::new(w_n[3], w_n[4], w_n[5]);
         let mut x = [0.0; MAX_CABLES];
         for v in x.iter_mut().take(n) {
             *v = 0.5 * (lo + hi);
@@ -609,10 +636,11 @@ impl TensionSolver {
         let mut yv = x;
         let mut tk = 1.0f64;
         for _ in 0..2000 {
-            let r = g.wrench_of(&yv[..n]) - w_n;
+            let r = g.wrench_of(&yv[..n]) - wf;
+            let rm = g.moment_of(&yv[..n]) - wm;
             let mut xn = [0.0; MAX_CABLES];
             for i in 0..n {
-                let grad = g.unit[i].dot(&r) + rho * yv[i];
+                let grad = g.unit[i].dot(&r) + g.arm_m[i].cross(&g.unit[i]).dot(&rm) + rho * yv[i];
                 xn[i] = (yv[i] - grad / lip).clamp(lo, hi);
             }
             let tn = 0.5 * (1.0 + (1.0 + 4.0 * tk * tk).sqrt());
@@ -623,9 +651,11 @@ impl TensionSolver {
             tk = tn;
         }
         self.t = x;
-        let r = g.wrench_of(&x[..n]) - w_n;
+        let rf = g.wrench_of(&x[..n]) - wf;
+        let rm = g.moment_of(&x[..n]) - wm;
+        let r = [rf.x, rf.y, rf.z, rm.x, rm.y, rm.z];
         let mut worst = 0;
-        for c in 1..3 {
+        for c in 1..6 {
             if r[c].abs() > r[worst].abs() {
                 worst = c;
             }
@@ -646,7 +676,7 @@ impl TensionSolver {
         }
         TensionError::Infeasible {
             worst_component: worst,
-            residual_n: [r[0], r[1], r[2]],
+            residual_n: r,
             at_upper_mask: up,
             at_lower_mask: dn,
             t_min_n: lo,
@@ -716,6 +746,16 @@ pub fn clarabel_reference(
     t_min_n: f64,
     t_max_n: f64,
 ) -> Result<Vec<f64>, TensionError> {
+    clarabel_reference_wrench(g, &[w_n.x, w_n.y, w_n.z, 0.0, 0.0, 0.0], t_min_n, t_max_n)
+}
+
+/// [`clarabel_reference`] for a full wrench (force N, moment N·m).
+pub fn clarabel_reference_wrench(
+    g: &Geometry,
+    w_n: &[f64; 6],
+    t_min_n: f64,
+    t_max_n: f64,
+) -> Result<Vec<f64>, TensionError> {
     use clarabel::algebra::CscMatrix;
     use clarabel::solver::{
         DefaultSettings, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus, ZeroConeT,
@@ -727,11 +767,12 @@ pub fn clarabel_reference(
     if !w_n.iter().all(|x| x.is_finite()) {
         return Err(TensionError::NonFinite);
     }
-    // Equality rows that are not identically zero (a planar robot's normal row is).
-    let rows: Vec<usize> = (0..3)
-        .filter(|&r| (0..n).any(|i| g.unit[i][r].abs() > 1e-14))
+    // Equality rows that are not identically zero (a planar robot's normal row is; so are
+    // a point mass's moment rows).
+    let rows: Vec<usize> = (0..6)
+        .filter(|&r| (0..n).any(|i| g.a(r, i).abs() > 1e-14))
         .collect();
-    for r in 0..3 {
+    for r in 0..6 {
         if !rows.contains(&r) && w_n[r].abs() > 1e-9 {
             let mut s = TensionSolver::new(n, TensionParams::default());
             s.lo = t_min_n;
@@ -744,7 +785,7 @@ pub fn clarabel_reference(
     let mut b = vec![0.0; m_eq + 2 * n];
     for (k, &r) in rows.iter().enumerate() {
         for i in 0..n {
-            dense[k][i] = g.unit[i][r];
+            dense[k][i] = g.a(r, i);
         }
         b[k] = w_n[r];
     }
