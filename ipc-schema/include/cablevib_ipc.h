@@ -32,6 +32,17 @@
 #define CABLEVIB_SERVICE_ESTIMATE "cablevib/estimate" /* publish-subscribe, EstimateSample */
 #define CABLEVIB_SERVICE_MARGIN "cablevib/margin"     /* request-response, MarginRequest -> MarginResponse */
 
+/* Event services (wake-ups for peers that block instead of busy-polling): notify
+ * CABLEVIB_SERVICE_WAKE_SERVICE after sending a pose, set-point or margin request; cablevib
+ * notifies CABLEVIB_SERVICE_WAKE_CONTROLLER after each estimate and margin response. */
+#define CABLEVIB_SERVICE_WAKE_SERVICE "cablevib/wake/service"
+#define CABLEVIB_SERVICE_WAKE_CONTROLLER "cablevib/wake/controller"
+#define CABLEVIB_EVENT_ID_POSE 1
+#define CABLEVIB_EVENT_ID_T_MIN 2
+#define CABLEVIB_EVENT_ID_MARGIN_REQUEST 3
+#define CABLEVIB_EVENT_ID_ESTIMATE 4
+#define CABLEVIB_EVENT_ID_MARGIN_RESPONSE 5
+
 /* iceoryx2 type names; they end with "::v<CABLEVIB_SCHEMA_VERSION>". */
 #define CABLEVIB_TYPE_NAME_POSE_SAMPLE "cablevib::PoseSample::v1"
 #define CABLEVIB_TYPE_NAME_T_MIN_SETPOINT "cablevib::TminSetpoint::v1"

@@ -16,6 +16,11 @@
 //!
 //! Several instances share a machine by prefixing the names ([`prefixed`], [`ServiceNames`]).
 //!
+//! Two event services carry wake-ups, for peers that block instead of busy-polling: a peer
+//! notifies [`SERVICE_WAKE_SERVICE`] after sending a pose, set-point or margin request, and
+//! cablevib notifies [`SERVICE_WAKE_CONTROLLER`] after each estimate and margin response (event
+//! ids `EVENT_ID_*`). The data always travels on the services above; an event only says "look".
+//!
 //! # Layout
 //!
 //! Every message is `#[repr(C)]`, `Copy` and of fixed size: per-cable arrays hold
@@ -97,8 +102,9 @@ pub use messages::{
     IDENTITY_QUATERNION,
 };
 pub use names::{
-    prefixed, ServiceNames, ALL_SERVICES, SERVICE_ESTIMATE, SERVICE_MARGIN, SERVICE_POSE,
-    SERVICE_T_MIN,
+    prefixed, ServiceNames, ALL_SERVICES, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST,
+    EVENT_ID_MARGIN_RESPONSE, EVENT_ID_POSE, EVENT_ID_T_MIN, SERVICE_ESTIMATE, SERVICE_MARGIN,
+    SERVICE_POSE, SERVICE_T_MIN, SERVICE_WAKE_CONTROLLER, SERVICE_WAKE_SERVICE,
 };
 pub use status::{status_str, StatusCode, StatusText};
 

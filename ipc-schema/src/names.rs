@@ -10,6 +10,26 @@ pub const SERVICE_ESTIMATE: &str = "cablevib/estimate";
 /// [`MarginResponse`](crate::MarginResponse).
 pub const SERVICE_MARGIN: &str = "cablevib/margin";
 
+/// Event service that wakes a cablevib service running with `--wait event`: a peer notifies it
+/// after sending a pose ([`EVENT_ID_POSE`]), a T_min set-point ([`EVENT_ID_T_MIN`]) or a margin
+/// request ([`EVENT_ID_MARGIN_REQUEST`]). Notifying is harmless when the service busy-polls.
+pub const SERVICE_WAKE_SERVICE: &str = "cablevib/wake/service";
+/// Event service cablevib notifies after publishing an estimate ([`EVENT_ID_ESTIMATE`]) and
+/// after answering a margin request ([`EVENT_ID_MARGIN_RESPONSE`]): a controller waits on it
+/// instead of polling.
+pub const SERVICE_WAKE_CONTROLLER: &str = "cablevib/wake/controller";
+
+/// Event id: a pose was sent on [`SERVICE_POSE`].
+pub const EVENT_ID_POSE: usize = 1;
+/// Event id: a T_min set-point was sent on [`SERVICE_T_MIN`].
+pub const EVENT_ID_T_MIN: usize = 2;
+/// Event id: a margin request was sent on [`SERVICE_MARGIN`].
+pub const EVENT_ID_MARGIN_REQUEST: usize = 3;
+/// Event id: an estimate was published on [`SERVICE_ESTIMATE`].
+pub const EVENT_ID_ESTIMATE: usize = 4;
+/// Event id: a margin response was sent on [`SERVICE_MARGIN`].
+pub const EVENT_ID_MARGIN_RESPONSE: usize = 5;
+
 /// Every base service name, in the order pose, T_min, estimate, margin.
 pub const ALL_SERVICES: [&str; 4] = [
     SERVICE_POSE,
@@ -42,6 +62,10 @@ pub struct ServiceNames {
     pub estimate: String,
     /// [`SERVICE_MARGIN`], prefixed.
     pub margin: String,
+    /// [`SERVICE_WAKE_SERVICE`] (event), prefixed.
+    pub wake_service: String,
+    /// [`SERVICE_WAKE_CONTROLLER`] (event), prefixed.
+    pub wake_controller: String,
 }
 
 impl ServiceNames {
@@ -52,12 +76,19 @@ impl ServiceNames {
             t_min: prefixed(instance, SERVICE_T_MIN),
             estimate: prefixed(instance, SERVICE_ESTIMATE),
             margin: prefixed(instance, SERVICE_MARGIN),
+            wake_service: prefixed(instance, SERVICE_WAKE_SERVICE),
+            wake_controller: prefixed(instance, SERVICE_WAKE_CONTROLLER),
         }
     }
 
     /// The names in the order pose, T_min, estimate, margin.
     pub fn all(&self) -> [&str; 4] {
         [&self.pose, &self.t_min, &self.estimate, &self.margin]
+    }
+
+    /// The event service names, in the order wake-service, wake-controller.
+    pub fn events(&self) -> [&str; 2] {
+        [&self.wake_service, &self.wake_controller]
     }
 }
 
@@ -95,7 +126,15 @@ mod tests {
 
     #[test]
     fn names_are_valid_iceoryx2_service_names() {
-        for name in ServiceNames::new("some_instance").all() {
+        let names = ServiceNames::new("some_instance");
+        assert_eq!(
+            names.events(),
+            [
+                "some_instance/cablevib/wake/service",
+                "some_instance/cablevib/wake/controller"
+            ]
+        );
+        for name in names.all().into_iter().chain(names.events()) {
             iceoryx2::prelude::ServiceName::new(name).expect("valid service name");
         }
     }

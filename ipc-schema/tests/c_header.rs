@@ -13,8 +13,9 @@ use std::process::Command;
 
 use cablevib_ipc::layout::{StructLayout, ALL_LAYOUTS};
 use cablevib_ipc::{
-    StatusCode, ALL_SERVICES, MAX_CABLES, MAX_STIFFNESS_DIM, SCHEMA_VERSION, SERVICE_ESTIMATE,
-    SERVICE_MARGIN, SERVICE_POSE, SERVICE_T_MIN,
+    StatusCode, ALL_SERVICES, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST, EVENT_ID_MARGIN_RESPONSE,
+    EVENT_ID_POSE, EVENT_ID_T_MIN, MAX_CABLES, MAX_STIFFNESS_DIM, SCHEMA_VERSION, SERVICE_ESTIMATE,
+    SERVICE_MARGIN, SERVICE_POSE, SERVICE_T_MIN, SERVICE_WAKE_CONTROLLER, SERVICE_WAKE_SERVICE,
 };
 
 fn include_dir() -> PathBuf {
@@ -62,6 +63,28 @@ fn expected_constants() -> Vec<(String, String)> {
         (
             "CABLEVIB_SERVICE_MARGIN".into(),
             format!("\"{SERVICE_MARGIN}\""),
+        ),
+        (
+            "CABLEVIB_SERVICE_WAKE_SERVICE".into(),
+            format!("\"{SERVICE_WAKE_SERVICE}\""),
+        ),
+        (
+            "CABLEVIB_SERVICE_WAKE_CONTROLLER".into(),
+            format!("\"{SERVICE_WAKE_CONTROLLER}\""),
+        ),
+        ("CABLEVIB_EVENT_ID_POSE".into(), EVENT_ID_POSE.to_string()),
+        ("CABLEVIB_EVENT_ID_T_MIN".into(), EVENT_ID_T_MIN.to_string()),
+        (
+            "CABLEVIB_EVENT_ID_MARGIN_REQUEST".into(),
+            EVENT_ID_MARGIN_REQUEST.to_string(),
+        ),
+        (
+            "CABLEVIB_EVENT_ID_ESTIMATE".into(),
+            EVENT_ID_ESTIMATE.to_string(),
+        ),
+        (
+            "CABLEVIB_EVENT_ID_MARGIN_RESPONSE".into(),
+            EVENT_ID_MARGIN_RESPONSE.to_string(),
         ),
     ];
     assert_eq!(

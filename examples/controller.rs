@@ -1,0 +1,146 @@
+//! Controller: takes every estimate of a running `cablevib serve`, asks for its vibration margin
+//! after each one, and prints f1, the margin and latency percentiles at the end.
+//!
+//! ```text
+//! cargo run --release -- serve --instance demo &
+//! cargo run --release --example controller -- --instance demo --seconds 10 --required-hz 8 &
+//! cargo run --release --example replay -- --instance demo --seconds 10
+//! ```
+//!
+//! The loop is paced by the estimates (1 kHz when the replay publishes at 1 kHz). A real motion
+//! controller publishes the pose at the start of its cycle and takes the estimate (or the
+//! margin) before it commands the next set-point; the latency measured here, pose timestamp →
+//! estimate received, is what that costs. Ctrl-C stops early.
+
+use std::time::{Duration, Instant};
+
+use cablevib::service::ports::{create_node, EstimateOutput, MarginClient};
+use cablevib::service::stats::SampleLog;
+use cablevib::service::WaitMode;
+use cablevib_ipc::{monotonic_now_ns, status_str, MarginRequest, ServiceNames};
+use clap::Parser;
+
+/// Take estimates and margins from a cablevib service.
+#[derive(Debug, Parser)]
+struct Args {
+    /// Instance name, as given to `cablevib serve --instance` (empty: the bare service names).
+    #[arg(long, default_value = "")]
+    instance: String,
+    /// How long to run, s.
+    #[arg(long, default_value_t = 10.0)]
+    seconds: f64,
+    /// Required first natural frequency, Hz: margin = f1 − required.
+    #[arg(long, default_value_t = 8.0)]
+    required_hz: f64,
+    /// event: block on the wake-controller event (no CPU while waiting); spin: busy-poll
+    /// (lowest latency, but needs a CPU of its own besides the service's).
+    #[arg(long, value_enum, default_value_t = WaitMode::Event)]
+    wait: WaitMode,
+    /// Only take the estimates; do not query the margin.
+    #[arg(long)]
+    no_margin: bool,
+}
+
+fn main() -> anyhow::Result<()> {
+    let a = Args::parse();
+    anyhow::ensure!(
+        a.seconds.is_finite() && a.seconds > 0.0,
+        "--seconds must be finite and > 0"
+    );
+    let names = ServiceNames::new(&a.instance);
+    let node = create_node("cablevib-controller")?;
+    let estimates = EstimateOutput::open(&node, &names)?;
+    let margin = MarginClient::open(&node, &names)?;
+    println!(
+        "controller: taking estimates from \"{}\" for {} s (wait {}), margin against {} Hz",
+        names.estimate, a.seconds, a.wait, a.required_hz
+    );
+
+    let capacity = (a.seconds * 20_000.0) as usize + 1000;
+    let mut latency = SampleLog::with_capacity(capacity);
+    let mut margin_rtt = SampleLog::with_capacity(capacity);
+    let mut status_counts = [0u64; 16];
+    let (mut f1_min, mut f1_max) = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut worst_margin = f64::INFINITY;
+    let (mut stale, mut last_sequence, mut unanswered) = (0u64, 0u64, 0u64);
+    let mut request_sequence = 0u64;
+    let start = Instant::now();
+    let mut next_print = 1.0;
+    // `node.wait(0)` does not sleep; it returns an error after SIGINT/SIGTERM.
+    while node.wait(Duration::ZERO).is_ok() && start.elapsed().as_secs_f64() < a.seconds {
+        let Some(e) = estimates.wait(a.wait, Duration::from_millis(100))? else {
+            continue;
+        };
+        latency.push(monotonic_now_ns().saturating_sub(e.pose_timestamp_ns));
+        if e.pose_sequence <= last_sequence {
+            stale += 1; // the replay restarted, or an old estimate
+        }
+        last_sequence = e.pose_sequence;
+        status_counts[(e.status as usize).min(15)] += 1;
+        if e.is_ok() {
+            f1_min = f1_min.min(e.f1_hz);
+            f1_max = f1_max.max(e.f1_hz);
+        }
+        let (mut margin_hz, mut margin_pose) = (f64::NAN, 0);
+        if !a.no_margin {
+            request_sequence += 1;
+            let t0 = monotonic_now_ns();
+            let request = MarginRequest::new(request_sequence, t0, a.required_hz);
+            match margin.query(&request, a.wait, Duration::from_millis(5))? {
+                Some(r) => {
+                    margin_rtt.push(monotonic_now_ns().saturating_sub(t0));
+                    margin_pose = r.pose_sequence;
+                    if r.is_ok() {
+                        margin_hz = r.margin_hz;
+                        worst_margin = worst_margin.min(r.margin_hz);
+                    }
+                }
+                None => unanswered += 1,
+            }
+        }
+        let t = start.elapsed().as_secs_f64();
+        if t >= next_print {
+            println!(
+                "controller: t = {t:.1} s  pose {}  status {}  f1 {:.4} Hz  margin {:+.4} Hz \
+                 (latest pose {margin_pose})",
+                e.pose_sequence,
+                status_str(e.status),
+                e.f1_hz,
+                margin_hz
+            );
+            next_print += 1.0;
+        }
+    }
+
+    println!("controller: {} estimates", latency.len());
+    if f1_min.is_finite() {
+        println!("  f1: {f1_min:.4} … {f1_max:.4} Hz");
+    }
+    if worst_margin.is_finite() {
+        println!(
+            "  worst margin against {} Hz: {worst_margin:+.4} Hz",
+            a.required_hz
+        );
+    }
+    let statuses: Vec<String> = status_counts
+        .iter()
+        .enumerate()
+        .filter(|(_, &c)| c > 0)
+        .map(|(i, &c)| format!("{} {c}", status_str(i as u32)))
+        .collect();
+    println!("  statuses: {}", statuses.join(", "));
+    println!(
+        "  latency pose timestamp → estimate received: {}",
+        latency.percentiles().display_us()
+    );
+    if !a.no_margin {
+        println!(
+            "  margin query round trip: {} ({unanswered} unanswered within 5 ms)",
+            margin_rtt.percentiles().display_us()
+        );
+    }
+    if stale > 0 {
+        println!("  {stale} estimates did not advance the pose sequence");
+    }
+    Ok(())
+}

@@ -1,0 +1,263 @@
+//! `cablevib bench-ipc`: latency from a pose being published to its estimate being received,
+//! through real iceoryx2 services, in spin and in event mode.
+//!
+//! The service runs in its own thread with its own node (as in a separate process: iceoryx2
+//! goes through shared memory either way); the client publishes a pose of the paper's circle
+//! (1 ms apart along the trajectory, so the estimator's warm start behaves as in operation),
+//! waits for the estimate echoing its sequence, and records:
+//!
+//! - end-to-end: pose timestamp → estimate received (what a controller sees);
+//! - compute: the estimator's time, as the service measured it;
+//! - IPC overhead: end-to-end − compute;
+//! - pose → pickup: pose timestamp → the service took the pose;
+//! - estimate publish → received.
+//!
+//! Ping-pong (one pose in flight), after 1000 warm-up samples.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use cablevib_ipc::{monotonic_now_ns, PoseSample, ServiceNames, IDENTITY_QUATERNION};
+
+use super::ports::{create_node, EstimateOutput, PoseInput};
+use super::rt;
+use super::server::{self, no_allocation_counter, ServerConfig};
+use super::stats::{Percentiles, SampleLog};
+use super::trajectory::Trajectory;
+use super::{init_tracing, BenchIpcArgs, ServiceError, WaitMode};
+
+const WARM_UP: usize = 1000;
+const ANSWER_TIMEOUT: Duration = Duration::from_secs(1);
+
+/// Results of one wait mode.
+#[derive(Debug, Clone)]
+pub struct BenchResult {
+    /// The wait mode of service and client.
+    pub mode: WaitMode,
+    /// Pose timestamp → estimate received.
+    pub end_to_end: Percentiles,
+    /// Estimator compute time.
+    pub compute: Percentiles,
+    /// End-to-end − compute, per sample.
+    pub overhead: Percentiles,
+    /// Pose timestamp → service took the pose.
+    pub pickup: Percentiles,
+    /// Estimate publish timestamp → received.
+    pub delivery: Percentiles,
+    /// Poses without an answer within 1 s.
+    pub timeouts: u64,
+    /// Wall time of the timed samples, s.
+    pub seconds: f64,
+}
+
+/// Runs the benchmark and prints the results.
+pub fn run(a: &BenchIpcArgs) -> Result<(), ServiceError> {
+    init_tracing("warn");
+    if a.samples == 0 {
+        return Err(ServiceError::Usage("--samples must be > 0".into()));
+    }
+    let scene = crate::cli::load_scene(&a.scene)?;
+    let modes = match a.wait {
+        Some(m) => vec![m],
+        None => vec![WaitMode::Spin, WaitMode::Event],
+    };
+    let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut results = Vec::new();
+    for mode in modes {
+        if !a.json {
+            eprintln!("measuring {} mode: {} samples ...", mode, a.samples);
+        }
+        results.push(bench_mode(&scene, mode, a)?);
+    }
+    if a.json {
+        let q = |p: &Percentiles| serde_json::json!({"p50_ns": p.p50_ns, "p99_ns": p.p99_ns, "p999_ns": p.p999_ns, "max_ns": p.max_ns, "count": p.count});
+        let o = serde_json::json!({
+            "scene": scene.name,
+            "samples": a.samples,
+            "gap_us": a.gap_us,
+            "cpus": cpus,
+            "modes": results.iter().map(|r| serde_json::json!({
+                "wait": r.mode.as_str(),
+                "end_to_end": q(&r.end_to_end),
+                "compute": q(&r.compute),
+                "ipc_overhead": q(&r.overhead),
+                "pose_to_pickup": q(&r.pickup),
+                "publish_to_received": q(&r.delivery),
+                "timeouts": r.timeouts,
+                "seconds": r.seconds,
+            })).collect::<Vec<_>>(),
+        });
+        println!("{o}");
+        return Ok(());
+    }
+    println!(
+        "cablevib bench-ipc: pose published → estimate received over iceoryx2, scene `{}`, {} \
+         samples per mode (ping-pong{}), {} CPUs",
+        scene.name,
+        a.samples,
+        if a.gap_us > 0 {
+            format!(", {} µs gap", a.gap_us)
+        } else {
+            String::new()
+        },
+        cpus
+    );
+    println!(
+        "  {:<6} {:<34} {:>9} {:>9} {:>9} {:>9}",
+        "wait", "µs", "p50", "p99", "p99.9", "max"
+    );
+    for r in &results {
+        for (name, p) in [
+            ("end-to-end", &r.end_to_end),
+            ("  estimator compute", &r.compute),
+            ("  IPC overhead (end-to-end − compute)", &r.overhead),
+            ("  pose → taken by the service", &r.pickup),
+            ("  estimate publish → received", &r.delivery),
+        ] {
+            println!(
+                "  {:<6} {:<34} {:>9.1} {:>9.1} {:>9.1} {:>9.1}",
+                r.mode.as_str(),
+                name,
+                p.p50_ns as f64 / 1e3,
+                p.p99_ns as f64 / 1e3,
+                p.p999_ns as f64 / 1e3,
+                p.max_ns as f64 / 1e3
+            );
+        }
+        println!(
+            "  {:<6} {} samples in {:.2} s, {} unanswered",
+            r.mode.as_str(),
+            r.end_to_end.count,
+            r.seconds,
+            r.timeouts
+        );
+    }
+    Ok(())
+}
+
+/// Measures one wait mode: a service thread, the client in the calling thread.
+pub fn bench_mode(
+    scene: &crate::scene::Scene,
+    mode: WaitMode,
+    a: &BenchIpcArgs,
+) -> Result<BenchResult, ServiceError> {
+    let instance = format!("cablevib_bench_{}_{}", std::process::id(), mode.as_str());
+    let names = ServiceNames::new(&instance);
+    let stop = Arc::new(AtomicBool::new(false));
+    let server_thread = {
+        let scene = scene.clone();
+        let stop = stop.clone();
+        let cfg = ServerConfig {
+            instance,
+            wait: mode,
+            stats_period: None,
+            cpu: a.cpu,
+            node_name: "cablevib-bench-serve".into(),
+            ..ServerConfig::default()
+        };
+        std::thread::Builder::new()
+            .name("cablevib-serve".into())
+            .spawn(move || {
+                let r = server::run(&scene, &cfg, &stop, no_allocation_counter);
+                stop.store(true, Ordering::Release);
+                r
+            })
+            .map_err(|e| ServiceError::Usage(format!("cannot start the service thread: {e}")))?
+    };
+    let result = client(scene, mode, a, &names, &stop);
+    stop.store(true, Ordering::Release);
+    let served = server_thread
+        .join()
+        .map_err(|_| ServiceError::ThreadPanicked("service"))?;
+    served?;
+    result
+}
+
+fn client(
+    scene: &crate::scene::Scene,
+    mode: WaitMode,
+    a: &BenchIpcArgs,
+    names: &ServiceNames,
+    stop: &AtomicBool,
+) -> Result<BenchResult, ServiceError> {
+    if let Some(cpu) = a.cpu {
+        let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
+        if let Err(e) = rt::pin_to_cpu((cpu + 1) % cpus) {
+            tracing::warn!("client not pinned: {e}");
+        }
+    }
+    let node = create_node("cablevib-bench-client")?;
+    let input = PoseInput::open(&node, names)?;
+    let output = EstimateOutput::open(&node, names)?;
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !(input.service_connected() && output.service_connected()) {
+        if stop.load(Ordering::Acquire) || Instant::now() > deadline {
+            return Err(ServiceError::Timeout(
+                "the service did not come up within 10 s".into(),
+            ));
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    let trajectory = Trajectory::circle(scene, 4.0)?;
+    let n = a.samples;
+    let mut logs: [SampleLog; 5] = core::array::from_fn(|_| SampleLog::with_capacity(n));
+    let mut timeouts = 0;
+    let mut start = Instant::now();
+    for k in 0..WARM_UP + n {
+        if k == WARM_UP {
+            start = Instant::now();
+        }
+        if stop.load(Ordering::Acquire) {
+            break;
+        }
+        let p = trajectory
+            .position_at(k as f64 * 1e-3)
+            .unwrap_or(scene.ee_position_m);
+        let sequence = k as u64 + 1;
+        let pose = PoseSample::new(
+            sequence,
+            monotonic_now_ns(),
+            [p.x, p.y, p.z],
+            IDENTITY_QUATERNION,
+        );
+        input.send_pose(&pose)?;
+        let answer = loop {
+            match output.wait(mode, ANSWER_TIMEOUT)? {
+                Some(e) if e.pose_sequence == sequence => break Some(e),
+                Some(_) => continue, // an answer to an earlier (timed-out) pose
+                None => break None,
+            }
+        };
+        let received_ns = monotonic_now_ns();
+        let Some(e) = answer else {
+            timeouts += 1;
+            continue;
+        };
+        if k >= WARM_UP {
+            let e2e = received_ns.saturating_sub(pose.timestamp_ns);
+            logs[0].push(e2e);
+            logs[1].push(e.compute_ns);
+            logs[2].push(e2e.saturating_sub(e.compute_ns));
+            logs[3].push(e.receive_timestamp_ns.saturating_sub(pose.timestamp_ns));
+            logs[4].push(received_ns.saturating_sub(e.publish_timestamp_ns));
+        }
+        if a.gap_us > 0 {
+            let until = Instant::now() + Duration::from_micros(a.gap_us);
+            while Instant::now() < until {
+                core::hint::spin_loop();
+            }
+        }
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    Ok(BenchResult {
+        mode,
+        end_to_end: logs[0].percentiles(),
+        compute: logs[1].percentiles(),
+        overhead: logs[2].percentiles(),
+        pickup: logs[3].percentiles(),
+        delivery: logs[4].percentiles(),
+        timeouts,
+        seconds,
+    })
+}

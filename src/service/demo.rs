@@ -1,0 +1,444 @@
+//! `cablevib demo`: the service, a replay publisher and a controller, each with its own
+//! iceoryx2 node and thread in one process, talking over real shared-memory services.
+//!
+//! The replay (main thread) publishes the paper's circle at `--rate-hz`; the service thread
+//! estimates every pose; the controller thread takes every estimate, measures the latency from
+//! the pose's timestamp to its arrival, and asks the service for its margin against
+//! `--required-hz` after each one. A line of progress per second, then a summary.
+
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use cablevib_ipc::{
+    monotonic_now_ns, status_str, MarginRequest, PoseSample, ServiceNames, StatusCode,
+    TminSetpoint, IDENTITY_QUATERNION,
+};
+
+use super::ports::{create_node, EstimateOutput, MarginClient, PoseInput};
+use super::server::{self, no_allocation_counter, ServerConfig, ServerReport};
+use super::stats::{Percentiles, SampleLog};
+use super::trajectory::{TminSchedule, Trajectory};
+use super::{init_tracing, DemoArgs, ServiceError, WaitMode};
+
+/// What the controller saw of one estimate.
+#[derive(Debug, Clone, Copy)]
+struct Seen {
+    pose_sequence: u64,
+    status: u32,
+    f1_hz: f64,
+    ee_mode_hz: f64,
+}
+
+/// Everything the controller thread recorded.
+#[derive(Debug)]
+struct ControllerLog {
+    seen: Vec<Seen>,
+    latency: SampleLog,
+    margin_rtt: SampleLog,
+    /// (pose sequence, margin Hz, status) of each margin answer.
+    margins: Vec<(u64, f64, u32)>,
+    margin_timeouts: u64,
+}
+
+/// Shared progress counters (read once per second by the main thread).
+#[derive(Debug, Default)]
+struct Progress {
+    estimates: AtomicU64,
+    last_f1_bits: AtomicU64,
+    last_margin_bits: AtomicU64,
+    max_latency_ns: AtomicU64,
+    not_ok: AtomicU64,
+}
+
+fn controller(
+    names: ServiceNames,
+    wait: WaitMode,
+    required_hz: f64,
+    capacity: usize,
+    stop: Arc<AtomicBool>,
+    ready: Arc<AtomicBool>,
+    progress: Arc<Progress>,
+) -> Result<ControllerLog, ServiceError> {
+    let node = create_node("cablevib-demo-controller")?;
+    let estimates = EstimateOutput::open(&node, &names)?;
+    let margin = MarginClient::open(&node, &names)?;
+    ready.store(true, Ordering::Release);
+    let mut log = ControllerLog {
+        seen: Vec::with_capacity(capacity),
+        latency: SampleLog::with_capacity(capacity),
+        margin_rtt: SampleLog::with_capacity(capacity),
+        margins: Vec::with_capacity(capacity),
+        margin_timeouts: 0,
+    };
+    let mut request_sequence = 0;
+    while !stop.load(Ordering::Acquire) {
+        let Some(e) = estimates.wait(wait, Duration::from_millis(20))? else {
+            continue;
+        };
+        let latency = monotonic_now_ns().saturating_sub(e.pose_timestamp_ns);
+        log.latency.push(latency);
+        if log.seen.len() < capacity {
+            log.seen.push(Seen {
+                pose_sequence: e.pose_sequence,
+                status: e.status,
+                f1_hz: e.f1_hz,
+                ee_mode_hz: e.ee_mode_hz,
+            });
+        }
+        request_sequence += 1;
+        let t0 = monotonic_now_ns();
+        let request = MarginRequest::new(request_sequence, t0, required_hz);
+        match margin.query(&request, wait, Duration::from_millis(5))? {
+            Some(r) => {
+                log.margin_rtt.push(monotonic_now_ns().saturating_sub(t0));
+                if log.margins.len() < capacity {
+                    log.margins.push((r.pose_sequence, r.margin_hz, r.status));
+                }
+                progress
+                    .last_margin_bits
+                    .store(r.margin_hz.to_bits(), Ordering::Relaxed);
+            }
+            None => log.margin_timeouts += 1,
+        }
+        progress.estimates.fetch_add(1, Ordering::Relaxed);
+        progress
+            .last_f1_bits
+            .store(e.f1_hz.to_bits(), Ordering::Relaxed);
+        progress
+            .max_latency_ns
+            .fetch_max(latency, Ordering::Relaxed);
+        if !e.is_ok() {
+            progress.not_ok.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+    Ok(log)
+}
+
+fn validate(a: &DemoArgs) -> Result<(), ServiceError> {
+    let bad = |m: String| Err(ServiceError::Usage(m));
+    if !(a.seconds.is_finite() && a.seconds > 0.0 && a.seconds <= 3600.0) {
+        return bad(format!("--seconds {} must be in (0, 3600]", a.seconds));
+    }
+    if !(a.rate_hz.is_finite() && a.rate_hz >= 1.0 && a.rate_hz <= 20_000.0) {
+        return bad(format!("--rate-hz {} must be in [1, 20000] Hz", a.rate_hz));
+    }
+    if !(a.required_hz.is_finite() && a.required_hz > 0.0) {
+        return bad(format!(
+            "--required-hz {} must be finite and > 0",
+            a.required_hz
+        ));
+    }
+    Ok(())
+}
+
+/// Runs the demo and prints its summary.
+pub fn run(a: &DemoArgs) -> Result<(), ServiceError> {
+    validate(a)?;
+    // The service's own log lines would interleave with the progress: warnings only.
+    init_tracing("warn");
+    let scene = crate::cli::load_scene(&a.scene)?;
+    let trajectory = Trajectory::circle(&scene, a.period_s)?;
+    let schedule = match &a.t_min_schedule {
+        Some(s) => TminSchedule::parse(s)?,
+        None => TminSchedule::default(),
+    };
+    let instance = format!("cablevib_demo_{}", std::process::id());
+    let names = ServiceNames::new(&instance);
+    let n_poses = (a.seconds * a.rate_hz).round().max(1.0) as usize;
+    let capacity = n_poses + 1000;
+
+    println!(
+        "cablevib demo: {:.1} s on scene `{}` ({} cables, {} × {} elements/cable); the service \
+         waits by {}, the controller by {}",
+        a.seconds,
+        scene.name,
+        scene.n_cables(),
+        scene.model.element.as_str(),
+        scene.model.elements_per_cable,
+        a.wait,
+        a.controller_wait
+    );
+    println!(
+        "  replay: {}, {} Hz; T_min {}",
+        trajectory.describe(),
+        a.rate_hz,
+        if schedule.is_empty() {
+            format!("{} N (the scene's)", scene.t_min_n)
+        } else {
+            schedule
+                .steps()
+                .iter()
+                .map(|(t, v)| format!("{v} N from {t} s"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        }
+    );
+
+    let stop = Arc::new(AtomicBool::new(false));
+    let controller_ready = Arc::new(AtomicBool::new(false));
+    let progress = Arc::new(Progress::default());
+
+    let server_thread = {
+        let scene = scene.clone();
+        let stop = stop.clone();
+        let cfg = ServerConfig {
+            instance: instance.clone(),
+            wait: a.wait,
+            stats_period: None,
+            node_name: "cablevib-demo-serve".into(),
+            ..ServerConfig::default()
+        };
+        std::thread::Builder::new()
+            .name("cablevib-serve".into())
+            .spawn(move || {
+                let r = server::run(&scene, &cfg, &stop, no_allocation_counter);
+                // A signal stops the service first; make everybody else stop too.
+                stop.store(true, Ordering::Release);
+                r
+            })
+            .map_err(|e| ServiceError::Usage(format!("cannot start the service thread: {e}")))?
+    };
+    let controller_thread = {
+        let (names, stop, ready, progress) = (
+            names.clone(),
+            stop.clone(),
+            controller_ready.clone(),
+            progress.clone(),
+        );
+        let (wait, required) = (a.controller_wait, a.required_hz);
+        std::thread::Builder::new()
+            .name("cablevib-controller".into())
+            .spawn(move || {
+                let r = controller(
+                    names,
+                    wait,
+                    required,
+                    capacity,
+                    stop.clone(),
+                    ready,
+                    progress,
+                );
+                if r.is_err() {
+                    stop.store(true, Ordering::Release);
+                }
+                r
+            })
+            .map_err(|e| ServiceError::Usage(format!("cannot start the controller thread: {e}")))?
+    };
+
+    let replay = replay(
+        a,
+        &names,
+        &trajectory,
+        &schedule,
+        n_poses,
+        &stop,
+        &controller_ready,
+        &progress,
+    );
+    // Let the last estimates arrive, then stop the others.
+    std::thread::sleep(Duration::from_millis(100));
+    stop.store(true, Ordering::Release);
+    let server_report = server_thread
+        .join()
+        .map_err(|_| ServiceError::ThreadPanicked("service"))?;
+    let log = controller_thread
+        .join()
+        .map_err(|_| ServiceError::ThreadPanicked("controller"))?;
+    let sent = replay?;
+    let server_report = server_report?;
+    let log = log?;
+    summary(a, &trajectory, sent, &server_report, &log);
+    Ok(())
+}
+
+/// Publishes the trajectory from the calling thread; returns the number of poses sent.
+#[allow(clippy::too_many_arguments)]
+fn replay(
+    a: &DemoArgs,
+    names: &ServiceNames,
+    trajectory: &Trajectory,
+    schedule: &TminSchedule,
+    n_poses: usize,
+    stop: &AtomicBool,
+    controller_ready: &AtomicBool,
+    progress: &Progress,
+) -> Result<u64, ServiceError> {
+    let node = create_node("cablevib-demo-replay")?;
+    let input = PoseInput::open(&node, names)?;
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !(input.service_connected() && controller_ready.load(Ordering::Acquire)) {
+        if stop.load(Ordering::Acquire) {
+            return Err(ServiceError::Usage(
+                "the service or the controller stopped before the demo began".into(),
+            ));
+        }
+        if Instant::now() > deadline {
+            return Err(ServiceError::Timeout(
+                "the service did not come up within 10 s".into(),
+            ));
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let start = Instant::now();
+    let mut step = None;
+    let mut sent = 0u64;
+    let mut next_progress = 1.0;
+    let mut last_estimates = 0;
+    for k in 0..n_poses {
+        if stop.load(Ordering::Acquire) {
+            break;
+        }
+        let t_s = k as f64 / a.rate_hz;
+        let due = start + Duration::from_secs_f64(t_s);
+        let now = Instant::now();
+        if due > now {
+            std::thread::sleep(due - now);
+        }
+        let current = schedule.step_at(t_s);
+        if current != step {
+            if let Some(i) = current {
+                let (_, v) = schedule.steps()[i];
+                input.send_t_min(&TminSetpoint::uniform(i as u64 + 1, monotonic_now_ns(), v))?;
+            }
+            step = current;
+        }
+        let Some(p) = trajectory.position_at(t_s) else {
+            break;
+        };
+        let pose = PoseSample::new(
+            k as u64 + 1,
+            monotonic_now_ns(),
+            [p.x, p.y, p.z],
+            IDENTITY_QUATERNION,
+        );
+        input.send_pose(&pose)?;
+        sent += 1;
+        if t_s + 1.0 / a.rate_hz >= next_progress {
+            let n = progress.estimates.load(Ordering::Relaxed);
+            let f1 = f64::from_bits(progress.last_f1_bits.load(Ordering::Relaxed));
+            let margin = f64::from_bits(progress.last_margin_bits.load(Ordering::Relaxed));
+            let max_lat = progress.max_latency_ns.swap(0, Ordering::Relaxed);
+            println!(
+                "  t = {:>4.1} s  poses {:>6}  estimates {:>6} (+{:>4})  f1 {:.4} Hz  margin \
+                 {:+.4} Hz  worst latency this second {:.1} µs  not ok {}",
+                next_progress,
+                sent,
+                n,
+                n - last_estimates,
+                f1,
+                margin,
+                max_lat as f64 / 1e3,
+                progress.not_ok.load(Ordering::Relaxed)
+            );
+            last_estimates = n;
+            next_progress += 1.0;
+        }
+        if k % 64 == 0 {
+            input.update_connections();
+        }
+    }
+    Ok(sent)
+}
+
+fn summary(
+    a: &DemoArgs,
+    trajectory: &Trajectory,
+    sent: u64,
+    service: &ServerReport,
+    log: &ControllerLog,
+) {
+    let where_ = |seq: u64| {
+        let t = (seq.saturating_sub(1)) as f64 / a.rate_hz;
+        match trajectory.position_at(t) {
+            Some(p) => format!(
+                "t = {t:.3} s, at ({:.3}, {:.3}, {:.3}) m",
+                p.x + 0.0,
+                p.y + 0.0,
+                p.z + 0.0
+            ),
+            None => format!("t = {t:.3} s"),
+        }
+    };
+    println!("summary");
+    println!(
+        "  service: {} poses published, {} estimated ({} skipped as stale), estimator compute \
+         {}",
+        sent,
+        service.cycles,
+        service.skipped_poses,
+        service.compute.display_us()
+    );
+    let ok: Vec<&Seen> = log
+        .seen
+        .iter()
+        .filter(|s| s.status == StatusCode::Ok.as_u32())
+        .collect();
+    let min = ok.iter().min_by(|x, y| x.f1_hz.total_cmp(&y.f1_hz));
+    let max = ok.iter().max_by(|x, y| x.f1_hz.total_cmp(&y.f1_hz));
+    if let (Some(min), Some(max)) = (min, max) {
+        println!(
+            "  first natural frequency f1 along the trajectory: min {:.4} Hz ({}), max {:.4} Hz \
+             ({})",
+            min.f1_hz,
+            where_(min.pose_sequence),
+            max.f1_hz,
+            where_(max.pose_sequence)
+        );
+        let ee: Vec<f64> = ok
+            .iter()
+            .map(|s| s.ee_mode_hz)
+            .filter(|x| x.is_finite())
+            .collect();
+        if !ee.is_empty() {
+            let lo = ee.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = ee.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            println!("  end-effector mode frequency: {lo:.4} … {hi:.4} Hz");
+        }
+    } else {
+        println!("  no valid estimate was received");
+    }
+    let answered: Vec<&(u64, f64, u32)> = log
+        .margins
+        .iter()
+        .filter(|m| m.2 == StatusCode::Ok.as_u32())
+        .collect();
+    if let Some(worst) = answered.iter().min_by(|x, y| x.1.total_cmp(&y.1)) {
+        let below = answered.iter().filter(|m| m.1 < 0.0).count();
+        println!(
+            "  margin f1 − {:.2} Hz (required): worst {:+.4} Hz ({}); below the requirement in \
+             {} of {} answers{}",
+            a.required_hz,
+            worst.1,
+            where_(worst.0),
+            below,
+            answered.len(),
+            if log.margin_timeouts > 0 {
+                format!(", {} queries unanswered within 5 ms", log.margin_timeouts)
+            } else {
+                String::new()
+            }
+        );
+    }
+    let statuses: Vec<String> = service
+        .status_counts
+        .iter()
+        .enumerate()
+        .filter(|(_, &c)| c > 0)
+        .map(|(i, &c)| format!("{} {c}", status_str(i as u32)))
+        .collect();
+    println!("  estimates per status: {}", statuses.join(", "));
+    let lat: Percentiles = log.latency.percentiles();
+    println!(
+        "  latency pose published → estimate received by the controller ({} estimates): {}",
+        lat.count,
+        lat.display_us()
+    );
+    let rtt = log.margin_rtt.percentiles();
+    println!(
+        "  margin query round trip ({} queries): {}",
+        rtt.count,
+        rtt.display_us()
+    );
+}

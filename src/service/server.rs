@@ -1,0 +1,696 @@
+//! The service loop: poses and T_min set-points in, estimates and margin answers out.
+//!
+//! One iteration ([`Server::poll`]):
+//!
+//! 1. drain the pose subscriber, keeping the newest pose (the older ones are *skipped* and
+//!    counted);
+//! 2. drain the T_min subscriber; the newest set-point becomes *pending*;
+//! 3. if a pose came, apply the pending set-point and estimate the pose, then publish the
+//!    estimate and notify the wake-controller event;
+//! 4. answer every queued margin request from the latest estimate.
+//!
+//! Between iterations the loop busy-polls ([`WaitMode::Spin`]) or blocks on the wake-service
+//! event ([`WaitMode::Event`]), checks for SIGINT/SIGTERM (iceoryx2's handler, installed by the
+//! first `node.wait`) and, once per stats period, logs statistics through `tracing`.
+//!
+//! Nothing in steps 1–4 allocates except iceoryx2 itself, which in 0.10 allocates once per loan
+//! (one per published estimate, one per margin response) and once per received request; the
+//! heap allocations per cycle are counted (with the binary's counting allocator) and logged
+//! next to iceoryx2's expected share, so that a regression shows. Every loop over a queue is bounded. Bad input never
+//! stops the loop: the estimate carries the status ([`StatusCode`]) and the next valid pose is
+//! answered normally.
+//!
+//! # T_min set-points
+//!
+//! A set-point received in one iteration applies to the next pose estimated; a set-point sent
+//! before a pose (from the same thread) always applies to that pose, since the poses are
+//! drained before the set-points. The estimator
+//! takes one T_min for every cable: a per-cable set-point is applied as the largest of its
+//! values over the scene's cables (conservative: every cable gets at least its own minimum). A
+//! set-point that is negative, above the scene's T_max or not finite is reported once, as the
+//! status [`StatusCode::TminOutOfRange`] of the next estimate, and the previous set-point stays
+//! in force.
+
+use core::sync::atomic::{AtomicBool, Ordering};
+use core::time::Duration;
+
+use cablevib_ipc::{
+    monotonic_now_ns, EstimateSample, MarginResponse, PoseSample, ServiceNames, StatusCode,
+    TminSetpoint, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_RESPONSE, MAX_CABLES,
+};
+use iceoryx2::prelude::*;
+use nalgebra::Vector3;
+
+use super::ports::{self, Ipc, ServicePorts, POSE_BUFFER};
+use super::rt;
+use super::stats::{Percentiles, Ring};
+use super::{ServiceError, WaitMode};
+use crate::estimator::Estimator;
+use crate::kinematics::Pose;
+use crate::scene::Scene;
+
+/// Heap allocation counter (the binary's global allocator), or a function returning 0.
+pub type AllocCounter = fn() -> u64;
+
+/// A counter that counts nothing (when no counting allocator is installed).
+pub fn no_allocation_counter() -> u64 {
+    0
+}
+
+/// How the service runs.
+#[derive(Debug, Clone)]
+pub struct ServerConfig {
+    /// Instance name prefixing the service names (see [`ServiceNames::new`]).
+    pub instance: String,
+    /// Busy-poll or block on the wake-service event.
+    pub wait: WaitMode,
+    /// Period of the statistics log line; `None` logs none.
+    pub stats_period: Option<Duration>,
+    /// Stop after this many estimator cycles.
+    pub max_cycles: Option<u64>,
+    /// Pin the service thread to this CPU.
+    pub cpu: Option<usize>,
+    /// SCHED_FIFO and mlockall.
+    pub realtime: bool,
+    /// iceoryx2 node name (shown by `iox2 node list`).
+    pub node_name: String,
+    /// Check SIGINT/SIGTERM through the node (the process's iceoryx2 signal handler). Turn off
+    /// when another thread of the same process owns signal handling.
+    pub handle_signals: bool,
+}
+
+impl Default for ServerConfig {
+    fn default() -> ServerConfig {
+        ServerConfig {
+            instance: String::new(),
+            wait: WaitMode::Spin,
+            stats_period: Some(Duration::from_secs(5)),
+            max_cycles: None,
+            cpu: None,
+            realtime: false,
+            node_name: "cablevib-serve".into(),
+            handle_signals: true,
+        }
+    }
+}
+
+/// Why the loop ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StopReason {
+    /// SIGINT or SIGTERM.
+    Signal,
+    /// The stop flag was set (another thread).
+    Requested,
+    /// `max_cycles` reached.
+    MaxCycles,
+}
+
+/// Totals of one run of the service.
+#[derive(Debug, Clone)]
+pub struct ServerReport {
+    /// Why it stopped.
+    pub stop: StopReason,
+    /// Estimator cycles (= estimates published).
+    pub cycles: u64,
+    /// Poses received but not estimated because a newer one was queued.
+    pub skipped_poses: u64,
+    /// Estimates whose status was not ok.
+    pub invalid_inputs: u64,
+    /// Estimates per status code (index = wire value; the last slot collects unknown codes).
+    pub status_counts: [u64; 16],
+    /// T_min set-points received.
+    pub t_min_setpoints: u64,
+    /// Margin requests answered.
+    pub margin_requests: u64,
+    /// iceoryx2 receive/loan/send failures (the loop continues after each).
+    pub ipc_errors: u64,
+    /// Dead nodes whose stale resources were removed at start.
+    pub stale_nodes_removed: usize,
+    /// Compute time per cycle over the last [`RUN_RING`] cycles, ns.
+    pub compute: Percentiles,
+    /// Heap allocations on the cycle path per cycle (0 when no counting allocator is given).
+    pub allocations_per_cycle: f64,
+    /// Of those, the ones iceoryx2 0.10 makes by design per cycle: one per loan (estimate,
+    /// margin response) and one per received margin request.
+    pub iceoryx2_allocations_per_cycle: f64,
+}
+
+/// Capacity of the per-period compute-time ring.
+pub const PERIOD_RING: usize = 1 << 16;
+/// Capacity of the whole-run compute-time ring.
+pub const RUN_RING: usize = 1 << 17;
+/// Upper bound of samples taken from one queue in one iteration.
+const DRAIN_LIMIT: usize = 4 * POSE_BUFFER;
+/// Longest block in event mode before the loop checks signals and stats again.
+const EVENT_TIMEOUT: Duration = Duration::from_millis(50);
+
+/// The latest estimate, as far as the margin service needs it.
+#[derive(Debug, Clone, Copy)]
+struct Latest {
+    pose_sequence: u64,
+    status: StatusCode,
+    f1_hz: f64,
+}
+
+/// Counters of one stats period.
+#[derive(Debug, Clone, Copy, Default)]
+struct PeriodCounters {
+    cycles: u64,
+    skipped: u64,
+    invalid: u64,
+    margin: u64,
+    t_min: u64,
+    ipc_errors: u64,
+    status: [u64; 16],
+    rejected_t_min: Option<f64>,
+    allocations: u64,
+    /// Allocations iceoryx2 0.10 makes by design: one per loan (estimate, margin response) and
+    /// one per received request.
+    iceoryx2_allocations: u64,
+}
+
+/// The service: estimator, ports and bookkeeping. Built once; [`Server::poll`] is the cycle.
+pub struct Server {
+    scene_t_max_n: f64,
+    n_cables: usize,
+    estimator: Estimator,
+    ports: ServicePorts,
+    allocations: AllocCounter,
+    t_min_n: f64,
+    pending_t_min: Option<f64>,
+    latest: Option<Latest>,
+    period: PeriodCounters,
+    total: PeriodCounters,
+    period_ring: Ring,
+    run_ring: Ring,
+}
+
+impl Server {
+    /// Builds the estimator for `scene` and opens the service's ports on `node`.
+    pub fn new(
+        scene: &Scene,
+        node: &Node<Ipc>,
+        names: &ServiceNames,
+        allocations: AllocCounter,
+    ) -> Result<Server, ServiceError> {
+        let estimator = Estimator::new(scene)?;
+        let ports = ServicePorts::open(node, names)?;
+        Ok(Server {
+            scene_t_max_n: scene.t_max_n,
+            n_cables: scene.n_cables().min(MAX_CABLES),
+            estimator,
+            ports,
+            allocations,
+            t_min_n: scene.t_min_n,
+            pending_t_min: None,
+            latest: None,
+            period: PeriodCounters::default(),
+            total: PeriodCounters::default(),
+            period_ring: Ring::new(PERIOD_RING),
+            run_ring: Ring::new(RUN_RING),
+        })
+    }
+
+    /// The T_min in force, N.
+    pub fn t_min_n(&self) -> f64 {
+        self.t_min_n
+    }
+
+    /// One iteration: newest pose, set-points, estimate + publish, margin requests. Returns
+    /// whether anything was received.
+    pub fn poll(&mut self) -> bool {
+        let a0 = (self.allocations)();
+        let mut iceoryx2_allocations = 0;
+
+        // Poses first, then set-points: a set-point sent before a pose (by the same sender) is
+        // then always seen with that pose, because seeing the pose implies seeing everything
+        // its sender wrote before it.
+        let mut newest: Option<PoseSample> = None;
+        let mut received = 0u64;
+        while received < DRAIN_LIMIT as u64 {
+            match self.ports.pose.receive() {
+                Ok(Some(s)) => {
+                    newest = Some(*s);
+                    received += 1;
+                }
+                Ok(None) => break,
+                Err(_) => {
+                    self.period.ipc_errors += 1;
+                    break;
+                }
+            }
+        }
+        let receive_ns = monotonic_now_ns();
+        let mut worked = self.drain_t_min();
+        let cycle = newest.is_some();
+        if let Some(pose) = newest {
+            self.period.skipped += received - 1;
+            self.cycle(&pose, receive_ns);
+            iceoryx2_allocations += 1;
+            worked = true;
+        }
+
+        let answered = self.answer_margin_requests();
+        iceoryx2_allocations += 2 * answered;
+        worked |= answered > 0;
+
+        if cycle {
+            self.period.allocations += (self.allocations)().wrapping_sub(a0);
+            self.period.iceoryx2_allocations += iceoryx2_allocations;
+        }
+        worked
+    }
+
+    fn drain_t_min(&mut self) -> bool {
+        let mut any = false;
+        for _ in 0..DRAIN_LIMIT {
+            match self.ports.t_min.receive() {
+                Ok(Some(s)) => {
+                    self.pending_t_min = Some(effective_t_min(&s, self.n_cables));
+                    self.period.t_min += 1;
+                    any = true;
+                }
+                Ok(None) => break,
+                Err(_) => {
+                    self.period.ipc_errors += 1;
+                    break;
+                }
+            }
+        }
+        any
+    }
+
+    /// The T_min for this cycle: the pending set-point if valid (it stays in force), the
+    /// rejected value itself for this one cycle if not (the estimator reports
+    /// `TminOutOfRange`), otherwise the one in force.
+    fn t_min_for_cycle(&mut self) -> f64 {
+        match self.pending_t_min.take() {
+            Some(v) if v.is_finite() && v >= 0.0 && v <= self.scene_t_max_n => {
+                self.t_min_n = v;
+                v
+            }
+            Some(v) => {
+                self.period.rejected_t_min = Some(v);
+                v
+            }
+            None => self.t_min_n,
+        }
+    }
+
+    fn cycle(&mut self, p: &PoseSample, receive_ns: u64) {
+        let t_min = self.t_min_for_cycle();
+        let pose = Pose {
+            position_m: Vector3::new(p.position_m[0], p.position_m[1], p.position_m[2]),
+            orientation_wxyz: p.orientation_wxyz,
+        };
+        let t0 = monotonic_now_ns();
+        let e = *self.estimator.update(&pose, t_min);
+        let compute_ns = monotonic_now_ns().saturating_sub(t0);
+
+        let n = e.n_cables.min(MAX_CABLES);
+        let mut out = EstimateSample::zeroed();
+        out.pose_sequence = p.sequence;
+        out.pose_timestamp_ns = p.timestamp_ns;
+        out.receive_timestamp_ns = receive_ns;
+        out.status = e.status.as_u32();
+        out.cable_count = n as u32;
+        out.tensions_n[..n].copy_from_slice(&e.tensions_n[..n]);
+        out.f1_hz = e.f1_hz;
+        out.ee_mode_hz = e.ee_mode_hz;
+        out.stiffness_dim = 3;
+        for r in 0..3 {
+            for c in 0..3 {
+                out.stiffness[3 * r + c] = e.stiffness_n_m[(r, c)];
+            }
+        }
+        out.compute_ns = compute_ns;
+        out.eigen_evaluations = e.eigen_evaluations;
+        out.tension_iterations = e.tension_iterations;
+        out.eigen_residual = e.eigen_residual;
+        out.skipped_poses = self.total.skipped + self.period.skipped;
+
+        match self.ports.estimate.loan_uninit() {
+            Ok(sample) => {
+                out.publish_timestamp_ns = monotonic_now_ns();
+                if sample.write_payload(out).send().is_err() {
+                    self.period.ipc_errors += 1;
+                }
+            }
+            Err(_) => self.period.ipc_errors += 1,
+        }
+        self.ports.notify(EVENT_ID_ESTIMATE);
+
+        self.latest = Some(Latest {
+            pose_sequence: p.sequence,
+            status: e.status,
+            f1_hz: e.f1_hz,
+        });
+        self.period.cycles += 1;
+        self.period.status[(e.status.as_u32() as usize).min(15)] += 1;
+        if !e.is_ok() {
+            self.period.invalid += 1;
+        }
+        self.period_ring.push(compute_ns);
+        self.run_ring.push(compute_ns);
+    }
+
+    fn answer_margin_requests(&mut self) -> u64 {
+        let mut answered = 0;
+        for _ in 0..DRAIN_LIMIT {
+            let request = match self.ports.margin.receive() {
+                Ok(Some(r)) => r,
+                Ok(None) => break,
+                Err(_) => {
+                    self.period.ipc_errors += 1;
+                    break;
+                }
+            };
+            let req = *request.payload();
+            let now = monotonic_now_ns();
+            let response = margin_response(&req, self.latest, now);
+            if request.send_copy(response).is_err() {
+                self.period.ipc_errors += 1;
+            }
+            answered += 1;
+        }
+        if answered > 0 {
+            self.ports.notify(EVENT_ID_MARGIN_RESPONSE);
+            self.period.margin += answered;
+        }
+        answered
+    }
+
+    /// Logs the period's statistics (if `log`) and starts a new period.
+    fn end_period(&mut self, period_s: f64, log: bool) {
+        let p = self.period;
+        if log {
+            let compute = self.period_ring.percentiles();
+            let per_cycle = |x: u64| {
+                if p.cycles > 0 {
+                    x as f64 / p.cycles as f64
+                } else {
+                    0.0
+                }
+            };
+            tracing::info!(
+                "{} cycles in {:.1} s; compute p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs; \
+                 skipped poses {} (total {}); invalid inputs {}{}; T_min set-points {}, in force \
+                 {} N; margin requests {}; heap allocations per cycle {:.2} (iceoryx2's per loan \
+                 and per request: {:.2}){}",
+                p.cycles,
+                period_s,
+                compute.p50_ns as f64 / 1e3,
+                compute.p99_ns as f64 / 1e3,
+                compute.max_ns as f64 / 1e3,
+                p.skipped,
+                self.total.skipped + p.skipped,
+                p.invalid,
+                status_breakdown(&p.status),
+                p.t_min,
+                self.t_min_n,
+                p.margin,
+                per_cycle(p.allocations),
+                per_cycle(p.iceoryx2_allocations),
+                if p.ipc_errors > 0 {
+                    format!("; iceoryx2 errors {}", p.ipc_errors)
+                } else {
+                    String::new()
+                }
+            );
+            if let Some(v) = p.rejected_t_min {
+                tracing::warn!(
+                    "rejected a T_min set-point of {v} N (must be finite and in [0, {}] N); \
+                     {} N stays in force",
+                    self.scene_t_max_n,
+                    self.t_min_n
+                );
+            }
+        }
+        let t = &mut self.total;
+        t.cycles += p.cycles;
+        t.skipped += p.skipped;
+        t.invalid += p.invalid;
+        t.margin += p.margin;
+        t.t_min += p.t_min;
+        t.ipc_errors += p.ipc_errors;
+        t.allocations += p.allocations;
+        t.iceoryx2_allocations += p.iceoryx2_allocations;
+        for (a, b) in t.status.iter_mut().zip(p.status) {
+            *a += b;
+        }
+        self.period = PeriodCounters::default();
+        self.period_ring.clear();
+    }
+
+    fn cycles(&self) -> u64 {
+        self.total.cycles + self.period.cycles
+    }
+
+    fn report(&mut self, stop: StopReason, stale_nodes_removed: usize) -> ServerReport {
+        self.end_period(0.0, false);
+        let t = self.total;
+        let per = |x: u64| {
+            if t.cycles > 0 {
+                x as f64 / t.cycles as f64
+            } else {
+                0.0
+            }
+        };
+        ServerReport {
+            stop,
+            cycles: t.cycles,
+            skipped_poses: t.skipped,
+            invalid_inputs: t.invalid,
+            status_counts: t.status,
+            t_min_setpoints: t.t_min,
+            margin_requests: t.margin,
+            ipc_errors: t.ipc_errors,
+            stale_nodes_removed,
+            compute: self.run_ring.percentiles(),
+            allocations_per_cycle: per(t.allocations),
+            iceoryx2_allocations_per_cycle: per(t.iceoryx2_allocations),
+        }
+    }
+}
+
+/// The single T_min (N) the estimator gets for set-point `s`: the uniform value, or for a
+/// per-cable set-point the largest value over the first `n_cables` cables (NaN when malformed,
+/// so that the estimator reports `TminOutOfRange`).
+pub fn effective_t_min(s: &TminSetpoint, n_cables: usize) -> f64 {
+    if s.per_cable_count == 0 {
+        return s.t_min_n;
+    }
+    if !s.is_well_formed() {
+        return f64::NAN;
+    }
+    (0..n_cables)
+        .map(|i| s.t_min_for(i))
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// The answer to margin request `req` given the latest estimate: `InvalidRequest` for a
+/// required frequency that is not finite and positive, `NoPoseYet` before the first estimate,
+/// the latest estimate's status when it is not ok, otherwise f1 and the margin.
+/// `t_min_required_n` is not computed yet (NaN).
+fn margin_response(
+    req: &cablevib_ipc::MarginRequest,
+    latest: Option<Latest>,
+    now_ns: u64,
+) -> MarginResponse {
+    let pose_sequence = latest.map_or(0, |l| l.pose_sequence);
+    let status = match latest {
+        _ if !req.is_valid() => StatusCode::InvalidRequest,
+        None => StatusCode::NoPoseYet,
+        Some(l) if l.status.is_ok() => {
+            return MarginResponse::from_f1(req, pose_sequence, l.status, l.f1_hz, f64::NAN, now_ns)
+        }
+        Some(l) => l.status,
+    };
+    let mut r = MarginResponse::with_status(req, status, now_ns);
+    r.pose_sequence = pose_sequence;
+    r
+}
+
+/// `" (outside_workspace 3, t_min_out_of_range 1)"`, or `""` when every status was ok.
+fn status_breakdown(counts: &[u64; 16]) -> String {
+    let parts: Vec<String> = counts
+        .iter()
+        .enumerate()
+        .filter(|&(i, &c)| c > 0 && i != 0)
+        .map(|(i, &c)| format!("{} {c}", cablevib_ipc::status_str(i as u32)))
+        .collect();
+    if parts.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", parts.join(", "))
+    }
+}
+
+/// Runs the service for `scene` until a signal (when `cfg.handle_signals`), `stop` is set, or
+/// `cfg.max_cycles` cycles. Cleans up resources of dead nodes first.
+pub fn run(
+    scene: &Scene,
+    cfg: &ServerConfig,
+    stop: &AtomicBool,
+    allocations: AllocCounter,
+) -> Result<ServerReport, ServiceError> {
+    let (removed, failed) = ports::remove_stale_nodes();
+    if removed > 0 {
+        tracing::info!("removed the stale resources of {removed} dead iceoryx2 node(s)");
+    }
+    if failed > 0 {
+        tracing::warn!("could not remove the stale resources of {failed} dead iceoryx2 node(s)");
+    }
+    let names = ServiceNames::new(&cfg.instance);
+    let node = ports::create_node(&cfg.node_name)?;
+    // The first wait installs iceoryx2's SIGINT/SIGTERM handler; a zero wait does not sleep.
+    if cfg.handle_signals && node.wait(Duration::ZERO).is_err() {
+        return Err(ServiceError::Interrupted);
+    }
+    let mut server = Server::new(scene, &node, &names, allocations)?;
+
+    if let Some(cpu) = cfg.cpu {
+        match rt::pin_to_cpu(cpu) {
+            Ok(()) => tracing::info!("pinned to CPU {cpu}"),
+            Err(e) => tracing::warn!("CPU pinning not applied: {e}"),
+        }
+    }
+    if cfg.realtime {
+        match rt::lock_memory() {
+            Ok(()) => tracing::info!("memory locked (mlockall)"),
+            Err(e) => tracing::warn!("memory not locked: {e}"),
+        }
+        match rt::set_fifo() {
+            Ok(()) => tracing::info!("running with SCHED_FIFO priority {}", rt::FIFO_PRIORITY),
+            Err(e) => tracing::warn!("SCHED_FIFO not applied: {e}"),
+        }
+    }
+    tracing::info!(
+        "serving instance \"{}\" ({}): scene `{}` ({} cables, {} × {} elements/cable), wait {}, T_min {} N, \
+         T_max {} N",
+        cfg.instance,
+        if cfg.instance.is_empty() {
+            "bare service names".to_string()
+        } else {
+            format!("services \"{}/cablevib/...\"", cfg.instance.trim_matches('/'))
+        },
+        scene.name,
+        scene.n_cables(),
+        scene.model.element.as_str(),
+        scene.model.elements_per_cable,
+        cfg.wait.as_str(),
+        scene.t_min_n,
+        scene.t_max_n
+    );
+
+    let period_ns = cfg
+        .stats_period
+        .map(|d| d.as_nanos().min(u64::MAX as u128) as u64)
+        .unwrap_or(u64::MAX);
+    let mut period_start = monotonic_now_ns();
+    let reason = loop {
+        if stop.load(Ordering::Relaxed) {
+            break StopReason::Requested;
+        }
+        if cfg.handle_signals && node.wait(Duration::ZERO).is_err() {
+            break StopReason::Signal;
+        }
+        if cfg.wait == WaitMode::Event {
+            let until_stats = Duration::from_nanos(
+                period_ns.saturating_sub(monotonic_now_ns().saturating_sub(period_start)),
+            );
+            // Returns early on a notification (or a signal); either way we poll next.
+            let _ = server
+                .ports
+                .wake_in
+                .timed_wait(|_| {}, until_stats.min(EVENT_TIMEOUT));
+        }
+        let worked = server.poll();
+        if !worked && cfg.wait == WaitMode::Spin {
+            core::hint::spin_loop();
+        }
+        let now = monotonic_now_ns();
+        if now.saturating_sub(period_start) >= period_ns {
+            server.end_period((now - period_start) as f64 * 1e-9, true);
+            period_start = now;
+        }
+        if cfg.max_cycles.is_some_and(|m| server.cycles() >= m) {
+            break StopReason::MaxCycles;
+        }
+    };
+    let report = server.report(reason, removed);
+    tracing::info!(
+        "stopped ({}): {} cycles, compute {}, skipped poses {}, invalid inputs {}, margin \
+         requests {}, heap allocations per cycle {:.2} (iceoryx2's per loan and per request: \
+         {:.2})",
+        match reason {
+            StopReason::Signal => "signal",
+            StopReason::Requested => "stop requested",
+            StopReason::MaxCycles => "max cycles reached",
+        },
+        report.cycles,
+        report.compute.display_us(),
+        report.skipped_poses,
+        report.invalid_inputs,
+        report.margin_requests,
+        report.allocations_per_cycle,
+        report.iceoryx2_allocations_per_cycle
+    );
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cablevib_ipc::MarginRequest;
+
+    #[test]
+    fn per_cable_t_min_uses_the_largest_value() {
+        let s = TminSetpoint::per_cable(1, 0, 50.0, &[10.0, 70.0, 20.0]).unwrap();
+        assert_eq!(effective_t_min(&s, 8), 70.0);
+        assert_eq!(effective_t_min(&s, 1), 10.0);
+        let s = TminSetpoint::per_cable(1, 0, 90.0, &[10.0]).unwrap();
+        assert_eq!(
+            effective_t_min(&s, 8),
+            90.0,
+            "cables without a value use t_min_n"
+        );
+        let mut bad = TminSetpoint::per_cable(1, 0, 50.0, &[10.0, -1.0]).unwrap();
+        assert!(effective_t_min(&bad, 8).is_nan());
+        bad.per_cable_count = 99;
+        assert!(effective_t_min(&bad, 8).is_nan());
+        assert_eq!(effective_t_min(&TminSetpoint::uniform(1, 0, -3.0), 8), -3.0);
+    }
+
+    #[test]
+    fn margin_answers() {
+        let req = MarginRequest::new(5, 0, 8.0);
+        let none = margin_response(&req, None, 1);
+        assert_eq!(none.status_code(), Some(StatusCode::NoPoseYet));
+        let ok = Latest {
+            pose_sequence: 9,
+            status: StatusCode::Ok,
+            f1_hz: 9.5,
+        };
+        let r = margin_response(&req, Some(ok), 1);
+        assert!(r.is_ok());
+        assert_eq!((r.pose_sequence, r.f1_hz, r.margin_hz), (9, 9.5, 1.5));
+        let bad_req = MarginRequest::new(6, 0, -1.0);
+        assert_eq!(
+            margin_response(&bad_req, None, 1).status_code(),
+            Some(StatusCode::InvalidRequest)
+        );
+        let r = margin_response(&bad_req, Some(ok), 1);
+        assert_eq!(r.status_code(), Some(StatusCode::InvalidRequest));
+        assert!(r.margin_hz.is_nan());
+        let failed = Latest {
+            status: StatusCode::OutsideWorkspace,
+            f1_hz: f64::NAN,
+            ..ok
+        };
+        let r = margin_response(&req, Some(failed), 1);
+        assert_eq!(r.status_code(), Some(StatusCode::OutsideWorkspace));
+        assert_eq!(r.pose_sequence, 9);
+        assert!(r.f1_hz.is_nan());
+    }
+}
