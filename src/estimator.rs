@@ -16,8 +16,8 @@ use crate::cable::{up_frame, CableError, CableModel};
 use crate::kinematics::{Geometry, KinematicsError, Pose};
 use crate::modal::{self, lambda_to_hz, ModalError, ModalParams, ModalSolver, Root};
 use crate::scene::{ElementKind, Scene, MAX_CABLES};
-use crate::tension::{clarabel_reference, TensionError, TensionInfo, TensionParams, TensionSolver};
-use nalgebra::{Matrix3, Vector3};
+use crate::tension::{TensionError, TensionInfo, TensionParams, TensionSolver};
+use nalgebra::{Matrix3, Matrix6, Vector3};
 
 pub use cablevib_ipc::StatusCode as Status;
 
@@ -130,8 +130,13 @@ pub struct Estimate {
     pub ee_mode_hz: f64,
     /// Its participation.
     pub ee_mode_participation: f64,
-    /// Static end-effector stiffness, N/m (NaN unless ok).
+    /// Static end-effector stiffness, translational block, N/m (NaN unless ok).
     pub stiffness_n_m: Matrix3<f64>,
+    /// Static end-effector stiffness, 6 × 6 for a rigid body (N/m, N/rad, N·m/rad; the
+    /// translational 3 × 3 block for a point mass, zeros elsewhere).
+    pub stiffness6: Matrix6<f64>,
+    /// 3 (point mass) or 6 (rigid body).
+    pub stiffness_dim: usize,
     /// Tension solver: active-set changes in this cycle.
     pub tension_iterations: u32,
     /// Tension solver: the previous active set was optimal again.
@@ -156,6 +161,8 @@ impl Estimate {
             ee_mode_hz: f64::NAN,
             ee_mode_participation: f64::NAN,
             stiffness_n_m: Matrix3::repeat(f64::NAN),
+            stiffness6: Matrix6::repeat(f64::NAN),
+            stiffness_dim: 3,
             tension_iterations: 0,
             tension_warm: false,
             eigen_evaluations: 0,
@@ -188,6 +195,43 @@ pub struct Estimator {
     last_ok_position: Option<Vector3<f64>>,
     last_lambda1: f64,
     estimate: Estimate,
+    /// Scratch solvers of the inverse query (so it leaves the cycle's warm state alone).
+    inv_geometry: Geometry,
+    inv_tension: TensionSolver,
+    inv_models: Vec<CableModel>,
+    inv_modal: ModalSolver,
+}
+
+/// The answer to "which T_min reaches f1 ≥ f_required at this pose".
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TminAnswer {
+    /// The smallest T_min found, N (within the bracket tolerance).
+    pub t_min_n: f64,
+    /// f1 at that T_min, Hz (≥ the requirement up to 1e-9 relative).
+    pub f1_hz: f64,
+    /// Evaluations of the forward model (tensions + f1) spent.
+    pub evaluations: u32,
+}
+
+/// Errors of the inverse T_min query.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum TminQueryError {
+    /// The requirement is not finite and positive.
+    #[error("required f1 {0} Hz must be finite and > 0")]
+    BadRequirement(f64),
+    /// Even the largest feasible T_min does not reach the requirement.
+    #[error("f1 ≥ {required_hz:.4} Hz is unreachable: the largest feasible T_min {t_min_n:.3} N gives {f1_max_hz:.4} Hz")]
+    Unreachable {
+        /// Required, Hz.
+        required_hz: f64,
+        /// Best f1, Hz.
+        f1_max_hz: f64,
+        /// At this T_min, N.
+        t_min_n: f64,
+    },
+    /// The pose itself is invalid or infeasible at every T_min.
+    #[error(transparent)]
+    Pose(#[from] EstimatorError),
 }
 
 /// Errors building an estimator.
@@ -241,28 +285,37 @@ impl Estimator {
             last_ok_position: None,
             last_lambda1: f64::NAN,
             estimate: Estimate::empty(n),
+            inv_geometry: Geometry::new(n),
+            inv_tension: TensionSolver::new(n, params.tension),
+            inv_models: vec![zero; n],
+            inv_modal: ModalSolver::new(ModalParams {
+                certify: false,
+                ..params.modal
+            }),
         };
         // Expected rank: the rank at the default pose.
+        let rot = crate::kinematics::rotation_of(&scene.ee_orientation_wxyz);
+        let default_pose = |e: EstimatorError| BuildError::DefaultPose {
+            scene: scene.name.clone(),
+            source: e,
+        };
         est.geometry
-            .update(
+            .update_rigid(
                 scene.cables.iter().map(|c| &c.anchor_m),
+                scene.cables.iter().map(|c| &c.attachment_m),
                 &scene.ee_position_m,
+                &rot,
             )
-            .map_err(|e| BuildError::DefaultPose {
-                scene: scene.name.clone(),
-                source: e.into(),
-            })?;
+            .map_err(|e| default_pose(e.into()))?;
+        let f = scene.wrench_n();
         est.tension
-            .solve(
+            .solve_wrench(
                 &est.geometry,
-                &scene.wrench_n(),
+                &[f.x, f.y, f.z, 0.0, 0.0, 0.0],
                 scene.t_min_n,
                 scene.t_max_n,
             )
-            .map_err(|e| BuildError::DefaultPose {
-                scene: scene.name.clone(),
-                source: e.into(),
-            })?;
+            .map_err(|e| default_pose(e.into()))?;
         est.expected_rank = est.tension.info().rank;
         est.tension.reset_warm_start();
         Ok(est)
@@ -305,6 +358,183 @@ impl Estimator {
         self.tension.reset_warm_start();
     }
 
+    /// The smallest T_min (N) for which f1 at `pose` reaches `f_required_hz` (the paper's
+    /// conclusion 4), on the fast path: regula falsi (Illinois) on f1(T)² − f², which is
+    /// nearly linear in T_min (f1 ∝ √T_min), bracketed in [10⁻⁶ T_max, T_max] (or the largest
+    /// feasible T_min below T_max), at most 80 forward evaluations. Uses its own scratch
+    /// solvers: the cycle's warm state is untouched. No allocation.
+    pub fn t_min_for_f1(
+        &mut self,
+        pose: &Pose,
+        f_required_hz: f64,
+    ) -> Result<TminAnswer, TminQueryError> {
+        if !(f_required_hz.is_finite() && f_required_hz > 0.0) {
+            return Err(TminQueryError::BadRequirement(f_required_hz));
+        }
+        if !pose.is_finite() {
+            return Err(EstimatorError::Input("non-finite pose").into());
+        }
+        if !pose.has_unit_quaternion(self.params.quaternion_tol) {
+            return Err(EstimatorError::Input("quaternion is not of unit norm").into());
+        }
+        if self.scene.rigid {
+            let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
+            self.inv_geometry
+                .update_rigid(
+                    self.scene.cables.iter().map(|c| &c.anchor_m),
+                    self.scene.cables.iter().map(|c| &c.attachment_m),
+                    &pose.position_m,
+                    &rot,
+                )
+                .map_err(EstimatorError::from)?;
+        } else {
+            self.inv_geometry
+                .update(
+                    self.scene.cables.iter().map(|c| &c.anchor_m),
+                    &pose.position_m,
+                )
+                .map_err(EstimatorError::from)?;
+        }
+        self.inv_tension.reset_warm_start();
+        let mut evals = 0u32;
+        let mut warm = None;
+        let t_max = self.scene.t_max_n;
+        let lo0 = 1e-6 * t_max;
+        // Largest feasible T_min: T_max itself, or bisect the feasibility boundary.
+        let mut hi = t_max;
+        let mut f_hi = self.inverse_f1(pose, hi, &mut warm, &mut evals);
+        if f_hi.is_err() {
+            let mut ok = lo0;
+            let first = self.inverse_f1(pose, ok, &mut warm, &mut evals)?;
+            let mut f_ok = first;
+            let mut bad = t_max;
+            for _ in 0..50 {
+                let mid = 0.5 * (ok + bad);
+                match self.inverse_f1(pose, mid, &mut warm, &mut evals) {
+                    Ok(f) => {
+                        ok = mid;
+                        f_ok = f;
+                    }
+                    Err(_) => bad = mid,
+                }
+                if bad - ok <= 1e-12 * t_max {
+                    break;
+                }
+            }
+            hi = ok;
+            f_hi = Ok(f_ok);
+        }
+        let f_hi = f_hi?;
+        if f_hi < f_required_hz {
+            return Err(TminQueryError::Unreachable {
+                required_hz: f_required_hz,
+                f1_max_hz: f_hi,
+                t_min_n: hi,
+            });
+        }
+        let mut lo = lo0;
+        let f_lo = self.inverse_f1(pose, lo, &mut warm, &mut evals)?;
+        if f_lo >= f_required_hz {
+            return Ok(TminAnswer {
+                t_min_n: lo,
+                f1_hz: f_lo,
+                evaluations: evals,
+            });
+        }
+        let target = f_required_hz * f_required_hz;
+        let mut g_lo = f_lo * f_lo - target;
+        let mut g_hi = f_hi * f_hi - target;
+        let mut best = (hi, f_hi);
+        let mut side = 0i8;
+        for _ in 0..80 {
+            let t = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
+            let t = if t > lo && t < hi { t } else { 0.5 * (lo + hi) };
+            let f = self.inverse_f1(pose, t, &mut warm, &mut evals)?;
+            let g = f * f - target;
+            if g >= 0.0 {
+                hi = t;
+                g_hi = g;
+                best = (t, f);
+                if side == 1 {
+                    g_lo *= 0.5;
+                }
+                side = 1;
+            } else {
+                lo = t;
+                g_lo = g;
+                if side == -1 {
+                    g_hi *= 0.5;
+                }
+                side = -1;
+            }
+            if (best.1 - f_required_hz) <= 1e-10 * f_required_hz || hi - lo <= 1e-12 * t_max {
+                break;
+            }
+        }
+        Ok(TminAnswer {
+            t_min_n: best.0,
+            f1_hz: best.1,
+            evaluations: evals,
+        })
+    }
+
+    /// f1 (Hz) at `pose` (geometry already in `inv_geometry`) for T_min = `t_min_n`.
+    fn inverse_f1(
+        &mut self,
+        _pose: &Pose,
+        t_min_n: f64,
+        warm: &mut Option<f64>,
+        evals: &mut u32,
+    ) -> Result<f64, EstimatorError> {
+        *evals += 1;
+        let n = self.scene.n_cables();
+        let f = self.scene.wrench_n();
+        self.inv_tension.solve_wrench(
+            &self.inv_geometry,
+            &[f.x, f.y, f.z, 0.0, 0.0, 0.0],
+            t_min_n,
+            self.scene.t_max_n,
+        )?;
+        let model = self.scene.model;
+        let g = self.scene.gravity_m_s2.norm();
+        for i in 0..n {
+            let c = &self.scene.cables[i];
+            self.inv_models[i] = CableModel::build(
+                model.element,
+                model.elements_per_cable,
+                &self.inv_geometry.unit[i],
+                self.inv_geometry.length_m[i],
+                self.inv_tension.tensions_n()[i],
+                c.ea_n(),
+                c.mass_per_length_kg_m,
+                c.mass_per_length_kg_m * g,
+                &self.frame,
+                model.geometric_stiffness,
+            )?;
+        }
+        if self.scene.rigid {
+            let rot = crate::kinematics::rotation_of(&_pose.orientation_wxyz);
+            let inertia = rot * self.scene.ee_inertia_kg_m2 * rot.transpose();
+            let kgeo = modal::rigid_geometric_stiffness(
+                &self.inv_geometry.unit,
+                &self.inv_geometry.arm_m,
+                self.inv_tension.tensions_n(),
+            );
+            self.inv_modal.load_rigid(
+                &self.inv_models,
+                self.scene.ee_mass_kg,
+                &inertia,
+                &self.inv_geometry.arm_m,
+                &kgeo,
+            );
+        } else {
+            self.inv_modal.load(&self.inv_models, self.scene.ee_mass_kg);
+        }
+        let r = self.inv_modal.first_root(*warm)?;
+        *warm = Some(r.lambda);
+        Ok(lambda_to_hz(r.lambda))
+    }
+
     /// One cycle: pose and T_min (N, the same for every cable) → estimate.
     pub fn update(&mut self, pose: &Pose, t_min_n: f64) -> &Estimate {
         let n = self.scene.n_cables();
@@ -320,6 +550,7 @@ impl Estimator {
                 e.f1_hz = f64::NAN;
                 e.ee_mode_hz = f64::NAN;
                 e.stiffness_n_m = Matrix3::repeat(f64::NAN);
+                e.stiffness6 = Matrix6::repeat(f64::NAN);
                 if e.status != Status::TensionInfeasible {
                     e.tensions_n = [f64::NAN; MAX_CABLES];
                 }
@@ -349,8 +580,18 @@ impl Estimator {
         if (0..3).any(|i| p[i] < self.bounds.0[i] - m || p[i] > self.bounds.1[i] + m) {
             return Err(EstimatorError::Input("position outside the anchors' frame"));
         }
-        self.geometry
-            .update(self.scene.cables.iter().map(|c| &c.anchor_m), &p)?;
+        if self.scene.rigid {
+            let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
+            self.geometry.update_rigid(
+                self.scene.cables.iter().map(|c| &c.anchor_m),
+                self.scene.cables.iter().map(|c| &c.attachment_m),
+                &p,
+                &rot,
+            )?;
+        } else {
+            self.geometry
+                .update(self.scene.cables.iter().map(|c| &c.anchor_m), &p)?;
+        }
         let warm = match self.last_ok_position {
             Some(q) => (q - p).norm() <= self.params.warm_jump_m,
             None => false,
@@ -359,10 +600,11 @@ impl Estimator {
             self.tension.reset_warm_start();
             self.modal.reset_tracking();
         }
-        let wrench = self.scene.wrench_n();
+        let f = self.scene.wrench_n();
+        let wrench = [f.x, f.y, f.z, 0.0, 0.0, 0.0];
         let res = self
             .tension
-            .solve(&self.geometry, &wrench, t_min_n, self.scene.t_max_n)
+            .solve_wrench(&self.geometry, &wrench, t_min_n, self.scene.t_max_n)
             .map(|_| ());
         let info = self.tension.info();
         e.tension_iterations = info.iterations;
@@ -392,7 +634,24 @@ impl Estimator {
                 model.geometric_stiffness,
             )?;
         }
-        self.modal.load(&self.models, self.scene.ee_mass_kg);
+        if self.scene.rigid {
+            let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
+            let inertia = rot * self.scene.ee_inertia_kg_m2 * rot.transpose();
+            let kgeo = modal::rigid_geometric_stiffness(
+                &self.geometry.unit,
+                &self.geometry.arm_m,
+                &e.tensions_n[..n],
+            );
+            self.modal.load_rigid(
+                &self.models,
+                self.scene.ee_mass_kg,
+                &inertia,
+                &self.geometry.arm_m,
+                &kgeo,
+            );
+        } else {
+            self.modal.load(&self.models, self.scene.ee_mass_kg);
+        }
         let start = self.modal.evaluations();
         let warm_l = if warm && self.last_lambda1.is_finite() {
             Some(self.last_lambda1)
@@ -419,12 +678,22 @@ impl Estimator {
             e.ee_mode_hz = lambda_to_hz(ree.lambda);
             e.ee_mode_participation = ree.ee_participation;
         }
-        e.eigen_evaluations = self.modal.evaluations() - start;
-        let mut k = Matrix3::zeros();
-        for cm in &self.models {
-            k += cm.static_stiffness;
+        if self.scene.rigid {
+            let k6 = self.modal.static_stiffness6();
+            e.stiffness6 = k6;
+            e.stiffness_n_m = k6.fixed_view::<3, 3>(0, 0).into_owned();
+            e.stiffness_dim = 6;
+        } else {
+            let mut k = Matrix3::zeros();
+            for cm in &self.models {
+                k += cm.static_stiffness;
+            }
+            e.stiffness_n_m = k;
+            e.stiffness6 = Matrix6::zeros();
+            e.stiffness6.fixed_view_mut::<3, 3>(0, 0).copy_from(&k);
+            e.stiffness_dim = 3;
         }
-        e.stiffness_n_m = k;
+        e.eigen_evaluations = self.modal.evaluations() - start;
         Ok(())
     }
 }
@@ -494,16 +763,63 @@ pub fn reference_analysis(
     t_min_n: f64,
     vectors: bool,
 ) -> Result<ReferenceAnalysis, AnalysisError> {
+    let pose = Pose {
+        position_m: *position_m,
+        orientation_wxyz: scene.ee_orientation_wxyz,
+    };
+    reference_analysis_at(scene, &pose, t_min_n, vectors)
+}
+
+/// [`reference_analysis`] at a full pose (orientation matters for a rigid end-effector).
+pub fn reference_analysis_at(
+    scene: &Scene,
+    pose: &Pose,
+    t_min_n: f64,
+    vectors: bool,
+) -> Result<ReferenceAnalysis, AnalysisError> {
     let mut g = Geometry::new(scene.n_cables());
-    g.update(scene.cables.iter().map(|c| &c.anchor_m), position_m)?;
-    let t = clarabel_reference(&g, &scene.wrench_n(), t_min_n, scene.t_max_n)?;
+    let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
+    if scene.rigid {
+        g.update_rigid(
+            scene.cables.iter().map(|c| &c.anchor_m),
+            scene.cables.iter().map(|c| &c.attachment_m),
+            &pose.position_m,
+            &rot,
+        )?;
+    } else {
+        g.update(scene.cables.iter().map(|c| &c.anchor_m), &pose.position_m)?;
+    }
+    let f = scene.wrench_n();
+    let t = crate::tension::clarabel_reference_wrench(
+        &g,
+        &[f.x, f.y, f.z, 0.0, 0.0, 0.0],
+        t_min_n,
+        scene.t_max_n,
+    )?;
     let models = build_models(scene, &g, &t)?;
-    let (k, m) = modal::assemble(&models, scene.ee_mass_kg)?;
+    let mut ee = Matrix6::zeros();
+    ee.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(Matrix3::identity() * scene.ee_mass_kg));
+    let (k, m) = if scene.rigid {
+        let inertia = rot * scene.ee_inertia_kg_m2 * rot.transpose();
+        let kgeo = modal::rigid_geometric_stiffness(&g.unit, &g.arm_m, &t);
+        ee.fixed_view_mut::<3, 3>(3, 3).copy_from(&inertia);
+        modal::assemble_rigid(&models, scene.ee_mass_kg, &inertia, &g.arm_m, &kgeo)?
+    } else {
+        modal::assemble(&models, scene.ee_mass_kg)?
+    };
     let dof = k.nrows();
-    let modes = modal::dense_modes(&k, &m, scene.ee_mass_kg, vectors)?;
-    let stiffness_n_m = models
-        .iter()
-        .fold(Matrix3::zeros(), |a, cm| a + cm.static_stiffness);
+    let dim = if scene.rigid { 6 } else { 3 };
+    let modes = modal::dense_modes_ee(&k, &m, &ee, dim, vectors)?;
+    let stiffness_n_m = if scene.rigid {
+        modal::condense_static(&k, dim)
+            .fixed_view::<3, 3>(0, 0)
+            .into_owned()
+    } else {
+        models
+            .iter()
+            .fold(Matrix3::zeros(), |a, cm| a + cm.static_stiffness)
+    };
     Ok(ReferenceAnalysis {
         tensions_n: t,
         modes,
@@ -516,7 +832,13 @@ pub fn reference_analysis(
 /// active-set solver, then f1 and the end-effector mode.
 pub fn structured_analysis(scene: &Scene, position_m: &Vector3<f64>, t_min_n: f64) -> Estimate {
     match Estimator::new(scene) {
-        Ok(mut est) => *est.update(&Pose::at(*position_m), t_min_n),
+        Ok(mut est) => *est.update(
+            &Pose {
+                position_m: *position_m,
+                orientation_wxyz: scene.ee_orientation_wxyz,
+            },
+            t_min_n,
+        ),
         Err(BuildError::DefaultPose { source, .. }) => {
             let mut e = Estimate::empty(scene.n_cables());
             e.status = source.status();

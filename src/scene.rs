@@ -18,6 +18,8 @@ use std::path::Path;
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../scenes/spatial_paper.toml");
 /// The paper's planar robot (Tables 1-2), embedded for tests and examples.
 pub const PLANAR_SCENE_TOML: &str = include_str!("../scenes/planar_paper.toml");
+/// A 6-DOF robot: 8 cables, 3 × 3 × 2.5 m frame, box platform with attachment points.
+pub const BOX_SCENE_TOML: &str = include_str!("../scenes/box_6dof.toml");
 
 /// Largest number of cables a scene may have (fixed by the IPC message layout).
 pub const MAX_CABLES: usize = cablevib_ipc::MAX_CABLES;
@@ -107,6 +109,8 @@ pub struct Cable {
     pub area_m2: f64,
     /// Mass per unit length μ, kg/m.
     pub mass_per_length_kg_m: f64,
+    /// Attachment point on the end-effector in its body frame, m (zero for a point mass).
+    pub attachment_m: Vector3<f64>,
 }
 
 impl Cable {
@@ -152,6 +156,12 @@ pub struct Scene {
     pub t_max_n: f64,
     /// Cable model.
     pub model: ModelSettings,
+    /// Rigid-body end-effector (effect `rotation`): 6 DOF, attachments b_i, inertia.
+    pub rigid: bool,
+    /// Inertia tensor about the centroid in the body frame, kg·m² (rigid body only).
+    pub ee_inertia_kg_m2: nalgebra::Matrix3<f64>,
+    /// Default orientation, unit quaternion [w, x, y, z].
+    pub ee_orientation_wxyz: [f64; 4],
 }
 
 #[derive(Debug, Deserialize)]
@@ -183,6 +193,8 @@ struct RawEffects {
 struct RawEndEffector {
     mass: f64,
     position: [f64; 3],
+    inertia: Option<[[f64; 3]; 3]>,
+    orientation: Option<[f64; 4]>,
     #[serde(default = "default_true")]
     weight_carried: bool,
 }
@@ -228,6 +240,7 @@ fn default_participation() -> f64 {
 #[serde(deny_unknown_fields)]
 struct RawCable {
     anchor: [f64; 3],
+    attachment: Option<[f64; 3]>,
     youngs_modulus: Option<f64>,
     area: Option<f64>,
     weight_per_length: Option<f64>,
@@ -361,10 +374,49 @@ impl Scene {
                 (false, _) => {}
             }
         }
-        if fx.rotation == Some(true) {
+        let rigid = fx.rotation.unwrap_or(false);
+        let inertia =
+            match (rigid, raw.end_effector.inertia) {
+                (true, None) => return Err(inv(
+                    "end_effector.inertia",
+                    "missing: effects.rotation = true needs the inertia tensor (kg·m², body frame)"
+                        .into(),
+                )),
+                (_, Some(m)) => {
+                    let m = nalgebra::Matrix3::from_fn(|r, c| m[r][c]);
+                    if !m.iter().all(|x| x.is_finite())
+                        || (m - m.transpose()).abs().max() > 1e-9 * m.abs().max()
+                    {
+                        return Err(inv(
+                            "end_effector.inertia",
+                            "must be finite and symmetric".into(),
+                        ));
+                    }
+                    if m.cholesky().is_none() {
+                        return Err(inv(
+                            "end_effector.inertia",
+                            "must be positive definite".into(),
+                        ));
+                    }
+                    m
+                }
+                (false, None) => nalgebra::Matrix3::zeros(),
+            };
+        let orientation = raw.end_effector.orientation.unwrap_or([1.0, 0.0, 0.0, 0.0]);
+        let qn = orientation.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if !orientation.iter().all(|x| x.is_finite()) || (qn - 1.0).abs() > 1e-6 {
             return Err(inv(
-                "effects.rotation",
-                "the rigid-body end-effector is not supported yet; use rotation = false (point mass)".into(),
+                "end_effector.orientation",
+                format!("must be a unit quaternion [w, x, y, z], norm {qn}"),
+            ));
+        }
+        if rigid && raw.cables.len() < 6 {
+            return Err(inv(
+                "cables",
+                format!(
+                    "a rigid end-effector needs at least 6 cables, got {}",
+                    raw.cables.len()
+                ),
             ));
         }
         let geometric_stiffness = fx.geometric_stiffness.unwrap_or(true);
@@ -399,6 +451,19 @@ impl Scene {
         for (i, c) in raw.cables.iter().enumerate() {
             let key = |k: &str| format!("cables[{i}].{k}");
             let anchor = finite3(&key("anchor"), c.anchor)?;
+            let attachment = match c.attachment {
+                Some(b) => {
+                    let b = finite3(&key("attachment"), b)?;
+                    if !rigid && b.norm() > 0.0 {
+                        return Err(inv(
+                            &key("attachment"),
+                            "attachment points need the rigid end-effector: set effects.rotation = true".into(),
+                        ));
+                    }
+                    b
+                }
+                None => Vector3::zeros(),
+            };
             if (anchor - ee_pos).norm() < 1e-6 {
                 return Err(inv(
                     &key("anchor"),
@@ -457,6 +522,7 @@ impl Scene {
                 youngs_modulus_pa: e,
                 area_m2: a,
                 mass_per_length_kg_m: mu,
+                attachment_m: attachment,
             });
         }
         Ok(Scene {
@@ -474,7 +540,16 @@ impl Scene {
                 ee_participation_min: part,
                 geometric_stiffness,
             },
+            rigid,
+            ee_inertia_kg_m2: inertia,
+            ee_orientation_wxyz: orientation,
         })
+    }
+
+    /// The embedded 6-DOF box-platform robot.
+    pub fn box_6dof() -> Scene {
+        Self::from_toml_str(BOX_SCENE_TOML, "<embedded box_6dof.toml>")
+            .expect("embedded 6-DOF scene is valid (tested)")
     }
 
     /// Number of cables.
@@ -530,6 +605,8 @@ mod tests {
         let p = Scene::planar_paper();
         assert_eq!(p.n_cables(), 4);
         assert!(!p.weight_carried);
+        let b = Scene::box_6dof();
+        assert!(b.rigid && b.n_cables() == 8);
     }
 
     fn err(text: &str) -> String {
@@ -556,6 +633,8 @@ mod tests {
         assert!(e.contains("effects.geometric_stiffness"), "{e}");
         let e = with("rotation = maybe").unwrap_err().to_string();
         assert!(e.contains("rotation"), "{e}");
+        let e = with("rotation = true").unwrap_err().to_string();
+        assert!(e.contains("end_effector.inertia"), "{e}");
     }
 
     #[test]

@@ -1,9 +1,9 @@
 //! A counting global allocator proves the per-cycle path allocates nothing: 10,000 cycles
 //! along the trajectory (and bad inputs mixed in) make zero heap allocations after the
-//! first. This file is its own test binary, so the allocator counts only this process;
-//! the single test keeps other threads quiet while it measures.
-use cablevib::cli::circle_pose;
-use cablevib::estimator::Estimator;
+//! first, for every model including the rigid body; so does the inverse T_min query.
+//! This file is its own test binary, so the allocator counts only this process; the single
+//! test keeps other threads quiet while it measures.
+use cablevib::estimator::{Estimator, TminQueryError};
 use cablevib::kinematics::Pose;
 use cablevib::scene::{ElementKind, Scene};
 use nalgebra::Vector3;
@@ -28,6 +28,17 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static A: Counting = Counting;
 
+/// A circle around the default position (radius 0.75 m like the paper's, 0.2 m for the
+/// rigid-body robot whose feasible workspace is smaller), one pose per 1 ms, 4 s per turn.
+fn circle_pose(s: &Scene, k: usize, period_s: f64) -> Pose {
+    let r = if s.rigid { 0.2 } else { 0.75 };
+    let th = 2.0 * std::f64::consts::PI * (k as f64 * 1e-3) / period_s;
+    Pose {
+        position_m: s.ee_position_m + Vector3::new(r * th.cos(), r * th.sin(), 0.0),
+        orientation_wxyz: s.ee_orientation_wxyz,
+    }
+}
+
 #[test]
 fn ten_thousand_cycles_allocate_nothing() {
     for (scene, el, n) in [
@@ -36,6 +47,7 @@ fn ten_thousand_cycles_allocate_nothing() {
         (Scene::default_scene(), ElementKind::Continuous, 1),
         (Scene::default_scene(), ElementKind::Massless, 1),
         (Scene::planar_paper(), ElementKind::Fem, 10),
+        (Scene::box_6dof(), ElementKind::Fem, 10),
     ] {
         let s = scene.with_model(el, n);
         let mut est = Estimator::new(&s).unwrap();
@@ -53,7 +65,18 @@ fn ten_thousand_cycles_allocate_nothing() {
             };
             ok += e.is_ok() as usize;
         }
+        // The inverse T_min query (the service's margin answer): answered or unreachable,
+        // it allocates nothing either.
+        let pose = circle_pose(&s, 5, 4.0);
+        let e = *est.update(&pose, s.t_min_n);
+        assert!(e.is_ok(), "{} {el:?}: {:?}", s.name, e.error);
+        let f = e.f1_hz;
+        let q = est.t_min_for_f1(&pose, 1.05 * f);
         let after = COUNT.load(Ordering::Relaxed);
+        assert!(
+            matches!(q, Ok(_) | Err(TminQueryError::Unreachable { .. })),
+            "{q:?}"
+        );
         assert_eq!(
             after - before,
             0,

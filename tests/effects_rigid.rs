@@ -1,0 +1,290 @@
+//! Issue 5: effects switched off remove their contribution exactly, the rigid-body
+//! end-effector matches the dense reference, and the inverse T_min query.
+mod common;
+use cablevib::estimator::{reference_analysis_at, Estimator};
+use cablevib::kinematics::{Geometry, Pose};
+use cablevib::modal::{dense_relative_accuracy, lambda_to_hz};
+use cablevib::scene::{ElementKind, Scene, DEFAULT_SCENE_TOML, PLANAR_SCENE_TOML};
+use cablevib::tension::clarabel_reference;
+use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+
+fn f1(scene: &Scene, p: Vector3<f64>, t_min: f64) -> cablevib::estimator::Estimate {
+    let mut est = Estimator::new(scene).unwrap();
+    *est.update(
+        &Pose {
+            position_m: p,
+            orientation_wxyz: scene.ee_orientation_wxyz,
+        },
+        t_min,
+    )
+}
+
+/// The spring model by hand: f = √(λ_min(K)/m)/2π with K = Σ EA/L ssᵀ (+ T/L (I − ssᵀ)).
+fn spring_f1(scene: &Scene, p: Vector3<f64>, t_min: f64, geometric: bool) -> f64 {
+    let mut g = Geometry::new(scene.n_cables());
+    g.update(scene.cables.iter().map(|c| &c.anchor_m), &p)
+        .unwrap();
+    let t = clarabel_reference(&g, &scene.wrench_n(), t_min, scene.t_max_n).unwrap();
+    let mut k = Matrix3::zeros();
+    for i in 0..scene.n_cables() {
+        let s = g.unit[i];
+        let ss = s * s.transpose();
+        k += ss * (scene.cables[i].ea_n() / g.length_m[i]);
+        if geometric {
+            k += (Matrix3::identity() - ss) * (t[i] / g.length_m[i]);
+        }
+    }
+    let l = SymmetricEigen::new(k).eigenvalues.min() / scene.ee_mass_kg;
+    lambda_to_hz(l)
+}
+
+#[test]
+fn massless_cables_equal_the_spring_model() {
+    for (text, p) in [
+        (DEFAULT_SCENE_TOML, Vector3::new(0.3, -0.2, 1.0)),
+        (PLANAR_SCENE_TOML, Vector3::new(0.4, 0.1, 0.0)),
+    ] {
+        for geometric in [true, false] {
+            let fx = if geometric {
+                "cable_mass = false"
+            } else {
+                "cable_mass = false\ngeometric_stiffness = false"
+            };
+            let s = Scene::from_toml_str(&format!("{text}\n[effects]\n{fx}\n"), "t").unwrap();
+            let e = f1(&s, p, s.t_min_n);
+            let want = spring_f1(&s, p, s.t_min_n, geometric);
+            if !geometric && s.name == "planar-paper" {
+                // Axial springs in a plane leave the out-of-plane direction with no stiffness.
+                assert!(
+                    !e.is_ok(),
+                    "planar axial-only springs are a mechanism: {:?}",
+                    e.status
+                );
+                continue;
+            }
+            assert!(e.is_ok(), "{:?}", e.error);
+            assert!(
+                (e.f1_hz - want).abs() <= 1e-12 * want,
+                "{} geometric={geometric}: {} vs {want}",
+                s.name,
+                e.f1_hz
+            );
+            // Massless cables: the only modes are the end-effector's, participation 1.
+            assert!((e.f1_ee_participation - 1.0).abs() < 1e-12);
+        }
+    }
+}
+
+#[test]
+fn catenary_without_sag_equals_fem_within_t_over_2ea() {
+    // Gravity 1e-6 m/s² (weight not carried, mass per length given): γ ≈ 7e-9 N/m, no sag.
+    let text = PLANAR_SCENE_TOML
+        .replace(
+            "gravity = [0.0, 0.0, -9.81]",
+            "gravity = [0.0, 0.0, -1.0e-6]",
+        )
+        .replace(
+            "weight_per_length = 0.067     # N/m",
+            "mass_per_length = 0.006829765545361876",
+        );
+    let base = Scene::from_toml_str(&text, "t").unwrap();
+    for p in [Vector3::new(0.0, 0.0, 0.0), Vector3::new(0.5, -0.3, 0.0)] {
+        let fem = f1(&base.with_model(ElementKind::Fem, 10), p, 40.0);
+        let cat = f1(&base.with_model(ElementKind::Catenary, 10), p, 40.0);
+        let bound = fem
+            .tensions()
+            .iter()
+            .zip(&base.cables)
+            .map(|(t, c)| t / (2.0 * c.ea_n()))
+            .fold(0.0, f64::max);
+        let d = (fem.f1_hz - cat.f1_hz) / fem.f1_hz;
+        assert!(
+            d >= 0.0 && d <= 1.02 * bound,
+            "relative difference {d:.3e} vs T/(2EA) = {bound:.3e}"
+        );
+        assert!(
+            d >= 0.5 * bound,
+            "the chord-length effect T/(2EA) should be visible: {d:.3e} vs {bound:.3e}"
+        );
+    }
+}
+
+#[test]
+fn sag_effect_selects_the_catenary_element() {
+    let s = Scene::from_toml_str(
+        &format!("{DEFAULT_SCENE_TOML}\n[effects]\nsag = true\n"),
+        "t",
+    )
+    .unwrap();
+    assert_eq!(s.model.element, ElementKind::Catenary);
+    let e = f1(&s, s.ee_position_m, 60.0);
+    let want = common::f64s(&common::table(8)["rows"][0]["faithful_analytical_N40"])[0].unwrap();
+    assert!((e.f1_hz - want).abs() < 1e-9 * want);
+}
+
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+#[test]
+fn rigid_body_matches_the_dense_reference_on_random_poses() {
+    let scene = Scene::box_6dof();
+    let mut rng = Rng(7);
+    let mut checked = 0;
+    let mut worst = 0.0f64;
+    let mut worst_ee = 0.0f64;
+    for _ in 0..400 {
+        if checked == 100 {
+            break;
+        }
+        let p = Vector3::new(
+            -0.6 + 1.2 * rng.next(),
+            -0.6 + 1.2 * rng.next(),
+            0.8 + 0.9 * rng.next(),
+        );
+        let axis = Vector3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5).normalize();
+        let angle = 0.15 * (rng.next() - 0.5);
+        let q =
+            nalgebra::UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(axis), angle);
+        let pose = Pose {
+            position_m: p,
+            orientation_wxyz: [q.w, q.i, q.j, q.k],
+        };
+        let t_min = 40.0 + 40.0 * rng.next();
+        let Ok(r) = reference_analysis_at(&scene, &pose, t_min, true) else {
+            continue;
+        };
+        let mut est = Estimator::new(&scene).unwrap();
+        let e = *est.update(&pose, t_min);
+        assert!(e.is_ok(), "{:?} at {p:?}", e.error);
+        assert_eq!(e.stiffness_dim, 6);
+        for (a, b) in e.tensions().iter().zip(&r.tensions_n) {
+            assert!((a - b).abs() <= 1e-9 * b.max(1.0));
+        }
+        let l1 = r.modes.lambda[0];
+        let tol = (8.0 * dense_relative_accuracy(l1, r.modes.lambda_max)).max(1e-9);
+        let err = (e.f1_hz - lambda_to_hz(l1)).abs() / e.f1_hz;
+        assert!(
+            err <= tol,
+            "f1 {} vs dense {}: {err:.2e} > {tol:.2e}",
+            e.f1_hz,
+            lambda_to_hz(l1)
+        );
+        worst = worst.max(err);
+        let thr = scene.model.ee_participation_min;
+        let (k, lee) = r.modes.first_ee_mode(thr).unwrap();
+        if !r.modes.ee_participation[..=k]
+            .iter()
+            .any(|&q| (q - thr).abs() < 1e-3)
+        {
+            let tol = (8.0 * dense_relative_accuracy(lee, r.modes.lambda_max)).max(1e-9);
+            let err = (e.ee_mode_hz - lambda_to_hz(lee)).abs() / e.ee_mode_hz;
+            assert!(
+                err <= tol,
+                "ee {} vs dense {}: {err:.2e}",
+                e.ee_mode_hz,
+                lambda_to_hz(lee)
+            );
+            worst_ee = worst_ee.max(err);
+        }
+        // The 6 × 6 static stiffness equals the dense static condensation.
+        let kd = r.stiffness_n_m;
+        assert!(
+            (e.stiffness_n_m - kd).norm() <= 1e-8 * kd.norm(),
+            "{} vs {kd}",
+            e.stiffness_n_m
+        );
+        checked += 1;
+    }
+    assert_eq!(checked, 100);
+    eprintln!("6-DOF box robot, 100 random poses: worst |Δf1|/f1 {worst:.2e}, end-effector mode {worst_ee:.2e}");
+}
+
+#[test]
+fn rigid_body_keys_are_validated() {
+    let rigid = cablevib::scene::BOX_SCENE_TOML;
+    // Attachment points without the rotation effect are an error, not silently ignored.
+    let e = Scene::from_toml_str(&rigid.replace("rotation = true ", "rotation = false"), "t")
+        .unwrap_err();
+    assert!(e.to_string().contains("attachment"), "{e}");
+    // A non-definite inertia tensor is rejected.
+    let e = Scene::from_toml_str(&rigid.replace("0.6666667]]", "-0.6666667]]"), "t").unwrap_err();
+    assert!(e.to_string().contains("end_effector.inertia"), "{e}");
+    // A non-unit default orientation is rejected.
+    let e = Scene::from_toml_str(
+        &rigid.replace(
+            "orientation = [1.0, 0.0, 0.0, 0.0]",
+            "orientation = [1.0, 1.0, 0.0, 0.0]",
+        ),
+        "t",
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("end_effector.orientation"), "{e}");
+    // Rotation about the platform's vertical axis is held (crossed cables): the 6 × 6
+    // static stiffness is positive definite at the default pose.
+    let s = Scene::from_toml_str(rigid, "t").unwrap();
+    let e = f1(&s, s.ee_position_m, s.t_min_n);
+    assert!(e.is_ok() && e.stiffness6.cholesky().is_some());
+}
+
+#[test]
+fn inverse_t_min_reaches_the_required_frequency() {
+    for (scene, p) in [
+        (
+            Scene::default_scene().with_model(ElementKind::Fem, 10),
+            Vector3::new(0.2, 0.1, 1.0),
+        ),
+        (Scene::planar_paper(), Vector3::new(0.3, -0.4, 0.0)),
+        (Scene::box_6dof(), Vector3::new(0.1, 0.2, 1.3)),
+    ] {
+        let pose = Pose {
+            position_m: p,
+            orientation_wxyz: scene.ee_orientation_wxyz,
+        };
+        let mut est = Estimator::new(&scene).unwrap();
+        let base = *est.update(&pose, scene.t_min_n);
+        assert!(base.is_ok());
+        for factor in [0.7, 1.0, 1.3] {
+            let want = factor * base.f1_hz;
+            let a = match est.t_min_for_f1(&pose, want) {
+                Ok(a) => a,
+                Err(e) => panic!("{}: {e}", scene.name),
+            };
+            // Forward check with a fresh estimator at the answered T_min.
+            let mut fresh = Estimator::new(&scene).unwrap();
+            let e = *fresh.update(&pose, a.t_min_n);
+            assert!(e.is_ok());
+            let rel = (e.f1_hz - want) / want;
+            assert!(
+                rel >= -1e-9 && rel <= 1e-6,
+                "{}: f1({}) = {} vs required {want}: {rel:.2e}",
+                scene.name,
+                a.t_min_n,
+                e.f1_hz
+            );
+            // Smallest: a slightly lower T_min misses the requirement.
+            let below = *fresh.update(&pose, a.t_min_n * (1.0 - 1e-4));
+            assert!(
+                below.f1_hz < want,
+                "{}: T_min is not the smallest",
+                scene.name
+            );
+            assert!(a.evaluations <= 100);
+        }
+        // Unreachable requirements are errors, not clamps.
+        assert!(est.t_min_for_f1(&pose, 100.0 * base.f1_hz).is_err());
+        assert!(est.t_min_for_f1(&pose, f64::NAN).is_err());
+        // The cycle's own state is untouched (the next cycle is warm-started: equal to the
+        // cold first cycle within Newton's stopping tolerance).
+        let again = *est.update(&pose, scene.t_min_n);
+        assert!((again.f1_hz - base.f1_hz).abs() <= 1e-12 * base.f1_hz);
+        assert!(!again.cold_start);
+    }
+}
