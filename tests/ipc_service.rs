@@ -586,8 +586,40 @@ fn margin_requests_answer_for_the_latest_pose() {
     assert_eq!(r.margin_hz, e.f1_hz - 8.0);
     assert_eq!(r.margin_ratio, e.f1_hz / 8.0);
     assert!(r.margin_hz > 0.0, "the paper's robot is above 8 Hz here");
+    // The smallest T_min that reaches the requirement, as the library computes it.
+    let mut lib =
+        cablevib::estimator::Estimator::new(&cablevib::scene::Scene::default_scene()).unwrap();
+    let pose = cablevib::kinematics::Pose {
+        position_m: nalgebra::Vector3::from(circle(0)),
+        orientation_wxyz: IDENTITY_QUATERNION,
+    };
+    let want = lib
+        .t_min_for_f1(&pose, 8.0)
+        .expect("8 Hz is reachable")
+        .t_min_n;
+    assert!(
+        (r.t_min_required_n - want).abs() <= 1e-9 * want,
+        "{} vs {want}",
+        r.t_min_required_n
+    );
+    assert!(
+        r.t_min_required_n < 60.0,
+        "8 Hz needs less than the current 60 N"
+    );
     let r = query(&client, 3, 20.0);
     assert!(r.margin_hz < 0.0);
+    // Here the largest feasible T_min (≈ 88 N) gives ≈ 11 Hz: 20 Hz is unreachable → NaN.
+    assert!(
+        r.t_min_required_n.is_nan(),
+        "unreachable: NaN, got {}",
+        r.t_min_required_n
+    );
+    let r = query(&client, 6, 10.0);
+    let want = lib
+        .t_min_for_f1(&pose, 10.0)
+        .expect("10 Hz is reachable")
+        .t_min_n;
+    assert!((r.t_min_required_n - want).abs() <= 1e-9 * want && r.t_min_required_n > 60.0);
 
     for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         let r = query(&client, 4, bad);

@@ -150,6 +150,8 @@ struct Latest {
     pose_sequence: u64,
     status: StatusCode,
     f1_hz: f64,
+    /// The pose the estimate answers (for the inverse T_min query).
+    pose: Pose,
 }
 
 /// Counters of one stats period.
@@ -344,6 +346,7 @@ impl Server {
             pose_sequence: p.sequence,
             status: e.status,
             f1_hz: e.f1_hz,
+            pose,
         });
         self.period.cycles += 1;
         self.period.status[(e.status.as_u32() as usize).min(15)] += 1;
@@ -366,8 +369,17 @@ impl Server {
                 }
             };
             let req = *request.payload();
+            // The smallest T_min reaching the required f1 at the latest pose (fast path,
+            // allocation-free; NaN when unreachable within [0, T_max] or not asked).
+            let t_min_required = match self.latest {
+                Some(l) if l.status.is_ok() && req.is_valid() => self
+                    .estimator
+                    .t_min_for_f1(&l.pose, req.required_f1_hz)
+                    .map_or(f64::NAN, |a| a.t_min_n),
+                _ => f64::NAN,
+            };
             let now = monotonic_now_ns();
-            let response = margin_response(&req, self.latest, now);
+            let response = margin_response(&req, self.latest, t_min_required, now);
             if request.send_copy(response).is_err() {
                 self.period.ipc_errors += 1;
             }
@@ -491,10 +503,12 @@ pub fn effective_t_min(s: &TminSetpoint, n_cables: usize) -> f64 {
 /// The answer to margin request `req` given the latest estimate: `InvalidRequest` for a
 /// required frequency that is not finite and positive, `NoPoseYet` before the first estimate,
 /// the latest estimate's status when it is not ok, otherwise f1 and the margin.
-/// `t_min_required_n` is not computed yet (NaN).
+/// `t_min_required_n` is the smallest T_min (N) reaching the required f1 at the latest pose
+/// ([`Estimator::t_min_for_f1`]), NaN when unreachable.
 fn margin_response(
     req: &cablevib_ipc::MarginRequest,
     latest: Option<Latest>,
+    t_min_required_n: f64,
     now_ns: u64,
 ) -> MarginResponse {
     let pose_sequence = latest.map_or(0, |l| l.pose_sequence);
@@ -502,7 +516,14 @@ fn margin_response(
         _ if !req.is_valid() => StatusCode::InvalidRequest,
         None => StatusCode::NoPoseYet,
         Some(l) if l.status.is_ok() => {
-            return MarginResponse::from_f1(req, pose_sequence, l.status, l.f1_hz, f64::NAN, now_ns)
+            return MarginResponse::from_f1(
+                req,
+                pose_sequence,
+                l.status,
+                l.f1_hz,
+                t_min_required_n,
+                now_ns,
+            )
         }
         Some(l) => l.status,
     };
@@ -665,22 +686,24 @@ mod tests {
     #[test]
     fn margin_answers() {
         let req = MarginRequest::new(5, 0, 8.0);
-        let none = margin_response(&req, None, 1);
+        let none = margin_response(&req, None, f64::NAN, 1);
         assert_eq!(none.status_code(), Some(StatusCode::NoPoseYet));
         let ok = Latest {
             pose_sequence: 9,
             status: StatusCode::Ok,
             f1_hz: 9.5,
+            pose: Pose::at(Vector3::new(0.0, 0.0, 1.25)),
         };
-        let r = margin_response(&req, Some(ok), 1);
+        let r = margin_response(&req, Some(ok), 42.0, 1);
         assert!(r.is_ok());
         assert_eq!((r.pose_sequence, r.f1_hz, r.margin_hz), (9, 9.5, 1.5));
+        assert_eq!(r.t_min_required_n, 42.0);
         let bad_req = MarginRequest::new(6, 0, -1.0);
         assert_eq!(
-            margin_response(&bad_req, None, 1).status_code(),
+            margin_response(&bad_req, None, f64::NAN, 1).status_code(),
             Some(StatusCode::InvalidRequest)
         );
-        let r = margin_response(&bad_req, Some(ok), 1);
+        let r = margin_response(&bad_req, Some(ok), f64::NAN, 1);
         assert_eq!(r.status_code(), Some(StatusCode::InvalidRequest));
         assert!(r.margin_hz.is_nan());
         let failed = Latest {
@@ -688,7 +711,7 @@ mod tests {
             f1_hz: f64::NAN,
             ..ok
         };
-        let r = margin_response(&req, Some(failed), 1);
+        let r = margin_response(&req, Some(failed), f64::NAN, 1);
         assert_eq!(r.status_code(), Some(StatusCode::OutsideWorkspace));
         assert_eq!(r.pose_sequence, 9);
         assert!(r.f1_hz.is_nan());
