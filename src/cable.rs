@@ -42,6 +42,9 @@ pub enum CableError {
     /// The flexibility matrix is singular or not definite (numerically broken input).
     #[error("catenary flexibility matrix is not definite")]
     NotDefinite,
+    /// The `auto` model must be resolved (estimator::resolve_auto) before use.
+    #[error("the auto model is not resolved")]
+    Unresolved,
 }
 
 /// FEM element stiffness block K_c = EA/l e eᵀ + T/l (I − e eᵀ), N/m.
@@ -533,6 +536,7 @@ impl CableModel {
                 };
                 (fem_block(e, length_m, ea_n, tension_n, geometric), mt, 1, 2)
             }
+            ElementKind::Auto => return Err(CableError::Unresolved),
             ElementKind::Catenary => {
                 let nel = n.max(1);
                 let l = length_m / nel as f64;

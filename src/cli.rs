@@ -69,7 +69,7 @@ pub struct SceneArgs {
     /// Elements per cable (default: the scene's).
     #[arg(long)]
     pub elements: Option<usize>,
-    /// Element model: fem, catenary, continuous or massless (default: the scene's).
+    /// Element model: fem, catenary, continuous, massless or auto (default: the scene's).
     #[arg(long)]
     pub element: Option<String>,
 }
@@ -156,7 +156,7 @@ pub fn resolve_scene(a: &SceneArgs) -> Result<Scene, CliError> {
     let element = match &a.element {
         Some(e) => ElementKind::parse(e).ok_or_else(|| {
             CliError::Usage(format!(
-                "--element `{e}`: expected fem, catenary, continuous or massless"
+                "--element `{e}`: expected fem, catenary, continuous, massless or auto"
             ))
         })?,
         None => s.model.element,
@@ -183,7 +183,20 @@ fn json_f64(x: f64) -> serde_json::Value {
 pub fn analyze(a: &AnalyzeArgs) -> Result<(), CliError> {
     let s = resolve_scene(&a.scene)?;
     let pos = s.ee_position_m;
-    if a.realtime || s.model.element == ElementKind::Continuous {
+    let s = if s.model.element == ElementKind::Auto {
+        let (resolved, choice) =
+            crate::estimator::resolve_auto(&s).map_err(|e| CliError::Analysis(e.to_string()))?;
+        if !a.json {
+            println!("{choice}");
+        }
+        resolved
+    } else {
+        s
+    };
+    if a.realtime
+        || s.model.element == ElementKind::Continuous
+        || s.model.element == ElementKind::Massless
+    {
         return analyze_realtime(a, &s);
     }
     let t0 = Instant::now();

@@ -180,6 +180,162 @@ impl Estimate {
     }
 }
 
+/// What `element = "auto"` picked, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AutoChoice {
+    /// The model picked.
+    pub element: ElementKind,
+    /// Elements per cable of the pick (1 for massless and continuous).
+    pub elements_per_cable: usize,
+    /// Its largest relative f1 error against the reference over the sample poses.
+    pub predicted_error: f64,
+    /// The tolerance it had to meet.
+    pub tolerance: f64,
+    /// Every candidate tried, cheapest first: (model, N, largest relative f1 error).
+    pub candidates: Vec<(ElementKind, usize, f64)>,
+    /// The reference: the catenary element with this many elements per cable.
+    pub reference_elements: usize,
+    /// Sample poses used (the default pose and feasible poses on the 0.75 m circle).
+    pub poses: usize,
+    /// Largest Irvine parameter λ² = (γ⊥ L / T)² · EA / T over the cables at the default
+    /// pose (sag matters when it is not ≪ 1).
+    pub irvine_lambda2: f64,
+    /// Total cable mass over end-effector mass.
+    pub mass_ratio: f64,
+}
+
+impl std::fmt::Display for AutoChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let name = |el: ElementKind, n: usize| {
+            if el.is_discrete() {
+                format!("{} × {n}", el.as_str())
+            } else {
+                el.as_str().to_string()
+            }
+        };
+        write!(
+            f,
+            "auto picked {}: predicted f1 error {:.2e} (tolerance {:.1e}; largest over {} poses against catenary × {}; Irvine λ² ≤ {:.2e}, cable/end-effector mass ratio {:.3}). Tried:",
+            name(self.element, self.elements_per_cable),
+            self.predicted_error,
+            self.tolerance,
+            self.poses,
+            self.reference_elements,
+            self.irvine_lambda2,
+            self.mass_ratio
+        )?;
+        for (el, n, err) in &self.candidates {
+            write!(f, " {} {:.2e};", name(*el, *n), err)?;
+        }
+        Ok(())
+    }
+}
+
+/// Resolve `element = "auto"`: evaluate, at the default pose and at feasible poses of the
+/// 0.75 m circle, the f1 of each candidate model in order of per-cycle cost — massless
+/// cables, the continuous string (the N → ∞ limit of FEM, at the same cost as any FEM N),
+/// the catenary element at N = 4 and 16 — against the converged reference (catenary,
+/// N = 64), and pick the first whose largest relative error is within
+/// `model.f1_tolerance`. The reference itself is the fallback. Allocates: set-up only.
+pub fn resolve_auto(scene: &Scene) -> Result<(Scene, AutoChoice), BuildError> {
+    const REF_N: usize = 64;
+    let tol = scene.model.f1_tolerance;
+    let reference = scene.with_model(ElementKind::Catenary, REF_N);
+    let frame = up_frame(&scene.gravity_m_s2);
+    let mut poses = vec![Pose {
+        position_m: scene.ee_position_m,
+        orientation_wxyz: scene.ee_orientation_wxyz,
+    }];
+    for k in 0..8 {
+        let th = k as f64 * std::f64::consts::FRAC_PI_4;
+        poses.push(Pose {
+            position_m: scene.ee_position_m
+                + frame.column(0) * (0.75 * th.cos())
+                + frame.column(1) * (0.75 * th.sin()),
+            orientation_wxyz: scene.ee_orientation_wxyz,
+        });
+    }
+    let f1_of = |s: &Scene, pose: &Pose| -> Option<f64> {
+        let p = EstimatorParams {
+            ee_mode: false,
+            ..EstimatorParams::default()
+        };
+        let mut est = Estimator::with_params(s, p).ok()?;
+        let e = est.update(pose, s.t_min_n);
+        e.is_ok().then_some(e.f1_hz)
+    };
+    let refs: Vec<(Pose, f64)> = poses
+        .iter()
+        .filter_map(|pose| f1_of(&reference, pose).map(|f| (*pose, f)))
+        .collect();
+    if refs.is_empty() {
+        Estimator::with_params(&reference, EstimatorParams::default())?;
+        return Err(BuildError::DefaultPose {
+            scene: scene.name.clone(),
+            source: EstimatorError::Input("no feasible pose to choose the auto model"),
+        });
+    }
+    let mut massless = scene.with_model(ElementKind::Massless, 1);
+    massless.model.geometric_stiffness = true;
+    let list = [
+        massless,
+        scene.with_model(ElementKind::Continuous, 1),
+        scene.with_model(ElementKind::Catenary, 4),
+        scene.with_model(ElementKind::Catenary, 16),
+    ];
+    let mut candidates = Vec::new();
+    let mut pick: Option<(Scene, f64)> = None;
+    for cand in list {
+        let worst = refs
+            .iter()
+            .map(|(pose, fr)| f1_of(&cand, pose).map_or(f64::INFINITY, |f| (f - fr).abs() / fr))
+            .fold(0.0f64, f64::max);
+        candidates.push((cand.model.element, cand.model.elements_per_cable, worst));
+        if pick.is_none() && worst <= tol {
+            pick = Some((cand, worst));
+        }
+    }
+    let (chosen, err) = pick.unwrap_or((reference, 0.0));
+    // Diagnostics at the default pose.
+    let mut g = Geometry::new(scene.n_cables());
+    let _ = g.update(
+        scene.cables.iter().map(|c| &c.anchor_m),
+        &scene.ee_position_m,
+    );
+    let t = crate::tension::clarabel_reference(&g, &scene.wrench_n(), scene.t_min_n, scene.t_max_n)
+        .unwrap_or_default();
+    let gn = scene.gravity_m_s2.norm();
+    let down = if gn > 0.0 {
+        scene.gravity_m_s2 / gn
+    } else {
+        Vector3::zeros()
+    };
+    let mut irvine = 0.0f64;
+    let mut cable_mass = 0.0;
+    for (i, c) in scene.cables.iter().enumerate() {
+        let l = g.length_m[i];
+        cable_mass += c.mass_per_length_kg_m * l;
+        if let Some(&ti) = t.get(i) {
+            let s = g.unit[i];
+            let perp = (down - s * s.dot(&down)).norm();
+            let gam = c.mass_per_length_kg_m * gn * perp;
+            irvine = irvine.max((gam * l / ti).powi(2) * c.ea_n() / ti);
+        }
+    }
+    let choice = AutoChoice {
+        element: chosen.model.element,
+        elements_per_cable: chosen.model.elements_per_cable,
+        predicted_error: err,
+        tolerance: tol,
+        candidates,
+        reference_elements: REF_N,
+        poses: refs.len(),
+        irvine_lambda2: irvine,
+        mass_ratio: cable_mass / scene.ee_mass_kg,
+    };
+    Ok((chosen, choice))
+}
+
 /// The real-time estimator of one scene.
 #[derive(Debug, Clone)]
 pub struct Estimator {
@@ -200,6 +356,7 @@ pub struct Estimator {
     inv_tension: TensionSolver,
     inv_models: Vec<CableModel>,
     inv_modal: ModalSolver,
+    auto: Option<AutoChoice>,
 }
 
 /// The answer to "which T_min reaches f1 ≥ f_required at this pose".
@@ -258,6 +415,12 @@ impl Estimator {
     /// Build with explicit parameters. Allocates everything the cycle needs and checks
     /// the scene's default pose.
     pub fn with_params(scene: &Scene, params: EstimatorParams) -> Result<Estimator, BuildError> {
+        if scene.model.element == ElementKind::Auto {
+            let (resolved, choice) = resolve_auto(scene)?;
+            let mut est = Self::with_params(&resolved, params)?;
+            est.auto = Some(choice);
+            return Ok(est);
+        }
         let n = scene.n_cables();
         let zero = CableModel::build(
             ElementKind::Massless,
@@ -292,6 +455,7 @@ impl Estimator {
                 certify: false,
                 ..params.modal
             }),
+            auto: None,
         };
         // Expected rank: the rank at the default pose.
         let rot = crate::kinematics::rotation_of(&scene.ee_orientation_wxyz);
@@ -321,7 +485,12 @@ impl Estimator {
         Ok(est)
     }
 
-    /// The scene.
+    /// What `element = "auto"` picked (None for an explicit model).
+    pub fn auto_choice(&self) -> Option<&AutoChoice> {
+        self.auto.as_ref()
+    }
+
+    /// The scene (with the `auto` model resolved).
     pub fn scene(&self) -> &Scene {
         &self.scene
     }
@@ -740,6 +909,9 @@ pub enum AnalysisError {
     /// Eigen solve.
     #[error(transparent)]
     Modal(#[from] ModalError),
+    /// The auto model could not be resolved.
+    #[error("auto model: {0}")]
+    Auto(String),
 }
 
 /// Everything the dense reference computes for one pose.
@@ -777,6 +949,12 @@ pub fn reference_analysis_at(
     t_min_n: f64,
     vectors: bool,
 ) -> Result<ReferenceAnalysis, AnalysisError> {
+    if scene.model.element == ElementKind::Auto {
+        let resolved = resolve_auto(scene)
+            .map(|(s, _)| s)
+            .map_err(|e| AnalysisError::Auto(e.to_string()))?;
+        return reference_analysis_at(&resolved, pose, t_min_n, vectors);
+    }
     let mut g = Geometry::new(scene.n_cables());
     let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
     if scene.rigid {

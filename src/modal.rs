@@ -667,23 +667,10 @@ impl ModalSolver {
     }
 
     /// Load the chains of the cable models at one pose and the end-effector mass (kg).
+    /// Chains that contribute nothing (zero spring and zero mass: a switched-off effect)
+    /// are not loaded, so they cost nothing per evaluation.
     pub fn load(&mut self, models: &[CableModel], ee_mass_kg: f64) {
-        self.n_chains = 0;
-        for m in models {
-            for c in &m.chains[..m.n_chains] {
-                if self.n_chains < MAX_CHAINS {
-                    self.chains[self.n_chains] = *c;
-                    self.n_chains += 1;
-                }
-            }
-        }
-        self.ee_mass_kg = ee_mass_kg;
-        self.dim = 3;
-        self.m6 = Matrix6::zeros();
-        self.m6
-            .fixed_view_mut::<3, 3>(0, 0)
-            .copy_from(&(Matrix3::identity() * ee_mass_kg));
-        self.k6 = Matrix6::zeros();
+        self.load_general(models, ee_mass_kg, None);
     }
 
     /// Load for a rigid end-effector: cable i's end moves with G_i = [I, −[r_i]×] (arm r_i,
@@ -697,20 +684,41 @@ impl ModalSolver {
         arms_m: &[Vector3<f64>],
         k_geo_rot: &Matrix3<f64>,
     ) {
-        self.load(models, ee_mass_kg);
-        self.dim = 6;
+        self.load_general(models, ee_mass_kg, Some((inertia_kg_m2, arms_m, k_geo_rot)));
+    }
+
+    fn load_general(
+        &mut self,
+        models: &[CableModel],
+        ee_mass_kg: f64,
+        rigid: Option<RigidParts<'_>>,
+    ) {
+        self.n_chains = 0;
+        self.ee_mass_kg = ee_mass_kg;
+        self.m6 = Matrix6::zeros();
         self.m6
-            .fixed_view_mut::<3, 3>(3, 3)
-            .copy_from(inertia_kg_m2);
-        self.k6.fixed_view_mut::<3, 3>(3, 3).copy_from(k_geo_rot);
-        let mut k = 0;
-        for (m, r) in models.iter().zip(arms_m) {
-            let g = attach_map(r);
-            for _ in 0..m.n_chains {
-                if k < MAX_CHAINS {
-                    self.q6[k] = g.transpose() * self.chains[k].proj * g;
-                    k += 1;
+            .fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(Matrix3::identity() * ee_mass_kg));
+        self.k6 = Matrix6::zeros();
+        self.dim = 3;
+        if let Some((inertia, _, kgeo)) = rigid {
+            self.dim = 6;
+            self.m6.fixed_view_mut::<3, 3>(3, 3).copy_from(inertia);
+            self.k6.fixed_view_mut::<3, 3>(3, 3).copy_from(kgeo);
+        }
+        for (i, m) in models.iter().enumerate() {
+            let g = rigid.map(|(_, arms, _)| attach_map(&arms[i]));
+            for c in &m.chains[..m.n_chains] {
+                let idle =
+                    matches!(c.kind, ChainKind::Discrete { k, m, .. } if k == 0.0 && m == 0.0);
+                if idle || self.n_chains >= MAX_CHAINS {
+                    continue;
                 }
+                self.chains[self.n_chains] = *c;
+                if let Some(g) = g {
+                    self.q6[self.n_chains] = g.transpose() * c.proj * g;
+                }
+                self.n_chains += 1;
             }
         }
     }

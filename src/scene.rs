@@ -70,6 +70,9 @@ pub enum ElementKind {
     Continuous,
     /// Massless cables: springs EA/L along and T/L across; end-effector modes only.
     Massless,
+    /// Pick the cheapest of the above whose f1 error stays within `model.f1_tolerance`
+    /// (resolved when the estimator is built; see `estimator::resolve_auto`).
+    Auto,
 }
 
 impl ElementKind {
@@ -80,6 +83,7 @@ impl ElementKind {
             ElementKind::Catenary => "catenary",
             ElementKind::Continuous => "continuous",
             ElementKind::Massless => "massless",
+            ElementKind::Auto => "auto",
         }
     }
     /// Parse a command-line name.
@@ -89,6 +93,7 @@ impl ElementKind {
             "catenary" => Some(Self::Catenary),
             "continuous" => Some(Self::Continuous),
             "massless" => Some(Self::Massless),
+            "auto" => Some(Self::Auto),
             _ => None,
         }
     }
@@ -133,6 +138,8 @@ pub struct ModelSettings {
     /// Transverse geometric stiffness T/l of the cables (effect `geometric_stiffness`).
     /// Off: axial springs only (the paper's ref. [7]).
     pub geometric_stiffness: bool,
+    /// Relative f1 error the `auto` model may make (default 1e-3).
+    pub f1_tolerance: f64,
 }
 
 /// A validated robot description. All fields SI.
@@ -227,6 +234,12 @@ struct RawModel {
     elements_per_cable: i64,
     #[serde(default = "default_participation")]
     ee_participation_min: f64,
+    #[serde(default = "default_f1_tolerance")]
+    f1_tolerance: f64,
+}
+
+fn default_f1_tolerance() -> f64 {
+    1e-3
 }
 
 fn default_elements() -> i64 {
@@ -330,6 +343,13 @@ impl Scene {
                 format!("must be in 1..={MAX_ELEMENTS_PER_CABLE}, got {n}"),
             ));
         }
+        let tol = raw.model.f1_tolerance;
+        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
+            return Err(inv(
+                "model.f1_tolerance",
+                format!("must be in (0, 1), got {tol}"),
+            ));
+        }
         let part = raw.model.ee_participation_min;
         if !(part.is_finite() && part > 0.0 && part <= 1.0) {
             return Err(inv(
@@ -354,7 +374,7 @@ impl Scene {
         }
         if let Some(sag) = fx.sag {
             match (sag, element) {
-                (true, ElementKind::Fem) => element = ElementKind::Catenary,
+                (true, ElementKind::Fem | ElementKind::Auto) => element = ElementKind::Catenary,
                 (true, ElementKind::Catenary) => {}
                 (true, other) => {
                     return Err(inv(
@@ -539,6 +559,7 @@ impl Scene {
                 elements_per_cable: n as usize,
                 ee_participation_min: part,
                 geometric_stiffness,
+                f1_tolerance: raw.model.f1_tolerance,
             },
             rigid,
             ee_inertia_kg_m2: inertia,

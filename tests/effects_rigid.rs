@@ -288,3 +288,33 @@ fn inverse_t_min_reaches_the_required_frequency() {
         assert!(!again.cold_start);
     }
 }
+
+#[test]
+fn auto_picks_the_cheapest_model_within_the_tolerance() {
+    use cablevib::estimator::resolve_auto;
+    let with_tol = |text: &str, tol: f64| {
+        let t = text.replace("elements_per_cable = ", &format!("f1_tolerance = {tol:e}\nelements_per_cable = "));
+        let mut s = Scene::from_toml_str(&t, "t").unwrap();
+        s.model.element = ElementKind::Auto;
+        s
+    };
+    // Spatial robot: f1 is a string mode, so massless cables are far off; the continuous
+    // string is within 1e-3 of the converged catenary.
+    let (s, c) = resolve_auto(&with_tol(DEFAULT_SCENE_TOML, 1e-3)).unwrap();
+    assert_eq!(s.model.element, ElementKind::Continuous, "{c}");
+    assert!(c.candidates[0].2 > 1.0, "massless error {c}");
+    // The reported error is the real one: recompute it at the default pose.
+    let r = f1(&s.with_model(ElementKind::Catenary, 64), s.ee_position_m, s.t_min_n).f1_hz;
+    let got = f1(&s, s.ee_position_m, s.t_min_n).f1_hz;
+    assert!((got - r).abs() / r <= c.predicted_error * (1.0 + 1e-9));
+    // A tolerance no cheap model meets falls back to the reference itself.
+    let (s, c) = resolve_auto(&with_tol(DEFAULT_SCENE_TOML, 1e-7)).unwrap();
+    assert_eq!((s.model.element, s.model.elements_per_cable), (ElementKind::Catenary, 64), "{c}");
+    // Planar robot, loose tolerance: its first mode is the end-effector's, massless is enough.
+    let (s, c) = resolve_auto(&with_tol(PLANAR_SCENE_TOML, 2e-3)).unwrap();
+    assert_eq!(s.model.element, ElementKind::Massless, "{c}");
+    // The estimator resolves it at build time and keeps the choice for the log.
+    let est = Estimator::new(&with_tol(PLANAR_SCENE_TOML, 2e-3)).unwrap();
+    assert_eq!(est.auto_choice().unwrap().element, ElementKind::Massless);
+    assert!(est.auto_choice().unwrap().to_string().contains("auto picked massless"));
+}

@@ -196,6 +196,9 @@ impl Server {
         allocations: AllocCounter,
     ) -> Result<Server, ServiceError> {
         let estimator = Estimator::new(scene)?;
+        if let Some(choice) = estimator.auto_choice() {
+            tracing::info!("{choice}");
+        }
         let ports = ServicePorts::open(node, names)?;
         Ok(Server {
             scene_t_max_n: scene.t_max_n,
