@@ -272,7 +272,7 @@ pub fn resolve_auto(scene: &Scene) -> Result<(Scene, AutoChoice), BuildError> {
         Estimator::with_params(&reference, EstimatorParams::default())?;
         return Err(BuildError::DefaultPose {
             scene: scene.name.clone(),
-            source: EstimatorError::Input("no feasible pose to choose the auto model"),
+            reason: EstimatorError::Input("no feasible pose to choose the auto model"),
         });
     }
     let mut massless = scene.with_model(ElementKind::Massless, 1);
@@ -395,12 +395,12 @@ pub enum TminQueryError {
 #[derive(Debug, thiserror::Error)]
 pub enum BuildError {
     /// The scene's default pose is not solvable: the robot is unusable as described.
-    #[error("scene `{scene}` at its default pose: {source}")]
+    #[error("scene `{scene}` at its default pose: {reason}")]
     DefaultPose {
         /// Scene name.
         scene: String,
         /// Why.
-        source: EstimatorError,
+        reason: EstimatorError,
     },
 }
 
@@ -461,7 +461,7 @@ impl Estimator {
         let rot = crate::kinematics::rotation_of(&scene.ee_orientation_wxyz);
         let default_pose = |e: EstimatorError| BuildError::DefaultPose {
             scene: scene.name.clone(),
-            source: e,
+            reason: e,
         };
         est.geometry
             .update_rigid(
@@ -1017,10 +1017,10 @@ pub fn structured_analysis(scene: &Scene, position_m: &Vector3<f64>, t_min_n: f6
             },
             t_min_n,
         ),
-        Err(BuildError::DefaultPose { source, .. }) => {
+        Err(BuildError::DefaultPose { reason, .. }) => {
             let mut e = Estimate::empty(scene.n_cables());
-            e.status = source.status();
-            e.error = Some(source);
+            e.status = reason.status();
+            e.error = Some(reason);
             e
         }
     }

@@ -31,12 +31,12 @@ pub const MAX_ELEMENTS_PER_CABLE: usize = 10_000;
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// The file could not be read.
-    #[error("{file}: cannot read scene file: {source}")]
+    #[error("{file}: cannot read scene file: {reason}")]
     Io {
         /// File name.
         file: String,
         /// Underlying error.
-        source: std::io::Error,
+        reason: std::io::Error,
     },
     /// TOML syntax error, wrong type, missing or unknown key (serde's message names the key).
     #[error("{file}: {message}")]
@@ -264,9 +264,9 @@ impl Scene {
     /// Read and validate a scene file.
     pub fn from_path(path: &Path) -> Result<Scene, SceneError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        let text = std::fs::read_to_string(path).map_err(|reason| SceneError::Io {
             file: file.clone(),
-            source,
+            reason,
         })?;
         Self::from_toml_str(&text, &file)
     }
