@@ -136,16 +136,19 @@ pub fn up_frame(gravity_m_s2: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::from_columns(&[x, y, up])
 }
 
-/// Catenary element stiffness block (N/m, global frame, positive definite) for an element
-/// with chord `chord_m` from node I to node J, tension `t0_n`, EA and weight per length γ,
-/// in the frame `frame` from [`up_frame`].
-pub fn catenary_block(
+/// Catenary element stiffness in modal form: K_c = Σ_r k_r v_r v_rᵀ (N/m, global frame) for
+/// an element with chord `chord_m` from node I to node J, tension `t0_n`, EA and weight per
+/// length γ, in the frame `frame` from [`up_frame`]. The decomposition is done on
+/// G = F + (L0/EA) I in the local frame (F = G − (L0/EA) I shares its eigenvectors), so
+/// k_r = 1/(L0/EA − g_r): the transverse stiffnesses (≈ T/L0) come out with relative
+/// accuracy ε instead of the ε·EA/T of decomposing K itself.
+pub fn catenary_modes(
     chord_m: &Vector3<f64>,
     t0_n: f64,
     ea_n: f64,
     gamma_n_m: f64,
     frame: &Matrix3<f64>,
-) -> Result<Matrix3<f64>, CableError> {
+) -> Result<([f64; 3], [Vector3<f64>; 3]), CableError> {
     if !(t0_n.is_finite() && t0_n > 0.0) {
         return Err(CableError::BadTension(t0_n));
     }
@@ -153,10 +156,35 @@ pub fn catenary_block(
     let local = frame.transpose() * chord_m;
     let f = -local * (t0_n / l0);
     let flex = catenary_flexibility(&f, l0, ea_n, gamma_n_m)?;
-    let neg = -flex;
-    let k_local = neg.cholesky().ok_or(CableError::NotDefinite)?.inverse();
-    let k = frame * k_local * frame.transpose();
-    Ok((k + k.transpose()) * 0.5)
+    let c = l0 / ea_n;
+    let g = flex + Matrix3::identity() * c;
+    let eig = SymmetricEigen::new(g);
+    let mut k = [0.0; 3];
+    let mut v = [Vector3::zeros(); 3];
+    for r in 0..3 {
+        let d = c - eig.eigenvalues[r];
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(CableError::NotDefinite);
+        }
+        k[r] = 1.0 / d;
+        v[r] = frame * eig.eigenvectors.column(r);
+    }
+    Ok((k, v))
+}
+
+/// Catenary element stiffness block (N/m, global frame, positive definite): Σ k_r v_r v_rᵀ
+/// of [`catenary_modes`].
+pub fn catenary_block(
+    chord_m: &Vector3<f64>,
+    t0_n: f64,
+    ea_n: f64,
+    gamma_n_m: f64,
+    frame: &Matrix3<f64>,
+) -> Result<Matrix3<f64>, CableError> {
+    let (k, v) = catenary_modes(chord_m, t0_n, ea_n, gamma_n_m, frame)?;
+    Ok((0..3).fold(Matrix3::zeros(), |acc, r| {
+        acc + v[r] * v[r].transpose() * k[r]
+    }))
 }
 
 /// How a chain is modelled.
@@ -541,19 +569,19 @@ impl CableModel {
                 let nel = n.max(1);
                 let l = length_m / nel as f64;
                 // Chord from node I (anchor side) to node J: along e.
-                let kc = catenary_block(&(e * l), tension_n, ea_n, gamma_n_m, frame)?;
+                let (kr, vr) = catenary_modes(&(e * l), tension_n, ea_n, gamma_n_m, frame)?;
                 let me = mu_kg_m * l;
-                let eig = SymmetricEigen::new(kc);
+                let mut kc = Matrix3::zeros();
                 for r in 0..3 {
-                    let v = eig.eigenvectors.column(r).into_owned();
+                    kc += vr[r] * vr[r].transpose() * kr[r];
                     chains[r] = Chain {
                         kind: ChainKind::Discrete {
-                            k: eig.eigenvalues[r],
+                            k: kr[r],
                             m: me,
                             n_el: nel,
                         },
                         mult: 1,
-                        proj: v * v.transpose(),
+                        proj: vr[r] * vr[r].transpose(),
                     };
                 }
                 (kc, me, nel, 3)

@@ -71,7 +71,9 @@ impl EstimatorError {
             EstimatorError::Tension(TensionError::Infeasible { .. }) => Status::TensionInfeasible,
             EstimatorError::Tension(TensionError::InvalidBounds { .. }) => Status::TminOutOfRange,
             EstimatorError::Tension(TensionError::NonFinite) => Status::InvalidInput,
-            EstimatorError::Tension(TensionError::NotConverged { .. }) => Status::NotConverged,
+            EstimatorError::Tension(
+                TensionError::NotConverged { .. } | TensionError::ReferenceFailed { .. },
+            ) => Status::NotConverged,
             EstimatorError::Cable(_) => Status::RankDeficient,
             EstimatorError::Modal(ModalError::NotPositiveDefinite(_)) => Status::RankDeficient,
             EstimatorError::Modal(_) => Status::NotConverged,
@@ -89,6 +91,8 @@ pub struct EstimatorParams {
     pub modal: ModalParams,
     /// A pose step larger than this (m) forces a cold start.
     pub warm_jump_m: f64,
+    /// A relative T_min change larger than this forces a cold start.
+    pub warm_t_min_change: f64,
     /// Tolerance on the quaternion norm.
     pub quaternion_tol: f64,
     /// How far outside the anchors' bounding box (m) a position may be before it is rejected.
@@ -102,7 +106,8 @@ impl Default for EstimatorParams {
         EstimatorParams {
             tension: TensionParams::default(),
             modal: ModalParams::default(),
-            warm_jump_m: 0.02,
+            warm_jump_m: 0.005,
+            warm_t_min_change: 1e-3,
             quaternion_tol: 1e-6,
             workspace_margin_m: 0.0,
             ee_mode: true,
@@ -126,7 +131,10 @@ pub struct Estimate {
     /// End-effector participation of the first mode (0 ..= 1).
     pub f1_ee_participation: f64,
     /// Frequency of the lowest mode with end-effector participation ≥ the scene's
-    /// threshold, Hz (NaN unless ok or when not computed).
+    /// threshold, Hz. When no mode reaches the threshold within the bounded scan (a very
+    /// light end-effector, or its character split across an avoided crossing), the mode
+    /// with the largest participation found — `ee_mode_participation` is then below the
+    /// threshold. NaN unless ok or when not computed.
     pub ee_mode_hz: f64,
     /// Its participation.
     pub ee_mode_participation: f64,
@@ -350,6 +358,7 @@ pub struct Estimator {
     bounds: (Vector3<f64>, Vector3<f64>),
     last_ok_position: Option<Vector3<f64>>,
     last_lambda1: f64,
+    last_t_min_n: f64,
     estimate: Estimate,
     /// Scratch solvers of the inverse query (so it leaves the cycle's warm state alone).
     inv_geometry: Geometry,
@@ -447,6 +456,7 @@ impl Estimator {
             bounds: scene.frame_bounds_m(),
             last_ok_position: None,
             last_lambda1: f64::NAN,
+            last_t_min_n: f64::NAN,
             estimate: Estimate::empty(n),
             inv_geometry: Geometry::new(n),
             inv_tension: TensionSolver::new(n, params.tension),
@@ -712,6 +722,7 @@ impl Estimator {
             Ok(()) => {
                 e.status = Status::Ok;
                 self.last_ok_position = Some(pose.position_m);
+                self.last_t_min_n = t_min_n;
             }
             Err(err) => {
                 e.status = err.status();
@@ -746,7 +757,11 @@ impl Estimator {
         }
         let m = self.params.workspace_margin_m;
         let p = pose.position_m;
-        if (0..3).any(|i| p[i] < self.bounds.0[i] - m || p[i] > self.bounds.1[i] + m) {
+        // Axes along which the anchors are flat (all at one height for a suspended robot,
+        // a planar robot's normal) do not bound the workspace; tension feasibility does.
+        let flat = |i: usize| self.bounds.1[i] - self.bounds.0[i] <= 1e-9;
+        if (0..3).any(|i| !flat(i) && (p[i] < self.bounds.0[i] - m || p[i] > self.bounds.1[i] + m))
+        {
             return Err(EstimatorError::Input("position outside the anchors' frame"));
         }
         if self.scene.rigid {
@@ -762,7 +777,11 @@ impl Estimator {
                 .update(self.scene.cables.iter().map(|c| &c.anchor_m), &p)?;
         }
         let warm = match self.last_ok_position {
-            Some(q) => (q - p).norm() <= self.params.warm_jump_m,
+            Some(q) => {
+                (q - p).norm() <= self.params.warm_jump_m
+                    && (t_min_n - self.last_t_min_n).abs()
+                        <= self.params.warm_t_min_change * self.last_t_min_n
+            }
             None => false,
         };
         if !warm {
@@ -841,11 +860,12 @@ impl Estimator {
         e.eigen_residual = r1.residual;
         self.last_lambda1 = r1.lambda;
         if self.params.ee_mode {
-            let ree = self.modal.ee_mode_tracked(&r1, warm_l.is_some());
-            e.eigen_evaluations = self.modal.evaluations() - start;
-            let ree = ree?;
-            e.ee_mode_hz = lambda_to_hz(ree.lambda);
-            e.ee_mode_participation = ree.ee_participation;
+            // No mode reaching the participation threshold within the bounded scan leaves
+            // the end-effector mode unknown (NaN) without invalidating f1 and the tensions.
+            if let Ok(ree) = self.modal.ee_mode_tracked(&r1, warm_l.is_some()) {
+                e.ee_mode_hz = lambda_to_hz(ree.lambda);
+                e.ee_mode_participation = ree.ee_participation;
+            }
         }
         if self.scene.rigid {
             let k6 = self.modal.static_stiffness6();

@@ -49,6 +49,9 @@
 //! [`modal`], [`estimator`] (the per-cycle pipeline and the offline reference pipeline),
 //! [`service`] (iceoryx2 wiring), [`cli`] (command-line tools).
 #![warn(missing_docs)]
+// Numerical kernels index several arrays with one loop variable; iterator chains would
+// hide the maths. `!(x > 0.0)` is used on purpose: it is also true for NaN.
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 pub mod cable;
 pub mod cli;
 pub mod estimator;

@@ -319,6 +319,8 @@ pub struct ModalParams {
     pub rel_tol: f64,
     /// Largest number of pole intervals scanned for the end-effector mode.
     pub max_scan_intervals: u32,
+    /// Largest number of D(λ) evaluations one end-effector scan may spend.
+    pub max_scan_evaluations: u32,
     /// Smallest end-effector participation of an end-effector mode (0 < x ≤ 1).
     pub ee_participation_min: f64,
     /// Check the first root with the eigenvalue count (two more evaluations).
@@ -331,6 +333,7 @@ impl Default for ModalParams {
             max_evaluations: 100,
             rel_tol: 1e-12,
             max_scan_intervals: 400,
+            max_scan_evaluations: 1500,
             ee_participation_min: 0.5,
             certify: true,
         }
@@ -611,6 +614,8 @@ pub struct ModalSolver {
     rescans: [u64; 6],
     /// Warm cycles since the last full scan.
     since_scan: u32,
+    /// Warm cycles left before a failed full scan is retried.
+    ee_skip: u32,
 }
 
 /// Largest number of watched modes.
@@ -653,6 +658,7 @@ impl ModalSolver {
             recording: false,
             rescans: [0; 6],
             since_scan: 0,
+            ee_skip: 0,
         }
     }
 
@@ -952,6 +958,7 @@ impl ModalSolver {
     fn ee_scan(&mut self, start: f64, skip_to: f64, limit: f64) -> Result<Root, ModalError> {
         let begin = self.evaluations;
         let thr = self.params.ee_participation_min;
+        let mut best: Option<Root> = None;
         let mut a = 0.0f64;
         for i in 0..self.n_chains {
             let (lo, _) = self.chains[i].poles_around(start);
@@ -959,6 +966,9 @@ impl ModalSolver {
             self.next_pole[i] = 1;
         }
         for _ in 0..self.params.max_scan_intervals {
+            if self.evaluations - begin > self.params.max_scan_evaluations {
+                break;
+            }
             // Next distinct pole above a.
             let mut b = f64::INFINITY;
             for i in 0..self.n_chains {
@@ -1024,6 +1034,9 @@ impl ModalSolver {
                         r.evaluations = self.evaluations - begin;
                         return Ok(r);
                     }
+                    if best.is_none_or(|b| r.ee_participation > b.ee_participation) {
+                        best = Some(r);
+                    }
                 }
             }
             if !b.is_finite() {
@@ -1031,7 +1044,15 @@ impl ModalSolver {
             }
             a = b;
         }
-        Err(ModalError::NoEeMode(self.params.max_scan_intervals))
+        // No mode reaches the threshold within the bounds: the most end-effector-like mode
+        // found (its participation, below the threshold, says so).
+        match best {
+            Some(mut r) => {
+                r.evaluations = self.evaluations - begin;
+                Ok(r)
+            }
+            None => Err(ModalError::NoEeMode(self.params.max_scan_intervals)),
+        }
     }
 
     /// The pole-free interval (a, b) of D around λ: the nearest blocked eigenvalues of all
@@ -1071,7 +1092,28 @@ impl ModalSolver {
         if first.ee_participation >= thr {
             self.ee_track = Some((first.lambda, 0));
             self.n_members = 0;
+            self.ee_skip = 0;
             return Ok(*first);
+        }
+        if !warm {
+            self.ee_skip = 0;
+        } else if self.ee_skip > 0 {
+            // Weak episode: no mode reached the threshold at the last full scan; follow the
+            // most end-effector-like mode and rescan fully every 16 cycles.
+            self.ee_skip -= 1;
+            if self.n_members == 1 {
+                if let Some((mut r, _)) = self.track_root(self.members[0].0) {
+                    if (r.lambda - self.members[0].0).abs() <= 2e-3 * self.members[0].0 {
+                        self.members[0].0 = r.lambda;
+                        self.members[0].2 = r.ee_participation;
+                        if r.ee_participation < thr {
+                            r.evaluations = self.evaluations - start;
+                            return Ok(r);
+                        }
+                    }
+                }
+            }
+            self.ee_skip = 0;
         }
         let mut reason = 0;
         if let (true, Some((l_ee, below0))) = (warm, self.ee_track) {
@@ -1104,7 +1146,23 @@ impl ModalSolver {
         }
         let r = self.ee_mode(first);
         self.recording = false;
-        let mut r = r?;
+        let mut r = match r {
+            Ok(r) => r,
+            Err(e) => {
+                self.ee_track = None;
+                self.n_members = 0;
+                return Err(e);
+            }
+        };
+        if r.ee_participation < thr {
+            // Weak: watch only this mode until the next full scan.
+            self.members[0] = (r.lambda, r.ee_participation, r.ee_participation);
+            self.n_members = 1;
+            self.ee_skip = 16;
+            self.ee_track = None;
+            r.evaluations = self.evaluations - start;
+            return Ok(r);
+        }
         let below = self.count_below(r.lambda * (1.0 - 1e-10));
         self.ee_track = Some((r.lambda, below));
         r.evaluations = self.evaluations - start;
@@ -1165,6 +1223,11 @@ impl ModalSolver {
             let (l, p_scan, _) = self.members[i];
             let window = 0.95 * l;
             let (r, branch) = self.track_root(l).ok_or((1usize, window))?;
+            // Modes move continuously: a root that moved more than 0.2 % in one cycle is
+            // another mode that Newton converged to (an identity jump), not this one.
+            if (r.lambda - l).abs() > 2e-3 * l {
+                return Err((1, window.min(0.95 * r.lambda)));
+            }
             lost += p_scan - r.ee_participation;
             if r.ee_participation < p_scan {
                 first_loser = first_loser.min(window);

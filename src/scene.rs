@@ -537,6 +537,25 @@ impl Scene {
                     ))
                 }
             };
+            // Derived values must be usable numbers too (a denormal weight gives μ = 0, an
+            // overflowing E·A gives ∞).
+            if !(mu.is_normal() && mu > 0.0) {
+                return Err(inv(
+                    &key(if w.is_some() {
+                        "weight_per_length"
+                    } else {
+                        "mass_per_length"
+                    }),
+                    format!("gives a mass per length of {mu:e} kg/m, not a usable positive number"),
+                ));
+            }
+            let ea = e * a;
+            if !(ea.is_normal() && ea > 0.0 && ea < 1e15) {
+                return Err(inv(
+                    &key("area"),
+                    format!("youngs_modulus × area = {ea:e} N is not a usable axial rigidity (0 < EA < 1e15 N)"),
+                ));
+            }
             cables.push(Cable {
                 anchor_m: anchor,
                 youngs_modulus_pa: e,

@@ -117,6 +117,14 @@ pub enum TensionError {
         /// Iterations done.
         iterations: u32,
     },
+    /// The Clarabel reference stopped without a solution or an infeasibility certificate.
+    #[error("Clarabel reference stopped with status {status} after {iterations} iterations")]
+    ReferenceFailed {
+        /// Clarabel's status.
+        status: &'static str,
+        /// Iterations done.
+        iterations: u32,
+    },
 }
 
 struct MaskFmt(u32);
@@ -173,7 +181,7 @@ impl TensionSolver {
     /// Allocate for `n_cables` (≤ [`MAX_CABLES`]) cables.
     pub fn new(n_cables: usize, params: TensionParams) -> TensionSolver {
         assert!(
-            n_cables <= MAX_CABLES && n_cables >= 1,
+            (1..=MAX_CABLES).contains(&n_cables),
             "1..=MAX_CABLES cables"
         );
         TensionSolver {
@@ -258,7 +266,61 @@ impl TensionSolver {
         self.lo = t_min_n;
         self.hi = t_max_n;
         self.info = TensionInfo::default();
-        // Independent rows of A by Gram-Schmidt on the rows; dependent rows must be consistent.
+        let (dependent, scale) = self.setup_rows(g, w_n);
+        self.info.rank = self.n_rows as u32;
+        let tol = self.params.feasibility_tol * t_max_n.max(1.0);
+
+        let mut solved = false;
+        if self.have_warm && self.kkt_solve() && self.kkt_is_optimal(tol) {
+            self.info.warm_start_accepted = true;
+            solved = true;
+        }
+        if !solved {
+            match self.cold_solve(tol) {
+                Ok(()) => {
+                    // Polish: exact KKT solve of the active set the cold solve found.
+                    let keep = self.t;
+                    if !self.kkt_solve() || !self.kkt_is_optimal(tol * 1e3) {
+                        self.t = keep;
+                    }
+                }
+                Err(e) => {
+                    self.have_warm = false;
+                    if let TensionError::Infeasible { .. } = e {
+                        return Err(self.closest_solution(g, w_n));
+                    }
+                    return Err(e);
+                }
+            }
+        }
+        // The answer is exact to rounding; values within the tolerance of a bound are that
+        // bound (T_min = 1e-9 N must not come back as −0.0).
+        for t in self.t.iter_mut().take(n) {
+            *t = t.clamp(self.lo, self.hi);
+        }
+        // Dependent rows (w must be consistent with them).
+        let aw = g.wrench_of(&self.t[..n]);
+        let am = g.moment_of(&self.t[..n]);
+        let wnorm = w_n.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let mut res = 0.0f64;
+        for r in 0..M {
+            let got = if r < 3 { aw[r] } else { am[r - 3] };
+            let d = (got - w_n[r]).abs();
+            res = res.max(d);
+            if dependent[r] && d > 1e-9 * (wnorm + t_max_n * scale) {
+                self.have_warm = false;
+                return Err(self.closest_solution(g, w_n));
+            }
+        }
+        self.info.residual_n = res;
+        self.have_warm = true;
+        Ok(&self.t[..n])
+    }
+
+    /// Keep the linearly independent rows of A (Gram-Schmidt on the rows) and their wrench
+    /// components; returns which rows were dependent and the largest row norm.
+    fn setup_rows(&mut self, g: &Geometry, w_n: &[f64; 6]) -> ([bool; M], f64) {
+        let n = self.n;
         let mut basis = [[0.0; MAX_CABLES]; M];
         let mut full = [[0.0; MAX_CABLES]; M];
         for (r, row) in full.iter_mut().enumerate() {
@@ -294,49 +356,46 @@ impl TensionSolver {
                 dependent[r] = true;
             }
         }
-        self.info.rank = self.n_rows as u32;
-        let tol = self.params.feasibility_tol * t_max_n.max(1.0);
+        (dependent, scale)
+    }
 
-        let mut solved = false;
-        if self.have_warm && self.kkt_solve() && self.kkt_is_optimal(tol) {
-            self.info.warm_start_accepted = true;
-            solved = true;
+    /// Exact solution for a given bound pattern (the KKT system of that active set), if it
+    /// is optimal within `tol` (N): the polish step of [`clarabel_reference`].
+    fn polish(
+        &mut self,
+        g: &Geometry,
+        w_n: &[f64; 6],
+        t_min_n: f64,
+        t_max_n: f64,
+        pattern: &[Bound],
+    ) -> Option<Vec<f64>> {
+        self.lo = t_min_n;
+        self.hi = t_max_n;
+        self.setup_rows(g, w_n);
+        self.bound[..self.n].copy_from_slice(pattern);
+        let tol = 1e-9 * t_max_n.max(1.0);
+        if self.kkt_solve() && self.kkt_is_optimal(tol) {
+            return Some(
+                self.t[..self.n]
+                    .iter()
+                    .map(|t| t.clamp(t_min_n, t_max_n))
+                    .collect(),
+            );
         }
-        if !solved {
-            match self.cold_solve(tol) {
-                Ok(()) => {
-                    // Polish: exact KKT solve of the active set the cold solve found.
-                    let keep = self.t;
-                    if !self.kkt_solve() || !self.kkt_is_optimal(tol * 1e3) {
-                        self.t = keep;
-                    }
-                }
-                Err(e) => {
-                    self.have_warm = false;
-                    if let TensionError::Infeasible { .. } = e {
-                        return Err(self.closest_solution(g, w_n));
-                    }
-                    return Err(e);
-                }
+        // Every cable at T_min: the tensions are fixed; optimal (multipliers ν = 0) when
+        // they produce the wrench.
+        if pattern.iter().all(|b| *b == Bound::Lower) {
+            let t = vec![t_min_n; self.n];
+            let f = g.wrench_of(&t);
+            let m = g.moment_of(&t);
+            let res = (0..3)
+                .map(|r| (f[r] - w_n[r]).abs().max((m[r] - w_n[3 + r]).abs()))
+                .fold(0.0, f64::max);
+            if res <= tol {
+                return Some(t);
             }
         }
-        // Dependent rows (w must be consistent with them).
-        let aw = g.wrench_of(&self.t[..n]);
-        let am = g.moment_of(&self.t[..n]);
-        let wnorm = w_n.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let mut res = 0.0f64;
-        for r in 0..M {
-            let got = if r < 3 { aw[r] } else { am[r - 3] };
-            let d = (got - w_n[r]).abs();
-            res = res.max(d);
-            if dependent[r] && d > 1e-9 * (wnorm + t_max_n * scale) {
-                self.have_warm = false;
-                return Err(self.closest_solution(g, w_n));
-            }
-        }
-        self.info.residual_n = res;
-        self.have_warm = true;
-        Ok(&self.t[..n])
+        None
     }
 
     /// Solve the KKT system of the current `bound` pattern; false when it is singular.
@@ -346,9 +405,7 @@ impl TensionSolver {
         // rhs = w − A_W T_W ; G = A_F A_Fᵀ
         let mut g = [[0.0; M]; M];
         let mut rhs = [0.0; M];
-        for r in 0..k {
-            rhs[r] = self.w[r];
-        }
+        rhs[..k].copy_from_slice(&self.w[..k]);
         for i in 0..n {
             let fixed = match self.bound[i] {
                 Bound::Free => None,
@@ -737,9 +794,12 @@ fn cholesky_solve(g: &mut [[f64; M]; M], b: &mut [f64; M], k: usize) -> bool {
     true
 }
 
-/// Reference solution with Clarabel (interior point, tolerances 1e-12), built fresh per call.
-/// Allocates; for tests, `analyze` and cross-checks, not the real-time path.
-/// Infeasibility is reported with the same closest-solution analysis as [`TensionSolver`].
+/// Reference solution with Clarabel (interior point), built fresh per call: tolerances 1e-13,
+/// then with the unknowns scaled by T_max, then Clarabel's defaults, until it solves or
+/// certifies infeasibility; the solution is polished by solving the KKT system of the
+/// active set Clarabel found (kept only if optimal). Allocates; for tests, `analyze` and
+/// cross-checks, not the real-time path. Infeasibility is reported with the same
+/// closest-solution analysis as [`TensionSolver`].
 pub fn clarabel_reference(
     g: &Geometry,
     w_n: &Vector3<f64>,
@@ -781,25 +841,7 @@ pub fn clarabel_reference_wrench(
         }
     }
     let m_eq = rows.len();
-    let mut dense = vec![vec![0.0; n]; m_eq + 2 * n];
-    let mut b = vec![0.0; m_eq + 2 * n];
-    for (k, &r) in rows.iter().enumerate() {
-        for i in 0..n {
-            dense[k][i] = g.a(r, i);
-        }
-        b[k] = w_n[r];
-    }
-    for i in 0..n {
-        dense[m_eq + i][i] = 1.0; // T_i + s = t_max
-        b[m_eq + i] = t_max_n;
-        dense[m_eq + n + i][i] = -1.0; // −T_i + s = −t_min
-        b[m_eq + n + i] = -t_min_n;
-    }
-    let a = CscMatrix::from(&dense);
-    let p = CscMatrix::identity(n);
-    let q = vec![0.0; n];
-    let cones = [ZeroConeT(m_eq), NonnegativeConeT(2 * n)];
-    let settings = DefaultSettings {
+    let strict = DefaultSettings {
         verbose: false,
         tol_gap_abs: 1e-13,
         tol_gap_rel: 1e-13,
@@ -808,21 +850,92 @@ pub fn clarabel_reference_wrench(
         max_iter: 200,
         ..DefaultSettings::default()
     };
-    let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, settings)
-        .map_err(|_| TensionError::NonFinite)?;
-    solver.solve();
-    match solver.solution.status {
-        SolverStatus::Solved | SolverStatus::AlmostSolved => Ok(solver.solution.x.clone()),
-        SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
-            let mut s = TensionSolver::new(n, TensionParams::default());
-            s.lo = t_min_n;
-            s.hi = t_max_n;
-            Err(s.closest_solution(g, w_n))
+    let loose = DefaultSettings {
+        verbose: false,
+        max_iter: 400,
+        ..DefaultSettings::default()
+    };
+    // Attempts: the problem as posed with tight tolerances; then with the unknowns scaled by
+    // T_max (x = T / T_max) so the tolerances are relative; then Clarabel's defaults.
+    let mut last = (SolverStatus::Unsolved, 0u32);
+    for (scale, settings) in [
+        (1.0, strict.clone()),
+        (t_max_n.max(1e-300), strict),
+        (t_max_n.max(1e-300), loose),
+    ] {
+        let mut dense = vec![vec![0.0; n]; m_eq + 2 * n];
+        let mut b = vec![0.0; m_eq + 2 * n];
+        for (k, &r) in rows.iter().enumerate() {
+            for i in 0..n {
+                dense[k][i] = g.a(r, i);
+            }
+            b[k] = w_n[r] / scale;
         }
-        _ => Err(TensionError::NotConverged {
-            iterations: solver.info.iterations,
-        }),
+        for i in 0..n {
+            dense[m_eq + i][i] = 1.0; // x_i + s = t_max / scale
+            b[m_eq + i] = t_max_n / scale;
+            dense[m_eq + n + i][i] = -1.0; // −x_i + s = −t_min / scale
+            b[m_eq + n + i] = -t_min_n / scale;
+        }
+        let a = CscMatrix::from(&dense);
+        let p = CscMatrix::identity(n);
+        let q = vec![0.0; n];
+        let cones = [ZeroConeT(m_eq), NonnegativeConeT(2 * n)];
+        let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, settings)
+            .map_err(|_| TensionError::NonFinite)?;
+        solver.solve();
+        match solver.solution.status {
+            SolverStatus::Solved | SolverStatus::AlmostSolved => {
+                let x: Vec<f64> = solver
+                    .solution
+                    .x
+                    .iter()
+                    .map(|x| (x * scale).clamp(t_min_n, t_max_n))
+                    .collect();
+                // Polish: Clarabel's active set, solved exactly (interior-point answers sit
+                // ~tolerance away from the bounds they touch). The first bound-detection
+                // threshold whose KKT solution is optimal wins; else Clarabel's answer.
+                let mut s = TensionSolver::new(n, TensionParams::default());
+                for rel in [1e-5, 1e-7, 1e-9] {
+                    let delta = rel * t_max_n.max(1.0);
+                    let pattern: Vec<Bound> = x
+                        .iter()
+                        .map(|&t| {
+                            if t <= t_min_n + delta {
+                                Bound::Lower
+                            } else if t >= t_max_n - delta {
+                                Bound::Upper
+                            } else {
+                                Bound::Free
+                            }
+                        })
+                        .collect();
+                    if let Some(t) = s.polish(g, w_n, t_min_n, t_max_n, &pattern) {
+                        return Ok(t);
+                    }
+                }
+                return Ok(x);
+            }
+            SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
+                let mut s = TensionSolver::new(n, TensionParams::default());
+                s.lo = t_min_n;
+                s.hi = t_max_n;
+                return Err(s.closest_solution(g, w_n));
+            }
+            other => last = (other, solver.info.iterations),
+        }
     }
+    Err(TensionError::ReferenceFailed {
+        status: match last.0 {
+            SolverStatus::MaxIterations => "max_iterations",
+            SolverStatus::MaxTime => "max_time",
+            SolverStatus::NumericalError => "numerical_error",
+            SolverStatus::InsufficientProgress => "insufficient_progress",
+            SolverStatus::DualInfeasible | SolverStatus::AlmostDualInfeasible => "dual_infeasible",
+            _ => "unsolved",
+        },
+        iterations: last.1,
+    })
 }
 
 #[cfg(test)]

@@ -1,5 +1,6 @@
 //! Issue 5: effects switched off remove their contribution exactly, the rigid-body
 //! end-effector matches the dense reference, and the inverse T_min query.
+#![allow(clippy::needless_range_loop)]
 mod common;
 use cablevib::estimator::{reference_analysis_at, Estimator};
 use cablevib::kinematics::{Geometry, Pose};
@@ -263,7 +264,7 @@ fn inverse_t_min_reaches_the_required_frequency() {
             assert!(e.is_ok());
             let rel = (e.f1_hz - want) / want;
             assert!(
-                rel >= -1e-9 && rel <= 1e-6,
+                (-1e-9..=1e-6).contains(&rel),
                 "{}: f1({}) = {} vs required {want}: {rel:.2e}",
                 scene.name,
                 a.t_min_n,
@@ -293,7 +294,10 @@ fn inverse_t_min_reaches_the_required_frequency() {
 fn auto_picks_the_cheapest_model_within_the_tolerance() {
     use cablevib::estimator::resolve_auto;
     let with_tol = |text: &str, tol: f64| {
-        let t = text.replace("elements_per_cable = ", &format!("f1_tolerance = {tol:e}\nelements_per_cable = "));
+        let t = text.replace(
+            "elements_per_cable = ",
+            &format!("f1_tolerance = {tol:e}\nelements_per_cable = "),
+        );
         let mut s = Scene::from_toml_str(&t, "t").unwrap();
         s.model.element = ElementKind::Auto;
         s
@@ -304,17 +308,30 @@ fn auto_picks_the_cheapest_model_within_the_tolerance() {
     assert_eq!(s.model.element, ElementKind::Continuous, "{c}");
     assert!(c.candidates[0].2 > 1.0, "massless error {c}");
     // The reported error is the real one: recompute it at the default pose.
-    let r = f1(&s.with_model(ElementKind::Catenary, 64), s.ee_position_m, s.t_min_n).f1_hz;
+    let r = f1(
+        &s.with_model(ElementKind::Catenary, 64),
+        s.ee_position_m,
+        s.t_min_n,
+    )
+    .f1_hz;
     let got = f1(&s, s.ee_position_m, s.t_min_n).f1_hz;
     assert!((got - r).abs() / r <= c.predicted_error * (1.0 + 1e-9));
     // A tolerance no cheap model meets falls back to the reference itself.
     let (s, c) = resolve_auto(&with_tol(DEFAULT_SCENE_TOML, 1e-7)).unwrap();
-    assert_eq!((s.model.element, s.model.elements_per_cable), (ElementKind::Catenary, 64), "{c}");
+    assert_eq!(
+        (s.model.element, s.model.elements_per_cable),
+        (ElementKind::Catenary, 64),
+        "{c}"
+    );
     // Planar robot, loose tolerance: its first mode is the end-effector's, massless is enough.
     let (s, c) = resolve_auto(&with_tol(PLANAR_SCENE_TOML, 2e-3)).unwrap();
     assert_eq!(s.model.element, ElementKind::Massless, "{c}");
     // The estimator resolves it at build time and keeps the choice for the log.
     let est = Estimator::new(&with_tol(PLANAR_SCENE_TOML, 2e-3)).unwrap();
     assert_eq!(est.auto_choice().unwrap().element, ElementKind::Massless);
-    assert!(est.auto_choice().unwrap().to_string().contains("auto picked massless"));
+    assert!(est
+        .auto_choice()
+        .unwrap()
+        .to_string()
+        .contains("auto picked massless"));
 }
