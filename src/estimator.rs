@@ -358,6 +358,7 @@ pub struct Estimator {
     bounds: (Vector3<f64>, Vector3<f64>),
     last_ok_position: Option<Vector3<f64>>,
     last_lambda1: f64,
+    prev_lambda1: f64,
     last_t_min_n: f64,
     estimate: Estimate,
     /// Scratch solvers of the inverse query (so it leaves the cycle's warm state alone).
@@ -456,6 +457,7 @@ impl Estimator {
             bounds: scene.frame_bounds_m(),
             last_ok_position: None,
             last_lambda1: f64::NAN,
+            prev_lambda1: f64::NAN,
             last_t_min_n: f64::NAN,
             estimate: Estimate::empty(n),
             inv_geometry: Geometry::new(n),
@@ -841,8 +843,14 @@ impl Estimator {
             self.modal.load(&self.models, self.scene.ee_mass_kg);
         }
         let start = self.modal.evaluations();
+        // Predictor: linear extrapolation of the last two cycles' λ₁.
         let warm_l = if warm && self.last_lambda1.is_finite() {
-            Some(self.last_lambda1)
+            let pred = if self.prev_lambda1.is_finite() {
+                2.0 * self.last_lambda1 - self.prev_lambda1
+            } else {
+                self.last_lambda1
+            };
+            Some(if pred > 0.0 { pred } else { self.last_lambda1 })
         } else {
             None
         };
@@ -858,6 +866,7 @@ impl Estimator {
         e.f1_hz = lambda_to_hz(r1.lambda);
         e.f1_ee_participation = r1.ee_participation;
         e.eigen_residual = r1.residual;
+        self.prev_lambda1 = if warm { self.last_lambda1 } else { f64::NAN };
         self.last_lambda1 = r1.lambda;
         if self.params.ee_mode {
             // No mode reaching the participation threshold within the bounded scan leaves
