@@ -632,6 +632,9 @@ const P_WATCH: f64 = 0.2;
 /// The watched modes may lose at most P_LOSS × threshold of participation (net) since
 /// the last scan; an unwatched mode then holds < (P_WATCH + P_LOSS) × threshold.
 const P_LOSS: f64 = 0.7;
+/// A partial rescan starts this fraction below the failing watched mode (participation
+/// moves between modes close in frequency, through avoided crossings).
+const WINDOW: f64 = 0.95;
 /// A full rescan at least this often (cycles) bounds the slow drift of the total
 /// participation with the pose.
 const FULL_RESCAN_CYCLES: u32 = 2000;
@@ -1263,19 +1266,19 @@ impl ModalSolver {
         }
         for i in 0..self.n_members {
             let (l, p_scan, _) = self.members[i];
-            let window = 0.95 * l;
+            let window = WINDOW * l;
             let (r, branch) = self.track_root(l).ok_or((1usize, window))?;
             // Modes move continuously: a root that moved more than 0.2 % in one cycle is
             // another mode that Newton converged to (an identity jump), not this one.
             if (r.lambda - l).abs() > 2e-3 * l {
-                return Err((1, window.min(0.95 * r.lambda)));
+                return Err((1, window.min(WINDOW * r.lambda)));
             }
             lost += p_scan - r.ee_participation;
             if r.ee_participation < p_scan {
                 first_loser = first_loser.min(window);
             }
             if r.lambda <= prev * (1.0 + 1e-9) {
-                return Err((3, 0.95 * prev.min(r.lambda)));
+                return Err((3, WINDOW * prev.min(r.lambda)));
             }
             prev = r.lambda;
             self.members[i].0 = r.lambda;
@@ -1285,9 +1288,9 @@ impl ModalSolver {
             }
         }
         if lost > P_LOSS * thr {
-            return Err((2, first_loser.min(0.95 * l_ee)));
+            return Err((2, first_loser.min(WINDOW * l_ee)));
         }
-        let (r, branch) = answer.ok_or((4usize, 0.95 * l_ee.min(prev)))?;
+        let (r, branch) = answer.ok_or((4usize, WINDOW * l_ee.min(prev)))?;
         // The watched modes keep their order, so the answer is the same mode as before
         // exactly when it was the end-effector mode at the last cycle.
         let same = (r.lambda - l_ee).abs() <= 1e-3 * l_ee;
@@ -1299,10 +1302,10 @@ impl ModalSolver {
                 // A mode arrived from above: it must carry little participation.
                 match self.highest_root_below(r.lambda, branch) {
                     Some(h) if h.ee_participation < P_WATCH * thr => {}
-                    _ => return Err((5, 0.95 * r.lambda)),
+                    _ => return Err((5, WINDOW * r.lambda)),
                 }
             } else {
-                return Err((5, 0.95 * r.lambda));
+                return Err((5, WINDOW * r.lambda));
             }
         }
         self.ee_track = Some((r.lambda, below));
