@@ -53,6 +53,14 @@ pub enum Command {
     Demo(crate::service::DemoArgs),
     /// Measure pose-published → estimate-received latency over iceoryx2.
     BenchIpc(crate::service::BenchIpcArgs),
+    /// What accuracy costs in time: f1 error and per-cycle time of every model, with plots.
+    Accuracy(crate::sweep::AccuracyArgs),
+    /// f1 over a workspace grid: heat-map SVG and CSV (infeasible points marked).
+    Map(crate::sweep::MapArgs),
+    /// f1 and the end-effector mode along a trajectory (the paper's circle or a CSV).
+    Trajectory(crate::sweep::TrajectoryArgs),
+    /// f1 against T_min, with the √T_min fit.
+    SweepTmin(crate::sweep::SweepTminArgs),
 }
 
 /// Scene and model overrides shared by the offline commands.

@@ -47,7 +47,8 @@
 //!
 //! [`scene`] (TOML description and validation), [`kinematics`], [`tension`], [`cable`],
 //! [`modal`], [`estimator`] (the per-cycle pipeline and the offline reference pipeline),
-//! [`service`] (iceoryx2 wiring), [`cli`] (command-line tools).
+//! [`service`] (iceoryx2 wiring), [`cli`] (command-line tools), [`sweep`] (accuracy, maps,
+//! trajectories and T_min sweeps, with [`svg`] plots).
 #![warn(missing_docs)]
 // Numerical kernels index several arrays with one loop variable; iterator chains would
 // hide the maths. `!(x > 0.0)` is used on purpose: it is also true for NaN.
@@ -59,4 +60,6 @@ pub mod kinematics;
 pub mod modal;
 pub mod scene;
 pub mod service;
+pub mod svg;
+pub mod sweep;
 pub mod tension;

@@ -44,6 +44,10 @@ fn run(cli: cablevib::cli::Cli) -> anyhow::Result<()> {
         Command::Serve(a) => cablevib::service::serve(&a, allocations)?,
         Command::Demo(a) => cablevib::service::demo(&a)?,
         Command::BenchIpc(a) => cablevib::service::bench_ipc(&a)?,
+        Command::Accuracy(a) => cablevib::sweep::accuracy(&a)?,
+        Command::Map(a) => cablevib::sweep::map(&a)?,
+        Command::Trajectory(a) => cablevib::sweep::trajectory(&a)?,
+        Command::SweepTmin(a) => cablevib::sweep::sweep_tmin(&a)?,
     }
     Ok(())
 }
