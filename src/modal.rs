@@ -963,7 +963,7 @@ impl ModalSolver {
         let fast = warm.is_some();
         let mut r = self.branch_root_with(0, 0.0, hi, lp, guess, fast)?;
         self.roots += 1;
-        if self.params.certify && (!fast || self.roots % 256 == 0) {
+        if self.params.certify && (!fast || self.roots.is_multiple_of(256)) {
             let mut certified = self.certify_first(r.lambda);
             if !certified && fast {
                 // A relaxed warm answer may sit outside the certificate's ±1e-10 probe in
