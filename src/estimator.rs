@@ -470,27 +470,17 @@ impl Estimator {
             auto: None,
         };
         // Expected rank: the rank at the default pose.
-        let rot = crate::kinematics::rotation_of(&scene.ee_orientation_wxyz);
         let default_pose = |e: EstimatorError| BuildError::DefaultPose {
             scene: scene.name.clone(),
             reason: e,
         };
-        est.geometry
-            .update_rigid(
-                scene.cables.iter().map(|c| &c.anchor_m),
-                scene.cables.iter().map(|c| &c.attachment_m),
-                &scene.ee_position_m,
-                &rot,
-            )
-            .map_err(|e| default_pose(e.into()))?;
-        let f = scene.wrench_n();
+        let pose = Pose {
+            position_m: scene.ee_position_m,
+            orientation_wxyz: scene.ee_orientation_wxyz,
+        };
+        update_geometry(scene, &mut est.geometry, &pose).map_err(|e| default_pose(e.into()))?;
         est.tension
-            .solve_wrench(
-                &est.geometry,
-                &[f.x, f.y, f.z, 0.0, 0.0, 0.0],
-                scene.t_min_n,
-                scene.t_max_n,
-            )
+            .solve_wrench(&est.geometry, &wrench6(scene), scene.t_min_n, scene.t_max_n)
             .map_err(|e| default_pose(e.into()))?;
         est.expected_rank = est.tension.info().rank;
         est.tension.reset_warm_start();
@@ -558,24 +548,7 @@ impl Estimator {
         if !pose.has_unit_quaternion(self.params.quaternion_tol) {
             return Err(EstimatorError::Input("quaternion is not of unit norm").into());
         }
-        if self.scene.rigid {
-            let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
-            self.inv_geometry
-                .update_rigid(
-                    self.scene.cables.iter().map(|c| &c.anchor_m),
-                    self.scene.cables.iter().map(|c| &c.attachment_m),
-                    &pose.position_m,
-                    &rot,
-                )
-                .map_err(EstimatorError::from)?;
-        } else {
-            self.inv_geometry
-                .update(
-                    self.scene.cables.iter().map(|c| &c.anchor_m),
-                    &pose.position_m,
-                )
-                .map_err(EstimatorError::from)?;
-        }
+        update_geometry(&self.scene, &mut self.inv_geometry, pose).map_err(EstimatorError::from)?;
         self.inv_tension.reset_warm_start();
         let mut evals = 0u32;
         let mut warm = None;
@@ -662,55 +635,34 @@ impl Estimator {
     /// f1 (Hz) at `pose` (geometry already in `inv_geometry`) for T_min = `t_min_n`.
     fn inverse_f1(
         &mut self,
-        _pose: &Pose,
+        pose: &Pose,
         t_min_n: f64,
         warm: &mut Option<f64>,
         evals: &mut u32,
     ) -> Result<f64, EstimatorError> {
         *evals += 1;
-        let n = self.scene.n_cables();
-        let f = self.scene.wrench_n();
         self.inv_tension.solve_wrench(
             &self.inv_geometry,
-            &[f.x, f.y, f.z, 0.0, 0.0, 0.0],
+            &wrench6(&self.scene),
             t_min_n,
             self.scene.t_max_n,
         )?;
-        let model = self.scene.model;
-        let g = self.scene.gravity_m_s2.norm();
-        for i in 0..n {
-            let c = &self.scene.cables[i];
-            self.inv_models[i] = CableModel::build(
-                model.element,
-                model.elements_per_cable,
-                &self.inv_geometry.unit[i],
-                self.inv_geometry.length_m[i],
-                self.inv_tension.tensions_n()[i],
-                c.ea_n(),
-                c.mass_per_length_kg_m,
-                c.mass_per_length_kg_m * g,
-                &self.frame,
-                model.geometric_stiffness,
-            )?;
-        }
-        if self.scene.rigid {
-            let rot = crate::kinematics::rotation_of(&_pose.orientation_wxyz);
-            let inertia = rot * self.scene.ee_inertia_kg_m2 * rot.transpose();
-            let kgeo = modal::rigid_geometric_stiffness(
-                &self.inv_geometry.unit,
-                &self.inv_geometry.arm_m,
-                self.inv_tension.tensions_n(),
-            );
-            self.inv_modal.load_rigid(
-                &self.inv_models,
-                self.scene.ee_mass_kg,
-                &inertia,
-                &self.inv_geometry.arm_m,
-                &kgeo,
-            );
-        } else {
-            self.inv_modal.load(&self.inv_models, self.scene.ee_mass_kg);
-        }
+        let t = self.inv_tension.tensions_n();
+        fill_models(
+            &self.scene,
+            &self.frame,
+            &self.inv_geometry,
+            t,
+            &mut self.inv_models,
+        )?;
+        load_modal(
+            &self.scene,
+            &mut self.inv_modal,
+            &self.inv_models,
+            &self.inv_geometry,
+            t,
+            pose,
+        );
         let r = self.inv_modal.first_root(*warm)?;
         *warm = Some(r.lambda);
         Ok(lambda_to_hz(r.lambda))
@@ -766,18 +718,7 @@ impl Estimator {
         {
             return Err(EstimatorError::Input("position outside the anchors' frame"));
         }
-        if self.scene.rigid {
-            let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
-            self.geometry.update_rigid(
-                self.scene.cables.iter().map(|c| &c.anchor_m),
-                self.scene.cables.iter().map(|c| &c.attachment_m),
-                &p,
-                &rot,
-            )?;
-        } else {
-            self.geometry
-                .update(self.scene.cables.iter().map(|c| &c.anchor_m), &p)?;
-        }
+        update_geometry(&self.scene, &mut self.geometry, pose)?;
         let warm = match self.last_ok_position {
             Some(q) => {
                 (q - p).norm() <= self.params.warm_jump_m
@@ -790,8 +731,7 @@ impl Estimator {
             self.tension.reset_warm_start();
             self.modal.reset_tracking();
         }
-        let f = self.scene.wrench_n();
-        let wrench = [f.x, f.y, f.z, 0.0, 0.0, 0.0];
+        let wrench = wrench6(&self.scene);
         let res = self
             .tension
             .solve_wrench(&self.geometry, &wrench, t_min_n, self.scene.t_max_n)
@@ -807,41 +747,21 @@ impl Estimator {
                 expected: self.expected_rank,
             });
         }
-        let model = self.scene.model;
-        let g = self.scene.gravity_m_s2.norm();
-        for i in 0..n {
-            let c = &self.scene.cables[i];
-            self.models[i] = CableModel::build(
-                model.element,
-                model.elements_per_cable,
-                &self.geometry.unit[i],
-                self.geometry.length_m[i],
-                e.tensions_n[i],
-                c.ea_n(),
-                c.mass_per_length_kg_m,
-                c.mass_per_length_kg_m * g,
-                &self.frame,
-                model.geometric_stiffness,
-            )?;
-        }
-        if self.scene.rigid {
-            let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
-            let inertia = rot * self.scene.ee_inertia_kg_m2 * rot.transpose();
-            let kgeo = modal::rigid_geometric_stiffness(
-                &self.geometry.unit,
-                &self.geometry.arm_m,
-                &e.tensions_n[..n],
-            );
-            self.modal.load_rigid(
-                &self.models,
-                self.scene.ee_mass_kg,
-                &inertia,
-                &self.geometry.arm_m,
-                &kgeo,
-            );
-        } else {
-            self.modal.load(&self.models, self.scene.ee_mass_kg);
-        }
+        fill_models(
+            &self.scene,
+            &self.frame,
+            &self.geometry,
+            &e.tensions_n[..n],
+            &mut self.models,
+        )?;
+        load_modal(
+            &self.scene,
+            &mut self.modal,
+            &self.models,
+            &self.geometry,
+            &e.tensions_n[..n],
+            pose,
+        );
         let start = self.modal.evaluations();
         // Predictor: linear extrapolation of the last two cycles' λ₁.
         let warm_l = if warm && self.last_lambda1.is_finite() {
@@ -896,6 +816,74 @@ impl Estimator {
     }
 }
 
+/// Cable geometry of `scene` at `pose`: rigid-body attachments rotated by the pose's
+/// orientation, or all cables at the centroid. No allocation.
+fn update_geometry(scene: &Scene, g: &mut Geometry, pose: &Pose) -> Result<(), KinematicsError> {
+    if scene.rigid {
+        let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
+        g.update_rigid(
+            scene.cables.iter().map(|c| &c.anchor_m),
+            scene.cables.iter().map(|c| &c.attachment_m),
+            &pose.position_m,
+            &rot,
+        )
+    } else {
+        g.update(scene.cables.iter().map(|c| &c.anchor_m), &pose.position_m)
+    }
+}
+
+/// The wrench the cables carry as (force N, moment N·m).
+fn wrench6(scene: &Scene) -> [f64; 6] {
+    let f = scene.wrench_n();
+    [f.x, f.y, f.z, 0.0, 0.0, 0.0]
+}
+
+/// Cable models of `scene` for geometry `g` and tensions into `out`. No allocation.
+fn fill_models(
+    scene: &Scene,
+    frame: &Matrix3<f64>,
+    g: &Geometry,
+    tensions_n: &[f64],
+    out: &mut [CableModel],
+) -> Result<(), CableError> {
+    let gn = scene.gravity_m_s2.norm();
+    for (i, (c, m)) in scene.cables.iter().zip(out.iter_mut()).enumerate() {
+        *m = CableModel::build(
+            scene.model.element,
+            scene.model.elements_per_cable,
+            &g.unit[i],
+            g.length_m[i],
+            tensions_n[i],
+            c.ea_n(),
+            c.mass_per_length_kg_m,
+            c.mass_per_length_kg_m * gn,
+            frame,
+            scene.model.geometric_stiffness,
+        )?;
+    }
+    Ok(())
+}
+
+/// Load `modal` with the models: a point mass, or a rigid body at `pose` (world inertia
+/// R I Rᵀ and the tensions' rotational geometric stiffness). No allocation.
+fn load_modal(
+    scene: &Scene,
+    modal: &mut ModalSolver,
+    models: &[CableModel],
+    g: &Geometry,
+    tensions_n: &[f64],
+    pose: &Pose,
+) {
+    if scene.rigid {
+        let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
+        let inertia = rot * scene.ee_inertia_kg_m2 * rot.transpose();
+        let kgeo = modal::rigid_geometric_stiffness(&g.unit, &g.arm_m, tensions_n);
+        modal.load_rigid(models, scene.ee_mass_kg, &inertia, &g.arm_m, &kgeo);
+    } else {
+        modal.load(models, scene.ee_mass_kg);
+    }
+}
+
 /// Build the cable models of a scene for given geometry and tensions (allocates a Vec).
 pub fn build_models(
     scene: &Scene,
@@ -903,24 +891,21 @@ pub fn build_models(
     tensions_n: &[f64],
 ) -> Result<Vec<CableModel>, CableError> {
     let frame = up_frame(&scene.gravity_m_s2);
-    let g = scene.gravity_m_s2.norm();
-    (0..scene.n_cables())
-        .map(|i| {
-            let c = &scene.cables[i];
-            CableModel::build(
-                scene.model.element,
-                scene.model.elements_per_cable,
-                &geometry.unit[i],
-                geometry.length_m[i],
-                tensions_n[i],
-                c.ea_n(),
-                c.mass_per_length_kg_m,
-                c.mass_per_length_kg_m * g,
-                &frame,
-                scene.model.geometric_stiffness,
-            )
-        })
-        .collect()
+    let placeholder = CableModel::build(
+        ElementKind::Massless,
+        1,
+        &Vector3::x(),
+        1.0,
+        1.0,
+        1.0,
+        0.0,
+        0.0,
+        &frame,
+        true,
+    )?;
+    let mut out = vec![placeholder; scene.n_cables()];
+    fill_models(scene, &frame, geometry, tensions_n, &mut out)?;
+    Ok(out)
 }
 
 /// Errors of the reference pipeline.
@@ -986,23 +971,8 @@ pub fn reference_analysis_at(
     }
     let mut g = Geometry::new(scene.n_cables());
     let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
-    if scene.rigid {
-        g.update_rigid(
-            scene.cables.iter().map(|c| &c.anchor_m),
-            scene.cables.iter().map(|c| &c.attachment_m),
-            &pose.position_m,
-            &rot,
-        )?;
-    } else {
-        g.update(scene.cables.iter().map(|c| &c.anchor_m), &pose.position_m)?;
-    }
-    let f = scene.wrench_n();
-    let t = crate::tension::clarabel_reference_wrench(
-        &g,
-        &[f.x, f.y, f.z, 0.0, 0.0, 0.0],
-        t_min_n,
-        scene.t_max_n,
-    )?;
+    update_geometry(scene, &mut g, pose)?;
+    let t = crate::tension::clarabel_reference_wrench(&g, &wrench6(scene), t_min_n, scene.t_max_n)?;
     let models = build_models(scene, &g, &t)?;
     let mut ee = Matrix6::zeros();
     ee.fixed_view_mut::<3, 3>(0, 0)

@@ -7,6 +7,7 @@ use cablevib::kinematics::{Geometry, Pose};
 use cablevib::modal::{dense_relative_accuracy, lambda_to_hz};
 use cablevib::scene::{ElementKind, Scene, DEFAULT_SCENE_TOML, PLANAR_SCENE_TOML};
 use cablevib::tension::clarabel_reference;
+use common::Rng;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
 fn f1(scene: &Scene, p: Vector3<f64>, t_min: f64) -> cablevib::estimator::Estimate {
@@ -121,17 +122,6 @@ fn sag_effect_selects_the_catenary_element() {
     let e = f1(&s, s.ee_position_m, 60.0);
     let want = common::f64s(&common::table(8)["rows"][0]["faithful_analytical_N40"])[0].unwrap();
     assert!((e.f1_hz - want).abs() < 1e-9 * want);
-}
-
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
 }
 
 #[test]

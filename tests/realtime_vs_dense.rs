@@ -10,19 +10,8 @@ use cablevib::estimator::{reference_analysis, Estimator};
 use cablevib::kinematics::Pose;
 use cablevib::modal::{dense_relative_accuracy, lambda_to_hz};
 use cablevib::scene::{ElementKind, Scene};
+use common::Rng;
 use nalgebra::Vector3;
-
-/// Deterministic pseudo-random numbers (SplitMix64).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 fn random_poses_agree(scene: &Scene, count: usize, seed: u64) -> (usize, f64, f64) {
     let (lo, hi) = scene.frame_bounds_m();
