@@ -539,6 +539,19 @@ impl Estimator {
         pose: &Pose,
         f_required_hz: f64,
     ) -> Result<TminAnswer, TminQueryError> {
+        self.t_min_for_f1_near(pose, f_required_hz, None)
+    }
+
+    /// [`Self::t_min_for_f1`] warm-started from `hint` (N: the last answer, or the current
+    /// T_min): a ±2 % bracket around it is tried first (two evaluations, then a few
+    /// regula-falsi steps), the full search only when the answer is not in it. A service
+    /// answering margin requests every cycle pays a few evaluations per request.
+    pub fn t_min_for_f1_near(
+        &mut self,
+        pose: &Pose,
+        f_required_hz: f64,
+        hint: Option<f64>,
+    ) -> Result<TminAnswer, TminQueryError> {
         if !(f_required_hz.is_finite() && f_required_hz > 0.0) {
             return Err(TminQueryError::BadRequirement(f_required_hz));
         }
@@ -554,6 +567,24 @@ impl Estimator {
         let mut warm = None;
         let t_max = self.scene.t_max_n;
         let lo0 = 1e-6 * t_max;
+        if let Some(h) = hint.filter(|h| h.is_finite() && *h > lo0 && *h < t_max) {
+            let (a, b) = ((0.98 * h).max(lo0), (1.02 * h).min(t_max));
+            if let (Ok(fa), Ok(fb)) = (
+                self.inverse_f1(pose, a, &mut warm, &mut evals),
+                self.inverse_f1(pose, b, &mut warm, &mut evals),
+            ) {
+                if fa < f_required_hz && fb >= f_required_hz {
+                    return self.inverse_refine(
+                        pose,
+                        f_required_hz,
+                        (a, fa),
+                        (b, fb),
+                        &mut warm,
+                        &mut evals,
+                    );
+                }
+            }
+        }
         // Largest feasible T_min: T_max itself, or bisect the feasibility boundary.
         let mut hi = t_max;
         let mut f_hi = self.inverse_f1(pose, hi, &mut warm, &mut evals);
@@ -586,7 +617,7 @@ impl Estimator {
                 t_min_n: hi,
             });
         }
-        let mut lo = lo0;
+        let lo = lo0;
         let f_lo = self.inverse_f1(pose, lo, &mut warm, &mut evals)?;
         if f_lo >= f_required_hz {
             return Ok(TminAnswer {
@@ -595,6 +626,27 @@ impl Estimator {
                 evaluations: evals,
             });
         }
+        self.inverse_refine(
+            pose,
+            f_required_hz,
+            (lo, f_lo),
+            (hi, f_hi),
+            &mut warm,
+            &mut evals,
+        )
+    }
+
+    /// Regula falsi (Illinois) on f1(T)² − f² inside a bracket with f1(lo) < f ≤ f1(hi).
+    fn inverse_refine(
+        &mut self,
+        pose: &Pose,
+        f_required_hz: f64,
+        (mut lo, f_lo): (f64, f64),
+        (mut hi, f_hi): (f64, f64),
+        warm: &mut Option<f64>,
+        evals: &mut u32,
+    ) -> Result<TminAnswer, TminQueryError> {
+        let t_max = self.scene.t_max_n;
         let target = f_required_hz * f_required_hz;
         let mut g_lo = f_lo * f_lo - target;
         let mut g_hi = f_hi * f_hi - target;
@@ -603,7 +655,7 @@ impl Estimator {
         for _ in 0..80 {
             let t = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
             let t = if t > lo && t < hi { t } else { 0.5 * (lo + hi) };
-            let f = self.inverse_f1(pose, t, &mut warm, &mut evals)?;
+            let f = self.inverse_f1(pose, t, warm, evals)?;
             let g = f * f - target;
             if g >= 0.0 {
                 hi = t;
@@ -628,7 +680,7 @@ impl Estimator {
         Ok(TminAnswer {
             t_min_n: best.0,
             f1_hz: best.1,
-            evaluations: evals,
+            evaluations: *evals,
         })
     }
 

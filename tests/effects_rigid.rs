@@ -268,6 +268,24 @@ fn inverse_t_min_reaches_the_required_frequency() {
                 scene.name
             );
             assert!(a.evaluations <= 100);
+            // Warm-started from a nearby hint (the service's path): the same answer, cheaper.
+            for hint in [a.t_min_n * 1.01, a.t_min_n * 0.99, scene.t_min_n] {
+                let b = est.t_min_for_f1_near(&pose, want, Some(hint)).unwrap();
+                assert!(
+                    (b.t_min_n - a.t_min_n).abs() <= 1e-6 * a.t_min_n,
+                    "hint {hint}: {} vs {}",
+                    b.t_min_n,
+                    a.t_min_n
+                );
+                if (hint / a.t_min_n - 1.0).abs() < 0.015 {
+                    assert!(
+                        b.evaluations < a.evaluations,
+                        "{} vs {}",
+                        b.evaluations,
+                        a.evaluations
+                    );
+                }
+            }
         }
         // Unreachable requirements are errors, not clamps.
         assert!(est.t_min_for_f1(&pose, 100.0 * base.f1_hz).is_err());

@@ -179,6 +179,8 @@ pub struct Server {
     ports: ServicePorts,
     allocations: AllocCounter,
     t_min_n: f64,
+    /// The last inverse answer (required f1 Hz, T_min N): the next request's warm start.
+    last_inverse: Option<(f64, f64)>,
     pending_t_min: Option<f64>,
     latest: Option<Latest>,
     period: PeriodCounters,
@@ -207,6 +209,7 @@ impl Server {
             ports,
             allocations,
             t_min_n: scene.t_min_n,
+            last_inverse: None,
             pending_t_min: None,
             latest: None,
             period: PeriodCounters::default(),
@@ -374,11 +377,21 @@ impl Server {
             let req = *request.payload();
             // The smallest T_min reaching the required f1 at the latest pose (fast path,
             // allocation-free; NaN when unreachable within [0, T_max] or not asked).
+            // Warm-started from the last answer for the same requirement (or the T_min in
+            // force): a few forward evaluations per request on a smooth trajectory.
             let t_min_required = match self.latest {
-                Some(l) if l.status.is_ok() && req.is_valid() => self
-                    .estimator
-                    .t_min_for_f1(&l.pose, req.required_f1_hz)
-                    .map_or(f64::NAN, |a| a.t_min_n),
+                Some(l) if l.status.is_ok() && req.is_valid() => {
+                    let hint = match self.last_inverse {
+                        Some((f, t)) if f == req.required_f1_hz && t.is_finite() => t,
+                        _ => self.t_min_n,
+                    };
+                    let t = self
+                        .estimator
+                        .t_min_for_f1_near(&l.pose, req.required_f1_hz, Some(hint))
+                        .map_or(f64::NAN, |a| a.t_min_n);
+                    self.last_inverse = Some((req.required_f1_hz, t));
+                    t
+                }
                 _ => f64::NAN,
             };
             let now = monotonic_now_ns();
