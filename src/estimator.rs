@@ -432,19 +432,7 @@ impl Estimator {
             return Ok(est);
         }
         let n = scene.n_cables();
-        let zero = CableModel::build(
-            ElementKind::Massless,
-            1,
-            &Vector3::x(),
-            1.0,
-            1.0,
-            1.0,
-            0.0,
-            0.0,
-            &Matrix3::identity(),
-            true,
-        )
-        .expect("trivial model");
+        let zero = placeholder_model();
         let mut est = Estimator {
             scene: scene.clone(),
             params,
@@ -936,14 +924,9 @@ fn load_modal(
     }
 }
 
-/// Build the cable models of a scene for given geometry and tensions (allocates a Vec).
-pub fn build_models(
-    scene: &Scene,
-    geometry: &Geometry,
-    tensions_n: &[f64],
-) -> Result<Vec<CableModel>, CableError> {
-    let frame = up_frame(&scene.gravity_m_s2);
-    let placeholder = CableModel::build(
+/// A valid stand-in cable model (a 1 N/m massless spring) for preallocated model buffers.
+fn placeholder_model() -> CableModel {
+    CableModel::build(
         ElementKind::Massless,
         1,
         &Vector3::x(),
@@ -952,10 +935,20 @@ pub fn build_models(
         1.0,
         0.0,
         0.0,
-        &frame,
+        &Matrix3::identity(),
         true,
-    )?;
-    let mut out = vec![placeholder; scene.n_cables()];
+    )
+    .expect("a unit massless spring is a valid model")
+}
+
+/// Build the cable models of a scene for given geometry and tensions (allocates a Vec).
+pub fn build_models(
+    scene: &Scene,
+    geometry: &Geometry,
+    tensions_n: &[f64],
+) -> Result<Vec<CableModel>, CableError> {
+    let frame = up_frame(&scene.gravity_m_s2);
+    let mut out = vec![placeholder_model(); scene.n_cables()];
     fill_models(scene, &frame, geometry, tensions_n, &mut out)?;
     Ok(out)
 }
