@@ -22,7 +22,7 @@ use cablevib_ipc::{monotonic_now_ns, PoseSample, ServiceNames, IDENTITY_QUATERNI
 
 use super::ports::{create_node, EstimateOutput, PoseInput};
 use super::rt;
-use super::server::{self, no_allocation_counter, ServerConfig};
+use super::server::{self, ServerConfig};
 use super::stats::{Percentiles, SampleLog};
 use super::trajectory::Trajectory;
 use super::{init_tracing, BenchIpcArgs, ServiceError, WaitMode};
@@ -156,14 +156,7 @@ pub fn bench_mode(
             node_name: "cablevib-bench-serve".into(),
             ..ServerConfig::default()
         };
-        std::thread::Builder::new()
-            .name("cablevib-serve".into())
-            .spawn(move || {
-                let r = server::run(&scene, &cfg, &stop, no_allocation_counter);
-                stop.store(true, Ordering::Release);
-                r
-            })
-            .map_err(|e| ServiceError::Usage(format!("cannot start the service thread: {e}")))?
+        server::spawn_thread(scene, cfg, stop)?
     };
     let result = client(scene, mode, a, &names, &stop);
     stop.store(true, Ordering::Release);

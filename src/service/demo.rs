@@ -16,7 +16,7 @@ use cablevib_ipc::{
 };
 
 use super::ports::{create_node, EstimateOutput, MarginClient, PoseInput};
-use super::server::{self, no_allocation_counter, ServerConfig, ServerReport};
+use super::server::{self, ServerConfig, ServerReport};
 use super::stats::{Percentiles, SampleLog};
 use super::trajectory::{TminSchedule, Trajectory};
 use super::{init_tracing, DemoArgs, ServiceError, WaitMode};
@@ -189,15 +189,7 @@ pub fn run(a: &DemoArgs) -> Result<(), ServiceError> {
             node_name: "cablevib-demo-serve".into(),
             ..ServerConfig::default()
         };
-        std::thread::Builder::new()
-            .name("cablevib-serve".into())
-            .spawn(move || {
-                let r = server::run(&scene, &cfg, &stop, no_allocation_counter);
-                // A signal stops the service first; make everybody else stop too.
-                stop.store(true, Ordering::Release);
-                r
-            })
-            .map_err(|e| ServiceError::Usage(format!("cannot start the service thread: {e}")))?
+        server::spawn_thread(scene, cfg, stop)?
     };
     let controller_thread = {
         let (names, stop, ready, progress) = (

@@ -57,6 +57,24 @@ pub fn no_allocation_counter() -> u64 {
     0
 }
 
+/// Runs the service for `scene` in its own thread (named `cablevib-serve`), as the demo and
+/// the IPC benchmark do; when it ends, for any reason, `stop` is set so the other threads
+/// stop too.
+pub fn spawn_thread(
+    scene: Scene,
+    cfg: ServerConfig,
+    stop: std::sync::Arc<AtomicBool>,
+) -> Result<std::thread::JoinHandle<Result<ServerReport, ServiceError>>, ServiceError> {
+    std::thread::Builder::new()
+        .name("cablevib-serve".into())
+        .spawn(move || {
+            let r = run(&scene, &cfg, &stop, no_allocation_counter);
+            stop.store(true, Ordering::Release);
+            r
+        })
+        .map_err(|e| ServiceError::Usage(format!("cannot start the service thread: {e}")))
+}
+
 /// How the service runs.
 #[derive(Debug, Clone)]
 pub struct ServerConfig {
