@@ -28,7 +28,9 @@
 //! vector v of D(λ): the share of the mode's kinetic-energy norm carried by the
 //! end-effector's own mass.
 
-use crate::cable::{CableModel, Chain, ChainKind};
+use crate::cable::{
+    eval_discrete_batch, CableModel, Chain, ChainEval, ChainKind, BATCH_MAX_ELEMENTS,
+};
 use crate::scene::MAX_CABLES;
 use nalgebra::{DMatrix, Matrix3, Matrix6, SymmetricEigen, Vector3, Vector6};
 
@@ -434,6 +436,22 @@ pub struct Eig3 {
     pub vectors: [Vector3<f64>; 3],
 }
 
+/// The branch of D(λ) closest to vanishing: the smallest |μ_i| / |μ_i'|.
+fn nearest_branch(e: &DynEval, eg: &EigD) -> usize {
+    let mut branch = 0;
+    let mut best = f64::INFINITY;
+    for i in 0..eg.n {
+        let v = eg.vectors[i];
+        let d = -(v.transpose() * e.dd * v)[(0, 0)];
+        let dist = eg.values[i].abs() / d.max(f64::MIN_POSITIVE);
+        if dist < best {
+            best = dist;
+            branch = i;
+        }
+    }
+    branch
+}
+
 /// Symmetric 3 × 3 eigen-decomposition, sorted ascending. Closed form (trigonometric
 /// eigenvalues, eigenvectors from cross products of rows of A − μI) when the eigenvalues are
 /// separated by more than 1e-4 ‖A‖; Jacobi rotations ([`eig3_jacobi`]) otherwise, where the
@@ -606,12 +624,27 @@ pub struct ModalSolver {
     /// Constant rigid-body geometric stiffness (rotational block), N·m/rad.
     k6: Matrix6<f64>,
     next_pole: [usize; MAX_CHAINS],
+    /// Chains evaluated together by the batched recurrence: their indices, k and m, and
+    /// their common element count (0 when there are none).
+    batch_idx: [usize; MAX_CHAINS],
+    batch_k: [f64; MAX_CHAINS],
+    batch_m: [f64; MAX_CHAINS],
+    n_batch: usize,
+    batch_n_el: usize,
+    /// Per-chain evaluations at the last λ.
+    chain_eval: [ChainEval; MAX_CHAINS],
+    /// (1 − cos θ_j, cos θ_j) for θ_j = jπ/N, j = 0 ..= N, of the discrete chains'
+    /// common element count N = `pole_tab_n` (the blocked eigenvalues without trigonometry).
+    pole_tab: Vec<(f64, f64)>,
+    pole_tab_n: usize,
     evaluations: u32,
     /// Tracked end-effector mode: (λ, number of modes below it).
     ee_track: Option<(f64, u32)>,
     /// Watched modes at or below the end-effector mode (participation ≥ p_watch at the
     /// last scan): (λ, participation at the scan, participation now).
     members: [(f64, f64, f64); MAX_MEMBERS],
+    /// Each watched mode's λ one cycle earlier (NaN when unknown): the linear predictor.
+    member_prev: [f64; MAX_MEMBERS],
     n_members: usize,
     /// Record roots with participation ≥ p_watch during a scan.
     recording: bool,
@@ -619,6 +652,8 @@ pub struct ModalSolver {
     rescans: [u64; 6],
     /// Warm cycles since the last full scan.
     since_scan: u32,
+    /// Participation the watched modes have given to unwatched ones since the last scan.
+    leak: f64,
     /// Warm cycles left before a failed full scan is retried.
     ee_skip: u32,
     /// First roots solved (schedules the periodic count certificate).
@@ -629,8 +664,8 @@ pub struct ModalSolver {
 const MAX_MEMBERS: usize = 8;
 /// Modes up to the end-effector mode with participation ≥ P_WATCH × threshold are watched.
 const P_WATCH: f64 = 0.2;
-/// The watched modes may lose at most P_LOSS × threshold of participation (net) since
-/// the last scan; an unwatched mode then holds < (P_WATCH + P_LOSS) × threshold.
+/// The watched modes may leak at most P_LOSS × threshold of participation to unwatched
+/// ones since the last scan; an unwatched mode then holds < (P_WATCH + P_LOSS) × threshold.
 const P_LOSS: f64 = 0.7;
 /// A partial rescan starts this fraction below the failing watched mode (participation
 /// moves between modes close in frequency, through avoided crossings).
@@ -638,6 +673,12 @@ const WINDOW: f64 = 0.95;
 /// A full rescan at least this often (cycles) bounds the slow drift of the total
 /// participation with the pose.
 const FULL_RESCAN_CYCLES: u32 = 2000;
+/// A watched mode is followed by one Newton step from its prediction when that step is
+/// below this (relative); its participation is then that of the predicted point.
+const CHEAP_ACCEPT: f64 = 1e-5;
+/// A watched mode whose approximate participation is within this of the threshold is
+/// solved to full accuracy before it is compared with the threshold.
+const P_MARGIN: f64 = 0.02;
 
 impl ModalSolver {
     /// A solver with the given parameters.
@@ -661,13 +702,27 @@ impl ModalSolver {
             m6: Matrix6::zeros(),
             k6: Matrix6::zeros(),
             next_pole: [1; MAX_CHAINS],
+            batch_idx: [0; MAX_CHAINS],
+            batch_k: [0.0; MAX_CHAINS],
+            batch_m: [0.0; MAX_CHAINS],
+            n_batch: 0,
+            batch_n_el: 0,
+            chain_eval: [ChainEval {
+                s: 0.0,
+                ds: 0.0,
+                below: 0,
+            }; MAX_CHAINS],
             evaluations: 0,
+            pole_tab: Vec::with_capacity(crate::scene::MAX_ELEMENTS_PER_CABLE + 1),
+            pole_tab_n: 0,
             ee_track: None,
             members: [(0.0, 0.0, 0.0); MAX_MEMBERS],
+            member_prev: [f64::NAN; MAX_MEMBERS],
             n_members: 0,
             recording: false,
             rescans: [0; 6],
             since_scan: 0,
+            leak: 0.0,
             ee_skip: 0,
             roots: 0,
         }
@@ -738,18 +793,118 @@ impl ModalSolver {
                 self.n_chains += 1;
             }
         }
+        // Pole table for the discrete chains' element count (refilled only when it changes;
+        // the capacity is reserved in `new`).
+        let mut n_tab = 0;
+        for c in &self.chains[..self.n_chains] {
+            if let ChainKind::Discrete { n_el, .. } = c.kind {
+                if (2..=crate::scene::MAX_ELEMENTS_PER_CABLE).contains(&n_el) {
+                    n_tab = n_el;
+                    break;
+                }
+            }
+        }
+        if n_tab != 0 && n_tab != self.pole_tab_n {
+            self.pole_tab.clear();
+            for j in 0..=n_tab {
+                let th = j as f64 * std::f64::consts::PI / n_tab as f64;
+                self.pole_tab
+                    .push((2.0 * (0.5 * th).sin().powi(2), th.cos()));
+            }
+            self.pole_tab_n = n_tab;
+        }
+        // Batch the discrete chains of the most common small element count.
+        self.n_batch = 0;
+        self.batch_n_el = 0;
+        for c in &self.chains[..self.n_chains] {
+            if let ChainKind::Discrete { k, m, n_el } = c.kind {
+                if k > 0.0 && m > 0.0 && (2..=BATCH_MAX_ELEMENTS).contains(&n_el) {
+                    self.batch_n_el = n_el;
+                    break;
+                }
+            }
+        }
+        for (i, c) in self.chains[..self.n_chains].iter().enumerate() {
+            if let ChainKind::Discrete { k, m, n_el } = c.kind {
+                if k > 0.0 && m > 0.0 && n_el == self.batch_n_el {
+                    self.batch_idx[self.n_batch] = i;
+                    self.batch_k[self.n_batch] = k;
+                    self.batch_m[self.n_batch] = m;
+                    self.n_batch += 1;
+                }
+            }
+        }
+    }
+
+    /// Blocked eigenvalue j (1-based; 0 gives 0) of chain i, rad²/s², equal to
+    /// [`Chain::pole`] bit for bit (same formula, tabulated cosines).
+    #[inline]
+    fn chain_pole(&self, i: usize, j: usize) -> f64 {
+        if j == 0 {
+            return 0.0;
+        }
+        let c = &self.chains[i];
+        if let ChainKind::Discrete { k, m, n_el } = c.kind {
+            if n_el == self.pole_tab_n && m > 0.0 && j < n_el {
+                let (omc, cth) = self.pole_tab[j];
+                return 6.0 * k * omc / (m * (2.0 + cth));
+            }
+        }
+        c.pole(j)
+    }
+
+    /// The pole-free interval (a, b) of D around the λ of the last evaluation, from the
+    /// chains' blocked counts there.
+    fn last_pole_interval(&self) -> (f64, f64) {
+        let mut a = 0.0f64;
+        let mut b = f64::INFINITY;
+        for i in 0..self.n_chains {
+            let j = self.chain_eval[i].below as usize;
+            a = a.max(self.chain_pole(i, j));
+            b = b.min(self.chain_pole(i, j + 1));
+        }
+        (a, b)
+    }
+
+    /// Every chain at λ into `chain_eval`: the batched ones together, the rest one by one.
+    #[inline]
+    fn eval_chains(&mut self, lambda: f64) {
+        let mut batch = [ChainEval {
+            s: 0.0,
+            ds: 0.0,
+            below: 0,
+        }; MAX_CHAINS];
+        let nb = self.n_batch;
+        if nb > 0 {
+            eval_discrete_batch(
+                &self.batch_k[..nb],
+                &self.batch_m[..nb],
+                self.batch_n_el,
+                lambda,
+                &mut batch[..nb],
+            );
+        }
+        let mut j = 0;
+        for i in 0..self.n_chains {
+            if j < nb && self.batch_idx[j] == i {
+                self.chain_eval[i] = batch[j];
+                j += 1;
+            } else {
+                self.chain_eval[i] = self.chains[i].eval(lambda);
+            }
+        }
     }
 
     /// D(λ), D'(λ) and the blocked count.
     #[inline]
     pub fn eval(&mut self, lambda: f64) -> DynEval {
         self.evaluations += 1;
+        self.eval_chains(lambda);
         let mut below = 0u32;
         if self.dim == 3 {
             let mut d = Matrix3::identity() * (-lambda * self.ee_mass_kg);
             let mut dd = Matrix3::identity() * (-self.ee_mass_kg);
-            for c in &self.chains[..self.n_chains] {
-                let e = c.eval(lambda);
+            for (c, e) in self.chains[..self.n_chains].iter().zip(&self.chain_eval) {
                 d += c.proj * e.s;
                 dd += c.proj * e.ds;
                 below += c.mult * e.below;
@@ -767,8 +922,11 @@ impl ModalSolver {
         }
         let mut d = self.k6 - self.m6 * lambda;
         let mut dd = -self.m6;
-        for (c, q) in self.chains[..self.n_chains].iter().zip(&self.q6) {
-            let e = c.eval(lambda);
+        for ((c, q), e) in self.chains[..self.n_chains]
+            .iter()
+            .zip(&self.q6)
+            .zip(&self.chain_eval)
+        {
             d += q * e.s;
             dd += q * e.ds;
             below += c.mult * e.below;
@@ -1063,7 +1221,7 @@ impl ModalSolver {
                     } else {
                         2.0 * lo.max(skip_to).max(1.0)
                     };
-                    let mut r = self.branch_root(branch, lo, hi, b, guess)?;
+                    let mut r = self.branch_root_with(branch, lo, hi, b, guess, true)?;
                     if r.lambda <= skip_to * (1.0 + 1e-9) {
                         continue;
                     }
@@ -1073,6 +1231,7 @@ impl ModalSolver {
                     {
                         self.members[self.n_members] =
                             (r.lambda, r.ee_participation, r.ee_participation);
+                        self.member_prev[self.n_members] = f64::NAN;
                         self.n_members += 1;
                     }
                     if r.ee_participation >= thr {
@@ -1122,15 +1281,22 @@ impl ModalSolver {
     /// The end-effector mode, tracked from the last cycle when `warm`.
     ///
     /// A full scan ([`Self::ee_mode`]) records every root up to the end-effector mode whose
-    /// participation is at least 0.2 × the threshold (the *watched* modes). A warm cycle follows each watched
-    /// mode by Newton's method on its branch of D inside its pole interval, and answers the
-    /// lowest with participation ≥ the threshold. Participation moves between modes only
-    /// through avoided crossings, so an unwatched mode can reach the threshold only by
-    /// taking it from a watched one; a rescan is forced when the watched modes have lost more
-    /// than 0.7 × the threshold of participation in total since the scan (an unwatched mode
-    /// then holds < 0.9 × the threshold), when a watched mode is lost, when two collapse onto one root, or when the
-    /// Wittrick-Williams count of modes below the answer changes other than by a mode with
-    /// low participation arriving or leaving.
+    /// participation is at least 0.2 × the threshold (the *watched* modes). A warm cycle
+    /// follows each watched mode from its linear prediction (last two cycles) by Newton's
+    /// method on its branch of D with both bounding poles removed, accepting one step below
+    /// 1e-5 (relative) for bookkeeping; a mode whose participation is within 0.02 of the
+    /// threshold, and the answer, are solved to full accuracy. When a weakly coupled pole
+    /// passed through a mode since the last cycle, the mode is followed into the neighbouring
+    /// pole interval. The answer is the lowest watched mode with participation ≥ the
+    /// threshold. Participation moves only between neighbouring modes (avoided crossings):
+    /// within a run of watched modes that are neighbours in the spectrum (their
+    /// Wittrick-Williams counts differ by one) it stays watched, and what a run loses in net
+    /// in a cycle is added to a *leak*. A rescan is forced when the leak since the scan
+    /// exceeds 0.7 × the threshold (an unwatched mode then holds < 0.9 × the threshold),
+    /// when a watched mode is lost or jumps more than 0.2 % from its prediction, when two
+    /// collapse onto one root, when none reaches the threshold, or when the count of modes
+    /// below the answer changes other than by a mode with low participation arriving or
+    /// leaving.
     pub fn ee_mode_tracked(&mut self, first: &Root, warm: bool) -> Result<Root, ModalError> {
         let start = self.evaluations;
         let thr = self.params.ee_participation_min;
@@ -1147,8 +1313,12 @@ impl ModalSolver {
             // most end-effector-like mode and rescan fully every 16 cycles.
             self.ee_skip -= 1;
             if self.n_members == 1 {
-                if let Some((mut r, _)) = self.track_root(self.members[0].0) {
-                    if (r.lambda - self.members[0].0).abs() <= 2e-3 * self.members[0].0 {
+                let l0 = self.members[0].0;
+                let pred = self.predict(0);
+                let exact = self.params.newton_accept;
+                if let Some((mut r, _, _)) = self.track_root(pred, exact) {
+                    if (r.lambda - pred).abs() <= 2e-3 * l0 {
+                        self.member_prev[0] = l0;
                         self.members[0].0 = r.lambda;
                         self.members[0].2 = r.ee_participation;
                         if r.ee_participation < thr {
@@ -1183,10 +1353,12 @@ impl ModalSolver {
         }
         self.rescans[reason] += 1;
         self.since_scan = 0;
+        self.leak = 0.0;
         self.recording = true;
         self.n_members = 0;
         if first.ee_participation >= P_WATCH * thr {
             self.members[0] = (first.lambda, first.ee_participation, first.ee_participation);
+            self.member_prev[0] = f64::NAN;
             self.n_members = 1;
         }
         let r = self.ee_mode(first);
@@ -1202,6 +1374,7 @@ impl ModalSolver {
         if r.ee_participation < thr {
             // Weak: watch only this mode until the next full scan.
             self.members[0] = (r.lambda, r.ee_participation, r.ee_participation);
+            self.member_prev[0] = f64::NAN;
             self.n_members = 1;
             self.ee_skip = 16;
             self.ee_track = None;
@@ -1212,6 +1385,19 @@ impl ModalSolver {
         self.ee_track = Some((r.lambda, below));
         r.evaluations = self.evaluations - start;
         Ok(r)
+    }
+
+    /// The linear predictor of watched mode `i` from its last two λ.
+    fn predict(&self, i: usize) -> f64 {
+        let l = self.members[i].0;
+        let p = self.member_prev[i];
+        if p.is_finite() {
+            let x = 2.0 * l - p;
+            if x > 0.0 {
+                return x;
+            }
+        }
+        l
     }
 
     /// Counters of end-effector rescans by reason: [cold start, watched mode lost,
@@ -1229,15 +1415,15 @@ impl ModalSolver {
             keep += 1;
         }
         self.n_members = keep;
+        self.leak = 0.0;
         if keep == 0 {
             self.since_scan = 0;
         }
         // A kept mode above the threshold is lower than anything in the window.
         for i in 0..keep {
             if self.members[i].2 >= thr {
-                let l = self.members[i].0;
-                let (r, _) = self.track_root(l)?;
-                let below = self.count_below(r.lambda * (1.0 - 1e-10));
+                let exact = self.params.newton_accept;
+                let (r, _, below) = self.track_root(self.predict(i), exact)?;
                 self.ee_track = Some((r.lambda, below));
                 return Some(r);
             }
@@ -1254,47 +1440,71 @@ impl ModalSolver {
     /// One warm step of the watched modes; Err((reason, window start)) when a rescan is
     /// needed from that λ upward.
     fn track_members(&mut self, l_ee: f64, below0: u32, thr: f64) -> Result<Root, (usize, f64)> {
-        let mut answer: Option<(Root, usize)> = None;
+        let mut answer: Option<(Root, usize, u32)> = None;
         let mut prev = 0.0f64;
-        // Net participation the watched set gave away since the scan (what moves between
-        // watched modes cannot reach an unwatched one).
-        let mut lost = 0.0f64;
-        let mut first_loser = f64::INFINITY;
+        // Each watched mode's participation at the last cycle and its count of modes below.
+        let mut p_last = [0.0f64; MAX_MEMBERS];
+        let mut counts = [0u32; MAX_MEMBERS];
         self.since_scan += 1;
         if self.since_scan > FULL_RESCAN_CYCLES {
             return Err((2, 0.0));
         }
         for i in 0..self.n_members {
-            let (l, p_scan, _) = self.members[i];
+            let l = self.members[i].0;
+            p_last[i] = self.members[i].2;
             let window = WINDOW * l;
-            let (r, branch) = self.track_root(l).ok_or((1usize, window))?;
-            // Modes move continuously: a root that moved more than 0.2 % in one cycle is
+            let pred = self.predict(i);
+            // One Newton step from the prediction is enough to follow a watched mode; the
+            // answer is then solved to full accuracy (one more evaluation).
+            let tr = self.track_root(pred, CHEAP_ACCEPT);
+            let (mut r, mut branch, mut count) = tr.ok_or((1usize, window))?;
+            // Modes move continuously: a root more than 0.2 % away from its prediction is
             // another mode that Newton converged to (an identity jump), not this one.
-            if (r.lambda - l).abs() > 2e-3 * l {
+            if (r.lambda - pred).abs() > 2e-3 * l {
                 return Err((1, window.min(WINDOW * r.lambda)));
             }
-            lost += p_scan - r.ee_participation;
-            if r.ee_participation < p_scan {
-                first_loser = first_loser.min(window);
+            if answer.is_none() && r.ee_participation >= thr - P_MARGIN {
+                let exact = self.params.newton_accept;
+                (r, branch, count) = self.track_root(r.lambda, exact).ok_or((1usize, window))?;
             }
             if r.lambda <= prev * (1.0 + 1e-9) {
                 return Err((3, WINDOW * prev.min(r.lambda)));
             }
             prev = r.lambda;
+            counts[i] = count;
+            self.member_prev[i] = l;
             self.members[i].0 = r.lambda;
             self.members[i].2 = r.ee_participation;
             if answer.is_none() && r.ee_participation >= thr {
-                answer = Some((r, branch));
+                answer = Some((r, branch, count));
             }
         }
-        if lost > P_LOSS * thr {
-            return Err((2, first_loser.min(WINDOW * l_ee)));
+        // Participation moves between neighbouring modes (avoided crossings). Within a run
+        // of watched modes that are neighbours in the spectrum (their counts of modes below
+        // differ by one) it stays watched; what a run loses in net went to an unwatched
+        // neighbour. The leak since the scan bounds what any unwatched mode has gained:
+        // above P_LOSS × threshold, rescan from just below the leaking run.
+        let mut first_leaker = f64::INFINITY;
+        let mut i = 0;
+        while i < self.n_members {
+            let mut j = i;
+            while j + 1 < self.n_members && counts[j + 1] == counts[j] + 1 {
+                j += 1;
+            }
+            let change: f64 = (i..=j).map(|k| self.members[k].2 - p_last[k]).sum();
+            if change < 0.0 {
+                self.leak -= change;
+                first_leaker = first_leaker.min(WINDOW * self.members[i].0);
+            }
+            i = j + 1;
         }
-        let (r, branch) = answer.ok_or((4usize, WINDOW * l_ee.min(prev)))?;
+        if self.leak > P_LOSS * thr {
+            return Err((2, first_leaker.min(WINDOW * l_ee)));
+        }
+        let (r, branch, below) = answer.ok_or((4usize, WINDOW * l_ee.min(prev)))?;
         // The watched modes keep their order, so the answer is the same mode as before
         // exactly when it was the end-effector mode at the last cycle.
         let same = (r.lambda - l_ee).abs() <= 1e-3 * l_ee;
-        let below = self.count_below(r.lambda * (1.0 - 1e-10));
         if same && below != below0 {
             if below + 1 == below0 {
                 // A mode left upward through the answer: fine.
@@ -1333,49 +1543,70 @@ impl ModalSolver {
             .ok()
     }
 
-    /// Newton from l0 on the branch of D closest to vanishing there, kept inside the pole
-    /// interval of l0; None when it leaves it or does not converge in the bound.
-    fn track_root(&mut self, l0: f64) -> Option<(Root, usize)> {
-        let (a, b) = self.pole_interval(l0);
-        if !(l0 > a && l0 < b) {
+    /// Newton from `l0` on the branch of D closest to vanishing there, kept inside the pole
+    /// interval of l0; None when it leaves it or does not converge in the bound. The first
+    /// step is accepted when it is below `first_accept` (relative), later ones below
+    /// [`ModalParams::newton_accept`]. Returns the root, its branch and the number of
+    /// natural frequencies below it, read off the last evaluation (Wittrick-Williams count
+    /// there, less the root itself when the last iterate lies above it).
+    fn track_root(&mut self, l0: f64, first_accept: f64) -> Option<(Root, usize, u32)> {
+        let mut x = l0;
+        let mut e = self.eval(x);
+        let (mut a, mut b) = self.last_pole_interval();
+        if !(x > a && x < b) {
             return None;
         }
-        let e = self.eval(l0);
-        let eg = e.eig();
-        let mut branch = 0;
-        let mut best = f64::INFINITY;
-        for i in 0..eg.n {
-            let v = eg.vectors[i];
-            let d = -(v.transpose() * e.dd * v)[(0, 0)];
-            let dist = eg.values[i].abs() / d.max(f64::MIN_POSITIVE);
-            if dist < best {
-                best = dist;
-                branch = i;
-            }
-        }
-        let mut x = l0;
-        let mut e = e;
-        let mut eg = eg;
-        for _ in 0..self.params.max_evaluations.min(12) {
+        let mut eg = e.eig();
+        let mut branch = nearest_branch(&e, &eg);
+        let mut hopped = false;
+        let mut it = 0;
+        while it < self.params.max_evaluations.min(12) {
             let v = eg.vectors[branch];
             let mu = eg.values[branch];
             let dmu = (v.transpose() * e.dd * v)[(0, 0)];
-            let (g, dg) = if b.is_finite() {
+            // Newton on μ(λ)(λ − a)(b − λ): both poles removed (a = 0 and b = ∞ add nothing).
+            let (mut g, mut dg) = (mu, dmu);
+            if b.is_finite() {
                 let w = b - x;
-                (mu * w, dmu * w - mu)
-            } else {
-                (mu, dmu)
-            };
+                (g, dg) = (g * w, dg * w - g);
+            }
+            if a > 0.0 {
+                let w = x - a;
+                (g, dg) = (g * w, dg * w + g);
+            }
             if !(dg < 0.0) {
                 return None;
             }
             let xn = x - g / dg;
             if !(xn > a && xn < b) {
-                return None;
+                // A weakly coupled pole passed through the mode since the last cycle: follow
+                // it into the neighbouring interval, once, from the mirror point.
+                if hopped {
+                    return None;
+                }
+                hopped = true;
+                x = if xn >= b { b + (b - x) } else { a - (x - a) };
+                if !(x > 0.0) {
+                    return None;
+                }
+                e = self.eval(x);
+                (a, b) = self.last_pole_interval();
+                if !(x > a && x < b) {
+                    return None;
+                }
+                eg = e.eig();
+                branch = nearest_branch(&e, &eg);
+                it += 1;
+                continue;
             }
-            if mu == 0.0 || (xn - x).abs() <= self.params.newton_accept.max(self.params.rel_tol) * x
-            {
+            let accept = if it == 0 {
+                first_accept
+            } else {
+                self.params.newton_accept
+            };
+            if mu == 0.0 || (xn - x).abs() <= accept.max(self.params.rel_tol) * x {
                 let scale = e.d.abs().max().max(f64::MIN_POSITIVE);
+                let count = e.below + eg.negatives() as u32 - u32::from(mu < 0.0);
                 return Some((
                     Root {
                         lambda: xn,
@@ -1384,11 +1615,13 @@ impl ModalSolver {
                         residual: mu.abs() / scale,
                     },
                     branch,
+                    count,
                 ));
             }
             x = xn;
             e = self.eval(x);
             eg = e.eig();
+            it += 1;
         }
         None
     }
