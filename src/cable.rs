@@ -692,85 +692,63 @@ mod tests {
         }
     }
 
-    #[test]
-    fn closed_form_equals_recurrence() {
+    /// Compares two evaluators of the uniform chain on a λ grid up to 1.3 × the cut-off
+    /// 12k/m, for three (k, m) pairs and the given element counts. s has absolute accuracy
+    /// ~ε·N·k (cancellation α + βR), s' relative ε·N²·(pole factor). Returns the worst errors.
+    fn compare_chain_evals(
+        ns: &[usize],
+        f: impl Fn(f64, f64, usize, f64) -> ChainEval,
+        g: impl Fn(f64, f64, usize, f64) -> ChainEval,
+    ) -> [f64; 2] {
         let mut worst = [0.0f64; 2];
-        for &n in &[2usize, 3, 5, 10, 40, 80, 200] {
+        for &n in ns {
             for &(k, m) in &[(400.0, 0.01), (1.9e7, 1.4e-3), (3.0, 2e-3)] {
                 let cut = 12.0 * k / m;
                 for i in 0..400 {
                     let lambda = cut * 1.3 * (i as f64 / 400.0).powi(3) + 1e-9 * cut * i as f64;
-                    let a = eval_discrete(k, m, n, lambda);
-                    let b = eval_discrete_recurrence(k, m, n, lambda);
+                    let (a, b) = (f(k, m, n, lambda), g(k, m, n, lambda));
                     assert_eq!(a.below, b.below, "n {n} k {k} λ {lambda}");
-                    // s has absolute accuracy ~ε·N·k (cancellation α + βR), s' relative ε·N²·(pole factor).
                     let es = (a.s - b.s).abs() / (k * (1.0 + b.s.abs() / k));
                     let ed = (a.ds - b.ds).abs() / (m + b.ds.abs());
+                    let at = lambda / cut;
                     assert!(
                         es < 1e-11 * n as f64,
-                        "s: n {n} λ/cut {} {} vs {}",
-                        lambda / cut,
+                        "s: n {n} λ/cut {at} {} vs {}",
                         a.s,
                         b.s
                     );
-                    assert!(
-                        ed < 1e-8 * (n * n) as f64,
-                        "ds: n {n} λ/cut {} {} vs {}",
-                        lambda / cut,
-                        a.ds,
-                        b.ds
-                    );
+                    let tol = 1e-8 * (n * n) as f64;
+                    assert!(ed < tol, "ds: n {n} λ/cut {at} {} vs {}", a.ds, b.ds);
                     worst[0] = worst[0].max(es);
                     worst[1] = worst[1].max(ed);
                 }
             }
         }
-        eprintln!(
-            "closed form vs recurrence: s {:.2e}, s' {:.2e}",
-            worst[0], worst[1]
-        );
+        worst
+    }
+
+    #[test]
+    fn closed_form_equals_recurrence() {
+        let ns = [2usize, 3, 5, 10, 40, 80, 200];
+        let w = compare_chain_evals(&ns, eval_discrete, eval_discrete_recurrence);
+        eprintln!("closed form vs recurrence: s {:.2e}, s' {:.2e}", w[0], w[1]);
     }
 
     #[test]
     fn batch_equals_closed_form() {
-        // Same tolerances as the closed form against the pivot recurrence, same grid
-        // (up to 1.3 × the cut-off, where U_j grows like 5^j).
-        let mut worst = [0.0f64; 2];
-        let pairs = [(400.0, 0.01), (1.9e7, 1.4e-3), (3.0, 2e-3)];
-        let ks: Vec<f64> = pairs.iter().map(|p| p.0).collect();
-        let ms: Vec<f64> = pairs.iter().map(|p| p.1).collect();
-        let mut out = [ChainEval {
-            s: 0.0,
-            ds: 0.0,
-            below: 0,
-        }; 3];
-        for &n in &[2usize, 3, 5, 10, 20, 32, 64] {
-            for i in 0..400 {
-                let x = 1.3 * (i as f64 / 400.0).powi(3) + 1e-9 * i as f64;
-                for (j, &(k, m)) in pairs.iter().enumerate() {
-                    let lambda = x * 12.0 * k / m;
-                    eval_discrete_batch(&ks[j..=j], &ms[j..=j], n, lambda, &mut out[j..=j]);
-                    let a = out[j];
-                    let b = eval_discrete(k, m, n, lambda);
-                    assert_eq!(a.below, b.below, "n {n} k {k} λ {lambda}");
-                    let es = (a.s - b.s).abs() / (k * (1.0 + b.s.abs() / k));
-                    let ed = (a.ds - b.ds).abs() / (m + b.ds.abs());
-                    assert!(es < 1e-11 * n as f64, "s: n {n} x {x} {} vs {}", a.s, b.s);
-                    assert!(
-                        ed < 1e-8 * (n * n) as f64,
-                        "ds: n {n} x {x} {} vs {}",
-                        a.ds,
-                        b.ds
-                    );
-                    worst[0] = worst[0].max(es);
-                    worst[1] = worst[1].max(ed);
-                }
-            }
-        }
-        eprintln!(
-            "batch vs closed form: s {:.2e}, s' {:.2e}",
-            worst[0], worst[1]
-        );
+        // Same grid and tolerances; above the cut-off U_j grows like 5^j.
+        let batch = |k: f64, m: f64, n: usize, lambda: f64| {
+            let mut out = [ChainEval {
+                s: 0.0,
+                ds: 0.0,
+                below: 0,
+            }];
+            eval_discrete_batch(&[k], &[m], n, lambda, &mut out);
+            out[0]
+        };
+        let ns = [2usize, 3, 5, 10, 20, 32, 64];
+        let w = compare_chain_evals(&ns, batch, eval_discrete);
+        eprintln!("batch vs closed form: s {:.2e}, s' {:.2e}", w[0], w[1]);
     }
 
     #[test]
