@@ -641,8 +641,8 @@ pub struct ModalSolver {
     /// Tracked end-effector mode: (λ, number of modes below it).
     ee_track: Option<(f64, u32)>,
     /// Watched modes at or below the end-effector mode (participation ≥ p_watch at the
-    /// last scan): (λ, participation at the scan, participation now).
-    members: [(f64, f64, f64); MAX_MEMBERS],
+    /// last scan): (λ, participation at the last cycle).
+    members: [(f64, f64); MAX_MEMBERS],
     /// Each watched mode's λ one cycle earlier (NaN when unknown): the linear predictor.
     member_prev: [f64; MAX_MEMBERS],
     n_members: usize,
@@ -716,7 +716,7 @@ impl ModalSolver {
             pole_tab: Vec::with_capacity(crate::scene::MAX_ELEMENTS_PER_CABLE + 1),
             pole_tab_n: 0,
             ee_track: None,
-            members: [(0.0, 0.0, 0.0); MAX_MEMBERS],
+            members: [(0.0, 0.0); MAX_MEMBERS],
             member_prev: [f64::NAN; MAX_MEMBERS],
             n_members: 0,
             recording: false,
@@ -1229,8 +1229,7 @@ impl ModalSolver {
                         && r.ee_participation >= P_WATCH * thr
                         && self.n_members < MAX_MEMBERS
                     {
-                        self.members[self.n_members] =
-                            (r.lambda, r.ee_participation, r.ee_participation);
+                        self.members[self.n_members] = (r.lambda, r.ee_participation);
                         self.member_prev[self.n_members] = f64::NAN;
                         self.n_members += 1;
                     }
@@ -1320,7 +1319,7 @@ impl ModalSolver {
                     if (r.lambda - pred).abs() <= 2e-3 * l0 {
                         self.member_prev[0] = l0;
                         self.members[0].0 = r.lambda;
-                        self.members[0].2 = r.ee_participation;
+                        self.members[0].1 = r.ee_participation;
                         if r.ee_participation < thr {
                             r.evaluations = self.evaluations - start;
                             return Ok(r);
@@ -1357,7 +1356,7 @@ impl ModalSolver {
         self.recording = true;
         self.n_members = 0;
         if first.ee_participation >= P_WATCH * thr {
-            self.members[0] = (first.lambda, first.ee_participation, first.ee_participation);
+            self.members[0] = (first.lambda, first.ee_participation);
             self.member_prev[0] = f64::NAN;
             self.n_members = 1;
         }
@@ -1373,7 +1372,7 @@ impl ModalSolver {
         };
         if r.ee_participation < thr {
             // Weak: watch only this mode until the next full scan.
-            self.members[0] = (r.lambda, r.ee_participation, r.ee_participation);
+            self.members[0] = (r.lambda, r.ee_participation);
             self.member_prev[0] = f64::NAN;
             self.n_members = 1;
             self.ee_skip = 16;
@@ -1421,7 +1420,7 @@ impl ModalSolver {
         }
         // A kept mode above the threshold is lower than anything in the window.
         for i in 0..keep {
-            if self.members[i].2 >= thr {
+            if self.members[i].1 >= thr {
                 let exact = self.params.newton_accept;
                 let (r, _, below) = self.track_root(self.predict(i), exact)?;
                 self.ee_track = Some((r.lambda, below));
@@ -1451,7 +1450,7 @@ impl ModalSolver {
         }
         for i in 0..self.n_members {
             let l = self.members[i].0;
-            p_last[i] = self.members[i].2;
+            p_last[i] = self.members[i].1;
             let window = WINDOW * l;
             let pred = self.predict(i);
             // One Newton step from the prediction is enough to follow a watched mode; the
@@ -1474,7 +1473,7 @@ impl ModalSolver {
             counts[i] = count;
             self.member_prev[i] = l;
             self.members[i].0 = r.lambda;
-            self.members[i].2 = r.ee_participation;
+            self.members[i].1 = r.ee_participation;
             if answer.is_none() && r.ee_participation >= thr {
                 answer = Some((r, branch, count));
             }
@@ -1491,7 +1490,7 @@ impl ModalSolver {
             while j + 1 < self.n_members && counts[j + 1] == counts[j] + 1 {
                 j += 1;
             }
-            let change: f64 = (i..=j).map(|k| self.members[k].2 - p_last[k]).sum();
+            let change: f64 = (i..=j).map(|k| self.members[k].1 - p_last[k]).sum();
             if change < 0.0 {
                 self.leak -= change;
                 first_leaker = first_leaker.min(WINDOW * self.members[i].0);
