@@ -243,6 +243,30 @@ impl Chain {
         }
     }
 
+    /// The chain's end mass in the limit λ → −∞, kg: lim −s(λ)/λ, the Schur complement of
+    /// its mass matrix onto the free end (what the end-effector carries of the chain when
+    /// the chain's inner nodes are held by infinitely stiff springs). For N consistent-mass
+    /// elements of mass m: m/3 + (m/6)·q with q = U_{N−2}(−2)/U_{N−1}(−2)
+    /// = −e^{−φ}(1 − e^{−2(N−1)φ})/(1 − e^{−2Nφ}), φ = acosh 2; 0 for a continuous chain
+    /// (its end carries no lumped mass).
+    pub fn end_mass_kg(&self) -> f64 {
+        match self.kind {
+            ChainKind::Discrete { m, n_el, .. } => {
+                if m <= 0.0 {
+                    return 0.0;
+                }
+                if n_el <= 1 {
+                    return m / 3.0;
+                }
+                let r = 2.0 - 3.0f64.sqrt(); // e^{−φ}, φ = acosh 2
+                let r2 = r * r;
+                let q = -r * (1.0 - r2.powi(n_el as i32 - 1)) / (1.0 - r2.powi(n_el as i32));
+                m / 3.0 + m / 6.0 * q
+            }
+            ChainKind::Continuous { .. } => 0.0,
+        }
+    }
+
     /// The lowest blocked eigenvalue λ (rad²/s²) of the chain; ∞ when it has none.
     pub fn first_pole(&self) -> f64 {
         self.pole(1)

@@ -475,6 +475,14 @@ pub fn bench(a: &BenchArgs, allocations: AllocCounter) -> Result<(), CliError> {
             q(0.999),
             q(1.0)
         );
+        let ev: Vec<u64> = evals.iter().map(|&x| x as u64).collect();
+        println!(
+            "  D(λ) evaluations per cycle: p50 {}  p90 {}  p99 {}  max {}",
+            percentile(&ev, 0.5),
+            percentile(&ev, 0.9),
+            percentile(&ev, 0.99),
+            percentile(&ev, 1.0)
+        );
         println!(
             "  heap allocations: {allocs} in {} cycles ({per_cycle_allocs} per cycle)",
             a.cycles
@@ -482,8 +490,8 @@ pub fn bench(a: &BenchArgs, allocations: AllocCounter) -> Result<(), CliError> {
         println!("  statuses: {names:?}");
         let rc = est.rescan_counts();
         println!(
-            "  end-effector mode rescans: cold {} lost {} participation {} collapsed {} none {} count {}",
-            rc[0], rc[1], rc[2], rc[3], rc[4], rc[5]
+            "  end-effector mode bookkeeping: full scans cold {} uncertified {} none {}; lost {} dropped {}; neighbour searches {}",
+            rc[0], rc[2], rc[4], rc[1], rc[5], rc[3]
         );
         if f1_min.0.is_finite() {
             println!(

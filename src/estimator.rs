@@ -500,7 +500,12 @@ impl Estimator {
         &self.models
     }
 
-    /// End-effector rescans by reason (see [`ModalSolver::rescan_counts`]).
+    /// The structured eigen solver as loaded at the last pose (its sum rules, counters).
+    pub fn modal(&self) -> &ModalSolver {
+        &self.modal
+    }
+
+    /// End-effector bookkeeping counters (see [`ModalSolver::rescan_counts`]).
     pub fn rescan_counts(&self) -> [u64; 6] {
         self.modal.rescan_counts()
     }

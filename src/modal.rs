@@ -27,6 +27,14 @@
 //! the count. A mode's end-effector participation is m_ee‖v‖² / vᵀ(−D'(λ))v for the null
 //! vector v of D(λ): the share of the mode's kinetic-energy norm carried by the
 //! end-effector's own mass.
+//!
+//! **Sum rules.** With mass-normalised modes φ_k, D(σ)⁻¹ = Σ_k φ_k φ_kᵀ/(λ_k − σ) on the
+//! end-effector's coordinates, so Σ_k p_k/λ_k = tr(M_ee D(0)⁻¹), and as σ → −∞,
+//! Σ_k p_k = tr(M_ee M_∞⁻¹) with M_∞ = lim −D(σ)/σ: the end-effector's mass plus each
+//! chain's end mass (m/3 + (m/6)·U_{N−2}(−2)/U_{N−1}(−2) for N consistent-mass elements of
+//! mass m, 0 for a continuous chain). What a set of known modes does not hold bounds the
+//! participation of every other mode; [`ModalSolver::ee_mode_tracked`] certifies its answer
+//! with it.
 
 use crate::cable::{
     eval_discrete_batch, CableModel, Chain, ChainEval, ChainKind, BATCH_MAX_ELEMENTS,
@@ -638,47 +646,150 @@ pub struct ModalSolver {
     pole_tab: Vec<(f64, f64)>,
     pole_tab_n: usize,
     evaluations: u32,
-    /// Tracked end-effector mode: (λ, number of modes below it).
-    ee_track: Option<(f64, u32)>,
-    /// Watched modes at or below the end-effector mode (participation ≥ p_watch at the
-    /// last scan): (λ, participation at the last cycle).
-    members: [(f64, f64); MAX_MEMBERS],
-    /// Each watched mode's λ one cycle earlier (NaN when unknown): the linear predictor.
-    member_prev: [f64; MAX_MEMBERS],
+    /// Watched modes, ascending in λ and in index.
+    members: [Member; MAX_MEMBERS],
     n_members: usize,
-    /// Record roots with participation ≥ p_watch during a scan.
+    /// Record roots with participation ≥ [`P_ADD`] during a scan.
     recording: bool,
-    /// Why end-effector rescans happened: [cold, lost, drift, order, no answer, count].
+    /// End-effector bookkeeping by kind: [full scans from a cold start, watched modes lost,
+    /// full scans because the bound was not certified, neighbour searches, full scans
+    /// because no watched mode reached the threshold, watched modes dropped].
     rescans: [u64; 6],
-    /// Warm cycles since the last full scan.
-    since_scan: u32,
-    /// Participation the watched modes have given to unwatched ones since the last scan.
-    leak: f64,
     /// Warm cycles left before a failed full scan is retried.
     ee_skip: u32,
+    /// tr(M_ee D(0)⁻¹) = Σ_k p_k/λ_k (s²/rad², the weighted sum rule), from `first_root`.
+    flex0: f64,
+    /// Neighbour searches so far (orders the watched modes by their last search).
+    cycle_count: u64,
     /// First roots solved (schedules the periodic count certificate).
     roots: u64,
+    /// Σ of the end-effector participation over all modes (sum rule), from `load`.
+    p_total: f64,
 }
 
 /// Largest number of watched modes.
-const MAX_MEMBERS: usize = 8;
-/// Modes up to the end-effector mode with participation ≥ P_WATCH × threshold are watched.
-const P_WATCH: f64 = 0.2;
-/// The watched modes may leak at most P_LOSS × threshold of participation to unwatched
-/// ones since the last scan; an unwatched mode then holds < (P_WATCH + P_LOSS) × threshold.
-const P_LOSS: f64 = 0.7;
-/// A partial rescan starts this fraction below the failing watched mode (participation
-/// moves between modes close in frequency, through avoided crossings).
-const WINDOW: f64 = 0.95;
-/// A full rescan at least this often (cycles) bounds the slow drift of the total
-/// participation with the pose.
-const FULL_RESCAN_CYCLES: u32 = 2000;
+const MAX_MEMBERS: usize = 16;
+/// Modes found with at least this participation are watched (the modes of the paper's
+/// spatial robot below 0.05 hold at most 0.16 together along the circle, dense reference).
+const P_ADD: f64 = 0.05;
+/// A watched mode whose participation falls below this is dropped (what it holds then
+/// counts against the sum-rule bound).
+const P_DROP: f64 = 0.02;
+/// When the sum-rule bound on the unwatched modes exceeds this, a spectral neighbour of
+/// the watched mode whose participation changed most is searched (ahead of need: the bound
+/// must stay below the threshold less [`CERT_MARGIN`]).
+const SEARCH_BOUND: f64 = 0.3;
+/// ... and that mode's participation must have changed at least this much since its
+/// neighbours were searched (else the one searched longest ago is taken).
+const SEARCH_LOSS: f64 = 0.02;
+/// A scan from cold goes on past the answer until the bound is below this.
+const SCAN_BOUND: f64 = 0.15;
+/// Allowance for the participation error of the watched modes followed by one Newton step
+/// (their participation is that of the predicted point, within ~1e-5 of the root): the
+/// answer is certified when the bound plus this is below the threshold.
+const CERT_MARGIN: f64 = 0.05;
 /// A watched mode is followed by one Newton step from its prediction when that step is
 /// below this (relative); its participation is then that of the predicted point.
 const CHEAP_ACCEPT: f64 = 1e-5;
 /// A watched mode whose approximate participation is within this of the threshold is
 /// solved to full accuracy before it is compared with the threshold.
 const P_MARGIN: f64 = 0.02;
+/// Modes a neighbour search may walk past (weak ones) on each side.
+const NEIGHBOUR_WALK: usize = 3;
+/// Pole intervals a neighbour search may cross.
+const NEIGHBOUR_INTERVALS: usize = 4;
+
+/// Evaluation point inset from a pole at x into an interval of width w: never past a
+/// quarter of a narrow interval (nearly coincident poles of different chains).
+fn inset(w: f64, x: f64) -> f64 {
+    (1e-9 * x).min(0.25 * w)
+}
+
+/// The predictor of a watched mode: quadratic through its last three λ (linear with two).
+fn predict(m: &Member) -> f64 {
+    if m.prev.is_finite() {
+        let x = if m.prev2.is_finite() {
+            // Quadratic through the last three cycles.
+            3.0 * (m.lambda - m.prev) + m.prev2
+        } else {
+            2.0 * m.lambda - m.prev
+        };
+        if x > 0.0 {
+            return x;
+        }
+    }
+    m.lambda
+}
+
+/// One watched mode.
+#[derive(Debug, Clone, Copy, Default)]
+struct Member {
+    /// λ, rad²/s².
+    lambda: f64,
+    /// λ one and two cycles earlier (NaN when unknown): the predictor.
+    prev: f64,
+    prev2: f64,
+    /// End-effector participation.
+    p: f64,
+    /// Participation when the mode's neighbours were last searched (NaN: never).
+    p_ref: f64,
+    /// When its neighbours were last searched (count of searches).
+    searched: u64,
+    /// Side of the last neighbour search: 0 none yet, 1 below, 2 above.
+    last_side: u8,
+    /// Position in the spectrum: modes below it, counted with multiplicity.
+    index: u32,
+    /// Branch of D (eigenvalue number) that vanishes at the mode.
+    branch: usize,
+    /// The pole interval that contains it, rad²/s².
+    a: f64,
+    b: f64,
+}
+
+impl Member {
+    /// A newly watched mode (no history yet).
+    fn new(lambda: f64, p: f64, index: u32, branch: usize, a: f64, b: f64) -> Member {
+        Member {
+            lambda,
+            prev: f64::NAN,
+            prev2: f64::NAN,
+            p,
+            p_ref: p,
+            searched: 0,
+            last_side: 0,
+            index,
+            branch,
+            a,
+            b,
+        }
+    }
+}
+
+/// A root followed by [`ModalSolver::track_root`].
+#[derive(Debug, Clone, Copy)]
+struct Tracked {
+    root: Root,
+    branch: usize,
+    index: u32,
+    a: f64,
+    b: f64,
+}
+
+impl Tracked {
+    fn member(&self, prev: f64) -> Member {
+        let r = &self.root;
+        let mut m = Member::new(
+            r.lambda,
+            r.ee_participation,
+            self.index,
+            self.branch,
+            self.a,
+            self.b,
+        );
+        m.prev = prev;
+        m
+    }
+}
 
 impl ModalSolver {
     /// A solver with the given parameters.
@@ -715,16 +826,15 @@ impl ModalSolver {
             evaluations: 0,
             pole_tab: Vec::with_capacity(crate::scene::MAX_ELEMENTS_PER_CABLE + 1),
             pole_tab_n: 0,
-            ee_track: None,
-            members: [(0.0, 0.0); MAX_MEMBERS],
-            member_prev: [f64::NAN; MAX_MEMBERS],
+            members: [Member::default(); MAX_MEMBERS],
             n_members: 0,
             recording: false,
             rescans: [0; 6],
-            since_scan: 0,
-            leak: 0.0,
             ee_skip: 0,
+            flex0: f64::NAN,
+            cycle_count: 0,
             roots: 0,
+            p_total: f64::NAN,
         }
     }
 
@@ -793,6 +903,26 @@ impl ModalSolver {
                 self.n_chains += 1;
             }
         }
+        // Sum rule: Σ over all modes of the participation = tr(M_ee M_∞⁻¹), with M_∞ the
+        // end-effector's mass plus every chain's end mass (the λ → −∞ limit of −D(λ)/λ).
+        let mut m_inf = self.m6;
+        let mut m_inf3 = Matrix3::identity() * ee_mass_kg;
+        for i in 0..self.n_chains {
+            let me = self.chains[i].end_mass_kg();
+            if me > 0.0 {
+                m_inf += self.q6[i] * me;
+                m_inf3 += self.chains[i].proj * me;
+            }
+        }
+        self.p_total = if self.dim == 6 {
+            m_inf
+                .cholesky()
+                .map_or(f64::NAN, |c| (self.m6 * c.inverse()).trace())
+        } else {
+            m_inf3
+                .cholesky()
+                .map_or(f64::NAN, |c| ee_mass_kg * c.inverse().trace())
+        };
         // Pole table for the discrete chains' element count (refilled only when it changes;
         // the capacity is reserved in `new`).
         let mut n_tab = 0;
@@ -939,6 +1069,31 @@ impl ModalSolver {
         }
     }
 
+    /// D(0) from the chains' static end stiffnesses (N elements of spring k in series:
+    /// k/N; a continuous chain: S/L), without evaluating the chains; D'(0) is left zero.
+    fn static_eval(&self) -> DynEval {
+        let mut d = self.k6;
+        for i in 0..self.n_chains {
+            let c = &self.chains[i];
+            let s0 = match c.kind {
+                ChainKind::Discrete { k, n_el, .. } => k / n_el.max(1) as f64,
+                ChainKind::Continuous { k_total, .. } => k_total,
+            };
+            if self.dim == 6 {
+                d += self.q6[i] * s0;
+            } else {
+                let mut v = d.fixed_view_mut::<3, 3>(0, 0);
+                v += c.proj * s0;
+            }
+        }
+        DynEval {
+            d,
+            dd: Matrix6::zeros(),
+            below: 0,
+            dim: self.dim,
+        }
+    }
+
     /// Number of natural frequencies strictly below λ (Wittrick-Williams).
     pub fn count_below(&mut self, lambda: f64) -> u32 {
         let e = self.eval(lambda);
@@ -953,6 +1108,20 @@ impl ModalSolver {
     /// Static end-effector stiffness D(0) (6 × 6 for a rigid body; top-left 3 × 3 else).
     pub fn static_stiffness6(&mut self) -> Matrix6<f64> {
         self.eval(0.0).d
+    }
+
+    /// The sum of the end-effector participation over all modes of the loaded model,
+    /// tr(M_ee M_∞⁻¹) with M_∞ = lim −D(λ)/λ as λ → −∞ (the end-effector's mass plus the
+    /// chains' end masses): the modes are complete, so Σ_k p_k = Σ_k φ_kᵀ M_ee φ_k equals it.
+    /// `dim` for continuous or massless cables, slightly less for discrete ones.
+    pub fn participation_total(&self) -> f64 {
+        self.p_total
+    }
+
+    /// Σ_k p_k/λ_k over all modes, s²/rad²: tr(M_ee D(0)⁻¹), from the last
+    /// [`Self::first_root`] (NaN before it or when D(0) is not positive definite).
+    pub fn participation_over_lambda(&self) -> f64 {
+        self.flex0
     }
 
     /// 3 (point mass) or 6 (rigid body).
@@ -981,26 +1150,17 @@ impl ModalSolver {
     }
 
     /// Root of the `branch`-th smallest eigenvalue of D on (lo, hi), where it is positive at
-    /// lo and negative at hi. `pole_hi` (≥ hi, may be ∞) is the pole bounding the interval
-    /// above; Newton runs on μ(λ)(pole_hi − λ) to remove it. `guess` starts the iteration.
-    fn branch_root(
-        &mut self,
-        branch: usize,
-        lo: f64,
-        hi: f64,
-        pole_hi: f64,
-        guess: f64,
-    ) -> Result<Root, ModalError> {
-        self.branch_root_with(branch, lo, hi, pole_hi, guess, false)
-    }
-
-    /// [`Self::branch_root`]; `fast` accepts an iterate once a Newton step is below
-    /// [`ModalParams::newton_accept`] (warm starts), else only below `rel_tol`.
+    /// lo and negative at hi. `pole_lo` (≤ lo, may be 0) and `pole_hi` (≥ hi, may be ∞) are
+    /// the poles bounding the interval; Newton runs on μ(λ)(λ − pole_lo)(pole_hi − λ) to
+    /// remove them. `guess` starts the iteration. `fast` accepts an iterate once a Newton
+    /// step is below [`ModalParams::newton_accept`] (warm starts), else only below `rel_tol`.
+    #[allow(clippy::too_many_arguments)]
     fn branch_root_with(
         &mut self,
         branch: usize,
         mut lo: f64,
         mut hi: f64,
+        pole_lo: f64,
         pole_hi: f64,
         guess: f64,
         fast: bool,
@@ -1033,12 +1193,17 @@ impl ModalSolver {
                 hi = hi.min(x);
             }
             let scale = e.d.abs().max().max(f64::MIN_POSITIVE);
-            let (g, dg) = if pole_hi.is_finite() {
+            // Newton on μ(λ)(λ − pole_lo)(pole_hi − λ): the poles bounding the interval
+            // removed (pole_lo = 0 and pole_hi = ∞ add nothing).
+            let (mut g, mut dg) = (mu, dmu);
+            if pole_hi.is_finite() {
                 let w = pole_hi - x;
-                (mu * w, dmu * w - mu)
-            } else {
-                (mu, dmu)
-            };
+                (g, dg) = (g * w, dg * w - g);
+            }
+            if pole_lo > 0.0 {
+                let w = x - pole_lo;
+                (g, dg) = (g * w, dg * w + g);
+            }
             let mut xn = if dg < 0.0 { x - g / dg } else { f64::NAN };
             let collapsed = hi.is_finite() && (hi - lo) <= 4.0 * f64::EPSILON * x.abs();
             let step = (xn - x).abs();
@@ -1076,11 +1241,25 @@ impl ModalSolver {
     /// The first natural frequency's λ (rad²/s²), warm-started from `warm` when given.
     pub fn first_root(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
         let start = self.evaluations;
-        let e0 = self.eval(0.0);
+        // D(0) in closed form on warm starts (each chain's static end stiffness); the full
+        // evaluation, with D'(0), only for the cold start's Rayleigh guess.
+        let e0 = if warm.is_some() {
+            self.static_eval()
+        } else {
+            self.eval(0.0)
+        };
         let eg0 = e0.eig();
         if !(eg0.values[0] > 0.0) {
+            self.flex0 = f64::NAN;
             return Err(ModalError::NotPositiveDefinite(eg0.values[0]));
         }
+        // Weighted sum rule: Σ_k p_k/λ_k = tr(M_ee D(0)⁻¹).
+        self.flex0 = (0..self.dim)
+            .map(|j| {
+                let v = eg0.vectors[j];
+                (v.transpose() * self.m6 * v)[(0, 0)] / eg0.values[j]
+            })
+            .sum();
         let lp = self.lowest_pole();
         let guess = match warm {
             Some(w) if w > 0.0 && w < lp => w,
@@ -1119,14 +1298,14 @@ impl ModalSolver {
             hi = h;
         }
         let fast = warm.is_some();
-        let mut r = self.branch_root_with(0, 0.0, hi, lp, guess, fast)?;
+        let mut r = self.branch_root_with(0, 0.0, hi, 0.0, lp, guess, fast)?;
         self.roots += 1;
         if self.params.certify && (!fast || self.roots.is_multiple_of(256)) {
             let mut certified = self.certify_first(r.lambda);
             if !certified && fast {
                 // A relaxed warm answer may sit outside the certificate's ±1e-10 probe in
                 // an ill-conditioned case: solve strictly before reporting anything.
-                r = self.branch_root_with(0, 0.0, hi, lp, r.lambda, false)?;
+                r = self.branch_root_with(0, 0.0, hi, 0.0, lp, r.lambda, false)?;
                 certified = self.certify_first(r.lambda);
             }
             if !certified {
@@ -1157,18 +1336,21 @@ impl ModalSolver {
 
     /// Scan upward from the pole interval containing `start` (rad²/s²) for the first root
     /// with participation ≥ the threshold, skipping roots at or below `skip_to`, and giving up
-    /// above `limit`.
+    /// above `limit`. While recording, every root with participation ≥ [`P_ADD`] is watched
+    /// and the scan goes on past the answer until the sum-rule bound is below [`SCAN_BOUND`]
+    /// (within the same bounds); the answer is the same.
     fn ee_scan(&mut self, start: f64, skip_to: f64, limit: f64) -> Result<Root, ModalError> {
         let begin = self.evaluations;
         let thr = self.params.ee_participation_min;
         let mut best: Option<Root> = None;
+        let mut answer: Option<Root> = None;
         let mut a = 0.0f64;
         for i in 0..self.n_chains {
             let (lo, _) = self.chains[i].poles_around(start);
             a = a.max(lo);
             self.next_pole[i] = 1;
         }
-        for _ in 0..self.params.max_scan_intervals {
+        'scan: for _ in 0..self.params.max_scan_intervals {
             if self.evaluations - begin > self.params.max_scan_evaluations {
                 break;
             }
@@ -1189,7 +1371,6 @@ impl ModalSolver {
             }
             // Evaluation points just inside (a, b): never past the middle of a narrow
             // interval (nearly coincident poles of different chains).
-            let inset = |w: f64, x: f64| (1e-9 * x).min(0.25 * w);
             let lo = if a == 0.0 { 0.0 } else { a + inset(b - a, a) };
             let hi_eval = if b.is_finite() {
                 b - inset(b - a, b)
@@ -1198,14 +1379,18 @@ impl ModalSolver {
             };
             let skip_interval = b.is_finite() && hi_eval <= skip_to * (1.0 + 1e-9);
             if !skip_interval {
+                // Blocked count of the interval (index of its lowest root).
+                let mut below = 0;
                 let na = if a == 0.0 {
                     0
                 } else {
                     let e = self.eval(lo);
+                    below = e.below;
                     e.eig().negatives()
                 };
                 let nb = if b.is_finite() {
                     let e = self.eval(hi_eval);
+                    below = e.below;
                     e.eig().negatives()
                 } else {
                     self.dim
@@ -1221,21 +1406,38 @@ impl ModalSolver {
                     } else {
                         2.0 * lo.max(skip_to).max(1.0)
                     };
-                    let mut r = self.branch_root_with(branch, lo, hi, b, guess, true)?;
+                    let mut r = match self.branch_root_with(branch, lo, hi, 0.0, b, guess, true) {
+                        Ok(r) => r,
+                        // Collecting past the answer: keep what was found.
+                        Err(_) if answer.is_some() => break 'scan,
+                        Err(e) => return Err(e),
+                    };
                     if r.lambda <= skip_to * (1.0 + 1e-9) {
                         continue;
                     }
-                    if self.recording
-                        && r.ee_participation >= P_WATCH * thr
-                        && self.n_members < MAX_MEMBERS
-                    {
-                        self.members[self.n_members] = (r.lambda, r.ee_participation);
-                        self.member_prev[self.n_members] = f64::NAN;
-                        self.n_members += 1;
+                    if self.recording && r.ee_participation >= P_ADD {
+                        self.insert_member(Member::new(
+                            r.lambda,
+                            r.ee_participation,
+                            below + branch as u32,
+                            branch,
+                            a,
+                            b,
+                        ));
                     }
-                    if r.ee_participation >= thr {
+                    if answer.is_none() && r.ee_participation >= thr {
                         r.evaluations = self.evaluations - begin;
-                        return Ok(r);
+                        if !self.recording {
+                            return Ok(r);
+                        }
+                        answer = Some(r);
+                    }
+                    if let Some(ans) = answer {
+                        if self.unwatched_bound(ans.lambda) < SCAN_BOUND
+                            || self.n_members == MAX_MEMBERS
+                        {
+                            break 'scan;
+                        }
                     }
                     if best.is_none_or(|b| r.ee_participation > b.ee_participation) {
                         best = Some(r);
@@ -1246,6 +1448,10 @@ impl ModalSolver {
                 break;
             }
             a = b;
+        }
+        if let Some(mut r) = answer {
+            r.evaluations = self.evaluations - begin;
+            return Ok(r);
         }
         // No mode reaches the threshold within the bounds: the most end-effector-like mode
         // found (its participation, below the threshold, says so).
@@ -1273,34 +1479,41 @@ impl ModalSolver {
 
     /// Forget the tracked end-effector mode (the next [`Self::ee_mode_tracked`] scans).
     pub fn reset_tracking(&mut self) {
-        self.ee_track = None;
         self.n_members = 0;
+        self.ee_skip = 0;
     }
 
     /// The end-effector mode, tracked from the last cycle when `warm`.
     ///
-    /// A full scan ([`Self::ee_mode`]) records every root up to the end-effector mode whose
-    /// participation is at least 0.2 × the threshold (the *watched* modes). A warm cycle
-    /// follows each watched mode from its linear prediction (last two cycles) by Newton's
+    /// **Certificate.** The modes are complete, so the end-effector participation summed
+    /// over all of them is [`Self::participation_total`] (sum rule), and weighted by 1/λ it
+    /// is tr(M_ee D(0)⁻¹) (the static flexibility, known from the first root). If a set W of
+    /// distinct modes with known participation is *watched*, every other mode holds at most
+    /// Σ_all p − Σ_W p, and every other mode below λ_A at most λ_A (tr(M_ee D(0)⁻¹) −
+    /// Σ_W p_k/λ_k). When the smaller bound is below the threshold, the lowest watched mode
+    /// that reaches the threshold is the end-effector mode: no unwatched mode can be.
+    ///
+    /// **Tracking.** A scan from cold watches every mode it meets with participation ≥ 0.05
+    /// and goes on past the answer until the bound is below 0.15. A warm cycle follows each
+    /// watched mode from its prediction (quadratic through the last three cycles) by Newton's
     /// method on its branch of D with both bounding poles removed, accepting one step below
-    /// 1e-5 (relative) for bookkeeping; a mode whose participation is within 0.02 of the
-    /// threshold, and the answer, are solved to full accuracy. When a weakly coupled pole
-    /// passed through a mode since the last cycle, the mode is followed into the neighbouring
-    /// pole interval. The answer is the lowest watched mode with participation ≥ the
-    /// threshold. Participation moves only between neighbouring modes (avoided crossings):
-    /// within a run of watched modes that are neighbours in the spectrum (their
-    /// Wittrick-Williams counts differ by one) it stays watched, and what a run loses in net
-    /// in a cycle is added to a *leak*. A rescan is forced when the leak since the scan
-    /// exceeds 0.7 × the threshold (an unwatched mode then holds < 0.9 × the threshold),
-    /// when a watched mode is lost or jumps more than 0.2 % from its prediction, when two
-    /// collapse onto one root, when none reaches the threshold, or when the count of modes
-    /// below the answer changes other than by a mode with low participation arriving or
-    /// leaving.
+    /// 1e-5 (relative); a mode within 0.02 of the threshold, and the answer, are solved to
+    /// full accuracy. Each mode's index in the spectrum (the blocked count of its pole
+    /// interval plus its branch) keeps the watched modes distinct. Participation moves between
+    /// neighbouring modes (avoided crossings), so when the bound exceeds 0.3 a neighbour of
+    /// the watched mode whose participation changed most (index ± 1, first towards its nearer
+    /// pole, walking past up to 3 weak modes and the participation-free modes that sit
+    /// exactly at a pole) is found and watched. Modes below 0.02 are dropped. When the bound
+    /// plus an allowance of 0.05 for the one-step participations is not below the threshold,
+    /// or no watched mode reaches it, the band from 10 % below the lowest watched mode is
+    /// scanned again, and everything from zero if that does not certify.
+    ///
+    /// The heuristics (what to watch, where to search) only decide the cost: the answer
+    /// returned by a warm cycle is always certified by the bound.
     pub fn ee_mode_tracked(&mut self, first: &Root, warm: bool) -> Result<Root, ModalError> {
         let start = self.evaluations;
         let thr = self.params.ee_participation_min;
         if first.ee_participation >= thr {
-            self.ee_track = Some((first.lambda, 0));
             self.n_members = 0;
             self.ee_skip = 0;
             return Ok(*first);
@@ -1312,15 +1525,14 @@ impl ModalSolver {
             // most end-effector-like mode and rescan fully every 16 cycles.
             self.ee_skip -= 1;
             if self.n_members == 1 {
-                let l0 = self.members[0].0;
-                let pred = self.predict(0);
+                let m = self.members[0];
+                let pred = predict(&m);
                 let exact = self.params.newton_accept;
-                if let Some((mut r, _, _)) = self.track_root(pred, exact) {
-                    if (r.lambda - pred).abs() <= 2e-3 * l0 {
-                        self.member_prev[0] = l0;
-                        self.members[0].0 = r.lambda;
-                        self.members[0].1 = r.ee_participation;
-                        if r.ee_participation < thr {
+                if let Some(t) = self.track_root(pred, exact) {
+                    if (t.root.lambda - pred).abs() <= 2e-3 * m.lambda {
+                        self.members[0] = t.member(m.lambda);
+                        if t.root.ee_participation < thr {
+                            let mut r = t.root;
                             r.evaluations = self.evaluations - start;
                             return Ok(r);
                         }
@@ -1328,227 +1540,412 @@ impl ModalSolver {
                 }
             }
             self.ee_skip = 0;
+            self.n_members = 0;
         }
         let mut reason = 0;
-        if let (true, Some((l_ee, below0))) = (warm, self.ee_track) {
-            if self.n_members > 0 {
-                match self.track_members(l_ee, below0, thr) {
-                    Ok(mut r) => {
-                        r.evaluations = self.evaluations - start;
-                        return Ok(r);
-                    }
-                    Err((why, window)) => {
-                        // Partial rescan: the watched modes below the window keep their
-                        // baselines; everything from the window up is scanned again.
-                        self.rescans[why] += 1;
-                        if let Some(mut r) = self.partial_rescan(window, 2.0 * l_ee, thr) {
-                            r.evaluations = self.evaluations - start;
-                            return Ok(r);
-                        }
-                        reason = 0;
-                    }
+        if warm && self.n_members > 0 {
+            match self.track_watched(thr) {
+                Ok(mut r) => {
+                    r.evaluations = self.evaluations - start;
+                    return Ok(r);
                 }
+                Err(why) => reason = why,
             }
         }
         self.rescans[reason] += 1;
-        self.since_scan = 0;
-        self.leak = 0.0;
-        self.recording = true;
+        if reason != 0 && self.n_members > 0 {
+            // Rescan from 10 % below the lowest watched mode (the watched modes are those
+            // the participation moves among); the modes below stay unwatched and covered by
+            // the bound. Certified, this is the answer; else scan from zero.
+            let window = 0.9 * self.members[0].lambda;
+            if let Some(mut r) = self.partial_rescan(first, window, thr) {
+                r.evaluations = self.evaluations - start;
+                return Ok(r);
+            }
+        }
         self.n_members = 0;
-        if first.ee_participation >= P_WATCH * thr {
-            self.members[0] = (first.lambda, first.ee_participation);
-            self.member_prev[0] = f64::NAN;
-            self.n_members = 1;
+        self.recording = true;
+        if first.ee_participation >= P_ADD {
+            self.watch_first(first);
         }
         let r = self.ee_mode(first);
         self.recording = false;
         let mut r = match r {
             Ok(r) => r,
             Err(e) => {
-                self.ee_track = None;
                 self.n_members = 0;
                 return Err(e);
             }
         };
         if r.ee_participation < thr {
             // Weak: watch only this mode until the next full scan.
-            self.members[0] = (r.lambda, r.ee_participation);
-            self.member_prev[0] = f64::NAN;
+            let (a, b) = self.pole_interval(r.lambda);
+            self.members[0] = Member::new(r.lambda, r.ee_participation, 0, 0, a, b);
             self.n_members = 1;
             self.ee_skip = 16;
-            self.ee_track = None;
-            r.evaluations = self.evaluations - start;
-            return Ok(r);
         }
-        let below = self.count_below(r.lambda * (1.0 - 1e-10));
-        self.ee_track = Some((r.lambda, below));
         r.evaluations = self.evaluations - start;
         Ok(r)
     }
 
-    /// The linear predictor of watched mode `i` from its last two λ.
-    fn predict(&self, i: usize) -> f64 {
-        let l = self.members[i].0;
-        let p = self.member_prev[i];
-        if p.is_finite() {
-            let x = 2.0 * l - p;
-            if x > 0.0 {
-                return x;
-            }
-        }
-        l
+    /// Watch the first root: branch 0 below the lowest pole, index 0.
+    fn watch_first(&mut self, first: &Root) {
+        let lp = self.lowest_pole();
+        self.insert_member(Member::new(
+            first.lambda,
+            first.ee_participation,
+            0,
+            0,
+            0.0,
+            lp,
+        ));
     }
 
-    /// Counters of end-effector rescans by reason: [cold start, watched mode lost,
-    /// participation lost, watched modes collapsed, no watched mode above the threshold,
-    /// count of modes below changed].
+    /// Scan from `window` (rad²/s²) upward, watching what it finds (and the first root when
+    /// it has participation); Some(answer) only when the bound certifies it.
+    fn partial_rescan(&mut self, first: &Root, window: f64, thr: f64) -> Option<Root> {
+        self.n_members = 0;
+        if first.ee_participation >= P_ADD && first.lambda < window {
+            self.watch_first(first);
+        }
+        self.recording = true;
+        let r = self.ee_scan(window, window * (1.0 - 1e-12), f64::INFINITY);
+        self.recording = false;
+        let r = r.ok()?;
+        if r.ee_participation >= thr && self.unwatched_bound(r.lambda) + CERT_MARGIN < thr {
+            Some(r)
+        } else {
+            self.n_members = 0;
+            None
+        }
+    }
+
+    /// Counters of the end-effector bookkeeping: [full scans from a cold start, watched
+    /// modes lost, full scans because the sum-rule bound was not certified, neighbour
+    /// searches, full scans because no watched mode reached the threshold, watched modes
+    /// dropped below 0.01].
     pub fn rescan_counts(&self) -> [u64; 6] {
         self.rescans
     }
 
-    /// Rescan from `window` (rad²/s²) upward, keeping the watched modes below it. None when
-    /// the scan fails (the caller then scans from zero).
-    fn partial_rescan(&mut self, window: f64, limit: f64, thr: f64) -> Option<Root> {
-        let mut keep = 0;
-        while keep < self.n_members && self.members[keep].0 < window {
-            keep += 1;
+    /// Bound on the participation of any unwatched mode below `l_ans` (rad²/s²): the smaller
+    /// of the plain and the 1/λ-weighted sum rules less what the watched modes hold.
+    fn unwatched_bound(&self, l_ans: f64) -> f64 {
+        let mut sum = 0.0;
+        let mut weighted = 0.0;
+        for m in &self.members[..self.n_members] {
+            sum += m.p;
+            weighted += m.p / m.lambda;
         }
-        self.n_members = keep;
-        self.leak = 0.0;
-        if keep == 0 {
-            self.since_scan = 0;
-        }
-        // A kept mode above the threshold is lower than anything in the window.
-        for i in 0..keep {
-            if self.members[i].1 >= thr {
-                let exact = self.params.newton_accept;
-                let (r, _, below) = self.track_root(self.predict(i), exact)?;
-                self.ee_track = Some((r.lambda, below));
-                return Some(r);
-            }
-        }
-        self.recording = true;
-        let r = self.ee_scan(window, window * (1.0 - 1e-12), limit);
-        self.recording = false;
-        let r = r.ok()?;
-        let below = self.count_below(r.lambda * (1.0 - 1e-10));
-        self.ee_track = Some((r.lambda, below));
-        Some(r)
+        let plain = self.p_total - sum;
+        let w = if self.flex0.is_finite() && l_ans.is_finite() {
+            l_ans * (self.flex0 - weighted)
+        } else {
+            f64::INFINITY
+        };
+        plain.min(w).max(0.0)
     }
 
-    /// One warm step of the watched modes; Err((reason, window start)) when a rescan is
-    /// needed from that λ upward.
-    fn track_members(&mut self, l_ee: f64, below0: u32, thr: f64) -> Result<Root, (usize, f64)> {
-        let mut answer: Option<(Root, usize, u32)> = None;
-        let mut prev = 0.0f64;
-        // Each watched mode's participation at the last cycle and its count of modes below.
-        let mut p_last = [0.0f64; MAX_MEMBERS];
-        let mut counts = [0u32; MAX_MEMBERS];
-        self.since_scan += 1;
-        if self.since_scan > FULL_RESCAN_CYCLES {
-            return Err((2, 0.0));
+    /// Insert a watched mode in index order; a mode already watched (same index) is
+    /// replaced. When full, the weakest watched mode gives way to a stronger one.
+    fn insert_member(&mut self, m: Member) {
+        let n = self.n_members;
+        let pos = self.members[..n].partition_point(|x| x.index < m.index);
+        if pos < n && self.members[pos].index == m.index {
+            self.members[pos] = m;
+            return;
         }
-        for i in 0..self.n_members {
-            let l = self.members[i].0;
-            p_last[i] = self.members[i].1;
-            let window = WINDOW * l;
-            let pred = self.predict(i);
-            // One Newton step from the prediction is enough to follow a watched mode; the
-            // answer is then solved to full accuracy (one more evaluation).
-            let tr = self.track_root(pred, CHEAP_ACCEPT);
-            let (mut r, mut branch, mut count) = tr.ok_or((1usize, window))?;
-            // Modes move continuously: a root more than 0.2 % away from its prediction is
-            // another mode that Newton converged to (an identity jump), not this one.
-            if (r.lambda - pred).abs() > 2e-3 * l {
-                return Err((1, window.min(WINDOW * r.lambda)));
+        if n == MAX_MEMBERS {
+            let (weak, wp) =
+                self.members[..n]
+                    .iter()
+                    .enumerate()
+                    .fold(
+                        (0, f64::INFINITY),
+                        |acc, (i, x)| {
+                            if x.p < acc.1 {
+                                (i, x.p)
+                            } else {
+                                acc
+                            }
+                        },
+                    );
+            if wp >= m.p {
+                return;
             }
-            if answer.is_none() && r.ee_participation >= thr - P_MARGIN {
-                let exact = self.params.newton_accept;
-                (r, branch, count) = self.track_root(r.lambda, exact).ok_or((1usize, window))?;
-            }
-            if r.lambda <= prev * (1.0 + 1e-9) {
-                return Err((3, WINDOW * prev.min(r.lambda)));
-            }
-            prev = r.lambda;
-            counts[i] = count;
-            self.member_prev[i] = l;
-            self.members[i].0 = r.lambda;
-            self.members[i].1 = r.ee_participation;
-            if answer.is_none() && r.ee_participation >= thr {
-                answer = Some((r, branch, count));
-            }
+            self.remove_member(weak);
+            self.insert_member(m);
+            return;
         }
-        // Participation moves between neighbouring modes (avoided crossings). Within a run
-        // of watched modes that are neighbours in the spectrum (their counts of modes below
-        // differ by one) it stays watched; what a run loses in net went to an unwatched
-        // neighbour. The leak since the scan bounds what any unwatched mode has gained:
-        // above P_LOSS × threshold, rescan from just below the leaking run.
-        let mut first_leaker = f64::INFINITY;
+        let mut i = n;
+        while i > pos {
+            self.members[i] = self.members[i - 1];
+            i -= 1;
+        }
+        self.members[pos] = m;
+        self.n_members += 1;
+    }
+
+    fn remove_member(&mut self, i: usize) {
+        for k in i..self.n_members - 1 {
+            self.members[k] = self.members[k + 1];
+        }
+        self.n_members -= 1;
+    }
+
+    /// One warm cycle of the watched modes; Err(reason) when a full scan is needed.
+    fn track_watched(&mut self, thr: f64) -> Result<Root, usize> {
+        // Follow every watched mode one step.
         let mut i = 0;
         while i < self.n_members {
-            let mut j = i;
-            while j + 1 < self.n_members && counts[j + 1] == counts[j] + 1 {
-                j += 1;
-            }
-            let change: f64 = (i..=j).map(|k| self.members[k].1 - p_last[k]).sum();
-            if change < 0.0 {
-                self.leak -= change;
-                first_leaker = first_leaker.min(WINDOW * self.members[i].0);
-            }
-            i = j + 1;
-        }
-        if self.leak > P_LOSS * thr {
-            return Err((2, first_leaker.min(WINDOW * l_ee)));
-        }
-        let (r, branch, below) = answer.ok_or((4usize, WINDOW * l_ee.min(prev)))?;
-        // The watched modes keep their order, so the answer is the same mode as before
-        // exactly when it was the end-effector mode at the last cycle.
-        let same = (r.lambda - l_ee).abs() <= 1e-3 * l_ee;
-        if same && below != below0 {
-            if below + 1 == below0 {
-                // A mode left upward through the answer: fine.
-            } else if below == below0 + 1 {
-                // A mode arrived from above: it must carry little participation.
-                match self.highest_root_below(r.lambda, branch) {
-                    Some(h) if h.ee_participation < P_WATCH * thr => {}
-                    _ => return Err((5, WINDOW * r.lambda)),
+            let m = self.members[i];
+            let pred = predict(&m);
+            match self.track_root(pred, CHEAP_ACCEPT) {
+                Some(t) => {
+                    // A root far from the prediction is another mode that Newton converged
+                    // to: still a mode, but without a history.
+                    let jumped = (t.root.lambda - pred).abs() > 2e-3 * m.lambda;
+                    let mut n = t.member(if jumped { f64::NAN } else { m.lambda });
+                    if !jumped && t.index == m.index {
+                        n.p_ref = m.p_ref;
+                        n.searched = m.searched;
+                        n.last_side = m.last_side;
+                        n.prev2 = m.prev;
+                    }
+                    self.members[i] = n;
+                    i += 1;
                 }
-            } else {
-                return Err((5, WINDOW * r.lambda));
+                None => {
+                    self.rescans[1] += 1;
+                    self.remove_member(i);
+                }
             }
         }
-        self.ee_track = Some((r.lambda, below));
-        Ok(r)
+        // Keep them in index order and distinct (two that converged to one mode are one).
+        for i in 1..self.n_members {
+            let mut k = i;
+            while k > 0 && self.members[k - 1].index > self.members[k].index {
+                self.members.swap(k - 1, k);
+                k -= 1;
+            }
+        }
+        let mut i = 1;
+        while i < self.n_members {
+            if self.members[i].index == self.members[i - 1].index {
+                self.remove_member(i);
+            } else {
+                i += 1;
+            }
+        }
+        let mut i = 0;
+        while i < self.n_members {
+            if self.members[i].p < P_DROP {
+                self.rescans[5] += 1;
+                self.remove_member(i);
+            } else {
+                i += 1;
+            }
+        }
+        let mut answer = self.select_answer(thr)?;
+        if self.unwatched_bound(answer.lambda) > SEARCH_BOUND {
+            // Search the neighbours of the watched mode whose participation changed most
+            // since its neighbours were last searched (first those never searched): a
+            // flood fill towards the participation the watched modes miss.
+            let mut pick = None;
+            let mut change = SEARCH_LOSS;
+            let mut oldest = (u64::MAX, 0);
+            for (k, m) in self.members[..self.n_members].iter().enumerate() {
+                let c = if m.p_ref.is_nan() {
+                    f64::INFINITY
+                } else {
+                    (m.p - m.p_ref).abs()
+                };
+                if c >= change {
+                    change = c;
+                    pick = Some(k);
+                }
+                if m.searched < oldest.0 {
+                    oldest = (m.searched, k);
+                }
+            }
+            // Nothing changed: the one searched longest ago.
+            let k = pick.unwrap_or(oldest.1);
+            {
+                self.rescans[3] += 1;
+                self.cycle_count += 1;
+                let m = self.members[k];
+                // One side per search: first towards the nearer pole (an avoided crossing
+                // partner sits across it), then alternately.
+                let up = match m.last_side {
+                    0 => m.b - m.lambda < m.lambda - m.a,
+                    1 => false,
+                    _ => true,
+                };
+                self.members[k].last_side = if up { 2 } else { 1 };
+                // Both sides searched: the mode is settled until its participation changes.
+                if m.last_side != 0 {
+                    self.members[k].p_ref = m.p;
+                }
+                self.members[k].searched = self.cycle_count;
+                {
+                    // Walk past weak modes (up to NEIGHBOUR_WALK) to the first one worth
+                    // watching.
+                    let mut from = m;
+                    for _ in 0..NEIGHBOUR_WALK {
+                        let target = if up {
+                            from.index + 1
+                        } else if from.index > 0 {
+                            from.index - 1
+                        } else {
+                            break;
+                        };
+                        if self.members[..self.n_members]
+                            .iter()
+                            .any(|x| x.index == target)
+                        {
+                            break;
+                        }
+                        let Some(t) = self.neighbour(&from, up) else {
+                            break;
+                        };
+                        let mut n = t.member(f64::NAN);
+                        if t.root.ee_participation >= P_ADD {
+                            n.p_ref = f64::NAN;
+                            self.insert_member(n);
+                            break;
+                        }
+                        from = n;
+                    }
+                }
+                answer = self.select_answer(thr)?;
+            }
+        }
+        if self.unwatched_bound(answer.lambda) + CERT_MARGIN >= thr {
+            return Err(2);
+        }
+        Ok(answer)
     }
 
-    /// The highest root below the root `l1` of branch `branch`, when it lies in the same
-    /// pole interval (branch − 1 changes sign between the interval's lower pole and l1).
-    fn highest_root_below(&mut self, l1: f64, branch: usize) -> Option<Root> {
-        if branch == 0 {
-            return None;
+    /// The lowest watched mode with participation ≥ the threshold, solved to full accuracy
+    /// (and so is any watched mode below it within [`P_MARGIN`] of the threshold);
+    /// Err(4) when there is none, Err(1) when an exact solve fails.
+    fn select_answer(&mut self, thr: f64) -> Result<Root, usize> {
+        let exact = self.params.newton_accept;
+        for i in 0..self.n_members {
+            let m = self.members[i];
+            if m.p < thr - P_MARGIN {
+                continue;
+            }
+            let t = self.track_root(m.lambda, exact).ok_or(1usize)?;
+            if t.index != m.index {
+                return Err(1);
+            }
+            self.members[i].lambda = t.root.lambda;
+            self.members[i].p = t.root.ee_participation;
+            if t.root.ee_participation >= thr {
+                return Ok(t.root);
+            }
         }
-        let (a, b) = self.pole_interval(l1);
-        let lo = if a == 0.0 {
-            0.0
+        Err(4)
+    }
+
+    /// The spectral neighbour of watched mode `m`: the mode of index m.index + 1 (`up`) or
+    /// m.index − 1 (or the first beyond the modes sitting exactly at a pole, which have no
+    /// participation), searched across at most [`NEIGHBOUR_INTERVALS`] pole intervals; None when
+    /// it is not found there. In a pole interval (a, b) with blocked count B the roots are
+    /// those of branches j with D's j-th eigenvalue positive at a⁺ and negative at b⁻, in
+    /// order, and the root of branch j has index B + j.
+    fn neighbour(&mut self, m: &Member, up: bool) -> Option<Tracked> {
+        let mut target = if up {
+            m.index + 1
         } else {
-            a + (1e-9 * a).min(0.25 * (l1 - a))
+            m.index.checked_sub(1)?
         };
-        let e = self.eval(lo);
-        if !(e.eig().values[branch - 1] > 0.0) {
-            return None;
+        let (mut a, mut b) = (m.a, m.b);
+        let mut below = m.index.checked_sub(m.branch as u32)?;
+        // The end of the interval where the target's branch is known to have the right sign
+        // (≥ 0 below the root when going up, ≤ 0 above it when going down).
+        let mut known = m.lambda;
+        for _ in 0..NEIGHBOUR_INTERVALS {
+            if target >= below && ((target - below) as usize) < self.dim {
+                let j = (target - below) as usize;
+                // The other end: b⁻ (∞ when there is no pole above: D → −λ M_∞ there) or
+                // a⁺ (0 when a = 0: D(0) is positive definite).
+                let other = if up {
+                    b.is_finite().then(|| b - inset(b - a, b))
+                } else {
+                    (a > 0.0).then(|| a + inset(b - a, a))
+                };
+                let holds = match other {
+                    None => true,
+                    Some(x) => {
+                        let v = self.eval(x).eig().values[j];
+                        if up {
+                            v < 0.0
+                        } else {
+                            v > 0.0
+                        }
+                    }
+                };
+                if holds {
+                    let (lo, hi) = if up {
+                        (known, other.unwrap_or(f64::INFINITY))
+                    } else {
+                        (other.unwrap_or(0.0), known)
+                    };
+                    let guess = if hi.is_finite() {
+                        0.5 * (lo + hi)
+                    } else {
+                        2.0 * lo.max(1.0)
+                    };
+                    let r = self.branch_root_with(j, lo, hi, a, b, guess, true).ok()?;
+                    return Some(Tracked {
+                        root: r,
+                        branch: j,
+                        index: target,
+                        a,
+                        b,
+                    });
+                }
+            }
+            // Not in this interval: the next one in the search direction.
+            let x = if up {
+                if !b.is_finite() {
+                    return None;
+                }
+                b + inset(b - a, b)
+            } else {
+                if a == 0.0 {
+                    return None;
+                }
+                a - inset(b - a, a)
+            };
+            let e = self.eval(x);
+            (a, b) = self.last_pole_interval();
+            if !(x > a && x < b) {
+                return None;
+            }
+            below = e.below;
+            let count = below + e.eig().negatives() as u32;
+            // Modes between x and the pole just crossed sit at that pole (several chains
+            // blocked at one λ: the end-effector is still in them, participation 0): the
+            // neighbour is the next mode beyond them.
+            if up && count > target {
+                target = count;
+            } else if !up && count <= target {
+                target = count.checked_sub(1)?;
+            }
+            known = x;
         }
-        let hi = l1 - (1e-13 * l1).min(0.25 * (l1 - lo));
-        self.branch_root(branch - 1, lo, hi, b, l1 - (1e-6 * l1).min(0.5 * (l1 - lo)))
-            .ok()
+        None
     }
 
     /// Newton from `l0` on the branch of D closest to vanishing there, kept inside the pole
     /// interval of l0; None when it leaves it or does not converge in the bound. The first
     /// step is accepted when it is below `first_accept` (relative), later ones below
-    /// [`ModalParams::newton_accept`]. Returns the root, its branch and the number of
-    /// natural frequencies below it, read off the last evaluation (Wittrick-Williams count
-    /// there, less the root itself when the last iterate lies above it).
-    fn track_root(&mut self, l0: f64, first_accept: f64) -> Option<(Root, usize, u32)> {
+    /// [`ModalParams::newton_accept`]. Returns the root, its branch, its pole interval and
+    /// its index in the spectrum (the interval's blocked count plus the branch).
+    fn track_root(&mut self, l0: f64, first_accept: f64) -> Option<Tracked> {
         let mut x = l0;
         let mut e = self.eval(x);
         let (mut a, mut b) = self.last_pole_interval();
@@ -1605,17 +2002,18 @@ impl ModalSolver {
             };
             if mu == 0.0 || (xn - x).abs() <= accept.max(self.params.rel_tol) * x {
                 let scale = e.d.abs().max().max(f64::MIN_POSITIVE);
-                let count = e.below + eg.negatives() as u32 - u32::from(mu < 0.0);
-                return Some((
-                    Root {
+                return Some(Tracked {
+                    root: Root {
                         lambda: xn,
                         ee_participation: self.participation(&e.dd, &v),
                         evaluations: 0,
                         residual: mu.abs() / scale,
                     },
                     branch,
-                    count,
-                ));
+                    index: e.below + branch as u32,
+                    a,
+                    b,
+                });
             }
             x = xn;
             e = self.eval(x);
