@@ -660,7 +660,7 @@ pub struct ModalSolver {
     /// tr(M_ee D(0)⁻¹) = Σ_k p_k/λ_k (s²/rad², the weighted sum rule), from `first_root`.
     flex0: f64,
     /// Neighbour searches so far (orders the watched modes by their last search).
-    cycle_count: u64,
+    search_count: u64,
     /// First roots solved (schedules the periodic count certificate).
     roots: u64,
     /// Σ of the end-effector participation over all modes (sum rule), from `load`.
@@ -832,7 +832,7 @@ impl ModalSolver {
             rescans: [0; 6],
             ee_skip: 0,
             flex0: f64::NAN,
-            cycle_count: 0,
+            search_count: 0,
             roots: 0,
             p_total: f64::NAN,
         }
@@ -1772,7 +1772,7 @@ impl ModalSolver {
             let k = pick.unwrap_or(oldest.1);
             {
                 self.rescans[3] += 1;
-                self.cycle_count += 1;
+                self.search_count += 1;
                 let m = self.members[k];
                 // One side per search: first towards the nearer pole (an avoided crossing
                 // partner sits across it), then alternately.
@@ -1786,7 +1786,7 @@ impl ModalSolver {
                 if m.last_side != 0 {
                     self.members[k].p_ref = m.p;
                 }
-                self.members[k].searched = self.cycle_count;
+                self.members[k].searched = self.search_count;
                 {
                     // Walk past weak modes (up to NEIGHBOUR_WALK) to the first one worth
                     // watching.
