@@ -490,8 +490,8 @@ pub fn bench(a: &BenchArgs, allocations: AllocCounter) -> Result<(), CliError> {
         println!("  statuses: {names:?}");
         let rc = est.rescan_counts();
         println!(
-            "  end-effector mode bookkeeping: full scans cold {} uncertified {} none {}; lost {} dropped {}; neighbour searches {}",
-            rc[0], rc[2], rc[4], rc[1], rc[5], rc[3]
+            "  end-effector mode bookkeeping: full scans cold {} uncertified {} none {}; lost {} dropped {}; partner searches {} neighbour searches {}",
+            rc[0], rc[2], rc[4], rc[1], rc[5], rc[6], rc[3]
         );
         if f1_min.0.is_finite() {
             println!(

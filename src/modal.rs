@@ -37,7 +37,8 @@
 //! with it.
 
 use crate::cable::{
-    eval_discrete_batch, CableModel, Chain, ChainEval, ChainKind, BATCH_MAX_ELEMENTS,
+    eval_continuous_batch, eval_discrete_batch, CableModel, Chain, ChainEval, ChainKind,
+    BATCH_MAX_ELEMENTS,
 };
 use crate::scene::MAX_CABLES;
 use nalgebra::{DMatrix, Matrix3, Matrix6, SymmetricEigen, Vector3, Vector6};
@@ -445,12 +446,26 @@ pub struct Eig3 {
 }
 
 /// The branch of D(λ) closest to vanishing: the smallest |μ_i| / |μ_i'|.
+/// vᵀ A v for a symmetric A, over the leading `dim` × `dim` block (3 or 6).
+#[inline]
+fn quad(a: &Matrix6<f64>, v: &Vector6<f64>, dim: usize) -> f64 {
+    if dim == 3 {
+        let (x, y, z) = (v[0], v[1], v[2]);
+        x * x * a[(0, 0)]
+            + y * y * a[(1, 1)]
+            + z * z * a[(2, 2)]
+            + 2.0 * (x * y * a[(0, 1)] + x * z * a[(0, 2)] + y * z * a[(1, 2)])
+    } else {
+        (v.transpose() * a * v)[(0, 0)]
+    }
+}
+
 fn nearest_branch(e: &DynEval, eg: &EigD) -> usize {
     let mut branch = 0;
     let mut best = f64::INFINITY;
     for i in 0..eg.n {
         let v = eg.vectors[i];
-        let d = -(v.transpose() * e.dd * v)[(0, 0)];
+        let d = -quad(&e.dd, &v, e.dim);
         let dist = eg.values[i].abs() / d.max(f64::MIN_POSITIVE);
         if dist < best {
             best = dist;
@@ -638,6 +653,11 @@ pub struct ModalSolver {
     batch_k: [f64; MAX_CHAINS],
     batch_m: [f64; MAX_CHAINS],
     n_batch: usize,
+    /// The continuous chains, evaluated together ([`eval_continuous_batch`]).
+    cont_idx: [usize; MAX_CHAINS],
+    cont_k: [f64; MAX_CHAINS],
+    cont_m: [f64; MAX_CHAINS],
+    n_cont: usize,
     batch_n_el: usize,
     /// Per-chain evaluations at the last λ.
     chain_eval: [ChainEval; MAX_CHAINS],
@@ -653,8 +673,9 @@ pub struct ModalSolver {
     recording: bool,
     /// End-effector bookkeeping by kind: [full scans from a cold start, watched modes lost,
     /// full scans because the bound was not certified, neighbour searches, full scans
-    /// because no watched mode reached the threshold, watched modes dropped].
-    rescans: [u64; 6],
+    /// because no watched mode reached the threshold, watched modes dropped, partner
+    /// searches].
+    rescans: [u64; 7],
     /// Warm cycles left before a failed full scan is retried.
     ee_skip: u32,
     /// tr(M_ee D(0)⁻¹) = Σ_k p_k/λ_k (s²/rad², the weighted sum rule), from `first_root`.
@@ -675,10 +696,12 @@ const P_ADD: f64 = 0.05;
 /// A watched mode whose participation falls below this is dropped (what it holds then
 /// counts against the sum-rule bound).
 const P_DROP: f64 = 0.02;
-/// When the sum-rule bound on the unwatched modes exceeds this, a spectral neighbour of
-/// the watched mode whose participation changed most is searched (ahead of need: the bound
-/// must stay below the threshold less [`CERT_MARGIN`]).
-const SEARCH_BOUND: f64 = 0.3;
+/// When the sum-rule bound on the unwatched modes (counting the watched modes not followed
+/// this cycle with their last participation) exceeds this, a spectral neighbour of the
+/// watched mode whose participation changed most is searched (ahead of need: the bound
+/// must stay below the threshold less [`CERT_MARGIN`]). Most participation moves are caught
+/// earlier by the partner searches ([`P_PARTNER`]).
+const SEARCH_BOUND: f64 = 0.4;
 /// ... and that mode's participation must have changed at least this much since its
 /// neighbours were searched (else the one searched longest ago is taken).
 const SEARCH_LOSS: f64 = 0.02;
@@ -688,12 +711,28 @@ const SCAN_BOUND: f64 = 0.15;
 /// (their participation is that of the predicted point, within ~1e-5 of the root): the
 /// answer is certified when the bound plus this is below the threshold.
 const CERT_MARGIN: f64 = 0.05;
-/// A watched mode is followed by one Newton step from its prediction when that step is
-/// below this (relative); its participation is then that of the predicted point.
+/// A watched mode is followed by Newton's method from its prediction until a step is
+/// below this (relative, usually the first); its participation is that of the last
+/// evaluated point, within ~1e-5 of the root.
 const CHEAP_ACCEPT: f64 = 1e-5;
 /// A watched mode whose approximate participation is within this of the threshold is
 /// solved to full accuracy before it is compared with the threshold.
 const P_MARGIN: f64 = 0.02;
+/// The answer is taken from its tracking step when that step was below this (relative):
+/// Newton's error is then ~step² · λ/w (w the pole interval) ≲ 1e-12.
+const ANSWER_ACCEPT: f64 = 1e-7;
+/// Watched modes below this participation are followed one per cycle (the one followed
+/// longest ago); the others every cycle. A mode not followed this cycle does not count in
+/// the certificate; when that fails, all are followed before anything is rescanned.
+const P_LAZY: f64 = 0.15;
+/// A watched mode with at least this participation ...
+const P_STRONG: f64 = 0.15;
+/// ... whose kinetic energy is at least this much in one chain is mixing with that chain's
+/// string mode (an avoided crossing): the partner across the chain's nearest pole is
+/// searched and watched (two-level model: it holds about that share).
+const P_PARTNER: f64 = 0.03;
+/// Partner searches per cycle.
+const PARTNER_SEARCHES: usize = 2;
 /// Modes a neighbour search may walk past (weak ones) on each side.
 const NEIGHBOUR_WALK: usize = 3;
 /// Pole intervals a neighbour search may cross.
@@ -707,6 +746,15 @@ fn inset(w: f64, x: f64) -> f64 {
 
 /// The predictor of a watched mode: quadratic through its last three λ (linear with two).
 fn predict(m: &Member) -> f64 {
+    if m.age > 1 {
+        // Not followed for a while: linear extrapolation over the gap.
+        let x = if m.prev.is_finite() {
+            m.lambda + m.age as f64 * (m.lambda - m.prev)
+        } else {
+            m.lambda
+        };
+        return if x > 0.0 { x } else { m.lambda };
+    }
     if m.prev.is_finite() {
         let x = if m.prev2.is_finite() {
             // Quadratic through the last three cycles.
@@ -744,6 +792,23 @@ struct Member {
     /// The pole interval that contains it, rad²/s².
     a: f64,
     b: f64,
+    /// The chain that holds the largest share of the mode's kinetic-energy norm (after the
+    /// end-effector): that share, and the chain's pole nearest the mode (rad²/s²) and
+    /// whether it lies above.
+    share: f64,
+    pole: f64,
+    pole_up: bool,
+    /// That pole's identity (chain << 16 | pole number).
+    pole_key: u32,
+    /// The pole whose partner was searched last, and the share then.
+    partner_key: u32,
+    partner_share: f64,
+    /// Relative size of the last Newton step and the residual there.
+    step: f64,
+    residual: f64,
+    /// Cycles since it was last followed (0: this cycle). Only members followed this cycle
+    /// count in the certificate.
+    age: u32,
 }
 
 impl Member {
@@ -761,6 +826,15 @@ impl Member {
             branch,
             a,
             b,
+            share: 0.0,
+            pole: f64::NAN,
+            pole_up: false,
+            pole_key: u32::MAX,
+            partner_key: u32::MAX,
+            partner_share: 0.0,
+            step: f64::INFINITY,
+            residual: f64::NAN,
+            age: 0,
         }
     }
 }
@@ -773,6 +847,13 @@ struct Tracked {
     index: u32,
     a: f64,
     b: f64,
+    /// [`Member::share`], [`Member::pole`], [`Member::pole_up`], [`Member::pole_key`].
+    share: f64,
+    pole: f64,
+    pole_up: bool,
+    pole_key: u32,
+    /// Relative size of the last Newton step (the root's error is of its square).
+    step: f64,
 }
 
 impl Tracked {
@@ -787,6 +868,12 @@ impl Tracked {
             self.b,
         );
         m.prev = prev;
+        m.share = self.share;
+        m.pole = self.pole;
+        m.pole_up = self.pole_up;
+        m.pole_key = self.pole_key;
+        m.step = self.step;
+        m.residual = r.residual;
         m
     }
 }
@@ -817,6 +904,10 @@ impl ModalSolver {
             batch_k: [0.0; MAX_CHAINS],
             batch_m: [0.0; MAX_CHAINS],
             n_batch: 0,
+            cont_idx: [0; MAX_CHAINS],
+            cont_k: [0.0; MAX_CHAINS],
+            cont_m: [0.0; MAX_CHAINS],
+            n_cont: 0,
             batch_n_el: 0,
             chain_eval: [ChainEval {
                 s: 0.0,
@@ -829,7 +920,7 @@ impl ModalSolver {
             members: [Member::default(); MAX_MEMBERS],
             n_members: 0,
             recording: false,
-            rescans: [0; 6],
+            rescans: [0; 7],
             ee_skip: 0,
             flex0: f64::NAN,
             search_count: 0,
@@ -964,6 +1055,15 @@ impl ModalSolver {
                 }
             }
         }
+        self.n_cont = 0;
+        for (i, c) in self.chains[..self.n_chains].iter().enumerate() {
+            if let ChainKind::Continuous { k_total, m_total } = c.kind {
+                self.cont_idx[self.n_cont] = i;
+                self.cont_k[self.n_cont] = k_total;
+                self.cont_m[self.n_cont] = m_total;
+                self.n_cont += 1;
+            }
+        }
     }
 
     /// Blocked eigenvalue j (1-based; 0 gives 0) of chain i, rad²/s², equal to
@@ -1014,11 +1114,28 @@ impl ModalSolver {
                 &mut batch[..nb],
             );
         }
-        let mut j = 0;
+        let mut cont = [ChainEval {
+            s: 0.0,
+            ds: 0.0,
+            below: 0,
+        }; MAX_CHAINS];
+        let nc = self.n_cont;
+        if nc > 0 {
+            eval_continuous_batch(
+                &self.cont_k[..nc],
+                &self.cont_m[..nc],
+                lambda,
+                &mut cont[..nc],
+            );
+        }
+        let (mut j, mut jc) = (0, 0);
         for i in 0..self.n_chains {
             if j < nb && self.batch_idx[j] == i {
                 self.chain_eval[i] = batch[j];
                 j += 1;
+            } else if jc < nc && self.cont_idx[jc] == i {
+                self.chain_eval[i] = cont[jc];
+                jc += 1;
             } else {
                 self.chain_eval[i] = self.chains[i].eval(lambda);
             }
@@ -1140,13 +1257,55 @@ impl ModalSolver {
     /// Participation of the mode at root λ with null vector v (unit): the end-effector's
     /// share vᵀ M_ee v / vᵀ(−D'(λ))v of the mode's kinetic-energy norm.
     fn participation(&self, dd: &Matrix6<f64>, v: &Vector6<f64>) -> f64 {
-        let kin = -(v.transpose() * dd * v)[(0, 0)];
-        let own = (v.transpose() * self.m6 * v)[(0, 0)];
+        let kin = -quad(dd, v, self.dim);
+        let own = quad(&self.m6, v, self.dim);
         if kin > 0.0 {
             (own / kin).min(1.0)
         } else {
             0.0
         }
+    }
+
+    /// The chain holding the largest share of the kinetic-energy norm vᵀ(−D'(x))v of the
+    /// mode shape v at the last evaluation (at x): (share, that chain's pole nearest x,
+    /// whether the pole is above x). In an avoided crossing with a string mode of that chain,
+    /// the share is what the partner across the pole holds (two-level model).
+    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
+        let kin = -quad(dd, v, self.dim);
+        if !(kin > 0.0) {
+            return (0.0, f64::NAN, false, u32::MAX);
+        }
+        let mut best = (0.0, usize::MAX);
+        for i in 0..self.n_chains {
+            let w = if self.dim == 3 {
+                let (p, x, y, z) = (&self.chains[i].proj, v[0], v[1], v[2]);
+                x * x * p[(0, 0)]
+                    + y * y * p[(1, 1)]
+                    + z * z * p[(2, 2)]
+                    + 2.0 * (x * y * p[(0, 1)] + x * z * p[(0, 2)] + y * z * p[(1, 2)])
+            } else {
+                quad(&self.q6[i], v, 6)
+            };
+            let q = -self.chain_eval[i].ds * w;
+            if q > best.0 {
+                best = (q, i);
+            }
+        }
+        if best.1 == usize::MAX {
+            return (0.0, f64::NAN, false, u32::MAX);
+        }
+        let i = best.1;
+        let j = self.chain_eval[i].below as usize;
+        let lo = self.chain_pole(i, j);
+        let hi = self.chain_pole(i, j + 1);
+        let up = j == 0 || hi - x < x - lo;
+        let jp = if up { j + 1 } else { j };
+        (
+            best.0 / kin,
+            if up { hi } else { lo },
+            up,
+            (i as u32) << 16 | jp as u32,
+        )
     }
 
     /// Root of the `branch`-th smallest eigenvalue of D on (lo, hi), where it is positive at
@@ -1186,7 +1345,7 @@ impl ModalSolver {
             let eg = e.eig();
             let mu = eg.values[branch];
             let v = eg.vectors[branch];
-            let dmu = (v.transpose() * e.dd * v)[(0, 0)];
+            let dmu = quad(&e.dd, &v, e.dim);
             if mu > 0.0 {
                 lo = lo.max(x);
             } else if mu < 0.0 {
@@ -1257,7 +1416,7 @@ impl ModalSolver {
         self.flex0 = (0..self.dim)
             .map(|j| {
                 let v = eg0.vectors[j];
-                (v.transpose() * self.m6 * v)[(0, 0)] / eg0.values[j]
+                quad(&self.m6, &v, self.dim) / eg0.values[j]
             })
             .sum();
         let lp = self.lowest_pole();
@@ -1266,7 +1425,7 @@ impl ModalSolver {
             _ => {
                 // Rayleigh estimate from λ = 0: μ(0)/(−μ'(0)).
                 let v = eg0.vectors[0];
-                let dmu = -(v.transpose() * e0.dd * v)[(0, 0)];
+                let dmu = -quad(&e0.dd, &v, e0.dim);
                 let g = eg0.values[0] / dmu.max(f64::MIN_POSITIVE);
                 if lp.is_finite() {
                     g.min(0.999 * lp)
@@ -1623,17 +1782,26 @@ impl ModalSolver {
     /// Counters of the end-effector bookkeeping: [full scans from a cold start, watched
     /// modes lost, full scans because the sum-rule bound was not certified, neighbour
     /// searches, full scans because no watched mode reached the threshold, watched modes
-    /// dropped below 0.01].
-    pub fn rescan_counts(&self) -> [u64; 6] {
+    /// dropped (participation below 0.02), partner searches (avoided crossings ahead)].
+    pub fn rescan_counts(&self) -> [u64; 7] {
         self.rescans
     }
 
     /// Bound on the participation of any unwatched mode below `l_ans` (rad²/s²): the smaller
     /// of the plain and the 1/λ-weighted sum rules less what the watched modes hold.
     fn unwatched_bound(&self, l_ans: f64) -> f64 {
+        self.unwatched_bound_with(l_ans, false)
+    }
+
+    /// [`Self::unwatched_bound`]; with `stale`, the members not followed this cycle count
+    /// too, with their last participation (an estimate for the search heuristics only).
+    fn unwatched_bound_with(&self, l_ans: f64, stale: bool) -> f64 {
         let mut sum = 0.0;
         let mut weighted = 0.0;
         for m in &self.members[..self.n_members] {
+            if m.age > 0 && !stale {
+                continue;
+            }
             sum += m.p;
             weighted += m.p / m.lambda;
         }
@@ -1695,22 +1863,58 @@ impl ModalSolver {
 
     /// One warm cycle of the watched modes; Err(reason) when a full scan is needed.
     fn track_watched(&mut self, thr: f64) -> Result<Root, usize> {
-        // Follow every watched mode one step.
+        self.follow_members(false);
+        self.partners_and_answer(thr)
+    }
+
+    /// Follow the watched modes one step: every one with participation ≥ [`P_LAZY`] and
+    /// the weak one followed longest ago (`stale_only`: those not followed this cycle).
+    /// Then keep them in index order, distinct, and drop the weak ones.
+    fn follow_members(&mut self, stale_only: bool) {
+        let mut rr = usize::MAX;
+        if !stale_only {
+            let mut oldest = 0;
+            for (k, m) in self.members[..self.n_members].iter_mut().enumerate() {
+                m.age += 1;
+                if m.p < P_LAZY && m.age > oldest {
+                    oldest = m.age;
+                    rr = k;
+                }
+            }
+        }
         let mut i = 0;
         while i < self.n_members {
             let m = self.members[i];
+            let follow = if stale_only {
+                m.age > 0
+            } else {
+                m.p >= P_LAZY || i == rr
+            };
+            if !follow {
+                i += 1;
+                continue;
+            }
             let pred = predict(&m);
             match self.track_root(pred, CHEAP_ACCEPT) {
                 Some(t) => {
                     // A root far from the prediction is another mode that Newton converged
                     // to: still a mode, but without a history.
-                    let jumped = (t.root.lambda - pred).abs() > 2e-3 * m.lambda;
+                    let jumped =
+                        t.index != m.index || (t.root.lambda - pred).abs() > 2e-2 * m.lambda;
                     let mut n = t.member(if jumped { f64::NAN } else { m.lambda });
-                    if !jumped && t.index == m.index {
+                    if !jumped {
                         n.p_ref = m.p_ref;
                         n.searched = m.searched;
                         n.last_side = m.last_side;
-                        n.prev2 = m.prev;
+                        n.partner_key = m.partner_key;
+                        n.partner_share = m.partner_share;
+                        if m.age > 1 {
+                            // The λ one cycle ago, interpolated over the gap.
+                            n.prev = t.root.lambda - (t.root.lambda - m.lambda) / m.age as f64;
+                            n.prev2 = f64::NAN;
+                        } else {
+                            n.prev2 = m.prev;
+                        }
                     }
                     self.members[i] = n;
                     i += 1;
@@ -1732,22 +1936,70 @@ impl ModalSolver {
         let mut i = 1;
         while i < self.n_members {
             if self.members[i].index == self.members[i - 1].index {
-                self.remove_member(i);
+                // Keep the one followed this cycle.
+                let stale = if self.members[i].age > 0 { i } else { i - 1 };
+                self.remove_member(stale);
             } else {
                 i += 1;
             }
         }
         let mut i = 0;
         while i < self.n_members {
-            if self.members[i].p < P_DROP {
+            if self.members[i].age == 0 && self.members[i].p < P_DROP {
                 self.rescans[5] += 1;
                 self.remove_member(i);
             } else {
                 i += 1;
             }
         }
+    }
+
+    /// The rest of a warm cycle after [`Self::follow_members`]: partners of strong modes,
+    /// the answer, neighbour searches, the certificate.
+    fn partners_and_answer(&mut self, thr: f64) -> Result<Root, usize> {
+        // Avoided crossings ahead: a strong watched mode that shares enough of its kinetic
+        // energy with one chain is mixing with that chain's string mode, which sits just
+        // across the chain's nearest pole; watch it before the participation moves there.
+        let mut searches = 0;
+        let mut i = 0;
+        while i < self.n_members && searches < PARTNER_SEARCHES {
+            let m = self.members[i];
+            i += 1;
+            if m.age > 0 || m.p < P_STRONG || m.share < P_PARTNER || !m.pole.is_finite() {
+                continue;
+            }
+            // Two-level model (the mode and the chain's string mode): the partner sits at
+            // λ_m − (λ_m − pole)/(1 − share), across the pole.
+            let pred = m.lambda - (m.lambda - m.pole) / (1.0 - m.share).max(0.05);
+            let reach = 2.0 * (pred - m.pole).abs() + 1e-6 * m.pole;
+            let watched = self.members[..self.n_members].iter().any(|x| {
+                (if m.pole_up {
+                    x.lambda > m.pole
+                } else {
+                    x.lambda < m.pole
+                }) && (x.lambda - m.pole).abs() <= reach
+                    && x.p >= 0.5 * m.share
+            });
+            if watched || (m.pole_key == m.partner_key && m.share < 2.0 * m.partner_share) {
+                continue;
+            }
+            self.members[i - 1].partner_key = m.pole_key;
+            self.members[i - 1].partner_share = m.share;
+            searches += 1;
+            self.rescans[6] += 1;
+            if let Some(t) = self.partner(m.pole, m.pole_up, pred) {
+                let known = self.members[..self.n_members]
+                    .iter()
+                    .any(|x| x.index == t.index);
+                if !known && t.root.ee_participation >= P_DROP {
+                    self.insert_member(t.member(f64::NAN));
+                    // Restart: insertion shifted the members.
+                    i = 0;
+                }
+            }
+        }
         let mut answer = self.select_answer(thr)?;
-        if self.unwatched_bound(answer.lambda) > SEARCH_BOUND {
+        if self.unwatched_bound_with(answer.lambda, true) > SEARCH_BOUND {
             // Search the neighbours of the watched mode whose participation changed most
             // since its neighbours were last searched (first those never searched): a
             // flood fill towards the participation the watched modes miss.
@@ -1821,7 +2073,15 @@ impl ModalSolver {
             }
         }
         if self.unwatched_bound(answer.lambda) + CERT_MARGIN >= thr {
-            return Err(2);
+            if self.members[..self.n_members].iter().all(|m| m.age == 0) {
+                return Err(2);
+            }
+            // Follow the rest too before giving up.
+            self.follow_members(true);
+            answer = self.select_answer(thr)?;
+            if self.unwatched_bound(answer.lambda) + CERT_MARGIN >= thr {
+                return Err(2);
+            }
         }
         Ok(answer)
     }
@@ -1833,7 +2093,20 @@ impl ModalSolver {
         let exact = self.params.newton_accept;
         for i in 0..self.n_members {
             let m = self.members[i];
-            if m.p < thr - P_MARGIN {
+            if m.age > 0 || m.p < thr - P_MARGIN {
+                continue;
+            }
+            if m.step <= ANSWER_ACCEPT {
+                // Followed this cycle by a Newton step this small: λ is within ~step² of
+                // the root already.
+                if m.p >= thr {
+                    return Ok(Root {
+                        lambda: m.lambda,
+                        ee_participation: m.p,
+                        evaluations: 0,
+                        residual: m.residual,
+                    });
+                }
                 continue;
             }
             let t = self.track_root(m.lambda, exact).ok_or(1usize)?;
@@ -1842,6 +2115,8 @@ impl ModalSolver {
             }
             self.members[i].lambda = t.root.lambda;
             self.members[i].p = t.root.ee_participation;
+            self.members[i].step = t.step;
+            self.members[i].residual = t.root.residual;
             if t.root.ee_participation >= thr {
                 return Ok(t.root);
             }
@@ -1905,6 +2180,11 @@ impl ModalSolver {
                         index: target,
                         a,
                         b,
+                        share: 0.0,
+                        pole: f64::NAN,
+                        pole_up: false,
+                        pole_key: u32::MAX,
+                        step: 0.0,
                     });
                 }
             }
@@ -1940,12 +2220,26 @@ impl ModalSolver {
         None
     }
 
+    /// The partner of a watched mode in an avoided crossing: the mode across `pole`
+    /// (rad²/s²; above it when `up`) nearest `pred` (the two-level model's estimate), by
+    /// [`Self::track_root`] from `pred` (or from just across the pole when `pred` is on the
+    /// wrong side). Whatever mode it converges to is a root with its index counted afresh.
+    fn partner(&mut self, pole: f64, up: bool, pred: f64) -> Option<Tracked> {
+        let x = if up {
+            pred.max(pole * (1.0 + 1e-9))
+        } else {
+            pred.min(pole * (1.0 - 1e-9))
+        };
+        self.track_root(x, CHEAP_ACCEPT)
+    }
+
     /// Newton from `l0` on the branch of D closest to vanishing there, kept inside the pole
-    /// interval of l0; None when it leaves it or does not converge in the bound. The first
-    /// step is accepted when it is below `first_accept` (relative), later ones below
-    /// [`ModalParams::newton_accept`]. Returns the root, its branch, its pole interval and
-    /// its index in the spectrum (the interval's blocked count plus the branch).
-    fn track_root(&mut self, l0: f64, first_accept: f64) -> Option<Tracked> {
+    /// interval of l0; None when it leaves it or does not converge in the bound. The next
+    /// iterate is accepted once a step is below `accept` (relative; the iterate is then
+    /// within ~step² of the root). Returns the root, its branch, its pole interval, its index
+    /// in the spectrum (the interval's blocked count plus the branch) and, for a mode with
+    /// participation ≥ [`P_STRONG`], the chain it shares most energy with.
+    fn track_root(&mut self, l0: f64, accept: f64) -> Option<Tracked> {
         let mut x = l0;
         let mut e = self.eval(x);
         let (mut a, mut b) = self.last_pole_interval();
@@ -1959,7 +2253,7 @@ impl ModalSolver {
         while it < self.params.max_evaluations.min(12) {
             let v = eg.vectors[branch];
             let mu = eg.values[branch];
-            let dmu = (v.transpose() * e.dd * v)[(0, 0)];
+            let dmu = quad(&e.dd, &v, e.dim);
             // Newton on μ(λ)(λ − a)(b − λ): both poles removed (a = 0 and b = ∞ add nothing).
             let (mut g, mut dg) = (mu, dmu);
             if b.is_finite() {
@@ -1995,17 +2289,18 @@ impl ModalSolver {
                 it += 1;
                 continue;
             }
-            let accept = if it == 0 {
-                first_accept
-            } else {
-                self.params.newton_accept
-            };
             if mu == 0.0 || (xn - x).abs() <= accept.max(self.params.rel_tol) * x {
                 let scale = e.d.abs().max().max(f64::MIN_POSITIVE);
+                let p = self.participation(&e.dd, &v);
+                let (share, pole, pole_up, pole_key) = if p >= P_STRONG {
+                    self.coupling(x, &e.dd, &v)
+                } else {
+                    (0.0, f64::NAN, false, u32::MAX)
+                };
                 return Some(Tracked {
                     root: Root {
                         lambda: xn,
-                        ee_participation: self.participation(&e.dd, &v),
+                        ee_participation: p,
                         evaluations: 0,
                         residual: mu.abs() / scale,
                     },
@@ -2013,6 +2308,11 @@ impl ModalSolver {
                     index: e.below + branch as u32,
                     a,
                     b,
+                    share,
+                    pole,
+                    pole_up,
+                    pole_key,
+                    step: (xn - x).abs() / x,
                 });
             }
             x = xn;
