@@ -559,14 +559,37 @@ fn sin_cos_kernel(r: f64) -> (f64, f64) {
 }
 
 /// [`Chain::eval`] of several continuous chains (K, m per chain: `k`, `m`, N/m and kg) at
-/// one λ > 0: one square root of λ, and cot φ from a Cody-Waite reduction by π/2 (two
-/// parts; φ < 2²⁰ here) and polynomial kernels instead of a library sin/cos per chain. Agrees
-/// with the scalar form to a few ulp of its condition (tested).
-#[allow(clippy::excessive_precision)] // fdlibm's constants as published
+/// one λ: one square root of λ, and cot φ from a Cody-Waite reduction by π/2 (two parts;
+/// φ ≤ 1e5 here) and fdlibm's polynomial kernels instead of a library sin/cos per chain,
+/// branch-free so that it vectorizes (an AVX2 build is chosen at run time: the same
+/// operations, so the same results). Agrees with the scalar form within its conditioning
+/// (tested). Chains outside 1e-3 ≤ φ ≤ 1e5, or with K or m ≤ 0, and λ ≤ 0 take the scalar
+/// form.
 pub fn eval_continuous_batch(k: &[f64], m: &[f64], lambda: f64, out: &mut [ChainEval]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            unsafe { continuous_avx2(k, m, lambda, out) };
+            return;
+        }
+    }
+    continuous_generic(k, m, lambda, out);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn continuous_avx2(k: &[f64], m: &[f64], lambda: f64, out: &mut [ChainEval]) {
+    continuous_generic(k, m, lambda, out);
+}
+
+#[inline(always)]
+#[allow(clippy::excessive_precision)] // fdlibm's constants as published
+fn continuous_generic(k: &[f64], m: &[f64], lambda: f64, out: &mut [ChainEval]) {
     const PIO2_1: f64 = 1.570_796_326_734_125_614_17; // first 33 bits of π/2
     const PIO2_1T: f64 = 6.077_100_506_506_192_249_32e-11; // π/2 − PIO2_1
-    let n = k.len().min(m.len()).min(out.len());
+    const W: usize = 3 * crate::scene::MAX_CABLES;
+    let n = k.len().min(m.len()).min(out.len()).min(W);
     if !(lambda > 0.0) {
         for i in 0..n {
             out[i] = eval_continuous(k[i], m[i], lambda);
@@ -574,40 +597,54 @@ pub fn eval_continuous_batch(k: &[f64], m: &[f64], lambda: f64, out: &mut [Chain
         return;
     }
     let sl = lambda.sqrt();
+    let mut s = [0.0f64; W];
+    let mut ds = [0.0f64; W];
+    let mut below = [0u32; W];
+    let mut phis = [0.0f64; W];
     for i in 0..n {
         let (ki, mi) = (k[i], m[i]);
-        if !(mi > 0.0 && ki > 0.0) {
-            out[i] = eval_continuous(ki, mi, lambda);
-            continue;
-        }
         let phi = sl * (mi / ki).sqrt();
-        if !(1e-3..=1e5).contains(&phi) {
-            out[i] = eval_continuous(ki, mi, lambda);
-            continue;
-        }
-        let below = (phi / std::f64::consts::PI).ceil() as u32 - 1;
-        let q = (phi * std::f64::consts::FRAC_2_PI).round();
+        phis[i] = phi;
+        // ceil(φ/π) − 1 by truncation (φ > 0; an exact multiple of π counts one less).
+        let x = phi * std::f64::consts::FRAC_1_PI;
+        let t = x as u32;
+        below[i] = if t as f64 == x {
+            t.saturating_sub(1)
+        } else {
+            t
+        };
+        let qi = (phi * std::f64::consts::FRAC_2_PI + 0.5) as i64;
+        let q = qi as f64;
         let r = (phi - q * PIO2_1) - q * PIO2_1T;
         let (sm, cm) = sin_cos_kernel(r);
         let (sr, cr) = (r + sm, 1.0 + cm);
         // φ = qπ/2 + r: cot φ = cot r (q even) or −tan r (q odd); sin²φ likewise.
-        let odd = (q as i64) & 1 == 1;
-        let (cot, s2) = if odd {
-            (-sr / cr, cr * cr)
+        let odd = qi & 1 == 1;
+        let num = if odd { -sr } else { cr };
+        let den = if odd { cr } else { sr };
+        let s2 = den * den;
+        let cot = num / den;
+        s[i] = ki * phi * cot;
+        // d(φ cot φ)/dφ = (sin φ cos φ − φ)/sin²φ; for q = 0 (φ = r) the numerator is
+        // (sin φ − φ) cos φ + φ (cos φ − 1), two terms of one sign: no cancellation as φ → 0.
+        let dnum = if qi == 0 {
+            sm * cr + phi * cm
         } else {
-            (cr / sr, sr * sr)
+            num * den - phi
         };
-        let s = ki * phi * cot;
-        // d(φ cot φ)/dφ = cot φ − φ/sin²φ = (sin φ cos φ − φ)/sin²φ; for q = 0 (φ = r)
-        // the numerator is (sin φ − φ) cos φ + φ (cos φ − 1), two terms of one sign, with
-        // no cancellation as φ → 0.
-        let dfdphi = if q == 0.0 {
-            (sm * cr + phi * cm) / s2
+        ds[i] = dnum / s2 * (0.5 * mi / phi);
+    }
+    for i in 0..n {
+        let ok = k[i] > 0.0 && m[i] > 0.0 && (1e-3..=1e5).contains(&phis[i]);
+        out[i] = if ok {
+            ChainEval {
+                s: s[i],
+                ds: ds[i],
+                below: below[i],
+            }
         } else {
-            cot - phi / s2
+            eval_continuous(k[i], m[i], lambda)
         };
-        let ds = dfdphi * mi / (2.0 * phi);
-        out[i] = ChainEval { s, ds, below };
     }
 }
 

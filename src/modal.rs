@@ -653,6 +653,8 @@ pub struct ModalSolver {
     batch_k: [f64; MAX_CHAINS],
     batch_m: [f64; MAX_CHAINS],
     n_batch: usize,
+    /// Each chain's projector as its six distinct entries ([`SYM3`] order).
+    proj_sym: [[f64; 6]; MAX_CHAINS],
     /// The continuous chains, evaluated together ([`eval_continuous_batch`]).
     cont_idx: [usize; MAX_CHAINS],
     cont_k: [f64; MAX_CHAINS],
@@ -687,6 +689,9 @@ pub struct ModalSolver {
     /// Σ of the end-effector participation over all modes (sum rule), from `load`.
     p_total: f64,
 }
+
+/// (row, column) of the six distinct entries of a symmetric 3 × 3 matrix.
+const SYM3: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
 
 /// Largest number of watched modes.
 const MAX_MEMBERS: usize = 16;
@@ -732,7 +737,7 @@ const P_STRONG: f64 = 0.15;
 /// searched and watched (two-level model: it holds about that share).
 const P_PARTNER: f64 = 0.03;
 /// Partner searches per cycle.
-const PARTNER_SEARCHES: usize = 2;
+const PARTNER_SEARCHES: usize = 1;
 /// Modes a neighbour search may walk past (weak ones) on each side.
 const NEIGHBOUR_WALK: usize = 3;
 /// Pole intervals a neighbour search may cross.
@@ -904,6 +909,7 @@ impl ModalSolver {
             batch_k: [0.0; MAX_CHAINS],
             batch_m: [0.0; MAX_CHAINS],
             n_batch: 0,
+            proj_sym: [[0.0; 6]; MAX_CHAINS],
             cont_idx: [0; MAX_CHAINS],
             cont_k: [0.0; MAX_CHAINS],
             cont_m: [0.0; MAX_CHAINS],
@@ -988,6 +994,9 @@ impl ModalSolver {
                     continue;
                 }
                 self.chains[self.n_chains] = *c;
+                for (j, &(r, col)) in SYM3.iter().enumerate() {
+                    self.proj_sym[self.n_chains][j] = c.proj[(r, col)];
+                }
                 if let Some(g) = g {
                     self.q6[self.n_chains] = g.transpose() * c.proj * g;
                 }
@@ -1149,17 +1158,26 @@ impl ModalSolver {
         self.eval_chains(lambda);
         let mut below = 0u32;
         if self.dim == 3 {
-            let mut d = Matrix3::identity() * (-lambda * self.ee_mass_kg);
-            let mut dd = Matrix3::identity() * (-self.ee_mass_kg);
-            for (c, e) in self.chains[..self.n_chains].iter().zip(&self.chain_eval) {
-                d += c.proj * e.s;
-                dd += c.proj * e.ds;
-                below += c.mult * e.below;
+            // The six distinct entries of the symmetric 3 × 3 blocks (00 11 22 01 02 12).
+            let m = self.ee_mass_kg;
+            let mut d = [-lambda * m, -lambda * m, -lambda * m, 0.0, 0.0, 0.0];
+            let mut dd = [-m, -m, -m, 0.0, 0.0, 0.0];
+            for (i, e) in self.chain_eval[..self.n_chains].iter().enumerate() {
+                let p = &self.proj_sym[i];
+                for j in 0..6 {
+                    d[j] += p[j] * e.s;
+                    dd[j] += p[j] * e.ds;
+                }
+                below += self.chains[i].mult * e.below;
             }
             let mut d6 = Matrix6::zeros();
             let mut dd6 = Matrix6::zeros();
-            d6.fixed_view_mut::<3, 3>(0, 0).copy_from(&d);
-            dd6.fixed_view_mut::<3, 3>(0, 0).copy_from(&dd);
+            for (j, &(r, c)) in SYM3.iter().enumerate() {
+                d6[(r, c)] = d[j];
+                d6[(c, r)] = d[j];
+                dd6[(r, c)] = dd[j];
+                dd6[(c, r)] = dd[j];
+            }
             return DynEval {
                 d: d6,
                 dd: dd6,
@@ -1653,19 +1671,31 @@ impl ModalSolver {
     /// that reaches the threshold is the end-effector mode: no unwatched mode can be.
     ///
     /// **Tracking.** A scan from cold watches every mode it meets with participation ≥ 0.05
-    /// and goes on past the answer until the bound is below 0.15. A warm cycle follows each
-    /// watched mode from its prediction (quadratic through the last three cycles) by Newton's
-    /// method on its branch of D with both bounding poles removed, accepting one step below
-    /// 1e-5 (relative); a mode within 0.02 of the threshold, and the answer, are solved to
-    /// full accuracy. Each mode's index in the spectrum (the blocked count of its pole
-    /// interval plus its branch) keeps the watched modes distinct. Participation moves between
-    /// neighbouring modes (avoided crossings), so when the bound exceeds 0.3 a neighbour of
-    /// the watched mode whose participation changed most (index ± 1, first towards its nearer
-    /// pole, walking past up to 3 weak modes and the participation-free modes that sit
-    /// exactly at a pole) is found and watched. Modes below 0.02 are dropped. When the bound
-    /// plus an allowance of 0.05 for the one-step participations is not below the threshold,
-    /// or no watched mode reaches it, the band from 10 % below the lowest watched mode is
-    /// scanned again, and everything from zero if that does not certify.
+    /// and goes on past the answer until the bound is below 0.15. A warm cycle follows the
+    /// watched modes from their predictions (quadratic through the last three cycles) by
+    /// Newton's method on their branch of D with both bounding poles removed, until a step is
+    /// below 1e-5 (relative); the answer, and a mode within 0.02 of the threshold, to full
+    /// accuracy (a tracking step below 1e-7 already is). Modes with participation ≥ 0.15 are
+    /// followed every cycle, weaker ones one per cycle (the one followed longest ago): a
+    /// mode not followed this cycle does not count in the bound, and when the bound does not
+    /// certify, all are followed before anything is rescanned. Each mode's index in the
+    /// spectrum (the blocked count of its pole interval plus its branch) keeps the watched
+    /// modes distinct and carries its history.
+    ///
+    /// **Avoided crossings.** Along a trajectory the string modes of the cables pass through
+    /// the end-effector modes and the participation moves between modes. Each strong watched
+    /// mode (≥ 0.15) reads, from its own last evaluation, the chain that holds the largest
+    /// share σ of its kinetic-energy norm vᵀ(−D')v; with σ ≥ 0.03 it is mixing with that
+    /// chain's string mode, and a two-level model (the mode and the string mode across the
+    /// chain's nearest pole P) places the partner at λ − (λ − P)/(1 − σ), holding about σ.
+    /// The partner is found by Newton from there and watched before the participation moves
+    /// (at most one such search per cycle, and once per pole until σ doubles). When the bound
+    /// still exceeds 0.4, a spectral neighbour (index ± 1) of the watched mode whose
+    /// participation changed most is searched across up to 4 pole intervals. Modes below 0.02
+    /// are dropped. When the bound plus an allowance of 0.05 for the participations read
+    /// within 1e-5 of the root is not below the threshold, or no watched mode reaches it, the
+    /// band from 10 % below the lowest watched mode is scanned again, and everything from zero
+    /// if that does not certify.
     ///
     /// The heuristics (what to watch, where to search) only decide the cost: the answer
     /// returned by a warm cycle is always certified by the bound.
