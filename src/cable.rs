@@ -449,43 +449,57 @@ unsafe fn batch_avx2(k: &[f64], m: &[f64], n_el: usize, lambda: f64, out: &mut [
     batch_generic(k, m, n_el, lambda, out);
 }
 
+/// Chains per block of the batched evaluations (fixed-size lanes: no per-call clearing of
+/// large scratch arrays, loops of constant trip count that vectorize).
+const LANES: usize = 8;
+
 #[inline(always)]
 fn batch_generic(k: &[f64], m: &[f64], n_el: usize, lambda: f64, out: &mut [ChainEval]) {
-    const W: usize = 3 * crate::scene::MAX_CABLES;
-    let n = k.len().min(m.len()).min(out.len()).min(W);
-    let mut two_delta = [0.0f64; W];
-    let mut u = [1.0f64; W];
-    let mut dl = [1.0f64; W];
-    let mut up = [0.0f64; W];
-    let mut dp = [0.0f64; W];
-    let mut below = [0u64; W];
-    for i in 0..n {
-        let kp = k[i] + lambda * m[i] / 6.0;
-        two_delta[i] = lambda * m[i] / kp;
-    }
-    for _ in 0..n_el.saturating_sub(1) {
-        for i in 0..n {
-            let t = two_delta[i];
-            let dpn = dp[i] - 2.0 * u[i] - t * up[i];
-            let dn = dl[i] - t * u[i];
-            let un = u[i] + dn;
-            up[i] += dpn;
-            dp[i] = dpn;
-            below[i] += (un.to_bits() ^ u[i].to_bits()) >> 63;
-            dl[i] = dn;
-            u[i] = un;
+    let n = k.len().min(m.len()).min(out.len());
+    let mut start = 0;
+    while start < n {
+        let len = (n - start).min(LANES);
+        // Padding lanes: a massless chain (δ = 0), never written out.
+        let mut kk = [1.0f64; LANES];
+        let mut mm = [0.0f64; LANES];
+        kk[..len].copy_from_slice(&k[start..start + len]);
+        mm[..len].copy_from_slice(&m[start..start + len]);
+        let mut two_delta = [0.0f64; LANES];
+        let mut u = [1.0f64; LANES];
+        let mut dl = [1.0f64; LANES];
+        let mut up = [0.0f64; LANES];
+        let mut dp = [0.0f64; LANES];
+        let mut below = [0u64; LANES];
+        for i in 0..LANES {
+            let kp = kk[i] + lambda * mm[i] / 6.0;
+            two_delta[i] = lambda * mm[i] / kp;
         }
-    }
-    for i in 0..n {
-        let kp = k[i] + lambda * m[i] / 6.0;
-        let ratio = dl[i] / u[i];
-        let dratio = (dp[i] * u[i] - dl[i] * up[i]) / (u[i] * u[i]);
-        let ddelta = 0.5 * m[i] * k[i] / (kp * kp);
-        out[i] = ChainEval {
-            s: -0.5 * lambda * m[i] + kp * ratio,
-            ds: -0.5 * m[i] + m[i] / 6.0 * ratio + kp * dratio * ddelta,
-            below: below[i] as u32,
-        };
+        for _ in 0..n_el.saturating_sub(1) {
+            for i in 0..LANES {
+                let t = two_delta[i];
+                let dpn = dp[i] - 2.0 * u[i] - t * up[i];
+                let dn = dl[i] - t * u[i];
+                let un = u[i] + dn;
+                up[i] += dpn;
+                dp[i] = dpn;
+                below[i] += (un.to_bits() ^ u[i].to_bits()) >> 63;
+                dl[i] = dn;
+                u[i] = un;
+            }
+        }
+        for i in 0..len {
+            let (ki, mi) = (kk[i], mm[i]);
+            let kp = ki + lambda * mi / 6.0;
+            let ratio = dl[i] / u[i];
+            let dratio = (dp[i] * u[i] - dl[i] * up[i]) / (u[i] * u[i]);
+            let ddelta = 0.5 * mi * ki / (kp * kp);
+            out[start + i] = ChainEval {
+                s: -0.5 * lambda * mi + kp * ratio,
+                ds: -0.5 * mi + mi / 6.0 * ratio + kp * dratio * ddelta,
+                below: below[i] as u32,
+            };
+        }
+        start += len;
     }
 }
 
@@ -584,12 +598,8 @@ unsafe fn continuous_avx2(k: &[f64], m: &[f64], lambda: f64, out: &mut [ChainEva
 }
 
 #[inline(always)]
-#[allow(clippy::excessive_precision)] // fdlibm's constants as published
 fn continuous_generic(k: &[f64], m: &[f64], lambda: f64, out: &mut [ChainEval]) {
-    const PIO2_1: f64 = 1.570_796_326_734_125_614_17; // first 33 bits of π/2
-    const PIO2_1T: f64 = 6.077_100_506_506_192_249_32e-11; // π/2 − PIO2_1
-    const W: usize = 3 * crate::scene::MAX_CABLES;
-    let n = k.len().min(m.len()).min(out.len()).min(W);
+    let n = k.len().min(m.len()).min(out.len());
     if !(lambda > 0.0) {
         for i in 0..n {
             out[i] = eval_continuous(k[i], m[i], lambda);
@@ -597,12 +607,38 @@ fn continuous_generic(k: &[f64], m: &[f64], lambda: f64, out: &mut [ChainEval]) 
         return;
     }
     let sl = lambda.sqrt();
-    let mut s = [0.0f64; W];
-    let mut ds = [0.0f64; W];
-    let mut below = [0u32; W];
-    let mut phis = [0.0f64; W];
-    for i in 0..n {
-        let (ki, mi) = (k[i], m[i]);
+    let mut start = 0;
+    while start < n {
+        let len = (n - start).min(LANES);
+        continuous_block(
+            &k[start..start + len],
+            &m[start..start + len],
+            lambda,
+            sl,
+            &mut out[start..start + len],
+        );
+        start += len;
+    }
+}
+
+/// Up to [`LANES`] continuous chains at λ > 0 (`sl` = √λ).
+#[inline(always)]
+#[allow(clippy::excessive_precision)] // fdlibm's constants as published
+fn continuous_block(k: &[f64], m: &[f64], lambda: f64, sl: f64, out: &mut [ChainEval]) {
+    const PIO2_1: f64 = 1.570_796_326_734_125_614_17; // first 33 bits of π/2
+    const PIO2_1T: f64 = 6.077_100_506_506_192_249_32e-11; // π/2 − PIO2_1
+    let len = k.len().min(LANES);
+    // Padding lanes: K = m = 1 (φ = √λ), never written out.
+    let mut kk = [1.0f64; LANES];
+    let mut mm = [1.0f64; LANES];
+    kk[..len].copy_from_slice(&k[..len]);
+    mm[..len].copy_from_slice(&m[..len]);
+    let mut s = [0.0f64; LANES];
+    let mut ds = [0.0f64; LANES];
+    let mut below = [0u32; LANES];
+    let mut phis = [0.0f64; LANES];
+    for i in 0..LANES {
+        let (ki, mi) = (kk[i], mm[i]);
         let phi = sl * (mi / ki).sqrt();
         phis[i] = phi;
         // ceil(φ/π) − 1 by truncation (φ > 0; an exact multiple of π counts one less).
@@ -634,7 +670,7 @@ fn continuous_generic(k: &[f64], m: &[f64], lambda: f64, out: &mut [ChainEval]) 
         };
         ds[i] = dnum / s2 * (0.5 * mi / phi);
     }
-    for i in 0..n {
+    for i in 0..len {
         let ok = k[i] > 0.0 && m[i] > 0.0 && (1e-3..=1e5).contains(&phis[i]);
         out[i] = if ok {
             ChainEval {

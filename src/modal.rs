@@ -653,6 +653,9 @@ pub struct ModalSolver {
     batch_k: [f64; MAX_CHAINS],
     batch_m: [f64; MAX_CHAINS],
     n_batch: usize,
+    /// Scratch for the batched evaluations (no per-evaluation clearing).
+    batch_out: [ChainEval; MAX_CHAINS],
+    cont_out: [ChainEval; MAX_CHAINS],
     /// Each chain's projector as its six distinct entries ([`SYM3`] order).
     proj_sym: [[f64; 6]; MAX_CHAINS],
     /// The continuous chains, evaluated together ([`eval_continuous_batch`]).
@@ -724,7 +727,8 @@ const CHEAP_ACCEPT: f64 = 1e-5;
 /// solved to full accuracy before it is compared with the threshold.
 const P_MARGIN: f64 = 0.02;
 /// The answer is taken from its tracking step when that step was below this (relative):
-/// Newton's error is then ~step² · λ/w (w the pole interval) ≲ 1e-12.
+/// Newton's error is then ~step² · λ/w ≤ 1e-14 · λ/w (w the distance to the nearer pole;
+/// the warm path equals a cold solve to 1e-10 on every cycle of the circle, tested).
 const ANSWER_ACCEPT: f64 = 1e-7;
 /// Watched modes below this participation are followed one per cycle (the one followed
 /// longest ago); the others every cycle. A mode not followed this cycle does not count in
@@ -910,6 +914,16 @@ impl ModalSolver {
             batch_m: [0.0; MAX_CHAINS],
             n_batch: 0,
             proj_sym: [[0.0; 6]; MAX_CHAINS],
+            batch_out: [ChainEval {
+                s: 0.0,
+                ds: 0.0,
+                below: 0,
+            }; MAX_CHAINS],
+            cont_out: [ChainEval {
+                s: 0.0,
+                ds: 0.0,
+                below: 0,
+            }; MAX_CHAINS],
             cont_idx: [0; MAX_CHAINS],
             cont_k: [0.0; MAX_CHAINS],
             cont_m: [0.0; MAX_CHAINS],
@@ -1108,11 +1122,6 @@ impl ModalSolver {
     /// Every chain at λ into `chain_eval`: the batched ones together, the rest one by one.
     #[inline]
     fn eval_chains(&mut self, lambda: f64) {
-        let mut batch = [ChainEval {
-            s: 0.0,
-            ds: 0.0,
-            below: 0,
-        }; MAX_CHAINS];
         let nb = self.n_batch;
         if nb > 0 {
             eval_discrete_batch(
@@ -1120,30 +1129,25 @@ impl ModalSolver {
                 &self.batch_m[..nb],
                 self.batch_n_el,
                 lambda,
-                &mut batch[..nb],
+                &mut self.batch_out[..nb],
             );
         }
-        let mut cont = [ChainEval {
-            s: 0.0,
-            ds: 0.0,
-            below: 0,
-        }; MAX_CHAINS];
         let nc = self.n_cont;
         if nc > 0 {
             eval_continuous_batch(
                 &self.cont_k[..nc],
                 &self.cont_m[..nc],
                 lambda,
-                &mut cont[..nc],
+                &mut self.cont_out[..nc],
             );
         }
         let (mut j, mut jc) = (0, 0);
         for i in 0..self.n_chains {
             if j < nb && self.batch_idx[j] == i {
-                self.chain_eval[i] = batch[j];
+                self.chain_eval[i] = self.batch_out[j];
                 j += 1;
             } else if jc < nc && self.cont_idx[jc] == i {
-                self.chain_eval[i] = cont[jc];
+                self.chain_eval[i] = self.cont_out[jc];
                 jc += 1;
             } else {
                 self.chain_eval[i] = self.chains[i].eval(lambda);
