@@ -258,12 +258,18 @@ impl Chain {
                 if n_el <= 1 {
                     return m / 3.0;
                 }
-                let r = 2.0 - 3.0f64.sqrt(); // e^{−φ}, φ = acosh 2
-                let r2 = r * r;
-                let q = -r * (1.0 - r2.powi(n_el as i32 - 1)) / (1.0 - r2.powi(n_el as i32));
-                m / 3.0 + m / 6.0 * q
+                m / 3.0 + m / 6.0 * end_mass_q(n_el)
             }
             ChainKind::Continuous { .. } => 0.0,
+        }
+    }
+
+    /// The chain's end mass from its kind, with q = [`end_mass_q`] for its element count
+    /// given (the solver computes q once per element count).
+    pub fn end_mass_kg_with(&self, q: f64) -> f64 {
+        match self.kind {
+            ChainKind::Discrete { m, n_el, .. } if m > 0.0 && n_el > 1 => m / 3.0 + m / 6.0 * q,
+            _ => self.end_mass_kg(),
         }
     }
 
@@ -412,6 +418,14 @@ fn eval_discrete(k: f64, m: f64, n_el: usize, lambda: f64) -> ChainEval {
         ds: dalpha + dbeta * r + beta * drdc * dc,
         below,
     }
+}
+
+/// q = U_{N−2}(−2)/U_{N−1}(−2) = −r(1 − r^{2(N−1)})/(1 − r^{2N}), r = 2 − √3, of
+/// [`Chain::end_mass_kg`] for N ≥ 2 elements.
+pub fn end_mass_q(n_el: usize) -> f64 {
+    let r = 2.0 - 3.0f64.sqrt(); // e^{−φ}, φ = acosh 2
+    let r2 = r * r;
+    -r * (1.0 - r2.powi(n_el as i32 - 1)) / (1.0 - r2.powi(n_el as i32))
 }
 
 /// Largest element count evaluated by [`eval_discrete_batch`] (above it the closed form

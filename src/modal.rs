@@ -1021,8 +1021,17 @@ impl ModalSolver {
         // end-effector's mass plus every chain's end mass (the λ → −∞ limit of −D(λ)/λ).
         let mut m_inf = self.m6;
         let mut m_inf3 = Matrix3::identity() * ee_mass_kg;
+        let mut q_cache = (0usize, 0.0f64);
         for i in 0..self.n_chains {
-            let me = self.chains[i].end_mass_kg();
+            let me = match self.chains[i].kind {
+                ChainKind::Discrete { n_el, .. } if n_el > 1 => {
+                    if q_cache.0 != n_el {
+                        q_cache = (n_el, crate::cable::end_mass_q(n_el));
+                    }
+                    self.chains[i].end_mass_kg_with(q_cache.1)
+                }
+                _ => self.chains[i].end_mass_kg(),
+            };
             if me > 0.0 {
                 m_inf += self.q6[i] * me;
                 m_inf3 += self.chains[i].proj * me;
@@ -1033,9 +1042,18 @@ impl ModalSolver {
                 .cholesky()
                 .map_or(f64::NAN, |c| (self.m6 * c.inverse()).trace())
         } else {
-            m_inf3
-                .cholesky()
-                .map_or(f64::NAN, |c| ee_mass_kg * c.inverse().trace())
+            // tr(A⁻¹) = (sum of the diagonal cofactors)/det A, A symmetric positive definite.
+            let a = &m_inf3;
+            let c00 = a[(1, 1)] * a[(2, 2)] - a[(1, 2)] * a[(2, 1)];
+            let c11 = a[(0, 0)] * a[(2, 2)] - a[(0, 2)] * a[(2, 0)];
+            let c22 = a[(0, 0)] * a[(1, 1)] - a[(0, 1)] * a[(1, 0)];
+            let det = a[(0, 0)] * c00 - a[(0, 1)] * (a[(1, 0)] * a[(2, 2)] - a[(1, 2)] * a[(2, 0)])
+                + a[(0, 2)] * (a[(1, 0)] * a[(2, 1)] - a[(1, 1)] * a[(2, 0)]);
+            if det > 0.0 && c00 > 0.0 && c22 > 0.0 {
+                ee_mass_kg * (c00 + c11 + c22) / det
+            } else {
+                f64::NAN
+            }
         };
         // Pole table for the discrete chains' element count (refilled only when it changes;
         // the capacity is reserved in `new`).
@@ -1270,9 +1288,9 @@ impl ModalSolver {
 
     /// The lowest blocked eigenvalue over all chains, rad²/s² (∞ when none).
     pub fn lowest_pole(&self) -> f64 {
-        self.chains[..self.n_chains]
-            .iter()
-            .map(|c| c.first_pole())
+        // Tabulated cosines for the discrete chains (no trigonometry per cycle).
+        (0..self.n_chains)
+            .map(|i| self.chain_pole(i, 1))
             .fold(f64::INFINITY, f64::min)
     }
 
