@@ -430,7 +430,7 @@ pub fn end_mass_q(n_el: usize) -> f64 {
 
 /// Largest element count evaluated by [`eval_discrete_batch`] (above it the closed form
 /// is cheaper than the O(N) recurrence).
-pub const BATCH_MAX_ELEMENTS: usize = 32;
+pub const BATCH_MAX_ELEMENTS: usize = 64;
 
 /// Several uniform chains with the same element count `n_el` (2 ..= [`BATCH_MAX_ELEMENTS`])
 /// at one λ, by the Chebyshev recurrence in differential form, written chain-innermost so
@@ -999,7 +999,7 @@ mod tests {
             eval_discrete_batch(&[k], &[m], n, lambda, &mut out);
             out[0]
         };
-        let ns = [2usize, 3, 5, 10, 20, 32, 64];
+        let ns = [2usize, 3, 5, 10, 20, 32, 40, 64];
         let w = compare_chain_evals(&ns, batch, eval_discrete);
         eprintln!("batch vs closed form: s {:.2e}, s' {:.2e}", w[0], w[1]);
     }
