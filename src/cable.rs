@@ -273,11 +273,6 @@ impl Chain {
         }
     }
 
-    /// The lowest blocked eigenvalue λ (rad²/s²) of the chain; ∞ when it has none.
-    pub fn first_pole(&self) -> f64 {
-        self.pole(1)
-    }
-
     /// The blocked eigenvalues just below and just above λ: (λ_j, λ_{j+1}) with j the number
     /// of blocked eigenvalues ≤ λ (λ_0 = 0; ∞ when there is none above).
     pub fn poles_around(&self, lambda: f64) -> (f64, f64) {
