@@ -2,12 +2,12 @@
 //! `cargo bench --bench cycle`; the per-cycle latency distribution along the trajectory is
 //! measured by `cablevib bench` (percentiles, allocations, dense ratio in one run).
 use cablevib::cable::{catenary_block, up_frame, ChainKind};
-use cablevib::cli::circle_pose;
 use cablevib::estimator::{build_models, reference_analysis, Estimator};
 use cablevib::kinematics::Geometry;
 use cablevib::modal::{eig3, ModalParams, ModalSolver};
 use cablevib::scene::{ElementKind, Scene};
 use cablevib::tension::{clarabel_reference, TensionParams, TensionSolver};
+use cablevib::trajectory::circle_pose;
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::Vector3;
 use std::hint::black_box;

@@ -16,7 +16,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
 use cablevib::service::ports::{create_node, PoseInput};
-use cablevib::service::trajectory::{TminSchedule, Trajectory};
+use cablevib::service::TminSchedule;
+use cablevib::trajectory::Trajectory;
 use cablevib_ipc::{monotonic_now_ns, PoseSample, ServiceNames, TminSetpoint, IDENTITY_QUATERNION};
 use clap::Parser;
 

@@ -90,7 +90,8 @@ run_all() {
   for f in "$w"/acc/data/*.csv; do strip_csv "$f" > "$s/accuracy/$(basename "$f")"; done
   cp "$w"/acc/img/*error-vs-n.svg "$w"/acc/img/*mode3.svg "$s/accuracy/"
   rm -rf "$w"
-  sed -i "s#$out#OUT#g" "$s"/*.txt  # output paths printed by the commands
+  # output paths and wall times printed by the commands
+  sed -i -E "s#$out#OUT#g; s/ in [0-9.]+ s / in (time) /" "$s"/*.txt
 }
 
 if [ "${1:-}" = "--against" ]; then

@@ -8,6 +8,9 @@ use crate::estimator::{reference_analysis, Estimator, EstimatorParams, Status};
 use crate::kinematics::Pose;
 use crate::modal::lambda_to_hz;
 use crate::scene::{ElementKind, Scene, SceneError};
+use crate::service::stats::{percentile, StatusHistogram};
+use crate::service::{BenchIpcConfig, DemoConfig, ServerConfig, TminSchedule, WaitMode};
+use crate::trajectory::circle_pose;
 use clap::{Args, Parser, Subcommand};
 use nalgebra::Vector3;
 use std::path::Path;
@@ -28,6 +31,9 @@ pub enum CliError {
     /// Output failed.
     #[error("output: {0}")]
     Io(#[from] std::io::Error),
+    /// A service command failed.
+    #[error(transparent)]
+    Service(#[from] crate::service::ServiceError),
 }
 
 /// cablevib: tension distribution, stiffness and natural frequencies of cable-driven
@@ -48,11 +54,11 @@ pub enum Command {
     /// Drive the real-time estimator along the paper's circle and report per-cycle latency.
     Bench(BenchArgs),
     /// Run the long-running iceoryx2 service.
-    Serve(crate::service::ServeArgs),
+    Serve(ServeArgs),
     /// Run service, replay publisher and controller together on the default scene.
-    Demo(crate::service::DemoArgs),
+    Demo(DemoArgs),
     /// Measure pose-published → estimate-received latency over iceoryx2.
-    BenchIpc(crate::service::BenchIpcArgs),
+    BenchIpc(BenchIpcArgs),
     /// What accuracy costs in time: f1 error and per-cycle time of every model, with plots.
     Accuracy(crate::sweep::AccuracyArgs),
     /// f1 over a workspace grid: heat-map SVG and CSV (infeasible points marked).
@@ -320,25 +326,6 @@ fn analyze_realtime(a: &AnalyzeArgs, s: &Scene) -> Result<(), CliError> {
     Ok(())
 }
 
-/// The paper's circular trajectory: radius 0.75 m around the scene's default position,
-/// in the plane perpendicular to gravity, `period_s` per revolution, sampled every 1 ms.
-pub fn circle_pose(s: &Scene, k: usize, period_s: f64) -> Pose {
-    let frame = crate::cable::up_frame(&s.gravity_m_s2);
-    let th = 2.0 * std::f64::consts::PI * (k as f64 * 1e-3) / period_s;
-    let p =
-        s.ee_position_m + frame.column(0) * (0.75 * th.cos()) + frame.column(1) * (0.75 * th.sin());
-    Pose::at(p)
-}
-
-/// Percentiles of a sample (sorted in place), in the sample's unit.
-pub fn percentile(sorted: &[u64], q: f64) -> u64 {
-    if sorted.is_empty() {
-        return 0;
-    }
-    let i = ((sorted.len() - 1) as f64 * q).round() as usize;
-    sorted[i.min(sorted.len() - 1)]
-}
-
 /// Heap allocation counter supplied by the binary's global allocator (0 when none).
 pub type AllocCounter = fn() -> u64;
 
@@ -358,7 +345,7 @@ pub fn bench(a: &BenchArgs, allocations: AllocCounter) -> Result<(), CliError> {
     est.update(&circle_pose(&s, 0, a.period_s), s.t_min_n);
     let mut ns = Vec::with_capacity(a.cycles);
     let mut evals = Vec::with_capacity(a.cycles);
-    let mut statuses = [0usize; 16];
+    let mut statuses = StatusHistogram::default();
     let mut f1_min = (f64::INFINITY, 0usize);
     let mut f1_max = (f64::NEG_INFINITY, 0usize);
     let alloc0 = allocations();
@@ -369,7 +356,7 @@ pub fn bench(a: &BenchArgs, allocations: AllocCounter) -> Result<(), CliError> {
         let dt = t0.elapsed().as_nanos() as u64;
         ns.push(dt);
         evals.push(e.eigen_evaluations);
-        statuses[(e.status.as_u32() as usize).min(15)] += 1;
+        statuses.record(e.status);
         if e.is_ok() {
             if e.f1_hz < f1_min.0 {
                 f1_min = (e.f1_hz, k);
@@ -424,17 +411,8 @@ pub fn bench(a: &BenchArgs, allocations: AllocCounter) -> Result<(), CliError> {
     };
     let per_cycle_allocs = allocs as f64 / a.cycles as f64;
     let names: Vec<(String, usize)> = statuses
-        .iter()
-        .enumerate()
-        .filter(|(_, &c)| c > 0)
-        .map(|(i, &c)| {
-            (
-                Status::from_u32(i as u32)
-                    .map(|x| x.as_str().to_string())
-                    .unwrap_or(format!("code{i}")),
-                c,
-            )
-        })
+        .nonzero()
+        .map(|(code, c)| (cablevib_ipc::status_str(code).to_string(), c as usize))
         .collect();
     if a.json {
         let o = serde_json::json!({
@@ -511,4 +489,142 @@ pub fn bench(a: &BenchArgs, allocations: AllocCounter) -> Result<(), CliError> {
         }
     }
     Ok(())
+}
+
+/// `cablevib serve` options.
+#[derive(Debug, Clone, Args)]
+pub struct ServeArgs {
+    /// Scene file (TOML), or `spatial-paper` / `planar-paper` for the embedded paper robots.
+    #[arg(long, default_value = "spatial-paper")]
+    pub scene: String,
+    /// Instance name prefixing every service name ("NAME/cablevib/pose", ...), so that several
+    /// robots (or tests) share a machine; empty: the bare names.
+    #[arg(long, default_value = "")]
+    pub instance: String,
+    /// spin: busy-poll (lowest latency, one CPU at 100 %); event: block on the wake-service
+    /// event that peers notify after sending (tens of µs per wake-up).
+    #[arg(long, value_enum, default_value_t = WaitMode::Spin)]
+    pub wait: WaitMode,
+    /// Pin the service thread to this CPU (0-based); a warning if not permitted.
+    #[arg(long)]
+    pub cpu: Option<usize>,
+    /// Run with SCHED_FIFO (priority 80) and locked memory (mlockall); a warning if not
+    /// permitted.
+    #[arg(long)]
+    pub realtime: bool,
+    /// Period of the statistics log line, s (0 = none).
+    #[arg(long, default_value_t = 5.0)]
+    pub stats_period_s: f64,
+    /// Stop after this many estimator cycles (tests, benchmarks).
+    #[arg(long)]
+    pub max_cycles: Option<u64>,
+}
+
+/// `cablevib demo` options.
+#[derive(Debug, Clone, Args)]
+pub struct DemoArgs {
+    /// How long the replay publishes poses, s.
+    #[arg(long, default_value_t = 5.0)]
+    pub seconds: f64,
+    /// Required first natural frequency the margin is computed against, Hz.
+    #[arg(long, default_value_t = 8.0)]
+    pub required_hz: f64,
+    /// How the service waits for poses: spin (busy-poll, one CPU) or event.
+    #[arg(long, value_enum, default_value_t = WaitMode::Spin)]
+    pub wait: WaitMode,
+    /// How the controller waits for estimates and margin answers; event leaves the other CPU
+    /// to the replay and the controller (spin only pays off with a free CPU per spinning
+    /// thread).
+    #[arg(long, value_enum, default_value_t = WaitMode::Event)]
+    pub controller_wait: WaitMode,
+    /// Pose rate, Hz.
+    #[arg(long, default_value_t = 1000.0)]
+    pub rate_hz: f64,
+    /// Time per revolution of the circle, s.
+    #[arg(long, default_value_t = 4.0)]
+    pub period_s: f64,
+    /// T_min schedule SECONDS:NEWTONS,... (e.g. "0:60,3:70"); default: the scene's T_min.
+    #[arg(long)]
+    pub t_min_schedule: Option<String>,
+    /// Scene file (TOML), or `spatial-paper` / `planar-paper`.
+    #[arg(long, default_value = "spatial-paper")]
+    pub scene: String,
+}
+
+/// `cablevib bench-ipc` options.
+#[derive(Debug, Clone, Args)]
+pub struct BenchIpcArgs {
+    /// Timed samples per wait mode (after 1000 warm-up samples).
+    #[arg(long, default_value_t = 100_000)]
+    pub samples: usize,
+    /// Wait mode to measure; both when omitted.
+    #[arg(long, value_enum)]
+    pub wait: Option<WaitMode>,
+    /// Pause between a received estimate and the next pose, µs (0: ping-pong).
+    #[arg(long, default_value_t = 0)]
+    pub gap_us: u64,
+    /// Pin the service thread to this CPU and the client to the next one.
+    #[arg(long)]
+    pub cpu: Option<usize>,
+    /// Scene file (TOML), or `spatial-paper` / `planar-paper`.
+    #[arg(long, default_value = "spatial-paper")]
+    pub scene: String,
+    /// One JSON object on stdout instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `cablevib serve`: loads the scene and runs the service until SIGINT/SIGTERM.
+pub fn serve(a: &ServeArgs, allocations: AllocCounter) -> Result<(), CliError> {
+    if !(a.stats_period_s.is_finite() && a.stats_period_s >= 0.0) {
+        return Err(CliError::Usage(format!(
+            "--stats-period-s {} must be finite and ≥ 0",
+            a.stats_period_s
+        )));
+    }
+    let scene = load_scene(&a.scene)?;
+    let cfg = ServerConfig {
+        instance: a.instance.clone(),
+        wait: a.wait,
+        stats_period: (a.stats_period_s > 0.0)
+            .then(|| std::time::Duration::from_secs_f64(a.stats_period_s)),
+        max_cycles: a.max_cycles,
+        cpu: a.cpu,
+        realtime: a.realtime,
+        ..ServerConfig::default()
+    };
+    crate::service::serve(&scene, &cfg, allocations)?;
+    Ok(())
+}
+
+/// `cablevib demo`: service, replay publisher and controller on one scene.
+pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
+    let scene = load_scene(&a.scene)?;
+    let t_min_schedule = match &a.t_min_schedule {
+        Some(s) => Some(TminSchedule::parse(s)?),
+        None => None,
+    };
+    let cfg = DemoConfig {
+        seconds: a.seconds,
+        required_hz: a.required_hz,
+        wait: a.wait,
+        controller_wait: a.controller_wait,
+        rate_hz: a.rate_hz,
+        period_s: a.period_s,
+        t_min_schedule,
+    };
+    Ok(crate::service::demo(&scene, &cfg)?)
+}
+
+/// `cablevib bench-ipc`: pose-published → estimate-received latency.
+pub fn bench_ipc(a: &BenchIpcArgs) -> Result<(), CliError> {
+    let scene = load_scene(&a.scene)?;
+    let cfg = BenchIpcConfig {
+        samples: a.samples,
+        wait: a.wait,
+        gap_us: a.gap_us,
+        cpu: a.cpu,
+        json: a.json,
+    };
+    Ok(crate::service::bench_ipc(&scene, &cfg)?)
 }

@@ -63,3 +63,4 @@ pub mod service;
 pub mod svg;
 pub mod sweep;
 pub mod tension;
+pub mod trajectory;

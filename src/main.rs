@@ -41,9 +41,9 @@ fn run(cli: cablevib::cli::Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Analyze(a) => cablevib::cli::analyze(&a)?,
         Command::Bench(a) => cablevib::cli::bench(&a, allocations)?,
-        Command::Serve(a) => cablevib::service::serve(&a, allocations)?,
-        Command::Demo(a) => cablevib::service::demo(&a)?,
-        Command::BenchIpc(a) => cablevib::service::bench_ipc(&a)?,
+        Command::Serve(a) => cablevib::cli::serve(&a, allocations)?,
+        Command::Demo(a) => cablevib::cli::demo(&a)?,
+        Command::BenchIpc(a) => cablevib::cli::bench_ipc(&a)?,
         Command::Accuracy(a) => cablevib::sweep::accuracy(&a)?,
         Command::Map(a) => cablevib::sweep::map(&a)?,
         Command::Trajectory(a) => cablevib::sweep::trajectory(&a)?,

@@ -12,12 +12,14 @@
 //! The accuracy study also runs the dense reference ([`reference_analysis`]) for the
 //! paper's convergence figures (mode 3 against the number of elements, Figs. 5 and 10).
 
-use crate::cli::{circle_pose, percentile, resolve_scene, CliError, SceneArgs};
+use crate::cli::{resolve_scene, CliError, SceneArgs};
 use crate::estimator::{reference_analysis, Estimate, Estimator, EstimatorParams, Status};
 use crate::kinematics::Pose;
 use crate::modal::lambda_to_hz;
 use crate::scene::{ElementKind, Scene};
+use crate::service::stats::percentile;
 use crate::svg::{Axis, HLine, HeatMap, HeatPanel, LinePlot, Mark, Series, PALETTE};
+use crate::trajectory::{circle_pose, Circle, Samples, TrajectoryError};
 use clap::{Args, ValueEnum};
 use nalgebra::Vector3;
 use std::fmt::Write as _;
@@ -38,16 +40,9 @@ pub enum SweepError {
     /// The estimator could not be built (the scene's default pose is unsolvable).
     #[error("{0}")]
     Build(String),
-    /// A trajectory file could not be parsed.
-    #[error("{path}:{line}: {msg}")]
-    Csv {
-        /// File.
-        path: PathBuf,
-        /// 1-based line number.
-        line: usize,
-        /// What is wrong.
-        msg: String,
-    },
+    /// A trajectory could not be made or read.
+    #[error(transparent)]
+    Trajectory(#[from] TrajectoryError),
     /// Reading or writing a file failed.
     #[error("{path}: {source}")]
     Io {
@@ -729,84 +724,11 @@ pub struct TrajectoryArgs {
     pub quiet: bool,
 }
 
-/// A trajectory: times (s) and positions (m), plus the circle angle (deg) when it is the
-/// default circle.
-#[derive(Debug, Clone)]
-pub struct Trajectory {
-    /// Time stamps, s.
-    pub t_s: Vec<f64>,
-    /// Positions, m.
-    pub position_m: Vec<Vector3<f64>>,
-    /// Angle along the circle, degrees (empty for a CSV trajectory).
-    pub angle_deg: Vec<f64>,
-}
-
-/// The paper's circle: `radius_m` around the scene's position in the plane perpendicular
-/// to gravity, one revolution in `period_s`, 1 ms spacing.
-pub fn circle_trajectory(s: &Scene, radius_m: f64, period_s: f64) -> Trajectory {
-    let n = (period_s * 1000.0).round().max(1.0) as usize;
-    let mut t = Trajectory {
-        t_s: Vec::with_capacity(n + 1),
-        position_m: Vec::with_capacity(n + 1),
-        angle_deg: Vec::with_capacity(n + 1),
-    };
-    let centre = s.ee_position_m;
-    for k in 0..=n {
-        // circle_pose draws the 0.75 m circle; rescale its offset to the radius asked for.
-        let p = circle_pose(s, k, period_s).position_m;
-        let p = centre + (p - centre) * (radius_m / 0.75);
-        t.t_s.push(k as f64 * 1e-3);
-        t.position_m.push(p);
-        t.angle_deg.push(360.0 * k as f64 * 1e-3 / period_s);
-    }
-    t
-}
-
-/// Read a t,x,y,z CSV.
-pub fn read_trajectory(path: &Path) -> Result<Trajectory, SweepError> {
-    let text = std::fs::read_to_string(path).map_err(io_err(path))?;
-    let mut t = Trajectory {
-        t_s: Vec::new(),
-        position_m: Vec::new(),
-        angle_deg: Vec::new(),
-    };
-    for (i, line) in text.lines().enumerate() {
-        let l = line.trim();
-        if l.is_empty() || l.starts_with('#') {
-            continue;
-        }
-        let f: Vec<&str> = l.split(',').map(|x| x.trim()).collect();
-        let v: Result<Vec<f64>, _> = f.iter().map(|x| x.parse::<f64>()).collect();
-        match v {
-            Ok(v) if v.len() >= 4 && v[..4].iter().all(|x| x.is_finite()) => {
-                t.t_s.push(v[0]);
-                t.position_m.push(Vector3::new(v[1], v[2], v[3]));
-            }
-            Err(_) if t.t_s.is_empty() && f.len() >= 4 => continue, // header
-            _ => {
-                return Err(SweepError::Csv {
-                    path: path.to_path_buf(),
-                    line: i + 1,
-                    msg: format!("expected four finite numbers t,x,y,z, got `{l}`"),
-                })
-            }
-        }
-    }
-    if t.t_s.is_empty() {
-        return Err(SweepError::Csv {
-            path: path.to_path_buf(),
-            line: 0,
-            msg: "no trajectory points".into(),
-        });
-    }
-    Ok(t)
-}
-
 /// Evaluate a trajectory for each T_min (one run per T_min, consecutive poses so the
 /// estimator warm-starts); results are T_min-major.
 pub fn compute_trajectory(
     s: &Scene,
-    tr: &Trajectory,
+    tr: &Samples,
     t_mins: &[f64],
     ee_mode: bool,
     threads: usize,
@@ -843,7 +765,7 @@ pub fn trajectory(a: &TrajectoryArgs) -> Result<(), SweepError> {
         )));
     }
     let tr = match &a.csv {
-        Some(p) => read_trajectory(p)?,
+        Some(p) => Samples::read_csv(p)?,
         None => {
             if !(a.period_s.is_finite()
                 && a.period_s > 0.0
@@ -855,7 +777,7 @@ pub fn trajectory(a: &TrajectoryArgs) -> Result<(), SweepError> {
                     "--period-s must be in (0, 3600] and --radius-m finite and >= 0".into(),
                 ));
             }
-            circle_trajectory(&s, a.radius_m, a.period_s)
+            Circle::new(&s, a.radius_m, a.period_s)?.sampled(&s)
         }
     };
     let label = (!a.quiet).then_some("trajectory");

@@ -31,8 +31,8 @@ use cablevib::service::ports::{
     create_node, open_event, open_pubsub, EstimateOutput, MarginClient, PoseInput, PubSubSettings,
     POSE_BUFFER,
 };
-use cablevib::service::trajectory::Trajectory;
 use cablevib::service::WaitMode;
+use cablevib::trajectory::Trajectory;
 use cablevib_ipc::{
     monotonic_now_ns, EstimateSample, MarginRequest, PoseSample, ServiceNames, StatusCode,
     TminSetpoint, EVENT_ID_POSE, IDENTITY_QUATERNION,
@@ -362,7 +362,7 @@ fn pose_at(p: [f64; 3], q: [f64; 4]) -> Pose {
 
 fn circle(k: usize) -> [f64; 3] {
     let scene = Scene::default_scene();
-    let p = cablevib::cli::circle_pose(&scene, k, 4.0).position_m;
+    let p = cablevib::trajectory::circle_pose(&scene, k, 4.0).position_m;
     [p.x, p.y, p.z]
 }
 

@@ -5,11 +5,11 @@
 //! 8·ε·λ_max/λ (relative, on λ; half that on f) + 1e-10, computed per pose and mode.
 //! Tensions: 1e-9 relative against Clarabel (tolerances 1e-13).
 mod common;
-use cablevib::cli::circle_pose;
 use cablevib::estimator::{reference_analysis, Estimator};
 use cablevib::kinematics::Pose;
 use cablevib::modal::{dense_relative_accuracy, lambda_to_hz};
 use cablevib::scene::{ElementKind, Scene};
+use cablevib::trajectory::circle_pose;
 use common::Rng;
 use nalgebra::Vector3;
 

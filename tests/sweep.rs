@@ -4,6 +4,7 @@
 
 use cablevib::scene::{ElementKind, Scene};
 use cablevib::sweep::{self, AccuracyArgs, MapArgs, SweepError, SweepTminArgs, TrajectoryArgs};
+use cablevib::trajectory::{Circle, TrajectoryError};
 use clap::Parser;
 use std::path::{Path, PathBuf};
 
@@ -243,14 +244,14 @@ fn trajectory_from_csv_and_default_circle() {
     // A malformed line is reported with its line number.
     std::fs::write(&input, "0,0,0,1.25\n0.001,zero,0,1.25\n").unwrap();
     match sweep::trajectory(&cli.a) {
-        Err(SweepError::Csv { line, .. }) => assert_eq!(line, 2),
+        Err(SweepError::Trajectory(TrajectoryError::Row { line, .. })) => assert_eq!(line, 2),
         other => panic!("{other:?}"),
     }
 
     // Default: the paper's circle, 1 ms apart; planar f1 is higher for the higher T_min
     // at every pose (paper Fig. 8).
     let s = Scene::planar_paper();
-    let tr = sweep::circle_trajectory(&s, 0.75, 0.2);
+    let tr = Circle::new(&s, 0.75, 0.2).unwrap().sampled(&s);
     assert_eq!(tr.t_s.len(), 201);
     assert!((tr.position_m[50].norm() - 0.75).abs() < 1e-12);
     let r = sweep::compute_trajectory(&s, &tr, &[20.0, 40.0], true, 2, None).unwrap();

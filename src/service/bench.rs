@@ -24,8 +24,9 @@ use super::ports::{create_node, EstimateOutput, PoseInput};
 use super::rt;
 use super::server::{self, ServerConfig};
 use super::stats::{Percentiles, SampleLog};
-use super::trajectory::Trajectory;
-use super::{init_tracing, BenchIpcArgs, ServiceError, WaitMode};
+use super::{init_tracing, BenchIpcConfig, ServiceError, WaitMode};
+use crate::scene::Scene;
+use crate::trajectory::Trajectory;
 
 const WARM_UP: usize = 1000;
 const ANSWER_TIMEOUT: Duration = Duration::from_secs(1);
@@ -52,12 +53,11 @@ pub struct BenchResult {
 }
 
 /// Runs the benchmark and prints the results.
-pub fn run(a: &BenchIpcArgs) -> Result<(), ServiceError> {
+pub fn run(scene: &Scene, a: &BenchIpcConfig) -> Result<(), ServiceError> {
     init_tracing("warn");
     if a.samples == 0 {
         return Err(ServiceError::Usage("--samples must be > 0".into()));
     }
-    let scene = crate::cli::load_scene(&a.scene)?;
     let modes = match a.wait {
         Some(m) => vec![m],
         None => vec![WaitMode::Spin, WaitMode::Event],
@@ -140,7 +140,7 @@ pub fn run(a: &BenchIpcArgs) -> Result<(), ServiceError> {
 pub fn bench_mode(
     scene: &crate::scene::Scene,
     mode: WaitMode,
-    a: &BenchIpcArgs,
+    a: &BenchIpcConfig,
 ) -> Result<BenchResult, ServiceError> {
     let instance = format!("cablevib_bench_{}_{}", std::process::id(), mode.as_str());
     let names = ServiceNames::new(&instance);
@@ -170,7 +170,7 @@ pub fn bench_mode(
 fn client(
     scene: &crate::scene::Scene,
     mode: WaitMode,
-    a: &BenchIpcArgs,
+    a: &BenchIpcConfig,
     names: &ServiceNames,
     stop: &AtomicBool,
 ) -> Result<BenchResult, ServiceError> {

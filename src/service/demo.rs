@@ -11,15 +11,17 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use cablevib_ipc::{
-    monotonic_now_ns, status_str, MarginRequest, PoseSample, ServiceNames, StatusCode,
-    TminSetpoint, IDENTITY_QUATERNION,
+    monotonic_now_ns, MarginRequest, PoseSample, ServiceNames, StatusCode, TminSetpoint,
+    IDENTITY_QUATERNION,
 };
 
 use super::ports::{create_node, EstimateOutput, MarginClient, PoseInput};
 use super::server::{self, ServerConfig, ServerReport};
 use super::stats::{Percentiles, SampleLog};
-use super::trajectory::{TminSchedule, Trajectory};
-use super::{init_tracing, DemoArgs, ServiceError, WaitMode};
+use super::TminSchedule;
+use super::{init_tracing, DemoConfig, ServiceError, WaitMode};
+use crate::scene::Scene;
+use crate::trajectory::Trajectory;
 
 /// What the controller saw of one estimate.
 #[derive(Debug, Clone, Copy)]
@@ -115,7 +117,7 @@ fn controller(
     Ok(log)
 }
 
-fn validate(a: &DemoArgs) -> Result<(), ServiceError> {
+fn validate(a: &DemoConfig) -> Result<(), ServiceError> {
     let bad = |m: String| Err(ServiceError::Usage(m));
     if !(a.seconds.is_finite() && a.seconds > 0.0 && a.seconds <= 3600.0) {
         return bad(format!("--seconds {} must be in (0, 3600]", a.seconds));
@@ -133,16 +135,12 @@ fn validate(a: &DemoArgs) -> Result<(), ServiceError> {
 }
 
 /// Runs the demo and prints its summary.
-pub fn run(a: &DemoArgs) -> Result<(), ServiceError> {
+pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
     validate(a)?;
     // The service's own log lines would interleave with the progress: warnings only.
     init_tracing("warn");
-    let scene = crate::cli::load_scene(&a.scene)?;
-    let trajectory = Trajectory::circle(&scene, a.period_s)?;
-    let schedule = match &a.t_min_schedule {
-        Some(s) => TminSchedule::parse(s)?,
-        None => TminSchedule::default(),
-    };
+    let trajectory = Trajectory::circle(scene, a.period_s)?;
+    let schedule = a.t_min_schedule.clone().unwrap_or_default();
     let instance = format!("cablevib_demo_{}", std::process::id());
     let names = ServiceNames::new(&instance);
     let n_poses = (a.seconds * a.rate_hz).round().max(1.0) as usize;
@@ -248,7 +246,7 @@ pub fn run(a: &DemoArgs) -> Result<(), ServiceError> {
 /// Publishes the trajectory from the calling thread; returns the number of poses sent.
 #[allow(clippy::too_many_arguments)]
 fn replay(
-    a: &DemoArgs,
+    a: &DemoConfig,
     names: &ServiceNames,
     trajectory: &Trajectory,
     schedule: &TminSchedule,
@@ -335,7 +333,7 @@ fn replay(
 }
 
 fn summary(
-    a: &DemoArgs,
+    a: &DemoConfig,
     trajectory: &Trajectory,
     sent: u64,
     service: &ServerReport,
@@ -413,14 +411,10 @@ fn summary(
             }
         );
     }
-    let statuses: Vec<String> = service
-        .status_counts
-        .iter()
-        .enumerate()
-        .filter(|(_, &c)| c > 0)
-        .map(|(i, &c)| format!("{} {c}", status_str(i as u32)))
-        .collect();
-    println!("  estimates per status: {}", statuses.join(", "));
+    println!(
+        "  estimates per status: {}",
+        service.status_counts.summary()
+    );
     let lat: Percentiles = log.latency.percentiles();
     println!(
         "  latency pose published → estimate received by the controller ({} estimates): {}",

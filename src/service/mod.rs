@@ -12,7 +12,7 @@
 //! |---|---|
 //! | [`ports`] | opening the services with one set of settings; the service's and a controller's ports |
 //! | [`server`] | the service loop, statistics, signals, real-time settings |
-//! | [`trajectory`] | the paper's circle, CSV trajectories, T_min schedules (replay) |
+//! | [`schedule`] | T_min schedules (replay); trajectories are [`crate::trajectory`]'s |
 //! | [`stats`] | preallocated rings and percentiles |
 //! | [`demo`](mod@demo) | `cablevib demo`: service, replay and controller in one process |
 //! | [`bench`](mod@bench) | `cablevib bench-ipc`: pose-published → estimate-received latency |
@@ -31,17 +31,19 @@ pub mod bench;
 pub mod demo;
 pub mod ports;
 pub mod rt;
+pub mod schedule;
 pub mod server;
 pub mod stats;
-pub mod trajectory;
 
 use core::sync::atomic::AtomicBool;
-use core::time::Duration;
 
-use clap::{Args, ValueEnum};
+use clap::ValueEnum;
 
-use crate::cli::CliError;
 use crate::estimator::BuildError;
+use crate::scene::{Scene, SceneError};
+use crate::trajectory::TrajectoryError;
+
+pub use schedule::TminSchedule;
 
 pub use server::{AllocCounter, ServerConfig, ServerReport, StopReason};
 
@@ -76,7 +78,10 @@ impl core::fmt::Display for WaitMode {
 pub enum ServiceError {
     /// The scene could not be loaded.
     #[error(transparent)]
-    Scene(#[from] CliError),
+    Scene(#[from] SceneError),
+    /// The trajectory could not be made or read.
+    #[error(transparent)]
+    Trajectory(#[from] TrajectoryError),
     /// The estimator could not be built for the scene.
     #[error(transparent)]
     Build(#[from] BuildError),
@@ -114,86 +119,37 @@ pub enum ServiceError {
     Timeout(String),
 }
 
-/// `cablevib serve` options.
-#[derive(Debug, Clone, Args)]
-pub struct ServeArgs {
-    /// Scene file (TOML), or `spatial-paper` / `planar-paper` for the embedded paper robots.
-    #[arg(long, default_value = "spatial-paper")]
-    pub scene: String,
-    /// Instance name prefixing every service name ("NAME/cablevib/pose", ...), so that several
-    /// robots (or tests) share a machine; empty: the bare names.
-    #[arg(long, default_value = "")]
-    pub instance: String,
-    /// spin: busy-poll (lowest latency, one CPU at 100 %); event: block on the wake-service
-    /// event that peers notify after sending (tens of µs per wake-up).
-    #[arg(long, value_enum, default_value_t = WaitMode::Spin)]
-    pub wait: WaitMode,
-    /// Pin the service thread to this CPU (0-based); a warning if not permitted.
-    #[arg(long)]
-    pub cpu: Option<usize>,
-    /// Run with SCHED_FIFO (priority 80) and locked memory (mlockall); a warning if not
-    /// permitted.
-    #[arg(long)]
-    pub realtime: bool,
-    /// Period of the statistics log line, s (0 = none).
-    #[arg(long, default_value_t = 5.0)]
-    pub stats_period_s: f64,
-    /// Stop after this many estimator cycles (tests, benchmarks).
-    #[arg(long)]
-    pub max_cycles: Option<u64>,
-}
-
-/// `cablevib demo` options.
-#[derive(Debug, Clone, Args)]
-pub struct DemoArgs {
+/// What `cablevib demo` runs (the scene is passed beside it).
+#[derive(Debug, Clone)]
+pub struct DemoConfig {
     /// How long the replay publishes poses, s.
-    #[arg(long, default_value_t = 5.0)]
     pub seconds: f64,
     /// Required first natural frequency the margin is computed against, Hz.
-    #[arg(long, default_value_t = 8.0)]
     pub required_hz: f64,
-    /// How the service waits for poses: spin (busy-poll, one CPU) or event.
-    #[arg(long, value_enum, default_value_t = WaitMode::Spin)]
+    /// How the service waits for poses.
     pub wait: WaitMode,
-    /// How the controller waits for estimates and margin answers; event leaves the other CPU
-    /// to the replay and the controller (spin only pays off with a free CPU per spinning
-    /// thread).
-    #[arg(long, value_enum, default_value_t = WaitMode::Event)]
+    /// How the controller waits for estimates and margin answers.
     pub controller_wait: WaitMode,
     /// Pose rate, Hz.
-    #[arg(long, default_value_t = 1000.0)]
     pub rate_hz: f64,
     /// Time per revolution of the circle, s.
-    #[arg(long, default_value_t = 4.0)]
     pub period_s: f64,
-    /// T_min schedule SECONDS:NEWTONS,... (e.g. "0:60,3:70"); default: the scene's T_min.
-    #[arg(long)]
-    pub t_min_schedule: Option<String>,
-    /// Scene file (TOML), or `spatial-paper` / `planar-paper`.
-    #[arg(long, default_value = "spatial-paper")]
-    pub scene: String,
+    /// T_min schedule (default: the scene's T_min throughout).
+    pub t_min_schedule: Option<TminSchedule>,
 }
 
-/// `cablevib bench-ipc` options.
-#[derive(Debug, Clone, Args)]
-pub struct BenchIpcArgs {
-    /// Timed samples per wait mode (after 1000 warm-up samples).
-    #[arg(long, default_value_t = 100_000)]
+/// What `cablevib bench-ipc` measures (the scene is passed beside it).
+#[derive(Debug, Clone)]
+pub struct BenchIpcConfig {
+    /// Timed samples per wait mode (after the warm-up samples).
     pub samples: usize,
-    /// Wait mode to measure; both when omitted.
-    #[arg(long, value_enum)]
+    /// Wait mode to measure; both when `None`.
     pub wait: Option<WaitMode>,
     /// Pause between a received estimate and the next pose, µs (0: ping-pong).
-    #[arg(long, default_value_t = 0)]
     pub gap_us: u64,
     /// Pin the service thread to this CPU and the client to the next one.
-    #[arg(long)]
     pub cpu: Option<usize>,
-    /// Scene file (TOML), or `spatial-paper` / `planar-paper`.
-    #[arg(long, default_value = "spatial-paper")]
-    pub scene: String,
     /// One JSON object on stdout instead of the table.
-    #[arg(long)]
     pub json: bool,
 }
 
@@ -209,36 +165,24 @@ pub fn init_tracing(default_filter: &str) {
         .try_init();
 }
 
-/// `cablevib serve`: runs the service until SIGINT/SIGTERM (or `--max-cycles`).
-pub fn serve(a: &ServeArgs, allocations: fn() -> u64) -> Result<(), ServiceError> {
+/// `cablevib serve`: runs the service on `scene` until SIGINT/SIGTERM (or
+/// `cfg.max_cycles`).
+pub fn serve(
+    scene: &Scene,
+    cfg: &ServerConfig,
+    allocations: fn() -> u64,
+) -> Result<ServerReport, ServiceError> {
     init_tracing("info");
-    if !(a.stats_period_s.is_finite() && a.stats_period_s >= 0.0) {
-        return Err(ServiceError::Usage(format!(
-            "--stats-period-s {} must be finite and ≥ 0",
-            a.stats_period_s
-        )));
-    }
-    let scene = crate::cli::load_scene(&a.scene)?;
-    let cfg = ServerConfig {
-        instance: a.instance.clone(),
-        wait: a.wait,
-        stats_period: (a.stats_period_s > 0.0).then(|| Duration::from_secs_f64(a.stats_period_s)),
-        max_cycles: a.max_cycles,
-        cpu: a.cpu,
-        realtime: a.realtime,
-        ..ServerConfig::default()
-    };
     let stop = AtomicBool::new(false);
-    server::run(&scene, &cfg, &stop, allocations)?;
-    Ok(())
+    server::run(scene, cfg, &stop, allocations)
 }
 
 /// `cablevib demo`: service, replay publisher and controller over real iceoryx2 services.
-pub fn demo(a: &DemoArgs) -> Result<(), ServiceError> {
-    demo::run(a)
+pub fn demo(scene: &Scene, cfg: &DemoConfig) -> Result<(), ServiceError> {
+    demo::run(scene, cfg)
 }
 
 /// `cablevib bench-ipc`: pose-published → estimate-received latency in spin and event mode.
-pub fn bench_ipc(a: &BenchIpcArgs) -> Result<(), ServiceError> {
-    bench::run(a)
+pub fn bench_ipc(scene: &Scene, cfg: &BenchIpcConfig) -> Result<(), ServiceError> {
+    bench::run(scene, cfg)
 }

@@ -43,7 +43,7 @@ use nalgebra::Vector3;
 
 use super::ports::{self, Ipc, ServicePorts, POSE_BUFFER};
 use super::rt;
-use super::stats::{Percentiles, Ring};
+use super::stats::{Percentiles, Ring, StatusHistogram};
 use super::{ServiceError, WaitMode};
 use crate::estimator::Estimator;
 use crate::kinematics::Pose;
@@ -135,7 +135,7 @@ pub struct ServerReport {
     /// Estimates whose status was not ok.
     pub invalid_inputs: u64,
     /// Estimates per status code (index = wire value; the last slot collects unknown codes).
-    pub status_counts: [u64; 16],
+    pub status_counts: StatusHistogram,
     /// T_min set-points received.
     pub t_min_setpoints: u64,
     /// Margin requests answered.
@@ -181,7 +181,7 @@ struct PeriodCounters {
     margin: u64,
     t_min: u64,
     ipc_errors: u64,
-    status: [u64; 16],
+    status: StatusHistogram,
     rejected_t_min: Option<f64>,
     allocations: u64,
     /// Allocations iceoryx2 0.10 makes by design: one per loan (estimate, margin response) and
@@ -373,7 +373,7 @@ impl Server {
             pose,
         });
         self.period.cycles += 1;
-        self.period.status[(e.status.as_u32() as usize).min(15)] += 1;
+        self.period.status.record(e.status);
         if !e.is_ok() {
             self.period.invalid += 1;
         }
@@ -481,9 +481,7 @@ impl Server {
         t.ipc_errors += p.ipc_errors;
         t.allocations += p.allocations;
         t.iceoryx2_allocations += p.iceoryx2_allocations;
-        for (a, b) in t.status.iter_mut().zip(p.status) {
-            *a += b;
-        }
+        t.status.merge(&p.status);
         self.period = PeriodCounters::default();
         self.period_ring.clear();
     }
@@ -567,17 +565,12 @@ fn margin_response(
 }
 
 /// `" (outside_workspace 3, t_min_out_of_range 1)"`, or `""` when every status was ok.
-fn status_breakdown(counts: &[u64; 16]) -> String {
-    let parts: Vec<String> = counts
-        .iter()
-        .enumerate()
-        .filter(|&(i, &c)| c > 0 && i != 0)
-        .map(|(i, &c)| format!("{} {c}", cablevib_ipc::status_str(i as u32)))
-        .collect();
+fn status_breakdown(counts: &StatusHistogram) -> String {
+    let parts = counts.summary_not_ok();
     if parts.is_empty() {
-        String::new()
+        parts
     } else {
-        format!(" ({})", parts.join(", "))
+        format!(" ({parts})")
     }
 }
 

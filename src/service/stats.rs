@@ -1,4 +1,89 @@
-//! Fixed-capacity sample buffers and percentiles that never allocate after construction.
+//! Fixed-capacity sample buffers, percentiles and status histograms that never allocate
+//! after construction. The one place percentiles and status counts are computed: the
+//! service, the benchmarks and the offline sweeps all use it.
+
+use cablevib_ipc::{status_str, StatusCode};
+
+/// Slots of a [`StatusHistogram`]: one per wire value below it; the last slot also collects
+/// every larger (unknown) wire value.
+pub const STATUS_SLOTS: usize = 16;
+
+/// Counts per status code (index = wire value). Copy, no allocation.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct StatusHistogram {
+    counts: [u64; STATUS_SLOTS],
+}
+
+impl StatusHistogram {
+    /// Counts one estimate of status `s`.
+    pub fn record(&mut self, s: StatusCode) {
+        self.record_wire(s.as_u32());
+    }
+
+    /// Counts one status given by its wire value (unknown values share the last slot).
+    pub fn record_wire(&mut self, code: u32) {
+        self.counts[(code as usize).min(STATUS_SLOTS - 1)] += 1;
+    }
+
+    /// Adds the counts of `other`.
+    pub fn merge(&mut self, other: &StatusHistogram) {
+        for (a, b) in self.counts.iter_mut().zip(other.counts) {
+            *a += b;
+        }
+    }
+
+    /// Count of status `s`.
+    pub fn count(&self, s: StatusCode) -> u64 {
+        self.counts[(s.as_u32() as usize).min(STATUS_SLOTS - 1)]
+    }
+
+    /// All counts, index = wire value.
+    pub fn counts(&self) -> &[u64; STATUS_SLOTS] {
+        &self.counts
+    }
+
+    /// Total count.
+    pub fn total(&self) -> u64 {
+        self.counts.iter().sum()
+    }
+
+    /// `(wire value, count)` of every status seen, in wire-value order.
+    pub fn nonzero(&self) -> impl Iterator<Item = (u32, u64)> + '_ {
+        self.counts
+            .iter()
+            .enumerate()
+            .filter(|&(_, &c)| c > 0)
+            .map(|(i, &c)| (i as u32, c))
+    }
+
+    /// `"ok 970, outside_workspace 30"`: every status seen, in wire-value order.
+    pub fn summary(&self) -> String {
+        self.summary_where(|_| true)
+    }
+
+    /// As [`summary`](Self::summary) without `ok`: `""` when every status was ok.
+    pub fn summary_not_ok(&self) -> String {
+        self.summary_where(|code| code != StatusCode::Ok.as_u32())
+    }
+
+    fn summary_where(&self, keep: impl Fn(u32) -> bool) -> String {
+        self.nonzero()
+            .filter(|&(code, _)| keep(code))
+            .map(|(code, c)| format!("{} {c}", status_str(code)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+/// The `q`-quantile (0 ≤ q ≤ 1) of an ascending sample, by the nearest-rank rule every
+/// percentile of this crate uses: the element at index `round((n − 1) q)`. 0 when empty.
+pub fn percentile(sorted: &[u64], q: f64) -> u64 {
+    if sorted.is_empty() {
+        return 0;
+    }
+    let i = ((sorted.len() - 1) as f64 * q).round() as usize;
+    sorted[i.min(sorted.len() - 1)]
+}
 
 /// Percentiles of a set of durations (ns): p50, p99, p99.9 and max.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -189,7 +274,38 @@ mod tests {
     fn naive(v: &[u64], q: f64) -> u64 {
         let mut s = v.to_vec();
         s.sort_unstable();
-        s[(((s.len() - 1) as f64) * q).round() as usize]
+        percentile(&s, q)
+    }
+
+    #[test]
+    fn percentile_is_nearest_rank() {
+        assert_eq!(percentile(&[], 0.5), 0);
+        assert_eq!(percentile(&[7], 0.99), 7);
+        assert_eq!(percentile(&[1, 2, 3, 4], 0.5), 3); // round(1.5) = 2
+        assert_eq!(percentile(&[1, 2, 3, 4], 1.0), 4);
+        assert_eq!(percentile(&[1, 2, 3, 4], 0.0), 1);
+    }
+
+    #[test]
+    fn status_histogram_counts_and_names() {
+        let mut h = StatusHistogram::default();
+        h.record(StatusCode::Ok);
+        h.record(StatusCode::Ok);
+        h.record(StatusCode::OutsideWorkspace);
+        h.record_wire(1000);
+        let mut g = StatusHistogram::default();
+        g.record(StatusCode::OutsideWorkspace);
+        h.merge(&g);
+        assert_eq!(h.total(), 5);
+        assert_eq!(h.count(StatusCode::OutsideWorkspace), 2);
+        assert_eq!(h.counts()[STATUS_SLOTS - 1], 1);
+        assert!(
+            h.summary().starts_with("ok 2, outside_workspace 2"),
+            "{}",
+            h.summary()
+        );
+        assert!(!h.summary_not_ok().contains("ok 2"));
+        assert_eq!(StatusHistogram::default().summary_not_ok(), "");
     }
 
     #[test]
