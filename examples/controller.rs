@@ -15,7 +15,7 @@
 use std::time::{Duration, Instant};
 
 use cablevib::service::ports::{create_node, EstimateOutput, MarginClient};
-use cablevib::service::stats::SampleLog;
+use cablevib::service::stats::{SampleLog, StatusHistogram};
 use cablevib::service::WaitMode;
 use cablevib_ipc::{monotonic_now_ns, status_str, MarginRequest, ServiceNames};
 use clap::Parser;
@@ -59,7 +59,7 @@ fn main() -> anyhow::Result<()> {
     let capacity = (a.seconds * 20_000.0) as usize + 1000;
     let mut latency = SampleLog::with_capacity(capacity);
     let mut margin_rtt = SampleLog::with_capacity(capacity);
-    let mut status_counts = [0u64; 16];
+    let mut status_counts = StatusHistogram::default();
     let (mut f1_min, mut f1_max) = (f64::INFINITY, f64::NEG_INFINITY);
     let mut worst_margin = f64::INFINITY;
     let (mut stale, mut last_sequence, mut unanswered) = (0u64, 0u64, 0u64);
@@ -76,7 +76,7 @@ fn main() -> anyhow::Result<()> {
             stale += 1; // the replay restarted, or an old estimate
         }
         last_sequence = e.pose_sequence;
-        status_counts[(e.status as usize).min(15)] += 1;
+        status_counts.record_wire(e.status);
         if e.is_ok() {
             f1_min = f1_min.min(e.f1_hz);
             f1_max = f1_max.max(e.f1_hz);
@@ -122,13 +122,7 @@ fn main() -> anyhow::Result<()> {
             a.required_hz
         );
     }
-    let statuses: Vec<String> = status_counts
-        .iter()
-        .enumerate()
-        .filter(|(_, &c)| c > 0)
-        .map(|(i, &c)| format!("{} {c}", status_str(i as u32)))
-        .collect();
-    println!("  statuses: {}", statuses.join(", "));
+    println!("  statuses: {}", status_counts.summary());
     println!(
         "  latency pose timestamp → estimate received: {}",
         latency.percentiles().display_us()

@@ -68,7 +68,7 @@ pub fn run(scene: &Scene, a: &BenchIpcConfig) -> Result<(), ServiceError> {
         if !a.json {
             eprintln!("measuring {} mode: {} samples ...", mode, a.samples);
         }
-        results.push(bench_mode(&scene, mode, a)?);
+        results.push(bench_mode(scene, mode, a)?);
     }
     if a.json {
         let q = |p: &Percentiles| serde_json::json!({"p50_ns": p.p50_ns, "p99_ns": p.p99_ns, "p999_ns": p.p999_ns, "max_ns": p.max_ns, "count": p.count});

@@ -140,56 +140,83 @@ pub struct PubSubSettings {
     pub history: usize,
 }
 
+/// One try at opening or creating a service.
+enum Attempt<F> {
+    /// Opened or created.
+    Done(F),
+    /// Not there yet, or another process is creating it: try again (with iceoryx2's reason
+    /// when it said one).
+    Retry(Option<String>),
+    /// A failure that retrying does not cure.
+    Fail(ServiceError),
+}
+
+/// Opens service `name`, or creates it: alternates `open` and `create` until one succeeds,
+/// for at most [`OPEN_RETRIES`] rounds ([`OPEN_RETRY_SLEEP`] apart), so that two processes
+/// starting together end up on one service. `kind` names the service in errors.
+fn open_or_create<F>(
+    name: &str,
+    kind: &str,
+    mut open: impl FnMut() -> Attempt<F>,
+    mut create: impl FnMut() -> Attempt<F>,
+) -> Result<F, ServiceError> {
+    let mut last = String::new();
+    for _ in 0..OPEN_RETRIES {
+        for attempt in [&mut open as &mut dyn FnMut() -> Attempt<F>, &mut create] {
+            match attempt() {
+                Attempt::Done(f) => return Ok(f),
+                Attempt::Retry(reason) => last = reason.unwrap_or(last),
+                Attempt::Fail(e) => return Err(e),
+            }
+        }
+        std::thread::sleep(OPEN_RETRY_SLEEP);
+    }
+    Err(ipc_error(
+        format!("open or create {kind} \"{name}\" (gave up after retries)"),
+        last,
+    ))
+}
+
 /// Opens publish-subscribe service `name` carrying `M`, or creates it with `settings`.
 pub fn open_pubsub<M: Message>(
     node: &Node<Ipc>,
     name: &str,
     settings: PubSubSettings,
 ) -> Result<publish_subscribe::PortFactory<Ipc, M, ()>, ServiceError> {
+    use PublishSubscribeCreateError as C;
+    use PublishSubscribeOpenError as O;
     let sname = service_name(name)?;
-    let mut last = String::new();
-    for _ in 0..OPEN_RETRIES {
-        match node.service_builder(&sname).publish_subscribe::<M>().open() {
-            Ok(f) => return Ok(f),
-            Err(PublishSubscribeOpenError::IncompatibleTypes) => {
-                return Err(ServiceError::IncompatiblePeer(
-                    explain_publish_subscribe_mismatch::<Ipc, M>(name),
-                ))
-            }
-            Err(
-                PublishSubscribeOpenError::DoesNotExist
-                | PublishSubscribeOpenError::HangsInCreation
-                | PublishSubscribeOpenError::IsMarkedForDestruction
-                | PublishSubscribeOpenError::Interrupt,
-            ) => {}
-            Err(e) => return Err(ipc_error(format!("open service \"{name}\""), e)),
+    let open = || match node.service_builder(&sname).publish_subscribe::<M>().open() {
+        Ok(f) => Attempt::Done(f),
+        Err(O::IncompatibleTypes) => Attempt::Fail(ServiceError::IncompatiblePeer(
+            explain_publish_subscribe_mismatch::<Ipc, M>(name),
+        )),
+        Err(O::DoesNotExist | O::HangsInCreation | O::IsMarkedForDestruction | O::Interrupt) => {
+            Attempt::Retry(None)
         }
-        match node
-            .service_builder(&sname)
-            .publish_subscribe::<M>()
-            .max_publishers(MAX_PUBLISHERS)
-            .max_subscribers(MAX_SUBSCRIBERS)
-            .max_nodes(MAX_NODES)
-            .subscriber_max_buffer_size(settings.buffer)
-            .history_size(settings.history)
-            .enable_safe_overflow(true)
-            .create()
-        {
-            Ok(f) => return Ok(f),
-            Err(
-                e @ (PublishSubscribeCreateError::AlreadyExists
-                | PublishSubscribeCreateError::IsBeingCreatedByAnotherInstance
-                | PublishSubscribeCreateError::HangsInCreation
-                | PublishSubscribeCreateError::Interrupt),
-            ) => last = format!("{e:?}"),
-            Err(e) => return Err(ipc_error(format!("create service \"{name}\""), e)),
-        }
-        std::thread::sleep(OPEN_RETRY_SLEEP);
-    }
-    Err(ipc_error(
-        format!("open or create service \"{name}\" (gave up after retries)"),
-        last,
-    ))
+        Err(e) => Attempt::Fail(ipc_error(format!("open service \"{name}\""), e)),
+    };
+    let create = || match node
+        .service_builder(&sname)
+        .publish_subscribe::<M>()
+        .max_publishers(MAX_PUBLISHERS)
+        .max_subscribers(MAX_SUBSCRIBERS)
+        .max_nodes(MAX_NODES)
+        .subscriber_max_buffer_size(settings.buffer)
+        .history_size(settings.history)
+        .enable_safe_overflow(true)
+        .create()
+    {
+        Ok(f) => Attempt::Done(f),
+        Err(
+            e @ (C::AlreadyExists
+            | C::IsBeingCreatedByAnotherInstance
+            | C::HangsInCreation
+            | C::Interrupt),
+        ) => Attempt::Retry(Some(format!("{e:?}"))),
+        Err(e) => Attempt::Fail(ipc_error(format!("create service \"{name}\""), e)),
+    };
+    open_or_create(name, "service", open, create)
 }
 
 /// The margin request-response service.
@@ -197,86 +224,62 @@ pub type MarginFactory = request_response::PortFactory<Ipc, MarginRequest, (), M
 
 /// Opens the margin request-response service `name`, or creates it.
 pub fn open_margin(node: &Node<Ipc>, name: &str) -> Result<MarginFactory, ServiceError> {
+    use RequestResponseCreateError as C;
+    use RequestResponseOpenError as O;
     let sname = service_name(name)?;
-    let mut last = String::new();
-    for _ in 0..OPEN_RETRIES {
-        match node
-            .service_builder(&sname)
+    let builder = || {
+        node.service_builder(&sname)
             .request_response::<MarginRequest, MarginResponse>()
-            .open()
-        {
-            Ok(f) => return Ok(f),
-            Err(RequestResponseOpenError::IncompatibleRequestOrResponseType) => {
-                return Err(ServiceError::IncompatiblePeer(
-                    explain_request_response_mismatch::<Ipc, MarginRequest, MarginResponse>(name),
-                ))
-            }
-            Err(
-                RequestResponseOpenError::DoesNotExist
-                | RequestResponseOpenError::HangsInCreation
-                | RequestResponseOpenError::Interrupt,
-            ) => {}
-            Err(e) => return Err(ipc_error(format!("open service \"{name}\""), e)),
-        }
-        match node
-            .service_builder(&sname)
-            .request_response::<MarginRequest, MarginResponse>()
-            .max_clients(MAX_SUBSCRIBERS)
-            .max_servers(MAX_PUBLISHERS)
-            .max_nodes(MAX_NODES)
-            .create()
-        {
-            Ok(f) => return Ok(f),
-            Err(
-                e @ (RequestResponseCreateError::AlreadyExists
-                | RequestResponseCreateError::IsBeingCreatedByAnotherInstance
-                | RequestResponseCreateError::HangsInCreation
-                | RequestResponseCreateError::Interrupt),
-            ) => last = format!("{e:?}"),
-            Err(e) => return Err(ipc_error(format!("create service \"{name}\""), e)),
-        }
-        std::thread::sleep(OPEN_RETRY_SLEEP);
-    }
-    Err(ipc_error(
-        format!("open or create service \"{name}\" (gave up after retries)"),
-        last,
-    ))
+    };
+    let open = || match builder().open() {
+        Ok(f) => Attempt::Done(f),
+        Err(O::IncompatibleRequestOrResponseType) => Attempt::Fail(ServiceError::IncompatiblePeer(
+            explain_request_response_mismatch::<Ipc, MarginRequest, MarginResponse>(name),
+        )),
+        Err(O::DoesNotExist | O::HangsInCreation | O::Interrupt) => Attempt::Retry(None),
+        Err(e) => Attempt::Fail(ipc_error(format!("open service \"{name}\""), e)),
+    };
+    let create = || match builder()
+        .max_clients(MAX_SUBSCRIBERS)
+        .max_servers(MAX_PUBLISHERS)
+        .max_nodes(MAX_NODES)
+        .create()
+    {
+        Ok(f) => Attempt::Done(f),
+        Err(
+            e @ (C::AlreadyExists
+            | C::IsBeingCreatedByAnotherInstance
+            | C::HangsInCreation
+            | C::Interrupt),
+        ) => Attempt::Retry(Some(format!("{e:?}"))),
+        Err(e) => Attempt::Fail(ipc_error(format!("create service \"{name}\""), e)),
+    };
+    open_or_create(name, "service", open, create)
 }
 
 /// Opens event service `name`, or creates it.
 pub fn open_event(node: &Node<Ipc>, name: &str) -> Result<event::PortFactory<Ipc>, ServiceError> {
+    use EventCreateError as C;
+    use EventOpenError as O;
     let sname = service_name(name)?;
-    let mut last = String::new();
-    for _ in 0..OPEN_RETRIES {
-        match node.service_builder(&sname).event().open() {
-            Ok(f) => return Ok(f),
-            Err(
-                EventOpenError::DoesNotExist
-                | EventOpenError::HangsInCreation
-                | EventOpenError::Interrupt,
-            ) => {}
-            Err(e) => return Err(ipc_error(format!("open event service \"{name}\""), e)),
+    let open = || match node.service_builder(&sname).event().open() {
+        Ok(f) => Attempt::Done(f),
+        Err(O::DoesNotExist | O::HangsInCreation | O::Interrupt) => Attempt::Retry(None),
+        Err(e) => Attempt::Fail(ipc_error(format!("open event service \"{name}\""), e)),
+    };
+    let create = || match node
+        .service_builder(&sname)
+        .event()
+        .max_nodes(MAX_NODES * 2)
+        .create()
+    {
+        Ok(f) => Attempt::Done(f),
+        Err(e @ (C::AlreadyExists | C::IsBeingCreatedByAnotherInstance | C::Interrupt)) => {
+            Attempt::Retry(Some(format!("{e:?}")))
         }
-        match node
-            .service_builder(&sname)
-            .event()
-            .max_nodes(MAX_NODES * 2)
-            .create()
-        {
-            Ok(f) => return Ok(f),
-            Err(
-                e @ (EventCreateError::AlreadyExists
-                | EventCreateError::IsBeingCreatedByAnotherInstance
-                | EventCreateError::Interrupt),
-            ) => last = format!("{e:?}"),
-            Err(e) => return Err(ipc_error(format!("create event service \"{name}\""), e)),
-        }
-        std::thread::sleep(OPEN_RETRY_SLEEP);
-    }
-    Err(ipc_error(
-        format!("open or create event service \"{name}\" (gave up after retries)"),
-        last,
-    ))
+        Err(e) => Attempt::Fail(ipc_error(format!("create event service \"{name}\""), e)),
+    };
+    open_or_create(name, "event service", open, create)
 }
 
 const POSE_SETTINGS: PubSubSettings = PubSubSettings {
