@@ -27,6 +27,9 @@ use crate::scene::Scene;
 /// Radius of the paper's circular trajectory, m.
 pub const CIRCLE_RADIUS_M: f64 = 0.75;
 
+/// Time per revolution of the circle that the benchmarks and the demo drive by default, s.
+pub const CIRCLE_PERIOD_S: f64 = 4.0;
+
 /// Time between consecutive poses of the circle (one control cycle at 1 kHz), s.
 pub const SAMPLE_PERIOD_S: f64 = 1e-3;
 

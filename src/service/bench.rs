@@ -20,13 +20,13 @@ use std::time::{Duration, Instant};
 
 use cablevib_ipc::{monotonic_now_ns, PoseSample, ServiceNames, IDENTITY_QUATERNION};
 
-use super::ports::{create_node, EstimateOutput, PoseInput};
+use super::ports::{create_node, wait_for_service, EstimateOutput, PoseInput};
 use super::rt;
 use super::server::{self, ServerConfig};
 use super::stats::{Percentiles, SampleLog};
 use super::{init_tracing, BenchIpcConfig, ServiceError, WaitMode};
 use crate::scene::Scene;
-use crate::trajectory::Trajectory;
+use crate::trajectory::{Trajectory, CIRCLE_PERIOD_S, SAMPLE_PERIOD_S};
 
 const WARM_UP: usize = 1000;
 const ANSWER_TIMEOUT: Duration = Duration::from_secs(1);
@@ -183,16 +183,12 @@ fn client(
     let node = create_node("cablevib-bench-client")?;
     let input = PoseInput::open(&node, names)?;
     let output = EstimateOutput::open(&node, names)?;
-    let deadline = Instant::now() + Duration::from_secs(10);
-    while !(input.service_connected() && output.service_connected()) {
-        if stop.load(Ordering::Acquire) || Instant::now() > deadline {
-            return Err(ServiceError::Timeout(
-                "the service did not come up within 10 s".into(),
-            ));
-        }
-        std::thread::sleep(Duration::from_millis(1));
-    }
-    let trajectory = Trajectory::circle(scene, 4.0)?;
+    wait_for_service(
+        || input.service_connected() && output.service_connected(),
+        stop,
+        || ServiceError::Timeout("stopped before the service came up".into()),
+    )?;
+    let trajectory = Trajectory::circle(scene, CIRCLE_PERIOD_S)?;
     let n = a.samples;
     let mut logs: [SampleLog; 5] = core::array::from_fn(|_| SampleLog::with_capacity(n));
     let mut timeouts = 0;
@@ -205,7 +201,7 @@ fn client(
             break;
         }
         let p = trajectory
-            .position_at(k as f64 * 1e-3)
+            .position_at(k as f64 * SAMPLE_PERIOD_S)
             .unwrap_or(scene.ee_position_m);
         let sequence = k as u64 + 1;
         let pose = PoseSample::new(

@@ -15,12 +15,28 @@ use cablevib_ipc::{
     IDENTITY_QUATERNION,
 };
 
-use super::ports::{create_node, EstimateOutput, MarginClient, PoseInput};
+use super::ports::{create_node, wait_for_service, EstimateOutput, MarginClient, PoseInput};
 use super::server::{self, ServerConfig, ServerReport};
 use super::stats::{Percentiles, SampleLog};
 use super::TminSchedule;
 use super::{init_tracing, DemoConfig, ServiceError, WaitMode};
 use crate::scene::Scene;
+
+/// Longest demo, s (its logs are preallocated for the whole run).
+const MAX_SECONDS: f64 = 3600.0;
+/// Highest pose rate, Hz: above it the replay thread cannot keep its schedule.
+const MAX_RATE_HZ: f64 = 20_000.0;
+/// How long the controller waits for an estimate before it checks `stop` again.
+const ESTIMATE_WAIT: Duration = Duration::from_millis(20);
+/// A margin query unanswered this long counts as a timeout (five 1 kHz cycles).
+const MARGIN_TIMEOUT: Duration = Duration::from_millis(5);
+/// Time the last estimates get to arrive after the replay ends.
+const DRAIN_TIME: Duration = Duration::from_millis(100);
+/// Extra log capacity beyond one entry per pose (estimates of start-up and drain).
+const LOG_SLACK: usize = 1000;
+/// The replay refreshes its iceoryx2 connections every this many poses (a restarted
+/// service is found again within 64 ms at 1 kHz).
+const CONNECTION_UPDATE_EVERY: usize = 64;
 use crate::trajectory::Trajectory;
 
 /// What the controller saw of one estimate.
@@ -75,7 +91,7 @@ fn controller(
     };
     let mut request_sequence = 0;
     while !stop.load(Ordering::Acquire) {
-        let Some(e) = estimates.wait(wait, Duration::from_millis(20))? else {
+        let Some(e) = estimates.wait(wait, ESTIMATE_WAIT)? else {
             continue;
         };
         let latency = monotonic_now_ns().saturating_sub(e.pose_timestamp_ns);
@@ -91,7 +107,7 @@ fn controller(
         request_sequence += 1;
         let t0 = monotonic_now_ns();
         let request = MarginRequest::new(request_sequence, t0, required_hz);
-        match margin.query(&request, wait, Duration::from_millis(5))? {
+        match margin.query(&request, wait, MARGIN_TIMEOUT)? {
             Some(r) => {
                 log.margin_rtt.push(monotonic_now_ns().saturating_sub(t0));
                 if log.margins.len() < capacity {
@@ -119,11 +135,17 @@ fn controller(
 
 fn validate(a: &DemoConfig) -> Result<(), ServiceError> {
     let bad = |m: String| Err(ServiceError::Usage(m));
-    if !(a.seconds.is_finite() && a.seconds > 0.0 && a.seconds <= 3600.0) {
-        return bad(format!("--seconds {} must be in (0, 3600]", a.seconds));
+    if !(a.seconds.is_finite() && a.seconds > 0.0 && a.seconds <= MAX_SECONDS) {
+        return bad(format!(
+            "--seconds {} must be in (0, {MAX_SECONDS}]",
+            a.seconds
+        ));
     }
-    if !(a.rate_hz.is_finite() && a.rate_hz >= 1.0 && a.rate_hz <= 20_000.0) {
-        return bad(format!("--rate-hz {} must be in [1, 20000] Hz", a.rate_hz));
+    if !(a.rate_hz.is_finite() && a.rate_hz >= 1.0 && a.rate_hz <= MAX_RATE_HZ) {
+        return bad(format!(
+            "--rate-hz {} must be in [1, {MAX_RATE_HZ}] Hz",
+            a.rate_hz
+        ));
     }
     if !(a.required_hz.is_finite() && a.required_hz > 0.0) {
         return bad(format!(
@@ -144,7 +166,7 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
     let instance = format!("cablevib_demo_{}", std::process::id());
     let names = ServiceNames::new(&instance);
     let n_poses = (a.seconds * a.rate_hz).round().max(1.0) as usize;
-    let capacity = n_poses + 1000;
+    let capacity = n_poses + LOG_SLACK;
 
     println!(
         "cablevib demo: {:.1} s on scene `{}` ({} cables, {} × {} elements/cable); the service \
@@ -228,7 +250,7 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
         &progress,
     );
     // Let the last estimates arrive, then stop the others.
-    std::thread::sleep(Duration::from_millis(100));
+    std::thread::sleep(DRAIN_TIME);
     stop.store(true, Ordering::Release);
     let server_report = server_thread
         .join()
@@ -257,20 +279,15 @@ fn replay(
 ) -> Result<u64, ServiceError> {
     let node = create_node("cablevib-demo-replay")?;
     let input = PoseInput::open(&node, names)?;
-    let deadline = Instant::now() + Duration::from_secs(10);
-    while !(input.service_connected() && controller_ready.load(Ordering::Acquire)) {
-        if stop.load(Ordering::Acquire) {
-            return Err(ServiceError::Usage(
+    wait_for_service(
+        || input.service_connected() && controller_ready.load(Ordering::Acquire),
+        stop,
+        || {
+            ServiceError::Usage(
                 "the service or the controller stopped before the demo began".into(),
-            ));
-        }
-        if Instant::now() > deadline {
-            return Err(ServiceError::Timeout(
-                "the service did not come up within 10 s".into(),
-            ));
-        }
-        std::thread::sleep(Duration::from_millis(2));
-    }
+            )
+        },
+    )?;
     let start = Instant::now();
     let mut step = None;
     let mut sent = 0u64;
@@ -325,7 +342,7 @@ fn replay(
             last_estimates = n;
             next_progress += 1.0;
         }
-        if k % 64 == 0 {
+        if k % CONNECTION_UPDATE_EVERY == 0 {
             input.update_connections();
         }
     }
@@ -405,7 +422,11 @@ fn summary(
             below,
             answered.len(),
             if log.margin_timeouts > 0 {
-                format!(", {} queries unanswered within 5 ms", log.margin_timeouts)
+                format!(
+                    ", {} queries unanswered within {} ms",
+                    log.margin_timeouts,
+                    MARGIN_TIMEOUT.as_millis()
+                )
             } else {
                 String::new()
             }

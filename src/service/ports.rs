@@ -73,6 +73,34 @@ fn ipc_error(context: impl Into<String>, reason: impl core::fmt::Debug) -> Servi
     }
 }
 
+/// How long a client started beside the service (demo, benchmark) waits for it to come up.
+pub const SERVICE_UP_TIMEOUT: Duration = Duration::from_secs(10);
+/// How often [`wait_for_service`] checks.
+const SERVICE_UP_POLL: Duration = Duration::from_millis(1);
+
+/// Polls `ready` until it is true. Fails with `stopped()` once `stop` is set, and with
+/// [`ServiceError::Timeout`] after [`SERVICE_UP_TIMEOUT`].
+pub fn wait_for_service(
+    mut ready: impl FnMut() -> bool,
+    stop: &core::sync::atomic::AtomicBool,
+    stopped: impl FnOnce() -> ServiceError,
+) -> Result<(), ServiceError> {
+    let deadline = std::time::Instant::now() + SERVICE_UP_TIMEOUT;
+    while !ready() {
+        if stop.load(core::sync::atomic::Ordering::Acquire) {
+            return Err(stopped());
+        }
+        if std::time::Instant::now() > deadline {
+            return Err(ServiceError::Timeout(format!(
+                "the service did not come up within {} s",
+                SERVICE_UP_TIMEOUT.as_secs()
+            )));
+        }
+        std::thread::sleep(SERVICE_UP_POLL);
+    }
+    Ok(())
+}
+
 /// A validated iceoryx2 service name.
 pub fn service_name(name: &str) -> Result<ServiceName, ServiceError> {
     ServiceName::new(name).map_err(|e| ServiceError::Usage(format!("service name `{name}`: {e:?}")))
