@@ -205,15 +205,9 @@ impl Estimator {
     /// f1 (Hz) at the search's pose (geometry already set) for T_min = `t_min_n`.
     fn inverse_f1(&mut self, s: &mut Search<'_>, t_min_n: f64) -> Result<f64, EstimatorError> {
         s.evals += 1;
-        let r = self.inverse.first_root(
-            &self.scene,
-            &self.frame,
-            s.pose,
-            t_min_n,
-            ANY_RANK,
-            s.warm,
-            |_| {},
-        )?;
+        let r = self
+            .inverse
+            .first_root(&self.scene, s.pose, t_min_n, ANY_RANK, s.warm, |_| {})?;
         s.warm = Some(r.lambda);
         Ok(lambda_to_hz(r.lambda))
     }

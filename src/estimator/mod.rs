@@ -59,7 +59,6 @@ const FLAT_AXIS_M: f64 = 1e-9;
 pub struct Estimator {
     scene: Scene,
     params: EstimatorParams,
-    frame: Matrix3<f64>,
     /// The cycle's solvers (their warm state carries from cycle to cycle).
     cycle: Pipeline,
     expected_rank: u32,
@@ -92,11 +91,11 @@ impl Estimator {
             return Ok(est);
         }
         let n = scene.n_cables();
+        let frame = up_frame(&scene.gravity_m_s2);
         let mut est = Estimator {
             scene: scene.clone(),
             params,
-            frame: up_frame(&scene.gravity_m_s2),
-            cycle: Pipeline::new(n, params.tension, params.modal),
+            cycle: Pipeline::new(n, frame, params.tension, params.modal),
             expected_rank: 0,
             bounds: scene.frame_bounds_m(),
             last_ok_position: None,
@@ -106,6 +105,7 @@ impl Estimator {
             estimate: Estimate::empty(n),
             inverse: Pipeline::new(
                 n,
+                frame,
                 params.tension,
                 ModalParams {
                     certify: false,
@@ -267,7 +267,6 @@ impl Estimator {
         let warm_l = self.predict_lambda1(warm);
         let root = self.cycle.first_root(
             &self.scene,
-            &self.frame,
             pose,
             t_min_n,
             self.expected_rank,

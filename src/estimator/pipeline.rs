@@ -26,14 +26,22 @@ pub(super) struct Pipeline {
     pub(super) models: Vec<CableModel>,
     /// The structured eigen solver, loaded with `models`.
     pub(super) modal: ModalSolver,
+    /// The scene's up frame (columns: two horizontal axes, then up), for the cable models.
+    frame: Matrix3<f64>,
     /// `modal`'s evaluation counter when it was last loaded.
     loaded_at: u32,
 }
 
 impl Pipeline {
-    /// Buffers for `n` cables (allocates: set-up only).
-    pub(super) fn new(n: usize, tension: TensionParams, modal: ModalParams) -> Pipeline {
+    /// Buffers for `n` cables with the scene's up frame (allocates: set-up only).
+    pub(super) fn new(
+        n: usize,
+        frame: Matrix3<f64>,
+        tension: TensionParams,
+        modal: ModalParams,
+    ) -> Pipeline {
         Pipeline {
+            frame,
             geometry: Geometry::new(n),
             tension: TensionSolver::new(n, tension),
             models: vec![placeholder_model(); n],
@@ -55,7 +63,6 @@ impl Pipeline {
     pub(super) fn first_root(
         &mut self,
         scene: &Scene,
-        frame: &Matrix3<f64>,
         pose: &Pose,
         t_min_n: f64,
         min_rank: u32,
@@ -76,7 +83,7 @@ impl Pipeline {
             });
         }
         let t = self.tension.tensions_n();
-        fill_models(scene, frame, &self.geometry, t, &mut self.models)?;
+        fill_models(scene, &self.frame, &self.geometry, t, &mut self.models)?;
         load_modal(
             scene,
             &mut self.modal,
