@@ -59,7 +59,9 @@ impl Pipeline {
     /// `t_min_n`, show the solver to `on_tensions` (also when the solve failed: an
     /// infeasible solve still has its closest tensions), reject a structure matrix of rank
     /// below `min_rank` (0 accepts any), build the cable models, load the modal solver and
-    /// find the first root, warm-started from `warm` (λ, rad²/s²).
+    /// find the first root, warm-started from `warm` (λ, rad²/s²). A `Modal` error comes
+    /// only from the root search, after the modal solver was loaded; every other error comes
+    /// before it is loaded.
     pub(super) fn first_root(
         &mut self,
         scene: &Scene,
