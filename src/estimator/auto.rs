@@ -1,0 +1,178 @@
+//! `element = "auto"`: pick the cheapest cable model whose f1 matches a converged reference
+//! within the scene's tolerance. Offline: runs at build time and allocates.
+
+use super::{BuildError, Estimator, EstimatorError, EstimatorParams, InputError};
+use crate::cable::up_frame;
+use crate::kinematics::{Geometry, Pose};
+use crate::scene::{ElementKind, Scene};
+use nalgebra::Vector3;
+
+/// Elements per cable of the reference (catenary) model: converged in f1 well below any
+/// tolerance a scene sets.
+const REF_N: usize = 64;
+/// Radius (m) of the circle of sample poses around the default pose, in the horizontal
+/// plane: the span over which the pick must hold.
+const CIRCLE_RADIUS_M: f64 = 0.75;
+/// Sample poses on that circle, π/4 apart.
+const CIRCLE_POSES: u32 = 8;
+
+/// What `element = "auto"` picked, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AutoChoice {
+    /// The model picked.
+    pub element: ElementKind,
+    /// Elements per cable of the pick (1 for massless and continuous).
+    pub elements_per_cable: usize,
+    /// Its largest relative f1 error against the reference over the sample poses.
+    pub predicted_error: f64,
+    /// The tolerance it had to meet.
+    pub tolerance: f64,
+    /// Every candidate tried, cheapest first: (model, N, largest relative f1 error).
+    pub candidates: Vec<(ElementKind, usize, f64)>,
+    /// The reference: the catenary element with this many elements per cable.
+    pub reference_elements: usize,
+    /// Sample poses used (the default pose and feasible poses on the 0.75 m circle).
+    pub poses: usize,
+    /// Largest Irvine parameter λ² = (γ⊥ L / T)² · EA / T over the cables at the default
+    /// pose (sag matters when it is not ≪ 1).
+    pub irvine_lambda2: f64,
+    /// Total cable mass over end-effector mass.
+    pub mass_ratio: f64,
+}
+
+impl std::fmt::Display for AutoChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let name = |el: ElementKind, n: usize| {
+            if el.is_discrete() {
+                format!("{} × {n}", el.as_str())
+            } else {
+                el.as_str().to_string()
+            }
+        };
+        write!(
+            f,
+            "auto picked {}: predicted f1 error {:.2e} (tolerance {:.1e}; largest over {} poses against catenary × {}; Irvine λ² ≤ {:.2e}, cable/end-effector mass ratio {:.3}). Tried:",
+            name(self.element, self.elements_per_cable),
+            self.predicted_error,
+            self.tolerance,
+            self.poses,
+            self.reference_elements,
+            self.irvine_lambda2,
+            self.mass_ratio
+        )?;
+        for (el, n, err) in &self.candidates {
+            write!(f, " {} {:.2e};", name(*el, *n), err)?;
+        }
+        Ok(())
+    }
+}
+
+/// Resolve `element = "auto"`: evaluate, at the default pose and at feasible poses of the
+/// 0.75 m circle, the f1 of each candidate model in order of per-cycle cost — massless
+/// cables, the continuous string (the N → ∞ limit of FEM, at the same cost as any FEM N),
+/// the catenary element at N = 4 and 16 — against the converged reference (catenary,
+/// N = 64), and pick the first whose largest relative error is within
+/// `model.f1_tolerance`. The reference itself is the fallback. Allocates: set-up only.
+pub fn resolve_auto(scene: &Scene) -> Result<(Scene, AutoChoice), BuildError> {
+    let tol = scene.model.f1_tolerance;
+    let reference = scene.with_model(ElementKind::Catenary, REF_N);
+    let frame = up_frame(&scene.gravity_m_s2);
+    let mut poses = vec![Pose {
+        position_m: scene.ee_position_m,
+        orientation_wxyz: scene.ee_orientation_wxyz,
+    }];
+    for k in 0..CIRCLE_POSES {
+        let th = k as f64 * std::f64::consts::FRAC_PI_4;
+        poses.push(Pose {
+            position_m: scene.ee_position_m
+                + frame.column(0) * (CIRCLE_RADIUS_M * th.cos())
+                + frame.column(1) * (CIRCLE_RADIUS_M * th.sin()),
+            orientation_wxyz: scene.ee_orientation_wxyz,
+        });
+    }
+    let f1_of = |s: &Scene, pose: &Pose| -> Option<f64> {
+        let p = EstimatorParams {
+            ee_mode: false,
+            ..EstimatorParams::default()
+        };
+        let mut est = Estimator::with_params(s, p).ok()?;
+        let e = est.update(pose, s.t_min_n);
+        e.is_ok().then_some(e.f1_hz)
+    };
+    let refs: Vec<(Pose, f64)> = poses
+        .iter()
+        .filter_map(|pose| f1_of(&reference, pose).map(|f| (*pose, f)))
+        .collect();
+    if refs.is_empty() {
+        Estimator::with_params(&reference, EstimatorParams::default())?;
+        return Err(BuildError::DefaultPose {
+            scene: scene.name.clone(),
+            reason: EstimatorError::Input(InputError::NoFeasiblePose),
+        });
+    }
+    let mut massless = scene.with_model(ElementKind::Massless, 1);
+    massless.model.geometric_stiffness = true;
+    let list = [
+        massless,
+        scene.with_model(ElementKind::Continuous, 1),
+        scene.with_model(ElementKind::Catenary, 4),
+        scene.with_model(ElementKind::Catenary, 16),
+    ];
+    let mut candidates = Vec::new();
+    let mut pick: Option<(Scene, f64)> = None;
+    for cand in list {
+        let worst = refs
+            .iter()
+            .map(|(pose, fr)| f1_of(&cand, pose).map_or(f64::INFINITY, |f| (f - fr).abs() / fr))
+            .fold(0.0f64, f64::max);
+        candidates.push((cand.model.element, cand.model.elements_per_cable, worst));
+        if pick.is_none() && worst <= tol {
+            pick = Some((cand, worst));
+        }
+    }
+    let (chosen, err) = pick.unwrap_or((reference, 0.0));
+    let (irvine, cable_mass) = default_pose_diagnostics(scene);
+    let choice = AutoChoice {
+        element: chosen.model.element,
+        elements_per_cable: chosen.model.elements_per_cable,
+        predicted_error: err,
+        tolerance: tol,
+        candidates,
+        reference_elements: REF_N,
+        poses: refs.len(),
+        irvine_lambda2: irvine,
+        mass_ratio: cable_mass / scene.ee_mass_kg,
+    };
+    Ok((chosen, choice))
+}
+
+/// At the scene's default pose (Clarabel tensions): the largest Irvine parameter λ² over
+/// the cables (0 when the tensions are not available) and the total cable mass, kg.
+fn default_pose_diagnostics(scene: &Scene) -> (f64, f64) {
+    let mut g = Geometry::new(scene.n_cables());
+    let _ = g.update(
+        scene.cables.iter().map(|c| &c.anchor_m),
+        &scene.ee_position_m,
+    );
+    let t = crate::tension::clarabel_reference(&g, &scene.wrench_n(), scene.t_min_n, scene.t_max_n)
+        .unwrap_or_default();
+    let gn = scene.gravity_m_s2.norm();
+    let down = if gn > 0.0 {
+        scene.gravity_m_s2 / gn
+    } else {
+        Vector3::zeros()
+    };
+    let mut irvine = 0.0f64;
+    let mut cable_mass = 0.0;
+    for (i, c) in scene.cables.iter().enumerate() {
+        let l = g.length_m[i];
+        cable_mass += c.mass_per_length_kg_m * l;
+        if let Some(&ti) = t.get(i) {
+            let s = g.unit[i];
+            let perp = (down - s * s.dot(&down)).norm();
+            let gam = c.mass_per_length_kg_m * gn * perp;
+            irvine = irvine.max((gam * l / ti).powi(2) * c.ea_n() / ti);
+        }
+    }
+    (irvine, cable_mass)
+}

@@ -1,0 +1,257 @@
+//! Errors of the estimator: why a cycle, a build, an inverse query or an offline analysis
+//! failed, and the wire status each cycle error is reported with.
+
+use super::Status;
+use crate::cable::CableError;
+use crate::kinematics::KinematicsError;
+use crate::modal::ModalError;
+use crate::tension::TensionError;
+
+/// Input rejected before any computation. Copy, no allocation; the Display text is what
+/// the CLI and the service log print after "invalid input: ".
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, thiserror::Error)]
+pub enum InputError {
+    /// A pose component is NaN or infinite.
+    #[error("non-finite pose")]
+    NonFinitePose,
+    /// The orientation quaternion is not of unit norm (within the estimator's tolerance).
+    #[error("quaternion is not of unit norm")]
+    NonUnitQuaternion,
+    /// T_min is negative, above T_max or not finite.
+    #[error("t_min outside [0, t_max] or not finite")]
+    TminOutOfRange,
+    /// The position lies outside the anchors' bounding box (plus the workspace margin).
+    #[error("position outside the anchors' frame")]
+    OutsideWorkspace,
+    /// `element = "auto"`: the reference model is solvable at none of the sample poses.
+    #[error("no feasible pose to choose the auto model")]
+    NoFeasiblePose,
+}
+
+impl InputError {
+    /// The status code this input error is reported with.
+    pub fn status(&self) -> Status {
+        match self {
+            InputError::NonFinitePose => Status::InvalidInput,
+            InputError::NonUnitQuaternion => Status::NonUnitQuaternion,
+            InputError::TminOutOfRange => Status::TminOutOfRange,
+            InputError::OutsideWorkspace => Status::OutsideWorkspace,
+            InputError::NoFeasiblePose => Status::InvalidInput,
+        }
+    }
+}
+
+/// Why a cycle's estimate is not ok (the detail behind [`Status`]). Copy, no allocation.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum EstimatorError {
+    /// Input rejected before any computation.
+    #[error("invalid input: {0}")]
+    Input(#[from] InputError),
+    /// Kinematics failed.
+    #[error(transparent)]
+    Kinematics(#[from] KinematicsError),
+    /// Tension distribution failed.
+    #[error(transparent)]
+    Tension(#[from] TensionError),
+    /// Element model failed.
+    #[error(transparent)]
+    Cable(#[from] CableError),
+    /// Eigen solver failed.
+    #[error(transparent)]
+    Modal(#[from] ModalError),
+    /// The structure matrix has lower rank than the scene's design pose.
+    #[error("structure matrix rank {rank} < {expected}: the pose is singular")]
+    RankDeficient {
+        /// Rank at this pose.
+        rank: u32,
+        /// Rank at the scene's default pose.
+        expected: u32,
+    },
+}
+
+impl EstimatorError {
+    /// The status code this error is reported with.
+    pub fn status(&self) -> Status {
+        match self {
+            EstimatorError::Input(input) => input.status(),
+            EstimatorError::Kinematics(KinematicsError::NonFinite) => Status::InvalidInput,
+            EstimatorError::Kinematics(KinematicsError::CableTooShort { .. }) => {
+                Status::OutsideWorkspace
+            }
+            EstimatorError::Tension(TensionError::Infeasible { .. }) => Status::TensionInfeasible,
+            EstimatorError::Tension(TensionError::InvalidBounds { .. }) => Status::TminOutOfRange,
+            EstimatorError::Tension(TensionError::NonFinite) => Status::InvalidInput,
+            EstimatorError::Tension(
+                TensionError::NotConverged { .. } | TensionError::ReferenceFailed { .. },
+            ) => Status::NotConverged,
+            EstimatorError::Cable(_) => Status::RankDeficient,
+            EstimatorError::Modal(ModalError::NotPositiveDefinite(_)) => Status::RankDeficient,
+            EstimatorError::Modal(_) => Status::NotConverged,
+            EstimatorError::RankDeficient { .. } => Status::RankDeficient,
+        }
+    }
+}
+
+/// Errors of the inverse T_min query.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum TminQueryError {
+    /// The requirement is not finite and positive.
+    #[error("required f1 {0} Hz must be finite and > 0")]
+    BadRequirement(f64),
+    /// Even the largest feasible T_min does not reach the requirement.
+    #[error("f1 ≥ {required_hz:.4} Hz is unreachable: the largest feasible T_min {t_min_n:.3} N gives {f1_max_hz:.4} Hz")]
+    Unreachable {
+        /// Required, Hz.
+        required_hz: f64,
+        /// Best f1, Hz.
+        f1_max_hz: f64,
+        /// At this T_min, N.
+        t_min_n: f64,
+    },
+    /// The pose itself is invalid or infeasible at every T_min.
+    #[error(transparent)]
+    Pose(#[from] EstimatorError),
+}
+
+impl From<InputError> for TminQueryError {
+    fn from(e: InputError) -> Self {
+        TminQueryError::Pose(e.into())
+    }
+}
+
+/// Errors building an estimator.
+#[derive(Debug, thiserror::Error)]
+pub enum BuildError {
+    /// The scene's default pose is not solvable: the robot is unusable as described.
+    #[error("scene `{scene}` at its default pose: {reason}")]
+    DefaultPose {
+        /// Scene name.
+        scene: String,
+        /// Why.
+        reason: EstimatorError,
+    },
+}
+
+/// Errors of the reference pipeline.
+#[derive(Debug, thiserror::Error)]
+pub enum AnalysisError {
+    /// Kinematics.
+    #[error(transparent)]
+    Kinematics(#[from] KinematicsError),
+    /// Tensions.
+    #[error(transparent)]
+    Tension(#[from] TensionError),
+    /// Element models.
+    #[error(transparent)]
+    Cable(#[from] CableError),
+    /// Eigen solve.
+    #[error(transparent)]
+    Modal(#[from] ModalError),
+    /// The auto model could not be resolved.
+    #[error("auto model: {0}")]
+    Auto(String),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The wire status each input error is meant to carry.
+    const STATUS_TABLE: [(InputError, Status); 5] = [
+        (InputError::NonFinitePose, Status::InvalidInput),
+        (InputError::NonUnitQuaternion, Status::NonUnitQuaternion),
+        (InputError::TminOutOfRange, Status::TminOutOfRange),
+        (InputError::OutsideWorkspace, Status::OutsideWorkspace),
+        (InputError::NoFeasiblePose, Status::InvalidInput),
+    ];
+
+    /// The Display text of `EstimatorError::Input` before the enum existed (the message was
+    /// a `&'static str`), one per variant.
+    const OLD_TEXTS: [(InputError, &str); 5] = [
+        (InputError::NonFinitePose, "invalid input: non-finite pose"),
+        (
+            InputError::NonUnitQuaternion,
+            "invalid input: quaternion is not of unit norm",
+        ),
+        (
+            InputError::TminOutOfRange,
+            "invalid input: t_min outside [0, t_max] or not finite",
+        ),
+        (
+            InputError::OutsideWorkspace,
+            "invalid input: position outside the anchors' frame",
+        ),
+        (
+            InputError::NoFeasiblePose,
+            "invalid input: no feasible pose to choose the auto model",
+        ),
+    ];
+
+    /// The status the old code derived from words in the message.
+    fn status_by_words(msg: &str) -> Status {
+        if msg.contains("quaternion") {
+            Status::NonUnitQuaternion
+        } else if msg.contains("t_min") {
+            Status::TminOutOfRange
+        } else if msg.contains("outside") {
+            Status::OutsideWorkspace
+        } else {
+            Status::InvalidInput
+        }
+    }
+
+    /// Fails to compile when a variant is added, until it is added here and to the tables.
+    fn table_index(e: InputError) -> usize {
+        match e {
+            InputError::NonFinitePose => 0,
+            InputError::NonUnitQuaternion => 1,
+            InputError::TminOutOfRange => 2,
+            InputError::OutsideWorkspace => 3,
+            InputError::NoFeasiblePose => 4,
+        }
+    }
+
+    #[test]
+    fn every_input_error_has_its_status() {
+        for (input, want) in STATUS_TABLE {
+            assert_eq!(input.status(), want, "{input:?}");
+            assert_eq!(EstimatorError::Input(input).status(), want, "{input:?}");
+            assert_eq!(
+                status_by_words(&input.to_string()),
+                want,
+                "{input:?}: the status the message's words gave before"
+            );
+        }
+        for (k, (input, _)) in STATUS_TABLE.iter().enumerate() {
+            assert_eq!(
+                table_index(*input),
+                k,
+                "{input:?} out of place in STATUS_TABLE"
+            );
+            assert_eq!(
+                OLD_TEXTS[k].0, *input,
+                "{input:?} out of place in OLD_TEXTS"
+            );
+        }
+    }
+
+    #[test]
+    fn input_error_texts_are_unchanged() {
+        for (input, text) in OLD_TEXTS {
+            assert_eq!(EstimatorError::Input(input).to_string(), text);
+            assert_eq!(
+                TminQueryError::from(input).to_string(),
+                text,
+                "the inverse query prints the pose error transparently"
+            );
+        }
+        let build = BuildError::DefaultPose {
+            scene: "s".into(),
+            reason: InputError::NoFeasiblePose.into(),
+        };
+        assert_eq!(
+            build.to_string(),
+            "scene `s` at its default pose: invalid input: no feasible pose to choose the auto model"
+        );
+    }
+}

@@ -1,0 +1,81 @@
+//! [`Estimate`], the fixed-size result of one cycle, and its wire [`Status`].
+
+use super::EstimatorError;
+use crate::scene::MAX_CABLES;
+use nalgebra::{Matrix3, Matrix6};
+
+pub use cablevib_ipc::StatusCode as Status;
+
+/// The result of one cycle. Fixed size, Copy.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    /// Whether the numbers below are valid for this pose.
+    pub status: Status,
+    /// The detail when `status` is not ok.
+    pub error: Option<EstimatorError>,
+    /// Number of cables (valid entries of `tensions_n`).
+    pub n_cables: usize,
+    /// Cable tensions, N (for `TensionInfeasible`: the closest achievable, flagged).
+    pub tensions_n: [f64; MAX_CABLES],
+    /// First natural frequency of the whole model, Hz (NaN unless ok).
+    pub f1_hz: f64,
+    /// End-effector participation of the first mode (0 ..= 1).
+    pub f1_ee_participation: f64,
+    /// Frequency of the lowest mode with end-effector participation ≥ the scene's
+    /// threshold, Hz. When no mode reaches the threshold within the bounded scan (a very
+    /// light end-effector, or its character split across an avoided crossing), the mode
+    /// with the largest participation found — `ee_mode_participation` is then below the
+    /// threshold. NaN unless ok or when not computed.
+    pub ee_mode_hz: f64,
+    /// Its participation.
+    pub ee_mode_participation: f64,
+    /// Static end-effector stiffness, translational block, N/m (NaN unless ok).
+    pub stiffness_n_m: Matrix3<f64>,
+    /// Static end-effector stiffness, 6 × 6 for a rigid body (N/m, N/rad, N·m/rad; the
+    /// translational 3 × 3 block for a point mass, zeros elsewhere).
+    pub stiffness6: Matrix6<f64>,
+    /// 3 (point mass) or 6 (rigid body).
+    pub stiffness_dim: usize,
+    /// Tension solver: active-set changes in this cycle.
+    pub tension_iterations: u32,
+    /// Tension solver: the previous active set was optimal again.
+    pub tension_warm: bool,
+    /// Evaluations of the dynamic stiffness D(λ) in this cycle.
+    pub eigen_evaluations: u32,
+    /// Relative residual |μ₁(D(λ₁))| / ‖D‖ of the first root.
+    pub eigen_residual: f64,
+    /// The first-mode iteration started cold.
+    pub cold_start: bool,
+}
+
+impl Estimate {
+    /// No pose yet: every number NaN, `n` cables.
+    pub(super) fn empty(n: usize) -> Estimate {
+        Estimate {
+            status: Status::NoPoseYet,
+            error: None,
+            n_cables: n,
+            tensions_n: [f64::NAN; MAX_CABLES],
+            f1_hz: f64::NAN,
+            f1_ee_participation: f64::NAN,
+            ee_mode_hz: f64::NAN,
+            ee_mode_participation: f64::NAN,
+            stiffness_n_m: Matrix3::repeat(f64::NAN),
+            stiffness6: Matrix6::repeat(f64::NAN),
+            stiffness_dim: 3,
+            tension_iterations: 0,
+            tension_warm: false,
+            eigen_evaluations: 0,
+            eigen_residual: f64::NAN,
+            cold_start: true,
+        }
+    }
+    /// Tensions of the cables, N.
+    pub fn tensions(&self) -> &[f64] {
+        &self.tensions_n[..self.n_cables]
+    }
+    /// True when the status is ok.
+    pub fn is_ok(&self) -> bool {
+        self.status == Status::Ok
+    }
+}

@@ -1,0 +1,330 @@
+//! The per-cycle pipeline and the offline reference pipeline.
+//!
+//! One cycle ([`Estimator::update`]) takes a pose — centroid position p (m) and orientation
+//! quaternion — and one lower tension bound T_min (N, the same for every cable), and computes:
+//!
+//! 1. the cable geometry: unit directions s_i and lengths L_i (m) from the anchors to the
+//!    end-effector (to its attachment points for a rigid body);
+//! 2. the tension distribution T (N): minimise ½‖T‖² subject to A T = w (w = m g, N, when
+//!    the cables carry the weight) and T_min ≤ T_i ≤ T_max, with the active-set solver
+//!    warm-started from the last cycle;
+//! 3. the cable models at those tensions (stiffness N/m, mass kg; the scene's element);
+//! 4. the first natural frequency f1 = √λ₁ / 2π (Hz, λ in rad²/s²) by the structured
+//!    solver, warm-started from a linear prediction of the last two cycles' λ₁; its
+//!    end-effector participation (0 ..= 1); and, when enabled, the end-effector mode;
+//! 5. the static end-effector stiffness (N/m; N/rad and N·m/rad blocks for a rigid body).
+//!
+//! [`Estimator`] owns every buffer of the cycle, sized in [`Estimator::new`]; the cycle
+//! returns an [`Estimate`] whose [`Estimate::status`] says whether its numbers are valid.
+//! It never allocates, never blocks, and every loop in it is bounded; bad input and
+//! non-convergence come out as status codes ([`EstimatorError::status`]), never as a panic,
+//! and a non-ok estimate carries NaN frequencies rather than stale ones. The inverse query
+//! [`Estimator::t_min_for_f1`] runs the same forward pipeline on its own buffers.
+//!
+//! [`reference_analysis`] is the offline reference of the same model: Clarabel for the
+//! tensions, dense assembly and a dense generalized eigensolver for every frequency.
+//! [`resolve_auto`] picks the model of `element = "auto"` scenes. Both allocate.
+
+mod auto;
+mod error;
+mod estimate;
+mod inverse;
+mod params;
+mod pipeline;
+mod reference;
+
+pub use auto::{resolve_auto, AutoChoice};
+pub use error::{AnalysisError, BuildError, EstimatorError, InputError, TminQueryError};
+pub use estimate::{Estimate, Status};
+pub use inverse::TminAnswer;
+pub use params::EstimatorParams;
+pub use reference::{
+    build_models, reference_analysis, reference_analysis_at, structured_analysis, ReferenceAnalysis,
+};
+
+use crate::cable::{up_frame, CableModel};
+use crate::kinematics::Pose;
+use crate::modal::{lambda_to_hz, ModalParams, ModalSolver};
+use crate::scene::{ElementKind, Scene, MAX_CABLES};
+use crate::tension::TensionInfo;
+use nalgebra::{Matrix3, Matrix6, Vector3};
+use pipeline::{wrench6, Pipeline};
+
+/// Anchors spread less than this (m) along an axis count as flat along it (all at one
+/// height, or a planar robot's normal): that axis does not bound the workspace.
+const FLAT_AXIS_M: f64 = 1e-9;
+
+/// The real-time estimator of one scene.
+#[derive(Debug, Clone)]
+pub struct Estimator {
+    scene: Scene,
+    params: EstimatorParams,
+    /// The cycle's solvers (their warm state carries from cycle to cycle).
+    cycle: Pipeline,
+    expected_rank: u32,
+    bounds: (Vector3<f64>, Vector3<f64>),
+    last_ok_position: Option<Vector3<f64>>,
+    last_lambda1: f64,
+    prev_lambda1: f64,
+    last_t_min_n: f64,
+    estimate: Estimate,
+    /// Scratch solvers of the inverse query (so it leaves the cycle's warm state alone).
+    inverse: Pipeline,
+    auto: Option<AutoChoice>,
+}
+
+impl Estimator {
+    /// Build for a scene with default parameters (the scene's participation threshold).
+    pub fn new(scene: &Scene) -> Result<Estimator, BuildError> {
+        let mut p = EstimatorParams::default();
+        p.modal.ee_participation_min = scene.model.ee_participation_min;
+        Self::with_params(scene, p)
+    }
+
+    /// Build with explicit parameters. Allocates everything the cycle needs and checks
+    /// the scene's default pose.
+    pub fn with_params(scene: &Scene, params: EstimatorParams) -> Result<Estimator, BuildError> {
+        if scene.model.element == ElementKind::Auto {
+            let (resolved, choice) = resolve_auto(scene)?;
+            let mut est = Self::with_params(&resolved, params)?;
+            est.auto = Some(choice);
+            return Ok(est);
+        }
+        let n = scene.n_cables();
+        let frame = up_frame(&scene.gravity_m_s2);
+        let mut est = Estimator {
+            scene: scene.clone(),
+            params,
+            cycle: Pipeline::new(n, frame, params.tension, params.modal),
+            expected_rank: 0,
+            bounds: scene.frame_bounds_m(),
+            last_ok_position: None,
+            last_lambda1: f64::NAN,
+            prev_lambda1: f64::NAN,
+            last_t_min_n: f64::NAN,
+            estimate: Estimate::empty(n),
+            inverse: Pipeline::new(
+                n,
+                frame,
+                params.tension,
+                ModalParams {
+                    certify: false,
+                    ..params.modal
+                },
+            ),
+            auto: None,
+        };
+        // Expected rank: the rank at the default pose.
+        let default_pose = |e: EstimatorError| BuildError::DefaultPose {
+            scene: scene.name.clone(),
+            reason: e,
+        };
+        let pose = Pose {
+            position_m: scene.ee_position_m,
+            orientation_wxyz: scene.ee_orientation_wxyz,
+        };
+        let c = &mut est.cycle;
+        c.set_pose(scene, &pose)
+            .map_err(|e| default_pose(e.into()))?;
+        c.tension
+            .solve_wrench(&c.geometry, &wrench6(scene), scene.t_min_n, scene.t_max_n)
+            .map_err(|e| default_pose(e.into()))?;
+        est.expected_rank = c.tension.info().rank;
+        c.tension.reset_warm_start();
+        Ok(est)
+    }
+
+    /// What `element = "auto"` picked (None for an explicit model).
+    pub fn auto_choice(&self) -> Option<&AutoChoice> {
+        self.auto.as_ref()
+    }
+
+    /// The scene (with the `auto` model resolved).
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &EstimatorParams {
+        &self.params
+    }
+
+    /// The last estimate.
+    pub fn estimate(&self) -> &Estimate {
+        &self.estimate
+    }
+
+    /// The cable models of the last successful cycle.
+    pub fn cable_models(&self) -> &[CableModel] {
+        &self.cycle.models
+    }
+
+    /// The structured eigen solver as loaded at the last pose (its sum rules, counters).
+    pub fn modal(&self) -> &ModalSolver {
+        &self.cycle.modal
+    }
+
+    /// End-effector bookkeeping counters (see [`ModalSolver::rescan_counts`]).
+    pub fn rescan_counts(&self) -> [u64; 7] {
+        self.cycle.modal.rescan_counts()
+    }
+
+    /// Info of the last tension solve.
+    pub fn tension_info(&self) -> TensionInfo {
+        self.cycle.tension.info()
+    }
+
+    /// Forget every warm start: the next cycle starts cold.
+    pub fn reset(&mut self) {
+        self.last_ok_position = None;
+        self.last_lambda1 = f64::NAN;
+        self.cycle.tension.reset_warm_start();
+    }
+
+    /// One cycle: pose and T_min (N, the same for every cable) → estimate.
+    pub fn update(&mut self, pose: &Pose, t_min_n: f64) -> &Estimate {
+        let n = self.scene.n_cables();
+        let mut e = Estimate::empty(n);
+        match self.run(pose, t_min_n, &mut e) {
+            Ok(()) => {
+                e.status = Status::Ok;
+                self.last_ok_position = Some(pose.position_m);
+                self.last_t_min_n = t_min_n;
+            }
+            Err(err) => {
+                e.status = err.status();
+                e.error = Some(err);
+                e.f1_hz = f64::NAN;
+                e.ee_mode_hz = f64::NAN;
+                e.stiffness_n_m = Matrix3::repeat(f64::NAN);
+                e.stiffness6 = Matrix6::repeat(f64::NAN);
+                if e.status != Status::TensionInfeasible {
+                    e.tensions_n = [f64::NAN; MAX_CABLES];
+                }
+                self.last_ok_position = None;
+                self.last_lambda1 = f64::NAN;
+            }
+        }
+        self.estimate = e;
+        &self.estimate
+    }
+
+    /// Reject a pose or T_min before any computation.
+    fn check_input(&self, pose: &Pose, t_min_n: f64) -> Result<(), InputError> {
+        if !pose.is_finite() {
+            return Err(InputError::NonFinitePose);
+        }
+        if !pose.has_unit_quaternion(self.params.quaternion_tol) {
+            return Err(InputError::NonUnitQuaternion);
+        }
+        if !(t_min_n.is_finite() && t_min_n >= 0.0 && t_min_n <= self.scene.t_max_n) {
+            return Err(InputError::TminOutOfRange);
+        }
+        let m = self.params.workspace_margin_m;
+        let p = pose.position_m;
+        // Axes along which the anchors are flat (all at one height for a suspended robot,
+        // a planar robot's normal) do not bound the workspace; tension feasibility does.
+        let flat = |i: usize| self.bounds.1[i] - self.bounds.0[i] <= FLAT_AXIS_M;
+        if (0..3).any(|i| !flat(i) && (p[i] < self.bounds.0[i] - m || p[i] > self.bounds.1[i] + m))
+        {
+            return Err(InputError::OutsideWorkspace);
+        }
+        Ok(())
+    }
+
+    /// The cycle's warm start of λ₁ (rad²/s²): a linear extrapolation of the last two
+    /// cycles' λ₁ (the last one alone when the extrapolation is not positive), None cold.
+    fn predict_lambda1(&self, warm: bool) -> Option<f64> {
+        if warm && self.last_lambda1.is_finite() {
+            let pred = if self.prev_lambda1.is_finite() {
+                2.0 * self.last_lambda1 - self.prev_lambda1
+            } else {
+                self.last_lambda1
+            };
+            Some(if pred > 0.0 { pred } else { self.last_lambda1 })
+        } else {
+            None
+        }
+    }
+
+    fn run(&mut self, pose: &Pose, t_min_n: f64, e: &mut Estimate) -> Result<(), EstimatorError> {
+        let n = self.scene.n_cables();
+        self.check_input(pose, t_min_n)?;
+        let p = pose.position_m;
+        self.cycle.set_pose(&self.scene, pose)?;
+        let warm = match self.last_ok_position {
+            Some(q) => {
+                (q - p).norm() <= self.params.warm_jump_m
+                    && (t_min_n - self.last_t_min_n).abs()
+                        <= self.params.warm_t_min_change * self.last_t_min_n
+            }
+            None => false,
+        };
+        if !warm {
+            self.cycle.tension.reset_warm_start();
+            self.cycle.modal.reset_tracking();
+        }
+        let warm_l = self.predict_lambda1(warm);
+        let root = self.cycle.first_root(
+            &self.scene,
+            pose,
+            t_min_n,
+            self.expected_rank,
+            warm_l,
+            |tension| {
+                let info = tension.info();
+                e.tension_iterations = info.iterations;
+                e.tension_warm = info.warm_start_accepted;
+                e.tensions_n[..n].copy_from_slice(tension.tensions_n());
+            },
+        );
+        let r1 = match root {
+            Ok(r) => r,
+            Err(err) => {
+                // Only the root search fails with a modal error: it was started and spent
+                // evaluations.
+                if let EstimatorError::Modal(_) = err {
+                    e.cold_start = warm_l.is_none();
+                    e.eigen_evaluations = self.cycle.evaluations_since_load();
+                }
+                return Err(err);
+            }
+        };
+        e.cold_start = warm_l.is_none();
+        e.f1_hz = lambda_to_hz(r1.lambda);
+        e.f1_ee_participation = r1.ee_participation;
+        e.eigen_residual = r1.residual;
+        self.prev_lambda1 = if warm { self.last_lambda1 } else { f64::NAN };
+        self.last_lambda1 = r1.lambda;
+        if self.params.ee_mode {
+            // No mode reaching the participation threshold within the bounded scan leaves
+            // the end-effector mode unknown (NaN) without invalidating f1 and the tensions.
+            if let Ok(ree) = self.cycle.modal.ee_mode_tracked(&r1, warm_l.is_some()) {
+                e.ee_mode_hz = lambda_to_hz(ree.lambda);
+                e.ee_mode_participation = ree.ee_participation;
+            }
+        }
+        self.write_stiffness(e);
+        e.eigen_evaluations = self.cycle.evaluations_since_load();
+        Ok(())
+    }
+
+    /// The static end-effector stiffness of the loaded models into `e`.
+    fn write_stiffness(&mut self, e: &mut Estimate) {
+        if self.scene.rigid {
+            let k6 = self.cycle.modal.static_stiffness6();
+            e.stiffness6 = k6;
+            e.stiffness_n_m = k6.fixed_view::<3, 3>(0, 0).into_owned();
+            e.stiffness_dim = 6;
+        } else {
+            let mut k = Matrix3::zeros();
+            for cm in &self.cycle.models {
+                k += cm.static_stiffness;
+            }
+            e.stiffness_n_m = k;
+            e.stiffness6 = Matrix6::zeros();
+            e.stiffness6.fixed_view_mut::<3, 3>(0, 0).copy_from(&k);
+            e.stiffness_dim = 3;
+        }
+    }
+}
