@@ -2,7 +2,7 @@
 //! within the scene's tolerance. Offline: runs at build time and allocates.
 
 use super::{BuildError, Estimator, EstimatorError, EstimatorParams, InputError};
-use crate::cable::up_frame;
+use crate::trajectory::{Circle, CIRCLE_RADIUS_M};
 use crate::kinematics::{Geometry, Pose};
 use crate::scene::{ElementKind, Scene};
 use nalgebra::Vector3;
@@ -10,10 +10,8 @@ use nalgebra::Vector3;
 /// Elements per cable of the reference (catenary) model: converged in f1 well below any
 /// tolerance a scene sets.
 const REF_N: usize = 64;
-/// Radius (m) of the circle of sample poses around the default pose, in the horizontal
-/// plane: the span over which the pick must hold.
-const CIRCLE_RADIUS_M: f64 = 0.75;
-/// Sample poses on that circle, π/4 apart.
+/// Sample poses on the paper's circle (radius [`CIRCLE_RADIUS_M`] around the default pose,
+/// the span over which the pick must hold), π/4 apart.
 const CIRCLE_POSES: u32 = 8;
 
 /// What `element = "auto"` picked, and why.
@@ -76,19 +74,18 @@ impl std::fmt::Display for AutoChoice {
 pub fn resolve_auto(scene: &Scene) -> Result<(Scene, AutoChoice), BuildError> {
     let tol = scene.model.f1_tolerance;
     let reference = scene.with_model(ElementKind::Catenary, REF_N);
-    let frame = up_frame(&scene.gravity_m_s2);
     let mut poses = vec![Pose {
         position_m: scene.ee_position_m,
         orientation_wxyz: scene.ee_orientation_wxyz,
     }];
-    for k in 0..CIRCLE_POSES {
-        let th = k as f64 * std::f64::consts::FRAC_PI_4;
-        poses.push(Pose {
-            position_m: scene.ee_position_m
-                + frame.column(0) * (CIRCLE_RADIUS_M * th.cos())
-                + frame.column(1) * (CIRCLE_RADIUS_M * th.sin()),
-            orientation_wxyz: scene.ee_orientation_wxyz,
-        });
+    // One revolution per second: time k/8 s is the angle kπ/4 (exactly, in binary).
+    if let Ok(circle) = Circle::new(scene, CIRCLE_RADIUS_M, 1.0) {
+        for k in 0..CIRCLE_POSES {
+            poses.push(Pose {
+                position_m: circle.position_at(k as f64 / CIRCLE_POSES as f64),
+                orientation_wxyz: scene.ee_orientation_wxyz,
+            });
+        }
     }
     let f1_of = |s: &Scene, pose: &Pose| -> Option<f64> {
         let p = EstimatorParams {
