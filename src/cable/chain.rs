@@ -247,8 +247,6 @@ pub fn end_mass_q(n_el: usize) -> f64 {
     -r * (1.0 - r2.powi(n_el as i32 - 1)) / (1.0 - r2.powi(n_el as i32))
 }
 
-/// Largest element count evaluated by [`eval_discrete_batch`] (above it the closed form
-
 /// Pivot recurrence of the uniform chain (interior diagonal 2α, off-diagonal β):
 /// p₁ = 2α, p_j = 2α − β²/p_{j−1}; s = α − β²/p_{N−1}; negative pivots = blocked count.
 /// O(N); the reference for the closed form and the fallback at its singular points.
