@@ -141,7 +141,7 @@ impl Geometry {
         self.update(anchors_m, p_m)
     }
 
-    /// Structure matrix entry A[r, i]: s_i[r] for r < 3, (r_i × s_i)[r − 3] for r ≥ 3.
+    /// Structure matrix entry A[r, i]: s_i\[r\] for r < 3, (r_i × s_i)[r − 3] for r ≥ 3.
     pub fn a(&self, r: usize, i: usize) -> f64 {
         if r < 3 {
             self.unit[i][r]

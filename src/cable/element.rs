@@ -13,7 +13,7 @@ const SLACK_HORIZONTAL_REL: f64 = 1e-24;
 const ASINH_SERIES_MAX: f64 = 1e-4;
 
 /// FEM element stiffness block K_c = EA/l e eᵀ + T/l (I − e eᵀ), N/m.
-/// `geometric` = false drops the T/l term (axial springs only, the paper's ref. [7]).
+/// `geometric` = false drops the T/l term (axial springs only, the paper's ref. \[7\]).
 pub fn fem_block(
     e: &Vector3<f64>,
     length_m: f64,

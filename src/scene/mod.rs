@@ -150,7 +150,7 @@ pub struct ModelSettings {
     /// mode to count as an "end-effector mode" (0 < x ≤ 1, default 0.5).
     pub ee_participation_min: f64,
     /// Transverse geometric stiffness T/l of the cables (effect `geometric_stiffness`).
-    /// Off: axial springs only (the paper's ref. [7]).
+    /// Off: axial springs only (the paper's ref. \[7\]).
     pub geometric_stiffness: bool,
     /// Relative f1 error the `auto` model may make (default 1e-3).
     pub f1_tolerance: f64,
