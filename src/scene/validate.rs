@@ -1,9 +1,11 @@
-//! Validation: the raw scene into a [`Scene`], one function per concern. The checks run in
-//! a fixed order and the first failing one is the error reported, so [`scene_from_raw`]
-//! calls them in the order of the keys a reader meets them: name, gravity, end-effector,
-//! tension bounds, model, effects, rigid body, cable count, then each cable.
+//! Validation: the raw scene into a [`Scene`], one function per concern. The first failing
+//! check is the error reported, so [`scene_from_raw`] keeps one fixed order: name, gravity,
+//! end-effector, tension bounds, model, effects, inertia, orientation, rigid-body cable
+//! count, geometric stiffness, cable count, then each cable in turn.
 
-use super::parse::{RawCable, RawCableDefaults, RawEffects, RawModel, RawScene, RawTension};
+use super::parse::{
+    RawCable, RawCableDefaults, RawEffects, RawEndEffector, RawModel, RawScene, RawTension,
+};
 use super::{
     Cable, ElementKind, ModelSettings, Scene, SceneError, MAX_CABLES, MAX_ELEMENTS_PER_CABLE,
 };
@@ -67,8 +69,7 @@ pub(super) fn scene_from_raw(raw: RawScene, file: &str) -> Result<Scene, SceneEr
     let ck = Checker { file };
     validate_name(&ck, &raw.name)?;
     let (gravity, g) = validate_gravity(&ck, raw.gravity)?;
-    let ee_mass = ck.positive("end_effector.mass", raw.end_effector.mass)?;
-    let ee_pos = ck.finite3("end_effector.position", raw.end_effector.position)?;
+    let (ee_mass, ee_pos) = validate_end_effector(&ck, &raw.end_effector)?;
     let (t_min, t_max) = validate_tension_bounds(&ck, &raw.tension)?;
     let (n, part) = validate_model(&ck, &raw.model)?;
     let fx = raw.effects.unwrap_or_default();
@@ -128,6 +129,17 @@ fn validate_gravity(ck: &Checker, raw: [f64; 3]) -> Result<(Vector3<f64>, f64), 
         return Err(ck.inv("gravity", format!("|g| = {g} m/s² is implausible (> 1000)")));
     }
     Ok((gravity, g))
+}
+
+/// `[end_effector]` mass (kg, > 0) and position (m, finite); its inertia and orientation
+/// are checked with the effects that use them.
+fn validate_end_effector(
+    ck: &Checker,
+    raw: &RawEndEffector,
+) -> Result<(f64, Vector3<f64>), SceneError> {
+    let ee_mass = ck.positive("end_effector.mass", raw.mass)?;
+    let ee_pos = ck.finite3("end_effector.position", raw.position)?;
+    Ok((ee_mass, ee_pos))
 }
 
 /// `[tension]`: 0 < t_min ≤ t_max, both finite (N).
