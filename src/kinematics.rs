@@ -1,12 +1,18 @@
-//! Kinematics of a point-mass CDPR (paper Eqs. 1-5, all cables attached at the centroid).
+//! Kinematics of a CDPR (paper Eqs. 1-5): cable lengths, unit vectors and the structure
+//! matrix at one pose.
 //!
-//! For cable i with anchor a_i and end-effector position p, the cable vector is
-//! l_i = p − a_i (anchor → end-effector), its length L_i = ‖l_i‖ (m) and its unit vector
-//! s_i = l_i / L_i. The structure matrix A = Jᵀ (3 × n) has columns s_i, and static
-//! equilibrium reads A T = w, with w the wrench the cables carry (N): m·g when they carry
-//! the end-effector's weight. (A cable pulls the end-effector towards its anchor, i.e.
-//! with force −T_i s_i; equilibrium −Σ T_i s_i + m g = 0 gives Σ T_i s_i = m g.)
-//! The moment rows of Eq. 5 vanish because every b_i = 0.
+//! For cable i with anchor a_i, end-effector position p and attachment arm r_i (the
+//! attachment point relative to the centroid, world frame), the cable vector is
+//! l_i = p + r_i − a_i (anchor → attachment point), its length L_i = ‖l_i‖ (m) and its unit
+//! vector s_i = l_i / L_i. The structure matrix A = Jᵀ has columns s_i (force rows) and
+//! r_i × s_i (moment rows), and static equilibrium reads A T = w, with w the wrench the
+//! cables carry (N, N·m): m·g and no moment when they carry the end-effector's weight. (A
+//! cable pulls the end-effector towards its anchor, i.e. with force −T_i s_i; equilibrium
+//! −Σ T_i s_i + m g = 0 gives Σ T_i s_i = m g.)
+//!
+//! A point-mass end-effector has every r_i = 0, so its moment rows vanish and A is 3 × n. A
+//! rigid one (scene effect `rotation`) has r_i = R b_i, with b_i in its body frame and R its
+//! orientation ([`Geometry::update_rigid`]).
 
 use nalgebra::Vector3;
 
@@ -135,7 +141,7 @@ impl Geometry {
         self.update(anchors_m, p_m)
     }
 
-    /// Structure matrix entry A[r, i]: s_i[r] for r < 3, (r_i × s_i)[r − 3] for r ≥ 3.
+    /// Structure matrix entry A[r, i]: s_i\[r\] for r < 3, (r_i × s_i)[r − 3] for r ≥ 3.
     pub fn a(&self, r: usize, i: usize) -> f64 {
         if r < 3 {
             self.unit[i][r]

@@ -1,0 +1,102 @@
+//! [`Scene::load`]: a scene file, or one of the embedded scenes by name.
+
+use super::{Scene, SceneError};
+use std::path::Path;
+
+/// The names [`Scene::load`] accepts for the embedded scenes (when no file of that name
+/// exists), as listed in its error message.
+pub(super) const EMBEDDED_NAMES: [&str; 5] = [
+    "spatial-paper",
+    "spatial",
+    "default",
+    "planar-paper",
+    "planar",
+];
+
+impl Scene {
+    /// Load a scene by path or by name: `name_or_path` is read as a scene file when it
+    /// exists; otherwise `spatial-paper` (also `spatial`, `default`) is the embedded
+    /// [`Scene::default_scene`] and `planar-paper` (also `planar`) the embedded
+    /// [`Scene::planar_paper`]. Anything else is [`SceneError::NotFound`]; a file that
+    /// exists but cannot be read or validated gives that error.
+    pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
+        let p = Path::new(name_or_path);
+        let exists = p.try_exists();
+        if !matches!(exists, Ok(true)) {
+            match name_or_path {
+                "spatial-paper" | "spatial" | "default" => return Ok(Scene::default_scene()),
+                "planar-paper" | "planar" => return Ok(Scene::planar_paper()),
+                _ => {}
+            }
+            // Known absent (not, e.g., an unreadable directory: that reports its reason).
+            if matches!(exists, Ok(false)) {
+                return Err(SceneError::NotFound {
+                    name: name_or_path.to_string(),
+                });
+            }
+        }
+        Scene::from_path(p)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn embedded_names() {
+        for name in ["spatial-paper", "spatial", "default"] {
+            assert_eq!(Scene::load(name).unwrap(), Scene::default_scene(), "{name}");
+        }
+        for name in ["planar-paper", "planar"] {
+            assert_eq!(Scene::load(name).unwrap(), Scene::planar_paper(), "{name}");
+        }
+    }
+
+    #[test]
+    fn a_path_is_read() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/box_6dof.toml");
+        assert_eq!(Scene::load(path).unwrap(), Scene::box_6dof());
+    }
+
+    #[test]
+    fn a_file_wins_over_an_embedded_name() {
+        let dir = std::env::temp_dir().join(format!("cablevib-load-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("planar");
+        std::fs::write(&file, super::super::BOX_SCENE_TOML).unwrap();
+        let s = Scene::load(file.to_str().unwrap());
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(s.unwrap().n_cables(), Scene::box_6dof().n_cables());
+    }
+
+    #[test]
+    fn an_unknown_name_is_a_clear_error() {
+        let e = Scene::load("no-such-scene.toml").unwrap_err();
+        assert!(matches!(e, SceneError::NotFound { .. }), "{e:?}");
+        let msg = e.to_string();
+        assert!(
+            msg.starts_with("no-such-scene.toml: no such scene file"),
+            "{msg}"
+        );
+        assert!(
+            msg.contains("spatial-paper") && msg.contains("planar-paper"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn a_bad_file_names_file_and_key() {
+        let dir = std::env::temp_dir().join(format!("cablevib-load-bad-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("bad.toml");
+        let text = super::super::DEFAULT_SCENE_TOML.replace("mass = 30.0", "mass = -1.0");
+        std::fs::write(&file, text).unwrap();
+        let e = Scene::load(file.to_str().unwrap()).unwrap_err().to_string();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(
+            e.contains("bad.toml") && e.contains("end_effector.mass"),
+            "{e}"
+        );
+    }
+}

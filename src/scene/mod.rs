@@ -1,0 +1,273 @@
+//! Scene files: the description of one robot, parsed from TOML and validated.
+//!
+//! A scene gives the frame (cable anchors, m), the end-effector (point mass at the
+//! centroid where every cable attaches, kg), the cable material (Young's modulus E in Pa,
+//! cross-section A in m², weight per length γ in N/m or mass per length μ in kg/m), the
+//! tension bounds (N) and the cable model. Gravity (m/s²) converts weight per length to
+//! mass per length (μ = γ/|g|) and gives the direction of sag and of the end-effector's
+//! weight. Everything is SI. Unknown keys are errors, not silently ignored.
+//!
+//! [`Scene::from_path`], [`Scene::from_toml_str`] and [`Scene::load`] return a
+//! [`SceneError`] that names the file, the key and what is wrong; they never panic.
+//!
+//! The module is split by stage: `parse` (TOML into serde's raw types), `validate` (raw
+//! types into a [`Scene`], one check per concern) and `load` (a file path or the name of an
+//! embedded scene).
+
+use nalgebra::Vector3;
+use serde::Deserialize;
+use std::path::Path;
+
+mod load;
+mod parse;
+mod validate;
+
+/// The embedded default scene: the paper's spatial robot (Tables 5-6).
+pub const DEFAULT_SCENE_TOML: &str = include_str!("../../scenes/spatial_paper.toml");
+/// The paper's planar robot (Tables 1-2), embedded for tests and examples.
+pub const PLANAR_SCENE_TOML: &str = include_str!("../../scenes/planar_paper.toml");
+/// A 6-DOF robot: 8 cables, 3 × 3 × 2.5 m frame, box platform with attachment points.
+pub const BOX_SCENE_TOML: &str = include_str!("../../scenes/box_6dof.toml");
+
+/// Largest number of cables a scene may have (fixed by the IPC message layout).
+pub const MAX_CABLES: usize = cablevib_ipc::MAX_CABLES;
+
+/// Largest number of elements per cable accepted (bounds every per-cycle loop).
+pub const MAX_ELEMENTS_PER_CABLE: usize = 10_000;
+
+/// Errors from reading or validating a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("{file}: cannot read scene file: {reason}")]
+    Io {
+        /// File name.
+        file: String,
+        /// Underlying error.
+        reason: std::io::Error,
+    },
+    /// TOML syntax error, wrong type, missing or unknown key (serde's message names the key).
+    #[error("{file}: {message}")]
+    Parse {
+        /// File name.
+        file: String,
+        /// What is wrong, with the key and the line.
+        message: String,
+    },
+    /// A value that parses but is not physically valid.
+    #[error("{file}: key `{key}`: {message}")]
+    Invalid {
+        /// File name.
+        file: String,
+        /// The offending key, e.g. `cables[2].anchor`.
+        key: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// [`Scene::load`]: neither an existing file nor the name of an embedded scene.
+    #[error("{name}: no such scene file, and not an embedded scene ({})", load::EMBEDDED_NAMES.join(", "))]
+    NotFound {
+        /// The name or path given.
+        name: String,
+    },
+}
+
+/// The cable element model used for the string modes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ElementKind {
+    /// Straight two-node truss element with geometric stiffness (paper Eqs. 12-18).
+    Fem,
+    /// Modified analytical (catenary) element, cancellation-free form (paper Eqs. 19-32, docs/model.md).
+    Catenary,
+    /// Continuous taut string / bar (N → ∞ limit of the FEM element), exact dynamic stiffness.
+    Continuous,
+    /// Massless cables: springs EA/L along and T/L across; end-effector modes only.
+    Massless,
+    /// Pick the cheapest of the above whose f1 error stays within `model.f1_tolerance`
+    /// (resolved when the estimator is built; see `estimator::resolve_auto`).
+    Auto,
+}
+
+impl ElementKind {
+    /// Lower-case name as used in scene files and on the command line.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ElementKind::Fem => "fem",
+            ElementKind::Catenary => "catenary",
+            ElementKind::Continuous => "continuous",
+            ElementKind::Massless => "massless",
+            ElementKind::Auto => "auto",
+        }
+    }
+    /// Parse a command-line name.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "fem" => Some(Self::Fem),
+            "catenary" => Some(Self::Catenary),
+            "continuous" => Some(Self::Continuous),
+            "massless" => Some(Self::Massless),
+            "auto" => Some(Self::Auto),
+            _ => None,
+        }
+    }
+    /// True when the model is discretised into N elements per cable.
+    pub fn is_discrete(self) -> bool {
+        matches!(self, Self::Fem | Self::Catenary)
+    }
+}
+
+/// Material and geometry of one cable, SI units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cable {
+    /// Anchor point on the frame, m.
+    pub anchor_m: Vector3<f64>,
+    /// Young's modulus E, Pa.
+    pub youngs_modulus_pa: f64,
+    /// Cross-section A, m².
+    pub area_m2: f64,
+    /// Mass per unit length μ, kg/m.
+    pub mass_per_length_kg_m: f64,
+    /// Attachment point on the end-effector in its body frame, m (zero for a point mass).
+    pub attachment_m: Vector3<f64>,
+}
+
+impl Cable {
+    /// Axial rigidity EA, N.
+    pub fn ea_n(&self) -> f64 {
+        self.youngs_modulus_pa * self.area_m2
+    }
+}
+
+/// Cable model settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModelSettings {
+    /// Element kind.
+    pub element: ElementKind,
+    /// Number of equal elements per cable (FEM and catenary).
+    pub elements_per_cable: usize,
+    /// Smallest share of modal kinetic energy carried by the end-effector's own mass for a
+    /// mode to count as an "end-effector mode" (0 < x ≤ 1, default 0.5).
+    pub ee_participation_min: f64,
+    /// Transverse geometric stiffness T/l of the cables (effect `geometric_stiffness`).
+    /// Off: axial springs only (the paper's ref. \[7\]).
+    pub geometric_stiffness: bool,
+    /// Relative f1 error the `auto` model may make (default 1e-3).
+    pub f1_tolerance: f64,
+}
+
+/// A validated robot description. All fields SI.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    /// Scene name.
+    pub name: String,
+    /// Gravity vector, m/s².
+    pub gravity_m_s2: Vector3<f64>,
+    /// End-effector mass, kg (point mass at the centroid).
+    pub ee_mass_kg: f64,
+    /// Default end-effector position, m.
+    pub ee_position_m: Vector3<f64>,
+    /// Whether the cables carry the end-effector's weight (wrench w = m·g) or not (w = 0).
+    pub weight_carried: bool,
+    /// Cables in order.
+    pub cables: Vec<Cable>,
+    /// Lower tension bound, N.
+    pub t_min_n: f64,
+    /// Upper tension bound, N.
+    pub t_max_n: f64,
+    /// Cable model.
+    pub model: ModelSettings,
+    /// Rigid-body end-effector (effect `rotation`): 6 DOF, attachments b_i, inertia.
+    pub rigid: bool,
+    /// Inertia tensor about the centroid in the body frame, kg·m² (rigid body only).
+    pub ee_inertia_kg_m2: nalgebra::Matrix3<f64>,
+    /// Default orientation, unit quaternion [w, x, y, z].
+    pub ee_orientation_wxyz: [f64; 4],
+}
+
+impl Scene {
+    /// Read and validate a scene file.
+    pub fn from_path(path: &Path) -> Result<Scene, SceneError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|reason| SceneError::Io {
+            file: file.clone(),
+            reason,
+        })?;
+        Self::from_toml_str(&text, &file)
+    }
+
+    /// The embedded default scene (the paper's spatial robot).
+    pub fn default_scene() -> Scene {
+        Self::from_toml_str(DEFAULT_SCENE_TOML, "<embedded spatial_paper.toml>")
+            .expect("embedded default scene is valid (tested)")
+    }
+
+    /// The embedded planar paper scene.
+    pub fn planar_paper() -> Scene {
+        Self::from_toml_str(PLANAR_SCENE_TOML, "<embedded planar_paper.toml>")
+            .expect("embedded planar scene is valid (tested)")
+    }
+
+    /// The embedded 6-DOF box-platform robot.
+    pub fn box_6dof() -> Scene {
+        Self::from_toml_str(BOX_SCENE_TOML, "<embedded box_6dof.toml>")
+            .expect("embedded 6-DOF scene is valid (tested)")
+    }
+
+    /// Number of cables.
+    pub fn n_cables(&self) -> usize {
+        self.cables.len()
+    }
+
+    /// Weight per length γ = μ|g| of cable `i`, N/m (drives the catenary sag).
+    pub fn weight_per_length_n_m(&self, i: usize) -> f64 {
+        self.cables[i].mass_per_length_kg_m * self.gravity_m_s2.norm()
+    }
+
+    /// The wrench the cables must supply, N: m·g when the weight is carried, else zero.
+    pub fn wrench_n(&self) -> Vector3<f64> {
+        if self.weight_carried {
+            self.gravity_m_s2 * self.ee_mass_kg
+        } else {
+            Vector3::zeros()
+        }
+    }
+
+    /// Axis-aligned bounding box of the anchors, m (the frame).
+    pub fn frame_bounds_m(&self) -> (Vector3<f64>, Vector3<f64>) {
+        let mut lo = Vector3::repeat(f64::INFINITY);
+        let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+        for c in &self.cables {
+            lo = lo.inf(&c.anchor_m);
+            hi = hi.sup(&c.anchor_m);
+        }
+        (lo, hi)
+    }
+
+    /// Copy with a different element model and element count (command-line overrides).
+    pub fn with_model(&self, element: ElementKind, elements_per_cable: usize) -> Scene {
+        let mut s = self.clone();
+        s.model.element = element;
+        if element != ElementKind::Massless {
+            s.model.geometric_stiffness = true;
+        }
+        s.model.elements_per_cable = elements_per_cable.clamp(1, MAX_ELEMENTS_PER_CABLE);
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn embedded_scenes_parse() {
+        let s = Scene::default_scene();
+        assert_eq!(s.n_cables(), 8);
+        let p = Scene::planar_paper();
+        assert_eq!(p.n_cables(), 4);
+        assert!(!p.weight_carried);
+        let b = Scene::box_6dof();
+        assert!(b.rigid && b.n_cables() == 8);
+    }
+}

@@ -1,0 +1,105 @@
+//! TOML parsing: the scene file as serde reads it (`Raw*` types, unknown keys rejected,
+//! defaults filled in), before any physical check.
+
+use super::{ElementKind, Scene, SceneError};
+use serde::Deserialize;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawScene {
+    pub(super) name: String,
+    pub(super) gravity: [f64; 3],
+    pub(super) end_effector: RawEndEffector,
+    pub(super) cable: RawCableDefaults,
+    pub(super) tension: RawTension,
+    pub(super) model: RawModel,
+    #[serde(default)]
+    pub(super) effects: Option<RawEffects>,
+    pub(super) cables: Vec<RawCable>,
+}
+
+/// `[effects]`: which physics the scene asks for; nothing switched off is computed.
+#[derive(Debug, Deserialize, Default, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawEffects {
+    pub(super) geometric_stiffness: Option<bool>,
+    pub(super) cable_mass: Option<bool>,
+    pub(super) sag: Option<bool>,
+    pub(super) rotation: Option<bool>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawEndEffector {
+    pub(super) mass: f64,
+    pub(super) position: [f64; 3],
+    pub(super) inertia: Option<[[f64; 3]; 3]>,
+    pub(super) orientation: Option<[f64; 4]>,
+    #[serde(default = "default_true")]
+    pub(super) weight_carried: bool,
+}
+
+fn default_true() -> bool {
+    true
+}
+
+#[derive(Debug, Deserialize, Default, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawCableDefaults {
+    pub(super) youngs_modulus: Option<f64>,
+    pub(super) area: Option<f64>,
+    pub(super) weight_per_length: Option<f64>,
+    pub(super) mass_per_length: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawTension {
+    pub(super) t_min: f64,
+    pub(super) t_max: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawModel {
+    pub(super) element: ElementKind,
+    #[serde(default = "default_elements")]
+    pub(super) elements_per_cable: i64,
+    #[serde(default = "default_participation")]
+    pub(super) ee_participation_min: f64,
+    #[serde(default = "default_f1_tolerance")]
+    pub(super) f1_tolerance: f64,
+}
+
+fn default_f1_tolerance() -> f64 {
+    1e-3
+}
+
+fn default_elements() -> i64 {
+    10
+}
+fn default_participation() -> f64 {
+    0.5
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawCable {
+    pub(super) anchor: [f64; 3],
+    pub(super) attachment: Option<[f64; 3]>,
+    pub(super) youngs_modulus: Option<f64>,
+    pub(super) area: Option<f64>,
+    pub(super) weight_per_length: Option<f64>,
+    pub(super) mass_per_length: Option<f64>,
+}
+
+impl Scene {
+    /// Parse and validate TOML text; `file` names the source in error messages.
+    pub fn from_toml_str(text: &str, file: &str) -> Result<Scene, SceneError> {
+        let raw: RawScene = toml::from_str(text).map_err(|e| SceneError::Parse {
+            file: file.to_string(),
+            message: e.to_string().trim_end().replace('\n', " | "),
+        })?;
+        super::validate::scene_from_raw(raw, file)
+    }
+}

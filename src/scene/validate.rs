@@ -1,0 +1,529 @@
+//! Validation: the raw scene into a [`Scene`], one function per concern. The first failing
+//! check is the error reported, so [`scene_from_raw`] keeps one fixed order: name, gravity,
+//! end-effector, tension bounds, model, effects, inertia, orientation, rigid-body cable
+//! count, geometric stiffness, cable count, then each cable in turn.
+
+use super::parse::{
+    RawCable, RawCableDefaults, RawEffects, RawEndEffector, RawModel, RawScene, RawTension,
+};
+use super::{
+    Cable, ElementKind, ModelSettings, Scene, SceneError, MAX_CABLES, MAX_ELEMENTS_PER_CABLE,
+};
+use nalgebra::{Matrix3, Vector3};
+
+/// Largest accepted |g|, m/s²: far above any planet's, so only a unit mistake exceeds it.
+const MAX_GRAVITY_M_S2: f64 = 1e3;
+/// Asymmetry of the inertia tensor tolerated, relative to its largest entry (rounding of
+/// the printed values, not a real asymmetry).
+const INERTIA_SYMMETRY_REL_TOL: f64 = 1e-9;
+/// Deviation of the orientation quaternion's norm from 1 tolerated (printed digits).
+const QUATERNION_NORM_TOL: f64 = 1e-6;
+/// Closest an anchor may be to the end-effector position, m: a cable of zero length has no
+/// direction.
+const MIN_ANCHOR_DISTANCE_M: f64 = 1e-6;
+/// Largest accepted axial rigidity EA, N: well above any real cable, and small enough that
+/// EA/l stays a usable stiffness.
+const MAX_AXIAL_RIGIDITY_N: f64 = 1e15;
+
+/// Builds errors that name the file, and the checks shared by several keys.
+struct Checker<'a> {
+    file: &'a str,
+}
+
+impl Checker<'_> {
+    /// An [`SceneError::Invalid`] for `key`.
+    fn inv(&self, key: &str, message: String) -> SceneError {
+        SceneError::Invalid {
+            file: self.file.to_string(),
+            key: key.to_string(),
+            message,
+        }
+    }
+
+    /// Three finite components.
+    fn finite3(&self, key: &str, v: [f64; 3]) -> Result<Vector3<f64>, SceneError> {
+        if v.iter().all(|x| x.is_finite()) {
+            Ok(Vector3::new(v[0], v[1], v[2]))
+        } else {
+            Err(self.inv(key, format!("must be finite, got {v:?}")))
+        }
+    }
+
+    /// A finite value > 0.
+    fn positive(&self, key: &str, x: f64) -> Result<f64, SceneError> {
+        if x.is_finite() && x > 0.0 {
+            Ok(x)
+        } else {
+            Err(self.inv(key, format!("must be finite and > 0, got {x}")))
+        }
+    }
+}
+
+/// The key of field `k` of cable `i`, as users write it.
+fn cable_key(i: usize, k: &str) -> String {
+    format!("cables[{i}].{k}")
+}
+
+/// Check every value of `raw` and build the scene (`file` names the source in errors).
+pub(super) fn scene_from_raw(raw: RawScene, file: &str) -> Result<Scene, SceneError> {
+    let ck = Checker { file };
+    validate_name(&ck, &raw.name)?;
+    let (gravity, g) = validate_gravity(&ck, raw.gravity)?;
+    let (ee_mass, ee_pos) = validate_end_effector(&ck, &raw.end_effector)?;
+    let (t_min, t_max) = validate_tension_bounds(&ck, &raw.tension)?;
+    let (n, part) = validate_model(&ck, &raw.model)?;
+    let fx = raw.effects.unwrap_or_default();
+    let element = validate_effects(&ck, fx, raw.model.element)?;
+    let rigid = fx.rotation.unwrap_or(false);
+    let inertia = validate_inertia(&ck, rigid, raw.end_effector.inertia)?;
+    let orientation = validate_orientation(&ck, raw.end_effector.orientation)?;
+    validate_rigid_cable_count(&ck, rigid, raw.cables.len())?;
+    let geometric_stiffness = validate_geometric_stiffness(&ck, fx, element)?;
+    validate_cable_count(&ck, raw.cables.len())?;
+    let at = CableContext {
+        defaults: raw.cable,
+        ee_pos,
+        ee_position: raw.end_effector.position,
+        rigid,
+        g,
+    };
+    let mut cables = Vec::with_capacity(raw.cables.len());
+    for (i, c) in raw.cables.iter().enumerate() {
+        cables.push(validate_cable(&ck, &at, i, c)?);
+    }
+    Ok(Scene {
+        name: raw.name,
+        gravity_m_s2: gravity,
+        ee_mass_kg: ee_mass,
+        ee_position_m: ee_pos,
+        weight_carried: raw.end_effector.weight_carried,
+        cables,
+        t_min_n: t_min,
+        t_max_n: t_max,
+        model: ModelSettings {
+            element,
+            elements_per_cable: n,
+            ee_participation_min: part,
+            geometric_stiffness,
+            f1_tolerance: raw.model.f1_tolerance,
+        },
+        rigid,
+        ee_inertia_kg_m2: inertia,
+        ee_orientation_wxyz: orientation,
+    })
+}
+
+/// `name`: not blank.
+fn validate_name(ck: &Checker, name: &str) -> Result<(), SceneError> {
+    if name.trim().is_empty() {
+        return Err(ck.inv("name", "must not be empty".into()));
+    }
+    Ok(())
+}
+
+/// `gravity`: finite and plausible; returns g and |g|.
+fn validate_gravity(ck: &Checker, raw: [f64; 3]) -> Result<(Vector3<f64>, f64), SceneError> {
+    let gravity = ck.finite3("gravity", raw)?;
+    let g = gravity.norm();
+    if g > MAX_GRAVITY_M_S2 {
+        return Err(ck.inv("gravity", format!("|g| = {g} m/s² is implausible (> 1000)")));
+    }
+    Ok((gravity, g))
+}
+
+/// `[end_effector]` mass (kg, > 0) and position (m, finite); its inertia and orientation
+/// are checked with the effects that use them.
+fn validate_end_effector(
+    ck: &Checker,
+    raw: &RawEndEffector,
+) -> Result<(f64, Vector3<f64>), SceneError> {
+    let ee_mass = ck.positive("end_effector.mass", raw.mass)?;
+    let ee_pos = ck.finite3("end_effector.position", raw.position)?;
+    Ok((ee_mass, ee_pos))
+}
+
+/// `[tension]`: 0 < t_min ≤ t_max, both finite (N).
+fn validate_tension_bounds(ck: &Checker, raw: &RawTension) -> Result<(f64, f64), SceneError> {
+    let t_min = raw.t_min;
+    let t_max = raw.t_max;
+    if !(t_min.is_finite() && t_min > 0.0) {
+        return Err(ck.inv(
+            "tension.t_min",
+            format!("must be finite and > 0 N, got {t_min}"),
+        ));
+    }
+    ck.positive("tension.t_max", t_max)?;
+    if t_min > t_max {
+        return Err(ck.inv(
+            "tension.t_min",
+            format!("t_min = {t_min} N exceeds t_max = {t_max} N"),
+        ));
+    }
+    Ok((t_min, t_max))
+}
+
+/// `[model]`: element count, f1 tolerance and participation threshold in range; returns
+/// the element count and the participation threshold.
+fn validate_model(ck: &Checker, raw: &RawModel) -> Result<(usize, f64), SceneError> {
+    let n = raw.elements_per_cable;
+    if n < 1 || n as usize > MAX_ELEMENTS_PER_CABLE {
+        return Err(ck.inv(
+            "model.elements_per_cable",
+            format!("must be in 1..={MAX_ELEMENTS_PER_CABLE}, got {n}"),
+        ));
+    }
+    let tol = raw.f1_tolerance;
+    if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
+        return Err(ck.inv(
+            "model.f1_tolerance",
+            format!("must be in (0, 1), got {tol}"),
+        ));
+    }
+    let part = raw.ee_participation_min;
+    if !(part.is_finite() && part > 0.0 && part <= 1.0) {
+        return Err(ck.inv(
+            "model.ee_participation_min",
+            format!("must be in (0, 1], got {part}"),
+        ));
+    }
+    Ok((n as usize, part))
+}
+
+/// `[effects]` against `model.element`: cable_mass = false → massless springs; sag = true →
+/// catenary element; contradictions are errors. Returns the element to use.
+fn validate_effects(
+    ck: &Checker,
+    fx: RawEffects,
+    element: ElementKind,
+) -> Result<ElementKind, SceneError> {
+    let mut element = element;
+    if let Some(mass) = fx.cable_mass {
+        match (mass, element) {
+            (false, _) => element = ElementKind::Massless,
+            (true, ElementKind::Massless) => {
+                return Err(ck.inv(
+                    "effects.cable_mass",
+                    "cable_mass = true contradicts model.element = \"massless\"".into(),
+                ))
+            }
+            _ => {}
+        }
+    }
+    if let Some(sag) = fx.sag {
+        match (sag, element) {
+            (true, ElementKind::Fem | ElementKind::Auto) => element = ElementKind::Catenary,
+            (true, ElementKind::Catenary) => {}
+            (true, other) => {
+                return Err(ck.inv(
+                    "effects.sag",
+                    format!(
+                        "sag needs the catenary element; model.element = \"{}\" cannot sag",
+                        other.as_str()
+                    ),
+                ))
+            }
+            (false, ElementKind::Catenary) => {
+                return Err(ck.inv(
+                    "effects.sag",
+                    "sag = false contradicts model.element = \"catenary\"".into(),
+                ))
+            }
+            (false, _) => {}
+        }
+    }
+    Ok(element)
+}
+
+/// `end_effector.inertia`: required by a rigid end-effector; when given, finite, symmetric
+/// and positive definite (kg·m²). Zero for a point mass without one.
+fn validate_inertia(
+    ck: &Checker,
+    rigid: bool,
+    raw: Option<[[f64; 3]; 3]>,
+) -> Result<Matrix3<f64>, SceneError> {
+    match (rigid, raw) {
+        (true, None) => Err(ck.inv(
+            "end_effector.inertia",
+            "missing: effects.rotation = true needs the inertia tensor (kg·m², body frame)".into(),
+        )),
+        (_, Some(m)) => {
+            let m = Matrix3::from_fn(|r, c| m[r][c]);
+            if !m.iter().all(|x| x.is_finite())
+                || (m - m.transpose()).abs().max() > INERTIA_SYMMETRY_REL_TOL * m.abs().max()
+            {
+                return Err(ck.inv(
+                    "end_effector.inertia",
+                    "must be finite and symmetric".into(),
+                ));
+            }
+            if m.cholesky().is_none() {
+                return Err(ck.inv("end_effector.inertia", "must be positive definite".into()));
+            }
+            Ok(m)
+        }
+        (false, None) => Ok(Matrix3::zeros()),
+    }
+}
+
+/// `end_effector.orientation`: a unit quaternion [w, x, y, z] (identity when absent).
+fn validate_orientation(ck: &Checker, raw: Option<[f64; 4]>) -> Result<[f64; 4], SceneError> {
+    let orientation = raw.unwrap_or([1.0, 0.0, 0.0, 0.0]);
+    let qn = orientation.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if !orientation.iter().all(|x| x.is_finite()) || (qn - 1.0).abs() > QUATERNION_NORM_TOL {
+        return Err(ck.inv(
+            "end_effector.orientation",
+            format!("must be a unit quaternion [w, x, y, z], norm {qn}"),
+        ));
+    }
+    Ok(orientation)
+}
+
+/// A rigid end-effector (6 DOF) needs at least 6 cables.
+fn validate_rigid_cable_count(ck: &Checker, rigid: bool, n: usize) -> Result<(), SceneError> {
+    if rigid && n < 6 {
+        return Err(ck.inv(
+            "cables",
+            format!("a rigid end-effector needs at least 6 cables, got {n}"),
+        ));
+    }
+    Ok(())
+}
+
+/// `effects.geometric_stiffness` (default on) may be off only for massless cables.
+fn validate_geometric_stiffness(
+    ck: &Checker,
+    fx: RawEffects,
+    element: ElementKind,
+) -> Result<bool, SceneError> {
+    let geometric_stiffness = fx.geometric_stiffness.unwrap_or(true);
+    if !geometric_stiffness && element != ElementKind::Massless {
+        return Err(ck.inv(
+            "effects.geometric_stiffness",
+            "without geometric stiffness a cable with mass has no transverse stiffness (its string modes are at 0 Hz); \
+             switch it off only with cable_mass = false"
+                .into(),
+        ));
+    }
+    Ok(geometric_stiffness)
+}
+
+/// Between 2 and [`MAX_CABLES`] cables.
+fn validate_cable_count(ck: &Checker, n: usize) -> Result<(), SceneError> {
+    if n < 2 {
+        return Err(ck.inv(
+            "cables",
+            format!(
+                "at least 2 cables are needed to hold a point mass in a plane (and 4 in space), got {n}"
+            ),
+        ));
+    }
+    if n > MAX_CABLES {
+        return Err(ck.inv(
+            "cables",
+            format!("at most {MAX_CABLES} cables are supported, got {n}"),
+        ));
+    }
+    Ok(())
+}
+
+/// What every cable's checks need from the rest of the scene.
+struct CableContext {
+    /// `[cable]`: values for keys a cable does not give.
+    defaults: RawCableDefaults,
+    /// End-effector position, m.
+    ee_pos: Vector3<f64>,
+    /// The same as written in the file (for the message).
+    ee_position: [f64; 3],
+    /// Rigid end-effector (attachment points allowed).
+    rigid: bool,
+    /// |g|, m/s² (weight per length → mass per length).
+    g: f64,
+}
+
+/// `cables[i]`: anchor, attachment and material.
+fn validate_cable(
+    ck: &Checker,
+    at: &CableContext,
+    i: usize,
+    c: &RawCable,
+) -> Result<Cable, SceneError> {
+    let d = &at.defaults;
+    let anchor = ck.finite3(&cable_key(i, "anchor"), c.anchor)?;
+    let attachment = validate_attachment(ck, i, c.attachment, at.rigid)?;
+    if (anchor - at.ee_pos).norm() < MIN_ANCHOR_DISTANCE_M {
+        return Err(ck.inv(
+            &cable_key(i, "anchor"),
+            format!("coincides with end_effector.position {:?}", at.ee_position),
+        ));
+    }
+    let pick = |own: Option<f64>, def: Option<f64>, name: &str| -> Result<f64, SceneError> {
+        match own.or(def) {
+            Some(v) => ck.positive(&cable_key(i, name), v),
+            None => Err(ck.inv(
+                &cable_key(i, name),
+                format!("missing: give cable.{name} or cables[{i}].{name}"),
+            )),
+        }
+    };
+    let e = pick(c.youngs_modulus, d.youngs_modulus, "youngs_modulus")?;
+    let a = pick(c.area, d.area, "area")?;
+    let mu = validate_mass_per_length(ck, i, c, d, at.g)?;
+    validate_axial_rigidity(ck, i, e * a)?;
+    Ok(Cable {
+        anchor_m: anchor,
+        youngs_modulus_pa: e,
+        area_m2: a,
+        mass_per_length_kg_m: mu,
+        attachment_m: attachment,
+    })
+}
+
+/// `cables[i].attachment`: finite; non-zero only on a rigid end-effector.
+fn validate_attachment(
+    ck: &Checker,
+    i: usize,
+    raw: Option<[f64; 3]>,
+    rigid: bool,
+) -> Result<Vector3<f64>, SceneError> {
+    match raw {
+        Some(b) => {
+            let b = ck.finite3(&cable_key(i, "attachment"), b)?;
+            if !rigid && b.norm() > 0.0 {
+                return Err(ck.inv(
+                    &cable_key(i, "attachment"),
+                    "attachment points need the rigid end-effector: set effects.rotation = true"
+                        .into(),
+                ));
+            }
+            Ok(b)
+        }
+        None => Ok(Vector3::zeros()),
+    }
+}
+
+/// Mass per length μ (kg/m) of cable `i` from weight or mass per length: the cable's own
+/// keys win over the defaults; within one level, both is an error.
+fn validate_mass_per_length(
+    ck: &Checker,
+    i: usize,
+    c: &RawCable,
+    d: &RawCableDefaults,
+    g: f64,
+) -> Result<f64, SceneError> {
+    let key = |k: &str| cable_key(i, k);
+    let (w, m) = if c.weight_per_length.is_some() || c.mass_per_length.is_some() {
+        (c.weight_per_length, c.mass_per_length)
+    } else {
+        (d.weight_per_length, d.mass_per_length)
+    };
+    let mu = match (w, m) {
+        (Some(_), Some(_)) => {
+            return Err(ck.inv(
+                &key("weight_per_length"),
+                "give weight_per_length or mass_per_length, not both".into(),
+            ))
+        }
+        (Some(w), None) => {
+            let w = ck.positive(&key("weight_per_length"), w)?;
+            if g <= 0.0 {
+                return Err(ck.inv(
+                    &key("weight_per_length"),
+                    "needs non-zero gravity to convert to mass; give mass_per_length".into(),
+                ));
+            }
+            w / g
+        }
+        (None, Some(m)) => ck.positive(&key("mass_per_length"), m)?,
+        (None, None) => {
+            return Err(ck.inv(
+                &key("weight_per_length"),
+                "missing: give weight_per_length or mass_per_length".into(),
+            ))
+        }
+    };
+    // Derived values must be usable numbers too (a denormal weight gives μ = 0).
+    if !(mu.is_normal() && mu > 0.0) {
+        return Err(ck.inv(
+            &key(if w.is_some() {
+                "weight_per_length"
+            } else {
+                "mass_per_length"
+            }),
+            format!("gives a mass per length of {mu:e} kg/m, not a usable positive number"),
+        ));
+    }
+    Ok(mu)
+}
+
+/// EA = youngs_modulus × area of cable `i` must be a usable number (an overflowing E·A
+/// gives ∞).
+fn validate_axial_rigidity(ck: &Checker, i: usize, ea: f64) -> Result<(), SceneError> {
+    if !(ea.is_normal() && ea > 0.0 && ea < MAX_AXIAL_RIGIDITY_N) {
+        return Err(ck.inv(
+            &cable_key(i, "area"),
+            format!(
+                "youngs_modulus × area = {ea:e} N is not a usable axial rigidity (0 < EA < 1e15 N)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::DEFAULT_SCENE_TOML;
+    use super::*;
+
+    fn err(text: &str) -> String {
+        Scene::from_toml_str(text, "t.toml")
+            .unwrap_err()
+            .to_string()
+    }
+
+    #[test]
+    fn effects_select_the_model() {
+        let base = DEFAULT_SCENE_TOML;
+        let with = |fx: &str| Scene::from_toml_str(&format!("{base}\n[effects]\n{fx}\n"), "t.toml");
+        assert_eq!(
+            with("sag = true").unwrap().model.element,
+            ElementKind::Catenary
+        );
+        assert_eq!(
+            with("cable_mass = false").unwrap().model.element,
+            ElementKind::Massless
+        );
+        let m = with("cable_mass = false\ngeometric_stiffness = false").unwrap();
+        assert!(!m.model.geometric_stiffness);
+        let e = with("geometric_stiffness = false").unwrap_err().to_string();
+        assert!(e.contains("effects.geometric_stiffness"), "{e}");
+        let e = with("rotation = maybe").unwrap_err().to_string();
+        assert!(e.contains("rotation"), "{e}");
+        let e = with("rotation = true").unwrap_err().to_string();
+        assert!(e.contains("end_effector.inertia"), "{e}");
+    }
+
+    #[test]
+    fn errors_name_file_and_key() {
+        let base = DEFAULT_SCENE_TOML;
+        let e = err(&base.replace("mass = 30.0", "mass = -1.0"));
+        assert!(
+            e.contains("t.toml") && e.contains("end_effector.mass"),
+            "{e}"
+        );
+        let e = err(&base.replace("t_min = 60.0", "t_min = 400.0"));
+        assert!(e.contains("tension.t_min") && e.contains("exceeds"), "{e}");
+        let e = err(&format!("{base}\nbogus = 1\n"));
+        assert!(e.contains("bogus"), "{e}");
+        let e = err(&base.replace("area = 50.265e-6", "area = \"big\""));
+        assert!(e.contains("area"), "{e}");
+        let e = err(&base.replace("youngs_modulus = 2.01e10", "youngs_modulus = nan"));
+        assert!(e.contains("youngs_modulus"), "{e}");
+        let e = err(&base.replace("[0.0, 0.0, 1.25]", "[1.25, 1.25, 2.5]"));
+        assert!(
+            e.contains("cables[0].anchor") && e.contains("coincides"),
+            "{e}"
+        );
+        let e = err(&base.replace("name = \"spatial-paper\"\n", ""));
+        assert!(e.contains("name"), "{e}");
+    }
+}

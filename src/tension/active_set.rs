@@ -1,0 +1,759 @@
+//! The real-time solver: an exact dual active-set method (Goldfarb-Idnani with H = I) on
+//! fixed-size buffers, warm-started from the last active set and polished by the KKT
+//! system of the active set it finds.
+
+use super::{Bound, TensionError, TensionInfo, TensionParams, M};
+use crate::kinematics::Geometry;
+use crate::scene::MAX_CABLES;
+use nalgebra::Vector3;
+
+/// Floor of a norm used as a scale, so that an all-zero matrix divides by something.
+const NORM_FLOOR: f64 = 1e-300;
+/// A row of A whose part orthogonal to the rows kept is below this fraction of the largest
+/// row norm is linearly dependent (a planar robot's out-of-plane row is exactly zero).
+const ROW_INDEPENDENCE_REL: f64 = 1e-10;
+/// A dependent row's wrench residual above this fraction of (‖w‖ + T_max·‖A‖) means w is
+/// not consistent with it: infeasible, not rounding.
+const DEPENDENT_ROW_RESIDUAL_REL: f64 = 1e-9;
+/// The polished KKT solution of a cold solve replaces the cold answer when it is optimal
+/// within this multiple of the feasibility tolerance (the cold answer carries the
+/// iteration's rounding; the polish only fixes it).
+const POLISH_ACCEPT_FACTOR: f64 = 1e3;
+/// Optimality tolerance of [`TensionSolver::polish`], relative to max(1, T_max): the
+/// reference's bound patterns are guessed from an interior-point answer, so a looser test
+/// than the real-time solver's.
+const REFERENCE_POLISH_TOL_REL: f64 = 1e-9;
+/// Cholesky pivots below this fraction of the largest diagonal entry: the KKT system of
+/// the active set is singular (too few free cables to span the rows).
+const CHOLESKY_PIVOT_REL: f64 = 1e-13;
+/// An active normal whose part orthogonal to the others is below this fraction of its
+/// norm is dependent on them: the active set cannot grow by it.
+const DEPENDENT_COLUMN_REL: f64 = 1e-12;
+/// Entries of R⁻¹Qᵀn_p at or below this are rounding noise, not an active bound limiting
+/// the dual step.
+const STEP_MULTIPLIER_MIN: f64 = 1e-14;
+/// ‖z‖² at or below this: the new normal lies in the span of the active ones, so there is
+/// no primal step (only a dual one).
+const STEP_DIRECTION_MIN_SQ: f64 = 1e-24;
+/// Regularisation ρ of the closest-solution problem: makes it strictly convex, so the
+/// reported tensions are unique, without moving the residual noticeably.
+const CLOSEST_REGULARISATION: f64 = 1e-9;
+/// Projected-gradient (FISTA) steps of the closest solution: a fixed count keeps the
+/// infeasible path bounded in time; enough for the residual to settle to a few digits.
+const CLOSEST_STEPS: usize = 2000;
+/// A closest-solution tension within this fraction of max(1, T_max − T_min) of a bound is
+/// reported at that bound.
+const CLOSEST_AT_BOUND_REL: f64 = 1e-9;
+
+/// The real-time tension solver: fixed-size buffers, warm start, no allocation in `solve`.
+#[derive(Debug, Clone)]
+pub struct TensionSolver {
+    n: usize,
+    params: TensionParams,
+    /// Structure matrix rows (only the independent ones are used), A[r][i].
+    a: [[f64; MAX_CABLES]; M],
+    rows: [usize; M],
+    n_rows: usize,
+    w: [f64; M],
+    lo: f64,
+    hi: f64,
+    t: [f64; MAX_CABLES],
+    bound: [Bound; MAX_CABLES],
+    have_warm: bool,
+    // Goldfarb-Idnani work space: active constraint ids (equalities first), Q, R, multipliers.
+    active: [usize; MAX_CABLES + M],
+    n_active: usize,
+    q: [[f64; MAX_CABLES]; MAX_CABLES],
+    r: [[f64; MAX_CABLES]; MAX_CABLES],
+    u: [f64; MAX_CABLES + M],
+    info: TensionInfo,
+}
+
+/// Constraint ids in the cold solver: 0..M equality rows, then M + i: T_i ≥ lo, M + n + i: T_i ≤ hi.
+const EQ_BASE: usize = 0;
+
+impl TensionSolver {
+    /// Allocate for `n_cables` (≤ [`MAX_CABLES`]) cables.
+    pub fn new(n_cables: usize, params: TensionParams) -> TensionSolver {
+        assert!(
+            (1..=MAX_CABLES).contains(&n_cables),
+            "1..=MAX_CABLES cables"
+        );
+        TensionSolver {
+            n: n_cables,
+            params,
+            a: [[0.0; MAX_CABLES]; M],
+            rows: [0; M],
+            n_rows: 0,
+            w: [0.0; M],
+            lo: 0.0,
+            hi: 0.0,
+            t: [0.0; MAX_CABLES],
+            bound: [Bound::Free; MAX_CABLES],
+            have_warm: false,
+            active: [0; MAX_CABLES + M],
+            n_active: 0,
+            q: [[0.0; MAX_CABLES]; MAX_CABLES],
+            r: [[0.0; MAX_CABLES]; MAX_CABLES],
+            u: [0.0; MAX_CABLES + M],
+            info: TensionInfo::default(),
+        }
+    }
+
+    /// Forget the warm start (the next solve is cold).
+    pub fn reset_warm_start(&mut self) {
+        self.have_warm = false;
+    }
+
+    /// Tensions of the last successful solve (or the closest solution after `Infeasible`), N.
+    pub fn tensions_n(&self) -> &[f64] {
+        &self.t[..self.n]
+    }
+
+    /// Active bounds of the last solve.
+    pub fn bounds(&self) -> &[Bound] {
+        &self.bound[..self.n]
+    }
+
+    /// Information on the last solve.
+    pub fn info(&self) -> TensionInfo {
+        self.info
+    }
+
+    /// Solve for geometry `g`, force `w_n` (N, no moment) and bounds [t_min_n, t_max_n] (N).
+    pub fn solve(
+        &mut self,
+        g: &Geometry,
+        w_n: &Vector3<f64>,
+        t_min_n: f64,
+        t_max_n: f64,
+    ) -> Result<&[f64], TensionError> {
+        let w = [w_n.x, w_n.y, w_n.z, 0.0, 0.0, 0.0];
+        self.solve_wrench(g, &w, t_min_n, t_max_n)
+    }
+
+    /// Solve for geometry `g`, wrench `w` = (force N, moment N·m) and bounds (N).
+    pub fn solve_wrench(
+        &mut self,
+        g: &Geometry,
+        w_n: &[f64; 6],
+        t_min_n: f64,
+        t_max_n: f64,
+    ) -> Result<&[f64], TensionError> {
+        let n = self.n;
+        if !(t_min_n.is_finite() && t_max_n.is_finite() && t_min_n >= 0.0 && t_min_n <= t_max_n) {
+            self.have_warm = false;
+            return Err(TensionError::InvalidBounds { t_min_n, t_max_n });
+        }
+        if !w_n.iter().all(|x| x.is_finite())
+            || g.unit
+                .iter()
+                .take(n)
+                .any(|s| !s.iter().all(|x| x.is_finite()))
+            || g.arm_m
+                .iter()
+                .take(n)
+                .any(|s| !s.iter().all(|x| x.is_finite()))
+        {
+            self.have_warm = false;
+            return Err(TensionError::NonFinite);
+        }
+        self.lo = t_min_n;
+        self.hi = t_max_n;
+        self.info = TensionInfo::default();
+        let (dependent, scale) = self.setup_rows(g, w_n);
+        self.info.rank = self.n_rows as u32;
+        let tol = self.params.feasibility_tol * t_max_n.max(1.0);
+
+        let mut solved = false;
+        if self.have_warm && self.kkt_solve() && self.kkt_is_optimal(tol) {
+            self.info.warm_start_accepted = true;
+            solved = true;
+        }
+        if !solved {
+            match self.cold_solve(tol) {
+                Ok(()) => {
+                    // Polish: exact KKT solve of the active set the cold solve found.
+                    let keep = self.t;
+                    if !self.kkt_solve() || !self.kkt_is_optimal(tol * POLISH_ACCEPT_FACTOR) {
+                        self.t = keep;
+                    }
+                }
+                Err(e) => {
+                    self.have_warm = false;
+                    if let TensionError::Infeasible { .. } = e {
+                        return Err(self.closest_solution(g, w_n));
+                    }
+                    return Err(e);
+                }
+            }
+        }
+        // The answer is exact to rounding; values within the tolerance of a bound are that
+        // bound (T_min = 1e-9 N must not come back as −0.0).
+        for t in self.t.iter_mut().take(n) {
+            *t = t.clamp(self.lo, self.hi);
+        }
+        // Dependent rows (w must be consistent with them).
+        let aw = g.wrench_of(&self.t[..n]);
+        let am = g.moment_of(&self.t[..n]);
+        let wnorm = w_n.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let mut res = 0.0f64;
+        for r in 0..M {
+            let got = if r < 3 { aw[r] } else { am[r - 3] };
+            let d = (got - w_n[r]).abs();
+            res = res.max(d);
+            if dependent[r] && d > DEPENDENT_ROW_RESIDUAL_REL * (wnorm + t_max_n * scale) {
+                self.have_warm = false;
+                return Err(self.closest_solution(g, w_n));
+            }
+        }
+        self.info.residual_n = res;
+        self.have_warm = true;
+        Ok(&self.t[..n])
+    }
+
+    /// Keep the linearly independent rows of A (Gram-Schmidt on the rows) and their wrench
+    /// components; returns which rows were dependent and the largest row norm.
+    fn setup_rows(&mut self, g: &Geometry, w_n: &[f64; 6]) -> ([bool; M], f64) {
+        let n = self.n;
+        let mut basis = [[0.0; MAX_CABLES]; M];
+        let mut full = [[0.0; MAX_CABLES]; M];
+        for (r, row) in full.iter_mut().enumerate() {
+            for i in 0..n {
+                row[i] = g.a(r, i);
+            }
+        }
+        let scale = full
+            .iter()
+            .map(|row| dot(row, row, n).sqrt())
+            .fold(0.0, f64::max)
+            .max(NORM_FLOOR);
+        self.n_rows = 0;
+        let mut dependent = [false; M];
+        for r in 0..M {
+            let mut v = full[r];
+            for _pass in 0..2 {
+                for b in basis.iter().take(self.n_rows) {
+                    let c = dot(b, &v, n);
+                    axpy(&mut v, -c, b, n);
+                }
+            }
+            let nv = dot(&v, &v, n).sqrt();
+            if nv > ROW_INDEPENDENCE_REL * scale {
+                for i in 0..n {
+                    basis[self.n_rows][i] = v[i] / nv;
+                }
+                self.rows[self.n_rows] = r;
+                self.a[self.n_rows] = full[r];
+                self.w[self.n_rows] = w_n[r];
+                self.n_rows += 1;
+            } else {
+                dependent[r] = true;
+            }
+        }
+        (dependent, scale)
+    }
+
+    /// Exact solution for a given bound pattern (the KKT system of that active set), if it
+    /// is optimal within `tol` (N): the polish step of [`super::clarabel_reference`].
+    pub(super) fn polish(
+        &mut self,
+        g: &Geometry,
+        w_n: &[f64; 6],
+        t_min_n: f64,
+        t_max_n: f64,
+        pattern: &[Bound],
+    ) -> Option<Vec<f64>> {
+        self.lo = t_min_n;
+        self.hi = t_max_n;
+        self.setup_rows(g, w_n);
+        self.bound[..self.n].copy_from_slice(pattern);
+        let tol = REFERENCE_POLISH_TOL_REL * t_max_n.max(1.0);
+        if self.kkt_solve() && self.kkt_is_optimal(tol) {
+            return Some(
+                self.t[..self.n]
+                    .iter()
+                    .map(|t| t.clamp(t_min_n, t_max_n))
+                    .collect(),
+            );
+        }
+        // Every cable at T_min: the tensions are fixed; optimal (multipliers ν = 0) when
+        // they produce the wrench.
+        if pattern.iter().all(|b| *b == Bound::Lower) {
+            let t = vec![t_min_n; self.n];
+            let f = g.wrench_of(&t);
+            let m = g.moment_of(&t);
+            let res = (0..3)
+                .map(|r| (f[r] - w_n[r]).abs().max((m[r] - w_n[3 + r]).abs()))
+                .fold(0.0, f64::max);
+            if res <= tol {
+                return Some(t);
+            }
+        }
+        None
+    }
+
+    /// Solve the KKT system of the current `bound` pattern; false when it is singular.
+    fn kkt_solve(&mut self) -> bool {
+        let n = self.n;
+        let k = self.n_rows;
+        // rhs = w − A_W T_W ; G = A_F A_Fᵀ
+        let mut g = [[0.0; M]; M];
+        let mut rhs = [0.0; M];
+        rhs[..k].copy_from_slice(&self.w[..k]);
+        for i in 0..n {
+            let fixed = match self.bound[i] {
+                Bound::Free => None,
+                Bound::Lower => Some(self.lo),
+                Bound::Upper => Some(self.hi),
+            };
+            match fixed {
+                Some(v) => {
+                    for r in 0..k {
+                        rhs[r] -= self.a[r][i] * v;
+                    }
+                }
+                None => {
+                    for r in 0..k {
+                        for c in 0..k {
+                            g[r][c] += self.a[r][i] * self.a[c][i];
+                        }
+                    }
+                }
+            }
+        }
+        let mut nu = rhs;
+        if !cholesky_solve(&mut g, &mut nu, k) {
+            return false;
+        }
+        for i in 0..n {
+            let atnu: f64 = (0..k).map(|r| self.a[r][i] * nu[r]).sum();
+            self.t[i] = match self.bound[i] {
+                Bound::Free => atnu,
+                Bound::Lower => self.lo,
+                Bound::Upper => self.hi,
+            };
+            // Store multipliers: reuse u[i] = (Aᵀν)_i.
+            self.u[i] = atnu;
+        }
+        true
+    }
+
+    /// Primal and dual feasibility of the last `kkt_solve`.
+    fn kkt_is_optimal(&self, tol: f64) -> bool {
+        (0..self.n).all(|i| {
+            let atnu = self.u[i];
+            match self.bound[i] {
+                Bound::Free => self.t[i] >= self.lo - tol && self.t[i] <= self.hi + tol,
+                Bound::Lower => self.lo - atnu >= -tol,
+                Bound::Upper => atnu - self.hi >= -tol,
+            }
+        }) && self.t[..self.n].iter().all(|x| x.is_finite())
+    }
+
+    fn normal(&self, id: usize, out: &mut [f64; MAX_CABLES]) {
+        let n = self.n;
+        out[..n].iter_mut().for_each(|x| *x = 0.0);
+        if id < M {
+            out[..n].copy_from_slice(&self.a[id - EQ_BASE][..n]);
+        } else if id < M + n {
+            out[id - M] = 1.0;
+        } else {
+            out[id - M - n] = -1.0;
+        }
+    }
+
+    fn rhs_of(&self, id: usize) -> f64 {
+        if id < M {
+            self.w[id]
+        } else if id < M + self.n {
+            self.lo
+        } else {
+            -self.hi
+        }
+    }
+
+    /// Rebuild Q, R of the active normals by modified Gram-Schmidt with re-orthogonalisation.
+    /// Returns false when a column is dependent.
+    fn refactor(&mut self) -> bool {
+        let n = self.n;
+        let mut v = [0.0; MAX_CABLES];
+        for k in 0..self.n_active {
+            self.normal(self.active[k], &mut v);
+            let nrm = dot(&v, &v, n).sqrt();
+            for j in 0..k {
+                self.r[j][k] = 0.0;
+            }
+            for _pass in 0..2 {
+                for j in 0..k {
+                    let c = dot(&self.q[j], &v, n);
+                    self.r[j][k] += c;
+                    let qj = self.q[j];
+                    axpy(&mut v, -c, &qj, n);
+                }
+            }
+            let rkk = dot(&v, &v, n).sqrt();
+            if rkk <= DEPENDENT_COLUMN_REL * nrm.max(NORM_FLOOR) {
+                return false;
+            }
+            self.r[k][k] = rkk;
+            for i in 0..n {
+                self.q[k][i] = v[i] / rkk;
+            }
+        }
+        true
+    }
+
+    /// z = (I − QQᵀ) n_p, r = R⁻¹ Qᵀ n_p.
+    fn directions(
+        &self,
+        np: &[f64; MAX_CABLES],
+        z: &mut [f64; MAX_CABLES],
+        rr: &mut [f64; MAX_CABLES + M],
+    ) {
+        let n = self.n;
+        let q = self.n_active;
+        let mut d = [0.0; MAX_CABLES + M];
+        *z = *np;
+        for _pass in 0..2 {
+            for j in 0..q {
+                let c = dot(&self.q[j], z, n);
+                d[j] += c;
+                axpy(z, -c, &self.q[j], n);
+            }
+        }
+        for j in (0..q).rev() {
+            let mut s = d[j];
+            for k in j + 1..q {
+                s -= self.r[j][k] * rr[k];
+            }
+            rr[j] = s / self.r[j][j];
+        }
+    }
+
+    /// Cold solve (Goldfarb-Idnani dual active set): from the minimum-norm solution of the
+    /// equalities, add the most violated bound until none is violated beyond `tol` (N).
+    fn cold_solve(&mut self, tol: f64) -> Result<(), TensionError> {
+        let mut x = self.cold_start()?;
+        let mut scratch = StepScratch {
+            np: [0.0; MAX_CABLES],
+            z: [0.0; MAX_CABLES],
+            rr: [0.0; MAX_CABLES + M],
+        };
+        let mut iters = 0u32;
+        loop {
+            let p = self.most_violated(&x, tol);
+            if p == usize::MAX {
+                break;
+            }
+            self.add_constraint(p, &mut x, &mut scratch, &mut iters)?;
+        }
+        self.info.iterations = iters;
+        self.record_active_set(&x);
+        Ok(())
+    }
+
+    /// Start of the cold solve: the equality rows active, x = Aᵀ (A Aᵀ)⁻¹ w (the
+    /// minimum-norm solution of the equalities) and their multipliers in `u`.
+    fn cold_start(&mut self) -> Result<[f64; MAX_CABLES], TensionError> {
+        let n = self.n;
+        let k = self.n_rows;
+        self.n_active = k;
+        for j in 0..k {
+            self.active[j] = j;
+        }
+        if !self.refactor() {
+            return Err(TensionError::NonFinite);
+        }
+        // x = Q R⁻ᵀ w, u = R⁻¹ R⁻ᵀ w.
+        let mut y = [0.0; M];
+        for j in 0..k {
+            let mut s = self.w[j];
+            for i in 0..j {
+                s -= self.r[i][j] * y[i];
+            }
+            y[j] = s / self.r[j][j];
+        }
+        let mut x = [0.0; MAX_CABLES];
+        for j in 0..k {
+            let qj = self.q[j];
+            axpy(&mut x, y[j], &qj, n);
+        }
+        for j in (0..k).rev() {
+            let mut s = y[j];
+            for i in j + 1..k {
+                s -= self.r[j][i] * self.u[i];
+            }
+            self.u[j] = s / self.r[j][j];
+        }
+        Ok(x)
+    }
+
+    /// The most violated inactive bound at `x` (beyond `tol`, N), or `usize::MAX` when none is.
+    fn most_violated(&self, x: &[f64; MAX_CABLES], tol: f64) -> usize {
+        let n = self.n;
+        let k = self.n_rows;
+        let mut p = usize::MAX;
+        let mut worst = -tol;
+        for i in 0..n {
+            let lo_v = x[i] - self.lo;
+            let hi_v = self.hi - x[i];
+            let is_active = |id: usize| self.active[k..self.n_active].contains(&id);
+            if lo_v < worst && !is_active(M + i) {
+                worst = lo_v;
+                p = M + i;
+            }
+            if hi_v < worst && !is_active(M + n + i) {
+                worst = hi_v;
+                p = M + n + i;
+            }
+        }
+        p
+    }
+
+    /// Make constraint `p` active: full steps along its normal, partial steps that drop the
+    /// active bound whose multiplier reaches zero first, until `p` is added. Counts every
+    /// step in `iters` against [`TensionParams::max_iterations`].
+    fn add_constraint(
+        &mut self,
+        p: usize,
+        x: &mut [f64; MAX_CABLES],
+        scratch: &mut StepScratch,
+        iters: &mut u32,
+    ) -> Result<(), TensionError> {
+        let n = self.n;
+        let k = self.n_rows;
+        let StepScratch { np, z, rr } = scratch;
+        self.normal(p, np);
+        let bp = self.rhs_of(p);
+        let mut up = 0.0;
+        loop {
+            *iters += 1;
+            if *iters as usize > self.params.max_iterations {
+                self.info.iterations = *iters;
+                return Err(TensionError::NotConverged { iterations: *iters });
+            }
+            self.directions(np, z, rr);
+            // Partial step: largest step keeping inequality multipliers ≥ 0.
+            let mut t1 = f64::INFINITY;
+            let mut kdrop = usize::MAX;
+            for j in k..self.n_active {
+                if rr[j] > STEP_MULTIPLIER_MIN {
+                    let s = self.u[j] / rr[j];
+                    if s < t1 {
+                        t1 = s;
+                        kdrop = j;
+                    }
+                }
+            }
+            let zz = dot(z, z, n);
+            let sp = dot(np, x, n) - bp;
+            let t2 = if zz > STEP_DIRECTION_MIN_SQ {
+                -sp / zz
+            } else {
+                f64::INFINITY
+            };
+            if !t1.is_finite() && !t2.is_finite() {
+                self.info.iterations = *iters;
+                return Err(TensionError::Infeasible {
+                    worst_component: 0,
+                    residual_n: [0.0; 6],
+                    at_upper_mask: 0,
+                    at_lower_mask: 0,
+                    t_min_n: self.lo,
+                    t_max_n: self.hi,
+                });
+            }
+            let t = t1.min(t2);
+            if t2.is_finite() {
+                axpy(x, t, z, n);
+            }
+            for j in 0..self.n_active {
+                self.u[j] -= t * rr[j];
+            }
+            up += t;
+            if t2 <= t1 {
+                // Full step: add p.
+                self.active[self.n_active] = p;
+                self.u[self.n_active] = up;
+                self.n_active += 1;
+                if !self.refactor() {
+                    self.n_active -= 1;
+                    self.refactor();
+                    return Err(TensionError::NotConverged { iterations: *iters });
+                }
+                return Ok(());
+            }
+            // Partial step: drop kdrop.
+            for j in kdrop..self.n_active - 1 {
+                self.active[j] = self.active[j + 1];
+                self.u[j] = self.u[j + 1];
+            }
+            self.n_active -= 1;
+            self.refactor();
+        }
+    }
+
+    /// The answer of the cold solve: tensions `x` and the bound pattern of its active set.
+    fn record_active_set(&mut self, x: &[f64; MAX_CABLES]) {
+        let n = self.n;
+        let k = self.n_rows;
+        for i in 0..n {
+            self.t[i] = x[i];
+            self.bound[i] = Bound::Free;
+        }
+        for j in k..self.n_active {
+            let id = self.active[j];
+            if id < M + n {
+                self.bound[id - M] = Bound::Lower;
+            } else {
+                self.bound[id - M - n] = Bound::Upper;
+            }
+        }
+    }
+
+    /// [`Self::closest_solution`] of a fresh solver for `n` cables and bounds
+    /// [t_min_n, t_max_n] (N): the infeasibility report of [`super::clarabel_reference`].
+    pub(super) fn closest_for(
+        n: usize,
+        g: &Geometry,
+        w_n: &[f64; 6],
+        t_min_n: f64,
+        t_max_n: f64,
+    ) -> TensionError {
+        let mut s = TensionSolver::new(n, TensionParams::default());
+        s.lo = t_min_n;
+        s.hi = t_max_n;
+        s.closest_solution(g, w_n)
+    }
+
+    /// The closest achievable wrench: min ½‖A T − w‖² + ½ρ‖T‖² over the box, by a bounded
+    /// number of projected-gradient (FISTA) steps. Leaves the tensions in `self.t`.
+    fn closest_solution(&mut self, g: &Geometry, w_n: &[f64; 6]) -> TensionError {
+        let n = self.n;
+        let (lo, hi) = (self.lo, self.hi);
+        // Lipschitz constant of the gradient: ‖A‖² ≤ trace(AᵀA) = Σ (1 + ‖r_i × s_i‖²).
+        let rho = CLOSEST_REGULARISATION;
+        let lip = (0..n)
+            .map(|i| 1.0 + g.arm_m[i].cross(&g.unit[i]).norm_squared())
+            .sum::<f64>()
+            + rho;
+        let wf = Vector3::new(w_n[0], w_n[1], w_n[2]);
+        let wm = Vector3::new(w_n[3], w_n[4], w_n[5]);
+        let mut x = [0.0; MAX_CABLES];
+        for v in x.iter_mut().take(n) {
+            *v = 0.5 * (lo + hi);
+        }
+        let mut yv = x;
+        let mut tk = 1.0f64;
+        for _ in 0..CLOSEST_STEPS {
+            let r = g.wrench_of(&yv[..n]) - wf;
+            let rm = g.moment_of(&yv[..n]) - wm;
+            let mut xn = [0.0; MAX_CABLES];
+            for i in 0..n {
+                let grad = g.unit[i].dot(&r) + g.arm_m[i].cross(&g.unit[i]).dot(&rm) + rho * yv[i];
+                xn[i] = (yv[i] - grad / lip).clamp(lo, hi);
+            }
+            let tn = 0.5 * (1.0 + (1.0 + 4.0 * tk * tk).sqrt());
+            for i in 0..n {
+                yv[i] = xn[i] + (tk - 1.0) / tn * (xn[i] - x[i]);
+            }
+            x = xn;
+            tk = tn;
+        }
+        self.t = x;
+        let rf = g.wrench_of(&x[..n]) - wf;
+        let rm = g.moment_of(&x[..n]) - wm;
+        let r = [rf.x, rf.y, rf.z, rm.x, rm.y, rm.z];
+        let mut worst = 0;
+        for c in 1..6 {
+            if r[c].abs() > r[worst].abs() {
+                worst = c;
+            }
+        }
+        let eps = CLOSEST_AT_BOUND_REL * (hi - lo).max(1.0);
+        let mut up = 0u32;
+        let mut dn = 0u32;
+        for (i, &xi) in x.iter().enumerate().take(n) {
+            if xi >= hi - eps {
+                up |= 1 << i;
+                self.bound[i] = Bound::Upper;
+            } else if xi <= lo + eps {
+                dn |= 1 << i;
+                self.bound[i] = Bound::Lower;
+            } else {
+                self.bound[i] = Bound::Free;
+            }
+        }
+        TensionError::Infeasible {
+            worst_component: worst,
+            residual_n: r,
+            at_upper_mask: up,
+            at_lower_mask: dn,
+            t_min_n: lo,
+            t_max_n: hi,
+        }
+    }
+}
+
+fn dot(a: &[f64; MAX_CABLES], b: &[f64; MAX_CABLES], n: usize) -> f64 {
+    let mut s = 0.0;
+    for i in 0..n {
+        s += a[i] * b[i];
+    }
+    s
+}
+
+fn axpy(y: &mut [f64; MAX_CABLES], alpha: f64, x: &[f64; MAX_CABLES], n: usize) {
+    for i in 0..n {
+        y[i] += alpha * x[i];
+    }
+}
+
+/// In-place Cholesky solve of a k × k SPD system; false when not positive definite.
+fn cholesky_solve(g: &mut [[f64; M]; M], b: &mut [f64; M], k: usize) -> bool {
+    let diag_max = (0..k).map(|i| g[i][i].abs()).fold(0.0, f64::max);
+    for j in 0..k {
+        let mut d = g[j][j];
+        for p in 0..j {
+            d -= g[j][p] * g[j][p];
+        }
+        if !(d > CHOLESKY_PIVOT_REL * diag_max) {
+            return false;
+        }
+        let d = d.sqrt();
+        g[j][j] = d;
+        for i in j + 1..k {
+            let mut s = g[i][j];
+            for p in 0..j {
+                s -= g[i][p] * g[j][p];
+            }
+            g[i][j] = s / d;
+        }
+    }
+    for i in 0..k {
+        let mut s = b[i];
+        for p in 0..i {
+            s -= g[i][p] * b[p];
+        }
+        b[i] = s / g[i][i];
+    }
+    for i in (0..k).rev() {
+        let mut s = b[i];
+        for p in i + 1..k {
+            s -= g[p][i] * b[p];
+        }
+        b[i] = s / g[i][i];
+    }
+    true
+}
+
+/// Scratch vectors of one cold-solve step (allocated once per cold solve).
+struct StepScratch {
+    /// Normal n_p of the constraint being added.
+    np: [f64; MAX_CABLES],
+    /// Primal step direction z = (I − QQᵀ) n_p.
+    z: [f64; MAX_CABLES],
+    /// Dual step direction r = R⁻¹ Qᵀ n_p.
+    rr: [f64; MAX_CABLES + M],
+}

@@ -1,0 +1,78 @@
+//! Errors of the tension distribution; an infeasible wrench carries the closest solution's
+//! residual and active bounds.
+
+/// Errors of the tension distribution.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum TensionError {
+    /// T_min > T_max, or a bound not finite, or T_min < 0.
+    #[error("invalid tension bounds: t_min = {t_min_n} N, t_max = {t_max_n} N (need 0 ≤ t_min ≤ t_max, finite)")]
+    InvalidBounds {
+        /// Lower bound, N.
+        t_min_n: f64,
+        /// Upper bound, N.
+        t_max_n: f64,
+    },
+    /// A non-finite wrench or geometry.
+    #[error("non-finite wrench or cable geometry")]
+    NonFinite,
+    /// No tensions within the bounds produce the wrench.
+    #[error(
+        "tension infeasible: wrench component {} cannot be reached within [{t_min_n}, {t_max_n}] N; \
+         closest tensions leave a residual force ({:.4}, {:.4}, {:.4}) N, moment ({:.4}, {:.4}, {:.4}) N·m; \
+         cables at t_max: {}, at t_min: {}",
+        ["f_x", "f_y", "f_z", "m_x", "m_y", "m_z"][*worst_component], residual_n[0], residual_n[1], residual_n[2],
+        residual_n[3], residual_n[4], residual_n[5],
+        fmt_mask(*at_upper_mask), fmt_mask(*at_lower_mask)
+    )]
+    Infeasible {
+        /// Index (0-2 = force x, y, z; 3-5 = moment x, y, z) of the largest residual.
+        worst_component: usize,
+        /// A·T_closest − w: force (N) then moment (N·m).
+        residual_n: [f64; 6],
+        /// Bit i set: cable i at T_max in the closest solution.
+        at_upper_mask: u32,
+        /// Bit i set: cable i at T_min in the closest solution.
+        at_lower_mask: u32,
+        /// Lower bound, N.
+        t_min_n: f64,
+        /// Upper bound, N.
+        t_max_n: f64,
+    },
+    /// The bounded iteration count ran out (should not happen; reported, not hidden).
+    #[error("active-set method did not converge in {iterations} iterations")]
+    NotConverged {
+        /// Iterations done.
+        iterations: u32,
+    },
+    /// The Clarabel reference stopped without a solution or an infeasibility certificate.
+    #[error("Clarabel reference stopped with status {status} after {iterations} iterations")]
+    ReferenceFailed {
+        /// Clarabel's status.
+        status: &'static str,
+        /// Iterations done.
+        iterations: u32,
+    },
+}
+
+struct MaskFmt(u32);
+impl std::fmt::Display for MaskFmt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.0 == 0 {
+            return write!(f, "none");
+        }
+        let mut first = true;
+        for i in 0..32 {
+            if self.0 & (1 << i) != 0 {
+                if !first {
+                    write!(f, ",")?;
+                }
+                write!(f, "{i}")?;
+                first = false;
+            }
+        }
+        Ok(())
+    }
+}
+fn fmt_mask(m: u32) -> MaskFmt {
+    MaskFmt(m)
+}
