@@ -83,12 +83,7 @@ fn table4_planar_fem_and_catenary() {
     let mut worst = 0.0f64;
     for row in t["rows"].as_array().unwrap() {
         let tmin = row["t_min_n"].as_f64().unwrap();
-        for (key, el, n) in [
-            ("faithful_fem_N10", ElementKind::Fem, 10),
-            ("faithful_analytical_N10", ElementKind::Catenary, 10),
-            ("faithful_fem_N40", ElementKind::Fem, 40),
-            ("faithful_analytical_N40", ElementKind::Catenary, 40),
-        ] {
+        for (key, el, n) in TABLE4_COLUMNS {
             let s = scene_for(&t, el, n, tmin);
             worst = worst.max(check_dense(
                 &format!("T4 {key} {tmin} N"),
@@ -129,10 +124,7 @@ fn table8_spatial_fem_and_catenary_modes_1_to_8_and_tensions() {
     let mut worst = 0.0f64;
     for row in t["rows"].as_array().unwrap() {
         let tmin = row["t_min_n"].as_f64().unwrap();
-        for (key, el) in [
-            ("faithful_fem_N40", ElementKind::Fem),
-            ("faithful_analytical_N40", ElementKind::Catenary),
-        ] {
+        for (key, el) in TABLE8_COLUMNS {
             let s = scene_for(&t, el, 40, tmin);
             worst = worst.max(check_dense(
                 &format!("T8 {key} {tmin} N"),

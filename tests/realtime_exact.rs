@@ -43,12 +43,7 @@ fn f1_equals_faithful_values_of_every_table() {
     let t = table(4);
     for row in t["rows"].as_array().unwrap() {
         let tmin = row["t_min_n"].as_f64().unwrap();
-        for (key, el, n) in [
-            ("faithful_fem_N10", ElementKind::Fem, 10),
-            ("faithful_analytical_N10", ElementKind::Catenary, 10),
-            ("faithful_fem_N40", ElementKind::Fem, 40),
-            ("faithful_analytical_N40", ElementKind::Catenary, 40),
-        ] {
+        for (key, el, n) in TABLE4_COLUMNS {
             let s = scene_for(&t, el, n, tmin);
             worst = worst.max(check(
                 &format!("T4 {key} {tmin}"),
@@ -60,10 +55,7 @@ fn f1_equals_faithful_values_of_every_table() {
     let t = table(8);
     for row in t["rows"].as_array().unwrap() {
         let tmin = row["t_min_n"].as_f64().unwrap();
-        for (key, el) in [
-            ("faithful_fem_N40", ElementKind::Fem),
-            ("faithful_analytical_N40", ElementKind::Catenary),
-        ] {
+        for (key, el) in TABLE8_COLUMNS {
             let s = scene_for(&t, el, 40, tmin);
             worst = worst.max(check(
                 &format!("T8 {key} {tmin}"),

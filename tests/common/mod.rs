@@ -64,6 +64,20 @@ pub fn scene_for(t: &Value, element: ElementKind, n: usize, t_min: f64) -> Scene
     s.with_model(element, n)
 }
 
+/// Table 4's result columns (planar robot): key, element, elements per cable.
+pub const TABLE4_COLUMNS: [(&str, ElementKind, usize); 4] = [
+    ("faithful_fem_N10", ElementKind::Fem, 10),
+    ("faithful_analytical_N10", ElementKind::Catenary, 10),
+    ("faithful_fem_N40", ElementKind::Fem, 40),
+    ("faithful_analytical_N40", ElementKind::Catenary, 40),
+];
+
+/// Table 8's result columns (spatial robot, 40 elements per cable): key, element.
+pub const TABLE8_COLUMNS: [(&str, ElementKind); 2] = [
+    ("faithful_fem_N40", ElementKind::Fem),
+    ("faithful_analytical_N40", ElementKind::Catenary),
+];
+
 pub fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
