@@ -25,14 +25,7 @@ fn f1_equals_faithful_values_of_every_table() {
     let mut worst = 0.0f64;
     for tn in [3, 7] {
         let t = table(tn);
-        for row in t["rows"].as_array().unwrap() {
-            let n = row["elements_per_cable"].as_u64().unwrap() as usize;
-            let s = scene_for(
-                &t,
-                ElementKind::Fem,
-                n,
-                t["robot"]["t_min_n"].as_f64().unwrap(),
-            );
+        for (n, s, row) in convergence_rows(&t) {
             worst = worst.max(check(
                 &format!("T{tn} N={n}"),
                 &s,

@@ -64,6 +64,21 @@ pub fn scene_for(t: &Value, element: ElementKind, n: usize, t_min: f64) -> Scene
     s.with_model(element, n)
 }
 
+/// The rows of a FEM convergence table (3 or 7): elements per cable, the shipped scene
+/// with that many FEM elements at the table's T_min, and the row.
+pub fn convergence_rows(t: &Value) -> Vec<(usize, Scene, &Value)> {
+    let t_min = t["robot"]["t_min_n"].as_f64().unwrap();
+    t["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|row| {
+            let n = row["elements_per_cable"].as_u64().unwrap() as usize;
+            (n, scene_for(t, ElementKind::Fem, n, t_min), row)
+        })
+        .collect()
+}
+
 /// Table 4's result columns (planar robot): key, element, elements per cable.
 pub const TABLE4_COLUMNS: [(&str, ElementKind, usize); 4] = [
     ("faithful_fem_N10", ElementKind::Fem, 10),
