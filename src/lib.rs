@@ -53,6 +53,7 @@
 // Numerical kernels index several arrays with one loop variable; iterator chains would
 // hide the maths. `!(x > 0.0)` is used on purpose: it is also true for NaN.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+pub mod alloc_count;
 pub mod cable;
 pub mod cli;
 pub mod estimator;

@@ -1,4 +1,4 @@
-//! Issue 5: effects switched off remove their contribution exactly, the rigid-body
+//! Effects switched off remove their contribution exactly, the rigid-body
 //! end-effector matches the dense reference, and the inverse T_min query.
 #![allow(clippy::needless_range_loop)]
 mod common;

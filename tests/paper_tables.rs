@@ -14,7 +14,6 @@
 mod common;
 use cablevib::estimator::reference_analysis;
 use cablevib::modal::{dense_relative_accuracy, lambda_to_hz};
-use cablevib::scene::ElementKind;
 use common::*;
 
 const DENSE_TOL: f64 = 5e-6;
@@ -59,14 +58,7 @@ fn check_dense(
 fn table3_planar_fem_convergence() {
     let t = table(3);
     let mut worst = 0.0f64;
-    for row in t["rows"].as_array().unwrap() {
-        let n = row["elements_per_cable"].as_u64().unwrap() as usize;
-        let s = scene_for(
-            &t,
-            ElementKind::Fem,
-            n,
-            t["robot"]["t_min_n"].as_f64().unwrap(),
-        );
+    for (n, s, row) in convergence_rows(&t) {
         worst = worst.max(check_dense(
             &format!("T3 N={n}"),
             &s,
@@ -83,12 +75,7 @@ fn table4_planar_fem_and_catenary() {
     let mut worst = 0.0f64;
     for row in t["rows"].as_array().unwrap() {
         let tmin = row["t_min_n"].as_f64().unwrap();
-        for (key, el, n) in [
-            ("faithful_fem_N10", ElementKind::Fem, 10),
-            ("faithful_analytical_N10", ElementKind::Catenary, 10),
-            ("faithful_fem_N40", ElementKind::Fem, 40),
-            ("faithful_analytical_N40", ElementKind::Catenary, 40),
-        ] {
+        for (key, el, n) in TABLE4_COLUMNS {
             let s = scene_for(&t, el, n, tmin);
             worst = worst.max(check_dense(
                 &format!("T4 {key} {tmin} N"),
@@ -105,14 +92,7 @@ fn table4_planar_fem_and_catenary() {
 fn table7_spatial_fem_convergence_modes_1_to_8() {
     let t = table(7);
     let mut worst = 0.0f64;
-    for row in t["rows"].as_array().unwrap() {
-        let n = row["elements_per_cable"].as_u64().unwrap() as usize;
-        let s = scene_for(
-            &t,
-            ElementKind::Fem,
-            n,
-            t["robot"]["t_min_n"].as_f64().unwrap(),
-        );
+    for (n, s, row) in convergence_rows(&t) {
         worst = worst.max(check_dense(
             &format!("T7 N={n}"),
             &s,
@@ -129,10 +109,7 @@ fn table8_spatial_fem_and_catenary_modes_1_to_8_and_tensions() {
     let mut worst = 0.0f64;
     for row in t["rows"].as_array().unwrap() {
         let tmin = row["t_min_n"].as_f64().unwrap();
-        for (key, el) in [
-            ("faithful_fem_N40", ElementKind::Fem),
-            ("faithful_analytical_N40", ElementKind::Catenary),
-        ] {
+        for (key, el) in TABLE8_COLUMNS {
             let s = scene_for(&t, el, 40, tmin);
             worst = worst.max(check_dense(
                 &format!("T8 {key} {tmin} N"),

@@ -1,8 +1,8 @@
-//! Property tests over random robots and poses (issue 6):
+//! Property tests over random robots and poses:
 //!
 //! - the real-time f1 and end-effector mode equal the dense reference within its accuracy
 //!   (SAFETY·ε·λ_max/λ + 1e-9, SAFETY = 8, plus SAFETY·ε·EA/T for the catenary element,
-//!   whose block is formed in global axes; see tests/hard_cases.rs);
+//!   whose block is formed in global axes; see tests/common/hard_cases.rs);
 //! - the assembled K and M (`modal::assemble`) are symmetric and positive definite;
 //! - frequencies are continuous along small pose steps (1e-6 m), and the warm-started
 //!   estimator equals a cold one.
@@ -11,16 +11,16 @@
 //! lower rings, or all on the top for a suspended robot), the end-effector inside, random EA,
 //! weight per length, end-effector mass, tension bounds, element (FEM, catenary, massless)
 //! and N ≤ 10. Fixed seed, no failure persistence: deterministic.
+mod common;
+
 use cablevib::estimator::{reference_analysis, Estimate, Estimator, EstimatorParams, Status};
 use cablevib::kinematics::Pose;
-use cablevib::modal::{assemble, dense_relative_accuracy, hz_to_lambda, lambda_to_hz, DenseModes};
+use cablevib::modal::{assemble, hz_to_lambda, lambda_to_hz, DenseModes};
 use cablevib::scene::{Cable, ElementKind, Scene};
+use common::hard_cases::{catenary_conditioning, dense_tol};
 use nalgebra::{DMatrix, Vector3};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
-
-const SAFETY: f64 = 8.0;
-const EPS: f64 = f64::EPSILON;
 
 #[derive(Debug, Clone)]
 struct Robot {
@@ -129,7 +129,7 @@ fn config(cases: u32) -> Config {
 }
 
 /// An estimator that accepts any position (the random frames are not boxes around the
-/// end-effector; the workspace check is tested in tests/hard_cases.rs).
+/// end-effector; the workspace check is tested in tests/hard_cases_inputs.rs).
 fn estimator(s: &Scene) -> Option<Estimator> {
     let mut p = EstimatorParams::default();
     p.modal.ee_participation_min = s.model.ee_participation_min;
@@ -137,22 +137,12 @@ fn estimator(s: &Scene) -> Option<Estimator> {
     Estimator::with_params(s, p).ok()
 }
 
+/// The tolerance on mode `lambda` (see tests/common/hard_cases.rs) plus `extra`.
 fn tol_of(lambda: f64, m: &DenseModes, extra: f64) -> f64 {
-    SAFETY * dense_relative_accuracy(lambda, m.lambda_max) + 1e-9 + extra
+    dense_tol(lambda, m) + extra
 }
 
-fn catenary_conditioning(s: &Scene, t: &[f64]) -> f64 {
-    if s.model.element != ElementKind::Catenary {
-        return 0.0;
-    }
-    s.cables
-        .iter()
-        .zip(t)
-        .map(|(c, &t)| SAFETY * EPS * c.ea_n() / t)
-        .fold(0.0, f64::max)
-}
-
-/// Real-time against dense: f1, and the end-effector mode as in tests/hard_cases.rs
+/// Real-time against dense: f1, and the end-effector mode as in tests/common/hard_cases.rs
 /// (a dense mode within tolerance whose participation is ≥ thr − 1e-3, none clearly below it
 /// with participation ≥ thr + 1e-3).
 fn check_against_dense(

@@ -25,14 +25,7 @@ fn f1_equals_faithful_values_of_every_table() {
     let mut worst = 0.0f64;
     for tn in [3, 7] {
         let t = table(tn);
-        for row in t["rows"].as_array().unwrap() {
-            let n = row["elements_per_cable"].as_u64().unwrap() as usize;
-            let s = scene_for(
-                &t,
-                ElementKind::Fem,
-                n,
-                t["robot"]["t_min_n"].as_f64().unwrap(),
-            );
+        for (n, s, row) in convergence_rows(&t) {
             worst = worst.max(check(
                 &format!("T{tn} N={n}"),
                 &s,
@@ -43,12 +36,7 @@ fn f1_equals_faithful_values_of_every_table() {
     let t = table(4);
     for row in t["rows"].as_array().unwrap() {
         let tmin = row["t_min_n"].as_f64().unwrap();
-        for (key, el, n) in [
-            ("faithful_fem_N10", ElementKind::Fem, 10),
-            ("faithful_analytical_N10", ElementKind::Catenary, 10),
-            ("faithful_fem_N40", ElementKind::Fem, 40),
-            ("faithful_analytical_N40", ElementKind::Catenary, 40),
-        ] {
+        for (key, el, n) in TABLE4_COLUMNS {
             let s = scene_for(&t, el, n, tmin);
             worst = worst.max(check(
                 &format!("T4 {key} {tmin}"),
@@ -60,10 +48,7 @@ fn f1_equals_faithful_values_of_every_table() {
     let t = table(8);
     for row in t["rows"].as_array().unwrap() {
         let tmin = row["t_min_n"].as_f64().unwrap();
-        for (key, el) in [
-            ("faithful_fem_N40", ElementKind::Fem),
-            ("faithful_analytical_N40", ElementKind::Catenary),
-        ] {
+        for (key, el) in TABLE8_COLUMNS {
             let s = scene_for(&t, el, 40, tmin);
             worst = worst.max(check(
                 &format!("T8 {key} {tmin}"),

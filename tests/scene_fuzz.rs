@@ -1,4 +1,4 @@
-//! Property tests of the scene parser (issue 6, "bad input"): mutations of
+//! Property tests of the scene parser against bad input: mutations of
 //! scenes/spatial_paper.toml (truncated at a random byte, numbers replaced by huge, tiny,
 //! NaN, infinite, negative, string or array values, keys deleted, lines duplicated or
 //! swapped, garbage inserted) and random text. Always `Ok` or an `Err` whose message names

@@ -1,4 +1,4 @@
-//! Soak of the real-time estimator (issue 6): a random walk through and out of the
+//! Soak of the real-time estimator: a random walk through and out of the
 //! workspace (mean-reverting ±1 cm steps, kicks and one-cycle glitches anywhere in the frame
 //! plus 15 %), random T_min changes and injected bad samples (NaN, ±Inf, non-unit
 //! quaternions, negative / NaN / too large T_min, a pose at an anchor).
@@ -7,72 +7,28 @@
 //! end-effector mode, finite stiffness and tensions within [T_min, T_max]; a non-ok estimate
 //! has NaN frequencies (nothing stale). Every 101 cycles a cold estimator answers the same
 //! input and must agree (status, and f1 / end-effector mode to 1e-9), so warm starts never
-//! pass off a stale or wrong value. Zero heap allocations in the measured loop (a counting
-//! `#[global_allocator]`, counting only on the soak thread while the loop runs) and no
+//! pass off a stale or wrong value. Zero heap allocations in the measured loop (the counting
+//! `#[global_allocator]` of `cablevib::alloc_count`, read on the soak thread around the
+//! loop, so the test harness's other threads are not charged) and no
 //! resident-memory growth. Prints the count of each status and the latency percentiles.
 //!
 //! `cargo test --test soak` runs the short soak (2 × 20 000 cycles);
 //! `cargo test --release --test soak -- --ignored --nocapture` runs the long one
 //! (10⁶ cycles of the paper's spatial robot, FEM N = 40, plus 2·10⁵ with the catenary
 //! element); its figures are recorded in docs/hard-cases.md.
+mod common;
+
+use cablevib::alloc_count::{thread_allocated_bytes, thread_allocations, CountingAlloc};
 use cablevib::estimator::{Estimator, Status};
 use cablevib::kinematics::Pose;
 use cablevib::scene::{ElementKind, Scene};
+use cablevib::service::stats::percentile;
+use common::Rng;
 use nalgebra::Vector3;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-// ---------------------------------------------------------------------------------------
-// Counting allocator
-// ---------------------------------------------------------------------------------------
-
-struct Counting;
-
-static ALLOCATIONS: AtomicU64 = AtomicU64::new(0);
-static ALLOCATED_BYTES: AtomicU64 = AtomicU64::new(0);
-
-thread_local! {
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-}
-
-fn counting() -> bool {
-    COUNTING.try_with(|c| c.get()).unwrap_or(false)
-}
-
-// SAFETY: every call is forwarded unchanged to the system allocator; the counters are
-// atomics and the thread-local flag is a const-initialised Cell (no allocation, no
-// destructor), so counting cannot recurse into the allocator.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if counting() {
-            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-            ALLOCATED_BYTES.fetch_add(layout.size() as u64, Ordering::Relaxed);
-        }
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        if counting() {
-            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-            ALLOCATED_BYTES.fetch_add(layout.size() as u64, Ordering::Relaxed);
-        }
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        if counting() {
-            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-            ALLOCATED_BYTES.fetch_add(new_size as u64, Ordering::Relaxed);
-        }
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: CountingAlloc = CountingAlloc;
 
 /// Resident set size, kB (Linux; 0 elsewhere).
 fn rss_kb() -> u64 {
@@ -90,27 +46,6 @@ fn rss_kb() -> u64 {
 // ---------------------------------------------------------------------------------------
 // The walk
 // ---------------------------------------------------------------------------------------
-
-/// SplitMix64: deterministic, no allocation.
-struct Rng(u64);
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.uniform()
-    }
-    fn chance(&mut self, p: f64) -> bool {
-        self.uniform() < p
-    }
-}
 
 const N_STATUS: usize = 16;
 
@@ -131,15 +66,7 @@ struct Report {
     /// The first solver failures (NotConverged, RankDeficient) on finite input: what to look at.
     solver_failures: Vec<String>,
     /// Slowest cycle: (ns, status, position, t_min).
-    slowest: (u32, Status, Vector3<f64>, f64),
-}
-
-fn percentile(sorted: &[u32], q: f64) -> u64 {
-    if sorted.is_empty() {
-        return 0;
-    }
-    let i = ((sorted.len() - 1) as f64 * q).round() as usize;
-    sorted[i] as u64
+    slowest: (u64, Status, Vector3<f64>, f64),
 }
 
 // The loop index is the cycle number (also used for the latency slot), and `!(x <= tol)`
@@ -160,8 +87,8 @@ fn soak(scene: &Scene, cycles: usize, seed: u64) -> Report {
     let mut t_min = scene.t_min_n;
     // Latency buffers allocated and touched before the measurement (no page faults or
     // growth inside it).
-    let mut latency: Vec<u32> = vec![1; cycles];
-    let mut latency_ok: Vec<u32> = vec![1; cycles];
+    let mut latency: Vec<u64> = vec![1; cycles];
+    let mut latency_ok: Vec<u64> = vec![1; cycles];
     let mut n_ok = 0usize;
     let mut status = [0u64; N_STATUS];
     let mut injected = 0u64;
@@ -184,14 +111,13 @@ fn soak(scene: &Scene, cycles: usize, seed: u64) -> Report {
         Option<cablevib::estimator::EstimatorError>,
     ); 8] = [(0, Vector3::zeros(), 0.0, None); 8];
     let mut n_solver_fail = 0usize;
-    let mut slowest = (0u32, Status::Ok, Vector3::zeros(), 0.0);
+    let mut slowest = (0u64, Status::Ok, Vector3::zeros(), 0.0);
     // Warm up once outside the measurement (the first cold start).
     est.update(&Pose::at(p), t_min);
 
     let rss_before = rss_kb();
-    ALLOCATIONS.store(0, Ordering::Relaxed);
-    ALLOCATED_BYTES.store(0, Ordering::Relaxed);
-    COUNTING.with(|c| c.set(true));
+    let allocations_before = thread_allocations();
+    let bytes_before = thread_allocated_bytes();
     let wall = Instant::now();
     for k in 0..cycles {
         // Random walk: ±1 cm steps pulled back to the default pose (stationary spread
@@ -252,7 +178,7 @@ fn soak(scene: &Scene, cycles: usize, seed: u64) -> Report {
         injected += bad as u64;
         let t0 = Instant::now();
         let e = est.update(&pose, tm);
-        let dt = t0.elapsed().as_nanos().min(u32::MAX as u128) as u32;
+        let dt = t0.elapsed().as_nanos().min(u64::MAX as u128) as u64;
         latency[k] = dt;
         status[(e.status.as_u32() as usize).min(N_STATUS - 1)] += 1;
         if dt > slowest.0 {
@@ -317,9 +243,8 @@ fn soak(scene: &Scene, cycles: usize, seed: u64) -> Report {
         }
     }
     let wall_s = wall.elapsed().as_secs_f64();
-    COUNTING.with(|c| c.set(false));
-    let allocations = ALLOCATIONS.load(Ordering::Relaxed);
-    let allocated_bytes = ALLOCATED_BYTES.load(Ordering::Relaxed);
+    let allocations = thread_allocations() - allocations_before;
+    let allocated_bytes = thread_allocated_bytes() - bytes_before;
     let rss_after = rss_kb();
 
     let what = |c: u8| match c {
@@ -377,12 +302,12 @@ fn soak(scene: &Scene, cycles: usize, seed: u64) -> Report {
             percentile(&latency, 0.99),
             percentile(&latency, 0.999),
             percentile(&latency, 0.9999),
-            latency.last().copied().unwrap_or(0) as u64,
+            latency.last().copied().unwrap_or(0),
         ],
         latency_ok_ns: [
             percentile(&latency_ok, 0.5),
             percentile(&latency_ok, 0.99),
-            latency_ok.last().copied().unwrap_or(0) as u64,
+            latency_ok.last().copied().unwrap_or(0),
         ],
         wall_s,
         failures,
@@ -427,7 +352,7 @@ fn report(label: &str, r: &Report) -> Vec<String> {
     let (ns, st, p, tm) = r.slowest;
     eprintln!(
         "  slowest cycle {:.1} µs: {st:?} at [{:.4}, {:.4}, {:.4}] m, t_min {tm} N",
-        us(ns as u64),
+        us(ns),
         p.x,
         p.y,
         p.z

@@ -1,11 +1,14 @@
-//! Shared helpers of the integration tests: the paper's tables and scene builders.
+//! Shared helpers of the integration tests: the paper's tables and scene builders, the one
+//! test random-number generator, and (in [`hard_cases`]) the real-time-against-dense checks
+//! of the hard-case tests.
 #![allow(dead_code)]
+pub mod hard_cases;
+
 use cablevib::scene::{ElementKind, Scene};
 use nalgebra::Vector3;
 use serde_json::Value;
 
-/// The paper's tables with the faithful values (tests/data/paper_tables.json, a copy of
-/// shared/reference/paper_tables.json).
+/// The paper's tables with the faithful values (tests/data/paper_tables.json).
 pub fn tables() -> Value {
     serde_json::from_str(include_str!("../data/paper_tables.json")).expect("valid json")
 }
@@ -61,18 +64,75 @@ pub fn scene_for(t: &Value, element: ElementKind, n: usize, t_min: f64) -> Scene
     s.with_model(element, n)
 }
 
+/// The rows of a FEM convergence table (3 or 7): elements per cable, the shipped scene
+/// with that many FEM elements at the table's T_min, and the row.
+pub fn convergence_rows(t: &Value) -> Vec<(usize, Scene, &Value)> {
+    let t_min = t["robot"]["t_min_n"].as_f64().unwrap();
+    t["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|row| {
+            let n = row["elements_per_cable"].as_u64().unwrap() as usize;
+            (n, scene_for(t, ElementKind::Fem, n, t_min), row)
+        })
+        .collect()
+}
+
+/// Table 4's result columns (planar robot): key, element, elements per cable.
+pub const TABLE4_COLUMNS: [(&str, ElementKind, usize); 4] = [
+    ("faithful_fem_N10", ElementKind::Fem, 10),
+    ("faithful_analytical_N10", ElementKind::Catenary, 10),
+    ("faithful_fem_N40", ElementKind::Fem, 40),
+    ("faithful_analytical_N40", ElementKind::Catenary, 40),
+];
+
+/// Table 8's result columns (spatial robot, 40 elements per cable): key, element.
+pub const TABLE8_COLUMNS: [(&str, ElementKind); 2] = [
+    ("faithful_fem_N40", ElementKind::Fem),
+    ("faithful_analytical_N40", ElementKind::Catenary),
+];
+
 pub fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
 
-/// Deterministic pseudo-random numbers (SplitMix64), uniform in [0, 1).
+/// Deterministic pseudo-random numbers (SplitMix64). Never allocates, so it can drive
+/// loops whose heap allocations are counted.
 pub struct Rng(pub u64);
 impl Rng {
-    pub fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
+    /// The next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    pub fn next(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// Uniform in [lo, hi).
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+    /// True with probability `p`.
+    pub fn chance(&mut self, p: f64) -> bool {
+        self.next() < p
+    }
+    /// A random direction: a point of the cube [−1, 1]³ with 0.1 < |v| ≤ 1, normalised.
+    pub fn unit(&mut self) -> Vector3<f64> {
+        loop {
+            let v = Vector3::new(
+                2.0 * self.next() - 1.0,
+                2.0 * self.next() - 1.0,
+                2.0 * self.next() - 1.0,
+            );
+            let n = v.norm();
+            if n > 0.1 && n <= 1.0 {
+                return v / n;
+            }
+        }
     }
 }

@@ -1,0 +1,270 @@
+//! Hard cases of the estimator's input: bad values (T_min out of range, NaN / Inf
+//! positions, non-unit quaternions, poses far outside or at an anchor) get a status with no
+//! numbers and leave nothing stale; poses approaching an anchor converge and are refused
+//! below the minimum cable length; the poses of a suspended robot (every anchor at one
+//! height) are in its workspace.
+//!
+//! Every test prints what it measured (`cargo test --release --test hard_cases_inputs -- --nocapture`);
+//! docs/hard-cases.md lists the cases, the expected behaviour and these tests. The shared
+//! checks and their tolerance (real-time against the dense reference) are in
+//! tests/common/hard_cases.rs.
+mod common;
+
+use cablevib::estimator::{reference_analysis, AnalysisError, Estimator, Status};
+use cablevib::kinematics::Pose;
+use cablevib::modal::lambda_to_hz;
+use cablevib::scene::{ElementKind, Scene};
+use cablevib::tension::TensionError;
+use common::hard_cases::*;
+use common::rel;
+use nalgebra::Vector3;
+
+// ---------------------------------------------------------------------------------------
+// Bad inputs
+// ---------------------------------------------------------------------------------------
+
+/// T_min > T_max, negative, NaN or infinite T_min, NaN / Inf positions, non-unit
+/// quaternions: each a status with no numbers, and the next valid input is answered
+/// exactly as a fresh estimator answers it (nothing stale, nothing lost).
+#[test]
+fn bad_inputs_get_a_status_and_the_next_valid_input_is_exact() {
+    let s = Scene::default_scene();
+    let good = Vector3::new(0.3, 0.2, 1.0);
+    let reference = realtime(&s, good, s.t_min_n);
+    assert_sane("reference", &reference, &s, s.t_min_n);
+    let q = |w: f64, x: f64| Pose {
+        position_m: good,
+        orientation_wxyz: [w, x, 0.0, 0.0],
+    };
+    let bad: Vec<(&str, Pose, f64, Status)> = vec![
+        (
+            "t_min > t_max",
+            Pose::at(good),
+            s.t_max_n + 1.0,
+            Status::TminOutOfRange,
+        ),
+        ("t_min < 0", Pose::at(good), -1.0, Status::TminOutOfRange),
+        (
+            "t_min NaN",
+            Pose::at(good),
+            f64::NAN,
+            Status::TminOutOfRange,
+        ),
+        (
+            "t_min inf",
+            Pose::at(good),
+            f64::INFINITY,
+            Status::TminOutOfRange,
+        ),
+        (
+            "x NaN",
+            Pose::at(Vector3::new(f64::NAN, 0.2, 1.0)),
+            60.0,
+            Status::InvalidInput,
+        ),
+        (
+            "z inf",
+            Pose::at(Vector3::new(0.3, 0.2, f64::INFINITY)),
+            60.0,
+            Status::InvalidInput,
+        ),
+        (
+            "z -inf",
+            Pose::at(Vector3::new(0.3, 0.2, f64::NEG_INFINITY)),
+            60.0,
+            Status::InvalidInput,
+        ),
+        ("q NaN", q(f64::NAN, 0.0), 60.0, Status::InvalidInput),
+        ("q zero", q(0.0, 0.0), 60.0, Status::NonUnitQuaternion),
+        ("q 2", q(2.0, 0.0), 60.0, Status::NonUnitQuaternion),
+        (
+            "q 1+1e-3",
+            q(1.0 + 1e-3, 0.0),
+            60.0,
+            Status::NonUnitQuaternion,
+        ),
+        (
+            "outside",
+            Pose::at(Vector3::new(9.0, 0.2, 1.0)),
+            60.0,
+            Status::OutsideWorkspace,
+        ),
+        (
+            "huge",
+            Pose::at(Vector3::new(1e300, 0.2, 1.0)),
+            60.0,
+            Status::OutsideWorkspace,
+        ),
+        (
+            "at anchor",
+            Pose::at(s.cables[5].anchor_m),
+            60.0,
+            Status::OutsideWorkspace,
+        ),
+    ];
+    let mut est = Estimator::new(&s).unwrap();
+    for (name, pose, t_min, want) in bad {
+        // Warm the estimator on a nearby pose first, so a stale value would be available.
+        est.update(&Pose::at(good + Vector3::new(1e-3, 0.0, 0.0)), s.t_min_n);
+        let e = *est.update(&pose, t_min);
+        assert_eq!(e.status, want, "{name}: {:?}", e.error);
+        assert_no_numbers(name, &e);
+        let next = *est.update(&Pose::at(good), s.t_min_n);
+        assert_sane(name, &next, &s, s.t_min_n);
+        assert!(
+            rel(next.f1_hz, reference.f1_hz) <= 1e-10
+                && rel(next.ee_mode_hz, reference.ee_mode_hz) <= 1e-10,
+            "{name}: next valid answer {} / {} vs fresh {} / {}",
+            next.f1_hz,
+            next.ee_mode_hz,
+            reference.f1_hz,
+            reference.ee_mode_hz
+        );
+        for (a, b) in next.tensions().iter().zip(reference.tensions()) {
+            assert!((a - b).abs() <= 1e-9 * b, "{name}: tensions {a} vs {b}");
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Poses near an anchor, suspended robots
+// ---------------------------------------------------------------------------------------
+
+/// The end-effector approaching an anchor (cable length d → 0): a lower corner of the
+/// spatial robot (tension-feasible all the way), the two vertical anchors of the
+/// five-cable robot, and an upper corner of the spatial robot (tension-infeasible all the
+/// way). Expected: the same status for every d ≥ 1e-6 m, ok numbers converging to a limit
+/// (|f1(d) − f1(d/10)| ≤ d·f1 per metre), equal to dense where its accuracy allows; below
+/// 1e-6 m (MIN_CABLE_LENGTH_M) OutsideWorkspace with no numbers, and the dense reference
+/// refuses the pose too.
+#[test]
+fn poses_approaching_an_anchor() {
+    let spatial = Scene::default_scene();
+    let vert = vertical_scene("fem", 10);
+    // (name, scene, anchor, direction of approach, expected status)
+    type Case = (String, Scene, Vector3<f64>, Vector3<f64>, Status);
+    let cases: Vec<Case> = vec![
+        (
+            "spatial lower corner".into(),
+            spatial.clone(),
+            spatial.cables[4].anchor_m,
+            Vector3::new(-1.0, -1.0, 1.0).normalize(),
+            Status::Ok,
+        ),
+        (
+            "spatial upper corner".into(),
+            spatial.clone(),
+            spatial.cables[0].anchor_m,
+            Vector3::new(-1.0, -1.0, -1.0).normalize(),
+            Status::TensionInfeasible,
+        ),
+        (
+            "vertical top anchor".into(),
+            vert.clone(),
+            vert.cables[0].anchor_m,
+            -Vector3::z(),
+            Status::Ok,
+        ),
+        (
+            "vertical bottom anchor".into(),
+            vert.clone(),
+            vert.cables[1].anchor_m,
+            Vector3::z(),
+            Status::Ok,
+        ),
+    ];
+    for (name, s0, anchor, dir, expect) in cases {
+        for el in [ElementKind::Fem, ElementKind::Catenary] {
+            let s = s0.with_model(el, 10);
+            let mut prev: Option<(f64, f64)> = None;
+            for d in [1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1.0001e-6] {
+                let p = anchor + dir * d;
+                let label = format!("{name} {} d {d:e}", el.as_str());
+                let e = realtime(&s, p, s.t_min_n);
+                assert_eq!(e.status, expect, "{label}: {:?}", e.error);
+                if expect != Status::Ok {
+                    assert_no_numbers(&label, &e);
+                    let t = e.tensions();
+                    assert!(
+                        t.iter()
+                            .all(|&x| x >= s.t_min_n - 1e-9 && x <= s.t_max_n + 1e-9),
+                        "{label}: closest tensions {t:?} outside the bounds"
+                    );
+                    let r = reference_analysis(&s, &p, s.t_min_n, false);
+                    assert!(
+                        matches!(
+                            r,
+                            Err(AnalysisError::Tension(TensionError::Infeasible { .. }))
+                        ),
+                        "{label}: dense {:?}",
+                        r.map(|r| r.modes.lambda[0])
+                    );
+                    continue;
+                }
+                assert_sane(&label, &e, &s, s.t_min_n);
+                if d >= 1e-3 {
+                    let r = dense(&s, p, s.t_min_n);
+                    assert_matches_dense(&label, &s, &e, &r);
+                }
+                if let Some((d0, f0)) = prev {
+                    let jump = rel(e.f1_hz, f0);
+                    assert!(
+                        jump <= d0,
+                        "{label}: f1 {} vs {f0} at d = {d0:e}: {jump:.2e}",
+                        e.f1_hz
+                    );
+                }
+                prev = Some((d, e.f1_hz));
+            }
+            for d in [0.9999e-6, 1e-9, 0.0] {
+                let p = anchor + dir * d;
+                let label = format!("{name} {} d {d:e}", el.as_str());
+                let e = realtime(&s, p, s.t_min_n);
+                assert_eq!(e.status, Status::OutsideWorkspace, "{label}: {:?}", e.error);
+                assert_no_numbers(&label, &e);
+                assert!(e.tensions().iter().all(|t| t.is_nan()), "{label}");
+                assert!(
+                    matches!(
+                        reference_analysis(&s, &p, s.t_min_n, false),
+                        Err(AnalysisError::Kinematics(_))
+                    ),
+                    "{label}: dense accepted the pose"
+                );
+            }
+        }
+    }
+}
+
+/// A suspended robot (every anchor at one height, the end-effector hanging below: the
+/// common overhead CDPR) is a valid scene; its default pose and the poses below the anchors
+/// are tension-feasible and the dense reference analyses them. The real-time estimator must
+/// answer them too, not refuse them as outside the anchors' (flat) bounding box.
+#[test]
+fn suspended_robot_poses_are_in_the_workspace() {
+    let s = suspended_scene();
+    let mut refused = Vec::new();
+    for p in [
+        s.ee_position_m,
+        Vector3::new(0.3, -0.2, 1.2),
+        Vector3::new(-0.5, 0.5, 0.5),
+    ] {
+        let r = dense(&s, p, s.t_min_n);
+        let e = realtime(&s, p, s.t_min_n);
+        if e.status == Status::Ok {
+            assert_sane("suspended", &e, &s, s.t_min_n);
+            assert_matches_dense(&format!("suspended {p:?}"), &s, &e, &r);
+        } else {
+            refused.push(format!(
+                "{p:?}: {:?} ({}); dense f1 {:.6} Hz",
+                e.status,
+                e.error.map(|x| x.to_string()).unwrap_or_default(),
+                lambda_to_hz(r.modes.lambda[0])
+            ));
+        }
+    }
+    assert!(
+        refused.is_empty(),
+        "feasible poses of the suspended robot refused:\n{}",
+        refused.join("\n")
+    );
+}
