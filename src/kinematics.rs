@@ -14,7 +14,7 @@
 //! rigid one (scene effect `rotation`) has r_i = R b_i, with b_i in its body frame and R its
 //! orientation ([`Geometry::update_rigid`]).
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
 /// End-effector pose: position (m) and orientation (unit quaternion w, x, y, z).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -166,6 +166,29 @@ impl Geometry {
             .zip(t_n)
             .fold(Vector3::zeros(), |acc, (s, t)| acc + s * *t)
     }
+}
+
+/// An orthonormal frame whose third column points up (against `gravity`); any frame when
+/// gravity is zero (the catenary element is then the rotation-invariant straight limit). The circle
+/// trajectory and the catenary element use its first two columns as the horizontal plane.
+pub fn up_frame(gravity_m_s2: &Vector3<f64>) -> Matrix3<f64> {
+    let g = gravity_m_s2.norm();
+    let up = if g > 0.0 {
+        -gravity_m_s2 / g
+    } else {
+        Vector3::z()
+    };
+    // Pick the coordinate axis least aligned with `up` to build x.
+    let seed = if up.x.abs() <= up.y.abs() && up.x.abs() <= up.z.abs() {
+        Vector3::x()
+    } else if up.y.abs() <= up.z.abs() {
+        Vector3::y()
+    } else {
+        Vector3::z()
+    };
+    let x = (seed - up * up.dot(&seed)).normalize();
+    let y = up.cross(&x);
+    Matrix3::from_columns(&[x, y, up])
 }
 
 #[cfg(test)]

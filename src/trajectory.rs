@@ -21,7 +21,7 @@ use std::path::Path;
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::kinematics::Pose;
+use crate::kinematics::{up_frame, Pose};
 use crate::scene::Scene;
 
 /// Radius of the paper's circular trajectory, m.
@@ -73,9 +73,9 @@ pub enum TrajectoryError {
 }
 
 /// Two orthonormal directions spanning the plane perpendicular to gravity (the first two
-/// columns of [`crate::cable::up_frame`]).
+/// columns of [`up_frame`]).
 fn horizontal_axes(gravity_m_s2: &Vector3<f64>) -> Matrix3<f64> {
-    crate::cable::up_frame(gravity_m_s2)
+    up_frame(gravity_m_s2)
 }
 
 /// Pose k of the paper's circle around `s`'s default position: time k·[`SAMPLE_PERIOD_S`],

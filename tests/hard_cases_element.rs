@@ -26,7 +26,7 @@ fn max_t_over_2ea(s: &Scene, t: &[f64]) -> f64 {
 }
 
 /// Catenary against FEM, per frequency: the catenary element's transverse stiffness is
-/// T/(l(1 + T/EA)) (chord = unstressed length, notes.md) instead of T/l, i.e. f lower by up
+/// T/(l(1 + T/EA)) (chord = unstressed length, docs/model.md section 5.3) instead of T/l, i.e. f lower by up
 /// to T/(2EA); with weight, the tension varies by γl along an element (±γl/(4T) in f) and
 /// sag softens the axial spring by ≈ (γl/T)²·EA/(12T) (Irvine, per element; half in f).
 fn catenary_vs_fem_bound(s: &Scene, t: &[f64], lengths: &[f64]) -> f64 {
@@ -41,7 +41,7 @@ fn catenary_vs_fem_bound(s: &Scene, t: &[f64], lengths: &[f64]) -> f64 {
     b
 }
 
-/// Straight taut cable limit of the catenary element (notes.md):
+/// Straight taut cable limit of the catenary element (docs/model.md section 5.3):
 /// K = EA/L0 e eᵀ + T/(L0 (1 + T/EA)) (I − e eᵀ).
 fn straight_limit(e: &Vector3<f64>, l0: f64, t: f64, ea: f64) -> (f64, f64) {
     let _ = e;
@@ -174,7 +174,7 @@ fn vertical_cables_anchor_above_and_below() {
 // gamma = 0 and gamma → 0
 // ---------------------------------------------------------------------------------------
 
-/// Element level: the catenary element against the analytic straight limit of notes.md,
+/// Element level: the catenary element against the analytic straight limit of docs/model.md (section 5.3),
 /// for γ = 0 and γ = 1e-15 .. 1e-3 N/m, elements of a 2 m cable refined from N = 1 to
 /// 10 000, EA/T = 1e2 .. 1e9, five orientations (vertical both ways, horizontal, sloped up
 /// and down). Expected: the axial, transverse and coupling parts within
@@ -184,7 +184,7 @@ fn vertical_cables_anchor_above_and_below() {
 ///             (tension varying by γl along the element; the chord turned by ≈ γl/(2T)
 ///             from the end tangents, which mixes the axial spring into the others),
 /// so refining the mesh (l → 0) never loses accuracy. The literal Eq. 28 would lose it
-/// like ε·EA/(γ l) (notes.md).
+/// like ε·EA/(γ l) (docs/model.md section 5.1).
 #[test]
 fn gamma_to_zero_element_is_the_straight_limit_at_every_n() {
     let frame = up_frame(&Vector3::new(0.0, 0.0, -9.81));

@@ -8,7 +8,7 @@
 //! Tensions: 1e-9 relative against the exact KKT values (Clarabel run at 1e-13 tolerances).
 //!
 //! Printed values: every reproduced "By Matlab" number is 1.005312 × the faithful value
-//! (reference/notes.md), so the faithful model sits ≈0.531% below the printed tables —
+//! (docs/model.md section 3), so the faithful model sits ≈0.531% below the printed tables —
 //! the same factor for end-effector and string modes, so no physical parameter explains
 //! it. `printed_tables_are_0_531_percent_above` checks exactly that, at print precision.
 mod common;

@@ -1,6 +1,6 @@
 //! The offline sweeps: every grid point is in the CSV with a status, infeasible points are
 //! marked (not dropped), the SVG figures are well-formed, the FEM converges as 1/N², and
-//! f1 follows a·√T_min with the coefficient of notes.md.
+//! f1 follows a·√T_min with the coefficient of docs/model.md (section 2.2).
 
 use cablevib::scene::{ElementKind, Scene};
 use cablevib::sweep::{self, AccuracyArgs, MapArgs, SweepError, SweepTminArgs, TrajectoryArgs};

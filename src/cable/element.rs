@@ -79,31 +79,9 @@ pub fn catenary_flexibility(
     Ok(m)
 }
 
-/// An orthonormal frame whose third column points up (against `gravity`); any frame when
-/// gravity is zero (the catenary element is then the rotation-invariant straight limit).
-pub fn up_frame(gravity_m_s2: &Vector3<f64>) -> Matrix3<f64> {
-    let g = gravity_m_s2.norm();
-    let up = if g > 0.0 {
-        -gravity_m_s2 / g
-    } else {
-        Vector3::z()
-    };
-    // Pick the coordinate axis least aligned with `up` to build x.
-    let seed = if up.x.abs() <= up.y.abs() && up.x.abs() <= up.z.abs() {
-        Vector3::x()
-    } else if up.y.abs() <= up.z.abs() {
-        Vector3::y()
-    } else {
-        Vector3::z()
-    };
-    let x = (seed - up * up.dot(&seed)).normalize();
-    let y = up.cross(&x);
-    Matrix3::from_columns(&[x, y, up])
-}
-
 /// Catenary element stiffness in modal form: K_c = Σ_r k_r v_r v_rᵀ (N/m, global frame) for
 /// an element with chord `chord_m` from node I to node J, tension `t0_n`, EA and weight per
-/// length γ, in the frame `frame` from [`up_frame`]. The decomposition is done on
+/// length γ, in the frame `frame` from [`up_frame`](crate::kinematics::up_frame). The decomposition is done on
 /// G = F + (L0/EA) I in the local frame (F = G − (L0/EA) I shares its eigenvectors), so
 /// k_r = 1/(L0/EA − g_r): the transverse stiffnesses (≈ T/L0) come out with relative
 /// accuracy ε instead of the ε·EA/T of decomposing K itself.
@@ -155,6 +133,7 @@ pub fn catenary_block(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kinematics::up_frame;
 
     #[test]
     fn catenary_tends_to_straight_cable() {

@@ -2,9 +2,9 @@
 //! within the scene's tolerance. Offline: runs at build time and allocates.
 
 use super::{BuildError, Estimator, EstimatorError, EstimatorParams, InputError};
-use crate::trajectory::{Circle, CIRCLE_RADIUS_M};
 use crate::kinematics::{Geometry, Pose};
 use crate::scene::{ElementKind, Scene};
+use crate::trajectory::{Circle, CIRCLE_RADIUS_M};
 use nalgebra::Vector3;
 
 /// Elements per cable of the reference (catenary) model: converged in f1 well below any
