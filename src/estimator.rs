@@ -506,7 +506,7 @@ impl Estimator {
     }
 
     /// End-effector bookkeeping counters (see [`ModalSolver::rescan_counts`]).
-    pub fn rescan_counts(&self) -> [u64; 7] {
+    pub fn rescan_counts(&self) -> modal::RescanCounts {
         self.modal.rescan_counts()
     }
 
