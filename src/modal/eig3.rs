@@ -3,6 +3,18 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+/// The closed form needs a spread p = ‖B − qI‖_F/√6 of the scaled matrix above this; below
+/// it the eigenvalues nearly coincide and the trigonometric formula loses accuracy.
+const CLOSED_FORM_MIN_SPREAD: f64 = 1e-3;
+/// ... and adjacent scaled eigenvalues at least this far apart, else the cross-product
+/// eigenvectors are inaccurate.
+const CLOSED_FORM_MIN_GAP: f64 = 2e-4;
+/// Jacobi sweeps at most (cyclic Jacobi converges quadratically: a handful suffice).
+const JACOBI_MAX_SWEEPS: usize = 12;
+/// Jacobi stops once the squared off-diagonal is below this fraction of the squared norm
+/// (ε² ≈ 5e-32: the off-diagonal is then below ε‖A‖).
+const JACOBI_OFF_TOL: f64 = 1e-34;
+
 /// Sorted eigen-decomposition of a symmetric 3 × 3 matrix (ascending).
 #[derive(Debug, Clone, Copy)]
 pub struct Eig3 {
@@ -14,8 +26,8 @@ pub struct Eig3 {
 
 /// Symmetric 3 × 3 eigen-decomposition, sorted ascending. Closed form (trigonometric
 /// eigenvalues, eigenvectors from cross products of rows of A − μI) when the eigenvalues are
-/// separated by more than 1e-4 ‖A‖; Jacobi rotations ([`eig3_jacobi`]) otherwise, where the
-/// closed form loses accuracy. No allocation.
+/// separated by at least 2e-4 of the largest |entry| of A; Jacobi rotations
+/// ([`eig3_jacobi`]) otherwise, where the closed form loses accuracy. No allocation.
 pub fn eig3(a: &Matrix3<f64>) -> Eig3 {
     let scale = a.abs().max();
     if !(scale > 0.0) || !scale.is_finite() {
@@ -28,7 +40,7 @@ pub fn eig3(a: &Matrix3<f64>) -> Eig3 {
     let (d0, d1, d2) = (b[(0, 0)] - q, b[(1, 1)] - q, b[(2, 2)] - q);
     let p2 = d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * p1;
     let p = (p2 / 6.0).sqrt();
-    if !(p > 1e-3) {
+    if !(p > CLOSED_FORM_MIN_SPREAD) {
         return eig3_jacobi(a);
     }
     // det((B − qI)/p) / 2
@@ -42,7 +54,7 @@ pub fn eig3(a: &Matrix3<f64>) -> Eig3 {
     let e_lo = q + 2.0 * p * (phi + third).cos();
     let e_mid = 3.0 * q - e_hi - e_lo;
     let vals = [e_lo, e_mid, e_hi];
-    if (e_mid - e_lo) < 2e-4 || (e_hi - e_mid) < 2e-4 {
+    if (e_mid - e_lo) < CLOSED_FORM_MIN_GAP || (e_hi - e_mid) < CLOSED_FORM_MIN_GAP {
         return eig3_jacobi(a);
     }
     let mut vecs = [Vector3::zeros(); 3];
@@ -85,9 +97,9 @@ pub fn eig3_jacobi(a: &Matrix3<f64>) -> Eig3 {
     ];
     let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     let norm2: f64 = m.iter().flatten().map(|x| x * x).sum();
-    for _sweep in 0..12 {
+    for _sweep in 0..JACOBI_MAX_SWEEPS {
         let off = m[0][1] * m[0][1] + m[0][2] * m[0][2] + m[1][2] * m[1][2];
-        if !(off > 1e-34 * norm2) {
+        if !(off > JACOBI_OFF_TOL * norm2) {
             break;
         }
         for &(p, q) in &[(0usize, 1usize), (0, 2), (1, 2)] {
