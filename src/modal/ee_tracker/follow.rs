@@ -2,7 +2,7 @@
 //! ones and the neighbours where participation is missing, pick the answer and certify it
 //! with the sum-rule bound.
 
-use super::member::predict;
+use super::member::{predict, SearchSide};
 use super::search::{neighbour, partner, track_root};
 use super::{
     EeTracker, RescanReason, ANSWER_ACCEPT, CERT_MARGIN, CHEAP_ACCEPT, NEIGHBOUR_WALK,
@@ -235,13 +235,17 @@ impl EeTracker {
         // One side per search: first towards the nearer pole (an avoided crossing
         // partner sits across it), then alternately.
         let up = match m.last_side {
-            0 => m.b - m.lambda < m.lambda - m.a,
-            1 => false,
-            _ => true,
+            SearchSide::None => m.b - m.lambda < m.lambda - m.a,
+            SearchSide::Below => false,
+            SearchSide::Above => true,
         };
-        self.members[k].last_side = if up { 2 } else { 1 };
+        self.members[k].last_side = if up {
+            SearchSide::Above
+        } else {
+            SearchSide::Below
+        };
         // Both sides searched: the mode is settled until its participation changes.
-        if m.last_side != 0 {
+        if m.last_side != SearchSide::None {
             self.members[k].p_ref = m.p;
         }
         self.members[k].searched = self.search_count;

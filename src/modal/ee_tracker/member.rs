@@ -29,6 +29,18 @@ pub(super) fn predict(m: &Member) -> f64 {
     m.lambda
 }
 
+/// The side of a watched mode's last neighbour search.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(super) enum SearchSide {
+    /// Not searched yet.
+    #[default]
+    None,
+    /// The neighbour below (index − 1).
+    Below,
+    /// The neighbour above (index + 1).
+    Above,
+}
+
 /// One watched mode.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct Member {
@@ -43,8 +55,8 @@ pub(super) struct Member {
     pub(super) p_ref: f64,
     /// When its neighbours were last searched (count of searches).
     pub(super) searched: u64,
-    /// Side of the last neighbour search: 0 none yet, 1 below, 2 above.
-    pub(super) last_side: u8,
+    /// Side of the last neighbour search.
+    pub(super) last_side: SearchSide,
     /// Position in the spectrum: modes below it, counted with multiplicity.
     pub(super) index: u32,
     /// Branch of D (eigenvalue number) that vanishes at the mode.
@@ -81,7 +93,7 @@ impl Member {
             p,
             p_ref: p,
             searched: 0,
-            last_side: 0,
+            last_side: SearchSide::None,
             index,
             branch,
             a,
@@ -117,6 +129,7 @@ pub(super) struct Tracked {
 }
 
 impl Tracked {
+    /// A newly watched mode at this root; `prev` is its λ one cycle earlier (NaN: none).
     pub(super) fn member(&self, prev: f64) -> Member {
         let r = &self.root;
         let mut m = Member::new(
