@@ -34,6 +34,11 @@
 //! chain's end mass (m/3 + (m/6)·U_{N−2}(−2)/U_{N−1}(−2) for N consistent-mass elements of
 //! mass m, 0 for a continuous chain). What a set of known modes does not hold bounds the
 //! participation of every other mode; [`ModalSolver::ee_mode_tracked`] certifies its answer
+//! with it.
+//!
+//! **Units** (SI throughout): K and D in N/m (N·m/rad in a rigid body's rotational block),
+//! M and D' in kg (kg·m²), λ in rad²/s², f in Hz; participations are dimensionless (0 ..= 1)
+//! and Σ_k p_k/λ_k is in s²/rad².
 //!
 //! **Layout.** `dense`: the offline reference. `dynamic_stiffness`: the loaded problem and
 //! the evaluation of D(λ). `first_mode`: the first root and its certificate. `ee_tracker`:
