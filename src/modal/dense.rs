@@ -17,9 +17,9 @@ pub fn assemble(
 }
 
 /// Assemble for a rigid end-effector (6 DOF: translation, rotation): cable i's last node is
-/// tied to it by G_i = [I, −[r_i]×] (arm r_i, m, world frame); `inertia_kg_m2` is the
+/// tied to it by G_i = [I, −\[r_i\]×] (arm r_i, m, world frame); `inertia_kg_m2` is the
 /// world-frame inertia about the centroid, `k_geo_rot` the tensions' rotational geometric
-/// stiffness (N·m/rad, see [`rigid_geometric_stiffness`]).
+/// stiffness (N·m/rad, see [`rigid_geometric_stiffness`](super::rigid_geometric_stiffness)).
 pub fn assemble_rigid(
     models: &[CableModel],
     ee_mass_kg: f64,

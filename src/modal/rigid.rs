@@ -7,7 +7,7 @@ use nalgebra::{Matrix3, Vector3};
 /// attachment arms (m) and the rotational geometric stiffness (N·m/rad).
 pub(super) type RigidParts<'a> = (&'a Matrix3<f64>, &'a [Vector3<f64>], &'a Matrix3<f64>);
 
-/// G = [I, −[r]×] (3 × 6): displacement of an attachment point at arm r (m) for an
+/// G = [I, −\[r\]×] (3 × 6): displacement of an attachment point at arm r (m) for an
 /// end-effector translation u and small rotation θ: δx = u + θ × r.
 pub fn attach_map(r: &Vector3<f64>) -> nalgebra::Matrix3x6<f64> {
     let mut g = nalgebra::Matrix3x6::zeros();

@@ -71,7 +71,7 @@ impl ModalSolver {
         self.problem.load(models, ee_mass_kg, None);
     }
 
-    /// Load for a rigid end-effector: cable i's end moves with G_i = [I, −[r_i]×] (arm r_i,
+    /// Load for a rigid end-effector: cable i's end moves with G_i = [I, −\[r_i\]×] (arm r_i,
     /// world frame, m); `inertia_kg_m2` is the world-frame inertia about the centroid and
     /// `k_geo_rot` the rotational geometric stiffness (N·m/rad) of the tensions.
     pub fn load_rigid(
