@@ -370,6 +370,7 @@ impl LoadedChains {
 
     /// D(0) from the chains' static end stiffnesses (N elements of spring k in series:
     /// k/N; a continuous chain: S/L), without evaluating the chains; D'(0) is left zero.
+    #[inline]
     pub(super) fn static_eval(&self) -> DynEval {
         let mut d = self.k6;
         for i in 0..self.n_chains {
@@ -395,6 +396,7 @@ impl LoadedChains {
 
     /// Participation of the mode at root λ with null vector v (unit): the end-effector's
     /// share vᵀ M_ee v / vᵀ(−D'(λ))v of the mode's kinetic-energy norm.
+    #[inline]
     pub(super) fn participation(&self, dd: &Matrix6<f64>, v: &Vector6<f64>) -> f64 {
         let kin = -quad(dd, v, self.dim);
         let own = quad(&self.m6, v, self.dim);
@@ -526,6 +528,7 @@ impl EvalScratch {
 
     /// The pole-free interval (a, b) of D around the λ of the last evaluation, from the
     /// chains' blocked counts there.
+    #[inline]
     pub(super) fn last_pole_interval(&self, p: &LoadedChains) -> (f64, f64) {
         let mut a = 0.0f64;
         let mut b = f64::INFINITY;
@@ -542,6 +545,7 @@ impl EvalScratch {
     /// whether the pole is above x, the pole's key chain << 16 | pole number). In an avoided
     /// crossing with a string mode of that chain, the share is what the partner across the
     /// pole holds (two-level model).
+    #[inline]
     pub(super) fn coupling(
         &self,
         p: &LoadedChains,

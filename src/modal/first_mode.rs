@@ -68,11 +68,13 @@ impl RootFinder<'_> {
     }
 
     /// The pole-free interval (a, b) around the λ of the last evaluation.
+    #[inline]
     pub(super) fn last_pole_interval(&self) -> (f64, f64) {
         self.scratch.last_pole_interval(self.problem)
     }
 
     /// The end-effector participation of the mode with null vector v, D' = `dd`.
+    #[inline]
     pub(super) fn participation(&self, dd: &Matrix6<f64>, v: &Vector6<f64>) -> f64 {
         self.problem.participation(dd, v)
     }
