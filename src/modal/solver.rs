@@ -46,13 +46,15 @@ impl ModalSolver {
         self.params = p;
     }
 
-    /// The root finders' view: parameters and problem read, scratch written.
-    fn finder(&mut self) -> RootFinder<'_> {
-        RootFinder {
+    /// The root finders' view (parameters and problem read, scratch written), and beside
+    /// it the first root's state and the tracker (disjoint borrows).
+    fn parts(&mut self) -> (RootFinder<'_>, &mut FirstRootState, &mut EeTracker) {
+        let finder = RootFinder {
             params: &self.params,
             problem: &self.problem,
             scratch: &mut self.scratch,
-        }
+        };
+        (finder, &mut self.first, &mut self.tracker)
     }
 
     /// The sum rules of the loaded pose as known now (the weighted one from the last
@@ -94,7 +96,7 @@ impl ModalSolver {
 
     /// Number of natural frequencies strictly below λ (Wittrick-Williams).
     pub fn count_below(&mut self, lambda: f64) -> u32 {
-        self.finder().count_below(lambda)
+        self.parts().0.count_below(lambda)
     }
 
     /// Static end-effector stiffness D(0), translational block, N/m.
@@ -139,12 +141,8 @@ impl ModalSolver {
 
     /// The first natural frequency's λ (rad²/s²), warm-started from `warm` when given.
     pub fn first_root(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
-        let mut f = RootFinder {
-            params: &self.params,
-            problem: &self.problem,
-            scratch: &mut self.scratch,
-        };
-        f.first_root(&mut self.first, warm)
+        let (mut f, first, _) = self.parts();
+        f.first_root(first, warm)
     }
 
     /// The lowest mode whose end-effector participation is at least
@@ -153,12 +151,8 @@ impl ModalSolver {
     /// `first` is the already-known first root (not solved again).
     pub fn ee_mode(&mut self, first: &Root) -> Result<Root, ModalError> {
         let sums = self.sums();
-        let mut f = RootFinder {
-            params: &self.params,
-            problem: &self.problem,
-            scratch: &mut self.scratch,
-        };
-        self.tracker.ee_mode(&mut f, sums, first)
+        let (mut f, _, tracker) = self.parts();
+        tracker.ee_mode(&mut f, sums, first)
     }
 
     /// Forget the tracked end-effector mode (the next [`Self::ee_mode_tracked`] scans).
@@ -207,12 +201,8 @@ impl ModalSolver {
     /// returned by a warm cycle is always certified by the bound.
     pub fn ee_mode_tracked(&mut self, first: &Root, warm: bool) -> Result<Root, ModalError> {
         let sums = self.sums();
-        let mut f = RootFinder {
-            params: &self.params,
-            problem: &self.problem,
-            scratch: &mut self.scratch,
-        };
-        self.tracker.ee_mode_tracked(&mut f, sums, first, warm)
+        let (mut f, _, tracker) = self.parts();
+        tracker.ee_mode_tracked(&mut f, sums, first, warm)
     }
 
     /// Counters of the end-effector bookkeeping: full scans by reason, watched modes lost

@@ -20,7 +20,8 @@ use super::{ModalError, Root};
 use member::{predict, Member};
 use search::track_root;
 
-/// Largest number of watched modes.
+/// Largest number of watched modes (a fixed array, no allocation; when full, the weakest
+/// gives way to a stronger one).
 const MAX_MEMBERS: usize = 16;
 /// Modes found with at least this participation are watched (the modes of the paper's
 /// spatial robot below 0.05 hold at most 0.16 together along the circle, dense reference).
@@ -64,11 +65,12 @@ const P_STRONG: f64 = 0.15;
 /// string mode (an avoided crossing): the partner across the chain's nearest pole is
 /// searched and watched (two-level model: it holds about that share).
 const P_PARTNER: f64 = 0.03;
-/// Partner searches per cycle.
+/// Partner searches per cycle (bounds a warm cycle's cost; the rest wait a cycle).
 const PARTNER_SEARCHES: usize = 1;
-/// Modes a neighbour search may walk past (weak ones) on each side.
+/// Modes a neighbour search may walk past (weak ones) on each side (bounds its cost).
 const NEIGHBOUR_WALK: usize = 3;
-/// Pole intervals a neighbour search may cross.
+/// Pole intervals a neighbour search may cross (bounds its cost; a neighbour farther away
+/// is left to the rescan).
 const NEIGHBOUR_INTERVALS: usize = 4;
 /// A weakly followed mode (no mode reached the threshold at the last full scan) is the
 /// same mode while its root stays within this (relative) of its prediction.
