@@ -469,7 +469,13 @@ pub fn bench(a: &BenchArgs, allocations: AllocCounter) -> Result<(), CliError> {
         let rc = est.rescan_counts();
         println!(
             "  end-effector mode bookkeeping: full scans cold {} uncertified {} none {}; lost {} dropped {}; partner searches {} neighbour searches {}",
-            rc[0], rc[2], rc[4], rc[1], rc[5], rc[6], rc[3]
+            rc.cold_scans,
+            rc.uncertified_scans,
+            rc.no_mode_scans,
+            rc.lost,
+            rc.dropped,
+            rc.partner_searches,
+            rc.neighbour_searches
         );
         if f1_min.0.is_finite() {
             println!(

@@ -165,7 +165,7 @@ impl Estimator {
     }
 
     /// End-effector bookkeeping counters (see [`ModalSolver::rescan_counts`]).
-    pub fn rescan_counts(&self) -> [u64; 7] {
+    pub fn rescan_counts(&self) -> crate::modal::RescanCounts {
         self.cycle.modal.rescan_counts()
     }
 

@@ -1,0 +1,235 @@
+//! The offline dense reference: assembled K and M, static condensation, and a dense
+//! generalized symmetric eigen-solve. Never on the real-time path.
+
+use super::rigid::{attach_map, RigidParts};
+use super::{lambda_to_hz, ModalError};
+use crate::cable::{CableModel, ChainKind};
+use nalgebra::{DMatrix, Matrix3, Matrix6, SymmetricEigen, Vector3};
+
+/// Assemble the global K (N/m) and M (kg) of the cable models and the end-effector point
+/// mass. DOF order: end-effector (0..3), then for each cable its interior nodes from the
+/// anchor side. Anchors are fixed and carry no DOF.
+pub fn assemble(
+    models: &[CableModel],
+    ee_mass_kg: f64,
+) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
+    assemble_general(models, ee_mass_kg, None)
+}
+
+/// Assemble for a rigid end-effector (6 DOF: translation, rotation): cable i's last node is
+/// tied to it by G_i = [I, −\[r_i\]×] (arm r_i, m, world frame); `inertia_kg_m2` is the
+/// world-frame inertia about the centroid, `k_geo_rot` the tensions' rotational geometric
+/// stiffness (N·m/rad, see [`rigid_geometric_stiffness`](super::rigid_geometric_stiffness)).
+pub fn assemble_rigid(
+    models: &[CableModel],
+    ee_mass_kg: f64,
+    inertia_kg_m2: &Matrix3<f64>,
+    arms_m: &[Vector3<f64>],
+    k_geo_rot: &Matrix3<f64>,
+) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
+    assemble_general(models, ee_mass_kg, Some((inertia_kg_m2, arms_m, k_geo_rot)))
+}
+
+fn assemble_general(
+    models: &[CableModel],
+    ee_mass_kg: f64,
+    rigid: Option<RigidParts<'_>>,
+) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
+    if models.iter().any(|m| {
+        m.chains[..m.n_chains]
+            .iter()
+            .any(|c| matches!(c.kind, ChainKind::Continuous { .. }))
+    }) {
+        return Err(ModalError::NotAssemblable);
+    }
+    let ee_dim = if rigid.is_some() { 6 } else { 3 };
+    let interior: usize = models.iter().map(|m| m.n_el - 1).sum();
+    let ndof = ee_dim + 3 * interior;
+    let mut k = DMatrix::<f64>::zeros(ndof, ndof);
+    let mut mm = DMatrix::<f64>::zeros(ndof, ndof);
+    for i in 0..3 {
+        mm[(i, i)] += ee_mass_kg;
+    }
+    if let Some((inertia, _, kgeo)) = rigid {
+        for r in 0..3 {
+            for c in 0..3 {
+                mm[(3 + r, 3 + c)] += inertia[(r, c)];
+                k[(3 + r, 3 + c)] += kgeo[(r, c)];
+            }
+        }
+    }
+    let i3 = DMatrix::<f64>::identity(3, 3);
+    let mut base = ee_dim;
+    for (ci, cm) in models.iter().enumerate() {
+        let n = cm.n_el;
+        // Map of the cable's end node onto the end-effector DOFs (3 × ee_dim).
+        let g: DMatrix<f64> = match rigid {
+            Some((_, arms, _)) => {
+                let g6 = attach_map(&arms[ci]);
+                DMatrix::from_fn(3, 6, |r, c| g6[(r, c)])
+            }
+            None => i3.clone(),
+        };
+        let me = cm.element_mass_kg;
+        let kc = DMatrix::from_fn(3, 3, |r, c| cm.kc[(r, c)]);
+        // Node j: 0 = anchor (fixed), 1..n−1 interior, n = end-effector.
+        let place = |j: usize| -> (usize, &DMatrix<f64>) {
+            if j == n {
+                (0, &g)
+            } else {
+                (base + 3 * (j - 1), &i3)
+            }
+        };
+        for el in 0..n {
+            let nodes = [el, el + 1];
+            for (ia, &na) in nodes.iter().enumerate() {
+                for (ib, &nb) in nodes.iter().enumerate() {
+                    if na == 0 || nb == 0 {
+                        continue;
+                    }
+                    let sign = if ia == ib { 1.0 } else { -1.0 };
+                    let mcoef = if ia == ib { me / 3.0 } else { me / 6.0 };
+                    let (ra, la) = place(na);
+                    let (rb, lb) = place(nb);
+                    let kk = la.transpose() * (&kc * sign) * lb;
+                    let mk = la.transpose() * lb * mcoef;
+                    for r in 0..kk.nrows() {
+                        for c in 0..kk.ncols() {
+                            k[(ra + r, rb + c)] += kk[(r, c)];
+                            mm[(ra + r, rb + c)] += mk[(r, c)];
+                        }
+                    }
+                }
+            }
+        }
+        base += 3 * (n - 1);
+    }
+    Ok((k, mm))
+}
+
+/// Static condensation of K onto its first `dim` DOFs: K_ee − K_ei K_ii⁻¹ K_ie.
+pub fn condense_static(k: &DMatrix<f64>, dim: usize) -> Matrix6<f64> {
+    let n = k.nrows();
+    let mut out = Matrix6::zeros();
+    let kee = k.view((0, 0), (dim, dim)).into_owned();
+    let s = if n > dim {
+        let kii = k.view((dim, dim), (n - dim, n - dim)).into_owned();
+        let kie = k.view((dim, 0), (n - dim, dim)).into_owned();
+        match kii.cholesky() {
+            Some(ch) => kee - kie.transpose() * ch.solve(&kie),
+            None => DMatrix::repeat(dim, dim, f64::NAN),
+        }
+    } else {
+        kee
+    };
+    for r in 0..dim {
+        for c in 0..dim {
+            out[(r, c)] = s[(r, c)];
+        }
+    }
+    out
+}
+
+/// The full spectrum from the dense reference.
+#[derive(Debug, Clone)]
+pub struct DenseModes {
+    /// λ = ω², ascending, rad²/s².
+    pub lambda: Vec<f64>,
+    /// End-effector participation of each mode (0 ..= 1); empty when vectors were not asked.
+    pub ee_participation: Vec<f64>,
+    /// Largest |λ|, rad²/s² (sets the solver's absolute accuracy ε·λ_max).
+    pub lambda_max: f64,
+}
+
+impl DenseModes {
+    /// Frequencies in Hz, ascending.
+    pub fn frequencies_hz(&self) -> Vec<f64> {
+        self.lambda.iter().map(|&l| lambda_to_hz(l)).collect()
+    }
+    /// The lowest mode whose end-effector participation is at least `min` (index, λ).
+    pub fn first_ee_mode(&self, min: f64) -> Option<(usize, f64)> {
+        self.ee_participation
+            .iter()
+            .position(|&p| p >= min)
+            .map(|i| (i, self.lambda[i]))
+    }
+}
+
+/// Estimated relative accuracy of a dense f64 solve for eigenvalue λ: ε·λ_max/λ.
+pub fn dense_relative_accuracy(lambda: f64, lambda_max: f64) -> f64 {
+    f64::EPSILON * lambda_max / lambda.abs().max(f64::MIN_POSITIVE)
+}
+
+/// Dense generalized symmetric eigen-solve of K u = λ M u via M = L Lᵀ and
+/// C = L⁻¹ K L⁻ᵀ. With `vectors`, also each mode's end-effector participation
+/// m_ee‖u_ee‖² / uᵀ M u (the first three DOF are the end-effector's).
+pub fn dense_modes(
+    k: &DMatrix<f64>,
+    m: &DMatrix<f64>,
+    ee_mass_kg: f64,
+    vectors: bool,
+) -> Result<DenseModes, ModalError> {
+    let mut ee = Matrix6::zeros();
+    ee.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(Matrix3::identity() * ee_mass_kg));
+    dense_modes_ee(k, m, &ee, 3, vectors)
+}
+
+/// [`dense_modes`] with the end-effector's own mass matrix `ee_mass` (its first `dim` rows
+/// and columns; the first `dim` DOF are the end-effector's): participation
+/// u_eeᵀ M_ee u_ee / uᵀ M u.
+pub fn dense_modes_ee(
+    k: &DMatrix<f64>,
+    m: &DMatrix<f64>,
+    ee_mass: &Matrix6<f64>,
+    dim: usize,
+    vectors: bool,
+) -> Result<DenseModes, ModalError> {
+    let chol = m.clone().cholesky().ok_or(ModalError::MassNotDefinite)?;
+    let l = chol.l();
+    let linv_k = l
+        .solve_lower_triangular(k)
+        .ok_or(ModalError::MassNotDefinite)?;
+    let c = l
+        .solve_lower_triangular(&linv_k.transpose())
+        .ok_or(ModalError::MassNotDefinite)?;
+    let c = (&c + c.transpose()) * 0.5;
+    if !vectors {
+        let mut lambda: Vec<f64> = c.symmetric_eigenvalues().iter().copied().collect();
+        lambda.sort_by(|a, b| a.total_cmp(b));
+        let lambda_max = lambda.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+        return Ok(DenseModes {
+            lambda,
+            ee_participation: Vec::new(),
+            lambda_max,
+        });
+    }
+    let eig = SymmetricEigen::new(c);
+    let mut idx: Vec<usize> = (0..eig.eigenvalues.len()).collect();
+    idx.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let lt = l.transpose();
+    let y = &eig.eigenvectors;
+    let u = lt
+        .solve_upper_triangular(y)
+        .ok_or(ModalError::MassNotDefinite)?;
+    let mut lambda = Vec::with_capacity(idx.len());
+    let mut part = Vec::with_capacity(idx.len());
+    for &i in &idx {
+        lambda.push(eig.eigenvalues[i]);
+        let col = u.column(i);
+        let mut ee = 0.0;
+        for r in 0..dim {
+            for c in 0..dim {
+                ee += col[r] * ee_mass[(r, c)] * col[c];
+            }
+        }
+        let yn = y.column(i).norm_squared(); // = uᵀ M u
+        part.push(ee / yn);
+    }
+    let lambda_max = lambda.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+    Ok(DenseModes {
+        lambda,
+        ee_participation: part,
+        lambda_max,
+    })
+}

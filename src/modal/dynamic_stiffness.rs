@@ -1,0 +1,592 @@
+//! The loaded problem and its evaluation: D(λ) = Σ_chains s_c(λ) P_c − λ M_ee (+ the
+//! rigid body's constant geometric stiffness), its λ-derivative and the chains' blocked
+//! count.
+//!
+//! [`LoadedChains`] is what `load` computes at one pose and nothing on the hot path writes;
+//! [`EvalScratch`] holds the buffers one evaluation writes (and the evaluation counter).
+
+use super::eig3::eig3;
+use super::rigid::{attach_map, RigidParts};
+use crate::cable::{
+    eval_continuous_batch, eval_discrete_batch, CableModel, Chain, ChainEval, ChainKind,
+    BATCH_MAX_ELEMENTS,
+};
+use crate::scene::{MAX_CABLES, MAX_ELEMENTS_PER_CABLE};
+use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector6};
+
+/// Largest number of chains (a [`CableModel`] has up to three).
+pub(super) const MAX_CHAINS: usize = 3 * MAX_CABLES;
+
+/// (row, column) of the six distinct entries of a symmetric 3 × 3 matrix.
+const SYM3: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+
+/// D(λ), D'(λ) and the blocked count at one λ. D is 3 × 3 (point mass, in the top-left
+/// block) or 6 × 6 (rigid body: translation then rotation).
+#[derive(Debug, Clone, Copy)]
+pub struct DynEval {
+    /// Dynamic stiffness D(λ), N/m (N·m/rad in the rotational block).
+    pub d: Matrix6<f64>,
+    /// dD/dλ, kg (kg·m² in the rotational block).
+    pub dd: Matrix6<f64>,
+    /// Σ mult · blocked eigenvalues below λ.
+    pub below: u32,
+    /// 3 or 6.
+    pub dim: usize,
+}
+
+impl DynEval {
+    /// Sorted eigen-decomposition of D.
+    pub fn eig(&self) -> EigD {
+        if self.dim == 3 {
+            let e = eig3(&self.d.fixed_view::<3, 3>(0, 0).into_owned());
+            let mut out = EigD {
+                values: [f64::INFINITY; 6],
+                vectors: [Vector6::zeros(); 6],
+                n: 3,
+            };
+            for k in 0..3 {
+                out.values[k] = e.values[k];
+                out.vectors[k]
+                    .fixed_rows_mut::<3>(0)
+                    .copy_from(&e.vectors[k]);
+            }
+            out
+        } else {
+            let e = SymmetricEigen::new(self.d);
+            let mut idx = [0usize, 1, 2, 3, 4, 5];
+            idx.sort_by(|&i, &j| e.eigenvalues[i].total_cmp(&e.eigenvalues[j]));
+            let mut out = EigD {
+                values: [0.0; 6],
+                vectors: [Vector6::zeros(); 6],
+                n: 6,
+            };
+            for (k, &i) in idx.iter().enumerate() {
+                out.values[k] = e.eigenvalues[i];
+                out.vectors[k] = e.eigenvectors.column(i).into_owned();
+            }
+            out
+        }
+    }
+}
+
+/// Sorted eigen-decomposition of D (3 or 6 valid entries).
+#[derive(Debug, Clone, Copy)]
+pub struct EigD {
+    /// Eigenvalues ascending (entries ≥ n are +∞ or unused).
+    pub values: [f64; 6],
+    /// Matching unit eigenvectors.
+    pub vectors: [Vector6<f64>; 6],
+    /// Number of valid entries.
+    pub n: usize,
+}
+
+impl EigD {
+    /// Number of negative eigenvalues.
+    pub fn negatives(&self) -> usize {
+        self.values[..self.n].iter().filter(|&&v| v < 0.0).count()
+    }
+}
+
+/// vᵀ A v for a symmetric A, over the leading `dim` × `dim` block (3 or 6).
+#[inline]
+pub(super) fn quad(a: &Matrix6<f64>, v: &Vector6<f64>, dim: usize) -> f64 {
+    if dim == 3 {
+        let (x, y, z) = (v[0], v[1], v[2]);
+        x * x * a[(0, 0)]
+            + y * y * a[(1, 1)]
+            + z * z * a[(2, 2)]
+            + 2.0 * (x * y * a[(0, 1)] + x * z * a[(0, 2)] + y * z * a[(1, 2)])
+    } else {
+        (v.transpose() * a * v)[(0, 0)]
+    }
+}
+
+/// The problem of one pose, as `load` leaves it: the chains, how they attach to the
+/// end-effector, its mass, the evaluation plan (batches) and the tabulated poles. Read-only
+/// on the hot path.
+#[derive(Debug, Clone)]
+pub(super) struct LoadedChains {
+    pub(super) chains: [Chain; MAX_CHAINS],
+    /// Rigid body: each chain's projector through the attachment map, Gᵀ P G (6 × 6).
+    pub(super) q6: [Matrix6<f64>; MAX_CHAINS],
+    pub(super) n_chains: usize,
+    /// End-effector mass, kg.
+    pub(super) ee_mass_kg: f64,
+    /// 3 (point mass) or 6 (rigid body).
+    pub(super) dim: usize,
+    /// Rigid-body mass matrix diag(m I, I_world), kg and kg·m².
+    pub(super) m6: Matrix6<f64>,
+    /// Constant rigid-body geometric stiffness (rotational block), N·m/rad.
+    pub(super) k6: Matrix6<f64>,
+    /// Chains evaluated together by the batched recurrence: their indices, k and m, and
+    /// their common element count (0 when there are none).
+    batch_idx: [usize; MAX_CHAINS],
+    batch_k: [f64; MAX_CHAINS],
+    batch_m: [f64; MAX_CHAINS],
+    n_batch: usize,
+    batch_n_el: usize,
+    /// Each chain's projector as its six distinct entries ([`SYM3`] order).
+    proj_sym: [[f64; 6]; MAX_CHAINS],
+    /// The continuous chains, evaluated together ([`eval_continuous_batch`]).
+    cont_idx: [usize; MAX_CHAINS],
+    cont_k: [f64; MAX_CHAINS],
+    cont_m: [f64; MAX_CHAINS],
+    n_cont: usize,
+    /// (1 − cos θ_j, cos θ_j) for θ_j = jπ/N, j = 0 ..= N, of the discrete chains'
+    /// common element count N = `pole_tab_n` (the blocked eigenvalues without trigonometry).
+    pole_tab: Vec<(f64, f64)>,
+    pole_tab_n: usize,
+    /// Σ of the end-effector participation over all modes (sum rule), from `load`.
+    pub(super) p_total: f64,
+}
+
+impl LoadedChains {
+    /// Nothing loaded; the pole table's capacity reserved (the only allocation).
+    pub(super) fn new() -> LoadedChains {
+        let zero = Chain {
+            kind: ChainKind::Discrete {
+                k: 0.0,
+                m: 0.0,
+                n_el: 1,
+            },
+            mult: 0,
+            proj: Matrix3::zeros(),
+        };
+        LoadedChains {
+            chains: [zero; MAX_CHAINS],
+            q6: [Matrix6::zeros(); MAX_CHAINS],
+            n_chains: 0,
+            ee_mass_kg: 0.0,
+            dim: 3,
+            m6: Matrix6::zeros(),
+            k6: Matrix6::zeros(),
+            batch_idx: [0; MAX_CHAINS],
+            batch_k: [0.0; MAX_CHAINS],
+            batch_m: [0.0; MAX_CHAINS],
+            n_batch: 0,
+            batch_n_el: 0,
+            proj_sym: [[0.0; 6]; MAX_CHAINS],
+            cont_idx: [0; MAX_CHAINS],
+            cont_k: [0.0; MAX_CHAINS],
+            cont_m: [0.0; MAX_CHAINS],
+            n_cont: 0,
+            pole_tab: Vec::with_capacity(MAX_ELEMENTS_PER_CABLE + 1),
+            pole_tab_n: 0,
+            p_total: f64::NAN,
+        }
+    }
+
+    /// Load the chains of the cable models at one pose (point mass when `rigid` is None).
+    /// Chains that contribute nothing (zero spring and zero mass: a switched-off effect)
+    /// are not loaded, so they cost nothing per evaluation.
+    pub(super) fn load(
+        &mut self,
+        models: &[CableModel],
+        ee_mass_kg: f64,
+        rigid: Option<RigidParts<'_>>,
+    ) {
+        self.load_chains(models, ee_mass_kg, rigid);
+        self.p_total = self.sum_rule_total(ee_mass_kg);
+        self.fill_pole_table();
+        self.plan_batches();
+    }
+
+    /// The end-effector's mass (and inertia, geometric stiffness) and the active chains
+    /// with their projectors.
+    fn load_chains(
+        &mut self,
+        models: &[CableModel],
+        ee_mass_kg: f64,
+        rigid: Option<RigidParts<'_>>,
+    ) {
+        self.n_chains = 0;
+        self.ee_mass_kg = ee_mass_kg;
+        self.m6 = Matrix6::zeros();
+        self.m6
+            .fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(Matrix3::identity() * ee_mass_kg));
+        self.k6 = Matrix6::zeros();
+        self.dim = 3;
+        if let Some((inertia, _, kgeo)) = rigid {
+            self.dim = 6;
+            self.m6.fixed_view_mut::<3, 3>(3, 3).copy_from(inertia);
+            self.k6.fixed_view_mut::<3, 3>(3, 3).copy_from(kgeo);
+        }
+        for (i, m) in models.iter().enumerate() {
+            let g = rigid.map(|(_, arms, _)| attach_map(&arms[i]));
+            for c in &m.chains[..m.n_chains] {
+                let idle =
+                    matches!(c.kind, ChainKind::Discrete { k, m, .. } if k == 0.0 && m == 0.0);
+                if idle || self.n_chains >= MAX_CHAINS {
+                    continue;
+                }
+                self.chains[self.n_chains] = *c;
+                for (j, &(r, col)) in SYM3.iter().enumerate() {
+                    self.proj_sym[self.n_chains][j] = c.proj[(r, col)];
+                }
+                if let Some(g) = g {
+                    self.q6[self.n_chains] = g.transpose() * c.proj * g;
+                }
+                self.n_chains += 1;
+            }
+        }
+    }
+
+    /// Sum rule: Σ over all modes of the participation = tr(M_ee M_∞⁻¹), with M_∞ the
+    /// end-effector's mass plus every chain's end mass (the λ → −∞ limit of −D(λ)/λ).
+    fn sum_rule_total(&self, ee_mass_kg: f64) -> f64 {
+        let mut m_inf = self.m6;
+        let mut m_inf3 = Matrix3::identity() * ee_mass_kg;
+        let mut q_cache = (0usize, 0.0f64);
+        for i in 0..self.n_chains {
+            let me = match self.chains[i].kind {
+                ChainKind::Discrete { n_el, .. } if n_el > 1 => {
+                    if q_cache.0 != n_el {
+                        q_cache = (n_el, crate::cable::end_mass_q(n_el));
+                    }
+                    self.chains[i].end_mass_kg_with(q_cache.1)
+                }
+                _ => self.chains[i].end_mass_kg(),
+            };
+            if me > 0.0 {
+                m_inf += self.q6[i] * me;
+                m_inf3 += self.chains[i].proj * me;
+            }
+        }
+        if self.dim == 6 {
+            m_inf
+                .cholesky()
+                .map_or(f64::NAN, |c| (self.m6 * c.inverse()).trace())
+        } else {
+            // tr(A⁻¹) = (sum of the diagonal cofactors)/det A, A symmetric positive definite.
+            let a = &m_inf3;
+            let c00 = a[(1, 1)] * a[(2, 2)] - a[(1, 2)] * a[(2, 1)];
+            let c11 = a[(0, 0)] * a[(2, 2)] - a[(0, 2)] * a[(2, 0)];
+            let c22 = a[(0, 0)] * a[(1, 1)] - a[(0, 1)] * a[(1, 0)];
+            let det = a[(0, 0)] * c00 - a[(0, 1)] * (a[(1, 0)] * a[(2, 2)] - a[(1, 2)] * a[(2, 0)])
+                + a[(0, 2)] * (a[(1, 0)] * a[(2, 1)] - a[(1, 1)] * a[(2, 0)]);
+            if det > 0.0 && c00 > 0.0 && c22 > 0.0 {
+                ee_mass_kg * (c00 + c11 + c22) / det
+            } else {
+                f64::NAN
+            }
+        }
+    }
+
+    /// Pole table for the discrete chains' element count (refilled only when it changes;
+    /// the capacity is reserved in `new`).
+    fn fill_pole_table(&mut self) {
+        let mut n_tab = 0;
+        for c in &self.chains[..self.n_chains] {
+            if let ChainKind::Discrete { n_el, .. } = c.kind {
+                if (2..=MAX_ELEMENTS_PER_CABLE).contains(&n_el) {
+                    n_tab = n_el;
+                    break;
+                }
+            }
+        }
+        if n_tab != 0 && n_tab != self.pole_tab_n {
+            self.pole_tab.clear();
+            for j in 0..=n_tab {
+                let th = j as f64 * std::f64::consts::PI / n_tab as f64;
+                self.pole_tab
+                    .push((2.0 * (0.5 * th).sin().powi(2), th.cos()));
+            }
+            self.pole_tab_n = n_tab;
+        }
+    }
+
+    /// Batch the discrete chains of the most common small element count, and the
+    /// continuous chains.
+    fn plan_batches(&mut self) {
+        self.n_batch = 0;
+        self.batch_n_el = 0;
+        for c in &self.chains[..self.n_chains] {
+            if let ChainKind::Discrete { k, m, n_el } = c.kind {
+                if k > 0.0 && m > 0.0 && (2..=BATCH_MAX_ELEMENTS).contains(&n_el) {
+                    self.batch_n_el = n_el;
+                    break;
+                }
+            }
+        }
+        for (i, c) in self.chains[..self.n_chains].iter().enumerate() {
+            if let ChainKind::Discrete { k, m, n_el } = c.kind {
+                if k > 0.0 && m > 0.0 && n_el == self.batch_n_el {
+                    self.batch_idx[self.n_batch] = i;
+                    self.batch_k[self.n_batch] = k;
+                    self.batch_m[self.n_batch] = m;
+                    self.n_batch += 1;
+                }
+            }
+        }
+        self.n_cont = 0;
+        for (i, c) in self.chains[..self.n_chains].iter().enumerate() {
+            if let ChainKind::Continuous { k_total, m_total } = c.kind {
+                self.cont_idx[self.n_cont] = i;
+                self.cont_k[self.n_cont] = k_total;
+                self.cont_m[self.n_cont] = m_total;
+                self.n_cont += 1;
+            }
+        }
+    }
+
+    /// Blocked eigenvalue j (1-based; 0 gives 0) of chain i, rad²/s², equal to
+    /// [`Chain::pole`] bit for bit (same formula, tabulated cosines).
+    #[inline]
+    pub(super) fn chain_pole(&self, i: usize, j: usize) -> f64 {
+        if j == 0 {
+            return 0.0;
+        }
+        let c = &self.chains[i];
+        if let ChainKind::Discrete { k, m, n_el } = c.kind {
+            if n_el == self.pole_tab_n && m > 0.0 && j < n_el {
+                let (omc, cth) = self.pole_tab[j];
+                return 6.0 * k * omc / (m * (2.0 + cth));
+            }
+        }
+        c.pole(j)
+    }
+
+    /// The pole-free interval (a, b) of D around λ: the nearest blocked eigenvalues of all
+    /// chains below and above (0 and ∞ when there are none), rad²/s².
+    pub(super) fn pole_interval(&self, lambda: f64) -> (f64, f64) {
+        let mut a = 0.0f64;
+        let mut b = f64::INFINITY;
+        for c in &self.chains[..self.n_chains] {
+            let (lo, hi) = c.poles_around(lambda);
+            a = a.max(lo);
+            b = b.min(hi);
+        }
+        (a, b)
+    }
+
+    /// The lowest blocked eigenvalue over all chains, rad²/s² (∞ when none).
+    pub(super) fn lowest_pole(&self) -> f64 {
+        // Tabulated cosines for the discrete chains (no trigonometry per cycle).
+        (0..self.n_chains)
+            .map(|i| self.chain_pole(i, 1))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// D(0) from the chains' static end stiffnesses (N elements of spring k in series:
+    /// k/N; a continuous chain: S/L), without evaluating the chains; D'(0) is left zero.
+    #[inline]
+    pub(super) fn static_eval(&self) -> DynEval {
+        let mut d = self.k6;
+        for i in 0..self.n_chains {
+            let c = &self.chains[i];
+            let s0 = match c.kind {
+                ChainKind::Discrete { k, n_el, .. } => k / n_el.max(1) as f64,
+                ChainKind::Continuous { k_total, .. } => k_total,
+            };
+            if self.dim == 6 {
+                d += self.q6[i] * s0;
+            } else {
+                let mut v = d.fixed_view_mut::<3, 3>(0, 0);
+                v += c.proj * s0;
+            }
+        }
+        DynEval {
+            d,
+            dd: Matrix6::zeros(),
+            below: 0,
+            dim: self.dim,
+        }
+    }
+
+    /// Participation of the mode at root λ with null vector v (unit): the end-effector's
+    /// share vᵀ M_ee v / vᵀ(−D'(λ))v of the mode's kinetic-energy norm.
+    #[inline]
+    pub(super) fn participation(&self, dd: &Matrix6<f64>, v: &Vector6<f64>) -> f64 {
+        let kin = -quad(dd, v, self.dim);
+        let own = quad(&self.m6, v, self.dim);
+        if kin > 0.0 {
+            (own / kin).min(1.0)
+        } else {
+            0.0
+        }
+    }
+}
+
+/// What one evaluation of D(λ) writes: the chains' values at the last λ (and the batched
+/// evaluators' outputs), and the count of evaluations. No per-evaluation clearing.
+#[derive(Debug, Clone)]
+pub(super) struct EvalScratch {
+    /// Per-chain evaluations at the last λ.
+    pub(super) chain_eval: [ChainEval; MAX_CHAINS],
+    batch_out: [ChainEval; MAX_CHAINS],
+    cont_out: [ChainEval; MAX_CHAINS],
+    /// Evaluations of D(λ) since the solver was built.
+    pub(super) evaluations: u32,
+}
+
+impl EvalScratch {
+    /// Zeroed buffers.
+    pub(super) fn new() -> EvalScratch {
+        let zero = ChainEval {
+            s: 0.0,
+            ds: 0.0,
+            below: 0,
+        };
+        EvalScratch {
+            chain_eval: [zero; MAX_CHAINS],
+            batch_out: [zero; MAX_CHAINS],
+            cont_out: [zero; MAX_CHAINS],
+            evaluations: 0,
+        }
+    }
+
+    /// Every chain of `p` at λ into `chain_eval`: the batched ones together, the rest one
+    /// by one.
+    #[inline]
+    fn eval_chains(&mut self, p: &LoadedChains, lambda: f64) {
+        let nb = p.n_batch;
+        if nb > 0 {
+            eval_discrete_batch(
+                &p.batch_k[..nb],
+                &p.batch_m[..nb],
+                p.batch_n_el,
+                lambda,
+                &mut self.batch_out[..nb],
+            );
+        }
+        let nc = p.n_cont;
+        if nc > 0 {
+            eval_continuous_batch(
+                &p.cont_k[..nc],
+                &p.cont_m[..nc],
+                lambda,
+                &mut self.cont_out[..nc],
+            );
+        }
+        let (mut j, mut jc) = (0, 0);
+        for i in 0..p.n_chains {
+            if j < nb && p.batch_idx[j] == i {
+                self.chain_eval[i] = self.batch_out[j];
+                j += 1;
+            } else if jc < nc && p.cont_idx[jc] == i {
+                self.chain_eval[i] = self.cont_out[jc];
+                jc += 1;
+            } else {
+                self.chain_eval[i] = p.chains[i].eval(lambda);
+            }
+        }
+    }
+
+    /// D(λ), D'(λ) and the blocked count of the loaded problem `p`.
+    #[inline]
+    pub(super) fn eval(&mut self, p: &LoadedChains, lambda: f64) -> DynEval {
+        self.evaluations += 1;
+        self.eval_chains(p, lambda);
+        let mut below = 0u32;
+        if p.dim == 3 {
+            // The six distinct entries of the symmetric 3 × 3 blocks (00 11 22 01 02 12).
+            let m = p.ee_mass_kg;
+            let mut d = [-lambda * m, -lambda * m, -lambda * m, 0.0, 0.0, 0.0];
+            let mut dd = [-m, -m, -m, 0.0, 0.0, 0.0];
+            for (i, e) in self.chain_eval[..p.n_chains].iter().enumerate() {
+                let pr = &p.proj_sym[i];
+                for j in 0..6 {
+                    d[j] += pr[j] * e.s;
+                    dd[j] += pr[j] * e.ds;
+                }
+                below += p.chains[i].mult * e.below;
+            }
+            let mut d6 = Matrix6::zeros();
+            let mut dd6 = Matrix6::zeros();
+            for (j, &(r, c)) in SYM3.iter().enumerate() {
+                d6[(r, c)] = d[j];
+                d6[(c, r)] = d[j];
+                dd6[(r, c)] = dd[j];
+                dd6[(c, r)] = dd[j];
+            }
+            return DynEval {
+                d: d6,
+                dd: dd6,
+                below,
+                dim: 3,
+            };
+        }
+        let mut d = p.k6 - p.m6 * lambda;
+        let mut dd = -p.m6;
+        for ((c, q), e) in p.chains[..p.n_chains]
+            .iter()
+            .zip(&p.q6)
+            .zip(&self.chain_eval)
+        {
+            d += q * e.s;
+            dd += q * e.ds;
+            below += c.mult * e.below;
+        }
+        DynEval {
+            d,
+            dd,
+            below,
+            dim: 6,
+        }
+    }
+
+    /// The pole-free interval (a, b) of D around the λ of the last evaluation, from the
+    /// chains' blocked counts there.
+    #[inline]
+    pub(super) fn last_pole_interval(&self, p: &LoadedChains) -> (f64, f64) {
+        let mut a = 0.0f64;
+        let mut b = f64::INFINITY;
+        for i in 0..p.n_chains {
+            let j = self.chain_eval[i].below as usize;
+            a = a.max(p.chain_pole(i, j));
+            b = b.min(p.chain_pole(i, j + 1));
+        }
+        (a, b)
+    }
+
+    /// The chain holding the largest share of the kinetic-energy norm vᵀ(−D'(x))v of the
+    /// mode shape v at the last evaluation (at x): (share, that chain's pole nearest x,
+    /// whether the pole is above x, the pole's key chain << 16 | pole number). In an avoided
+    /// crossing with a string mode of that chain, the share is what the partner across the
+    /// pole holds (two-level model).
+    #[inline]
+    pub(super) fn coupling(
+        &self,
+        p: &LoadedChains,
+        x: f64,
+        dd: &Matrix6<f64>,
+        v: &Vector6<f64>,
+    ) -> (f64, f64, bool, u32) {
+        let kin = -quad(dd, v, p.dim);
+        if !(kin > 0.0) {
+            return (0.0, f64::NAN, false, u32::MAX);
+        }
+        let mut best = (0.0, usize::MAX);
+        for i in 0..p.n_chains {
+            let w = if p.dim == 3 {
+                let (pr, x, y, z) = (&p.chains[i].proj, v[0], v[1], v[2]);
+                x * x * pr[(0, 0)]
+                    + y * y * pr[(1, 1)]
+                    + z * z * pr[(2, 2)]
+                    + 2.0 * (x * y * pr[(0, 1)] + x * z * pr[(0, 2)] + y * z * pr[(1, 2)])
+            } else {
+                quad(&p.q6[i], v, 6)
+            };
+            let q = -self.chain_eval[i].ds * w;
+            if q > best.0 {
+                best = (q, i);
+            }
+        }
+        if best.1 == usize::MAX {
+            return (0.0, f64::NAN, false, u32::MAX);
+        }
+        let i = best.1;
+        let j = self.chain_eval[i].below as usize;
+        let lo = p.chain_pole(i, j);
+        let hi = p.chain_pole(i, j + 1);
+        let up = j == 0 || hi - x < x - lo;
+        let jp = if up { j + 1 } else { j };
+        (
+            best.0 / kin,
+            if up { hi } else { lo },
+            up,
+            (i as u32) << 16 | jp as u32,
+        )
+    }
+}

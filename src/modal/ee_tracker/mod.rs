@@ -1,0 +1,356 @@
+//! The end-effector mode tracker: the lowest mode whose end-effector participation reaches
+//! [`ModalParams::ee_participation_min`](super::ModalParams::ee_participation_min), followed
+//! from cycle to cycle and certified by the participation sum rules (see
+//! [`ModalSolver::ee_mode_tracked`](super::ModalSolver::ee_mode_tracked) for the method).
+//!
+//! - [`member`]: one watched mode, its predictor, the watch list;
+//! - [`scan`]: the scan over the pole intervals (cold start and rescans);
+//! - [`follow`]: one warm cycle (follow, partner and neighbour searches, certificate);
+//! - [`search`]: the Newton searches it uses (follow a root, a neighbour, a partner).
+//!
+//! The tuning constants below decide only the cost: every warm answer is certified.
+
+mod follow;
+mod member;
+mod scan;
+mod search;
+
+use super::first_mode::RootFinder;
+use super::{ModalError, Root};
+use member::{predict, Member};
+use search::track_root;
+
+/// Largest number of watched modes (a fixed array, no allocation; when full, the weakest
+/// gives way to a stronger one).
+const MAX_MEMBERS: usize = 16;
+/// Modes found with at least this participation are watched (the modes of the paper's
+/// spatial robot below 0.05 hold at most 0.16 together along the circle, dense reference).
+const P_ADD: f64 = 0.05;
+/// A watched mode whose participation falls below this is dropped (what it holds then
+/// counts against the sum-rule bound).
+const P_DROP: f64 = 0.02;
+/// When the sum-rule bound on the unwatched modes (counting the watched modes not followed
+/// this cycle with their last participation) exceeds this, a spectral neighbour of the
+/// watched mode whose participation changed most is searched (ahead of need: the bound
+/// must stay below the threshold less [`CERT_MARGIN`]). Most participation moves are caught
+/// earlier by the partner searches ([`P_PARTNER`]).
+const SEARCH_BOUND: f64 = 0.4;
+/// ... and that mode's participation must have changed at least this much since its
+/// neighbours were searched (else the one searched longest ago is taken).
+const SEARCH_LOSS: f64 = 0.02;
+/// A scan from cold goes on past the answer until the bound is below this.
+const SCAN_BOUND: f64 = 0.15;
+/// Allowance for the participation error of the watched modes followed by one Newton step
+/// (their participation is that of the predicted point, within ~1e-5 of the root): the
+/// answer is certified when the bound plus this is below the threshold.
+const CERT_MARGIN: f64 = 0.05;
+/// A watched mode is followed by Newton's method from its prediction until a step is
+/// below this (relative, usually the first); its participation is that of the last
+/// evaluated point, within ~1e-5 of the root.
+const CHEAP_ACCEPT: f64 = 1e-5;
+/// A watched mode whose approximate participation is within this of the threshold is
+/// solved to full accuracy before it is compared with the threshold.
+const P_MARGIN: f64 = 0.02;
+/// The answer is taken from its tracking step when that step was below this (relative):
+/// Newton's error is then ~step² · λ/w ≤ 1e-14 · λ/w (w the distance to the nearer pole;
+/// the warm path equals a cold solve to 1e-10 on every cycle of the circle, tested).
+const ANSWER_ACCEPT: f64 = 1e-7;
+/// Watched modes below this participation are followed one per cycle (the one followed
+/// longest ago); the others every cycle. A mode not followed this cycle does not count in
+/// the certificate; when that fails, all are followed before anything is rescanned.
+const P_LAZY: f64 = 0.15;
+/// A watched mode with at least this participation ...
+const P_STRONG: f64 = 0.15;
+/// ... whose kinetic energy is at least this much in one chain is mixing with that chain's
+/// string mode (an avoided crossing): the partner across the chain's nearest pole is
+/// searched and watched (two-level model: it holds about that share).
+const P_PARTNER: f64 = 0.03;
+/// Partner searches per cycle (bounds a warm cycle's cost; the rest wait a cycle).
+const PARTNER_SEARCHES: usize = 1;
+/// Modes a neighbour search may walk past (weak ones) on each side (bounds its cost).
+const NEIGHBOUR_WALK: usize = 3;
+/// Pole intervals a neighbour search may cross (bounds its cost; a neighbour farther away
+/// is left to the rescan).
+const NEIGHBOUR_INTERVALS: usize = 4;
+/// A weakly followed mode (no mode reached the threshold at the last full scan) is the
+/// same mode while its root stays within this (relative) of its prediction.
+const WEAK_FOLLOW_TOL: f64 = 2e-3;
+/// Cycles a weak mode is followed before the full scan is retried.
+const WEAK_RESCAN_CYCLES: u32 = 16;
+/// A rescan starts at this fraction of the lowest watched mode's λ (the participation
+/// moves among the watched modes; the modes below stay covered by the bound).
+const RESCAN_WINDOW: f64 = 0.9;
+
+/// Why the end-effector mode had to be scanned for instead of tracked.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum RescanReason {
+    /// A cold start (or nothing watched).
+    Cold,
+    /// A watched mode was lost in its exact solve.
+    Lost,
+    /// The sum-rule bound did not certify the answer.
+    Uncertified,
+    /// No watched mode reached the threshold.
+    NoneReached,
+}
+
+/// Counters of the end-effector bookkeeping since the solver was built.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RescanCounts {
+    /// Full scans from a cold start.
+    pub cold_scans: u64,
+    /// Watched modes lost (their Newton search left the pole interval or did not converge),
+    /// and rescans because a mode was lost in its exact solve.
+    pub lost: u64,
+    /// Full scans because the sum-rule bound was not certified.
+    pub uncertified_scans: u64,
+    /// Neighbour searches.
+    pub neighbour_searches: u64,
+    /// Full scans because no watched mode reached the threshold.
+    pub no_mode_scans: u64,
+    /// Watched modes dropped (participation below 0.02).
+    pub dropped: u64,
+    /// Partner searches (avoided crossings ahead).
+    pub partner_searches: u64,
+}
+
+impl RescanCounts {
+    /// Count one rescan for `reason`.
+    fn record(&mut self, reason: RescanReason) {
+        match reason {
+            RescanReason::Cold => self.cold_scans += 1,
+            RescanReason::Lost => self.lost += 1,
+            RescanReason::Uncertified => self.uncertified_scans += 1,
+            RescanReason::NoneReached => self.no_mode_scans += 1,
+        }
+    }
+}
+
+/// The sum rules of the loaded pose that bound the unwatched modes' participation.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct SumRules {
+    /// Σ_k p_k over all modes (from `load`).
+    pub(super) total: f64,
+    /// Σ_k p_k/λ_k over all modes, s²/rad² (from the first root; NaN when unknown).
+    pub(super) over_lambda: f64,
+}
+
+/// The tracker's state between cycles: the watched modes and the bookkeeping.
+#[derive(Debug, Clone)]
+pub(super) struct EeTracker {
+    /// Watched modes, ascending in λ and in index.
+    members: [Member; MAX_MEMBERS],
+    n_members: usize,
+    /// Record roots with participation ≥ [`P_ADD`] during a scan.
+    recording: bool,
+    counts: RescanCounts,
+    /// Warm cycles left before a failed full scan is retried.
+    ee_skip: u32,
+    /// Neighbour searches so far (orders the watched modes by their last search).
+    search_count: u64,
+    /// The sum rules of this cycle (copied in by each call).
+    sums: SumRules,
+}
+
+impl EeTracker {
+    /// Nothing watched.
+    pub(super) fn new() -> EeTracker {
+        EeTracker {
+            members: [Member::default(); MAX_MEMBERS],
+            n_members: 0,
+            recording: false,
+            counts: RescanCounts::default(),
+            ee_skip: 0,
+            search_count: 0,
+            sums: SumRules {
+                total: f64::NAN,
+                over_lambda: f64::NAN,
+            },
+        }
+    }
+
+    /// The bookkeeping counters.
+    pub(super) fn counts(&self) -> RescanCounts {
+        self.counts
+    }
+
+    /// Forget the watched modes (the next tracked call scans).
+    pub(super) fn reset(&mut self) {
+        self.n_members = 0;
+        self.ee_skip = 0;
+    }
+
+    /// The lowest mode whose participation reaches the threshold, by a scan from zero
+    /// (`first` is the known first root, not solved again).
+    pub(super) fn ee_mode(
+        &mut self,
+        f: &mut RootFinder<'_>,
+        sums: SumRules,
+        first: &Root,
+    ) -> Result<Root, ModalError> {
+        self.sums = sums;
+        if first.ee_participation >= f.params.ee_participation_min {
+            return Ok(*first);
+        }
+        self.ee_scan(f, 0.0, first.lambda, f64::INFINITY)
+    }
+
+    /// The end-effector mode, tracked from the last cycle when `warm` (the method:
+    /// [`ModalSolver::ee_mode_tracked`](super::ModalSolver::ee_mode_tracked)).
+    pub(super) fn ee_mode_tracked(
+        &mut self,
+        f: &mut RootFinder<'_>,
+        sums: SumRules,
+        first: &Root,
+        warm: bool,
+    ) -> Result<Root, ModalError> {
+        self.sums = sums;
+        let start = f.evaluations();
+        let thr = f.params.ee_participation_min;
+        if first.ee_participation >= thr {
+            self.n_members = 0;
+            self.ee_skip = 0;
+            return Ok(*first);
+        }
+        if !warm {
+            self.ee_skip = 0;
+        } else if self.ee_skip > 0 {
+            if let Some(mut r) = self.follow_weak(f, thr) {
+                r.evaluations = f.evaluations() - start;
+                return Ok(r);
+            }
+        }
+        let mut reason = RescanReason::Cold;
+        if warm && self.n_members > 0 {
+            match self.track_watched(f, thr) {
+                Ok(mut r) => {
+                    r.evaluations = f.evaluations() - start;
+                    return Ok(r);
+                }
+                Err(why) => reason = why,
+            }
+        }
+        self.counts.record(reason);
+        if reason != RescanReason::Cold && self.n_members > 0 {
+            // Rescan from 10 % below the lowest watched mode (the watched modes are those
+            // the participation moves among); the modes below stay unwatched and covered by
+            // the bound. Certified, this is the answer; else scan from zero.
+            let window = RESCAN_WINDOW * self.members[0].lambda;
+            if let Some(mut r) = self.partial_rescan(f, first, window, thr) {
+                r.evaluations = f.evaluations() - start;
+                return Ok(r);
+            }
+        }
+        self.n_members = 0;
+        self.recording = true;
+        if first.ee_participation >= P_ADD {
+            self.watch_first(f, first);
+        }
+        let r = self.ee_mode(f, sums, first);
+        self.recording = false;
+        let mut r = match r {
+            Ok(r) => r,
+            Err(e) => {
+                self.n_members = 0;
+                return Err(e);
+            }
+        };
+        if r.ee_participation < thr {
+            // Weak: watch only this mode until the next full scan.
+            let (a, b) = f.problem.pole_interval(r.lambda);
+            self.members[0] = Member::new(r.lambda, r.ee_participation, 0, 0, a, b);
+            self.n_members = 1;
+            self.ee_skip = WEAK_RESCAN_CYCLES;
+        }
+        r.evaluations = f.evaluations() - start;
+        Ok(r)
+    }
+
+    /// Weak episode: no mode reached the threshold at the last full scan; follow the most
+    /// end-effector-like mode and rescan fully every [`WEAK_RESCAN_CYCLES`] cycles. Some(its
+    /// root) while it stays below the threshold; None (nothing watched) when a scan is due.
+    fn follow_weak(&mut self, f: &mut RootFinder<'_>, thr: f64) -> Option<Root> {
+        self.ee_skip -= 1;
+        if self.n_members == 1 {
+            let m = self.members[0];
+            let pred = predict(&m);
+            let exact = f.params.newton_accept;
+            if let Some(t) = track_root(f, pred, exact) {
+                if (t.root.lambda - pred).abs() <= WEAK_FOLLOW_TOL * m.lambda {
+                    self.members[0] = t.member(m.lambda);
+                    if t.root.ee_participation < thr {
+                        return Some(t.root);
+                    }
+                }
+            }
+        }
+        self.ee_skip = 0;
+        self.n_members = 0;
+        None
+    }
+
+    /// Watch the first root: branch 0 below the lowest pole, index 0.
+    fn watch_first(&mut self, f: &RootFinder<'_>, first: &Root) {
+        let lp = f.problem.lowest_pole();
+        self.insert_member(Member::new(
+            first.lambda,
+            first.ee_participation,
+            0,
+            0,
+            0.0,
+            lp,
+        ));
+    }
+
+    /// Scan from `window` (rad²/s²) upward, watching what it finds (and the first root when
+    /// it has participation); Some(answer) only when the bound certifies it.
+    fn partial_rescan(
+        &mut self,
+        f: &mut RootFinder<'_>,
+        first: &Root,
+        window: f64,
+        thr: f64,
+    ) -> Option<Root> {
+        self.n_members = 0;
+        if first.ee_participation >= P_ADD && first.lambda < window {
+            self.watch_first(f, first);
+        }
+        self.recording = true;
+        let r = self.ee_scan(f, window, window * (1.0 - scan::WINDOW_EDGE), f64::INFINITY);
+        self.recording = false;
+        let r = r.ok()?;
+        if r.ee_participation >= thr && self.unwatched_bound(r.lambda) + CERT_MARGIN < thr {
+            Some(r)
+        } else {
+            self.n_members = 0;
+            None
+        }
+    }
+
+    /// Bound on the participation of any unwatched mode below `l_ans` (rad²/s²): the smaller
+    /// of the plain and the 1/λ-weighted sum rules less what the watched modes hold.
+    fn unwatched_bound(&self, l_ans: f64) -> f64 {
+        self.unwatched_bound_with(l_ans, false)
+    }
+
+    /// [`Self::unwatched_bound`]; with `stale`, the members not followed this cycle count
+    /// too, with their last participation (an estimate for the search heuristics only).
+    fn unwatched_bound_with(&self, l_ans: f64, stale: bool) -> f64 {
+        let mut sum = 0.0;
+        let mut weighted = 0.0;
+        for m in &self.members[..self.n_members] {
+            if m.age > 0 && !stale {
+                continue;
+            }
+            sum += m.p;
+            weighted += m.p / m.lambda;
+        }
+        let plain = self.sums.total - sum;
+        let w = if self.sums.over_lambda.is_finite() && l_ans.is_finite() {
+            l_ans * (self.sums.over_lambda - weighted)
+        } else {
+            f64::INFINITY
+        };
+        plain.min(w).max(0.0)
+    }
+}

@@ -1,0 +1,127 @@
+//! Natural frequencies: the dense reference and the structured real-time solver.
+//!
+//! The free vibration problem is K u = λ M u, λ = ω² (rad²/s²), f = ω / 2π (Hz)
+//! (paper Eqs. 33-35, with K and M in the right places).
+//!
+//! **Dense reference** ([`assemble`], [`dense_modes`]): the assembled K and M (3 DOF per
+//! interior node plus the end-effector node), reduced to a standard symmetric problem
+//! with the Cholesky factor of M, solved by a dense symmetric eigensolver. A backward
+//! stable solver has absolute eigenvalue error ≈ ε·λ_max, i.e. relative error
+//! ε·λ_max/λ on a mode λ ([`dense_relative_accuracy`]). Never on the real-time path.
+//!
+//! **Structured solver** ([`ModalSolver`]): each cable's interior nodes decouple into
+//! scalar chains ([`crate::cable::Chain`]); condensing them onto the end-effector gives
+//! its 3 × 3 dynamic stiffness
+//!
+//! ```text
+//!     D(λ) = Σ_chains s_c(λ) P_c − λ m_ee I,
+//! ```
+//!
+//! and the Wittrick-Williams count J(λ) = Σ_chains mult_c · (blocked eigenvalues of c
+//! below λ) + (negative eigenvalues of D(λ)) is the exact number of natural frequencies
+//! below λ. Below the lowest blocked eigenvalue λ_p every eigenvalue of D decreases
+//! (D' = −(mass norm) < 0) from D(0) (the static stiffness, positive definite) to −∞, so
+//! the first natural frequency is the unique root of the smallest eigenvalue μ₁(D(λ)) on
+//! (0, λ_p). It is found by Newton's method on g(λ) = μ₁(λ)(λ_p − λ) (which removes the
+//! pole), safeguarded by the bracket, warm-started from the last cycle, and certified by
+//! the count. A mode's end-effector participation is m_ee‖v‖² / vᵀ(−D'(λ))v for the null
+//! vector v of D(λ): the share of the mode's kinetic-energy norm carried by the
+//! end-effector's own mass.
+//!
+//! **Sum rules.** With mass-normalised modes φ_k, D(σ)⁻¹ = Σ_k φ_k φ_kᵀ/(λ_k − σ) on the
+//! end-effector's coordinates, so Σ_k p_k/λ_k = tr(M_ee D(0)⁻¹), and as σ → −∞,
+//! Σ_k p_k = tr(M_ee M_∞⁻¹) with M_∞ = lim −D(σ)/σ: the end-effector's mass plus each
+//! chain's end mass (m/3 + (m/6)·U_{N−2}(−2)/U_{N−1}(−2) for N consistent-mass elements of
+//! mass m, 0 for a continuous chain). What a set of known modes does not hold bounds the
+//! participation of every other mode; [`ModalSolver::ee_mode_tracked`] certifies its answer
+//! with it.
+//!
+//! **Units** (SI throughout): K and D in N/m (N·m/rad in a rigid body's rotational block),
+//! M and D' in kg (kg·m²), λ in rad²/s², f in Hz; participations are dimensionless (0 ..= 1)
+//! and Σ_k p_k/λ_k is in s²/rad².
+//!
+//! **Layout.** `dense`: the offline reference. `dynamic_stiffness`: the loaded problem and
+//! the evaluation of D(λ). `first_mode`: the first root and its certificate. `ee_tracker`:
+//! the end-effector mode, scanned and tracked. `solver`: [`ModalSolver`], which composes
+//! them. `eig3` and `rigid`: small kernels both solvers use.
+
+mod dense;
+mod dynamic_stiffness;
+mod ee_tracker;
+mod eig3;
+mod error;
+mod first_mode;
+mod rigid;
+mod solver;
+
+pub use dense::{
+    assemble, assemble_rigid, condense_static, dense_modes, dense_modes_ee,
+    dense_relative_accuracy, DenseModes,
+};
+pub use dynamic_stiffness::{DynEval, EigD};
+pub use ee_tracker::RescanCounts;
+pub use eig3::{eig3, eig3_jacobi, Eig3};
+pub use error::ModalError;
+pub use rigid::{attach_map, rigid_geometric_stiffness};
+pub use solver::ModalSolver;
+
+/// Convert λ = ω² (rad²/s²) to Hz.
+#[inline]
+pub fn lambda_to_hz(lambda: f64) -> f64 {
+    lambda.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
+}
+
+/// Convert Hz to λ = ω² (rad²/s²).
+#[inline]
+pub fn hz_to_lambda(f_hz: f64) -> f64 {
+    let w = 2.0 * std::f64::consts::PI * f_hz;
+    w * w
+}
+
+/// Parameters of the structured solver (finite bounds everywhere).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModalParams {
+    /// Largest number of D(λ) evaluations for one root.
+    pub max_evaluations: u32,
+    /// Relative step size at which Newton stops.
+    pub rel_tol: f64,
+    /// Largest number of pole intervals scanned for the end-effector mode.
+    pub max_scan_intervals: u32,
+    /// Largest number of D(λ) evaluations one end-effector scan may spend.
+    pub max_scan_evaluations: u32,
+    /// Smallest end-effector participation of an end-effector mode (0 < x ≤ 1).
+    pub ee_participation_min: f64,
+    /// Check the first root with the eigenvalue count (two more evaluations) on every cold
+    /// start and every 256th warm one.
+    pub certify: bool,
+    /// Newton accepts its next iterate once a step is below this relative size: with
+    /// quadratic convergence the iterate is then within ~(step)² of the root.
+    pub newton_accept: f64,
+}
+
+impl Default for ModalParams {
+    fn default() -> Self {
+        ModalParams {
+            max_evaluations: 100,
+            rel_tol: 1e-12,
+            max_scan_intervals: 400,
+            max_scan_evaluations: 1500,
+            ee_participation_min: 0.5,
+            certify: true,
+            newton_accept: 1e-9,
+        }
+    }
+}
+
+/// One root found by the structured solver.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Root {
+    /// λ = ω², rad²/s².
+    pub lambda: f64,
+    /// End-effector participation of the mode (0 ..= 1).
+    pub ee_participation: f64,
+    /// Evaluations of D(λ) spent.
+    pub evaluations: u32,
+    /// |μ(λ)| / ‖D(λ)‖ at the answer (relative residual of the condensed problem).
+    pub residual: f64,
+}
