@@ -126,8 +126,15 @@ fn every_module_uses_only_the_layers_below_it() {
             }
         }
     }
-    assert!(checked > 50, "only {checked} crate paths found: is the scan broken?");
-    assert!(violations.is_empty(), "layer violations:\n{}", violations.join("\n"));
+    assert!(
+        checked > 50,
+        "only {checked} crate paths found: is the scan broken?"
+    );
+    assert!(
+        violations.is_empty(),
+        "layer violations:\n{}",
+        violations.join("\n")
+    );
 }
 
 #[test]

@@ -156,18 +156,8 @@ fn validate(a: &DemoConfig) -> Result<(), ServiceError> {
     Ok(())
 }
 
-/// Runs the demo and prints its summary.
-pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
-    validate(a)?;
-    // The service's own log lines would interleave with the progress: warnings only.
-    init_tracing("warn");
-    let trajectory = Trajectory::circle(scene, a.period_s)?;
-    let schedule = a.t_min_schedule.clone().unwrap_or_default();
-    let instance = format!("cablevib_demo_{}", std::process::id());
-    let names = ServiceNames::new(&instance);
-    let n_poses = (a.seconds * a.rate_hz).round().max(1.0) as usize;
-    let capacity = n_poses + LOG_SLACK;
-
+/// What the demo is about to run.
+fn print_header(scene: &Scene, a: &DemoConfig, trajectory: &Trajectory, schedule: &TminSchedule) {
     println!(
         "cablevib demo: {:.1} s on scene `{}` ({} cables, {} × {} elements/cable); the service \
          waits by {}, the controller by {}",
@@ -194,6 +184,21 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
                 .join(", ")
         }
     );
+}
+
+/// Runs the demo and prints its summary.
+pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
+    validate(a)?;
+    // The service's own log lines would interleave with the progress: warnings only.
+    init_tracing("warn");
+    let trajectory = Trajectory::circle(scene, a.period_s)?;
+    let schedule = a.t_min_schedule.clone().unwrap_or_default();
+    let instance = format!("cablevib_demo_{}", std::process::id());
+    let names = ServiceNames::new(&instance);
+    let n_poses = (a.seconds * a.rate_hz).round().max(1.0) as usize;
+    let capacity = n_poses + LOG_SLACK;
+
+    print_header(scene, a, &trajectory, &schedule);
 
     let stop = Arc::new(AtomicBool::new(false));
     let controller_ready = Arc::new(AtomicBool::new(false));

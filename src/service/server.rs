@@ -57,6 +57,69 @@ pub fn no_allocation_counter() -> u64 {
     0
 }
 
+/// Pins the thread and switches to SCHED_FIFO with locked memory when `cfg` asks; a warning
+/// for each setting the system does not permit.
+fn apply_rt_settings(cfg: &ServerConfig) {
+    if let Some(cpu) = cfg.cpu {
+        match rt::pin_to_cpu(cpu) {
+            Ok(()) => tracing::info!("pinned to CPU {cpu}"),
+            Err(e) => tracing::warn!("CPU pinning not applied: {e}"),
+        }
+    }
+    if cfg.realtime {
+        match rt::lock_memory() {
+            Ok(()) => tracing::info!("memory locked (mlockall)"),
+            Err(e) => tracing::warn!("memory not locked: {e}"),
+        }
+        match rt::set_fifo() {
+            Ok(()) => tracing::info!("running with SCHED_FIFO priority {}", rt::FIFO_PRIORITY),
+            Err(e) => tracing::warn!("SCHED_FIFO not applied: {e}"),
+        }
+    }
+}
+
+/// The log line at the start of a run.
+fn log_start(scene: &Scene, cfg: &ServerConfig) {
+    tracing::info!(
+        "serving instance \"{}\" ({}): scene `{}` ({} cables, {} × {} elements/cable), wait {}, T_min {} N, \
+         T_max {} N",
+        cfg.instance,
+        if cfg.instance.is_empty() {
+            "bare service names".to_string()
+        } else {
+            format!("services \"{}/cablevib/...\"", cfg.instance.trim_matches('/'))
+        },
+        scene.name,
+        scene.n_cables(),
+        scene.model.element.as_str(),
+        scene.model.elements_per_cable,
+        cfg.wait.as_str(),
+        scene.t_min_n,
+        scene.t_max_n
+    );
+}
+
+/// The log line at the end of a run.
+fn log_stop(reason: StopReason, report: &ServerReport) {
+    tracing::info!(
+        "stopped ({}): {} cycles, compute {}, skipped poses {}, invalid inputs {}, margin \
+         requests {}, heap allocations per cycle {:.2} (iceoryx2's per loan and per request: \
+         {:.2})",
+        match reason {
+            StopReason::Signal => "signal",
+            StopReason::Requested => "stop requested",
+            StopReason::MaxCycles => "max cycles reached",
+        },
+        report.cycles,
+        report.compute.display_us(),
+        report.skipped_poses,
+        report.invalid_inputs,
+        report.margin_requests,
+        report.allocations_per_cycle,
+        report.iceoryx2_allocations_per_cycle
+    );
+}
+
 /// Runs the service for `scene` in its own thread (named `cablevib-serve`), as the demo and
 /// the IPC benchmark do; when it ends, for any reason, `stop` is set so the other threads
 /// stop too.
@@ -597,39 +660,8 @@ pub fn run(
     }
     let mut server = Server::new(scene, &node, &names, allocations)?;
 
-    if let Some(cpu) = cfg.cpu {
-        match rt::pin_to_cpu(cpu) {
-            Ok(()) => tracing::info!("pinned to CPU {cpu}"),
-            Err(e) => tracing::warn!("CPU pinning not applied: {e}"),
-        }
-    }
-    if cfg.realtime {
-        match rt::lock_memory() {
-            Ok(()) => tracing::info!("memory locked (mlockall)"),
-            Err(e) => tracing::warn!("memory not locked: {e}"),
-        }
-        match rt::set_fifo() {
-            Ok(()) => tracing::info!("running with SCHED_FIFO priority {}", rt::FIFO_PRIORITY),
-            Err(e) => tracing::warn!("SCHED_FIFO not applied: {e}"),
-        }
-    }
-    tracing::info!(
-        "serving instance \"{}\" ({}): scene `{}` ({} cables, {} × {} elements/cable), wait {}, T_min {} N, \
-         T_max {} N",
-        cfg.instance,
-        if cfg.instance.is_empty() {
-            "bare service names".to_string()
-        } else {
-            format!("services \"{}/cablevib/...\"", cfg.instance.trim_matches('/'))
-        },
-        scene.name,
-        scene.n_cables(),
-        scene.model.element.as_str(),
-        scene.model.elements_per_cable,
-        cfg.wait.as_str(),
-        scene.t_min_n,
-        scene.t_max_n
-    );
+    apply_rt_settings(cfg);
+    log_start(scene, cfg);
 
     let period_ns = cfg
         .stats_period
@@ -667,23 +699,7 @@ pub fn run(
         }
     };
     let report = server.report(reason, removed);
-    tracing::info!(
-        "stopped ({}): {} cycles, compute {}, skipped poses {}, invalid inputs {}, margin \
-         requests {}, heap allocations per cycle {:.2} (iceoryx2's per loan and per request: \
-         {:.2})",
-        match reason {
-            StopReason::Signal => "signal",
-            StopReason::Requested => "stop requested",
-            StopReason::MaxCycles => "max cycles reached",
-        },
-        report.cycles,
-        report.compute.display_us(),
-        report.skipped_poses,
-        report.invalid_inputs,
-        report.margin_requests,
-        report.allocations_per_cycle,
-        report.iceoryx2_allocations_per_cycle
-    );
+    log_stop(reason, &report);
     Ok(report)
 }
 
