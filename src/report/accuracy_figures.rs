@@ -99,6 +99,14 @@ fn single_model_color(row: &AccuracyRow) -> &'static str {
     }
 }
 
+/// A curve of the error figure: legend, rows, the error drawn, mark.
+type Curve<'a> = (
+    &'a str,
+    &'a [&'a AccuracyRow],
+    fn(&AccuracyRow) -> f64,
+    Mark,
+);
+
 /// |f1 error| against N, FEM and catenary; the models without N as horizontal lines.
 fn error_vs_n(s: &Scene, r: &AccuracyReport) -> String {
     let fem = family(r, ElementKind::Fem);
@@ -122,7 +130,7 @@ fn error_vs_n(s: &Scene, r: &AccuracyReport) -> String {
         r.f1_ref_hz,
         r.max_elements
     );
-    let curves: [(&str, &[&AccuracyRow], fn(&AccuracyRow) -> f64, Mark); 3] = [
+    let curves: [Curve; 3] = [
         ("FEM vs reference", &fem, |x| x.err_ref, Mark::LinePoints),
         (
             "catenary vs reference",

@@ -212,7 +212,8 @@ impl HeatPanel {
             let y = py(v);
             tick(o, (x0 - 4.0, y, x0, y), (x0 - 6.0, y + 4.0), END, v);
         }
-        if k / l.cols == l.rows - 1 || k + l.cols >= self.maps.len() {
+        let (row, col) = (k / l.cols, k % l.cols);
+        if row == l.rows - 1 || k + l.cols >= self.maps.len() {
             let _ = writeln!(
                 o,
                 r#"<text x="{:.1}" y="{:.1}" font-size="12" text-anchor="middle">{}</text>"#,
@@ -221,7 +222,7 @@ impl HeatPanel {
                 escape(&self.x_label)
             );
         }
-        if k % l.cols == 0 {
+        if col == 0 {
             let (tx, ty) = (x0 - 44.0, y0 + ph / 2.0);
             let _ = writeln!(
                 o,
