@@ -44,7 +44,7 @@ pub fn tmin_csv(s: &Scene, r: &TminSweep) -> String {
     csv.into_string()
 }
 
-/// The figure: the fit over [`from_n`, `to_n`], f1, the end-effector mode where it differs
+/// The figure: the fit from `from_n` to `to_n` N, f1, the end-effector mode where it differs
 /// from f1 (with `ee_mode`), and the compared points.
 pub fn tmin_svg(
     s: &Scene,
