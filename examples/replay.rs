@@ -55,7 +55,7 @@ fn main() -> anyhow::Result<()> {
     if !(a.rate_hz.is_finite() && a.rate_hz > 0.0 && a.rate_hz <= 100_000.0) {
         bail!("--rate-hz {} must be in (0, 100000] Hz", a.rate_hz);
     }
-    let scene = cablevib::cli::load_scene(&a.scene).context("loading the scene")?;
+    let scene = cablevib::scene::Scene::load(&a.scene).context("loading the scene")?;
     let trajectory = match &a.csv {
         Some(path) => Trajectory::from_csv(path)?,
         None => Trajectory::circle(&scene, a.period_s)?,

@@ -47,8 +47,9 @@
 //!
 //! [`scene`] (TOML description and validation), [`kinematics`], [`tension`], [`cable`],
 //! [`modal`], [`estimator`] (the per-cycle pipeline and the offline reference pipeline),
-//! [`service`] (iceoryx2 wiring), [`cli`] (command-line tools), [`sweep`] (accuracy, maps,
-//! trajectories and T_min sweeps, with [`svg`] plots).
+//! [`service`] (iceoryx2 wiring), [`trajectory`] (the circle and CSV paths), [`study`] (offline
+//! accuracy, map, trajectory and T_min studies), [`report`] (their CSV, SVG and Markdown),
+//! [`cli`] (the command line, used by the binary alone).
 #![warn(missing_docs)]
 // Numerical kernels index several arrays with one loop variable; iterator chains would
 // hide the maths. `!(x > 0.0)` is used on purpose: it is also true for NaN.
@@ -59,9 +60,9 @@ pub mod cli;
 pub mod estimator;
 pub mod kinematics;
 pub mod modal;
+pub mod report;
 pub mod scene;
 pub mod service;
-pub mod svg;
-pub mod sweep;
+pub mod study;
 pub mod tension;
 pub mod trajectory;

@@ -18,17 +18,6 @@ fn main() {
 }
 
 fn run(cli: cablevib::cli::Cli) -> anyhow::Result<()> {
-    use cablevib::cli::Command;
-    match cli.command {
-        Command::Analyze(a) => cablevib::cli::analyze(&a)?,
-        Command::Bench(a) => cablevib::cli::bench(&a, allocations)?,
-        Command::Serve(a) => cablevib::cli::serve(&a, allocations)?,
-        Command::Demo(a) => cablevib::cli::demo(&a)?,
-        Command::BenchIpc(a) => cablevib::cli::bench_ipc(&a)?,
-        Command::Accuracy(a) => cablevib::sweep::accuracy(&a)?,
-        Command::Map(a) => cablevib::sweep::map(&a)?,
-        Command::Trajectory(a) => cablevib::sweep::trajectory(&a)?,
-        Command::SweepTmin(a) => cablevib::sweep::sweep_tmin(&a)?,
-    }
+    cablevib::cli::run(cli, allocations)?;
     Ok(())
 }

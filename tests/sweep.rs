@@ -2,8 +2,15 @@
 //! marked (not dropped), the SVG figures are well-formed, the FEM converges as 1/N², and
 //! f1 follows a·√T_min with the coefficient of docs/model.md (section 2.2).
 
+use cablevib::cli::accuracy::AccuracyArgs;
+use cablevib::cli::map::MapArgs;
+use cablevib::cli::sweep_tmin::SweepTminArgs;
+use cablevib::cli::trajectory::TrajectoryArgs;
+use cablevib::cli::{self, CliError};
 use cablevib::scene::{ElementKind, Scene};
-use cablevib::sweep::{self, AccuracyArgs, MapArgs, SweepError, SweepTminArgs, TrajectoryArgs};
+use cablevib::study::accuracy::AccuracyConfig;
+use cablevib::study::tmin::TminConfig;
+use cablevib::study::{self, StudyError};
 use cablevib::trajectory::{Circle, TrajectoryError};
 use clap::Parser;
 use std::path::{Path, PathBuf};
@@ -116,7 +123,7 @@ fn map_csv_has_every_grid_point_and_marks_infeasible_ones() {
         out.to_str().unwrap(),
     ])
     .unwrap();
-    sweep::map(&cli.a).unwrap();
+    cli::map::run(&cli.a).unwrap();
     let (h, rows) = read_csv(&out.with_extension("csv"));
     let col = |n: &str| h.iter().position(|c| c == n).unwrap();
     let (xs, ys, zs, st, f1) = (
@@ -197,8 +204,8 @@ fn map_result_is_independent_of_the_thread_count() {
         .unwrap()
         .a
     };
-    let (_, one) = sweep::compute_map(&args("1")).unwrap();
-    let (_, three) = sweep::compute_map(&args("3")).unwrap();
+    let (_, one) = cli::map::compute(&args("1")).unwrap();
+    let (_, three) = cli::map::compute(&args("3")).unwrap();
     assert_eq!(one.points.len(), 25);
     for (a, b) in one.points.iter().zip(&three.points) {
         assert_eq!(a.position_m, b.position_m);
@@ -206,7 +213,7 @@ fn map_result_is_independent_of_the_thread_count() {
         assert!((a.estimate.f1_hz - b.estimate.f1_hz).abs() <= 1e-9 * a.estimate.f1_hz);
     }
     // Planar: the minimum is at the centre (paper, conclusion 1).
-    let (p, _) = one.min(sweep::MapValue::F1).unwrap();
+    let (p, _) = one.min(study::map::MapValue::F1).unwrap();
     assert!(p.norm() < 1e-12, "{p}");
 }
 
@@ -232,7 +239,7 @@ fn trajectory_from_csv_and_default_circle() {
         out.to_str().unwrap(),
     ])
     .unwrap();
-    sweep::trajectory(&cli.a).unwrap();
+    cli::trajectory::run(&cli.a).unwrap();
     let (h, rows) = read_csv(&out.with_extension("csv"));
     let st = h.iter().position(|c| c == "status").unwrap();
     assert_eq!(rows.len(), 6, "3 poses x 2 T_min values");
@@ -243,8 +250,10 @@ fn trajectory_from_csv_and_default_circle() {
 
     // A malformed line is reported with its line number.
     std::fs::write(&input, "0,0,0,1.25\n0.001,zero,0,1.25\n").unwrap();
-    match sweep::trajectory(&cli.a) {
-        Err(SweepError::Trajectory(TrajectoryError::Row { line, .. })) => assert_eq!(line, 2),
+    match cli::trajectory::run(&cli.a) {
+        Err(CliError::Study(StudyError::Trajectory(TrajectoryError::Row { line, .. }))) => {
+            assert_eq!(line, 2)
+        }
         other => panic!("{other:?}"),
     }
 
@@ -254,7 +263,7 @@ fn trajectory_from_csv_and_default_circle() {
     let tr = Circle::new(&s, 0.75, 0.2).unwrap().sampled(&s);
     assert_eq!(tr.t_s.len(), 201);
     assert!((tr.position_m[50].norm() - 0.75).abs() < 1e-12);
-    let r = sweep::compute_trajectory(&s, &tr, &[20.0, 40.0], true, 2, None).unwrap();
+    let r = study::trajectory::evaluate(&s, &tr, &[20.0, 40.0], true, 2, None).unwrap();
     let n = tr.t_s.len();
     for i in 0..n {
         let (a, b) = (&r[i].estimate, &r[n + i].estimate);
@@ -266,11 +275,17 @@ fn trajectory_from_csv_and_default_circle() {
 #[test]
 fn sweep_tmin_fits_sqrt_with_the_notes_coefficient() {
     let s = Scene::planar_paper();
-    let r = sweep::compute_sweep_tmin(&s, 20.0, 80.0, 7, false).unwrap();
+    let cfg = TminConfig {
+        from_n: 20.0,
+        to_n: 80.0,
+        steps: 7,
+        ee_mode: false,
+    };
+    let r = study::tmin::compute(&s, &cfg).unwrap();
     assert!(r.points.iter().all(|p| p.estimate.is_ok()));
     assert!((r.a - 0.10689).abs() < 1e-3 * 0.10689, "a = {}", r.a);
     assert!(r.max_rel_residual < 1e-9, "{}", r.max_rel_residual);
-    assert!((sweep::sqrt_fit(&[4.0, 9.0], &[2.0, 3.0]) - 1.0).abs() < 1e-15);
+    assert!((study::tmin::sqrt_fit(&[4.0, 9.0], &[2.0, 3.0]) - 1.0).abs() < 1e-15);
 
     let d = tmp("tmin");
     let out = d.join("s");
@@ -289,21 +304,27 @@ fn sweep_tmin_fits_sqrt_with_the_notes_coefficient() {
         out.to_str().unwrap(),
     ])
     .unwrap();
-    sweep::sweep_tmin(&cli.a).unwrap();
+    cli::sweep_tmin::run(&cli.a).unwrap();
     let (_, rows) = read_csv(&out.with_extension("csv"));
     assert_eq!(rows.len(), 4);
     assert_well_formed_svg(&out.with_extension("svg"));
     let bad = TminCli::try_parse_from(["sweep-tmin", "planar-paper", "--from", "300"]).unwrap();
     assert!(matches!(
-        sweep::sweep_tmin(&bad.a),
-        Err(SweepError::Usage(_))
+        cli::sweep_tmin::run(&bad.a),
+        Err(CliError::Study(StudyError::Usage(_)))
     ));
 }
 
 #[test]
 fn fem_error_falls_as_one_over_n_squared() {
     let s = Scene::default_scene();
-    let r = sweep::compute_accuracy(&s, &[5, 10, 20, 40], 5, 4.0, 2).unwrap();
+    let cfg = AccuracyConfig {
+        element_counts: vec![5, 10, 20, 40],
+        cycles: 5,
+        rounds: 2,
+        period_s: 4.0,
+    };
+    let r = study::accuracy::compute(&s, &cfg).unwrap();
     let f = |n: usize| {
         r.rows
             .iter()
@@ -350,7 +371,7 @@ fn accuracy_command_writes_section_figures_and_data() {
             "1",
         ])
         .unwrap();
-        sweep::accuracy(&cli.a).unwrap();
+        cli::accuracy::run(&cli.a).unwrap();
     };
     run("planar-paper");
     run("spatial-paper");

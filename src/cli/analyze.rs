@@ -1,0 +1,161 @@
+//! `cablevib analyze`: tensions and natural frequencies of one pose, from the dense
+//! reference or the real-time path.
+
+use super::args::{resolve_scene, SceneArgs};
+use super::{json_f64, CliError};
+use crate::estimator::{reference_analysis, Estimator, Status};
+use crate::kinematics::Pose;
+use crate::modal::lambda_to_hz;
+use crate::scene::{ElementKind, Scene};
+use clap::Args;
+use std::time::Instant;
+
+/// `cablevib analyze`.
+#[derive(Debug, Args)]
+pub struct AnalyzeArgs {
+    /// Scene and overrides.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Number of frequencies to print.
+    #[arg(long, default_value_t = 10)]
+    pub modes: usize,
+    /// One JSON object on stdout instead of tables.
+    #[arg(long)]
+    pub json: bool,
+    /// Print what the real-time path computes (f1, end-effector mode, tensions, status).
+    #[arg(long)]
+    pub realtime: bool,
+}
+
+/// `cablevib analyze`.
+pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
+    let s = resolve_scene(&a.scene)?;
+    let pos = s.ee_position_m;
+    let s = if s.model.element == ElementKind::Auto {
+        let (resolved, choice) =
+            crate::estimator::resolve_auto(&s).map_err(|e| CliError::Analysis(e.to_string()))?;
+        if !a.json {
+            println!("{choice}");
+        }
+        resolved
+    } else {
+        s
+    };
+    if a.realtime
+        || s.model.element == ElementKind::Continuous
+        || s.model.element == ElementKind::Massless
+    {
+        return analyze_realtime(a, &s);
+    }
+    let t0 = Instant::now();
+    let r = reference_analysis(&s, &pos, s.t_min_n, true)
+        .map_err(|e| CliError::Analysis(e.to_string()))?;
+    let secs = t0.elapsed().as_secs_f64();
+    let k = a.modes.min(r.modes.lambda.len());
+    let f: Vec<f64> = r.modes.lambda[..k]
+        .iter()
+        .map(|&l| lambda_to_hz(l))
+        .collect();
+    let part = &r.modes.ee_participation[..k];
+    if a.json {
+        let o = serde_json::json!({
+            "scene": s.name,
+            "position_m": [pos.x, pos.y, pos.z],
+            "t_min_n": s.t_min_n,
+            "tensions_n": r.tensions_n,
+            "frequencies_hz": f,
+            "ee_participation": part,
+            "dof": r.dof,
+            "element": s.model.element.as_str(),
+            "elements_per_cable": s.model.elements_per_cable,
+            "stiffness_n_m": r.stiffness_n_m.row_iter().map(|row| row.iter().copied().collect::<Vec<_>>()).collect::<Vec<_>>(),
+            "solver": "dense",
+            "dense_seconds": secs,
+        });
+        println!("{o}");
+        return Ok(());
+    }
+    println!(
+        "scene {}  position ({:.4}, {:.4}, {:.4}) m  T_min {} N  model {} × {} elements/cable  ({} DOF, dense solve {:.1} ms)",
+        s.name,
+        pos.x,
+        pos.y,
+        pos.z,
+        s.t_min_n,
+        s.model.element.as_str(),
+        s.model.elements_per_cable,
+        r.dof,
+        secs * 1e3
+    );
+    println!("\n cable   tension (N)");
+    for (i, t) in r.tensions_n.iter().enumerate() {
+        println!(" {:>5}   {:>11.4}", i, t);
+    }
+    println!("\n mode   frequency (Hz)   end-effector participation");
+    for (i, (fi, p)) in f.iter().zip(part).enumerate() {
+        println!(" {:>4}   {:>14.6}   {:>8.4}", i + 1, fi, p);
+    }
+    Ok(())
+}
+
+fn analyze_realtime(a: &AnalyzeArgs, s: &Scene) -> Result<(), CliError> {
+    let mut est = Estimator::new(s).map_err(|e| CliError::Analysis(e.to_string()))?;
+    let t0 = Instant::now();
+    let e = *est.update(&Pose::at(s.ee_position_m), s.t_min_n);
+    let ns = t0.elapsed().as_nanos();
+    if a.json {
+        let o = serde_json::json!({
+            "scene": s.name,
+            "status": e.status.as_str(),
+            "error": e.error.map(|x| x.to_string()),
+            "tensions_n": e.tensions().iter().map(|&x| json_f64(x)).collect::<Vec<_>>(),
+            "f1_hz": json_f64(e.f1_hz),
+            "f1_ee_participation": json_f64(e.f1_ee_participation),
+            "ee_mode_hz": json_f64(e.ee_mode_hz),
+            "ee_mode_participation": json_f64(e.ee_mode_participation),
+            "stiffness_n_m": e.stiffness_n_m.row_iter().map(|row| row.iter().map(|&x| json_f64(x)).collect::<Vec<_>>()).collect::<Vec<_>>(),
+            "element": s.model.element.as_str(),
+            "elements_per_cable": s.model.elements_per_cable,
+            "eigen_evaluations": e.eigen_evaluations,
+            "eigen_residual": json_f64(e.eigen_residual),
+            "solver": "realtime",
+            "compute_ns": ns as u64,
+        });
+        println!("{o}");
+    } else {
+        println!(
+            "scene {}  model {} × {}  status {}",
+            s.name,
+            s.model.element.as_str(),
+            s.model.elements_per_cable,
+            e.status.as_str()
+        );
+        if let Some(err) = e.error {
+            println!("  reason: {err}");
+        }
+        for (i, t) in e.tensions().iter().enumerate() {
+            println!("  cable {i:>2}: {t:>11.4} N");
+        }
+        println!(
+            "  f1            {:.9} Hz (end-effector participation {:.3e})",
+            e.f1_hz, e.f1_ee_participation
+        );
+        println!(
+            "  end-effector  {:.9} Hz (participation {:.4})",
+            e.ee_mode_hz, e.ee_mode_participation
+        );
+        println!(
+            "  {} evaluations of D(λ), {:.1} µs (first cycle, cold)",
+            e.eigen_evaluations,
+            ns as f64 / 1e3
+        );
+    }
+    if e.status != Status::Ok {
+        return Err(CliError::Analysis(format!(
+            "status {}: {}",
+            e.status.as_str(),
+            e.error.map(|x| x.to_string()).unwrap_or_default()
+        )));
+    }
+    Ok(())
+}

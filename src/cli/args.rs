@@ -1,0 +1,131 @@
+//! Options shared by the offline commands (the scene and its model overrides) and the value
+//! parsers of the command line.
+
+use super::CliError;
+use crate::scene::{ElementKind, Scene, MAX_ELEMENTS_PER_CABLE};
+use crate::study::map::Interval;
+use clap::Args;
+use nalgebra::Vector3;
+
+/// Scene and model overrides shared by the offline commands.
+#[derive(Debug, Args, Clone)]
+pub struct SceneArgs {
+    /// Scene file (TOML), or `spatial-paper` / `planar-paper` for the embedded paper robots.
+    pub scene: String,
+    /// End-effector position x,y,z in m (default: the scene's).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub position: Option<Vector3<f64>>,
+    /// Minimum cable tension T_min in N (default: the scene's).
+    #[arg(long)]
+    pub t_min: Option<f64>,
+    /// Elements per cable (default: the scene's).
+    #[arg(long)]
+    pub elements: Option<usize>,
+    /// Element model: fem, catenary, continuous, massless or auto (default: the scene's).
+    #[arg(long)]
+    pub element: Option<String>,
+}
+
+/// Comma-separated finite numbers.
+fn parse_numbers(s: &str) -> Result<Vec<f64>, String> {
+    s.split(',')
+        .map(|x| x.trim().parse::<f64>().map_err(|e| format!("`{x}`: {e}")))
+        .collect()
+}
+
+/// Parse `X,Y,Z` (three finite numbers).
+pub fn parse_vec3(s: &str) -> Result<Vector3<f64>, String> {
+    let v = parse_numbers(s)?;
+    if v.len() != 3 || !v.iter().all(|x| x.is_finite()) {
+        return Err(format!("expected three finite numbers X,Y,Z, got `{s}`"));
+    }
+    Ok(Vector3::new(v[0], v[1], v[2]))
+}
+
+/// Parse `MIN,MAX` or a single value `V` (MIN = MAX = V).
+pub fn parse_interval(s: &str) -> Result<Interval, String> {
+    let v = parse_numbers(s)?;
+    let (lo, hi) = match v.as_slice() {
+        [a] => (*a, *a),
+        [a, b] => (*a, *b),
+        _ => return Err(format!("expected MIN,MAX or a single value, got `{s}`")),
+    };
+    if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+        return Err(format!("expected finite MIN <= MAX, got `{s}`"));
+    }
+    Ok(Interval { lo, hi })
+}
+
+/// A list of (x, y) pairs from the command line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pairs(pub Vec<(f64, f64)>);
+
+/// Parse `A:B,C:D,...` into pairs of finite numbers.
+pub fn parse_pairs(s: &str) -> Result<Pairs, String> {
+    s.split(',')
+        .map(|p| {
+            let (a, b) = p
+                .split_once(':')
+                .ok_or_else(|| format!("`{p}`: expected T_MIN:HZ"))?;
+            let a: f64 = a.trim().parse().map_err(|e| format!("`{a}`: {e}"))?;
+            let b: f64 = b.trim().parse().map_err(|e| format!("`{b}`: {e}"))?;
+            if a.is_finite() && b.is_finite() {
+                Ok((a, b))
+            } else {
+                Err(format!("`{p}`: not finite"))
+            }
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .map(Pairs)
+}
+
+/// Apply the overrides; returns the scene with its position and T_min set.
+pub fn resolve_scene(a: &SceneArgs) -> Result<Scene, CliError> {
+    let mut s = Scene::load(&a.scene)?;
+    if let Some(p) = a.position {
+        s.ee_position_m = p;
+    }
+    if let Some(t) = a.t_min {
+        if !(t.is_finite() && t >= 0.0 && t <= s.t_max_n) {
+            return Err(CliError::Usage(format!(
+                "--t-min {t} N must be finite and within [0, t_max = {} N]",
+                s.t_max_n
+            )));
+        }
+        s.t_min_n = t;
+    }
+    let element = match &a.element {
+        Some(e) => ElementKind::parse(e).ok_or_else(|| {
+            CliError::Usage(format!(
+                "--element `{e}`: expected fem, catenary, continuous, massless or auto"
+            ))
+        })?,
+        None => s.model.element,
+    };
+    let n = a.elements.unwrap_or(s.model.elements_per_cable);
+    if n == 0 || n > MAX_ELEMENTS_PER_CABLE {
+        return Err(CliError::Usage(format!(
+            "--elements {n}: must be in 1..={MAX_ELEMENTS_PER_CABLE}"
+        )));
+    }
+    Ok(s.with_model(element, n))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn intervals() {
+        assert_eq!(
+            parse_interval("-1,1").unwrap(),
+            Interval { lo: -1.0, hi: 1.0 }
+        );
+        assert_eq!(
+            parse_interval("0.5").unwrap(),
+            Interval { lo: 0.5, hi: 0.5 }
+        );
+        assert!(parse_interval("1,-1").is_err());
+        assert!(parse_interval("a").is_err());
+    }
+}

@@ -1,0 +1,278 @@
+//! `cablevib bench`: the real-time estimator along the paper's circle, per-cycle latency,
+//! allocations, and the dense reference on a few poses for comparison.
+
+use super::args::{resolve_scene, SceneArgs};
+use super::{json_f64, AllocCounter, CliError};
+use crate::estimator::{reference_analysis, Estimator, EstimatorParams};
+use crate::modal::lambda_to_hz;
+use crate::scene::Scene;
+use crate::service::stats::{percentile, StatusHistogram};
+use crate::study::estimator_params;
+use crate::trajectory::{circle_pose, CIRCLE_RADIUS_M};
+use clap::Args;
+use std::time::Instant;
+
+/// `cablevib bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Scene and overrides.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Cycles to time.
+    #[arg(long, default_value_t = 20_000)]
+    pub cycles: usize,
+    /// Period of one revolution of the circle, s (poses are spaced 1 ms apart).
+    #[arg(long, default_value_t = 4.0)]
+    pub period_s: f64,
+    /// Poses on which the dense reference is timed and compared (0 to skip).
+    #[arg(long, default_value_t = 8)]
+    pub dense_samples: usize,
+    /// Skip the end-effector mode (f1 only).
+    #[arg(long)]
+    pub no_ee_mode: bool,
+    /// One JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The timed cycles along the circle.
+struct CircleRun {
+    /// Per-cycle compute time, ns, ascending.
+    ns: Vec<u64>,
+    /// D(λ) evaluations per cycle, ascending.
+    evals: Vec<u64>,
+    statuses: StatusHistogram,
+    /// (smallest valid f1 in Hz, its cycle), and the largest.
+    f1_min: (f64, usize),
+    f1_max: (f64, usize),
+    allocs: u64,
+}
+
+/// Time `a.cycles` cycles of `est` (after one cold cycle) along the circle.
+fn run_circle(
+    est: &mut Estimator,
+    s: &Scene,
+    a: &BenchArgs,
+    allocations: AllocCounter,
+) -> CircleRun {
+    // Warm-up cycle (cold start), then timed cycles.
+    est.update(&circle_pose(s, 0, a.period_s), s.t_min_n);
+    let mut ns = Vec::with_capacity(a.cycles);
+    let mut evals = Vec::with_capacity(a.cycles);
+    let mut statuses = StatusHistogram::default();
+    let mut f1_min = (f64::INFINITY, 0usize);
+    let mut f1_max = (f64::NEG_INFINITY, 0usize);
+    let alloc0 = allocations();
+    for k in 1..=a.cycles {
+        let pose = circle_pose(s, k, a.period_s);
+        let t0 = Instant::now();
+        let e = est.update(&pose, s.t_min_n);
+        let dt = t0.elapsed().as_nanos() as u64;
+        ns.push(dt);
+        evals.push(e.eigen_evaluations);
+        statuses.record(e.status);
+        if e.is_ok() {
+            if e.f1_hz < f1_min.0 {
+                f1_min = (e.f1_hz, k);
+            }
+            if e.f1_hz > f1_max.0 {
+                f1_max = (e.f1_hz, k);
+            }
+        }
+    }
+    let allocs = allocations() - alloc0;
+    ns.sort_unstable();
+    evals.sort_unstable();
+    CircleRun {
+        ns,
+        evals: evals.iter().map(|&x| x as u64).collect(),
+        statuses,
+        f1_min,
+        f1_max,
+        allocs,
+    }
+}
+
+/// The dense reference against a cold real-time estimator on a sample of the poses.
+struct DenseCheck {
+    /// Dense solve times, ns, ascending.
+    ns: Vec<u64>,
+    max_rel_err_f1: f64,
+    max_rel_err_ee: f64,
+}
+
+fn dense_check(s: &Scene, a: &BenchArgs, p: EstimatorParams) -> Result<DenseCheck, CliError> {
+    let mut dense_ns = Vec::new();
+    let mut max_rel_err_f1 = 0.0f64;
+    let mut max_rel_err_ee = 0.0f64;
+    let mut rt_on_samples = Vec::new();
+    if s.model.element.is_discrete() {
+        for j in 0..a.dense_samples {
+            let k = 1 + j * (a.cycles / a.dense_samples.max(1)).max(1);
+            let pose = circle_pose(s, k, a.period_s);
+            let t0 = Instant::now();
+            let r = reference_analysis(s, &pose.position_m, s.t_min_n, true);
+            let dt = t0.elapsed().as_nanos() as u64;
+            let Ok(r) = r else { continue };
+            dense_ns.push(dt);
+            let mut cold =
+                Estimator::with_params(s, p).map_err(|e| CliError::Analysis(e.to_string()))?;
+            let t1 = Instant::now();
+            let e = *cold.update(&pose, s.t_min_n);
+            rt_on_samples.push(t1.elapsed().as_nanos() as u64);
+            if e.is_ok() {
+                max_rel_err_f1 =
+                    max_rel_err_f1.max((e.f1_hz - lambda_to_hz(r.modes.lambda[0])).abs() / e.f1_hz);
+                if let Some((_, l)) = r.modes.first_ee_mode(p.modal.ee_participation_min) {
+                    if e.ee_mode_hz.is_finite() {
+                        max_rel_err_ee = max_rel_err_ee
+                            .max((e.ee_mode_hz - lambda_to_hz(l)).abs() / e.ee_mode_hz);
+                    }
+                }
+            }
+        }
+    }
+    dense_ns.sort_unstable();
+    Ok(DenseCheck {
+        ns: dense_ns,
+        max_rel_err_f1,
+        max_rel_err_ee,
+    })
+}
+
+/// `cablevib bench`.
+pub fn run(a: &BenchArgs, allocations: AllocCounter) -> Result<(), CliError> {
+    let s = resolve_scene(&a.scene)?;
+    if a.cycles == 0 || !(a.period_s.is_finite() && a.period_s > 0.0) {
+        return Err(CliError::Usage(
+            "--cycles must be > 0 and --period-s finite and > 0".into(),
+        ));
+    }
+    let p = estimator_params(&s, !a.no_ee_mode);
+    let mut est = Estimator::with_params(&s, p).map_err(|e| CliError::Analysis(e.to_string()))?;
+    let c = run_circle(&mut est, &s, a, allocations);
+    // Dense reference on a sample of poses, timed in the same run.
+    let d = dense_check(&s, a, p)?;
+    if a.json {
+        print_json(&s, a, p, &c, &d);
+    } else {
+        print_text(&s, a, p, &c, &d, &est);
+    }
+    Ok(())
+}
+
+/// Median dense time over the real-time p50 (NaN when the p50 is 0).
+fn dense_ratio(c: &CircleRun, d: &DenseCheck) -> f64 {
+    let p50 = percentile(&c.ns, 0.5);
+    if p50 > 0 {
+        percentile(&d.ns, 0.5) as f64 / p50 as f64
+    } else {
+        f64::NAN
+    }
+}
+
+fn print_json(s: &Scene, a: &BenchArgs, p: EstimatorParams, c: &CircleRun, d: &DenseCheck) {
+    let q = |x: f64| percentile(&c.ns, x);
+    let names: Vec<(String, usize)> = c
+        .statuses
+        .nonzero()
+        .map(|(code, n)| (cablevib_ipc::status_str(code).to_string(), n as usize))
+        .collect();
+    let o = serde_json::json!({
+        "scene": s.name,
+        "element": s.model.element.as_str(),
+        "elements_per_cable": s.model.elements_per_cable,
+        "ee_mode": p.ee_mode,
+        "cycles": a.cycles,
+        "p50_ns": q(0.5), "p90_ns": q(0.9), "p99_ns": q(0.99), "p999_ns": q(0.999), "max_ns": q(1.0),
+        "eigen_evaluations_p50": percentile(&c.evals, 0.5),
+        "eigen_evaluations_max": c.evals.last().copied().unwrap_or(0) as usize,
+        "allocations_per_cycle": c.allocs as f64 / a.cycles as f64,
+        "allocations_total": c.allocs,
+        "dense_samples": d.ns.len(),
+        "dense_median_ns": percentile(&d.ns, 0.5),
+        "dense_to_realtime_p50_ratio": json_f64(dense_ratio(c, d)),
+        "max_rel_err_f1": d.max_rel_err_f1,
+        "max_rel_err_ee_mode": d.max_rel_err_ee,
+        "f1_min_hz": json_f64(c.f1_min.0), "f1_max_hz": json_f64(c.f1_max.0),
+        "statuses": names.iter().map(|(n, c)| serde_json::json!({"status": n, "count": c})).collect::<Vec<_>>(),
+    });
+    println!("{o}");
+}
+
+fn print_text(
+    s: &Scene,
+    a: &BenchArgs,
+    p: EstimatorParams,
+    c: &CircleRun,
+    d: &DenseCheck,
+    est: &Estimator,
+) {
+    let q = |x: f64| percentile(&c.ns, x);
+    let allocs = c.allocs;
+    let per_cycle_allocs = allocs as f64 / a.cycles as f64;
+    let names: Vec<(String, usize)> = c
+        .statuses
+        .nonzero()
+        .map(|(code, n)| (cablevib_ipc::status_str(code).to_string(), n as usize))
+        .collect();
+    println!(
+        "scene {}  model {} × {}  {} cycles along the r = {} m circle ({} s per revolution, 1 ms spacing){}",
+        s.name,
+        s.model.element.as_str(),
+        s.model.elements_per_cable,
+        a.cycles,
+        CIRCLE_RADIUS_M,
+        a.period_s,
+        if p.ee_mode { "" } else { ", f1 only" }
+    );
+    println!(
+        "  per-cycle compute: p50 {} ns  p90 {} ns  p99 {} ns  p99.9 {} ns  max {} ns",
+        q(0.5),
+        q(0.9),
+        q(0.99),
+        q(0.999),
+        q(1.0)
+    );
+    let ev = &c.evals;
+    println!(
+        "  D(λ) evaluations per cycle: p50 {}  p90 {}  p99 {}  max {}",
+        percentile(ev, 0.5),
+        percentile(ev, 0.9),
+        percentile(ev, 0.99),
+        percentile(ev, 1.0)
+    );
+    println!(
+        "  heap allocations: {allocs} in {} cycles ({per_cycle_allocs} per cycle)",
+        a.cycles
+    );
+    println!("  statuses: {names:?}");
+    let rc = est.rescan_counts();
+    println!(
+        "  end-effector mode bookkeeping: full scans cold {} uncertified {} none {}; lost {} dropped {}; partner searches {} neighbour searches {}",
+        rc.cold_scans,
+        rc.uncertified_scans,
+        rc.no_mode_scans,
+        rc.lost,
+        rc.dropped,
+        rc.partner_searches,
+        rc.neighbour_searches
+    );
+    let (f1_min, f1_max) = (c.f1_min, c.f1_max);
+    if f1_min.0.is_finite() {
+        println!(
+            "  f1 along the circle: min {:.6} Hz (cycle {}), max {:.6} Hz (cycle {})",
+            f1_min.0, f1_min.1, f1_max.0, f1_max.1
+        );
+    }
+    if !d.ns.is_empty() {
+        println!(
+            "  dense reference on {} poses: median {:.3} ms  → {:.0}× the real-time p50; max |Δf1|/f1 {:.2e}, max |Δf_ee|/f_ee {:.2e}",
+            d.ns.len(),
+            percentile(&d.ns, 0.5) as f64 / 1e6,
+            dense_ratio(c, d),
+            d.max_rel_err_f1,
+            d.max_rel_err_ee
+        );
+    }
+}

@@ -1,0 +1,100 @@
+//! The command-line front end: the argument structures of every command and one
+//! [`run`] that dispatches them. Each command's file turns its options into the
+//! configuration of a study ([`crate::study`]) or of the service ([`crate::service`]),
+//! runs it, writes files through [`crate::report`] and prints a summary.
+//!
+//! | command | module | what |
+//! |---|---|---|
+//! | `analyze` | [`analyze`](mod@analyze) | tensions and natural frequencies of one pose |
+//! | `bench` | [`bench`](mod@bench) | per-cycle latency of the real-time estimator along the circle |
+//! | `serve`, `demo`, `bench-ipc` | [`serve`](mod@serve) | the iceoryx2 service, the demo, the IPC latency |
+//! | `accuracy` | [`accuracy`](mod@accuracy) | what accuracy costs: error and time of every model |
+//! | `map` | [`map`](mod@map) | f1 over a workspace grid |
+//! | `trajectory` | [`trajectory`](mod@trajectory) | f1 along the circle or a CSV path |
+//! | `sweep-tmin` | [`sweep_tmin`] | f1 against T_min with the √T_min fit |
+//!
+//! Functions here return `Result<_, CliError>`; the binary maps errors to a one-line reason
+//! and a non-zero exit code.
+
+pub mod accuracy;
+pub mod analyze;
+pub mod args;
+pub mod bench;
+pub mod error;
+pub mod map;
+pub mod serve;
+pub mod sweep_tmin;
+pub mod trajectory;
+
+pub use args::{resolve_scene, SceneArgs};
+pub use error::CliError;
+
+use crate::report::with_ext;
+use clap::{Parser, Subcommand};
+use std::path::{Path, PathBuf};
+
+/// cablevib: tension distribution, stiffness and natural frequencies of cable-driven
+/// parallel robots, offline and in real time.
+#[derive(Debug, Parser)]
+#[command(name = "cablevib", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Tensions and natural frequencies of one pose (dense reference, or --realtime).
+    Analyze(analyze::AnalyzeArgs),
+    /// Drive the real-time estimator along the paper's circle and report per-cycle latency.
+    Bench(bench::BenchArgs),
+    /// Run the long-running iceoryx2 service.
+    Serve(serve::ServeArgs),
+    /// Run service, replay publisher and controller together on the default scene.
+    Demo(serve::DemoArgs),
+    /// Measure pose-published → estimate-received latency over iceoryx2.
+    BenchIpc(serve::BenchIpcArgs),
+    /// What accuracy costs in time: f1 error and per-cycle time of every model, with plots.
+    Accuracy(accuracy::AccuracyArgs),
+    /// f1 over a workspace grid: heat-map SVG and CSV (infeasible points marked).
+    Map(map::MapArgs),
+    /// f1 and the end-effector mode along a trajectory (the paper's circle or a CSV).
+    Trajectory(trajectory::TrajectoryArgs),
+    /// f1 against T_min, with the √T_min fit.
+    SweepTmin(sweep_tmin::SweepTminArgs),
+}
+
+/// Heap allocation counter supplied by the binary's global allocator (0 when none).
+pub type AllocCounter = fn() -> u64;
+
+/// Run one command; `allocations` counts heap allocations (for `bench` and `serve`).
+pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
+    match cli.command {
+        Command::Analyze(a) => analyze::run(&a),
+        Command::Bench(a) => bench::run(&a, allocations),
+        Command::Serve(a) => serve::serve(&a, allocations),
+        Command::Demo(a) => serve::demo(&a),
+        Command::BenchIpc(a) => serve::bench_ipc(&a),
+        Command::Accuracy(a) => accuracy::run(&a),
+        Command::Map(a) => map::run(&a),
+        Command::Trajectory(a) => trajectory::run(&a),
+        Command::SweepTmin(a) => sweep_tmin::run(&a),
+    }
+}
+
+/// A finite number as JSON, else `null`.
+fn json_f64(x: f64) -> serde_json::Value {
+    if x.is_finite() {
+        serde_json::json!(x)
+    } else {
+        serde_json::Value::Null
+    }
+}
+
+/// The CSV and figure paths of a command: PREFIX.csv, and `svg` or PREFIX.svg.
+fn output_paths(out: &Path, svg: &Option<PathBuf>) -> (PathBuf, PathBuf) {
+    let svg_path = svg.clone().unwrap_or_else(|| with_ext(out, "svg"));
+    (with_ext(out, "csv"), svg_path)
+}

@@ -1,0 +1,147 @@
+//! The service commands: `serve` (the long-running iceoryx2 service), `demo` (service,
+//! replay and controller in one process) and `bench-ipc` (pose-to-estimate latency). Each
+//! turns its options into the service's configuration struct; the work is
+//! [`crate::service`]'s.
+
+use super::{AllocCounter, CliError};
+use crate::scene::Scene;
+use crate::service::{BenchIpcConfig, DemoConfig, ServerConfig, TminSchedule, WaitMode};
+use clap::Args;
+
+/// `cablevib serve` options.
+#[derive(Debug, Clone, Args)]
+pub struct ServeArgs {
+    /// Scene file (TOML), or `spatial-paper` / `planar-paper` for the embedded paper robots.
+    #[arg(long, default_value = "spatial-paper")]
+    pub scene: String,
+    /// Instance name prefixing every service name ("NAME/cablevib/pose", ...), so that several
+    /// robots (or tests) share a machine; empty: the bare names.
+    #[arg(long, default_value = "")]
+    pub instance: String,
+    /// spin: busy-poll (lowest latency, one CPU at 100 %); event: block on the wake-service
+    /// event that peers notify after sending (tens of µs per wake-up).
+    #[arg(long, value_enum, default_value_t = WaitMode::Spin)]
+    pub wait: WaitMode,
+    /// Pin the service thread to this CPU (0-based); a warning if not permitted.
+    #[arg(long)]
+    pub cpu: Option<usize>,
+    /// Run with SCHED_FIFO (priority 80) and locked memory (mlockall); a warning if not
+    /// permitted.
+    #[arg(long)]
+    pub realtime: bool,
+    /// Period of the statistics log line, s (0 = none).
+    #[arg(long, default_value_t = 5.0)]
+    pub stats_period_s: f64,
+    /// Stop after this many estimator cycles (tests, benchmarks).
+    #[arg(long)]
+    pub max_cycles: Option<u64>,
+}
+
+/// `cablevib demo` options.
+#[derive(Debug, Clone, Args)]
+pub struct DemoArgs {
+    /// How long the replay publishes poses, s.
+    #[arg(long, default_value_t = 5.0)]
+    pub seconds: f64,
+    /// Required first natural frequency the margin is computed against, Hz.
+    #[arg(long, default_value_t = 8.0)]
+    pub required_hz: f64,
+    /// How the service waits for poses: spin (busy-poll, one CPU) or event.
+    #[arg(long, value_enum, default_value_t = WaitMode::Spin)]
+    pub wait: WaitMode,
+    /// How the controller waits for estimates and margin answers; event leaves the other CPU
+    /// to the replay and the controller (spin only pays off with a free CPU per spinning
+    /// thread).
+    #[arg(long, value_enum, default_value_t = WaitMode::Event)]
+    pub controller_wait: WaitMode,
+    /// Pose rate, Hz.
+    #[arg(long, default_value_t = 1000.0)]
+    pub rate_hz: f64,
+    /// Time per revolution of the circle, s.
+    #[arg(long, default_value_t = 4.0)]
+    pub period_s: f64,
+    /// T_min schedule SECONDS:NEWTONS,... (e.g. "0:60,3:70"); default: the scene's T_min.
+    #[arg(long)]
+    pub t_min_schedule: Option<String>,
+    /// Scene file (TOML), or `spatial-paper` / `planar-paper`.
+    #[arg(long, default_value = "spatial-paper")]
+    pub scene: String,
+}
+
+/// `cablevib bench-ipc` options.
+#[derive(Debug, Clone, Args)]
+pub struct BenchIpcArgs {
+    /// Timed samples per wait mode (after 1000 warm-up samples).
+    #[arg(long, default_value_t = 100_000)]
+    pub samples: usize,
+    /// Wait mode to measure; both when omitted.
+    #[arg(long, value_enum)]
+    pub wait: Option<WaitMode>,
+    /// Pause between a received estimate and the next pose, µs (0: ping-pong).
+    #[arg(long, default_value_t = 0)]
+    pub gap_us: u64,
+    /// Pin the service thread to this CPU and the client to the next one.
+    #[arg(long)]
+    pub cpu: Option<usize>,
+    /// Scene file (TOML), or `spatial-paper` / `planar-paper`.
+    #[arg(long, default_value = "spatial-paper")]
+    pub scene: String,
+    /// One JSON object on stdout instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `cablevib serve`: loads the scene and runs the service until SIGINT/SIGTERM.
+pub fn serve(a: &ServeArgs, allocations: AllocCounter) -> Result<(), CliError> {
+    if !(a.stats_period_s.is_finite() && a.stats_period_s >= 0.0) {
+        return Err(CliError::Usage(format!(
+            "--stats-period-s {} must be finite and ≥ 0",
+            a.stats_period_s
+        )));
+    }
+    let scene = Scene::load(&a.scene)?;
+    let cfg = ServerConfig {
+        instance: a.instance.clone(),
+        wait: a.wait,
+        stats_period: (a.stats_period_s > 0.0)
+            .then(|| std::time::Duration::from_secs_f64(a.stats_period_s)),
+        max_cycles: a.max_cycles,
+        cpu: a.cpu,
+        realtime: a.realtime,
+        ..ServerConfig::default()
+    };
+    crate::service::serve(&scene, &cfg, allocations)?;
+    Ok(())
+}
+
+/// `cablevib demo`: service, replay publisher and controller on one scene.
+pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
+    let scene = Scene::load(&a.scene)?;
+    let t_min_schedule = match &a.t_min_schedule {
+        Some(s) => Some(TminSchedule::parse(s)?),
+        None => None,
+    };
+    let cfg = DemoConfig {
+        seconds: a.seconds,
+        required_hz: a.required_hz,
+        wait: a.wait,
+        controller_wait: a.controller_wait,
+        rate_hz: a.rate_hz,
+        period_s: a.period_s,
+        t_min_schedule,
+    };
+    Ok(crate::service::demo(&scene, &cfg)?)
+}
+
+/// `cablevib bench-ipc`: pose-published → estimate-received latency.
+pub fn bench_ipc(a: &BenchIpcArgs) -> Result<(), CliError> {
+    let scene = Scene::load(&a.scene)?;
+    let cfg = BenchIpcConfig {
+        samples: a.samples,
+        wait: a.wait,
+        gap_us: a.gap_us,
+        cpu: a.cpu,
+        json: a.json,
+    };
+    Ok(crate::service::bench_ipc(&scene, &cfg)?)
+}

@@ -1,0 +1,102 @@
+//! `cablevib trajectory`: f1 and the end-effector mode along the paper's circle or a CSV
+//! path, as a CSV and a figure.
+
+use super::args::{resolve_scene, SceneArgs};
+use super::{output_paths, CliError};
+use crate::report::trajectory::{trajectory_csv, trajectory_svg};
+use crate::report::write_file;
+use crate::study::trajectory::{self as study, PathSource, TrajectoryConfig};
+use crate::trajectory::CIRCLE_RADIUS_M;
+use clap::Args;
+use std::path::PathBuf;
+
+/// `cablevib trajectory`: f1 and the end-effector mode along a trajectory.
+#[derive(Debug, Args, Clone)]
+pub struct TrajectoryArgs {
+    /// Scene and overrides.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Trajectory CSV with columns t,x,y,z (s, m; `#` comments and a header line are
+    /// skipped). Default: the paper's circle around the scene's position.
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// Comma-separated T_min values, N, one curve each (default: the scene's T_min).
+    #[arg(long = "t-mins", value_delimiter = ',', num_args = 1..)]
+    pub t_mins: Vec<f64>,
+    /// Circle radius, m (default trajectory only).
+    #[arg(long, default_value_t = CIRCLE_RADIUS_M)]
+    pub radius_m: f64,
+    /// Period of one revolution of the circle, s (poses 1 ms apart).
+    #[arg(long, default_value_t = 4.0)]
+    pub period_s: f64,
+    /// Output prefix: writes PREFIX.csv and PREFIX.svg.
+    #[arg(long, default_value = "trajectory")]
+    pub out: PathBuf,
+    /// Write the figure here instead of PREFIX.svg.
+    #[arg(long)]
+    pub svg: Option<PathBuf>,
+    /// Worker threads (T_min curves are spread over them).
+    #[arg(long, default_value_t = 2)]
+    pub threads: usize,
+    /// Skip the end-effector mode (f1 only).
+    #[arg(long)]
+    pub no_ee_mode: bool,
+    /// No progress on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+impl TrajectoryArgs {
+    /// The study configuration of these options.
+    pub fn config(&self) -> TrajectoryConfig {
+        TrajectoryConfig {
+            path: match &self.csv {
+                Some(p) => PathSource::Csv(p.clone()),
+                None => PathSource::Circle {
+                    radius_m: self.radius_m,
+                    period_s: self.period_s,
+                },
+            },
+            t_mins_n: self.t_mins.clone(),
+            ee_mode: !self.no_ee_mode,
+            threads: self.threads,
+            progress: !self.quiet,
+        }
+    }
+}
+
+/// `cablevib trajectory`: writes PREFIX.csv and PREFIX.svg.
+pub fn run(a: &TrajectoryArgs) -> Result<(), CliError> {
+    let s = resolve_scene(&a.scene)?;
+    let t = study::run(&s, &a.config())?;
+    let (csv_path, svg_path) = output_paths(&a.out, &a.svg);
+    write_file(&csv_path, &trajectory_csv(&s, &t))?;
+    println!(
+        "trajectory: scene {}  {} poses × {} T_min values",
+        s.name,
+        t.samples.position_m.len(),
+        t.t_mins_n.len()
+    );
+    for (k, &tm) in t.t_mins_n.iter().enumerate() {
+        let c = t.summary(k);
+        if c.f1_min_hz.is_finite() {
+            println!(
+                "  T_min {tm} N: f1 min {:.4} Hz  max {:.4} Hz  statuses: {}",
+                c.f1_min_hz,
+                c.f1_max_hz,
+                c.counts.summary()
+            );
+        } else {
+            println!(
+                "  T_min {tm} N: no valid estimate  statuses: {}",
+                c.counts.summary()
+            );
+        }
+    }
+    write_file(
+        &svg_path,
+        &trajectory_svg(&s, &t, a.radius_m, !a.no_ee_mode),
+    )?;
+    println!("  wrote {} and {}", csv_path.display(), svg_path.display());
+    Ok(())
+}

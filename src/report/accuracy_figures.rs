@@ -1,0 +1,248 @@
+//! `cablevib accuracy`: the CSVs of the study and its figures (error against N, error
+//! against per-cycle time, mode 3 against N).
+
+use super::csv::{num, Csv};
+use super::svg::{Axis, HLine, LinePlot, Mark, Series, PALETTE};
+use crate::scene::{ElementKind, Scene};
+use crate::study::accuracy::{AccuracyReport, AccuracyRow, Mode3Row};
+use crate::trajectory::CIRCLE_RADIUS_M;
+
+/// The scene name as a file-name part: anything but ASCII letters, digits, `-` and `_`
+/// becomes `_`.
+pub fn file_stem(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// The CSV of the accuracy rows.
+pub fn accuracy_csv(r: &AccuracyReport) -> String {
+    let mut csv = Csv::new(
+        None,
+        "model,element,n,geometric_stiffness,status,f1_hz,err_ref,err_continuous,ee_mode_hz,ee_err_ref,f1_p50_ns,f1_p99_ns,ee_p50_ns,ee_p99_ns,evaluations_p50",
+    );
+    for x in &r.rows {
+        csv.row(&format!(
+            "\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            x.label(),
+            x.element.as_str(),
+            x.n.map(|n| n.to_string()).unwrap_or_default(),
+            x.geometric_stiffness,
+            x.status.as_str(),
+            num(x.f1_hz),
+            num(x.err_ref),
+            num(x.err_continuous),
+            num(x.ee_mode_hz),
+            num(x.ee_err_ref),
+            x.f1_ns.0,
+            x.f1_ns.1,
+            x.ee_ns.0,
+            x.ee_ns.1,
+            x.evaluations
+        ));
+    }
+    csv.into_string()
+}
+
+/// The CSV of the dense mode-3 study.
+pub fn mode3_csv(mode3: &[Mode3Row]) -> String {
+    let mut m = Csv::new(
+        None,
+        "element,n,dof,mode1_hz,mode2_hz,mode3_hz,dense_seconds",
+    );
+    for x in mode3 {
+        m.row(&format!(
+            "{},{},{},{},{},{},{}",
+            x.element.as_str(),
+            x.n,
+            x.dof,
+            num(x.modes_hz[0]),
+            num(x.modes_hz[1]),
+            num(x.modes_hz[2]),
+            x.seconds
+        ));
+    }
+    m.into_string()
+}
+
+/// The figures of the study: error vs N, error vs per-cycle time, and mode 3 vs N (none
+/// without the dense study).
+pub fn accuracy_svgs(
+    s: &Scene,
+    r: &AccuracyReport,
+    mode3: &[Mode3Row],
+) -> (String, String, Option<String>) {
+    (
+        error_vs_n(s, r),
+        cost(s, r),
+        (!mode3.is_empty()).then(|| mode3_svg(s, mode3)),
+    )
+}
+
+/// The rows of one element family.
+fn family(r: &AccuracyReport, el: ElementKind) -> Vec<&AccuracyRow> {
+    r.rows.iter().filter(|x| x.element == el).collect()
+}
+
+/// Colour of a model without N (continuous, massless with and without T/l).
+fn single_model_color(row: &AccuracyRow) -> &'static str {
+    match row.element {
+        ElementKind::Continuous => PALETTE[3],
+        _ if row.geometric_stiffness => PALETTE[4],
+        _ => PALETTE[6],
+    }
+}
+
+/// A curve of the error figure: legend, rows, the error drawn, mark.
+type Curve<'a> = (
+    &'a str,
+    &'a [&'a AccuracyRow],
+    fn(&AccuracyRow) -> f64,
+    Mark,
+);
+
+/// |f1 error| against N, FEM and catenary; the models without N as horizontal lines.
+fn error_vs_n(s: &Scene, r: &AccuracyReport) -> String {
+    let fem = family(r, ElementKind::Fem);
+    let cat = family(r, ElementKind::Catenary);
+    let pt = |v: &[&AccuracyRow], f: &dyn Fn(&AccuracyRow) -> f64| -> Vec<(f64, f64)> {
+        v.iter()
+            .map(|x| (x.n.unwrap_or(0) as f64, f(x).abs()))
+            .collect()
+    };
+    let mut p = LinePlot::new(
+        &format!("{}: f1 error against elements per cable", s.name),
+        Axis::log("elements per cable N"),
+        Axis::log("|f1 − f1,ref| / f1,ref"),
+    );
+    p.subtitle = format!(
+        "pose ({}, {}, {}) m, T_min {} N; reference f1,ref = {:.9} Hz (catenary N = {}, Richardson)",
+        s.ee_position_m.x,
+        s.ee_position_m.y,
+        s.ee_position_m.z,
+        s.t_min_n,
+        r.f1_ref_hz,
+        r.max_elements
+    );
+    let curves: [Curve; 3] = [
+        ("FEM vs reference", &fem, |x| x.err_ref, Mark::LinePoints),
+        (
+            "catenary vs reference",
+            &cat,
+            |x| x.err_ref,
+            Mark::LinePoints,
+        ),
+        (
+            "FEM vs its continuous limit",
+            &fem,
+            |x| x.err_continuous,
+            Mark::Dashed,
+        ),
+    ];
+    for (k, (name, rows, f, mark)) in curves.into_iter().enumerate() {
+        p.series
+            .push(Series::new(name, pt(rows, &f), mark).color(PALETTE[k]));
+    }
+    for row in &r.rows {
+        if row.n.is_none() && row.err_ref.is_finite() {
+            p.hlines.push(HLine {
+                name: format!("{}: {:.1e}", row.label(), row.err_ref.abs()),
+                y: row.err_ref.abs(),
+                color: single_model_color(row).into(),
+            });
+        }
+    }
+    p.to_svg()
+}
+
+/// |f1 error| against the median per-cycle time (f1 only), every model.
+fn cost(s: &Scene, r: &AccuracyReport) -> String {
+    let mut q = LinePlot::new(
+        &format!("{}: what accuracy costs", s.name),
+        Axis::log("median per-cycle time of the real-time path, f1 only (µs)"),
+        Axis::log("|f1 − f1,ref| / f1,ref"),
+    );
+    q.subtitle = format!(
+        "{} cycles along the r = {} m circle per model; error at ({}, {}, {}) m, T_min {} N",
+        "timed",
+        CIRCLE_RADIUS_M,
+        s.ee_position_m.x,
+        s.ee_position_m.y,
+        s.ee_position_m.z,
+        s.t_min_n
+    );
+    // N labelled next to their points: the ends and a few in between.
+    let lab_ns = [1usize, 4, 10, 40, r.max_elements];
+    let scatter = |v: &[&AccuracyRow]| -> (Vec<(f64, f64)>, Vec<Option<String>>) {
+        v.iter()
+            .filter(|x| x.f1_ns.0 > 0)
+            .map(|x| {
+                (
+                    (x.f1_ns.0 as f64 / 1e3, x.err_ref.abs()),
+                    x.n.filter(|n| lab_ns.contains(n)).map(|n| format!("N={n}")),
+                )
+            })
+            .unzip()
+    };
+    for (k, (name, el)) in [
+        ("FEM", ElementKind::Fem),
+        ("catenary", ElementKind::Catenary),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let (a, la) = scatter(&family(r, el));
+        q.series.push(
+            Series::new(name, a, Mark::Points)
+                .color(PALETTE[k])
+                .labels(la),
+        );
+    }
+    for row in r.rows.iter().filter(|x| x.n.is_none()) {
+        if row.f1_ns.0 > 0 && row.err_ref.is_finite() {
+            q.series.push(
+                Series::new(
+                    &row.label(),
+                    vec![(row.f1_ns.0 as f64 / 1e3, row.err_ref.abs())],
+                    Mark::Points,
+                )
+                .color(single_model_color(row)),
+            );
+        }
+    }
+    q.to_svg()
+}
+
+/// Mode 3 against N from the dense study, FEM and catenary.
+fn mode3_svg(s: &Scene, mode3: &[Mode3Row]) -> String {
+    let mut m = LinePlot::new(
+        &format!(
+            "{}: convergence of mode 3 with the number of elements",
+            s.name
+        ),
+        Axis::linear("elements per cable N"),
+        Axis::linear("frequency of mode 3 (Hz)"),
+    );
+    m.subtitle = format!(
+        "dense reference (all modes), pose ({}, {}, {}) m, T_min {} N",
+        s.ee_position_m.x, s.ee_position_m.y, s.ee_position_m.z, s.t_min_n
+    );
+    for (k, el) in [ElementKind::Fem, ElementKind::Catenary].iter().enumerate() {
+        let pts: Vec<(f64, f64)> = mode3
+            .iter()
+            .filter(|x| x.element == *el)
+            .map(|x| (x.n as f64, x.modes_hz[2]))
+            .collect();
+        m.series.push(
+            Series::new(&format!("{} element", el.as_str()), pts, Mark::LinePoints)
+                .color(PALETTE[k]),
+        );
+    }
+    m.to_svg()
+}

@@ -1,0 +1,73 @@
+//! Rendering of the studies' results: CSV tables ([`csv`]), SVG figures ([`svg`] and the
+//! figures of each study), the accuracy Markdown ([`accuracy_doc`]), and writing files.
+//! Nothing here calls the estimator: every function takes computed results.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`svg`] | the SVG writer: line plots, heat maps |
+//! | [`csv`] | the one CSV writer and number formats of every command's CSV |
+//! | [`map`](mod@map) | `cablevib map`: CSV and heat-map figure |
+//! | [`trajectory`](mod@trajectory) | `cablevib trajectory`: CSV and figure |
+//! | [`tmin`] | `cablevib sweep-tmin`: CSV and figure |
+//! | [`accuracy_figures`] | `cablevib accuracy`: CSVs and figures |
+//! | [`accuracy_doc`] | `cablevib accuracy`: the Markdown section and its splicing |
+
+pub mod accuracy_doc;
+pub mod accuracy_figures;
+pub mod csv;
+pub mod map;
+pub mod svg;
+pub mod tmin;
+pub mod trajectory;
+
+use std::path::{Path, PathBuf};
+
+/// Errors of writing reports.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// Reading or writing a file failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// File.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {
+    move |source| ReportError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Write `text` to `path`, creating parent directories.
+pub fn write_file(path: &Path, text: &str) -> Result<(), ReportError> {
+    if let Some(d) = path.parent() {
+        if !d.as_os_str().is_empty() {
+            std::fs::create_dir_all(d).map_err(io_err(d))?;
+        }
+    }
+    std::fs::write(path, text).map_err(io_err(path))
+}
+
+/// `PREFIX` + `ext` (`map` → `map.csv`), keeping any dots already in the prefix.
+pub fn with_ext(prefix: &Path, ext: &str) -> PathBuf {
+    let mut s = prefix.as_os_str().to_os_string();
+    s.push(".");
+    s.push(ext);
+    PathBuf::from(s)
+}
+
+/// Relative difference below which the end-effector mode counts as f1 itself (then its
+/// curve is not drawn again).
+const SAME_MODE_REL: f64 = 1e-9;
+
+/// Whether the end-effector-mode curve `ee` differs anywhere from the f1 curve `f1`
+/// (same x values).
+pub(crate) fn ee_curve_differs(f1: &[(f64, f64)], ee: &[(f64, f64)]) -> bool {
+    f1.iter()
+        .zip(ee)
+        .any(|(a, b)| b.1.is_finite() && (a.1 - b.1).abs() > SAME_MODE_REL * b.1.abs())
+}

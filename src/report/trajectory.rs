@@ -1,0 +1,107 @@
+//! `cablevib trajectory`: the CSV of every pose and T_min, and the figure.
+
+use super::csv::{point_fields, point_header, scene_comment, Csv};
+use super::ee_curve_differs;
+use super::svg::{Axis, LinePlot, Mark, Series, PALETTE};
+use crate::estimator::Estimate;
+use crate::scene::Scene;
+use crate::study::points::{valid, PointResult};
+use crate::study::trajectory::TrajectoryStudy;
+use std::fmt::Write as _;
+
+/// The CSV: one row per pose and T_min (T_min-major), with time and angle.
+pub fn trajectory_csv(s: &Scene, t: &TrajectoryStudy) -> String {
+    let tr = &t.samples;
+    let n = tr.position_m.len();
+    let comment = format!("{}, T_max {} N", scene_comment("trajectory", s), s.t_max_n);
+    let header = format!("t_s,angle_deg,{}", point_header(s.n_cables()));
+    let mut csv = Csv::new(Some(&comment), &header);
+    for (k, r) in t.points.iter().enumerate() {
+        let i = k % n;
+        let ang = if t.is_circle() {
+            format!("{}", tr.angle_deg[i])
+        } else {
+            "NaN".into()
+        };
+        csv.row(&format!("{},{ang},{}", tr.t_s[i], point_fields(r)));
+    }
+    csv.into_string()
+}
+
+/// (x, valid value) of each row.
+fn curve(rows: &[PointResult], xs: &[f64], f: fn(&Estimate) -> f64) -> Vec<(f64, f64)> {
+    rows.iter()
+        .zip(xs)
+        .map(|(r, &x)| (x, valid(&r.estimate, f(&r.estimate))))
+        .collect()
+}
+
+/// The figure: f1 of each T_min (and the end-effector mode where it differs from f1)
+/// against the angle along the circle (`radius_m`) or the time.
+pub fn trajectory_svg(s: &Scene, t: &TrajectoryStudy, radius_m: f64, ee_mode: bool) -> String {
+    let circle = t.is_circle();
+    let xlab = if circle {
+        "angle along the circle (deg)"
+    } else {
+        "t (s)"
+    };
+    let mut plot = LinePlot::new(
+        &format!(
+            "{}: first natural frequency along the {}",
+            s.name,
+            if circle {
+                format!("circle (r = {} m)", radius_m)
+            } else {
+                "trajectory".into()
+            }
+        ),
+        if circle {
+            Axis::linear(xlab).with_range(0.0, 360.0)
+        } else {
+            Axis::linear(xlab)
+        },
+        Axis::linear("f (Hz)"),
+    );
+    let mut sub = format!(
+        "{} × {} elements/cable, T_max {} N",
+        s.model.element.as_str(),
+        s.model.elements_per_cable,
+        s.t_max_n
+    );
+    let xs = if circle {
+        &t.samples.angle_deg
+    } else {
+        &t.samples.t_s
+    };
+    for (k, &tm) in t.t_mins_n.iter().enumerate() {
+        let rows = t.curve(k);
+        let f1 = curve(rows, xs, |e| e.f1_hz);
+        let ee = curve(rows, xs, |e| e.ee_mode_hz);
+        let color = PALETTE[k % PALETTE.len()];
+        let differs = ee_curve_differs(&f1, &ee);
+        plot.series
+            .push(Series::new(&format!("f1, T_min = {tm} N"), f1, Mark::Line).color(color));
+        if ee_mode && differs {
+            plot.series.push(
+                Series::new(
+                    &format!("end-effector mode, T_min = {tm} N"),
+                    ee,
+                    Mark::Dashed,
+                )
+                .color(color),
+            );
+        }
+        let c = t.summary(k);
+        if c.f1_min_hz.is_finite() {
+            let (lo, hi) = (c.f1_min_hz, c.f1_max_hz);
+            let _ = write!(sub, "; T_min {tm} N: f1 {lo:.3}–{hi:.3} Hz");
+        } else {
+            let _ = write!(sub, "; T_min {tm} N: no valid estimate");
+        }
+        if !c.counts.summary_not_ok().is_empty() {
+            let _ = write!(sub, " ({})", c.counts.summary());
+        }
+    }
+    plot.subtitle = sub;
+    plot.to_svg()
+}

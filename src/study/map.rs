@@ -1,0 +1,230 @@
+//! The first natural frequency (and the end-effector mode) over a workspace grid.
+
+use super::points::{evaluate_points, status_histogram, PointResult};
+use super::{estimator_params, StudyError};
+use crate::estimator::Estimate;
+use crate::scene::Scene;
+use crate::service::stats::StatusHistogram;
+use nalgebra::Vector3;
+
+/// Most values on one grid axis.
+pub const MAX_AXIS_VALUES: usize = 100_000;
+/// Most grid points of one map (one `PointResult` each, ~0.5 kB).
+pub const MAX_GRID_POINTS: usize = 5_000_000;
+/// Grid values are rounded to a lattice of 1/this m (1 nm), so that 0.25 + 7 × 0.1 prints as
+/// 0.95.
+const GRID_LATTICE_PER_M: f64 = 1e9;
+/// A plane axis given no range spans the central 80 % of the frame: this is half of it.
+const DEFAULT_HALF_SPAN_SHARE: f64 = 0.4;
+
+/// A closed interval `[lo, hi]`, m.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Interval {
+    /// Lower end.
+    pub lo: f64,
+    /// Upper end.
+    pub hi: f64,
+}
+
+/// The plane of a heat map; the third axis is swept as slices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Plane {
+    /// x horizontal, y vertical; slices along z.
+    Xy,
+    /// x horizontal, z vertical; slices along y.
+    Xz,
+    /// y horizontal, z vertical; slices along x.
+    Yz,
+}
+
+impl Plane {
+    /// (horizontal, vertical, slice) axis indices.
+    pub fn axes(self) -> (usize, usize, usize) {
+        match self {
+            Plane::Xy => (0, 1, 2),
+            Plane::Xz => (0, 2, 1),
+            Plane::Yz => (1, 2, 0),
+        }
+    }
+}
+
+/// Which frequency a map shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MapValue {
+    /// The first natural frequency of the whole model.
+    F1,
+    /// The end-effector mode (lowest mode with end-effector participation ≥ threshold).
+    EeMode,
+}
+
+/// What to map.
+#[derive(Debug, Clone)]
+pub struct MapConfig {
+    /// Range of x, y, z, m; `None`: the central 80 % of the frame for a plane axis, the
+    /// scene's position for the slice axis.
+    pub ranges_m: [Option<Interval>; 3],
+    /// Grid step, m (all axes).
+    pub step_m: f64,
+    /// The heat-map plane.
+    pub plane: Plane,
+    /// Worker threads (one estimator each).
+    pub threads: usize,
+    /// Compute the end-effector mode too.
+    pub ee_mode: bool,
+    /// Print a percentage on stderr.
+    pub progress: bool,
+}
+
+/// Grid values lo, lo + step, …, hi (the last value snaps to hi when within 1e-9 step).
+pub fn grid_axis(iv: Interval, step: f64) -> Result<Vec<f64>, StudyError> {
+    if !(step.is_finite() && step > 0.0) {
+        return Err(StudyError::Usage(format!("--step {step}: must be > 0")));
+    }
+    let n = ((iv.hi - iv.lo) / step + 1e-9).floor() as usize + 1;
+    if n > MAX_AXIS_VALUES {
+        return Err(StudyError::Usage(format!(
+            "{n} grid values on [{}, {}] at step {step}: too many",
+            iv.lo, iv.hi
+        )));
+    }
+    Ok((0..n)
+        .map(|i| {
+            // Snap to a 1e-9 m lattice so 0.25 + 7 × 0.1 prints as 0.95.
+            let v = ((iv.lo + i as f64 * step) * GRID_LATTICE_PER_M).round() / GRID_LATTICE_PER_M;
+            if (v - iv.hi).abs() < 1e-9 * step {
+                iv.hi
+            } else if v.abs() < 1e-12 * step {
+                0.0
+            } else {
+                v
+            }
+        })
+        .collect())
+}
+
+/// A computed map: grid axes and one result per grid point.
+#[derive(Debug, Clone)]
+pub struct MapResult {
+    /// Grid values of x, y, z, m.
+    pub axes: [Vec<f64>; 3],
+    /// The heat-map plane.
+    pub plane: Plane,
+    /// Results ordered slice-major, then vertical, then horizontal.
+    pub points: Vec<PointResult>,
+}
+
+impl MapResult {
+    /// Grid point with the largest valid `value`, and the value.
+    pub fn max(&self, v: MapValue) -> Option<(Vector3<f64>, f64)> {
+        max_of(&self.points, v)
+    }
+    /// Grid point with the smallest valid `value`, and the value.
+    pub fn min(&self, v: MapValue) -> Option<(Vector3<f64>, f64)> {
+        self.points
+            .iter()
+            .filter_map(|p| pick(&p.estimate, v).map(|f| (p.position_m, f)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+    }
+    /// How many points have each status.
+    pub fn status_counts(&self) -> StatusHistogram {
+        status_histogram(&self.points)
+    }
+}
+
+/// Point of `points` with the largest valid `value`, and the value.
+pub fn max_of(points: &[PointResult], v: MapValue) -> Option<(Vector3<f64>, f64)> {
+    points
+        .iter()
+        .filter_map(|p| pick(&p.estimate, v).map(|f| (p.position_m, f)))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+/// The frequency `v` of an estimate, when it is ok and finite.
+pub fn pick(e: &Estimate, v: MapValue) -> Option<f64> {
+    let f = match v {
+        MapValue::F1 => e.f1_hz,
+        MapValue::EeMode => e.ee_mode_hz,
+    };
+    (e.is_ok() && f.is_finite()).then_some(f)
+}
+
+/// The grid axes of a map of scene `s`.
+fn grid(s: &Scene, cfg: &MapConfig) -> Result<[Vec<f64>; 3], StudyError> {
+    let (lo, hi) = s.frame_bounds_m();
+    let (_, _, sl) = cfg.plane.axes();
+    let mut axes: [Vec<f64>; 3] = Default::default();
+    for k in 0..3 {
+        let iv = match cfg.ranges_m[k] {
+            Some(iv) => iv,
+            None if k == sl => Interval {
+                lo: s.ee_position_m[k],
+                hi: s.ee_position_m[k],
+            },
+            None => {
+                let (c, r) = (
+                    (lo[k] + hi[k]) / 2.0,
+                    DEFAULT_HALF_SPAN_SHARE * (hi[k] - lo[k]),
+                );
+                Interval {
+                    lo: c - r,
+                    hi: c + r,
+                }
+            }
+        };
+        axes[k] = grid_axis(iv, cfg.step_m)?;
+    }
+    Ok(axes)
+}
+
+/// Evaluate the map of scene `s` at its T_min.
+pub fn compute(s: &Scene, cfg: &MapConfig) -> Result<MapResult, StudyError> {
+    let axes = grid(s, cfg)?;
+    let (h, v, sl) = cfg.plane.axes();
+    let n = axes[0].len() * axes[1].len() * axes[2].len();
+    if n > MAX_GRID_POINTS {
+        return Err(StudyError::Usage(format!("{n} grid points: too many")));
+    }
+    let mut points = Vec::with_capacity(n);
+    for &ws in &axes[sl] {
+        for &wv in &axes[v] {
+            for &wh in &axes[h] {
+                let mut p = Vector3::zeros();
+                p[h] = wh;
+                p[v] = wv;
+                p[sl] = ws;
+                points.push(p);
+            }
+        }
+    }
+    let params = estimator_params(s, cfg.ee_mode);
+    let label = cfg.progress.then_some("map");
+    let res = evaluate_points(
+        s,
+        &points,
+        s.t_min_n,
+        params,
+        cfg.threads,
+        axes[h].len(),
+        label,
+    )?;
+    Ok(MapResult {
+        axes,
+        plane: cfg.plane,
+        points: res,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_axes() {
+        let g = grid_axis(Interval { lo: -1.0, hi: 1.0 }, 0.1).unwrap();
+        assert_eq!(g.len(), 21);
+        assert_eq!(g[20], 1.0);
+        assert_eq!(g[10], 0.0);
+        let g = grid_axis(Interval { lo: 0.25, hi: 1.25 }, 0.1).unwrap();
+        assert_eq!(g.len(), 11);
+    }
+}
