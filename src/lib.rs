@@ -5,8 +5,8 @@
 //! a cable model, computed without heap allocation, blocking or unbounded loops.
 //!
 //! ## The model (Nguyen et al., "A novel modified analytical method and finite element
-//! method for vibration analysis of cable-driven parallel robots", with the corrections of
-//! `shared/reference/notes.md`)
+//! method for vibration analysis of cable-driven parallel robots", with the corrections
+//! written down in `docs/model.md`)
 //!
 //! - **Kinematics** ([`kinematics`]): cable i runs from anchor a_i to the end-effector at
 //!   p; s_i = (p − a_i)/L_i. The structure matrix A = [s_1 … s_n] (3 × n).
@@ -14,7 +14,8 @@
 //!   T_min ≤ T_i ≤ T_max (N), w = m g when the cables carry the weight.
 //! - **Cable elements** ([`cable`]): N equal elements per cable, 3 DOF per node, consistent
 //!   mass (μl/6)[2I I; I 2I]. FEM: K_c = EA/l e eᵀ + T/l (I − e eᵀ). Catenary: K_c = −F⁻¹
-//!   with the flexibility F of paper Eq. 28 in the cancellation-free form of notes.md.
+//!   with the flexibility F of paper Eq. 28 in the cancellation-free form of `docs/model.md`
+//!   (section 5).
 //! - **Modes** ([`modal`]): K u = λ M u, f = √λ / 2π (Hz). Dense reference: Cholesky
 //!   reduction and a symmetric eigensolver (accuracy ε·λ_max/λ).
 //!
@@ -43,26 +44,46 @@
 //! The *end-effector mode* is the lowest mode whose participation reaches the scene's
 //! threshold (default 0.5); see [`modal::ModalSolver::ee_mode_tracked`].
 //!
-//! ## Modules
+//! ## Layers
 //!
-//! [`scene`] (TOML description and validation), [`kinematics`], [`tension`], [`cable`],
-//! [`modal`], [`estimator`] (the per-cycle pipeline and the offline reference pipeline),
-//! [`service`] (iceoryx2 wiring), [`trajectory`] (the circle and CSV paths), [`study`] (offline
-//! accuracy, map, trajectory and T_min studies), [`report`] (their CSV, SVG and Markdown),
-//! [`cli`] (the command line, used by the binary alone).
+//! Each layer uses only the layers below it (`tests/layers.rs` checks every `crate::` path),
+//! so the crate reads bottom-up:
+//!
+//! | layer | modules | what |
+//! |---|---|---|
+//! | 0 | [`scene`], [`alloc_count`] | robot description, TOML parsing and validation, `Scene::load`; a counting allocator |
+//! | 1 | [`kinematics`] | poses, cable vectors and lengths, the structure matrix |
+//! | 2 | [`trajectory`], [`tension`], [`cable`] | the paper's circle and CSV paths; the tension QP (active set, Clarabel reference); element models and chains |
+//! | 3 | [`modal`] | D(λ) of the loaded chains, the first mode, the end-effector tracker, the dense reference |
+//! | 4 | [`estimator`] | the per-cycle pipeline, the inverse T_min query, the offline `auto` choice and reference |
+//! | 5 | [`service`], [`study`] | iceoryx2 wiring; offline studies (maps, trajectories, T_min sweeps, accuracy) |
+//! | 6 | [`report`] | the studies' CSV files, SVG plots and Markdown |
+//! | 7 | [`cli`] | the command line, used by the binary alone |
+//!
+//! A pose's path through one cycle: [`service`] takes it from iceoryx2 →
+//! [`estimator::Estimator::update`] → [`kinematics`] → [`tension`] → [`cable`] → [`modal`]
+//! → [`estimator::Estimate`] → [`service`] publishes it.
 #![warn(missing_docs)]
 // Numerical kernels index several arrays with one loop variable; iterator chains would
 // hide the maths. `!(x > 0.0)` is used on purpose: it is also true for NaN.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+// Layer 0
 pub mod alloc_count;
-pub mod cable;
-pub mod cli;
-pub mod estimator;
-pub mod kinematics;
-pub mod modal;
-pub mod report;
 pub mod scene;
-pub mod service;
-pub mod study;
+// Layer 1
+pub mod kinematics;
+// Layer 2
+pub mod cable;
 pub mod tension;
 pub mod trajectory;
+// Layer 3
+pub mod modal;
+// Layer 4
+pub mod estimator;
+// Layer 5
+pub mod service;
+pub mod study;
+// Layer 6
+pub mod report;
+// Layer 7
+pub mod cli;

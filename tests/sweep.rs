@@ -273,7 +273,7 @@ fn trajectory_from_csv_and_default_circle() {
 }
 
 #[test]
-fn sweep_tmin_fits_sqrt_with_the_notes_coefficient() {
+fn sweep_tmin_fits_sqrt_with_the_model_coefficient() {
     let s = Scene::planar_paper();
     let cfg = TminConfig {
         from_n: 20.0,

@@ -130,7 +130,7 @@ fn sin_cos_kernel(r: f64) -> (f64, f64) {
 /// parts; φ ≤ 1e5 here) and fdlibm's polynomial kernels instead of a library sin/cos per
 /// chain, branch-free so that it vectorizes (an AVX2 build is chosen at run time: the same
 /// operations, so the same results). Agrees with the scalar form within its conditioning
-/// (tested). Chains outside 1e-3 ≤ φ ≤ 1e5 ([`BATCH_PHI_MIN`], [`BATCH_PHI_MAX`]), or with
+/// (tested). Chains outside 1e-3 ≤ φ ≤ 1e5 (`BATCH_PHI_MIN`, `BATCH_PHI_MAX`), or with
 /// K or m ≤ 0, and λ ≤ 0 take the scalar form.
 pub fn eval_continuous_batch(k: &[f64], m: &[f64], lambda: f64, out: &mut [ChainEval]) {
     #[cfg(target_arch = "x86_64")]
