@@ -45,6 +45,22 @@ pub struct Chain {
     pub proj: Matrix3<f64>,
 }
 
+impl Chain {
+    /// A chain that loads nothing (no stiffness, no mass, multiplicity 0): the filler of
+    /// preallocated chain tables.
+    pub fn idle() -> Chain {
+        Chain {
+            kind: ChainKind::Discrete {
+                k: 0.0,
+                m: 0.0,
+                n_el: 1,
+            },
+            mult: 0,
+            proj: Matrix3::zeros(),
+        }
+    }
+}
+
 /// Dynamic stiffness of one scalar chain at λ = ω² (rad²/s²).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ChainEval {

@@ -102,15 +102,7 @@ impl CableModel {
         let eet = e * e.transpose();
         let perp = Matrix3::identity() - eet;
         let t_geo = if geometric { tension_n } else { 0.0 };
-        let zero_chain = Chain {
-            kind: ChainKind::Discrete {
-                k: 0.0,
-                m: 0.0,
-                n_el: 1,
-            },
-            mult: 0,
-            proj: Matrix3::zeros(),
-        };
+        let zero_chain = Chain::idle();
         let mut chains = [zero_chain; 3];
         let (kc, me, nel, nch) = match kind {
             ElementKind::Fem | ElementKind::Massless => {

@@ -143,15 +143,7 @@ pub(super) struct LoadedChains {
 impl LoadedChains {
     /// Nothing loaded; the pole table's capacity reserved (the only allocation).
     pub(super) fn new() -> LoadedChains {
-        let zero = Chain {
-            kind: ChainKind::Discrete {
-                k: 0.0,
-                m: 0.0,
-                n_el: 1,
-            },
-            mult: 0,
-            proj: Matrix3::zeros(),
-        };
+        let zero = Chain::idle();
         LoadedChains {
             chains: [zero; MAX_CHAINS],
             q6: [Matrix6::zeros(); MAX_CHAINS],

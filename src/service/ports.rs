@@ -73,6 +73,12 @@ fn ipc_error(context: impl Into<String>, reason: impl core::fmt::Debug) -> Servi
     }
 }
 
+/// How long a starting service waits for a dead predecessor's margin server to be cleaned
+/// up before it concludes that a live service holds the instance.
+const STALE_SERVER_GRACE: Duration = Duration::from_secs(2);
+/// How often it checks meanwhile.
+const STALE_SERVER_POLL: Duration = Duration::from_millis(20);
+
 /// How long a client started beside the service (demo, benchmark) waits for it to come up.
 pub const SERVICE_UP_TIMEOUT: Duration = Duration::from_secs(10);
 /// How often [`wait_for_service`] checks.
@@ -360,7 +366,7 @@ impl ServicePorts {
             .map_err(|e| ipc_error("create the margin server", e))?;
         // A server port of a process that died counts until its stale resources are removed;
         // another process may be removing them right now, so give that a moment.
-        let deadline = std::time::Instant::now() + Duration::from_secs(2);
+        let deadline = std::time::Instant::now() + STALE_SERVER_GRACE;
         while margin_factory.dynamic_config().number_of_servers() > 1 {
             if std::time::Instant::now() > deadline {
                 return Err(ServiceError::AlreadyServing {
@@ -368,7 +374,7 @@ impl ServicePorts {
                 });
             }
             remove_stale_nodes();
-            std::thread::sleep(Duration::from_millis(20));
+            std::thread::sleep(STALE_SERVER_POLL);
         }
         let estimate = open_pubsub::<EstimateSample>(node, &names.estimate, ESTIMATE_SETTINGS)?
             .publisher_builder()
