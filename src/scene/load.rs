@@ -99,4 +99,19 @@ mod tests {
             "{e}"
         );
     }
+
+    #[test]
+    fn a_toml_error_keeps_the_snippet_under_the_file_name() {
+        let e = Scene::from_toml_str("name = \"x\"\ngravity = [0, 0\n", "s.toml")
+            .unwrap_err()
+            .to_string();
+        let lines: Vec<&str> = e.lines().collect();
+        assert!(lines.len() >= 4, "{e}");
+        assert!(
+            lines[0].starts_with("s.toml: ") && lines[0].contains("line 2"),
+            "{e}"
+        );
+        assert!(e.contains("2 | gravity = [0, 0") && e.contains('^'), "{e}");
+        assert!(!e.contains(" | 2 |"), "flattened: {e}");
+    }
 }

@@ -46,12 +46,13 @@ pub enum SceneError {
         /// Underlying error.
         reason: std::io::Error,
     },
-    /// TOML syntax error, wrong type, missing or unknown key (serde's message names the key).
+    /// TOML syntax error, wrong type, missing or unknown key: the toml crate's own report
+    /// (several lines: line and column, the offending line with a caret, what is wrong).
     #[error("{file}: {message}")]
     Parse {
         /// File name.
         file: String,
-        /// What is wrong, with the key and the line.
+        /// The toml crate's report.
         message: String,
     },
     /// A value that parses but is not physically valid.

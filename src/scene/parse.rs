@@ -98,7 +98,7 @@ impl Scene {
     pub fn from_toml_str(text: &str, file: &str) -> Result<Scene, SceneError> {
         let raw: RawScene = toml::from_str(text).map_err(|e| SceneError::Parse {
             file: file.to_string(),
-            message: e.to_string().trim_end().replace('\n', " | "),
+            message: e.to_string().trim_end().to_string(),
         })?;
         super::validate::scene_from_raw(raw, file)
     }
