@@ -45,7 +45,8 @@
 //!
 //! ## Modules
 //!
-//! [`scene`] (TOML description and validation), [`kinematics`], [`tension`], [`cable`],
+//! [`input_file`] (bounded reading of scene and trajectory files), [`scene`] (TOML
+//! description and validation), [`kinematics`], [`tension`], [`cable`],
 //! [`modal`], [`estimator`] (the per-cycle pipeline and the offline reference pipeline),
 //! [`service`] (iceoryx2 wiring), [`cli`] (command-line tools), [`sweep`] (accuracy, maps,
 //! trajectories and T_min sweeps, with [`svg`] plots).
@@ -57,6 +58,7 @@ pub mod alloc_count;
 pub mod cable;
 pub mod cli;
 pub mod estimator;
+pub mod input_file;
 pub mod kinematics;
 pub mod modal;
 pub mod scene;
