@@ -51,14 +51,15 @@
 //!
 //! | layer | modules | what |
 //! |---|---|---|
-//! | 0 | [`scene`], [`alloc_count`] | robot description, TOML parsing and validation, `Scene::load`; a counting allocator |
-//! | 1 | [`kinematics`] | poses, cable vectors and lengths, the structure matrix |
-//! | 2 | [`trajectory`], [`tension`], [`cable`] | the paper's circle and CSV paths; the tension QP (active set, Clarabel reference); element models and chains |
-//! | 3 | [`modal`] | D(λ) of the loaded chains, the first mode, the end-effector tracker, the dense reference |
-//! | 4 | [`estimator`] | the per-cycle pipeline, the inverse T_min query, the offline `auto` choice and reference |
-//! | 5 | [`service`], [`study`] | iceoryx2 wiring; offline studies (maps, trajectories, T_min sweeps, accuracy) |
-//! | 6 | [`report`] | the studies' CSV files, SVG plots and Markdown |
-//! | 7 | [`cli`] | the command line, used by the binary alone |
+//! | 0 | [`input_file`], [`alloc_count`] | bounded reading of scene and trajectory files; a counting allocator |
+//! | 1 | [`scene`] | robot description, TOML parsing and validation, `Scene::load` |
+//! | 2 | [`kinematics`] | poses, cable vectors and lengths, the structure matrix |
+//! | 3 | [`trajectory`], [`tension`], [`cable`] | the paper's circle and CSV paths; the tension QP (active set, Clarabel reference); element models and chains |
+//! | 4 | [`modal`] | D(λ) of the loaded chains, the first mode, the end-effector tracker, the dense reference |
+//! | 5 | [`estimator`] | the per-cycle pipeline, the inverse T_min query, the offline `auto` choice and reference |
+//! | 6 | [`service`], [`study`] | iceoryx2 wiring; offline studies (maps, trajectories, T_min sweeps, accuracy) |
+//! | 7 | [`report`] | the studies' CSV files, SVG plots and Markdown |
+//! | 8 | [`cli`] | the command line, used by the binary alone |
 //!
 //! A pose's path through one cycle: [`service`] takes it from iceoryx2 →
 //! [`estimator::Estimator::update`] → [`kinematics`] → [`tension`] → [`cable`] → [`modal`]
@@ -69,21 +70,23 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 // Layer 0
 pub mod alloc_count;
-pub mod scene;
+pub mod input_file;
 // Layer 1
-pub mod kinematics;
+pub mod scene;
 // Layer 2
+pub mod kinematics;
+// Layer 3
 pub mod cable;
 pub mod tension;
 pub mod trajectory;
-// Layer 3
-pub mod modal;
 // Layer 4
-pub mod estimator;
+pub mod modal;
 // Layer 5
+pub mod estimator;
+// Layer 6
 pub mod service;
 pub mod study;
-// Layer 6
-pub mod report;
 // Layer 7
+pub mod report;
+// Layer 8
 pub mod cli;

@@ -21,6 +21,7 @@ use std::path::Path;
 
 use nalgebra::{Matrix3, Vector3};
 
+use crate::input_file::{InputError, MAX_TRAJECTORY_BYTES};
 use crate::kinematics::{up_frame, Pose};
 use crate::scene::Scene;
 
@@ -46,14 +47,10 @@ pub enum TrajectoryError {
         /// The range it must be in.
         bound: &'static str,
     },
-    /// The file could not be read.
-    #[error("cannot read trajectory {origin}: {source}")]
-    Io {
-        /// The file.
-        origin: String,
-        /// The cause.
-        source: std::io::Error,
-    },
+    /// The file could not be read: missing, not a regular file, over
+    /// [`MAX_TRAJECTORY_BYTES`] or not UTF-8.
+    #[error(transparent)]
+    Input(#[from] InputError),
     /// A row breaks the CSV rules (see the module docs).
     #[error("{origin}:{line}: {msg}")]
     Row {
@@ -167,14 +164,11 @@ pub struct Samples {
 }
 
 impl Samples {
-    /// Reads a trajectory CSV file (rules in the module docs).
+    /// Reads a trajectory CSV file (rules in the module docs; a regular file of at most
+    /// [`MAX_TRAJECTORY_BYTES`]).
     pub fn read_csv(path: &Path) -> Result<Samples, TrajectoryError> {
-        let origin = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| TrajectoryError::Io {
-            origin: origin.clone(),
-            source,
-        })?;
-        Samples::parse_csv(&text, &origin)
+        let text = crate::input_file::read_text(path, "trajectory CSV", MAX_TRAJECTORY_BYTES)?;
+        Samples::parse_csv(&text, &path.display().to_string())
     }
 
     /// Parses trajectory CSV text (rules in the module docs); `origin` names the source in
@@ -373,5 +367,52 @@ mod tests {
             let e = Samples::parse_csv(text, "f.csv").unwrap_err().to_string();
             assert!(e.contains(why) && e.starts_with("f.csv"), "{text:?}: {e}");
         }
+    }
+
+    /// `Samples::read_csv` of `path` in a thread, failing the test if it blocks.
+    fn read_within_timeout(path: &Path) -> Result<Samples, TrajectoryError> {
+        let p = path.to_path_buf();
+        crate::input_file::test_files::within_timeout(move || Samples::read_csv(&p))
+    }
+
+    #[test]
+    fn csv_from_devices_fifos_and_directories_is_refused_without_blocking() {
+        use crate::input_file::test_files::{fifo, temp_dir};
+        let dir = temp_dir("csv-kinds");
+        let fifo = fifo(&dir, "t.csv");
+        for (p, kind) in [
+            (fifo.as_path(), "FIFO"),
+            (Path::new("/dev/zero"), "character device"),
+            (Path::new("/dev/urandom"), "character device"),
+            (dir.as_path(), "directory"),
+        ] {
+            let msg = read_within_timeout(p).unwrap_err().to_string();
+            let name = p.display().to_string();
+            assert!(
+                msg.starts_with(&format!("{name}: is a {kind}")) && msg.contains("trajectory CSV"),
+                "{msg}"
+            );
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn csv_over_the_limit_is_refused_and_a_small_file_read() {
+        use crate::input_file::test_files::{sparse, temp_dir};
+        use crate::input_file::MAX_TRAJECTORY_BYTES;
+        let dir = temp_dir("csv-size");
+        let big = sparse(&dir, "big.csv", MAX_TRAJECTORY_BYTES + 1);
+        let msg = read_within_timeout(&big).unwrap_err().to_string();
+        let expected = format!(
+            "{}: trajectory CSV is {} bytes, over the limit of {MAX_TRAJECTORY_BYTES} bytes",
+            big.display(),
+            MAX_TRAJECTORY_BYTES + 1
+        );
+        assert_eq!(msg, expected);
+        let small = dir.join("small.csv");
+        std::fs::write(&small, "t,x,y,z\n0,0,0,1\n1,1,0,1\n").unwrap();
+        let s = read_within_timeout(&small).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(s.duration_s(), 1.0);
     }
 }

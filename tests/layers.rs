@@ -6,14 +6,15 @@
 //!
 //! | rank | modules |
 //! |---|---|
-//! | 0 | `scene`, `alloc_count` |
-//! | 1 | `kinematics` |
-//! | 2 | `trajectory`, `tension`, `cable` |
-//! | 3 | `modal` |
-//! | 4 | `estimator` |
-//! | 5 | `service`, `study` |
-//! | 6 | `report` |
-//! | 7 | `cli` (used by `main.rs` alone) |
+//! | 0 | `input_file`, `alloc_count` |
+//! | 1 | `scene` |
+//! | 2 | `kinematics` |
+//! | 3 | `trajectory`, `tension`, `cable` |
+//! | 4 | `modal` |
+//! | 5 | `estimator` |
+//! | 6 | `service`, `study` |
+//! | 7 | `report` |
+//! | 8 | `cli` (used by `main.rs` alone) |
 //!
 //! Modules of one rank do not use each other, with the exceptions in [`SIBLING_EDGES`].
 
@@ -22,18 +23,19 @@ use std::path::{Path, PathBuf};
 
 /// (module, rank): every top-level module of the library.
 const LAYERS: &[(&str, u32)] = &[
-    ("scene", 0),
+    ("input_file", 0),
+    ("scene", 1),
     ("alloc_count", 0),
-    ("kinematics", 1),
-    ("trajectory", 2),
-    ("tension", 2),
-    ("cable", 2),
-    ("modal", 3),
-    ("estimator", 4),
-    ("service", 5),
-    ("study", 5),
-    ("report", 6),
-    ("cli", 7),
+    ("kinematics", 2),
+    ("trajectory", 3),
+    ("tension", 3),
+    ("cable", 3),
+    ("modal", 4),
+    ("estimator", 5),
+    ("service", 6),
+    ("study", 6),
+    ("report", 7),
+    ("cli", 8),
 ];
 
 /// Same-rank uses that are allowed, with why.

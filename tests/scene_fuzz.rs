@@ -5,11 +5,14 @@
 //! the file; never a panic. An `Ok` scene is valid (the invariants `Scene` promises, including
 //! the derived μ = w/|g| and EA = E·A finite and > 0), and an
 //! estimator built on it answers its default pose and a few others with a status, never a
-//! panic and never NaN in an ok estimate. Fixed seed, no failure persistence.
+//! panic and never NaN in an ok estimate. Every fixed-size array key of the format, made too
+//! long, too short, of mixed types or with a trailing NaN, is refused with a message that
+//! names the key and says what is wrong. Fixed seed, no failure persistence.
 use cablevib::estimator::{Estimator, Status};
 use cablevib::kinematics::Pose;
 use cablevib::scene::{
-    Scene, DEFAULT_SCENE_TOML, MAX_CABLES, MAX_ELEMENTS_PER_CABLE, PLANAR_SCENE_TOML,
+    Scene, BOX_SCENE_TOML, DEFAULT_SCENE_TOML, MAX_CABLES, MAX_ELEMENTS_PER_CABLE,
+    PLANAR_SCENE_TOML,
 };
 use nalgebra::Vector3;
 use proptest::prelude::*;
@@ -418,6 +421,221 @@ fn derived_quantities_stay_finite_and_positive() {
         failures.len(),
         failures.join("\n")
     );
+}
+
+/// The fixed-size array keys of a scene text, as users name them in errors (`gravity`,
+/// `end_effector.inertia`, `cables[3].anchor`, ...), with the line they are on.
+fn array_keys(text: &str) -> Vec<(String, usize)> {
+    let mut out = Vec::new();
+    let mut section = String::new();
+    let mut cable = None::<usize>;
+    for (i, line) in text.split('\n').enumerate() {
+        let t = line.trim();
+        if t == "[[cables]]" {
+            cable = Some(cable.map_or(0, |c| c + 1));
+            section.clear();
+        } else if t.starts_with('[') && t.ends_with(']') {
+            section = t.trim_matches(['[', ']']).to_string();
+        } else if let Some((key, value)) = t.split_once(" = ") {
+            if value.starts_with('[') {
+                let name = match (cable, section.is_empty()) {
+                    (Some(c), true) => format!("cables[{c}].{key}"),
+                    (_, false) => format!("{section}.{key}"),
+                    (None, true) => key.to_string(),
+                };
+                out.push((name, i));
+            }
+        }
+    }
+    out
+}
+
+/// Bad forms of the array `value` (`[a, b, c]`, comments stripped) of `n` numbers, each with
+/// the key suffix and message its error must carry.
+fn bad_arrays(value: &str, n: usize) -> Vec<(String, String, String)> {
+    let inner = &value[1..value.len() - 1];
+    let items: Vec<&str> = inner.split(", ").collect();
+    assert_eq!(items.len(), n, "{value}");
+    let with = |j: usize, bad: &str| {
+        let mut v = items.clone();
+        v[j] = bad;
+        format!("[{}]", v.join(", "))
+    };
+    let short = format!("[{}]", items[..n - 1].join(", "));
+    vec![
+        (
+            format!("[{inner}, 12345, \"junk\", [1]]"),
+            String::new(),
+            format!("expected {n} numbers, got {}", n + 3),
+        ),
+        (
+            format!("[{inner}, nan]"),
+            String::new(),
+            format!("expected {n} numbers, got {}", n + 1),
+        ),
+        (
+            format!("[{inner}, {inner}]"),
+            String::new(),
+            format!("expected {n} numbers, got {}", 2 * n),
+        ),
+        (
+            short,
+            String::new(),
+            format!("expected {n} numbers, got {}", n - 1),
+        ),
+        (
+            "[]".into(),
+            String::new(),
+            format!("expected {n} numbers, got 0"),
+        ),
+        (
+            "\"junk\"".into(),
+            String::new(),
+            format!("expected an array of {n} numbers, got a string"),
+        ),
+        (
+            "1.0".into(),
+            String::new(),
+            format!("expected an array of {n} numbers, got a float"),
+        ),
+        (
+            with(1, "\"2.0\""),
+            "[1]".into(),
+            "expected a number, got a string".into(),
+        ),
+        (
+            with(n - 1, "true"),
+            format!("[{}]", n - 1),
+            "expected a number, got a boolean".into(),
+        ),
+        (
+            with(0, "[1.0]"),
+            "[0]".into(),
+            "expected a number, got an array".into(),
+        ),
+        (
+            with(0, "{ x = 1.0 }"),
+            "[0]".into(),
+            "expected a number, got a table".into(),
+        ),
+        (
+            with(1, "1979-05-27"),
+            "[1]".into(),
+            "expected a number, got a datetime".into(),
+        ),
+    ]
+}
+
+/// Every fixed-size array key of the box scene (gravity, position, orientation, inertia and
+/// its rows, every cable's anchor and attachment) made too long, too short, of mixed types,
+/// NaN-trailing or not an array: refused, and the message names the file, the key (with the
+/// cable index or the element) and what is wrong, on one line.
+#[test]
+fn every_array_key_has_exactly_its_length_of_numbers() {
+    let text = BOX_SCENE_TOML;
+    assert!(Scene::from_toml_str(text, FILE).is_ok());
+    let lines: Vec<&str> = text.split('\n').collect();
+    let keys = array_keys(text);
+    let names: Vec<&str> = keys.iter().map(|(k, _)| k.as_str()).collect();
+    for k in [
+        "gravity",
+        "end_effector.position",
+        "end_effector.orientation",
+        "end_effector.inertia",
+        "cables[0].anchor",
+        "cables[7].attachment",
+    ] {
+        assert!(names.contains(&k), "{k} not found in {names:?}");
+    }
+    let mut checked = 0;
+    let mut failures = Vec::new();
+    for (key, i) in &keys {
+        let (lhs, rest) = lines[*i].split_once(" = ").unwrap();
+        let value = rest.split('#').next().unwrap().trim();
+        let mut cases: Vec<(String, String, String)> = Vec::new();
+        if key == "end_effector.inertia" {
+            let rows: Vec<&str> = value[1..value.len() - 1].split("], [").collect();
+            let rows: Vec<String> = rows
+                .iter()
+                .map(|r| format!("[{}]", r.trim_matches(['[', ']'])))
+                .collect();
+            let all = rows.join(", ");
+            cases.push((
+                format!("[{all}, {}]", rows[2]),
+                key.clone(),
+                "expected 3 rows of 3 numbers, got 4".into(),
+            ));
+            cases.push((
+                format!("[{}, {}]", rows[0], rows[1]),
+                key.clone(),
+                "expected 3 rows of 3 numbers, got 2".into(),
+            ));
+            cases.push((
+                "[1.0, 2.0, 3.0]".into(),
+                format!("{key}[0]"),
+                "expected an array of 3 numbers, got a float".into(),
+            ));
+            for (bad, suffix, msg) in bad_arrays(&rows[1], 3) {
+                let v = format!("[{}, {bad}, {}]", rows[0], rows[2]);
+                cases.push((v, format!("{key}[1]{suffix}"), msg));
+            }
+        } else {
+            let n = value.split(", ").count();
+            for (bad, suffix, msg) in bad_arrays(value, n) {
+                cases.push((bad, format!("{key}{suffix}"), msg));
+            }
+        }
+        for (bad, err_key, msg) in cases {
+            let mut v: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
+            v[*i] = format!("{lhs} = {bad}");
+            let expected = format!("{FILE}: key `{err_key}`: {msg}");
+            checked += 1;
+            match Scene::from_toml_str(&v.join("\n"), FILE) {
+                Ok(_) => failures.push(format!("{key} = {bad}: accepted")),
+                Err(e) if e.to_string() != expected => {
+                    failures.push(format!("{key} = {bad}: `{e}`, expected `{expected}`"))
+                }
+                Err(_) => {}
+            }
+        }
+    }
+    eprintln!("{checked} bad arrays checked over {} keys", keys.len());
+    assert!(checked > 200, "only {checked} cases");
+    assert!(
+        failures.is_empty(),
+        "{} failures:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
+/// A NaN or infinity inside an array of the right length is refused by the key's own check.
+#[test]
+fn non_finite_array_elements_are_refused() {
+    let text = BOX_SCENE_TOML;
+    let lines: Vec<&str> = text.split('\n').collect();
+    for (key, i) in array_keys(text) {
+        let (lhs, rest) = lines[i].split_once(" = ").unwrap();
+        let value = rest.split('#').next().unwrap().trim();
+        for bad in ["nan", "inf", "-inf"] {
+            // The first number of the value becomes `bad`.
+            let start = value
+                .find(|c: char| c.is_ascii_digit() || c == '-')
+                .unwrap();
+            let len = value[start..].find([',', ']']).unwrap();
+            let v_bad = format!("{}{bad}{}", &value[..start], &value[start + len..]);
+            let mut v: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
+            v[i] = format!("{lhs} = {v_bad}");
+            let e = Scene::from_toml_str(&v.join("\n"), FILE)
+                .err()
+                .unwrap_or_else(|| panic!("{key} = {v_bad}: accepted"))
+                .to_string();
+            assert!(
+                e.starts_with(&format!("{FILE}: key `{key}`: must be")) && !e.contains('\n'),
+                "{key} = {v_bad}: {e}"
+            );
+        }
+    }
 }
 
 proptest! {

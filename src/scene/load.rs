@@ -99,4 +99,77 @@ mod tests {
             "{e}"
         );
     }
+
+    /// `Scene::load` of `path` in a thread, failing the test if it blocks.
+    fn load_within_timeout(path: &Path) -> Result<Scene, SceneError> {
+        let p = path.to_str().expect("UTF-8 path").to_string();
+        crate::input_file::test_files::within_timeout(move || Scene::load(&p))
+    }
+
+    #[test]
+    fn devices_fifos_and_directories_are_refused_without_blocking() {
+        use crate::input_file::test_files::{fifo, temp_dir};
+        let dir = temp_dir("scene-kinds");
+        let fifo = fifo(&dir, "scene.toml");
+        for (p, kind) in [
+            (fifo.as_path(), "FIFO"),
+            (Path::new("/dev/zero"), "character device"),
+            (Path::new("/dev/urandom"), "character device"),
+            (dir.as_path(), "directory"),
+        ] {
+            let msg = load_within_timeout(p).unwrap_err().to_string();
+            let name = p.display().to_string();
+            assert!(
+                msg.starts_with(&format!("{name}: is a {kind}")) && msg.contains("scene file"),
+                "{msg}"
+            );
+            assert!(!msg.contains('\n'), "{msg}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_scene_file_over_the_limit_is_refused() {
+        use crate::input_file::test_files::{sparse, temp_dir};
+        use crate::input_file::MAX_SCENE_BYTES;
+        let dir = temp_dir("scene-size");
+        let big = sparse(&dir, "big.toml", MAX_SCENE_BYTES + 1);
+        let msg = load_within_timeout(&big).unwrap_err().to_string();
+        std::fs::remove_dir_all(&dir).unwrap();
+        let expected = format!(
+            "{}: scene file is {} bytes, over the limit of {MAX_SCENE_BYTES} bytes",
+            big.display(),
+            MAX_SCENE_BYTES + 1
+        );
+        assert_eq!(msg, expected);
+    }
+
+    #[test]
+    fn a_non_utf8_scene_file_is_refused() {
+        let dir = crate::input_file::test_files::temp_dir("scene-utf8");
+        let file = dir.join("latin1.toml");
+        std::fs::write(&file, b"name = \"caf\xe9\"\n").unwrap();
+        let msg = load_within_timeout(&file).unwrap_err().to_string();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(
+            msg.contains("latin1.toml")
+                && msg.contains("not UTF-8 text (invalid byte at offset 11)"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn a_toml_error_keeps_the_snippet_under_the_file_name() {
+        let e = Scene::from_toml_str("name = \"x\"\ngravity = [0, 0\n", "s.toml")
+            .unwrap_err()
+            .to_string();
+        let lines: Vec<&str> = e.lines().collect();
+        assert!(lines.len() >= 4, "{e}");
+        assert!(
+            lines[0].starts_with("s.toml: ") && lines[0].contains("line 2"),
+            "{e}"
+        );
+        assert!(e.contains("2 | gravity = [0, 0") && e.contains('^'), "{e}");
+        assert!(!e.contains(" | 2 |"), "flattened: {e}");
+    }
 }

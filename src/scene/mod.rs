@@ -18,6 +18,8 @@ use nalgebra::Vector3;
 use serde::Deserialize;
 use std::path::Path;
 
+use crate::input_file::{InputError, MAX_SCENE_BYTES};
+
 mod load;
 mod parse;
 mod validate;
@@ -38,20 +40,17 @@ pub const MAX_ELEMENTS_PER_CABLE: usize = 10_000;
 /// Errors from reading or validating a scene.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    /// The file could not be read.
-    #[error("{file}: cannot read scene file: {reason}")]
-    Io {
-        /// File name.
-        file: String,
-        /// Underlying error.
-        reason: std::io::Error,
-    },
-    /// TOML syntax error, wrong type, missing or unknown key (serde's message names the key).
+    /// The file could not be read: missing, not a regular file, over
+    /// [`MAX_SCENE_BYTES`] or not UTF-8.
+    #[error(transparent)]
+    Input(#[from] InputError),
+    /// TOML syntax error, wrong type, missing or unknown key: the toml crate's own report
+    /// (several lines: line and column, the offending line with a caret, what is wrong).
     #[error("{file}: {message}")]
     Parse {
         /// File name.
         file: String,
-        /// What is wrong, with the key and the line.
+        /// The toml crate's report.
         message: String,
     },
     /// A value that parses but is not physically valid.
@@ -186,14 +185,10 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Read and validate a scene file.
+    /// Read and validate a scene file (a regular file of at most [`MAX_SCENE_BYTES`]).
     pub fn from_path(path: &Path) -> Result<Scene, SceneError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|reason| SceneError::Io {
-            file: file.clone(),
-            reason,
-        })?;
-        Self::from_toml_str(&text, &file)
+        let text = crate::input_file::read_text(path, "scene file", MAX_SCENE_BYTES)?;
+        Self::from_toml_str(&text, &path.display().to_string())
     }
 
     /// The embedded default scene (the paper's spatial robot).

@@ -1,14 +1,22 @@
 //! TOML parsing: the scene file as serde reads it (`Raw*` types, unknown keys rejected,
-//! defaults filled in), before any physical check.
+//! defaults filled in), before any physical check. Fixed-size arrays are read as any TOML
+//! value ([`RawArray`]) and checked element by element in `validate`: serde's `[f64; N]`
+//! would silently drop elements past the N-th, and its errors cannot name `cables[i]`.
 
 use super::{ElementKind, Scene, SceneError};
 use serde::Deserialize;
+
+/// A fixed-size array of numbers as written (any TOML value): `validate` checks that it is
+/// an array of exactly the expected length whose elements are numbers.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(transparent)]
+pub(super) struct RawArray(pub(super) toml::Value);
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawScene {
     pub(super) name: String,
-    pub(super) gravity: [f64; 3],
+    pub(super) gravity: RawArray,
     pub(super) end_effector: RawEndEffector,
     pub(super) cable: RawCableDefaults,
     pub(super) tension: RawTension,
@@ -32,9 +40,9 @@ pub(super) struct RawEffects {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawEndEffector {
     pub(super) mass: f64,
-    pub(super) position: [f64; 3],
-    pub(super) inertia: Option<[[f64; 3]; 3]>,
-    pub(super) orientation: Option<[f64; 4]>,
+    pub(super) position: RawArray,
+    pub(super) inertia: Option<RawArray>,
+    pub(super) orientation: Option<RawArray>,
     #[serde(default = "default_true")]
     pub(super) weight_carried: bool,
 }
@@ -85,8 +93,8 @@ fn default_participation() -> f64 {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawCable {
-    pub(super) anchor: [f64; 3],
-    pub(super) attachment: Option<[f64; 3]>,
+    pub(super) anchor: RawArray,
+    pub(super) attachment: Option<RawArray>,
     pub(super) youngs_modulus: Option<f64>,
     pub(super) area: Option<f64>,
     pub(super) weight_per_length: Option<f64>,
@@ -98,7 +106,7 @@ impl Scene {
     pub fn from_toml_str(text: &str, file: &str) -> Result<Scene, SceneError> {
         let raw: RawScene = toml::from_str(text).map_err(|e| SceneError::Parse {
             file: file.to_string(),
-            message: e.to_string().trim_end().replace('\n', " | "),
+            message: e.to_string().trim_end().to_string(),
         })?;
         super::validate::scene_from_raw(raw, file)
     }

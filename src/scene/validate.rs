@@ -4,7 +4,8 @@
 //! count, geometric stiffness, cable count, then each cable in turn.
 
 use super::parse::{
-    RawCable, RawCableDefaults, RawEffects, RawEndEffector, RawModel, RawScene, RawTension,
+    RawArray, RawCable, RawCableDefaults, RawEffects, RawEndEffector, RawModel, RawScene,
+    RawTension,
 };
 use super::{
     Cable, ElementKind, ModelSettings, Scene, SceneError, MAX_CABLES, MAX_ELEMENTS_PER_CABLE,
@@ -40,8 +41,53 @@ impl Checker<'_> {
         }
     }
 
-    /// Three finite components.
-    fn finite3(&self, key: &str, v: [f64; 3]) -> Result<Vector3<f64>, SceneError> {
+    /// The elements of an array of exactly `n` values (`noun` names them in the message).
+    fn elements<'v>(
+        &self,
+        key: &str,
+        raw: &'v toml::Value,
+        n: usize,
+        noun: &str,
+    ) -> Result<&'v [toml::Value], SceneError> {
+        match raw {
+            toml::Value::Array(a) if a.len() == n => Ok(a),
+            toml::Value::Array(a) => {
+                Err(self.inv(key, format!("expected {n} {noun}, got {}", a.len())))
+            }
+            other => Err(self.inv(
+                key,
+                format!("expected an array of {n} {noun}, got {}", a_type(other)),
+            )),
+        }
+    }
+
+    /// A number: a float, or an integer read as a float (as serde reads it into `f64`).
+    fn number(&self, key: &str, raw: &toml::Value) -> Result<f64, SceneError> {
+        match *raw {
+            toml::Value::Float(x) => Ok(x),
+            toml::Value::Integer(i) => Ok(i as f64),
+            ref other => Err(self.inv(key, format!("expected a number, got {}", a_type(other)))),
+        }
+    }
+
+    /// An array of exactly `N` numbers (not yet checked for finiteness); an element's error
+    /// names it as `key[j]`.
+    fn numbers<const N: usize>(
+        &self,
+        key: &str,
+        raw: &toml::Value,
+    ) -> Result<[f64; N], SceneError> {
+        let mut out = [0.0; N];
+        let elements = self.elements(key, raw, N, "numbers")?;
+        for (j, (o, x)) in out.iter_mut().zip(elements).enumerate() {
+            *o = self.number(&format!("{key}[{j}]"), x)?;
+        }
+        Ok(out)
+    }
+
+    /// Exactly three numbers, all finite.
+    fn finite3(&self, key: &str, raw: &RawArray) -> Result<Vector3<f64>, SceneError> {
+        let v: [f64; 3] = self.numbers(key, &raw.0)?;
         if v.iter().all(|x| x.is_finite()) {
             Ok(Vector3::new(v[0], v[1], v[2]))
         } else {
@@ -59,6 +105,17 @@ impl Checker<'_> {
     }
 }
 
+/// A TOML value's type with its article, for messages ("a string", "an array").
+fn a_type(v: &toml::Value) -> String {
+    let t = v.type_str();
+    let article = if t.starts_with(['a', 'e', 'i', 'o', 'u']) {
+        "an"
+    } else {
+        "a"
+    };
+    format!("{article} {t}")
+}
+
 /// The key of field `k` of cable `i`, as users write it.
 fn cable_key(i: usize, k: &str) -> String {
     format!("cables[{i}].{k}")
@@ -68,22 +125,22 @@ fn cable_key(i: usize, k: &str) -> String {
 pub(super) fn scene_from_raw(raw: RawScene, file: &str) -> Result<Scene, SceneError> {
     let ck = Checker { file };
     validate_name(&ck, &raw.name)?;
-    let (gravity, g) = validate_gravity(&ck, raw.gravity)?;
+    let (gravity, g) = validate_gravity(&ck, &raw.gravity)?;
     let (ee_mass, ee_pos) = validate_end_effector(&ck, &raw.end_effector)?;
     let (t_min, t_max) = validate_tension_bounds(&ck, &raw.tension)?;
     let (n, part) = validate_model(&ck, &raw.model)?;
     let fx = raw.effects.unwrap_or_default();
     let element = validate_effects(&ck, fx, raw.model.element)?;
     let rigid = fx.rotation.unwrap_or(false);
-    let inertia = validate_inertia(&ck, rigid, raw.end_effector.inertia)?;
-    let orientation = validate_orientation(&ck, raw.end_effector.orientation)?;
+    let inertia = validate_inertia(&ck, rigid, raw.end_effector.inertia.as_ref())?;
+    let orientation = validate_orientation(&ck, raw.end_effector.orientation.as_ref())?;
     validate_rigid_cable_count(&ck, rigid, raw.cables.len())?;
     let geometric_stiffness = validate_geometric_stiffness(&ck, fx, element)?;
     validate_cable_count(&ck, raw.cables.len())?;
     let at = CableContext {
         defaults: raw.cable,
         ee_pos,
-        ee_position: raw.end_effector.position,
+        ee_position: [ee_pos.x, ee_pos.y, ee_pos.z],
         rigid,
         g,
     };
@@ -122,7 +179,7 @@ fn validate_name(ck: &Checker, name: &str) -> Result<(), SceneError> {
 }
 
 /// `gravity`: finite and plausible; returns g and |g|.
-fn validate_gravity(ck: &Checker, raw: [f64; 3]) -> Result<(Vector3<f64>, f64), SceneError> {
+fn validate_gravity(ck: &Checker, raw: &RawArray) -> Result<(Vector3<f64>, f64), SceneError> {
     let gravity = ck.finite3("gravity", raw)?;
     let g = gravity.norm();
     if g > MAX_GRAVITY_M_S2 {
@@ -138,7 +195,7 @@ fn validate_end_effector(
     raw: &RawEndEffector,
 ) -> Result<(f64, Vector3<f64>), SceneError> {
     let ee_mass = ck.positive("end_effector.mass", raw.mass)?;
-    let ee_pos = ck.finite3("end_effector.position", raw.position)?;
+    let ee_pos = ck.finite3("end_effector.position", &raw.position)?;
     Ok((ee_mass, ee_pos))
 }
 
@@ -239,11 +296,13 @@ fn validate_effects(
 fn validate_inertia(
     ck: &Checker,
     rigid: bool,
-    raw: Option<[[f64; 3]; 3]>,
+    raw: Option<&RawArray>,
 ) -> Result<Matrix3<f64>, SceneError> {
+    const KEY: &str = "end_effector.inertia";
+    let raw = raw.map(|r| inertia_rows(ck, KEY, r)).transpose()?;
     match (rigid, raw) {
         (true, None) => Err(ck.inv(
-            "end_effector.inertia",
+            KEY,
             "missing: effects.rotation = true needs the inertia tensor (kg·m², body frame)".into(),
         )),
         (_, Some(m)) => {
@@ -251,13 +310,10 @@ fn validate_inertia(
             if !m.iter().all(|x| x.is_finite())
                 || (m - m.transpose()).abs().max() > INERTIA_SYMMETRY_REL_TOL * m.abs().max()
             {
-                return Err(ck.inv(
-                    "end_effector.inertia",
-                    "must be finite and symmetric".into(),
-                ));
+                return Err(ck.inv(KEY, "must be finite and symmetric".into()));
             }
             if m.cholesky().is_none() {
-                return Err(ck.inv("end_effector.inertia", "must be positive definite".into()));
+                return Err(ck.inv(KEY, "must be positive definite".into()));
             }
             Ok(m)
         }
@@ -265,9 +321,22 @@ fn validate_inertia(
     }
 }
 
+/// The inertia tensor as written: exactly 3 rows of exactly 3 numbers.
+fn inertia_rows(ck: &Checker, key: &str, raw: &RawArray) -> Result<[[f64; 3]; 3], SceneError> {
+    let mut m = [[0.0; 3]; 3];
+    let rows = ck.elements(key, &raw.0, 3, "rows of 3 numbers")?;
+    for (r, (out, row)) in m.iter_mut().zip(rows).enumerate() {
+        *out = ck.numbers(&format!("{key}[{r}]"), row)?;
+    }
+    Ok(m)
+}
+
 /// `end_effector.orientation`: a unit quaternion [w, x, y, z] (identity when absent).
-fn validate_orientation(ck: &Checker, raw: Option<[f64; 4]>) -> Result<[f64; 4], SceneError> {
-    let orientation = raw.unwrap_or([1.0, 0.0, 0.0, 0.0]);
+fn validate_orientation(ck: &Checker, raw: Option<&RawArray>) -> Result<[f64; 4], SceneError> {
+    let orientation = match raw {
+        Some(r) => ck.numbers("end_effector.orientation", &r.0)?,
+        None => [1.0, 0.0, 0.0, 0.0],
+    };
     let qn = orientation.iter().map(|x| x * x).sum::<f64>().sqrt();
     if !orientation.iter().all(|x| x.is_finite()) || (qn - 1.0).abs() > QUATERNION_NORM_TOL {
         return Err(ck.inv(
@@ -348,8 +417,8 @@ fn validate_cable(
     c: &RawCable,
 ) -> Result<Cable, SceneError> {
     let d = &at.defaults;
-    let anchor = ck.finite3(&cable_key(i, "anchor"), c.anchor)?;
-    let attachment = validate_attachment(ck, i, c.attachment, at.rigid)?;
+    let anchor = ck.finite3(&cable_key(i, "anchor"), &c.anchor)?;
+    let attachment = validate_attachment(ck, i, c.attachment.as_ref(), at.rigid)?;
     if (anchor - at.ee_pos).norm() < MIN_ANCHOR_DISTANCE_M {
         return Err(ck.inv(
             &cable_key(i, "anchor"),
@@ -382,7 +451,7 @@ fn validate_cable(
 fn validate_attachment(
     ck: &Checker,
     i: usize,
-    raw: Option<[f64; 3]>,
+    raw: Option<&RawArray>,
     rigid: bool,
 ) -> Result<Vector3<f64>, SceneError> {
     match raw {
@@ -525,5 +594,15 @@ mod tests {
         );
         let e = err(&base.replace("name = \"spatial-paper\"\n", ""));
         assert!(e.contains("name"), "{e}");
+        let e = err(&base.replace(
+            "gravity = [0.0, 0.0, -9.81]",
+            "gravity = [0, 0, -9.81, 12345, \"junk\", [1]]",
+        ));
+        assert_eq!(e, "t.toml: key `gravity`: expected 3 numbers, got 6");
+        let e = err(&base.replace("[0.0, 0.0, 1.25]", "[0.0, 0.0, 1.25, nan]"));
+        assert_eq!(
+            e,
+            "t.toml: key `end_effector.position`: expected 3 numbers, got 4"
+        );
     }
 }

@@ -1,0 +1,316 @@
+//! Bounded reading of the text files a user hands the program (scenes, trajectory CSVs).
+//!
+//! [`read_text`] reads a whole file into a `String` only when it is a regular file of at
+//! most a named number of bytes and valid UTF-8. A device (`/dev/zero`, `/dev/urandom`)
+//! would otherwise be read until memory runs out, a FIFO would block forever, and a
+//! directory would give an obscure OS error; each is refused with a one-line message that
+//! names the file and what it is.
+
+use std::fs::{File, FileType, Metadata, OpenOptions};
+use std::io::Read;
+use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
+use std::path::Path;
+
+/// Largest scene file read, bytes (16 MiB): a scene with the most cables the IPC layout
+/// allows is a few kB, so only a wrong file reaches this.
+pub const MAX_SCENE_BYTES: u64 = 16 * 1024 * 1024;
+
+/// Largest trajectory CSV read, bytes (256 MiB): an hour of 1 kHz `t,x,y,z` rows at about
+/// 60 bytes a row (≈ 216 MB) fits; the parsed samples take about half as much again.
+pub const MAX_TRAJECTORY_BYTES: u64 = 256 * 1024 * 1024;
+
+/// Why an input file was not read.
+#[derive(Debug, thiserror::Error)]
+pub enum InputError {
+    /// The OS refused to stat, open or read the file.
+    #[error("{file}: cannot read {what}: {source}")]
+    Io {
+        /// The file.
+        file: String,
+        /// What the file was meant to be, e.g. `scene file`.
+        what: &'static str,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A directory, FIFO, socket or device.
+    #[error("{file}: is a {kind}, not a regular file; a {what} must be a regular file")]
+    NotRegular {
+        /// The file.
+        file: String,
+        /// What the file was meant to be.
+        what: &'static str,
+        /// What it is, e.g. `FIFO (named pipe)`.
+        kind: &'static str,
+    },
+    /// Larger than the limit for its kind of input.
+    #[error("{file}: {what} is {size_bytes} bytes, over the limit of {limit_bytes} bytes")]
+    TooLarge {
+        /// The file.
+        file: String,
+        /// What the file was meant to be.
+        what: &'static str,
+        /// Its size, bytes (the size read when the file grew while being read).
+        size_bytes: u64,
+        /// The limit, bytes.
+        limit_bytes: u64,
+    },
+    /// Not UTF-8 text.
+    #[error("{file}: {what} is not UTF-8 text (invalid byte at offset {offset})")]
+    NotUtf8 {
+        /// The file.
+        file: String,
+        /// What the file was meant to be.
+        what: &'static str,
+        /// Byte offset of the first invalid sequence.
+        offset: usize,
+    },
+}
+
+/// Reads the regular file `path` as UTF-8 text of at most `limit_bytes` bytes; `what`
+/// (e.g. `scene file`) says in errors what the file was meant to be.
+pub fn read_text(path: &Path, what: &'static str, limit_bytes: u64) -> Result<String, InputError> {
+    let file = path.display().to_string();
+    let io = |source| InputError::Io {
+        file: file.clone(),
+        what,
+        source,
+    };
+    // Checked twice. `std::fs::metadata` (follows symlinks) refuses a FIFO or device before
+    // anything is opened: opening a FIFO blocks until a writer appears and opening some
+    // devices has side effects. The path can still be swapped between that check and the
+    // open, so the open is non-blocking (O_NONBLOCK: no effect on regular files) and the
+    // opened handle is checked again; that second check is the one that cannot race.
+    check_kind_and_size(
+        &std::fs::metadata(path).map_err(io)?,
+        &file,
+        what,
+        limit_bytes,
+    )?;
+    let mut f = OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(path)
+        .map_err(io)?;
+    check_kind_and_size(&f.metadata().map_err(io)?, &file, what, limit_bytes)?;
+    let bytes = read_at_most(&mut f, limit_bytes).map_err(io)?;
+    if bytes.len() as u64 > limit_bytes {
+        // The file grew after the size check (or its size is not known, as in /proc).
+        return Err(InputError::TooLarge {
+            file,
+            what,
+            size_bytes: bytes.len() as u64,
+            limit_bytes,
+        });
+    }
+    String::from_utf8(bytes).map_err(|e| InputError::NotUtf8 {
+        file,
+        what,
+        offset: e.utf8_error().valid_up_to(),
+    })
+}
+
+/// A regular file of at most `limit_bytes` bytes.
+fn check_kind_and_size(
+    meta: &Metadata,
+    file: &str,
+    what: &'static str,
+    limit_bytes: u64,
+) -> Result<(), InputError> {
+    if let Some(kind) = irregular_kind(meta.file_type()) {
+        return Err(InputError::NotRegular {
+            file: file.to_string(),
+            what,
+            kind,
+        });
+    }
+    if meta.len() > limit_bytes {
+        return Err(InputError::TooLarge {
+            file: file.to_string(),
+            what,
+            size_bytes: meta.len(),
+            limit_bytes,
+        });
+    }
+    Ok(())
+}
+
+/// What a file that is not a regular file is, for the message (`None` for a regular file).
+fn irregular_kind(t: FileType) -> Option<&'static str> {
+    if t.is_file() {
+        None
+    } else if t.is_dir() {
+        Some("directory")
+    } else if t.is_fifo() {
+        Some("FIFO (named pipe)")
+    } else if t.is_char_device() {
+        Some("character device")
+    } else if t.is_block_device() {
+        Some("block device")
+    } else if t.is_socket() {
+        Some("socket")
+    } else {
+        Some("special file")
+    }
+}
+
+/// At most `limit_bytes + 1` bytes of `f` (one more than allowed tells a file over the
+/// limit from one exactly at it).
+fn read_at_most(f: &mut File, limit_bytes: u64) -> std::io::Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    f.take(limit_bytes.saturating_add(1))
+        .read_to_end(&mut bytes)?;
+    Ok(bytes)
+}
+
+/// Hostile files for tests: a FIFO, a sparse file, and a guard against a read that blocks.
+#[cfg(test)]
+pub(crate) mod test_files {
+    use std::path::{Path, PathBuf};
+    use std::sync::mpsc;
+    use std::time::Duration;
+
+    /// How long a read may take before the test counts it as blocked.
+    pub(crate) const READ_TIMEOUT: Duration = Duration::from_secs(5);
+
+    /// A fresh, empty directory for one test.
+    pub(crate) fn temp_dir(test: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("cablevib-{test}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).expect("create test directory");
+        d
+    }
+
+    /// A FIFO `name` in `dir` (nobody ever writes to it).
+    pub(crate) fn fifo(dir: &Path, name: &str) -> PathBuf {
+        let p = dir.join(name);
+        let c = std::ffi::CString::new(p.to_str().expect("UTF-8 path")).expect("no NUL");
+        // SAFETY: a valid NUL-terminated path; mkfifo only creates a file system entry.
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0, "mkfifo");
+        p
+    }
+
+    /// A sparse file `name` of `len` bytes in `dir` (no disk space used).
+    pub(crate) fn sparse(dir: &Path, name: &str, len: u64) -> PathBuf {
+        let p = dir.join(name);
+        let f = std::fs::File::create(&p).expect("create sparse file");
+        f.set_len(len).expect("set_len");
+        p
+    }
+
+    /// `f()` in a thread; panics (fails the test) when it does not return within
+    /// [`READ_TIMEOUT`], which a read of a FIFO without the kind check would not.
+    pub(crate) fn within_timeout<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            let _ = tx.send(f());
+        });
+        rx.recv_timeout(READ_TIMEOUT)
+            .expect("the read blocked (no answer within the timeout)")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_files::*;
+    use super::*;
+
+    /// `read_text` of a test file, failing the test if it blocks.
+    fn read_with_timeout(path: &Path, limit: u64) -> Result<String, InputError> {
+        let p = path.to_path_buf();
+        within_timeout(move || read_text(&p, "test file", limit))
+    }
+
+    #[test]
+    fn a_small_text_file_is_read() {
+        let d = temp_dir("input-ok");
+        let p = d.join("a.txt");
+        std::fs::write(&p, "héllo\n").unwrap();
+        assert_eq!(read_with_timeout(&p, 7).unwrap(), "héllo\n");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn devices_fifos_and_directories_are_refused() {
+        let d = temp_dir("input-kinds");
+        let fifo = fifo(&d, "fifo");
+        for (p, kind) in [
+            (fifo.as_path(), "FIFO (named pipe)"),
+            (Path::new("/dev/zero"), "character device"),
+            (Path::new("/dev/urandom"), "character device"),
+            (d.as_path(), "directory"),
+        ] {
+            let e = read_with_timeout(p, MAX_SCENE_BYTES).unwrap_err();
+            assert!(matches!(e, InputError::NotRegular { .. }), "{e:?}");
+            let msg = e.to_string();
+            assert!(
+                msg.starts_with(&p.display().to_string()) && msg.contains(kind),
+                "{msg}"
+            );
+            assert!(!msg.contains('\n'), "{msg}");
+        }
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn a_file_over_the_limit_is_refused_and_one_at_it_read() {
+        let d = temp_dir("input-size");
+        let p = sparse(&d, "big", MAX_SCENE_BYTES + 1);
+        let msg = read_with_timeout(&p, MAX_SCENE_BYTES)
+            .unwrap_err()
+            .to_string();
+        let size = (MAX_SCENE_BYTES + 1).to_string();
+        let limit = MAX_SCENE_BYTES.to_string();
+        assert!(
+            msg.contains("big") && msg.contains(&size) && msg.contains(&limit),
+            "{msg}"
+        );
+        std::fs::write(&p, "abcd").unwrap();
+        assert_eq!(read_with_timeout(&p, 4).unwrap(), "abcd");
+        assert!(matches!(
+            read_with_timeout(&p, 3),
+            Err(InputError::TooLarge { size_bytes: 4, .. })
+        ));
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn a_file_of_unknown_size_is_bounded_by_the_read() {
+        // /proc files report size 0 whatever they hold.
+        let e = read_with_timeout(Path::new("/proc/self/maps"), 8).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                InputError::TooLarge {
+                    size_bytes: 9,
+                    limit_bytes: 8,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+    }
+
+    #[test]
+    fn non_utf8_is_refused() {
+        let d = temp_dir("input-utf8");
+        let p = d.join("bin");
+        std::fs::write(&p, b"ab\xffcd").unwrap();
+        let msg = read_with_timeout(&p, 100).unwrap_err().to_string();
+        assert!(
+            msg.contains("not UTF-8") && msg.contains("offset 2"),
+            "{msg}"
+        );
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn a_missing_file_names_the_file() {
+        let msg = read_with_timeout(Path::new("/no/such/file.toml"), 10)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.starts_with("/no/such/file.toml: cannot read test file"),
+            "{msg}"
+        );
+    }
+}
