@@ -13,8 +13,8 @@ mod common;
 use cablevib::estimator::{reference_analysis, AnalysisError, Estimator, Status};
 use cablevib::kinematics::Pose;
 use cablevib::modal::lambda_to_hz;
-use cablevib::scene::{ElementKind, Scene};
-use cablevib::tension::TensionError;
+use cablevib::scene::{ElementKind, Scene, MAX_CABLES, T_MIN_FLOOR_N};
+use cablevib::tension::{clarabel_reference_bounds, TensionError};
 use common::hard_cases::*;
 use common::rel;
 use nalgebra::Vector3;
@@ -23,7 +23,7 @@ use nalgebra::Vector3;
 // Bad inputs
 // ---------------------------------------------------------------------------------------
 
-/// T_min > T_max, negative, NaN or infinite T_min, NaN / Inf positions, non-unit
+/// T_min > T_max, zero, subnormal, negative, NaN or infinite T_min, NaN / Inf positions, non-unit
 /// quaternions: each a status with no numbers, and the next valid input is answered
 /// exactly as a fresh estimator answers it (nothing stale, nothing lost).
 #[test]
@@ -44,6 +44,14 @@ fn bad_inputs_get_a_status_and_the_next_valid_input_is_exact() {
             Status::TminOutOfRange,
         ),
         ("t_min < 0", Pose::at(good), -1.0, Status::TminOutOfRange),
+        ("t_min 0", Pose::at(good), 0.0, Status::TminOutOfRange),
+        ("t_min -0", Pose::at(good), -0.0, Status::TminOutOfRange),
+        (
+            "t_min subnormal",
+            Pose::at(good),
+            f64::MIN_POSITIVE / 2.0,
+            Status::TminOutOfRange,
+        ),
         (
             "t_min NaN",
             Pose::at(good),
@@ -124,6 +132,142 @@ fn bad_inputs_get_a_status_and_the_next_valid_input_is_exact() {
             assert!((a - b).abs() <= 1e-9 * b, "{name}: tensions {a} vs {b}");
         }
     }
+}
+
+/// The smallest accepted T_min ([`T_MIN_FLOOR_N`], the smallest normal f64) is accepted by
+/// the estimator (no `TminOutOfRange`), and the next T_min below it is not.
+#[test]
+fn t_min_floor_is_accepted_and_below_it_is_not() {
+    let s = Scene::default_scene();
+    let mut est = Estimator::new(&s).unwrap();
+    let p = Pose::at(s.ee_position_m);
+    let below = f64::from_bits(T_MIN_FLOOR_N.to_bits() - 1);
+    let e = *est.update(&p, below);
+    assert_eq!(e.status, Status::TminOutOfRange, "{below:e} N");
+    let e = *est.update(&p, T_MIN_FLOOR_N);
+    assert_ne!(e.status, Status::TminOutOfRange, "{:?}", e.error);
+    println!("t_min = {T_MIN_FLOOR_N:e} N: {:?}", e.status);
+}
+
+// ---------------------------------------------------------------------------------------
+// Per-cable lower bounds
+// ---------------------------------------------------------------------------------------
+
+/// Per-cable T_min [10, 100, 10, 100, ...] on the spatial robot: every tension is at least
+/// its own cable's bound, the tensions equal the Clarabel reference with the same per-cable
+/// bounds to 1e-9 relative, and f1 is below the answer with 100 N on every cable (the old
+/// collapse to the largest value). Equal per-cable values give the uniform update bit for
+/// bit; a slice of the wrong length or with a zero is `TminOutOfRange`.
+#[test]
+fn per_cable_t_min_is_honoured_and_matches_the_reference() {
+    let s = Scene::default_scene();
+    let n = s.n_cables();
+    let mut bounds = [10.0; MAX_CABLES];
+    for (i, b) in bounds.iter_mut().enumerate().take(n) {
+        if i % 2 == 1 {
+            *b = 100.0;
+        }
+    }
+    let lo = &bounds[..n];
+    let mut est = Estimator::new(&s).unwrap();
+    let mut collapsed = Estimator::new(&s).unwrap();
+    for p in [
+        s.ee_position_m,
+        Vector3::new(0.3, 0.2, 1.0),
+        Vector3::new(-0.4, 0.1, 1.3),
+    ] {
+        let pose = Pose::at(p);
+        let e = *est.update_with_bounds(&pose, lo);
+        assert!(e.is_ok(), "{p:?}: {:?}", e.error);
+        let g = geometry(&s, &p);
+        let w = s.wrench_n();
+        let r =
+            clarabel_reference_bounds(&g, &[w.x, w.y, w.z, 0.0, 0.0, 0.0], lo, &vec![s.t_max_n; n])
+                .unwrap();
+        for i in 0..n {
+            let t = e.tensions()[i];
+            assert!(
+                t >= lo[i],
+                "{p:?}: cable {i} at {t} N below its bound {} N",
+                lo[i]
+            );
+            assert!(
+                rel(t, r[i]) <= 1e-9,
+                "{p:?}: cable {i}: {t} vs Clarabel {}",
+                r[i]
+            );
+        }
+        let old = *collapsed.update(&pose, 100.0);
+        assert!(old.is_ok());
+        assert!(
+            e.f1_hz < old.f1_hz,
+            "{p:?}: per-cable f1 {} Hz not below the collapsed {} Hz",
+            e.f1_hz,
+            old.f1_hz
+        );
+        println!(
+            "{p:?}: per-cable f1 {:.4} Hz (collapsed to 100 N: {:.4} Hz), tensions {:?}",
+            e.f1_hz,
+            old.f1_hz,
+            e.tensions()
+        );
+    }
+    // Equal per-cable values are the uniform update, bit for bit.
+    let mut a = Estimator::new(&s).unwrap();
+    let mut b = Estimator::new(&s).unwrap();
+    for k in 0..50 {
+        let pose = Pose::at(Vector3::new(0.01 * k as f64, 0.0, 1.2));
+        let x = *a.update(&pose, 70.0);
+        let y = *b.update_with_bounds(&pose, &[70.0; MAX_CABLES][..n]);
+        assert_eq!(x.f1_hz.to_bits(), y.f1_hz.to_bits(), "pose {k}");
+        assert_eq!(x.tension_iterations, y.tension_iterations, "pose {k}");
+        for (t, u) in x.tensions().iter().zip(y.tensions()) {
+            assert_eq!(t.to_bits(), u.to_bits(), "pose {k}");
+        }
+    }
+    // Refused like a bad uniform value.
+    let pose = Pose::at(s.ee_position_m);
+    let e = *est.update_with_bounds(&pose, &lo[..n - 1]);
+    assert_eq!(e.status, Status::TminOutOfRange, "wrong length");
+    let mut zero = bounds;
+    zero[2] = 0.0;
+    let e = *est.update_with_bounds(&pose, &zero[..n]);
+    assert_eq!(e.status, Status::TminOutOfRange, "a zero bound");
+    assert_no_numbers("a zero bound", &e);
+}
+
+/// A scene with per-cable bounds (`cables[i].t_min`, `.t_max`): the estimator uses them as
+/// its default bounds, so every tension lies within its own cable's bounds.
+#[test]
+fn scene_per_cable_bounds_are_the_default() {
+    let text = cablevib::scene::DEFAULT_SCENE_TOML;
+    let mut n_seen = 0;
+    let mut out = String::new();
+    for line in text.lines() {
+        out.push_str(line);
+        out.push('\n');
+        if line.trim_start().starts_with("anchor") {
+            if n_seen % 2 == 1 {
+                out.push_str("t_min = 100.0\n");
+            }
+            n_seen += 1;
+        }
+    }
+    let s = Scene::from_toml_str(&out, "per-cable.toml").unwrap();
+    assert!(s.has_per_cable_bounds(), "{out}");
+    let n = s.n_cables();
+    let mut est = Estimator::new(&s).unwrap();
+    let defaults = est.default_t_min_n();
+    let e = *est.update_with_bounds(&Pose::at(s.ee_position_m), &defaults[..n]);
+    assert!(e.is_ok(), "{:?}", e.error);
+    for i in 0..n {
+        let t = e.tensions()[i];
+        assert!(
+            t >= s.cable_t_min_n(i) && t <= s.cable_t_max_n(i),
+            "cable {i}: {t} N"
+        );
+    }
+    assert!((0..n).any(|i| s.cable_t_min_n(i) == 100.0));
 }
 
 // ---------------------------------------------------------------------------------------

@@ -378,22 +378,29 @@ fn estimates_equal_the_library_bit_for_bit() {
     client.wait_for(&mut service);
     let scene = Scene::default_scene();
     let mut reference = Estimator::new(&scene).expect("estimator");
-    let mut t_min_n = scene.t_min_n;
+    let mut t_min_n = [scene.t_min_n; 8];
     let q = IDENTITY_QUATERNION;
     for k in 0..300 {
         if k == 100 {
-            t_min_n = 75.0; // applies to the very next pose
-            client.t_min(TminSetpoint::uniform(0, 0, t_min_n));
+            t_min_n = [75.0; 8]; // applies to the very next pose
+            client.t_min(TminSetpoint::uniform(0, 0, 75.0));
         }
         if k == 200 {
-            // Per-cable values: the estimator takes their largest over the scene's cables.
+            // Per-cable values: each cable gets its own lower bound.
             let per_cable = [61.0, 64.0, 62.0, 70.0, 60.0, 60.0, 60.0, 63.0];
             client.t_min(TminSetpoint::per_cable(0, 0, 10.0, &per_cable).unwrap());
-            t_min_n = 70.0;
+            t_min_n = per_cable;
         }
         let p = circle(5 * k);
         let got = client.estimate(p, q);
-        let want = *reference.update(&pose_at(p, q), t_min_n);
+        let want = *reference.update_with_bounds(&pose_at(p, q), &t_min_n);
+        if k >= 200 {
+            let t = got.tensions();
+            assert!(
+                t.iter().zip(&t_min_n).all(|(t, lo)| t >= lo),
+                "pose {k}: tensions {t:?} below the per-cable bounds {t_min_n:?}"
+            );
+        }
         assert!(want.is_ok(), "pose {k}: {:?}", want.error);
         assert_same(&got, &want, &format!("pose {k}"));
         assert_eq!(got.skipped_poses, 0);
@@ -418,7 +425,8 @@ fn every_bad_input_gets_its_status_and_the_next_pose_is_answered() {
     let inf = f64::INFINITY;
     // (what, position, quaternion, T_min set-point to send first, expected status)
     type Case = (&'static str, [f64; 3], [f64; 4], Option<f64>, StatusCode);
-    let cases: [Case; 11] = [
+    let subnormal = f64::MIN_POSITIVE / 2.0;
+    let cases: [Case; 13] = [
         (
             "NaN position",
             [0.1, nan, 1.0],
@@ -490,6 +498,20 @@ fn every_bad_input_gets_its_status_and_the_next_pose_is_answered() {
             StatusCode::TminOutOfRange,
         ),
         (
+            "T_min 0 (a zeroed set-point)",
+            [0.1, 0.0, 1.0],
+            q,
+            Some(0.0),
+            StatusCode::TminOutOfRange,
+        ),
+        (
+            "T_min subnormal",
+            [0.1, 0.0, 1.0],
+            q,
+            Some(subnormal),
+            StatusCode::TminOutOfRange,
+        ),
+        (
             "infeasible: T_min 100 N at the circle's edge",
             [0.75, 0.0, 1.25],
             q,
@@ -513,7 +535,7 @@ fn every_bad_input_gets_its_status_and_the_next_pose_is_answered() {
         if let Some(v) = set {
             client.t_min(TminSetpoint::uniform(0, 0, v));
             t_min_for_this = v;
-            if v.is_finite() && (0.0..=scene.t_max_n).contains(&v) {
+            if cablevib::scene::is_valid_t_min(v, scene.t_max_n) {
                 t_min_n = v; // a valid set-point stays in force
             }
         }
@@ -548,6 +570,21 @@ fn every_bad_input_gets_its_status_and_the_next_pose_is_answered() {
         );
         service.assert_running();
     }
+    // A per-cable set-point with one value the scene would refuse (0 N, as in a zeroed
+    // message): refused as a whole for one estimate, the previous bounds stay in force.
+    let mut zeroed = TminSetpoint::zeroed();
+    zeroed.per_cable_count = 8;
+    zeroed.per_cable_t_min_n[..8].fill(scene.t_min_n);
+    zeroed.per_cable_t_min_n[3] = 0.0;
+    client.t_min(zeroed);
+    let got = client.estimate(good(99), q);
+    assert_eq!(got.status_code(), Some(StatusCode::TminOutOfRange));
+    valid(
+        &mut client,
+        &mut reference,
+        t_min_n,
+        "valid pose after a per-cable set-point with a zero",
+    );
     // The service counted and logged it all.
     std::thread::sleep(Duration::from_millis(700));
     let log = service.stderr();

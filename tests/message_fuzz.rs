@@ -1,13 +1,13 @@
 //! Garbage messages: random bytes reinterpreted as the #[repr(C)] input messages (every bit
 //! pattern is a valid value of their u32/u64/f64 fields), mapped to the estimator exactly as
 //! the service maps them (`service::server`: pose fields → `Pose`, set-point →
-//! `effective_t_min`, margin request → `is_valid` then `t_min_for_f1`). Each must give a
+//! `setpoint_bounds` then `update_with_bounds`, margin request → `is_valid` then `t_min_for_f1`). Each must give a
 //! status — never a panic, never a NaN in an estimate marked ok — and the next valid pose
 //! must be answered exactly as a fresh estimator answers it.
 use cablevib::estimator::Estimator;
 use cablevib::kinematics::Pose;
 use cablevib::scene::Scene;
-use cablevib::service::server::effective_t_min;
+use cablevib::service::server::setpoint_bounds;
 use cablevib_ipc::{MarginRequest, PoseSample, TminSetpoint};
 use nalgebra::Vector3;
 use proptest::prelude::*;
@@ -94,8 +94,10 @@ proptest! {
             1 => TminSetpoint::uniform(1, 0, tmin_value),
             _ => TminSetpoint::uniform(1, 0, 40.0 + f64::from(tmin[1]) / 4.0),
         };
-        let t_min = effective_t_min(&s, scene.n_cables());
-        let e = *est.update(&pose_of(&p), t_min);
+        let mut t_min = [0.0; cablevib::scene::MAX_CABLES];
+        let n = scene.n_cables();
+        setpoint_bounds(&s, &mut t_min[..n]);
+        let e = *est.update_with_bounds(&pose_of(&p), &t_min[..n]);
         ALL.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         if e.is_ok() {
             OK.fetch_add(1, std::sync::atomic::Ordering::Relaxed);

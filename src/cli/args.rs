@@ -86,13 +86,9 @@ pub fn resolve_scene(a: &SceneArgs) -> Result<Scene, CliError> {
         s.ee_position_m = p;
     }
     if let Some(t) = a.t_min {
-        if !(t.is_finite() && t >= 0.0 && t <= s.t_max_n) {
-            return Err(CliError::Usage(format!(
-                "--t-min {t} N must be finite and within [0, t_max = {} N]",
-                s.t_max_n
-            )));
-        }
-        s.t_min_n = t;
+        // The one T_min rule of scene files and set-points; per-cable values are replaced.
+        s.set_uniform_t_min(t)
+            .map_err(|e| CliError::Usage(format!("--t-min: {e}")))?;
     }
     let element = match &a.element {
         Some(e) => ElementKind::parse(e).ok_or_else(|| {

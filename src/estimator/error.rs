@@ -17,8 +17,9 @@ pub enum InputError {
     /// The orientation quaternion is not of unit norm (within the estimator's tolerance).
     #[error("quaternion is not of unit norm")]
     NonUnitQuaternion,
-    /// T_min is negative, above T_max or not finite.
-    #[error("t_min outside [0, t_max] or not finite")]
+    /// A T_min the scene would refuse: not finite, not > 0 or subnormal, above T_max (see
+    /// [`crate::scene::check_t_min`]), or per-cable bounds of the wrong count.
+    #[error("t_min not finite, ≤ 0, subnormal or above t_max")]
     TminOutOfRange,
     /// The position lies outside the anchors' bounding box (plus the workspace margin).
     #[error("position outside the anchors' frame")]
@@ -175,7 +176,7 @@ mod tests {
         ),
         (
             InputError::TminOutOfRange,
-            "invalid input: t_min outside [0, t_max] or not finite",
+            "invalid input: t_min not finite, ≤ 0, subnormal or above t_max",
         ),
         (
             InputError::OutsideWorkspace,

@@ -5,6 +5,7 @@
 use super::{Estimator, EstimatorError, InputError, TminQueryError};
 use crate::kinematics::Pose;
 use crate::modal::lambda_to_hz;
+use crate::scene::MAX_CABLES;
 
 /// Low end of the full bracket, as a fraction of T_max: positive, so every cable keeps a
 /// tension floor, and so small that an answer there means T_min ≈ 0 suffices.
@@ -55,6 +56,10 @@ impl Estimator {
     /// nearly linear in T_min (f1 ∝ √T_min), bracketed in [10⁻⁶ T_max, T_max] (or the largest
     /// feasible T_min below T_max), at most 80 forward evaluations. Uses its own scratch
     /// solvers: the cycle's warm state is untouched. No allocation.
+    ///
+    /// The query is uniform: the answer is one T_min for every cable (with each cable's
+    /// upper bound from the scene), whatever per-cable lower bounds the cycle was given
+    /// ([`Self::update_with_bounds`]) and whatever per-cable t_min the scene has.
     pub fn t_min_for_f1(
         &mut self,
         pose: &Pose,
@@ -205,9 +210,18 @@ impl Estimator {
     /// f1 (Hz) at the search's pose (geometry already set) for T_min = `t_min_n`.
     fn inverse_f1(&mut self, s: &mut Search<'_>, t_min_n: f64) -> Result<f64, EstimatorError> {
         s.evals += 1;
-        let r = self
-            .inverse
-            .first_root(&self.scene, s.pose, t_min_n, ANY_RANK, s.warm, |_| {})?;
+        // The query is uniform: the same T_min for every cable (per-cable set-points do not
+        // enter it).
+        let uniform = [t_min_n; MAX_CABLES];
+        let n = self.scene.n_cables();
+        let r = self.inverse.first_root(
+            &self.scene,
+            s.pose,
+            &uniform[..n],
+            ANY_RANK,
+            s.warm,
+            |_| {},
+        )?;
         s.warm = Some(r.lambda);
         Ok(lambda_to_hz(r.lambda))
     }

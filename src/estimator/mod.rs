@@ -1,12 +1,13 @@
 //! The per-cycle pipeline and the offline reference pipeline.
 //!
 //! One cycle ([`Estimator::update`]) takes a pose — centroid position p (m) and orientation
-//! quaternion — and one lower tension bound T_min (N, the same for every cable), and computes:
+//! quaternion — and one lower tension bound T_min (N, the same for every cable; per cable
+//! with [`Estimator::update_with_bounds`]), and computes:
 //!
 //! 1. the cable geometry: unit directions s_i and lengths L_i (m) from the anchors to the
 //!    end-effector (to its attachment points for a rigid body);
 //! 2. the tension distribution T (N): minimise ½‖T‖² subject to A T = w (w = m g, N, when
-//!    the cables carry the weight) and T_min ≤ T_i ≤ T_max, with the active-set solver
+//!    the cables carry the weight) and T_min,i ≤ T_i ≤ T_max,i, with the active-set solver
 //!    warm-started from the last cycle;
 //! 3. the cable models at those tensions (stiffness N/m, mass kg; the scene's element);
 //! 4. the first natural frequency f1 = √λ₁ / 2π (Hz, λ in rad²/s²) by the structured
@@ -45,7 +46,7 @@ pub use reference::{
 use crate::cable::{up_frame, CableModel};
 use crate::kinematics::Pose;
 use crate::modal::{lambda_to_hz, ModalParams, ModalSolver};
-use crate::scene::{ElementKind, Scene, MAX_CABLES};
+use crate::scene::{is_valid_t_min, ElementKind, Scene, MAX_CABLES};
 use crate::tension::TensionInfo;
 use nalgebra::{Matrix3, Matrix6, Vector3};
 use pipeline::{wrench6, Pipeline};
@@ -66,7 +67,12 @@ pub struct Estimator {
     last_ok_position: Option<Vector3<f64>>,
     last_lambda1: f64,
     prev_lambda1: f64,
-    last_t_min_n: f64,
+    /// The lower bounds (N) of the last ok cycle, one per cable (the warm-start test).
+    last_t_min_n: [f64; MAX_CABLES],
+    /// The lower bounds (N) of the current cycle, one per cable.
+    t_min_n: [f64; MAX_CABLES],
+    /// Each cable's upper bound (N), from the scene.
+    t_max_n: [f64; MAX_CABLES],
     estimate: Estimate,
     /// Scratch solvers of the inverse query (so it leaves the cycle's warm state alone).
     inverse: Pipeline,
@@ -95,16 +101,18 @@ impl Estimator {
         let mut est = Estimator {
             scene: scene.clone(),
             params,
-            cycle: Pipeline::new(n, frame, params.tension, params.modal),
+            cycle: Pipeline::new(scene, frame, params.tension, params.modal),
             expected_rank: 0,
             bounds: scene.frame_bounds_m(),
             last_ok_position: None,
             last_lambda1: f64::NAN,
             prev_lambda1: f64::NAN,
-            last_t_min_n: f64::NAN,
+            last_t_min_n: [f64::NAN; MAX_CABLES],
+            t_min_n: pipeline::cable_t_min_n(scene),
+            t_max_n: pipeline::cable_t_max_n(scene),
             estimate: Estimate::empty(n),
             inverse: Pipeline::new(
-                n,
+                scene,
                 frame,
                 params.tension,
                 ModalParams {
@@ -127,7 +135,12 @@ impl Estimator {
         c.set_pose(scene, &pose)
             .map_err(|e| default_pose(e.into()))?;
         c.tension
-            .solve_wrench(&c.geometry, &wrench6(scene), scene.t_min_n, scene.t_max_n)
+            .solve_wrench_bounds(
+                &c.geometry,
+                &wrench6(scene),
+                &est.t_min_n[..n],
+                &est.t_max_n[..n],
+            )
             .map_err(|e| default_pose(e.into()))?;
         est.expected_rank = c.tension.info().rank;
         c.tension.reset_warm_start();
@@ -182,14 +195,47 @@ impl Estimator {
     }
 
     /// One cycle: pose and T_min (N, the same for every cable) → estimate.
+    ///
+    /// A T_min the scene would refuse ([`crate::scene::check_t_min`] against each cable's
+    /// T_max: not finite, not > 0, subnormal, above T_max) gives the status
+    /// `TminOutOfRange` and no numbers.
     pub fn update(&mut self, pose: &Pose, t_min_n: f64) -> &Estimate {
         let n = self.scene.n_cables();
+        self.t_min_n[..n].fill(t_min_n);
+        self.update_loaded(pose)
+    }
+
+    /// One cycle with a lower bound per cable: `t_min_n[i]` (N) for cable i, one value per
+    /// cable of the scene. With every value equal this is [`Self::update`], bit for bit.
+    /// Every value must pass [`crate::scene::check_t_min`] against its cable's T_max, and
+    /// the slice must have one value per cable; otherwise the status is `TminOutOfRange`.
+    /// No allocation.
+    pub fn update_with_bounds(&mut self, pose: &Pose, t_min_n: &[f64]) -> &Estimate {
+        let n = self.scene.n_cables();
+        if t_min_n.len() == n {
+            self.t_min_n[..n].copy_from_slice(t_min_n);
+        } else {
+            // A wrong length is refused like an out-of-range value (NaN fails the rule).
+            self.t_min_n[..n].fill(f64::NAN);
+        }
+        self.update_loaded(pose)
+    }
+
+    /// The scene's default lower bounds (N), one per cable: `cables[i].t_min`, else its
+    /// `tension.t_min`.
+    pub fn default_t_min_n(&self) -> [f64; MAX_CABLES] {
+        pipeline::cable_t_min_n(&self.scene)
+    }
+
+    /// One cycle with the lower bounds already in `self.t_min_n`.
+    fn update_loaded(&mut self, pose: &Pose) -> &Estimate {
+        let n = self.scene.n_cables();
         let mut e = Estimate::empty(n);
-        match self.run(pose, t_min_n, &mut e) {
+        match self.run(pose, &mut e) {
             Ok(()) => {
                 e.status = Status::Ok;
                 self.last_ok_position = Some(pose.position_m);
-                self.last_t_min_n = t_min_n;
+                self.last_t_min_n = self.t_min_n;
             }
             Err(err) => {
                 e.status = err.status();
@@ -210,14 +256,16 @@ impl Estimator {
     }
 
     /// Reject a pose or T_min before any computation.
-    fn check_input(&self, pose: &Pose, t_min_n: f64) -> Result<(), InputError> {
+    fn check_input(&self, pose: &Pose) -> Result<(), InputError> {
         if !pose.is_finite() {
             return Err(InputError::NonFinitePose);
         }
         if !pose.has_unit_quaternion(self.params.quaternion_tol) {
             return Err(InputError::NonUnitQuaternion);
         }
-        if !(t_min_n.is_finite() && t_min_n >= 0.0 && t_min_n <= self.scene.t_max_n) {
+        let n = self.scene.n_cables();
+        let bounds = self.t_min_n[..n].iter().zip(&self.t_max_n[..n]);
+        if !bounds.into_iter().all(|(&lo, &hi)| is_valid_t_min(lo, hi)) {
             return Err(InputError::TminOutOfRange);
         }
         let m = self.params.workspace_margin_m;
@@ -247,17 +295,21 @@ impl Estimator {
         }
     }
 
-    fn run(&mut self, pose: &Pose, t_min_n: f64, e: &mut Estimate) -> Result<(), EstimatorError> {
+    /// Whether the cycle's lower bounds are close enough to the last ok cycle's for a warm
+    /// start: each within `warm_t_min_change` (relative) of its last value.
+    fn t_min_close_to_last(&self) -> bool {
         let n = self.scene.n_cables();
-        self.check_input(pose, t_min_n)?;
+        let k = self.params.warm_t_min_change;
+        (0..n).all(|i| (self.t_min_n[i] - self.last_t_min_n[i]).abs() <= k * self.last_t_min_n[i])
+    }
+
+    fn run(&mut self, pose: &Pose, e: &mut Estimate) -> Result<(), EstimatorError> {
+        let n = self.scene.n_cables();
+        self.check_input(pose)?;
         let p = pose.position_m;
         self.cycle.set_pose(&self.scene, pose)?;
         let warm = match self.last_ok_position {
-            Some(q) => {
-                (q - p).norm() <= self.params.warm_jump_m
-                    && (t_min_n - self.last_t_min_n).abs()
-                        <= self.params.warm_t_min_change * self.last_t_min_n
-            }
+            Some(q) => (q - p).norm() <= self.params.warm_jump_m && self.t_min_close_to_last(),
             None => false,
         };
         if !warm {
@@ -268,7 +320,7 @@ impl Estimator {
         let root = self.cycle.first_root(
             &self.scene,
             pose,
-            t_min_n,
+            &self.t_min_n[..n],
             self.expected_rank,
             warm_l,
             |tension| {

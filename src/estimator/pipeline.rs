@@ -11,7 +11,7 @@ use super::EstimatorError;
 use crate::cable::{CableError, CableModel};
 use crate::kinematics::{Geometry, KinematicsError, Pose};
 use crate::modal::{self, ModalParams, ModalSolver, Root};
-use crate::scene::{ElementKind, Scene};
+use crate::scene::{ElementKind, Scene, MAX_CABLES};
 use crate::tension::{TensionParams, TensionSolver};
 use nalgebra::{Matrix3, Vector3};
 
@@ -30,18 +30,22 @@ pub(super) struct Pipeline {
     frame: Matrix3<f64>,
     /// `modal`'s evaluation counter when it was last loaded.
     loaded_at: u32,
+    /// Each cable's upper tension bound, N (the scene's, fixed).
+    t_max_n: [f64; MAX_CABLES],
 }
 
 impl Pipeline {
-    /// Buffers for `n` cables with the scene's up frame (allocates: set-up only).
+    /// Buffers for the cables of `scene` with its up frame (allocates: set-up only).
     pub(super) fn new(
-        n: usize,
+        scene: &Scene,
         frame: Matrix3<f64>,
         tension: TensionParams,
         modal: ModalParams,
     ) -> Pipeline {
+        let n = scene.n_cables();
         Pipeline {
             frame,
+            t_max_n: cable_t_max_n(scene),
             geometry: Geometry::new(n),
             tension: TensionSolver::new(n, tension),
             models: vec![placeholder_model(); n],
@@ -55,8 +59,8 @@ impl Pipeline {
         update_geometry(scene, &mut self.geometry, pose)
     }
 
-    /// At the pose of the last [`Self::set_pose`]: solve the tensions for T_min =
-    /// `t_min_n`, show the solver to `on_tensions` (also when the solve failed: an
+    /// At the pose of the last [`Self::set_pose`]: solve the tensions for the per-cable
+    /// lower bounds `t_min_n` (N, one per cable) and the scene's upper bounds, show the solver to `on_tensions` (also when the solve failed: an
     /// infeasible solve still has its closest tensions), reject a structure matrix of rank
     /// below `min_rank` (0 accepts any), build the cable models, load the modal solver and
     /// find the first root, warm-started from `warm` (λ, rad²/s²). A `Modal` error comes
@@ -66,14 +70,15 @@ impl Pipeline {
         &mut self,
         scene: &Scene,
         pose: &Pose,
-        t_min_n: f64,
+        t_min_n: &[f64],
         min_rank: u32,
         warm: Option<f64>,
         on_tensions: impl FnOnce(&TensionSolver),
     ) -> Result<Root, EstimatorError> {
+        let n = scene.n_cables();
         let res = self
             .tension
-            .solve_wrench(&self.geometry, &wrench6(scene), t_min_n, scene.t_max_n)
+            .solve_wrench_bounds(&self.geometry, &wrench6(scene), t_min_n, &self.t_max_n[..n])
             .map(|_| ());
         on_tensions(&self.tension);
         res?;
@@ -122,6 +127,24 @@ pub(super) fn update_geometry(
     } else {
         g.update(scene.cables.iter().map(|c| &c.anchor_m), &pose.position_m)
     }
+}
+
+/// Each cable's upper tension bound of `scene`, N (entries past its cables unused).
+pub(super) fn cable_t_max_n(scene: &Scene) -> [f64; MAX_CABLES] {
+    let mut t = [scene.t_max_n; MAX_CABLES];
+    for (i, v) in t.iter_mut().enumerate().take(scene.n_cables()) {
+        *v = scene.cable_t_max_n(i);
+    }
+    t
+}
+
+/// Each cable's default lower tension bound of `scene`, N (entries past its cables unused).
+pub(super) fn cable_t_min_n(scene: &Scene) -> [f64; MAX_CABLES] {
+    let mut t = [scene.t_min_n; MAX_CABLES];
+    for (i, v) in t.iter_mut().enumerate().take(scene.n_cables()) {
+        *v = scene.cable_t_min_n(i);
+    }
+    t
 }
 
 /// The wrench the cables carry as (force N, moment N·m).

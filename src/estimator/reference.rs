@@ -66,7 +66,15 @@ pub fn reference_analysis_at(
     let mut g = Geometry::new(scene.n_cables());
     let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
     update_geometry(scene, &mut g, pose)?;
-    let t = crate::tension::clarabel_reference_wrench(&g, &wrench6(scene), t_min_n, scene.t_max_n)?;
+    // Uniform T_min (N) for every cable; each cable's own T_max from the scene.
+    let n = scene.n_cables();
+    let t_max_n = super::pipeline::cable_t_max_n(scene);
+    let t = crate::tension::clarabel_reference_bounds(
+        &g,
+        &wrench6(scene),
+        &vec![t_min_n; n],
+        &t_max_n[..n],
+    )?;
     let models = build_models(scene, &g, &t)?;
     let mut ee = Matrix6::zeros();
     ee.fixed_view_mut::<3, 3>(0, 0)

@@ -18,11 +18,14 @@ use nalgebra::Vector3;
 use serde::Deserialize;
 use std::path::Path;
 
+mod bounds;
 use crate::input_file::{InputError, MAX_SCENE_BYTES};
 
 mod load;
 mod parse;
 mod validate;
+
+pub use bounds::{check_t_min, is_valid_t_min, TminRangeError, T_MIN_FLOOR_N};
 
 /// The embedded default scene: the paper's spatial robot (Tables 5-6).
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../../scenes/spatial_paper.toml");
@@ -129,6 +132,12 @@ pub struct Cable {
     pub mass_per_length_kg_m: f64,
     /// Attachment point on the end-effector in its body frame, m (zero for a point mass).
     pub attachment_m: Vector3<f64>,
+    /// This cable's own lower tension bound, N (`cables[i].t_min`); None: the scene's
+    /// [`Scene::t_min_n`]. See [`Scene::cable_t_min_n`].
+    pub t_min_n: Option<f64>,
+    /// This cable's own upper tension bound, N (`cables[i].t_max`); None: the scene's
+    /// [`Scene::t_max_n`]. See [`Scene::cable_t_max_n`].
+    pub t_max_n: Option<f64>,
 }
 
 impl Cable {
@@ -170,9 +179,11 @@ pub struct Scene {
     pub weight_carried: bool,
     /// Cables in order.
     pub cables: Vec<Cable>,
-    /// Lower tension bound, N.
+    /// Lower tension bound, N: the default of every cable without its own
+    /// ([`Cable::t_min_n`]).
     pub t_min_n: f64,
-    /// Upper tension bound, N.
+    /// Upper tension bound, N: the default of every cable without its own
+    /// ([`Cable::t_max_n`]).
     pub t_max_n: f64,
     /// Cable model.
     pub model: ModelSettings,
@@ -212,6 +223,41 @@ impl Scene {
     /// Number of cables.
     pub fn n_cables(&self) -> usize {
         self.cables.len()
+    }
+
+    /// Lower tension bound of cable `i`, N: its own, else the scene's.
+    pub fn cable_t_min_n(&self, i: usize) -> f64 {
+        self.cables[i].t_min_n.unwrap_or(self.t_min_n)
+    }
+
+    /// Upper tension bound of cable `i`, N: its own, else the scene's.
+    pub fn cable_t_max_n(&self, i: usize) -> f64 {
+        self.cables[i].t_max_n.unwrap_or(self.t_max_n)
+    }
+
+    /// Whether some cable has bounds of its own (`cables[i].t_min` or `.t_max`).
+    pub fn has_per_cable_bounds(&self) -> bool {
+        self.cables
+            .iter()
+            .any(|c| c.t_min_n.is_some() || c.t_max_n.is_some())
+    }
+
+    /// Checks a uniform T_min (N, every cable) against every cable's upper bound by the
+    /// crate's one rule ([`check_t_min`]); the check of a command-line override.
+    pub fn check_uniform_t_min(&self, t_min_n: f64) -> Result<(), TminRangeError> {
+        check_t_min(t_min_n, self.t_max_n)?;
+        (0..self.n_cables()).try_for_each(|i| check_t_min(t_min_n, self.cable_t_max_n(i)))
+    }
+
+    /// Sets T_min (N) for every cable, per-cable values included, after
+    /// [`Self::check_uniform_t_min`]; unchanged on error.
+    pub fn set_uniform_t_min(&mut self, t_min_n: f64) -> Result<(), TminRangeError> {
+        self.check_uniform_t_min(t_min_n)?;
+        self.t_min_n = t_min_n;
+        for c in &mut self.cables {
+            c.t_min_n = None;
+        }
+        Ok(())
     }
 
     /// Weight per length γ = μ|g| of cable `i`, N/m (drives the catenary sag).

@@ -99,6 +99,8 @@ pub(super) struct RawCable {
     pub(super) area: Option<f64>,
     pub(super) weight_per_length: Option<f64>,
     pub(super) mass_per_length: Option<f64>,
+    pub(super) t_min: Option<f64>,
+    pub(super) t_max: Option<f64>,
 }
 
 impl Scene {

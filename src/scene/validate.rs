@@ -3,6 +3,7 @@
 //! end-effector, tension bounds, model, effects, inertia, orientation, rigid-body cable
 //! count, geometric stiffness, cable count, then each cable in turn.
 
+use super::bounds::{check_t_min, TminRangeError};
 use super::parse::{
     RawArray, RawCable, RawCableDefaults, RawEffects, RawEndEffector, RawModel, RawScene,
     RawTension,
@@ -143,6 +144,8 @@ pub(super) fn scene_from_raw(raw: RawScene, file: &str) -> Result<Scene, SceneEr
         ee_position: [ee_pos.x, ee_pos.y, ee_pos.z],
         rigid,
         g,
+        t_min_n: t_min,
+        t_max_n: t_max,
     };
     let mut cables = Vec::with_capacity(raw.cables.len());
     for (i, c) in raw.cables.iter().enumerate() {
@@ -199,24 +202,29 @@ fn validate_end_effector(
     Ok((ee_mass, ee_pos))
 }
 
-/// `[tension]`: 0 < t_min ≤ t_max, both finite (N).
+/// `[tension]`: t_min and t_max (N) by [`check_bound_pair`].
 fn validate_tension_bounds(ck: &Checker, raw: &RawTension) -> Result<(f64, f64), SceneError> {
-    let t_min = raw.t_min;
-    let t_max = raw.t_max;
-    if !(t_min.is_finite() && t_min > 0.0) {
-        return Err(ck.inv(
-            "tension.t_min",
-            format!("must be finite and > 0 N, got {t_min}"),
-        ));
+    check_bound_pair(ck, "tension.t_min", "tension.t_max", raw.t_min, raw.t_max)?;
+    Ok((raw.t_min, raw.t_max))
+}
+
+/// A pair of tension bounds (N): t_max finite and > 0, t_min by the crate's one T_min rule
+/// ([`check_t_min`]: finite, > 0 and not subnormal, ≤ t_max). Errors name `min_key` or
+/// `max_key`.
+fn check_bound_pair(
+    ck: &Checker,
+    min_key: &str,
+    max_key: &str,
+    t_min_n: f64,
+    t_max_n: f64,
+) -> Result<(), SceneError> {
+    if let Err(e @ (TminRangeError::NotFinite { .. } | TminRangeError::BelowFloor { .. })) =
+        check_t_min(t_min_n, f64::MAX)
+    {
+        return Err(ck.inv(min_key, e.to_string()));
     }
-    ck.positive("tension.t_max", t_max)?;
-    if t_min > t_max {
-        return Err(ck.inv(
-            "tension.t_min",
-            format!("t_min = {t_min} N exceeds t_max = {t_max} N"),
-        ));
-    }
-    Ok((t_min, t_max))
+    ck.positive(max_key, t_max_n)?;
+    check_t_min(t_min_n, t_max_n).map_err(|e| ck.inv(min_key, e.to_string()))
 }
 
 /// `[model]`: element count, f1 tolerance and participation threshold in range; returns
@@ -407,6 +415,10 @@ struct CableContext {
     rigid: bool,
     /// |g|, m/s² (weight per length → mass per length).
     g: f64,
+    /// `tension.t_min`, N: the lower bound of a cable without its own.
+    t_min_n: f64,
+    /// `tension.t_max`, N: the upper bound of a cable without its own.
+    t_max_n: f64,
 }
 
 /// `cables[i]`: anchor, attachment and material.
@@ -438,13 +450,42 @@ fn validate_cable(
     let a = pick(c.area, d.area, "area")?;
     let mu = validate_mass_per_length(ck, i, c, d, at.g)?;
     validate_axial_rigidity(ck, i, e * a)?;
+    validate_cable_bounds(ck, at, i, c)?;
     Ok(Cable {
         anchor_m: anchor,
         youngs_modulus_pa: e,
         area_m2: a,
         mass_per_length_kg_m: mu,
         attachment_m: attachment,
+        t_min_n: c.t_min,
+        t_max_n: c.t_max,
     })
+}
+
+/// `cables[i].t_min`, `cables[i].t_max` (N, optional): with the scene's bounds for the one
+/// not given, a pair by [`check_bound_pair`]; t_min above t_max names the key the cable gave.
+fn validate_cable_bounds(
+    ck: &Checker,
+    at: &CableContext,
+    i: usize,
+    c: &RawCable,
+) -> Result<(), SceneError> {
+    if c.t_min.is_none() && c.t_max.is_none() {
+        return Ok(());
+    }
+    let max_key = cable_key(i, "t_max");
+    let min_key = if c.t_min.is_some() {
+        cable_key(i, "t_min")
+    } else {
+        max_key.clone()
+    };
+    check_bound_pair(
+        ck,
+        &min_key,
+        &max_key,
+        c.t_min.unwrap_or(at.t_min_n),
+        c.t_max.unwrap_or(at.t_max_n),
+    )
 }
 
 /// `cables[i].attachment`: finite; non-zero only on a rigid end-effector.
@@ -569,6 +610,71 @@ mod tests {
         assert!(e.contains("rotation"), "{e}");
         let e = with("rotation = true").unwrap_err().to_string();
         assert!(e.contains("end_effector.inertia"), "{e}");
+    }
+
+    /// The first cable's `[[cables]]` table of the default scene with `extra` lines added.
+    fn with_first_cable(extra: &str) -> String {
+        let base = DEFAULT_SCENE_TOML;
+        let anchor = "anchor = [1.25, 1.25, 2.5]";
+        assert!(base.contains(anchor));
+        base.replacen(anchor, &format!("{anchor}\n{extra}"), 1)
+    }
+
+    #[test]
+    fn per_cable_bounds_parse_and_default_to_the_scene() {
+        let s = Scene::from_toml_str(&with_first_cable("t_min = 80.0\nt_max = 300.0"), "t.toml")
+            .unwrap();
+        assert_eq!((s.cable_t_min_n(0), s.cable_t_max_n(0)), (80.0, 300.0));
+        assert_eq!((s.cable_t_min_n(1), s.cable_t_max_n(1)), (60.0, 350.0));
+        assert!(s.has_per_cable_bounds());
+        let only_max = Scene::from_toml_str(&with_first_cable("t_max = 200.0"), "t.toml").unwrap();
+        assert_eq!(
+            (only_max.cable_t_min_n(0), only_max.cable_t_max_n(0)),
+            (60.0, 200.0)
+        );
+        assert!(!Scene::default_scene().has_per_cable_bounds());
+    }
+
+    #[test]
+    fn bad_per_cable_bounds_are_refused_naming_file_and_key() {
+        let subnormal = format!("{:e}", f64::MIN_POSITIVE / 2.0);
+        for (extra, key, what) in [
+            ("t_min = 0.0", "cables[0].t_min", "> 0"),
+            ("t_min = -1.0", "cables[0].t_min", "> 0"),
+            (
+                &format!("t_min = {subnormal}")[..],
+                "cables[0].t_min",
+                "subnormal",
+            ),
+            ("t_min = nan", "cables[0].t_min", "finite"),
+            ("t_min = inf", "cables[0].t_min", "finite"),
+            ("t_max = 0.0", "cables[0].t_max", "> 0"),
+            ("t_max = nan", "cables[0].t_max", "finite"),
+            ("t_min = 200.0\nt_max = 100.0", "cables[0].t_min", "exceeds"),
+            ("t_min = 400.0", "cables[0].t_min", "exceeds"),
+            ("t_max = 50.0", "cables[0].t_max", "exceeds"),
+            ("t_min = \"big\"", "t_min", "invalid type"),
+        ] {
+            let e = err(&with_first_cable(extra));
+            assert!(
+                e.contains("t.toml") && e.contains(key) && e.contains(what),
+                "{extra}: {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn scene_t_min_obeys_the_one_rule() {
+        let base = DEFAULT_SCENE_TOML;
+        for bad in ["0.0", "-0.0", "2e-310"] {
+            let e = err(&base.replace("t_min = 60.0", &format!("t_min = {bad}")));
+            assert!(
+                e.contains("t.toml") && e.contains("tension.t_min"),
+                "{bad}: {e}"
+            );
+        }
+        let floor = format!("t_min = {:e}", f64::MIN_POSITIVE);
+        assert!(Scene::from_toml_str(&base.replace("t_min = 60.0", &floor), "t.toml").is_ok());
     }
 
     #[test]

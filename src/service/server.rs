@@ -24,12 +24,15 @@
 //!
 //! A set-point received in one iteration applies to the next pose estimated; a set-point sent
 //! before a pose (from the same thread) always applies to that pose, since the poses are
-//! drained before the set-points. The estimator
-//! takes one T_min for every cable: a per-cable set-point is applied as the largest of its
-//! values over the scene's cables (conservative: every cable gets at least its own minimum). A
-//! set-point that is negative, above the scene's T_max or not finite is reported once, as the
-//! status [`StatusCode::TminOutOfRange`] of the next estimate, and the previous set-point stays
-//! in force.
+//! drained before the set-points. A per-cable set-point gives each cable its own lower bound
+//! (cables past its per-cable values take its uniform value; [`setpoint_bounds`]), passed to
+//! [`Estimator::update_with_bounds`]. Before any set-point the scene's bounds are in force
+//! (`cables[i].t_min`, else `tension.t_min`). A set-point with a value the scene file would
+//! refuse (the one rule of [`crate::scene::check_t_min`]: not finite, zero, negative,
+//! subnormal, above that cable's T_max — `TminSetpoint::zeroed()` is one) is reported once,
+//! as the status [`StatusCode::TminOutOfRange`] of the next estimate, and the previous
+//! set-point stays in force for the estimates after it. The inverse T_min query of the margin
+//! service stays uniform (one T_min for every cable).
 
 use core::sync::atomic::{AtomicBool, Ordering};
 use core::time::Duration;
@@ -47,7 +50,7 @@ use super::stats::{Percentiles, Ring, StatusHistogram};
 use super::{ServiceError, WaitMode};
 use crate::estimator::Estimator;
 use crate::kinematics::Pose;
-use crate::scene::Scene;
+use crate::scene::{is_valid_t_min, Scene};
 
 /// Heap allocation counter (the binary's global allocator), or a function returning 0.
 pub type AllocCounter = fn() -> u64;
@@ -245,6 +248,7 @@ struct PeriodCounters {
     t_min: u64,
     ipc_errors: u64,
     status: StatusHistogram,
+    /// The first refused value of the last refused set-point of the period, N.
     rejected_t_min: Option<f64>,
     allocations: u64,
     /// Allocations iceoryx2 0.10 makes by design: one per loan (estimate, margin response) and
@@ -254,15 +258,20 @@ struct PeriodCounters {
 
 /// The service: estimator, ports and bookkeeping. Built once; [`Server::poll`] is the cycle.
 pub struct Server {
-    scene_t_max_n: f64,
     n_cables: usize,
     estimator: Estimator,
     ports: ServicePorts,
     allocations: AllocCounter,
-    t_min_n: f64,
+    /// Each cable's upper bound, N (the scene's).
+    t_max_n: [f64; MAX_CABLES],
+    /// The lower bounds in force, N, one per cable.
+    t_min_n: [f64; MAX_CABLES],
+    /// The lower bounds of the current cycle, N (the ones in force, or a refused set-point's
+    /// for the one estimate that reports it).
+    cycle_t_min_n: [f64; MAX_CABLES],
     /// The last inverse answer (required f1 Hz, T_min N): the next request's warm start.
     last_inverse: Option<(f64, f64)>,
-    pending_t_min: Option<f64>,
+    pending_t_min: Option<TminSetpoint>,
     latest: Option<Latest>,
     period: PeriodCounters,
     total: PeriodCounters,
@@ -283,13 +292,20 @@ impl Server {
             tracing::info!("{choice}");
         }
         let ports = ServicePorts::open(node, names)?;
+        let n_cables = scene.n_cables().min(MAX_CABLES);
+        let mut t_max_n = [scene.t_max_n; MAX_CABLES];
+        for (i, t) in t_max_n.iter_mut().enumerate().take(n_cables) {
+            *t = scene.cable_t_max_n(i);
+        }
+        let t_min_n = estimator.default_t_min_n();
         Ok(Server {
-            scene_t_max_n: scene.t_max_n,
-            n_cables: scene.n_cables().min(MAX_CABLES),
+            n_cables,
             estimator,
             ports,
             allocations,
-            t_min_n: scene.t_min_n,
+            t_max_n,
+            t_min_n,
+            cycle_t_min_n: t_min_n,
             last_inverse: None,
             pending_t_min: None,
             latest: None,
@@ -300,9 +316,19 @@ impl Server {
         })
     }
 
-    /// The T_min in force, N.
-    pub fn t_min_n(&self) -> f64 {
-        self.t_min_n
+    /// The lower bounds in force, N, one per cable.
+    pub fn t_min_n(&self) -> &[f64] {
+        &self.t_min_n[..self.n_cables]
+    }
+
+    /// The smallest and largest upper bound, N (for the log).
+    fn t_max_range_n(&self) -> (f64, f64) {
+        min_max(&self.t_max_n[..self.n_cables])
+    }
+
+    /// The smallest and largest lower bound in force, N (for the log).
+    fn t_min_range_n(&self) -> (f64, f64) {
+        min_max(self.t_min_n())
     }
 
     /// One iteration: newest pose, set-points, estimate + publish, margin requests. Returns
@@ -355,7 +381,7 @@ impl Server {
         for _ in 0..DRAIN_LIMIT {
             match self.ports.t_min.receive() {
                 Ok(Some(s)) => {
-                    self.pending_t_min = Some(effective_t_min(&s, self.n_cables));
+                    self.pending_t_min = Some(*s);
                     self.period.t_min += 1;
                     any = true;
                 }
@@ -369,31 +395,33 @@ impl Server {
         any
     }
 
-    /// The T_min for this cycle: the pending set-point if valid (it stays in force), the
-    /// rejected value itself for this one cycle if not (the estimator reports
-    /// `TminOutOfRange`), otherwise the one in force.
-    fn t_min_for_cycle(&mut self) -> f64 {
-        match self.pending_t_min.take() {
-            Some(v) if v.is_finite() && v >= 0.0 && v <= self.scene_t_max_n => {
-                self.t_min_n = v;
-                v
-            }
-            Some(v) => {
-                self.period.rejected_t_min = Some(v);
-                v
-            }
-            None => self.t_min_n,
+    /// Loads `cycle_t_min_n` with this cycle's lower bounds: the pending set-point's if valid
+    /// (they stay in force), the refused values themselves for this one cycle if not (the
+    /// estimator, by the same rule, reports `TminOutOfRange`), otherwise the ones in force.
+    fn t_min_for_cycle(&mut self) {
+        let n = self.n_cables;
+        let Some(s) = self.pending_t_min.take() else {
+            self.cycle_t_min_n = self.t_min_n;
+            return;
+        };
+        setpoint_bounds(&s, &mut self.cycle_t_min_n[..n]);
+        match first_refused(&self.cycle_t_min_n[..n], &self.t_max_n[..n]) {
+            None => self.t_min_n = self.cycle_t_min_n,
+            Some(v) => self.period.rejected_t_min = Some(v),
         }
     }
 
     fn cycle(&mut self, p: &PoseSample, receive_ns: u64) {
-        let t_min = self.t_min_for_cycle();
+        self.t_min_for_cycle();
+        let n_cables = self.n_cables;
         let pose = Pose {
             position_m: Vector3::new(p.position_m[0], p.position_m[1], p.position_m[2]),
             orientation_wxyz: p.orientation_wxyz,
         };
         let t0 = monotonic_now_ns();
-        let e = *self.estimator.update(&pose, t_min);
+        let e = *self
+            .estimator
+            .update_with_bounds(&pose, &self.cycle_t_min_n[..n_cables]);
         let compute_ns = monotonic_now_ns().saturating_sub(t0);
 
         let n = e.n_cables.min(MAX_CABLES);
@@ -464,7 +492,7 @@ impl Server {
                 Some(l) if l.status.is_ok() && req.is_valid() => {
                     let hint = match self.last_inverse {
                         Some((f, t)) if f == req.required_f1_hz && t.is_finite() => t,
-                        _ => self.t_min_n,
+                        _ => self.t_min_range_n().1,
                     };
                     let t = self
                         .estimator
@@ -492,6 +520,7 @@ impl Server {
     /// Logs the period's statistics (if `log`) and starts a new period.
     fn end_period(&mut self, period_s: f64, log: bool) {
         let p = self.period;
+        let in_force = display_range(self.t_min_range_n());
         if log {
             let compute = self.period_ring.percentiles();
             let per_cycle = |x: u64| {
@@ -516,7 +545,7 @@ impl Server {
                 p.invalid,
                 status_breakdown(&p.status),
                 p.t_min,
-                self.t_min_n,
+                in_force,
                 p.margin,
                 per_cycle(p.allocations),
                 per_cycle(p.iceoryx2_allocations),
@@ -528,10 +557,10 @@ impl Server {
             );
             if let Some(v) = p.rejected_t_min {
                 tracing::warn!(
-                    "rejected a T_min set-point of {v} N (must be finite and in [0, {}] N); \
-                     {} N stays in force",
-                    self.scene_t_max_n,
-                    self.t_min_n
+                    "rejected a T_min set-point with a value of {v} N (each must be finite, \
+                     ≥ {:e} N and ≤ its cable's t_max, ≤ {} N); {in_force} N stays in force",
+                    crate::scene::T_MIN_FLOOR_N,
+                    display_range(self.t_max_range_n())
                 );
             }
         }
@@ -580,19 +609,46 @@ impl Server {
     }
 }
 
-/// The single T_min (N) the estimator gets for set-point `s`: the uniform value, or for a
-/// per-cable set-point the largest value over the first `n_cables` cables (NaN when malformed,
-/// so that the estimator reports `TminOutOfRange`).
-pub fn effective_t_min(s: &TminSetpoint, n_cables: usize) -> f64 {
-    if s.per_cable_count == 0 {
-        return s.t_min_n;
+/// The lower bounds (N) of set-point `s` for the cables of `out`, one per cable: its
+/// per-cable value, its uniform value past those; every entry NaN when the set-point is
+/// malformed (more per-cable values than [`MAX_CABLES`]), so that it is refused. Does not
+/// check the values (see [`first_refused`]). No allocation.
+pub fn setpoint_bounds(s: &TminSetpoint, out: &mut [f64]) {
+    if s.per_cable_count as usize > MAX_CABLES {
+        out.fill(f64::NAN);
+        return;
     }
-    if !s.is_well_formed() {
-        return f64::NAN;
+    for (i, t) in out.iter_mut().enumerate() {
+        *t = s.t_min_for(i);
     }
-    (0..n_cables)
-        .map(|i| s.t_min_for(i))
-        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// The first lower bound (N) of `t_min_n` that the crate's one T_min rule refuses
+/// ([`crate::scene::check_t_min`] against the same cable's `t_max_n`, N), None when every
+/// one is valid.
+pub fn first_refused(t_min_n: &[f64], t_max_n: &[f64]) -> Option<f64> {
+    t_min_n
+        .iter()
+        .zip(t_max_n)
+        .find(|(&lo, &hi)| !is_valid_t_min(lo, hi))
+        .map(|(&lo, _)| lo)
+}
+
+/// (smallest, largest) of `v`.
+fn min_max(v: &[f64]) -> (f64, f64) {
+    v.iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| {
+            (lo.min(t), hi.max(t))
+        })
+}
+
+/// `"60"` for equal ends, `"10..100"` otherwise.
+fn display_range((lo, hi): (f64, f64)) -> String {
+    if lo == hi {
+        format!("{lo}")
+    } else {
+        format!("{lo}..{hi}")
+    }
 }
 
 /// The answer to margin request `req` given the latest estimate: `InvalidRequest` for a
@@ -709,21 +765,41 @@ mod tests {
     use cablevib_ipc::MarginRequest;
 
     #[test]
-    fn per_cable_t_min_uses_the_largest_value() {
+    fn per_cable_set_points_give_each_cable_its_bound() {
         let s = TminSetpoint::per_cable(1, 0, 50.0, &[10.0, 70.0, 20.0]).unwrap();
-        assert_eq!(effective_t_min(&s, 8), 70.0);
-        assert_eq!(effective_t_min(&s, 1), 10.0);
-        let s = TminSetpoint::per_cable(1, 0, 90.0, &[10.0]).unwrap();
+        let mut out = [0.0; 5];
+        setpoint_bounds(&s, &mut out);
         assert_eq!(
-            effective_t_min(&s, 8),
-            90.0,
+            out,
+            [10.0, 70.0, 20.0, 50.0, 50.0],
             "cables without a value use t_min_n"
         );
-        let mut bad = TminSetpoint::per_cable(1, 0, 50.0, &[10.0, -1.0]).unwrap();
-        assert!(effective_t_min(&bad, 8).is_nan());
+        let mut bad = s;
         bad.per_cable_count = 99;
-        assert!(effective_t_min(&bad, 8).is_nan());
-        assert_eq!(effective_t_min(&TminSetpoint::uniform(1, 0, -3.0), 8), -3.0);
+        setpoint_bounds(&bad, &mut out);
+        assert!(out.iter().all(|t| t.is_nan()));
+    }
+
+    #[test]
+    fn set_points_the_scene_would_refuse_are_refused() {
+        let t_max = [350.0; 3];
+        assert_eq!(first_refused(&[10.0, 70.0, 20.0], &t_max), None);
+        let subnormal = f64::MIN_POSITIVE / 4.0;
+        for bad in [0.0, -0.0, subnormal, -3.0, f64::NAN, f64::INFINITY, 351.0] {
+            let r = first_refused(&[10.0, bad, 20.0], &t_max);
+            assert!(
+                r.is_some_and(|v| v.to_bits() == bad.to_bits()),
+                "{bad}: {r:?}"
+            );
+        }
+        assert_eq!(
+            first_refused(&[200.0], &[100.0]),
+            Some(200.0),
+            "per-cable t_max"
+        );
+        let mut out = [1.0; 8];
+        setpoint_bounds(&TminSetpoint::zeroed(), &mut out);
+        assert_eq!(first_refused(&out, &[350.0; 8]), Some(0.0));
     }
 
     #[test]

@@ -55,8 +55,10 @@ pub struct TensionSolver {
     rows: [usize; M],
     n_rows: usize,
     w: [f64; M],
-    lo: f64,
-    hi: f64,
+    /// Per-cable lower bounds T_min,i (N) of the current solve.
+    lo: [f64; MAX_CABLES],
+    /// Per-cable upper bounds T_max,i (N) of the current solve.
+    hi: [f64; MAX_CABLES],
     t: [f64; MAX_CABLES],
     bound: [Bound; MAX_CABLES],
     have_warm: bool,
@@ -86,8 +88,8 @@ impl TensionSolver {
             rows: [0; M],
             n_rows: 0,
             w: [0.0; M],
-            lo: 0.0,
-            hi: 0.0,
+            lo: [0.0; MAX_CABLES],
+            hi: [0.0; MAX_CABLES],
             t: [0.0; MAX_CABLES],
             bound: [Bound::Free; MAX_CABLES],
             have_warm: false,
@@ -132,7 +134,8 @@ impl TensionSolver {
         self.solve_wrench(g, &w, t_min_n, t_max_n)
     }
 
-    /// Solve for geometry `g`, wrench `w` = (force N, moment N·m) and bounds (N).
+    /// Solve for geometry `g`, wrench `w` = (force N, moment N·m) and bounds
+    /// [t_min_n, t_max_n] (N), the same for every cable.
     pub fn solve_wrench(
         &mut self,
         g: &Geometry,
@@ -140,11 +143,62 @@ impl TensionSolver {
         t_min_n: f64,
         t_max_n: f64,
     ) -> Result<&[f64], TensionError> {
-        let n = self.n;
-        if !(t_min_n.is_finite() && t_max_n.is_finite() && t_min_n >= 0.0 && t_min_n <= t_max_n) {
+        if !bounds_are_valid(t_min_n, t_max_n) {
             self.have_warm = false;
             return Err(TensionError::InvalidBounds { t_min_n, t_max_n });
         }
+        self.lo[..self.n].fill(t_min_n);
+        self.hi[..self.n].fill(t_max_n);
+        self.solve_loaded(g, w_n)
+    }
+
+    /// Solve for geometry `g`, wrench `w` = (force N, moment N·m) and per-cable bounds
+    /// t_min_n[i] ≤ T_i ≤ t_max_n[i] (N; one value per cable). With every lower bound equal
+    /// and every upper bound equal this is [`Self::solve_wrench`], bit for bit. No
+    /// allocation. A slice of the wrong length or a bound pair that is not finite,
+    /// 0 ≤ t_min ≤ t_max is [`TensionError::InvalidBounds`] (with the first bad pair).
+    pub fn solve_wrench_bounds(
+        &mut self,
+        g: &Geometry,
+        w_n: &[f64; 6],
+        t_min_n: &[f64],
+        t_max_n: &[f64],
+    ) -> Result<&[f64], TensionError> {
+        let n = self.n;
+        if let Some(e) = invalid_bounds(n, t_min_n, t_max_n) {
+            self.have_warm = false;
+            return Err(e);
+        }
+        self.lo[..n].copy_from_slice(t_min_n);
+        self.hi[..n].copy_from_slice(t_max_n);
+        self.solve_loaded(g, w_n)
+    }
+
+    /// The lower bounds (N) of the last solve, one per cable.
+    pub fn lower_bounds_n(&self) -> &[f64] {
+        &self.lo[..self.n]
+    }
+
+    /// Largest upper bound of the current solve, N: the scale of the tolerances.
+    fn hi_max(&self) -> f64 {
+        self.hi[..self.n]
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// Smallest lower bound of the current solve, N (reported in errors).
+    fn lo_min(&self) -> f64 {
+        self.lo[..self.n]
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The solve with the bounds already in `lo`, `hi` (checked).
+    fn solve_loaded(&mut self, g: &Geometry, w_n: &[f64; 6]) -> Result<&[f64], TensionError> {
+        let n = self.n;
+        let t_max_n = self.hi_max();
         if !w_n.iter().all(|x| x.is_finite())
             || g.unit
                 .iter()
@@ -158,8 +212,6 @@ impl TensionSolver {
             self.have_warm = false;
             return Err(TensionError::NonFinite);
         }
-        self.lo = t_min_n;
-        self.hi = t_max_n;
         self.info = TensionInfo::default();
         let (dependent, scale) = self.setup_rows(g, w_n);
         self.info.rank = self.n_rows as u32;
@@ -190,8 +242,8 @@ impl TensionSolver {
         }
         // The answer is exact to rounding; values within the tolerance of a bound are that
         // bound (T_min = 1e-9 N must not come back as −0.0).
-        for t in self.t.iter_mut().take(n) {
-            *t = t.clamp(self.lo, self.hi);
+        for (i, t) in self.t.iter_mut().enumerate().take(n) {
+            *t = t.clamp(self.lo[i], self.hi[i]);
         }
         // Dependent rows (w must be consistent with them).
         let aw = g.wrench_of(&self.t[..n]);
@@ -255,32 +307,33 @@ impl TensionSolver {
     }
 
     /// Exact solution for a given bound pattern (the KKT system of that active set), if it
-    /// is optimal within `tol` (N): the polish step of [`super::clarabel_reference`].
+    /// is optimal within `tol` (N): the polish step of [`super::clarabel_reference`]. The
+    /// bounds (N) are per cable, of length n.
     pub(super) fn polish(
         &mut self,
         g: &Geometry,
         w_n: &[f64; 6],
-        t_min_n: f64,
-        t_max_n: f64,
+        t_min_n: &[f64],
+        t_max_n: &[f64],
         pattern: &[Bound],
     ) -> Option<Vec<f64>> {
-        self.lo = t_min_n;
-        self.hi = t_max_n;
+        let n = self.n;
+        self.lo[..n].copy_from_slice(t_min_n);
+        self.hi[..n].copy_from_slice(t_max_n);
         self.setup_rows(g, w_n);
-        self.bound[..self.n].copy_from_slice(pattern);
-        let tol = REFERENCE_POLISH_TOL_REL * t_max_n.max(1.0);
+        self.bound[..n].copy_from_slice(pattern);
+        let tol = REFERENCE_POLISH_TOL_REL * self.hi_max().max(1.0);
         if self.kkt_solve() && self.kkt_is_optimal(tol) {
             return Some(
-                self.t[..self.n]
-                    .iter()
-                    .map(|t| t.clamp(t_min_n, t_max_n))
+                (0..n)
+                    .map(|i| self.t[i].clamp(self.lo[i], self.hi[i]))
                     .collect(),
             );
         }
         // Every cable at T_min: the tensions are fixed; optimal (multipliers ν = 0) when
         // they produce the wrench.
         if pattern.iter().all(|b| *b == Bound::Lower) {
-            let t = vec![t_min_n; self.n];
+            let t = t_min_n.to_vec();
             let f = g.wrench_of(&t);
             let m = g.moment_of(&t);
             let res = (0..3)
@@ -304,8 +357,8 @@ impl TensionSolver {
         for i in 0..n {
             let fixed = match self.bound[i] {
                 Bound::Free => None,
-                Bound::Lower => Some(self.lo),
-                Bound::Upper => Some(self.hi),
+                Bound::Lower => Some(self.lo[i]),
+                Bound::Upper => Some(self.hi[i]),
             };
             match fixed {
                 Some(v) => {
@@ -330,8 +383,8 @@ impl TensionSolver {
             let atnu: f64 = (0..k).map(|r| self.a[r][i] * nu[r]).sum();
             self.t[i] = match self.bound[i] {
                 Bound::Free => atnu,
-                Bound::Lower => self.lo,
-                Bound::Upper => self.hi,
+                Bound::Lower => self.lo[i],
+                Bound::Upper => self.hi[i],
             };
             // Store multipliers: reuse u[i] = (Aᵀν)_i.
             self.u[i] = atnu;
@@ -344,9 +397,9 @@ impl TensionSolver {
         (0..self.n).all(|i| {
             let atnu = self.u[i];
             match self.bound[i] {
-                Bound::Free => self.t[i] >= self.lo - tol && self.t[i] <= self.hi + tol,
-                Bound::Lower => self.lo - atnu >= -tol,
-                Bound::Upper => atnu - self.hi >= -tol,
+                Bound::Free => self.t[i] >= self.lo[i] - tol && self.t[i] <= self.hi[i] + tol,
+                Bound::Lower => self.lo[i] - atnu >= -tol,
+                Bound::Upper => atnu - self.hi[i] >= -tol,
             }
         }) && self.t[..self.n].iter().all(|x| x.is_finite())
     }
@@ -367,9 +420,9 @@ impl TensionSolver {
         if id < M {
             self.w[id]
         } else if id < M + self.n {
-            self.lo
+            self.lo[id - M]
         } else {
-            -self.hi
+            -self.hi[id - M - self.n]
         }
     }
 
@@ -496,8 +549,8 @@ impl TensionSolver {
         let mut p = usize::MAX;
         let mut worst = -tol;
         for i in 0..n {
-            let lo_v = x[i] - self.lo;
-            let hi_v = self.hi - x[i];
+            let lo_v = x[i] - self.lo[i];
+            let hi_v = self.hi[i] - x[i];
             let is_active = |id: usize| self.active[k..self.n_active].contains(&id);
             if lo_v < worst && !is_active(M + i) {
                 worst = lo_v;
@@ -560,8 +613,8 @@ impl TensionSolver {
                     residual_n: [0.0; 6],
                     at_upper_mask: 0,
                     at_lower_mask: 0,
-                    t_min_n: self.lo,
-                    t_max_n: self.hi,
+                    t_min_n: self.lo_min(),
+                    t_max_n: self.hi_max(),
                 });
             }
             let t = t1.min(t2);
@@ -612,18 +665,19 @@ impl TensionSolver {
         }
     }
 
-    /// [`Self::closest_solution`] of a fresh solver for `n` cables and bounds
-    /// [t_min_n, t_max_n] (N): the infeasibility report of [`super::clarabel_reference`].
+    /// [`Self::closest_solution`] of a fresh solver for `n` cables and per-cable bounds
+    /// t_min_n[i] ≤ T_i ≤ t_max_n[i] (N): the infeasibility report of
+    /// [`super::clarabel_reference`].
     pub(super) fn closest_for(
         n: usize,
         g: &Geometry,
         w_n: &[f64; 6],
-        t_min_n: f64,
-        t_max_n: f64,
+        t_min_n: &[f64],
+        t_max_n: &[f64],
     ) -> TensionError {
         let mut s = TensionSolver::new(n, TensionParams::default());
-        s.lo = t_min_n;
-        s.hi = t_max_n;
+        s.lo[..n].copy_from_slice(t_min_n);
+        s.hi[..n].copy_from_slice(t_max_n);
         s.closest_solution(g, w_n)
     }
 
@@ -632,6 +686,7 @@ impl TensionSolver {
     fn closest_solution(&mut self, g: &Geometry, w_n: &[f64; 6]) -> TensionError {
         let n = self.n;
         let (lo, hi) = (self.lo, self.hi);
+        let (lo_min, hi_max) = (self.lo_min(), self.hi_max());
         // Lipschitz constant of the gradient: ‖A‖² ≤ trace(AᵀA) = Σ (1 + ‖r_i × s_i‖²).
         let rho = CLOSEST_REGULARISATION;
         let lip = (0..n)
@@ -641,8 +696,8 @@ impl TensionSolver {
         let wf = Vector3::new(w_n[0], w_n[1], w_n[2]);
         let wm = Vector3::new(w_n[3], w_n[4], w_n[5]);
         let mut x = [0.0; MAX_CABLES];
-        for v in x.iter_mut().take(n) {
-            *v = 0.5 * (lo + hi);
+        for (i, v) in x.iter_mut().enumerate().take(n) {
+            *v = 0.5 * (lo[i] + hi[i]);
         }
         let mut yv = x;
         let mut tk = 1.0f64;
@@ -652,7 +707,7 @@ impl TensionSolver {
             let mut xn = [0.0; MAX_CABLES];
             for i in 0..n {
                 let grad = g.unit[i].dot(&r) + g.arm_m[i].cross(&g.unit[i]).dot(&rm) + rho * yv[i];
-                xn[i] = (yv[i] - grad / lip).clamp(lo, hi);
+                xn[i] = (yv[i] - grad / lip).clamp(lo[i], hi[i]);
             }
             let tn = 0.5 * (1.0 + (1.0 + 4.0 * tk * tk).sqrt());
             for i in 0..n {
@@ -671,14 +726,14 @@ impl TensionSolver {
                 worst = c;
             }
         }
-        let eps = CLOSEST_AT_BOUND_REL * (hi - lo).max(1.0);
         let mut up = 0u32;
         let mut dn = 0u32;
         for (i, &xi) in x.iter().enumerate().take(n) {
-            if xi >= hi - eps {
+            let eps = CLOSEST_AT_BOUND_REL * (hi[i] - lo[i]).max(1.0);
+            if xi >= hi[i] - eps {
                 up |= 1 << i;
                 self.bound[i] = Bound::Upper;
-            } else if xi <= lo + eps {
+            } else if xi <= lo[i] + eps {
                 dn |= 1 << i;
                 self.bound[i] = Bound::Lower;
             } else {
@@ -690,10 +745,31 @@ impl TensionSolver {
             residual_n: r,
             at_upper_mask: up,
             at_lower_mask: dn,
-            t_min_n: lo,
-            t_max_n: hi,
+            t_min_n: lo_min,
+            t_max_n: hi_max,
         }
     }
+}
+
+/// One bound pair (N) a box QP accepts: both finite, 0 ≤ t_min ≤ t_max.
+pub(super) fn bounds_are_valid(t_min_n: f64, t_max_n: f64) -> bool {
+    t_min_n.is_finite() && t_max_n.is_finite() && t_min_n >= 0.0 && t_min_n <= t_max_n
+}
+
+/// The error for per-cable bounds (N) that are not `n` valid pairs (the first bad pair, or
+/// NaN for a wrong length), None when they are.
+pub(super) fn invalid_bounds(n: usize, t_min_n: &[f64], t_max_n: &[f64]) -> Option<TensionError> {
+    if t_min_n.len() != n || t_max_n.len() != n {
+        return Some(TensionError::InvalidBounds {
+            t_min_n: f64::NAN,
+            t_max_n: f64::NAN,
+        });
+    }
+    t_min_n
+        .iter()
+        .zip(t_max_n)
+        .find(|(&lo, &hi)| !bounds_are_valid(lo, hi))
+        .map(|(&t_min_n, &t_max_n)| TensionError::InvalidBounds { t_min_n, t_max_n })
 }
 
 fn dot(a: &[f64; MAX_CABLES], b: &[f64; MAX_CABLES], n: usize) -> f64 {

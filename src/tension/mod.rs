@@ -1,8 +1,12 @@
 //! Tension distribution: the QP of paper Eqs. 9-11 with C = I, c = 0,
 //!
 //! ```text
-//!     minimise ½‖T‖²   subject to   A T = w,   T_min ≤ T_i ≤ T_max,
+//!     minimise ½‖T‖²   subject to   A T = w,   T_min,i ≤ T_i ≤ T_max,i,
 //! ```
+//!
+//! The bounds are per cable ([`TensionSolver::solve_wrench_bounds`],
+//! [`clarabel_reference_bounds`]); [`TensionSolver::solve_wrench`] is the common case of one
+//! T_min and one T_max for every cable.
 //!
 //! with A the structure matrix of [`crate::kinematics`] (3 × n force rows; 6 × n with the
 //! moment rows of a rigid end-effector), w the wrench (N, N·m) and T the tensions (N).
@@ -38,7 +42,7 @@ pub use active_set::TensionSolver;
 pub use error::TensionError;
 pub use info::{Bound, TensionInfo};
 pub use params::TensionParams;
-pub use reference::{clarabel_reference, clarabel_reference_wrench};
+pub use reference::{clarabel_reference, clarabel_reference_bounds, clarabel_reference_wrench};
 
 /// Largest number of equality rows: force (3) and moment (3).
 const M: usize = 6;
@@ -81,6 +85,72 @@ mod tests {
         let t = ts.solve(&g, &s.wrench_n(), 20.0, 250.0).unwrap().to_vec();
         assert!(t.iter().all(|x| (x - 20.0).abs() < 1e-12), "{t:?}");
         assert_eq!(ts.info().rank, 2);
+    }
+
+    /// Per-cable lower bounds: every tension at or above its own cable's bound, equal to the
+    /// Clarabel reference with the same bounds to 1e-9 relative, at poses where the raised
+    /// bounds are active; equal per-cable values give the uniform solve bit for bit.
+    #[test]
+    fn per_cable_lower_bounds_match_the_reference() {
+        let s = Scene::default_scene();
+        let n = s.n_cables();
+        let lo: Vec<f64> = (0..n)
+            .map(|i| if i % 2 == 1 { 100.0 } else { 10.0 })
+            .collect();
+        let hi = vec![s.t_max_n; n];
+        let w = s.wrench_n();
+        let w6 = [w.x, w.y, w.z, 0.0, 0.0, 0.0];
+        let mut ts = TensionSolver::new(n, TensionParams::default());
+        let mut active_raised = 0;
+        for p in [
+            s.ee_position_m,
+            Vector3::new(0.3, 0.2, 1.0),
+            Vector3::new(-0.5, 0.4, 1.4),
+            Vector3::new(0.6, -0.6, 0.8),
+        ] {
+            let g = geom(&s, p);
+            let t = ts.solve_wrench_bounds(&g, &w6, &lo, &hi).unwrap().to_vec();
+            let r = clarabel_reference_bounds(&g, &w6, &lo, &hi).unwrap();
+            for i in 0..n {
+                assert!(t[i] >= lo[i], "{p:?}: cable {i} {} < {}", t[i], lo[i]);
+                assert!(
+                    (t[i] - r[i]).abs() <= 1e-9 * r[i],
+                    "{p:?}: cable {i}: {} vs Clarabel {}",
+                    t[i],
+                    r[i]
+                );
+                active_raised += (lo[i] == 100.0 && t[i] == 100.0) as usize;
+            }
+            assert_eq!(ts.lower_bounds_n(), &lo[..]);
+            let mut uniform = TensionSolver::new(n, TensionParams::default());
+            let u = uniform
+                .solve_wrench(&g, &w6, 60.0, s.t_max_n)
+                .unwrap()
+                .to_vec();
+            let mut same = TensionSolver::new(n, TensionParams::default());
+            let v = same
+                .solve_wrench_bounds(&g, &w6, &vec![60.0; n], &hi)
+                .unwrap()
+                .to_vec();
+            let bits = |x: &[f64]| x.iter().map(|t| t.to_bits()).collect::<Vec<_>>();
+            assert_eq!(
+                bits(&u),
+                bits(&v),
+                "{p:?}: uniform slices are the uniform solve"
+            );
+        }
+        assert!(active_raised > 0, "the raised bounds were never active");
+        let g = geom(&s, s.ee_position_m);
+        assert!(matches!(
+            ts.solve_wrench_bounds(&g, &w6, &lo[..n - 1], &hi),
+            Err(TensionError::InvalidBounds { .. })
+        ));
+        let mut bad = lo.clone();
+        bad[3] = 400.0;
+        assert!(matches!(
+            ts.solve_wrench_bounds(&g, &w6, &bad, &hi),
+            Err(TensionError::InvalidBounds { t_min_n, .. }) if t_min_n == 400.0
+        ));
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! The reference solver: Clarabel's interior-point method with tight tolerances, built
 //! fresh per call, its answer polished by the active-set solver's KKT solve.
 
+use super::active_set::{bounds_are_valid, invalid_bounds};
 use super::{Bound, TensionError, TensionParams, TensionSolver};
 use crate::kinematics::Geometry;
 use clarabel::algebra::CscMatrix;
@@ -53,10 +54,26 @@ pub fn clarabel_reference_wrench(
     t_min_n: f64,
     t_max_n: f64,
 ) -> Result<Vec<f64>, TensionError> {
-    let n = g.n();
-    if !(t_min_n.is_finite() && t_max_n.is_finite() && t_min_n >= 0.0 && t_min_n <= t_max_n) {
+    if !bounds_are_valid(t_min_n, t_max_n) {
         return Err(TensionError::InvalidBounds { t_min_n, t_max_n });
     }
+    let n = g.n();
+    clarabel_reference_bounds(g, w_n, &vec![t_min_n; n], &vec![t_max_n; n])
+}
+
+/// [`clarabel_reference_wrench`] with per-cable bounds t_min_n[i] ≤ T_i ≤ t_max_n[i] (N, one
+/// value per cable): the reference of [`TensionSolver::solve_wrench_bounds`].
+pub fn clarabel_reference_bounds(
+    g: &Geometry,
+    w_n: &[f64; 6],
+    t_min_n: &[f64],
+    t_max_n: &[f64],
+) -> Result<Vec<f64>, TensionError> {
+    let n = g.n();
+    if let Some(e) = invalid_bounds(n, t_min_n, t_max_n) {
+        return Err(e);
+    }
+    let t_max_scale = t_max_n.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     if !w_n.iter().all(|x| x.is_finite()) {
         return Err(TensionError::NonFinite);
     }
@@ -89,8 +106,8 @@ pub fn clarabel_reference_wrench(
     let mut last = (SolverStatus::Unsolved, 0u32);
     for (scale, settings) in [
         (1.0, strict.clone()),
-        (t_max_n.max(SCALE_FLOOR), strict),
-        (t_max_n.max(SCALE_FLOOR), loose),
+        (t_max_scale.max(SCALE_FLOOR), strict),
+        (t_max_scale.max(SCALE_FLOOR), loose),
     ] {
         let problem = Problem {
             g,
@@ -123,8 +140,10 @@ struct Problem<'a> {
     g: &'a Geometry,
     w_n: &'a [f64; 6],
     rows: &'a [usize],
-    t_min_n: f64,
-    t_max_n: f64,
+    /// Per-cable lower bounds, N.
+    t_min_n: &'a [f64],
+    /// Per-cable upper bounds, N.
+    t_max_n: &'a [f64],
     scale: f64,
 }
 
@@ -146,9 +165,9 @@ impl Problem<'_> {
         }
         for i in 0..n {
             dense[m_eq + i][i] = 1.0; // x_i + s = t_max / scale
-            b[m_eq + i] = t_max_n / scale;
+            b[m_eq + i] = t_max_n[i] / scale;
             dense[m_eq + n + i][i] = -1.0; // −x_i + s = −t_min / scale
-            b[m_eq + n + i] = -t_min_n / scale;
+            b[m_eq + n + i] = -t_min_n[i] / scale;
         }
         let a = CscMatrix::from(&dense);
         let p = CscMatrix::identity(n);
@@ -166,17 +185,20 @@ impl Problem<'_> {
         let n = g.n();
         let x: Vec<f64> = x
             .iter()
-            .map(|x| (x * scale).clamp(t_min_n, t_max_n))
+            .enumerate()
+            .map(|(i, x)| (x * scale).clamp(t_min_n[i], t_max_n[i]))
             .collect();
+        let t_max_scale = t_max_n.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let mut s = TensionSolver::new(n, TensionParams::default());
         for rel in BOUND_DETECTION_REL {
-            let delta = rel * t_max_n.max(1.0);
+            let delta = rel * t_max_scale.max(1.0);
             let pattern: Vec<Bound> = x
                 .iter()
-                .map(|&t| {
-                    if t <= t_min_n + delta {
+                .enumerate()
+                .map(|(i, &t)| {
+                    if t <= t_min_n[i] + delta {
                         Bound::Lower
-                    } else if t >= t_max_n - delta {
+                    } else if t >= t_max_n[i] - delta {
                         Bound::Upper
                     } else {
                         Bound::Free
