@@ -11,14 +11,25 @@
 //! controller publishes the pose at the start of its cycle and takes the estimate (or the
 //! margin) before it commands the next set-point; the latency measured here, pose timestamp →
 //! estimate received, is what that costs. Ctrl-C stops early.
+//!
+//! An outage of the service (no estimate for `--outage-ms`) prints one line when it starts and
+//! one when the estimates resume, with its duration; the summary counts the outages, the
+//! longest and their total time ([`GapDetector`]).
 
 use std::time::{Duration, Instant};
 
 use cablevib::service::ports::{create_node, EstimateOutput, MarginClient};
-use cablevib::service::stats::{SampleLog, StatusHistogram};
+use cablevib::service::stats::{GapDetector, GapEvent, SampleLog, StatusHistogram};
 use cablevib::service::WaitMode;
 use cablevib_ipc::{monotonic_now_ns, status_str, MarginRequest, ServiceNames};
 use clap::Parser;
+
+/// Default outage threshold, ms: 100 expected periods at the replay's 1 kHz, far above the
+/// scheduling jitter of a loaded machine (a few ms), short enough that a controller notices a
+/// dead service long before a human would.
+const DEFAULT_OUTAGE_MS: f64 = 100.0;
+/// Longest block waiting for an estimate: how late at most an outage's start is noticed.
+const WAIT_SLICE: Duration = Duration::from_millis(10);
 
 /// Take estimates and margins from a cablevib service.
 #[derive(Debug, Parser)]
@@ -39,6 +50,9 @@ struct Args {
     /// Only take the estimates; do not query the margin.
     #[arg(long)]
     no_margin: bool,
+    /// An outage is this long without an estimate, ms.
+    #[arg(long, default_value_t = DEFAULT_OUTAGE_MS)]
+    outage_ms: f64,
 }
 
 fn main() -> anyhow::Result<()> {
@@ -46,6 +60,10 @@ fn main() -> anyhow::Result<()> {
     anyhow::ensure!(
         a.seconds.is_finite() && a.seconds > 0.0,
         "--seconds must be finite and > 0"
+    );
+    anyhow::ensure!(
+        a.outage_ms.is_finite() && a.outage_ms > 0.0,
+        "--outage-ms must be finite and > 0"
     );
     let names = ServiceNames::new(&a.instance);
     let node = create_node("cablevib-controller")?;
@@ -64,14 +82,30 @@ fn main() -> anyhow::Result<()> {
     let mut worst_margin = f64::INFINITY;
     let (mut stale, mut last_sequence, mut unanswered) = (0u64, 0u64, 0u64);
     let mut request_sequence = 0u64;
+    let mut outages = GapDetector::new((a.outage_ms * 1e6) as u64);
     let start = Instant::now();
     let mut next_print = 1.0;
     // `node.wait(0)` does not sleep; it returns an error after SIGINT/SIGTERM.
     while node.wait(Duration::ZERO).is_ok() && start.elapsed().as_secs_f64() < a.seconds {
-        let Some(e) = estimates.wait(a.wait, Duration::from_millis(100))? else {
+        let Some(e) = estimates.wait(a.wait, WAIT_SLICE)? else {
+            if let Some(GapEvent::Started { silent_ns }) = outages.poll(monotonic_now_ns()) {
+                println!(
+                    "controller: t = {:.3} s  no estimate for {:.1} ms: service outage",
+                    start.elapsed().as_secs_f64(),
+                    silent_ns as f64 * 1e-6
+                );
+            }
             continue;
         };
-        latency.push(monotonic_now_ns().saturating_sub(e.pose_timestamp_ns));
+        let now_ns = monotonic_now_ns();
+        if let Some(GapEvent::Ended { duration_ns }) = outages.on_message(now_ns) {
+            println!(
+                "controller: t = {:.3} s  estimates resumed after {:.1} ms without one",
+                start.elapsed().as_secs_f64(),
+                duration_ns as f64 * 1e-6
+            );
+        }
+        latency.push(now_ns.saturating_sub(e.pose_timestamp_ns));
         if e.pose_sequence <= last_sequence {
             stale += 1; // the replay restarted, or an old estimate
         }
@@ -112,7 +146,15 @@ fn main() -> anyhow::Result<()> {
         }
     }
 
+    outages.finish(monotonic_now_ns());
     println!("controller: {} estimates", latency.len());
+    println!(
+        "  outages (no estimate for {} ms or more): {}, longest {:.1} ms, total {:.1} ms",
+        a.outage_ms,
+        outages.outages(),
+        outages.longest_ns() as f64 * 1e-6,
+        outages.total_ns() as f64 * 1e-6
+    );
     if f1_min.is_finite() {
         println!("  f1: {f1_min:.4} … {f1_max:.4} Hz");
     }

@@ -375,11 +375,12 @@ fn summary(
     };
     println!("summary");
     println!(
-        "  service: {} poses published, {} estimated ({} skipped as stale), estimator compute \
-         {}",
+        "  service: {} poses published, {} estimated ({} skipped as stale, {} overwritten in \
+         the queue before the service drained them), estimator compute {}",
         sent,
         service.cycles,
         service.skipped_poses,
+        service.overwritten_poses,
         service.compute.display_us()
     );
     let ok: Vec<&Seen> = log

@@ -3,7 +3,9 @@
 //! One iteration ([`Server::poll`]):
 //!
 //! 1. drain the pose subscriber, keeping the newest pose (the older ones are *skipped* and
-//!    counted);
+//!    counted); poses that never reached the service because the subscriber queue
+//!    ([`POSE_BUFFER`]) overflowed between two drains are *overwritten*, counted from the gaps
+//!    in each publisher's pose sequence ([`SequenceGaps`]);
 //! 2. drain the T_min subscriber; the newest set-point becomes *pending*;
 //! 3. if a pose came, apply the pending set-point and estimate the pose, then publish the
 //!    estimate and notify the wake-controller event;
@@ -41,12 +43,13 @@ use cablevib_ipc::{
     monotonic_now_ns, EstimateSample, MarginResponse, PoseSample, ServiceNames, StatusCode,
     TminSetpoint, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_RESPONSE, MAX_CABLES,
 };
+use iceoryx2::identifiers::UniquePublisherId;
 use iceoryx2::prelude::*;
 use nalgebra::Vector3;
 
-use super::ports::{self, Ipc, ServicePorts, POSE_BUFFER};
+use super::ports::{self, Ipc, ServicePorts, MAX_PUBLISHERS, POSE_BUFFER};
 use super::rt;
-use super::stats::{Percentiles, Ring, StatusHistogram};
+use super::stats::{Percentiles, Ring, SequenceGaps, StatusHistogram};
 use super::{ServiceError, WaitMode};
 use crate::estimator::Estimator;
 use crate::kinematics::Pose;
@@ -105,8 +108,8 @@ fn log_start(scene: &Scene, cfg: &ServerConfig) {
 /// The log line at the end of a run.
 fn log_stop(reason: StopReason, report: &ServerReport) {
     tracing::info!(
-        "stopped ({}): {} cycles, compute {}, skipped poses {}, invalid inputs {}, margin \
-         requests {}, heap allocations per cycle {:.2} (iceoryx2's per loan and per request: \
+        "stopped ({}): {} cycles, compute {}, skipped poses {}, overwritten poses {}, invalid \
+         inputs {}, margin requests {}, heap allocations per cycle {:.2} (iceoryx2's per loan and per request: \
          {:.2})",
         match reason {
             StopReason::Signal => "signal",
@@ -116,6 +119,7 @@ fn log_stop(reason: StopReason, report: &ServerReport) {
         report.cycles,
         report.compute.display_us(),
         report.skipped_poses,
+        report.overwritten_poses,
         report.invalid_inputs,
         report.margin_requests,
         report.allocations_per_cycle,
@@ -198,6 +202,11 @@ pub struct ServerReport {
     pub cycles: u64,
     /// Poses received but not estimated because a newer one was queued.
     pub skipped_poses: u64,
+    /// Poses never received: overwritten in the subscriber queue ([`POSE_BUFFER`], safe
+    /// overflow) before a drain, counted from the gaps in each publisher's pose sequence.
+    /// Every pose a connected publisher sent after its first received one is estimated,
+    /// skipped or overwritten: `cycles + skipped_poses + overwritten_poses` = poses sent.
+    pub overwritten_poses: u64,
     /// Estimates whose status was not ok.
     pub invalid_inputs: u64,
     /// Estimates per status code (index = wire value; the last slot collects unknown codes).
@@ -243,6 +252,8 @@ struct Latest {
 struct PeriodCounters {
     cycles: u64,
     skipped: u64,
+    /// Poses lost in the subscriber queue (sequence gaps).
+    overwritten: u64,
     invalid: u64,
     margin: u64,
     t_min: u64,
@@ -273,6 +284,9 @@ pub struct Server {
     last_inverse: Option<(f64, f64)>,
     pending_t_min: Option<TminSetpoint>,
     latest: Option<Latest>,
+    /// Last pose sequence per publisher, for the poses overwritten in the queue. One slot per
+    /// publisher the pose service admits.
+    pose_gaps: SequenceGaps<UniquePublisherId, MAX_PUBLISHERS>,
     period: PeriodCounters,
     total: PeriodCounters,
     period_ring: Ring,
@@ -309,6 +323,7 @@ impl Server {
             last_inverse: None,
             pending_t_min: None,
             latest: None,
+            pose_gaps: SequenceGaps::default(),
             period: PeriodCounters::default(),
             total: PeriodCounters::default(),
             period_ring: Ring::new(PERIOD_RING),
@@ -345,6 +360,8 @@ impl Server {
         while received < DRAIN_LIMIT as u64 {
             match self.ports.pose.receive() {
                 Ok(Some(s)) => {
+                    self.period.overwritten +=
+                        self.pose_gaps.record(s.header().publisher_id(), s.sequence);
                     newest = Some(*s);
                     received += 1;
                 }
@@ -532,7 +549,7 @@ impl Server {
             };
             tracing::info!(
                 "{} cycles in {:.1} s; compute p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs; \
-                 skipped poses {} (total {}); invalid inputs {}{}; T_min set-points {}, in force \
+                 skipped poses {} (total {}); overwritten poses {} (total {}); invalid inputs {}{}; T_min set-points {}, in force \
                  {} N; margin requests {}; heap allocations per cycle {:.2} (iceoryx2's per loan \
                  and per request: {:.2}){}",
                 p.cycles,
@@ -542,6 +559,8 @@ impl Server {
                 compute.max_ns as f64 / 1e3,
                 p.skipped,
                 self.total.skipped + p.skipped,
+                p.overwritten,
+                self.total.overwritten + p.overwritten,
                 p.invalid,
                 status_breakdown(&p.status),
                 p.t_min,
@@ -567,6 +586,7 @@ impl Server {
         let t = &mut self.total;
         t.cycles += p.cycles;
         t.skipped += p.skipped;
+        t.overwritten += p.overwritten;
         t.invalid += p.invalid;
         t.margin += p.margin;
         t.t_min += p.t_min;
@@ -596,6 +616,7 @@ impl Server {
             stop,
             cycles: t.cycles,
             skipped_poses: t.skipped,
+            overwritten_poses: t.overwritten,
             invalid_inputs: t.invalid,
             status_counts: t.status,
             t_min_setpoints: t.t_min,

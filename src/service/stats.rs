@@ -267,6 +267,212 @@ impl SampleLog {
     }
 }
 
+/// Poses lost in a queue, counted from the senders' sequence numbers. Every sender increments
+/// its sequence by one per message, so a gap between two consecutive sequences received from
+/// the same sender (`key`: iceoryx2's publisher id in the service) is that many messages that
+/// were sent to us and never received: overwritten in the subscriber queue (safe overflow).
+///
+/// - The first sequence of a sender counts nothing (what it sent before we were connected
+///   never reached our queue). A restarted sender is a new key, so its sequence starting
+///   again from 1 (or anywhere) is never compared with its predecessor's.
+/// - A sequence not above the last one of the same key (a duplicate, or a sender that
+///   restarted its counter on the same port) counts nothing and becomes the new base:
+///   iceoryx2 delivers one publisher's samples in order, so going down means a restart, and
+///   the next gap is measured from there instead of from a stale, larger value.
+/// - Up to `N` senders are tracked; a new one beyond that replaces the one heard from least
+///   recently (its next sample then counts as a first).
+///
+/// Fixed capacity, no allocation, O(N) per message.
+#[derive(Debug, Clone, Copy)]
+pub struct SequenceGaps<K: Copy + Eq, const N: usize> {
+    /// (sender, last sequence received, when last heard from in `clock` ticks).
+    senders: [Option<(K, u64, u64)>; N],
+    /// Messages received (any key), for the least-recently-heard eviction.
+    clock: u64,
+    /// Messages missing between consecutive sequences of one sender, in total.
+    lost: u64,
+    /// Times a sender's sequence did not advance (duplicates and counter restarts).
+    restarts: u64,
+}
+
+impl<K: Copy + Eq, const N: usize> Default for SequenceGaps<K, N> {
+    fn default() -> Self {
+        SequenceGaps {
+            senders: [None; N],
+            clock: 0,
+            lost: 0,
+            restarts: 0,
+        }
+    }
+}
+
+impl<K: Copy + Eq, const N: usize> SequenceGaps<K, N> {
+    /// Records sequence `seq` received from sender `key`; returns how many of that sender's
+    /// messages are missing just before it (0 when it follows the previous one, is the
+    /// sender's first, or does not advance).
+    pub fn record(&mut self, key: K, seq: u64) -> u64 {
+        self.clock += 1;
+        let now = self.clock;
+        let slot = match self
+            .senders
+            .iter()
+            .position(|s| s.is_some_and(|(k, _, _)| k == key))
+        {
+            Some(i) => i,
+            None => {
+                // A free slot, else the sender heard from least recently.
+                let i = self
+                    .senders
+                    .iter()
+                    .enumerate()
+                    .min_by_key(|(_, s)| s.map_or(0, |(_, _, t)| t))
+                    .map_or(0, |(i, _)| i);
+                self.senders[i] = Some((key, seq, now));
+                return 0;
+            }
+        };
+        let Some((_, last, _)) = self.senders[slot] else {
+            return 0;
+        };
+        self.senders[slot] = Some((key, seq, now));
+        if seq > last {
+            let gap = seq - last - 1;
+            self.lost += gap;
+            gap
+        } else {
+            self.restarts += 1;
+            0
+        }
+    }
+
+    /// Messages missing between consecutive sequences, in total.
+    pub fn lost(&self) -> u64 {
+        self.lost
+    }
+
+    /// Times a sender's sequence did not advance (duplicates and counter restarts).
+    pub fn restarts(&self) -> u64 {
+        self.restarts
+    }
+}
+
+/// What [`GapDetector`] saw at one instant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GapEvent {
+    /// An outage started: nothing for `silent_ns` (≥ the threshold) since the last message.
+    Started {
+        /// Time since the last message, ns.
+        silent_ns: u64,
+    },
+    /// Messages resumed after an outage that lasted `duration_ns` (last message before it →
+    /// first message after it).
+    Ended {
+        /// Time without messages, ns.
+        duration_ns: u64,
+    },
+}
+
+/// Outages of a periodic stream (e.g. the estimates at 1 kHz): no message for at least
+/// `threshold_ns`. Fed the time of every message ([`GapDetector::on_message`]) and polled
+/// while waiting ([`GapDetector::poll`]); each outage is reported once when it starts and
+/// once when it ends, and counted (number, longest, total). Nothing is an outage before the
+/// first message. No allocation.
+#[derive(Debug, Clone, Copy)]
+pub struct GapDetector {
+    threshold_ns: u64,
+    last_ns: Option<u64>,
+    in_outage: bool,
+    outages: u64,
+    longest_ns: u64,
+    total_ns: u64,
+}
+
+impl GapDetector {
+    /// An outage is `threshold_ns` or more without a message.
+    pub fn new(threshold_ns: u64) -> GapDetector {
+        GapDetector {
+            threshold_ns: threshold_ns.max(1),
+            last_ns: None,
+            in_outage: false,
+            outages: 0,
+            longest_ns: 0,
+            total_ns: 0,
+        }
+    }
+
+    /// The outage threshold, ns.
+    pub fn threshold_ns(&self) -> u64 {
+        self.threshold_ns
+    }
+
+    /// No message received yet at `now_ns`: reports the start of an outage once.
+    pub fn poll(&mut self, now_ns: u64) -> Option<GapEvent> {
+        let last = self.last_ns?;
+        let silent_ns = now_ns.saturating_sub(last);
+        if !self.in_outage && silent_ns >= self.threshold_ns {
+            self.in_outage = true;
+            return Some(GapEvent::Started { silent_ns });
+        }
+        None
+    }
+
+    /// A message received at `now_ns`. Reports the end of an outage (which it also counts;
+    /// a gap of at least the threshold that no poll saw start counts as well, with no start
+    /// reported: [`GapEvent::Ended`] is returned all the same).
+    pub fn on_message(&mut self, now_ns: u64) -> Option<GapEvent> {
+        let event = self.last_ns.and_then(|last| {
+            let duration_ns = now_ns.saturating_sub(last);
+            if self.in_outage || duration_ns >= self.threshold_ns {
+                self.record(duration_ns);
+                Some(GapEvent::Ended { duration_ns })
+            } else {
+                None
+            }
+        });
+        self.in_outage = false;
+        self.last_ns = Some(now_ns);
+        event
+    }
+
+    /// Ends the observation at `now_ns`: an outage still going on is counted (up to now).
+    pub fn finish(&mut self, now_ns: u64) {
+        if let Some(last) = self.last_ns {
+            let silent_ns = now_ns.saturating_sub(last);
+            if self.in_outage || silent_ns >= self.threshold_ns {
+                self.record(silent_ns);
+            }
+            self.in_outage = false;
+            self.last_ns = Some(now_ns);
+        }
+    }
+
+    fn record(&mut self, duration_ns: u64) {
+        self.outages += 1;
+        self.longest_ns = self.longest_ns.max(duration_ns);
+        self.total_ns += duration_ns;
+    }
+
+    /// Outages counted (ended, or cut by [`GapDetector::finish`]).
+    pub fn outages(&self) -> u64 {
+        self.outages
+    }
+
+    /// The longest outage, ns (0 without any).
+    pub fn longest_ns(&self) -> u64 {
+        self.longest_ns
+    }
+
+    /// All outages together, ns.
+    pub fn total_ns(&self) -> u64 {
+        self.total_ns
+    }
+
+    /// Whether an outage is going on (started, not ended).
+    pub fn in_outage(&self) -> bool {
+        self.in_outage
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -354,5 +560,136 @@ mod tests {
         }
         assert_eq!((l.len(), l.dropped()), (3, 2));
         assert_eq!(l.samples(), &[0, 1, 2]);
+    }
+
+    #[test]
+    fn sequence_gaps_in_order_count_nothing() {
+        let mut g = SequenceGaps::<u32, 4>::default();
+        for seq in 1..=1000 {
+            assert_eq!(g.record(7, seq), 0);
+        }
+        assert_eq!((g.lost(), g.restarts()), (0, 0));
+    }
+
+    #[test]
+    fn sequence_gaps_count_the_missing_sequences() {
+        let mut g = SequenceGaps::<u32, 4>::default();
+        assert_eq!(
+            g.record(7, 5),
+            0,
+            "a sender's first sequence counts nothing"
+        );
+        assert_eq!(g.record(7, 6), 0);
+        assert_eq!(g.record(7, 10), 3, "7, 8, 9 never received");
+        assert_eq!(g.record(7, 11), 0);
+        assert_eq!(g.record(7, 1011), 999);
+        assert_eq!(g.lost(), 1002);
+    }
+
+    #[test]
+    fn sequence_gaps_duplicates_and_steps_back_count_nothing() {
+        let mut g = SequenceGaps::<u32, 4>::default();
+        for seq in [1, 2, 2, 3, 1, 2, 3, 4] {
+            g.record(7, seq);
+        }
+        assert_eq!(g.lost(), 0, "a duplicate or a step back is no loss");
+        assert_eq!(g.restarts(), 2);
+        // Out of order: 4 missing at 5, then 4 late: it re-bases, and 5 follows it.
+        let mut g = SequenceGaps::<u32, 4>::default();
+        for seq in [1, 2, 3, 5, 4, 5, 6] {
+            g.record(7, seq);
+        }
+        assert_eq!(g.lost(), 1);
+    }
+
+    #[test]
+    fn sequence_gaps_a_restart_is_no_huge_gap() {
+        // Same key, counter back to 1 after a long run: nothing, and the next gap is measured
+        // from the new base, not from the old one.
+        let mut g = SequenceGaps::<u32, 4>::default();
+        g.record(7, 1_000_000);
+        assert_eq!(g.record(7, 1), 0);
+        assert_eq!(g.record(7, 2), 0);
+        assert_eq!(g.record(7, 4), 1);
+        assert_eq!(g.lost(), 1);
+        // A restarted sender is a new key: a large first sequence is not compared with the
+        // old sender's, nor is a small one.
+        let mut g = SequenceGaps::<u32, 4>::default();
+        g.record(1, 10);
+        assert_eq!(
+            g.record(2, u64::MAX - 1),
+            0,
+            "new sender, large first sequence"
+        );
+        assert_eq!(g.record(2, u64::MAX), 0);
+        assert_eq!(g.record(3, 1), 0);
+        assert_eq!(g.record(1, 11), 0, "each sender against its own sequence");
+        assert_eq!(g.record(3, 3), 1);
+        assert_eq!(g.lost(), 1);
+    }
+
+    #[test]
+    fn sequence_gaps_evict_the_least_recent_sender() {
+        let mut g = SequenceGaps::<u32, 2>::default();
+        g.record(1, 1);
+        g.record(2, 1);
+        g.record(1, 2);
+        g.record(3, 100); // replaces sender 2, heard from least recently
+        assert_eq!(g.record(1, 3), 0, "sender 1 is still tracked");
+        assert_eq!(g.record(2, 50), 0, "sender 2 starts over: a first sequence");
+        assert_eq!(g.lost(), 0);
+    }
+
+    const MS: u64 = 1_000_000;
+
+    #[test]
+    fn gap_detector_reports_an_outage_once_at_start_and_at_end() {
+        let mut d = GapDetector::new(100 * MS);
+        assert_eq!(
+            d.poll(10_000 * MS),
+            None,
+            "nothing before the first message"
+        );
+        for t in 0..1000 {
+            assert_eq!(d.on_message(t * MS), None);
+            assert_eq!(d.poll(t * MS + MS / 2), None);
+        }
+        // Last message at 999 ms; silence until 4300 ms.
+        assert_eq!(d.poll(1098 * MS), None);
+        assert_eq!(
+            d.poll(1099 * MS),
+            Some(GapEvent::Started {
+                silent_ns: 100 * MS
+            })
+        );
+        assert!(d.in_outage());
+        for t in 1100..4300 {
+            assert_eq!(d.poll(t * MS), None, "one line per outage start");
+        }
+        assert_eq!(
+            d.on_message(4300 * MS),
+            Some(GapEvent::Ended {
+                duration_ns: 3301 * MS
+            })
+        );
+        assert_eq!(d.on_message(4301 * MS), None);
+        // A second, shorter one that no poll saw start.
+        assert_eq!(
+            d.on_message(4501 * MS),
+            Some(GapEvent::Ended {
+                duration_ns: 200 * MS
+            })
+        );
+        // Jitter below the threshold is no outage.
+        assert_eq!(d.on_message(4600 * MS), None);
+        d.finish(4650 * MS);
+        assert_eq!(d.outages(), 2);
+        assert_eq!(d.longest_ns(), 3301 * MS);
+        assert_eq!(d.total_ns(), 3501 * MS);
+        // An outage still going on at the end is counted up to then.
+        d.poll(4800 * MS);
+        d.finish(5000 * MS);
+        assert_eq!((d.outages(), d.longest_ns()), (3, 3301 * MS));
+        assert_eq!(d.total_ns(), 3501 * MS + 350 * MS);
     }
 }
