@@ -10,7 +10,10 @@
 //! - SIGKILL of the service while a publisher runs, then a restart: estimates resume, with the
 //!   T_min set-point in force (history); publishers and controllers SIGKILLed and restarted
 //!   more often than a service has port slots: dead nodes are cleaned up;
-//! - a peer with another message layout gets a clear error; SIGINT/SIGTERM stop cleanly.
+//! - a peer with another message layout gets a clear error; SIGINT/SIGTERM stop cleanly;
+//! - a second estimate publisher or margin server is refused while the service runs; a service
+//!   pre-created with other limits makes `serve` refuse, naming the setting; a dead node of
+//!   another application survives the service's cleanup, a dead cablevib node does not.
 //!
 //! Each test uses its own instance name (process id + test name), so tests run in parallel;
 //! every wait is bounded; child processes are killed by a guard when a test fails. Publisher
@@ -28,8 +31,9 @@ use cablevib::estimator::{Estimate, Estimator};
 use cablevib::kinematics::Pose;
 use cablevib::scene::Scene;
 use cablevib::service::ports::{
-    create_node, open_event, open_pubsub, EstimateOutput, MarginClient, PoseInput, PubSubSettings,
-    POSE_BUFFER,
+    create_node, load_iceoryx2_config, open_event, open_margin, open_pubsub, EstimateOutput,
+    MarginClient, PoseInput, ESTIMATE_BUFFER, ESTIMATE_SETTINGS, MAX_CLIENTS, MAX_NODES,
+    MAX_PUBLISHERS, MAX_SUBSCRIBERS, POSE_BUFFER, POSE_SETTINGS, T_MIN_SETTINGS,
 };
 use cablevib::service::WaitMode;
 use cablevib::trajectory::Trajectory;
@@ -37,6 +41,7 @@ use cablevib_ipc::{
     monotonic_now_ns, EstimateSample, MarginRequest, PoseSample, ServiceNames, StatusCode,
     TminSetpoint, EVENT_ID_POSE, IDENTITY_QUATERNION,
 };
+use iceoryx2::node::{NodeState, NodeView};
 use iceoryx2::prelude::*;
 use nalgebra::Vector3;
 
@@ -684,18 +689,11 @@ fn latest_pose_wins_and_skipped_poses_are_counted() {
     client.wait_for(&mut service);
     // A publisher that does not notify: the poses queue until the wake-up below.
     let node = create_node("cablevib-test-quiet").expect("node");
-    let quiet = open_pubsub::<PoseSample>(
-        &node,
-        &names.pose,
-        PubSubSettings {
-            buffer: POSE_BUFFER,
-            history: 0,
-        },
-    )
-    .expect("pose service")
-    .publisher_builder()
-    .create()
-    .expect("publisher");
+    let quiet = open_pubsub::<PoseSample>(&node, &names.pose, POSE_SETTINGS)
+        .expect("pose service")
+        .publisher_builder()
+        .create()
+        .expect("publisher");
     let wake = open_event(&node, &names.wake_service)
         .expect("event")
         .notifier_builder()
@@ -952,15 +950,8 @@ fn a_peer_with_another_layout_gets_a_clear_error() {
     let client = Client::new(&inst);
     let mut service = spawn_service(&inst, WaitMode::Event);
     client.wait_for(&mut service);
-    let err = open_pubsub::<cablevib_ipc::TminSetpoint>(
-        &node,
-        &names.pose,
-        PubSubSettings {
-            buffer: 1,
-            history: 0,
-        },
-    )
-    .expect_err("another payload on the pose service");
+    let err = open_pubsub::<cablevib_ipc::TminSetpoint>(&node, &names.pose, T_MIN_SETTINGS)
+        .expect_err("another payload on the pose service");
     let text = err.to_string();
     assert!(text.contains("incompatible peer"), "{text}");
     assert!(
@@ -1114,4 +1105,213 @@ fn helper_controller() {
         );
         let _ = std::io::stdout().flush();
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Other programs of the same user (docs/security.md)
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn a_second_estimate_publisher_or_margin_server_is_refused() {
+    let inst = instance("impostor");
+    let names = ServiceNames::new(&inst);
+    let mut client = Client::new(&inst);
+    let mut service = spawn_service(&inst, WaitMode::Event);
+    client.wait_for(&mut service);
+    let node = create_node("cablevib-test-impostor").expect("node");
+    let estimate = open_pubsub::<EstimateSample>(&node, &names.estimate, ESTIMATE_SETTINGS)
+        .expect("the estimate service");
+    assert!(
+        estimate.publisher_builder().create().is_err(),
+        "a second estimate publisher must not be created"
+    );
+    let margin = open_margin(&node, &names.margin).expect("the margin service");
+    assert!(
+        margin.server_builder().create().is_err(),
+        "a second margin server must not be created"
+    );
+    // The real service still answers.
+    assert!(client.estimate(circle(1), IDENTITY_QUATERNION).is_ok());
+    service.assert_running();
+}
+
+/// `cablevib serve` on instance `inst` exits with an error whose log contains `message`.
+fn assert_serve_refuses(inst: &str, message: &str) {
+    let mut service = spawn_service(inst, WaitMode::Event);
+    let status = service.wait_exit(TIMEOUT);
+    let log = service.stderr();
+    assert!(!status.success(), "the service must refuse to run: {log}");
+    assert!(log.contains(message), "expected `{message}` in: {log}");
+}
+
+fn iox_name(name: &str) -> ServiceName {
+    ServiceName::new(name).expect("service name")
+}
+
+#[test]
+fn services_pre_created_with_other_limits_make_serve_refuse() {
+    let node = create_node("cablevib-test-hostile").expect("node");
+
+    // Pose buffer 1 (our limits otherwise): the newest pose would still win, but a hostile
+    // creator chose it; refused.
+    let inst = instance("hostile_pose_buffer");
+    let names = ServiceNames::new(&inst);
+    let _pose = node
+        .service_builder(&iox_name(&names.pose))
+        .publish_subscribe::<PoseSample>()
+        .max_publishers(MAX_PUBLISHERS)
+        .max_subscribers(MAX_SUBSCRIBERS)
+        .max_nodes(MAX_NODES)
+        .subscriber_max_buffer_size(1)
+        .history_size(0)
+        .enable_safe_overflow(false)
+        .create()
+        .expect("hostile pose service");
+    assert_serve_refuses(
+        &inst,
+        &format!(
+            "service \"{}\" exists with subscriber_max_buffer_size = 1, expected {POSE_BUFFER}",
+            names.pose
+        ),
+    );
+
+    // Pose buffer right, no safe overflow: publishers would block or drop the newest pose.
+    let inst = instance("hostile_pose_overflow");
+    let names = ServiceNames::new(&inst);
+    let _pose = node
+        .service_builder(&iox_name(&names.pose))
+        .publish_subscribe::<PoseSample>()
+        .max_publishers(MAX_PUBLISHERS)
+        .max_subscribers(MAX_SUBSCRIBERS)
+        .max_nodes(MAX_NODES)
+        .subscriber_max_buffer_size(POSE_BUFFER)
+        .history_size(0)
+        .enable_safe_overflow(false)
+        .create()
+        .expect("hostile pose service");
+    assert_serve_refuses(
+        &inst,
+        &format!(
+            "service \"{}\" exists with safe_overflow = false, expected true",
+            names.pose
+        ),
+    );
+
+    // Estimate service admitting 4 publishers: room for impostors.
+    let inst = instance("hostile_estimate");
+    let names = ServiceNames::new(&inst);
+    let _estimate = node
+        .service_builder(&iox_name(&names.estimate))
+        .publish_subscribe::<EstimateSample>()
+        .max_publishers(4)
+        .max_subscribers(MAX_SUBSCRIBERS)
+        .max_nodes(MAX_NODES)
+        .subscriber_max_buffer_size(ESTIMATE_BUFFER)
+        .history_size(0)
+        .enable_safe_overflow(true)
+        .create()
+        .expect("hostile estimate service");
+    assert_serve_refuses(
+        &inst,
+        &format!(
+            "service \"{}\" exists with max_publishers = 4, expected 1",
+            names.estimate
+        ),
+    );
+
+    // Margin service admitting 2 servers: a second one could answer in the service's name.
+    let inst = instance("hostile_margin");
+    let names = ServiceNames::new(&inst);
+    let _margin = node
+        .service_builder(&iox_name(&names.margin))
+        .request_response::<MarginRequest, cablevib_ipc::MarginResponse>()
+        .max_servers(2)
+        .max_clients(MAX_CLIENTS)
+        .max_nodes(MAX_NODES)
+        .create()
+        .expect("hostile margin service");
+    assert_serve_refuses(
+        &inst,
+        &format!(
+            "service \"{}\" exists with max_servers = 2, expected 1",
+            names.margin
+        ),
+    );
+}
+
+/// The dead nodes named `name`.
+fn dead_nodes(name: &str) -> Vec<iceoryx2::node::DeadNodeView<ipc::Service>> {
+    let mut dead = Vec::new();
+    Node::<ipc::Service>::list(load_iceoryx2_config(), |state| {
+        if let NodeState::Dead(view) = state {
+            if view
+                .details()
+                .as_ref()
+                .is_some_and(|d| d.name().as_str() == name)
+            {
+                dead.push(view);
+            }
+        }
+        CallbackProgression::Continue
+    })
+    .expect("list nodes");
+    dead
+}
+
+#[test]
+fn serve_cleans_only_dead_cablevib_nodes() {
+    let inst = instance("foreign_node");
+    let foreign = format!("othervendor-{}", std::process::id());
+    let own = format!("cablevib-test-dead-{}", std::process::id());
+    let mut helper = spawn_helper("nodes", &inst, 0);
+    let end = Instant::now() + TIMEOUT;
+    while !helper
+        .next_line(Duration::from_millis(100))
+        .is_some_and(|l| l.ends_with("nodes ready"))
+    {
+        helper.assert_running();
+        assert!(Instant::now() < end, "the helper's nodes did not come up");
+    }
+    helper.kill9();
+    // (The dead cablevib node may already be cleaned by a service of a test running beside.)
+    assert_eq!(dead_nodes(&foreign).len(), 1, "the foreign node is dead");
+
+    let mut client = Client::new(&inst);
+    let mut service = spawn_service(&inst, WaitMode::Event);
+    client.wait_for(&mut service);
+    assert!(client.estimate(circle(1), IDENTITY_QUATERNION).is_ok());
+    let foreign_left = dead_nodes(&foreign);
+    let own_left = dead_nodes(&own).len();
+    // Tidy up before asserting, so that a failure leaves nothing behind.
+    for view in &foreign_left {
+        let _ = view.clone().try_remove_stale_resources();
+    }
+    assert_eq!(
+        foreign_left.len(),
+        1,
+        "the dead node of another application must be left alone"
+    );
+    assert_eq!(own_left, 0, "the dead cablevib node must be cleaned up");
+    service.assert_running();
+}
+
+#[test]
+#[ignore = "a helper process of serve_cleans_only_dead_cablevib_nodes"]
+fn helper_nodes() {
+    use std::io::Write;
+    if helper_env("nodes").is_none() {
+        return;
+    }
+    let parent = std::os::unix::process::parent_id();
+    // Another application's node, made the way it would make it (iceoryx2's defaults).
+    let foreign = NodeBuilder::new()
+        .name(&NodeName::new(&format!("othervendor-{parent}")).expect("name"))
+        .create::<ipc::Service>()
+        .expect("foreign node");
+    let own = create_node(&format!("cablevib-test-dead-{parent}")).expect("node");
+    println!("nodes ready");
+    let _ = std::io::stdout().flush();
+    // Until killed (at most 60 s, so that an orphan never lingers).
+    std::thread::sleep(Duration::from_secs(60));
+    drop((foreign, own));
 }

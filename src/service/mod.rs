@@ -99,6 +99,22 @@ pub enum ServiceError {
         /// iceoryx2's error.
         reason: String,
     },
+    /// An existing service was created (by another program) with other limits than cablevib
+    /// creates it with; using it could admit impostors or drop messages.
+    #[error(
+        "service \"{service}\" exists with {setting} = {found}, expected {expected}; another \
+         program created it: stop that program, or use another --instance"
+    )]
+    ServiceSettings {
+        /// The iceoryx2 service name.
+        service: String,
+        /// The static setting that differs.
+        setting: &'static str,
+        /// Its value in the existing service.
+        found: String,
+        /// What cablevib needs.
+        expected: String,
+    },
     /// Another live cablevib service already serves this instance.
     #[error(
         "another cablevib service already serves \"{service}\"; stop it, or give this one \

@@ -1,18 +1,26 @@
 //! The iceoryx2 ports of every participant, opened with one set of service settings.
 //!
 //! Whoever comes first creates a service, with the settings below; everybody else opens it
-//! without requirements, so a peer that created it with other (compatible) settings is still
-//! accepted. A peer whose payload type differs (another schema version or layout) is refused
-//! by iceoryx2 at open time; the error is turned into [`ServiceError::IncompatiblePeer`] with
-//! the explanation of [`cablevib_ipc::compat`] (what the service carries, what we expect).
+//! and checks its static configuration against the same settings: a service that another
+//! program created with other limits (a second estimate publisher allowed, a pose buffer of 1
+//! without safe overflow, ...) is refused with [`ServiceError::ServiceSettings`], which names
+//! the service, the setting, its value and the expected value. A peer whose payload type
+//! differs (another schema version or layout) is refused by iceoryx2 at open time; the error
+//! is turned into [`ServiceError::IncompatiblePeer`] with the explanation of
+//! [`cablevib_ipc::compat`] (what the service carries, what we expect). `docs/security.md`
+//! says what this protects against and what it does not.
 //!
 //! | service | pattern | created with |
 //! |---|---|---|
-//! | pose | publish-subscribe | [`POSE_BUFFER`] queued poses per subscriber, history 0 |
+//! | pose | publish-subscribe | [`POSE_BUFFER`] queued poses per subscriber, history 0, [`MAX_PUBLISHERS`] publishers |
 //! | T_min | publish-subscribe | history 1: a (re)started service gets the set-point in force |
-//! | estimate | publish-subscribe | [`ESTIMATE_BUFFER`] queued estimates per subscriber |
-//! | margin | request-response | defaults (4 active requests per client) |
-//! | wake/service, wake/controller | event | defaults |
+//! | estimate | publish-subscribe | [`ESTIMATE_BUFFER`] queued estimates per subscriber, [`ESTIMATE_PUBLISHERS`] publisher |
+//! | margin | request-response | [`MARGIN_SERVERS`] server, [`MAX_CLIENTS`] clients, [`MARGIN_ACTIVE_REQUESTS`] active requests per client |
+//! | wake/service, wake/controller | event | [`EVENT_PORTS`] listeners and notifiers |
+//!
+//! Every publish-subscribe and request-response service overflows safely (the newest sample
+//! replaces the oldest): the service estimates the newest pose, a controller wants the newest
+//! estimate.
 //!
 //! Every port type here is `!Send` (iceoryx2 ports are bound to the thread that made them):
 //! create them in the thread that uses them.
@@ -22,9 +30,11 @@ use core::time::Duration;
 use cablevib_ipc::{
     explain_publish_subscribe_mismatch, explain_request_response_mismatch, EstimateSample,
     MarginRequest, MarginResponse, Message, PoseSample, ServiceNames, TminSetpoint,
-    EVENT_ID_MARGIN_REQUEST, EVENT_ID_POSE, EVENT_ID_T_MIN,
+    EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST, EVENT_ID_MARGIN_RESPONSE, EVENT_ID_POSE,
+    EVENT_ID_T_MIN,
 };
-use iceoryx2::node::NodeState;
+use iceoryx2::config::Config as Iceoryx2Config;
+use iceoryx2::node::{NodeState, NodeView};
 use iceoryx2::pending_response::PendingResponse;
 use iceoryx2::port::client::Client;
 use iceoryx2::port::listener::Listener;
@@ -41,6 +51,7 @@ use iceoryx2::service::builder::publish_subscribe::{
 use iceoryx2::service::builder::request_response::{
     RequestResponseCreateError, RequestResponseOpenError,
 };
+use iceoryx2::service::port_factory::server::ServerCreateError;
 use iceoryx2::service::port_factory::{event, publish_subscribe, request_response};
 
 use super::{ServiceError, WaitMode};
@@ -53,13 +64,56 @@ pub type Ipc = ipc::Service;
 pub const POSE_BUFFER: usize = 16;
 /// How many estimates a subscriber queues before the oldest is overwritten.
 pub const ESTIMATE_BUFFER: usize = 16;
-/// Publishers per publish-subscribe service. More than one live publisher is unusual; the slack
+/// Publishers of the pose and T_min services: one controller or replay at a time; the slack
 /// covers killed peers whose ports are not cleaned up yet.
 pub const MAX_PUBLISHERS: usize = 4;
-/// Subscribers per publish-subscribe service.
+/// Publishers of the estimate service: the one `cablevib serve`; a second would be an impostor
+/// whose estimates the controller cannot tell from the real ones.
+pub const ESTIMATE_PUBLISHERS: usize = 1;
+/// Servers of the margin service: the one `cablevib serve`; a second would answer in its name.
+pub const MARGIN_SERVERS: usize = 1;
+/// Subscribers per publish-subscribe service: the service (pose, T_min) or a controller
+/// (estimate), plus `bench-ipc`/monitors beside it, plus slack for killed peers not cleaned up
+/// yet.
 pub const MAX_SUBSCRIBERS: usize = 8;
-/// Nodes per service.
+/// Margin clients: as many as estimate subscribers (each controller has one of each).
+pub const MAX_CLIENTS: usize = MAX_SUBSCRIBERS;
+/// Margin requests a client may have in flight (iceoryx2's default; a controller asks one at a
+/// time).
+pub const MARGIN_ACTIVE_REQUESTS: usize = 4;
+/// Responses queued per pending request (iceoryx2's default; the service answers once).
+pub const MARGIN_RESPONSE_BUFFER: usize = 2;
+/// Nodes per publish-subscribe or request-response service.
 pub const MAX_NODES: usize = 16;
+/// Nodes per event service: every participant of the instance may notify or listen.
+pub const EVENT_NODES: usize = MAX_NODES * 2;
+/// Listeners and notifiers per event service (iceoryx2's default): the service and each
+/// controller (pose input, estimate output and margin client each have one event port).
+pub const EVENT_PORTS: usize = 16;
+/// The largest event id a peer sends (the `EVENT_ID_*` of `cablevib-ipc`).
+const EVENT_ID_LARGEST: usize = max_event_id([
+    EVENT_ID_POSE,
+    EVENT_ID_T_MIN,
+    EVENT_ID_MARGIN_REQUEST,
+    EVENT_ID_ESTIMATE,
+    EVENT_ID_MARGIN_RESPONSE,
+]);
+
+const fn max_event_id(ids: [usize; 5]) -> usize {
+    let mut max = 0;
+    let mut i = 0;
+    while i < ids.len() {
+        if ids[i] > max {
+            max = ids[i];
+        }
+        i += 1;
+    }
+    max
+}
+
+/// Every cablevib node name starts with this, so that `cablevib serve` cleans up the dead
+/// nodes of cablevib processes and leaves other iceoryx2 applications' alone.
+pub const NODE_NAME_PREFIX: &str = "cablevib";
 
 /// How long [`open_pubsub`] and friends retry while another process is creating the same
 /// service.
@@ -126,14 +180,41 @@ pub fn load_iceoryx2_config() -> &'static Config {
     Config::global_config()
 }
 
-/// Removes the resources (shared memory, ports in every service) that processes which died
-/// without cleaning up (SIGKILL, crash) left behind. Returns how many dead nodes were cleaned
-/// and how many could not be (permissions, or another process is cleaning them).
+/// The configuration cablevib's nodes are created with: the global one, but without
+/// iceoryx2's cleanup of every dead node of the user when a node is created or dropped, so
+/// that only [`remove_stale_nodes`] cleans up, and only cablevib's nodes. (Opening a service
+/// still cleans the dead nodes of that service: they are participants of a cablevib service.)
+fn node_config() -> &'static Iceoryx2Config {
+    static CONFIG: std::sync::OnceLock<Iceoryx2Config> = std::sync::OnceLock::new();
+    CONFIG.get_or_init(|| {
+        let mut config = load_iceoryx2_config().clone();
+        config.global.node.cleanup_dead_nodes_on_creation = false;
+        config.global.node.cleanup_dead_nodes_on_destruction = false;
+        config
+    })
+}
+
+/// A node of this name belongs to cablevib (see [`NODE_NAME_PREFIX`]).
+pub fn is_cablevib_node(name: &str) -> bool {
+    name.starts_with(NODE_NAME_PREFIX)
+}
+
+/// Removes the resources (shared memory, ports in every service) that cablevib processes which
+/// died without cleaning up (SIGKILL, crash) left behind; dead nodes of other applications
+/// (names not starting with [`NODE_NAME_PREFIX`], or without readable details) are left to
+/// their owners. Returns how many dead nodes were cleaned and how many could not be
+/// (permissions, or another process is cleaning them).
 pub fn remove_stale_nodes() -> (usize, usize) {
     let mut dead = Vec::new();
     let listed = Node::<Ipc>::list(load_iceoryx2_config(), |state| {
         if let NodeState::<Ipc>::Dead(view) = state {
-            dead.push(view);
+            let own = view
+                .details()
+                .as_ref()
+                .is_some_and(|d| is_cablevib_node(d.name().as_str()));
+            if own {
+                dead.push(view);
+            }
         }
         CallbackProgression::Continue
     });
@@ -155,12 +236,19 @@ pub fn remove_stale_nodes() -> (usize, usize) {
 }
 
 /// An iceoryx2 node named `name` (a readable tag for `iox2 node list`; need not be unique).
+/// The name must start with [`NODE_NAME_PREFIX`], so that `cablevib serve` cleans up after the
+/// node if its process dies.
 pub fn create_node(name: &str) -> Result<Node<Ipc>, ServiceError> {
-    load_iceoryx2_config();
+    if !is_cablevib_node(name) {
+        return Err(ServiceError::Usage(format!(
+            "node name `{name}`: must start with `{NODE_NAME_PREFIX}`"
+        )));
+    }
     let node_name = NodeName::new(name)
         .map_err(|e| ServiceError::Usage(format!("node name `{name}`: {e:?}")))?;
     NodeBuilder::new()
         .name(&node_name)
+        .config(node_config())
         .create::<Ipc>()
         .map_err(|e| ipc_error(format!("create node `{name}`"), e))
 }
@@ -172,6 +260,120 @@ pub struct PubSubSettings {
     pub buffer: usize,
     /// Samples replayed to a late subscriber.
     pub history: usize,
+    /// Publishers the service admits.
+    pub max_publishers: usize,
+}
+
+/// Refuses an existing service whose setting `setting` is `found` where cablevib needs
+/// `expected` (`ok` says whether it fits).
+fn expect_setting(
+    service: &str,
+    setting: &'static str,
+    found: impl core::fmt::Display,
+    expected: impl core::fmt::Display,
+    ok: bool,
+) -> Result<(), ServiceError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(ServiceError::ServiceSettings {
+            service: service.to_owned(),
+            setting,
+            found: found.to_string(),
+            expected: expected.to_string(),
+        })
+    }
+}
+
+/// The static configuration of publish-subscribe service `name` is the one cablevib creates
+/// it with (`settings`).
+fn verify_pubsub<M: Message>(
+    name: &str,
+    f: &publish_subscribe::PortFactory<Ipc, M, ()>,
+    settings: PubSubSettings,
+) -> Result<(), ServiceError> {
+    let c = f.static_config();
+    let exact = |setting, found: usize, expected: usize| {
+        expect_setting(name, setting, found, expected, found == expected)
+    };
+    exact(
+        "max_publishers",
+        c.max_publishers(),
+        settings.max_publishers,
+    )?;
+    exact("max_subscribers", c.max_subscribers(), MAX_SUBSCRIBERS)?;
+    exact("max_nodes", c.max_nodes(), MAX_NODES)?;
+    exact(
+        "subscriber_max_buffer_size",
+        c.subscriber_max_buffer_size(),
+        settings.buffer,
+    )?;
+    exact("history_size", c.history_size(), settings.history)?;
+    expect_setting(
+        name,
+        "safe_overflow",
+        c.has_safe_overflow(),
+        true,
+        c.has_safe_overflow(),
+    )
+}
+
+/// The static configuration of the margin service `name` is the one cablevib creates it with.
+fn verify_margin(name: &str, f: &MarginFactory) -> Result<(), ServiceError> {
+    let c = f.static_config();
+    let exact = |setting, found: usize, expected: usize| {
+        expect_setting(name, setting, found, expected, found == expected)
+    };
+    exact("max_servers", c.max_servers(), MARGIN_SERVERS)?;
+    exact("max_clients", c.max_clients(), MAX_CLIENTS)?;
+    exact("max_nodes", c.max_nodes(), MAX_NODES)?;
+    exact(
+        "max_active_requests_per_client",
+        c.max_active_requests_per_client(),
+        MARGIN_ACTIVE_REQUESTS,
+    )?;
+    exact(
+        "max_response_buffer_size",
+        c.max_response_buffer_size(),
+        MARGIN_RESPONSE_BUFFER,
+    )?;
+    let requests = c.has_safe_overflow_for_requests();
+    expect_setting(name, "safe_overflow_for_requests", requests, true, requests)?;
+    let responses = c.has_safe_overflow_for_responses();
+    expect_setting(
+        name,
+        "safe_overflow_for_responses",
+        responses,
+        true,
+        responses,
+    )
+}
+
+/// The static configuration of event service `name` is the one cablevib creates it with.
+fn verify_event(name: &str, f: &event::PortFactory<Ipc>) -> Result<(), ServiceError> {
+    let c = f.static_config();
+    let exact = |setting, found: usize, expected: usize| {
+        expect_setting(name, setting, found, expected, found == expected)
+    };
+    exact("max_listeners", c.max_listeners(), EVENT_PORTS)?;
+    exact("max_notifiers", c.max_notifiers(), EVENT_PORTS)?;
+    exact("max_nodes", c.max_nodes(), EVENT_NODES)?;
+    let ids = c.event_id_max_value();
+    expect_setting(
+        name,
+        "event_id_max_value",
+        ids,
+        format_args!("at least {EVENT_ID_LARGEST}"),
+        ids >= EVENT_ID_LARGEST,
+    )
+}
+
+/// `Done` when the opened or created service `f` passes `verify`, `Fail` otherwise.
+fn verified<F>(f: F, verify: impl FnOnce(&F) -> Result<(), ServiceError>) -> Attempt<F> {
+    match verify(&f) {
+        Ok(()) => Attempt::Done(f),
+        Err(e) => Attempt::Fail(e),
+    }
 }
 
 /// One try at opening or creating a service.
@@ -221,7 +423,7 @@ pub fn open_pubsub<M: Message>(
     use PublishSubscribeOpenError as O;
     let sname = service_name(name)?;
     let open = || match node.service_builder(&sname).publish_subscribe::<M>().open() {
-        Ok(f) => Attempt::Done(f),
+        Ok(f) => verified(f, |f| verify_pubsub(name, f, settings)),
         Err(O::IncompatibleTypes) => Attempt::Fail(ServiceError::IncompatiblePeer(
             explain_publish_subscribe_mismatch::<Ipc, M>(name),
         )),
@@ -233,7 +435,7 @@ pub fn open_pubsub<M: Message>(
     let create = || match node
         .service_builder(&sname)
         .publish_subscribe::<M>()
-        .max_publishers(MAX_PUBLISHERS)
+        .max_publishers(settings.max_publishers)
         .max_subscribers(MAX_SUBSCRIBERS)
         .max_nodes(MAX_NODES)
         .subscriber_max_buffer_size(settings.buffer)
@@ -241,7 +443,7 @@ pub fn open_pubsub<M: Message>(
         .enable_safe_overflow(true)
         .create()
     {
-        Ok(f) => Attempt::Done(f),
+        Ok(f) => verified(f, |f| verify_pubsub(name, f, settings)),
         Err(
             e @ (C::AlreadyExists
             | C::IsBeingCreatedByAnotherInstance
@@ -266,7 +468,7 @@ pub fn open_margin(node: &Node<Ipc>, name: &str) -> Result<MarginFactory, Servic
             .request_response::<MarginRequest, MarginResponse>()
     };
     let open = || match builder().open() {
-        Ok(f) => Attempt::Done(f),
+        Ok(f) => verified(f, |f| verify_margin(name, f)),
         Err(O::IncompatibleRequestOrResponseType) => Attempt::Fail(ServiceError::IncompatiblePeer(
             explain_request_response_mismatch::<Ipc, MarginRequest, MarginResponse>(name),
         )),
@@ -274,12 +476,16 @@ pub fn open_margin(node: &Node<Ipc>, name: &str) -> Result<MarginFactory, Servic
         Err(e) => Attempt::Fail(ipc_error(format!("open service \"{name}\""), e)),
     };
     let create = || match builder()
-        .max_clients(MAX_SUBSCRIBERS)
-        .max_servers(MAX_PUBLISHERS)
+        .max_clients(MAX_CLIENTS)
+        .max_servers(MARGIN_SERVERS)
         .max_nodes(MAX_NODES)
+        .max_active_requests_per_client(MARGIN_ACTIVE_REQUESTS)
+        .max_response_buffer_size(MARGIN_RESPONSE_BUFFER)
+        .enable_safe_overflow_for_requests(true)
+        .enable_safe_overflow_for_responses(true)
         .create()
     {
-        Ok(f) => Attempt::Done(f),
+        Ok(f) => verified(f, |f| verify_margin(name, f)),
         Err(
             e @ (C::AlreadyExists
             | C::IsBeingCreatedByAnotherInstance
@@ -297,17 +503,19 @@ pub fn open_event(node: &Node<Ipc>, name: &str) -> Result<event::PortFactory<Ipc
     use EventOpenError as O;
     let sname = service_name(name)?;
     let open = || match node.service_builder(&sname).event().open() {
-        Ok(f) => Attempt::Done(f),
+        Ok(f) => verified(f, |f| verify_event(name, f)),
         Err(O::DoesNotExist | O::HangsInCreation | O::Interrupt) => Attempt::Retry(None),
         Err(e) => Attempt::Fail(ipc_error(format!("open event service \"{name}\""), e)),
     };
     let create = || match node
         .service_builder(&sname)
         .event()
-        .max_nodes(MAX_NODES * 2)
+        .max_nodes(EVENT_NODES)
+        .max_listeners(EVENT_PORTS)
+        .max_notifiers(EVENT_PORTS)
         .create()
     {
-        Ok(f) => Attempt::Done(f),
+        Ok(f) => verified(f, |f| verify_event(name, f)),
         Err(e @ (C::AlreadyExists | C::IsBeingCreatedByAnotherInstance | C::Interrupt)) => {
             Attempt::Retry(Some(format!("{e:?}")))
         }
@@ -316,17 +524,23 @@ pub fn open_event(node: &Node<Ipc>, name: &str) -> Result<event::PortFactory<Ipc
     open_or_create(name, "event service", open, create)
 }
 
-const POSE_SETTINGS: PubSubSettings = PubSubSettings {
+/// The pose service's settings.
+pub const POSE_SETTINGS: PubSubSettings = PubSubSettings {
     buffer: POSE_BUFFER,
     history: 0,
+    max_publishers: MAX_PUBLISHERS,
 };
-const T_MIN_SETTINGS: PubSubSettings = PubSubSettings {
+/// The T_min service's settings.
+pub const T_MIN_SETTINGS: PubSubSettings = PubSubSettings {
     buffer: 4,
     history: 1,
+    max_publishers: MAX_PUBLISHERS,
 };
-const ESTIMATE_SETTINGS: PubSubSettings = PubSubSettings {
+/// The estimate service's settings.
+pub const ESTIMATE_SETTINGS: PubSubSettings = PubSubSettings {
     buffer: ESTIMATE_BUFFER,
     history: 0,
+    max_publishers: ESTIMATE_PUBLISHERS,
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -360,26 +574,40 @@ impl ServicePorts {
     /// the same instance (two would publish two estimates per pose).
     pub fn open(node: &Node<Ipc>, names: &ServiceNames) -> Result<ServicePorts, ServiceError> {
         let margin_factory = open_margin(node, &names.margin)?;
-        let margin = margin_factory
-            .server_builder()
-            .create()
-            .map_err(|e| ipc_error("create the margin server", e))?;
-        // A server port of a process that died counts until its stale resources are removed;
-        // another process may be removing them right now, so give that a moment.
+        // The service admits one server. A server port of a process that died counts until its
+        // stale resources are removed; another process may be removing them right now, so give
+        // that a moment.
         let deadline = std::time::Instant::now() + STALE_SERVER_GRACE;
-        while margin_factory.dynamic_config().number_of_servers() > 1 {
-            if std::time::Instant::now() > deadline {
-                return Err(ServiceError::AlreadyServing {
-                    service: names.margin.clone(),
-                });
+        let margin = loop {
+            match margin_factory.server_builder().create() {
+                Ok(server) => break server,
+                Err(ServerCreateError::ExceedsMaxSupportedServers) => {
+                    if std::time::Instant::now() > deadline {
+                        return Err(ServiceError::AlreadyServing {
+                            service: names.margin.clone(),
+                        });
+                    }
+                    remove_stale_nodes();
+                    std::thread::sleep(STALE_SERVER_POLL);
+                }
+                Err(e) => return Err(ipc_error("create the margin server", e)),
             }
-            remove_stale_nodes();
-            std::thread::sleep(STALE_SERVER_POLL);
-        }
+        };
+        // The margin server is ours, so a live estimate publisher is not another cablevib
+        // service: it is another program publishing estimates in this instance's name.
         let estimate = open_pubsub::<EstimateSample>(node, &names.estimate, ESTIMATE_SETTINGS)?
             .publisher_builder()
             .create()
-            .map_err(|e| ipc_error("create the estimate publisher", e))?;
+            .map_err(|e| {
+                ipc_error(
+                    format!(
+                        "create the estimate publisher of \"{}\" (another process publishes \
+                         estimates there?)",
+                        names.estimate
+                    ),
+                    e,
+                )
+            })?;
         let wake_in = open_event(node, &names.wake_service)?
             .listener_builder()
             .create()
@@ -648,5 +876,38 @@ fn wait_for<T>(
                 let _ = wake.timed_wait(|_| {}, (timeout - elapsed).min(Duration::from_millis(10)));
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_cablevib_node_names_are_own() {
+        for own in [
+            "cablevib-serve",
+            "cablevib-controller",
+            "cablevib-test-client",
+        ] {
+            assert!(is_cablevib_node(own), "{own}");
+        }
+        for other in [
+            "othervendor-serve",
+            "iox2-node",
+            "",
+            "Cablevib-serve",
+            "x-cablevib",
+        ] {
+            assert!(!is_cablevib_node(other), "{other}");
+        }
+    }
+
+    #[test]
+    fn nodes_must_carry_the_prefix() {
+        assert!(matches!(
+            create_node("controller"),
+            Err(ServiceError::Usage(_))
+        ));
     }
 }
