@@ -78,12 +78,12 @@ pub struct MapConfig {
 /// Grid values lo, lo + step, …, hi (the last value snaps to hi when within 1e-9 step).
 pub fn grid_axis(iv: Interval, step: f64) -> Result<Vec<f64>, StudyError> {
     if !(step.is_finite() && step > 0.0) {
-        return Err(StudyError::Usage(format!("--step {step}: must be > 0")));
+        return Err(StudyError::Usage(format!("--step {step:?}: must be > 0")));
     }
     let n = ((iv.hi - iv.lo) / step + 1e-9).floor() as usize + 1;
     if n > MAX_AXIS_VALUES {
         return Err(StudyError::Usage(format!(
-            "{n} grid values on [{}, {}] at step {step}: too many",
+            "{n} grid values on [{:?}, {:?}] at step {step:?}: too many",
             iv.lo, iv.hi
         )));
     }
