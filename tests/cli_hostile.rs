@@ -168,6 +168,12 @@ fn subnormal_numbers_print_compactly() {
             "--step -5e-324",
         ),
         (
+            // A subnormal step: an infinite count, not an empty map.
+            "map --step 5e-324",
+            &["map", "spatial-paper", "--step", "5e-324"][..],
+            "at step 5e-324: too many",
+        ),
+        (
             "demo --required-hz",
             &["demo", "--required-hz=-5e-324"][..],
             "--required-hz -5e-324",
