@@ -55,11 +55,18 @@ struct Args {
     outage_ms: f64,
 }
 
+/// Longest `--seconds`, s: a day, far beyond any run, keeps the latency log's size finite.
+const MAX_SECONDS: f64 = 86_400.0;
+/// Most latency samples kept (800 MB); later ones are counted as dropped.
+const MAX_LOGGED_SAMPLES: usize = 100_000_000;
+
 fn main() -> anyhow::Result<()> {
+    default_sigpipe();
     let a = Args::parse();
     anyhow::ensure!(
-        a.seconds.is_finite() && a.seconds > 0.0,
-        "--seconds must be finite and > 0"
+        a.seconds.is_finite() && a.seconds > 0.0 && a.seconds <= MAX_SECONDS,
+        "--seconds {:?} must be in (0, {MAX_SECONDS}] s",
+        a.seconds
     );
     anyhow::ensure!(
         a.outage_ms.is_finite() && a.outage_ms > 0.0,
@@ -74,7 +81,7 @@ fn main() -> anyhow::Result<()> {
         names.estimate, a.seconds, a.wait, a.required_hz
     );
 
-    let capacity = (a.seconds * 20_000.0) as usize + 1000;
+    let capacity = ((a.seconds * 20_000.0) as usize + 1000).min(MAX_LOGGED_SAMPLES);
     let mut latency = SampleLog::with_capacity(capacity);
     let mut margin_rtt = SampleLog::with_capacity(capacity);
     let mut status_counts = StatusHistogram::default();
@@ -179,4 +186,13 @@ fn main() -> anyhow::Result<()> {
         println!("  {stale} estimates did not advance the pose sequence");
     }
     Ok(())
+}
+
+/// Restores the default action of SIGPIPE, as the `cablevib` binary does: `controller | head`
+/// ends quietly instead of panicking in `println!`.
+fn default_sigpipe() {
+    // SAFETY: called first in main, before any thread exists; SIG_DFL is a valid disposition.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
 }

@@ -50,20 +50,55 @@ struct Args {
     wait_for_service_s: f64,
 }
 
+/// Longest `--seconds`, s: a day of poses, far beyond any replay, keeps the pose count
+/// (seconds × rate) and every due time representable (1e300 s would wrap the count to 0).
+const MAX_SECONDS: f64 = 86_400.0;
+/// Longest `--wait-for-service-s`, s: an hour is longer than any service start-up, and keeps
+/// the deadline a representable `Duration`.
+const MAX_WAIT_FOR_SERVICE_S: f64 = 3600.0;
+/// Highest `--rate-hz`, Hz: well above the service's 1 kHz control rate.
+const MAX_RATE_HZ: f64 = 100_000.0;
+
+/// `--seconds` (or the file's duration, or 10 s) checked against [`MAX_SECONDS`].
+fn checked_seconds(seconds: f64) -> anyhow::Result<f64> {
+    if !(seconds.is_finite() && (0.0..=MAX_SECONDS).contains(&seconds)) {
+        bail!("--seconds {seconds:?} must be in [0, {MAX_SECONDS}] s");
+    }
+    Ok(seconds)
+}
+
+/// `--wait-for-service-s` as a duration (negative: do not wait).
+fn checked_wait(wait_s: f64) -> anyhow::Result<Duration> {
+    if !(wait_s.is_finite() && wait_s <= MAX_WAIT_FOR_SERVICE_S) {
+        bail!("--wait-for-service-s {wait_s:?} must be finite and ≤ {MAX_WAIT_FOR_SERVICE_S} s");
+    }
+    Duration::try_from_secs_f64(wait_s.max(0.0))
+        .with_context(|| format!("--wait-for-service-s {wait_s:?}"))
+}
+
+/// The pose period of `--rate-hz`.
+fn checked_period(rate_hz: f64) -> anyhow::Result<Duration> {
+    if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= MAX_RATE_HZ) {
+        bail!("--rate-hz {rate_hz:?} must be in (0, {MAX_RATE_HZ}] Hz");
+    }
+    Duration::try_from_secs_f64(1.0 / rate_hz)
+        .with_context(|| format!("--rate-hz {rate_hz:?}: its period is not a representable time"))
+}
+
 fn main() -> anyhow::Result<()> {
+    default_sigpipe();
     let a = Args::parse();
-    if !(a.rate_hz.is_finite() && a.rate_hz > 0.0 && a.rate_hz <= 100_000.0) {
-        bail!("--rate-hz {} must be in (0, 100000] Hz", a.rate_hz);
+    let period = checked_period(a.rate_hz)?;
+    let wait_for_service = checked_wait(a.wait_for_service_s)?;
+    if let Some(s) = a.seconds {
+        checked_seconds(s)?;
     }
     let scene = cablevib::scene::Scene::load(&a.scene).context("loading the scene")?;
     let trajectory = match &a.csv {
         Some(path) => Trajectory::from_csv(path)?,
         None => Trajectory::circle(&scene, a.period_s)?,
     };
-    let seconds = a.seconds.or(trajectory.duration_s()).unwrap_or(10.0);
-    if !(seconds.is_finite() && seconds >= 0.0) {
-        bail!("--seconds {seconds} must be finite and ≥ 0");
-    }
+    let seconds = checked_seconds(a.seconds.or(trajectory.duration_s()).unwrap_or(10.0))?;
     let schedule = match &a.t_min {
         Some(s) => TminSchedule::parse(s)?,
         None => TminSchedule::default(),
@@ -72,7 +107,7 @@ fn main() -> anyhow::Result<()> {
     let names = ServiceNames::new(&a.instance);
     let node = create_node("cablevib-replay")?;
     let input = PoseInput::open(&node, &names)?;
-    let wait_until = Instant::now() + Duration::from_secs_f64(a.wait_for_service_s.max(0.0));
+    let wait_until = Instant::now() + wait_for_service;
     while !input.service_connected() && Instant::now() < wait_until {
         if node.wait(Duration::from_millis(10)).is_err() {
             return Ok(());
@@ -97,6 +132,7 @@ fn main() -> anyhow::Result<()> {
     let (mut sent, mut setpoints, mut late) = (0u64, 0u64, 0u64);
     for k in 0..n {
         let t_s = k as f64 / a.rate_hz;
+        // t_s ≤ MAX_SECONDS: representable.
         let due = start + Duration::from_secs_f64(t_s);
         let now = Instant::now();
         if due > now {
@@ -104,7 +140,7 @@ fn main() -> anyhow::Result<()> {
             if node.wait(due - now).is_err() {
                 break;
             }
-        } else if now - due > Duration::from_secs_f64(1.0 / a.rate_hz) {
+        } else if now - due > period {
             late += 1;
         }
         let current = schedule.step_at(t_s);
@@ -144,4 +180,33 @@ fn main() -> anyhow::Result<()> {
         sent as f64 / elapsed.max(1e-9)
     );
     Ok(())
+}
+
+/// Restores the default action of SIGPIPE, as the `cablevib` binary does: `replay | head`
+/// ends quietly instead of panicking in `println!`.
+fn default_sigpipe() {
+    // SAFETY: called first in main, before any thread exists; SIG_DFL is a valid disposition.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hostile_durations_are_errors_not_panics() {
+        let msg = checked_wait(1e300).unwrap_err().to_string();
+        assert!(msg.contains("--wait-for-service-s 1e300 must be"), "{msg}");
+        assert_eq!(checked_wait(-1.0).unwrap(), Duration::ZERO);
+        assert_eq!(checked_wait(5.0).unwrap(), Duration::from_secs(5));
+        let msg = checked_seconds(1e300).unwrap_err().to_string();
+        assert!(msg.contains("--seconds 1e300 must be"), "{msg}");
+        assert!(checked_seconds(f64::NAN).is_err());
+        assert_eq!(checked_seconds(10.0).unwrap(), 10.0);
+        assert!(checked_period(5e-324).is_err());
+        assert!(checked_period(0.0).is_err());
+        assert_eq!(checked_period(1000.0).unwrap(), Duration::from_millis(1));
+    }
 }

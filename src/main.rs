@@ -9,7 +9,21 @@ fn allocations() -> u64 {
     cablevib::alloc_count::allocations()
 }
 
+/// Restores the default action of SIGPIPE (terminate quietly), which the Rust runtime sets to
+/// "ignore" before `main`: a reader that closes the pipe early (`cablevib ... | head`) then
+/// ends the process the way it ends `cat` or `grep` (status 141 in a shell), instead of
+/// `println!` panicking on EPIPE. Done once here, so every print of every command (and
+/// clap's help) is covered. iceoryx2 does not rely on SIGPIPE being ignored: its socket-pair
+/// sends pass MSG_NOSIGNAL and its events use datagram sockets, which never raise it.
+fn default_sigpipe() {
+    // SAFETY: called first in main, before any thread exists; SIG_DFL is a valid disposition.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 fn main() {
+    default_sigpipe();
     let cli = cablevib::cli::Cli::parse();
     if let Err(e) = run(cli) {
         eprintln!("cablevib: {e:#}");

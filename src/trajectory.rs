@@ -38,7 +38,7 @@ pub const SAMPLE_PERIOD_S: f64 = 1e-3;
 #[derive(Debug, thiserror::Error)]
 pub enum TrajectoryError {
     /// A circle parameter is out of range.
-    #[error("circle {what} {value} must be finite and {bound}")]
+    #[error("circle {what} {value:?} must be finite and {bound}")]
     BadCircle {
         /// Which parameter (`radius_m`, `period_s`).
         what: &'static str,

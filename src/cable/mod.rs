@@ -45,7 +45,7 @@ pub enum CableError {
     BadTension(f64),
     /// The element cannot hang: a vertical element whose tension is below its own weight
     /// (the catenary's low point would need a slack segment).
-    #[error("catenary element cannot carry its own weight (tension {tension_n} N, element weight {weight_n} N)")]
+    #[error("catenary element cannot carry its own weight (tension {tension_n:?} N, element weight {weight_n:?} N)")]
     TooSlack {
         /// Tension, N.
         tension_n: f64,

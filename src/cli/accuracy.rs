@@ -14,6 +14,8 @@ use std::time::Instant;
 
 /// Default of `--period-s`, s.
 const DEFAULT_PERIOD_S: f64 = 4.0;
+/// Default of `--out-dir`: a directory of its own, not the repository's docs/.
+const DEFAULT_OUT_DIR: &str = "accuracy-out";
 /// Default of `--rounds`.
 const DEFAULT_ROUNDS: usize = 5;
 /// Default of `--dense-max`.
@@ -27,8 +29,9 @@ pub struct AccuracyArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
     /// Output directory: writes OUT/accuracy.md (this scene's section), OUT/img/*.svg
-    /// and OUT/data/*.csv.
-    #[arg(long, default_value = "docs")]
+    /// and OUT/data/*.csv. A new directory by default, so that a run from a checkout never
+    /// rewrites the repository's docs/ (regenerate those with `--out-dir docs`).
+    #[arg(long, default_value = DEFAULT_OUT_DIR)]
     pub out_dir: PathBuf,
     /// Largest number of elements per cable (FEM and catenary).
     #[arg(long, default_value_t = 80)]

@@ -3,11 +3,12 @@
 
 use super::args::{resolve_scene, SceneArgs};
 use super::{json_f64, CliError};
-use crate::estimator::{reference_analysis, Estimator, Status};
+use crate::estimator::{reference_analysis, BuildError, Estimator, Status};
 use crate::kinematics::Pose;
 use crate::modal::lambda_to_hz;
 use crate::scene::{ElementKind, Scene};
 use clap::Args;
+use nalgebra::Vector3;
 use std::time::Instant;
 
 /// `cablevib analyze`.
@@ -22,7 +23,9 @@ pub struct AnalyzeArgs {
     /// One JSON object on stdout instead of tables.
     #[arg(long)]
     pub json: bool,
-    /// Print what the real-time path computes (f1, end-effector mode, tensions, status).
+    /// Print what the real-time path computes (f1, end-effector mode, tensions, status). A pose
+    /// the estimator refuses (e.g. outside the workspace) is still printed with its status,
+    /// then the command exits with code 1 naming that status.
     #[arg(long)]
     pub realtime: bool,
 }
@@ -32,8 +35,16 @@ pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
     let s = resolve_scene(&a.scene)?;
     let pos = s.ee_position_m;
     let s = if s.model.element == ElementKind::Auto {
-        let (resolved, choice) =
-            crate::estimator::resolve_auto(&s).map_err(|e| CliError::Analysis(e.to_string()))?;
+        let resolved = match crate::estimator::resolve_auto(&s) {
+            Err(BuildError::DefaultPose { .. }) if a.realtime && a.scene.position.is_some() => {
+                // --position is not the scene's own pose: the auto model is chosen where the
+                // service would choose it, and the requested pose gets its status below.
+                crate::estimator::resolve_auto(&at_own_default_pose(a, &s)?)
+                    .map(|(r, c)| (at_position(&r, pos), c))
+            }
+            r => r,
+        };
+        let (resolved, choice) = resolved.map_err(|e| CliError::Analysis(e.to_string()))?;
         if !a.json {
             println!("{choice}");
         }
@@ -98,8 +109,34 @@ pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+/// The scene with `position` as its end-effector position.
+fn at_position(s: &Scene, position: Vector3<f64>) -> Scene {
+    let mut s = s.clone();
+    s.ee_position_m = position;
+    s
+}
+
+/// `s` moved back to the end-effector position of its scene file (before --position).
+fn at_own_default_pose(a: &AnalyzeArgs, s: &Scene) -> Result<Scene, CliError> {
+    Ok(at_position(s, Scene::load(&a.scene.scene)?.ee_position_m))
+}
+
+/// The estimator of `s` at `s.ee_position_m`. A --position the estimator cannot be built at
+/// is not the scene's fault: the estimator is then built at the scene's own pose, as the
+/// service builds it, and the requested pose is estimated like any other (its status, e.g.
+/// `outside_workspace`, names the real cause).
+fn realtime_estimator(a: &AnalyzeArgs, s: &Scene) -> Result<Estimator, CliError> {
+    match Estimator::new(s) {
+        Err(BuildError::DefaultPose { .. }) if a.scene.position.is_some() => {
+            Estimator::new(&at_own_default_pose(a, s)?)
+        }
+        r => r,
+    }
+    .map_err(|e| CliError::Analysis(e.to_string()))
+}
+
 fn analyze_realtime(a: &AnalyzeArgs, s: &Scene) -> Result<(), CliError> {
-    let mut est = Estimator::new(s).map_err(|e| CliError::Analysis(e.to_string()))?;
+    let mut est = realtime_estimator(a, s)?;
     let t0 = Instant::now();
     let e = *est.update(&Pose::at(s.ee_position_m), s.t_min_n);
     let ns = t0.elapsed().as_nanos();

@@ -7,6 +7,7 @@ use super::{AllocCounter, CliError};
 use crate::scene::Scene;
 use crate::service::{BenchIpcConfig, DemoConfig, ServerConfig, TminSchedule, WaitMode};
 use clap::Args;
+use std::time::Duration;
 
 /// `cablevib serve` options.
 #[derive(Debug, Clone, Args)]
@@ -29,7 +30,7 @@ pub struct ServeArgs {
     /// permitted.
     #[arg(long)]
     pub realtime: bool,
-    /// Period of the statistics log line, s (0 = none).
+    /// Period of the statistics log line, s (0 = none; else at least 1 ms, at most a day).
     #[arg(long, default_value_t = 5.0)]
     pub stats_period_s: f64,
     /// Stop after this many estimator cycles (tests, benchmarks).
@@ -91,20 +92,38 @@ pub struct BenchIpcArgs {
     pub json: bool,
 }
 
+/// Longest `--stats-period-s`, s: one line a day is already rarer than anyone watches a log;
+/// the bound keeps the period a representable `Duration` (1e300 s is not).
+pub const MAX_STATS_PERIOD_S: f64 = 86_400.0;
+
+/// Shortest non-zero `--stats-period-s`, s: a line per millisecond is already more than a log
+/// can take (5e-324 s would round to a zero period, a line every cycle).
+pub const MIN_STATS_PERIOD_S: f64 = 1e-3;
+
+/// The statistics period of `--stats-period-s` (None for 0).
+fn stats_period(s: f64) -> Result<Option<Duration>, CliError> {
+    let bad = || {
+        CliError::Usage(format!(
+            "--stats-period-s {s:?} must be 0 (none) or in [{MIN_STATS_PERIOD_S}, {MAX_STATS_PERIOD_S}] s"
+        ))
+    };
+    if s == 0.0 {
+        return Ok(None);
+    }
+    if !(MIN_STATS_PERIOD_S..=MAX_STATS_PERIOD_S).contains(&s) {
+        return Err(bad());
+    }
+    Duration::try_from_secs_f64(s).map(Some).map_err(|_| bad())
+}
+
 /// `cablevib serve`: loads the scene and runs the service until SIGINT/SIGTERM.
 pub fn serve(a: &ServeArgs, allocations: AllocCounter) -> Result<(), CliError> {
-    if !(a.stats_period_s.is_finite() && a.stats_period_s >= 0.0) {
-        return Err(CliError::Usage(format!(
-            "--stats-period-s {} must be finite and ≥ 0",
-            a.stats_period_s
-        )));
-    }
+    let stats_period = stats_period(a.stats_period_s)?;
     let scene = Scene::load(&a.scene)?;
     let cfg = ServerConfig {
         instance: a.instance.clone(),
         wait: a.wait,
-        stats_period: (a.stats_period_s > 0.0)
-            .then(|| std::time::Duration::from_secs_f64(a.stats_period_s)),
+        stats_period,
         max_cycles: a.max_cycles,
         cpu: a.cpu,
         realtime: a.realtime,

@@ -18,7 +18,7 @@ pub const T_MIN_FLOOR_N: f64 = f64::MIN_POSITIVE;
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum TminRangeError {
     /// NaN or infinite.
-    #[error("t_min must be finite, got {t_min_n} N")]
+    #[error("t_min must be finite, got {t_min_n:?} N")]
     NotFinite {
         /// The value given, N.
         t_min_n: f64,
@@ -30,7 +30,7 @@ pub enum TminRangeError {
         t_min_n: f64,
     },
     /// Above the upper bound.
-    #[error("t_min = {t_min_n} N exceeds t_max = {t_max_n} N")]
+    #[error("t_min = {t_min_n:?} N exceeds t_max = {t_max_n:?} N")]
     AboveTmax {
         /// The value given, N.
         t_min_n: f64,

@@ -101,7 +101,7 @@ impl Checker<'_> {
         if x.is_finite() && x > 0.0 {
             Ok(x)
         } else {
-            Err(self.inv(key, format!("must be finite and > 0, got {x}")))
+            Err(self.inv(key, format!("must be finite and > 0, got {x:?}")))
         }
     }
 }
@@ -241,14 +241,14 @@ fn validate_model(ck: &Checker, raw: &RawModel) -> Result<(usize, f64), SceneErr
     if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
         return Err(ck.inv(
             "model.f1_tolerance",
-            format!("must be in (0, 1), got {tol}"),
+            format!("must be in (0, 1), got {tol:?}"),
         ));
     }
     let part = raw.ee_participation_min;
     if !(part.is_finite() && part > 0.0 && part <= 1.0) {
         return Err(ck.inv(
             "model.ee_participation_min",
-            format!("must be in (0, 1], got {part}"),
+            format!("must be in (0, 1], got {part:?}"),
         ));
     }
     Ok((n as usize, part))
@@ -349,7 +349,7 @@ fn validate_orientation(ck: &Checker, raw: Option<&RawArray>) -> Result<[f64; 4]
     if !orientation.iter().all(|x| x.is_finite()) || (qn - 1.0).abs() > QUATERNION_NORM_TOL {
         return Err(ck.inv(
             "end_effector.orientation",
-            format!("must be a unit quaternion [w, x, y, z], norm {qn}"),
+            format!("must be a unit quaternion [w, x, y, z], norm {qn:?}"),
         ));
     }
     Ok(orientation)

@@ -137,19 +137,19 @@ fn validate(a: &DemoConfig) -> Result<(), ServiceError> {
     let bad = |m: String| Err(ServiceError::Usage(m));
     if !(a.seconds.is_finite() && a.seconds > 0.0 && a.seconds <= MAX_SECONDS) {
         return bad(format!(
-            "--seconds {} must be in (0, {MAX_SECONDS}]",
+            "--seconds {:?} must be in (0, {MAX_SECONDS}]",
             a.seconds
         ));
     }
     if !(a.rate_hz.is_finite() && a.rate_hz >= 1.0 && a.rate_hz <= MAX_RATE_HZ) {
         return bad(format!(
-            "--rate-hz {} must be in [1, {MAX_RATE_HZ}] Hz",
+            "--rate-hz {:?} must be in [1, {MAX_RATE_HZ}] Hz",
             a.rate_hz
         ));
     }
     if !(a.required_hz.is_finite() && a.required_hz > 0.0) {
         return bad(format!(
-            "--required-hz {} must be finite and > 0",
+            "--required-hz {:?} must be finite and > 0",
             a.required_hz
         ));
     }

@@ -576,7 +576,7 @@ impl Server {
             );
             if let Some(v) = p.rejected_t_min {
                 tracing::warn!(
-                    "rejected a T_min set-point with a value of {v} N (each must be finite, \
+                    "rejected a T_min set-point with a value of {v:?} N (each must be finite, \
                      ≥ {:e} N and ≤ its cable's t_max, ≤ {} N); {in_force} N stays in force",
                     crate::scene::T_MIN_FLOOR_N,
                     display_range(self.t_max_range_n())

@@ -78,15 +78,20 @@ pub struct MapConfig {
 /// Grid values lo, lo + step, …, hi (the last value snaps to hi when within 1e-9 step).
 pub fn grid_axis(iv: Interval, step: f64) -> Result<Vec<f64>, StudyError> {
     if !(step.is_finite() && step > 0.0) {
-        return Err(StudyError::Usage(format!("--step {step}: must be > 0")));
+        return Err(StudyError::Usage(format!("--step {step:?}: must be > 0")));
     }
-    let n = ((iv.hi - iv.lo) / step + 1e-9).floor() as usize + 1;
-    if n > MAX_AXIS_VALUES {
+    // Counted in f64 first: a subnormal step gives an infinite count, which `as usize`
+    // saturates and `+ 1` wrapped to an empty grid.
+    let steps = ((iv.hi - iv.lo) / step + 1e-9).floor();
+    if !(steps < MAX_AXIS_VALUES as f64) {
         return Err(StudyError::Usage(format!(
-            "{n} grid values on [{}, {}] at step {step}: too many",
-            iv.lo, iv.hi
+            "{:?} grid values on [{:?}, {:?}] at step {step:?}: too many (at most {MAX_AXIS_VALUES})",
+            steps + 1.0,
+            iv.lo,
+            iv.hi
         )));
     }
+    let n = steps as usize + 1;
     Ok((0..n)
         .map(|i| {
             // Snap to a 1e-9 m lattice so 0.25 + 7 × 0.1 prints as 0.95.

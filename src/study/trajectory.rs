@@ -123,7 +123,7 @@ pub fn run(s: &Scene, cfg: &TrajectoryConfig) -> Result<TrajectoryStudy, StudyEr
         .find(|t| !(t.is_finite() && **t >= 0.0 && **t <= s.t_max_n))
     {
         return Err(StudyError::Usage(format!(
-            "--t-mins {t}: must be within [0, t_max = {} N]",
+            "--t-mins {t:?}: must be within [0, t_max = {:?} N]",
             s.t_max_n
         )));
     }

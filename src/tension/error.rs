@@ -5,7 +5,7 @@
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum TensionError {
     /// T_min > T_max, or a bound not finite, or T_min < 0.
-    #[error("invalid tension bounds: t_min = {t_min_n} N, t_max = {t_max_n} N (need 0 ≤ t_min ≤ t_max, finite)")]
+    #[error("invalid tension bounds: t_min = {t_min_n:?} N, t_max = {t_max_n:?} N (need 0 ≤ t_min ≤ t_max, finite)")]
     InvalidBounds {
         /// Lower bound, N.
         t_min_n: f64,
