@@ -61,7 +61,7 @@ pub fn clarabel_reference_wrench(
     clarabel_reference_bounds(g, w_n, &vec![t_min_n; n], &vec![t_max_n; n])
 }
 
-/// [`clarabel_reference_wrench`] with per-cable bounds t_min_n[i] ≤ T_i ≤ t_max_n[i] (N, one
+/// [`clarabel_reference_wrench`] with per-cable bounds `t_min_n[i] ≤ T_i ≤ t_max_n[i]` (N, one
 /// value per cable): the reference of [`TensionSolver::solve_wrench_bounds`].
 pub fn clarabel_reference_bounds(
     g: &Geometry,

@@ -156,7 +156,7 @@ impl TensionSolver {
     }
 
     /// Solve for geometry `g`, wrench `w` = (force N, moment N·m) and per-cable bounds
-    /// t_min_n[i] ≤ T_i ≤ t_max_n[i] (N; one value per cable). With every lower bound equal
+    /// `t_min_n[i] ≤ T_i ≤ t_max_n[i]` (N; one value per cable). With every lower bound equal
     /// and every upper bound equal this is [`Self::solve_wrench`], bit for bit. No
     /// allocation. A slice of the wrong length or a bound pair that is not finite,
     /// 0 ≤ t_min ≤ t_max is [`TensionError::InvalidBounds`] (with the first bad pair).
