@@ -1156,17 +1156,7 @@ fn services_pre_created_with_other_limits_make_serve_refuse() {
     // creator chose it; refused.
     let inst = instance("hostile_pose_buffer");
     let names = ServiceNames::new(&inst);
-    let _pose = node
-        .service_builder(&iox_name(&names.pose))
-        .publish_subscribe::<PoseSample>()
-        .max_publishers(MAX_PUBLISHERS)
-        .max_subscribers(MAX_SUBSCRIBERS)
-        .max_nodes(MAX_NODES)
-        .subscriber_max_buffer_size(1)
-        .history_size(0)
-        .enable_safe_overflow(false)
-        .create()
-        .expect("hostile pose service");
+    let _pose = hostile_pubsub::<PoseSample>(&node, &names.pose, MAX_PUBLISHERS, 1, false);
     assert_serve_refuses(
         &inst,
         &format!(
@@ -1178,17 +1168,8 @@ fn services_pre_created_with_other_limits_make_serve_refuse() {
     // Pose buffer right, no safe overflow: publishers would block or drop the newest pose.
     let inst = instance("hostile_pose_overflow");
     let names = ServiceNames::new(&inst);
-    let _pose = node
-        .service_builder(&iox_name(&names.pose))
-        .publish_subscribe::<PoseSample>()
-        .max_publishers(MAX_PUBLISHERS)
-        .max_subscribers(MAX_SUBSCRIBERS)
-        .max_nodes(MAX_NODES)
-        .subscriber_max_buffer_size(POSE_BUFFER)
-        .history_size(0)
-        .enable_safe_overflow(false)
-        .create()
-        .expect("hostile pose service");
+    let _pose =
+        hostile_pubsub::<PoseSample>(&node, &names.pose, MAX_PUBLISHERS, POSE_BUFFER, false);
     assert_serve_refuses(
         &inst,
         &format!(
@@ -1200,17 +1181,8 @@ fn services_pre_created_with_other_limits_make_serve_refuse() {
     // Estimate service admitting 4 publishers: room for impostors.
     let inst = instance("hostile_estimate");
     let names = ServiceNames::new(&inst);
-    let _estimate = node
-        .service_builder(&iox_name(&names.estimate))
-        .publish_subscribe::<EstimateSample>()
-        .max_publishers(4)
-        .max_subscribers(MAX_SUBSCRIBERS)
-        .max_nodes(MAX_NODES)
-        .subscriber_max_buffer_size(ESTIMATE_BUFFER)
-        .history_size(0)
-        .enable_safe_overflow(true)
-        .create()
-        .expect("hostile estimate service");
+    let _estimate =
+        hostile_pubsub::<EstimateSample>(&node, &names.estimate, 4, ESTIMATE_BUFFER, true);
     assert_serve_refuses(
         &inst,
         &format!(
@@ -1237,6 +1209,27 @@ fn services_pre_created_with_other_limits_make_serve_refuse() {
             names.margin
         ),
     );
+}
+
+/// A publish-subscribe service carrying `M` created the way another program might: our
+/// subscriber and node limits, history 0, and the given publishers, buffer and overflow.
+fn hostile_pubsub<M: cablevib_ipc::Message>(
+    node: &Node<ipc::Service>,
+    name: &str,
+    max_publishers: usize,
+    buffer: usize,
+    safe_overflow: bool,
+) -> iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, M, ()> {
+    node.service_builder(&iox_name(name))
+        .publish_subscribe::<M>()
+        .max_publishers(max_publishers)
+        .max_subscribers(MAX_SUBSCRIBERS)
+        .max_nodes(MAX_NODES)
+        .subscriber_max_buffer_size(buffer)
+        .history_size(0)
+        .enable_safe_overflow(safe_overflow)
+        .create()
+        .expect("pre-created service")
 }
 
 /// The dead nodes named `name`.
