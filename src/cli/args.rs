@@ -4,7 +4,7 @@
 use super::CliError;
 use crate::scene::{ElementKind, Scene, MAX_ELEMENTS_PER_CABLE};
 use crate::study::map::Interval;
-use clap::Args;
+use clap::{Args, ValueEnum};
 use nalgebra::Vector3;
 
 /// Scene and model overrides shared by the offline commands.
@@ -21,9 +21,36 @@ pub struct SceneArgs {
     /// Elements per cable (default: the scene's).
     #[arg(long)]
     pub elements: Option<usize>,
-    /// Element model: fem, catenary, continuous, massless or auto (default: the scene's).
-    #[arg(long)]
-    pub element: Option<String>,
+    /// Element model (default: the scene's).
+    #[arg(long, value_enum)]
+    pub element: Option<ElementArg>,
+}
+
+/// `--element` values: the cable models of [`ElementKind`], as the command line spells them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ElementArg {
+    /// Straight two-node truss elements with geometric stiffness.
+    Fem,
+    /// The paper's catenary element.
+    Catenary,
+    /// Continuous taut string / bar: the exact N → ∞ limit of fem.
+    Continuous,
+    /// Massless cables: springs; end-effector modes only.
+    Massless,
+    /// The cheapest model within the scene's f1 tolerance.
+    Auto,
+}
+
+impl From<ElementArg> for ElementKind {
+    fn from(e: ElementArg) -> ElementKind {
+        match e {
+            ElementArg::Fem => ElementKind::Fem,
+            ElementArg::Catenary => ElementKind::Catenary,
+            ElementArg::Continuous => ElementKind::Continuous,
+            ElementArg::Massless => ElementKind::Massless,
+            ElementArg::Auto => ElementKind::Auto,
+        }
+    }
 }
 
 /// Comma-separated finite numbers.
@@ -90,14 +117,7 @@ pub fn resolve_scene(a: &SceneArgs) -> Result<Scene, CliError> {
         s.set_uniform_t_min(t)
             .map_err(|e| CliError::Usage(format!("--t-min: {e}")))?;
     }
-    let element = match &a.element {
-        Some(e) => ElementKind::parse(e).ok_or_else(|| {
-            CliError::Usage(format!(
-                "--element `{e}`: expected fem, catenary, continuous, massless or auto"
-            ))
-        })?,
-        None => s.model.element,
-    };
+    let element = a.element.map_or(s.model.element, ElementKind::from);
     let n = a.elements.unwrap_or(s.model.elements_per_cable);
     if n == 0 || n > MAX_ELEMENTS_PER_CABLE {
         return Err(CliError::Usage(format!(

@@ -12,6 +12,7 @@
 //! | `map` | [`map`](mod@map) | f1 over a workspace grid |
 //! | `trajectory` | [`trajectory`](mod@trajectory) | f1 along the circle or a CSV path |
 //! | `sweep-tmin` | [`sweep_tmin`] | f1 against T_min with the √T_min fit |
+//! | `completions`, `man` | [`completions`](mod@completions) | shell completions and the man page |
 //!
 //! Functions here return `Result<_, CliError>`; the binary maps errors to a one-line reason
 //! and a non-zero exit code.
@@ -20,6 +21,7 @@ pub mod accuracy;
 pub mod analyze;
 pub mod args;
 pub mod bench;
+pub mod completions;
 pub mod error;
 pub mod map;
 pub mod serve;
@@ -64,6 +66,10 @@ pub enum Command {
     Trajectory(trajectory::TrajectoryArgs),
     /// f1 against T_min, with the √T_min fit.
     SweepTmin(sweep_tmin::SweepTminArgs),
+    /// Print a shell completion script (bash, zsh, fish, elvish, powershell).
+    Completions(completions::CompletionsArgs),
+    /// Print the man page (roff): `cablevib man > cablevib.1`.
+    Man(completions::ManArgs),
 }
 
 /// Heap allocation counter supplied by the binary's global allocator (0 when none).
@@ -81,6 +87,8 @@ pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
         Command::Map(a) => map::run(&a),
         Command::Trajectory(a) => trajectory::run(&a),
         Command::SweepTmin(a) => sweep_tmin::run(&a),
+        Command::Completions(a) => completions::completions(&a),
+        Command::Man(a) => completions::man(&a),
     }
 }
 

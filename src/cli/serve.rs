@@ -12,9 +12,14 @@ use std::time::Duration;
 /// `cablevib serve` options.
 #[derive(Debug, Clone, Args)]
 pub struct ServeArgs {
-    /// Scene file (TOML), or `spatial-paper` / `planar-paper` for the embedded paper robots.
-    #[arg(long, default_value = "spatial-paper")]
-    pub scene: String,
+    /// Scene file (TOML), or `spatial-paper` / `planar-paper` for the embedded paper robots
+    /// [default: spatial-paper].
+    #[arg(value_name = "SCENE", conflicts_with = "scene_option")]
+    pub scene: Option<String>,
+    /// The scene as an option, the same as SCENE (what `serve` took before SCENE became
+    /// positional like in the other commands).
+    #[arg(long = "scene", id = "scene_option", value_name = "SCENE")]
+    pub scene_option: Option<String>,
     /// Instance name prefixing every service name ("NAME/cablevib/pose", ...), so that several
     /// robots (or tests) share a machine; empty: the bare names.
     #[arg(long, default_value = "")]
@@ -36,6 +41,19 @@ pub struct ServeArgs {
     /// Stop after this many estimator cycles (tests, benchmarks).
     #[arg(long)]
     pub max_cycles: Option<u64>,
+}
+
+/// The scene `serve` runs when neither SCENE nor `--scene` is given.
+const DEFAULT_SERVE_SCENE: &str = "spatial-paper";
+
+impl ServeArgs {
+    /// The scene asked for: SCENE, else `--scene`, else the spatial paper robot.
+    pub fn scene_name(&self) -> &str {
+        self.scene
+            .as_deref()
+            .or(self.scene_option.as_deref())
+            .unwrap_or(DEFAULT_SERVE_SCENE)
+    }
 }
 
 /// `cablevib demo` options.
@@ -119,7 +137,7 @@ fn stats_period(s: f64) -> Result<Option<Duration>, CliError> {
 /// `cablevib serve`: loads the scene and runs the service until SIGINT/SIGTERM.
 pub fn serve(a: &ServeArgs, allocations: AllocCounter) -> Result<(), CliError> {
     let stats_period = stats_period(a.stats_period_s)?;
-    let scene = Scene::load(&a.scene)?;
+    let scene = Scene::load(a.scene_name())?;
     let cfg = ServerConfig {
         instance: a.instance.clone(),
         wait: a.wait,

@@ -1,0 +1,79 @@
+//! The command line as a tool: completions and the man page come from the parser's own
+//! definitions, `--element` is checked by the parser, and `serve` takes its scene as a
+//! positional argument like the other commands (with `--scene` still accepted).
+
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_cablevib"))
+        .args(args)
+        .output()
+        .expect("run cablevib")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn completions_name_every_subcommand() {
+    for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
+        let o = run(&["completions", shell]);
+        assert!(
+            o.status.success(),
+            "{shell}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let text = stdout(&o);
+        for sub in [
+            "analyze",
+            "bench",
+            "serve",
+            "map",
+            "sweep-tmin",
+            "completions",
+            "man",
+        ] {
+            assert!(text.contains(sub), "{shell} completions lack `{sub}`");
+        }
+    }
+    let o = run(&["completions", "tcsh"]);
+    assert!(!o.status.success(), "an unknown shell is an error");
+}
+
+#[test]
+fn man_page_is_roff_with_the_subcommands() {
+    let o = run(&["man"]);
+    assert!(o.status.success());
+    let text = stdout(&o);
+    assert!(text.contains(".TH cablevib 1"), "no roff title line");
+    assert!(text.contains("analyze") && text.contains("serve"));
+}
+
+#[test]
+fn element_values_come_from_the_parser() {
+    let o = run(&["analyze", "spatial-paper", "--element", "spring"]);
+    assert_eq!(o.status.code(), Some(2), "clap's usage error code");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("possible values: fem, catenary, continuous, massless, auto"),
+        "{err}"
+    );
+}
+
+#[test]
+fn serve_scene_positional_or_option_not_both() {
+    for args in [
+        &["serve", "no-such-scene", "--max-cycles", "1"][..],
+        &["serve", "--scene", "no-such-scene", "--max-cycles", "1"][..],
+    ] {
+        let o = run(args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?}");
+        // Both spellings reach the scene loader, which names the scene it could not read.
+        assert!(err.contains("no-such-scene"), "{args:?}: {err}");
+    }
+    let o = run(&["serve", "a.toml", "--scene", "b.toml"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("cannot be used with"));
+}
