@@ -114,7 +114,11 @@ fn render_constants(out: &mut String) {
     ] {
         writeln!(out, "{name} = {v}").unwrap();
     }
-    assert_eq!(ALL_ATTRIBUTE_KEYS.len(), 6, "a new attribute needs a line here");
+    assert_eq!(
+        ALL_ATTRIBUTE_KEYS.len(),
+        6,
+        "a new attribute needs a line here"
+    );
     out.push_str("\n# iceoryx2 service attribute keys and the units value.\n");
     for (name, v) in [
         ("ATTR_SCHEMA_VERSION", ATTR_SCHEMA_VERSION),
@@ -181,12 +185,21 @@ fn render_struct(out: &mut String, l: &StructLayout) {
 }
 
 fn render_layout_check(out: &mut String) {
-    out.push_str("\n\n# (size, alignment, ((field, offset, size), ...)) per struct, from the Rust table.\n");
+    out.push_str(
+        "\n\n# (size, alignment, ((field, offset, size), ...)) per struct, from the Rust table.\n",
+    );
     out.push_str("LAYOUT = {\n");
     for l in ALL_LAYOUTS {
         writeln!(out, "    {}: ({}, {}, (", l.rust_name, l.size, l.align).unwrap();
         for f in l.fields {
-            writeln!(out, "        ({}, {}, {}),", py_str(f.name), f.offset, f.size).unwrap();
+            writeln!(
+                out,
+                "        ({}, {}, {}),",
+                py_str(f.name),
+                f.offset,
+                f.size
+            )
+            .unwrap();
         }
         out.push_str("    )),\n");
     }
