@@ -257,7 +257,7 @@ fn python_mirror_is_generated_from_the_layout() {
             .lines()
             .zip(want.lines())
             .position(|(a, b)| a != b)
-            .map_or_else(|| got.lines().count().min(want.lines().count()), |i| i);
+            .unwrap_or_else(|| got.lines().count().min(want.lines().count()));
         panic!(
             "{} is out of date (first difference at line {}); regenerate it with \
              {BLESS_ENV}=1 cargo test --release -p cablevib-ipc --test python_mirror",
