@@ -42,7 +42,7 @@ use serde_json::{json, Value};
 
 const BIN: &str = env!("CARGO_BIN_EXE_cablevib");
 /// Pinned Python packages: iceoryx2-python of the crate's version, and the flatbuffers version
-/// that iceoryx2 0.10.0 itself pins.
+/// that iceoryx2 0.10.0 itself pins (installed with `--no-deps`: exactly these two).
 const PIP_PACKAGES: [&str; 2] = ["iceoryx2==0.10.0", "flatbuffers==25.12.19"];
 /// Longest wait for a child process (venv creation and pip install included).
 const TIMEOUT: Duration = Duration::from_secs(300);
@@ -118,7 +118,14 @@ fn venv_python() -> &'static Path {
         let out = run(
             "pip install",
             Command::new(&python)
-                .args(["-m", "pip", "install", "-q", "--disable-pip-version-check"])
+                .args([
+                    "-m",
+                    "pip",
+                    "install",
+                    "-q",
+                    "--disable-pip-version-check",
+                    "--no-deps",
+                ])
                 .args(PIP_PACKAGES),
         );
         assert!(
@@ -276,6 +283,7 @@ fn python_controller_gets_estimates_and_margins() {
     let out = run(
         "controller.py",
         Command::new(python)
+            .env_remove("IOX2_LOG_LEVEL")
             .arg(root().join("examples/python/controller.py"))
             .args([
                 "--instance",
@@ -371,6 +379,7 @@ fn another_schema_version_is_refused_with_one_line() {
     let out = run(
         "controller.py",
         Command::new(python)
+            .env_remove("IOX2_LOG_LEVEL")
             .arg(root().join("examples/python/controller.py"))
             .args([
                 "--instance",
