@@ -215,7 +215,10 @@ fn ctypes_mirror_has_the_rust_layout() {
         "{stdout}{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    assert!(stdout.starts_with("layout ok: 5 structs"), "{stdout}");
+    assert!(
+        stdout.starts_with(&format!("layout ok: {} structs", ALL_LAYOUTS.len())),
+        "{stdout}"
+    );
 }
 
 /// The pose every test publishes: a point of the paper's circle.
@@ -306,9 +309,10 @@ fn python_controller_gets_estimates_and_margins() {
     );
     let s: Value = serde_json::from_str(stdout.lines().last().unwrap_or(""))
         .unwrap_or_else(|e| panic!("{e}: {stdout}"));
+    let lines: Vec<&str> = stdout.lines().collect();
     eprintln!(
-        "{poses} poses sent; controller.py: {}",
-        stdout.lines().rev().nth(1).unwrap_or("")
+        "{poses} poses sent; controller.py said:\n{}",
+        lines[..lines.len().saturating_sub(1)].join("\n")
     );
 
     let estimates = s["estimates"].as_u64().unwrap();

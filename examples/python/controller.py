@@ -175,9 +175,14 @@ class Summary:
         self.margin_min = math.inf
         self.last_margin = None
         self.lost_margins = 0
+        # Pose timestamp -> estimate received, and margin request sent -> answer received, ns
+        # (CLOCK_MONOTONIC, the clock of every *timestamp_ns field).
+        self.latency_ns = []
+        self.margin_rtt_ns = []
 
-    def estimate(self, e):
+    def estimate(self, e, now_ns):
         self.estimates += 1
+        self.latency_ns.append(now_ns - e.pose_timestamp_ns)
         name = cv.status_str(e.status)
         self.statuses[name] = self.statuses.get(name, 0) + 1
         if e.status == cv.STATUS_OK:
@@ -185,8 +190,9 @@ class Summary:
             self.f1_max = max(self.f1_max, e.f1_hz)
         self.last_estimate = e
 
-    def margin(self, r):
+    def margin(self, r, rtt_ns):
         self.margins += 1
+        self.margin_rtt_ns.append(rtt_ns)
         name = cv.status_str(r.status)
         self.margin_statuses[name] = self.margin_statuses.get(name, 0) + 1
         if r.status == cv.STATUS_OK:
@@ -209,6 +215,8 @@ class Summary:
             "margin_statuses": self.margin_statuses,
             "margin_min_hz": num(self.margin_min),
             "lost_margins": self.lost_margins,
+            "latency_us": percentiles_us(self.latency_ns),
+            "margin_rtt_us": percentiles_us(self.margin_rtt_ns),
             "last_margin": None if m is None else {
                 "status": cv.status_str(m.status), "pose_sequence": m.pose_sequence,
                 "f1_hz": num(m.f1_hz), "margin_hz": num(m.margin_hz),
@@ -216,27 +224,40 @@ class Summary:
         }, sort_keys=True)
 
 
+def percentiles_us(samples_ns):
+    """{"p50", "p99", "max"} of `samples_ns` in µs (nearest rank), or None without samples."""
+    if not samples_ns:
+        return None
+    v = sorted(samples_ns)
+
+    def rank(q):
+        return v[min(len(v) - 1, max(0, math.ceil(q * len(v)) - 1))] * 1e-3
+
+    return {"p50": rank(0.50), "p99": rank(0.99), "max": v[-1] * 1e-3}
+
+
 def run(ports, a):
     s = Summary(ports.attributes)
     start = time.monotonic()
     next_print = 1.0
-    pending, sent_at, sequence, asked_at = None, 0.0, 0, 0
+    pending, sent_ns, sequence, asked_at = None, 0, 0, 0
     while time.monotonic() - start < a.seconds:
         for e in ports.estimates():
-            s.estimate(e)
+            s.estimate(e, time.monotonic_ns())
         if pending is not None:
             r = take_response(pending)
             if r is not None:
-                s.margin(r)
+                s.margin(r, time.monotonic_ns() - sent_ns)
                 pending = None
-            elif time.monotonic() - sent_at > MARGIN_TIMEOUT_S:
+            elif time.monotonic_ns() - sent_ns > MARGIN_TIMEOUT_S * 1e9:
                 s.lost_margins += 1
                 pending = None
         if pending is None and s.estimates > asked_at:
             # One request per new estimate, as examples/controller.rs does.
             asked_at = s.estimates
             sequence += 1
-            pending, sent_at = ports.ask_margin(sequence, a.required_hz), time.monotonic()
+            sent_ns = time.monotonic_ns()
+            pending = ports.ask_margin(sequence, a.required_hz)
         t = time.monotonic() - start
         if t >= next_print and s.last_estimate is not None:
             next_print += 1.0
@@ -265,6 +286,11 @@ def main():
         return 130
     print("controller.py: %d estimates %s, f1 %.6f .. %.6f Hz; %d margin answers %s, worst margin %.6f Hz, %d lost" % (
         s.estimates, s.statuses, s.f1_min, s.f1_max, s.margins, s.margin_statuses, s.margin_min, s.lost_margins))
+    for what, samples in (("pose -> estimate latency", s.latency_ns), ("margin round trip", s.margin_rtt_ns)):
+        p = percentiles_us(samples)
+        if p is not None:
+            print("controller.py: %s: p50 %.1f us  p99 %.1f us  max %.1f us (%d samples)" % (
+                what, p["p50"], p["p99"], p["max"], len(samples)))
     if a.json:
         print(s.as_json(a.required_hz))
     return 0
