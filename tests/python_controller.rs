@@ -181,9 +181,17 @@ fn layout_json() -> Value {
             let fields: Vec<Value> = l
                 .fields
                 .iter()
-                .map(|f| json!({"name": f.name, "offset": f.offset, "size": f.size, "elem": f.elem, "len": f.len}))
+                .map(|f| {
+                    json!({
+                        "name": f.name, "offset": f.offset, "size": f.size,
+                        "elem": f.elem, "len": f.len,
+                    })
+                })
                 .collect();
-            json!({"rust_name": l.rust_name, "type_name": l.type_name, "size": l.size, "align": l.align, "fields": fields})
+            json!({
+                "rust_name": l.rust_name, "type_name": l.type_name,
+                "size": l.size, "align": l.align, "fields": fields,
+            })
         })
         .collect();
     json!({

@@ -1,5 +1,5 @@
-//! Opening or creating services with cablevib's settings and attributes, and verifying the static
-//! configuration of a service someone else created.
+//! Opening or creating services with cablevib's settings and attributes, and verifying the
+//! static configuration (and schema-version attribute) of a service someone else created.
 
 #[allow(unused_imports)]
 use super::*;
