@@ -12,6 +12,9 @@
 //! margin) before it commands the next set-point; the latency measured here, pose timestamp →
 //! estimate received, is what that costs. Ctrl-C stops early.
 //!
+//! Before it takes an estimate it checks the estimate service's schema-version attribute
+//! (`cablevib.schema_version`) and prints the service's attributes (scene, cable model, ...).
+//!
 //! An outage of the service (no estimate for `--outage-ms`) prints one line when it starts and
 //! one when the estimates resume, with its duration; the summary counts the outages, the
 //! longest and their total time ([`GapDetector`]).
@@ -76,10 +79,15 @@ fn main() -> anyhow::Result<()> {
     let node = create_node("cablevib-controller")?;
     let estimates = EstimateOutput::open(&node, &names)?;
     let margin = MarginClient::open(&node, &names)?;
+    // Whoever created the estimate service (usually `cablevib serve`) defined its schema
+    // version as an attribute: refuse to talk across schemas, and say what the service runs.
+    let attributes = estimates.attributes();
+    attributes.check_schema(&names.estimate, true)?;
     println!(
         "controller: taking estimates from \"{}\" for {} s (wait {}), margin against {} Hz",
         names.estimate, a.seconds, a.wait, a.required_hz
     );
+    println!("controller: service attributes: {attributes}");
 
     let capacity = ((a.seconds * 20_000.0) as usize + 1000).min(MAX_LOGGED_SAMPLES);
     let mut latency = SampleLog::with_capacity(capacity);

@@ -90,12 +90,17 @@
 
 #![warn(missing_docs)]
 
+pub mod attributes;
 pub mod compat;
 pub mod layout;
 pub mod messages;
 pub mod names;
 pub mod status;
 
+pub use attributes::{
+    schema_version_value, ALL_ATTRIBUTE_KEYS, ATTR_CABLEVIB_VERSION, ATTR_ELEMENTS_PER_CABLE,
+    ATTR_ELEMENT_MODEL, ATTR_SCENE, ATTR_SCHEMA_VERSION, ATTR_UNITS, UNITS,
+};
 pub use compat::{explain_publish_subscribe_mismatch, explain_request_response_mismatch, TypeInfo};
 pub use messages::{
     EstimateSample, MarginRequest, MarginResponse, Message, PoseSample, SchemaError, TminSetpoint,

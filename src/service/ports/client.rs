@@ -82,6 +82,11 @@ impl PoseInput {
         let _ = self.pose.update_connections();
     }
 
+    /// The attributes of the pose service (who created it and with which schema).
+    pub fn attributes(&self) -> ReadAttributes {
+        ReadAttributes::from_set(self.pose_factory.attributes())
+    }
+
     /// A cablevib service is subscribed to the poses (it has opened all its ports).
     pub fn service_connected(&self) -> bool {
         self.pose_factory.dynamic_config().number_of_subscribers() > 0
@@ -132,6 +137,12 @@ impl EstimateOutput {
         timeout: Duration,
     ) -> Result<Option<EstimateSample>, ServiceError> {
         wait_for(mode, &self.wake, timeout, || self.try_receive())
+    }
+
+    /// The attributes of the estimate service: schema version, units, cablevib version, and
+    /// the scene's when `cablevib serve` created it.
+    pub fn attributes(&self) -> ReadAttributes {
+        ReadAttributes::from_set(self.estimate_factory.attributes())
     }
 
     /// A cablevib service publishes estimates.
@@ -204,6 +215,11 @@ impl MarginClient {
             Ok(None) => Ok(None),
             Err(e) => Err(ipc_error("receive a margin response", e)),
         })
+    }
+
+    /// The attributes of the margin service.
+    pub fn attributes(&self) -> ReadAttributes {
+        ReadAttributes::from_set(self.factory.attributes())
     }
 
     /// A cablevib service serves margin requests.

@@ -18,6 +18,12 @@
 //! | margin | request-response | [`MARGIN_SERVERS`] server, [`MAX_CLIENTS`] clients, [`MARGIN_ACTIVE_REQUESTS`] active requests per client |
 //! | wake/service, wake/controller | event | [`EVENT_PORTS`] listeners and notifiers |
 //!
+//! Whoever creates a service defines cablevib's iceoryx2 service attributes on it (schema
+//! version, units, cablevib version; `cablevib serve` adds the scene's name and cable model:
+//! [`ServiceAttributes`], keys in `cablevib_ipc::attributes`). A service whose schema-version
+//! attribute differs from this build's is refused with [`ServiceError::IncompatiblePeer`];
+//! peers read the attributes with [`EstimateOutput::attributes`] and friends.
+//!
 //! Every publish-subscribe and request-response service overflows safely (the newest sample
 //! replaces the oldest): the service estimates the newest pose, a controller wants the newest
 //! estimate.
@@ -56,18 +62,20 @@ use iceoryx2::service::port_factory::{event, publish_subscribe, request_response
 
 use super::{ServiceError, WaitMode};
 
+mod attributes;
 mod client;
 mod node;
 mod open;
 
+pub use attributes::{ReadAttributes, ServiceAttributes};
 pub use client::{EstimateOutput, MarginClient, PendingMargin, PoseInput};
 pub use node::{
     create_node, is_cablevib_node, load_iceoryx2_config, remove_stale_nodes, service_name,
     wait_for_service, SERVICE_UP_TIMEOUT,
 };
 pub use open::{
-    open_event, open_margin, open_pubsub, MarginFactory, PubSubSettings, ESTIMATE_SETTINGS,
-    POSE_SETTINGS, T_MIN_SETTINGS,
+    open_event, open_event_with, open_margin, open_margin_with, open_pubsub, open_pubsub_with,
+    MarginFactory, PubSubSettings, ESTIMATE_SETTINGS, POSE_SETTINGS, T_MIN_SETTINGS,
 };
 
 /// The iceoryx2 service flavour used everywhere: inter-process, shared memory.
@@ -177,7 +185,17 @@ impl ServicePorts {
     /// Fails with [`ServiceError::AlreadyServing`] when another live cablevib service serves
     /// the same instance (two would publish two estimates per pose).
     pub fn open(node: &Node<Ipc>, names: &ServiceNames) -> Result<ServicePorts, ServiceError> {
-        let margin_factory = open_margin(node, &names.margin)?;
+        ServicePorts::open_with_attributes(node, names, &ServiceAttributes::contract())
+    }
+
+    /// [`ServicePorts::open`], creating the services that do not exist yet with `attributes`
+    /// (`cablevib serve` passes [`ServiceAttributes::of_scene`]).
+    pub fn open_with_attributes(
+        node: &Node<Ipc>,
+        names: &ServiceNames,
+        attributes: &ServiceAttributes,
+    ) -> Result<ServicePorts, ServiceError> {
+        let margin_factory = open_margin_with(node, &names.margin, attributes)?;
         // The service admits one server. A server port of a process that died counts until its
         // stale resources are removed; another process may be removing them right now, so give
         // that a moment.
@@ -199,32 +217,38 @@ impl ServicePorts {
         };
         // The margin server is ours, so a live estimate publisher is not another cablevib
         // service: it is another program publishing estimates in this instance's name.
-        let estimate = open_pubsub::<EstimateSample>(node, &names.estimate, ESTIMATE_SETTINGS)?
-            .publisher_builder()
-            .create()
-            .map_err(|e| {
-                ipc_error(
-                    format!(
-                        "create the estimate publisher of \"{}\" (another process publishes \
+        let estimate = open_pubsub_with::<EstimateSample>(
+            node,
+            &names.estimate,
+            ESTIMATE_SETTINGS,
+            attributes,
+        )?
+        .publisher_builder()
+        .create()
+        .map_err(|e| {
+            ipc_error(
+                format!(
+                    "create the estimate publisher of \"{}\" (another process publishes \
                          estimates there?)",
-                        names.estimate
-                    ),
-                    e,
-                )
-            })?;
-        let wake_in = open_event(node, &names.wake_service)?
+                    names.estimate
+                ),
+                e,
+            )
+        })?;
+        let wake_in = open_event_with(node, &names.wake_service, attributes)?
             .listener_builder()
             .create()
             .map_err(|e| ipc_error("create the wake-service listener", e))?;
-        let wake_out = open_event(node, &names.wake_controller)?
+        let wake_out = open_event_with(node, &names.wake_controller, attributes)?
             .notifier_builder()
             .create()
             .map_err(|e| ipc_error("create the wake-controller notifier", e))?;
-        let t_min = open_pubsub::<TminSetpoint>(node, &names.t_min, T_MIN_SETTINGS)?
-            .subscriber_builder()
-            .create()
-            .map_err(|e| ipc_error("create the T_min subscriber", e))?;
-        let pose = open_pubsub::<PoseSample>(node, &names.pose, POSE_SETTINGS)?
+        let t_min =
+            open_pubsub_with::<TminSetpoint>(node, &names.t_min, T_MIN_SETTINGS, attributes)?
+                .subscriber_builder()
+                .create()
+                .map_err(|e| ipc_error("create the T_min subscriber", e))?;
+        let pose = open_pubsub_with::<PoseSample>(node, &names.pose, POSE_SETTINGS, attributes)?
             .subscriber_builder()
             .create()
             .map_err(|e| ipc_error("create the pose subscriber", e))?;

@@ -1,5 +1,5 @@
-//! Opening or creating services with cablevib's settings, and verifying the static
-//! configuration of a service someone else created.
+//! Opening or creating services with cablevib's settings and attributes, and verifying the
+//! static configuration (and schema-version attribute) of a service someone else created.
 
 #[allow(unused_imports)]
 use super::*;
@@ -119,6 +119,11 @@ fn verify_event(name: &str, f: &event::PortFactory<Ipc>) -> Result<(), ServiceEr
     )
 }
 
+/// The attributes of an existing service `name` do not name another schema version.
+fn check_attributes(name: &str, attributes: &AttributeSet) -> Result<(), ServiceError> {
+    ReadAttributes::from_set(attributes).check_schema(name, false)
+}
+
 /// `Done` when the opened or created service `f` passes `verify`, `Fail` otherwise.
 fn verified<F>(f: F, verify: impl FnOnce(&F) -> Result<(), ServiceError>) -> Attempt<F> {
     match verify(&f) {
@@ -164,17 +169,32 @@ fn open_or_create<F>(
     ))
 }
 
-/// Opens publish-subscribe service `name` carrying `M`, or creates it with `settings`.
+/// Opens publish-subscribe service `name` carrying `M`, or creates it with `settings` and
+/// the [contract attributes](ServiceAttributes::contract).
 pub fn open_pubsub<M: Message>(
     node: &Node<Ipc>,
     name: &str,
     settings: PubSubSettings,
 ) -> Result<publish_subscribe::PortFactory<Ipc, M, ()>, ServiceError> {
+    open_pubsub_with(node, name, settings, &ServiceAttributes::contract())
+}
+
+/// [`open_pubsub`], creating the service with `attributes`.
+pub fn open_pubsub_with<M: Message>(
+    node: &Node<Ipc>,
+    name: &str,
+    settings: PubSubSettings,
+    attributes: &ServiceAttributes,
+) -> Result<publish_subscribe::PortFactory<Ipc, M, ()>, ServiceError> {
     use PublishSubscribeCreateError as C;
     use PublishSubscribeOpenError as O;
     let sname = service_name(name)?;
+    let spec = attributes.specifier()?;
     let open = || match node.service_builder(&sname).publish_subscribe::<M>().open() {
-        Ok(f) => verified(f, |f| verify_pubsub(name, f, settings)),
+        Ok(f) => verified(f, |f| {
+            check_attributes(name, f.attributes())?;
+            verify_pubsub(name, f, settings)
+        }),
         Err(O::IncompatibleTypes) => Attempt::Fail(ServiceError::IncompatiblePeer(
             explain_publish_subscribe_mismatch::<Ipc, M>(name),
         )),
@@ -192,7 +212,7 @@ pub fn open_pubsub<M: Message>(
         .subscriber_max_buffer_size(settings.buffer)
         .history_size(settings.history)
         .enable_safe_overflow(true)
-        .create()
+        .create_with_attributes(&spec)
     {
         Ok(f) => verified(f, |f| verify_pubsub(name, f, settings)),
         Err(
@@ -209,17 +229,31 @@ pub fn open_pubsub<M: Message>(
 /// The margin request-response service.
 pub type MarginFactory = request_response::PortFactory<Ipc, MarginRequest, (), MarginResponse, ()>;
 
-/// Opens the margin request-response service `name`, or creates it.
+/// Opens the margin request-response service `name`, or creates it with the
+/// [contract attributes](ServiceAttributes::contract).
 pub fn open_margin(node: &Node<Ipc>, name: &str) -> Result<MarginFactory, ServiceError> {
+    open_margin_with(node, name, &ServiceAttributes::contract())
+}
+
+/// [`open_margin`], creating the service with `attributes`.
+pub fn open_margin_with(
+    node: &Node<Ipc>,
+    name: &str,
+    attributes: &ServiceAttributes,
+) -> Result<MarginFactory, ServiceError> {
     use RequestResponseCreateError as C;
     use RequestResponseOpenError as O;
     let sname = service_name(name)?;
+    let spec = attributes.specifier()?;
     let builder = || {
         node.service_builder(&sname)
             .request_response::<MarginRequest, MarginResponse>()
     };
     let open = || match builder().open() {
-        Ok(f) => verified(f, |f| verify_margin(name, f)),
+        Ok(f) => verified(f, |f| {
+            check_attributes(name, f.attributes())?;
+            verify_margin(name, f)
+        }),
         Err(O::IncompatibleRequestOrResponseType) => Attempt::Fail(ServiceError::IncompatiblePeer(
             explain_request_response_mismatch::<Ipc, MarginRequest, MarginResponse>(name),
         )),
@@ -234,7 +268,7 @@ pub fn open_margin(node: &Node<Ipc>, name: &str) -> Result<MarginFactory, Servic
         .max_response_buffer_size(MARGIN_RESPONSE_BUFFER)
         .enable_safe_overflow_for_requests(true)
         .enable_safe_overflow_for_responses(true)
-        .create()
+        .create_with_attributes(&spec)
     {
         Ok(f) => verified(f, |f| verify_margin(name, f)),
         Err(
@@ -248,13 +282,27 @@ pub fn open_margin(node: &Node<Ipc>, name: &str) -> Result<MarginFactory, Servic
     open_or_create(name, "service", open, create)
 }
 
-/// Opens event service `name`, or creates it.
+/// Opens event service `name`, or creates it with the
+/// [contract attributes](ServiceAttributes::contract).
 pub fn open_event(node: &Node<Ipc>, name: &str) -> Result<event::PortFactory<Ipc>, ServiceError> {
+    open_event_with(node, name, &ServiceAttributes::contract())
+}
+
+/// [`open_event`], creating the service with `attributes`.
+pub fn open_event_with(
+    node: &Node<Ipc>,
+    name: &str,
+    attributes: &ServiceAttributes,
+) -> Result<event::PortFactory<Ipc>, ServiceError> {
     use EventCreateError as C;
     use EventOpenError as O;
     let sname = service_name(name)?;
+    let spec = attributes.specifier()?;
     let open = || match node.service_builder(&sname).event().open() {
-        Ok(f) => verified(f, |f| verify_event(name, f)),
+        Ok(f) => verified(f, |f| {
+            check_attributes(name, f.attributes())?;
+            verify_event(name, f)
+        }),
         Err(O::DoesNotExist | O::HangsInCreation | O::Interrupt) => Attempt::Retry(None),
         Err(e) => Attempt::Fail(ipc_error(format!("open event service \"{name}\""), e)),
     };
@@ -264,7 +312,7 @@ pub fn open_event(node: &Node<Ipc>, name: &str) -> Result<event::PortFactory<Ipc
         .max_nodes(EVENT_NODES)
         .max_listeners(EVENT_PORTS)
         .max_notifiers(EVENT_PORTS)
-        .create()
+        .create_with_attributes(&spec)
     {
         Ok(f) => verified(f, |f| verify_event(name, f)),
         Err(e @ (C::AlreadyExists | C::IsBeingCreatedByAnotherInstance | C::Interrupt)) => {

@@ -305,7 +305,11 @@ impl Server {
         if let Some(choice) = estimator.auto_choice() {
             tracing::info!("{choice}");
         }
-        let ports = ServicePorts::open(node, names)?;
+        let ports = ServicePorts::open_with_attributes(
+            node,
+            names,
+            &ports::ServiceAttributes::of_scene(scene),
+        )?;
         let n_cables = scene.n_cables().min(MAX_CABLES);
         let mut t_max_n = [scene.t_max_n; MAX_CABLES];
         for (i, t) in t_max_n.iter_mut().enumerate().take(n_cables) {
