@@ -2,7 +2,7 @@
 parallel robots (Python bindings of the Rust crate). SI units: m, kg, N, N/m, Hz."""
 
 import os
-from typing import Any, Optional, Sequence, Union
+from typing import Any, Dict, Optional, Sequence, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -69,6 +69,23 @@ class Scene:
     def ee_participation_min(self) -> float: ...
     @property
     def f1_tolerance(self) -> float: ...
+
+def analyze(
+    scene: Scene,
+    position: Optional[_Vec] = None,
+    t_min: Optional[float] = None,
+    element: Optional[str] = None,
+    elements: Optional[int] = None,
+    modes: int = 10,
+    solver: str = "structured",
+    compare_dense: bool = False,
+) -> Dict[str, Any]:
+    """What ``cablevib analyze SCENE --json`` prints, as a dict with numpy arrays:
+    ``scene``, ``position_m`` (m), ``t_min_n`` (N), ``tensions_n`` (N), ``frequencies_hz``
+    (Hz), ``ee_participation``, ``multiplicity``, ``cluster_start``, ``dof``, ``element``,
+    ``elements_per_cable``, ``stiffness_n_m`` (N/m, 3 × 3), ``solver``, ``solve_seconds``,
+    ``dense_seconds``, ``compare_dense``. Overrides as ``--position`` (m), ``--t-min`` (N),
+    ``--element``, ``--elements``; ``solver`` is ``structured`` or ``dense``."""
 
 class Estimate:
     """One ``Estimator.update``: valid numbers only when ``ok``."""

@@ -5,6 +5,11 @@ import cablevib
 scene = cablevib.Scene.load("spatial-paper")  # or a path to a scene .toml
 print(scene.name, scene.n_cables, "cables,", scene.element, "x", scene.elements)
 
+# One pose, as `cablevib analyze spatial-paper --position 0.3,0.1,1.2 --t-min 80 --json`.
+r = cablevib.analyze(scene, position=[0.3, 0.1, 1.2], t_min=80.0, modes=5)
+print("tensions (N):", np.round(r["tensions_n"], 2))
+print("f (Hz):", np.round(r["frequencies_hz"], 4))
+
 # A sweep with the real-time estimator: f1 (Hz) along a line through the workspace.
 est = cablevib.Estimator(scene)
 xs = np.linspace(-0.5, 0.5, 101)  # m

@@ -13,16 +13,18 @@ use pyo3::types::{PyDict, PyList};
 /// numpy.asarray, imported once.
 static ASARRAY: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
 
-/// `numpy.asarray(obj, dtype="float64")`.
-fn asarray<'py>(py: Python<'py>, obj: Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
-    ASARRAY
-        .import(py, "numpy", "asarray")?
-        .call1((obj, "float64"))
+/// `numpy.asarray(obj, dtype)`.
+fn asarray<'py>(
+    py: Python<'py>,
+    obj: Bound<'py, PyAny>,
+    dtype: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    ASARRAY.import(py, "numpy", "asarray")?.call1((obj, dtype))
 }
 
 /// A 1-D float64 array of `v`.
 pub fn array1<'py>(py: Python<'py>, v: &[f64]) -> PyResult<Bound<'py, PyAny>> {
-    asarray(py, PyList::new(py, v)?.into_any())
+    asarray(py, PyList::new(py, v)?.into_any(), "float64")
 }
 
 /// A 2-D float64 array of `rows` (each row one list).
@@ -31,7 +33,7 @@ pub fn array2<'py>(py: Python<'py>, rows: &[Vec<f64>]) -> PyResult<Bound<'py, Py
     for r in rows {
         list.append(PyList::new(py, r)?)?;
     }
-    asarray(py, list.into_any())
+    asarray(py, list.into_any(), "float64")
 }
 
 /// A 3-vector as a float64 array of shape (3,).
@@ -70,8 +72,8 @@ pub fn position(obj: &Bound<'_, PyAny>) -> PyResult<Vector3<f64>> {
 }
 
 /// A JSON value as a Python object: objects become dicts (keys in the report's order),
-/// arrays whose elements are all numbers or null become float64 numpy arrays (null → NaN,
-/// nested arrays → 2-D), other arrays lists, numbers int or float, null None.
+/// numeric arrays numpy arrays (see [`numeric_array`]), other arrays lists, numbers int or
+/// float, null None.
 pub fn json_to_py<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
     use serde_json::Value;
     Ok(match v {
@@ -79,9 +81,8 @@ pub fn json_to_py<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound
         Value::Bool(b) => b.into_pyobject(py)?.to_owned().into_any(),
         Value::Number(n) => number_to_py(py, n)?,
         Value::String(s) => s.into_pyobject(py)?.into_any(),
-        Value::Array(a) => match numeric_rows(a) {
-            Some(Numeric::Flat(x)) => array1(py, &x)?,
-            Some(Numeric::Rows(r)) => array2(py, &r)?,
+        Value::Array(a) => match numeric_array(py, a)? {
+            Some(x) => x,
             None => {
                 let list = PyList::empty(py);
                 for x in a {
@@ -114,34 +115,53 @@ fn number_to_py<'py>(py: Python<'py>, n: &serde_json::Number) -> PyResult<Bound<
     Ok(x.into_pyobject(py)?.into_any())
 }
 
-/// A JSON array of numbers, or of equally long arrays of numbers.
-enum Numeric {
-    Flat(Vec<f64>),
-    Rows(Vec<Vec<f64>>),
+/// A numpy array of a JSON array of numbers, or of equally long such arrays (2-D): int64
+/// when every element is an integer (counts, indices), else float64 with null read as NaN
+/// (serde_json writes non-finite numbers as null). An empty array is an empty float64
+/// array. None for anything else (strings, objects, ragged rows).
+fn numeric_array<'py>(
+    py: Python<'py>,
+    a: &[serde_json::Value],
+) -> PyResult<Option<Bound<'py, PyAny>>> {
+    use serde_json::Value;
+    let is_num = |x: &Value| x.is_number() || x.is_null();
+    let is_int = |x: &Value| x.is_u64() || x.is_i64();
+    let flat = a.iter().all(is_num);
+    let rows: Option<Vec<&Vec<Value>>> = a.iter().map(|r| r.as_array()).collect();
+    let rows = rows.filter(|r| {
+        !r.is_empty()
+            && r.iter().all(|x| !x.is_empty() && x.len() == r[0].len())
+            && r.iter().all(|x| x.iter().all(is_num))
+    });
+    if !flat && rows.is_none() {
+        return Ok(None);
+    }
+    let ints = match &rows {
+        Some(r) => r.iter().all(|x| x.iter().all(is_int)),
+        None => !a.is_empty() && a.iter().all(is_int),
+    };
+    let list = if flat {
+        json_list(py, a)?
+    } else {
+        let outer = PyList::empty(py);
+        for r in rows.into_iter().flatten() {
+            outer.append(json_list(py, r)?)?;
+        }
+        outer
+    };
+    let dtype = if ints { "int64" } else { "float64" };
+    Ok(Some(asarray(py, list.into_any(), dtype)?))
 }
 
-/// The numbers of `a` (null read as NaN: serde_json writes non-finite numbers as null), or
-/// None when `a` is empty or not a numeric vector or matrix (equal non-empty rows).
-fn numeric_rows(a: &[serde_json::Value]) -> Option<Numeric> {
-    let flat = |xs: &[serde_json::Value]| -> Option<Vec<f64>> {
-        if xs.is_empty() {
-            return None;
+/// The Python list of a JSON array of numbers (null as NaN).
+fn json_list<'py>(py: Python<'py>, a: &[serde_json::Value]) -> PyResult<Bound<'py, PyList>> {
+    let list = PyList::empty(py);
+    for x in a {
+        match x {
+            serde_json::Value::Null => list.append(f64::NAN)?,
+            serde_json::Value::Number(n) => list.append(number_to_py(py, n)?)?,
+            _ => return Err(PyValueError::new_err("not a number")),
         }
-        xs.iter()
-            .map(|x| match x {
-                serde_json::Value::Number(n) => n.as_f64(),
-                serde_json::Value::Null => Some(f64::NAN),
-                _ => None,
-            })
-            .collect()
-    };
-    if let Some(v) = flat(a) {
-        return Some(Numeric::Flat(v));
     }
-    let rows = a
-        .iter()
-        .map(|r| flat(r.as_array()?))
-        .collect::<Option<Vec<Vec<f64>>>>()?;
-    let same_len = rows.windows(2).all(|w| w[0].len() == w[1].len());
-    (same_len && !rows.is_empty()).then_some(Numeric::Rows(rows))
+    Ok(list)
 }

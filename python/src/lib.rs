@@ -3,6 +3,7 @@
 //! | Python | Rust |
 //! |---|---|
 //! | `Scene.load(path_or_name)` | [`cablevib::scene::Scene::load`] |
+//! | `analyze(scene, ...)` | [`cablevib::study::analysis::analyze`] (what `cablevib analyze --json` prints) |
 //! | `Estimator(scene).update(...)` | [`cablevib::estimator::Estimator::update`] |
 //! | `Estimator.t_min_for_f1(...)` | [`cablevib::estimator::Estimator::t_min_for_f1`] |
 //! | `CablevibError` | every library error, with its `Display` text |
@@ -10,6 +11,7 @@
 //! Numbers cross as IEEE doubles, unchanged; vectors and matrices come out as float64
 //! numpy arrays (SI units, named in every attribute).
 
+mod analysis;
 mod convert;
 mod error;
 mod estimator;
@@ -23,6 +25,7 @@ use pyo3::prelude::*;
 #[pyo3(name = "cablevib")]
 fn cablevib_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("CablevibError", m.py().get_type::<error::CablevibError>())?;
+    m.add_function(wrap_pyfunction!(analysis::analyze, m)?)?;
     m.add_class::<scene::PyScene>()?;
     m.add_class::<estimator::PyEstimator>()?;
     m.add_class::<estimator::PyEstimate>()?;
