@@ -6,7 +6,6 @@ use crate::error::CablevibError;
 use crate::scene::PyScene;
 use cablevib::estimator::{Estimate, Estimator, TminAnswer};
 use cablevib::kinematics::Pose;
-use cablevib::scene::MAX_CABLES;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
@@ -137,7 +136,7 @@ fn per_cable_t_min(t: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<f64>> {
             "t_min: expected a number (N) or {n} numbers, one per cable"
         ))
     })?;
-    if v.len() != n || n > MAX_CABLES {
+    if v.len() != n {
         return Err(PyValueError::new_err(format!(
             "t_min: expected {n} numbers (N), one per cable, got {}",
             v.len()
