@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds the Python package and runs its tests, as a user would install it:
-#   1. a venv under the cargo target dir (target/pyvenv) with pinned maturin, pytest, numpy;
+#   1. a venv under the cargo target dir (target/py-cablevib-venv) with pinned maturin, pytest, numpy;
 #   2. `pip install ./python` (maturin, release build; --no-build-isolation so the pinned
 #      maturin builds it) into that venv;
 #   3. pytest on python/tests/, which compares the bindings with the `cablevib` binary
@@ -16,7 +16,7 @@ PYTEST_VERSION=9.2.0
 NUMPY_VERSION=2.4.6
 
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$root/target}"
-venv="$CARGO_TARGET_DIR/pyvenv"
+venv="$CARGO_TARGET_DIR/py-cablevib-venv"
 echo "== python: venv $venv ($(python3 --version))"
 python3 -m venv "$venv"
 "$venv/bin/python" -m pip install --quiet --disable-pip-version-check \

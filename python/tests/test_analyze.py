@@ -114,7 +114,7 @@ ERRORS = [
     ({"t_min": 0.0}, ("--t-min", "t_min")),
     ({"element": "bogus"}, ("--element", "element")),
     ({"elements": 0}, ("--elements", "elements")),
-    ({"elements": 10001}, ("--elements", "elements")),
+    ({"elements": 10**9}, ("--elements", "elements")),
 ]
 
 
