@@ -130,6 +130,8 @@ class Estimate:
     def tension_iterations(self) -> int: ...
     @property
     def tension_warm(self) -> bool: ...
+    def to_dict(self) -> Dict[str, Any]:
+        """Every attribute in a dict (one row of a sweep's table)."""
 
 class TminAnswer:
     """The answer of ``Estimator.t_min_for_f1``."""

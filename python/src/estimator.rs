@@ -8,6 +8,7 @@ use cablevib::estimator::{Estimate, Estimator, TminAnswer};
 use cablevib::kinematics::Pose;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 /// The real-time estimator of one scene: tensions, end-effector stiffness, f1 and the
 /// end-effector mode at each pose, warm-started from the previous call (a sweep along a
@@ -254,6 +255,28 @@ impl PyEstimate {
     #[getter]
     fn tension_warm(&self) -> bool {
         self.inner.tension_warm
+    }
+
+    /// Every attribute above in a dict (one row of a sweep's table, e.g. for pandas).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("status", self.status())?;
+        d.set_item("status_code", self.status_code())?;
+        d.set_item("ok", self.ok())?;
+        d.set_item("error", self.error())?;
+        d.set_item("tensions_n", self.tensions_n(py)?)?;
+        d.set_item("f1_hz", self.f1_hz())?;
+        d.set_item("f1_ee_participation", self.f1_ee_participation())?;
+        d.set_item("ee_mode_hz", self.ee_mode_hz())?;
+        d.set_item("ee_mode_participation", self.ee_mode_participation())?;
+        d.set_item("stiffness_n_m", self.stiffness_n_m(py)?)?;
+        d.set_item("stiffness", self.stiffness(py)?)?;
+        d.set_item("eigen_evaluations", self.eigen_evaluations())?;
+        d.set_item("eigen_residual", self.eigen_residual())?;
+        d.set_item("cold_start", self.cold_start())?;
+        d.set_item("tension_iterations", self.tension_iterations())?;
+        d.set_item("tension_warm", self.tension_warm())?;
+        Ok(d)
     }
 
     fn __repr__(&self) -> String {

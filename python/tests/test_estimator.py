@@ -245,3 +245,14 @@ def test_estimator_scene_and_repr():
     assert "ok" in repr(e)
     est.reset()
     assert est.update(s.ee_position_m).cold_start
+
+
+def test_to_dict_has_every_attribute():
+    s = cablevib.Scene.load("spatial-paper")
+    est = cablevib.Estimator(s)
+    for e in (est.update([0.1, 0.2, 1.1]), est.update([9.0, 0.0, 1.0])):
+        d = e.to_dict()
+        names = {n for n in dir(type(e)) if not n.startswith("_") and n != "to_dict"}
+        assert set(d) == names
+        for k, v in d.items():
+            np.testing.assert_array_equal(v, getattr(e, k), err_msg=k)
