@@ -13,6 +13,8 @@
 //! files are the `report` layer's (above this one), option parsing is the command line's.
 
 pub mod accuracy;
+pub mod analysis;
+mod analysis_compare;
 pub mod map;
 pub mod points;
 pub mod tmin;

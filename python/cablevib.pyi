@@ -1,0 +1,169 @@
+"""cablevib: tension distribution, stiffness and natural frequencies of cable-driven
+parallel robots (Python bindings of the Rust crate). SI units: m, kg, N, N/m, Hz."""
+
+import os
+from typing import Any, Dict, Optional, Sequence, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+_Vec = Union[Sequence[float], npt.NDArray[np.floating[Any]]]
+_F64 = npt.NDArray[np.float64]
+
+class CablevibError(ValueError):
+    """An error of cablevib, with the command line's one-line message."""
+
+class Scene:
+    """A validated robot description (SI units), read-only."""
+
+    @staticmethod
+    def load(path_or_name: Union[str, "os.PathLike[str]"]) -> "Scene":
+        """A scene TOML file, or an embedded name: ``spatial-paper``, ``planar-paper``."""
+    @staticmethod
+    def from_toml(text: str, source: str = "<string>") -> "Scene":
+        """Parse a scene from TOML text; ``source`` names it in error messages."""
+    @property
+    def name(self) -> str: ...
+    @property
+    def n_cables(self) -> int: ...
+    @property
+    def element(self) -> str:
+        """``fem``, ``catenary``, ``continuous``, ``massless`` or ``auto``."""
+    @property
+    def elements(self) -> int:
+        """Elements per cable."""
+    @property
+    def t_min_n(self) -> float:
+        """Lower tension bound, N."""
+    @property
+    def t_max_n(self) -> float:
+        """Upper tension bound, N."""
+    @property
+    def cable_t_min_n(self) -> _F64:
+        """Each cable's lower bound, N, shape (n_cables,)."""
+    @property
+    def cable_t_max_n(self) -> _F64:
+        """Each cable's upper bound, N, shape (n_cables,)."""
+    @property
+    def ee_position_m(self) -> _F64:
+        """Default end-effector position, m, shape (3,)."""
+    @property
+    def ee_orientation_wxyz(self) -> _F64:
+        """Default orientation, unit quaternion [w, x, y, z], shape (4,)."""
+    @property
+    def ee_mass_kg(self) -> float: ...
+    @property
+    def gravity_m_s2(self) -> _F64:
+        """Gravity vector, m/s², shape (3,)."""
+    @property
+    def weight_carried(self) -> bool: ...
+    @property
+    def rigid(self) -> bool:
+        """Rigid-body end-effector (6 DOF) rather than a point mass."""
+    @property
+    def anchors_m(self) -> _F64:
+        """Cable anchors, m, shape (n_cables, 3)."""
+    @property
+    def ee_participation_min(self) -> float: ...
+    @property
+    def f1_tolerance(self) -> float: ...
+
+def analyze(
+    scene: Scene,
+    position: Optional[_Vec] = None,
+    t_min: Optional[float] = None,
+    element: Optional[str] = None,
+    elements: Optional[int] = None,
+    modes: int = 10,
+    solver: str = "structured",
+    compare_dense: bool = False,
+) -> Dict[str, Any]:
+    """What ``cablevib analyze SCENE --json`` prints, as a dict with numpy arrays:
+    ``scene``, ``position_m`` (m), ``t_min_n`` (N), ``tensions_n`` (N), ``frequencies_hz``
+    (Hz), ``ee_participation``, ``multiplicity``, ``cluster_start``, ``dof``, ``element``,
+    ``elements_per_cable``, ``stiffness_n_m`` (N/m, 3 × 3), ``solver``, ``solve_seconds``,
+    ``dense_seconds``, ``compare_dense``. Overrides as ``--position`` (m), ``--t-min`` (N),
+    ``--element``, ``--elements``; ``solver`` is ``structured`` or ``dense``."""
+
+class Estimate:
+    """One ``Estimator.update``: valid numbers only when ``ok``."""
+
+    @property
+    def status(self) -> str:
+        """``ok``, ``tension_infeasible``, ``invalid_input``, ``outside_workspace``, …"""
+    @property
+    def status_code(self) -> int:
+        """The service's wire code (0 is ok)."""
+    @property
+    def ok(self) -> bool: ...
+    @property
+    def error(self) -> Optional[str]:
+        """Why the status is not ok (the command line's message)."""
+    @property
+    def tensions_n(self) -> _F64:
+        """Cable tensions, N, shape (n_cables,)."""
+    @property
+    def f1_hz(self) -> float:
+        """First natural frequency, Hz (NaN unless ok)."""
+    @property
+    def f1_ee_participation(self) -> float: ...
+    @property
+    def ee_mode_hz(self) -> float:
+        """Lowest mode with end-effector participation ≥ the scene's threshold, Hz."""
+    @property
+    def ee_mode_participation(self) -> float: ...
+    @property
+    def stiffness_n_m(self) -> _F64:
+        """Static end-effector stiffness, translational block, N/m, shape (3, 3)."""
+    @property
+    def stiffness(self) -> _F64:
+        """(3, 3) N/m for a point mass, (6, 6) for a rigid body (N/m, N/rad, N·m/rad)."""
+    @property
+    def eigen_evaluations(self) -> int: ...
+    @property
+    def eigen_residual(self) -> float: ...
+    @property
+    def cold_start(self) -> bool: ...
+    @property
+    def tension_iterations(self) -> int: ...
+    @property
+    def tension_warm(self) -> bool: ...
+    def to_dict(self) -> Dict[str, Any]:
+        """Every attribute in a dict (one row of a sweep's table)."""
+
+class TminAnswer:
+    """The answer of ``Estimator.t_min_for_f1``."""
+
+    @property
+    def t_min_n(self) -> float:
+        """The smallest T_min found, N."""
+    @property
+    def f1_hz(self) -> float:
+        """f1 at that T_min, Hz."""
+    @property
+    def evaluations(self) -> int: ...
+
+class Estimator:
+    """The real-time estimator of one scene, warm-started from call to call."""
+
+    def __init__(self, scene: Scene) -> None: ...
+    def update(
+        self,
+        position: _Vec,
+        orientation: Optional[_Vec] = None,
+        t_min: Union[None, float, _Vec] = None,
+    ) -> Estimate:
+        """Position (m), orientation [w, x, y, z] (default the scene's), T_min (N: one
+        value or one per cable; default the scene's)."""
+    def t_min_for_f1(
+        self, position: _Vec, required_f1_hz: float, orientation: Optional[_Vec] = None
+    ) -> TminAnswer:
+        """The smallest T_min (N) for which f1 at ``position`` (m) reaches
+        ``required_f1_hz`` (Hz)."""
+    def reset(self) -> None: ...
+    @property
+    def scene(self) -> Scene: ...
+    @property
+    def auto_choice(self) -> Optional[str]: ...

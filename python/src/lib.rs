@@ -1,0 +1,35 @@
+//! Python bindings of cablevib (PyO3): the module `cablevib`.
+//!
+//! | Python | Rust |
+//! |---|---|
+//! | `Scene.load(path_or_name)` | [`cablevib::scene::Scene::load`] |
+//! | `analyze(scene, ...)` | [`cablevib::study::analysis::analyze`] (what `cablevib analyze --json` prints) |
+//! | `Estimator(scene).update(...)` | [`cablevib::estimator::Estimator::update`] |
+//! | `Estimator.t_min_for_f1(...)` | [`cablevib::estimator::Estimator::t_min_for_f1`] |
+//! | `CablevibError` | every library error, with its `Display` text |
+//!
+//! Numbers cross as IEEE doubles, unchanged; vectors and matrices come out as float64
+//! numpy arrays (SI units, named in every attribute).
+
+mod analysis;
+mod convert;
+mod error;
+mod estimator;
+mod scene;
+
+use pyo3::prelude::*;
+
+/// cablevib: tension distribution, stiffness and natural frequencies of cable-driven
+/// parallel robots (SI units: m, N, N/m, Hz).
+#[pymodule]
+#[pyo3(name = "cablevib")]
+fn cablevib_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("CablevibError", m.py().get_type::<error::CablevibError>())?;
+    m.add_function(wrap_pyfunction!(analysis::analyze, m)?)?;
+    m.add_class::<scene::PyScene>()?;
+    m.add_class::<estimator::PyEstimator>()?;
+    m.add_class::<estimator::PyEstimate>()?;
+    m.add_class::<estimator::PyTminAnswer>()?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
