@@ -12,6 +12,7 @@
 //! | `map` | [`map`](mod@map) | f1 over a workspace grid |
 //! | `trajectory` | [`trajectory`](mod@trajectory) | f1 along the circle or a CSV path |
 //! | `sweep-tmin` | [`sweep_tmin`] | f1 against T_min with the √T_min fit |
+//! | `import caspr` | [`import`](mod@import) | a scene file from CASPR's XML model files |
 //!
 //! Functions here return `Result<_, CliError>`; the binary maps errors to a one-line reason
 //! and a non-zero exit code.
@@ -21,6 +22,7 @@ pub mod analyze;
 pub mod args;
 pub mod bench;
 pub mod error;
+pub mod import;
 pub mod map;
 pub mod serve;
 pub mod sweep_tmin;
@@ -64,6 +66,8 @@ pub enum Command {
     Trajectory(trajectory::TrajectoryArgs),
     /// f1 against T_min, with the √T_min fit.
     SweepTmin(sweep_tmin::SweepTminArgs),
+    /// Write a scene file from another tool's robot model (CASPR's XML files).
+    Import(import::ImportArgs),
 }
 
 /// Heap allocation counter supplied by the binary's global allocator (0 when none).
@@ -81,6 +85,7 @@ pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
         Command::Map(a) => map::run(&a),
         Command::Trajectory(a) => trajectory::run(&a),
         Command::SweepTmin(a) => sweep_tmin::run(&a),
+        Command::Import(a) => import::run(&a),
     }
 }
 
