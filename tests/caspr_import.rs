@@ -613,3 +613,15 @@ fn cli_errors_are_one_line_and_the_output_analyzes() {
     let o = run(&["analyze", out.to_str().unwrap(), "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+#[test]
+fn names_with_quotes_and_newlines_cannot_break_the_scene_file() {
+    // XML character references put a newline and quotes into the names; the scene's name
+    // must stay one TOML string and the cable name one comment line.
+    let b = read("ipanema1_bodies.xml")
+        .replace("name=\"IPAnema 1\"", "name=\"x&#10;t_max = 1 # &quot;\\\"");
+    let c = read("ipanema1_cables.xml").replace("name=\"cable 1\"", "name=\"c&#10;[[cables]]\"");
+    let im = import_str(&b, "b.xml", &c, "c.xml", &ipanema_opts()).expect("imports");
+    assert_eq!(im.scene.name, "x\nt_max = 1 # \"\\");
+    assert_eq!(im.scene.n_cables(), 8);
+}
