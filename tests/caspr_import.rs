@@ -205,3 +205,33 @@ fn stderr(o: &Output) -> String {
 mod frames;
 #[path = "caspr_import/hostile.rs"]
 mod hostile;
+
+#[test]
+fn variants_found_in_caspr_models_are_read() {
+    let b = read("ipanema1_bodies.xml");
+    let c = read("ipanema1_cables.xml");
+    let reference = ipanema(&ipanema_opts()).expect("imports").scene;
+    let import = |b: &str, c: &str| {
+        cablevib::caspr::import_str(b, "b.xml", c, "c.xml", &ipanema_opts())
+            .expect("imports")
+            .scene
+    };
+    // Operational spaces beside the links, and no q_initial (CASPR's default: zero).
+    let ops = b.replace(
+        "</links>",
+        "</links>\n<operational_spaces><operational_set id=\"x\"/></operational_spaces>",
+    );
+    assert_eq!(import(&ops, &c), reference);
+    let at_zero = import(&b.replace(" q_initial=\"0 0 1.0 0 0 0\"", ""), &c);
+    assert_eq!(at_zero.ee_position_m, Vector3::zeros());
+    // No default_cable_set: the first set is used only when it is the only one.
+    let no_default = c.replace(" default_cable_set=\"original\"", "");
+    let one_set = no_default[..no_default.find("  <cable_set id=\"springs\">").unwrap()]
+        .to_string()
+        + "</cables>\n";
+    assert_eq!(import(&b, &one_set), reference);
+    let e = cablevib::caspr::import_str(&b, "b.xml", &no_default, "c.xml", &ipanema_opts())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("--cable-set (original, springs)"), "{e}");
+}

@@ -157,3 +157,48 @@ fn inertia_about_the_joint_is_moved_to_the_centre_of_mass() {
     // Two roundings of numbers ≤ 0.7 each way: 1e-15 absolute.
     assert!((im.scene.ee_inertia_kg_m2 - i_g).abs().max() < 1e-15);
 }
+
+#[test]
+fn quaternion_and_translational_joints_give_the_same_pose_as_euler_angles() {
+    let opts = ImportOptions {
+        t_min_n: None,
+        ..ipanema_opts()
+    };
+    let i_g = [0.6, 0.5, 0.7, 0.0, 0.0, 0.0];
+    let import = |bodies: String| {
+        import_str(
+            &bodies,
+            "b.xml",
+            &cables("joint", &box_corners()),
+            "c.xml",
+            &opts,
+        )
+        .expect("imports")
+        .scene
+    };
+    let com = "0.03 -0.02 0.12";
+    // A rotation by θ about z: Euler (0, 0, θ) and the quaternion (cos θ/2, 0, 0, sin θ/2).
+    let th: f64 = 0.3;
+    let euler = import(bodies(com, &format!("0.1 0.2 1.4 0 0 {th}"), "com", i_g));
+    let q = format!(
+        "0.1 0.2 1.4 {:?} 0 0 {:?}",
+        (th / 2.0).cos(),
+        (th / 2.0).sin()
+    );
+    let quat =
+        import(bodies(com, &q, "com", i_g).replace("SPATIAL_EULER_XYZ", "SPATIAL_QUATERNION"));
+    let rot =
+        |s: &cablevib::scene::Scene| cablevib::kinematics::rotation_of(&s.ee_orientation_wxyz);
+    // Two routes to the same rotation, each a few roundings of numbers ≤ 1.
+    assert!((rot(&euler) - rot(&quat)).abs().max() < 1e-15);
+    assert!((rot(&euler) - euler_xyz(0.0, 0.0, th)).abs().max() < 1e-15);
+    assert!((euler.ee_position_m - quat.ee_position_m).norm() < 1e-15);
+    // TRANSLATIONAL_XYZ: no rotation, q = x y z.
+    let tr =
+        bodies(com, "0.1 0.2 1.4", "com", i_g).replace("SPATIAL_EULER_XYZ", "TRANSLATIONAL_XYZ");
+    let s = import(tr);
+    assert_eq!(s.ee_orientation_wxyz, [1.0, 0.0, 0.0, 0.0]);
+    // Parent location (0.5, 0, 0.25) + q + r_G, each sum exact to within one rounding.
+    let expect = Vector3::new(0.5 + 0.1 + 0.03, 0.0 + 0.2 - 0.02, 0.25 + 1.4 + 0.12);
+    assert!((s.ee_position_m - expect).norm() < 1e-15);
+}
