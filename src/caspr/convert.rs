@@ -149,7 +149,7 @@ pub(super) fn scene_toml(
         )));
     }
     let mut t = String::new();
-    header(&mut t, link, o, src);
+    header(&mut t, link, src);
     end_effector(&mut t, link, o, rigid);
     materials_and_model(&mut t, o, &sc, rigid);
     for (c, s) in cables.iter().zip(&sc) {
@@ -159,7 +159,7 @@ pub(super) fn scene_toml(
 }
 
 /// Comment header, name and gravity.
-fn header(t: &mut String, link: &Link, o: &ImportOptions, src: &Sources) {
+fn header(t: &mut String, link: &Link, src: &Sources) {
     let name = if link.name.is_empty() {
         "caspr-import"
     } else {
@@ -190,30 +190,30 @@ fn header(t: &mut String, link: &Link, o: &ImportOptions, src: &Sources) {
         t,
         "# the platform's centre of mass; attachments are measured from it in the body frame."
     );
-    let pose = if o.position_m.is_some() {
-        "--position"
-    } else {
-        "q_initial"
-    };
     let _ = writeln!(t, "name = {}", toml_string(name));
     let _ = writeln!(
         t,
         "gravity = [0.0, 0.0, {:?}]   # m/s², CASPR's",
         -CASPR_GRAVITY_M_S2
     );
+}
+
+/// `[end_effector]`: mass, position, orientation, inertia and weight.
+fn end_effector(t: &mut String, link: &Link, o: &ImportOptions, rigid: bool) {
+    let origin = o.position_m.unwrap_or(link.origin_m);
+    let r = link.rotation;
+    let g = origin + r * link.com_m;
+    let pose = if o.position_m.is_some() {
+        "--position"
+    } else {
+        "q_initial"
+    };
     let _ = writeln!(t, "\n[end_effector]");
     let _ = writeln!(t, "mass = {:?}   # kg, CASPR <mass>", link.mass_kg);
     let _ = writeln!(
         t,
         "# centre of mass at the initial pose: link-frame origin ({pose}) + R·com_location"
     );
-}
-
-/// `[end_effector]` position, orientation, inertia and weight.
-fn end_effector(t: &mut String, link: &Link, o: &ImportOptions, rigid: bool) {
-    let origin = o.position_m.unwrap_or(link.origin_m);
-    let r = link.rotation;
-    let g = origin + r * link.com_m;
     let _ = writeln!(t, "position = {}   # m", vec3(&g));
     let q = r.quaternion();
     let _ = writeln!(
