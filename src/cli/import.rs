@@ -103,7 +103,7 @@ fn caspr(a: &CasprArgs) -> Result<(), CliError> {
     })?;
     let s = &imported.scene;
     println!(
-        "{}: {} cables (set `{}`), {:.6} kg, {}, centre of mass at [{}, {}, {}] m",
+        "{}: {} cables (set `{}`), {} kg, {}, centre of mass at [{}, {}, {}] m",
         a.output.display(),
         s.n_cables(),
         imported.cable_set,
