@@ -53,7 +53,7 @@
 //! |---|---|---|
 //! | 0 | [`input_file`], [`alloc_count`] | bounded reading of scene and trajectory files; a counting allocator |
 //! | 1 | [`scene`] | robot description, TOML parsing and validation, `Scene::load` |
-//! | 2 | [`kinematics`] | poses, cable vectors and lengths, the structure matrix |
+//! | 2 | [`kinematics`], [`caspr`] | poses, cable vectors and lengths, the structure matrix; import of CASPR's XML models into a scene |
 //! | 3 | [`trajectory`], [`tension`], [`cable`] | the paper's circle and CSV paths; the tension QP (active set, Clarabel reference); element models and chains |
 //! | 4 | [`modal`] | D(λ) of the loaded chains, the first mode, the end-effector tracker, the dense reference |
 //! | 5 | [`estimator`] | the per-cycle pipeline, the inverse T_min query, the offline `auto` choice and reference |
@@ -74,6 +74,7 @@ pub mod input_file;
 // Layer 1
 pub mod scene;
 // Layer 2
+pub mod caspr;
 pub mod kinematics;
 // Layer 3
 pub mod cable;

@@ -13,6 +13,7 @@
 //! | `trajectory` | [`trajectory`](mod@trajectory) | f1 along the circle or a CSV path |
 //! | `sweep-tmin` | [`sweep_tmin`] | f1 against T_min with the √T_min fit |
 //! | `completions`, `man` | [`completions`](mod@completions) | shell completions and the man page |
+//! | `import caspr` | [`import`](mod@import) | a scene file from CASPR's XML model files |
 //!
 //! Functions here return `Result<_, CliError>`; the binary maps errors to a one-line reason
 //! and a non-zero exit code.
@@ -23,6 +24,7 @@ pub mod args;
 pub mod bench;
 pub mod completions;
 pub mod error;
+pub mod import;
 pub mod map;
 pub mod serve;
 pub mod sweep_tmin;
@@ -70,6 +72,8 @@ pub enum Command {
     Completions(completions::CompletionsArgs),
     /// Print the man page (roff): `cablevib man > cablevib.1`.
     Man(completions::ManArgs),
+    /// Write a scene file from another tool's robot model (CASPR's XML files).
+    Import(import::ImportArgs),
 }
 
 /// Heap allocation counter supplied by the binary's global allocator (0 when none).
@@ -89,6 +93,7 @@ pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
         Command::SweepTmin(a) => sweep_tmin::run(&a),
         Command::Completions(a) => completions::completions(&a),
         Command::Man(a) => completions::man(&a),
+        Command::Import(a) => import::run(&a),
     }
 }
 

@@ -1,0 +1,182 @@
+//! CASPR's cables file: `<cables default_cable_set="..">` holding `<cable_set id="..">`s of
+//! cables. Read: `cable_ideal` and `cable_linear_spring` (its `<K>`, N, is the cable's
+//! axial rigidity: CASPR's stiffness is K/length), each with `name`,
+//! `attachment_reference` (`joint` or `com`), `<force_min>`, `<force_max>` (N) and exactly
+//! two `<attachment>`s, one on the base (`<link>0</link>`, location in the inertial frame,
+//! m) and one on the platform (`<link>1</link>`, location in the link frame, m, from the
+//! link-frame origin for `joint` or from the centre of mass for `com`). Other cable types
+//! (passive springs, variable-stiffness drives) and multi-segment cables are refused.
+
+use super::xml::At;
+use super::CasprError;
+use nalgebra::Vector3;
+
+/// Where a platform attachment location is measured from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AttachmentReference {
+    /// From the link-frame origin (`attachment_reference="joint"`).
+    Joint,
+    /// From the centre of mass (`attachment_reference="com"`).
+    Com,
+}
+
+/// One cable as CASPR gives it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CasprCable {
+    /// The `name` attribute.
+    pub name: String,
+    /// Anchor on the base, inertial frame, m.
+    pub base_m: Vector3<f64>,
+    /// Attachment on the platform, link frame, m, measured from `reference`.
+    pub platform_m: Vector3<f64>,
+    /// What `platform_m` is measured from.
+    pub reference: AttachmentReference,
+    /// `<force_min>`, N.
+    pub force_min_n: f64,
+    /// `<force_max>`, N.
+    pub force_max_n: f64,
+    /// `<K>` of a `cable_linear_spring`, N (axial rigidity EA); None for `cable_ideal`.
+    pub k_n: Option<f64>,
+}
+
+/// The cable types read.
+const SUPPORTED_CABLES: &str = "cable_ideal, cable_linear_spring";
+
+/// The set's id and its cables: `wanted`, else the file's `default_cable_set`.
+pub(super) fn read_set(
+    doc: &roxmltree::Document,
+    file: &str,
+    wanted: Option<&str>,
+) -> Result<(String, Vec<CasprCable>), CasprError> {
+    let root = At {
+        file,
+        node: doc.root_element(),
+    };
+    if !root.node.has_tag_name("cables") {
+        return Err(root.err("expected <cables> as the root element"));
+    }
+    let sets: Vec<_> = root
+        .elements()
+        .filter(|n| n.has_tag_name("cable_set"))
+        .collect();
+    let ids: Vec<&str> = sets
+        .iter()
+        .map(|n| n.attribute("id").unwrap_or(""))
+        .collect();
+    let id = match (wanted, root.node.attribute("default_cable_set")) {
+        (Some(w), _) => w,
+        (None, Some(d)) => d,
+        (None, None) if sets.len() == 1 => ids[0],
+        (None, None) => {
+            return Err(root.err(format!(
+                "no default_cable_set and {} cable sets: pick one with --cable-set ({})",
+                sets.len(),
+                ids.join(", ")
+            )))
+        }
+    };
+    let Some(k) = ids.iter().position(|i| *i == id) else {
+        return Err(CasprError::Model {
+            file: file.to_string(),
+            message: format!(
+                "no cable set `{id}`; the file has: {}",
+                if ids.is_empty() {
+                    "none".to_string()
+                } else {
+                    ids.join(", ")
+                }
+            ),
+        });
+    };
+    let set = root.at(sets[k]);
+    let cables = set
+        .elements()
+        .map(|n| cable(set.at(n)))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok((id.to_string(), cables))
+}
+
+/// One `<cable_ideal>` or `<cable_linear_spring>`.
+fn cable(c: At) -> Result<CasprCable, CasprError> {
+    let ty = c.node.tag_name().name();
+    if ty != "cable_ideal" && ty != "cable_linear_spring" {
+        return Err(c.err(format!(
+            "cable type <{ty}> is not supported ({SUPPORTED_CABLES})"
+        )));
+    }
+    let name = c.attr("name")?.trim().to_string();
+    let reference = match c.attr("attachment_reference")?.trim() {
+        "joint" => AttachmentReference::Joint,
+        "com" => AttachmentReference::Com,
+        other => {
+            return Err(c.err(format!(
+                "cable `{name}`: attachment_reference=\"{other}\": expected \"joint\" or \"com\""
+            )))
+        }
+    };
+    let p = c.child("properties")?;
+    let force_min_n = p.number("force_min")?;
+    let force_max_n = p.number("force_max")?;
+    let k_n = if ty == "cable_linear_spring" {
+        let k = p.number("K")?;
+        if !(k > 0.0) {
+            return Err(p
+                .child("K")?
+                .err(format!("cable `{name}`: K must be > 0 N, got {k}")));
+        }
+        Some(k)
+    } else {
+        None
+    };
+    let (base_m, platform_m) = attachments(c.child("attachments")?, &name)?;
+    Ok(CasprCable {
+        name,
+        base_m,
+        platform_m,
+        reference,
+        force_min_n,
+        force_max_n,
+        k_n,
+    })
+}
+
+/// `<attachments>`: one location on link 0 and one on link 1, in either order.
+fn attachments(a: At, name: &str) -> Result<(Vector3<f64>, Vector3<f64>), CasprError> {
+    let all: Vec<_> = a
+        .elements()
+        .filter(|n| n.has_tag_name("attachment"))
+        .collect();
+    if all.len() != 2 {
+        return Err(a.err(format!(
+            "cable `{name}`: {} attachments; only straight cables from the base (link 0) to the platform (link 1) are supported",
+            all.len()
+        )));
+    }
+    let mut base = None;
+    let mut platform = None;
+    for n in all {
+        let at = a.at(n);
+        let link = at.number("link")?;
+        let loc = at.vec3("location")?;
+        let slot = if link == 0.0 {
+            &mut base
+        } else if link == 1.0 {
+            &mut platform
+        } else {
+            return Err(at.err(format!(
+                "cable `{name}`: link {link}: expected 0 (base) or 1 (platform)"
+            )));
+        };
+        if slot.replace(loc).is_some() {
+            return Err(at.err(format!(
+                "cable `{name}`: both attachments are on link {link}; one must be on 0 and one on 1"
+            )));
+        }
+    }
+    match (base, platform) {
+        (Some(b), Some(p)) => Ok((b, p)),
+        _ => Err(a.err(format!(
+            "cable `{name}`: needs one attachment on link 0 and one on link 1"
+        ))),
+    }
+}

@@ -1,0 +1,180 @@
+//! Import of robots from CASPR's XML model files (a bodies file and a cables file) into a
+//! scene ([`crate::scene`]), for `cablevib import caspr`.
+//!
+//! What is read: the one moving link ([`bodies`]: joint type and initial pose, mass, centre
+//! of mass, inertia) and one cable set ([`cables`]: anchors, platform attachments,
+//! force_min and force_max, and the `K` of linear-spring cables). What CASPR does not have
+//! comes from [`ImportOptions`]: weight per length, Young's modulus, cross-section, element
+//! model, and a T_min for cables whose force_min is 0.
+//!
+//! ## Frames
+//!
+//! The scene's end-effector reference point is the **centre of mass** G: the scene applies
+//! the weight m·g there and takes the inertia about it. With the link frame's origin O at
+//! o (inertial frame, m), its rotation R, the centre of mass r_G (link frame, from O) and a
+//! platform attachment location r_A (link frame, from O for `attachment_reference="joint"`,
+//! from G for `"com"`):
+//!
+//! ```text
+//!   end_effector.position    = o + R r_G
+//!   end_effector.orientation = R (quaternion [w, x, y, z])
+//!   cables[i].attachment     = r_A − r_G  (joint)   or   r_A  (com)      (body frame, from G)
+//!   cables[i].anchor         = base location (inertial frame, as CASPR gives it)
+//! ```
+//!
+//! so every attachment point lands where CASPR puts it: o + R r_A = position + R·attachment.
+//! When every attachment is at G the platform is a point mass (3 DOF, no inertia written);
+//! otherwise `effects.rotation = true` (6 DOF, inertia about G, at least 6 cables).
+//! Gravity is CASPR's, −9.81 m/s² along z; a `PLANAR_XY` joint carries the weight in its
+//! plane, so the cables do not (`weight_carried = false`).
+//!
+//! ## Stiffness and bounds
+//!
+//! `cable_ideal` cables get EA = E·A from the options; a `cable_linear_spring`'s `K` (N,
+//! CASPR's stiffness K/length) is its EA, written as Young's modulus K/A with the
+//! option's A. Each cable's force_min and force_max (N) become its t_min and t_max; a
+//! force_min of 0 (a cable allowed to go slack) has no tension stiffness, so it needs
+//! [`ImportOptions::t_min_n`].
+
+pub mod bodies;
+pub mod cables;
+mod convert;
+mod xml;
+
+pub use bodies::Link;
+pub use cables::{AttachmentReference, CasprCable};
+
+use crate::input_file::{read_text, InputError};
+use crate::scene::{ElementKind, Scene, SceneError};
+use nalgebra::Vector3;
+use std::path::Path;
+
+/// Largest CASPR model file read, bytes: the largest of CASPR's own are tens of kB.
+pub const MAX_CASPR_FILE_BYTES: u64 = 16 * 1024 * 1024;
+
+/// Errors of the import, each one line naming the file (and the line and element where
+/// there is one).
+#[derive(Debug, thiserror::Error)]
+pub enum CasprError {
+    /// A file could not be read (missing, not a regular file, too large, not UTF-8).
+    #[error(transparent)]
+    Input(#[from] InputError),
+    /// Not well-formed XML.
+    #[error("{file}: malformed XML: {message}")]
+    Xml {
+        /// File name.
+        file: String,
+        /// The XML parser's report (one line, with line and column).
+        message: String,
+    },
+    /// An element is missing, has a bad value or is of an unsupported kind.
+    #[error("{file}:{line}: <{element}>: {message}")]
+    Element {
+        /// File name.
+        file: String,
+        /// Line of the element (1-based).
+        line: u32,
+        /// The element's tag.
+        element: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The model as a whole cannot be imported (several moving links, no such cable set,
+    /// too few cables for a rigid platform).
+    #[error("{file}: {message}")]
+    Model {
+        /// File name.
+        file: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// An import option is missing or out of range.
+    #[error("{0}")]
+    Options(String),
+    /// The scene written does not validate (a value CASPR allows and the scene does not).
+    #[error("imported scene: {0}")]
+    Scene(#[from] SceneError),
+}
+
+/// What the import needs that CASPR's files do not give. All SI.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImportOptions {
+    /// Cable set id; None: the file's `default_cable_set`.
+    pub cable_set: Option<String>,
+    /// Cable weight per length γ, N/m.
+    pub weight_per_length_n_m: f64,
+    /// Young's modulus E of `cable_ideal` cables, Pa (None: the set must have none).
+    pub youngs_modulus_pa: Option<f64>,
+    /// Cable cross-section A, m².
+    pub area_m2: f64,
+    /// Link-frame origin of the default pose (CASPR's joint translation), m; None: the
+    /// model's `q_initial`.
+    pub position_m: Option<Vector3<f64>>,
+    /// Lower tension bound for every cable, N; None: each cable's force_min.
+    pub t_min_n: Option<f64>,
+    /// Element model written into the scene.
+    pub element: ElementKind,
+    /// Elements per cable written into the scene.
+    pub elements_per_cable: usize,
+}
+
+/// The result of an import.
+#[derive(Debug, Clone)]
+pub struct Imported {
+    /// The scene file's text (TOML, with comments saying where each value came from).
+    pub toml: String,
+    /// The same text parsed and validated.
+    pub scene: Scene,
+    /// The cable set used.
+    pub cable_set: String,
+    /// The link as read.
+    pub link: Link,
+    /// The cables as read.
+    pub cables: Vec<CasprCable>,
+}
+
+/// Imports from the two files (read with the crate's bounded reader).
+pub fn import_files(
+    bodies: &Path,
+    cables: &Path,
+    opts: &ImportOptions,
+) -> Result<Imported, CasprError> {
+    let b = read_text(bodies, "CASPR bodies file", MAX_CASPR_FILE_BYTES)?;
+    let c = read_text(cables, "CASPR cables file", MAX_CASPR_FILE_BYTES)?;
+    import_str(
+        &b,
+        &bodies.display().to_string(),
+        &c,
+        &cables.display().to_string(),
+        opts,
+    )
+}
+
+/// Imports from the two files' texts; the names are used in messages and comments.
+pub fn import_str(
+    bodies_xml: &str,
+    bodies_name: &str,
+    cables_xml: &str,
+    cables_name: &str,
+    opts: &ImportOptions,
+) -> Result<Imported, CasprError> {
+    convert::check_options(opts)?;
+    let bdoc = xml::parse(bodies_xml, bodies_name)?;
+    let link = bodies::read_link(&bdoc, bodies_name)?;
+    let cdoc = xml::parse(cables_xml, cables_name)?;
+    let (cable_set, cables) = cables::read_set(&cdoc, cables_name, opts.cable_set.as_deref())?;
+    let src = convert::Sources {
+        bodies: bodies_name,
+        cables: cables_name,
+        cable_set: &cable_set,
+    };
+    let toml = convert::scene_toml(&link, &cables, opts, &src)?;
+    let scene = Scene::from_toml_str(&toml, "<imported scene>")?;
+    Ok(Imported {
+        toml,
+        scene,
+        cable_set,
+        link,
+        cables,
+    })
+}

@@ -1,0 +1,130 @@
+//! Reading CASPR's XML: one parsed document with its file name, and the element and number
+//! look-ups the bodies and cables readers share. Every error names the file, the line and
+//! the element ([`CasprError::Element`]).
+
+use super::CasprError;
+use nalgebra::Vector3;
+use roxmltree::{Document, Node, ParsingOptions};
+
+/// Most XML nodes (elements, texts, comments) a model file may have: CASPR's largest
+/// models have a few thousand; the bound keeps a hostile file from exhausting memory.
+const MAX_XML_NODES: u32 = 1_000_000;
+
+/// Parses `text` (the contents of `file`). CASPR's files start with a `<!DOCTYPE ...>`
+/// naming an external DTD, so DTDs are allowed; external entities are never loaded (no
+/// resolver), and roxmltree refuses recursive entity expansion.
+pub(super) fn parse<'a>(text: &'a str, file: &str) -> Result<Document<'a>, CasprError> {
+    let opt = ParsingOptions {
+        allow_dtd: true,
+        nodes_limit: MAX_XML_NODES,
+        ..ParsingOptions::default()
+    };
+    Document::parse_with_options(text, opt).map_err(|e| CasprError::Xml {
+        file: file.to_string(),
+        message: e.to_string(),
+    })
+}
+
+/// A node of one file, for messages that name the file and the line.
+#[derive(Clone, Copy)]
+pub(super) struct At<'a, 'i> {
+    /// The file name.
+    pub file: &'a str,
+    /// The element.
+    pub node: Node<'a, 'i>,
+}
+
+impl<'a, 'i> At<'a, 'i> {
+    /// The same file, another element.
+    pub fn at(&self, node: Node<'a, 'i>) -> At<'a, 'i> {
+        At {
+            file: self.file,
+            node,
+        }
+    }
+
+    /// An error about this element.
+    pub fn err(&self, message: impl Into<String>) -> CasprError {
+        let line = self
+            .node
+            .document()
+            .text_pos_at(self.node.range().start)
+            .row;
+        CasprError::Element {
+            file: self.file.to_string(),
+            line,
+            element: self.node.tag_name().name().to_string(),
+            message: message.into(),
+        }
+    }
+
+    /// The element children of this element.
+    pub fn elements(&self) -> impl Iterator<Item = Node<'a, 'i>> {
+        self.node.children().filter(|n| n.is_element())
+    }
+
+    /// The first child element named `tag` (CASPR reads the first one too).
+    pub fn child(&self, tag: &str) -> Result<At<'a, 'i>, CasprError> {
+        self.elements()
+            .find(|n| n.has_tag_name(tag))
+            .map(|n| self.at(n))
+            .ok_or_else(|| self.err(format!("missing <{tag}>")))
+    }
+
+    /// The attribute `name`, which must be present.
+    pub fn attr(&self, name: &str) -> Result<&'a str, CasprError> {
+        self.node
+            .attribute(name)
+            .ok_or_else(|| self.err(format!("missing attribute `{name}`")))
+    }
+
+    /// The element's text, trimmed (empty when it has none).
+    pub fn text(&self) -> &'a str {
+        self.node.text().unwrap_or("").trim()
+    }
+
+    /// The text of child `tag` as one finite number.
+    pub fn number(&self, tag: &str) -> Result<f64, CasprError> {
+        let c = self.child(tag)?;
+        let v = c.numbers(c.text(), 1)?;
+        Ok(v[0])
+    }
+
+    /// The text of child `tag` as three finite numbers separated by white space.
+    pub fn vec3(&self, tag: &str) -> Result<Vector3<f64>, CasprError> {
+        let c = self.child(tag)?;
+        let v = c.numbers(c.text(), 3)?;
+        Ok(Vector3::new(v[0], v[1], v[2]))
+    }
+
+    /// Exactly `n` finite numbers separated by white space, read from `s` (this element's
+    /// text or one of its attributes).
+    pub fn numbers(&self, s: &str, n: usize) -> Result<Vec<f64>, CasprError> {
+        let words: Vec<&str> = s.split_whitespace().collect();
+        if words.len() != n {
+            return Err(self.err(format!(
+                "expected {n} number{}, got `{}`",
+                if n == 1 { "" } else { "s" },
+                short(s)
+            )));
+        }
+        words
+            .iter()
+            .map(|w| match w.parse::<f64>() {
+                Ok(x) if x.is_finite() => Ok(x),
+                Ok(_) => Err(self.err(format!("`{w}` is not a finite number"))),
+                Err(_) => Err(self.err(format!("`{}` is not a number", short(w)))),
+            })
+            .collect()
+    }
+}
+
+/// At most 40 characters of `s` on one line, for messages.
+fn short(s: &str) -> String {
+    let one_line: String = s.split_whitespace().collect::<Vec<_>>().join(" ");
+    if one_line.chars().count() > 40 {
+        format!("{}…", one_line.chars().take(40).collect::<String>())
+    } else {
+        one_line
+    }
+}

@@ -1,0 +1,276 @@
+//! Hostile inputs: one-line errors naming the file (and line and element), no panics.
+
+use super::{data, ipanema_opts, read, run, stderr};
+use cablevib::caspr::{import_str, ImportOptions};
+use cablevib::scene::Scene;
+use nalgebra::Vector3;
+use std::path::Path;
+
+/// Importing `bodies` and `cables` (texts) with `opts` fails with one line containing
+/// every one of `needles`.
+fn refused(bodies: &str, cables: &str, opts: &ImportOptions, needles: &[&str]) {
+    let e = import_str(bodies, "b.xml", cables, "c.xml", opts)
+        .expect_err("must be refused")
+        .to_string();
+    assert_eq!(e.lines().count(), 1, "one line: {e}");
+    for n in needles {
+        assert!(e.contains(n), "`{n}` not in: {e}");
+    }
+}
+
+/// The IPAnema test files and options.
+fn ipanema_texts() -> (String, String, ImportOptions) {
+    (
+        read("ipanema1_bodies.xml"),
+        read("ipanema1_cables.xml"),
+        ipanema_opts(),
+    )
+}
+
+#[test]
+fn malformed_xml_and_unsupported_models_are_refused() {
+    let (b, c, o) = ipanema_texts();
+    refused(&first_half(&b), &c, &o, &["b.xml", "malformed XML"]);
+    refused(&b, "<cables><cable_set", &o, &["c.xml", "malformed XML"]);
+    // Entity expansion is bounded by the XML parser.
+    refused(&laughs(), &c, &o, &["b.xml", "malformed XML"]);
+    let two = b.replace("</links>", &format!("{}</links>", link_block(&b)));
+    refused(&two, &c, &o, &["b.xml", "2 moving links"]);
+    let revolute = b.replace("SPATIAL_EULER_XYZ", "REVOLUTE_Z");
+    refused(&revolute, &c, &o, &["b.xml:", "<joint>", "REVOLUTE_Z"]);
+    let passive = c.replacen("cable_ideal", "cable_passive_linear_spring", 2);
+    let needles = ["c.xml:", "cable_passive_linear_spring", "not supported"];
+    refused(&b, &passive, &o, &needles);
+    let base_twice = c.replacen("<link>1</link>", "<link>0</link>", 1);
+    refused(
+        &b,
+        &base_twice,
+        &o,
+        &["c.xml:", "both attachments are on link 0"],
+    );
+    // Off-centre attachments with too few cables for a rigid platform.
+    let needles = ["c.xml", "at least 6 cables", "has 4"];
+    refused(&b, &four_cables(&c), &o, &needles);
+    let nope = ImportOptions {
+        cable_set: Some("nope".into()),
+        ..o.clone()
+    };
+    let needles = ["c.xml", "no cable set `nope`", "original, springs"];
+    refused(&b, &c, &nope, &needles);
+}
+
+#[test]
+fn bad_numbers_and_missing_elements_name_file_line_and_element() {
+    let (b, c, o) = ipanema_texts();
+    let nan = c.replacen("-2.0 1.5 2.0", "-2.0 NaN 2.0", 1);
+    let needles = ["c.xml:24:", "<location>", "`NaN` is not a finite number"];
+    refused(&b, &nan, &o, &needles);
+    let inf = b.replace("<mass>25.0</mass>", "<mass>inf</mass>");
+    refused(&inf, &c, &o, &["b.xml:", "<mass>", "not a finite number"]);
+    let word = b.replace("<Ixx>14.0</Ixx>", "<Ixx>heavy</Ixx>");
+    refused(
+        &word,
+        &c,
+        &o,
+        &["b.xml:", "<Ixx>", "`heavy` is not a number"],
+    );
+    let two = c.replacen("-2.0 1.5 2.0", "-2.0 1.5", 1);
+    refused(
+        &b,
+        &two,
+        &o,
+        &["c.xml:", "<location>", "expected 3 numbers"],
+    );
+    let no_ref = c.replacen(" attachment_reference=\"joint\"", "", 1);
+    let needles = [
+        "c.xml:",
+        "<cable_ideal>",
+        "missing attribute `attachment_reference`",
+    ];
+    refused(&b, &no_ref, &o, &needles);
+    let no_max = c.replacen("<force_max>720.0</force_max>", "", 1);
+    let needles = ["c.xml:", "<properties>", "missing <force_max>"];
+    refused(&b, &no_max, &o, &needles);
+    let no_com = b.replace("<com_location>0.0 0.0 0.0</com_location>", "");
+    let needles = ["b.xml:", "<physical>", "missing <com_location>"];
+    refused(&no_com, &c, &o, &needles);
+}
+
+#[test]
+fn what_caspr_lacks_must_come_from_the_options() {
+    let (b, c, o) = ipanema_texts();
+    // CASPR's force_min of 0 without a T_min; cable_ideal without a Young's modulus.
+    let slack = ImportOptions {
+        t_min_n: None,
+        ..o.clone()
+    };
+    let needles = ["c.xml", "cable `cable 1`", "force_min = 0", "--t-min"];
+    refused(&b, &c, &slack, &needles);
+    let rigid = ImportOptions {
+        youngs_modulus_pa: None,
+        ..o.clone()
+    };
+    refused(&b, &c, &rigid, &["cable `cable 1`", "--youngs-modulus"]);
+    let nan_area = ImportOptions {
+        area_m2: f64::NAN,
+        ..o.clone()
+    };
+    refused(&b, &c, &nan_area, &["area", "NaN"]);
+}
+
+/// The first half of `s` (cut at a character boundary).
+fn first_half(s: &str) -> String {
+    let mut k = s.len() / 2;
+    while !s.is_char_boundary(k) {
+        k -= 1;
+    }
+    s[..k].to_string()
+}
+
+/// The `<link_rigid>` element of a bodies file (to make a second one).
+fn link_block(b: &str) -> String {
+    let start = b.find("<link_rigid").unwrap();
+    let end = b.find("</link_rigid>").unwrap() + "</link_rigid>".len();
+    b[start..end].replace("num=\"1\"", "num=\"2\"")
+}
+
+/// The IPAnema cables file with its default set cut to the first four cables.
+fn four_cables(c: &str) -> String {
+    let mut out = c.to_string();
+    for k in 5..=8 {
+        let open = format!("<cable_ideal name=\"cable {k}\"");
+        let start = out.find(&open).unwrap();
+        let end = start + out[start..].find("</cable_ideal>").unwrap() + "</cable_ideal>".len();
+        out.replace_range(start..end, "");
+    }
+    out
+}
+
+/// Nested entities whose expansion would be 10⁹ characters.
+fn laughs() -> String {
+    let mut s = String::from("<?xml version=\"1.0\"?>\n<!DOCTYPE lolz [\n<!ENTITY l0 \"lol\">\n");
+    for k in 1..=9 {
+        let prev = format!("&l{};", k - 1).repeat(10);
+        s += &format!("<!ENTITY l{k} \"{prev}\">\n");
+    }
+    s + "]>\n<links>&l9;</links>"
+}
+
+/// `import caspr` of the IPAnema test robot into `out`, without --t-min.
+fn ipanema_cli(out: &Path, extra: &[&str]) -> std::process::Output {
+    let (b, c) = (data("ipanema1_bodies.xml"), data("ipanema1_cables.xml"));
+    let mut args = vec!["import", "caspr", b.to_str().unwrap(), c.to_str().unwrap()];
+    args.extend_from_slice(&["--weight-per-length", "0.02", "--area", "1.767e-6"]);
+    args.extend_from_slice(&["--youngs-modulus", "1e11", "-o", out.to_str().unwrap()]);
+    args.extend_from_slice(extra);
+    run(&args)
+}
+
+/// Exit code 1 and one line on stderr containing `needle`.
+fn cli_refused(o: &std::process::Output, needle: &str) {
+    let e = stderr(o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
+    assert!(e.contains(needle), "`{needle}` not in {e}");
+}
+
+#[test]
+fn cli_errors_are_one_line() {
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli_refused.toml");
+    // force_min = 0 and no --t-min: refused, and no file written.
+    let _ = std::fs::remove_file(&out);
+    cli_refused(&ipanema_cli(&out, &[]), "--t-min");
+    assert!(!out.exists());
+    // Unknown set: the error lists the available ones.
+    let o = ipanema_cli(&out, &["--t-min", "10", "--cable-set", "x"]);
+    cli_refused(&o, "original, springs");
+    let o = ipanema_cli(&out, &["--t-min", "10", "--element", "spline"]);
+    cli_refused(&o, "--element `spline`");
+    // A missing file.
+    let c = data("ipanema1_cables.xml");
+    let o = run(&[
+        "import",
+        "caspr",
+        "/nonexistent.xml",
+        c.to_str().unwrap(),
+        "--weight-per-length",
+        "1",
+        "--area",
+        "1e-6",
+        "-o",
+        "/dev/null",
+    ]);
+    cli_refused(&o, "/nonexistent.xml");
+}
+
+#[test]
+fn cli_position_moves_the_link_frame_and_the_result_analyzes() {
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli_position.toml");
+    let o = ipanema_cli(&out, &["--t-min", "10", "--position", "0.3,-0.2,1.1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = Scene::from_path(&out).unwrap();
+    // The centre of mass is the link frame's origin in this model.
+    assert_eq!(s.ee_position_m, Vector3::new(0.3, -0.2, 1.1));
+    let o = run(&["analyze", out.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn names_with_quotes_and_newlines_cannot_break_the_scene_file() {
+    // XML character references put a newline and quotes into the names; the scene's name
+    // must stay one TOML string and the cable name one comment line.
+    let b = read("ipanema1_bodies.xml")
+        .replace("name=\"IPAnema 1\"", "name=\"x&#10;t_max = 1 # &quot;\\\"");
+    let c = read("ipanema1_cables.xml").replace("name=\"cable 1\"", "name=\"c&#10;[[cables]]\"");
+    let im = import_str(&b, "b.xml", &c, "c.xml", &ipanema_opts()).expect("imports");
+    assert_eq!(im.scene.name, "x\nt_max = 1 # \"\\");
+    assert_eq!(im.scene.n_cables(), 8);
+}
+
+#[test]
+fn mutated_files_never_panic() {
+    // Deterministic mutations (a 64-bit LCG, Knuth's constants): a character replaced by
+    // one of XML's or a number's special characters, or the file cut short. Every result
+    // must be an import or an error of one line; a panic fails the test.
+    let (b, c, o) = ipanema_texts();
+    let specials = [
+        "<", ">", "\"", "&", "/", "0", "-", "e", ".", " ", "\u{0}", "NaN", "é",
+    ];
+    let mut state: u64 = 0x2545_F491_4F6C_DD1D;
+    let mut next = |n: usize| {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 33) as usize % n
+    };
+    let mut refused = 0;
+    for round in 0..3000 {
+        let target = if round % 2 == 0 { &b } else { &c };
+        let mut at = next(target.len());
+        while !target.is_char_boundary(at) {
+            at -= 1;
+        }
+        let mutated = if round % 7 == 0 {
+            target[..at].to_string()
+        } else {
+            let mut end = at + 1;
+            while end < target.len() && !target.is_char_boundary(end) {
+                end += 1;
+            }
+            let s = specials[next(specials.len())];
+            format!("{}{s}{}", &target[..at], &target[end.min(target.len())..])
+        };
+        let (bb, cc) = if round % 2 == 0 {
+            (mutated.as_str(), c.as_str())
+        } else {
+            (b.as_str(), mutated.as_str())
+        };
+        if let Err(e) = import_str(bb, "b.xml", cc, "c.xml", &o) {
+            assert_eq!(e.to_string().lines().count(), 1, "{e}");
+            refused += 1;
+        }
+    }
+    // Most mutations hit a number, a tag or an attribute; the rest land in comments or
+    // white space and import as before.
+    assert!(refused > 0);
+}
