@@ -280,6 +280,7 @@ fn sweep_tmin_fits_sqrt_with_the_model_coefficient() {
         to_n: 80.0,
         steps: 7,
         ee_mode: false,
+        modes: 1,
     };
     let r = study::tmin::compute(&s, &cfg).unwrap();
     assert!(r.points.iter().all(|p| p.estimate.is_ok()));
