@@ -53,10 +53,11 @@ mod error;
 mod first_mode;
 mod rigid;
 mod solver;
+mod spectrum;
 
 pub use dense::{
-    assemble, assemble_rigid, condense_static, dense_modes, dense_modes_ee,
-    dense_relative_accuracy, DenseModes,
+    assemble, assemble_rigid, check_dense_budget, condense_static, dense_memory_bytes, dense_modes,
+    dense_modes_ee, dense_relative_accuracy, DenseModes, DENSE_MEMORY_BUDGET_BYTES,
 };
 pub use dynamic_stiffness::{DynEval, EigD};
 pub use ee_tracker::RescanCounts;
@@ -64,6 +65,7 @@ pub use eig3::{eig3, eig3_jacobi, Eig3};
 pub use error::ModalError;
 pub use rigid::{attach_map, rigid_geometric_stiffness};
 pub use solver::ModalSolver;
+pub use spectrum::{Mode, SpectrumParams};
 
 /// Convert λ = ω² (rad²/s²) to Hz.
 #[inline]

@@ -15,9 +15,9 @@ use nalgebra::{Matrix3, Matrix6, Vector3};
 pub struct ModalSolver {
     params: ModalParams,
     /// What `load` computes; read-only on the hot path.
-    problem: LoadedChains,
+    pub(in crate::modal) problem: LoadedChains,
     /// What one evaluation of D(λ) writes.
-    scratch: EvalScratch,
+    pub(in crate::modal) scratch: EvalScratch,
     /// The first root's state between cycles (certificate schedule, weighted sum rule).
     first: FirstRootState,
     /// The end-effector mode tracker's state between cycles.
