@@ -10,6 +10,7 @@
 use super::{build, StudyError};
 use crate::estimator::{Estimate, Estimator, EstimatorParams};
 use crate::kinematics::Pose;
+use crate::modal::Mode;
 use crate::scene::Scene;
 use crate::service::stats::StatusHistogram;
 use nalgebra::Vector3;
@@ -39,8 +40,10 @@ pub struct PointResult {
     pub estimate: Estimate,
     /// How many modes were asked for (1 ..= [`MAX_MODES`]); `modes_hz[..n_modes]` hold them.
     pub n_modes: usize,
-    /// Frequencies of the first `n_modes` modes in ascending order, Hz (entry 0 is the
-    /// first mode); NaN unless the estimate is ok, and where the solver returned fewer.
+    /// Frequencies of the first `n_modes` modes in ascending order, Hz, from
+    /// `Estimator::modes` (with `n_modes` = 1: `estimate.f1_hz`); NaN unless the estimate is
+    /// ok, and where the solver returned fewer. The CSVs' `f1_hz` column is always
+    /// `estimate.f1_hz`, `f2_hz` .. `fK_hz` are entries 1 .. K − 1.
     pub modes_hz: [f64; MAX_MODES],
     /// Smallest principal value of the static end-effector stiffness (translational block),
     /// N/m; NaN unless the estimate is ok.
@@ -93,7 +96,13 @@ pub fn evaluate_one(
     let estimate = *est.update(&Pose::at(position_m), t_min_n);
     let mut modes_hz = [f64::NAN; MAX_MODES];
     if estimate.is_ok() {
-        first_modes_hz(est, &mut modes_hz[..n_modes]);
+        if n_modes >= 2 {
+            first_modes_hz(est, &mut modes_hz[..n_modes]);
+        } else {
+            // One mode: the cycle's own f1, and no extra work (the default sweeps cost
+            // what they did before modes were added).
+            modes_hz[0] = estimate.f1_hz;
+        }
     }
     PointResult {
         position_m,
@@ -105,12 +114,16 @@ pub fn evaluate_one(
     }
 }
 
-/// Frequencies of the first `out.len()` modes of the last updated pose into `out` (Hz);
-/// entries the solver does not return stay NaN.
+/// Frequencies of the first `out.len()` modes of the last updated pose into `out` (Hz),
+/// by [`Estimator::modes`] (the structured solver); entries it does not return (a model with
+/// fewer modes, or a mode search that failed) stay NaN.
 fn first_modes_hz(est: &mut Estimator, out: &mut [f64]) {
-    // Stand-in until `Estimator::modes` is available: the first mode only.
-    if let Some(f) = out.first_mut() {
-        *f = est.estimate().f1_hz;
+    let mut modes = [Mode::default(); MAX_MODES];
+    let k = out.len().min(MAX_MODES);
+    if let Ok(n) = est.modes(k, &mut modes[..k]) {
+        for (f, m) in out.iter_mut().zip(&modes[..n]) {
+            *f = m.frequency_hz;
+        }
     }
 }
 
