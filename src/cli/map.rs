@@ -10,7 +10,7 @@ use crate::scene::Scene;
 use crate::study::map::{self as study, Interval, MapConfig, MapResult};
 use crate::study::points::MAX_MODES;
 use clap::{Args, ValueEnum};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// The plane of a heat map; the third axis is swept as slices.
@@ -99,8 +99,8 @@ pub struct MapArgs {
     /// (1 ..= 16).
     #[arg(long, default_value_t = 1)]
     pub modes: usize,
-    /// More heat maps, comma-separated, each written to PREFIX-NAME.svg next to the main
-    /// one: fK (the K-th natural frequency, Hz; needs K <= --modes), k-min (the smallest
+    /// More heat maps, comma-separated, each written next to the main figure as
+    /// PREFIX-NAME.svg (or, with --svg FILE.svg, FILE-NAME.svg): fK (the K-th natural frequency, Hz; needs K <= --modes), k-min (the smallest
     /// principal value of the static end-effector stiffness, N/m), f1, ee-mode.
     #[arg(long, value_delimiter = ',', value_parser = parse_shown)]
     pub show: Vec<study::MapValue>,
@@ -175,10 +175,7 @@ pub fn run(a: &MapArgs) -> Result<(), CliError> {
         svg_path.display().to_string(),
     ];
     for &v in &a.show {
-        let (_, _, part) = value_names(v);
-        let mut prefix = a.out.clone().into_os_string();
-        prefix.push(format!("-{part}"));
-        let p = with_ext(std::path::Path::new(&prefix), "svg");
+        let p = shown_path(&svg_path, &value_names(v).2);
         write_file(&p, &map_svg(&s, &m, v))?;
         written.push(p.display().to_string());
     }
@@ -196,6 +193,18 @@ pub fn run(a: &MapArgs) -> Result<(), CliError> {
     }
     println!("  wrote {}", written.join(", "));
     Ok(())
+}
+
+/// The figure of a `--show` value next to the main figure: `DIR/NAME.svg` →
+/// `DIR/NAME-PART.svg` (`map.svg` → `map-k-min.svg`).
+fn shown_path(main_svg: &Path, part: &str) -> PathBuf {
+    let stem = match main_svg.extension() {
+        Some(e) if e == "svg" => main_svg.with_extension(""),
+        _ => main_svg.to_path_buf(),
+    };
+    let mut prefix = stem.into_os_string();
+    prefix.push(format!("-{part}"));
+    with_ext(Path::new(&prefix), "svg")
 }
 
 /// The smallest and largest valid value `v` of the map, and where.

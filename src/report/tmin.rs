@@ -26,6 +26,8 @@ pub struct Compared<'a> {
 pub fn tmin_csv(s: &Scene, r: &TminSweep) -> Csv {
     let modes = r.points.first().map_or(1, |p| p.n_modes);
     let mut meta = scene_meta("sweep-tmin", s);
+    // The swept values are the t_min_n column, not the scene's T_min.
+    meta.remove("t_min_n");
     let p = s.ee_position_m;
     meta.insert("position_m".into(), json!([p.x, p.y, p.z]));
     meta.insert("fit".into(), json!("f1 = a * sqrt(T_min), least squares"));

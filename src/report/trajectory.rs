@@ -17,6 +17,8 @@ pub fn trajectory_csv(s: &Scene, t: &TrajectoryStudy) -> Csv {
     let n = tr.position_m.len();
     let modes = t.points.first().map_or(1, |p| p.n_modes);
     let mut meta = scene_meta("trajectory", s);
+    // The curves' T_min values are `t_mins_n` (and the t_min_n column).
+    meta.remove("t_min_n");
     meta.insert("t_mins_n".into(), json!(t.t_mins_n));
     meta.insert("poses".into(), json!(n));
     meta.insert("modes".into(), json!(modes));
