@@ -229,3 +229,34 @@ pub fn point_fields(r: &PointResult) -> Vec<String> {
     s.push(num_p(r.stiffness_min_n_m, 6));
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fields_with_commas_are_quoted_and_the_sidecar_names_every_column() {
+        let cols = vec![Column::new("a_m", "m", "a"), Column::new("label", "", "b")];
+        let mut c = Csv::new(cols, Map::new());
+        c.row(["1", "plain"]);
+        c.row(["NaN", "x, \"y\""]);
+        let (text, side) = c.into_parts("cablevib test");
+        assert_eq!(text, "a_m,label\n1,plain\nNaN,\"x, \"\"y\"\"\"\n");
+        let v: Value = serde_json::from_str(&side).unwrap();
+        assert_eq!(v["rows"], 2);
+        assert_eq!(v["command_line"], "cablevib test");
+        assert_eq!(v["columns"][1]["name"], "label");
+        assert_eq!(
+            sidecar_path(Path::new("d/map.csv")),
+            Path::new("d/map.csv.json")
+        );
+    }
+
+    #[test]
+    fn shell_words_are_quoted_only_when_needed() {
+        assert_eq!(shell_quote("--x=-1,1"), "--x=-1,1");
+        assert_eq!(shell_quote("paper Table 4"), "'paper Table 4'");
+        assert_eq!(shell_quote("it's"), r"'it'\''s'");
+        assert_eq!(shell_quote(""), "''");
+    }
+}
