@@ -52,6 +52,9 @@ impl From<MapValue> for study::MapValue {
     }
 }
 
+// The --modes help texts of map, trajectory and sweep-tmin say 1 ..= 16.
+const _: () = assert!(MAX_MODES == 16, "update the --modes help texts");
+
 /// A value of `--show`: `f1`, `ee-mode`, `fK` (K = 2 ..= 16) or `k-min`.
 pub fn parse_shown(text: &str) -> Result<study::MapValue, String> {
     let t = text.trim();

@@ -21,8 +21,8 @@ use std::time::{Duration, Instant};
 /// Most worker threads a study starts (more only contend for the same cores).
 pub const MAX_THREADS: usize = 64;
 /// Most modes a study keeps per point (`--modes`): the spatial robot's first string cluster
-/// has 8 modes, so 16 covers it and the modes above it, while a point stays small
-/// (16 × 8 bytes) on a 5-million-point map.
+/// has 8 modes, so 16 covers it and the modes above it, for 128 bytes more per point (a
+/// point is ~0.5 kB).
 pub const MAX_MODES: usize = 16;
 /// Shortest time between two progress updates: at most 4 lines a second.
 const PROGRESS_INTERVAL: Duration = Duration::from_millis(250);
