@@ -234,6 +234,8 @@ fn trajectory_from_csv_and_default_circle() {
         input.to_str().unwrap(),
         "--t-mins",
         "60,80",
+        "--modes",
+        "2",
         "--quiet",
         "--out",
         out.to_str().unwrap(),
@@ -301,6 +303,8 @@ fn sweep_tmin_fits_sqrt_with_the_model_coefficient() {
         "4",
         "--compare",
         "60:11.245,120:15.901",
+        "--modes",
+        "3",
         "--out",
         out.to_str().unwrap(),
     ])

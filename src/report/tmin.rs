@@ -12,6 +12,20 @@ use serde_json::json;
 /// Segments of the drawn fit curve a·√T_min.
 const FIT_CURVE_SEGMENTS: usize = 200;
 
+/// Colours of the modes f2 .. fK (the palette's entries not taken by f1, the fit, the
+/// end-effector mode and the compared points), cycled.
+const MODE_COLORS: [&str; 4] = [PALETTE[3], PALETTE[4], PALETTE[5], PALETTE[7]];
+
+/// The frequency axis: linear for f1 alone, logarithmic with more modes (f2 may be tens of
+/// times f1, which would flatten f1 on a linear axis).
+pub(crate) fn freq_axis(modes: usize) -> Axis {
+    if modes > 1 {
+        Axis::log("f (Hz)")
+    } else {
+        Axis::linear("f (Hz)")
+    }
+}
+
 /// Points measured elsewhere, drawn for comparison.
 #[derive(Debug, Clone, Copy)]
 pub struct Compared<'a> {
@@ -92,10 +106,19 @@ pub fn tmin_svg(
             (t, r.a * t.sqrt())
         })
         .collect();
+    let modes = r.points.first().map_or(1, |p| p.n_modes);
     let mut plot = LinePlot::new(
-        &format!("{}: first natural frequency against T_min", s.name),
+        &format!(
+            "{}: {} against T_min",
+            s.name,
+            if modes > 1 {
+                format!("the first {modes} natural frequencies")
+            } else {
+                "first natural frequency".into()
+            }
+        ),
         Axis::linear("T_min (N)"),
-        Axis::linear("f (Hz)"),
+        freq_axis(modes),
     );
     plot.subtitle = format!(
         "{} × {} elements/cable at ({}, {}, {}) m; fit f1 = {:.5}·√T_min (max deviation {:.1e})",
@@ -115,6 +138,12 @@ pub fn tmin_svg(
     if ee_mode && differs {
         plot.series
             .push(Series::new("end-effector mode", ee, Mark::LinePoints).color(PALETTE[2]));
+    }
+    for j in 2..=modes {
+        let fj: Vec<(f64, f64)> = r.points.iter().map(|p| (p.t_min_n, p.mode_hz(j))).collect();
+        let color = MODE_COLORS[(j - 2) % MODE_COLORS.len()];
+        plot.series
+            .push(Series::new(&format!("f{j}"), fj, Mark::Line).color(color));
     }
     if let Some(c) = compare {
         plot.series

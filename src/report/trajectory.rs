@@ -60,8 +60,10 @@ fn curve(rows: &[PointResult], xs: &[f64], f: fn(&Estimate) -> f64) -> Vec<(f64,
 
 /// The figure: f1 of each T_min (and the end-effector mode where it differs from f1)
 /// against the angle along the circle (`radius_m`) or the time.
+/// With K modes, f2 .. fK of each T_min are solid lines in its colour, on a log axis.
 pub fn trajectory_svg(s: &Scene, t: &TrajectoryStudy, radius_m: f64, ee_mode: bool) -> String {
     let circle = t.is_circle();
+    let modes = t.points.first().map_or(1, |p| p.n_modes);
     let xlab = if circle {
         "angle along the circle (deg)"
     } else {
@@ -69,8 +71,13 @@ pub fn trajectory_svg(s: &Scene, t: &TrajectoryStudy, radius_m: f64, ee_mode: bo
     };
     let mut plot = LinePlot::new(
         &format!(
-            "{}: first natural frequency along the {}",
+            "{}: {} along the {}",
             s.name,
+            if modes > 1 {
+                format!("the first {modes} natural frequencies")
+            } else {
+                "first natural frequency".into()
+            },
             if circle {
                 format!("circle (r = {} m)", radius_m)
             } else {
@@ -82,7 +89,7 @@ pub fn trajectory_svg(s: &Scene, t: &TrajectoryStudy, radius_m: f64, ee_mode: bo
         } else {
             Axis::linear(xlab)
         },
-        Axis::linear("f (Hz)"),
+        super::tmin::freq_axis(modes),
     );
     let mut sub = format!(
         "{} × {} elements/cable, T_max {} N",
@@ -112,6 +119,21 @@ pub fn trajectory_svg(s: &Scene, t: &TrajectoryStudy, radius_m: f64, ee_mode: bo
                 )
                 .color(color),
             );
+        }
+        for j in 2..=modes {
+            let fj: Vec<(f64, f64)> = rows
+                .iter()
+                .zip(xs)
+                .map(|(r, &x)| (x, r.mode_hz(j)))
+                .collect();
+            // One legend entry for the modes of a T_min.
+            let name = if j == 2 {
+                format!("f2..f{modes}, T_min = {tm} N")
+            } else {
+                String::new()
+            };
+            plot.series
+                .push(Series::new(&name, fj, Mark::Line).color(color));
         }
         let c = t.summary(k);
         if c.f1_min_hz.is_finite() {
