@@ -83,7 +83,7 @@ fn assert_well_formed_svg(path: &Path) {
     }
 }
 
-/// Data rows of a CSV written by the sweeps (comment lines skipped), with the header.
+/// Header and data rows of a CSV written by the sweeps (`#` lines skipped: they write none).
 fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines().filter(|l| !l.starts_with('#'));
@@ -234,6 +234,8 @@ fn trajectory_from_csv_and_default_circle() {
         input.to_str().unwrap(),
         "--t-mins",
         "60,80",
+        "--modes",
+        "2",
         "--quiet",
         "--out",
         out.to_str().unwrap(),
@@ -280,6 +282,7 @@ fn sweep_tmin_fits_sqrt_with_the_model_coefficient() {
         to_n: 80.0,
         steps: 7,
         ee_mode: false,
+        modes: 1,
     };
     let r = study::tmin::compute(&s, &cfg).unwrap();
     assert!(r.points.iter().all(|p| p.estimate.is_ok()));
@@ -300,6 +303,8 @@ fn sweep_tmin_fits_sqrt_with_the_model_coefficient() {
         "4",
         "--compare",
         "60:11.245,120:15.901",
+        "--modes",
+        "3",
         "--out",
         out.to_str().unwrap(),
     ])

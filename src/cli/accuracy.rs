@@ -5,6 +5,7 @@ use super::args::{resolve_scene, SceneArgs};
 use super::CliError;
 use crate::report::accuracy_doc::{accuracy_markdown, hz, sci, update_section, us};
 use crate::report::accuracy_figures::{accuracy_csv, accuracy_svgs, file_stem, mode3_csv};
+use crate::report::csv::write_csv;
 use crate::report::write_file;
 use crate::study::accuracy::{self as study, dense_element_counts, AccuracyConfig};
 use clap::Args;
@@ -84,7 +85,8 @@ fn command_line(a: &AccuracyArgs) -> String {
     c
 }
 
-/// `cablevib accuracy`: writes OUT/data/accuracy-SCENE.csv, OUT/data/mode3-SCENE.csv,
+/// `cablevib accuracy`: writes OUT/data/accuracy-SCENE.csv, OUT/data/mode3-SCENE.csv (each
+/// with its `.csv.json` sidecar),
 /// OUT/img/accuracy-SCENE-{error-vs-n,cost,mode3}.svg and this scene's section of
 /// OUT/accuracy.md.
 pub fn run(a: &AccuracyArgs) -> Result<(), CliError> {
@@ -109,12 +111,18 @@ pub fn run(a: &AccuracyArgs) -> Result<(), CliError> {
     let stem = file_stem(&s.name);
     let data = a.out_dir.join("data");
     let imgd = a.out_dir.join("img");
-    write_file(
+    let cmd = command_line(a);
+    write_csv(
         &data.join(format!("accuracy-{stem}.csv")),
-        &accuracy_csv(&r),
+        accuracy_csv(&s, &r),
+        &cmd,
     )?;
     if !mode3.is_empty() {
-        write_file(&data.join(format!("mode3-{stem}.csv")), &mode3_csv(&mode3))?;
+        write_csv(
+            &data.join(format!("mode3-{stem}.csv")),
+            mode3_csv(&s, &mode3),
+            &cmd,
+        )?;
     }
     let (e_n, cost, m3) = accuracy_svgs(&s, &r, &mode3);
     let mut imgs = vec![
@@ -128,15 +136,7 @@ pub fn run(a: &AccuracyArgs) -> Result<(), CliError> {
         write_file(&imgd.join(&imgs[2]), &m3)?;
     }
     let rel: Vec<String> = imgs.iter().map(|i| format!("img/{i}")).collect();
-    let body = accuracy_markdown(
-        &s,
-        &r,
-        &mode3,
-        &command_line(a),
-        a.cycles,
-        a.rounds.max(1),
-        &rel,
-    );
+    let body = accuracy_markdown(&s, &r, &mode3, &cmd, a.cycles, a.rounds.max(1), &rel);
     let md = a.out_dir.join("accuracy.md");
     update_section(&md, &s.name, &body)?;
     println!(

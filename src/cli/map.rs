@@ -1,13 +1,16 @@
-//! `cablevib map`: f1 over a workspace grid, as a CSV and a heat-map figure.
+//! `cablevib map`: f1 (and f2 .. fK, the end-effector mode, the softest static stiffness)
+//! over a workspace grid, as a CSV and heat-map figures.
 
 use super::args::{parse_interval, resolve_scene, SceneArgs};
 use super::{output_paths, CliError};
-use crate::report::map::{map_csv, map_svg};
-use crate::report::write_file;
+use crate::report::csv::{process_command_line, write_csv};
+use crate::report::map::{map_csv, map_svg, value_names};
+use crate::report::{with_ext, write_file};
 use crate::scene::Scene;
 use crate::study::map::{self as study, Interval, MapConfig, MapResult};
+use crate::study::points::MAX_MODES;
 use clap::{Args, ValueEnum};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// The plane of a heat map; the third axis is swept as slices.
@@ -49,6 +52,26 @@ impl From<MapValue> for study::MapValue {
     }
 }
 
+// The --modes help texts of map, trajectory and sweep-tmin say 1 ..= 16.
+const _: () = assert!(MAX_MODES == 16, "update the --modes help texts");
+
+/// A value of `--show`: `f1`, `ee-mode`, `fK` (K = 2 ..= 16) or `k-min`.
+pub fn parse_shown(text: &str) -> Result<study::MapValue, String> {
+    let t = text.trim();
+    match t {
+        "f1" => return Ok(study::MapValue::F1),
+        "ee-mode" => return Ok(study::MapValue::EeMode),
+        "k-min" => return Ok(study::MapValue::StiffnessMin),
+        _ => {}
+    }
+    match t.strip_prefix('f').map(str::parse::<usize>) {
+        Some(Ok(k)) if (2..=MAX_MODES).contains(&k) => Ok(study::MapValue::Mode(k)),
+        _ => Err(format!(
+            "`{t}`: expected f1, ee-mode, k-min or fK with K in 2..={MAX_MODES}"
+        )),
+    }
+}
+
 /// `cablevib map`: first natural frequency over a workspace grid.
 #[derive(Debug, Args, Clone)]
 pub struct MapArgs {
@@ -72,10 +95,19 @@ pub struct MapArgs {
     /// Plane of the heat map; a range on the third axis gives one panel per slice.
     #[arg(long, value_enum, default_value = "xy")]
     pub plane: Plane,
-    /// Frequency shown in the heat map (the CSV has both).
+    /// Frequency shown in the main heat map, PREFIX.svg (the CSV has both).
     #[arg(long, value_enum, default_value = "f1")]
     pub value: MapValue,
-    /// Output prefix: writes PREFIX.csv and PREFIX.svg.
+    /// Modes per grid point in the CSV: columns f1_hz (as before) and f2_hz .. fK_hz, Hz
+    /// (1 ..= 16).
+    #[arg(long, default_value_t = 1)]
+    pub modes: usize,
+    /// More heat maps, comma-separated, each written next to the main figure as
+    /// PREFIX-NAME.svg (or, with --svg FILE.svg, FILE-NAME.svg): fK (the K-th natural frequency, Hz; needs K <= --modes), k-min (the smallest
+    /// principal value of the static end-effector stiffness, N/m), f1, ee-mode.
+    #[arg(long, value_delimiter = ',', value_parser = parse_shown)]
+    pub show: Vec<study::MapValue>,
+    /// Output prefix: writes PREFIX.csv, its metadata PREFIX.csv.json and PREFIX.svg.
     #[arg(long, default_value = "map")]
     pub out: PathBuf,
     /// Write the figure here instead of PREFIX.svg.
@@ -104,27 +136,52 @@ impl MapArgs {
             plane: self.plane.into(),
             threads: self.threads,
             ee_mode: !self.no_ee_mode,
+            modes: self.modes,
             progress: !self.quiet,
         }
     }
 }
 
+/// A `--show fK` with K above `--modes`, as a usage error.
+fn check_shown(a: &MapArgs) -> Result<(), CliError> {
+    for v in &a.show {
+        if let study::MapValue::Mode(k) = *v {
+            if k > a.modes {
+                let msg = format!("--show f{k} needs --modes {k} or more (got {})", a.modes);
+                return Err(CliError::Usage(msg));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Resolve the scene and compute the map (no files).
 pub fn compute(a: &MapArgs) -> Result<(Scene, MapResult), CliError> {
+    check_shown(a)?;
     let s = resolve_scene(&a.scene)?;
     let m = study::compute(&s, &a.config())?;
     Ok((s, m))
 }
 
-/// `cablevib map`: writes PREFIX.csv (every grid point, with its status) and PREFIX.svg.
+/// `cablevib map`: writes PREFIX.csv (every grid point, with its status), its metadata
+/// PREFIX.csv.json, PREFIX.svg and one PREFIX-NAME.svg per `--show` value.
 pub fn run(a: &MapArgs) -> Result<(), CliError> {
     let t0 = Instant::now();
     let (s, m) = compute(a)?;
     let secs = t0.elapsed().as_secs_f64();
     let value = a.value.into();
     let (csv_path, svg_path) = output_paths(&a.out, &a.svg);
-    write_file(&csv_path, &map_csv(&s, &m))?;
+    write_csv(&csv_path, map_csv(&s, &m), &process_command_line())?;
     write_file(&svg_path, &map_svg(&s, &m, value))?;
+    let mut written = vec![
+        csv_path.display().to_string(),
+        svg_path.display().to_string(),
+    ];
+    for &v in &a.show {
+        let p = shown_path(&svg_path, &value_names(v).2);
+        write_file(&p, &map_svg(&s, &m, v))?;
+        written.push(p.display().to_string());
+    }
     println!(
         "map: scene {}  T_min {} N  {} points in {:.2} s ({} threads)  statuses: {}",
         s.name,
@@ -134,16 +191,37 @@ pub fn run(a: &MapArgs) -> Result<(), CliError> {
         a.threads,
         m.status_counts().summary()
     );
-    let name = match a.value {
-        MapValue::F1 => "f1",
-        MapValue::EeMode => "end-effector mode",
+    for v in std::iter::once(value).chain(a.show.iter().copied()) {
+        print_range(&m, v);
+    }
+    println!("  wrote {}", written.join(", "));
+    Ok(())
+}
+
+/// The figure of a `--show` value next to the main figure: `DIR/NAME.svg` →
+/// `DIR/NAME-PART.svg` (`map.svg` → `map-k-min.svg`).
+fn shown_path(main_svg: &Path, part: &str) -> PathBuf {
+    let stem = match main_svg.extension() {
+        Some(e) if e == "svg" => main_svg.with_extension(""),
+        _ => main_svg.to_path_buf(),
     };
-    if let (Some((pmin, fmin)), Some((pmax, fmax))) = (m.min(value), m.max(value)) {
+    let mut prefix = stem.into_os_string();
+    prefix.push(format!("-{part}"));
+    with_ext(Path::new(&prefix), "svg")
+}
+
+/// The smallest and largest valid value `v` of the map, and where.
+fn print_range(m: &MapResult, v: study::MapValue) {
+    let (_, unit, part) = value_names(v);
+    let name = if v == study::MapValue::EeMode {
+        "end-effector mode".to_string()
+    } else {
+        part
+    };
+    if let (Some((pmin, fmin)), Some((pmax, fmax))) = (m.min(v), m.max(v)) {
         println!(
-            "  {name}: min {fmin:.4} Hz at ({:.3}, {:.3}, {:.3}) m, max {fmax:.4} Hz at ({:.3}, {:.3}, {:.3}) m",
+            "  {name}: min {fmin:.4} {unit} at ({:.3}, {:.3}, {:.3}) m, max {fmax:.4} {unit} at ({:.3}, {:.3}, {:.3}) m",
             pmin.x, pmin.y, pmin.z, pmax.x, pmax.y, pmax.z
         );
     }
-    println!("  wrote {} and {}", csv_path.display(), svg_path.display());
-    Ok(())
 }

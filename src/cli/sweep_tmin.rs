@@ -3,6 +3,7 @@
 
 use super::args::{parse_pairs, resolve_scene, Pairs, SceneArgs};
 use super::{output_paths, CliError};
+use crate::report::csv::{process_command_line, write_csv};
 use crate::report::tmin::{tmin_csv, tmin_svg, Compared};
 use crate::report::write_file;
 use crate::study::tmin::{self as study, TminConfig};
@@ -27,7 +28,11 @@ pub struct SweepTminArgs {
     /// Number of T_min values (evenly spaced, both ends included).
     #[arg(long, default_value_t = 25)]
     pub steps: usize,
-    /// Output prefix: writes PREFIX.csv and PREFIX.svg.
+    /// Modes per T_min in the CSV: columns f1_hz (as before) and f2_hz .. fK_hz, Hz
+    /// (1 ..= 16).
+    #[arg(long, default_value_t = 1)]
+    pub modes: usize,
+    /// Output prefix: writes PREFIX.csv, its metadata PREFIX.csv.json and PREFIX.svg.
     #[arg(long, default_value = "sweep-tmin")]
     pub out: PathBuf,
     /// Write the figure here instead of PREFIX.svg.
@@ -45,7 +50,7 @@ pub struct SweepTminArgs {
     pub compare_label: String,
 }
 
-/// `cablevib sweep-tmin`: writes PREFIX.csv and PREFIX.svg.
+/// `cablevib sweep-tmin`: writes PREFIX.csv, PREFIX.csv.json and PREFIX.svg.
 pub fn run(a: &SweepTminArgs) -> Result<(), CliError> {
     let s = resolve_scene(&a.scene)?;
     let from = a.from.unwrap_or(s.t_min_n);
@@ -55,10 +60,11 @@ pub fn run(a: &SweepTminArgs) -> Result<(), CliError> {
         to_n: to,
         steps: a.steps,
         ee_mode: !a.no_ee_mode,
+        modes: a.modes,
     };
     let r = study::compute(&s, &cfg)?;
     let (csv_path, svg_path) = output_paths(&a.out, &a.svg);
-    write_file(&csv_path, &tmin_csv(&s, &r))?;
+    write_csv(&csv_path, tmin_csv(&s, &r), &process_command_line())?;
     let compare = a.compare.as_ref().map(|c| Compared {
         label: &a.compare_label,
         points: &c.0,

@@ -3,6 +3,7 @@
 
 use super::args::{resolve_scene, SceneArgs};
 use super::{output_paths, CliError};
+use crate::report::csv::{process_command_line, write_csv};
 use crate::report::trajectory::{trajectory_csv, trajectory_svg};
 use crate::report::write_file;
 use crate::study::trajectory::{self as study, PathSource, TrajectoryConfig};
@@ -29,7 +30,11 @@ pub struct TrajectoryArgs {
     /// Period of one revolution of the circle, s (poses 1 ms apart).
     #[arg(long, default_value_t = 4.0)]
     pub period_s: f64,
-    /// Output prefix: writes PREFIX.csv and PREFIX.svg.
+    /// Modes per pose in the CSV: columns f1_hz (as before) and f2_hz .. fK_hz, Hz
+    /// (1 ..= 16).
+    #[arg(long, default_value_t = 1)]
+    pub modes: usize,
+    /// Output prefix: writes PREFIX.csv, its metadata PREFIX.csv.json and PREFIX.svg.
     #[arg(long, default_value = "trajectory")]
     pub out: PathBuf,
     /// Write the figure here instead of PREFIX.svg.
@@ -59,18 +64,19 @@ impl TrajectoryArgs {
             },
             t_mins_n: self.t_mins.clone(),
             ee_mode: !self.no_ee_mode,
+            modes: self.modes,
             threads: self.threads,
             progress: !self.quiet,
         }
     }
 }
 
-/// `cablevib trajectory`: writes PREFIX.csv and PREFIX.svg.
+/// `cablevib trajectory`: writes PREFIX.csv, PREFIX.csv.json and PREFIX.svg.
 pub fn run(a: &TrajectoryArgs) -> Result<(), CliError> {
     let s = resolve_scene(&a.scene)?;
     let t = study::run(&s, &a.config())?;
     let (csv_path, svg_path) = output_paths(&a.out, &a.svg);
-    write_file(&csv_path, &trajectory_csv(&s, &t))?;
+    write_csv(&csv_path, trajectory_csv(&s, &t), &process_command_line())?;
     println!(
         "trajectory: scene {}  {} poses × {} T_min values",
         s.name,

@@ -1,7 +1,7 @@
 //! `cablevib accuracy`: the CSVs of the study and its figures (error against N, error
 //! against per-cycle time, mode 3 against N).
 
-use super::csv::{num, Csv};
+use super::csv::{num, scene_meta, Column, Csv};
 use super::svg::{Axis, HLine, LinePlot, Mark, Series, PALETTE};
 use crate::scene::{ElementKind, Scene};
 use crate::study::accuracy::{AccuracyReport, AccuracyRow, Mode3Row};
@@ -21,54 +21,116 @@ pub fn file_stem(name: &str) -> String {
         .collect()
 }
 
-/// The CSV of the accuracy rows.
-pub fn accuracy_csv(r: &AccuracyReport) -> String {
-    let mut csv = Csv::new(
-        None,
-        "model,element,n,geometric_stiffness,status,f1_hz,err_ref,err_continuous,ee_mode_hz,ee_err_ref,f1_p50_ns,f1_p99_ns,ee_p50_ns,ee_p99_ns,evaluations_p50",
+/// Columns of the accuracy CSV: (name, unit, meaning).
+const ACCURACY_COLUMNS: [(&str, &str, &str); 15] = [
+    ("model", "", "model label"),
+    ("element", "", "element kind"),
+    (
+        "n",
+        "",
+        "elements per cable (empty for the models without N)",
+    ),
+    (
+        "geometric_stiffness",
+        "",
+        "T/l geometric stiffness included (true/false)",
+    ),
+    ("status", "", "estimator status at the study pose"),
+    ("f1_hz", "Hz", "first natural frequency"),
+    (
+        "err_ref",
+        "1",
+        "(f1 - f1,ref) / f1,ref against the converged catenary reference",
+    ),
+    (
+        "err_continuous",
+        "1",
+        "(f1 - f1,cont) / f1,cont against the continuous model",
+    ),
+    ("ee_mode_hz", "Hz", "end-effector mode"),
+    (
+        "ee_err_ref",
+        "1",
+        "relative error of the end-effector mode against the reference",
+    ),
+    ("f1_p50_ns", "ns", "median per-cycle time, f1 only"),
+    ("f1_p99_ns", "ns", "99th percentile per-cycle time, f1 only"),
+    (
+        "ee_p50_ns",
+        "ns",
+        "median per-cycle time with the end-effector mode",
+    ),
+    (
+        "ee_p99_ns",
+        "ns",
+        "99th percentile per-cycle time with the end-effector mode",
+    ),
+    (
+        "evaluations_p50",
+        "",
+        "median D(lambda) evaluations per cycle",
+    ),
+];
+
+/// The CSV of the accuracy rows of scene `s`.
+pub fn accuracy_csv(s: &Scene, r: &AccuracyReport) -> Csv {
+    let cols = ACCURACY_COLUMNS
+        .iter()
+        .map(|(n, u, d)| Column::new(*n, u, *d))
+        .collect();
+    let mut meta = scene_meta("accuracy", s);
+    meta.insert("f1_ref_hz".into(), serde_json::json!(r.f1_ref_hz));
+    meta.insert(
+        "f1_continuous_hz".into(),
+        serde_json::json!(r.f1_continuous_hz),
     );
+    let mut csv = Csv::new(cols, meta);
     for x in &r.rows {
-        csv.row(&format!(
-            "\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        csv.row([
             x.label(),
-            x.element.as_str(),
+            x.element.as_str().to_string(),
             x.n.map(|n| n.to_string()).unwrap_or_default(),
-            x.geometric_stiffness,
-            x.status.as_str(),
+            x.geometric_stiffness.to_string(),
+            x.status.as_str().to_string(),
             num(x.f1_hz),
             num(x.err_ref),
             num(x.err_continuous),
             num(x.ee_mode_hz),
             num(x.ee_err_ref),
-            x.f1_ns.0,
-            x.f1_ns.1,
-            x.ee_ns.0,
-            x.ee_ns.1,
-            x.evaluations
-        ));
+            x.f1_ns.0.to_string(),
+            x.f1_ns.1.to_string(),
+            x.ee_ns.0.to_string(),
+            x.ee_ns.1.to_string(),
+            x.evaluations.to_string(),
+        ]);
     }
-    csv.into_string()
+    csv
 }
 
-/// The CSV of the dense mode-3 study.
-pub fn mode3_csv(mode3: &[Mode3Row]) -> String {
-    let mut m = Csv::new(
-        None,
-        "element,n,dof,mode1_hz,mode2_hz,mode3_hz,dense_seconds",
-    );
+/// The CSV of the dense mode-3 study of scene `s`.
+pub fn mode3_csv(s: &Scene, mode3: &[Mode3Row]) -> Csv {
+    let cols = vec![
+        Column::new("element", "", "element kind"),
+        Column::new("n", "", "elements per cable"),
+        Column::new("dof", "", "degrees of freedom of the dense model"),
+        Column::new("mode1_hz", "Hz", "mode 1 of the dense reference"),
+        Column::new("mode2_hz", "Hz", "mode 2 of the dense reference"),
+        Column::new("mode3_hz", "Hz", "mode 3 of the dense reference"),
+        Column::new("dense_seconds", "s", "time of the dense eigensolve"),
+    ];
+    let mut m = Csv::new(cols, scene_meta("accuracy", s));
     for x in mode3 {
-        m.row(&format!(
-            "{},{},{},{},{},{},{}",
-            x.element.as_str(),
-            x.n,
-            x.dof,
+        m.row([
+            x.element.as_str().to_string(),
+            x.n.to_string(),
+            x.dof.to_string(),
             num(x.modes_hz[0]),
             num(x.modes_hz[1]),
             num(x.modes_hz[2]),
-            x.seconds
-        ));
+            x.seconds.to_string(),
+        ]);
     }
-    m.into_string()
+    m
 }
 
 /// The figures of the study: error vs N, error vs per-cycle time, and mode 3 vs N (none

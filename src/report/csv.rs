@@ -1,45 +1,162 @@
-//! The one CSV writer of the commands: optional `#` comment line, header, rows; and the
-//! number formats of their columns (NaN for a value the estimator did not give).
+//! The one CSV writer of the commands, and the number formats of their columns.
+//!
+//! Every CSV a command writes is plain RFC 4180 (written by the `csv` crate): one header row
+//! of column names, then data rows; no comment lines, so that `pandas.read_csv(PATH)` and
+//! MATLAB `readtable(PATH)` read it with no options. A value the estimator did not give is
+//! `NaN` (both read it as a missing number). Units are in the column names (`_m`, `_n`,
+//! `_hz`, `_n_m` for N/m); cables are numbered from 1 (`tension1_n` is cable 1).
+//!
+//! What used to be a `#` comment line — command, scene, model, T_min, T_max, the command
+//! line, and each column's unit and meaning — is in a JSON sidecar next to the file,
+//! `PATH.json` (`map.csv` → `map.csv.json`), written by [`write_csv`].
 
+use super::{with_ext, write_file, ReportError};
 use crate::scene::Scene;
 use crate::study::points::PointResult;
-use std::fmt::Write as _;
+use serde_json::{json, Map, Value};
+use std::path::Path;
 
-/// A CSV document being written.
-#[derive(Debug, Clone, Default)]
+/// One column: its name (with the unit as a suffix), unit and meaning, for the sidecar.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Column {
+    /// Header name, e.g. `f1_hz`.
+    pub name: String,
+    /// Unit (`"Hz"`, `"N"`, `"m"`, `"N/m"`, `"1"` for a ratio, `""` for text).
+    pub unit: &'static str,
+    /// What the column holds.
+    pub description: String,
+}
+
+impl Column {
+    /// A column.
+    pub fn new(
+        name: impl Into<String>,
+        unit: &'static str,
+        description: impl Into<String>,
+    ) -> Self {
+        Column {
+            name: name.into(),
+            unit,
+            description: description.into(),
+        }
+    }
+}
+
+/// A CSV document being written, with the metadata of its sidecar.
+#[derive(Debug)]
 pub struct Csv {
-    text: String,
+    columns: Vec<Column>,
+    writer: csv::Writer<Vec<u8>>,
+    rows: usize,
+    meta: Map<String, Value>,
 }
 
 impl Csv {
-    /// A document starting with `# comment` (when given) and the `header` line.
-    pub fn new(comment: Option<&str>, header: &str) -> Csv {
-        let mut text = String::new();
-        if let Some(c) = comment {
-            let _ = writeln!(text, "# {c}");
+    /// A document with the header row of `columns`; `meta` goes to the sidecar.
+    pub fn new(columns: Vec<Column>, meta: Map<String, Value>) -> Csv {
+        let mut writer = csv::Writer::from_writer(Vec::new());
+        // Writing into a Vec<u8> cannot fail.
+        let _ = writer.write_record(columns.iter().map(|c| c.name.as_str()));
+        Csv {
+            columns,
+            writer,
+            rows: 0,
+            meta,
         }
-        let _ = writeln!(text, "{header}");
-        Csv { text }
     }
-    /// Append one row (the fields already joined by commas).
-    pub fn row(&mut self, fields: &str) {
-        self.text.push_str(fields);
-        self.text.push('\n');
+    /// Append one row: one field per column.
+    pub fn row<I, S>(&mut self, fields: I)
+    where
+        I: IntoIterator<Item = S>,
+        S: AsRef<[u8]>,
+    {
+        let _ = self.writer.write_record(fields);
+        self.rows += 1;
     }
-    /// The document.
-    pub fn into_string(self) -> String {
-        self.text
+    /// The column names.
+    pub fn names(&self) -> Vec<&str> {
+        self.columns.iter().map(|c| c.name.as_str()).collect()
+    }
+    /// Data rows written so far.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+    /// The CSV text and the sidecar JSON (with `command_line` and the row count).
+    pub fn into_parts(mut self, command_line: &str) -> (String, String) {
+        let _ = self.writer.flush();
+        let text =
+            String::from_utf8(self.writer.into_inner().unwrap_or_default()).unwrap_or_default();
+        let mut m = Map::new();
+        m.insert(
+            "format".into(),
+            json!("csv: one header row, no comment lines; NaN where no value"),
+        );
+        m.insert("command_line".into(), json!(command_line));
+        m.extend(self.meta);
+        m.insert("rows".into(), json!(self.rows));
+        let cols: Vec<Value> = self
+            .columns
+            .iter()
+            .map(|c| json!({"name": c.name, "unit": c.unit, "description": c.description}))
+            .collect();
+        m.insert("columns".into(), Value::Array(cols));
+        let side = serde_json::to_string_pretty(&Value::Object(m)).unwrap_or_default() + "\n";
+        (text, side)
     }
 }
 
-/// The start of a command's CSV comment: `cablevib COMMAND: scene NAME, model KIND x N`.
-pub fn scene_comment(command: &str, s: &Scene) -> String {
-    format!(
-        "cablevib {command}: scene {}, model {} x {}",
-        s.name,
-        s.model.element.as_str(),
-        s.model.elements_per_cable
-    )
+/// Write `csv` to `path` and its metadata to `path.json` (see the module doc).
+pub fn write_csv(path: &Path, csv: Csv, command_line: &str) -> Result<(), ReportError> {
+    let (text, side) = csv.into_parts(command_line);
+    write_file(path, &text)?;
+    write_file(&sidecar_path(path), &side)
+}
+
+/// The sidecar of a CSV: `PATH.json`.
+pub fn sidecar_path(csv_path: &Path) -> std::path::PathBuf {
+    with_ext(csv_path, "json")
+}
+
+/// The command line of this process, for a sidecar: the program as `cablevib`, the
+/// arguments shell-quoted where needed.
+pub fn process_command_line() -> String {
+    let mut parts = vec!["cablevib".to_string()];
+    parts.extend(std::env::args().skip(1).map(|a| shell_quote(&a)));
+    parts.join(" ")
+}
+
+/// `a` as one shell word: unchanged when it is plain, else in single quotes.
+fn shell_quote(a: &str) -> String {
+    let plain = !a.is_empty()
+        && a.chars()
+            .all(|c| c.is_ascii_alphanumeric() || "-_.,:=/+@%".contains(c));
+    if plain {
+        a.to_string()
+    } else {
+        format!("'{}'", a.replace('\'', r"'\''"))
+    }
+}
+
+/// The sidecar fields of a command on scene `s`: command, scene, model, T_min, T_max.
+pub fn scene_meta(command: &str, s: &Scene) -> Map<String, Value> {
+    let mut m = Map::new();
+    m.insert("command".into(), json!(command));
+    m.insert("scene".into(), json!(s.name));
+    m.insert(
+        "model".into(),
+        json!({
+            "element": s.model.element.as_str(),
+            "elements_per_cable": s.model.elements_per_cable,
+        }),
+    );
+    m.insert("t_min_n".into(), json!(s.t_min_n));
+    m.insert("t_max_n".into(), json!(s.t_max_n));
+    m.insert("cables".into(), json!(s.n_cables()));
+    m.insert(
+        "cable_numbering".into(),
+        json!("from 1: tension1_n is cable 1 of the scene"),
+    );
+    m
 }
 
 /// A finite value in scientific notation with 8 decimals, else `NaN`.
@@ -56,34 +173,90 @@ pub fn num_p(x: f64, digits: usize) -> String {
     }
 }
 
-/// CSV header of [`PointResult`] rows for a scene with `n` cables.
-pub fn point_header(n: usize) -> String {
-    let mut h = String::from(
-        "x_m,y_m,z_m,t_min_n,status,f1_hz,ee_mode_hz,f1_ee_participation,ee_mode_participation",
-    );
-    for i in 0..n {
-        let _ = write!(h, ",tension{}_n", i + 1);
+/// Columns of [`PointResult`] rows for a scene with `n` cables and `k` modes:
+/// position, T_min, status, f1, the end-effector mode, participations, tensions, then
+/// f2 .. fK and the smallest stiffness.
+pub fn point_columns(n: usize, k: usize) -> Vec<Column> {
+    let mut c = vec![
+        Column::new("x_m", "m", "end-effector position x"),
+        Column::new("y_m", "m", "end-effector position y"),
+        Column::new("z_m", "m", "end-effector position z"),
+        Column::new("t_min_n", "N", "lower tension bound of every cable"),
+        Column::new("status", "", "estimator status (ok, tension_infeasible, ...); numbers are NaN unless ok"),
+        Column::new("f1_hz", "Hz", "first natural frequency (mode 1)"),
+        Column::new("ee_mode_hz", "Hz", "end-effector mode: lowest mode with end-effector participation at or above the scene's threshold"),
+        Column::new("f1_ee_participation", "1", "end-effector participation of mode 1"),
+        Column::new("ee_mode_participation", "1", "end-effector participation of the end-effector mode"),
+    ];
+    for i in 1..=n {
+        c.push(Column::new(
+            format!("tension{i}_n"),
+            "N",
+            format!("tension of cable {i}"),
+        ));
     }
-    h
+    for j in 2..=k {
+        c.push(Column::new(
+            format!("f{j}_hz"),
+            "Hz",
+            format!("natural frequency of mode {j}"),
+        ));
+    }
+    c.push(Column::new(
+        "stiffness_min_n_m",
+        "N/m",
+        "smallest principal value of the static end-effector stiffness (translational block)",
+    ));
+    c
 }
 
-/// The fields of one [`PointResult`] row (see [`point_header`]).
-pub fn point_fields(r: &PointResult) -> String {
+/// The fields of one [`PointResult`] row (see [`point_columns`]).
+pub fn point_fields(r: &PointResult) -> Vec<String> {
     let e = &r.estimate;
-    let mut s = format!(
-        "{},{},{},{},{},{},{},{},{}",
-        r.position_m.x,
-        r.position_m.y,
-        r.position_m.z,
-        r.t_min_n,
-        e.status.as_str(),
+    let mut s = vec![
+        r.position_m.x.to_string(),
+        r.position_m.y.to_string(),
+        r.position_m.z.to_string(),
+        r.t_min_n.to_string(),
+        e.status.as_str().to_string(),
         num(e.f1_hz),
         num(e.ee_mode_hz),
         num_p(e.f1_ee_participation, 4),
-        num_p(e.ee_mode_participation, 4)
-    );
-    for t in e.tensions() {
-        let _ = write!(s, ",{}", num_p(*t, 6));
-    }
+        num_p(e.ee_mode_participation, 4),
+    ];
+    s.extend(e.tensions().iter().map(|t| num_p(*t, 6)));
+    s.extend((2..=r.n_modes).map(|j| num(r.mode_hz(j))));
+    s.push(num_p(r.stiffness_min_n_m, 6));
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fields_with_commas_are_quoted_and_the_sidecar_names_every_column() {
+        let cols = vec![Column::new("a_m", "m", "a"), Column::new("label", "", "b")];
+        let mut c = Csv::new(cols, Map::new());
+        c.row(["1", "plain"]);
+        c.row(["NaN", "x, \"y\""]);
+        let (text, side) = c.into_parts("cablevib test");
+        assert_eq!(text, "a_m,label\n1,plain\nNaN,\"x, \"\"y\"\"\"\n");
+        let v: Value = serde_json::from_str(&side).unwrap();
+        assert_eq!(v["rows"], 2);
+        assert_eq!(v["command_line"], "cablevib test");
+        assert_eq!(v["columns"][1]["name"], "label");
+        assert_eq!(
+            sidecar_path(Path::new("d/map.csv")),
+            Path::new("d/map.csv.json")
+        );
+    }
+
+    #[test]
+    fn shell_words_are_quoted_only_when_needed() {
+        assert_eq!(shell_quote("--x=-1,1"), "--x=-1,1");
+        assert_eq!(shell_quote("paper Table 4"), "'paper Table 4'");
+        assert_eq!(shell_quote("it's"), r"'it'\''s'");
+        assert_eq!(shell_quote(""), "''");
+    }
 }

@@ -1,45 +1,76 @@
 //! `cablevib map`: the CSV of every grid point and the heat-map figure.
 
-use super::csv::{point_fields, point_header, scene_comment, Csv};
+use super::csv::{point_columns, point_fields, scene_meta, Csv};
 use super::svg::{fmt_num, HeatMap, HeatPanel};
 use crate::scene::Scene;
 use crate::study::map::{max_of, pick, MapResult, MapValue};
+use serde_json::json;
 use std::fmt::Write as _;
 
 const AXIS_NAMES: [&str; 3] = ["x", "y", "z"];
 
-/// The CSV: one row per grid point, with its status.
-pub fn map_csv(s: &Scene, m: &MapResult) -> String {
-    let comment = format!(
-        "{}, T_min {} N, T_max {} N",
-        scene_comment("map", s),
-        s.t_min_n,
-        s.t_max_n,
+/// The CSV: one row per grid point, with its status (columns: [`point_columns`]).
+pub fn map_csv(s: &Scene, m: &MapResult) -> Csv {
+    let mut meta = scene_meta("map", s);
+    let (h, v, sl) = m.plane.axes();
+    meta.insert(
+        "plane".into(),
+        json!(format!("{}{}", AXIS_NAMES[h], AXIS_NAMES[v])),
     );
-    let mut csv = Csv::new(Some(&comment), &point_header(s.n_cables()));
+    meta.insert("slice_axis".into(), json!(AXIS_NAMES[sl]));
+    meta.insert("modes".into(), json!(modes_of(m)));
+    meta.insert(
+        "order".into(),
+        json!("slice-major, then the vertical axis, then the horizontal axis"),
+    );
+    let mut csv = Csv::new(point_columns(s.n_cables(), modes_of(m)), meta);
     for r in &m.points {
-        csv.row(&point_fields(r));
+        csv.row(point_fields(r));
     }
-    csv.into_string()
+    csv
+}
+
+/// The mode count of a map (1 for an empty one).
+fn modes_of(m: &MapResult) -> usize {
+    m.points.first().map_or(1, |p| p.n_modes)
+}
+
+/// Name, unit and file-name part of a shown value.
+pub fn value_names(v: MapValue) -> (String, &'static str, String) {
+    match v {
+        MapValue::F1 => ("first natural frequency".into(), "Hz", "f1".into()),
+        MapValue::EeMode => ("end-effector mode".into(), "Hz", "ee-mode".into()),
+        MapValue::Mode(k) => (
+            format!("natural frequency of mode {k}"),
+            "Hz",
+            format!("f{k}"),
+        ),
+        MapValue::StiffnessMin => (
+            "smallest static end-effector stiffness".into(),
+            "N/m",
+            "k-min".into(),
+        ),
+    }
 }
 
 /// One panel per slice; the slice's maximum is marked when there is one slice, or when it is
 /// the maximum of the whole grid.
 fn panels(m: &MapResult, v: MapValue) -> Vec<HeatMap> {
+    let unit = value_names(v).1;
     let (h, vv, sl) = m.plane.axes();
     let per = m.axes[h].len() * m.axes[vv].len();
     let gmax = m.max(v);
     let mut maps = Vec::new();
     for (k, &ws) in m.axes[sl].iter().enumerate() {
         let slice = &m.points[k * per..(k + 1) * per];
-        let values: Vec<Option<f64>> = slice.iter().map(|p| pick(&p.estimate, v)).collect();
+        let values: Vec<Option<f64>> = slice.iter().map(|p| pick(p, v)).collect();
         let mut markers = Vec::new();
         let smax = max_of(slice, v);
         if let (Some((p, f)), Some((_, g))) = (smax, gmax) {
             let text = if f == g {
-                format!("max {f:.3} Hz")
+                format!("max {} {unit}", fmt_value(f))
             } else {
-                format!("{f:.3}")
+                fmt_value(f)
             };
             if m.axes[sl].len() == 1 || f == g {
                 markers.push((p[h], p[vv], text));
@@ -72,10 +103,7 @@ pub fn map_svg(s: &Scene, m: &MapResult, v: MapValue) -> String {
     let nh = m.axes[h].len();
     let maps = panels(m, v);
     let counts = m.status_counts();
-    let vname = match v {
-        MapValue::F1 => "first natural frequency",
-        MapValue::EeMode => "end-effector mode",
-    };
+    let (vname, unit, _) = value_names(v);
     let mut sub = format!(
         "{} × {} elements/cable, T_min {} N, T_max {} N, step {} m",
         s.model.element.as_str(),
@@ -89,10 +117,10 @@ pub fn map_svg(s: &Scene, m: &MapResult, v: MapValue) -> String {
         })
     );
     if let Some((_, f)) = m.max(v) {
-        let _ = write!(sub, "; max {f:.3} Hz");
+        let _ = write!(sub, "; max {} {unit}", fmt_value(f));
     }
     if let Some((_, f)) = m.min(v) {
-        let _ = write!(sub, ", min {f:.3} Hz");
+        let _ = write!(sub, ", min {} {unit}", fmt_value(f));
     }
     let _ = write!(sub, "; {}", counts.summary());
     let single_slice = m.axes[sl].len() == 1;
@@ -109,13 +137,27 @@ pub fn map_svg(s: &Scene, m: &MapResult, v: MapValue) -> String {
         subtitle: sub,
         x_label: format!("{} (m)", AXIS_NAMES[h]),
         y_label: format!("{} (m)", AXIS_NAMES[vv]),
-        value_label: "f (Hz)".into(),
+        value_label: if unit == "Hz" {
+            "f (Hz)".into()
+        } else {
+            format!("k_min ({unit})")
+        },
         invalid_label: "no valid estimate".into(),
         maps,
         columns: panel_columns(m.axes[sl].len()),
         range: None,
     }
     .to_svg()
+}
+
+/// A shown value: 3 decimals (Hz-sized values keep today's format), or 4 significant
+/// digits for large values (stiffnesses, N/m).
+fn fmt_value(x: f64) -> String {
+    if x.abs() < 1e4 {
+        format!("{x:.3}")
+    } else {
+        format!("{x:.3e}")
+    }
 }
 
 /// Panels per row for `n` slices: up to 3 in one row, 4 as 2 × 2, then rows of 3 or 4.

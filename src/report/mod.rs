@@ -5,7 +5,7 @@
 //! | module | what |
 //! |---|---|
 //! | [`svg`] | the SVG writer: line plots, heat maps |
-//! | [`csv`] | the one CSV writer and number formats of every command's CSV |
+//! | [`csv`] | the one CSV writer (`csv` crate, `PATH.json` sidecars) and the number formats of every command's CSV |
 //! | [`map`](mod@map) | `cablevib map`: CSV and heat-map figure |
 //! | [`trajectory`](mod@trajectory) | `cablevib trajectory`: CSV and figure |
 //! | [`tmin`] | `cablevib sweep-tmin`: CSV and figure |

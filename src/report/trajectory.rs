@@ -1,21 +1,41 @@
 //! `cablevib trajectory`: the CSV of every pose and T_min, and the figure.
 
-use super::csv::{point_fields, point_header, scene_comment, Csv};
+use super::csv::{point_columns, point_fields, scene_meta, Column, Csv};
 use super::ee_curve_differs;
 use super::svg::{Axis, LinePlot, Mark, Series, PALETTE};
 use crate::estimator::Estimate;
 use crate::scene::Scene;
 use crate::study::points::{valid, PointResult};
 use crate::study::trajectory::TrajectoryStudy;
+use serde_json::json;
 use std::fmt::Write as _;
 
-/// The CSV: one row per pose and T_min (T_min-major), with time and angle.
-pub fn trajectory_csv(s: &Scene, t: &TrajectoryStudy) -> String {
+/// The CSV: one row per pose and T_min (T_min-major), with time and angle, then the
+/// columns of [`point_columns`].
+pub fn trajectory_csv(s: &Scene, t: &TrajectoryStudy) -> Csv {
     let tr = &t.samples;
     let n = tr.position_m.len();
-    let comment = format!("{}, T_max {} N", scene_comment("trajectory", s), s.t_max_n);
-    let header = format!("t_s,angle_deg,{}", point_header(s.n_cables()));
-    let mut csv = Csv::new(Some(&comment), &header);
+    let modes = t.points.first().map_or(1, |p| p.n_modes);
+    let mut meta = scene_meta("trajectory", s);
+    // The curves' T_min values are `t_mins_n` (and the t_min_n column).
+    meta.remove("t_min_n");
+    meta.insert("t_mins_n".into(), json!(t.t_mins_n));
+    meta.insert("poses".into(), json!(n));
+    meta.insert("modes".into(), json!(modes));
+    meta.insert(
+        "order".into(),
+        json!("T_min-major: the poses of the first T_min, then of the next"),
+    );
+    let mut cols = vec![
+        Column::new("t_s", "s", "time along the trajectory"),
+        Column::new(
+            "angle_deg",
+            "deg",
+            "angle along the circle (NaN for a trajectory read from a CSV)",
+        ),
+    ];
+    cols.extend(point_columns(s.n_cables(), modes));
+    let mut csv = Csv::new(cols, meta);
     for (k, r) in t.points.iter().enumerate() {
         let i = k % n;
         let ang = if t.is_circle() {
@@ -23,9 +43,11 @@ pub fn trajectory_csv(s: &Scene, t: &TrajectoryStudy) -> String {
         } else {
             "NaN".into()
         };
-        csv.row(&format!("{},{ang},{}", tr.t_s[i], point_fields(r)));
+        let mut row = vec![tr.t_s[i].to_string(), ang];
+        row.extend(point_fields(r));
+        csv.row(row);
     }
-    csv.into_string()
+    csv
 }
 
 /// (x, valid value) of each row.
@@ -38,8 +60,10 @@ fn curve(rows: &[PointResult], xs: &[f64], f: fn(&Estimate) -> f64) -> Vec<(f64,
 
 /// The figure: f1 of each T_min (and the end-effector mode where it differs from f1)
 /// against the angle along the circle (`radius_m`) or the time.
+/// With K modes, f2 .. fK of each T_min are solid lines in its colour, on a log axis.
 pub fn trajectory_svg(s: &Scene, t: &TrajectoryStudy, radius_m: f64, ee_mode: bool) -> String {
     let circle = t.is_circle();
+    let modes = t.points.first().map_or(1, |p| p.n_modes);
     let xlab = if circle {
         "angle along the circle (deg)"
     } else {
@@ -47,8 +71,13 @@ pub fn trajectory_svg(s: &Scene, t: &TrajectoryStudy, radius_m: f64, ee_mode: bo
     };
     let mut plot = LinePlot::new(
         &format!(
-            "{}: first natural frequency along the {}",
+            "{}: {} along the {}",
             s.name,
+            if modes > 1 {
+                format!("the first {modes} natural frequencies")
+            } else {
+                "first natural frequency".into()
+            },
             if circle {
                 format!("circle (r = {} m)", radius_m)
             } else {
@@ -60,7 +89,7 @@ pub fn trajectory_svg(s: &Scene, t: &TrajectoryStudy, radius_m: f64, ee_mode: bo
         } else {
             Axis::linear(xlab)
         },
-        Axis::linear("f (Hz)"),
+        super::tmin::freq_axis(modes),
     );
     let mut sub = format!(
         "{} × {} elements/cable, T_max {} N",
@@ -90,6 +119,21 @@ pub fn trajectory_svg(s: &Scene, t: &TrajectoryStudy, radius_m: f64, ee_mode: bo
                 )
                 .color(color),
             );
+        }
+        for j in 2..=modes {
+            let fj: Vec<(f64, f64)> = rows
+                .iter()
+                .zip(xs)
+                .map(|(r, &x)| (x, r.mode_hz(j)))
+                .collect();
+            // One legend entry for the modes of a T_min.
+            let name = if j == 2 {
+                format!("f2..f{modes}, T_min = {tm} N")
+            } else {
+                String::new()
+            };
+            plot.series
+                .push(Series::new(&name, fj, Mark::Line).color(color));
         }
         let c = t.summary(k);
         if c.f1_min_hz.is_finite() {

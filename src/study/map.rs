@@ -1,8 +1,8 @@
-//! The first natural frequency (and the end-effector mode) over a workspace grid.
+//! The first natural frequencies (f1 .. fK), the end-effector mode and the softest static
+//! stiffness over a workspace grid.
 
-use super::points::{evaluate_points, status_histogram, PointResult};
+use super::points::{evaluate_points_with, status_histogram, PointResult, Workers};
 use super::{estimator_params, StudyError};
-use crate::estimator::Estimate;
 use crate::scene::Scene;
 use crate::service::stats::StatusHistogram;
 use nalgebra::Vector3;
@@ -48,13 +48,17 @@ impl Plane {
     }
 }
 
-/// Which frequency a map shows.
+/// Which value a map shows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MapValue {
-    /// The first natural frequency of the whole model.
+    /// The first natural frequency of the whole model, Hz (`Estimate::f1_hz`).
     F1,
-    /// The end-effector mode (lowest mode with end-effector participation ≥ threshold).
+    /// The end-effector mode (lowest mode with end-effector participation ≥ threshold), Hz.
     EeMode,
+    /// The k-th natural frequency, Hz (1-based; needs k ≤ the map's mode count).
+    Mode(usize),
+    /// The smallest principal value of the static end-effector stiffness, N/m.
+    StiffnessMin,
 }
 
 /// What to map.
@@ -71,6 +75,8 @@ pub struct MapConfig {
     pub threads: usize,
     /// Compute the end-effector mode too.
     pub ee_mode: bool,
+    /// Modes kept per point (1 ..= `points::MAX_MODES`).
+    pub modes: usize,
     /// Print a percentage on stderr.
     pub progress: bool,
 }
@@ -127,7 +133,7 @@ impl MapResult {
     pub fn min(&self, v: MapValue) -> Option<(Vector3<f64>, f64)> {
         self.points
             .iter()
-            .filter_map(|p| pick(&p.estimate, v).map(|f| (p.position_m, f)))
+            .filter_map(|p| pick(p, v).map(|f| (p.position_m, f)))
             .min_by(|a, b| a.1.total_cmp(&b.1))
     }
     /// How many points have each status.
@@ -140,15 +146,18 @@ impl MapResult {
 pub fn max_of(points: &[PointResult], v: MapValue) -> Option<(Vector3<f64>, f64)> {
     points
         .iter()
-        .filter_map(|p| pick(&p.estimate, v).map(|f| (p.position_m, f)))
+        .filter_map(|p| pick(p, v).map(|f| (p.position_m, f)))
         .max_by(|a, b| a.1.total_cmp(&b.1))
 }
 
-/// The frequency `v` of an estimate, when it is ok and finite.
-pub fn pick(e: &Estimate, v: MapValue) -> Option<f64> {
+/// The value `v` of a point, when its estimate is ok and the value finite.
+pub fn pick(p: &PointResult, v: MapValue) -> Option<f64> {
+    let e = &p.estimate;
     let f = match v {
         MapValue::F1 => e.f1_hz,
         MapValue::EeMode => e.ee_mode_hz,
+        MapValue::Mode(k) => p.mode_hz(k),
+        MapValue::StiffnessMin => p.stiffness_min_n_m,
     };
     (e.is_ok() && f.is_finite()).then_some(f)
 }
@@ -201,17 +210,13 @@ pub fn compute(s: &Scene, cfg: &MapConfig) -> Result<MapResult, StudyError> {
             }
         }
     }
-    let params = estimator_params(s, cfg.ee_mode);
-    let label = cfg.progress.then_some("map");
-    let res = evaluate_points(
-        s,
-        &points,
-        s.t_min_n,
-        params,
-        cfg.threads,
-        axes[h].len(),
-        label,
-    )?;
+    let w = Workers {
+        params: estimator_params(s, cfg.ee_mode),
+        threads: cfg.threads,
+        progress: cfg.progress.then_some("map"),
+        n_modes: cfg.modes,
+    };
+    let res = evaluate_points_with(s, &points, s.t_min_n, axes[h].len(), &w)?;
     Ok(MapResult {
         axes,
         plane: cfg.plane,

@@ -1,9 +1,16 @@
 //! Parallel evaluation of poses: one real-time estimator per worker thread, results in
 //! input order, a throttled progress line on stderr.
+//!
+//! Each point keeps, besides the estimate, the frequencies of the first K modes
+//! (`Estimator::modes` right after the update, K ≤ [`MAX_MODES`]) and the smallest principal
+//! value of the static end-effector stiffness, k_min = min eig(K_ee) (N/m, the
+//! translational 3 × 3 block `Estimate::stiffness_n_m`, symmetric: its eigenvalues are
+//! real): the stiffness of the softest direction.
 
 use super::{build, StudyError};
-use crate::estimator::{Estimate, EstimatorParams};
+use crate::estimator::{Estimate, Estimator, EstimatorParams};
 use crate::kinematics::Pose;
+use crate::modal::Mode;
 use crate::scene::Scene;
 use crate::service::stats::StatusHistogram;
 use nalgebra::Vector3;
@@ -13,6 +20,10 @@ use std::time::{Duration, Instant};
 
 /// Most worker threads a study starts (more only contend for the same cores).
 pub const MAX_THREADS: usize = 64;
+/// Most modes a study keeps per point (`--modes`): the spatial robot's first string cluster
+/// has 8 modes, so 16 covers it and the modes above it, for 128 bytes more per point (a
+/// point is ~0.5 kB).
+pub const MAX_MODES: usize = 16;
 /// Shortest time between two progress updates: at most 4 lines a second.
 const PROGRESS_INTERVAL: Duration = Duration::from_millis(250);
 /// How often the main thread looks at the workers' progress.
@@ -27,6 +38,93 @@ pub struct PointResult {
     pub t_min_n: f64,
     /// What the real-time estimator returned (status, f1, end-effector mode, tensions).
     pub estimate: Estimate,
+    /// How many modes were asked for (1 ..= [`MAX_MODES`]); `modes_hz[..n_modes]` hold them.
+    pub n_modes: usize,
+    /// Frequencies of the first `n_modes` modes in ascending order, Hz, from
+    /// `Estimator::modes` (with `n_modes` = 1: `estimate.f1_hz`); NaN unless the estimate is
+    /// ok, and where the solver returned fewer. The CSVs' `f1_hz` column is always
+    /// `estimate.f1_hz`, `f2_hz` .. `fK_hz` are entries 1 .. K − 1.
+    pub modes_hz: [f64; MAX_MODES],
+    /// Smallest principal value of the static end-effector stiffness (translational block),
+    /// N/m; NaN unless the estimate is ok.
+    pub stiffness_min_n_m: f64,
+}
+
+impl PointResult {
+    /// Frequency of mode `k` (1-based: `mode_hz(1)` is the first mode), Hz; NaN when not
+    /// computed or not valid.
+    pub fn mode_hz(&self, k: usize) -> f64 {
+        if (1..=self.n_modes).contains(&k) {
+            valid(&self.estimate, self.modes_hz[k - 1])
+        } else {
+            f64::NAN
+        }
+    }
+}
+
+/// Check a requested mode count: 1 ..= [`MAX_MODES`].
+pub fn check_modes(k: usize) -> Result<usize, StudyError> {
+    if (1..=MAX_MODES).contains(&k) {
+        Ok(k)
+    } else {
+        Err(StudyError::Usage(format!(
+            "--modes {k}: must be within 1..={MAX_MODES}"
+        )))
+    }
+}
+
+/// The smallest eigenvalue of the symmetric stiffness `e.stiffness_n_m`, N/m (NaN unless
+/// the estimate is ok and the matrix finite).
+pub fn stiffness_min_n_m(e: &Estimate) -> f64 {
+    let k = e.stiffness_n_m;
+    if !e.is_ok() || !k.iter().all(|x| x.is_finite()) {
+        return f64::NAN;
+    }
+    // Symmetrised: the sum of the cables' symmetric stiffnesses is symmetric up to rounding.
+    let sym = (k + k.transpose()) * 0.5;
+    sym.symmetric_eigenvalues().min()
+}
+
+/// One study point: `est.update` at `position_m` and `t_min_n`, then the first `n_modes`
+/// modes of that pose (`n_modes` already checked by [`check_modes`]).
+pub fn evaluate_one(
+    est: &mut Estimator,
+    position_m: Vector3<f64>,
+    t_min_n: f64,
+    n_modes: usize,
+) -> PointResult {
+    let estimate = *est.update(&Pose::at(position_m), t_min_n);
+    let mut modes_hz = [f64::NAN; MAX_MODES];
+    if estimate.is_ok() {
+        if n_modes >= 2 {
+            first_modes_hz(est, &mut modes_hz[..n_modes]);
+        } else {
+            // One mode: the cycle's own f1, and no extra work (the default sweeps cost
+            // what they did before modes were added).
+            modes_hz[0] = estimate.f1_hz;
+        }
+    }
+    PointResult {
+        position_m,
+        t_min_n,
+        estimate,
+        n_modes,
+        modes_hz,
+        stiffness_min_n_m: stiffness_min_n_m(&estimate),
+    }
+}
+
+/// Frequencies of the first `out.len()` modes of the last updated pose into `out` (Hz),
+/// by [`Estimator::modes`] (the structured solver); entries it does not return (a model with
+/// fewer modes, or a mode search that failed) stay NaN.
+fn first_modes_hz(est: &mut Estimator, out: &mut [f64]) {
+    let mut modes = [Mode::default(); MAX_MODES];
+    let k = out.len().min(MAX_MODES);
+    if let Ok(n) = est.modes(k, &mut modes[..k]) {
+        for (f, m) in out.iter_mut().zip(&modes[..n]) {
+            *f = m.frequency_hz;
+        }
+    }
 }
 
 /// `value` when the estimate is ok, else NaN (a point without a valid answer).
@@ -82,10 +180,24 @@ impl<'a> Progress<'a> {
     }
 }
 
+/// How a pool of workers evaluates points.
+#[derive(Debug, Clone, Copy)]
+pub struct Workers<'a> {
+    /// Estimator parameters (one estimator per worker).
+    pub params: EstimatorParams,
+    /// Worker threads (clamped to 1 ..= [`MAX_THREADS`] and to the number of jobs).
+    pub threads: usize,
+    /// `Some(label)`: a percentage on stderr, at most 4 times a second.
+    pub progress: Option<&'a str>,
+    /// Modes kept per point (1 ..= [`MAX_MODES`]).
+    pub n_modes: usize,
+}
+
 /// Evaluate `points` (positions, m) at `t_min_n` on `threads` threads, one estimator per
-/// thread. Work is handed out in runs of `chunk` consecutive points (so a thread's
-/// estimator may warm-start along a run); the result keeps the order of `points`. With
-/// `progress = Some(label)` a percentage is printed on stderr (at most 4 times a second).
+/// thread, the first mode only. Work is handed out in runs of `chunk` consecutive points (so
+/// a thread's estimator may warm-start along a run); the result keeps the order of `points`.
+/// With `progress = Some(label)` a percentage is printed on stderr (at most 4 times a
+/// second). [`evaluate_points_with`] keeps more modes.
 pub fn evaluate_points(
     scene: &Scene,
     points: &[Vector3<f64>],
@@ -95,27 +207,36 @@ pub fn evaluate_points(
     chunk: usize,
     progress: Option<&str>,
 ) -> Result<Vec<PointResult>, StudyError> {
+    let w = Workers {
+        params,
+        threads,
+        progress,
+        n_modes: 1,
+    };
+    evaluate_points_with(scene, points, t_min_n, chunk, &w)
+}
+
+/// [`evaluate_points`] with the workers `w` (and their mode count).
+pub fn evaluate_points_with(
+    scene: &Scene,
+    points: &[Vector3<f64>],
+    t_min_n: f64,
+    chunk: usize,
+    w: &Workers,
+) -> Result<Vec<PointResult>, StudyError> {
     let jobs: Vec<(usize, usize)> = (0..points.len())
         .step_by(chunk.max(1))
         .map(|a| (a, (a + chunk.max(1)).min(points.len())))
         .collect();
-    let rows = evaluate_jobs(
-        scene,
-        &jobs,
-        threads,
-        progress,
-        points.len(),
-        |k| {
-            let (a, b) = jobs[k];
-            (a..b).map(|i| (points[i], t_min_n)).collect()
-        },
-        params,
-    )?;
-    Ok(rows)
+    evaluate_jobs_with(scene, &jobs, points.len(), w, |k| {
+        let (a, b) = jobs[k];
+        (a..b).map(|i| (points[i], t_min_n)).collect()
+    })
 }
 
 /// Shared worker pool: job k yields its (position, T_min) list; results are concatenated
 /// in job order. `total` is the number of points over all jobs (for the progress line).
+/// The first mode only; [`evaluate_jobs_with`] keeps more.
 pub fn evaluate_jobs<F>(
     scene: &Scene,
     jobs: &[(usize, usize)],
@@ -128,6 +249,28 @@ pub fn evaluate_jobs<F>(
 where
     F: Fn(usize) -> Vec<(Vector3<f64>, f64)> + Sync,
 {
+    let w = Workers {
+        params,
+        threads,
+        progress,
+        n_modes: 1,
+    };
+    evaluate_jobs_with(scene, jobs, total, &w, job_points)
+}
+
+/// [`evaluate_jobs`] with the workers `w` (and their mode count).
+pub fn evaluate_jobs_with<F>(
+    scene: &Scene,
+    jobs: &[(usize, usize)],
+    total: usize,
+    w: &Workers,
+    job_points: F,
+) -> Result<Vec<PointResult>, StudyError>
+where
+    F: Fn(usize) -> Vec<(Vector3<f64>, f64)> + Sync,
+{
+    let n_modes = check_modes(w.n_modes)?;
+    let (params, threads, progress) = (w.params, w.threads, w.progress);
     let threads = threads.clamp(1, MAX_THREADS).min(jobs.len().max(1));
     let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
@@ -147,12 +290,7 @@ where
                         let pts = job_points(k);
                         let mut out = Vec::with_capacity(pts.len());
                         for (p, t) in pts {
-                            let e = *est.update(&Pose::at(p), t);
-                            out.push(PointResult {
-                                position_m: p,
-                                t_min_n: t,
-                                estimate: e,
-                            });
+                            out.push(evaluate_one(&mut est, p, t, n_modes));
                         }
                         done.fetch_add(out.len(), Ordering::Relaxed);
                         local.push((k, out));

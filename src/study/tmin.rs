@@ -1,9 +1,8 @@
 //! The first natural frequency against the minimum cable tension at one pose, and the
 //! least-squares fit f1 = a·√T_min.
 
-use super::points::{valid, PointResult};
+use super::points::{check_modes, evaluate_one, valid, PointResult};
 use super::{build, estimator_params, StudyError};
-use crate::kinematics::Pose;
 use crate::scene::Scene;
 
 /// Most T_min values of one sweep.
@@ -20,6 +19,8 @@ pub struct TminConfig {
     pub steps: usize,
     /// Compute the end-effector mode too.
     pub ee_mode: bool,
+    /// Modes kept per T_min (1 ..= `points::MAX_MODES`).
+    pub modes: usize,
 }
 
 /// f1 against T_min.
@@ -58,7 +59,9 @@ pub fn compute(s: &Scene, cfg: &TminConfig) -> Result<TminSweep, StudyError> {
         to_n: to,
         steps,
         ee_mode,
+        modes,
     } = *cfg;
+    let modes = check_modes(modes)?;
     if !(from.is_finite() && to.is_finite() && from >= 0.0 && from <= to && to <= s.t_max_n)
         || steps == 0
         || steps > MAX_STEPS
@@ -78,14 +81,9 @@ pub fn compute(s: &Scene, cfg: &TminConfig) -> Result<TminSweep, StudyError> {
         })
         .collect();
     let mut est = build(s, estimator_params(s, ee_mode))?;
-    let pose = Pose::at(s.ee_position_m);
     let points: Vec<PointResult> = ts
         .iter()
-        .map(|&t| PointResult {
-            position_m: s.ee_position_m,
-            t_min_n: t,
-            estimate: *est.update(&pose, t),
-        })
+        .map(|&t| evaluate_one(&mut est, s.ee_position_m, t, modes))
         .collect();
     let f: Vec<f64> = points
         .iter()

@@ -1,7 +1,7 @@
-//! The first natural frequency and the end-effector mode along a trajectory, for one or
-//! several T_min values.
+//! The first natural frequencies (f1 .. fK) and the end-effector mode along a trajectory,
+//! for one or several T_min values.
 
-use super::points::{evaluate_jobs, status_histogram, valid, PointResult};
+use super::points::{evaluate_jobs_with, status_histogram, valid, PointResult, Workers};
 use super::{estimator_params, StudyError};
 use crate::scene::Scene;
 use crate::service::stats::StatusHistogram;
@@ -34,6 +34,8 @@ pub struct TrajectoryConfig {
     pub t_mins_n: Vec<f64>,
     /// Compute the end-effector mode too.
     pub ee_mode: bool,
+    /// Modes kept per pose (1 ..= `points::MAX_MODES`).
+    pub modes: usize,
     /// Worker threads (T_min curves are spread over them).
     pub threads: usize,
     /// Print a percentage on stderr.
@@ -89,7 +91,8 @@ pub struct CurveSummary {
 }
 
 /// Evaluate a trajectory for each T_min (one run per T_min, consecutive poses so the
-/// estimator warm-starts); results are T_min-major.
+/// estimator warm-starts); results are T_min-major. The first mode only;
+/// [`evaluate_with`] keeps more.
 pub fn evaluate(
     s: &Scene,
     tr: &Samples,
@@ -98,17 +101,27 @@ pub fn evaluate(
     threads: usize,
     progress: Option<&str>,
 ) -> Result<Vec<PointResult>, StudyError> {
-    let n = tr.position_m.len();
-    let jobs: Vec<(usize, usize)> = (0..t_mins.len()).map(|k| (k * n, (k + 1) * n)).collect();
-    evaluate_jobs(
-        s,
-        &jobs,
+    let w = Workers {
+        params: estimator_params(s, ee_mode),
         threads,
         progress,
-        n * t_mins.len(),
-        |k| tr.position_m.iter().map(|p| (*p, t_mins[k])).collect(),
-        estimator_params(s, ee_mode),
-    )
+        n_modes: 1,
+    };
+    evaluate_with(s, tr, t_mins, &w)
+}
+
+/// [`evaluate`] with the workers `w` (and their mode count).
+pub fn evaluate_with(
+    s: &Scene,
+    tr: &Samples,
+    t_mins: &[f64],
+    w: &Workers,
+) -> Result<Vec<PointResult>, StudyError> {
+    let n = tr.position_m.len();
+    let jobs: Vec<(usize, usize)> = (0..t_mins.len()).map(|k| (k * n, (k + 1) * n)).collect();
+    evaluate_jobs_with(s, &jobs, n * t_mins.len(), w, |k| {
+        tr.position_m.iter().map(|p| (*p, t_mins[k])).collect()
+    })
 }
 
 /// Check the T_min values, make or read the poses and evaluate every curve.
@@ -143,8 +156,13 @@ pub fn run(s: &Scene, cfg: &TrajectoryConfig) -> Result<TrajectoryStudy, StudyEr
             Circle::new(s, radius_m, period_s)?.sampled(s)
         }
     };
-    let label = cfg.progress.then_some("trajectory");
-    let points = evaluate(s, &tr, &t_mins, cfg.ee_mode, cfg.threads, label)?;
+    let w = Workers {
+        params: estimator_params(s, cfg.ee_mode),
+        threads: cfg.threads,
+        progress: cfg.progress.then_some("trajectory"),
+        n_modes: cfg.modes,
+    };
+    let points = evaluate_with(s, &tr, &t_mins, &w)?;
     Ok(TrajectoryStudy {
         samples: tr,
         t_mins_n: t_mins,
