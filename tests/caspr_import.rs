@@ -115,7 +115,9 @@ fn analyze_json(path: &Path) -> serde_json::Value {
     assert!(o.status.success(), "{}", stderr(&o));
     let mut v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
     let m = v.as_object_mut().unwrap();
-    m.remove("dense_seconds");
+    for timing in ["solve_seconds", "dense_seconds"] {
+        m.remove(timing);
+    }
     v
 }
 
