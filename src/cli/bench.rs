@@ -249,14 +249,16 @@ fn print_text(
     println!("  statuses: {names:?}");
     let rc = est.rescan_counts();
     println!(
-        "  end-effector mode bookkeeping: full scans cold {} uncertified {} none {}; lost {} dropped {}; partner searches {} neighbour searches {}",
+        "  end-effector mode bookkeeping: full scans cold {} uncertified {} none {}; lost {} dropped {}; partner searches {} neighbour searches {}; scans continued over cycles {}, cycles over budget {}",
         rc.cold_scans,
         rc.uncertified_scans,
         rc.no_mode_scans,
         rc.lost,
         rc.dropped,
         rc.partner_searches,
-        rc.neighbour_searches
+        rc.neighbour_searches,
+        rc.continued_scans,
+        rc.starved_cycles
     );
     let (f1_min, f1_max) = (c.f1_min, c.f1_max);
     if f1_min.0.is_finite() {

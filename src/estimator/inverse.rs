@@ -220,6 +220,7 @@ impl Estimator {
             &uniform[..n],
             ANY_RANK,
             s.warm,
+            u32::MAX,
             |_| {},
         )?;
         s.warm = Some(r.lambda);

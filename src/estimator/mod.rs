@@ -77,6 +77,8 @@ pub struct Estimator {
     /// Scratch solvers of the inverse query (so it leaves the cycle's warm state alone).
     inverse: Pipeline,
     auto: Option<AutoChoice>,
+    /// The last end-effector answer (Hz, participation, age in cycles), None when unknown.
+    last_ee: Option<(f64, f64, u32)>,
 }
 
 impl Estimator {
@@ -121,6 +123,7 @@ impl Estimator {
                 },
             ),
             auto: None,
+            last_ee: None,
         };
         // Expected rank: the rank at the default pose.
         let default_pose = |e: EstimatorError| BuildError::DefaultPose {
@@ -189,6 +192,7 @@ impl Estimator {
 
     /// Forget every warm start: the next cycle starts cold.
     pub fn reset(&mut self) {
+        self.last_ee = None;
         self.last_ok_position = None;
         self.last_lambda1 = f64::NAN;
         self.cycle.tension.reset_warm_start();
@@ -249,6 +253,7 @@ impl Estimator {
                 }
                 self.last_ok_position = None;
                 self.last_lambda1 = f64::NAN;
+                self.last_ee = None;
             }
         }
         self.estimate = e;
@@ -323,6 +328,7 @@ impl Estimator {
             &self.t_min_n[..n],
             self.expected_rank,
             warm_l,
+            self.params.modal.cycle_evaluations,
             |tension| {
                 let info = tension.info();
                 e.tension_iterations = info.iterations;
@@ -349,22 +355,49 @@ impl Estimator {
         self.prev_lambda1 = if warm { self.last_lambda1 } else { f64::NAN };
         self.last_lambda1 = r1.lambda;
         if self.params.ee_mode {
-            // No mode reaching the participation threshold within the bounded scan leaves
-            // the end-effector mode unknown (NaN) without invalidating f1 and the tensions.
-            if let Ok(ree) = self.cycle.modal.ee_mode_tracked(&r1, warm_l.is_some()) {
-                e.ee_mode_hz = lambda_to_hz(ree.lambda);
-                e.ee_mode_participation = ree.ee_participation;
-            }
+            self.ee_mode(&r1, warm_l.is_some(), e);
         }
         self.write_stiffness(e);
         e.eigen_evaluations = self.cycle.evaluations_since_load();
         Ok(())
     }
 
+    /// The end-effector mode within what is left of the cycle's budget, into `e`: this
+    /// cycle's answer (age 0), or while the work goes on over the cycles the last answer
+    /// with its age; unknown (NaN, age `u32::MAX`) when no mode reaching the participation
+    /// threshold is known — a mode below the threshold is never reported. Neither case
+    /// invalidates f1 and the tensions.
+    fn ee_mode(&mut self, r1: &crate::modal::Root, warm: bool, e: &mut Estimate) {
+        if !warm {
+            // A cold start (a jump): the last answer belongs to another pose.
+            self.last_ee = None;
+        }
+        let thr = self.cycle.modal.params().ee_participation_min;
+        match self.cycle.modal.ee_mode_tracked(r1, warm) {
+            Ok(Some(r)) if r.ee_participation >= thr => {
+                self.last_ee = Some((lambda_to_hz(r.lambda), r.ee_participation, 0));
+            }
+            // Still being worked on: the last answer, one cycle older.
+            Ok(None) => {
+                if let Some(l) = self.last_ee.as_mut() {
+                    l.2 = l.2.saturating_add(1);
+                }
+            }
+            // None reaches the threshold within the scan's bounds, or the scan failed.
+            Ok(Some(_)) | Err(_) => self.last_ee = None,
+        }
+        if let Some((hz, p, age)) = self.last_ee {
+            e.ee_mode_hz = hz;
+            e.ee_mode_participation = p;
+            e.ee_mode_age_cycles = age;
+        }
+    }
+
     /// The static end-effector stiffness of the loaded models into `e`.
     fn write_stiffness(&mut self, e: &mut Estimate) {
         if self.scene.rigid {
-            let k6 = self.cycle.modal.static_stiffness6();
+            // Closed form: no evaluation of D(λ) out of the cycle's budget.
+            let k6 = self.cycle.modal.static_stiffness6_closed();
             e.stiffness6 = k6;
             e.stiffness_n_m = k6.fixed_view::<3, 3>(0, 0).into_owned();
             e.stiffness_dim = 6;
