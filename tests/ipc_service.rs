@@ -939,7 +939,7 @@ fn a_peer_with_another_layout_gets_a_clear_error() {
         "{log}"
     );
     assert!(
-        log.contains("`cablevib::PoseSample::v1` (80 bytes, align 8)"),
+        log.contains("`cablevib::PoseSample::v2` (80 bytes, align 8)"),
         "{log}"
     );
     assert!(log.contains("rebuild the other peer"), "{log}");
@@ -955,7 +955,7 @@ fn a_peer_with_another_layout_gets_a_clear_error() {
     let text = err.to_string();
     assert!(text.contains("incompatible peer"), "{text}");
     assert!(
-        text.contains("carries payload `cablevib::PoseSample::v1`"),
+        text.contains("carries payload `cablevib::PoseSample::v2`"),
         "{text}"
     );
     assert!(node
