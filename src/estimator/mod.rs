@@ -89,6 +89,15 @@ impl Estimator {
         Self::with_params(scene, p)
     }
 
+    /// [`Self::new`] with the real-time per-cycle evaluation budget
+    /// ([`crate::modal::CYCLE_EVALUATIONS`]), as the service runs it.
+    pub fn realtime(scene: &Scene) -> Result<Estimator, BuildError> {
+        let mut p = EstimatorParams::default();
+        p.modal.ee_participation_min = scene.model.ee_participation_min;
+        p.modal.cycle_evaluations = crate::modal::CYCLE_EVALUATIONS;
+        Self::with_params(scene, p)
+    }
+
     /// Build with explicit parameters. Allocates everything the cycle needs and checks
     /// the scene's default pose.
     pub fn with_params(scene: &Scene, params: EstimatorParams) -> Result<Estimator, BuildError> {

@@ -79,11 +79,11 @@ pub fn hz_to_lambda(f_hz: f64) -> f64 {
     w * w
 }
 
-/// Default per-cycle budget of D(λ) evaluations. Along the paper's circle (spatial robot,
-/// fem/catenary/continuous, 20,000 cycles) a warm cycle needs 8 (median), 14-15 (p99), and
-/// at most 26 when no band rescan is due; a cold first root with its certificate about 12.
-/// 32 covers every warm cycle that does not rescan, with room for a few forward evaluations
-/// of a margin request's inverse search; a rescan (up to ~190) is spread over the cycles.
+/// The real-time per-cycle budget of D(λ) evaluations. Along the paper's circle (spatial
+/// robot, 20,000 cycles, unlimited budget) a warm cycle without a band rescan needs 7-8
+/// (median), 13-15 (p99), 16-25 (p99.9) and at most 19-34 (fem × 40, catenary × 40 and × 10,
+/// continuous); a cold first root with its certificate about 12. 32 covers all but a few in
+/// 10⁵ of them; a band rescan (up to ~190) or a cold scan is spread over the cycles.
 pub const CYCLE_EVALUATIONS: u32 = 32;
 
 /// Parameters of the structured solver (finite bounds everywhere).
@@ -98,9 +98,11 @@ pub struct ModalParams {
     /// Largest number of D(λ) evaluations one end-effector scan may spend (over all the
     /// cycles it is continued in).
     pub max_scan_evaluations: u32,
-    /// The per-cycle budget of D(λ) evaluations (first root, end-effector mode and, in the
-    /// estimator, the inverse T_min search together); what does not fit is continued in
-    /// the next cycles. `u32::MAX`: unlimited.
+    /// The per-cycle budget of D(λ) evaluations (first root and end-effector mode
+    /// together); the end-effector work that does not fit is continued in the next cycles.
+    /// `u32::MAX` (the default: offline analyses want every answer complete): unlimited;
+    /// the real-time users (the service, `bench`, [`crate::estimator::Estimator::realtime`])
+    /// use [`CYCLE_EVALUATIONS`].
     pub cycle_evaluations: u32,
     /// Smallest end-effector participation of an end-effector mode (0 < x ≤ 1).
     pub ee_participation_min: f64,
@@ -119,7 +121,7 @@ impl Default for ModalParams {
             rel_tol: 1e-12,
             max_scan_intervals: 400,
             max_scan_evaluations: 4000,
-            cycle_evaluations: CYCLE_EVALUATIONS,
+            cycle_evaluations: u32::MAX,
             ee_participation_min: 0.5,
             certify: true,
             newton_accept: 1e-9,

@@ -307,7 +307,7 @@ impl Server {
         names: &ServiceNames,
         allocations: AllocCounter,
     ) -> Result<Server, ServiceError> {
-        let estimator = Estimator::new(scene)?;
+        let estimator = Estimator::realtime(scene)?;
         if let Some(choice) = estimator.auto_choice() {
             tracing::info!("{choice}");
         }
