@@ -9,8 +9,8 @@
 //! estimator.
 use cablevib::alloc_count::{thread_allocations, CountingAlloc};
 use cablevib::estimator::{Estimator, EstimatorParams, TminQueryError};
-use cablevib::modal::CYCLE_EVALUATIONS;
 use cablevib::kinematics::Pose;
+use cablevib::modal::CYCLE_EVALUATIONS;
 use cablevib::scene::{ElementKind, Scene, MAX_CABLES};
 use cablevib::trajectory::{Circle, CIRCLE_RADIUS_M, SAMPLE_PERIOD_S};
 use nalgebra::Vector3;

@@ -20,7 +20,10 @@ use nalgebra::Vector3;
 
 /// The heavy-cable scene of the test data (the paper's robot, cables 50× heavier).
 fn heavy(el: ElementKind, n: usize) -> Scene {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/spatial_heavy_cable.toml");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/spatial_heavy_cable.toml"
+    );
     Scene::load(path).unwrap().with_model(el, n)
 }
 
@@ -101,7 +104,11 @@ fn no_cycle_exceeds_the_budget_on_random_trajectories() {
         // The random waypoints may leave the feasible workspace now and then; most are in it.
         assert!(ok >= 2000, "{} {el:?}: {ok} ok", s.name);
         // Most answers are this cycle's: the budget covers the common warm cycle.
-        assert!(fresh * 10 >= ok * 8, "{} {el:?}: {fresh} fresh of {ok}", s.name);
+        assert!(
+            fresh * 10 >= ok * 8,
+            "{} {el:?}: {fresh} fresh of {ok}",
+            s.name
+        );
     }
 }
 
@@ -135,7 +142,11 @@ fn heavy_cable_end_effector_mode_meets_the_threshold() {
             found = Some((cycle, e));
             break;
         }
-        assert_eq!(e.ee_mode_age_cycles, u32::MAX, "unknown while the scan goes on");
+        assert_eq!(
+            e.ee_mode_age_cycles,
+            u32::MAX,
+            "unknown while the scan goes on"
+        );
     }
     let (cycle, e) = found.expect("found within 1000 cycles");
     eprintln!(

@@ -698,7 +698,12 @@ fn margin_requests_answer_for_the_latest_pose() {
 /// Poses at ~1 kHz for `ms` milliseconds, each with a margin request whose required f1 is
 /// new (when `flood`): returns (poses sent, estimates received, largest D(λ) evaluation
 /// count of an estimate, the estimates' compute times in ns).
-fn paced_run(client: &mut Client, k0: usize, ms: usize, flood: bool) -> (usize, usize, u32, Vec<u64>) {
+fn paced_run(
+    client: &mut Client,
+    k0: usize,
+    ms: usize,
+    flood: bool,
+) -> (usize, usize, u32, Vec<u64>) {
     let mut pending = std::collections::VecDeque::new();
     let (mut received, mut max_evals, mut compute) = (0, 0, Vec::new());
     let start = Instant::now();
@@ -759,11 +764,27 @@ fn margin_flood_keeps_the_estimate_rate() {
     eprintln!(
         "without flood: {} of {} poses estimated, max {} evaluations, compute p99 {} ns; \
          with flood: {} of {}, max {}, p99 {} ns",
-        quiet.1, quiet.0, quiet.2, p99(&quiet.3), flood.1, flood.0, flood.2, p99(&flood.3)
+        quiet.1,
+        quiet.0,
+        quiet.2,
+        p99(&quiet.3),
+        flood.1,
+        flood.0,
+        flood.2,
+        p99(&flood.3)
     );
     for (name, r) in [("quiet", &quiet), ("flood", &flood)] {
-        assert!(r.2 <= budget, "{name}: {} evaluations > budget {budget}", r.2);
-        assert!(4 * r.1 >= r.0, "{name}: {} estimates for {} poses", r.1, r.0);
+        assert!(
+            r.2 <= budget,
+            "{name}: {} evaluations > budget {budget}",
+            r.2
+        );
+        assert!(
+            4 * r.1 >= r.0,
+            "{name}: {} estimates for {} poses",
+            r.1,
+            r.0
+        );
     }
     service.assert_running();
 }

@@ -98,8 +98,8 @@ pub mod status;
 
 pub use compat::{explain_publish_subscribe_mismatch, explain_request_response_mismatch, TypeInfo};
 pub use messages::{
-    EstimateSample, MarginRequest, MarginResponse, Message, PoseSample, SchemaError, TminSetpoint, EE_MODE_AGE_UNKNOWN, T_MIN_AGE_UNKNOWN,
-    IDENTITY_QUATERNION,
+    EstimateSample, MarginRequest, MarginResponse, Message, PoseSample, SchemaError, TminSetpoint,
+    EE_MODE_AGE_UNKNOWN, IDENTITY_QUATERNION, T_MIN_AGE_UNKNOWN,
 };
 pub use names::{
     prefixed, ServiceNames, ALL_SERVICES, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST,

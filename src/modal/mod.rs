@@ -65,7 +65,6 @@ pub use error::ModalError;
 pub use rigid::{attach_map, rigid_geometric_stiffness};
 pub use solver::ModalSolver;
 
-
 /// Convert λ = ω² (rad²/s²) to Hz.
 #[inline]
 pub fn lambda_to_hz(lambda: f64) -> f64 {

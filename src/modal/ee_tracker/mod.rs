@@ -216,7 +216,13 @@ impl EeTracker {
             return Ok(*first);
         }
         let start = f.evaluations();
-        self.scan = Some(ScanState::new(f.problem, 0.0, first.lambda, f64::INFINITY, false));
+        self.scan = Some(ScanState::new(
+            f.problem,
+            0.0,
+            first.lambda,
+            f64::INFINITY,
+            false,
+        ));
         let r = match self.scan_step(f) {
             ScanStep::Done(r) => r,
             ScanStep::Paused => {
@@ -378,7 +384,13 @@ impl EeTracker {
             if first.ee_participation >= P_ADD {
                 self.watch_first(f, first);
             }
-            self.scan = Some(ScanState::new(f.problem, 0.0, first.lambda, f64::INFINITY, false));
+            self.scan = Some(ScanState::new(
+                f.problem,
+                0.0,
+                first.lambda,
+                f64::INFINITY,
+                false,
+            ));
         }
     }
 

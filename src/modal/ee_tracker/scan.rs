@@ -116,7 +116,13 @@ pub(super) struct ScanState {
 impl ScanState {
     /// A scan upward from the pole interval containing `start` (rad²/s²), skipping roots at
     /// or below `skip_to`, giving up above `limit`.
-    pub(super) fn new(p: &LoadedChains, start: f64, skip_to: f64, limit: f64, window: bool) -> Self {
+    pub(super) fn new(
+        p: &LoadedChains,
+        start: f64,
+        skip_to: f64,
+        limit: f64,
+        window: bool,
+    ) -> Self {
         let mut a = 0.0f64;
         for i in 0..p.n_chains {
             let (lo, _) = p.chains[i].poles_around(start);
@@ -221,7 +227,10 @@ impl EeTracker {
         }
         // No mode reaches the threshold within the bounds: the most end-effector-like mode
         // found (its participation, below the threshold, says so).
-        Some(st.best.ok_or(ModalError::NoEeMode(f.params.max_scan_intervals)))
+        Some(
+            st.best
+                .ok_or(ModalError::NoEeMode(f.params.max_scan_intervals)),
+        )
     }
     /// The roots of one pole interval (a, b) from branch `st.branch` on.
     fn scan_interval(
@@ -261,7 +270,11 @@ impl EeTracker {
             if f.exhausted() {
                 if let Err(ModalError::NoConvergence { lo: l, hi: h, .. }) = r {
                     st.branch = branch;
-                    st.guess = if h.is_finite() { 0.5 * (l + h) } else { 2.0 * l };
+                    st.guess = if h.is_finite() {
+                        0.5 * (l + h)
+                    } else {
+                        2.0 * l
+                    };
                     return IntervalEnd::Paused;
                 }
             }
@@ -294,11 +307,16 @@ impl EeTracker {
             if let Some(ans) = st.answer {
                 // Modes watched in earlier cycles of a continued scan count with their
                 // participation then (the certificate comes later, at one pose).
-                if self.unwatched_bound_with(ans.lambda, true) < SCAN_BOUND || self.n_members == MAX_MEMBERS {
+                if self.unwatched_bound_with(ans.lambda, true) < SCAN_BOUND
+                    || self.n_members == MAX_MEMBERS
+                {
                     return IntervalEnd::Stop;
                 }
             }
-            if st.best.is_none_or(|x| r.ee_participation > x.ee_participation) {
+            if st
+                .best
+                .is_none_or(|x| r.ee_participation > x.ee_participation)
+            {
                 st.best = Some(r);
             }
         }

@@ -51,13 +51,13 @@ use iceoryx2::prelude::*;
 use nalgebra::Vector3;
 
 use super::ports::{self, Ipc, ServicePorts, MAX_PUBLISHERS, POSE_BUFFER};
-use inverse_worker::{InverseJob, InverseWorker};
 use super::rt;
 use super::stats::{Percentiles, Ring, SequenceGaps, StatusHistogram};
 use super::{ServiceError, WaitMode};
 use crate::estimator::Estimator;
 use crate::kinematics::Pose;
 use crate::scene::{is_valid_t_min, Scene};
+use inverse_worker::{InverseJob, InverseWorker};
 
 /// Heap allocation counter (the binary's global allocator), or a function returning 0.
 pub type AllocCounter = fn() -> u64;
