@@ -718,12 +718,11 @@ fn paced_run(
         client.input.send_pose(&pose).expect("send pose");
         if flood {
             // A requirement that changes every request (the worst case for a search that
-            // restarts); at most 4 in flight (older ones are dropped unanswered).
+            // restarts); the last one in flight is dropped first (the client's active
+            // requests are limited), answered or not.
             let req = MarginRequest::new(k as u64 + 1, monotonic_now_ns(), 7.0 + 1e-3 * k as f64);
+            pending.clear();
             pending.push_back(client.margin.send(&req).expect("send margin request"));
-            while pending.len() > 4 {
-                pending.pop_front();
-            }
         }
         while let Some(e) = client.output.try_receive().expect("receive") {
             received += 1;
@@ -749,8 +748,8 @@ fn paced_run(
 /// A controller flooding margin requests with a new required f1 each time, beside poses at
 /// 1 kHz: the estimate loop keeps its rate (the inverse search runs beside it) and no cycle
 /// spends more D(λ) evaluations than the budget. Counts, not timing: the estimates received
-/// must be at least a quarter of the poses sent (a loop running the search inline managed 13
-/// cycles in 3 s), on a shared machine.
+/// must be at least half of the poses sent, with and without the flood (a loop running the
+/// search inline managed 13 cycles in 3 s; the margin of 2 is for a shared machine).
 #[test]
 fn margin_flood_keeps_the_estimate_rate() {
     let inst = instance("margin_flood");

@@ -23,6 +23,13 @@ use crate::kinematics::Pose;
 /// The worker sleeps at most this long between looks at the mailbox (it is also woken by
 /// every posted job).
 const IDLE_PARK: Duration = Duration::from_millis(20);
+/// After a search the worker rests at least as long as the search took: at most half of a
+/// core, whatever the requests, so that on a machine with few cores it cannot take the
+/// estimate loop's.
+const REST_PER_WORK: u32 = 1;
+/// Niceness of the worker thread (Linux: lowest priority), so that the scheduler prefers the
+/// estimate loop when both want a core.
+const WORKER_NICE: i32 = 19;
 
 /// One search to run: at `pose` (the estimate of cycle `cycle`), for `required_f1_hz`.
 #[derive(Debug, Clone, Copy)]
@@ -112,6 +119,7 @@ impl Drop for InverseWorker {
 
 /// Take the newest job, search, post the answer; park when idle.
 fn worker_loop(est: &mut Estimator, mailbox: &Mutex<Mailbox>, stop: &AtomicBool) {
+    lower_priority();
     while !stop.load(Ordering::Acquire) {
         let job = match mailbox.lock() {
             Ok(mut m) => m.job.take(),
@@ -121,9 +129,11 @@ fn worker_loop(est: &mut Estimator, mailbox: &Mutex<Mailbox>, stop: &AtomicBool)
             std::thread::park_timeout(IDLE_PARK);
             continue;
         };
+        let t0 = std::time::Instant::now();
         let t = est
             .t_min_for_f1_near(&j.pose, j.required_f1_hz, Some(j.hint_n))
             .map_or(f64::NAN, |a| a.t_min_n);
+        let worked = t0.elapsed();
         if let Ok(mut m) = mailbox.lock() {
             m.answer = Some(InverseAnswer {
                 required_f1_hz: j.required_f1_hz,
@@ -131,5 +141,21 @@ fn worker_loop(est: &mut Estimator, mailbox: &Mutex<Mailbox>, stop: &AtomicBool)
                 t_min_n: t,
             });
         }
+        std::thread::sleep(worked * REST_PER_WORK);
     }
 }
+
+/// This thread's niceness to [`WORKER_NICE`] (Linux: per thread); a failure only leaves the
+/// default priority.
+#[cfg(target_os = "linux")]
+fn lower_priority() {
+    // SAFETY: setpriority on this thread's own id, no memory passed.
+    unsafe {
+        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+        let _ = libc::setpriority(libc::PRIO_PROCESS, tid, WORKER_NICE);
+    }
+}
+
+/// Elsewhere the worker keeps the default priority (its rest still halves its share).
+#[cfg(not(target_os = "linux"))]
+fn lower_priority() {}
