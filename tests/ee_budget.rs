@@ -226,7 +226,7 @@ fn residual_is_small_at_the_root_and_not_elsewhere() {
         assert!(m.residual_at(l) <= 1e-8, "{el:?}: {}", m.residual_at(l));
         for d in [1e-3, -1e-3] {
             let r = m.residual_at(l * (1.0 + d));
-            assert!(r >= 1e-4 && r <= 1e-1, "{el:?} perturbed {d}: {r}");
+            assert!((1e-4..=1e-1).contains(&r), "{el:?} perturbed {d}: {r}");
         }
     }
 }

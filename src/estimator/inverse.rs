@@ -220,7 +220,6 @@ impl Estimator {
             &uniform[..n],
             ANY_RANK,
             s.warm,
-            u32::MAX,
             |_| {},
         )?;
         s.warm = Some(r.lambda);

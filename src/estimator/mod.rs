@@ -128,6 +128,8 @@ impl Estimator {
                 params.tension,
                 ModalParams {
                     certify: false,
+                    // The inverse query is not a cycle: unlimited.
+                    cycle_evaluations: u32::MAX,
                     ..params.modal
                 },
             ),
@@ -337,7 +339,6 @@ impl Estimator {
             &self.t_min_n[..n],
             self.expected_rank,
             warm_l,
-            self.params.modal.cycle_evaluations,
             |tension| {
                 let info = tension.info();
                 e.tension_iterations = info.iterations;
