@@ -104,6 +104,7 @@ fn continued_scans_allocate_nothing() {
         let mut p = EstimatorParams::default();
         p.modal.ee_participation_min = s.model.ee_participation_min;
         p.modal.cycle_evaluations = budget;
+        p.modal.max_scan_evaluations = cablevib::modal::SPREAD_SCAN_EVALUATIONS;
         let mut est = Estimator::with_params(&s, p).unwrap();
         let c = Circle::new(&s, 0.1, 4.0).unwrap();
         est.update(&circle_pose(&s, &c, 0), s.t_min_n);

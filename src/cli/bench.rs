@@ -151,6 +151,7 @@ pub fn run(a: &BenchArgs, allocations: AllocCounter) -> Result<(), CliError> {
     let mut p = estimator_params(&s, !a.no_ee_mode);
     // The real-time budget, as the service runs.
     p.modal.cycle_evaluations = crate::modal::CYCLE_EVALUATIONS;
+    p.modal.max_scan_evaluations = crate::modal::SPREAD_SCAN_EVALUATIONS;
     let mut est = Estimator::with_params(&s, p).map_err(|e| CliError::Analysis(e.to_string()))?;
     let c = run_circle(&mut est, &s, a, allocations);
     // Dense reference on a sample of poses, timed in the same run.

@@ -90,11 +90,13 @@ impl Estimator {
     }
 
     /// [`Self::new`] with the real-time per-cycle evaluation budget
-    /// ([`crate::modal::CYCLE_EVALUATIONS`]), as the service runs it.
+    /// ([`crate::modal::CYCLE_EVALUATIONS`]) and the spread scan's bound
+    /// ([`crate::modal::SPREAD_SCAN_EVALUATIONS`]), as the service runs it.
     pub fn realtime(scene: &Scene) -> Result<Estimator, BuildError> {
         let mut p = EstimatorParams::default();
         p.modal.ee_participation_min = scene.model.ee_participation_min;
         p.modal.cycle_evaluations = crate::modal::CYCLE_EVALUATIONS;
+        p.modal.max_scan_evaluations = crate::modal::SPREAD_SCAN_EVALUATIONS;
         Self::with_params(scene, p)
     }
 

@@ -85,6 +85,13 @@ pub fn hz_to_lambda(f_hz: f64) -> f64 {
 /// 10⁵ of them; a band rescan (up to ~190) or a cold scan is spread over the cycles.
 pub const CYCLE_EVALUATIONS: u32 = 32;
 
+/// The scan bound ([`ModalParams::max_scan_evaluations`]) of the real-time configuration:
+/// a scan spread over the cycles by the budget costs the answer's age, not the cycle's
+/// latency, so it may go on longer than an unlimited one-cycle scan (1 500 by default);
+/// enough for the ~250 string modes below the end-effector mode of the heavy-cable test
+/// scene (tests/data/spatial_heavy_cable.toml).
+pub const SPREAD_SCAN_EVALUATIONS: u32 = 4000;
+
 /// Parameters of the structured solver (finite bounds everywhere).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ModalParams {
@@ -119,7 +126,7 @@ impl Default for ModalParams {
             max_evaluations: 100,
             rel_tol: 1e-12,
             max_scan_intervals: 400,
-            max_scan_evaluations: 4000,
+            max_scan_evaluations: 1500,
             cycle_evaluations: u32::MAX,
             ee_participation_min: 0.5,
             certify: true,
