@@ -15,6 +15,13 @@
 //!    end-effector participation (0 ..= 1); and, when enabled, the end-effector mode;
 //! 5. the static end-effector stiffness (N/m; N/rad and N·m/rad blocks for a rigid body).
 //!
+//! **Budget.** With [`ModalParams::cycle_evaluations`] finite (the real-time configuration,
+//! [`Estimator::realtime`]: [`crate::modal::CYCLE_EVALUATIONS`] = 32) a cycle never evaluates
+//! D(λ) more often than that: f1 is solved exactly first, the end-effector mode with what is
+//! left, and the end-effector work that does not fit is continued in the next cycles; the
+//! estimate then carries the last answer and its age ([`Estimate::ee_mode_age_cycles`]).
+//! The default ([`EstimatorParams::default`]) is unlimited, for offline analyses.
+//!
 //! [`Estimator`] owns every buffer of the cycle, sized in [`Estimator::new`]; the cycle
 //! returns an [`Estimate`] whose [`Estimate::status`] says whether its numbers are valid.
 //! It never allocates, never blocks, and every loop in it is bounded; bad input and

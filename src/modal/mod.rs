@@ -36,6 +36,15 @@
 //! participation of every other mode; [`ModalSolver::ee_mode_tracked`] certifies its answer
 //! with it.
 //!
+//! **Budget.** [`ModalSolver::begin_cycle`] sets a per-cycle budget of D(λ) evaluations
+//! ([`ModalParams::cycle_evaluations`]; [`CYCLE_EVALUATIONS`] in real time). Every loop that
+//! evaluates D(λ) checks it first, so a cycle never exceeds it: the first root's Newton runs
+//! first (a few evaluations), the end-effector tracker gets the rest, and a scan that runs
+//! out is a plain-data state ([`ModalSolver::ee_scanning`]) continued from the same pole
+//! interval in the next cycle, on that cycle's problem. A scan only discovers the modes to
+//! watch; an answer found over several cycles is certified by the sum rules at the pose of
+//! the cycle that reports it.
+//!
 //! **Units** (SI throughout): K and D in N/m (N·m/rad in a rigid body's rotational block),
 //! M and D' in kg (kg·m²), λ in rad²/s², f in Hz; participations are dimensionless (0 ..= 1)
 //! and Σ_k p_k/λ_k is in s²/rad².

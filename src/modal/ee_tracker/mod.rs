@@ -9,6 +9,10 @@
 //! - [`search`]: the Newton searches it uses (follow a root, a neighbour, a partner).
 //!
 //! The tuning constants below decide only the cost: every warm answer is certified.
+//!
+//! Every search stops at the cycle's evaluation budget; a warm cycle cut short is tried
+//! again in the next one (`RescanReason::Starved`, not a rescan), a scan cut short is kept
+//! in `EeTracker::scan` and continued (`scan::ScanState`).
 
 mod follow;
 mod member;

@@ -11,7 +11,7 @@
 //!    estimate and notify the wake-controller event;
 //! 4. answer every queued margin request from the latest estimate: f1 and the margin of this
 //!    cycle, and the T_min that reaches the requirement from the inverse search, which runs
-//!    on a thread of its own ([`inverse_worker`]) on the newest request, so that no request
+//!    on a thread of its own (`server/inverse_worker.rs`) on the newest request, so that no request
 //!    pattern costs the loop more than a copy per request.
 //!
 //! Between iterations the loop busy-polls ([`WaitMode::Spin`]) or blocks on the wake-service
