@@ -333,6 +333,10 @@ fn assert_same(got: &EstimateSample, want: &Estimate, what: &str) {
         bits(want.ee_mode_hz),
         "{what}: ee mode"
     );
+    assert_eq!(
+        got.ee_mode_age_cycles, want.ee_mode_age_cycles,
+        "{what}: ee mode age"
+    );
     assert_eq!(got.stiffness_dim, 3, "{what}");
     for r in 0..3 {
         for c in 0..3 {
