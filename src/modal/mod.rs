@@ -116,7 +116,7 @@ pub struct ModalParams {
     /// The per-cycle budget of D(λ) evaluations (first root and end-effector mode
     /// together); the end-effector work that does not fit is continued in the next cycles.
     /// `u32::MAX` (the default: offline analyses want every answer complete): unlimited;
-    /// the real-time users (the service, `bench`, [`crate::estimator::Estimator::realtime`])
+    /// the real-time users (the service, `bench`, `Estimator::realtime` (estimator))
     /// use [`CYCLE_EVALUATIONS`].
     pub cycle_evaluations: u32,
     /// Smallest end-effector participation of an end-effector mode (0 < x ≤ 1).
