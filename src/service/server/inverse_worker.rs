@@ -23,10 +23,10 @@ use crate::kinematics::Pose;
 /// The worker sleeps at most this long between looks at the mailbox (it is also woken by
 /// every posted job).
 const IDLE_PARK: Duration = Duration::from_millis(20);
-/// After a search the worker rests at least as long as the search took: at most half of a
+/// After a search the worker rests three times as long as the search took: at most a quarter of a
 /// core, whatever the requests, so that on a machine with few cores it cannot take the
 /// estimate loop's.
-const REST_PER_WORK: u32 = 1;
+const REST_PER_WORK: u32 = 3;
 /// Niceness of the worker thread (Linux: lowest priority), so that the scheduler prefers the
 /// estimate loop when both want a core.
 const WORKER_NICE: i32 = 19;
