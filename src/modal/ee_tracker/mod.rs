@@ -6,7 +6,8 @@
 //! - [`member`]: one watched mode, its predictor, the watch list;
 //! - [`scan`]: the scan over the pole intervals (cold start and rescans);
 //! - [`follow`]: one warm cycle (follow, partner and neighbour searches, certificate);
-//! - [`search`]: the Newton searches it uses (follow a root, a neighbour, a partner).
+//! - [`search`]: the Newton searches it uses (follow a root, a neighbour, a partner);
+//! - [`phases`]: one cycle's work within the budget (track, scan, continue, certify).
 //!
 //! The tuning constants below decide only the cost: every warm answer is certified.
 //!
@@ -16,6 +17,7 @@
 
 mod follow;
 mod member;
+mod phases;
 mod scan;
 mod search;
 
@@ -291,118 +293,6 @@ impl EeTracker {
                 r
             })
         })
-    }
-
-    /// Track, scan, or continue a scan, until an answer or the budget's end.
-    fn ee_phases(
-        &mut self,
-        f: &mut RootFinder<'_>,
-        first: &Root,
-        thr: f64,
-    ) -> Result<Option<Root>, ModalError> {
-        for _ in 0..PHASES_PER_CYCLE {
-            if self.scan.is_none() {
-                let reason = if self.n_members > 0 {
-                    match self.track_watched(f, thr) {
-                        Ok(r) => return Ok(Some(r)),
-                        Err(_) if f.exhausted() => return Ok(None),
-                        Err(why) => why,
-                    }
-                } else {
-                    RescanReason::Cold
-                };
-                self.counts.record(reason);
-                self.start_scan(f, first, reason);
-            }
-            let was_resumed = self.scan.is_some_and(|s| s.resumed > 0);
-            let window = self.scan.is_some_and(|s| s.window);
-            self.recording = true;
-            let step = self.scan_step(f);
-            self.recording = false;
-            let r = match step {
-                ScanStep::Paused => {
-                    if let Some(s) = self.scan.as_mut() {
-                        s.resumed += 1;
-                        if s.resumed == 1 {
-                            self.counts.continued_scans += 1;
-                        }
-                    }
-                    return Ok(None);
-                }
-                ScanStep::Done(r) => r,
-            };
-            let reached = matches!(r, Ok(ref x) if x.ee_participation >= thr);
-            if was_resumed && reached {
-                // Found over several cycles: certify at this cycle's pose (a warm cycle of
-                // the watched modes) before anything is reported.
-                continue;
-            }
-            if window {
-                // Certified, this is the answer; else scan from zero.
-                match r {
-                    Ok(r) if reached && self.unwatched_bound(r.lambda) + CERT_MARGIN < thr => {
-                        return Ok(Some(r))
-                    }
-                    _ => {
-                        self.n_members = 0;
-                        continue;
-                    }
-                }
-            }
-            let r = match r {
-                Ok(r) => r,
-                Err(e) => {
-                    self.n_members = 0;
-                    return Err(e);
-                }
-            };
-            if r.ee_participation < thr {
-                // Weak: watch only this mode until the next full scan.
-                let (a, b) = f.problem.pole_interval(r.lambda);
-                self.members[0] = Member::new(r.lambda, r.ee_participation, 0, 0, a, b);
-                self.n_members = 1;
-                self.ee_skip = WEAK_RESCAN_CYCLES;
-            }
-            return Ok(Some(r));
-        }
-        Ok(None)
-    }
-
-    /// Start a scan for `reason`: from 10 % below the lowest watched mode after a failed
-    /// warm cycle (the watched modes are those the participation moves among; the modes
-    /// below stay unwatched and covered by the bound), from zero otherwise.
-    fn start_scan(&mut self, f: &RootFinder<'_>, first: &Root, reason: RescanReason) {
-        let window = if reason != RescanReason::Cold && self.n_members > 0 {
-            RESCAN_WINDOW * self.members[0].lambda
-        } else {
-            0.0
-        };
-        self.n_members = 0;
-        if window > 0.0 {
-            if first.ee_participation >= P_ADD && first.lambda < window {
-                self.watch_first(f, first);
-            }
-            let skip = window * (1.0 - scan::WINDOW_EDGE);
-            self.scan = Some(ScanState::new(f.problem, window, skip, f64::INFINITY, true));
-        } else {
-            if first.ee_participation >= P_ADD {
-                self.watch_first(f, first);
-            }
-            self.scan = Some(ScanState::new(
-                f.problem,
-                0.0,
-                first.lambda,
-                f64::INFINITY,
-                false,
-            ));
-        }
-    }
-
-    /// Mark every watched mode as not followed at this cycle's pose.
-    fn age_members(&mut self) {
-        for m in &mut self.members[..self.n_members] {
-            m.age += 1;
-        }
     }
 
     /// Weak episode: no mode reached the threshold at the last full scan; follow the most
