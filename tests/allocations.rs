@@ -1,12 +1,16 @@
 //! A counting global allocator proves the per-cycle path allocates nothing: 10,000 cycles
 //! along the trajectory (and bad inputs mixed in) make zero heap allocations after the
 //! first, for every model including the rigid body; so does the inverse T_min query.
+//! The continuation paths (an end-effector scan spread over the cycles by the per-cycle
+//! evaluation budget, a warm cycle cut short) are covered by a small budget and by the
+//! heavy-cable scene, whose scan takes many cycles.
 //! The allocator (`cablevib::alloc_count`) is read per thread, so what the test harness's
 //! own threads allocate meanwhile (output capture, the runner) is not charged to the
 //! estimator.
 use cablevib::alloc_count::{thread_allocations, CountingAlloc};
-use cablevib::estimator::{Estimator, TminQueryError};
+use cablevib::estimator::{Estimator, EstimatorParams, TminQueryError};
 use cablevib::kinematics::Pose;
+use cablevib::modal::CYCLE_EVALUATIONS;
 use cablevib::scene::{ElementKind, Scene, MAX_CABLES};
 use cablevib::trajectory::{Circle, CIRCLE_RADIUS_M, SAMPLE_PERIOD_S};
 use nalgebra::Vector3;
@@ -76,6 +80,44 @@ fn ten_thousand_cycles_allocate_nothing() {
             after - before
         );
         assert!(ok >= 9_950, "{ok}");
+    }
+}
+
+/// The continuation paths: with a budget of 12 evaluations per cycle, every rescan and the
+/// cold scans are spread over several cycles and warm cycles are cut short now and then; the
+/// heavy-cable scene's cold scan (~250 string modes below the end-effector mode) runs over
+/// dozens of cycles at the default budget. 3,000 cycles of each allocate nothing.
+#[test]
+fn continued_scans_allocate_nothing() {
+    let heavy = Scene::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/spatial_heavy_cable.toml"
+    ))
+    .unwrap();
+    for (scene, el, n, budget) in [
+        (Scene::default_scene(), ElementKind::Fem, 40, 12),
+        (Scene::default_scene(), ElementKind::Continuous, 1, 12),
+        (heavy.clone(), ElementKind::Continuous, 1, CYCLE_EVALUATIONS),
+        (heavy, ElementKind::Catenary, 40, CYCLE_EVALUATIONS),
+    ] {
+        let s = scene.with_model(el, n);
+        let mut p = EstimatorParams::default();
+        p.modal.ee_participation_min = s.model.ee_participation_min;
+        p.modal.cycle_evaluations = budget;
+        p.modal.max_scan_evaluations = cablevib::modal::SPREAD_SCAN_EVALUATIONS;
+        let mut est = Estimator::with_params(&s, p).unwrap();
+        let c = Circle::new(&s, 0.1, 4.0).unwrap();
+        est.update(&circle_pose(&s, &c, 0), s.t_min_n);
+        let before = thread_allocations();
+        let mut continued = 0;
+        for k in 1..=3_000 {
+            let e = est.update(&circle_pose(&s, &c, k), s.t_min_n);
+            assert!(e.eigen_evaluations <= budget);
+            continued += (e.ee_mode_age_cycles != 0) as usize;
+        }
+        let after = thread_allocations();
+        assert_eq!(after - before, 0, "{} {el:?} budget {budget}", s.name);
+        assert!(continued > 0, "{} {el:?}: the continuation ran", s.name);
     }
 }
 

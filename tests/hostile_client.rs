@@ -341,7 +341,7 @@ fn hostile_client_gets_exact_answers_and_the_service_stays_flat() {
         std::thread::sleep(Duration::from_millis(1));
     }
 
-    let mut reference = Estimator::new(&scene).expect("estimator");
+    let mut reference = Estimator::realtime(&scene).expect("estimator");
     let n = scene.n_cables();
     let mut t_max = [f64::INFINITY; MAX_CABLES];
     for (i, t) in t_max.iter_mut().enumerate().take(n) {

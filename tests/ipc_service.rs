@@ -333,6 +333,10 @@ fn assert_same(got: &EstimateSample, want: &Estimate, what: &str) {
         bits(want.ee_mode_hz),
         "{what}: ee mode"
     );
+    assert_eq!(
+        got.ee_mode_age_cycles, want.ee_mode_age_cycles,
+        "{what}: ee mode age"
+    );
     assert_eq!(got.stiffness_dim, 3, "{what}");
     for r in 0..3 {
         for c in 0..3 {
@@ -382,7 +386,7 @@ fn estimates_equal_the_library_bit_for_bit() {
     let mut service = spawn_service(&inst, WaitMode::Spin);
     client.wait_for(&mut service);
     let scene = Scene::default_scene();
-    let mut reference = Estimator::new(&scene).expect("estimator");
+    let mut reference = Estimator::realtime(&scene).expect("estimator");
     let mut t_min_n = [scene.t_min_n; 8];
     let q = IDENTITY_QUATERNION;
     for k in 0..300 {
@@ -423,7 +427,7 @@ fn every_bad_input_gets_its_status_and_the_next_pose_is_answered() {
     let mut service = spawn_service(&inst, WaitMode::Event);
     client.wait_for(&mut service);
     let scene = Scene::default_scene();
-    let mut reference = Estimator::new(&scene).expect("estimator");
+    let mut reference = Estimator::realtime(&scene).expect("estimator");
     let q = IDENTITY_QUATERNION;
     let good = |k: usize| circle(37 * k);
     let nan = f64::NAN;
@@ -614,6 +618,20 @@ fn margin_requests_answer_for_the_latest_pose() {
             .expect("query")
             .expect("an answer within the timeout")
     };
+    // The T_min answer comes from the inverse search beside the loop: the first request for
+    // a requirement starts it (NaN, age unknown); repeated, the request gets the answer at
+    // this pose (age 0: no pose in between). Unreachable stays NaN.
+    let settled = |client: &Client, seq: u64, required: f64| {
+        for _ in 0..400 {
+            let r = query(client, seq, required);
+            if r.t_min_required_age_cycles != cablevib_ipc::T_MIN_AGE_UNKNOWN {
+                assert_eq!(r.t_min_required_age_cycles, 0, "{r:?}");
+                return r;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        query(client, seq, required)
+    };
     let r = query(&client, 1, 8.0);
     assert_eq!(r.status_code(), Some(StatusCode::NoPoseYet));
     assert_eq!(r.request_sequence, 1);
@@ -621,7 +639,7 @@ fn margin_requests_answer_for_the_latest_pose() {
 
     let e = client.estimate(circle(0), IDENTITY_QUATERNION);
     assert!(e.is_ok());
-    let r = query(&client, 2, 8.0);
+    let r = settled(&client, 2, 8.0);
     assert!(r.is_ok(), "{r:?}");
     assert_eq!((r.request_sequence, r.pose_sequence), (2, e.pose_sequence));
     assert_eq!(bits(r.f1_hz), bits(e.f1_hz));
@@ -648,15 +666,16 @@ fn margin_requests_answer_for_the_latest_pose() {
         r.t_min_required_n < 60.0,
         "8 Hz needs less than the current 60 N"
     );
-    let r = query(&client, 3, 20.0);
+    let r = settled(&client, 3, 20.0);
     assert!(r.margin_hz < 0.0);
+    assert_eq!(r.t_min_required_age_cycles, cablevib_ipc::T_MIN_AGE_UNKNOWN);
     // Here the largest feasible T_min (≈ 88 N) gives ≈ 11 Hz: 20 Hz is unreachable → NaN.
     assert!(
         r.t_min_required_n.is_nan(),
         "unreachable: NaN, got {}",
         r.t_min_required_n
     );
-    let r = query(&client, 6, 10.0);
+    let r = settled(&client, 6, 10.0);
     let want = lib
         .t_min_for_f1(&pose, 10.0)
         .expect("10 Hz is reachable")
@@ -678,6 +697,99 @@ fn margin_requests_answer_for_the_latest_pose() {
     assert_eq!(r.status_code(), Some(StatusCode::OutsideWorkspace));
     assert_eq!(r.pose_sequence, e.pose_sequence);
     assert!(r.margin_hz.is_nan());
+}
+
+/// Poses at ~1 kHz for `ms` milliseconds, each with a margin request whose required f1 is
+/// new (when `flood`): returns (poses sent, estimates received, largest D(λ) evaluation
+/// count of an estimate, the estimates' compute times in ns).
+fn paced_run(
+    client: &mut Client,
+    k0: usize,
+    ms: usize,
+    flood: bool,
+) -> (usize, usize, u32, Vec<u64>) {
+    let mut pending = std::collections::VecDeque::new();
+    let (mut received, mut max_evals, mut compute) = (0, 0, Vec::new());
+    let start = Instant::now();
+    for k in 0..ms {
+        client.sequence += 1;
+        let pose = PoseSample::new(
+            client.sequence,
+            monotonic_now_ns(),
+            circle(k0 + k),
+            IDENTITY_QUATERNION,
+        );
+        client.input.send_pose(&pose).expect("send pose");
+        if flood {
+            // A requirement that changes every request (the worst case for a search that
+            // restarts); the last one in flight is dropped first (the client's active
+            // requests are limited), answered or not.
+            let req = MarginRequest::new(k as u64 + 1, monotonic_now_ns(), 7.0 + 1e-3 * k as f64);
+            pending.clear();
+            pending.push_back(client.margin.send(&req).expect("send margin request"));
+        }
+        while let Some(e) = client.output.try_receive().expect("receive") {
+            received += 1;
+            max_evals = max_evals.max(e.eigen_evaluations);
+            compute.push(e.compute_ns);
+        }
+        // Pace at 1 kHz.
+        let due = start + Duration::from_millis(k as u64 + 1);
+        while Instant::now() < due {
+            std::hint::spin_loop();
+        }
+    }
+    std::thread::sleep(Duration::from_millis(50));
+    while let Some(e) = client.output.try_receive().expect("receive") {
+        received += 1;
+        max_evals = max_evals.max(e.eigen_evaluations);
+        compute.push(e.compute_ns);
+    }
+    compute.sort_unstable();
+    (ms, received, max_evals, compute)
+}
+
+/// A controller flooding margin requests with a new required f1 each time, beside poses at
+/// 1 kHz: the estimate loop keeps its rate (the inverse search runs beside it) and no cycle
+/// spends more D(λ) evaluations than the budget. Counts, not timing: the estimates received
+/// must be at least half of the poses sent, with and without the flood (a loop running the
+/// search inline managed 13 cycles in 3 s; the margin of 2 is for a shared machine).
+#[test]
+fn margin_flood_keeps_the_estimate_rate() {
+    let inst = instance("margin_flood");
+    let mut client = Client::new(&inst);
+    let mut service = spawn_service(&inst, WaitMode::Event);
+    client.wait_for(&mut service);
+    let budget = cablevib::modal::CYCLE_EVALUATIONS;
+    let quiet = paced_run(&mut client, 0, 1500, false);
+    let flood = paced_run(&mut client, 1500, 1500, true);
+    let p99 = |v: &[u64]| v.get((v.len().max(1) - 1) * 99 / 100).copied().unwrap_or(0);
+    eprintln!(
+        "without flood: {} of {} poses estimated, max {} evaluations, compute p99 {} ns; \
+         with flood: {} of {}, max {}, p99 {} ns",
+        quiet.1,
+        quiet.0,
+        quiet.2,
+        p99(&quiet.3),
+        flood.1,
+        flood.0,
+        flood.2,
+        p99(&flood.3)
+    );
+    for (name, r) in [("quiet", &quiet), ("flood", &flood)] {
+        assert!(
+            r.2 <= budget,
+            "{name}: {} evaluations > budget {budget}",
+            r.2
+        );
+        assert!(
+            4 * r.1 >= r.0,
+            "{name}: {} estimates for {} poses",
+            r.1,
+            r.0
+        );
+    }
+    service.assert_running();
 }
 
 #[test]
@@ -784,11 +896,11 @@ fn service_killed_and_restarted_while_a_publisher_runs_recovers() {
     let node = create_node("cablevib-test-controller").expect("node");
     let output = EstimateOutput::open(&node, &names).expect("output");
     let reference = |seq: u64| {
-        let mut est = Estimator::new(&scene).expect("estimator");
+        let mut est = Estimator::realtime(&scene).expect("estimator");
         *est.update(&pose_at(circle(seq as usize), IDENTITY_QUATERNION), t_min_n)
     };
     let scene_default = |seq: u64| {
-        let mut est = Estimator::new(&scene).expect("estimator");
+        let mut est = Estimator::realtime(&scene).expect("estimator");
         *est.update(
             &pose_at(circle(seq as usize), IDENTITY_QUATERNION),
             scene.t_min_n,
@@ -939,7 +1051,7 @@ fn a_peer_with_another_layout_gets_a_clear_error() {
         "{log}"
     );
     assert!(
-        log.contains("`cablevib::PoseSample::v1` (80 bytes, align 8)"),
+        log.contains("`cablevib::PoseSample::v2` (80 bytes, align 8)"),
         "{log}"
     );
     assert!(log.contains("rebuild the other peer"), "{log}");
@@ -955,7 +1067,7 @@ fn a_peer_with_another_layout_gets_a_clear_error() {
     let text = err.to_string();
     assert!(text.contains("incompatible peer"), "{text}");
     assert!(
-        text.contains("carries payload `cablevib::PoseSample::v1`"),
+        text.contains("carries payload `cablevib::PoseSample::v2`"),
         "{text}"
     );
     assert!(node

@@ -196,7 +196,17 @@ fn soak(scene: &Scene, cycles: usize, seed: u64) -> Report {
             if !(e.f1_hz.is_finite() && e.f1_hz > 0.0) {
                 fail(k, 1, e.f1_hz, pose.position_m, tm, f64::NAN, f64::NAN);
             }
-            if !(e.ee_mode_hz.is_finite() && e.ee_mode_hz >= e.f1_hz * (1.0 - 1e-9)) {
+            // The end-effector mode is unknown (NaN, age u32::MAX) when no mode reaches the
+            // participation threshold (an avoided crossing splits it); a number is a mode at
+            // or above f1 that reaches it.
+            let ee_ok = if e.ee_mode_hz.is_nan() {
+                e.ee_mode_age_cycles == u32::MAX
+            } else {
+                e.ee_mode_hz.is_finite()
+                    && e.ee_mode_hz >= e.f1_hz * (1.0 - 1e-9)
+                    && e.ee_mode_participation >= scene.model.ee_participation_min
+            };
+            if !ee_ok {
                 fail(k, 2, e.ee_mode_hz, pose.position_m, tm, f64::NAN, f64::NAN);
             }
             if !e.stiffness_n_m.iter().all(|x| x.is_finite()) {
@@ -232,7 +242,12 @@ fn soak(scene: &Scene, cycles: usize, seed: u64) -> Report {
                 );
             } else if e.status == Status::Ok {
                 let d1 = (c.f1_hz - e.f1_hz).abs() / c.f1_hz;
-                let de = (c.ee_mode_hz - e.ee_mode_hz).abs() / c.ee_mode_hz;
+                // Both unknown (NaN) agree too.
+                let de = if c.ee_mode_hz.is_nan() && e.ee_mode_hz.is_nan() {
+                    0.0
+                } else {
+                    (c.ee_mode_hz - e.ee_mode_hz).abs() / c.ee_mode_hz
+                };
                 if !(d1 <= 1e-9) {
                     fail(k, 8, d1, pose.position_m, tm, e.f1_hz, c.f1_hz);
                 }

@@ -1,5 +1,5 @@
 /*
- * cablevib_ipc.h - C/C++ mirror of the cablevib-ipc message types (schema v1).
+ * cablevib_ipc.h - C/C++ mirror of the cablevib-ipc message types (schema v2).
  *
  * The Rust crate cablevib-ipc (ipc-schema/) is the reference; its test tests/c_header.rs
  * compiles this header and checks every size, alignment, offset, field type and constant
@@ -22,7 +22,7 @@
 
 /* ---- constants --------------------------------------------------------------------------- */
 
-#define CABLEVIB_SCHEMA_VERSION 1u
+#define CABLEVIB_SCHEMA_VERSION 2u
 #define CABLEVIB_MAX_CABLES 16
 #define CABLEVIB_MAX_STIFFNESS_DIM 6
 
@@ -43,12 +43,15 @@
 #define CABLEVIB_EVENT_ID_ESTIMATE 4
 #define CABLEVIB_EVENT_ID_MARGIN_RESPONSE 5
 
+/* ee_mode_age_cycles / t_min_required_age_cycles when nothing is known. */
+#define CABLEVIB_AGE_UNKNOWN 4294967295u
+
 /* iceoryx2 type names; they end with "::v<CABLEVIB_SCHEMA_VERSION>". */
-#define CABLEVIB_TYPE_NAME_POSE_SAMPLE "cablevib::PoseSample::v1"
-#define CABLEVIB_TYPE_NAME_T_MIN_SETPOINT "cablevib::TminSetpoint::v1"
-#define CABLEVIB_TYPE_NAME_ESTIMATE_SAMPLE "cablevib::EstimateSample::v1"
-#define CABLEVIB_TYPE_NAME_MARGIN_REQUEST "cablevib::MarginRequest::v1"
-#define CABLEVIB_TYPE_NAME_MARGIN_RESPONSE "cablevib::MarginResponse::v1"
+#define CABLEVIB_TYPE_NAME_POSE_SAMPLE "cablevib::PoseSample::v2"
+#define CABLEVIB_TYPE_NAME_T_MIN_SETPOINT "cablevib::TminSetpoint::v2"
+#define CABLEVIB_TYPE_NAME_ESTIMATE_SAMPLE "cablevib::EstimateSample::v2"
+#define CABLEVIB_TYPE_NAME_MARGIN_REQUEST "cablevib::MarginRequest::v2"
+#define CABLEVIB_TYPE_NAME_MARGIN_RESPONSE "cablevib::MarginResponse::v2"
 
 /* Status codes (the uint32_t `status` fields). Values never change; treat unknown ones as
  * "not valid". */
@@ -114,16 +117,25 @@ typedef struct cablevib_estimate_sample {
     uint32_t cable_count;           /* valid entries of tensions_n */
     double tensions_n[CABLEVIB_MAX_CABLES];  /* N */
     double f1_hz;                   /* first natural frequency, Hz */
-    double ee_mode_hz;              /* frequency of the end-effector mode, Hz */
+    double ee_mode_hz;              /* lowest mode with end-effector participation >= the
+                                     * scene's threshold, Hz, as of ee_mode_age_cycles
+                                     * estimates ago; NaN when none is known */
     uint32_t stiffness_dim;         /* 3 (x, y, z) or 6 (x, y, z, rx, ry, rz) */
-    uint32_t reserved0;             /* padding: write 0 */
+    uint32_t ee_mode_age_cycles;    /* 0: computed and certified at this pose; k: the answer
+                                     * of k estimates ago (the work that did not fit in the
+                                     * per-cycle evaluation budget goes on over the next
+                                     * cycles); CABLEVIB_AGE_UNKNOWN: none known (NaN) */
     /* row-major, packed: entry (r, c) is stiffness[r * stiffness_dim + c];
      * N/m, N*m/rad, N/rad */
     double stiffness[CABLEVIB_MAX_STIFFNESS_DIM * CABLEVIB_MAX_STIFFNESS_DIM];
     uint64_t compute_ns;            /* compute time of this estimate, ns */
-    uint32_t eigen_evaluations;
+    uint32_t eigen_evaluations;     /* evaluations of D(lambda) this cycle (<= the budget) */
     uint32_t tension_iterations;
-    double eigen_residual;          /* relative residual of the first eigenpair */
+    double eigen_residual;          /* |mu_1(D(l))| / (l * max|D'(l)|) at the solver's last
+                                     * iterate l: the smallest eigenvalue of the condensed
+                                     * dynamic stiffness against the inertia term it cancels,
+                                     * to first order the relative distance of l to the root;
+                                     * <= 1e-9 on converged answers (dimensionless) */
     uint64_t skipped_poses;         /* poses skipped since start (a newer one was queued) */
 } cablevib_estimate_sample_t;
 
@@ -141,11 +153,15 @@ typedef struct cablevib_margin_response {
     uint64_t request_sequence;  /* sequence of the request answered */
     uint64_t pose_sequence;     /* pose the answer is based on (0 if none) */
     uint32_t status;            /* cablevib_status_t */
-    uint32_t reserved0;         /* padding: write 0 */
+    uint32_t t_min_required_age_cycles; /* 0: t_min_required_n at pose_sequence's pose; k: at
+                                         * the pose k estimates earlier (the inverse search
+                                         * runs beside the estimate loop);
+                                         * CABLEVIB_AGE_UNKNOWN: not known (NaN) */
     double f1_hz;               /* Hz */
     double margin_hz;           /* f1_hz - required_f1_hz, Hz */
     double margin_ratio;        /* f1_hz / required_f1_hz */
-    double t_min_required_n;    /* T_min that would reach the requirement, N; NaN if unknown */
+    double t_min_required_n;    /* T_min (every cable) reaching exactly this requirement, N;
+                                 * NaN if unknown or unreachable */
     uint64_t timestamp_ns;      /* cablevib's CLOCK_MONOTONIC when answering, ns */
 } cablevib_margin_response_t;
 

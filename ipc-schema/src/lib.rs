@@ -59,7 +59,7 @@
 //! # Versioning
 //!
 //! Every iceoryx2 type name ends with `::v{SCHEMA_VERSION}` (e.g.
-//! `cablevib::PoseSample::v1`, [`Message::TYPE_NAME`]). iceoryx2 compares the type name, size
+//! `cablevib::PoseSample::v2`, [`Message::TYPE_NAME`]). iceoryx2 compares the type name, size
 //! and alignment of the payload when a port opens a service, so a peer built against another
 //! schema is refused at connect time (`IncompatibleTypes`; [`compat`] turns that into a
 //! readable message) instead of misreading bytes. The rule: **any change of a message's
@@ -104,7 +104,7 @@ pub use attributes::{
 pub use compat::{explain_publish_subscribe_mismatch, explain_request_response_mismatch, TypeInfo};
 pub use messages::{
     EstimateSample, MarginRequest, MarginResponse, Message, PoseSample, SchemaError, TminSetpoint,
-    IDENTITY_QUATERNION,
+    EE_MODE_AGE_UNKNOWN, IDENTITY_QUATERNION, T_MIN_AGE_UNKNOWN,
 };
 pub use names::{
     prefixed, ServiceNames, ALL_SERVICES, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST,
@@ -120,7 +120,7 @@ pub const MAX_CABLES: usize = 16;
 pub const MAX_STIFFNESS_DIM: usize = 6;
 
 /// Version of the wire schema; every type name ends with `::v{SCHEMA_VERSION}`.
-pub const SCHEMA_VERSION: u32 = 1;
+pub const SCHEMA_VERSION: u32 = 2;
 
 /// `CLOCK_MONOTONIC` now, ns: the clock of every `*timestamp_ns` field. It is shared by all
 /// processes of a machine (it counts from boot), never jumps, and takes ~20 ns (vDSO, no

@@ -62,7 +62,7 @@ pub const IDENTITY_QUATERNION: [f64; 4] = [1.0, 0.0, 0.0, 0.0];
 /// older ones are skipped (and counted in [`EstimateSample::skipped_poses`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::PoseSample::v1")]
+#[type_name("cablevib::PoseSample::v2")]
 pub struct PoseSample {
     /// Sender's sequence number, incremented by one per pose; echoed by the estimate.
     pub sequence: u64,
@@ -154,7 +154,7 @@ impl Default for PoseSample {
 }
 
 impl Message for PoseSample {
-    const TYPE_NAME: &'static str = "cablevib::PoseSample::v1";
+    const TYPE_NAME: &'static str = "cablevib::PoseSample::v2";
     const C_NAME: &'static str = "cablevib_pose_sample_t";
     const SERVICE: &'static str = crate::SERVICE_POSE;
 }
@@ -170,7 +170,7 @@ impl Message for PoseSample {
 /// cable `i < per_cable_count` uses `per_cable_t_min_n[i]` and the others `t_min_n`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::TminSetpoint::v1")]
+#[type_name("cablevib::TminSetpoint::v2")]
 pub struct TminSetpoint {
     /// Sender's sequence number, incremented by one per set-point.
     pub sequence: u64,
@@ -259,7 +259,7 @@ impl Default for TminSetpoint {
 }
 
 impl Message for TminSetpoint {
-    const TYPE_NAME: &'static str = "cablevib::TminSetpoint::v1";
+    const TYPE_NAME: &'static str = "cablevib::TminSetpoint::v2";
     const C_NAME: &'static str = "cablevib_t_min_setpoint_t";
     const SERVICE: &'static str = crate::SERVICE_T_MIN;
 }
@@ -267,6 +267,11 @@ impl Message for TminSetpoint {
 // ---------------------------------------------------------------------------------------------
 // EstimateSample
 // ---------------------------------------------------------------------------------------------
+
+/// [`EstimateSample::ee_mode_age_cycles`] when no end-effector mode is known.
+pub const EE_MODE_AGE_UNKNOWN: u32 = u32::MAX;
+/// [`MarginResponse::t_min_required_age_cycles`] when no T_min is known for the requirement.
+pub const T_MIN_AGE_UNKNOWN: u32 = u32::MAX;
 
 /// One estimator cycle's result, cablevib → controller on
 /// [`SERVICE_ESTIMATE`](crate::SERVICE_ESTIMATE).
@@ -278,7 +283,7 @@ impl Message for TminSetpoint {
 /// stiffness may be zero.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::EstimateSample::v1")]
+#[type_name("cablevib::EstimateSample::v2")]
 pub struct EstimateSample {
     /// `sequence` of the pose this estimate answers.
     pub pose_sequence: u64,
@@ -296,24 +301,35 @@ pub struct EstimateSample {
     pub tensions_n: [f64; MAX_CABLES],
     /// First natural frequency of the robot at this pose, Hz.
     pub f1_hz: f64,
-    /// Frequency of the mode dominated by end-effector motion, Hz.
+    /// Frequency of the lowest mode dominated by end-effector motion (end-effector
+    /// participation ≥ the scene's threshold), Hz, as of `ee_mode_age_cycles` estimates
+    /// ago; NaN when none is known.
     pub ee_mode_hz: f64,
     /// Dimension of the end-effector stiffness matrix: 3 (translations x, y, z) or 6
     /// (x, y, z, then rotations θx, θy, θz).
     pub stiffness_dim: u32,
-    /// Explicit padding: write 0.
-    pub reserved0: u32,
+    /// How many cycles (estimates) old `ee_mode_hz` is: 0 = computed and certified at
+    /// this pose; k > 0 = the answer of k estimates ago, while the work that did not fit
+    /// in the cycle's evaluation budget (an end-effector band rescan, a cold
+    /// re-identification) goes on over the next cycles; [`EE_MODE_AGE_UNKNOWN`]
+    /// (`u32::MAX`) = no end-effector mode known (`ee_mode_hz` is NaN). A number in
+    /// `ee_mode_hz` always reached the scene's participation threshold when computed.
+    pub ee_mode_age_cycles: u32,
     /// End-effector stiffness matrix, row-major and packed: entry (r, c) is
     /// `stiffness[r * stiffness_dim + c]`; entries at and beyond `stiffness_dim²` are zero.
     /// Units N/m (translation block), N·m/rad (rotation block), N/rad (coupling).
     pub stiffness: [f64; MAX_STIFFNESS_DIM * MAX_STIFFNESS_DIM],
     /// Time spent computing this estimate, ns.
     pub compute_ns: u64,
-    /// Eigen-solver iterations (or evaluations) spent on the first mode.
+    /// Evaluations of the dynamic stiffness D(λ) in this cycle (first mode and end-effector
+    /// mode): never more than the service's per-cycle budget.
     pub eigen_evaluations: u32,
     /// Iterations spent on the tension distribution.
     pub tension_iterations: u32,
-    /// Relative residual of the first eigenpair as reported by the eigen solver (dimensionless).
+    /// Relative residual of the first natural frequency (dimensionless):
+    /// |μ₁(D(λ))| / (λ·max|D'(λ)|) at the eigen solver's last iterate λ, the smallest
+    /// eigenvalue of the condensed dynamic stiffness against the inertia term it cancels;
+    /// to first order the relative distance of λ to the root. ≤ 1e-9 on converged answers.
     pub eigen_residual: f64,
     /// Poses skipped since the service started because a newer one was queued.
     pub skipped_poses: u64,
@@ -334,7 +350,7 @@ impl EstimateSample {
             f1_hz: 0.0,
             ee_mode_hz: 0.0,
             stiffness_dim: 0,
-            reserved0: 0,
+            ee_mode_age_cycles: 0,
             stiffness: [0.0; MAX_STIFFNESS_DIM * MAX_STIFFNESS_DIM],
             compute_ns: 0,
             eigen_evaluations: 0,
@@ -351,6 +367,7 @@ impl EstimateSample {
         e.status = status as u32;
         e.f1_hz = f64::NAN;
         e.ee_mode_hz = f64::NAN;
+        e.ee_mode_age_cycles = EE_MODE_AGE_UNKNOWN;
         e.eigen_residual = f64::NAN;
         e
     }
@@ -437,7 +454,7 @@ impl Default for EstimateSample {
 }
 
 impl Message for EstimateSample {
-    const TYPE_NAME: &'static str = "cablevib::EstimateSample::v1";
+    const TYPE_NAME: &'static str = "cablevib::EstimateSample::v2";
     const C_NAME: &'static str = "cablevib_estimate_sample_t";
     const SERVICE: &'static str = crate::SERVICE_ESTIMATE;
 }
@@ -450,7 +467,7 @@ impl Message for EstimateSample {
 /// [`SERVICE_MARGIN`](crate::SERVICE_MARGIN). 24 bytes, alignment 8.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::MarginRequest::v1")]
+#[type_name("cablevib::MarginRequest::v2")]
 pub struct MarginRequest {
     /// Requester's sequence number; echoed as [`MarginResponse::request_sequence`].
     pub sequence: u64,
@@ -493,7 +510,7 @@ impl Default for MarginRequest {
 }
 
 impl Message for MarginRequest {
-    const TYPE_NAME: &'static str = "cablevib::MarginRequest::v1";
+    const TYPE_NAME: &'static str = "cablevib::MarginRequest::v2";
     const C_NAME: &'static str = "cablevib_margin_request_t";
     const SERVICE: &'static str = crate::SERVICE_MARGIN;
 }
@@ -503,7 +520,7 @@ impl Message for MarginRequest {
 /// Frequencies and margins are NaN unless `status` is [`StatusCode::Ok`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::MarginResponse::v1")]
+#[type_name("cablevib::MarginResponse::v2")]
 pub struct MarginResponse {
     /// `sequence` of the request answered.
     pub request_sequence: u64,
@@ -512,15 +529,21 @@ pub struct MarginResponse {
     /// A [`StatusCode`] as `u32` (that of the latest estimate, or [`StatusCode::NoPoseYet`],
     /// or [`StatusCode::InvalidRequest`]).
     pub status: u32,
-    /// Explicit padding: write 0.
-    pub reserved0: u32,
+    /// How many estimates old `t_min_required_n` is: 0 = computed at the pose of
+    /// `pose_sequence`; k > 0 = at the pose k estimates earlier (the inverse search runs
+    /// beside the estimate loop and answers the newest requirement);
+    /// [`T_MIN_AGE_UNKNOWN`] (`u32::MAX`) = not known for this requirement (NaN).
+    pub t_min_required_age_cycles: u32,
     /// First natural frequency at that pose, Hz.
     pub f1_hz: f64,
     /// `f1_hz − required_f1_hz`, Hz (negative: below the requirement).
     pub margin_hz: f64,
     /// `f1_hz / required_f1_hz` (below 1: below the requirement).
     pub margin_ratio: f64,
-    /// Minimum cable tension that would bring f1 to the requirement, N; NaN when unknown.
+    /// Minimum cable tension (the same for every cable) that brings f1 to exactly this
+    /// request's requirement, N, at the pose `t_min_required_age_cycles` estimates before
+    /// `pose_sequence`; NaN when unknown (not computed yet for this requirement, or
+    /// unreachable).
     pub t_min_required_n: f64,
     /// cablevib's `CLOCK_MONOTONIC` when answering, ns.
     pub timestamp_ns: u64,
@@ -534,7 +557,7 @@ impl MarginResponse {
             request_sequence: 0,
             pose_sequence: 0,
             status: 0,
-            reserved0: 0,
+            t_min_required_age_cycles: 0,
             f1_hz: 0.0,
             margin_hz: 0.0,
             margin_ratio: 0.0,
@@ -554,7 +577,7 @@ impl MarginResponse {
             request_sequence: request.sequence,
             pose_sequence: 0,
             status: status as u32,
-            reserved0: 0,
+            t_min_required_age_cycles: T_MIN_AGE_UNKNOWN,
             f1_hz: f64::NAN,
             margin_hz: f64::NAN,
             margin_ratio: f64::NAN,
@@ -577,7 +600,11 @@ impl MarginResponse {
             request_sequence: request.sequence,
             pose_sequence,
             status: status as u32,
-            reserved0: 0,
+            t_min_required_age_cycles: if t_min_required_n.is_nan() {
+                T_MIN_AGE_UNKNOWN
+            } else {
+                0
+            },
             f1_hz,
             margin_hz: f1_hz - request.required_f1_hz,
             margin_ratio: f1_hz / request.required_f1_hz,
@@ -605,7 +632,7 @@ impl Default for MarginResponse {
 }
 
 impl Message for MarginResponse {
-    const TYPE_NAME: &'static str = "cablevib::MarginResponse::v1";
+    const TYPE_NAME: &'static str = "cablevib::MarginResponse::v2";
     const C_NAME: &'static str = "cablevib_margin_response_t";
     const SERVICE: &'static str = crate::SERVICE_MARGIN;
 }

@@ -45,6 +45,14 @@ fn expected_constants() -> Vec<(String, String)> {
         ("CABLEVIB_SCHEMA_VERSION".into(), SCHEMA_VERSION.to_string()),
         ("CABLEVIB_MAX_CABLES".into(), MAX_CABLES.to_string()),
         (
+            "CABLEVIB_AGE_UNKNOWN".into(),
+            cablevib_ipc::EE_MODE_AGE_UNKNOWN.to_string(),
+        ),
+        (
+            "CABLEVIB_AGE_UNKNOWN".into(),
+            cablevib_ipc::T_MIN_AGE_UNKNOWN.to_string(),
+        ),
+        (
             "CABLEVIB_MAX_STIFFNESS_DIM".into(),
             MAX_STIFFNESS_DIM.to_string(),
         ),

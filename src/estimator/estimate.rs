@@ -22,13 +22,18 @@ pub struct Estimate {
     /// End-effector participation of the first mode (0 ..= 1).
     pub f1_ee_participation: f64,
     /// Frequency of the lowest mode with end-effector participation ≥ the scene's
-    /// threshold, Hz. When no mode reaches the threshold within the bounded scan (a very
-    /// light end-effector, or its character split across an avoided crossing), the mode
-    /// with the largest participation found — `ee_mode_participation` is then below the
-    /// threshold. NaN unless ok or when not computed.
+    /// threshold, Hz (of `ee_mode_age_cycles` cycles ago). NaN when no such mode is known:
+    /// none reaches the threshold within the scan's bounds (a very light end-effector, or
+    /// its character split across an avoided crossing), the scan is still going on after a
+    /// cold start, not ok, or not computed.
     pub ee_mode_hz: f64,
-    /// Its participation.
+    /// Its participation (≥ the threshold whenever `ee_mode_hz` is a number).
     pub ee_mode_participation: f64,
+    /// How many cycles old the end-effector answer is: 0 = computed (and certified) at
+    /// this cycle's pose; k > 0 = the answer of k cycles ago, while the work that did not
+    /// fit in the cycle's evaluation budget (a band rescan, a cold re-identification) is
+    /// continued; `u32::MAX` = none known (`ee_mode_hz` NaN).
+    pub ee_mode_age_cycles: u32,
     /// Static end-effector stiffness, translational block, N/m (NaN unless ok).
     pub stiffness_n_m: Matrix3<f64>,
     /// Static end-effector stiffness, 6 × 6 for a rigid body (N/m, N/rad, N·m/rad; the
@@ -42,7 +47,9 @@ pub struct Estimate {
     pub tension_warm: bool,
     /// Evaluations of the dynamic stiffness D(λ) in this cycle.
     pub eigen_evaluations: u32,
-    /// Relative residual |μ₁(D(λ₁))| / ‖D‖ of the first root.
+    /// Relative residual of the first root (dimensionless, [`crate::modal::Root::residual`]):
+    /// |μ₁(D(λ))| / (λ·max|D'(λ)|) at the solver's last iterate, to first order its
+    /// relative distance to the root (≤ 1e-9 on converged answers).
     pub eigen_residual: f64,
     /// The first-mode iteration started cold.
     pub cold_start: bool,
@@ -60,6 +67,7 @@ impl Estimate {
             f1_ee_participation: f64::NAN,
             ee_mode_hz: f64::NAN,
             ee_mode_participation: f64::NAN,
+            ee_mode_age_cycles: u32::MAX,
             stiffness_n_m: Matrix3::repeat(f64::NAN),
             stiffness6: Matrix6::repeat(f64::NAN),
             stiffness_dim: 3,

@@ -15,6 +15,13 @@
 //!    end-effector participation (0 ..= 1); and, when enabled, the end-effector mode;
 //! 5. the static end-effector stiffness (N/m; N/rad and N·m/rad blocks for a rigid body).
 //!
+//! **Budget.** With [`ModalParams::cycle_evaluations`] finite (the real-time configuration,
+//! [`Estimator::realtime`]: [`crate::modal::CYCLE_EVALUATIONS`] = 32) a cycle never evaluates
+//! D(λ) more often than that: f1 is solved exactly first, the end-effector mode with what is
+//! left, and the end-effector work that does not fit is continued in the next cycles; the
+//! estimate then carries the last answer and its age ([`Estimate::ee_mode_age_cycles`]).
+//! The default ([`EstimatorParams::default`]) is unlimited, for offline analyses.
+//!
 //! [`Estimator`] owns every buffer of the cycle, sized in [`Estimator::new`]; the cycle
 //! returns an [`Estimate`] whose [`Estimate::status`] says whether its numbers are valid.
 //! It never allocates, never blocks, and every loop in it is bounded; bad input and
@@ -78,6 +85,8 @@ pub struct Estimator {
     /// Scratch solvers of the inverse query (so it leaves the cycle's warm state alone).
     inverse: Pipeline,
     auto: Option<AutoChoice>,
+    /// The last end-effector answer (Hz, participation, age in cycles), None when unknown.
+    last_ee: Option<(f64, f64, u32)>,
 }
 
 impl Estimator {
@@ -85,6 +94,17 @@ impl Estimator {
     pub fn new(scene: &Scene) -> Result<Estimator, BuildError> {
         let mut p = EstimatorParams::default();
         p.modal.ee_participation_min = scene.model.ee_participation_min;
+        Self::with_params(scene, p)
+    }
+
+    /// [`Self::new`] with the real-time per-cycle evaluation budget
+    /// ([`crate::modal::CYCLE_EVALUATIONS`]) and the spread scan's bound
+    /// ([`crate::modal::SPREAD_SCAN_EVALUATIONS`]), as the service runs it.
+    pub fn realtime(scene: &Scene) -> Result<Estimator, BuildError> {
+        let mut p = EstimatorParams::default();
+        p.modal.ee_participation_min = scene.model.ee_participation_min;
+        p.modal.cycle_evaluations = crate::modal::CYCLE_EVALUATIONS;
+        p.modal.max_scan_evaluations = crate::modal::SPREAD_SCAN_EVALUATIONS;
         Self::with_params(scene, p)
     }
 
@@ -118,10 +138,13 @@ impl Estimator {
                 params.tension,
                 ModalParams {
                     certify: false,
+                    // The inverse query is not a cycle: unlimited.
+                    cycle_evaluations: u32::MAX,
                     ..params.modal
                 },
             ),
             auto: None,
+            last_ee: None,
         };
         // Expected rank: the rank at the default pose.
         let default_pose = |e: EstimatorError| BuildError::DefaultPose {
@@ -190,6 +213,7 @@ impl Estimator {
 
     /// Forget every warm start: the next cycle starts cold.
     pub fn reset(&mut self) {
+        self.last_ee = None;
         self.last_ok_position = None;
         self.last_lambda1 = f64::NAN;
         self.cycle.tension.reset_warm_start();
@@ -250,6 +274,7 @@ impl Estimator {
                 }
                 self.last_ok_position = None;
                 self.last_lambda1 = f64::NAN;
+                self.last_ee = None;
             }
         }
         self.estimate = e;
@@ -350,22 +375,49 @@ impl Estimator {
         self.prev_lambda1 = if warm { self.last_lambda1 } else { f64::NAN };
         self.last_lambda1 = r1.lambda;
         if self.params.ee_mode {
-            // No mode reaching the participation threshold within the bounded scan leaves
-            // the end-effector mode unknown (NaN) without invalidating f1 and the tensions.
-            if let Ok(ree) = self.cycle.modal.ee_mode_tracked(&r1, warm_l.is_some()) {
-                e.ee_mode_hz = lambda_to_hz(ree.lambda);
-                e.ee_mode_participation = ree.ee_participation;
-            }
+            self.ee_mode(&r1, warm_l.is_some(), e);
         }
         self.write_stiffness(e);
         e.eigen_evaluations = self.cycle.evaluations_since_load();
         Ok(())
     }
 
+    /// The end-effector mode within what is left of the cycle's budget, into `e`: this
+    /// cycle's answer (age 0), or while the work goes on over the cycles the last answer
+    /// with its age; unknown (NaN, age `u32::MAX`) when no mode reaching the participation
+    /// threshold is known — a mode below the threshold is never reported. Neither case
+    /// invalidates f1 and the tensions.
+    fn ee_mode(&mut self, r1: &crate::modal::Root, warm: bool, e: &mut Estimate) {
+        if !warm {
+            // A cold start (a jump): the last answer belongs to another pose.
+            self.last_ee = None;
+        }
+        let thr = self.cycle.modal.params().ee_participation_min;
+        match self.cycle.modal.ee_mode_tracked(r1, warm) {
+            Ok(Some(r)) if r.ee_participation >= thr => {
+                self.last_ee = Some((lambda_to_hz(r.lambda), r.ee_participation, 0));
+            }
+            // Still being worked on: the last answer, one cycle older.
+            Ok(None) => {
+                if let Some(l) = self.last_ee.as_mut() {
+                    l.2 = l.2.saturating_add(1);
+                }
+            }
+            // None reaches the threshold within the scan's bounds, or the scan failed.
+            Ok(Some(_)) | Err(_) => self.last_ee = None,
+        }
+        if let Some((hz, p, age)) = self.last_ee {
+            e.ee_mode_hz = hz;
+            e.ee_mode_participation = p;
+            e.ee_mode_age_cycles = age;
+        }
+    }
+
     /// The static end-effector stiffness of the loaded models into `e`.
     fn write_stiffness(&mut self, e: &mut Estimate) {
         if self.scene.rigid {
-            let k6 = self.cycle.modal.static_stiffness6();
+            // Closed form: no evaluation of D(λ) out of the cycle's budget.
+            let k6 = self.cycle.modal.static_stiffness6_closed();
             e.stiffness6 = k6;
             e.stiffness_n_m = k6.fixed_view::<3, 3>(0, 0).into_owned();
             e.stiffness_dim = 6;

@@ -63,7 +63,8 @@ impl Pipeline {
     /// lower bounds `t_min_n` (N, one per cable) and the scene's upper bounds, show the solver to `on_tensions` (also when the solve failed: an
     /// infeasible solve still has its closest tensions), reject a structure matrix of rank
     /// below `min_rank` (0 accepts any), build the cable models, load the modal solver and
-    /// find the first root, warm-started from `warm` (λ, rad²/s²). A `Modal` error comes
+    /// find the first root, warm-started from `warm` (λ, rad²/s²), within the modal parameters'
+    /// per-cycle budget of D(λ) evaluations (the modal solver's cycle budget from here on). A `Modal` error comes
     /// only from the root search, after the modal solver was loaded; every other error comes
     /// before it is loaded.
     pub(super) fn first_root(
@@ -100,6 +101,8 @@ impl Pipeline {
             pose,
         );
         self.loaded_at = self.modal.evaluations();
+        self.modal
+            .begin_cycle(self.modal.params().cycle_evaluations);
         Ok(self.modal.first_root(warm)?)
     }
 

@@ -27,12 +27,26 @@ const BRACKET_STEPS: usize = 200;
 /// The bracket counts as collapsed when narrower than this many ε relative to λ.
 const COLLAPSE_ULPS: f64 = 4.0;
 
+/// The relative residual of an eigenvalue μ of D(λ) at λ (D'(λ) = `dd`):
+/// |μ| / (|λ|·max_ij |D'_ij|), the eigenvalue against the size of the inertia term λ·D'
+/// that cancels the stiffness at a root (‖D‖ itself vanishes there when the root is
+/// multiple). To first order it is the relative distance |λ − λ*|/λ to the root λ* of that
+/// branch; 0 exactly at a root.
+#[inline]
+pub(super) fn relative_residual(mu: f64, lambda: f64, dd: &Matrix6<f64>) -> f64 {
+    mu.abs() / (lambda.abs() * dd.abs().max()).max(f64::MIN_POSITIVE)
+}
+
 /// What the root finders work on: the parameters and the loaded problem (read only) and
 /// the evaluation scratch (the only thing an evaluation of D(λ) writes).
 pub(super) struct RootFinder<'a> {
     pub(super) params: &'a ModalParams,
     pub(super) problem: &'a LoadedChains,
     pub(super) scratch: &'a mut EvalScratch,
+    /// The cycle's budget: evaluations allowed from the counter value `budget_base`
+    /// (`u32::MAX`: unlimited). Every loop that evaluates D(λ) checks [`Self::left`] first.
+    pub(super) budget_base: u32,
+    pub(super) budget: u32,
 }
 
 /// State of the first-root solver between calls.
@@ -65,6 +79,22 @@ impl RootFinder<'_> {
     #[inline]
     pub(super) fn evaluations(&self) -> u32 {
         self.scratch.evaluations
+    }
+
+    /// Evaluations left in the cycle's budget (`u32::MAX` when unlimited).
+    #[inline]
+    pub(super) fn left(&self) -> u32 {
+        if self.budget == u32::MAX {
+            return u32::MAX;
+        }
+        let spent = self.scratch.evaluations.wrapping_sub(self.budget_base);
+        self.budget.saturating_sub(spent)
+    }
+
+    /// The cycle's budget is spent.
+    #[inline]
+    pub(super) fn exhausted(&self) -> bool {
+        self.left() == 0
     }
 
     /// The pole-free interval (a, b) around the λ of the last evaluation.
@@ -111,7 +141,7 @@ impl RootFinder<'_> {
         };
         let tol = self.params.rel_tol;
         loop {
-            if self.evaluations() - start >= self.params.max_evaluations {
+            if self.evaluations() - start >= self.params.max_evaluations || self.exhausted() {
                 return Err(ModalError::NoConvergence {
                     evaluations: self.evaluations() - start,
                     lo,
@@ -128,7 +158,6 @@ impl RootFinder<'_> {
             } else if mu < 0.0 {
                 hi = hi.min(x);
             }
-            let scale = e.d.abs().max().max(f64::MIN_POSITIVE);
             // Newton on μ(λ)(λ − pole_lo)(pole_hi − λ): the poles bounding the interval
             // removed (pole_lo = 0 and pole_hi = ∞ add nothing).
             let (mut g, mut dg) = (mu, dmu);
@@ -160,7 +189,7 @@ impl RootFinder<'_> {
                     lambda,
                     ee_participation: self.participation(&e.dd, &v),
                     evaluations: self.evaluations() - start,
-                    residual: mu.abs() / scale,
+                    residual: relative_residual(mu, x, &e.dd),
                 });
             }
             if !(xn > lo && xn < hi) {
@@ -226,6 +255,14 @@ impl RootFinder<'_> {
         let mut r = self.branch_root_with(0, 0.0, hi, 0.0, lp, guess, fast)?;
         state.roots += 1;
         if self.params.certify && (!fast || state.roots.is_multiple_of(CERTIFY_EVERY)) {
+            if self.left() < 2 {
+                // The certificate's two counts do not fit in the cycle's budget.
+                return Err(ModalError::NoConvergence {
+                    evaluations: self.evaluations() - start,
+                    lo: 0.0,
+                    hi,
+                });
+            }
             let mut certified = self.certify_first(r.lambda);
             if !certified && fast {
                 // A relaxed warm answer may sit outside the certificate's ±1e-10 probe in
@@ -246,6 +283,9 @@ impl RootFinder<'_> {
     fn upper_bracket(&mut self, guess: f64, start: u32) -> Result<f64, ModalError> {
         let mut h = guess.max(BRACKET_MIN) * 2.0;
         for _ in 0..BRACKET_STEPS {
+            if self.exhausted() {
+                break;
+            }
             let e = self.eval(h);
             if e.eig().values[0] < 0.0 {
                 return Ok(h);

@@ -36,6 +36,15 @@
 //! participation of every other mode; [`ModalSolver::ee_mode_tracked`] certifies its answer
 //! with it.
 //!
+//! **Budget.** [`ModalSolver::begin_cycle`] sets a per-cycle budget of D(λ) evaluations
+//! ([`ModalParams::cycle_evaluations`]; [`CYCLE_EVALUATIONS`] in real time). Every loop that
+//! evaluates D(λ) checks it first, so a cycle never exceeds it: the first root's Newton runs
+//! first (a few evaluations), the end-effector tracker gets the rest, and a scan that runs
+//! out is a plain-data state ([`ModalSolver::ee_scanning`]) continued from the same pole
+//! interval in the next cycle, on that cycle's problem. A scan only discovers the modes to
+//! watch; an answer found over several cycles is certified by the sum rules at the pose of
+//! the cycle that reports it.
+//!
 //! **Units** (SI throughout): K and D in N/m (N·m/rad in a rigid body's rotational block),
 //! M and D' in kg (kg·m²), λ in rad²/s², f in Hz; participations are dimensionless (0 ..= 1)
 //! and Σ_k p_k/λ_k is in s²/rad².
@@ -80,6 +89,20 @@ pub fn hz_to_lambda(f_hz: f64) -> f64 {
     w * w
 }
 
+/// The real-time per-cycle budget of D(λ) evaluations. Along the paper's circle (spatial
+/// robot, 20,000 cycles, unlimited budget) a warm cycle without a band rescan needs 7-8
+/// (median), 13-15 (p99), 16-25 (p99.9) and at most 19-34 (fem × 40, catenary × 40 and × 10,
+/// continuous); a cold first root with its certificate about 12. 32 covers all but a few in
+/// 10⁵ of them; a band rescan (up to ~190) or a cold scan is spread over the cycles.
+pub const CYCLE_EVALUATIONS: u32 = 32;
+
+/// The scan bound ([`ModalParams::max_scan_evaluations`]) of the real-time configuration:
+/// a scan spread over the cycles by the budget costs the answer's age, not the cycle's
+/// latency, so it may go on longer than an unlimited one-cycle scan (1 500 by default);
+/// enough for the ~250 string modes below the end-effector mode of the heavy-cable test
+/// scene (tests/data/spatial_heavy_cable.toml).
+pub const SPREAD_SCAN_EVALUATIONS: u32 = 4000;
+
 /// Parameters of the structured solver (finite bounds everywhere).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ModalParams {
@@ -89,8 +112,15 @@ pub struct ModalParams {
     pub rel_tol: f64,
     /// Largest number of pole intervals scanned for the end-effector mode.
     pub max_scan_intervals: u32,
-    /// Largest number of D(λ) evaluations one end-effector scan may spend.
+    /// Largest number of D(λ) evaluations one end-effector scan may spend (over all the
+    /// cycles it is continued in).
     pub max_scan_evaluations: u32,
+    /// The per-cycle budget of D(λ) evaluations (first root and end-effector mode
+    /// together); the end-effector work that does not fit is continued in the next cycles.
+    /// `u32::MAX` (the default: offline analyses want every answer complete): unlimited;
+    /// the real-time users (the service, `bench`, `Estimator::realtime` (estimator))
+    /// use [`CYCLE_EVALUATIONS`].
+    pub cycle_evaluations: u32,
     /// Smallest end-effector participation of an end-effector mode (0 < x ≤ 1).
     pub ee_participation_min: f64,
     /// Check the first root with the eigenvalue count (two more evaluations) on every cold
@@ -108,6 +138,7 @@ impl Default for ModalParams {
             rel_tol: 1e-12,
             max_scan_intervals: 400,
             max_scan_evaluations: 1500,
+            cycle_evaluations: u32::MAX,
             ee_participation_min: 0.5,
             certify: true,
             newton_accept: 1e-9,
@@ -124,6 +155,11 @@ pub struct Root {
     pub ee_participation: f64,
     /// Evaluations of D(λ) spent.
     pub evaluations: u32,
-    /// |μ(λ)| / ‖D(λ)‖ at the answer (relative residual of the condensed problem).
+    /// Relative residual |μ(λ_k)| / (λ_k · max_ij |D'(λ_k)_ij|) at the last iterate λ_k
+    /// the solver evaluated (μ: the branch of D that vanishes at the root): the eigenvalue
+    /// of D against the size of the inertia term λD' it must cancel (‖D‖ itself vanishes
+    /// at a multiple root, so it is no scale). To first order it is the relative distance
+    /// of λ_k to the root; `lambda`, one Newton step further, is closer still (≈ its
+    /// square). Dimensionless; ≤ the solver's step tolerance on a converged answer.
     pub residual: f64,
 }

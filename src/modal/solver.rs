@@ -22,6 +22,10 @@ pub struct ModalSolver {
     first: FirstRootState,
     /// The end-effector mode tracker's state between cycles.
     tracker: EeTracker,
+    /// The cycle's evaluation budget (`u32::MAX`: unlimited) and the evaluation counter
+    /// when it began ([`Self::begin_cycle`]).
+    budget: u32,
+    budget_base: u32,
 }
 
 impl ModalSolver {
@@ -33,7 +37,27 @@ impl ModalSolver {
             scratch: EvalScratch::new(),
             first: FirstRootState::new(),
             tracker: EeTracker::new(),
+            budget: u32::MAX,
+            budget_base: 0,
         }
+    }
+
+    /// Start a cycle with a budget of `evaluations` evaluations of D(λ) (`u32::MAX`:
+    /// unlimited): [`Self::first_root`] and [`Self::ee_mode_tracked`] stop there, whatever
+    /// is left of the end-effector work is continued in the next cycle. Until the first
+    /// call the solver is unlimited.
+    pub fn begin_cycle(&mut self, evaluations: u32) {
+        self.budget = evaluations;
+        self.budget_base = self.scratch.evaluations;
+    }
+
+    /// Evaluations left in the current cycle's budget (`u32::MAX` when unlimited).
+    pub fn budget_left(&self) -> u32 {
+        if self.budget == u32::MAX {
+            return u32::MAX;
+        }
+        let spent = self.scratch.evaluations.wrapping_sub(self.budget_base);
+        self.budget.saturating_sub(spent)
     }
 
     /// Parameters.
@@ -53,6 +77,8 @@ impl ModalSolver {
             params: &self.params,
             problem: &self.problem,
             scratch: &mut self.scratch,
+            budget_base: self.budget_base,
+            budget: self.budget,
         };
         (finder, &mut self.first, &mut self.tracker)
     }
@@ -149,10 +175,34 @@ impl ModalSolver {
     /// [`ModalParams::ee_participation_min`]: scans the intervals between the chains'
     /// blocked eigenvalues in ascending order and solves for each root of D in them.
     /// `first` is the already-known first root (not solved again).
+    /// Not bounded by the cycle's budget (an offline call; the scan's own bounds hold).
     pub fn ee_mode(&mut self, first: &Root) -> Result<Root, ModalError> {
         let sums = self.sums();
         let (mut f, _, tracker) = self.parts();
+        f.budget = u32::MAX;
         tracker.ee_mode(&mut f, sums, first)
+    }
+
+    /// Static end-effector stiffness D(0) in closed form (each chain's static end stiffness;
+    /// no evaluation of D(λ) counted): 6 × 6 for a rigid body, the top-left 3 × 3 else.
+    pub fn static_stiffness6_closed(&self) -> Matrix6<f64> {
+        self.problem.static_eval().d
+    }
+
+    /// A scan for the end-effector mode is in progress over the cycles.
+    pub fn ee_scanning(&self) -> bool {
+        self.tracker.scanning()
+    }
+
+    /// The relative residual of λ (rad²/s²) as a natural frequency of the loaded model:
+    /// min_i |μ_i(D(λ))| / (|λ|·max_jk |D'(λ)_jk|) (see [`Root::residual`]); one evaluation.
+    pub fn residual_at(&mut self, lambda: f64) -> f64 {
+        let e = self.eval(lambda);
+        let eg = e.eig();
+        let mu = eg.values[..eg.n]
+            .iter()
+            .fold(f64::INFINITY, |m, v| m.min(v.abs()));
+        super::first_mode::relative_residual(mu, lambda, &e.dd)
     }
 
     /// Forget the tracked end-effector mode (the next [`Self::ee_mode_tracked`] scans).
@@ -199,7 +249,19 @@ impl ModalSolver {
     ///
     /// The heuristics (what to watch, where to search) only decide the cost: the answer
     /// returned by a warm cycle is always certified by the bound.
-    pub fn ee_mode_tracked(&mut self, first: &Root, warm: bool) -> Result<Root, ModalError> {
+    ///
+    /// **Budget.** Everything stops at the cycle's evaluation budget ([`Self::begin_cycle`]);
+    /// Ok(None) says the end-effector work did not fit and is continued in the next cycle: a
+    /// scan resumes from the pole interval where it stopped (on the next cycle's problem:
+    /// it only discovers the modes to watch), and an answer found over several cycles is
+    /// certified by a warm cycle at the pose of the cycle that reports it. An answer below
+    /// the threshold (no mode reaches it within the scan's bounds) is the most
+    /// end-effector-like mode found.
+    pub fn ee_mode_tracked(
+        &mut self,
+        first: &Root,
+        warm: bool,
+    ) -> Result<Option<Root>, ModalError> {
         let sums = self.sums();
         let (mut f, _, tracker) = self.parts();
         tracker.ee_mode_tracked(&mut f, sums, first, warm)

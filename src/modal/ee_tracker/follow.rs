@@ -92,6 +92,8 @@ impl EeTracker {
                     self.members[i] = n;
                     i += 1;
                 }
+                // The cycle's budget ran out: the rest stay unfollowed this cycle.
+                None if f.exhausted() => break,
                 None => {
                     self.counts.lost += 1;
                     self.remove_member(i);

@@ -6,18 +6,25 @@
 //! - [`member`]: one watched mode, its predictor, the watch list;
 //! - [`scan`]: the scan over the pole intervals (cold start and rescans);
 //! - [`follow`]: one warm cycle (follow, partner and neighbour searches, certificate);
-//! - [`search`]: the Newton searches it uses (follow a root, a neighbour, a partner).
+//! - [`search`]: the Newton searches it uses (follow a root, a neighbour, a partner);
+//! - [`phases`]: one cycle's work within the budget (track, scan, continue, certify).
 //!
 //! The tuning constants below decide only the cost: every warm answer is certified.
+//!
+//! Every search stops at the cycle's evaluation budget; a warm cycle cut short is tried
+//! again in the next one (`RescanReason::Starved`, not a rescan), a scan cut short is kept
+//! in `EeTracker::scan` and continued (`scan::ScanState`).
 
 mod follow;
 mod member;
+mod phases;
 mod scan;
 mod search;
 
 use super::first_mode::RootFinder;
 use super::{ModalError, Root};
 use member::{predict, Member};
+use scan::{ScanState, ScanStep};
 use search::track_root;
 
 /// Largest number of watched modes (a fixed array, no allocation; when full, the weakest
@@ -77,6 +84,9 @@ const NEIGHBOUR_INTERVALS: usize = 4;
 const WEAK_FOLLOW_TOL: f64 = 2e-3;
 /// Cycles a weak mode is followed before the full scan is retried.
 const WEAK_RESCAN_CYCLES: u32 = 16;
+/// Phases (a warm cycle, a scan, the warm cycle that certifies a scan found over several
+/// cycles) one cycle may go through before it stops; each one also stops at the budget.
+const PHASES_PER_CYCLE: usize = 4;
 /// A rescan starts at this fraction of the lowest watched mode's λ (the participation
 /// moves among the watched modes; the modes below stay covered by the bound).
 const RESCAN_WINDOW: f64 = 0.9;
@@ -92,6 +102,9 @@ pub(super) enum RescanReason {
     Uncertified,
     /// No watched mode reached the threshold.
     NoneReached,
+    /// The cycle's evaluation budget ran out before the warm cycle was done (not a rescan:
+    /// the warm cycle is tried again in the next one).
+    Starved,
 }
 
 /// Counters of the end-effector bookkeeping since the solver was built.
@@ -112,6 +125,12 @@ pub struct RescanCounts {
     pub dropped: u64,
     /// Partner searches (avoided crossings ahead).
     pub partner_searches: u64,
+    /// Cycles whose end-effector work did not fit in the cycle's evaluation budget
+    /// ([`ModalParams::cycle_evaluations`](super::ModalParams::cycle_evaluations)) and was
+    /// continued in the next cycle.
+    pub starved_cycles: u64,
+    /// Scans that ran over more than one cycle.
+    pub continued_scans: u64,
 }
 
 impl RescanCounts {
@@ -122,6 +141,7 @@ impl RescanCounts {
             RescanReason::Lost => self.lost += 1,
             RescanReason::Uncertified => self.uncertified_scans += 1,
             RescanReason::NoneReached => self.no_mode_scans += 1,
+            RescanReason::Starved => self.starved_cycles += 1,
         }
     }
 }
@@ -150,6 +170,8 @@ pub(super) struct EeTracker {
     search_count: u64,
     /// The sum rules of this cycle (copied in by each call).
     sums: SumRules,
+    /// A scan in progress (continued over the cycles until done).
+    scan: Option<ScanState>,
 }
 
 impl EeTracker {
@@ -166,6 +188,7 @@ impl EeTracker {
                 total: f64::NAN,
                 over_lambda: f64::NAN,
             },
+            scan: None,
         }
     }
 
@@ -178,6 +201,12 @@ impl EeTracker {
     pub(super) fn reset(&mut self) {
         self.n_members = 0;
         self.ee_skip = 0;
+        self.scan = None;
+    }
+
+    /// A scan is in progress (the end-effector answer is being worked on over the cycles).
+    pub(super) fn scanning(&self) -> bool {
+        self.scan.is_some()
     }
 
     /// The lowest mode whose participation reaches the threshold, by a scan from zero
@@ -192,78 +221,78 @@ impl EeTracker {
         if first.ee_participation >= f.params.ee_participation_min {
             return Ok(*first);
         }
-        self.ee_scan(f, 0.0, first.lambda, f64::INFINITY)
+        let start = f.evaluations();
+        self.scan = Some(ScanState::new(
+            f.problem,
+            0.0,
+            first.lambda,
+            f64::INFINITY,
+            false,
+        ));
+        let r = match self.scan_step(f) {
+            ScanStep::Done(r) => r,
+            ScanStep::Paused => {
+                self.scan = None;
+                Err(ModalError::NoConvergence {
+                    evaluations: f.evaluations() - start,
+                    lo: first.lambda,
+                    hi: f64::INFINITY,
+                })
+            }
+        };
+        r.map(|mut r| {
+            r.evaluations = f.evaluations() - start;
+            r
+        })
     }
 
     /// The end-effector mode, tracked from the last cycle when `warm` (the method:
-    /// [`ModalSolver::ee_mode_tracked`](super::ModalSolver::ee_mode_tracked)).
+    /// [`ModalSolver::ee_mode_tracked`](super::ModalSolver::ee_mode_tracked)), within the
+    /// evaluations left in the cycle's budget. Ok(None): the work did not fit and goes on
+    /// in the next cycle (a scan in progress, or a warm cycle cut short).
     pub(super) fn ee_mode_tracked(
         &mut self,
         f: &mut RootFinder<'_>,
         sums: SumRules,
         first: &Root,
         warm: bool,
-    ) -> Result<Root, ModalError> {
+    ) -> Result<Option<Root>, ModalError> {
         self.sums = sums;
         let start = f.evaluations();
         let thr = f.params.ee_participation_min;
         if first.ee_participation >= thr {
             self.n_members = 0;
             self.ee_skip = 0;
-            return Ok(*first);
+            self.scan = None;
+            return Ok(Some(*first));
         }
         if !warm {
             self.ee_skip = 0;
+            self.scan = None;
+            self.n_members = 0;
+        } else if self.scan.is_some() {
+            // A scan continued: what it watched was found at earlier poses.
+            self.age_members();
         } else if self.ee_skip > 0 {
             if let Some(mut r) = self.follow_weak(f, thr) {
                 r.evaluations = f.evaluations() - start;
-                return Ok(r);
+                return Ok(Some(r));
+            }
+            if f.exhausted() {
+                self.counts.record(RescanReason::Starved);
+                return Ok(None);
             }
         }
-        let mut reason = RescanReason::Cold;
-        if warm && self.n_members > 0 {
-            match self.track_watched(f, thr) {
-                Ok(mut r) => {
-                    r.evaluations = f.evaluations() - start;
-                    return Ok(r);
-                }
-                Err(why) => reason = why,
-            }
+        let r = self.ee_phases(f, first, thr);
+        if let Ok(None) = r {
+            self.counts.record(RescanReason::Starved);
         }
-        self.counts.record(reason);
-        if reason != RescanReason::Cold && self.n_members > 0 {
-            // Rescan from 10 % below the lowest watched mode (the watched modes are those
-            // the participation moves among); the modes below stay unwatched and covered by
-            // the bound. Certified, this is the answer; else scan from zero.
-            let window = RESCAN_WINDOW * self.members[0].lambda;
-            if let Some(mut r) = self.partial_rescan(f, first, window, thr) {
+        r.map(|o| {
+            o.map(|mut r| {
                 r.evaluations = f.evaluations() - start;
-                return Ok(r);
-            }
-        }
-        self.n_members = 0;
-        self.recording = true;
-        if first.ee_participation >= P_ADD {
-            self.watch_first(f, first);
-        }
-        let r = self.ee_mode(f, sums, first);
-        self.recording = false;
-        let mut r = match r {
-            Ok(r) => r,
-            Err(e) => {
-                self.n_members = 0;
-                return Err(e);
-            }
-        };
-        if r.ee_participation < thr {
-            // Weak: watch only this mode until the next full scan.
-            let (a, b) = f.problem.pole_interval(r.lambda);
-            self.members[0] = Member::new(r.lambda, r.ee_participation, 0, 0, a, b);
-            self.n_members = 1;
-            self.ee_skip = WEAK_RESCAN_CYCLES;
-        }
-        r.evaluations = f.evaluations() - start;
-        Ok(r)
+                r
+            })
+        })
     }
 
     /// Weak episode: no mode reached the threshold at the last full scan; follow the most
@@ -300,31 +329,6 @@ impl EeTracker {
             0.0,
             lp,
         ));
-    }
-
-    /// Scan from `window` (rad²/s²) upward, watching what it finds (and the first root when
-    /// it has participation); Some(answer) only when the bound certifies it.
-    fn partial_rescan(
-        &mut self,
-        f: &mut RootFinder<'_>,
-        first: &Root,
-        window: f64,
-        thr: f64,
-    ) -> Option<Root> {
-        self.n_members = 0;
-        if first.ee_participation >= P_ADD && first.lambda < window {
-            self.watch_first(f, first);
-        }
-        self.recording = true;
-        let r = self.ee_scan(f, window, window * (1.0 - scan::WINDOW_EDGE), f64::INFINITY);
-        self.recording = false;
-        let r = r.ok()?;
-        if r.ee_participation >= thr && self.unwatched_bound(r.lambda) + CERT_MARGIN < thr {
-            Some(r)
-        } else {
-            self.n_members = 0;
-            None
-        }
     }
 
     /// Bound on the participation of any unwatched mode below `l_ans` (rad²/s²): the smaller

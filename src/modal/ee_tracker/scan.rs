@@ -27,24 +27,35 @@ pub(super) fn inset(w: f64, x: f64) -> f64 {
 }
 
 /// The next distinct pole above `a` over all chains, advancing each chain's pole cursor
-/// `next_pole` past `a`.
-fn next_distinct_pole(p: &LoadedChains, next_pole: &mut [usize; MAX_CHAINS], a: f64) -> f64 {
-    let mut b = f64::INFINITY;
+/// `next_pole` past `a` (and first moving it back to the first pole above `a`: the poles
+/// move between the cycles of a scan). Returns the pole and its (chain, number).
+fn next_distinct_pole(
+    p: &LoadedChains,
+    next_pole: &mut [usize; MAX_CHAINS],
+    a: f64,
+) -> (f64, usize, usize) {
+    let mut b = (f64::INFINITY, 0, 0);
     for i in 0..p.n_chains {
-        let mut j = next_pole[i];
+        let mut j = next_pole[i].max(1);
+        while j > 1 && p.chains[i].pole(j - 1) > a * (1.0 + POLE_MERGE) {
+            j -= 1;
+        }
         let mut pole = p.chains[i].pole(j);
         while pole <= a * (1.0 + POLE_MERGE) && pole.is_finite() {
             j += 1;
             pole = p.chains[i].pole(j);
         }
         next_pole[i] = j;
-        b = b.min(pole);
+        if pole < b.0 {
+            b = (pole, i, j);
+        }
     }
     b
 }
 
 /// The roots of the pole interval (a, b), evaluated at `lo` (a⁺) and `hi_eval` (b⁻): the
-/// blocked count there and the branches [na, nb) that have a root in it.
+/// blocked count there and the branches [na, nb) that have a root in it (two evaluations
+/// at most).
 fn interval_branches(
     f: &mut RootFinder<'_>,
     a: f64,
@@ -70,116 +81,257 @@ fn interval_branches(
     (below, na, nb)
 }
 
-impl EeTracker {
-    /// Scan upward from the pole interval containing `start` (rad²/s²) for the first root
-    /// with participation ≥ the threshold, skipping roots at or below `skip_to`, and giving
-    /// up above `limit`. While recording, every root with participation ≥ [`P_ADD`] is
-    /// watched and the scan goes on past the answer until the sum-rule bound is below
-    /// [`SCAN_BOUND`] (within the same bounds); the answer is the same.
-    pub(super) fn ee_scan(
-        &mut self,
-        f: &mut RootFinder<'_>,
+/// A scan in progress: where it stands, what it found. Plain data (no allocation); a scan
+/// that runs out of the cycle's evaluation budget is continued from here in the next cycle,
+/// on that cycle's problem (the poles move a little between cycles: the interval's lower
+/// pole is followed by its identity, the chain and pole number).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct ScanState {
+    /// The lower end of the current pole interval: a fixed λ (rad²/s², the scan's start) ...
+    a_fixed: f64,
+    /// ... or, once the scan passed a pole, that pole's (chain, number).
+    a_key: Option<(usize, usize)>,
+    /// Each chain's next pole number (the scan's cursor).
+    next_pole: [usize; MAX_CHAINS],
+    /// The first branch of the current interval not solved yet ...
+    branch: usize,
+    /// ... and where its root search stood when the budget ran out (the middle of its
+    /// bracket, rad²/s²; NaN: not started): the next cycle's search starts there.
+    guess: f64,
+    /// Roots at or below this λ (rad²/s²) count as known.
+    skip_to: f64,
+    /// The scan gives up above this λ (rad²/s²).
+    limit: f64,
+    /// Started from a window below the watched modes (a partial rescan), not from zero.
+    pub(super) window: bool,
+    answer: Option<Root>,
+    best: Option<Root>,
+    /// Evaluations and pole intervals spent over all its cycles.
+    spent: u32,
+    intervals: u32,
+    /// Cycles it was continued in after the one it started in.
+    pub(super) resumed: u32,
+}
+
+impl ScanState {
+    /// A scan upward from the pole interval containing `start` (rad²/s²), skipping roots at
+    /// or below `skip_to`, giving up above `limit`.
+    pub(super) fn new(
+        p: &LoadedChains,
         start: f64,
         skip_to: f64,
         limit: f64,
-    ) -> Result<Root, ModalError> {
-        let begin = f.evaluations();
-        let thr = f.params.ee_participation_min;
-        let mut best: Option<Root> = None;
-        let mut answer: Option<Root> = None;
+        window: bool,
+    ) -> Self {
         let mut a = 0.0f64;
-        // Each chain's next pole number (the scan's cursor).
-        let mut next_pole = [1usize; MAX_CHAINS];
-        for i in 0..f.problem.n_chains {
-            let (lo, _) = f.problem.chains[i].poles_around(start);
+        for i in 0..p.n_chains {
+            let (lo, _) = p.chains[i].poles_around(start);
             a = a.max(lo);
         }
-        'scan: for _ in 0..f.params.max_scan_intervals {
-            if f.evaluations() - begin > f.params.max_scan_evaluations {
+        ScanState {
+            a_fixed: a,
+            a_key: None,
+            next_pole: [1; MAX_CHAINS],
+            branch: 0,
+            guess: f64::NAN,
+            skip_to,
+            limit,
+            window,
+            answer: None,
+            best: None,
+            spent: 0,
+            intervals: 0,
+            resumed: 0,
+        }
+    }
+
+    /// The lower end of the current interval on the loaded problem, rad²/s².
+    fn a(&self, p: &LoadedChains) -> f64 {
+        match self.a_key {
+            Some((c, j)) if c < p.n_chains => p.chains[c].pole(j),
+            _ => self.a_fixed,
+        }
+    }
+}
+
+/// What one cycle's share of a scan came to.
+pub(super) enum ScanStep {
+    /// The cycle's budget ran out: continued next cycle.
+    Paused,
+    /// Finished: the answer (or the most end-effector-like mode found, below the threshold),
+    /// or why none was found.
+    Done(Result<Root, ModalError>),
+}
+
+impl EeTracker {
+    /// Continue the scan in progress (`self.scan`) within the cycle's budget: upward over
+    /// the pole intervals for the first root with participation ≥ the threshold. While
+    /// recording, every root with participation ≥ [`P_ADD`] is watched and the scan goes on
+    /// past the answer until the sum-rule bound is below [`SCAN_BOUND`] (within the scan's
+    /// bounds, [`ModalParams::max_scan_intervals`] and
+    /// [`ModalParams::max_scan_evaluations`] over all its cycles); the answer is the same.
+    ///
+    /// [`ModalParams::max_scan_intervals`]: crate::modal::ModalParams::max_scan_intervals
+    /// [`ModalParams::max_scan_evaluations`]: crate::modal::ModalParams::max_scan_evaluations
+    pub(super) fn scan_step(&mut self, f: &mut RootFinder<'_>) -> ScanStep {
+        let Some(mut st) = self.scan else {
+            return ScanStep::Done(Err(ModalError::NoEeMode(0)));
+        };
+        let begin = f.evaluations();
+        let done = self.scan_intervals(f, &mut st, begin);
+        st.spent = st.spent.saturating_add(f.evaluations() - begin);
+        match done {
+            None => {
+                self.scan = Some(st);
+                ScanStep::Paused
+            }
+            Some(r) => {
+                self.scan = None;
+                ScanStep::Done(r)
+            }
+        }
+    }
+
+    /// The scan's loop over the intervals; None when the budget ran out (state in `st`).
+    fn scan_intervals(
+        &mut self,
+        f: &mut RootFinder<'_>,
+        st: &mut ScanState,
+        begin: u32,
+    ) -> Option<Result<Root, ModalError>> {
+        let thr = f.params.ee_participation_min;
+        while st.intervals < f.params.max_scan_intervals
+            && st.spent + (f.evaluations() - begin) <= f.params.max_scan_evaluations
+        {
+            let a = st.a(f.problem);
+            let (b, bc, bj) = next_distinct_pole(f.problem, &mut st.next_pole, a);
+            if a > st.limit {
                 break;
             }
-            let b = next_distinct_pole(f.problem, &mut next_pole, a);
-            if a > limit {
-                break;
-            }
-            // Evaluation points just inside (a, b): never past the middle of a narrow
-            // interval (nearly coincident poles of different chains).
-            let lo = if a == 0.0 { 0.0 } else { a + inset(b - a, a) };
-            let hi_eval = if b.is_finite() {
-                b - inset(b - a, b)
-            } else {
-                f64::INFINITY
-            };
-            let skip_interval = b.is_finite() && hi_eval <= skip_to * (1.0 + SKIP_TOL);
-            if !skip_interval {
-                // Blocked count of the interval (index of its lowest root).
-                let (below, na, nb) = interval_branches(f, a, b, lo, hi_eval);
-                for branch in na..nb {
-                    let hi = if b.is_finite() {
-                        hi_eval
-                    } else {
-                        f64::INFINITY
-                    };
-                    let guess = if hi.is_finite() {
-                        0.5 * (lo + hi)
-                    } else {
-                        2.0 * lo.max(skip_to).max(1.0)
-                    };
-                    let mut r = match f.branch_root_with(branch, lo, hi, 0.0, b, guess, true) {
-                        Ok(r) => r,
-                        // Collecting past the answer: keep what was found.
-                        Err(_) if answer.is_some() => break 'scan,
-                        Err(e) => return Err(e),
-                    };
-                    if r.lambda <= skip_to * (1.0 + SKIP_TOL) {
-                        continue;
-                    }
-                    if self.recording && r.ee_participation >= P_ADD {
-                        self.insert_member(Member::new(
-                            r.lambda,
-                            r.ee_participation,
-                            below + branch as u32,
-                            branch,
-                            a,
-                            b,
-                        ));
-                    }
-                    if answer.is_none() && r.ee_participation >= thr {
-                        r.evaluations = f.evaluations() - begin;
-                        if !self.recording {
-                            return Ok(r);
-                        }
-                        answer = Some(r);
-                    }
-                    if let Some(ans) = answer {
-                        if self.unwatched_bound(ans.lambda) < SCAN_BOUND
-                            || self.n_members == MAX_MEMBERS
-                        {
-                            break 'scan;
-                        }
-                    }
-                    if best.is_none_or(|b| r.ee_participation > b.ee_participation) {
-                        best = Some(r);
-                    }
-                }
+            match self.scan_interval(f, st, a, b, thr) {
+                IntervalEnd::Paused => return None,
+                IntervalEnd::Stop => break,
+                IntervalEnd::Failed(e) => return Some(Err(e)),
+                IntervalEnd::Next => {}
             }
             if !b.is_finite() {
                 break;
             }
-            a = b;
+            st.a_key = Some((bc, bj));
+            st.branch = 0;
+            st.guess = f64::NAN;
+            st.intervals += 1;
         }
-        if let Some(mut r) = answer {
-            r.evaluations = f.evaluations() - begin;
-            return Ok(r);
+        if let Some(r) = st.answer {
+            return Some(Ok(r));
         }
         // No mode reaches the threshold within the bounds: the most end-effector-like mode
         // found (its participation, below the threshold, says so).
-        match best {
-            Some(mut r) => {
-                r.evaluations = f.evaluations() - begin;
-                Ok(r)
-            }
-            None => Err(ModalError::NoEeMode(f.params.max_scan_intervals)),
-        }
+        Some(
+            st.best
+                .ok_or(ModalError::NoEeMode(f.params.max_scan_intervals)),
+        )
     }
+    /// The roots of one pole interval (a, b) from branch `st.branch` on.
+    fn scan_interval(
+        &mut self,
+        f: &mut RootFinder<'_>,
+        st: &mut ScanState,
+        a: f64,
+        b: f64,
+        thr: f64,
+    ) -> IntervalEnd {
+        // Evaluation points just inside (a, b): never past the middle of a narrow interval
+        // (nearly coincident poles of different chains).
+        let lo = if a == 0.0 { 0.0 } else { a + inset(b - a, a) };
+        let hi_eval = if b.is_finite() {
+            b - inset(b - a, b)
+        } else {
+            f64::INFINITY
+        };
+        if b.is_finite() && hi_eval <= st.skip_to * (1.0 + SKIP_TOL) {
+            return IntervalEnd::Next;
+        }
+        if f.left() < 2 {
+            return IntervalEnd::Paused;
+        }
+        // Blocked count of the interval (index of its lowest root).
+        let (below, na, nb) = interval_branches(f, a, b, lo, hi_eval);
+        for branch in na.max(st.branch)..nb {
+            let resumed = branch == st.branch && st.guess > lo && st.guess < hi_eval;
+            let guess = if resumed {
+                st.guess
+            } else if hi_eval.is_finite() {
+                0.5 * (lo + hi_eval)
+            } else {
+                2.0 * lo.max(st.skip_to).max(1.0)
+            };
+            let r = f.branch_root_with(branch, lo, hi_eval, 0.0, b, guess, true);
+            if f.exhausted() {
+                if let Err(ModalError::NoConvergence { lo: l, hi: h, .. }) = r {
+                    st.branch = branch;
+                    st.guess = if h.is_finite() {
+                        0.5 * (l + h)
+                    } else {
+                        2.0 * l
+                    };
+                    return IntervalEnd::Paused;
+                }
+            }
+            st.guess = f64::NAN;
+            let r = match r {
+                Ok(r) => r,
+                // Collecting past the answer: keep what was found.
+                Err(_) if st.answer.is_some() => return IntervalEnd::Stop,
+                Err(e) => return IntervalEnd::Failed(e),
+            };
+            if r.lambda <= st.skip_to * (1.0 + SKIP_TOL) {
+                continue;
+            }
+            if self.recording && r.ee_participation >= P_ADD {
+                self.insert_member(Member::new(
+                    r.lambda,
+                    r.ee_participation,
+                    below + branch as u32,
+                    branch,
+                    a,
+                    b,
+                ));
+            }
+            if st.answer.is_none() && r.ee_participation >= thr {
+                st.answer = Some(r);
+                if !self.recording {
+                    return IntervalEnd::Stop;
+                }
+            }
+            if let Some(ans) = st.answer {
+                // Modes watched in earlier cycles of a continued scan count with their
+                // participation then (the certificate comes later, at one pose).
+                if self.unwatched_bound_with(ans.lambda, true) < SCAN_BOUND
+                    || self.n_members == MAX_MEMBERS
+                {
+                    return IntervalEnd::Stop;
+                }
+            }
+            if st
+                .best
+                .is_none_or(|x| r.ee_participation > x.ee_participation)
+            {
+                st.best = Some(r);
+            }
+        }
+        IntervalEnd::Next
+    }
+}
+
+/// How one interval of a scan ended.
+enum IntervalEnd {
+    /// Go on with the next interval.
+    Next,
+    /// The scan is finished (answer found and certified, or an error).
+    Stop,
+    /// The cycle's budget ran out.
+    Paused,
+    /// A root search failed before any answer.
+    Failed(ModalError),
 }

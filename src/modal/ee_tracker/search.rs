@@ -6,7 +6,7 @@ use super::member::{Member, Tracked};
 use super::scan::inset;
 use super::{CHEAP_ACCEPT, NEIGHBOUR_INTERVALS, P_STRONG};
 use crate::modal::dynamic_stiffness::{quad, DynEval, EigD};
-use crate::modal::first_mode::RootFinder;
+use crate::modal::first_mode::{relative_residual, RootFinder};
 use crate::modal::Root;
 
 /// Newton steps (evaluations) a followed root may take, at most.
@@ -60,6 +60,9 @@ pub(super) fn neighbour(f: &mut RootFinder<'_>, m: &Member, up: bool) -> Option<
             let holds = match other {
                 None => true,
                 Some(x) => {
+                    if f.exhausted() {
+                        return None;
+                    }
                     let v = f.eval(x).eig().values[j];
                     if up {
                         v < 0.0
@@ -106,6 +109,9 @@ pub(super) fn neighbour(f: &mut RootFinder<'_>, m: &Member, up: bool) -> Option<
             }
             a - inset(b - a, a)
         };
+        if f.exhausted() {
+            return None;
+        }
         let e = f.eval(x);
         (a, b) = f.last_pole_interval();
         if !(x > a && x < b) {
@@ -146,6 +152,9 @@ pub(super) fn partner(f: &mut RootFinder<'_>, pole: f64, up: bool, pred: f64) ->
 /// in the spectrum (the interval's blocked count plus the branch) and, for a mode with
 /// participation ≥ [`P_STRONG`], the chain it shares most energy with.
 pub(super) fn track_root(f: &mut RootFinder<'_>, l0: f64, accept: f64) -> Option<Tracked> {
+    if f.exhausted() {
+        return None;
+    }
     let mut x = l0;
     let mut e = f.eval(x);
     let (mut a, mut b) = f.last_pole_interval();
@@ -182,7 +191,7 @@ pub(super) fn track_root(f: &mut RootFinder<'_>, l0: f64, accept: f64) -> Option
             }
             hopped = true;
             x = if xn >= b { b + (b - x) } else { a - (x - a) };
-            if !(x > 0.0) {
+            if !(x > 0.0) || f.exhausted() {
                 return None;
             }
             e = f.eval(x);
@@ -196,7 +205,6 @@ pub(super) fn track_root(f: &mut RootFinder<'_>, l0: f64, accept: f64) -> Option
             continue;
         }
         if mu == 0.0 || (xn - x).abs() <= accept.max(f.params.rel_tol) * x {
-            let scale = e.d.abs().max().max(f64::MIN_POSITIVE);
             let p = f.participation(&e.dd, &v);
             let (share, pole, pole_up, pole_key) = if p >= P_STRONG {
                 f.scratch.coupling(f.problem, x, &e.dd, &v)
@@ -208,7 +216,7 @@ pub(super) fn track_root(f: &mut RootFinder<'_>, l0: f64, accept: f64) -> Option
                     lambda: xn,
                     ee_participation: p,
                     evaluations: 0,
-                    residual: mu.abs() / scale,
+                    residual: relative_residual(mu, x, &e.dd),
                 },
                 branch,
                 index: e.below + branch as u32,
@@ -220,6 +228,9 @@ pub(super) fn track_root(f: &mut RootFinder<'_>, l0: f64, accept: f64) -> Option
                 pole_key,
                 step: (xn - x).abs() / x,
             });
+        }
+        if f.exhausted() {
+            return None;
         }
         x = xn;
         e = f.eval(x);

@@ -9,7 +9,10 @@
 //! 2. drain the T_min subscriber; the newest set-point becomes *pending*;
 //! 3. if a pose came, apply the pending set-point and estimate the pose, then publish the
 //!    estimate and notify the wake-controller event;
-//! 4. answer every queued margin request from the latest estimate.
+//! 4. answer every queued margin request from the latest estimate: f1 and the margin of this
+//!    cycle, and the T_min that reaches the requirement from the inverse search, which runs
+//!    on a thread of its own (`server/inverse_worker.rs`) on the newest request, so that no request
+//!    pattern costs the loop more than a copy per request.
 //!
 //! Between iterations the loop busy-polls ([`WaitMode::Spin`]) or blocks on the wake-service
 //! event ([`WaitMode::Event`]), checks for SIGINT/SIGTERM (iceoryx2's handler, installed by the
@@ -54,6 +57,7 @@ use super::{ServiceError, WaitMode};
 use crate::estimator::Estimator;
 use crate::kinematics::Pose;
 use crate::scene::{is_valid_t_min, Scene};
+use inverse_worker::{InverseJob, InverseWorker};
 
 /// Heap allocation counter (the binary's global allocator), or a function returning 0.
 pub type AllocCounter = fn() -> u64;
@@ -240,6 +244,8 @@ const EVENT_TIMEOUT: Duration = Duration::from_millis(50);
 /// The latest estimate, as far as the margin service needs it.
 #[derive(Debug, Clone, Copy)]
 struct Latest {
+    /// The loop's cycle count when it was estimated.
+    cycle: u64,
     pose_sequence: u64,
     status: StatusCode,
     f1_hz: f64,
@@ -280,8 +286,8 @@ pub struct Server {
     /// The lower bounds of the current cycle, N (the ones in force, or a refused set-point's
     /// for the one estimate that reports it).
     cycle_t_min_n: [f64; MAX_CABLES],
-    /// The last inverse answer (required f1 Hz, T_min N): the next request's warm start.
-    last_inverse: Option<(f64, f64)>,
+    /// The inverse T_min search beside the loop.
+    inverse: InverseWorker,
     pending_t_min: Option<TminSetpoint>,
     latest: Option<Latest>,
     /// Last pose sequence per publisher, for the poses overwritten in the queue. One slot per
@@ -301,7 +307,7 @@ impl Server {
         names: &ServiceNames,
         allocations: AllocCounter,
     ) -> Result<Server, ServiceError> {
-        let estimator = Estimator::new(scene)?;
+        let estimator = Estimator::realtime(scene)?;
         if let Some(choice) = estimator.auto_choice() {
             tracing::info!("{choice}");
         }
@@ -316,6 +322,9 @@ impl Server {
             *t = scene.cable_t_max_n(i);
         }
         let t_min_n = estimator.default_t_min_n();
+        let inverse = InverseWorker::spawn(&estimator).map_err(|e| {
+            ServiceError::Usage(format!("cannot start the inverse T_min thread: {e}"))
+        })?;
         Ok(Server {
             n_cables,
             estimator,
@@ -324,7 +333,7 @@ impl Server {
             t_max_n,
             t_min_n,
             cycle_t_min_n: t_min_n,
-            last_inverse: None,
+            inverse,
             pending_t_min: None,
             latest: None,
             pose_gaps: SequenceGaps::default(),
@@ -455,6 +464,7 @@ impl Server {
         out.tensions_n[..n].copy_from_slice(&e.tensions_n[..n]);
         out.f1_hz = e.f1_hz;
         out.ee_mode_hz = e.ee_mode_hz;
+        out.ee_mode_age_cycles = e.ee_mode_age_cycles;
         out.stiffness_dim = 3;
         for r in 0..3 {
             for c in 0..3 {
@@ -479,6 +489,7 @@ impl Server {
         self.ports.notify(EVENT_ID_ESTIMATE);
 
         self.latest = Some(Latest {
+            cycle: self.cycles(),
             pose_sequence: p.sequence,
             status: e.status,
             f1_hz: e.f1_hz,
@@ -505,27 +516,39 @@ impl Server {
                 }
             };
             let req = *request.payload();
-            // The smallest T_min reaching the required f1 at the latest pose (fast path,
-            // allocation-free; NaN when unreachable within [0, T_max] or not asked).
-            // Warm-started from the last answer for the same requirement (or the T_min in
-            // force): a few forward evaluations per request on a smooth trajectory.
-            let t_min_required = match self.latest {
+            // The smallest T_min reaching the required f1: the inverse thread's last answer
+            // when it is for this requirement (with its age in cycles), NaN otherwise; this
+            // request becomes the thread's next job. A copy in, a copy out: no search here.
+            let (t_min_required, age) = match self.latest {
                 Some(l) if l.status.is_ok() && req.is_valid() => {
-                    let hint = match self.last_inverse {
-                        Some((f, t)) if f == req.required_f1_hz && t.is_finite() => t,
-                        _ => self.t_min_range_n().1,
-                    };
-                    let t = self
-                        .estimator
-                        .t_min_for_f1_near(&l.pose, req.required_f1_hz, Some(hint))
-                        .map_or(f64::NAN, |a| a.t_min_n);
-                    self.last_inverse = Some((req.required_f1_hz, t));
-                    t
+                    let known = self
+                        .inverse
+                        .answer()
+                        .filter(|a| a.required_f1_hz == req.required_f1_hz);
+                    self.inverse.post(InverseJob {
+                        pose: l.pose,
+                        cycle: l.cycle,
+                        required_f1_hz: req.required_f1_hz,
+                        hint_n: known
+                            .map(|a| a.t_min_n)
+                            .filter(|t| t.is_finite())
+                            .unwrap_or(self.t_min_range_n().1),
+                    });
+                    match known {
+                        Some(a) if a.t_min_n.is_finite() => {
+                            let age = l.cycle.saturating_sub(a.cycle);
+                            (a.t_min_n, age.min(u64::from(u32::MAX - 1)) as u32)
+                        }
+                        _ => (f64::NAN, cablevib_ipc::T_MIN_AGE_UNKNOWN),
+                    }
                 }
-                _ => f64::NAN,
+                _ => (f64::NAN, cablevib_ipc::T_MIN_AGE_UNKNOWN),
             };
             let now = monotonic_now_ns();
-            let response = margin_response(&req, self.latest, t_min_required, now);
+            let mut response = margin_response(&req, self.latest, t_min_required, now);
+            if response.is_ok() {
+                response.t_min_required_age_cycles = age;
+            }
             if request.send_copy(response).is_err() {
                 self.period.ipc_errors += 1;
             }
@@ -784,5 +807,6 @@ pub fn run(
     Ok(report)
 }
 
+mod inverse_worker;
 #[cfg(test)]
 mod tests;

@@ -46,6 +46,7 @@ fn margin_answers() {
     let none = margin_response(&req, None, f64::NAN, 1);
     assert_eq!(none.status_code(), Some(StatusCode::NoPoseYet));
     let ok = Latest {
+        cycle: 0,
         pose_sequence: 9,
         status: StatusCode::Ok,
         f1_hz: 9.5,

@@ -1,0 +1,161 @@
+//! The margin service's inverse T_min search, on a thread of its own beside the estimate
+//! loop.
+//!
+//! The search (the smallest uniform T_min reaching a required f1 at a pose,
+//! [`Estimator::t_min_for_f1_near`]) needs 2 to ~80 forward evaluations (tension solve and
+//! first root each): a few µs with a close hint, ~5 ms when the requirement changes between
+//! requests. Run inline it starved the loop; spread over the cycles a requirement that
+//! changes every request would restart it before it ends. So it runs here, on its own copy
+//! of the estimator (its own buffers; set up once), and always on the newest request: the
+//! loop posts (pose, requirement) into a one-slot mailbox with `try_lock` (never waits: a
+//! busy mailbox keeps the older job) and reads the last finished answer the same way. The
+//! loop's work per request is a copy in and a copy out; no request pattern reaches the
+//! estimate loop. Nothing here allocates after [`InverseWorker::spawn`].
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use crate::estimator::Estimator;
+use crate::kinematics::Pose;
+
+/// The worker sleeps at most this long between looks at the mailbox (it is also woken by
+/// every posted job).
+const IDLE_PARK: Duration = Duration::from_millis(20);
+/// After a search the worker rests three times as long as the search took: at most a quarter of a
+/// core, whatever the requests, so that on a machine with few cores it cannot take the
+/// estimate loop's.
+const REST_PER_WORK: u32 = 3;
+/// Niceness of the worker thread (Linux: lowest priority), so that the scheduler prefers the
+/// estimate loop when both want a core.
+const WORKER_NICE: i32 = 19;
+
+/// One search to run: at `pose` (the estimate of cycle `cycle`), for `required_f1_hz`.
+#[derive(Debug, Clone, Copy)]
+pub struct InverseJob {
+    /// The pose, and the loop's cycle count when it was estimated.
+    pub pose: Pose,
+    pub cycle: u64,
+    /// Required first natural frequency, Hz.
+    pub required_f1_hz: f64,
+    /// Start of the search, N (the last answer for this requirement, or the T_min in force).
+    pub hint_n: f64,
+}
+
+/// A finished search: T_min (N; NaN when unreachable or refused) for `required_f1_hz` at
+/// the pose of cycle `cycle`.
+#[derive(Debug, Clone, Copy)]
+pub struct InverseAnswer {
+    pub required_f1_hz: f64,
+    pub cycle: u64,
+    pub t_min_n: f64,
+}
+
+#[derive(Debug, Default)]
+struct Mailbox {
+    job: Option<InverseJob>,
+    answer: Option<InverseAnswer>,
+}
+
+/// The worker thread and its mailbox.
+pub struct InverseWorker {
+    mailbox: Arc<Mutex<Mailbox>>,
+    stop: Arc<AtomicBool>,
+    handle: Option<JoinHandle<()>>,
+    /// The last answer read (the loop's copy).
+    answer: Option<InverseAnswer>,
+}
+
+impl InverseWorker {
+    /// Start the worker with its own copy of `estimator` (allocates: set-up only).
+    pub fn spawn(estimator: &Estimator) -> std::io::Result<InverseWorker> {
+        let mailbox = Arc::new(Mutex::new(Mailbox::default()));
+        let stop = Arc::new(AtomicBool::new(false));
+        let mut est = estimator.clone();
+        let (m, s) = (mailbox.clone(), stop.clone());
+        let handle = std::thread::Builder::new()
+            .name("cablevib-inverse".into())
+            .spawn(move || worker_loop(&mut est, &m, &s))?;
+        Ok(InverseWorker {
+            mailbox,
+            stop,
+            handle: Some(handle),
+            answer: None,
+        })
+    }
+
+    /// Post `job` (replacing a job not started yet) and wake the worker; a busy mailbox
+    /// drops it (the next request posts again). Never waits.
+    pub fn post(&mut self, job: InverseJob) {
+        if let Ok(mut m) = self.mailbox.try_lock() {
+            m.job = Some(job);
+        }
+        if let Some(h) = &self.handle {
+            h.thread().unpark();
+        }
+    }
+
+    /// The last finished answer (refreshed from the mailbox when it is free). Never waits.
+    pub fn answer(&mut self) -> Option<InverseAnswer> {
+        if let Ok(m) = self.mailbox.try_lock() {
+            if m.answer.is_some() {
+                self.answer = m.answer;
+            }
+        }
+        self.answer
+    }
+}
+
+impl Drop for InverseWorker {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Release);
+        if let Some(h) = self.handle.take() {
+            h.thread().unpark();
+            let _ = h.join();
+        }
+    }
+}
+
+/// Take the newest job, search, post the answer; park when idle.
+fn worker_loop(est: &mut Estimator, mailbox: &Mutex<Mailbox>, stop: &AtomicBool) {
+    lower_priority();
+    while !stop.load(Ordering::Acquire) {
+        let job = match mailbox.lock() {
+            Ok(mut m) => m.job.take(),
+            Err(_) => return,
+        };
+        let Some(j) = job else {
+            std::thread::park_timeout(IDLE_PARK);
+            continue;
+        };
+        let t0 = std::time::Instant::now();
+        let t = est
+            .t_min_for_f1_near(&j.pose, j.required_f1_hz, Some(j.hint_n))
+            .map_or(f64::NAN, |a| a.t_min_n);
+        let worked = t0.elapsed();
+        if let Ok(mut m) = mailbox.lock() {
+            m.answer = Some(InverseAnswer {
+                required_f1_hz: j.required_f1_hz,
+                cycle: j.cycle,
+                t_min_n: t,
+            });
+        }
+        std::thread::sleep(worked * REST_PER_WORK);
+    }
+}
+
+/// This thread's niceness to [`WORKER_NICE`] (Linux: per thread); a failure only leaves the
+/// default priority.
+#[cfg(target_os = "linux")]
+fn lower_priority() {
+    // SAFETY: setpriority on this thread's own id, no memory passed.
+    unsafe {
+        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+        let _ = libc::setpriority(libc::PRIO_PROCESS, tid, WORKER_NICE);
+    }
+}
+
+/// Elsewhere the worker keeps the default priority (its rest still halves its share).
+#[cfg(not(target_os = "linux"))]
+fn lower_priority() {}
