@@ -20,7 +20,7 @@ STATUS_OK means the numbers of that message are not valid (frequencies are NaN).
 
 import ctypes
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 MAX_CABLES = 16
 MAX_STIFFNESS_DIM = 6
 
@@ -98,7 +98,7 @@ class PoseSample(ctypes.Structure):
         ("reserved0", ctypes.c_uint32),
     ]
 
-    TYPE_NAME = "cablevib::PoseSample::v1"
+    TYPE_NAME = "cablevib::PoseSample::v2"
 
     @classmethod
     def type_name(cls):
@@ -118,7 +118,7 @@ class TminSetpoint(ctypes.Structure):
         ("per_cable_t_min_n", ctypes.c_double * 16),
     ]
 
-    TYPE_NAME = "cablevib::TminSetpoint::v1"
+    TYPE_NAME = "cablevib::TminSetpoint::v2"
 
     @classmethod
     def type_name(cls):
@@ -140,7 +140,7 @@ class EstimateSample(ctypes.Structure):
         ("f1_hz", ctypes.c_double),
         ("ee_mode_hz", ctypes.c_double),
         ("stiffness_dim", ctypes.c_uint32),
-        ("reserved0", ctypes.c_uint32),
+        ("ee_mode_age_cycles", ctypes.c_uint32),
         ("stiffness", ctypes.c_double * 36),
         ("compute_ns", ctypes.c_uint64),
         ("eigen_evaluations", ctypes.c_uint32),
@@ -149,7 +149,7 @@ class EstimateSample(ctypes.Structure):
         ("skipped_poses", ctypes.c_uint64),
     ]
 
-    TYPE_NAME = "cablevib::EstimateSample::v1"
+    TYPE_NAME = "cablevib::EstimateSample::v2"
 
     @classmethod
     def type_name(cls):
@@ -166,7 +166,7 @@ class MarginRequest(ctypes.Structure):
         ("required_f1_hz", ctypes.c_double),
     ]
 
-    TYPE_NAME = "cablevib::MarginRequest::v1"
+    TYPE_NAME = "cablevib::MarginRequest::v2"
 
     @classmethod
     def type_name(cls):
@@ -181,7 +181,7 @@ class MarginResponse(ctypes.Structure):
         ("request_sequence", ctypes.c_uint64),
         ("pose_sequence", ctypes.c_uint64),
         ("status", ctypes.c_uint32),
-        ("reserved0", ctypes.c_uint32),
+        ("t_min_required_age_cycles", ctypes.c_uint32),
         ("f1_hz", ctypes.c_double),
         ("margin_hz", ctypes.c_double),
         ("margin_ratio", ctypes.c_double),
@@ -189,7 +189,7 @@ class MarginResponse(ctypes.Structure):
         ("timestamp_ns", ctypes.c_uint64),
     ]
 
-    TYPE_NAME = "cablevib::MarginResponse::v1"
+    TYPE_NAME = "cablevib::MarginResponse::v2"
 
     @classmethod
     def type_name(cls):
@@ -226,7 +226,7 @@ LAYOUT = {
         ("f1_hz", 168, 8),
         ("ee_mode_hz", 176, 8),
         ("stiffness_dim", 184, 4),
-        ("reserved0", 188, 4),
+        ("ee_mode_age_cycles", 188, 4),
         ("stiffness", 192, 288),
         ("compute_ns", 480, 8),
         ("eigen_evaluations", 488, 4),
@@ -243,7 +243,7 @@ LAYOUT = {
         ("request_sequence", 0, 8),
         ("pose_sequence", 8, 8),
         ("status", 16, 4),
-        ("reserved0", 20, 4),
+        ("t_min_required_age_cycles", 20, 4),
         ("f1_hz", 24, 8),
         ("margin_hz", 32, 8),
         ("margin_ratio", 40, 8),
