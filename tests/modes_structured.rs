@@ -64,3 +64,174 @@ fn every_model_matches_dense_at_n10() {
     }
     check_against_dense(&Scene::box_6dof().with_model(ElementKind::Fem, 10), 12);
 }
+
+// ---------------------------------------------------------------------------------------
+// Certificate in 40-digit arithmetic: the inertia of K − σM (tests/py/inertia_certificate.py)
+
+/// The probe of the certificate: the k-th eigenvalue lies in [λ(1 − 1e-10), λ(1 + 1e-10)],
+/// so the frequency is within 5e-11 — inside the required 1e-9. The assembled f64 K and M
+/// are exactly uniform chains of the rounded element block, whose own eigenvalues differ
+/// from the unrounded model's by ~ε·EA/T ≲ 1e-12 relative (transverse stiffness T/l is
+/// carried next to EA/l in one rounded block), far inside the probe.
+const CERT_REL: f64 = 1e-10;
+
+/// A venv under target/ with mpmath pinned; returns its python.
+fn mpmath_python() -> std::path::PathBuf {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/py-mpmath-1.3.0");
+    let py = root.join("bin/python");
+    let ok = |py: &std::path::Path| {
+        std::process::Command::new(py)
+            .args(["-c", "import mpmath; assert mpmath.__version__ == '1.3.0'"])
+            .status()
+            .is_ok_and(|s| s.success())
+    };
+    if !ok(&py) {
+        let st = std::process::Command::new("python3")
+            .args(["-m", "venv"])
+            .arg(&root)
+            .status()
+            .expect("python3 -m venv");
+        assert!(st.success(), "python3 -m venv failed");
+        let st = std::process::Command::new(root.join("bin/pip"))
+            .args(["install", "--quiet", "mpmath==1.3.0"])
+            .status()
+            .expect("pip");
+        assert!(st.success(), "pip install mpmath==1.3.0 failed");
+    }
+    py
+}
+
+/// `cablevib analyze ARGS --json` parsed.
+fn analyze_json(args: &[&str]) -> serde_json::Value {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cablevib"))
+        .arg("analyze")
+        .args(args)
+        .arg("--json")
+        .output()
+        .expect("run cablevib");
+    assert!(
+        out.status.success(),
+        "analyze {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("analyze JSON")
+}
+
+fn f64s(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array()
+        .expect("array")
+        .iter()
+        .map(|x| x.as_f64().expect("number"))
+        .collect()
+}
+
+/// Upper-triangle non-zeros of a dense matrix as [i, j, "v"] (shortest round-trip f64).
+fn triplets(a: &nalgebra::DMatrix<f64>) -> Vec<serde_json::Value> {
+    let mut out = Vec::new();
+    for j in 0..a.ncols() {
+        for i in 0..=j {
+            let v = a[(i, j)];
+            if v != 0.0 {
+                out.push(serde_json::json!([i, j, format!("{v:?}")]));
+            }
+        }
+    }
+    out
+}
+
+/// Number of eigenvalues of the assembled (K, M) below λ(1 + rel), for each pair.
+fn certified_counts(est: &Estimator, sigmas: &[(f64, f64)]) -> Vec<u64> {
+    let (k, m) = est.dense_matrices().unwrap();
+    let n = k.nrows();
+    let dim = est.modal().dim();
+    let order: Vec<usize> = (dim..n).chain(0..dim).collect();
+    let input = serde_json::json!({
+        "n": n,
+        "order": order,
+        "k": triplets(&k),
+        "m": triplets(&m),
+        "sigmas": sigmas.iter().map(|&(l, r)| [format!("{l:?}"), format!("{r:e}")]).collect::<Vec<_>>(),
+    });
+    let script =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/py/inertia_certificate.py");
+    let mut child = std::process::Command::new(mpmath_python())
+        .arg(script)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("python");
+    use std::io::Write;
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(input.to_string().as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "inertia_certificate.py failed");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    v["negatives"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap())
+        .collect()
+}
+
+/// `analyze SCENE --modes 10 --json`: each frequency certified to CERT_REL in λ by the
+/// 40-digit inertia of K − σM, and each cluster's multiplicity equal to the count there.
+fn certify_analyze(scene_arg: &str, s: &Scene) {
+    let j = analyze_json(&[scene_arg, "--modes", "10"]);
+    let f = f64s(&j["frequencies_hz"]);
+    let mult: Vec<u64> = j["multiplicity"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap())
+        .collect();
+    let start: Vec<u64> = j["cluster_start"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap())
+        .collect();
+    assert_eq!(f.len(), 10);
+    let est = estimator_at_default(s);
+    // The certificate is about the CLI's model: same tensions, bit for bit.
+    assert_eq!(f64s(&j["tensions_n"]), est.estimate().tensions().to_vec());
+    let lambda: Vec<f64> = f
+        .iter()
+        .map(|&x| cablevib::modal::hz_to_lambda(x))
+        .collect();
+    let sig: Vec<(f64, f64)> = lambda
+        .iter()
+        .flat_map(|&l| [(l, -CERT_REL), (l, CERT_REL)])
+        .collect();
+    let c = certified_counts(&est, &sig);
+    for (i, l) in lambda.iter().enumerate() {
+        let (below, above) = (c[2 * i], c[2 * i + 1]);
+        eprintln!("{scene_arg} mode {i}: λ {l:.15e}: {below} below, {above} below λ(1+1e-10); cluster {} × {}", start[i], mult[i]);
+        assert!(
+            below <= i as u64 && above > i as u64,
+            "{scene_arg} mode {i} not certified"
+        );
+        assert_eq!(
+            (below, above),
+            (start[i], start[i] + mult[i]),
+            "{scene_arg} mode {i}: cluster"
+        );
+    }
+}
+
+#[test]
+fn spatial_paper_n40_certified_in_40_digits() {
+    let s = Scene::default_scene();
+    assert_eq!(s.model.elements_per_cable, 40);
+    certify_analyze("spatial-paper", &s);
+}
+
+#[test]
+fn planar_paper_certified_in_40_digits() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/planar_paper.toml");
+    certify_analyze(path, &Scene::load(path).unwrap());
+}
