@@ -266,3 +266,22 @@ fn dense(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, Analyze
 pub(super) fn dense_bound(lambda: f64, lambda_max: f64) -> f64 {
     dense_relative_accuracy(lambda, lambda_max)
 }
+
+/// The assembled K (N/m) and M (kg) of the structured path's models at the scene's pose
+/// (same tensions as [`analyze`] with the structured solver), for external references.
+/// DOF order: the end-effector's 3 (or 6) first, then each cable's interior nodes from the
+/// anchor. Refused beyond [`crate::modal::DENSE_MEMORY_BUDGET_BYTES`].
+pub fn assembled_matrices(
+    scene: &Scene,
+) -> Result<(nalgebra::DMatrix<f64>, nalgebra::DMatrix<f64>), AnalyzeError> {
+    let mut est = Estimator::new(scene).map_err(|e| AnalyzeError::Build(e.to_string()))?;
+    let e = *est.update(&pose_of(scene), scene.t_min_n);
+    if let Some(err) = e.error {
+        return Err(AnalyzeError::Status {
+            status: e.status.as_str(),
+            reason: err.to_string(),
+        });
+    }
+    est.dense_matrices()
+        .map_err(|e| AnalyzeError::Solve(e.to_string()))
+}
