@@ -315,8 +315,8 @@ fn fem_at_a_million_elements_follows_the_inverse_square_law() {
             })
             .collect();
         let mut used = 0;
-        for j in 0..k {
-            let (d4, d5, d6) = (diffs[0][j], diffs[1][j], diffs[2][j]);
+        let triples = diffs[0].iter().zip(&diffs[1]).zip(&diffs[2]);
+        for (j, ((&d4, &d5), &d6)) in triples.enumerate() {
             eprintln!(
                 "{} mode {j}: rel diff {d4:.3e} {d5:.3e} {d6:.3e}: ratios {:.2} {:.2}",
                 base.name,

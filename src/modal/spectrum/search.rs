@@ -27,7 +27,9 @@ pub(super) struct Probe {
     pub(super) below: u32,
 }
 
-/// Where a mode was found.
+/// Where a mode was found. Short-lived, returned once per mode: the large variant's size
+/// (one evaluation of D) does not matter.
+#[allow(clippy::large_enum_variant)]
 enum Found {
     /// At a chain pole (the count steps between the probes around it).
     Pole(f64),
