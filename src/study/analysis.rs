@@ -17,6 +17,10 @@ use crate::scene::{ElementKind, Scene};
 use serde::Serialize;
 use std::time::Instant;
 
+/// Largest number of modes one analysis computes (the report holds them all; 10⁵ modes
+/// take seconds with the structured engine).
+pub const MAX_ANALYZE_MODES: usize = 100_000;
+
 /// Which eigensolver answers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -138,6 +142,12 @@ pub enum AnalyzeError {
 
 /// Analyse the scene at its own pose (`ee_position_m`, `ee_orientation_wxyz`) and T_min.
 pub fn analyze(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, AnalyzeError> {
+    if opts.modes > MAX_ANALYZE_MODES {
+        return Err(AnalyzeError::Usage(format!(
+            "--modes {}: at most {MAX_ANALYZE_MODES}",
+            opts.modes
+        )));
+    }
     match opts.solver {
         SolverChoice::Structured => structured(scene, opts),
         SolverChoice::Dense if opts.compare_dense => Err(AnalyzeError::Usage(
