@@ -1,10 +1,11 @@
 //! The search for one mode: count brackets, pole probes, safeguarded Newton on a branch.
 
-use super::cluster::{null_space_participations, residue_participations};
+use super::cluster::{branch_residue, participations, residue_participations};
 use super::{Mode, SpectrumParams};
 use crate::cable::ChainKind;
 use crate::modal::dynamic_stiffness::{quad, DynEval, EigD, EvalScratch, LoadedChains};
 use crate::modal::{lambda_to_hz, ModalError};
+use nalgebra::Matrix6;
 
 /// Without a better scale, the first bracket starts here (rad²/s²).
 const BRACKET_MIN: f64 = 1e-12;
@@ -12,12 +13,22 @@ const BRACKET_MIN: f64 = 1e-12;
 const BRACKET_GROWTH: f64 = 2.0;
 /// The bracket counts as collapsed when narrower than this many ε relative to λ.
 const COLLAPSE_ULPS: f64 = 4.0;
-/// Once a Newton step is below this (relative), quadratic convergence puts the next iterate
-/// within ~(step)² of the root, far below the target: it is accepted.
-const QUADRATIC_ACCEPT: f64 = 1e-8;
+/// A Newton step below this (relative) that is also below [`SUPERLINEAR_RATIO`] times the
+/// previous one shows superlinear convergence: the iterate after it is within ~(step)²
+/// (relative) of the root, far below the target, and it is accepted (steps of rounding
+/// noise, ~1e-13, end the iteration this way instead of bouncing).
+const NOISE_STEP: f64 = 1e-10;
+/// See [`NOISE_STEP`]: quadratic convergence shrinks steps far faster than this.
+const SUPERLINEAR_RATIO: f64 = 1e-2;
 /// Relative step of the symmetric residue quotient at a pole (error O(h²) from the other
 /// modes, while the cluster's own spread there is below the pole probe, ≪ h).
 const RESIDUE_STEP: f64 = 1e-7;
+/// Members of a cluster whose roots agree to this (relative) are one numerically degenerate
+/// eigenspace: their residue is V G⁻¹ Vᵀ at one root. Members further apart (split by less
+/// than the cluster probe) each get theirs at their own root — D' varies fast near a pole,
+/// so one evaluation for a split cluster would be off by (split)·D''/D'. Newton's noise
+/// on a degenerate root is ~1e-14; a split below 1e-12 changes D' by less than 1e-12·D''/D'.
+const DEGENERATE_REL: f64 = 1e-12;
 
 /// J, the blocked count and λ at one count probe.
 #[derive(Debug, Clone, Copy)]
@@ -50,7 +61,13 @@ struct Cluster {
     start: usize,
     mult: u32,
     parts: [f64; 6],
+    /// The roots of the first `presolved` members (solved with the first one).
+    lambdas: [f64; 6],
+    presolved: usize,
 }
+
+/// One solved member of a pole-free cluster: its root, the evaluation there, its branch.
+type Member = (f64, DynEval, EigD, usize);
 
 /// One sweep over the spectrum of the loaded problem, ascending.
 pub(super) struct SpectrumSearch<'a> {
@@ -103,6 +120,8 @@ impl<'a> SpectrumSearch<'a> {
                 start: 0,
                 mult: 0,
                 parts: [0.0; 6],
+                lambdas: [0.0; 6],
+                presolved: 0,
             },
             scale: f64::NAN,
             mode_start: 0,
@@ -130,11 +149,15 @@ impl<'a> SpectrumSearch<'a> {
         self.mode_start = self.s.evaluations;
         let cl = self.cl;
         if cl.mult > 0 && (i as u64) < cl.hi.count as u64 && i >= cl.start {
-            let lambda = match self.solve(i, cl.lo, cl.hi)? {
-                Found::Pole(x) => x,
-                Found::Branch { lambda, .. } => lambda,
-            };
             let j = i - cl.start;
+            let lambda = if j < cl.presolved {
+                cl.lambdas[j]
+            } else {
+                match self.solve(i, cl.lo, cl.hi)? {
+                    Found::Pole(x) => x,
+                    Found::Branch { lambda, .. } => lambda,
+                }
+            };
             return Ok(Mode {
                 lambda,
                 frequency_hz: lambda_to_hz(lambda),
@@ -273,13 +296,23 @@ impl<'a> SpectrumSearch<'a> {
             let inside = xn > lo.x && xn < hi.x;
             let step = (xn - x).abs();
             let collapsed = hi.x - lo.x <= COLLAPSE_ULPS * f64::EPSILON * x;
-            let converged = step <= self.params.rel_tol * x || prev_step <= QUADRATIC_ACCEPT * x;
+            let converged = step <= self.params.rel_tol * x
+                || (prev_step.is_finite()
+                    && step <= NOISE_STEP * x
+                    && step <= SUPERLINEAR_RATIO * prev_step);
             if mu == 0.0 || collapsed || (inside && converged) {
                 let lambda = if inside { xn } else { x };
+                // D' at the root itself: near a pole it changes by 2·step/distance, and the
+                // participation reads it (one more evaluation).
+                let eval = if lambda != x {
+                    self.s.eval(self.p, lambda)
+                } else {
+                    e
+                };
                 return Ok(Found::Branch {
                     lambda,
-                    eval: e,
-                    eig: eg,
+                    eig: eval.eig(),
+                    eval,
                     branch,
                 });
             }
@@ -312,10 +345,20 @@ impl<'a> SpectrumSearch<'a> {
         let mult = hi.count - i as u32;
         let (pa, pb) = self.p.pole_interval(lo.x);
         let pole_free = pb > hi.x && pa < lo.x;
+        let mut lambdas = [lambda; 6];
+        let mut presolved = 0;
         let parts = match found {
             Found::Branch {
                 eval, eig, branch, ..
-            } if pole_free => null_space_participations(self.p, &eval, &eig, branch, mult),
+            } if pole_free && branch + mult as usize <= self.p.dim => {
+                let mut members = [(lambda, eval, eig, branch); 6];
+                for k in 1..mult as usize {
+                    members[k] = self.member(i + k, lo, hi)?;
+                    lambdas[k] = members[k].0;
+                }
+                presolved = mult as usize;
+                participations(self.p, &members_residue(&members[..mult as usize]))
+            }
             _ => {
                 let h = RESIDUE_STEP;
                 let em = self.s.eval(self.p, lambda * (1.0 - h));
@@ -329,6 +372,8 @@ impl<'a> SpectrumSearch<'a> {
             start: i,
             mult,
             parts,
+            lambdas,
+            presolved,
         };
         Ok(Mode {
             lambda,
@@ -338,4 +383,36 @@ impl<'a> SpectrumSearch<'a> {
             multiplicity: mult,
         })
     }
+
+    /// Member `i` of a pole-free cluster bracketed by `lo`, `hi` (its own budget).
+    fn member(&mut self, i: usize, lo: Probe, hi: Probe) -> Result<Member, ModalError> {
+        self.mode_start = self.s.evaluations;
+        match self.solve(i, lo, hi)? {
+            Found::Branch {
+                lambda,
+                eval,
+                eig,
+                branch,
+            } => Ok((lambda, eval, eig, branch)),
+            Found::Pole(x) => Err(ModalError::CountMismatch(x)),
+        }
+    }
+}
+
+/// The residue block of a pole-free cluster from its solved members: members whose roots
+/// agree to [`DEGENERATE_REL`] form one degenerate eigenspace (V G⁻¹ Vᵀ over their branches
+/// at the first one's root), the others each their own term at their own root.
+fn members_residue(members: &[Member]) -> Matrix6<f64> {
+    let mut r = Matrix6::zeros();
+    let mut g = 0;
+    while g < members.len() {
+        let (l0, e, eg, b) = &members[g];
+        let mut end = g + 1;
+        while end < members.len() && (members[end].0 - l0).abs() <= DEGENERATE_REL * l0 {
+            end += 1;
+        }
+        r += branch_residue(e, eg, *b, end - g);
+        g = end;
+    }
+    r
 }
