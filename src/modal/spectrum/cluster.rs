@@ -2,6 +2,7 @@
 //! M_ee^{1/2} R M_ee^{1/2}, R = Σ_{cluster} φ_ee φ_eeᵀ (mass-normalised modes), from D's
 //! null space in a pole-free interval or from the residue of D⁻¹ at a pole.
 
+use super::search::Member;
 use crate::modal::dynamic_stiffness::{DynEval, EigD, LoadedChains};
 use nalgebra::{Matrix6, SymmetricEigen, Vector6};
 
@@ -86,4 +87,29 @@ pub(super) fn residue_participations(
     let r = (im - ip) * (0.5 * lambda * h);
     let r = (r + r.transpose()) * 0.5;
     congruent_values(&mass_padded(p), &r)
+}
+
+/// Members of a cluster whose roots agree to this (relative) are one numerically degenerate
+/// eigenspace: their residue is V G⁻¹ Vᵀ at one root. Members further apart (split by less
+/// than the cluster probe) each get theirs at their own root — D' varies fast near a pole,
+/// so one evaluation for a split cluster would be off by (split)·D''/D'. Newton's noise
+/// on a degenerate root is ~1e-14; a split below 1e-12 changes D' by less than 1e-12·D''/D'.
+const DEGENERATE_REL: f64 = 1e-12;
+
+/// The residue block of a pole-free cluster from its solved members: members whose roots
+/// agree to [`DEGENERATE_REL`] form one degenerate eigenspace (V G⁻¹ Vᵀ over their branches
+/// at the first one's root), the others each their own term at their own root.
+pub(super) fn members_residue(members: &[Member]) -> Matrix6<f64> {
+    let mut r = Matrix6::zeros();
+    let mut g = 0;
+    while g < members.len() {
+        let (l0, e, eg, b) = &members[g];
+        let mut end = g + 1;
+        while end < members.len() && (members[end].0 - l0).abs() <= DEGENERATE_REL * l0 {
+            end += 1;
+        }
+        r += branch_residue(e, eg, *b, end - g);
+        g = end;
+    }
+    r
 }

@@ -52,8 +52,10 @@
 mod cluster;
 mod search;
 
+use super::dynamic_stiffness::LoadedChains;
 use super::solver::ModalSolver;
 use super::ModalError;
+use crate::cable::ChainKind;
 use search::SpectrumSearch;
 
 /// One natural frequency of the loaded problem.
@@ -140,5 +142,23 @@ impl ModalSolver {
     /// needs besides the cable models.
     pub fn ee_matrices(&self) -> (nalgebra::Matrix6<f64>, nalgebra::Matrix6<f64>) {
         (self.problem.m6, self.problem.k6)
+    }
+}
+
+impl LoadedChains {
+    /// Number of natural frequencies of the loaded model: the end-effector's DOF plus every
+    /// blocked eigenvalue (`usize::MAX` with a continuous chain).
+    pub(in crate::modal) fn total_modes(&self) -> usize {
+        let mut n = self.dim;
+        for c in &self.chains[..self.n_chains] {
+            match c.kind {
+                ChainKind::Continuous { m_total, .. } if m_total > 0.0 => return usize::MAX,
+                ChainKind::Discrete { m, n_el, .. } if m > 0.0 => {
+                    n += c.mult as usize * (n_el.max(1) - 1);
+                }
+                _ => {}
+            }
+        }
+        n
     }
 }

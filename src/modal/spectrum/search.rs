@@ -1,11 +1,9 @@
 //! The search for one mode: count brackets, pole probes, safeguarded Newton on a branch.
 
-use super::cluster::{branch_residue, participations, residue_participations};
+use super::cluster::{members_residue, participations, residue_participations};
 use super::{Mode, SpectrumParams};
-use crate::cable::ChainKind;
 use crate::modal::dynamic_stiffness::{quad, DynEval, EigD, EvalScratch, LoadedChains};
 use crate::modal::{lambda_to_hz, ModalError};
-use nalgebra::Matrix6;
 
 /// Without a better scale, the first bracket starts here (rad²/s²).
 const BRACKET_MIN: f64 = 1e-12;
@@ -23,12 +21,6 @@ const SUPERLINEAR_RATIO: f64 = 1e-2;
 /// Relative step of the symmetric residue quotient at a pole (error O(h²) from the other
 /// modes, while the cluster's own spread there is below the pole probe, ≪ h).
 const RESIDUE_STEP: f64 = 1e-7;
-/// Members of a cluster whose roots agree to this (relative) are one numerically degenerate
-/// eigenspace: their residue is V G⁻¹ Vᵀ at one root. Members further apart (split by less
-/// than the cluster probe) each get theirs at their own root — D' varies fast near a pole,
-/// so one evaluation for a split cluster would be off by (split)·D''/D'. Newton's noise
-/// on a degenerate root is ~1e-14; a split below 1e-12 changes D' by less than 1e-12·D''/D'.
-const DEGENERATE_REL: f64 = 1e-12;
 
 /// J, the blocked count and λ at one count probe.
 #[derive(Debug, Clone, Copy)]
@@ -67,7 +59,7 @@ struct Cluster {
 }
 
 /// One solved member of a pole-free cluster: its root, the evaluation there, its branch.
-type Member = (f64, DynEval, EigD, usize);
+pub(super) type Member = (f64, DynEval, EigD, usize);
 
 /// One sweep over the spectrum of the loaded problem, ascending.
 pub(super) struct SpectrumSearch<'a> {
@@ -79,24 +71,6 @@ pub(super) struct SpectrumSearch<'a> {
     scale: f64,
     /// Evaluation counter at the start of the current mode.
     mode_start: u32,
-}
-
-impl LoadedChains {
-    /// Number of natural frequencies of the loaded model: the end-effector's DOF plus every
-    /// blocked eigenvalue (`usize::MAX` with a continuous chain).
-    pub(in crate::modal) fn total_modes(&self) -> usize {
-        let mut n = self.dim;
-        for c in &self.chains[..self.n_chains] {
-            match c.kind {
-                ChainKind::Continuous { m_total, .. } if m_total > 0.0 => return usize::MAX,
-                ChainKind::Discrete { m, n_el, .. } if m > 0.0 => {
-                    n += c.mult as usize * (n_el.max(1) - 1);
-                }
-                _ => {}
-            }
-        }
-        n
-    }
 }
 
 impl<'a> SpectrumSearch<'a> {
@@ -283,16 +257,7 @@ impl<'a> SpectrumSearch<'a> {
             } else if mu < 0.0 {
                 hi.x = x;
             }
-            let (mut g, mut dg) = (mu, dmu);
-            if pb.is_finite() {
-                let w = pb - x;
-                (g, dg) = (g * w, dg * w - g);
-            }
-            if pa > 0.0 {
-                let w = x - pa;
-                (g, dg) = (g * w, dg * w + g);
-            }
-            let xn = if dg < 0.0 { x - g / dg } else { f64::NAN };
+            let xn = pole_free_newton(mu, dmu, x, pa, pb);
             let inside = xn > lo.x && xn < hi.x;
             let step = (xn - x).abs();
             let collapsed = hi.x - lo.x <= COLLAPSE_ULPS * f64::EPSILON * x;
@@ -399,20 +364,21 @@ impl<'a> SpectrumSearch<'a> {
     }
 }
 
-/// The residue block of a pole-free cluster from its solved members: members whose roots
-/// agree to [`DEGENERATE_REL`] form one degenerate eigenspace (V G⁻¹ Vᵀ over their branches
-/// at the first one's root), the others each their own term at their own root.
-fn members_residue(members: &[Member]) -> Matrix6<f64> {
-    let mut r = Matrix6::zeros();
-    let mut g = 0;
-    while g < members.len() {
-        let (l0, e, eg, b) = &members[g];
-        let mut end = g + 1;
-        while end < members.len() && (members[end].0 - l0).abs() <= DEGENERATE_REL * l0 {
-            end += 1;
-        }
-        r += branch_residue(e, eg, *b, end - g);
-        g = end;
+/// The Newton iterate from x for μ(λ)(λ − pa)(pb − λ) (the poles bounding the interval
+/// removed; pa = 0 and pb = ∞ add nothing), NaN when the derivative is not negative.
+fn pole_free_newton(mu: f64, dmu: f64, x: f64, pa: f64, pb: f64) -> f64 {
+    let (mut g, mut dg) = (mu, dmu);
+    if pb.is_finite() {
+        let w = pb - x;
+        (g, dg) = (g * w, dg * w - g);
     }
-    r
+    if pa > 0.0 {
+        let w = x - pa;
+        (g, dg) = (g * w, dg * w + g);
+    }
+    if dg < 0.0 {
+        x - g / dg
+    } else {
+        f64::NAN
+    }
 }
