@@ -8,7 +8,9 @@ use super::{json_f64, CliError};
 use crate::estimator::{BuildError, Estimator, Status};
 use crate::kinematics::Pose;
 use crate::scene::{ElementKind, Scene};
-use crate::study::analysis::{analyze, AnalysisReport, AnalyzeOptions, SolverChoice};
+use crate::study::analysis::{
+    analyze, assembled_matrices, AnalysisReport, AnalyzeOptions, SolverChoice,
+};
 use clap::Args;
 use nalgebra::Vector3;
 use std::time::Instant;
@@ -33,6 +35,11 @@ pub struct AnalyzeArgs {
     /// eigenvalues next to the dense solver's bound ε·λ_max/λ.
     #[arg(long)]
     pub compare_dense: bool,
+    /// Also write the assembled stiffness K (N/m) and mass M (kg) of the structured path's
+    /// models to PREFIX.K.mtx and PREFIX.M.mtx (Matrix Market, symmetric, every f64 digit;
+    /// DOF order: end-effector first, then each cable's interior nodes from the anchor).
+    #[arg(long, value_name = "PREFIX")]
+    pub export_matrices: Option<std::path::PathBuf>,
     /// One JSON object on stdout instead of tables.
     #[arg(long)]
     pub json: bool,
@@ -74,6 +81,9 @@ pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
         compare_dense: a.compare_dense,
     };
     let r = analyze(&s, &opts).map_err(|e| CliError::Analysis(e.to_string()))?;
+    if let Some(prefix) = &a.export_matrices {
+        export_matrices(&s, prefix)?;
+    }
     if a.json {
         let o = serde_json::to_string(&r).map_err(|e| CliError::Analysis(e.to_string()))?;
         println!("{o}");
@@ -81,6 +91,42 @@ pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
         print_report(&r);
     }
     Ok(())
+}
+
+/// K and M of the structured path's models as PREFIX.K.mtx and PREFIX.M.mtx.
+fn export_matrices(s: &Scene, prefix: &std::path::Path) -> Result<(), CliError> {
+    let (k, m) = assembled_matrices(s).map_err(|e| CliError::Analysis(e.to_string()))?;
+    for (name, a) in [("K", &k), ("M", &m)] {
+        let mut path = prefix.as_os_str().to_owned();
+        path.push(format!(".{name}.mtx"));
+        let text = matrix_market(a);
+        std::fs::write(&path, text).map_err(|e| {
+            CliError::Analysis(format!("--export-matrices {}: {e}", path.to_string_lossy()))
+        })?;
+    }
+    Ok(())
+}
+
+/// The lower triangle of a symmetric matrix in Matrix Market coordinate format, with
+/// shortest round-trip f64 values.
+fn matrix_market(a: &nalgebra::DMatrix<f64>) -> String {
+    use std::fmt::Write;
+    let mut entries = String::new();
+    let mut nnz = 0usize;
+    for j in 0..a.ncols() {
+        for i in j..a.nrows() {
+            let v = a[(i, j)];
+            if v != 0.0 {
+                nnz += 1;
+                let _ = writeln!(entries, "{} {} {v:?}", i + 1, j + 1);
+            }
+        }
+    }
+    format!(
+        "%%MatrixMarket matrix coordinate real symmetric\n{} {} {nnz}\n{entries}",
+        a.nrows(),
+        a.ncols()
+    )
 }
 
 /// `structured` or `dense`.

@@ -17,6 +17,10 @@ use crate::scene::{ElementKind, Scene};
 use serde::Serialize;
 use std::time::Instant;
 
+/// Largest number of modes one analysis computes (the report holds them all; 10⁵ modes
+/// take seconds with the structured engine).
+pub const MAX_ANALYZE_MODES: usize = 100_000;
+
 /// Which eigensolver answers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -138,6 +142,12 @@ pub enum AnalyzeError {
 
 /// Analyse the scene at its own pose (`ee_position_m`, `ee_orientation_wxyz`) and T_min.
 pub fn analyze(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, AnalyzeError> {
+    if opts.modes > MAX_ANALYZE_MODES {
+        return Err(AnalyzeError::Usage(format!(
+            "--modes {}: at most {MAX_ANALYZE_MODES}",
+            opts.modes
+        )));
+    }
     match opts.solver {
         SolverChoice::Structured => structured(scene, opts),
         SolverChoice::Dense if opts.compare_dense => Err(AnalyzeError::Usage(
@@ -265,4 +275,23 @@ fn dense(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, Analyze
 /// The dense bound ε·λ_max/λ (re-exported for the comparison).
 pub(super) fn dense_bound(lambda: f64, lambda_max: f64) -> f64 {
     dense_relative_accuracy(lambda, lambda_max)
+}
+
+/// The assembled K (N/m) and M (kg) of the structured path's models at the scene's pose
+/// (same tensions as [`analyze`] with the structured solver), for external references.
+/// DOF order: the end-effector's 3 (or 6) first, then each cable's interior nodes from the
+/// anchor. Refused beyond [`crate::modal::DENSE_MEMORY_BUDGET_BYTES`].
+pub fn assembled_matrices(
+    scene: &Scene,
+) -> Result<(nalgebra::DMatrix<f64>, nalgebra::DMatrix<f64>), AnalyzeError> {
+    let mut est = Estimator::new(scene).map_err(|e| AnalyzeError::Build(e.to_string()))?;
+    let e = *est.update(&pose_of(scene), scene.t_min_n);
+    if let Some(err) = e.error {
+        return Err(AnalyzeError::Status {
+            status: e.status.as_str(),
+            reason: err.to_string(),
+        });
+    }
+    est.dense_matrices()
+        .map_err(|e| AnalyzeError::Solve(e.to_string()))
 }

@@ -33,7 +33,7 @@ pub(super) fn compare(
     let t0 = Instant::now();
     let d = est
         .dense_modes(true)
-        .map_err(|e| AnalyzeError::Solve(format!("dense reference: {e}")))?;
+        .map_err(|e| AnalyzeError::Solve(e.to_string()))?;
     let dense_seconds = t0.elapsed().as_secs_f64();
     let (mut worst, mut bound) = (0.0f64, f64::NAN);
     for (i, m) in modes.iter().enumerate().take(d.lambda.len()) {

@@ -1,4 +1,6 @@
-//! Offline studies over the real-time estimator: frequency maps over a workspace grid
+//! Offline studies over the real-time estimator: the analysis of one pose that `analyze`
+//! prints ([`analysis`]: the first K modes by the structured engine or the dense reference),
+//! frequency maps over a workspace grid
 //! ([`map`]), frequencies along a trajectory ([`trajectory`]) and against the minimum tension
 //! ([`tmin`]), and what accuracy costs in time ([`accuracy`], with the dense mode-3
 //! convergence study of the paper's Figs. 5 and 10).

@@ -2,6 +2,7 @@
 //! M_ee^{1/2} R M_ee^{1/2}, R = Σ_{cluster} φ_ee φ_eeᵀ (mass-normalised modes), from D's
 //! null space in a pole-free interval or from the residue of D⁻¹ at a pole.
 
+use super::search::Member;
 use crate::modal::dynamic_stiffness::{DynEval, EigD, LoadedChains};
 use nalgebra::{Matrix6, SymmetricEigen, Vector6};
 
@@ -37,34 +38,31 @@ fn bilinear(u: &Vector6<f64>, a: &Matrix6<f64>, w: &Vector6<f64>) -> f64 {
     (u.transpose() * a * w)[(0, 0)]
 }
 
-/// The participations of a cluster of `mult` modes whose roots are branches `branch`,
-/// `branch + 1`, ... of D at the evaluation `e` (pole-free): with V those unit eigenvectors
-/// and G = Vᵀ(−D')V, the generalised eigenvalues of (Vᵀ M_ee V, G). A simple mode gets
-/// m_ee‖v‖²/vᵀ(−D')v.
-pub(super) fn null_space_participations(
-    p: &LoadedChains,
-    e: &DynEval,
-    eg: &EigD,
-    branch: usize,
-    mult: u32,
-) -> [f64; 6] {
-    let r = (mult as usize).min(p.dim.saturating_sub(branch));
+/// The end-effector block of the residue of D⁻¹ of the `r` modes whose roots are branches
+/// `branch`, `branch + 1`, ... of D at the evaluation `e` (pole-free, the roots equal):
+/// R = V G⁻¹ Vᵀ with V those unit eigenvectors and G = Vᵀ(−D')V. For one mode,
+/// v vᵀ / vᵀ(−D')v.
+pub(super) fn branch_residue(e: &DynEval, eg: &EigD, branch: usize, r: usize) -> Matrix6<f64> {
     let mut g = Matrix6::identity();
-    let mut pm = Matrix6::zeros();
+    let mut v = Matrix6::zeros();
     for j in 0..r {
+        v.set_column(j, &eg.vectors[branch + j]);
         for l in 0..r {
-            let (vj, vl) = (&eg.vectors[branch + j], &eg.vectors[branch + l]);
-            g[(j, l)] = -bilinear(vj, &e.dd, vl);
-            pm[(j, l)] = bilinear(vj, &p.m6, vl);
+            g[(j, l)] = -bilinear(&eg.vectors[branch + j], &e.dd, &eg.vectors[branch + l]);
         }
     }
-    // Generalised eigenvalues of (P, G): eigenvalues of C⁻¹ P C⁻ᵀ, G = C Cᵀ; equal to
-    // those of Cᵀ-congruence with G⁻¹ (same spectrum as G⁻¹P).
     let Some(gi) = g.try_inverse() else {
-        return [f64::NAN; 6];
+        return Matrix6::repeat(f64::NAN);
     };
-    let gi = (gi + gi.transpose()) * 0.5;
-    congruent_values(&gi, &pm)
+    // Padding columns of V are zero: they add nothing.
+    let res = v * gi * v.transpose();
+    (res + res.transpose()) * 0.5
+}
+
+/// The participations of a cluster from its residue block R: the eigenvalues of
+/// M_ee^{1/2} R M_ee^{1/2}, largest first.
+pub(super) fn participations(p: &LoadedChains, r: &Matrix6<f64>) -> [f64; 6] {
+    congruent_values(&mass_padded(p), r)
 }
 
 /// The participations of the cluster at λ from the residue of D⁻¹, by the symmetric
@@ -89,4 +87,29 @@ pub(super) fn residue_participations(
     let r = (im - ip) * (0.5 * lambda * h);
     let r = (r + r.transpose()) * 0.5;
     congruent_values(&mass_padded(p), &r)
+}
+
+/// Members of a cluster whose roots agree to this (relative) are one numerically degenerate
+/// eigenspace: their residue is V G⁻¹ Vᵀ at one root. Members further apart (split by less
+/// than the cluster probe) each get theirs at their own root — D' varies fast near a pole,
+/// so one evaluation for a split cluster would be off by (split)·D''/D'. Newton's noise
+/// on a degenerate root is ~1e-14; a split below 1e-12 changes D' by less than 1e-12·D''/D'.
+const DEGENERATE_REL: f64 = 1e-12;
+
+/// The residue block of a pole-free cluster from its solved members: members whose roots
+/// agree to [`DEGENERATE_REL`] form one degenerate eigenspace (V G⁻¹ Vᵀ over their branches
+/// at the first one's root), the others each their own term at their own root.
+pub(super) fn members_residue(members: &[Member]) -> Matrix6<f64> {
+    let mut r = Matrix6::zeros();
+    let mut g = 0;
+    while g < members.len() {
+        let (l0, e, eg, b) = &members[g];
+        let mut end = g + 1;
+        while end < members.len() && (members[end].0 - l0).abs() <= DEGENERATE_REL * l0 {
+            end += 1;
+        }
+        r += branch_residue(e, eg, *b, end - g);
+        g = end;
+    }
+    r
 }

@@ -21,8 +21,10 @@
 //! g(λ) = μ(λ)(λ − P_lo)(P_hi − λ), the bounding poles removed as in the first-root solver,
 //! with μ' = vᵀD'v (v the unit eigenvector), safeguarded by the bracket (bisection whenever
 //! a step leaves it or fails to halve it), and stops when a step is below
-//! [`SpectrumParams::rel_tol`] (1e-14 relative by default: quadratic convergence puts the
-//! iterate far below that). Each mode has a finite evaluation budget
+//! [`SpectrumParams::rel_tol`] (1e-14 relative by default), or below 1e-10 and 100× below
+//! the previous Newton step (superlinear convergence seen: the next iterate is within
+//! ~step² of the root; rounding noise ends the iteration this way). D is then evaluated at
+//! the root itself. Each mode has a finite evaluation budget
 //! ([`SpectrumParams::max_evaluations_per_mode`]); exceeding it is
 //! [`ModalError::NoConvergence`].
 //!
@@ -39,7 +41,8 @@
 //! tr(M_ee R) is the cluster's total participation (what a dense solver's arbitrary basis
 //! gives when summed over the cluster). In a pole-free interval, with V the unit
 //! eigenvectors of D(λ) of the cluster's branches and G = Vᵀ(−D'(λ))V, R = V G⁻¹ Vᵀ; a
-//! simple mode gets m_ee‖v‖²/vᵀ(−D')v as before. At a pole R is the symmetric difference
+//! simple mode gets m_ee‖v‖²/vᵀ(−D')v as before; members whose roots agree to 1e-12 share
+//! one V, members of a split cluster each contribute at their own root. At a pole R is the symmetric difference
 //! quotient ½[(λ − σ₋)D(σ₋)⁻¹ + (λ − σ₊)D(σ₊)⁻¹] at σ± = λ(1 ± h) (error O(h²)); pure
 //! chain modes (end-effector still) get participation 0. Members beyond the rank of R get 0.
 //!
@@ -49,8 +52,10 @@
 mod cluster;
 mod search;
 
+use super::dynamic_stiffness::LoadedChains;
 use super::solver::ModalSolver;
 use super::ModalError;
+use crate::cable::ChainKind;
 use search::SpectrumSearch;
 
 /// One natural frequency of the loaded problem.
@@ -137,5 +142,23 @@ impl ModalSolver {
     /// needs besides the cable models.
     pub fn ee_matrices(&self) -> (nalgebra::Matrix6<f64>, nalgebra::Matrix6<f64>) {
         (self.problem.m6, self.problem.k6)
+    }
+}
+
+impl LoadedChains {
+    /// Number of natural frequencies of the loaded model: the end-effector's DOF plus every
+    /// blocked eigenvalue (`usize::MAX` with a continuous chain).
+    pub(in crate::modal) fn total_modes(&self) -> usize {
+        let mut n = self.dim;
+        for c in &self.chains[..self.n_chains] {
+            match c.kind {
+                ChainKind::Continuous { m_total, .. } if m_total > 0.0 => return usize::MAX,
+                ChainKind::Discrete { m, n_el, .. } if m > 0.0 => {
+                    n += c.mult as usize * (n_el.max(1) - 1);
+                }
+                _ => {}
+            }
+        }
+        n
     }
 }

@@ -1,8 +1,7 @@
 //! The search for one mode: count brackets, pole probes, safeguarded Newton on a branch.
 
-use super::cluster::{null_space_participations, residue_participations};
+use super::cluster::{members_residue, participations, residue_participations};
 use super::{Mode, SpectrumParams};
-use crate::cable::ChainKind;
 use crate::modal::dynamic_stiffness::{quad, DynEval, EigD, EvalScratch, LoadedChains};
 use crate::modal::{lambda_to_hz, ModalError};
 
@@ -12,9 +11,13 @@ const BRACKET_MIN: f64 = 1e-12;
 const BRACKET_GROWTH: f64 = 2.0;
 /// The bracket counts as collapsed when narrower than this many ε relative to λ.
 const COLLAPSE_ULPS: f64 = 4.0;
-/// Once a Newton step is below this (relative), quadratic convergence puts the next iterate
-/// within ~(step)² of the root, far below the target: it is accepted.
-const QUADRATIC_ACCEPT: f64 = 1e-8;
+/// A Newton step below this (relative) that is also below [`SUPERLINEAR_RATIO`] times the
+/// previous one shows superlinear convergence: the iterate after it is within ~(step)²
+/// (relative) of the root, far below the target, and it is accepted (steps of rounding
+/// noise, ~1e-13, end the iteration this way instead of bouncing).
+const NOISE_STEP: f64 = 1e-10;
+/// See [`NOISE_STEP`]: quadratic convergence shrinks steps far faster than this.
+const SUPERLINEAR_RATIO: f64 = 1e-2;
 /// Relative step of the symmetric residue quotient at a pole (error O(h²) from the other
 /// modes, while the cluster's own spread there is below the pole probe, ≪ h).
 const RESIDUE_STEP: f64 = 1e-7;
@@ -27,7 +30,9 @@ pub(super) struct Probe {
     pub(super) below: u32,
 }
 
-/// Where a mode was found.
+/// Where a mode was found. Short-lived, returned once per mode: the large variant's size
+/// (one evaluation of D) does not matter.
+#[allow(clippy::large_enum_variant)]
 enum Found {
     /// At a chain pole (the count steps between the probes around it).
     Pole(f64),
@@ -48,7 +53,13 @@ struct Cluster {
     start: usize,
     mult: u32,
     parts: [f64; 6],
+    /// The roots of the first `presolved` members (solved with the first one).
+    lambdas: [f64; 6],
+    presolved: usize,
 }
+
+/// One solved member of a pole-free cluster: its root, the evaluation there, its branch.
+pub(super) type Member = (f64, DynEval, EigD, usize);
 
 /// One sweep over the spectrum of the loaded problem, ascending.
 pub(super) struct SpectrumSearch<'a> {
@@ -60,24 +71,6 @@ pub(super) struct SpectrumSearch<'a> {
     scale: f64,
     /// Evaluation counter at the start of the current mode.
     mode_start: u32,
-}
-
-impl LoadedChains {
-    /// Number of natural frequencies of the loaded model: the end-effector's DOF plus every
-    /// blocked eigenvalue (`usize::MAX` with a continuous chain).
-    pub(in crate::modal) fn total_modes(&self) -> usize {
-        let mut n = self.dim;
-        for c in &self.chains[..self.n_chains] {
-            match c.kind {
-                ChainKind::Continuous { m_total, .. } if m_total > 0.0 => return usize::MAX,
-                ChainKind::Discrete { m, n_el, .. } if m > 0.0 => {
-                    n += c.mult as usize * (n_el.max(1) - 1);
-                }
-                _ => {}
-            }
-        }
-        n
-    }
 }
 
 impl<'a> SpectrumSearch<'a> {
@@ -101,6 +94,8 @@ impl<'a> SpectrumSearch<'a> {
                 start: 0,
                 mult: 0,
                 parts: [0.0; 6],
+                lambdas: [0.0; 6],
+                presolved: 0,
             },
             scale: f64::NAN,
             mode_start: 0,
@@ -128,11 +123,15 @@ impl<'a> SpectrumSearch<'a> {
         self.mode_start = self.s.evaluations;
         let cl = self.cl;
         if cl.mult > 0 && (i as u64) < cl.hi.count as u64 && i >= cl.start {
-            let lambda = match self.solve(i, cl.lo, cl.hi)? {
-                Found::Pole(x) => x,
-                Found::Branch { lambda, .. } => lambda,
-            };
             let j = i - cl.start;
+            let lambda = if j < cl.presolved {
+                cl.lambdas[j]
+            } else {
+                match self.solve(i, cl.lo, cl.hi)? {
+                    Found::Pole(x) => x,
+                    Found::Branch { lambda, .. } => lambda,
+                }
+            };
             return Ok(Mode {
                 lambda,
                 frequency_hz: lambda_to_hz(lambda),
@@ -258,26 +257,27 @@ impl<'a> SpectrumSearch<'a> {
             } else if mu < 0.0 {
                 hi.x = x;
             }
-            let (mut g, mut dg) = (mu, dmu);
-            if pb.is_finite() {
-                let w = pb - x;
-                (g, dg) = (g * w, dg * w - g);
-            }
-            if pa > 0.0 {
-                let w = x - pa;
-                (g, dg) = (g * w, dg * w + g);
-            }
-            let xn = if dg < 0.0 { x - g / dg } else { f64::NAN };
+            let xn = pole_free_newton(mu, dmu, x, pa, pb);
             let inside = xn > lo.x && xn < hi.x;
             let step = (xn - x).abs();
             let collapsed = hi.x - lo.x <= COLLAPSE_ULPS * f64::EPSILON * x;
-            let converged = step <= self.params.rel_tol * x || prev_step <= QUADRATIC_ACCEPT * x;
+            let converged = step <= self.params.rel_tol * x
+                || (prev_step.is_finite()
+                    && step <= NOISE_STEP * x
+                    && step <= SUPERLINEAR_RATIO * prev_step);
             if mu == 0.0 || collapsed || (inside && converged) {
                 let lambda = if inside { xn } else { x };
+                // D' at the root itself: near a pole it changes by 2·step/distance, and the
+                // participation reads it (one more evaluation).
+                let eval = if lambda != x {
+                    self.s.eval(self.p, lambda)
+                } else {
+                    e
+                };
                 return Ok(Found::Branch {
                     lambda,
-                    eval: e,
-                    eig: eg,
+                    eig: eval.eig(),
+                    eval,
                     branch,
                 });
             }
@@ -310,10 +310,20 @@ impl<'a> SpectrumSearch<'a> {
         let mult = hi.count - i as u32;
         let (pa, pb) = self.p.pole_interval(lo.x);
         let pole_free = pb > hi.x && pa < lo.x;
+        let mut lambdas = [lambda; 6];
+        let mut presolved = 0;
         let parts = match found {
             Found::Branch {
                 eval, eig, branch, ..
-            } if pole_free => null_space_participations(self.p, &eval, &eig, branch, mult),
+            } if pole_free && branch + mult as usize <= self.p.dim => {
+                let mut members = [(lambda, eval, eig, branch); 6];
+                for k in 1..mult as usize {
+                    members[k] = self.member(i + k, lo, hi)?;
+                    lambdas[k] = members[k].0;
+                }
+                presolved = mult as usize;
+                participations(self.p, &members_residue(&members[..mult as usize]))
+            }
             _ => {
                 let h = RESIDUE_STEP;
                 let em = self.s.eval(self.p, lambda * (1.0 - h));
@@ -327,6 +337,8 @@ impl<'a> SpectrumSearch<'a> {
             start: i,
             mult,
             parts,
+            lambdas,
+            presolved,
         };
         Ok(Mode {
             lambda,
@@ -335,5 +347,38 @@ impl<'a> SpectrumSearch<'a> {
             cluster_start: i,
             multiplicity: mult,
         })
+    }
+
+    /// Member `i` of a pole-free cluster bracketed by `lo`, `hi` (its own budget).
+    fn member(&mut self, i: usize, lo: Probe, hi: Probe) -> Result<Member, ModalError> {
+        self.mode_start = self.s.evaluations;
+        match self.solve(i, lo, hi)? {
+            Found::Branch {
+                lambda,
+                eval,
+                eig,
+                branch,
+            } => Ok((lambda, eval, eig, branch)),
+            Found::Pole(x) => Err(ModalError::CountMismatch(x)),
+        }
+    }
+}
+
+/// The Newton iterate from x for μ(λ)(λ − pa)(pb − λ) (the poles bounding the interval
+/// removed; pa = 0 and pb = ∞ add nothing), NaN when the derivative is not negative.
+fn pole_free_newton(mu: f64, dmu: f64, x: f64, pa: f64, pb: f64) -> f64 {
+    let (mut g, mut dg) = (mu, dmu);
+    if pb.is_finite() {
+        let w = pb - x;
+        (g, dg) = (g * w, dg * w - g);
+    }
+    if pa > 0.0 {
+        let w = x - pa;
+        (g, dg) = (g * w, dg * w + g);
+    }
+    if dg < 0.0 {
+        x - g / dg
+    } else {
+        f64::NAN
     }
 }
