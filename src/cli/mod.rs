@@ -11,6 +11,7 @@
 //! | `accuracy` | [`accuracy`](mod@accuracy) | what accuracy costs: error and time of every model |
 //! | `map` | [`map`](mod@map) | f1 over a workspace grid |
 //! | `trajectory` | [`trajectory`](mod@trajectory) | f1 along the circle or a CSV path |
+//! | `modes` | [`modes`](mod@modes) | the lowest modes with their shapes: table, CSV, SVG |
 //! | `sweep-tmin` | [`sweep_tmin`] | f1 against T_min with the √T_min fit |
 //!
 //! Functions here return `Result<_, CliError>`; the binary maps errors to a one-line reason
@@ -22,6 +23,7 @@ pub mod args;
 pub mod bench;
 pub mod error;
 pub mod map;
+pub mod modes;
 pub mod serve;
 pub mod sweep_tmin;
 pub mod trajectory;
@@ -64,6 +66,8 @@ pub enum Command {
     Trajectory(trajectory::TrajectoryArgs),
     /// f1 against T_min, with the √T_min fit.
     SweepTmin(sweep_tmin::SweepTminArgs),
+    /// The lowest modes of one pose with their shapes: table, CSV and SVG.
+    Modes(modes::ModesArgs),
 }
 
 /// Heap allocation counter supplied by the binary's global allocator (0 when none).
@@ -81,6 +85,7 @@ pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
         Command::Map(a) => map::run(&a),
         Command::Trajectory(a) => trajectory::run(&a),
         Command::SweepTmin(a) => sweep_tmin::run(&a),
+        Command::Modes(a) => modes::run(&a),
     }
 }
 

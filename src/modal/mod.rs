@@ -52,6 +52,7 @@ mod eig3;
 mod error;
 mod first_mode;
 mod rigid;
+mod shapes;
 mod solver;
 
 pub use dense::{
@@ -63,6 +64,7 @@ pub use ee_tracker::RescanCounts;
 pub use eig3::{eig3, eig3_jacobi, Eig3};
 pub use error::ModalError;
 pub use rigid::{attach_map, rigid_geometric_stiffness};
+pub use shapes::{ModeShape, ModeShapes, ShapeError, ShapeParams};
 pub use solver::ModalSolver;
 
 /// Convert λ = ω² (rad²/s²) to Hz.

@@ -15,7 +15,7 @@ use nalgebra::{Matrix3, Matrix6, Vector3};
 pub struct ModalSolver {
     params: ModalParams,
     /// What `load` computes; read-only on the hot path.
-    problem: LoadedChains,
+    pub(in crate::modal) problem: LoadedChains,
     /// What one evaluation of D(λ) writes.
     scratch: EvalScratch,
     /// The first root's state between cycles (certificate schedule, weighted sum rule).
