@@ -135,7 +135,8 @@ impl PoseModel {
         m.fixed_view_mut::<3, 3>(0, 0)
             .copy_from(&(Matrix3::identity() * self.scene.ee_mass_kg));
         if self.scene.rigid {
-            m.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.inertia_kg_m2);
+            m.fixed_view_mut::<3, 3>(3, 3)
+                .copy_from(&self.inertia_kg_m2);
         }
         m
     }

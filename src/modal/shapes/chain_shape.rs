@@ -172,7 +172,10 @@ mod tests {
             let (a, b) = (k - lambda * m / 3.0, -k - lambda * m / 6.0);
             for j in 1..n {
                 let r = b * sh.w[j - 1] + 2.0 * a * sh.w[j] + b * sh.w[j + 1];
-                assert!(r.abs() < 1e-12 * (a.abs() + b.abs()), "λ {lambda} j {j}: {r}");
+                assert!(
+                    r.abs() < 1e-12 * (a.abs() + b.abs()),
+                    "λ {lambda} j {j}: {r}"
+                );
             }
             let s = crate::cable::eval_discrete_recurrence(k, m, n, lambda).s;
             // Relative to the larger of |s| and k (s crosses zero).

@@ -42,7 +42,9 @@ impl ModalSolver {
         while found < k {
             let lambda = self.bisect_next(lo, hi, found, params)?;
             let above = lambda * (1.0 + params.cluster_rel);
-            let m = (self.count_below(above) as usize).saturating_sub(found).max(1);
+            let m = (self.count_below(above) as usize)
+                .saturating_sub(found)
+                .max(1);
             out.push((lambda, m as u32));
             found += m;
             lo = above;

@@ -37,9 +37,11 @@
 //! from its singular value decomposition: the right singular vectors of the m smallest
 //! singular values. λ* is known to a relative δ (≈ 1e-12 from the count's bisection, or the
 //! dense solver's ε·λ_max/λ), so those singular values are O(δ·‖A‖) instead of 0 and the
-//! subspace is accurate to O(δ·‖A‖/σ_{m+1}); [`ShapeParams::null_tol`] bounds σ_m/σ_max, and
-//! σ_{m+1}/σ_max must exceed it (else the multiplicity given is smaller than the null
-//! space's).
+//! subspace is accurate to about σ_m/σ_{m+1}; [`ShapeParams::null_tol`] bounds that ratio
+//! (a larger one means the multiplicity given does not match the null space, or λ is too
+//! coarse to separate it from a neighbour). Before the SVD the matrix is equilibrated
+//! (Ruiz: rows and columns scaled to unit largest entry): the chains' rows range from T/l
+//! to EA/l, and unbalanced, the SVD's backward error ε‖A‖ would swamp the soft rows.
 //!
 //! **Normalisation.** The consistent mass of the model is block diagonal in the chain
 //! coordinates (its 3 × 3 blocks are multiples of I and the chain directions are
@@ -80,15 +82,19 @@ pub const MAX_CONTINUOUS_SAMPLES: usize = 10_001;
 /// Parameters of the mode-shape recovery (finite bounds everywhere).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ShapeParams {
-    /// Largest σ_m/σ_max of the bordered system accepted for an eigenvalue of multiplicity
-    /// m (σ the singular values); and σ_{m+1}/σ_max must exceed it.
+    /// Largest σ_m/σ_{m+1} of the (equilibrated) bordered system accepted for an eigenvalue
+    /// of multiplicity m (σ the singular values, ascending): the m-dimensional null space
+    /// must be clearly separated. The subspace's error is about this ratio times the
+    /// relative error of λ's effect, so it is also a quality measure of the input λ.
     pub null_tol: f64,
     /// Points at which a continuous cable is sampled, anchor and end included (2 ..=
     /// [`MAX_CONTINUOUS_SAMPLES`]).
     pub continuous_samples: usize,
     /// Largest number of QR sweeps of the singular value decomposition.
     pub svd_max_iterations: usize,
-    /// Relative width within which the count groups eigenvalues into one cluster
+    /// Relative width within which the count groups eigenvalues into one cluster: exact
+    /// clusters (identical cables) agree to rounding, ~1e-15; distinct modes this close
+    /// would leave more than m small singular values in the bordered system (an error)
     /// ([`ModalSolver::eigen_clusters`](crate::modal::ModalSolver::eigen_clusters)).
     pub cluster_rel: f64,
     /// Largest number of count evaluations for one cluster's bisection.
@@ -98,10 +104,10 @@ pub struct ShapeParams {
 impl Default for ShapeParams {
     fn default() -> Self {
         ShapeParams {
-            null_tol: 1e-6,
+            null_tol: 1e-3,
             continuous_samples: 41,
             svd_max_iterations: 1000,
-            cluster_rel: 1e-9,
+            cluster_rel: 1e-12,
             max_bisections: 400,
         }
     }
@@ -126,7 +132,8 @@ pub struct ModeShape {
     pub cluster_start: usize,
     /// Multiplicity of λ (shapes in the cluster).
     pub multiplicity: u32,
-    /// σ_m/σ_max of the bordered system at λ: how far λ is from an exact eigenvalue.
+    /// σ_m/σ_{m+1} of the equilibrated bordered system at λ: how far λ is from an exact
+    /// eigenvalue of multiplicity m, relative to the distance to the next one.
     pub null_residual: f64,
 }
 

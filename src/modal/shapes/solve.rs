@@ -78,7 +78,11 @@ impl Layout {
                 }
                 l.kinds.push(c.kind);
             }
-            let n = if continuous { samples - 1 } else { m.n_el.max(1) };
+            let n = if continuous {
+                samples - 1
+            } else {
+                m.n_el.max(1)
+            };
             l.fractions
                 .push((0..=n).map(|j| j as f64 / n as f64).collect());
             l.cable_copies.push(mine);
@@ -198,22 +202,23 @@ impl ModalSolver {
             return Err(bad(f64::NAN, f64::NAN));
         }
         let col_scale = equilibrate(&mut a);
-        let svd = nalgebra::linalg::SVD::try_new(
-            a,
-            false,
-            true,
-            f64::EPSILON,
-            params.svd_max_iterations,
-        )
-        .ok_or(ShapeError::Svd(lambda))?;
+        let svd =
+            nalgebra::linalg::SVD::try_new(a, false, true, f64::EPSILON, params.svd_max_iterations)
+                .ok_or(ShapeError::Svd(lambda))?;
         let vt = svd.v_t.ok_or(ShapeError::Svd(lambda))?;
         let s = &svd.singular_values;
         let smax = s.max();
         let mut idx: Vec<usize> = (0..n).collect();
         idx.sort_by(|&i, &j| s[i].total_cmp(&s[j]));
         let sigma_m = s[idx[m - 1]] / smax;
-        let sigma_next = if m < n { s[idx[m]] / smax } else { f64::INFINITY };
-        if !(sigma_m <= params.null_tol && sigma_next > params.null_tol) {
+        let sigma_next = if m < n {
+            s[idx[m]] / smax
+        } else {
+            f64::INFINITY
+        };
+        // The null space is the m-dimensional one only if σ_m is clearly below σ_{m+1}.
+        let separation = sigma_m / sigma_next;
+        if !(separation <= params.null_tol) {
             return Err(bad(sigma_m, sigma_next));
         }
         let mut vectors = DMatrix::zeros(n, m);
@@ -223,7 +228,7 @@ impl ModalSolver {
         }
         Ok(NullSpace {
             vectors,
-            residual: sigma_m,
+            residual: separation,
         })
     }
 
@@ -354,7 +359,11 @@ fn nodes(
                 let sh = &shapes[cp.chain];
                 let amp = col[dim + q];
                 for (j, uj) in u.iter_mut().enumerate().take(last).skip(1) {
-                    let w = if sh.w.is_empty() { sh.at(fr[j]) } else { sh.w[j] };
+                    let w = if sh.w.is_empty() {
+                        sh.at(fr[j])
+                    } else {
+                        sh.w[j]
+                    };
                     *uj += cp.dir * (amp * w);
                 }
             }

@@ -79,12 +79,7 @@ pub fn modes_svg(scene: &Scene, geometry: &Geometry, shapes: &ModeShapes, k: usi
         100.0 * AMPLITUDE_OF_EXTENT
     );
     let mut body = String::new();
-    let top = title(
-        &mut body,
-        w,
-        &format!("Mode shapes: {}", scene.name),
-        &sub,
-    );
+    let top = title(&mut body, w, &format!("Mode shapes: {}", scene.name), &sub);
     let h = top + PANEL_H * rows as f64 + 10.0;
     let mut o = header(w, h);
     o.push_str(&body);
@@ -94,7 +89,10 @@ pub fn modes_svg(scene: &Scene, geometry: &Geometry, shapes: &ModeShapes, k: usi
         .collect();
     let mut all: Vec<Vector3<f64>> = undeformed.iter().flatten().copied().collect();
     all.push(p);
-    let (mut lo, mut hi) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));
+    let (mut lo, mut hi) = (
+        (f64::INFINITY, f64::INFINITY),
+        (f64::NEG_INFINITY, f64::NEG_INFINITY),
+    );
     let (mut bmin, mut bmax) = (all[0], all[0]);
     for q in &all {
         let (u, v) = iso(q);
@@ -116,10 +114,7 @@ pub fn modes_svg(scene: &Scene, geometry: &Geometry, shapes: &ModeShapes, k: usi
         let f = Frame {
             lo,
             scale,
-            origin: (
-                x0 + 15.0 + (iw - (hi.0 - lo.0) * scale) / 2.0,
-                y0 + 35.0,
-            ),
+            origin: (x0 + 15.0 + (iw - (hi.0 - lo.0) * scale) / 2.0, y0 + 35.0),
             h: (hi.1 - lo.1) * scale,
         };
         let mult = if m.multiplicity > 1 {
@@ -184,7 +179,12 @@ fn panel(
     let pd = p + m.ee.fixed_rows::<3>(0) * s;
     for (nodes, u) in undeformed.iter().zip(&m.cables) {
         let pts: Vec<Vector3<f64>> = nodes.iter().zip(u).map(|(x, d)| x + d * s).collect();
-        polyline(o, f, &pts, &format!(r#"stroke="{DEFORMED}" stroke-width="1.5""#));
+        polyline(
+            o,
+            f,
+            &pts,
+            &format!(r#"stroke="{DEFORMED}" stroke-width="1.5""#),
+        );
         // Spoke from the centroid to the attachment point (a point where they coincide).
         polyline(
             o,
