@@ -247,3 +247,78 @@ fn rigid_box_matches_dense() {
     assert_eq!(pm.dim(), 6);
     check_against_dense("box-6dof fem N=10", &pm);
 }
+
+/// All sampled node displacements of modes `range` (end-effector, then every cable node), as
+/// columns.
+fn sampled(s: &ModeShapes, range: std::ops::Range<usize>) -> DMatrix<f64> {
+    let cols: Vec<DVector<f64>> = range
+        .map(|i| {
+            let m = &s.modes[i];
+            let mut v: Vec<f64> = m.ee.iter().take(s.dim).copied().collect();
+            for nodes in &m.cables {
+                for u in nodes {
+                    v.extend_from_slice(u.as_slice());
+                }
+            }
+            DVector::from_vec(v)
+        })
+        .collect();
+    DMatrix::from_columns(&cols)
+}
+
+/// ‖V₁V₁ᵀ − V₂V₂ᵀ‖_F / ‖V₁V₁ᵀ‖_F through the small Gram matrices (basis-independent
+/// within a cluster).
+fn projector_distance(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
+    let (aa, bb, ab) = (a.transpose() * a, b.transpose() * b, a.transpose() * b);
+    let d2 = aa.norm_squared() + bb.norm_squared() - 2.0 * ab.norm_squared();
+    d2.max(0.0).sqrt() / aa.norm()
+}
+
+/// Continuous cables (closed-form sin(φx) shapes, no dense assembly) against the FEM shapes
+/// with N elements sampled at the same points (the FEM shapes are checked against dense
+/// above): the consistent-mass FEM converges as 1/N², so doubling N divides the distance by
+/// about 4 (accepted 3 ..= 5), and it is small at N = 80.
+#[test]
+fn continuous_shapes_are_the_limit_of_fem() {
+    // The distance comes from a difference of squared norms: resolution ≈ √ε.
+    const RESOLUTION: f64 = 1e-6;
+    let shapes_of = |el: ElementKind, n: usize, samples: usize| {
+        let pm = pose("planar-paper", el, n);
+        let p = ShapeParams {
+            continuous_samples: samples,
+            ..ShapeParams::default()
+        };
+        let mut solver = ModalSolver::new(ModalParams::default());
+        pm.load(&mut solver);
+        let cl = solver.eigen_clusters(10, &p).unwrap();
+        let s = solver.mode_shapes(&pm.models, &pm.geometry.arm_m, &cl, &p).unwrap();
+        (cl, s)
+    };
+    let mut last: Option<Vec<f64>> = None;
+    for n in [20usize, 40, 80] {
+        let (cc, sc) = shapes_of(ElementKind::Continuous, 1, n + 1);
+        let (cf, sf) = shapes_of(ElementKind::Fem, n, 2);
+        let mut errs = Vec::new();
+        let mut start = 0;
+        for (a, b) in cc.iter().zip(&cf) {
+            assert_eq!(a.1, b.1, "N={n}: multiplicities");
+            let r = start..start + a.1 as usize;
+            errs.push(projector_distance(&sampled(&sc, r.clone()), &sampled(&sf, r)));
+            start += a.1 as usize;
+        }
+        let shown: Vec<String> = errs.iter().map(|e| format!("{e:.2e}")).collect();
+        eprintln!("continuous vs fem N={n}: projector distances per cluster {shown:?}");
+        if let Some(prev) = &last {
+            for (c, (p, e)) in prev.iter().zip(&errs).enumerate() {
+                if *p < RESOLUTION {
+                    continue; // at the Gram difference's resolution: nothing to converge
+                }
+                let ratio = p / e;
+                assert!((3.0..=5.0).contains(&ratio), "cluster {c}: N={n}: ratio {ratio:.2} ({p:.2e} → {e:.2e})");
+            }
+        }
+        last = Some(errs);
+    }
+    let worst = last.unwrap().into_iter().fold(0.0, f64::max);
+    assert!(worst < 1e-2, "N=80: {worst:.2e}");
+}
