@@ -291,7 +291,9 @@ fn continuous_shapes_are_the_limit_of_fem() {
         let mut solver = ModalSolver::new(ModalParams::default());
         pm.load(&mut solver);
         let cl = solver.eigen_clusters(10, &p).unwrap();
-        let s = solver.mode_shapes(&pm.models, &pm.geometry.arm_m, &cl, &p).unwrap();
+        let s = solver
+            .mode_shapes(&pm.models, &pm.geometry.arm_m, &cl, &p)
+            .unwrap();
         (cl, s)
     };
     let mut last: Option<Vec<f64>> = None;
@@ -303,7 +305,10 @@ fn continuous_shapes_are_the_limit_of_fem() {
         for (a, b) in cc.iter().zip(&cf) {
             assert_eq!(a.1, b.1, "N={n}: multiplicities");
             let r = start..start + a.1 as usize;
-            errs.push(projector_distance(&sampled(&sc, r.clone()), &sampled(&sf, r)));
+            errs.push(projector_distance(
+                &sampled(&sc, r.clone()),
+                &sampled(&sf, r),
+            ));
             start += a.1 as usize;
         }
         let shown: Vec<String> = errs.iter().map(|e| format!("{e:.2e}")).collect();
@@ -314,7 +319,10 @@ fn continuous_shapes_are_the_limit_of_fem() {
                     continue; // at the Gram difference's resolution: nothing to converge
                 }
                 let ratio = p / e;
-                assert!((3.0..=5.0).contains(&ratio), "cluster {c}: N={n}: ratio {ratio:.2} ({p:.2e} → {e:.2e})");
+                assert!(
+                    (3.0..=5.0).contains(&ratio),
+                    "cluster {c}: N={n}: ratio {ratio:.2} ({p:.2e} → {e:.2e})"
+                );
             }
         }
         last = Some(errs);

@@ -45,8 +45,8 @@
 //!
 //! **Normalisation.** The consistent mass of the model is block diagonal in the chain
 //! coordinates (its 3 × 3 blocks are multiples of I and the chain directions are
-//! orthonormal), so φ_aᵀ M φ_b = φ_aᵀ M_ee φ_b + Σ_k [C_a C_b m_ii + (C_a e_b + e_a C_b) m_ie
-//! + e_a e_b m_ee] with e = b_kᵀφ the chain's end displacement and the element sums
+//! orthonormal), so φ_aᵀ M φ_b = φ_aᵀ M_ee φ_b +
+//! Σ_k [C_a C_b m_ii + (C_a e_b + e_a C_b) m_ie + e_a e_b m_ee] with e = b_kᵀφ the chain's end displacement and the element sums
 //! m_ii = (m/3)(Σ_{interior elements} (w_j² + w_j w_{j+1} + w_{j+1}²) + w_{N−1}²),
 //! m_ie = (m/6) w_{N−1}, m_ee = m/3 (μL ∫₀¹ w² dx for a continuous chain): exactly the
 //! dense M's quadratic form, in O(N) per chain. The m shapes of a cluster are
