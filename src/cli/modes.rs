@@ -36,7 +36,7 @@ pub struct ModesArgs {
     /// Write the mode shapes as CSV (mass-normalised, 1/√kg).
     #[arg(long)]
     pub csv: Option<PathBuf>,
-    /// Write the mode shapes as an SVG figure (isometric view, one panel per mode).
+    /// Write the mode shapes as an SVG figure (axonometric view, one panel per mode).
     #[arg(long)]
     pub svg: Option<PathBuf>,
 }

@@ -11,7 +11,7 @@
 //! | this one | the document (header, title, wrapped subtitle), escaping, number formatting |
 //! | [`axis`] | linear and log axes, the data-to-pixel mapping, ticks |
 //! | [`line_plot`] | [`LinePlot`] |
-//! | [`modes`] | the mode-shape figure (isometric panels) |
+//! | [`modes`] | the mode-shape figure (axonometric panels) |
 //! | [`heat_map`] | [`HeatPanel`], [`HeatMap`], the colour map |
 
 pub mod axis;

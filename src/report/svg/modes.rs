@@ -1,6 +1,8 @@
 //! The mode-shape figure of `cablevib modes`: the first K mode shapes of the whole robot,
-//! one panel per mode, in an isometric projection (screen right = (x − y)·cos 30°, screen
-//! up = z − (x + y)·sin 30°, the same in every panel).
+//! one panel per mode, in an axonometric projection seen from azimuth [`AZIMUTH_DEG`] and
+//! elevation [`ELEVATION_DEG`] (screen right = x cos a − y sin a, screen up =
+//! z cos e − (x sin a + y cos a) sin e; the same in every panel). Not the isometric view: that
+//! one projects the paper robots' upper and lower anchors onto each other.
 //!
 //! Each panel shows the anchors (squares), the undeformed cables (grey, dashed) and
 //! end-effector (grey ring), and the deformed cables and end-effector (coloured), the
@@ -29,10 +31,16 @@ const COLUMNS: usize = 3;
 /// Colour of the deformed shape.
 const DEFORMED: &str = "#D55E00";
 
-/// Isometric projection (x, y, z) → (right, up).
+/// Azimuth of the view, degrees (rotation about z).
+pub const AZIMUTH_DEG: f64 = 30.0;
+/// Elevation of the view, degrees (above the x-y plane).
+pub const ELEVATION_DEG: f64 = 20.0;
+
+/// Axonometric projection (x, y, z) → (right, up).
 fn iso(p: &Vector3<f64>) -> (f64, f64) {
-    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
-    ((p.x - p.y) * c, p.z - (p.x + p.y) * s)
+    let (sa, ca) = AZIMUTH_DEG.to_radians().sin_cos();
+    let (se, ce) = ELEVATION_DEG.to_radians().sin_cos();
+    (p.x * ca - p.y * sa, p.z * ce - (p.x * sa + p.y * ca) * se)
 }
 
 /// Maps projected coordinates into one panel.
@@ -73,7 +81,7 @@ pub fn modes_svg(scene: &Scene, geometry: &Geometry, shapes: &ModeShapes, k: usi
     let cols = k.min(COLUMNS);
     let w = PANEL_W * cols as f64;
     let sub = format!(
-        "model {} × {} elements/cable; isometric view; displacements scaled to {:.0} % of the robot's extent",
+        "model {} × {} elements/cable; view from azimuth {AZIMUTH_DEG}°, elevation {ELEVATION_DEG}°; displacements scaled to {:.0} % of the robot's extent",
         scene.model.element.as_str(),
         scene.model.elements_per_cable,
         100.0 * AMPLITUDE_OF_EXTENT
