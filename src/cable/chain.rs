@@ -199,7 +199,9 @@ pub(super) fn eval_discrete(k: f64, m: f64, n_el: usize, lambda: f64) -> ChainEv
     let dc = -0.5 * m * k / (kp * kp);
     let nf = n_el as f64;
     let n2 = 2.0 * nf - 1.0;
-    let (r, drdc, below) = if one_plus_c > 0.0 {
+    // (R, 1 − R, dR/dc, blocked count); s = α + βR = k(1 − R) − λm(1/3 + R/6), with 1 − R
+    // formed without cancellation (α + βR loses log₁₀ N digits at small λ).
+    let (r, one_minus_r, drdc, below) = if one_plus_c > 0.0 {
         let theta = if one_minus_c <= 1.0 {
             2.0 * (0.5 * one_minus_c).sqrt().asin()
         } else {
@@ -208,7 +210,7 @@ pub(super) fn eval_discrete(k: f64, m: f64, n_el: usize, lambda: f64) -> ChainEv
         if theta == 0.0 {
             let r = (nf - 1.0) / nf;
             let drdc = -n2 * (n2 * n2 - 1.0) / (12.0 * nf * nf);
-            (r, drdc, 0u32)
+            (r, 1.0 / nf, drdc, 0u32)
         } else {
             // sin θ and cos θ exactly from 1 ∓ c; one sin_cos for Nθ.
             let c = 1.0 - one_minus_c;
@@ -216,6 +218,9 @@ pub(super) fn eval_discrete(k: f64, m: f64, n_el: usize, lambda: f64) -> ChainEv
             let (sn, cn) = (nf * theta).sin_cos();
             let sn1 = sn * c - cn * st; // sin((N−1)θ)
             let r = sn1 / sn;
+            // 1 − R = (sin Nθ − sin (N−1)θ)/sin Nθ = 2 sin(θ/2) cos((N − ½)θ)/sin Nθ.
+            let (sh, ch) = ((0.5 * one_minus_c).sqrt(), (0.5 * one_plus_c).sqrt());
+            let one_minus_r = 2.0 * sh * (cn * ch + sn * sh) / sn;
             let diff = if n2 * theta < SMALL_ANGLE_SERIES_MAX {
                 let t2 = theta * theta;
                 let a = n2 * (n2 * n2 - 1.0);
@@ -229,7 +234,7 @@ pub(super) fn eval_discrete(k: f64, m: f64, n_el: usize, lambda: f64) -> ChainEv
             let drdc = -diff / (2.0 * sn * sn);
             let below = ((nf * theta / std::f64::consts::PI).ceil() as i64 - 1)
                 .clamp(0, n_el as i64 - 1) as u32;
-            (r, drdc, below)
+            (r, one_minus_r, drdc, below)
         }
     } else {
         // c ≤ −1: c = −cosh φ, cosh φ − 1 = 2 sinh²(φ/2) = −(1 + c).
@@ -246,10 +251,10 @@ pub(super) fn eval_discrete(k: f64, m: f64, n_el: usize, lambda: f64) -> ChainEv
         let den = (1.0 - e2n) * (1.0 - e2n);
         let term1 = n2 * 4.0 * e2n / den;
         let term2 = 2.0 * e * (1.0 - e.powi(2 * (2 * n_el as i32 - 1))) / (sh * den);
-        (r, 0.5 * (term1 - term2), (n_el - 1) as u32)
+        (r, 1.0 - r, 0.5 * (term1 - term2), (n_el - 1) as u32)
     };
     ChainEval {
-        s: alpha + beta * r,
+        s: k * one_minus_r - lambda * m * (1.0 / 3.0 + r / 6.0),
         ds: dalpha + dbeta * r + beta * drdc * dc,
         below,
     }

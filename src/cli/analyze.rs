@@ -1,12 +1,16 @@
-//! `cablevib analyze`: tensions and natural frequencies of one pose, from the dense
-//! reference or the real-time path.
+//! `cablevib analyze`: tensions and natural frequencies of one pose
+//! ([`crate::study::analysis::analyze`]: the structured engine by default, `--solver dense`
+//! for the dense reference, `--compare-dense` for both), or what the real-time path
+//! computes (`--realtime`).
 
 use super::args::{resolve_scene, SceneArgs};
 use super::{json_f64, CliError};
-use crate::estimator::{reference_analysis, BuildError, Estimator, Status};
+use crate::estimator::{BuildError, Estimator, Status};
 use crate::kinematics::Pose;
-use crate::modal::lambda_to_hz;
 use crate::scene::{ElementKind, Scene};
+use crate::study::analysis::{
+    analyze, assembled_matrices, AnalysisReport, AnalyzeOptions, SolverChoice,
+};
 use clap::Args;
 use nalgebra::Vector3;
 use std::time::Instant;
@@ -17,9 +21,25 @@ pub struct AnalyzeArgs {
     /// Scene and overrides.
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Number of frequencies to print.
+    /// Number of natural frequencies to print (every model, continuous included; the model
+    /// may have fewer).
     #[arg(long, default_value_t = 10)]
     pub modes: usize,
+    /// Eigensolver: `structured` (Wittrick-Williams count and Newton on the 3 × 3 or 6 × 6
+    /// condensed problem, O(1) in the element count) or `dense` (assembled K and M and a
+    /// dense eigensolver, Clarabel tensions; refused above 2 GiB of estimated memory).
+    #[arg(long, default_value = "structured", value_parser = parse_solver)]
+    pub solver: SolverChoice,
+    /// Also solve the same models densely in this process: print both times (the structured
+    /// one the median of repeats), their ratio and the largest relative difference of the
+    /// eigenvalues next to the dense solver's bound ε·λ_max/λ.
+    #[arg(long)]
+    pub compare_dense: bool,
+    /// Also write the assembled stiffness K (N/m) and mass M (kg) of the structured path's
+    /// models to PREFIX.K.mtx and PREFIX.M.mtx (Matrix Market, symmetric, every f64 digit;
+    /// DOF order: end-effector first, then each cable's interior nodes from the anchor).
+    #[arg(long, value_name = "PREFIX")]
+    pub export_matrices: Option<std::path::PathBuf>,
     /// One JSON object on stdout instead of tables.
     #[arg(long)]
     pub json: bool,
@@ -52,61 +72,108 @@ pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
     } else {
         s
     };
-    if a.realtime
-        || s.model.element == ElementKind::Continuous
-        || s.model.element == ElementKind::Massless
-    {
+    if a.realtime {
         return analyze_realtime(a, &s);
     }
-    let t0 = Instant::now();
-    let r = reference_analysis(&s, &pos, s.t_min_n, true)
-        .map_err(|e| CliError::Analysis(e.to_string()))?;
-    let secs = t0.elapsed().as_secs_f64();
-    let k = a.modes.min(r.modes.lambda.len());
-    let f: Vec<f64> = r.modes.lambda[..k]
-        .iter()
-        .map(|&l| lambda_to_hz(l))
-        .collect();
-    let part = &r.modes.ee_participation[..k];
-    if a.json {
-        let o = serde_json::json!({
-            "scene": s.name,
-            "position_m": [pos.x, pos.y, pos.z],
-            "t_min_n": s.t_min_n,
-            "tensions_n": r.tensions_n,
-            "frequencies_hz": f,
-            "ee_participation": part,
-            "dof": r.dof,
-            "element": s.model.element.as_str(),
-            "elements_per_cable": s.model.elements_per_cable,
-            "stiffness_n_m": r.stiffness_n_m.row_iter().map(|row| row.iter().copied().collect::<Vec<_>>()).collect::<Vec<_>>(),
-            "solver": "dense",
-            "dense_seconds": secs,
-        });
-        println!("{o}");
-        return Ok(());
+    let opts = AnalyzeOptions {
+        modes: a.modes,
+        solver: a.solver,
+        compare_dense: a.compare_dense,
+    };
+    let r = analyze(&s, &opts).map_err(|e| CliError::Analysis(e.to_string()))?;
+    if let Some(prefix) = &a.export_matrices {
+        export_matrices(&s, prefix)?;
     }
+    if a.json {
+        let o = serde_json::to_string(&r).map_err(|e| CliError::Analysis(e.to_string()))?;
+        println!("{o}");
+    } else {
+        print_report(&r);
+    }
+    Ok(())
+}
+
+/// K and M of the structured path's models as PREFIX.K.mtx and PREFIX.M.mtx.
+fn export_matrices(s: &Scene, prefix: &std::path::Path) -> Result<(), CliError> {
+    let (k, m) = assembled_matrices(s).map_err(|e| CliError::Analysis(e.to_string()))?;
+    for (name, a) in [("K", &k), ("M", &m)] {
+        let mut path = prefix.as_os_str().to_owned();
+        path.push(format!(".{name}.mtx"));
+        let text = matrix_market(a);
+        std::fs::write(&path, text).map_err(|e| {
+            CliError::Analysis(format!("--export-matrices {}: {e}", path.to_string_lossy()))
+        })?;
+    }
+    Ok(())
+}
+
+/// The lower triangle of a symmetric matrix in Matrix Market coordinate format, with
+/// shortest round-trip f64 values.
+fn matrix_market(a: &nalgebra::DMatrix<f64>) -> String {
+    use std::fmt::Write;
+    let mut entries = String::new();
+    let mut nnz = 0usize;
+    for j in 0..a.ncols() {
+        for i in j..a.nrows() {
+            let v = a[(i, j)];
+            if v != 0.0 {
+                nnz += 1;
+                let _ = writeln!(entries, "{} {} {v:?}", i + 1, j + 1);
+            }
+        }
+    }
+    format!(
+        "%%MatrixMarket matrix coordinate real symmetric\n{} {} {nnz}\n{entries}",
+        a.nrows(),
+        a.ncols()
+    )
+}
+
+/// `structured` or `dense`.
+fn parse_solver(s: &str) -> Result<SolverChoice, String> {
+    match s {
+        "structured" => Ok(SolverChoice::Structured),
+        "dense" => Ok(SolverChoice::Dense),
+        _ => Err(format!("`{s}`: expected structured or dense")),
+    }
+}
+
+/// The report as tables.
+fn print_report(r: &AnalysisReport) {
+    let p = r.position_m;
+    let dof = r
+        .dof
+        .map_or("continuous".to_string(), |d| format!("{d} DOF"));
     println!(
-        "scene {}  position ({:.4}, {:.4}, {:.4}) m  T_min {} N  model {} × {} elements/cable  ({} DOF, dense solve {:.1} ms)",
-        s.name,
-        pos.x,
-        pos.y,
-        pos.z,
-        s.t_min_n,
-        s.model.element.as_str(),
-        s.model.elements_per_cable,
-        r.dof,
-        secs * 1e3
+        "scene {}  position ({:.4}, {:.4}, {:.4}) m  T_min {} N  model {} × {} elements/cable  ({dof}, {} solve {:.3} ms)",
+        r.scene, p[0], p[1], p[2], r.t_min_n, r.element, r.elements_per_cable, r.solver,
+        r.solve_seconds * 1e3
     );
     println!("\n cable   tension (N)");
     for (i, t) in r.tensions_n.iter().enumerate() {
         println!(" {:>5}   {:>11.4}", i, t);
     }
-    println!("\n mode   frequency (Hz)   end-effector participation");
-    for (i, (fi, p)) in f.iter().zip(part).enumerate() {
-        println!(" {:>4}   {:>14.6}   {:>8.4}", i + 1, fi, p);
+    println!("\n mode   frequency (Hz)   end-effector participation   multiplicity");
+    for (i, (fi, pi)) in r.frequencies_hz.iter().zip(&r.ee_participation).enumerate() {
+        let m = r
+            .multiplicity
+            .as_ref()
+            .map_or(String::new(), |m| m[i].to_string());
+        println!(" {:>4}   {:>14.9}   {:>26.6}   {:>12}", i + 1, fi, pi, m);
     }
-    Ok(())
+    if let Some(c) = &r.compare_dense {
+        println!(
+            "\nstructured {:.3} ms (median), dense {:.3} ms on the same models: ratio {:.0}×; \
+             largest relative difference of λ {:.2e} (dense bound ε·λ_max/λ there {:.2e}), of \
+             cluster participations {:.2e}",
+            c.structured_seconds * 1e3,
+            c.dense_seconds * 1e3,
+            c.speedup,
+            c.max_rel_diff_lambda,
+            c.dense_bound_there,
+            c.max_abs_diff_cluster_participation
+        );
+    }
 }
 
 /// The scene with `position` as its end-effector position.

@@ -48,7 +48,8 @@ pub struct Cli {
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Tensions and natural frequencies of one pose (dense reference, or --realtime).
+    /// Tensions and the first K natural frequencies of one pose (structured engine; --solver
+    /// dense for the dense reference, --realtime for what the estimator cycle computes).
     Analyze(analyze::AnalyzeArgs),
     /// Drive the real-time estimator along the paper's circle and report per-cycle latency.
     Bench(bench::BenchArgs),

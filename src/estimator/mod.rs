@@ -30,6 +30,7 @@ mod auto;
 mod error;
 mod estimate;
 mod inverse;
+mod modes;
 mod params;
 mod pipeline;
 mod reference;

@@ -30,6 +30,35 @@ pub fn assemble_rigid(
     assemble_general(models, ee_mass_kg, Some((inertia_kg_m2, arms_m, k_geo_rot)))
 }
 
+/// Memory the dense reference may use, bytes (2 GiB): a dense solve at this size already
+/// takes minutes, and beyond it the structured solver is the only sensible path.
+pub const DENSE_MEMORY_BUDGET_BYTES: u64 = 2 << 30;
+
+/// Bytes per DOF² of a dense solve: K and M, the Cholesky factor and its copy, L⁻¹K, C and
+/// its symmetrised copy, the eigenvectors, the eigensolver's workspace and the mode shapes
+/// (12 n × n f64 matrices at most).
+const DENSE_BYTES_PER_DOF2: u64 = 12 * 8;
+
+/// The estimated memory of a dense solve with `dof` degrees of freedom, bytes.
+pub fn dense_memory_bytes(dof: usize) -> u64 {
+    (dof as u64)
+        .saturating_mul(dof as u64)
+        .saturating_mul(DENSE_BYTES_PER_DOF2)
+}
+
+/// Refuse a dense problem over [`DENSE_MEMORY_BUDGET_BYTES`] before allocating it.
+pub fn check_dense_budget(dof: usize) -> Result<(), ModalError> {
+    let bytes = dense_memory_bytes(dof);
+    if bytes > DENSE_MEMORY_BUDGET_BYTES {
+        return Err(ModalError::DenseTooLarge {
+            dof,
+            bytes,
+            budget: DENSE_MEMORY_BUDGET_BYTES,
+        });
+    }
+    Ok(())
+}
+
 fn assemble_general(
     models: &[CableModel],
     ee_mass_kg: f64,
@@ -45,6 +74,7 @@ fn assemble_general(
     let ee_dim = if rigid.is_some() { 6 } else { 3 };
     let interior: usize = models.iter().map(|m| m.n_el - 1).sum();
     let ndof = ee_dim + 3 * interior;
+    check_dense_budget(ndof)?;
     let mut k = DMatrix::<f64>::zeros(ndof, ndof);
     let mut mm = DMatrix::<f64>::zeros(ndof, ndof);
     for i in 0..3 {

@@ -11,7 +11,12 @@ use crate::cable::{
     eval_continuous_batch, eval_discrete_batch, CableModel, Chain, ChainEval, ChainKind,
     BATCH_MAX_ELEMENTS,
 };
-use crate::scene::{MAX_CABLES, MAX_ELEMENTS_PER_CABLE};
+use crate::scene::MAX_CABLES;
+
+/// Discrete chains up to this many elements have their blocked eigenvalues tabulated (16
+/// bytes each, reserved once per solver); longer chains (up to
+/// [`crate::scene::MAX_ELEMENTS_PER_CABLE`]) compute each one by trigonometry.
+const POLE_TABLE_MAX_ELEMENTS: usize = 10_000;
 use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector6};
 
 /// Largest number of chains (a [`CableModel`] has up to three).
@@ -162,7 +167,7 @@ impl LoadedChains {
             cont_k: [0.0; MAX_CHAINS],
             cont_m: [0.0; MAX_CHAINS],
             n_cont: 0,
-            pole_tab: Vec::with_capacity(MAX_ELEMENTS_PER_CABLE + 1),
+            pole_tab: Vec::with_capacity(POLE_TABLE_MAX_ELEMENTS + 1),
             pole_tab_n: 0,
             p_total: f64::NAN,
         }
@@ -271,7 +276,7 @@ impl LoadedChains {
         let mut n_tab = 0;
         for c in &self.chains[..self.n_chains] {
             if let ChainKind::Discrete { n_el, .. } = c.kind {
-                if (2..=MAX_ELEMENTS_PER_CABLE).contains(&n_el) {
+                if (2..=POLE_TABLE_MAX_ELEMENTS).contains(&n_el) {
                     n_tab = n_el;
                     break;
                 }

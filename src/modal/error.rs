@@ -33,4 +33,17 @@ pub enum ModalError {
     /// The Wittrick-Williams certificate disagrees with the root found.
     #[error("eigenvalue count check failed at λ = {0:.6e} rad²/s²")]
     CountMismatch(f64),
+    /// Nothing is loaded: no cycle has succeeded yet.
+    #[error("no pose loaded: no successful cycle yet")]
+    NotLoaded,
+    /// The dense reference would need more memory than its budget.
+    #[error("dense reference refused: {dof} DOF need about {bytes} bytes, over the budget of {budget} bytes (use the structured solver)")]
+    DenseTooLarge {
+        /// Degrees of freedom of the assembled model.
+        dof: usize,
+        /// Estimated memory of the dense solve, bytes.
+        bytes: u64,
+        /// The budget, bytes.
+        budget: u64,
+    },
 }

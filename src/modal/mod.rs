@@ -7,7 +7,9 @@
 //! interior node plus the end-effector node), reduced to a standard symmetric problem
 //! with the Cholesky factor of M, solved by a dense symmetric eigensolver. A backward
 //! stable solver has absolute eigenvalue error ≈ ε·λ_max, i.e. relative error
-//! ε·λ_max/λ on a mode λ ([`dense_relative_accuracy`]). Never on the real-time path.
+//! ε·λ_max/λ on a mode λ ([`dense_relative_accuracy`]). It needs O(n²) memory and O(n³)
+//! time, so assembly refuses n with [`dense_memory_bytes`] above
+//! [`DENSE_MEMORY_BUDGET_BYTES`] (2 GiB, ≈ 4 700 DOF). Never on the real-time path.
 //!
 //! **Structured solver** ([`ModalSolver`]): each cable's interior nodes decouple into
 //! scalar chains ([`crate::cable::Chain`]); condensing them onto the end-effector gives
@@ -28,6 +30,15 @@
 //! vector v of D(λ): the share of the mode's kinetic-energy norm carried by the
 //! end-effector's own mass.
 //!
+//! **The first K modes** ([`ModalSolver::modes`], module `spectrum`, docs/modes.md): the
+//! count J(λ) brackets the k-th eigenvalue; bisection on the count while two or more
+//! distinct poles lie in the bracket, count probes at λ_p(1 ∓ 1e-13) around a single pole
+//! (a mode exactly on a pole has the end-effector still: identical cables), then safeguarded
+//! Newton on branch k − (blocked count) of D with the bounding poles removed, to 1e-14.
+//! Multiplicities are the count's step over λ(1 ∓ 1e-10); a cluster's participations are the
+//! eigenvalues of M_ee^{1/2} R M_ee^{1/2} with R = Σ_cluster φ_ee φ_eeᵀ (basis-invariant).
+//! Each evaluation is O(1) in the element count, so N = 10⁶ costs what N = 10 does.
+//!
 //! **Sum rules.** With mass-normalised modes φ_k, D(σ)⁻¹ = Σ_k φ_k φ_kᵀ/(λ_k − σ) on the
 //! end-effector's coordinates, so Σ_k p_k/λ_k = tr(M_ee D(0)⁻¹), and as σ → −∞,
 //! Σ_k p_k = tr(M_ee M_∞⁻¹) with M_∞ = lim −D(σ)/σ: the end-effector's mass plus each
@@ -40,10 +51,12 @@
 //! M and D' in kg (kg·m²), λ in rad²/s², f in Hz; participations are dimensionless (0 ..= 1)
 //! and Σ_k p_k/λ_k is in s²/rad².
 //!
-//! **Layout.** `dense`: the offline reference. `dynamic_stiffness`: the loaded problem and
-//! the evaluation of D(λ). `first_mode`: the first root and its certificate. `ee_tracker`:
-//! the end-effector mode, scanned and tracked. `solver`: [`ModalSolver`], which composes
-//! them. `eig3` and `rigid`: small kernels both solvers use.
+//! **Layout.** `dense`: the offline reference (refused beyond
+//! [`DENSE_MEMORY_BUDGET_BYTES`]). `dynamic_stiffness`: the loaded problem and the
+//! evaluation of D(λ). `first_mode`: the first root and its certificate. `ee_tracker`: the
+//! end-effector mode, scanned and tracked. `spectrum`: the first K modes
+//! ([`ModalSolver::modes`], [`Mode`], [`SpectrumParams`]). `solver`: [`ModalSolver`], which
+//! composes them. `eig3` and `rigid`: small kernels both solvers use.
 
 mod dense;
 mod dynamic_stiffness;
@@ -54,10 +67,11 @@ mod first_mode;
 mod rigid;
 mod shapes;
 mod solver;
+mod spectrum;
 
 pub use dense::{
-    assemble, assemble_rigid, condense_static, dense_modes, dense_modes_ee,
-    dense_relative_accuracy, DenseModes,
+    assemble, assemble_rigid, check_dense_budget, condense_static, dense_memory_bytes, dense_modes,
+    dense_modes_ee, dense_relative_accuracy, DenseModes, DENSE_MEMORY_BUDGET_BYTES,
 };
 pub use dynamic_stiffness::{DynEval, EigD};
 pub use ee_tracker::RescanCounts;
@@ -66,6 +80,7 @@ pub use error::ModalError;
 pub use rigid::{attach_map, rigid_geometric_stiffness};
 pub use shapes::{ModeShape, ModeShapes, ShapeError, ShapeParams};
 pub use solver::ModalSolver;
+pub use spectrum::{Mode, SpectrumParams};
 
 /// Convert λ = ω² (rad²/s²) to Hz.
 #[inline]

@@ -17,7 +17,7 @@ pub struct ModalSolver {
     /// What `load` computes; read-only on the hot path.
     pub(in crate::modal) problem: LoadedChains,
     /// What one evaluation of D(λ) writes.
-    scratch: EvalScratch,
+    pub(in crate::modal) scratch: EvalScratch,
     /// The first root's state between cycles (certificate schedule, weighted sum rule).
     first: FirstRootState,
     /// The end-effector mode tracker's state between cycles.

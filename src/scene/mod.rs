@@ -37,8 +37,10 @@ pub const BOX_SCENE_TOML: &str = include_str!("../../scenes/box_6dof.toml");
 /// Largest number of cables a scene may have (fixed by the IPC message layout).
 pub const MAX_CABLES: usize = cablevib_ipc::MAX_CABLES;
 
-/// Largest number of elements per cable accepted (bounds every per-cycle loop).
-pub const MAX_ELEMENTS_PER_CABLE: usize = 10_000;
+/// Largest number of elements per cable accepted. The structured path costs O(1) in it
+/// (closed-form chains, a bounded pole table); the dense reference refuses models beyond
+/// its memory budget long before.
+pub const MAX_ELEMENTS_PER_CABLE: usize = 1_000_000;
 
 /// Errors from reading or validating a scene.
 #[derive(Debug, thiserror::Error)]

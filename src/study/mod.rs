@@ -1,4 +1,6 @@
-//! Offline studies over the real-time estimator: frequency maps over a workspace grid
+//! Offline studies over the real-time estimator: the analysis of one pose that `analyze`
+//! prints ([`analysis`]: the first K modes by the structured engine or the dense reference),
+//! frequency maps over a workspace grid
 //! ([`map`]), frequencies along a trajectory ([`trajectory`]) and against the minimum tension
 //! ([`tmin`]), and what accuracy costs in time ([`accuracy`], with the dense mode-3
 //! convergence study of the paper's Figs. 5 and 10).
@@ -13,6 +15,8 @@
 //! files are the `report` layer's (above this one), option parsing is the command line's.
 
 pub mod accuracy;
+pub mod analysis;
+mod analysis_compare;
 pub mod map;
 pub mod points;
 pub mod tmin;

@@ -1,0 +1,297 @@
+//! The analysis of one pose that `cablevib analyze` prints (and a Python binding calls):
+//! tensions, static stiffness and the first K natural frequencies with their end-effector
+//! participations, by the structured engine ([`crate::modal::ModalSolver::modes`], every
+//! model, O(1) in the element count) or by the dense reference
+//! ([`crate::estimator::reference_analysis`]: Clarabel tensions, assembled K and M, a dense
+//! eigensolver; refused beyond [`crate::modal::DENSE_MEMORY_BUDGET_BYTES`]).
+//!
+//! With [`AnalyzeOptions::compare_dense`] the structured answer is also checked against the
+//! dense spectrum of exactly the same models (the structured path's tensions), in the same
+//! process: both times, their ratio, and the largest relative difference of the K
+//! eigenvalues next to the dense solver's own bound ε·λ_max/λ.
+
+use crate::estimator::{reference_analysis_at, resolve_auto, Estimator};
+use crate::kinematics::Pose;
+use crate::modal::{dense_relative_accuracy, lambda_to_hz, Mode};
+use crate::scene::{ElementKind, Scene};
+use serde::Serialize;
+use std::time::Instant;
+
+/// Largest number of modes one analysis computes (the report holds them all; 10⁵ modes
+/// take seconds with the structured engine).
+pub const MAX_ANALYZE_MODES: usize = 100_000;
+
+/// Which eigensolver answers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SolverChoice {
+    /// Wittrick-Williams count and Newton on the condensed problem (default).
+    Structured,
+    /// Dense assembly and a dense generalised eigensolver (the reference).
+    Dense,
+}
+
+impl SolverChoice {
+    /// `structured` or `dense`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SolverChoice::Structured => "structured",
+            SolverChoice::Dense => "dense",
+        }
+    }
+}
+
+/// What to compute.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AnalyzeOptions {
+    /// Number of natural frequencies (the model may have fewer).
+    pub modes: usize,
+    /// Which eigensolver.
+    pub solver: SolverChoice,
+    /// Also run the dense reference on the structured path's models and compare (structured
+    /// solver only).
+    pub compare_dense: bool,
+}
+
+impl Default for AnalyzeOptions {
+    fn default() -> Self {
+        AnalyzeOptions {
+            modes: 10,
+            solver: SolverChoice::Structured,
+            compare_dense: false,
+        }
+    }
+}
+
+/// The structured engine against the dense reference on the same models.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DenseComparison {
+    /// Median time of the structured K modes, s.
+    pub structured_seconds: f64,
+    /// Time of the dense assembly and eigen-solve (with mode shapes for the
+    /// participations), s.
+    pub dense_seconds: f64,
+    /// dense_seconds / structured_seconds.
+    pub speedup: f64,
+    /// Largest relative difference of the K eigenvalues λ (structured vs dense).
+    pub max_rel_diff_lambda: f64,
+    /// The dense solver's bound ε·λ_max/λ at the mode where the difference is largest.
+    pub dense_bound_there: f64,
+    /// Largest difference of the participations summed over each cluster.
+    pub max_abs_diff_cluster_participation: f64,
+}
+
+/// The analysis of one pose (every field serialisable; the CLI prints it as JSON).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AnalysisReport {
+    /// Scene name.
+    pub scene: String,
+    /// End-effector position, m.
+    pub position_m: [f64; 3],
+    /// Lower tension bound, N.
+    pub t_min_n: f64,
+    /// Cable tensions, N.
+    pub tensions_n: Vec<f64>,
+    /// The first K natural frequencies, Hz, ascending.
+    pub frequencies_hz: Vec<f64>,
+    /// Their end-effector participations (0 ..= 1).
+    pub ee_participation: Vec<f64>,
+    /// Each mode's cluster size from the eigenvalue count (structured solver only).
+    pub multiplicity: Option<Vec<u32>>,
+    /// Index of the first mode of each mode's cluster (structured solver only).
+    pub cluster_start: Option<Vec<usize>>,
+    /// Degrees of freedom of the assembled model (None for continuous cables).
+    pub dof: Option<usize>,
+    /// Element model (resolved when the scene said `auto`).
+    pub element: String,
+    /// Elements per cable.
+    pub elements_per_cable: usize,
+    /// Static end-effector stiffness (translational block), N/m.
+    pub stiffness_n_m: [[f64; 3]; 3],
+    /// `structured` or `dense`.
+    pub solver: &'static str,
+    /// Time of the eigen-solve, s (structured: the K modes; dense: assembly and solve).
+    pub solve_seconds: f64,
+    /// Time of the dense reference, s (dense solver or comparison only).
+    pub dense_seconds: Option<f64>,
+    /// The comparison with the dense reference (when asked).
+    pub compare_dense: Option<DenseComparison>,
+}
+
+/// Why an analysis failed (one line each).
+#[derive(Debug, thiserror::Error)]
+pub enum AnalyzeError {
+    /// The estimator could not be built for the scene.
+    #[error("{0}")]
+    Build(String),
+    /// The pose has no valid estimate (status and reason).
+    #[error("status {status}: {reason}")]
+    Status {
+        /// The estimate's status.
+        status: &'static str,
+        /// Why.
+        reason: String,
+    },
+    /// The eigen-solve or the dense reference failed (or was refused).
+    #[error("{0}")]
+    Solve(String),
+    /// A combination of options that cannot be honoured.
+    #[error("{0}")]
+    Usage(String),
+}
+
+/// Analyse the scene at its own pose (`ee_position_m`, `ee_orientation_wxyz`) and T_min.
+pub fn analyze(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, AnalyzeError> {
+    if opts.modes > MAX_ANALYZE_MODES {
+        return Err(AnalyzeError::Usage(format!(
+            "--modes {}: at most {MAX_ANALYZE_MODES}",
+            opts.modes
+        )));
+    }
+    match opts.solver {
+        SolverChoice::Structured => structured(scene, opts),
+        SolverChoice::Dense if opts.compare_dense => Err(AnalyzeError::Usage(
+            "--compare-dense compares the structured solver with the dense one: drop --solver dense"
+                .into(),
+        )),
+        SolverChoice::Dense => dense(scene, opts),
+    }
+}
+
+fn pose_of(scene: &Scene) -> Pose {
+    Pose {
+        position_m: scene.ee_position_m,
+        orientation_wxyz: scene.ee_orientation_wxyz,
+    }
+}
+
+fn rows3(m: &nalgebra::Matrix3<f64>) -> [[f64; 3]; 3] {
+    [0, 1, 2].map(|r| [0, 1, 2].map(|c| m[(r, c)]))
+}
+
+/// The report's frame: everything but the modes and the times.
+fn report_frame(s: &Scene, solver: SolverChoice) -> AnalysisReport {
+    let p = s.ee_position_m;
+    AnalysisReport {
+        scene: s.name.clone(),
+        position_m: [p.x, p.y, p.z],
+        t_min_n: s.t_min_n,
+        tensions_n: Vec::new(),
+        frequencies_hz: Vec::new(),
+        ee_participation: Vec::new(),
+        multiplicity: None,
+        cluster_start: None,
+        dof: None,
+        element: s.model.element.as_str().to_string(),
+        elements_per_cable: s.model.elements_per_cable,
+        stiffness_n_m: [[f64::NAN; 3]; 3],
+        solver: solver.as_str(),
+        solve_seconds: f64::NAN,
+        dense_seconds: None,
+        compare_dense: None,
+    }
+}
+
+/// Degrees of freedom of the assembled model of `s` (None for continuous cables).
+fn model_dof(s: &Scene) -> Option<usize> {
+    if s.model.element == ElementKind::Continuous {
+        return None;
+    }
+    let dim = if s.rigid { 6 } else { 3 };
+    let n_el = if s.model.element == ElementKind::Massless {
+        1
+    } else {
+        s.model.elements_per_cable
+    };
+    Some(dim + 3 * s.n_cables() * (n_el - 1))
+}
+
+/// The structured path: the estimator's cycle at the pose, then its K modes.
+fn structured(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, AnalyzeError> {
+    let mut est = Estimator::new(scene).map_err(|e| AnalyzeError::Build(e.to_string()))?;
+    let e = *est.update(&pose_of(scene), scene.t_min_n);
+    if let Some(err) = e.error {
+        return Err(AnalyzeError::Status {
+            status: e.status.as_str(),
+            reason: err.to_string(),
+        });
+    }
+    let s = est.scene().clone();
+    let mut modes = vec![Mode::default(); opts.modes];
+    let t0 = Instant::now();
+    let n = est
+        .modes(opts.modes, &mut modes)
+        .map_err(|e| AnalyzeError::Solve(e.to_string()))?;
+    let secs = t0.elapsed().as_secs_f64();
+    modes.truncate(n);
+    let mut r = report_frame(&s, SolverChoice::Structured);
+    r.tensions_n = e.tensions().to_vec();
+    r.frequencies_hz = modes.iter().map(|m| m.frequency_hz).collect();
+    r.ee_participation = modes.iter().map(|m| m.ee_participation).collect();
+    r.multiplicity = Some(modes.iter().map(|m| m.multiplicity).collect());
+    r.cluster_start = Some(modes.iter().map(|m| m.cluster_start).collect());
+    r.dof = model_dof(&s);
+    r.stiffness_n_m = rows3(&e.stiffness_n_m);
+    r.solve_seconds = secs;
+    if opts.compare_dense {
+        let c = super::analysis_compare::compare(&mut est, &modes)?;
+        r.dense_seconds = Some(c.dense_seconds);
+        r.compare_dense = Some(c);
+    }
+    Ok(r)
+}
+
+/// The dense reference: Clarabel tensions, assembled K and M, a dense eigensolver.
+fn dense(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, AnalyzeError> {
+    if scene.model.element == ElementKind::Continuous {
+        return Err(AnalyzeError::Usage(
+            "--solver dense: the continuous model has no finite assembly (use the structured solver)"
+                .into(),
+        ));
+    }
+    if scene.model.element == ElementKind::Auto {
+        let (resolved, _) = resolve_auto(scene).map_err(|e| AnalyzeError::Build(e.to_string()))?;
+        return dense(&resolved, opts);
+    }
+    let t0 = Instant::now();
+    let a = reference_analysis_at(scene, &pose_of(scene), scene.t_min_n, true)
+        .map_err(|e| AnalyzeError::Solve(e.to_string()))?;
+    let secs = t0.elapsed().as_secs_f64();
+    let k = opts.modes.min(a.modes.lambda.len());
+    let mut r = report_frame(scene, SolverChoice::Dense);
+    r.tensions_n = a.tensions_n.clone();
+    r.frequencies_hz = a.modes.lambda[..k]
+        .iter()
+        .map(|&l| lambda_to_hz(l))
+        .collect();
+    r.ee_participation = a.modes.ee_participation[..k].to_vec();
+    r.dof = Some(a.dof);
+    r.stiffness_n_m = rows3(&a.stiffness_n_m);
+    r.solve_seconds = secs;
+    r.dense_seconds = Some(secs);
+    Ok(r)
+}
+
+/// The dense bound ε·λ_max/λ (re-exported for the comparison).
+pub(super) fn dense_bound(lambda: f64, lambda_max: f64) -> f64 {
+    dense_relative_accuracy(lambda, lambda_max)
+}
+
+/// The assembled K (N/m) and M (kg) of the structured path's models at the scene's pose
+/// (same tensions as [`analyze`] with the structured solver), for external references.
+/// DOF order: the end-effector's 3 (or 6) first, then each cable's interior nodes from the
+/// anchor. Refused beyond [`crate::modal::DENSE_MEMORY_BUDGET_BYTES`].
+pub fn assembled_matrices(
+    scene: &Scene,
+) -> Result<(nalgebra::DMatrix<f64>, nalgebra::DMatrix<f64>), AnalyzeError> {
+    let mut est = Estimator::new(scene).map_err(|e| AnalyzeError::Build(e.to_string()))?;
+    let e = *est.update(&pose_of(scene), scene.t_min_n);
+    if let Some(err) = e.error {
+        return Err(AnalyzeError::Status {
+            status: e.status.as_str(),
+            reason: err.to_string(),
+        });
+    }
+    est.dense_matrices()
+        .map_err(|e| AnalyzeError::Solve(e.to_string()))
+}
