@@ -4,7 +4,7 @@
 //! sharing nothing with the shapes' chain closed forms and bordered null space. Continuous
 //! cables, which have no dense assembly, are checked against the FEM shapes as N grows.
 use cablevib::cli::modes::PoseModel;
-use cablevib::modal::{ModalParams, ModalSolver, ModeShapes, ShapeParams};
+use cablevib::modal::{ModalParams, ModalSolver, Mode, ModeShapes, ShapeParams, MAX_MULTIPLICITY};
 use cablevib::scene::{ElementKind, Scene};
 use nalgebra::{DMatrix, DVector, Matrix6};
 
@@ -102,21 +102,81 @@ fn dense_participation(
     .sum()
 }
 
+/// The eigenvalues as clusters (λ, multiplicity) from the two structured sources: the
+/// shapes' own count bisection, and the spectrum engine (`ModalSolver::modes`).
+fn structured_clusters(pm: &PoseModel, spectrum: bool) -> Vec<(f64, u32)> {
+    let mut solver = ModalSolver::new(ModalParams::default());
+    pm.load(&mut solver);
+    if !spectrum {
+        return solver
+            .eigen_clusters(K_MODES, &ShapeParams::default())
+            .unwrap();
+    }
+    let mut modes = vec![Mode::default(); K_MODES + MAX_MULTIPLICITY as usize];
+    let n = solver.modes(modes.len(), &mut modes).unwrap();
+    let mut out = Vec::new();
+    for (i, md) in modes[..n].iter().enumerate() {
+        let complete = md.cluster_start + md.multiplicity as usize <= n;
+        if md.cluster_start == i && complete {
+            out.push((md.lambda, md.multiplicity));
+        }
+        if md.cluster_start == i && i >= K_MODES {
+            break;
+        }
+    }
+    out
+}
+
 fn check_against_dense(label: &str, pm: &PoseModel) {
     let (k, m) = pm.dense().unwrap();
     let (lambda, u) = dense_eig(&k, &m);
+    for spectrum in [false, true] {
+        let source = if spectrum { "spectrum" } else { "count" };
+        let counted = structured_clusters(pm, spectrum);
+        check_shapes(
+            &format!("{label} ({source})"),
+            pm,
+            (&k, &m),
+            (&lambda, &u),
+            &counted,
+        );
+    }
+}
+
+/// The shapes at `counted` against the dense (K, M) and its eigen-decomposition.
+fn check_shapes(
+    label: &str,
+    pm: &PoseModel,
+    (k, m): (&DMatrix<f64>, &DMatrix<f64>),
+    (lambda, u): (&[f64], &DMatrix<f64>),
+    counted: &[(f64, u32)],
+) {
     let lmax = lambda.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
     let mut solver = ModalSolver::new(ModalParams::default());
     pm.load(&mut solver);
     let p = ShapeParams::default();
-    let counted = solver.eigen_clusters(K_MODES, &p).unwrap();
-    // The count's eigenvalues, each repeated by its multiplicity, are the dense ones (to the
-    // dense accuracy, plus the bisection's 4ε): checks the multiplicities too.
+    // Shapes at the structured eigenvalues (4ε relative from the count, 1e-14 from the
+    // spectrum engine; the dense ones carry ε·λ_max absolute, too coarse for the robots'
+    // cable modes 1e-5 apart). A given cluster that is not one eigenvalue is split by the
+    // count (`mode_shapes` does it), so the clusters are read back from the shapes.
+    let shapes = solver
+        .mode_shapes(&pm.models, &pm.geometry.arm_m, counted, &p)
+        .unwrap();
+    let counted: Vec<(f64, u32)> = shapes
+        .modes
+        .iter()
+        .enumerate()
+        .filter(|(i, md)| md.cluster_start == *i)
+        .map(|(_, md)| (md.lambda, md.multiplicity))
+        .collect();
+    // The eigenvalues, each repeated by its multiplicity, are the dense ones (to the dense
+    // accuracy, plus the structured source's): checks the multiplicities too.
     let expanded: Vec<f64> = counted
         .iter()
         .flat_map(|&(l, n)| std::iter::repeat_n(l, n as usize))
         .collect();
     let nk = expanded.len();
+    assert_eq!(shapes.modes.len(), nk);
     for (i, &l) in expanded.iter().enumerate() {
         let tol = DENSE_ULPS * f64::EPSILON * lmax + 1e-12 * l;
         assert!(
@@ -125,12 +185,6 @@ fn check_against_dense(label: &str, pm: &PoseModel) {
             lambda[i]
         );
     }
-    // Shapes at the count's eigenvalues (4ε relative; the dense ones carry ε·λ_max
-    // absolute, too coarse for the robots' cable modes 1e-5 apart).
-    let shapes = solver
-        .mode_shapes(&pm.models, &pm.geometry.arm_m, &counted, &p)
-        .unwrap();
-    assert_eq!(shapes.modes.len(), nk);
     let phi = DMatrix::from_columns(
         &(0..nk)
             .map(|i| dense_vector(&shapes, i))
@@ -142,7 +196,7 @@ fn check_against_dense(label: &str, pm: &PoseModel) {
     // the shapes' accuracy: λ from the count is within ~1e-15 relative, which tilts a shape
     // towards a neighbour at relative gap g by ~1e-15/g (catenary chains of identical cables
     // split by ε·EA/T ≈ 1e-9, so g can be that small): 1e-9 or 1e-15/g, whichever is larger.
-    let gram = phi.transpose() * &m * &phi;
+    let gram = phi.transpose() * m * &phi;
     let mut orth = 0.0f64;
     for a in 0..nk {
         for b in 0..nk {
@@ -168,7 +222,7 @@ fn check_against_dense(label: &str, pm: &PoseModel) {
     let mut worst_res = 0.0f64;
     for (i, sm) in shapes.modes.iter().enumerate() {
         let x = phi.column(i);
-        let r = (&k * x - &m * x * sm.lambda).norm() / (knorm * x.norm());
+        let r = (k * x - m * x * sm.lambda).norm() / (knorm * x.norm());
         worst_res = worst_res.max(r);
     }
     assert!(worst_res < 1e-10, "{label}: residual {worst_res:.2e}");
@@ -184,14 +238,14 @@ fn check_against_dense(label: &str, pm: &PoseModel) {
         let e = subspace_error(
             &phi.columns(s, n).into_owned(),
             &u.columns(s, n).into_owned(),
-            &m,
+            m,
         );
         assert!(
             e <= SUBSPACE_TOL,
             "{label}: modes {s}..{}: subspace error {e:.2e}",
             s + n
         );
-        let pd = dense_participation(&u, s..s + n, &ee, shapes.dim);
+        let pd = dense_participation(u, s..s + n, &ee, shapes.dim);
         let ps: f64 = shapes.modes[s..s + n]
             .iter()
             .map(|x| x.ee_participation)

@@ -5,6 +5,11 @@
 use super::{ShapeError, ShapeParams};
 use crate::modal::ModalSolver;
 
+/// A cluster that is not one eigenvalue is resolved by the count from [`SPLIT_BELOW`]
+/// below the λ given (its lowest member, to the eigenvalue source's accuracy ≲ 1e-12) ...
+const SPLIT_BELOW: f64 = 1e-12;
+/// ... to this relative distance above it (wider than any cluster probe, ≲ 1e-10).
+const SPLIT_WINDOW: f64 = 1e-8;
 /// The first upper bound tried, rad²/s²; it grows by [`GROWTH`] until enough eigenvalues
 /// are below it ...
 const START_HI: f64 = 1.0;
@@ -53,7 +58,7 @@ impl ModalSolver {
     }
 
     /// The smallest λ in (lo, hi] with more than `found` modes at or below it, by bisection.
-    fn bisect_next(
+    pub(super) fn bisect_next(
         &mut self,
         mut lo: f64,
         mut hi: f64,
@@ -77,5 +82,34 @@ impl ModalSolver {
             hi,
         }
         .into())
+    }
+
+    /// The eigenvalues (λ, multiplicity) by the count from `lambda` (its cluster's lowest
+    /// member) to [`SPLIT_WINDOW`] above it, ascending, until they hold `m` modes; `None`
+    /// when the window holds fewer.
+    pub(super) fn split_cluster(
+        &mut self,
+        lambda: f64,
+        m: u32,
+        params: &ShapeParams,
+    ) -> Option<Vec<(f64, u32)>> {
+        let (lo, hi) = (lambda * (1.0 - SPLIT_BELOW), lambda * (1.0 + SPLIT_WINDOW));
+        let found0 = self.count_below(lo) as usize;
+        if (self.count_below(hi) as usize) < found0 + m as usize {
+            return None;
+        }
+        let (mut found, mut cur) = (found0, lo);
+        let mut out = Vec::new();
+        while found < found0 + m as usize {
+            let l = self.bisect_next(cur, hi, found, params).ok()?;
+            let above = l * (1.0 + params.cluster_rel);
+            let k = (self.count_below(above) as usize)
+                .saturating_sub(found)
+                .max(1);
+            out.push((l, k as u32));
+            found += k;
+            cur = above;
+        }
+        Some(out)
     }
 }

@@ -143,26 +143,48 @@ impl ModalSolver {
                     multiplicity: m,
                 });
             }
-            for (sh, kind) in shapes.iter_mut().zip(&layout.kinds) {
-                sh.fill(kind, lambda);
-            }
-            let null = self.null_space(&layout, &shapes, lambda, m, params)?;
-            let v = self.normalise(&layout, &shapes, &null.vectors);
-            let start = out.modes.len();
-            for (col, part) in v {
-                out.modes.push(ModeShape {
-                    lambda,
-                    frequency_hz: lambda_to_hz(lambda),
-                    ee: ee_of(&col, dim),
-                    cables: nodes(&layout, &shapes, &col, dim),
-                    ee_participation: part,
-                    cluster_start: start,
-                    multiplicity: m,
-                    null_residual: null.residual,
-                });
+            let first = self.cluster_shapes(&layout, &mut shapes, (lambda, m), params, &mut out);
+            if let Err(e @ ShapeError::NotAnEigenvalue { .. }) = first {
+                // Not one clean cluster (e.g. modes 1e-10 apart given as one): resolve it by
+                // the count and take each part's shapes.
+                for part in self.split_cluster(lambda, m, params).ok_or(e)? {
+                    self.cluster_shapes(&layout, &mut shapes, part, params, &mut out)?;
+                }
+            } else {
+                first?;
             }
         }
         Ok(out)
+    }
+
+    /// The shapes of one cluster (λ, m), appended to `out`.
+    fn cluster_shapes(
+        &self,
+        layout: &Layout,
+        shapes: &mut [ChainShape],
+        (lambda, m): (f64, u32),
+        params: &ShapeParams,
+        out: &mut ModeShapes,
+    ) -> Result<(), ShapeError> {
+        for (sh, kind) in shapes.iter_mut().zip(&layout.kinds) {
+            sh.fill(kind, lambda);
+        }
+        let null = self.null_space(layout, shapes, lambda, m, params)?;
+        let v = self.normalise(layout, shapes, &null.vectors);
+        let start = out.modes.len();
+        for (col, part) in v {
+            out.modes.push(ModeShape {
+                lambda,
+                frequency_hz: lambda_to_hz(lambda),
+                ee: ee_of(&col, out.dim),
+                cables: nodes(layout, shapes, &col, out.dim),
+                ee_participation: part,
+                cluster_start: start,
+                multiplicity: m,
+                null_residual: null.residual,
+            });
+        }
+        Ok(())
     }
 
     /// The bordered matrix at λ (see the module docs) and its m-dimensional null space.
