@@ -1,5 +1,5 @@
 //! `cablevib modes`: the lowest natural frequencies of one pose with their mode shapes,
-//! from the structured solver (eigenvalues by the Wittrick-Williams count, shapes from the
+//! from the structured solver (eigenvalues from the spectrum engine, shapes from the
 //! chains' closed forms; see [`crate::modal::ModeShapes`]), as a table, a CSV
 //! ([`crate::report::shapes_csv`]) and an SVG ([`crate::report::svg::modes`]).
 
@@ -8,7 +8,7 @@ use super::CliError;
 use crate::cable::CableModel;
 use crate::estimator::{build_models, resolve_auto};
 use crate::kinematics::{rotation_of, Geometry};
-use crate::modal::{self, ModalParams, ModalSolver, ModeShapes, ShapeParams};
+use crate::modal::{self, ModalParams, ModalSolver, Mode, ModeShapes, ShapeParams};
 use crate::report::shapes_csv::shapes_csv;
 use crate::report::svg::modes::modes_svg;
 use crate::report::write_file;
@@ -161,11 +161,32 @@ impl PoseModel {
         let mut solver = ModalSolver::new(ModalParams::default());
         self.load(&mut solver);
         let err = |e: modal::ShapeError| CliError::Analysis(e.to_string());
-        let clusters = solver.eigen_clusters(k, params).map_err(err)?;
+        let clusters = lowest_clusters(&mut solver, k)?;
         solver
             .mode_shapes(&self.models, &self.geometry.arm_m, &clusters, params)
             .map_err(err)
     }
+}
+
+/// The lowest clusters (λ, multiplicity) covering at least `k` modes, from the spectrum
+/// engine ([`ModalSolver::modes`]); a cluster cut by `k` is completed.
+fn lowest_clusters(solver: &mut ModalSolver, k: usize) -> Result<Vec<(f64, u32)>, CliError> {
+    let mut modes = vec![Mode::default(); k + modal::MAX_MULTIPLICITY as usize];
+    let n = solver
+        .modes(modes.len(), &mut modes)
+        .map_err(|e| CliError::Analysis(e.to_string()))?;
+    let mut out = Vec::new();
+    let mut covered = 0usize;
+    for (i, m) in modes[..n].iter().enumerate() {
+        if covered >= k {
+            break;
+        }
+        if m.cluster_start == i {
+            out.push((m.lambda, m.multiplicity));
+            covered += m.multiplicity as usize;
+        }
+    }
+    Ok(out)
 }
 
 /// `cablevib modes`.
