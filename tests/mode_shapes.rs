@@ -384,3 +384,56 @@ fn continuous_shapes_are_the_limit_of_fem() {
     let worst = last.unwrap().into_iter().fold(0.0, f64::max);
     assert!(worst < 1e-2, "N=80: {worst:.2e}");
 }
+
+/// The CSV holds every node of every mode with the documented columns, the anchors at rest
+/// and each cable's last node moving with the end-effector (G_i φ); the SVG has one panel per
+/// mode asked for.
+#[test]
+fn csv_and_svg_of_the_rigid_box() {
+    use cablevib::report::shapes_csv::{shapes_csv, SHAPES_HEADER};
+    use cablevib::report::svg::modes::modes_svg;
+    let pm = pose("scenes/box_6dof.toml", ElementKind::Fem, 6);
+    let mut solver = ModalSolver::new(ModalParams::default());
+    pm.load(&mut solver);
+    let p = ShapeParams::default();
+    let cl = solver.eigen_clusters(5, &p).unwrap();
+    let s = solver
+        .mode_shapes(&pm.models, &pm.geometry.arm_m, &cl, &p)
+        .unwrap();
+    let text = shapes_csv(&pm.scene, &pm.geometry, &s);
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some(SHAPES_HEADER));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse::<f64>().unwrap()).collect())
+        .collect();
+    let n_cables = pm.scene.n_cables();
+    // Per mode: centroid translation and rotation rows, then 7 nodes per cable.
+    assert_eq!(rows.len(), s.modes.len() * (2 + 7 * n_cables));
+    for r in &rows {
+        assert_eq!(r.len(), 10);
+        let (mode, cable, node) = (r[0] as usize - 1, r[2] as usize, r[3] as usize);
+        let m = &s.modes[mode];
+        assert!((r[1] - m.frequency_hz).abs() <= 1e-8 * m.frequency_hz);
+        if cable == 0 {
+            continue;
+        }
+        let i = cable - 1;
+        let u = nalgebra::Vector3::new(r[7], r[8], r[9]);
+        if node == 0 {
+            let a = pm.scene.cables[i].anchor_m;
+            assert_eq!(u.norm(), 0.0);
+            assert!((nalgebra::Vector3::new(r[4], r[5], r[6]) - a).norm() < 1e-8);
+        }
+        if node == 6 {
+            let g = cablevib::modal::attach_map(&pm.geometry.arm_m[i]);
+            let want = g * m.ee;
+            assert!(
+                (u - want).norm() <= 1e-8 * want.norm().max(1e-12),
+                "{u} vs {want}"
+            );
+        }
+    }
+    let svg = modes_svg(&pm.scene, &pm.geometry, &s, 4);
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert_eq!(svg.matches("mode ").count(), 4, "one titled panel per mode");
+}
