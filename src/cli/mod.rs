@@ -11,6 +11,7 @@
 //! | `accuracy` | [`accuracy`](mod@accuracy) | what accuracy costs: error and time of every model |
 //! | `map` | [`map`](mod@map) | f1 over a workspace grid |
 //! | `trajectory` | [`trajectory`](mod@trajectory) | f1 along the circle or a CSV path |
+//! | `modes` | [`modes`](mod@modes) | the lowest modes with their shapes: table, CSV, SVG |
 //! | `sweep-tmin` | [`sweep_tmin`] | f1 against T_min with the √T_min fit |
 //! | `completions`, `man` | [`completions`](mod@completions) | shell completions and the man page |
 //! | `import caspr` | [`import`](mod@import) | a scene file from CASPR's XML model files |
@@ -26,6 +27,7 @@ pub mod completions;
 pub mod error;
 pub mod import;
 pub mod map;
+pub mod modes;
 pub mod serve;
 pub mod sweep_tmin;
 pub mod trajectory;
@@ -75,6 +77,8 @@ pub enum Command {
     Man(completions::ManArgs),
     /// Write a scene file from another tool's robot model (CASPR's XML files).
     Import(import::ImportArgs),
+    /// The lowest modes of one pose with their shapes: table, CSV and SVG.
+    Modes(modes::ModesArgs),
 }
 
 /// Heap allocation counter supplied by the binary's global allocator (0 when none).
@@ -95,6 +99,7 @@ pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
         Command::Completions(a) => completions::completions(&a),
         Command::Man(a) => completions::man(&a),
         Command::Import(a) => import::run(&a),
+        Command::Modes(a) => modes::run(&a),
     }
 }
 

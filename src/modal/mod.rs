@@ -74,6 +74,7 @@ mod eig3;
 mod error;
 mod first_mode;
 mod rigid;
+mod shapes;
 mod solver;
 mod spectrum;
 
@@ -86,6 +87,9 @@ pub use ee_tracker::RescanCounts;
 pub use eig3::{eig3, eig3_jacobi, Eig3};
 pub use error::ModalError;
 pub use rigid::{attach_map, rigid_geometric_stiffness};
+pub use shapes::{
+    ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_CONTINUOUS_SAMPLES, MAX_MULTIPLICITY,
+};
 pub use solver::ModalSolver;
 pub use spectrum::{Mode, SpectrumParams};
 

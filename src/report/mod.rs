@@ -8,6 +8,7 @@
 //! | [`csv`] | the one CSV writer (`csv` crate, `PATH.json` sidecars) and the number formats of every command's CSV |
 //! | [`map`](mod@map) | `cablevib map`: CSV and heat-map figure |
 //! | [`trajectory`](mod@trajectory) | `cablevib trajectory`: CSV and figure |
+//! | [`shapes_csv`] | `cablevib modes`: the mode-shape CSV |
 //! | [`tmin`] | `cablevib sweep-tmin`: CSV and figure |
 //! | [`accuracy_figures`] | `cablevib accuracy`: CSVs and figures |
 //! | [`accuracy_doc`] | `cablevib accuracy`: the Markdown section and its splicing |
@@ -16,6 +17,7 @@ pub mod accuracy_doc;
 pub mod accuracy_figures;
 pub mod csv;
 pub mod map;
+pub mod shapes_csv;
 pub mod svg;
 pub mod tmin;
 pub mod trajectory;

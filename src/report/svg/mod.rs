@@ -11,11 +11,13 @@
 //! | this one | the document (header, title, wrapped subtitle), escaping, number formatting |
 //! | [`axis`] | linear and log axes, the data-to-pixel mapping, ticks |
 //! | [`line_plot`] | [`LinePlot`] |
+//! | [`modes`] | the mode-shape figure (axonometric panels) |
 //! | [`heat_map`] | [`HeatPanel`], [`HeatMap`], the colour map |
 
 pub mod axis;
 pub mod heat_map;
 pub mod line_plot;
+pub mod modes;
 
 pub use axis::Axis;
 pub use heat_map::{colormap, HeatMap, HeatPanel};

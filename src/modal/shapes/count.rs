@@ -1,0 +1,115 @@
+//! [`ModalSolver::eigen_clusters`]: the lowest eigenvalues and their multiplicities by
+//! bisection on the Wittrick-Williams count (offline; the shapes' input when no other
+//! eigenvalue source is at hand).
+
+use super::{ShapeError, ShapeParams};
+use crate::modal::ModalSolver;
+
+/// A cluster that is not one eigenvalue is resolved by the count from [`SPLIT_BELOW`]
+/// below the λ given (its lowest member, to the eigenvalue source's accuracy ≲ 1e-12) ...
+const SPLIT_BELOW: f64 = 1e-12;
+/// ... to this relative distance above it (wider than any cluster probe, ≲ 1e-10).
+const SPLIT_WINDOW: f64 = 1e-8;
+/// The first upper bound tried, rad²/s²; it grows by [`GROWTH`] until enough eigenvalues
+/// are below it ...
+const START_HI: f64 = 1.0;
+/// ... by this factor ...
+const GROWTH: f64 = 4.0;
+/// ... at most this many times (4⁶⁰⁰ covers any finite λ).
+const GROWTH_STEPS: usize = 600;
+
+impl ModalSolver {
+    /// The lowest eigenvalues of the loaded model as clusters (λ in rad²/s², multiplicity),
+    /// ascending, until at least `k` modes are covered. Each cluster's λ is the bisection
+    /// limit of the count J(λ) (numbers of modes strictly below λ) to a relative width of
+    /// 4ε; modes within [`ShapeParams::cluster_rel`] (relative) of it form its cluster.
+    pub fn eigen_clusters(
+        &mut self,
+        k: usize,
+        params: &ShapeParams,
+    ) -> Result<Vec<(f64, u32)>, ShapeError> {
+        params.check()?;
+        let mut out = Vec::new();
+        if k == 0 {
+            return Ok(out);
+        }
+        let mut hi = START_HI;
+        let mut steps = 0;
+        while (self.count_below(hi) as usize) < k {
+            hi *= GROWTH;
+            steps += 1;
+            if steps > GROWTH_STEPS || !hi.is_finite() {
+                return Err(ShapeError::BadParams("no finite bound holds k eigenvalues"));
+            }
+        }
+        let mut found = 0usize;
+        let mut lo = 0.0f64;
+        while found < k {
+            let lambda = self.bisect_next(lo, hi, found, params)?;
+            let above = lambda * (1.0 + params.cluster_rel);
+            let m = (self.count_below(above) as usize)
+                .saturating_sub(found)
+                .max(1);
+            out.push((lambda, m as u32));
+            found += m;
+            lo = above;
+        }
+        Ok(out)
+    }
+
+    /// The smallest λ in (lo, hi] with more than `found` modes at or below it, by bisection.
+    pub(super) fn bisect_next(
+        &mut self,
+        mut lo: f64,
+        mut hi: f64,
+        found: usize,
+        params: &ShapeParams,
+    ) -> Result<f64, ShapeError> {
+        for _ in 0..params.max_bisections {
+            if hi - lo <= 4.0 * f64::EPSILON * hi {
+                return Ok(0.5 * (lo + hi));
+            }
+            let mid = 0.5 * (lo + hi);
+            if (self.count_below(mid) as usize) > found {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        Err(crate::modal::ModalError::NoConvergence {
+            evaluations: params.max_bisections,
+            lo,
+            hi,
+        }
+        .into())
+    }
+
+    /// The eigenvalues (λ, multiplicity) by the count from `lambda` (its cluster's lowest
+    /// member) to [`SPLIT_WINDOW`] above it, ascending, until they hold `m` modes; `None`
+    /// when the window holds fewer.
+    pub(super) fn split_cluster(
+        &mut self,
+        lambda: f64,
+        m: u32,
+        params: &ShapeParams,
+    ) -> Option<Vec<(f64, u32)>> {
+        let (lo, hi) = (lambda * (1.0 - SPLIT_BELOW), lambda * (1.0 + SPLIT_WINDOW));
+        let found0 = self.count_below(lo) as usize;
+        if (self.count_below(hi) as usize) < found0 + m as usize {
+            return None;
+        }
+        let (mut found, mut cur) = (found0, lo);
+        let mut out = Vec::new();
+        while found < found0 + m as usize {
+            let l = self.bisect_next(cur, hi, found, params).ok()?;
+            let above = l * (1.0 + params.cluster_rel);
+            let k = (self.count_below(above) as usize)
+                .saturating_sub(found)
+                .max(1);
+            out.push((l, k as u32));
+            found += k;
+            cur = above;
+        }
+        Some(out)
+    }
+}

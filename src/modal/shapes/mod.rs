@@ -1,0 +1,228 @@
+//! Mode shapes from the structured solver: for an eigenvalue λ* of multiplicity m (from the
+//! Wittrick-Williams count), the m mass-normalised shapes of the whole robot, the
+//! end-effector's displacement and every cable's node displacements, without assembling
+//! anything of size N.
+//!
+//! **Chain shapes.** A cable's interior nodes decouple into scalar chains (directions w
+//! spanning the range of the chain's projector, one per multiplicity). At a given λ the
+//! interior equations of one chain, β y_{j−1} + 2α y_j + β y_{j+1} = 0 (α = k − λm/3,
+//! β = −k − λm/6) with the anchor held (y₀ = 0), have a one-parameter family of solutions
+//! y_j = C w_j, w_j ∝ U_{j−1}(c) with c = −α/β (sin(jθ)/sin θ for c = cos θ,
+//! (−1)^{j−1} sinh(jφ)/sinh φ above the cut-off); a continuous string or bar has
+//! w(x) ∝ sin(φx), φ = √(λμL²/S). The amplitude C is a free unknown. The chain's end value
+//! is g = w_N and the force it puts on its end node per unit amplitude is
+//! f = α w_N + β w_{N−1} (K w'(1) for a continuous chain), so its dynamic stiffness is
+//! s(λ) = f/g; w is normalised to max |w| = 1, so f and g are finite at every λ.
+//!
+//! **Bordered system.** With the end-effector's displacement φ (3 DOF, or 6 for a rigid
+//! body: translation, then rotation), b_k = G_iᵀ w_k the end direction of chain copy k of
+//! cable i (G_i = I, or [I, −\[r_i\]×] for a rigid body with arm r_i), the free vibration at
+//! λ is exactly
+//!
+//! ```text
+//!     (K_ee − λ M_ee) φ + Σ_k f_k C_k b_k = 0          (end-effector equilibrium)
+//!     σ_k (b_kᵀ φ − g_k C_k)            = 0  for all k  (the chain ends at the end-effector)
+//! ```
+//!
+//! (σ_k a stiffness of the size of f_k that balances the rows; K_ee is a rigid body's
+//! rotational geometric stiffness). Its unknowns are (φ, C_1 … C_n): n = dim + Σ mult, at
+//! most 6 + 3·(cables) whatever N is. A solution gives every node (y_j = C w_j inside, the
+//! end from φ) and every solution of the full K u = λ M u restricted to the chains is one,
+//! so the null space of this small matrix at λ* is the eigenspace, of dimension m. Unlike
+//! D(λ), it has no poles: when λ* is a blocked eigenvalue of some chains (identical cables
+//! give modes with the end-effector still, 3- and 5-fold clusters on the spatial paper
+//! robot), g_k = 0 for them and C_k is simply a free amplitude, the row b_kᵀφ = 0 holding
+//! the chain's end. The matrix is not symmetric (a symmetric scaling f_k·row would lose
+//! the row where f_k = 0, the chain's own free-end resonance), so the null space is taken
+//! from its singular value decomposition: the right singular vectors of the m smallest
+//! singular values. λ* is known to a relative δ (≈ 1e-12 from the count's bisection, or the
+//! dense solver's ε·λ_max/λ), so those singular values are O(δ·‖A‖) instead of 0 and the
+//! subspace is accurate to about σ_m/σ_{m+1}; [`ShapeParams::null_tol`] bounds that ratio
+//! (a larger one means the multiplicity given does not match the null space, or λ is too
+//! coarse to separate it from a neighbour). Before the SVD the matrix is equilibrated
+//! (Ruiz: rows and columns scaled to unit largest entry): the chains' rows range from T/l
+//! to EA/l, and unbalanced, the SVD's backward error ε‖A‖ would swamp the soft rows. A
+//! cluster given that fails the test (modes 1e-10 apart given as one; the catenary model's
+//! identical cables differ by ~ε·EA/T) is resolved by the count from its λ to 1e-8 above,
+//! and each part's shapes are taken.
+//!
+//! **Normalisation.** The consistent mass of the model is block diagonal in the chain
+//! coordinates (its 3 × 3 blocks are multiples of I and the chain directions are
+//! orthonormal), so φ_aᵀ M φ_b = φ_aᵀ M_ee φ_b +
+//! Σ_k [C_a C_b m_ii + (C_a e_b + e_a C_b) m_ie + e_a e_b m_ee] with e = b_kᵀφ the chain's end displacement and the element sums
+//! m_ii = (m/3)(Σ_{interior elements} (w_j² + w_j w_{j+1} + w_{j+1}²) + w_{N−1}²),
+//! m_ie = (m/6) w_{N−1}, m_ee = m/3 (μL ∫₀¹ w² dx for a continuous chain): exactly the
+//! dense M's quadratic form, in O(N) per chain. The m shapes of a cluster are
+//! M-orthonormalised (symmetric orthonormalisation with the m × m Gram matrix), then rotated
+//! within the cluster to diagonalise the end-effector's mass: the cluster's first shape
+//! carries the largest end-effector participation p = φ_eeᵀ M_ee φ_ee (m_ee‖φ_ee‖² for a
+//! point mass), the others the rest, and Σ p over the cluster is basis-independent.
+//!
+//! **Cost.** O(N) per chain for the shapes and moments, one SVD of size dim + Σ mult per
+//! cluster, O(N·K) for the node displacements of K modes. Offline: allocates.
+//!
+//! **Units.** λ in rad²/s²; shapes mass-normalised (φᵀMφ = 1): translations in m/√(kg·m²)
+//! = 1/√kg, rotations in rad/(m·√kg); participations dimensionless.
+//!
+//! **Layout.** `chain_shape`: one chain's w, f, g and mass moments. `solve`:
+//! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes). `count`:
+//! [`ModalSolver::eigen_clusters`](crate::modal::ModalSolver::eigen_clusters), the lowest
+//! eigenvalues and their multiplicities by count bisection.
+
+mod chain_shape;
+mod count;
+mod solve;
+
+use super::ModalError;
+use nalgebra::{Vector3, Vector6};
+
+/// Largest multiplicity accepted for one eigenvalue (every chain copy of 16 cables at one
+/// pole is 48; the bordered system has at most 6 + 3·16 unknowns).
+pub const MAX_MULTIPLICITY: u32 = 64;
+/// Largest number of sample points along a continuous cable.
+pub const MAX_CONTINUOUS_SAMPLES: usize = 10_001;
+
+/// Parameters of the mode-shape recovery (finite bounds everywhere).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShapeParams {
+    /// Largest σ_m/σ_{m+1} of the (equilibrated) bordered system accepted for an eigenvalue
+    /// of multiplicity m (σ the singular values, ascending): the m-dimensional null space
+    /// must be clearly separated. The subspace's error is about this ratio times the
+    /// relative error of λ's effect, so it is also a quality measure of the input λ.
+    pub null_tol: f64,
+    /// Points at which a continuous cable is sampled, anchor and end included (2 ..=
+    /// [`MAX_CONTINUOUS_SAMPLES`]).
+    pub continuous_samples: usize,
+    /// Largest number of QR sweeps of the singular value decomposition.
+    pub svd_max_iterations: usize,
+    /// Relative width within which the count groups eigenvalues into one cluster: exact
+    /// clusters (identical cables) agree to rounding, ~1e-15; distinct modes this close
+    /// would leave more than m small singular values in the bordered system (an error)
+    /// ([`ModalSolver::eigen_clusters`](crate::modal::ModalSolver::eigen_clusters)).
+    pub cluster_rel: f64,
+    /// Largest number of count evaluations for one cluster's bisection.
+    pub max_bisections: u32,
+}
+
+impl Default for ShapeParams {
+    fn default() -> Self {
+        ShapeParams {
+            null_tol: 1e-3,
+            continuous_samples: 41,
+            svd_max_iterations: 1000,
+            cluster_rel: 1e-12,
+            max_bisections: 400,
+        }
+    }
+}
+
+/// One mass-normalised mode shape.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModeShape {
+    /// λ = ω², rad²/s².
+    pub lambda: f64,
+    /// Natural frequency, Hz.
+    pub frequency_hz: f64,
+    /// End-effector displacement: translation (1/√kg), then rotation (rad/(m·√kg)) for a
+    /// rigid body (zeros for a point mass).
+    pub ee: Vector6<f64>,
+    /// Node displacements of each cable (1/√kg), anchor (node 0, zero) to end-effector; at
+    /// the fractions [`ModeShapes::fractions`] of the chord.
+    pub cables: Vec<Vec<Vector3<f64>>>,
+    /// End-effector participation φ_eeᵀ M_ee φ_ee (0 ..= 1).
+    pub ee_participation: f64,
+    /// Index (in [`ModeShapes::modes`]) of the first shape of this mode's cluster.
+    pub cluster_start: usize,
+    /// Multiplicity of λ (shapes in the cluster).
+    pub multiplicity: u32,
+    /// σ_m/σ_{m+1} of the equilibrated bordered system at λ: how far λ is from an exact
+    /// eigenvalue of multiplicity m, relative to the distance to the next one.
+    pub null_residual: f64,
+}
+
+/// The mode shapes of one pose.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ModeShapes {
+    /// 3 (point mass) or 6 (rigid body).
+    pub dim: usize,
+    /// Each cable's node positions as fractions (0 ..= 1) of its chord from the anchor.
+    pub fractions: Vec<Vec<f64>>,
+    /// The shapes, ascending in λ; a cluster's shapes by descending participation.
+    pub modes: Vec<ModeShape>,
+}
+
+/// Errors of the mode-shape recovery.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum ShapeError {
+    /// An eigenvalue or multiplicity given is not usable.
+    #[error("bad eigenvalue {lambda:e} rad²/s² with multiplicity {multiplicity} (must be finite, > 0, multiplicity 1..={MAX_MULTIPLICITY})")]
+    BadMode {
+        /// λ given, rad²/s².
+        lambda: f64,
+        /// Multiplicity given.
+        multiplicity: u32,
+    },
+    /// The models do not match what the solver was loaded with.
+    #[error("the solver was loaded with {loaded} chains, the models have {given}; load the same models first")]
+    NotLoaded {
+        /// Chains loaded.
+        loaded: usize,
+        /// Chains in the models given.
+        given: usize,
+    },
+    /// A rigid end-effector needs one attachment arm per cable.
+    #[error("rigid end-effector: {given} attachment arms for {cables} cables")]
+    MissingArms {
+        /// Arms given.
+        given: usize,
+        /// Cables.
+        cables: usize,
+    },
+    /// The bordered system has no null space of the given dimension at λ.
+    #[error("λ = {lambda:e} rad²/s² is not an eigenvalue of multiplicity {multiplicity}: singular values σ_m/σ_max = {sigma_m:.2e}, σ_(m+1)/σ_max = {sigma_next:.2e}")]
+    NotAnEigenvalue {
+        /// λ given, rad²/s².
+        lambda: f64,
+        /// Multiplicity given.
+        multiplicity: u32,
+        /// σ_m/σ_max.
+        sigma_m: f64,
+        /// σ_{m+1}/σ_max (∞ when m is the whole system).
+        sigma_next: f64,
+    },
+    /// The singular value decomposition did not converge in its bound.
+    #[error("singular value decomposition did not converge at λ = {0:e} rad²/s²")]
+    Svd(f64),
+    /// A parameter is out of its range.
+    #[error("bad shape parameter: {0}")]
+    BadParams(&'static str),
+    /// The eigenvalue count failed.
+    #[error(transparent)]
+    Modal(#[from] ModalError),
+}
+
+impl ShapeParams {
+    /// Check the ranges.
+    pub fn check(&self) -> Result<(), ShapeError> {
+        if !(self.null_tol > 0.0 && self.null_tol < 1.0) {
+            return Err(ShapeError::BadParams("null_tol must be in (0, 1)"));
+        }
+        if !(2..=MAX_CONTINUOUS_SAMPLES).contains(&self.continuous_samples) {
+            return Err(ShapeError::BadParams(
+                "continuous_samples must be in 2..=10001",
+            ));
+        }
+        if !(1..=100_000).contains(&self.svd_max_iterations) {
+            return Err(ShapeError::BadParams(
+                "svd_max_iterations must be in 1..=100000",
+            ));
+        }
+        if !(self.cluster_rel > 0.0 && self.cluster_rel < 1e-2) {
+            return Err(ShapeError::BadParams("cluster_rel must be in (0, 0.01)"));
+        }
+        if !(1..=10_000).contains(&self.max_bisections) {
+            return Err(ShapeError::BadParams("max_bisections must be in 1..=10000"));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,396 @@
+//! [`ModalSolver::mode_shapes`]: the bordered system at each eigenvalue, its null space, the
+//! M-orthonormalisation within a cluster and the node displacements (see the module docs).
+
+use super::chain_shape::ChainShape;
+use super::{ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_MULTIPLICITY};
+use crate::cable::{CableModel, ChainKind};
+use crate::modal::eig3::eig3_jacobi;
+use crate::modal::rigid::attach_map;
+use crate::modal::{lambda_to_hz, ModalSolver};
+use nalgebra::{DMatrix, DVector, Matrix3x6, SymmetricEigen, Vector3, Vector6};
+
+/// A projector eigenvalue above this is in its range (they are 0 or 1 to rounding).
+const PROJ_RANGE_MIN: f64 = 0.5;
+/// Sweeps of Ruiz equilibration (each halves the logarithm of every row's and column's
+/// imbalance: 30 sweeps bring a 1e30 spread to within a factor 1 + 1e-7).
+const RUIZ_SWEEPS: usize = 30;
+
+/// One chain copy: a direction of one chain of one cable.
+#[derive(Debug, Clone)]
+struct ChainCopy {
+    /// The chain's index in [`Layout::kinds`].
+    chain: usize,
+    /// Unit direction of the copy (world frame).
+    dir: Vector3<f64>,
+    /// End direction on the end-effector's coordinates, G_iᵀ dir.
+    b: Vector6<f64>,
+}
+
+/// How the models' chains attach, independent of λ.
+#[derive(Debug, Clone)]
+struct Layout {
+    /// Each active chain's kind.
+    kinds: Vec<ChainKind>,
+    /// Every chain copy.
+    copies: Vec<ChainCopy>,
+    /// Per cable: its copies' indices, its attachment map and whether it is continuous.
+    cable_copies: Vec<Vec<usize>>,
+    attach: Vec<Matrix3x6<f64>>,
+    fractions: Vec<Vec<f64>>,
+}
+
+impl Layout {
+    fn new(
+        models: &[CableModel],
+        arms_m: Option<&[nalgebra::Vector3<f64>]>,
+        samples: usize,
+    ) -> Layout {
+        let mut l = Layout {
+            kinds: Vec::new(),
+            copies: Vec::new(),
+            cable_copies: Vec::new(),
+            attach: Vec::new(),
+            fractions: Vec::new(),
+        };
+        for (i, m) in models.iter().enumerate() {
+            let g = match arms_m {
+                Some(arms) => attach_map(&arms[i]),
+                None => attach_map(&Vector3::zeros()),
+            };
+            let mut mine = Vec::new();
+            let mut continuous = false;
+            for c in &m.chains[..m.n_chains] {
+                if matches!(c.kind, ChainKind::Discrete { k, m, .. } if k == 0.0 && m == 0.0) {
+                    continue; // no stiffness, no mass: loads nothing (as `load` skips it)
+                }
+                continuous |= matches!(c.kind, ChainKind::Continuous { .. });
+                let e = eig3_jacobi(&c.proj);
+                for r in 0..3 {
+                    if e.values[r] > PROJ_RANGE_MIN {
+                        let dir = e.vectors[r];
+                        mine.push(l.copies.len());
+                        l.copies.push(ChainCopy {
+                            chain: l.kinds.len(),
+                            dir,
+                            b: g.transpose() * dir,
+                        });
+                    }
+                }
+                l.kinds.push(c.kind);
+            }
+            let n = if continuous {
+                samples - 1
+            } else {
+                m.n_el.max(1)
+            };
+            l.fractions
+                .push((0..=n).map(|j| j as f64 / n as f64).collect());
+            l.cable_copies.push(mine);
+            l.attach.push(g);
+        }
+        l
+    }
+}
+
+/// The null space of one cluster before normalisation: columns (φ, C_1 … C_n).
+struct NullSpace {
+    vectors: DMatrix<f64>,
+    residual: f64,
+}
+
+impl ModalSolver {
+    /// The mass-normalised mode shapes at the eigenvalues `modes` = (λ in rad²/s²,
+    /// multiplicity), e.g. from [`Self::eigen_clusters`] or the dense reference: for each,
+    /// `multiplicity` shapes, M-orthonormal, ordered by descending end-effector participation.
+    ///
+    /// The solver must be loaded ([`Self::load`] or [`Self::load_rigid`]) with the same
+    /// `models`; `arms_m` are the attachment arms (world frame, m) of a rigid end-effector
+    /// (ignored for a point mass). Continuous cables are sampled at
+    /// [`ShapeParams::continuous_samples`] points. Allocates; never on the real-time path.
+    pub fn mode_shapes(
+        &mut self,
+        models: &[CableModel],
+        arms_m: &[Vector3<f64>],
+        modes: &[(f64, u32)],
+        params: &ShapeParams,
+    ) -> Result<ModeShapes, ShapeError> {
+        params.check()?;
+        let dim = self.problem.dim;
+        if dim == 6 && arms_m.len() < models.len() {
+            return Err(ShapeError::MissingArms {
+                given: arms_m.len(),
+                cables: models.len(),
+            });
+        }
+        let arms = (dim == 6).then_some(arms_m);
+        let layout = Layout::new(models, arms, params.continuous_samples);
+        if layout.kinds.len() != self.problem.n_chains {
+            return Err(ShapeError::NotLoaded {
+                loaded: self.problem.n_chains,
+                given: layout.kinds.len(),
+            });
+        }
+        let mut shapes = vec![ChainShape::default(); layout.kinds.len()];
+        let mut out = ModeShapes {
+            dim,
+            fractions: layout.fractions.clone(),
+            modes: Vec::new(),
+        };
+        for &(lambda, m) in modes {
+            if !(lambda.is_finite() && lambda > 0.0) || m == 0 || m > MAX_MULTIPLICITY {
+                return Err(ShapeError::BadMode {
+                    lambda,
+                    multiplicity: m,
+                });
+            }
+            let first = self.cluster_shapes(&layout, &mut shapes, (lambda, m), params, &mut out);
+            if let Err(e @ ShapeError::NotAnEigenvalue { .. }) = first {
+                // Not one clean cluster (e.g. modes 1e-10 apart given as one): resolve it by
+                // the count and take each part's shapes.
+                for part in self.split_cluster(lambda, m, params).ok_or(e)? {
+                    self.cluster_shapes(&layout, &mut shapes, part, params, &mut out)?;
+                }
+            } else {
+                first?;
+            }
+        }
+        Ok(out)
+    }
+
+    /// The shapes of one cluster (λ, m), appended to `out`.
+    fn cluster_shapes(
+        &self,
+        layout: &Layout,
+        shapes: &mut [ChainShape],
+        (lambda, m): (f64, u32),
+        params: &ShapeParams,
+        out: &mut ModeShapes,
+    ) -> Result<(), ShapeError> {
+        for (sh, kind) in shapes.iter_mut().zip(&layout.kinds) {
+            sh.fill(kind, lambda);
+        }
+        let null = self.null_space(layout, shapes, lambda, m, params)?;
+        let v = self.normalise(layout, shapes, &null.vectors);
+        let start = out.modes.len();
+        for (col, part) in v {
+            out.modes.push(ModeShape {
+                lambda,
+                frequency_hz: lambda_to_hz(lambda),
+                ee: ee_of(&col, out.dim),
+                cables: nodes(layout, shapes, &col, out.dim),
+                ee_participation: part,
+                cluster_start: start,
+                multiplicity: m,
+                null_residual: null.residual,
+            });
+        }
+        Ok(())
+    }
+
+    /// The bordered matrix at λ (see the module docs) and its m-dimensional null space.
+    fn null_space(
+        &self,
+        layout: &Layout,
+        shapes: &[ChainShape],
+        lambda: f64,
+        m: u32,
+        params: &ShapeParams,
+    ) -> Result<NullSpace, ShapeError> {
+        let p = &self.problem;
+        let d = p.dim;
+        let n = d + layout.copies.len();
+        let m = m as usize;
+        let mut a = DMatrix::<f64>::zeros(n, n);
+        for r in 0..d {
+            for c in 0..d {
+                a[(r, c)] = p.k6[(r, c)] - lambda * p.m6[(r, c)];
+            }
+        }
+        for (q, cp) in layout.copies.iter().enumerate() {
+            let sh = &shapes[cp.chain];
+            for r in 0..d {
+                a[(r, d + q)] = sh.f * cp.b[r];
+                a[(d + q, r)] = sh.scale * cp.b[r];
+            }
+            a[(d + q, d + q)] = -sh.scale * sh.g;
+        }
+        let bad = |sigma_m, sigma_next| ShapeError::NotAnEigenvalue {
+            lambda,
+            multiplicity: m as u32,
+            sigma_m,
+            sigma_next,
+        };
+        if m > n {
+            return Err(bad(f64::NAN, f64::NAN));
+        }
+        let col_scale = equilibrate(&mut a);
+        let svd =
+            nalgebra::linalg::SVD::try_new(a, false, true, f64::EPSILON, params.svd_max_iterations)
+                .ok_or(ShapeError::Svd(lambda))?;
+        let vt = svd.v_t.ok_or(ShapeError::Svd(lambda))?;
+        let s = &svd.singular_values;
+        let smax = s.max();
+        let mut idx: Vec<usize> = (0..n).collect();
+        idx.sort_by(|&i, &j| s[i].total_cmp(&s[j]));
+        let sigma_m = s[idx[m - 1]] / smax;
+        let sigma_next = if m < n {
+            s[idx[m]] / smax
+        } else {
+            f64::INFINITY
+        };
+        // The null space is the m-dimensional one only if σ_m is clearly below σ_{m+1}.
+        let separation = sigma_m / sigma_next;
+        if !(separation <= params.null_tol) {
+            return Err(bad(sigma_m, sigma_next));
+        }
+        let mut vectors = DMatrix::zeros(n, m);
+        for (c, &i) in idx[..m].iter().enumerate() {
+            let v = vt.row(i).transpose().component_mul(&col_scale);
+            vectors.set_column(c, &(&v / v.norm()));
+        }
+        Ok(NullSpace {
+            vectors,
+            residual: separation,
+        })
+    }
+
+    /// M-orthonormalise the null vectors (columns) and rotate them to diagonalise the
+    /// end-effector's mass; returns the columns with their participations, descending.
+    fn normalise(
+        &self,
+        layout: &Layout,
+        shapes: &[ChainShape],
+        v: &DMatrix<f64>,
+    ) -> Vec<(DVector<f64>, f64)> {
+        let m = v.ncols();
+        let d = self.problem.dim;
+        let m6 = &self.problem.m6;
+        let ends: Vec<Vec<f64>> = (0..m)
+            .map(|a| {
+                layout
+                    .copies
+                    .iter()
+                    .map(|cp| (0..d).map(|r| cp.b[r] * v[(r, a)]).sum())
+                    .collect()
+            })
+            .collect();
+        let mut gram = DMatrix::<f64>::zeros(m, m);
+        let mut ee = DMatrix::<f64>::zeros(m, m);
+        for a in 0..m {
+            for b in 0..=a {
+                let mut own = 0.0;
+                for r in 0..d {
+                    for c in 0..d {
+                        own += v[(r, a)] * m6[(r, c)] * v[(c, b)];
+                    }
+                }
+                let mut cab = 0.0;
+                for (q, cp) in layout.copies.iter().enumerate() {
+                    let sh = &shapes[cp.chain];
+                    let (ca, cb) = (v[(d + q, a)], v[(d + q, b)]);
+                    let (ea, eb) = (ends[a][q], ends[b][q]);
+                    cab += ca * cb * sh.m_ii + (ca * eb + ea * cb) * sh.m_ie + ea * eb * sh.m_ee;
+                }
+                gram[(a, b)] = own + cab;
+                gram[(b, a)] = own + cab;
+                ee[(a, b)] = own;
+                ee[(b, a)] = own;
+            }
+        }
+        // Symmetric orthonormalisation T1 = Q Λ^{-1/2}, then the end-effector's mass in
+        // that basis diagonalised (descending).
+        let g = SymmetricEigen::new(gram);
+        let mut t1 = g.eigenvectors.clone();
+        for (c, &l) in g.eigenvalues.iter().enumerate() {
+            let s = 1.0 / l.max(f64::MIN_POSITIVE).sqrt();
+            t1.column_mut(c).scale_mut(s);
+        }
+        let e = SymmetricEigen::new(t1.transpose() * &ee * &t1);
+        let mut order: Vec<usize> = (0..m).collect();
+        order.sort_by(|&i, &j| e.eigenvalues[j].total_cmp(&e.eigenvalues[i]));
+        let t = &t1 * &e.eigenvectors;
+        order
+            .iter()
+            .map(|&c| {
+                let mut col = v * t.column(c);
+                // Sign: the largest entry positive (a convention; shapes are ± anyway).
+                let imax = col.iamax();
+                if col[imax] < 0.0 {
+                    col.neg_mut();
+                }
+                (col, e.eigenvalues[c].clamp(0.0, 1.0))
+            })
+            .collect()
+    }
+}
+
+/// Ruiz equilibration: scale rows and columns of `a` in place until every row and column
+/// has largest entry ≈ 1 (the chains' rows range from T/l to EA/l, and the end-effector's
+/// from λ·m to the sum of both: unbalanced, the SVD's backward error ε‖A‖ would swamp the
+/// small rows). Returns the column scales c: the null vectors of the original matrix are
+/// c ∘ (those of the scaled one).
+fn equilibrate(a: &mut DMatrix<f64>) -> DVector<f64> {
+    let n = a.ncols();
+    let mut cs = DVector::from_element(n, 1.0);
+    for _ in 0..RUIZ_SWEEPS {
+        for r in 0..a.nrows() {
+            let mx = a.row(r).amax();
+            if mx > 0.0 {
+                a.row_mut(r).scale_mut(1.0 / mx.sqrt());
+            }
+        }
+        for c in 0..n {
+            let mx = a.column(c).amax();
+            if mx > 0.0 {
+                let f = 1.0 / mx.sqrt();
+                a.column_mut(c).scale_mut(f);
+                cs[c] *= f;
+            }
+        }
+    }
+    cs
+}
+
+/// The end-effector part of a null vector.
+fn ee_of(col: &DVector<f64>, dim: usize) -> Vector6<f64> {
+    let mut ee = Vector6::zeros();
+    for r in 0..dim {
+        ee[r] = col[r];
+    }
+    ee
+}
+
+/// Every cable's node displacements of a null vector: C_k w inside, G_i φ at the end.
+fn nodes(
+    layout: &Layout,
+    shapes: &[ChainShape],
+    col: &DVector<f64>,
+    dim: usize,
+) -> Vec<Vec<Vector3<f64>>> {
+    let phi = ee_of(col, dim);
+    layout
+        .cable_copies
+        .iter()
+        .enumerate()
+        .map(|(i, copies)| {
+            let fr = &layout.fractions[i];
+            let last = fr.len() - 1;
+            let mut u = vec![Vector3::zeros(); fr.len()];
+            for &q in copies {
+                let cp = &layout.copies[q];
+                let sh = &shapes[cp.chain];
+                let amp = col[dim + q];
+                for (j, uj) in u.iter_mut().enumerate().take(last).skip(1) {
+                    let w = if sh.w.is_empty() {
+                        sh.at(fr[j])
+                    } else {
+                        sh.w[j]
+                    };
+                    *uj += cp.dir * (amp * w);
+                }
+            }
+            u[last] = layout.attach[i] * phi;
+            u
+        })
+        .collect()
+}
