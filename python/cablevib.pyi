@@ -115,6 +115,9 @@ class Estimate:
     @property
     def ee_mode_participation(self) -> float: ...
     @property
+    def ee_mode_age_cycles(self) -> Optional[int]:
+        """Cycles since the end-effector mode answer was computed (0: this pose); None if unknown."""
+    @property
     def stiffness_n_m(self) -> _F64:
         """Static end-effector stiffness, translational block, N/m, shape (3, 3)."""
     @property

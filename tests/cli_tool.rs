@@ -77,3 +77,35 @@ fn serve_scene_positional_or_option_not_both() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("cannot be used with"));
 }
+
+#[test]
+fn analyze_writes_the_mode_shapes_with_a_sidecar() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("analyze-shapes");
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("shapes.csv");
+    let o = run(&[
+        "analyze",
+        "planar-paper",
+        "--modes",
+        "3",
+        "--shapes",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(
+        text.lines().next(),
+        Some("mode,frequency_hz,cable,node,x_m,y_m,z_m,ux,uy,uz")
+    );
+    let side: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("shapes.csv.json")).unwrap())
+            .unwrap();
+    assert_eq!(side["command"], "modes");
+    assert!(
+        side["modes"].as_u64().unwrap() >= 3,
+        "clusters are completed"
+    );
+    // Not with --realtime: the parser says so.
+    let o = run(&["analyze", "planar-paper", "--realtime", "--shapes", "x.csv"]);
+    assert_eq!(o.status.code(), Some(2));
+}

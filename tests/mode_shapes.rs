@@ -400,7 +400,9 @@ fn csv_and_svg_of_the_rigid_box() {
     let s = solver
         .mode_shapes(&pm.models, &pm.geometry.arm_m, &cl, &p)
         .unwrap();
-    let text = shapes_csv(&pm.scene, &pm.geometry, &s);
+    let (text, sidecar) = shapes_csv(&pm.scene, &pm.geometry, &s).into_parts("test");
+    let sidecar: serde_json::Value = serde_json::from_str(&sidecar).expect("sidecar JSON");
+    assert_eq!(sidecar["modes"], s.modes.len());
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some(SHAPES_HEADER));
     let rows: Vec<Vec<f64>> = lines

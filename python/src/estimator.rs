@@ -214,6 +214,13 @@ impl PyEstimate {
         self.inner.ee_mode_participation
     }
 
+    /// How many cycles old the end-effector mode answer is (0: computed at this pose); None
+    /// when no answer is known (`ee_mode_hz` is then NaN).
+    #[getter]
+    fn ee_mode_age_cycles(&self) -> Option<u32> {
+        (self.inner.ee_mode_age_cycles != u32::MAX).then_some(self.inner.ee_mode_age_cycles)
+    }
+
     /// Static end-effector stiffness, translational block, N/m, shape (3, 3).
     #[getter]
     fn stiffness_n_m<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
@@ -269,6 +276,7 @@ impl PyEstimate {
         d.set_item("f1_ee_participation", self.f1_ee_participation())?;
         d.set_item("ee_mode_hz", self.ee_mode_hz())?;
         d.set_item("ee_mode_participation", self.ee_mode_participation())?;
+        d.set_item("ee_mode_age_cycles", self.ee_mode_age_cycles())?;
         d.set_item("stiffness_n_m", self.stiffness_n_m(py)?)?;
         d.set_item("stiffness", self.stiffness(py)?)?;
         d.set_item("eigen_evaluations", self.eigen_evaluations())?;

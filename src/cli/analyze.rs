@@ -40,6 +40,11 @@ pub struct AnalyzeArgs {
     /// DOF order: end-effector first, then each cable's interior nodes from the anchor).
     #[arg(long, value_name = "PREFIX")]
     pub export_matrices: Option<std::path::PathBuf>,
+    /// Also write the mode shapes of the first `--modes` modes (clusters completed) to
+    /// FILE.csv and its FILE.csv.json sidecar: the columns of `cablevib modes --csv`
+    /// (mass-normalised node displacements, 1/√kg). Not with --realtime.
+    #[arg(long, value_name = "FILE.csv", conflicts_with = "realtime")]
+    pub shapes: Option<std::path::PathBuf>,
     /// One JSON object on stdout instead of tables.
     #[arg(long)]
     pub json: bool,
@@ -84,6 +89,9 @@ pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
     if let Some(prefix) = &a.export_matrices {
         export_matrices(&s, prefix)?;
     }
+    if let Some(path) = &a.shapes {
+        write_shapes(&s, a.modes, path)?;
+    }
     if a.json {
         let o = serde_json::to_string(&r).map_err(|e| CliError::Analysis(e.to_string()))?;
         println!("{o}");
@@ -91,6 +99,16 @@ pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
         print_report(&r);
     }
     Ok(())
+}
+
+/// The shapes of the first `modes` modes of `s` at its pose (the `cablevib modes` pipeline)
+/// as a CSV with its sidecar.
+fn write_shapes(s: &Scene, modes: usize, path: &std::path::Path) -> Result<(), CliError> {
+    use crate::report::csv::{process_command_line, write_csv};
+    let pose = super::modes::PoseModel::new(s)?;
+    let shapes = pose.shapes(modes, &crate::modal::ShapeParams::default())?;
+    let csv = crate::report::shapes_csv::shapes_csv(&pose.scene, &pose.geometry, &shapes);
+    Ok(write_csv(path, csv, &process_command_line())?)
 }
 
 /// K and M of the structured path's models as PREFIX.K.mtx and PREFIX.M.mtx.
@@ -151,7 +169,7 @@ fn print_report(r: &AnalysisReport) {
     );
     println!("\n cable   tension (N)");
     for (i, t) in r.tensions_n.iter().enumerate() {
-        println!(" {:>5}   {:>11.4}", i, t);
+        println!(" {:>5}   {:>11.4}", i + 1, t);
     }
     println!("\n mode   frequency (Hz)   end-effector participation   multiplicity");
     for (i, (fi, pi)) in r.frequencies_hz.iter().zip(&r.ee_participation).enumerate() {
@@ -217,6 +235,7 @@ fn analyze_realtime(a: &AnalyzeArgs, s: &Scene) -> Result<(), CliError> {
             "f1_ee_participation": json_f64(e.f1_ee_participation),
             "ee_mode_hz": json_f64(e.ee_mode_hz),
             "ee_mode_participation": json_f64(e.ee_mode_participation),
+            "ee_mode_age_cycles": (e.ee_mode_age_cycles != u32::MAX).then_some(e.ee_mode_age_cycles),
             "stiffness_n_m": e.stiffness_n_m.row_iter().map(|row| row.iter().map(|&x| json_f64(x)).collect::<Vec<_>>()).collect::<Vec<_>>(),
             "element": s.model.element.as_str(),
             "elements_per_cable": s.model.elements_per_cable,
@@ -238,7 +257,7 @@ fn analyze_realtime(a: &AnalyzeArgs, s: &Scene) -> Result<(), CliError> {
             println!("  reason: {err}");
         }
         for (i, t) in e.tensions().iter().enumerate() {
-            println!("  cable {i:>2}: {t:>11.4} N");
+            println!("  cable {:>2}: {t:>11.4} N", i + 1);
         }
         println!(
             "  f1            {:.9} Hz (end-effector participation {:.3e})",

@@ -9,6 +9,7 @@ use crate::cable::CableModel;
 use crate::estimator::{build_models, resolve_auto};
 use crate::kinematics::{rotation_of, Geometry};
 use crate::modal::{self, ModalParams, ModalSolver, Mode, ModeShapes, ShapeParams};
+use crate::report::csv::{process_command_line, write_csv};
 use crate::report::shapes_csv::shapes_csv;
 use crate::report::svg::modes::modes_svg;
 use crate::report::write_file;
@@ -234,7 +235,11 @@ pub fn run(a: &ModesArgs) -> Result<(), CliError> {
         );
     }
     if let Some(path) = &a.csv {
-        write_file(path, &shapes_csv(sc, &pose.geometry, &shapes))?;
+        write_csv(
+            path,
+            shapes_csv(sc, &pose.geometry, &shapes),
+            &process_command_line(),
+        )?;
         println!("\nwrote {}", path.display());
     }
     if let Some(path) = &a.svg {

@@ -1,4 +1,6 @@
-//! The mode-shape CSV of `cablevib modes`: one row per node per mode, no comment line.
+//! The mode-shape CSV of `cablevib modes` and `cablevib analyze --shapes`: one row per node
+//! per mode, one header row, no comment line; scene, model and the columns' units are in the
+//! `PATH.json` sidecar ([`super::csv::write_csv`]).
 //!
 //! ```text
 //! mode,frequency_hz,cable,node,x_m,y_m,z_m,ux,uy,uz
@@ -16,7 +18,7 @@
 //! - `ux, uy, uz`: the mass-normalised displacement (φᵀMφ = 1 with the model's consistent
 //!   mass), 1/√kg; on the rigid body's rotation row the rotation vector, rad/(m·√kg).
 
-use super::csv::{num, Csv};
+use super::csv::{num, scene_meta, Column, Csv};
 use crate::kinematics::Geometry;
 use crate::modal::ModeShapes;
 use crate::scene::Scene;
@@ -38,25 +40,49 @@ pub fn node_positions(
     fractions.iter().map(|&t| a + (end - a) * t).collect()
 }
 
-/// The CSV text of `shapes` for the pose of `scene` (its `ee_position_m`) with `geometry`.
-pub fn shapes_csv(scene: &Scene, geometry: &Geometry, shapes: &ModeShapes) -> String {
-    let mut csv = Csv::new(None, SHAPES_HEADER);
+/// The columns: name, unit, meaning (their names joined are [`SHAPES_HEADER`]).
+const SHAPES_COLUMNS: [(&str, &str, &str); 10] = [
+    ("mode", "", "mode number, 1 = lowest"),
+    ("frequency_hz", "Hz", "natural frequency"),
+    ("cable", "", "cable number from 1; 0 = the end-effector"),
+    (
+        "node",
+        "",
+        "node from the anchor (0); end-effector: 0 translation, 1 rotation",
+    ),
+    ("x_m", "m", "undeformed node position x"),
+    ("y_m", "m", "undeformed node position y"),
+    ("z_m", "m", "undeformed node position z"),
+    (
+        "ux",
+        "1/sqrt(kg)",
+        "mass-normalised displacement x (rotation row: rad/(m sqrt(kg)))",
+    ),
+    ("uy", "1/sqrt(kg)", "mass-normalised displacement y"),
+    ("uz", "1/sqrt(kg)", "mass-normalised displacement z"),
+];
+
+/// The CSV of `shapes` for the pose of `scene` (its `ee_position_m`) with `geometry`; write
+/// it with [`super::csv::write_csv`] (text and sidecar) or take its text with
+/// [`Csv::into_parts`].
+pub fn shapes_csv(scene: &Scene, geometry: &Geometry, shapes: &ModeShapes) -> Csv {
+    let columns = SHAPES_COLUMNS
+        .iter()
+        .map(|&(n, u, d)| Column::new(n, u, d))
+        .collect();
+    let mut meta = scene_meta("modes", scene);
+    meta.insert("modes".into(), serde_json::json!(shapes.modes.len()));
+    let mut csv = Csv::new(columns, meta);
     let p = scene.ee_position_m;
     let positions: Vec<Vec<Vector3<f64>>> = (0..shapes.fractions.len())
         .map(|i| node_positions(scene, geometry, i, &shapes.fractions[i]))
         .collect();
     for (k, m) in shapes.modes.iter().enumerate() {
-        let head = format!("{},{}", k + 1, num(m.frequency_hz));
+        let head = [(k + 1).to_string(), num(m.frequency_hz)];
         let mut row = |cable: usize, node: usize, x: &Vector3<f64>, u: &Vector3<f64>| {
-            csv.row(&format!(
-                "{head},{cable},{node},{},{},{},{},{},{}",
-                num(x.x),
-                num(x.y),
-                num(x.z),
-                num(u.x),
-                num(u.y),
-                num(u.z)
-            ));
+            let (cable, node) = (cable.to_string(), node.to_string());
+            let coords = [x.x, x.y, x.z, u.x, u.y, u.z].map(num);
+            csv.row(head.iter().chain([&cable, &node]).chain(coords.iter()));
         };
         row(0, 0, &p, &m.ee.fixed_rows::<3>(0).into_owned());
         if shapes.dim == 6 {
@@ -68,5 +94,5 @@ pub fn shapes_csv(scene: &Scene, geometry: &Geometry, shapes: &ModeShapes) -> St
             }
         }
     }
-    csv.into_string()
+    csv
 }
