@@ -30,6 +30,10 @@ const IDLE_PARK: Duration = Duration::from_millis(20);
 /// without the flood 99 %). A search takes ~5 ms, so answers to a requirement that changes
 /// every request are up to ~0.1 s old (`t_min_required_age_cycles` says how old).
 const REST_PER_WORK: u32 = 19;
+/// The longest rest after one search: a rare long search (an unreachable requirement can take
+/// ~0.7 s) must not hold back the answer to the next requirement for 19 times as long; searches
+/// of the usual ~5 ms rest their full 19×.
+const MAX_REST: Duration = Duration::from_millis(200);
 /// Niceness of the worker thread (Linux: lowest priority), so that the scheduler prefers the
 /// estimate loop when both want a core.
 const WORKER_NICE: i32 = 19;
@@ -144,7 +148,7 @@ fn worker_loop(est: &mut Estimator, mailbox: &Mutex<Mailbox>, stop: &AtomicBool)
                 t_min_n: t,
             });
         }
-        std::thread::sleep(worked * REST_PER_WORK);
+        std::thread::sleep((worked * REST_PER_WORK).min(MAX_REST));
     }
 }
 
