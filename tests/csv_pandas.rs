@@ -10,10 +10,6 @@
 //! are written out here by hand from the documentation, not taken from the code under test.
 
 use cablevib::cli;
-use cablevib::cli::accuracy::AccuracyArgs;
-use cablevib::cli::map::MapArgs;
-use cablevib::cli::sweep_tmin::SweepTminArgs;
-use cablevib::cli::trajectory::TrajectoryArgs;
 use clap::Parser;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -21,26 +17,9 @@ use std::process::Command;
 /// pandas pinned for the check (installs on Python 3.11).
 const PANDAS_VERSION: &str = "2.2.3";
 
-#[derive(Parser)]
-struct MapCli {
-    #[command(flatten)]
-    a: MapArgs,
-}
-#[derive(Parser)]
-struct TrajCli {
-    #[command(flatten)]
-    a: TrajectoryArgs,
-}
-#[derive(Parser)]
-struct TminCli {
-    #[command(flatten)]
-    a: SweepTminArgs,
-}
-#[derive(Parser)]
-struct AccCli {
-    #[command(flatten)]
-    a: AccuracyArgs,
-}
+#[path = "common/sweep_cli.rs"]
+mod sweep_cli;
+use sweep_cli::{AccCli, MapCli, TminCli, TrajCli};
 
 fn target_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target")

@@ -2,10 +2,6 @@
 //! marked (not dropped), the SVG figures are well-formed, the FEM converges as 1/N², and
 //! f1 follows a·√T_min with the coefficient of docs/model.md (section 2.2).
 
-use cablevib::cli::accuracy::AccuracyArgs;
-use cablevib::cli::map::MapArgs;
-use cablevib::cli::sweep_tmin::SweepTminArgs;
-use cablevib::cli::trajectory::TrajectoryArgs;
 use cablevib::cli::{self, CliError};
 use cablevib::scene::{ElementKind, Scene};
 use cablevib::study::accuracy::AccuracyConfig;
@@ -15,26 +11,9 @@ use cablevib::trajectory::{Circle, TrajectoryError};
 use clap::Parser;
 use std::path::{Path, PathBuf};
 
-#[derive(Parser)]
-struct MapCli {
-    #[command(flatten)]
-    a: MapArgs,
-}
-#[derive(Parser)]
-struct TrajCli {
-    #[command(flatten)]
-    a: TrajectoryArgs,
-}
-#[derive(Parser)]
-struct TminCli {
-    #[command(flatten)]
-    a: SweepTminArgs,
-}
-#[derive(Parser)]
-struct AccCli {
-    #[command(flatten)]
-    a: AccuracyArgs,
-}
+#[path = "common/sweep_cli.rs"]
+mod sweep_cli;
+use sweep_cli::{AccCli, MapCli, TminCli, TrajCli};
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("cablevib-sweep-{}-{name}", std::process::id()));
