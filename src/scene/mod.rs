@@ -164,6 +164,11 @@ pub struct ModelSettings {
     pub geometric_stiffness: bool,
     /// Relative f1 error the `auto` model may make (default 1e-3).
     pub f1_tolerance: f64,
+    /// Effect `sag`: every cable hangs on its elastic catenary (statics on the end tangents,
+    /// vibration about the sagged profile) with the `fem` or `continuous` element. Off
+    /// (the default, and every scene without an `[effects]` table): every cable on its
+    /// straight chord.
+    pub sag: bool,
 }
 
 /// A validated robot description. All fields SI.

@@ -131,7 +131,7 @@ pub(super) fn scene_from_raw(raw: RawScene, file: &str) -> Result<Scene, SceneEr
     let (t_min, t_max) = validate_tension_bounds(&ck, &raw.tension)?;
     let (n, part) = validate_model(&ck, &raw.model)?;
     let fx = raw.effects.unwrap_or_default();
-    let element = validate_effects(&ck, fx, raw.model.element)?;
+    let (element, sag) = validate_effects(&ck, fx, raw.model.element)?;
     let rigid = fx.rotation.unwrap_or(false);
     let inertia = validate_inertia(&ck, rigid, raw.end_effector.inertia.as_ref())?;
     let orientation = validate_orientation(&ck, raw.end_effector.orientation.as_ref())?;
@@ -166,6 +166,7 @@ pub(super) fn scene_from_raw(raw: RawScene, file: &str) -> Result<Scene, SceneEr
             ee_participation_min: part,
             geometric_stiffness,
             f1_tolerance: raw.model.f1_tolerance,
+            sag,
         },
         rigid,
         ee_inertia_kg_m2: inertia,
@@ -254,13 +255,14 @@ fn validate_model(ck: &Checker, raw: &RawModel) -> Result<(usize, f64), SceneErr
     Ok((n as usize, part))
 }
 
-/// `[effects]` against `model.element`: cable_mass = false → massless springs; sag = true →
-/// catenary element; contradictions are errors. Returns the element to use.
+/// `[effects]` against `model.element`: cable_mass = false → massless springs; sag = true
+/// keeps `fem`, `continuous` and `auto` and switches them to the sagged profile; a
+/// contradiction is an error. Returns the element and whether the cables sag.
 fn validate_effects(
     ck: &Checker,
     fx: RawEffects,
     element: ElementKind,
-) -> Result<ElementKind, SceneError> {
+) -> Result<(ElementKind, bool), SceneError> {
     let mut element = element;
     if let Some(mass) = fx.cable_mass {
         match (mass, element) {
@@ -274,29 +276,18 @@ fn validate_effects(
             _ => {}
         }
     }
-    if let Some(sag) = fx.sag {
-        match (sag, element) {
-            (true, ElementKind::Fem | ElementKind::Auto) => element = ElementKind::Catenary,
-            (true, ElementKind::Catenary) => {}
-            (true, other) => {
-                return Err(ck.inv(
-                    "effects.sag",
-                    format!(
-                        "sag needs the catenary element; model.element = \"{}\" cannot sag",
-                        other.as_str()
-                    ),
-                ))
-            }
-            (false, ElementKind::Catenary) => {
-                return Err(ck.inv(
-                    "effects.sag",
-                    "sag = false contradicts model.element = \"catenary\"".into(),
-                ))
-            }
-            (false, _) => {}
-        }
+    let sag = fx.sag.unwrap_or(false);
+    match (sag, element) {
+        (true, ElementKind::Massless) => Err(ck.inv(
+            "effects.sag",
+            "sag needs cable mass (a cable without weight does not sag): use model.element = \"fem\" or \"continuous\"".into(),
+        )),
+        (true, ElementKind::Catenary) => Err(ck.inv(
+            "effects.sag",
+            "the catenary element sags only inside each element on the straight chord; on the sagged profile use model.element = \"fem\" or \"continuous\"".into(),
+        )),
+        _ => Ok((element, sag)),
     }
-    Ok(element)
 }
 
 /// `end_effector.inertia`: required by a rigid end-effector; when given, finite, symmetric
@@ -594,10 +585,19 @@ mod tests {
     fn effects_select_the_model() {
         let base = DEFAULT_SCENE_TOML;
         let with = |fx: &str| Scene::from_toml_str(&format!("{base}\n[effects]\n{fx}\n"), "t.toml");
-        assert_eq!(
-            with("sag = true").unwrap().model.element,
-            ElementKind::Catenary
-        );
+        let sagged = with("sag = true").unwrap();
+        assert_eq!(sagged.model.element, ElementKind::Fem);
+        assert!(sagged.model.sag);
+        assert!(!Scene::default_scene().model.sag, "no [effects]: the chord model");
+        let e = with("sag = true\ncable_mass = false").unwrap_err().to_string();
+        assert!(e.contains("effects.sag") && e.contains("does not sag"), "{e}");
+        let cat = base.replace("element = \"fem\"", "element = \"catenary\"");
+        let e = Scene::from_toml_str(&format!("{cat}\n[effects]\nsag = true\n"), "t.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("sags only inside each element"), "{e}");
+        let chord = Scene::from_toml_str(&format!("{cat}\n[effects]\nsag = false\n"), "t.toml");
+        assert_eq!(chord.unwrap().model.element, ElementKind::Catenary);
         assert_eq!(
             with("cable_mass = false").unwrap().model.element,
             ElementKind::Massless
