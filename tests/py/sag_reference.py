@@ -46,8 +46,12 @@ import scipy.sparse.linalg
 # Default elements per cable (the brief's reference resolution).
 DEFAULT_ELEMENTS = 160
 # Newton stops when max |R| ≤ RESIDUAL_REL × the reference weight (end-effector weight, or
-# the cables' weight with a fixed end).
+# the cables' weight with a fixed end) ...
 RESIDUAL_REL = 1e-10
+# ... or, for very stiff cables, ≤ ROUNDING_FLOOR_EPS · ε · max EA: an element force
+# EA (l − l0)/l0 carries a rounding error of about ε EA (l measured to ε l), so no iterate
+# can do better (only binds when EA exceeds ~1e-10/(16 ε) ≈ 3e4 times the weight).
+ROUNDING_FLOOR_EPS = 16.0
 # Newton iteration bound (quadratic convergence from the catenary start needs ~3-6).
 NEWTON_MAX_ITER = 60
 # Line-search halvings before a step is taken anyway (and the stall counter advances).
@@ -447,9 +451,14 @@ class Model:
         out[free] = du[(self.dof[free][:, None] + np.arange(3))]
         return out
 
+    def tolerance(self):
+        """Newton's stopping residual, N (RESIDUAL_REL, or the rounding floor)."""
+        floor = ROUNDING_FLOOR_EPS * np.finfo(float).eps * float(np.max(self.ea))
+        return max(RESIDUAL_REL * self.robot.weight_ref(), floor)
+
     def solve(self):
         """Newton with backtracking; returns (converged, iterations, max|R| history)."""
-        tol = RESIDUAL_REL * self.robot.weight_ref()
+        tol = self.tolerance()
         r = self.residual(self.u)
         hist = [float(np.max(np.abs(r)))]
         for it in range(NEWTON_MAX_ITER):
@@ -582,7 +591,7 @@ def solve_level(robot, n, req):
         "newton_iterations": iters,
         "residual_history_n": hist,
         "residual_max_n": hist[-1],
-        "residual_tol_n": RESIDUAL_REL * robot.weight_ref(),
+        "residual_tol_n": model.tolerance(),
         "tangent_asymmetry": float(asym),
         "cables": cable_results(model),
     }
@@ -621,6 +630,7 @@ def richardson(levels):
             out["stiffness_principal_n_m"] = ans["stiffness_principal_n_m"]
         out["tension_ee_n"] = [c["tension_ee_n"] for c in ans["cables"]]
         out["tension_anchor_n"] = [c["tension_anchor_n"] for c in ans["cables"]]
+        out["h_n"] = [c["h_n"] for c in ans["cables"]]
         if "frequencies_hz" in ans:
             out["frequencies_hz"] = ans["frequencies_hz"]
         return {k: np.asarray(v, dtype=float) for k, v in out.items()}
