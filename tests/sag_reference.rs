@@ -57,7 +57,10 @@ fn rel(a: f64, b: f64) -> f64 {
 /// +∞ and the right side is finite), by bisection to rounding.
 fn irvine_symmetric_beta(lambda2: f64, k: usize) -> f64 {
     let f = |b: f64| (b / 2.0).tan() - b / 2.0 + 4.0 / lambda2 * (b / 2.0).powi(3);
-    let (mut lo, mut hi) = ((2 * k + 1) as f64 * PI + 1e-12, (2 * k + 3) as f64 * PI - 1e-12);
+    let (mut lo, mut hi) = (
+        (2 * k + 1) as f64 * PI + 1e-12,
+        (2 * k + 3) as f64 * PI - 1e-12,
+    );
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
         if f(mid) < 0.0 {
@@ -133,7 +136,10 @@ fn a_shallow_level_cable_has_irvines_frequencies() {
     let fine = irvine_differences(1.0 / 800.0);
     for (j, (a, b)) in coarse.iter().zip(&fine).enumerate() {
         let bound = 5.0 * (1.0f64 / 400.0).powi(2);
-        eprintln!("mode {j}: {a:+.3e} at d/L = 1/400, {b:+.3e} at 1/800, ratio {:.3}", a / b);
+        eprintln!(
+            "mode {j}: {a:+.3e} at d/L = 1/400, {b:+.3e} at 1/800, ratio {:.3}",
+            a / b
+        );
         assert!(a.abs() <= bound, "mode {j}: {a:e} > {bound:e}");
         assert!((3.2..=4.8).contains(&(a / b)), "mode {j}: ratio {}", a / b);
     }
@@ -181,7 +187,12 @@ fn a_deep_stiff_cable_hangs_on_the_cosh_curve() {
     let ans = RefAnswer(run_reference(&req));
     for n in LEVELS {
         let lv = ans.at_level(n);
-        assert_eq!(lv["converged"], json!(true), "{n}: {}", lv["residual_history_n"]);
+        assert_eq!(
+            lv["converged"],
+            json!(true),
+            "{n}: {}",
+            lv["residual_history_n"]
+        );
     }
     let nodes = |n: usize| -> Vec<Vec<f64>> {
         ans.at_level(n)["nodes_m"][0]
@@ -205,7 +216,10 @@ fn a_deep_stiff_cable_hangs_on_the_cosh_curve() {
         }
     }
     let h = ans.extrapolated("h_n")[0];
-    eprintln!("cosh profile: worst node {worst:.2e} L0, H {h} vs w a {}", w * a);
+    eprintln!(
+        "cosh profile: worst node {worst:.2e} L0, H {h} vs w a {}",
+        w * a
+    );
     assert!(worst <= 1e-6, "profile off by {worst:e} L0");
     assert!(rel(h, w * a) <= 1e-6, "H {h} vs {}", w * a);
 }
@@ -232,7 +246,10 @@ fn balanced_reference(scene: &str, p: [f64; 3], modes: usize) -> (RefAnswer, Vec
 fn check_levels(name: &str, a: &RefAnswer) {
     for n in LEVELS {
         let lv = a.at_level(n);
-        let (r, tol) = (lv["residual_max_n"].as_f64().unwrap(), lv["residual_tol_n"].as_f64().unwrap());
+        let (r, tol) = (
+            lv["residual_max_n"].as_f64().unwrap(),
+            lv["residual_tol_n"].as_f64().unwrap(),
+        );
         assert_eq!(lv["converged"], json!(true), "{name} {n}: {r} > {tol}");
         assert!(r <= tol, "{name} {n}: residual {r} > {tol}");
         // Central differences of R at a relative step 1e-6: truncation ~1e-12, rounding
@@ -245,7 +262,9 @@ fn check_levels(name: &str, a: &RefAnswer) {
             lv["newton_iterations"], lv["time_s"]["total"]
         );
     }
-    let orders = a.0["richardson"]["observed_order"].as_object().expect("orders");
+    let orders = a.0["richardson"]["observed_order"]
+        .as_object()
+        .expect("orders");
     for (key, ps) in orders {
         if key == "ee_position_m" {
             continue; // ~0 by construction at the balanced pose (checked below)
@@ -306,7 +325,12 @@ fn the_fast_like_centre_is_symmetric() {
     let t0 = cables[0]["tension_ee_n"].as_f64().unwrap();
     for c in cables {
         assert!(rel(c["tension_ee_n"].as_f64().unwrap(), t0) <= 1e-9, "{c}");
-        assert!(rel(c["tension_anchor_n"].as_f64().unwrap(), cables[0]["tension_anchor_n"].as_f64().unwrap()) <= 1e-9);
+        assert!(
+            rel(
+                c["tension_anchor_n"].as_f64().unwrap(),
+                cables[0]["tension_anchor_n"].as_f64().unwrap()
+            ) <= 1e-9
+        );
     }
     let k = f64s(&a["stiffness_principal_n_m"]);
     let kz = a["stiffness_matrix_n_m"][2][2].as_f64().unwrap();
@@ -332,7 +356,10 @@ fn the_sagging_scenes_are_feasible_in_the_chord_model() {
             let t = f64s(&analyze(&scene, p)["tensions_n"]);
             assert_eq!(t.len(), s.n_cables());
             for ti in &t {
-                assert!(*ti >= s.t_min_n * (1.0 - 1e-9) && *ti <= s.t_max_n, "{file} {p:?}: {t:?}");
+                assert!(
+                    *ti >= s.t_min_n * (1.0 - 1e-9) && *ti <= s.t_max_n,
+                    "{file} {p:?}: {t:?}"
+                );
             }
         }
     }

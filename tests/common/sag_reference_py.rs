@@ -64,7 +64,13 @@ pub fn venv_python() -> &'static Path {
                 .expect("python3 -m venv");
             assert!(st.success(), "python3 -m venv failed");
             let st = Command::new(&py)
-                .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check"])
+                .args([
+                    "-m",
+                    "pip",
+                    "install",
+                    "--quiet",
+                    "--disable-pip-version-check",
+                ])
                 .arg(format!("numpy=={NUMPY_VERSION}"))
                 .arg(format!("scipy=={SCIPY_VERSION}"))
                 .status()

@@ -88,7 +88,36 @@ def describe_schema():
             "tangent_check": "true: compare K_t with central differences of R",
             "return_nodes": "true: include every node's equilibrium position",
         },
-        "answer": "see README in tests/data/sag_reference/ and the keys of solve()",
+        "answer": {
+            "elements, dof": "the (finest) model's size",
+            "converged, newton_iterations, residual_history_n, residual_max_n, "
+            "residual_tol_n": "Newton: max |R| over the free DOFs per iteration (N)",
+            "tangent_asymmetry": "‖K_t − K_tᵀ‖_F / ‖K_t‖_F",
+            "ee_position_m, ee_displacement_m": "equilibrium position, and its offset "
+            "from the input pose",
+            "ee_residual_n": "the end-effector node's residual force (N)",
+            "catenary_ee_residual_n": "force balance at the INPUT pose of the continuous "
+            "elastic catenaries with these L0 (0 when L0 is consistent with the pose)",
+            "stiffness_matrix_n_m, stiffness_principal_n_m": "Schur complement of K_t "
+            "onto the end-effector (N/m), its eigenvalues ascending",
+            "frequencies_hz, ee_participation": "first `modes` natural frequencies and "
+            "each mode's share of kinetic energy in the end-effector mass",
+            "eigen": "eigensolver used, negative eigenvalue count, dense_max_rel_diff, "
+            "plane_normal_share (single cable: each mode's kinetic energy share normal "
+            "to the cable's plane)",
+            "cables[i]": "unstretched_length_m, tension_ee_n (at s = L0), "
+            "tension_anchor_n (s = 0), h_n (horizontal component), element_force_min_n, "
+            "force_on_ee_n, slack, catenary_at_pose (the closed-form start: h_n, "
+            "v_anchor_n, tension_ee_n, tension_anchor_n, force_on_ee_n)",
+            "levels, richardson": "with convergence_levels: every level's answer; "
+            "extrapolated / error_estimate / observed_order of ee_position_m, "
+            "stiffness_principal_n_m, tension_ee_n, tension_anchor_n, h_n, "
+            "frequencies_hz",
+            "chosen": "with end_tensions_n: the unstretched_lengths_m chosen, the "
+            "continuous catenaries' end_tensions_n and ee_residual_n at the pose",
+            "time_s, wall_time_s, versions": "run times (s) and library versions",
+            "error": "only on failure (exit status 2): the reason",
+        },
     }
 
 
@@ -274,6 +303,14 @@ class Robot:
         for name, arr in (("ea_n", self.ea), ("mu_kg_m", self.mu)):
             if not np.all(np.isfinite(arr)) or np.any(arr < 0) or (name == "ea_n" and np.any(arr <= 0)):
                 raise ValueError(f"{name}: must be finite and positive")
+        if self.l0 is not None and (not np.all(np.isfinite(self.l0)) or np.any(self.l0 <= 0)):
+            raise ValueError("unstretched_lengths_m: must be finite and positive")
+        if not (np.all(np.isfinite(self.anchors)) and np.all(np.isfinite(self.ee))):
+            raise ValueError("anchors_m, ee_position_m: must be finite")
+        if not (math.isfinite(self.gnorm) and self.gnorm > 0):
+            raise ValueError("gravity_m_s2: must be finite and non-zero")
+        if not math.isfinite(self.mass) or self.mass < 0:
+            raise ValueError("ee_mass_kg: must be finite and ≥ 0")
         if not self.end_fixed and self.mass <= 0:
             raise ValueError("ee_mass_kg must be > 0 with a free end-effector")
 
