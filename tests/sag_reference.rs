@@ -14,7 +14,7 @@
 #[path = "common/sag_reference_py.rs"]
 mod sag_reference_py;
 
-use sag_reference_py::{f64s, run_reference, scene_request, RefAnswer, LEVELS};
+use sag_reference_py::{f64s, reference_at, run_reference, scene_request, RefAnswer, LEVELS};
 use serde_json::{json, Value};
 use std::f64::consts::PI;
 
@@ -343,6 +343,29 @@ fn the_fast_like_centre_is_symmetric() {
     // relative accuracy ~ε λ_max/λ ≈ 1e-9 here).
     let dd = a["eigen"]["dense_max_rel_diff"].as_f64().unwrap();
     assert!(dd <= 1e-7, "eigsh vs dense {dd:e}");
+}
+
+/// The comparison helper `reference_at` (scene by embedded name, pose, L0) reproduces the
+/// balanced answer when given the L0 the balance chose: the same model on the same input,
+/// so tensions, stiffness and frequencies agree to rounding (1e-9 relative).
+#[test]
+fn reference_at_takes_a_scene_name_a_pose_and_l0() {
+    let p = [4.0, 2.5, 1.5];
+    let (balanced, _) = balanced_reference(&scene_path("scenes/suspended_8.toml"), p, 4);
+    let l0 = f64s(&balanced.0["chosen"]["unstretched_lengths_m"]);
+    let a = reference_at("suspended-8", p, &l0, 4);
+    for key in [
+        "tension_ee_n",
+        "tension_anchor_n",
+        "stiffness_principal_n_m",
+        "frequencies_hz",
+    ] {
+        for (x, y) in a.extrapolated(key).iter().zip(balanced.extrapolated(key)) {
+            assert!(rel(*x, y) <= 1e-9, "{key}: {x} vs {y}");
+        }
+    }
+    let lv = a.at_level(160);
+    assert_eq!(RefAnswer::cable_values(lv, "tension_ee_n").len(), 8);
 }
 
 /// The scenes load in the crate and their suggested poses are tension-feasible in the
