@@ -5,20 +5,29 @@ use std::path::Path;
 
 /// The names [`Scene::load`] accepts for the embedded scenes (when no file of that name
 /// exists), as listed in its error message.
-pub(super) const EMBEDDED_NAMES: [&str; 5] = [
+pub(super) const EMBEDDED_NAMES: [&str; 7] = [
     "spatial-paper",
     "spatial",
     "default",
     "planar-paper",
     "planar",
+    "fast-like",
+    "suspended-8",
 ];
+
+/// The large suspended robot in the spirit of FAST's feed support (sagging cables).
+const FAST_LIKE_TOML: &str = include_str!("../../scenes/fast_like.toml");
+/// The 15 × 11 × 6 m suspended 8-cable robot (sagging cables).
+const SUSPENDED_8_TOML: &str = include_str!("../../scenes/suspended_8.toml");
 
 impl Scene {
     /// Load a scene by path or by name: `name_or_path` is read as a scene file when it
     /// exists; otherwise `spatial-paper` (also `spatial`, `default`) is the embedded
     /// [`Scene::default_scene`] and `planar-paper` (also `planar`) the embedded
-    /// [`Scene::planar_paper`]. Anything else is [`SceneError::NotFound`]; a file that
-    /// exists but cannot be read or validated gives that error.
+    /// [`Scene::planar_paper`]; `fast-like` and `suspended-8` are scenes/fast_like.toml and
+    /// scenes/suspended_8.toml (the sagging-cable robots). Anything else is
+    /// [`SceneError::NotFound`]; a file that exists but cannot be read or validated gives
+    /// that error.
     pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
         let p = Path::new(name_or_path);
         let exists = p.try_exists();
@@ -26,6 +35,12 @@ impl Scene {
             match name_or_path {
                 "spatial-paper" | "spatial" | "default" => return Ok(Scene::default_scene()),
                 "planar-paper" | "planar" => return Ok(Scene::planar_paper()),
+                "fast-like" => {
+                    return Scene::from_toml_str(FAST_LIKE_TOML, "<embedded fast_like.toml>")
+                }
+                "suspended-8" => {
+                    return Scene::from_toml_str(SUSPENDED_8_TOML, "<embedded suspended_8.toml>")
+                }
                 _ => {}
             }
             // Known absent (not, e.g., an unreadable directory: that reports its reason).
@@ -50,6 +65,12 @@ mod tests {
         }
         for name in ["planar-paper", "planar"] {
             assert_eq!(Scene::load(name).unwrap(), Scene::planar_paper(), "{name}");
+        }
+        for (name, file) in [("fast-like", "fast_like"), ("suspended-8", "suspended_8")] {
+            let path = format!("{}/scenes/{file}.toml", env!("CARGO_MANIFEST_DIR"));
+            let from_file = Scene::load(&path).unwrap();
+            assert_eq!(Scene::load(name).unwrap(), from_file, "{name}");
+            assert_eq!(from_file.name, name);
         }
     }
 
