@@ -40,12 +40,30 @@ fn x_catenary(h: f64, va: f64, v: f64, ta: f64, t: f64, w: f64, s: f64) -> f64 {
         // Low point inside: two positive asinh terms, and w s > |V_a| + V > 0.
         return (h / w) * ((v / h).asinh() + (-va / h).asinh());
     }
-    let q = if va >= 0.0 {
+    let q = branch_q(va, v, ta, t);
+    h * s * q * log1p_ratio(w * s * q)
+}
+
+/// [asinh(V_e/H) − asinh(V_a/H)]/w over the whole cable, m/N (x_catenary/H; finite at
+/// H = 0 unless the low point is inside, where it is +∞).
+pub(super) fn x_catenary_over_h(c: &Catenary) -> f64 {
+    let (h, va, w, s) = (c.h_n, c.v_anchor_n, c.w_n_m, c.l0_m);
+    let v = c.v_end_n();
+    let (ta, t) = (h.hypot(va), h.hypot(v));
+    if va < 0.0 && v > 0.0 {
+        return ((v / h).asinh() + (-va / h).asinh()) / w;
+    }
+    let q = branch_q(va, v, ta, t);
+    s * q * log1p_ratio(w * s * q)
+}
+
+/// q of the module docs for like-signed V_a, V (x_catenary = H s q log1p(w s q)/(w s q)).
+fn branch_q(va: f64, v: f64, ta: f64, t: f64) -> f64 {
+    if va >= 0.0 {
         (ta + t + va + v) / ((ta + t) * (ta + va))
     } else {
         (ta + t - va - v) / ((ta + t) * (t - v))
-    };
-    h * s * q * log1p_ratio(w * s * q)
+    }
 }
 
 /// The catenary part of z between the anchor and s, m: (T(s) − T_a)/w = s (V_a + V)/(T + T_a).

@@ -52,5 +52,6 @@
 //!   span it is the textbook (wL/H)² L/(H L_e/EA); for a vertical cable it is 0 (no sag).
 
 mod catenary;
+mod flexibility;
 
 pub use catenary::Catenary;
