@@ -42,6 +42,16 @@
 //! (H = 0: a vertical cable, x = 0) and either sign of V. At w = 0 they give the straight
 //! stretched cable x = s(1 + T/EA) H/T, z = s(1 + T/EA) V/T.
 //!
+//! ## Solving for a chord
+//!
+//! [`CableChord::solve_end_tension`] finds the catenary through a chord (span X ≥ 0, rise
+//! Z) whose end-effector-end tension is T_e, on the taut branch (shortest L0, continuous
+//! with the straight cable); [`CableChord::solve_length`] the one of a given L0;
+//! [`CableChord::min_end_tension`] the fold of the family, below whose end tension no
+//! catenary reaches the chord ([`SagError::TooSlack`]). Files: `catenary` (closed forms),
+//! `flexibility` (∂(X, Z)/∂(H, V_e), ∂(X, Z)/∂L0, the end stiffness), `solve` (the
+//! end-tension Newton), `family` (the length solve and the fallback along the family).
+//!
 //! ## Derived quantities
 //!
 //! - sag: the largest distance of the profile from its chord A→P, m, at the point where
@@ -52,6 +62,9 @@
 //!   span it is the textbook (wL/H)² L/(H L_e/EA); for a vertical cable it is 0 (no sag).
 
 mod catenary;
+mod family;
 mod flexibility;
+mod solve;
 
 pub use catenary::Catenary;
+pub use solve::{CableChord, SagError, SagInfo, SagParams};
