@@ -30,19 +30,23 @@
 //! dropped when w is consistent with them and reported infeasible when it is not.
 //!
 //! Files: `params`, `info` and `error` (the types a caller sees), `active_set` (the
-//! real-time solver) and `reference` (the Clarabel reference).
+//! real-time solver), `reference` (the Clarabel reference) and `sagged` (the same QP
+//! with sagging cables: each chord direction replaced by its catenary's end tangent,
+//! [`SagTensionSolver`]).
 
 mod active_set;
 mod error;
 mod info;
 mod params;
 mod reference;
+mod sagged;
 
 pub use active_set::TensionSolver;
 pub use error::TensionError;
 pub use info::{Bound, TensionInfo};
 pub use params::TensionParams;
 pub use reference::{clarabel_reference, clarabel_reference_bounds, clarabel_reference_wrench};
+pub use sagged::{SagCable, SagTensionError, SagTensionInfo, SagTensionParams, SagTensionSolver};
 
 /// Largest number of equality rows: force (3) and moment (3).
 const M: usize = 6;

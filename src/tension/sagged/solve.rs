@@ -1,0 +1,247 @@
+//! `SagTensionSolver`'s construction, fixed-point solve and accessors (the method is
+//! documented in the module docs).
+
+use super::{SagCable, SagTensionError, SagTensionInfo, SagTensionParams, SagTensionSolver};
+use crate::kinematics::{up_frame, Geometry};
+use crate::sag::{CableChord, Catenary, SagError};
+use crate::tension::TensionSolver;
+use nalgebra::Vector3;
+
+/// Below this horizontal part (relative to the chord length) a chord counts as vertical
+/// and takes the fixed horizontal h of `up_frame`: its catenary has H ≈ 0 there, so the
+/// choice of h does not change the force.
+const VERTICAL_REL: f64 = 1e-14;
+
+impl SagTensionSolver {
+    /// Allocate for `n_cables` cables.
+    pub fn new(n_cables: usize, params: SagTensionParams) -> SagTensionSolver {
+        let blank = Catenary {
+            l0_m: 0.0,
+            ea_n: 1.0,
+            w_n_m: 0.0,
+            h_n: 0.0,
+            v_anchor_n: 0.0,
+        };
+        let chord = CableChord {
+            span_m: 0.0,
+            rise_m: 0.0,
+            ea_n: 1.0,
+            w_n_m: 0.0,
+        };
+        SagTensionSolver {
+            params,
+            qp: TensionSolver::new(n_cables, params.tension),
+            tangent_geom: Geometry::new(n_cables),
+            chords: vec![chord; n_cables],
+            cats: vec![blank; n_cables],
+            h: vec![Vector3::zeros(); n_cables],
+            n_out: vec![Vector3::zeros(); n_cables],
+            up: Vector3::z(),
+            t_end: vec![0.0; n_cables],
+            have_warm: false,
+            info: SagTensionInfo::default(),
+        }
+    }
+
+    /// Solve at the cable chords `g` (kinematics at the pose) with each cable's material,
+    /// gravity (m/s², sets "up" and nothing else: the weights are in `cables`), the wrench
+    /// `w` the cables carry (force N, moment N·m, as [`TensionSolver::solve_wrench_bounds`])
+    /// and per-cable bounds on the end tension (N). Returns the end tensions. No allocation.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve(
+        &mut self,
+        g: &Geometry,
+        cables: &[SagCable],
+        gravity_m_s2: &Vector3<f64>,
+        w: &[f64; 6],
+        t_min_n: &[f64],
+        t_max_n: &[f64],
+    ) -> Result<&[f64], SagTensionError> {
+        let n = self.t_end.len();
+        if g.n() != n || cables.len() != n {
+            return Err(SagTensionError::Invalid {
+                what: "geometry or cable count differs from the solver's",
+            });
+        }
+        if !gravity_m_s2.iter().all(|x| x.is_finite()) {
+            return Err(SagTensionError::Invalid {
+                what: "non-finite gravity",
+            });
+        }
+        self.set_chords(g, cables, gravity_m_s2);
+        let r = self.fixed_point(w, t_min_n, t_max_n);
+        if r.is_err() {
+            self.have_warm = false;
+        }
+        r?;
+        self.have_warm = true;
+        Ok(&self.t_end)
+    }
+
+    /// Plane bases, chords and the QP geometry's arms and lengths.
+    fn set_chords(&mut self, g: &Geometry, cables: &[SagCable], gravity: &Vector3<f64>) {
+        let frame = up_frame(gravity);
+        self.up = frame.column(2).into_owned();
+        for i in 0..self.t_end.len() {
+            let l = g.unit[i] * g.length_m[i];
+            let rise = l.dot(&self.up);
+            let horiz = l - self.up * rise;
+            let span = horiz.norm();
+            let h = if span > VERTICAL_REL * g.length_m[i] {
+                horiz / span
+            } else {
+                frame.column(0).into_owned()
+            };
+            self.h[i] = h;
+            self.n_out[i] = h.cross(&self.up);
+            self.chords[i] = CableChord {
+                span_m: span,
+                rise_m: rise,
+                ea_n: cables[i].ea_n,
+                w_n_m: cables[i].w_n_m,
+            };
+            self.tangent_geom.arm_m[i] = g.arm_m[i];
+            self.tangent_geom.length_m[i] = g.length_m[i];
+            self.tangent_geom.unit[i] = g.unit[i];
+        }
+    }
+
+    /// The passes of the module docs.
+    fn fixed_point(&mut self, w: &[f64; 6], lo: &[f64], hi: &[f64]) -> Result<(), SagTensionError> {
+        let mut change = f64::INFINITY;
+        if self.have_warm {
+            // Start from the last end tensions on the new chords.
+            change = self.catenaries()?;
+        }
+        let mut iterations = 0;
+        while iterations < self.params.max_iterations {
+            iterations += 1;
+            let t = self.qp.solve_wrench_bounds(&self.tangent_geom, w, lo, hi);
+            let t = match t {
+                Ok(t) => t,
+                Err(e) => {
+                    self.t_end.copy_from_slice(self.qp.tensions_n());
+                    return Err(e.into());
+                }
+            };
+            self.t_end.copy_from_slice(t);
+            change = self.catenaries()?;
+            if change < self.params.direction_tol_rad {
+                break;
+            }
+        }
+        self.info = SagTensionInfo {
+            iterations,
+            direction_change_rad: change,
+            ..self.info
+        };
+        self.residual(w);
+        if !(change < self.params.direction_tol_rad) {
+            return Err(SagTensionError::NoConvergence {
+                iterations,
+                direction_change_rad: change,
+            });
+        }
+        Ok(())
+    }
+
+    /// Each cable's catenary for its current T_e and its world end tangent; returns the
+    /// largest change of direction, rad.
+    fn catenaries(&mut self) -> Result<f64, SagTensionError> {
+        let mut change: f64 = 0.0;
+        for i in 0..self.t_end.len() {
+            let warm = self
+                .have_warm
+                .then_some(&self.cats[i])
+                .filter(|c| c.l0_m > 0.0);
+            let (cat, _) =
+                match self.chords[i].solve_end_tension(self.t_end[i], warm, &self.params.sag) {
+                    Ok(ok) => ok,
+                    Err(e @ SagError::TooSlack { .. }) => {
+                        return Err(SagTensionError::Slack {
+                            cable: i,
+                            reason: e,
+                        })
+                    }
+                    Err(e) if !(self.t_end[i] > 0.0) => {
+                        return Err(SagTensionError::Slack {
+                            cable: i,
+                            reason: e,
+                        })
+                    }
+                    Err(e) => {
+                        return Err(SagTensionError::Catenary {
+                            cable: i,
+                            source: e,
+                        })
+                    }
+                };
+            if !(cat.tension_min_n() > 0.0) {
+                let reason = SagError::TooSlack {
+                    t_end_n: self.t_end[i],
+                    t_end_min_n: f64::NAN,
+                };
+                return Err(SagTensionError::Slack { cable: i, reason });
+            }
+            let [c, s] = cat.tangent_at(cat.l0_m);
+            let t = self.h[i] * c + self.up * s;
+            let old = self.tangent_geom.unit[i];
+            change = change.max(old.cross(&t).norm().atan2(old.dot(&t)));
+            self.tangent_geom.unit[i] = t;
+            self.cats[i] = cat;
+        }
+        Ok(change)
+    }
+
+    /// Equilibrium residual of the reported state (tensions and tangents).
+    fn residual(&mut self, w: &[f64; 6]) {
+        let g = &self.tangent_geom;
+        let f = g.wrench_of(&self.t_end) - Vector3::new(w[0], w[1], w[2]);
+        let m = g.moment_of(&self.t_end) - Vector3::new(w[3], w[4], w[5]);
+        self.info.residual_force_n = f.amax();
+        self.info.residual_moment_n_m = m.amax();
+    }
+
+    /// Forget the warm start (the next solve starts from the chords).
+    pub fn reset_warm_start(&mut self) {
+        self.have_warm = false;
+        self.qp.reset_warm_start();
+        self.cats.iter_mut().for_each(|c| c.l0_m = 0.0);
+    }
+
+    /// End-effector-end tensions T_e,i of the last solve (the QP's closest solution after
+    /// `Infeasible`), N.
+    pub fn tensions_n(&self) -> &[f64] {
+        &self.t_end
+    }
+
+    /// Each cable's catenary of the last successful solve.
+    pub fn catenaries_of(&self) -> &[Catenary] {
+        &self.cats
+    }
+
+    /// Anchor-end tension of cable i, N.
+    pub fn tension_anchor_n(&self, i: usize) -> f64 {
+        self.cats[i].tension_anchor_n()
+    }
+
+    /// Smallest tension along cable i, N.
+    pub fn tension_min_n(&self, i: usize) -> f64 {
+        self.cats[i].tension_min_n()
+    }
+
+    /// Cable i's plane basis (h_i, up, n_i), world unit vectors.
+    pub fn basis(&self, i: usize) -> [Vector3<f64>; 3] {
+        [self.h[i], self.up, self.n_out[i]]
+    }
+
+    /// World unit end tangents t_i (the cable pulls the end-effector with −T_e,i t_i).
+    pub fn end_tangents(&self) -> &[Vector3<f64>] {
+        &self.tangent_geom.unit
+    }
+
+    /// What the last solve did.
+    pub fn info(&self) -> SagTensionInfo {
+        self.info
+    }
+}

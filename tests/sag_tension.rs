@@ -1,0 +1,250 @@
+//! The tension distribution with sagging cables (`tension::SagTensionSolver`): weightless
+//! cables give the chord solver's tensions, heavy cables are in equilibrium (checked from
+//! the catenaries' own end forces and end points, not from the solver's residual), the
+//! solve does not allocate, and a timing print (ignored test).
+#![allow(clippy::needless_range_loop)] // index loops mirror the per-cable maths
+use cablevib::alloc_count::{thread_allocations, CountingAlloc};
+use cablevib::kinematics::{rotation_of, Geometry};
+use cablevib::scene::Scene;
+use cablevib::tension::{
+    SagCable, SagTensionError, SagTensionParams, SagTensionSolver, TensionParams, TensionSolver,
+};
+use nalgebra::Vector3;
+
+#[global_allocator]
+static A: CountingAlloc = CountingAlloc;
+
+fn geometry(s: &Scene, p: Vector3<f64>) -> Geometry {
+    let mut g = Geometry::new(s.n_cables());
+    if s.rigid {
+        let rot = rotation_of(&s.ee_orientation_wxyz);
+        g.update_rigid(
+            s.cables.iter().map(|c| &c.anchor_m),
+            s.cables.iter().map(|c| &c.attachment_m),
+            &p,
+            &rot,
+        )
+        .unwrap();
+    } else {
+        g.update(s.cables.iter().map(|c| &c.anchor_m), &p).unwrap();
+    }
+    g
+}
+
+fn wrench6(s: &Scene) -> [f64; 6] {
+    let f = s.wrench_n();
+    [f.x, f.y, f.z, 0.0, 0.0, 0.0]
+}
+
+fn materials(s: &Scene, w_n_m: f64) -> Vec<SagCable> {
+    s.cables
+        .iter()
+        .map(|c| SagCable {
+            ea_n: c.ea_n(),
+            w_n_m,
+        })
+        .collect()
+}
+
+fn bounds(s: &Scene, t_min: f64) -> (Vec<f64>, Vec<f64>) {
+    let n = s.n_cables();
+    (vec![t_min; n], (0..n).map(|i| s.cable_t_max_n(i)).collect())
+}
+
+/// Weightless cables: the end tangents are the chords, so the tensions are the chord
+/// solver's. Both QPs see the same matrix up to the catenary's rounding of the unit vector
+/// (a few ulps), so 1e-12 relative (the QP's conditioning is moderate at these poses).
+#[test]
+fn weightless_cables_give_the_chord_tensions() {
+    for s in [Scene::default_scene(), Scene::box_6dof()] {
+        let n = s.n_cables();
+        let (lo, hi) = bounds(&s, s.t_min_n);
+        let mut sag = SagTensionSolver::new(n, SagTensionParams::default());
+        let mut chord = TensionSolver::new(n, TensionParams::default());
+        let off = if s.rigid { 0.05 } else { 0.3 };
+        for p in [
+            s.ee_position_m,
+            s.ee_position_m + Vector3::new(off, -off / 2.0, off / 3.0),
+        ] {
+            let g = geometry(&s, p);
+            let want = chord
+                .solve_wrench_bounds(&g, &wrench6(&s), &lo, &hi)
+                .unwrap()
+                .to_vec();
+            let got = sag
+                .solve(
+                    &g,
+                    &materials(&s, 0.0),
+                    &s.gravity_m_s2,
+                    &wrench6(&s),
+                    &lo,
+                    &hi,
+                )
+                .unwrap()
+                .to_vec();
+            for i in 0..n {
+                assert!(
+                    (got[i] - want[i]).abs() <= 1e-12 * want[i],
+                    "{p:?} cable {i}: {} vs {}",
+                    got[i],
+                    want[i]
+                );
+            }
+        }
+    }
+}
+
+/// The paper's spatial robot with 50× heavier cables (12.55 N/m), t_min 30 N: the force on
+/// the end-effector, recomputed from each catenary's own end force −(H h + V_e up) and
+/// the (public) plane basis, balances the weight to 1e-9 of it; each catenary ends at its
+/// attachment point (1e-12 of the chord); the sag changed the tensions (not the chord
+/// answer), the anchor and minimum tensions are consistent.
+#[test]
+fn heavy_cables_are_in_equilibrium() {
+    let s = Scene::default_scene();
+    let n = s.n_cables();
+    let (lo, hi) = bounds(&s, 30.0);
+    let mats = materials(&s, 12.55);
+    let mut sag = SagTensionSolver::new(n, SagTensionParams::default());
+    let mut chord = TensionSolver::new(n, TensionParams::default());
+    let weight = s.wrench_n().norm();
+    for p in [
+        s.ee_position_m,
+        s.ee_position_m + Vector3::new(0.3, 0.2, 0.0),
+    ] {
+        let g = geometry(&s, p);
+        let t = sag
+            .solve(&g, &mats, &s.gravity_m_s2, &wrench6(&s), &lo, &hi)
+            .unwrap()
+            .to_vec();
+        let mut force = s.gravity_m_s2 * s.ee_mass_kg;
+        for i in 0..n {
+            let c = sag.catenaries_of()[i];
+            let [h, up, _] = sag.basis(i);
+            force -= h * c.h_n + up * c.v_end_n();
+            let end = c.end_point_m();
+            let chord_vec = g.unit[i] * g.length_m[i];
+            let world = h * end[0] + up * end[1];
+            assert!(
+                (world - chord_vec).amax() <= 1e-12 * g.length_m[i],
+                "{p:?} cable {i}: end {world:?} vs {chord_vec:?}"
+            );
+            // T_e = hypot(T cos φ, T sin φ) returns T to an ulp.
+            assert!(
+                (c.tension_end_n() - t[i]).abs() <= 4e-16 * t[i],
+                "{} vs {}",
+                c.tension_end_n(),
+                t[i]
+            );
+            assert!(sag.tension_min_n(i) <= t[i].min(sag.tension_anchor_n(i)));
+        }
+        assert!(
+            force.amax() <= 1e-9 * weight,
+            "{p:?}: residual force {force:?} N"
+        );
+        assert!(
+            sag.info().residual_force_n <= 1e-9 * weight,
+            "{:?}",
+            sag.info()
+        );
+        let c = chord
+            .solve_wrench_bounds(&g, &wrench6(&s), &lo, &hi)
+            .unwrap();
+        assert!(
+            t.iter().zip(c).any(|(a, b)| (a - b).abs() > 1e-3 * b),
+            "sag changed nothing"
+        );
+    }
+}
+
+/// A cable pulled below what its catenary needs is a Slack error naming it: a very heavy
+/// cable (1000 N/m on ~2 m) cannot be held at t_min = 1 N.
+#[test]
+fn a_cable_that_cannot_hold_its_weight_is_slack() {
+    let s = Scene::default_scene();
+    let n = s.n_cables();
+    let lo = vec![1.0; n];
+    let mut sag = SagTensionSolver::new(n, SagTensionParams::default());
+    let g = geometry(&s, s.ee_position_m);
+    let hi_big = vec![1e6; n];
+    let e = sag
+        .solve(
+            &g,
+            &materials(&s, 1000.0),
+            &s.gravity_m_s2,
+            &wrench6(&s),
+            &lo,
+            &hi_big,
+        )
+        .unwrap_err();
+    assert!(
+        matches!(e, SagTensionError::Slack { cable, .. } if cable < n),
+        "{e}"
+    );
+    assert!(e.to_string().contains("slack"), "{e}");
+}
+
+/// 1000 solves along a small circle with the heavy cables allocate nothing after the first.
+#[test]
+fn solve_does_not_allocate() {
+    let s = Scene::default_scene();
+    let n = s.n_cables();
+    let (lo, hi) = bounds(&s, 30.0);
+    let mats = materials(&s, 12.55);
+    let mut sag = SagTensionSolver::new(n, SagTensionParams::default());
+    let mut g = geometry(&s, s.ee_position_m);
+    sag.solve(&g, &mats, &s.gravity_m_s2, &wrench6(&s), &lo, &hi)
+        .unwrap();
+    let before = thread_allocations();
+    let mut ok = 0;
+    for k in 0..1000 {
+        let a = k as f64 * 0.00628;
+        let p = s.ee_position_m + Vector3::new(0.3 * a.cos(), 0.3 * a.sin(), 0.0);
+        g.update(s.cables.iter().map(|c| &c.anchor_m), &p).unwrap();
+        ok += sag
+            .solve(&g, &mats, &s.gravity_m_s2, &wrench6(&s), &lo, &hi)
+            .is_ok() as usize;
+    }
+    assert_eq!(thread_allocations() - before, 0);
+    assert_eq!(ok, 1000);
+}
+
+/// Solve time with the heavy cables at the centre and off-centre, cold and warm
+/// (`cargo test --release --test sag_tension -- --ignored --nocapture`). No assert on time.
+#[test]
+#[ignore]
+fn timing_heavy_cables() {
+    let s = Scene::default_scene();
+    let n = s.n_cables();
+    let (lo, hi) = bounds(&s, 30.0);
+    let mats = materials(&s, 12.55);
+    for (name, p) in [
+        ("centre", s.ee_position_m),
+        ("off-centre", s.ee_position_m + Vector3::new(0.3, 0.2, 0.0)),
+    ] {
+        let g = geometry(&s, p);
+        let mut sag = SagTensionSolver::new(n, SagTensionParams::default());
+        let reps = 2000;
+        let t0 = std::time::Instant::now();
+        for _ in 0..reps {
+            sag.reset_warm_start();
+            sag.solve(&g, &mats, &s.gravity_m_s2, &wrench6(&s), &lo, &hi)
+                .unwrap();
+        }
+        let cold = t0.elapsed().as_secs_f64() / reps as f64;
+        let cold_it = sag.info().iterations;
+        let t0 = std::time::Instant::now();
+        for _ in 0..reps {
+            sag.solve(&g, &mats, &s.gravity_m_s2, &wrench6(&s), &lo, &hi)
+                .unwrap();
+        }
+        let warm = t0.elapsed().as_secs_f64() / reps as f64;
+        println!(
+            "{name}: cold {:.1} µs ({cold_it} passes), warm {:.1} µs ({} passes), tensions {:?}",
+            cold * 1e6,
+            warm * 1e6,
+            sag.info().iterations,
+            sag.tensions_n()
+        );
+    }
+}
