@@ -53,7 +53,7 @@
 //! |---|---|---|
 //! | 0 | [`input_file`], [`alloc_count`] | bounded reading of scene and trajectory files; a counting allocator |
 //! | 1 | [`scene`] | robot description, TOML parsing and validation, `Scene::load` |
-//! | 2 | [`kinematics`], [`caspr`] | poses, cable vectors and lengths, the structure matrix; import of CASPR's XML models into a scene |
+//! | 2 | [`kinematics`], [`caspr`], [`sag`] | poses, cable vectors and lengths, the structure matrix; import of CASPR's XML models into a scene; the sagging cable's elastic catenary |
 //! | 3 | [`trajectory`], [`tension`], [`cable`] | the paper's circle and CSV paths; the tension QP (active set, Clarabel reference); element models and chains |
 //! | 4 | [`modal`] | D(λ) of the loaded chains, the first mode, the end-effector tracker, the dense reference |
 //! | 5 | [`estimator`] | the per-cycle pipeline, the inverse T_min query, the offline `auto` choice and reference |
@@ -76,6 +76,7 @@ pub mod scene;
 // Layer 2
 pub mod caspr;
 pub mod kinematics;
+pub mod sag;
 // Layer 3
 pub mod cable;
 pub mod tension;

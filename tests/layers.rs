@@ -8,7 +8,7 @@
 //! |---|---|
 //! | 0 | `input_file`, `alloc_count` |
 //! | 1 | `scene` |
-//! | 2 | `kinematics`, `caspr` |
+//! | 2 | `kinematics`, `caspr`, `sag` |
 //! | 3 | `trajectory`, `tension`, `cable` |
 //! | 4 | `modal` |
 //! | 5 | `estimator` |
@@ -28,6 +28,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("alloc_count", 0),
     ("kinematics", 2),
     ("caspr", 2),
+    ("sag", 2),
     ("trajectory", 3),
     ("tension", 3),
     ("cable", 3),
