@@ -2,6 +2,7 @@
 //! buffers sized once, filled from a profile without allocating.
 
 use super::{SagChainError, SagChainEval};
+use crate::sag::Catenary;
 
 /// One element of a sagged chain (element j runs from node j to node j + 1; node 0 is the
 /// anchor), as the dense reference assembles it.
@@ -15,6 +16,8 @@ pub struct SagElement {
     pub chord_m: f64,
     /// Axial force N_j = T at the element's middle, N.
     pub axial_n: f64,
+    /// Axial stiffness EA/l0, N/m.
+    pub k_axial_n_m: f64,
     /// Element mass μ l0, kg (consistent mass (m/6)[2 1; 1 2] per direction).
     pub mass_kg: f64,
     /// In-plane stiffness (EA/l0) c cᵀ + (N_j/l_j)(I − c cᵀ) as [a, b, c], N/m, (h, up).
@@ -37,6 +40,8 @@ pub struct SagChain {
     /// Element mass μ l0, kg.
     pub(super) mass_kg: f64,
     l0_m: f64,
+    /// EA/l0, N/m.
+    k_axial: f64,
     /// A pivot that is exactly singular is moved by this much, N/m.
     pub(super) nudge: f64,
     static_eval: SagChainEval,
@@ -55,6 +60,7 @@ impl SagChain {
             capacity: cap,
             mass_kg: 0.0,
             l0_m: 0.0,
+            k_axial: 0.0,
             nudge: 0.0,
             static_eval: SagChainEval::default(),
         }
@@ -125,9 +131,29 @@ impl SagChain {
         }
         self.mass_kg = mu_kg_m * l0;
         self.l0_m = l0;
+        self.k_axial = k_axial;
         self.nudge = f64::EPSILON * k_max;
         self.static_eval = self.eval(0.0);
         Ok(())
+    }
+
+    /// Fill the chain with `n_el` equal elements on the exact catenary `cat` (nodes at
+    /// `cat.point_at_m(s_j)`, N_j = `cat.tension_at_n` at each element's middle), mass per
+    /// unstretched length `mu_kg_m`. No allocation; on error the chain is left empty.
+    pub fn set_fem(
+        &mut self,
+        cat: &Catenary,
+        mu_kg_m: f64,
+        n_el: usize,
+    ) -> Result<(), SagChainError> {
+        self.set_profile(
+            cat.ea_n,
+            mu_kg_m,
+            cat.l0_m,
+            n_el,
+            |s| cat.point_at_m(s),
+            |s| cat.tension_at_n(s),
+        )
     }
 
     fn clear(&mut self) {
@@ -183,6 +209,7 @@ impl SagChain {
             l0_m: self.l0_m,
             chord_m: self.chord_m[j],
             axial_n: self.axial_n[j],
+            k_axial_n_m: self.k_axial,
             mass_kg: self.mass_kg,
             k_in: self.k_in[j],
             k_out: self.k_out[j],
