@@ -15,11 +15,11 @@
 mod sag_common;
 
 use cablevib::cable::{up_frame, CableModel};
-use cablevib::scene::ElementKind;
-use cablevib::modal::sag::{assemble_sagged, SagCable, SagDenseCable, SagEndEffector, SagModalSolver};
-use cablevib::modal::{
-    dense_modes_ee, rigid_geometric_stiffness, ModalParams, ModalSolver, Mode,
+use cablevib::modal::sag::{
+    assemble_sagged, SagCable, SagDenseCable, SagEndEffector, SagModalSolver,
 };
+use cablevib::modal::{dense_modes_ee, rigid_geometric_stiffness, ModalParams, ModalSolver, Mode};
+use cablevib::scene::ElementKind;
 use nalgebra::{Matrix3, Vector3};
 use sag_common::*;
 
@@ -65,14 +65,24 @@ fn compare(cables: &[SagCable], n_el: usize, ee: &SagEndEffector, k: usize) -> f
     for (i, m) in modes[..n].iter().enumerate() {
         let bound = DENSE_FACTOR * f64::EPSILON * lmax / dl[i] + STRUCTURED_TOL;
         let err = (m.lambda - dl[i]).abs() / dl[i];
-        assert!(err <= bound, "N {n_el} mode {i}: {} vs dense {} (err {err:.2e}, bound {bound:.2e})", m.lambda, dl[i]);
+        assert!(
+            err <= bound,
+            "N {n_el} mode {i}: {} vs dense {} (err {err:.2e}, bound {bound:.2e})",
+            m.lambda,
+            dl[i]
+        );
         worst = worst.max(err / (f64::EPSILON * lmax / dl[i]));
         // Participation of simple, well-separated modes (a cluster's dense basis is arbitrary).
         let sep = |j: usize| (dl[j] - dl[i]).abs() > 1e-6 * dl[i];
         if m.multiplicity == 1 && (i == 0 || sep(i - 1)) && (i + 1 >= dl.len() || sep(i + 1)) {
             // Both participations are ratios of mode-shape norms, ~1e-8 conditioned by the
             // separation 1e-6 at worst.
-            assert!((m.ee_participation - dp[i]).abs() < 1e-6, "participation mode {i}: {} vs {}", m.ee_participation, dp[i]);
+            assert!(
+                (m.ee_participation - dp[i]).abs() < 1e-6,
+                "participation mode {i}: {} vs {}",
+                m.ee_participation,
+                dp[i]
+            );
         }
     }
     // Count: exact at any λ not within the dense error of an eigenvalue.
@@ -84,7 +94,12 @@ fn compare(cables: &[SagCable], n_el: usize, ee: &SagEndEffector, k: usize) -> f
     }
     let r = s.first_root_cold().unwrap();
     let bound = DENSE_FACTOR * f64::EPSILON * lmax / dl[0] + STRUCTURED_TOL;
-    assert!((r.lambda - dl[0]).abs() / dl[0] <= bound, "first root {} vs {}", r.lambda, dl[0]);
+    assert!(
+        (r.lambda - dl[0]).abs() / dl[0] <= bound,
+        "first root {} vs {}",
+        r.lambda,
+        dl[0]
+    );
     worst
 }
 
@@ -194,9 +209,19 @@ fn weightless_chain_equals_chord_fem() {
                     let w = want[q].abs();
                     let es = (got[q] - want[q]).abs() / (k_ax + w + w * w / k_t);
                     let ed = (dgot[q] - dwant[q]).abs() / (m_tot + dwant[q].abs());
-                    assert!(es < 1e-11 * n_el as f64, "S N {n_el} λ {lambda} q {q}: {} vs {}", got[q], want[q]);
+                    assert!(
+                        es < 1e-11 * n_el as f64,
+                        "S N {n_el} λ {lambda} q {q}: {} vs {}",
+                        got[q],
+                        want[q]
+                    );
                     // S' of the closed form: relative ε·N²·(pole factor) (cable::chain's tests).
-                    assert!(ed < 1e-8 * (n_el * n_el) as f64, "S' N {n_el} λ {lambda} q {q}: {} vs {}", dgot[q], dwant[q]);
+                    assert!(
+                        ed < 1e-8 * (n_el * n_el) as f64,
+                        "S' N {n_el} λ {lambda} q {q}: {} vs {}",
+                        dgot[q],
+                        dwant[q]
+                    );
                     worst = worst.max(es);
                 }
                 assert_eq!(e.below, a.below + 2 * b.below, "N {n_el} λ {lambda}");
@@ -227,7 +252,10 @@ fn weightless_robot_equals_chord_fem() {
             let mut r = ModalSolver::new(ModalParams::default());
             match ee {
                 SagEndEffector::Point { mass_kg } => r.load(&models, mass_kg),
-                SagEndEffector::Rigid { mass_kg, inertia_kg_m2 } => {
+                SagEndEffector::Rigid {
+                    mass_kg,
+                    inertia_kg_m2,
+                } => {
                     let kg: Matrix3<f64> = rigid_geometric_stiffness(&units, &arms, &tens);
                     r.load_rigid(&models, mass_kg, &inertia_kg_m2, &arms, &kg)
                 }
@@ -238,7 +266,12 @@ fn weightless_robot_equals_chord_fem() {
             assert_eq!(n, r.modes(k, &mut b).unwrap());
             for i in 0..n {
                 let err = (a[i].lambda - b[i].lambda).abs() / b[i].lambda;
-                assert!(err < 1e-10, "N {n_el} mode {i}: {} vs chord {}", a[i].lambda, b[i].lambda);
+                assert!(
+                    err < 1e-10,
+                    "N {n_el} mode {i}: {} vs chord {}",
+                    a[i].lambda,
+                    b[i].lambda
+                );
                 assert_eq!(a[i].multiplicity, b[i].multiplicity, "mode {i}");
                 worst = worst.max(err);
             }
@@ -246,7 +279,10 @@ fn weightless_robot_equals_chord_fem() {
             let g = r.first_root(None).unwrap().lambda;
             assert!((f - g).abs() < 1e-10 * g, "{f} vs {g}");
             let (d1, d2) = (s.static_stiffness().unwrap(), r.static_stiffness6());
-            assert!((d1 - d2).abs().max() < 1e-10 * d2.abs().max(), "{d1} vs {d2}");
+            assert!(
+                (d1 - d2).abs().max() < 1e-10 * d2.abs().max(),
+                "{d1} vs {d2}"
+            );
         }
     }
     eprintln!("weightless robot vs chord FEM: λ {worst:.2e}");

@@ -59,7 +59,10 @@ fn level_cable(span: f64, ratio: f64, lambda2: f64) -> Catenary {
 fn irvine_symmetric(lambda2: f64, k: usize) -> f64 {
     let f = |x: f64| x.tan() - x + 4.0 / lambda2 * x * x * x;
     let pi = std::f64::consts::PI;
-    let (mut lo, mut hi) = ((2 * k - 1) as f64 * pi / 2.0 + 1e-12, (2 * k + 1) as f64 * pi / 2.0 - 1e-12);
+    let (mut lo, mut hi) = (
+        (2 * k - 1) as f64 * pi / 2.0 + 1e-12,
+        (2 * k + 1) as f64 * pi / 2.0 - 1e-12,
+    );
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
         if f(mid) > 0.0 {
@@ -118,8 +121,13 @@ fn shallow_level_cable_matches_irvine() {
             let err = irvine_error(ratio, lambda2);
             let cat = level_cable(10.0, ratio, lambda2);
             let tol = 8.0 * ratio * ratio + cat.h_n / cat.ea_n + 1e-4;
-            eprintln!("sag/span {ratio:.3} λ² {lambda2}: worst ω error {err:.2e} (tolerance {tol:.2e})");
-            assert!(err < tol, "sag/span {ratio} λ² {lambda2}: {err:.3e} ≥ {tol:.3e}");
+            eprintln!(
+                "sag/span {ratio:.3} λ² {lambda2}: worst ω error {err:.2e} (tolerance {tol:.2e})"
+            );
+            assert!(
+                err < tol,
+                "sag/span {ratio} λ² {lambda2}: {err:.3e} ≥ {tol:.3e}"
+            );
             errs.push(err);
         }
     }
@@ -185,7 +193,10 @@ fn check_ratios(what: &str, per_n: &[Vec<f64>], k: usize) {
             .map(|i| per_n[i][j] - per_n[i + 1][j])
             .collect();
         let r: Vec<f64> = (0..d.len() - 1).map(|i| d[i] / d[i + 1]).collect();
-        eprintln!("{what} mode {j}: λ {:.6e}, difference ratios {r:.3?}", per_n[per_n.len() - 1][j]);
+        eprintln!(
+            "{what} mode {j}: λ {:.6e}, difference ratios {r:.3?}",
+            per_n[per_n.len() - 1][j]
+        );
         for &x in &r {
             assert!((3.6..=4.4).contains(&x), "{what} mode {j}: ratios {r:?}");
         }

@@ -28,7 +28,11 @@ pub fn robot(n: usize, mu: f64, ea: f64, heavy: bool) -> Vec<SagCable> {
             let h = Vector3::new(phi.cos(), phi.sin(), 0.0);
             let l0 = 3.0 + 0.37 * i as f64;
             let w = mu * G;
-            let h_n = if heavy { 15.0 + 4.0 * i as f64 } else { 120.0 + 25.0 * i as f64 };
+            let h_n = if heavy {
+                15.0 + 4.0 * i as f64
+            } else {
+                120.0 + 25.0 * i as f64
+            };
             // Even: from an anchor above (V < 0 all along, descending to the end-effector);
             // odd: from below with the low point inside (V_a < 0 < V_e).
             let v_a = if i % 2 == 0 {

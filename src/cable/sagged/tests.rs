@@ -117,14 +117,27 @@ fn recurrence_equals_dense_condensation() {
             for q in 0..4 {
                 let es = (rec[q] - den[q]).abs() / (k_scale + den[q].abs());
                 let ed = (drec[q] - dden[q]).abs() / (mass + dden[q].abs());
-                assert!(es < 1e-9, "S N {n_el} λ {lambda} q {q}: {} vs {}", rec[q], den[q]);
-                assert!(ed < 1e-7, "S' N {n_el} λ {lambda} q {q}: {} vs {}", drec[q], dden[q]);
+                assert!(
+                    es < 1e-9,
+                    "S N {n_el} λ {lambda} q {q}: {} vs {}",
+                    rec[q],
+                    den[q]
+                );
+                assert!(
+                    ed < 1e-7,
+                    "S' N {n_el} λ {lambda} q {q}: {} vs {}",
+                    drec[q],
+                    dden[q]
+                );
                 worst[0] = worst[0].max(es);
                 worst[1] = worst[1].max(ed);
             }
         }
     }
-    eprintln!("sagged recurrence vs dense: S {:.2e}, S' {:.2e}", worst[0], worst[1]);
+    eprintln!(
+        "sagged recurrence vs dense: S {:.2e}, S' {:.2e}",
+        worst[0], worst[1]
+    );
 }
 
 #[test]

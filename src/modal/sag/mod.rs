@@ -11,8 +11,8 @@
 //! ```
 //!
 //! with G_i = [I, −\[r_i\]×] the attachment map of arm r_i and K_geo = Σ_i (f_i·r_i) I −
-//! sym(f_i r_iᵀ) the rotational geometric stiffness of the end forces f_i (f_i = −(H_i h_i
-//! + V_e,i up), the end tangent's direction, not the chord's). One evaluation is one O(N)
+//! sym(f_i r_iᵀ) the rotational geometric stiffness of the end forces
+//! f_i = −(H_i h_i + V_e,i up) (along the end tangent, not the chord). One evaluation is one O(N)
 //! recurrence per cable. The Wittrick–Williams count J(λ) = Σ_i below_i(λ) + (negative
 //! eigenvalues of D(λ)) is the exact number of natural frequencies below λ.
 //!

@@ -29,6 +29,8 @@ struct Probe {
 }
 
 /// A mode found: at a pole, or as the zero of `branch` with the evaluation nearest to it.
+/// Short-lived, returned once per mode: the large variant's size does not matter.
+#[allow(clippy::large_enum_variant)]
 enum Found {
     Pole(f64),
     Branch {

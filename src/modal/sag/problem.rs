@@ -158,8 +158,7 @@ impl SagProblem {
                 let ds = [e.ds_in[0], e.ds_in[1], e.ds_in[2], e.ds_out];
                 for j in 0..6 {
                     d[j] += s[0] * p[0][j] + s[1] * p[1][j] + s[2] * p[2][j] + s[3] * p[3][j];
-                    dd[j] +=
-                        ds[0] * p[0][j] + ds[1] * p[1][j] + ds[2] * p[2][j] + ds[3] * p[3][j];
+                    dd[j] += ds[0] * p[0][j] + ds[1] * p[1][j] + ds[2] * p[2][j] + ds[3] * p[3][j];
                 }
                 below += e.below;
             }
