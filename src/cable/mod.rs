@@ -24,6 +24,8 @@
 //! Files: `element` (the FEM and catenary element blocks), `chain` (one uniform chain's
 //! dynamic stiffness: closed form for N elements, and the continuous limit) and `batch`
 //! (many chains at one λ in fixed 8-lane blocks, with an AVX2 build chosen at run time).
+//! `sagged`: a sagging cable's FEM chain on its elastic catenary (non-uniform elements,
+//! 2 × 2 in-plane blocks), condensed onto its end by a block recurrence.
 
 use crate::scene::ElementKind;
 use nalgebra::{Matrix3, Vector3};
@@ -31,6 +33,7 @@ use nalgebra::{Matrix3, Vector3};
 mod batch;
 mod chain;
 mod element;
+pub mod sagged;
 
 pub use crate::kinematics::up_frame;
 pub use batch::{eval_continuous_batch, eval_discrete_batch, BATCH_MAX_ELEMENTS};

@@ -65,7 +65,9 @@
 //! evaluation of D(λ). `first_mode`: the first root and its certificate. `ee_tracker`: the
 //! end-effector mode, scanned and tracked. `spectrum`: the first K modes
 //! ([`ModalSolver::modes`], [`Mode`], [`SpectrumParams`]). `solver`: [`ModalSolver`], which
-//! composes them. `eig3` and `rigid`: small kernels both solvers use.
+//! composes them. `eig3` and `rigid`: small kernels both solvers use. `sag`: the same
+//! structured solver (and its dense reference) for cables sagging on their catenaries,
+//! whose chains are not uniform ([`sag::SagModalSolver`]).
 
 mod dense;
 mod dynamic_stiffness;
@@ -74,6 +76,7 @@ mod eig3;
 mod error;
 mod first_mode;
 mod rigid;
+pub mod sag;
 mod shapes;
 mod solver;
 mod spectrum;

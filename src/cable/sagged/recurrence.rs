@@ -1,0 +1,146 @@
+//! The condensation recurrence of a sagged chain (see the module docs): in-plane 2 × 2
+//! blocks, out-of-plane scalars, their λ-derivatives and the pivots' negative count.
+
+use super::chain::SagChain;
+use super::SagChainEval;
+
+/// A symmetric 2 × 2 matrix [a b; b c] as [a, b, c].
+type Sym2 = [f64; 3];
+/// A general 2 × 2 matrix, row-major [[y00, y01], [y10, y11]].
+type Mat2 = [[f64; 2]; 2];
+
+/// Number of negative eigenvalues of the symmetric 2 × 2 matrix `q` with determinant `det`
+/// (≠ 0): one when det < 0, both when det > 0 and the diagonal is negative.
+#[inline]
+fn negatives2(q: &Sym2, det: f64) -> u32 {
+    if det < 0.0 {
+        1
+    } else if q[0] < 0.0 {
+        2
+    } else {
+        0
+    }
+}
+
+/// Y = Q⁻¹ E for symmetric Q (determinant `det` ≠ 0) and E.
+#[inline]
+fn solve2(q: &Sym2, det: f64, e: &Sym2) -> Mat2 {
+    let inv = 1.0 / det;
+    // Q⁻¹ = [c −b; −b a]/det.
+    let (ia, ib, ic) = (q[2] * inv, -q[1] * inv, q[0] * inv);
+    [
+        [ia * e[0] + ib * e[1], ia * e[1] + ib * e[2]],
+        [ib * e[0] + ic * e[1], ib * e[1] + ic * e[2]],
+    ]
+}
+
+/// Sym(Xᵀ Y) for symmetric X given as [a, b, c] and general Y: the symmetric part of
+/// Xᵀ Y = X Y (entries 00, 01 averaged with 10, 11).
+#[inline]
+fn sym_xy(x: &Sym2, y: &Mat2) -> Sym2 {
+    let p00 = x[0] * y[0][0] + x[1] * y[1][0];
+    let p01 = x[0] * y[0][1] + x[1] * y[1][1];
+    let p10 = x[1] * y[0][0] + x[2] * y[1][0];
+    let p11 = x[1] * y[0][1] + x[2] * y[1][1];
+    [p00, 0.5 * (p01 + p10), p11]
+}
+
+/// Yᵀ X Y for symmetric X and general Y (symmetric result).
+#[inline]
+fn congruence(x: &Sym2, y: &Mat2) -> Sym2 {
+    // X Y columns, then Yᵀ (X Y).
+    let xy00 = x[0] * y[0][0] + x[1] * y[1][0];
+    let xy10 = x[1] * y[0][0] + x[2] * y[1][0];
+    let xy01 = x[0] * y[0][1] + x[1] * y[1][1];
+    let xy11 = x[1] * y[0][1] + x[2] * y[1][1];
+    [
+        y[0][0] * xy00 + y[1][0] * xy10,
+        y[0][0] * xy01 + y[1][0] * xy11,
+        y[0][1] * xy01 + y[1][1] * xy11,
+    ]
+}
+
+impl SagChain {
+    /// S(λ), S'(λ) and the blocked count of the chain at λ = ω² (rad²/s²). O(N), no
+    /// allocation; an empty chain gives zeros.
+    pub fn eval(&self, lambda: f64) -> SagChainEval {
+        let n = self.n_el();
+        if n == 0 {
+            return SagChainEval::default();
+        }
+        let (s_in, ds_in, below_in) = self.eval_in_plane(lambda);
+        let (s_out, ds_out, below_out) = self.eval_out_of_plane(lambda);
+        SagChainEval {
+            s_in,
+            ds_in,
+            s_out,
+            ds_out,
+            below: below_in + below_out,
+        }
+    }
+
+    /// The in-plane 2 × 2 recurrence: (S_N, S'_N, negative pivot eigenvalues).
+    fn eval_in_plane(&self, lambda: f64) -> (Sym2, Sym2, u32) {
+        let m = self.mass_kg;
+        let (d3, d2) = (lambda * m / 3.0, lambda * m / 2.0);
+        let k = &self.k_in;
+        let mut s = [k[0][0] - d3, k[0][1], k[0][2] - d3];
+        let mut ds = [-m / 3.0, 0.0, -m / 3.0];
+        let mut below = 0u32;
+        for kj in &k[1..] {
+            let mut q = [s[0] + kj[0] - d3, s[1] + kj[1], s[2] + kj[2] - d3];
+            let dq = [ds[0] - m / 3.0, ds[1], ds[2] - m / 3.0];
+            let mut det = q[0] * q[2] - q[1] * q[1];
+            if det == 0.0 {
+                q[0] += self.nudge;
+                q[2] += self.nudge;
+                det = q[0] * q[2] - q[1] * q[1];
+                if det == 0.0 {
+                    det = self.nudge * self.nudge;
+                }
+            }
+            below += negatives2(&q, det);
+            let e = [s[0] - d2, s[1], s[2] - d2];
+            let de = [ds[0] - m / 2.0, ds[1], ds[2] - m / 2.0];
+            let y = solve2(&q, det, &e);
+            let eqe = sym_xy(&e, &y);
+            let dey = sym_xy(&de, &y);
+            let yqy = congruence(&dq, &y);
+            s = [
+                s[0] - lambda * m - eqe[0],
+                s[1] - eqe[1],
+                s[2] - lambda * m - eqe[2],
+            ];
+            ds = [
+                ds[0] - m - 2.0 * dey[0] + yqy[0],
+                ds[1] - 2.0 * dey[1] + yqy[1],
+                ds[2] - m - 2.0 * dey[2] + yqy[2],
+            ];
+        }
+        (s, ds, below)
+    }
+
+    /// The out-of-plane scalar recurrence: (s_N, s'_N, negative pivots).
+    fn eval_out_of_plane(&self, lambda: f64) -> (f64, f64, u32) {
+        let m = self.mass_kg;
+        let (d3, d2) = (lambda * m / 3.0, lambda * m / 2.0);
+        let k = &self.k_out;
+        let mut s = k[0] - d3;
+        let mut ds = -m / 3.0;
+        let mut below = 0u32;
+        for &kj in &k[1..] {
+            let mut q = s + kj - d3;
+            if q == 0.0 {
+                q = self.nudge;
+            }
+            below += (q < 0.0) as u32;
+            let dq = ds - m / 3.0;
+            let e = s - d2;
+            let de = ds - m / 2.0;
+            let y = e / q;
+            s = s - lambda * m - e * y;
+            ds = ds - m - 2.0 * de * y + dq * y * y;
+        }
+        (s, ds, below)
+    }
+}

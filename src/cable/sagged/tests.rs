@@ -1,0 +1,170 @@
+//! The recurrence against an independent dense condensation of the same chain: the whole
+//! interior's K − λM assembled (nalgebra), S = Z_ee − Z_ei Z_ii⁻¹ Z_ie by LU, S' = −uᵀMu
+//! with u the forced shape (end displacement e_k, interior −Z_ii⁻¹ Z_ie e_k), the count from
+//! the interior's symmetric eigenvalues.
+
+use super::*;
+use nalgebra::{DMatrix, SymmetricEigen};
+
+/// A non-uniform, curved test profile (not a catenary: the recurrence does not care):
+/// chords turning by ~40° along the cable, tension growing 3× from anchor to end.
+pub(crate) fn test_chain(n_el: usize, ea_n: f64, mu: f64) -> SagChain {
+    let mut c = SagChain::new(n_el);
+    let l0 = 7.0;
+    c.set_profile(
+        ea_n,
+        mu,
+        l0,
+        n_el,
+        |s| {
+            let t = s / l0;
+            [6.5 * t + 0.2 * (3.0 * t).sin(), 2.0 * t * t - 0.8 * t]
+        },
+        |s| 200.0 + 400.0 * s / l0,
+    )
+    .unwrap();
+    c
+}
+
+/// Dense (S, S', count) of one direction set: `dof` DOF per node (2 in plane, 1 out),
+/// element stiffness blocks `k(j)` (dof × dof), element mass m.
+fn dense_condense(
+    n_el: usize,
+    dof: usize,
+    k: impl Fn(usize) -> DMatrix<f64>,
+    m: f64,
+    lambda: f64,
+) -> (DMatrix<f64>, DMatrix<f64>, usize) {
+    // Global DOF: nodes 1..=N, the end node N last.
+    let nd = dof * n_el;
+    let mut kk = DMatrix::<f64>::zeros(nd, nd);
+    let mut mm = DMatrix::<f64>::zeros(nd, nd);
+    let eye = DMatrix::<f64>::identity(dof, dof);
+    for j in 0..n_el {
+        let ke = k(j);
+        for (a, na) in [(0usize, j), (1, j + 1)] {
+            for (b, nb) in [(0usize, j), (1, j + 1)] {
+                if na == 0 || nb == 0 {
+                    continue;
+                }
+                let sg = if a == b { 1.0 } else { -1.0 };
+                let mc = if a == b { m / 3.0 } else { m / 6.0 };
+                let (ra, rb) = (dof * (na - 1), dof * (nb - 1));
+                for r in 0..dof {
+                    for c in 0..dof {
+                        kk[(ra + r, rb + c)] += sg * ke[(r, c)];
+                        mm[(ra + r, rb + c)] += mc * eye[(r, c)];
+                    }
+                }
+            }
+        }
+    }
+    let z = &kk - &mm * lambda;
+    let ni = nd - dof;
+    let zii = z.view((0, 0), (ni, ni)).into_owned();
+    let zie = z.view((0, ni), (ni, dof)).into_owned();
+    let zee = z.view((ni, ni), (dof, dof)).into_owned();
+    let x = if ni > 0 {
+        zii.clone().lu().solve(&zie).unwrap()
+    } else {
+        DMatrix::zeros(0, dof)
+    };
+    let s = &zee - zie.transpose() * &x;
+    // Forced shapes u_k = [−X e_k; e_k]; S' = −Uᵀ M U.
+    let mut u = DMatrix::<f64>::zeros(nd, dof);
+    u.view_mut((0, 0), (ni, dof)).copy_from(&(-&x));
+    u.view_mut((ni, 0), (dof, dof)).copy_from(&eye);
+    let ds = -(u.transpose() * &mm * &u);
+    let neg = if ni > 0 {
+        SymmetricEigen::new(zii)
+            .eigenvalues
+            .iter()
+            .filter(|&&v| v < 0.0)
+            .count()
+    } else {
+        0
+    };
+    (s, ds, neg)
+}
+
+#[test]
+fn recurrence_equals_dense_condensation() {
+    let mut worst = [0.0f64; 2];
+    for n_el in [1usize, 2, 3, 7, 20] {
+        let c = test_chain(n_el, 2.0e5, 0.3);
+        let k_in = |j: usize| {
+            let k = c.element(j).k_in;
+            DMatrix::from_row_slice(2, 2, &[k[0], k[1], k[1], k[2]])
+        };
+        let k_out = |j: usize| DMatrix::from_element(1, 1, c.element(j).k_out);
+        // λ up to above the transverse cut-off and into the axial band.
+        let lam_t = 12.0 * c.element(0).k_out.max(c.element(n_el - 1).k_out) / c.element_mass_kg();
+        for i in 0..60 {
+            let lambda = lam_t * 40.0 * (i as f64 / 60.0).powi(3) + 0.37 * i as f64;
+            let e = c.eval(lambda);
+            let (si, dsi, ni) = dense_condense(n_el, 2, k_in, c.element_mass_kg(), lambda);
+            let (so, dso, no) = dense_condense(n_el, 1, k_out, c.element_mass_kg(), lambda);
+            assert_eq!(e.below as usize, ni + no, "N {n_el} λ {lambda}");
+            let rec = [e.s_in[0], e.s_in[1], e.s_in[2], e.s_out];
+            let den = [si[(0, 0)], si[(0, 1)], si[(1, 1)], so[(0, 0)]];
+            let drec = [e.ds_in[0], e.ds_in[1], e.ds_in[2], e.ds_out];
+            let dden = [dsi[(0, 0)], dsi[(0, 1)], dsi[(1, 1)], dso[(0, 0)]];
+            // Scales: S against the largest element spring (the LU's own error is
+            // ~ε·cond·k_max, cond of the interior ≲ 1e6 here), S' against the chain mass
+            // plus |S'| (near a blocked eigenvalue both grow like 1/(λ − λ_j)²).
+            let k_scale = 2.0e5 / c.element_length_m();
+            let mass = c.element_mass_kg() * n_el as f64;
+            for q in 0..4 {
+                let es = (rec[q] - den[q]).abs() / (k_scale + den[q].abs());
+                let ed = (drec[q] - dden[q]).abs() / (mass + dden[q].abs());
+                assert!(
+                    es < 1e-9,
+                    "S N {n_el} λ {lambda} q {q}: {} vs {}",
+                    rec[q],
+                    den[q]
+                );
+                assert!(
+                    ed < 1e-7,
+                    "S' N {n_el} λ {lambda} q {q}: {} vs {}",
+                    drec[q],
+                    dden[q]
+                );
+                worst[0] = worst[0].max(es);
+                worst[1] = worst[1].max(ed);
+            }
+        }
+    }
+    eprintln!(
+        "sagged recurrence vs dense: S {:.2e}, S' {:.2e}",
+        worst[0], worst[1]
+    );
+}
+
+#[test]
+fn static_stiffness_is_springs_in_series_out_of_plane() {
+    // Out of plane at λ = 0 the chain is springs N_j/l_j in series: 1/s = Σ l_j/N_j.
+    let c = test_chain(50, 1.0e6, 0.2);
+    let flex: f64 = c.elements().map(|e| 1.0 / e.k_out).sum();
+    let s0 = c.static_eval().s_out;
+    assert!((s0 * flex - 1.0).abs() < 1e-13, "{s0} vs {}", 1.0 / flex);
+}
+
+#[test]
+fn bad_inputs_are_errors() {
+    let mut c = SagChain::new(4);
+    let p = |s: f64| [s, 0.0];
+    assert!(matches!(
+        c.set_profile(1e5, 0.1, 2.0, 5, p, |_| 10.0),
+        Err(SagChainError::ElementCount { .. })
+    ));
+    assert!(matches!(
+        c.set_profile(f64::NAN, 0.1, 2.0, 4, p, |_| 10.0),
+        Err(SagChainError::BadInput { .. })
+    ));
+    assert!(matches!(
+        c.set_profile(1e5, 0.1, 2.0, 4, p, |s| 1.0 - s),
+        Err(SagChainError::BadElement { element: 2, .. })
+    ));
+    assert_eq!(c.n_el(), 0);
+    assert_eq!(c.eval(3.0), SagChainEval::default());
+}

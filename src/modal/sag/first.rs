@@ -1,0 +1,110 @@
+//! The first root of the sagged problem: safeguarded Newton on μ₁(D(λ)) inside a bracket
+//! kept by the sign of μ₁ and the blocked count (see the module docs).
+
+use super::problem::SagProblem;
+use crate::modal::dynamic_stiffness::quad;
+use crate::modal::first_mode::relative_residual;
+use crate::modal::{ModalError, ModalParams, Root};
+
+/// Without a pole above, the bracket's upper end is unknown: a step that leaves the
+/// bracket doubles the iterate instead of bisecting.
+const GROWTH: f64 = 2.0;
+/// The cold start's Rayleigh guess is at least this, rad²/s² (a scale when D' vanishes).
+const GUESS_MIN: f64 = 1e-12;
+
+/// The first natural frequency's λ of `p`, from `warm` (the last root) or from the
+/// Rayleigh guess. `evals` counts the evaluations of D.
+pub(super) fn first_root(
+    p: &SagProblem,
+    params: &ModalParams,
+    evals: &mut u32,
+    warm: Option<f64>,
+) -> Result<Root, ModalError> {
+    let start = *evals;
+    let e0 = p.static_eval();
+    let eg0 = e0.eig();
+    if !(eg0.values[0] > 0.0) {
+        return Err(ModalError::NotPositiveDefinite(eg0.values[0]));
+    }
+    let mut x = match warm {
+        Some(w) if w > 0.0 && w.is_finite() => w,
+        _ => {
+            let kin = -quad(&e0.dd, &eg0.vectors[0], e0.dim);
+            (eg0.values[0] / kin.max(f64::MIN_POSITIVE)).max(GUESS_MIN)
+        }
+    };
+    let (mut lo, mut hi) = (0.0f64, f64::INFINITY);
+    loop {
+        let used = evals.wrapping_sub(start);
+        if used >= params.max_evaluations {
+            return Err(ModalError::NoConvergence {
+                evaluations: used,
+                lo,
+                hi,
+            });
+        }
+        *evals = evals.wrapping_add(1);
+        let e = p.eval(x);
+        let eg = e.eig();
+        let (mu, v) = (eg.values[0], eg.vectors[0]);
+        let dmu = quad(&e.dd, &v, e.dim);
+        let mut next = f64::NAN;
+        if e.below > 0 {
+            // A pole below x: the first root is below it.
+            hi = hi.min(x);
+        } else {
+            if mu > 0.0 {
+                lo = lo.max(x);
+            } else {
+                hi = hi.min(x);
+            }
+            if mu == 0.0 {
+                return Ok(root(p, x, x, mu, &e, &v, *evals - start));
+            }
+            if dmu < 0.0 {
+                next = x - mu / dmu;
+                if (next - x).abs() <= params.rel_tol * x && next > lo && next < hi {
+                    return Ok(root(p, next, x, mu, &e, &v, *evals - start));
+                }
+            }
+        }
+        if hi.is_finite() && hi - lo <= params.rel_tol * hi {
+            // Collapsed onto a pole (the count steps there, μ₁ does not cross zero): a
+            // mode with the end-effector still.
+            return Ok(Root {
+                lambda: hi,
+                ee_participation: 0.0,
+                evaluations: *evals - start,
+                residual: 0.0,
+            });
+        }
+        if !(next > lo && next < hi) {
+            next = if hi.is_finite() {
+                0.5 * (lo + hi)
+            } else {
+                GROWTH * x
+            };
+        }
+        x = next;
+    }
+}
+
+/// The root at λ, from the evaluation at its last iterate x (μ₁ there, D', unit vector v).
+fn root(
+    p: &SagProblem,
+    lambda: f64,
+    x: f64,
+    mu: f64,
+    e: &crate::modal::DynEval,
+    v: &nalgebra::Vector6<f64>,
+    evaluations: u32,
+) -> Root {
+    let kin = -quad(&e.dd, v, e.dim);
+    let own = quad(&p.m6, v, e.dim);
+    Root {
+        lambda,
+        ee_participation: if kin > 0.0 { (own / kin).min(1.0) } else { 0.0 },
+        evaluations,
+        residual: relative_residual(mu, x, &e.dd),
+    }
+}

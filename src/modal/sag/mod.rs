@@ -1,0 +1,279 @@
+//! Natural frequencies of a robot whose cables sag: the structured solver on the sagged
+//! FEM chains ([`crate::cable::sagged`]) and its dense reference.
+//!
+//! **D(λ).** Cable i hangs in the plane (h_i, up), n_i = h_i × up; its chain, condensed
+//! onto its end, gives S_in,i(λ) (2 × 2 in (h_i, up)) and s_out,i(λ). With E_i = [h_i up]
+//! (3 × 2), the end-effector's dynamic stiffness is
+//!
+//! ```text
+//!     D(λ) = Σ_i [E_i S_in,i Eᵢᵀ + s_out,i n_i n_iᵀ] − λ m I                    (point mass)
+//!     D(λ) = Σ_i G_iᵀ [E_i S_in,i Eᵢᵀ + s_out,i n_i n_iᵀ] G_i + K_geo − λ M₆     (rigid body)
+//! ```
+//!
+//! with G_i = [I, −\[r_i\]×] the attachment map of arm r_i and K_geo = Σ_i (f_i·r_i) I −
+//! sym(f_i r_iᵀ) the rotational geometric stiffness of the end forces
+//! f_i = −(H_i h_i + V_e,i up) (along the end tangent, not the chord). One evaluation is one O(N)
+//! recurrence per cable. The Wittrick–Williams count J(λ) = Σ_i below_i(λ) + (negative
+//! eigenvalues of D(λ)) is the exact number of natural frequencies below λ.
+//!
+//! **First root** ([`SagModalSolver::first_root`]). The chains are not uniform, so their
+//! blocked eigenvalues (the poles of D) are not known in closed form; the count shows
+//! where they are. The first natural frequency lies at or below the lowest pole (blocking
+//! the end adds a constraint), where μ₁(D(λ)) falls monotonically from μ₁(D(0)) > 0; it is
+//! the zero of μ₁ with no pole below it. Newton's method on μ₁ (μ₁' = vᵀD'v) runs from the
+//! last root (warm) or from the Rayleigh guess μ₁(0)/(−μ₁'(0)) (cold), inside a bracket
+//! [lo, hi] kept by the signs of μ₁ and by the blocked count: an iterate with a pole below
+//! it (below > 0) is an upper bound, and a step that leaves the bracket is replaced by
+//! bisection. A root whose evaluation has no pole below it is the first eigenvalue by
+//! monotonicity (no certificate needed); a bracket that collapses onto a pole (a mode with
+//! the end-effector still) is reported there with participation 0.
+//!
+//! **First K modes** ([`SagModalSolver::modes`]): the count brackets mode k; bisection on
+//! the count while the blocked count differs at the bracket's ends (a pole inside), then,
+//! once it is equal (the bracket is pole-free: the blocked count only steps at poles),
+//! safeguarded Newton on branch k − below of D's sorted eigenvalues. Multiplicity from the
+//! count over λ(1 ∓ δ); a cluster's participations are the eigenvalues of
+//! M₆^{1/2} V G⁻¹ Vᵀ M₆^{1/2}, V the unit eigenvectors of its branches, G = Vᵀ(−D')V.
+//!
+//! **Static stiffness** ([`SagModalSolver::static_stiffness`]): D(0), N/m (N·m/rad in the
+//! rotational block), from each chain's cached S(0).
+//!
+//! Files: `problem` (the loaded pose, D(λ)), `first` (first root), `modes` (first K),
+//! `dense` (the assembled reference).
+
+mod dense;
+mod first;
+mod modes;
+mod problem;
+
+pub use dense::{assemble_sagged, SagDenseCable};
+
+use super::{ModalError, ModalParams, Root};
+use crate::cable::sagged::{SagChain, SagChainError};
+use crate::modal::DynEval;
+use crate::sag::Catenary;
+use nalgebra::{Matrix3, Matrix6, Vector3};
+use problem::SagProblem;
+
+/// How one cable of a pose attaches to the end-effector.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SagCableFrame {
+    /// Unit horizontal h of the cable's plane (from the anchor toward the end), world frame.
+    pub h: Vector3<f64>,
+    /// Attachment arm from the centroid, world frame, m (rigid end-effector only).
+    pub arm_m: Vector3<f64>,
+    /// Force of the cable on the end-effector, −(H h + V_e up), N (rigid end-effector
+    /// only: its rotational geometric stiffness).
+    pub end_force_n: Vector3<f64>,
+}
+
+/// One sagging cable of a pose, for [`SagModalSolver::load_catenaries`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SagCable {
+    /// The static profile.
+    pub catenary: Catenary,
+    /// Mass per unstretched length, kg/m.
+    pub mu_kg_m: f64,
+    /// Unit horizontal h of the cable's plane, world frame.
+    pub h: Vector3<f64>,
+    /// Attachment arm from the centroid, world frame, m (rigid end-effector only).
+    pub arm_m: Vector3<f64>,
+}
+
+/// The end-effector: a point mass (3 DOF) or a rigid body (6 DOF).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SagEndEffector {
+    /// Point mass, kg.
+    Point {
+        /// Mass, kg.
+        mass_kg: f64,
+    },
+    /// Rigid body: mass and world-frame inertia about the centroid.
+    Rigid {
+        /// Mass, kg.
+        mass_kg: f64,
+        /// Inertia, kg·m².
+        inertia_kg_m2: Matrix3<f64>,
+    },
+}
+
+/// Errors of [`SagModalSolver::load`].
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum SagLoadError {
+    /// More cables than the solver was built for.
+    #[error("{given} cables, the solver holds {capacity}")]
+    CableCount {
+        /// Cables given.
+        given: usize,
+        /// Cables the solver was built for.
+        capacity: usize,
+    },
+    /// Cable i's basis is not orthonormal (h unit and horizontal, up unit) or not finite.
+    #[error("cable {0}: its frame is not a finite orthonormal basis")]
+    BadFrame(usize),
+    /// The end-effector's mass or inertia is not positive definite and finite.
+    #[error("end-effector mass or inertia not positive and finite")]
+    BadMass,
+    /// Cable i's chain could not be set.
+    #[error("cable {0}: {1}")]
+    Chain(usize, SagChainError),
+}
+
+/// The robot-level structured solver for sagged cables: built once, loaded per pose.
+#[derive(Debug, Clone)]
+pub struct SagModalSolver {
+    params: ModalParams,
+    problem: SagProblem,
+    evaluations: u32,
+    /// The last first root, rad²/s² (NaN: none; the warm start).
+    last_lambda1: f64,
+    loaded: bool,
+}
+
+impl SagModalSolver {
+    /// Room for `n_cables` cables of up to `n_el_max` elements each (the only allocation).
+    pub fn new(params: ModalParams, n_cables: usize, n_el_max: usize) -> SagModalSolver {
+        SagModalSolver {
+            params,
+            problem: SagProblem::new(n_cables, n_el_max),
+            evaluations: 0,
+            last_lambda1: f64::NAN,
+            loaded: false,
+        }
+    }
+
+    /// Cable i's chain, to be set (e.g. [`SagChain::set_fem`]) before [`Self::load`].
+    pub fn chain_mut(&mut self, i: usize) -> &mut SagChain {
+        self.loaded = false;
+        &mut self.problem.chains[i]
+    }
+
+    /// Cable i's chain.
+    pub fn chain(&self, i: usize) -> &SagChain {
+        &self.problem.chains[i]
+    }
+
+    /// Load a pose whose chains 0 .. frames.len() are set: each cable's frame, the unit
+    /// `up` (−g/|g|) and the end-effector. No allocation.
+    pub fn load(
+        &mut self,
+        frames: &[SagCableFrame],
+        up: &Vector3<f64>,
+        ee: &SagEndEffector,
+    ) -> Result<(), SagLoadError> {
+        self.loaded = false;
+        self.check_count(frames.len())?;
+        self.problem.set_end_effector(ee)?;
+        for (i, f) in frames.iter().enumerate() {
+            self.problem.set_cable(i, f, up)?;
+        }
+        self.problem.n = frames.len();
+        self.loaded = true;
+        Ok(())
+    }
+
+    /// Set every cable's chain to `n_el` FEM elements on its catenary and load the pose
+    /// (the end force of cable i is −(H h_i + V_e up)). No allocation.
+    pub fn load_catenaries(
+        &mut self,
+        cables: &[SagCable],
+        n_el: usize,
+        up: &Vector3<f64>,
+        ee: &SagEndEffector,
+    ) -> Result<(), SagLoadError> {
+        self.loaded = false;
+        self.check_count(cables.len())?;
+        self.problem.set_end_effector(ee)?;
+        for (i, c) in cables.iter().enumerate() {
+            self.problem.chains[i]
+                .set_fem(&c.catenary, c.mu_kg_m, n_el)
+                .map_err(|e| SagLoadError::Chain(i, e))?;
+            let cat = &c.catenary;
+            let frame = SagCableFrame {
+                h: c.h,
+                arm_m: c.arm_m,
+                end_force_n: -(c.h * cat.h_n + up * cat.v_end_n()),
+            };
+            self.problem.set_cable(i, &frame, up)?;
+        }
+        self.problem.n = cables.len();
+        self.loaded = true;
+        Ok(())
+    }
+
+    fn check_count(&self, given: usize) -> Result<(), SagLoadError> {
+        let capacity = self.problem.chains.len();
+        if given > capacity {
+            return Err(SagLoadError::CableCount { given, capacity });
+        }
+        Ok(())
+    }
+
+    fn require_loaded(&self) -> Result<(), ModalError> {
+        if self.loaded {
+            Ok(())
+        } else {
+            Err(ModalError::NotLoaded)
+        }
+    }
+
+    /// D(λ), D'(λ) and the blocked count of the loaded pose (one evaluation).
+    pub fn eval(&mut self, lambda: f64) -> DynEval {
+        self.evaluations = self.evaluations.wrapping_add(1);
+        self.problem.eval(lambda)
+    }
+
+    /// Number of natural frequencies strictly below λ (Wittrick–Williams).
+    pub fn count_below(&mut self, lambda: f64) -> u32 {
+        let e = self.eval(lambda);
+        e.below + e.eig().negatives() as u32
+    }
+
+    /// The end-effector's static stiffness D(0) (its leading 3 × 3 or 6 × 6 block), N/m
+    /// (N·m/rad in the rotational block). No chain evaluation.
+    pub fn static_stiffness(&self) -> Result<Matrix6<f64>, ModalError> {
+        self.require_loaded()?;
+        Ok(self.problem.static_eval().d)
+    }
+
+    /// 3 (point mass) or 6 (rigid body).
+    pub fn dim(&self) -> usize {
+        self.problem.dim
+    }
+
+    /// Evaluations of D(λ) since the solver was built (a counter; differences give a
+    /// solve's cost).
+    pub fn evaluations(&self) -> u32 {
+        self.evaluations
+    }
+
+    /// Number of natural frequencies of the loaded pose (end-effector DOF plus 3(N − 1)
+    /// per cable with mass).
+    pub fn total_modes(&self) -> usize {
+        self.problem.total_modes()
+    }
+
+    /// The end-effector's mass matrix diag(m I, I) and the rigid body's rotational
+    /// geometric stiffness (zero for a point mass): what the dense reference also needs.
+    pub fn ee_matrices(&self) -> (Matrix6<f64>, Matrix6<f64>) {
+        (self.problem.m6, self.problem.k6)
+    }
+
+    /// The first natural frequency, warm-started from the last one found (cold when none).
+    pub fn first_root(&mut self) -> Result<Root, ModalError> {
+        let warm = self.last_lambda1;
+        self.first_root_from(warm.is_finite().then_some(warm))
+    }
+
+    /// The first natural frequency from the Rayleigh guess (ignores the last root).
+    pub fn first_root_cold(&mut self) -> Result<Root, ModalError> {
+        self.first_root_from(None)
+    }
+
+    fn first_root_from(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
+        self.require_loaded()?;
+        let r = first::first_root(&self.problem, &self.params, &mut self.evaluations, warm);
+        self.last_lambda1 = r.as_ref().map_or(f64::NAN, |r| r.lambda);
+        r
+    }
+}

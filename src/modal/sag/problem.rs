@@ -1,0 +1,219 @@
+//! The loaded problem of one pose (the sagged chains, how each attaches to the
+//! end-effector, its mass) and the evaluation of D(λ), D'(λ) and the blocked count.
+
+use super::{SagCableFrame, SagEndEffector, SagLoadError};
+use crate::cable::sagged::{SagChain, SagChainEval};
+use crate::modal::attach_map;
+use crate::modal::DynEval;
+use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector3};
+
+/// (row, column) of the six distinct entries of a symmetric 3 × 3 matrix.
+const SYM3: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+/// |h| must be 1 and h ⟂ up to this (relative): the basis is the caller's, rounding only.
+const BASIS_TOL: f64 = 1e-9;
+
+/// How one cable's end stiffness enters D: the four world-frame matrices that multiply
+/// a, b, c of S_in = [a b; b c] and s_out: h hᵀ, h upᵀ + up hᵀ, up upᵀ, n nᵀ (3 × 3 as six
+/// entries, [`SYM3`] order), and for a rigid body the same through the attachment map,
+/// Gᵀ P G (6 × 6).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct CableProj {
+    p3: [[f64; 6]; 4],
+    p6: [Matrix6<f64>; 4],
+}
+
+/// The problem of one pose, as `load` leaves it. Read-only on the hot path.
+#[derive(Debug, Clone)]
+pub(super) struct SagProblem {
+    pub(super) chains: Vec<SagChain>,
+    proj: Vec<CableProj>,
+    /// Cables loaded.
+    pub(super) n: usize,
+    /// 3 (point mass) or 6 (rigid body).
+    pub(super) dim: usize,
+    /// End-effector mass, kg.
+    ee_mass_kg: f64,
+    /// diag(m I, I_world), kg and kg·m².
+    pub(super) m6: Matrix6<f64>,
+    /// M6^{1/2} (the cluster participations' congruence).
+    pub(super) m6_sqrt: Matrix6<f64>,
+    /// The tensions' rotational geometric stiffness (rigid body), N·m/rad.
+    pub(super) k6: Matrix6<f64>,
+}
+
+impl SagProblem {
+    /// Room for `n_cables` chains of up to `n_el_max` elements each (the only allocation).
+    pub(super) fn new(n_cables: usize, n_el_max: usize) -> SagProblem {
+        let zero = CableProj {
+            p3: [[0.0; 6]; 4],
+            p6: [Matrix6::zeros(); 4],
+        };
+        SagProblem {
+            chains: (0..n_cables).map(|_| SagChain::new(n_el_max)).collect(),
+            proj: vec![zero; n_cables],
+            n: 0,
+            dim: 3,
+            ee_mass_kg: 0.0,
+            m6: Matrix6::zeros(),
+            m6_sqrt: Matrix6::zeros(),
+            k6: Matrix6::zeros(),
+        }
+    }
+
+    /// The end-effector's mass matrix and its square root; clears the geometric stiffness.
+    pub(super) fn set_end_effector(&mut self, ee: &SagEndEffector) -> Result<(), SagLoadError> {
+        let (mass, inertia) = match *ee {
+            SagEndEffector::Point { mass_kg } => (mass_kg, None),
+            SagEndEffector::Rigid {
+                mass_kg,
+                inertia_kg_m2,
+            } => (mass_kg, Some(inertia_kg_m2)),
+        };
+        if !(mass > 0.0 && mass.is_finite()) {
+            return Err(SagLoadError::BadMass);
+        }
+        self.ee_mass_kg = mass;
+        self.m6 = Matrix6::zeros();
+        self.m6_sqrt = Matrix6::zeros();
+        self.k6 = Matrix6::zeros();
+        for i in 0..3 {
+            self.m6[(i, i)] = mass;
+            self.m6_sqrt[(i, i)] = mass.sqrt();
+        }
+        self.dim = 3;
+        if let Some(j) = inertia {
+            let e = SymmetricEigen::new(j);
+            if !(j.iter().all(|x| x.is_finite()) && e.eigenvalues.min() > 0.0) {
+                return Err(SagLoadError::BadMass);
+            }
+            let root = e.eigenvectors
+                * Matrix3::from_diagonal(&e.eigenvalues.map(f64::sqrt))
+                * e.eigenvectors.transpose();
+            self.m6.fixed_view_mut::<3, 3>(3, 3).copy_from(&j);
+            self.m6_sqrt.fixed_view_mut::<3, 3>(3, 3).copy_from(&root);
+            self.dim = 6;
+        }
+        Ok(())
+    }
+
+    /// Cable i's projectors from its frame (chain i must be set), and its share of the
+    /// rigid body's geometric stiffness: (f·r) I − sym(f rᵀ) for the end force f at arm r.
+    pub(super) fn set_cable(
+        &mut self,
+        i: usize,
+        frame: &SagCableFrame,
+        up: &Vector3<f64>,
+    ) -> Result<(), SagLoadError> {
+        let h = frame.h;
+        let finite = h.iter().chain(up.iter()).all(|x| x.is_finite());
+        if !(finite
+            && (h.norm_squared() - 1.0).abs() <= BASIS_TOL
+            && (up.norm_squared() - 1.0).abs() <= BASIS_TOL
+            && h.dot(up).abs() <= BASIS_TOL)
+        {
+            return Err(SagLoadError::BadFrame(i));
+        }
+        let n = h.cross(up);
+        let mats = [
+            h * h.transpose(),
+            h * up.transpose() + up * h.transpose(),
+            up * up.transpose(),
+            n * n.transpose(),
+        ];
+        let pr = &mut self.proj[i];
+        for (q, m) in mats.iter().enumerate() {
+            for (j, &(r, c)) in SYM3.iter().enumerate() {
+                pr.p3[q][j] = m[(r, c)];
+            }
+        }
+        if self.dim == 6 {
+            let (r, f) = (frame.arm_m, frame.end_force_n);
+            if !(r.iter().chain(f.iter()).all(|x| x.is_finite())) {
+                return Err(SagLoadError::BadFrame(i));
+            }
+            let g = attach_map(&r);
+            for (q, m) in mats.iter().enumerate() {
+                pr.p6[q] = g.transpose() * m * g;
+            }
+            let fr = f * r.transpose();
+            let kg = Matrix3::identity() * f.dot(&r) - (fr + fr.transpose()) * 0.5;
+            let mut rot = self.k6.fixed_view_mut::<3, 3>(3, 3);
+            rot += kg;
+        }
+        Ok(())
+    }
+
+    /// D, D' and the blocked count from the chains' evaluations `ev(i)`.
+    #[inline]
+    fn assemble(&self, lambda: f64, ev: impl Fn(usize) -> SagChainEval) -> DynEval {
+        let mut below = 0u32;
+        if self.dim == 3 {
+            let m = self.ee_mass_kg;
+            let mut d = [-lambda * m, -lambda * m, -lambda * m, 0.0, 0.0, 0.0];
+            let mut dd = [-m, -m, -m, 0.0, 0.0, 0.0];
+            for i in 0..self.n {
+                let e = ev(i);
+                let p = &self.proj[i].p3;
+                let s = [e.s_in[0], e.s_in[1], e.s_in[2], e.s_out];
+                let ds = [e.ds_in[0], e.ds_in[1], e.ds_in[2], e.ds_out];
+                for j in 0..6 {
+                    d[j] += s[0] * p[0][j] + s[1] * p[1][j] + s[2] * p[2][j] + s[3] * p[3][j];
+                    dd[j] += ds[0] * p[0][j] + ds[1] * p[1][j] + ds[2] * p[2][j] + ds[3] * p[3][j];
+                }
+                below += e.below;
+            }
+            let (mut d6, mut dd6) = (Matrix6::zeros(), Matrix6::zeros());
+            for (j, &(r, c)) in SYM3.iter().enumerate() {
+                d6[(r, c)] = d[j];
+                d6[(c, r)] = d[j];
+                dd6[(r, c)] = dd[j];
+                dd6[(c, r)] = dd[j];
+            }
+            return DynEval {
+                d: d6,
+                dd: dd6,
+                below,
+                dim: 3,
+            };
+        }
+        let mut d = self.k6 - self.m6 * lambda;
+        let mut dd = -self.m6;
+        for i in 0..self.n {
+            let e = ev(i);
+            let p = &self.proj[i].p6;
+            let s = [e.s_in[0], e.s_in[1], e.s_in[2], e.s_out];
+            let ds = [e.ds_in[0], e.ds_in[1], e.ds_in[2], e.ds_out];
+            for q in 0..4 {
+                d += p[q] * s[q];
+                dd += p[q] * ds[q];
+            }
+            below += e.below;
+        }
+        DynEval {
+            d,
+            dd,
+            below,
+            dim: 6,
+        }
+    }
+
+    /// D(λ), D'(λ) and Σ_cables blocked count (one evaluation: every chain's recurrence).
+    #[inline]
+    pub(super) fn eval(&self, lambda: f64) -> DynEval {
+        self.assemble(lambda, |i| self.chains[i].eval(lambda))
+    }
+
+    /// D(0) and D'(0) from the chains' cached static evaluations (no recurrence).
+    pub(super) fn static_eval(&self) -> DynEval {
+        self.assemble(0.0, |i| self.chains[i].static_eval())
+    }
+
+    /// Number of natural frequencies: the end-effector's DOF plus every blocked one.
+    pub(super) fn total_modes(&self) -> usize {
+        self.dim
+            + self.chains[..self.n]
+                .iter()
+                .map(|c| c.blocked_modes())
+                .sum::<usize>()
+    }
+}
