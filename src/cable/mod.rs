@@ -31,6 +31,7 @@ use nalgebra::{Matrix3, Vector3};
 mod batch;
 mod chain;
 mod element;
+pub mod sagged;
 
 pub use crate::kinematics::up_frame;
 pub use batch::{eval_continuous_batch, eval_discrete_batch, BATCH_MAX_ELEMENTS};
