@@ -189,3 +189,198 @@ fn convergence_study_is_fourth_order() {
         }
     }
 }
+
+/// A straight cable (w = 0) is the chord model's continuous string/bar fed with
+/// EA' = EA(1 + T/EA), μ' = μ/(1 + T/EA) on the stretched chord L = L0(1 + T/EA)
+/// (k_axial = EA'/L, k_transverse = T/L, m = μ'L): an independent closed form. Every
+/// sub-segment is then the cable itself, so they agree to rounding (1e-12 of the stiffness
+/// scale; the derivative 1e-10 of the mass scale, it passes poles' neighbourhoods).
+#[test]
+fn straight_cable_equals_closed_form_string_and_bar() {
+    use cablevib::cable::{Chain, ChainKind};
+    use nalgebra::Matrix3;
+    let (l0, ea, mu, h, va) = (3.0, 4e4, 0.07, 300.0, 200.0);
+    let cat = Catenary {
+        l0_m: l0,
+        ea_n: ea,
+        w_n_m: 0.0,
+        h_n: h,
+        v_anchor_n: va,
+    };
+    let t = h.hypot(va);
+    let l = l0 * (1.0 + t / ea);
+    let m_total = mu / (1.0 + t / ea) * l;
+    let chain = |k_total: f64| Chain {
+        kind: ChainKind::Continuous { k_total, m_total },
+        mult: 1,
+        proj: Matrix3::identity(),
+    };
+    let (bar, string) = (chain(ea * (1.0 + t / ea) / l), chain(t / l));
+    let (c, s) = (h / t, va / t);
+    let mut sc = SagContinuous::new(SagContinuousParams::default());
+    let mut worst = 0.0f64;
+    for steps in [1usize, 3, 16] {
+        sc.set_with_steps(&cat, mu, steps).unwrap();
+        let top = 3.5 * string.pole(1);
+        for i in 0..=400 {
+            let lam = top * i as f64 / 400.0 + 0.37;
+            let (a, b) = (bar.eval(lam), string.eval(lam));
+            let e = sc.eval(lam);
+            let want = [
+                a.s * c * c + b.s * s * s,
+                (a.s - b.s) * c * s,
+                a.s * s * s + b.s * c * c,
+            ];
+            let dwant = [
+                a.ds * c * c + b.ds * s * s,
+                (a.ds - b.ds) * c * s,
+                a.ds * s * s + b.ds * c * c,
+            ];
+            let scale = ea / l0 + a.s.abs() + b.s.abs();
+            let dscale = mu * l0 + a.ds.abs() + b.ds.abs();
+            for j in 0..3 {
+                let err = (e.s_in[j] - want[j]).abs() / scale;
+                worst = worst.max(err);
+                assert!(err <= 1e-12, "M {steps} λ {lam} S[{j}] {err:.1e}");
+                assert!(
+                    (e.ds_in[j] - dwant[j]).abs() <= 1e-10 * dscale,
+                    "M {steps} λ {lam} dS[{j}]"
+                );
+            }
+            assert!(
+                (e.s_out - b.s).abs() <= 1e-12 * (t / l + b.s.abs()),
+                "M {steps} λ {lam}"
+            );
+            assert!(
+                (e.ds_out - b.ds).abs() <= 1e-10 * dscale,
+                "M {steps} λ {lam}"
+            );
+            assert_eq!(e.below, a.below + 2 * b.below, "M {steps} λ {lam}");
+        }
+    }
+    eprintln!("straight cable vs closed form: worst {worst:.1e} of the stiffness scale");
+}
+
+/// set and eval allocate nothing (counting allocator, this thread), bad input included.
+#[test]
+fn set_and_eval_allocate_nothing() {
+    let cs = cables();
+    let mut sc = SagContinuous::new(SagContinuousParams::default());
+    let before = thread_allocations();
+    let mut acc = 0.0;
+    for (_, cat, mu) in &cs {
+        sc.set(cat, *mu).unwrap();
+        for i in 0..100 {
+            let e = sc.eval(10.0 * i as f64);
+            acc += e.s_in[0] + e.s_out;
+        }
+        let bad = Catenary {
+            h_n: f64::NAN,
+            ..*cat
+        };
+        let refused = sc.set(&bad, *mu).is_err();
+        let _ = sc.eval(f64::NAN);
+        assert!(refused);
+    }
+    assert_eq!(thread_allocations() - before, 0);
+    assert!(acc.is_finite());
+}
+
+/// The count is exact at the poles: it steps by one across each blocked eigenvalue (1e-12
+/// either side) and the outputs are not NaN on the pole itself; dS/dλ matches a central
+/// difference of S midway between poles (step 1e-4 of the gap: truncation ~1e-8, rounding
+/// ~1e-10 relative; tolerance 1e-5).
+#[test]
+fn count_steps_at_poles_and_derivative() {
+    for (name, cat, mu) in cables() {
+        let mut sc = SagContinuous::new(SagContinuousParams::default());
+        sc.set(&cat, mu).unwrap();
+        let mut prev = 0.0;
+        for k in 1..=6 {
+            let l = solver_eigenvalue(&sc, k);
+            let (lo, hi) = (sc.eval(l * (1.0 - 1e-12)), sc.eval(l * (1.0 + 1e-12)));
+            assert!(lo.below < k && hi.below >= k, "{name} k {k}");
+            let on = sc.eval(l);
+            assert!(
+                on.s_in.iter().chain(&on.ds_in).all(|x| !x.is_nan()),
+                "{name} k {k}"
+            );
+            let mid = 0.5 * (l + prev);
+            prev = l;
+            if mid <= 1e-9 * l || l - mid < 1e-6 * l {
+                continue;
+            }
+            // A step well inside the gap to the nearest pole (two poles may be 1e-5 apart).
+            let dh = 1e-4 * (l - mid);
+            let (p, m, e) = (sc.eval(mid + dh), sc.eval(mid - dh), sc.eval(mid));
+            let fd = (p.s_out - m.s_out) / (2.0 * dh);
+            let tol = 1e-5 * (fd.abs() + mu * cat.l0_m);
+            assert!((fd - e.ds_out).abs() <= tol, "{name} {fd} {}", e.ds_out);
+            for j in 0..3 {
+                let fd = (p.s_in[j] - m.s_in[j]) / (2.0 * dh);
+                let tol = 1e-5 * (e.ds_in.iter().map(|x| x.abs()).sum::<f64>() + mu * cat.l0_m);
+                assert!(
+                    (fd - e.ds_in[j]).abs() <= tol,
+                    "{name} [{j}] {fd} {}",
+                    e.ds_in[j]
+                );
+            }
+        }
+    }
+}
+
+/// ns per eval (in plane + out of plane) at Irvine's λ² ≈ 1, 100, 1e4, next to the taut
+/// continuous chain's eval (axial + transverse) in the same run. No timed assert.
+#[test]
+#[ignore]
+fn timing_per_eval() {
+    use cablevib::cable::{Chain, ChainKind};
+    use nalgebra::Matrix3;
+    use std::time::Instant;
+    let level = |ea: f64, w: f64, h: f64| Catenary {
+        l0_m: 5.0,
+        ea_n: ea,
+        w_n_m: w,
+        h_n: h,
+        v_anchor_n: -2.5 * w,
+    };
+    let cases = [
+        ("λ² ≈ 1", level(5e4, 0.316, 50.0)),
+        ("λ² ≈ 100", level(5e4, 3.16, 50.0)),
+        ("λ² ≈ 1e4", level(1e5, 2.0, 10.0)),
+    ];
+    let chain = |k: f64| Chain {
+        kind: ChainKind::Continuous {
+            k_total: k,
+            m_total: 0.5,
+        },
+        mult: 1,
+        proj: Matrix3::identity(),
+    };
+    let (bar, string) = (chain(1e4), chain(10.0));
+    const N: usize = 20000;
+    let t0 = Instant::now();
+    let mut acc = 0.0;
+    for i in 0..N {
+        let lam = 50.0 + (i % 7) as f64;
+        acc += bar.eval(lam).s + string.eval(lam).s;
+    }
+    let taut = t0.elapsed().as_nanos() as f64 / N as f64;
+    for (name, cat) in cases {
+        let mu = cat.w_n_m / G;
+        let mut sc = SagContinuous::new(SagContinuousParams::default());
+        let t1 = Instant::now();
+        let mesh = sc.set(&cat, mu).unwrap();
+        let set_ns = t1.elapsed().as_nanos();
+        let l1 = 0.7 * solver_eigenvalue(&sc, 1);
+        let t2 = Instant::now();
+        for i in 0..N {
+            acc += sc.eval(l1 * (1.0 + 1e-3 * (i % 7) as f64)).s_out;
+        }
+        let ns = t2.elapsed().as_nanos() as f64 / N as f64;
+        let lam2 = cat.irvine_lambda2();
+        let m = mesh.steps;
+        eprintln!("{name} (λ² {lam2:.2e}, M {m}): {ns:.0} ns/eval, set {set_ns} ns; taut chain pair {taut:.0} ns/eval");
+    }
+    assert!(acc.is_finite());
+}
