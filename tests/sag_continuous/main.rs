@@ -1,9 +1,8 @@
 //! The continuous sagged cable (`cablevib::cable::sagged::SagContinuous`) against an
 //! independent integration (rk4.rs: RK4 + Richardson on the brief's K, no shared code), the
-//! closed-form straight string/bar (`cable::Chain`), Irvine's shallow theory (irvine.rs), its
+//! closed-form straight string/bar (`cable::Chain`), its
 //! own derivative and count; no allocation in set/eval; timings (#[ignore]).
 
-mod irvine;
 mod rk4;
 
 use cablevib::alloc_count::{thread_allocations, CountingAlloc};
