@@ -48,13 +48,18 @@
 //! element stiffness), as in the uniform chain's recurrence: the count then takes the
 //! eigenvalue as not below λ, and S stays finite.
 //!
+//! **The continuous cable** ([`SagContinuous`]): the N → ∞ limit, by a 4th-order Magnus
+//! chain of exact straight sub-segments (see its module docs).
+//!
 //! Cost: O(N) per evaluation, no allocation; the chain's element data are written into
 //! buffers sized once by [`SagChain::new`].
 
 mod chain;
+mod continuous;
 mod recurrence;
 
 pub use chain::{SagChain, SagElement};
+pub use continuous::*;
 
 /// A sagged cable's end dynamic stiffness at λ = ω² (rad²/s²), seen from the end-effector,
 /// in the cable's basis: (h, up) in plane, n out of plane. S(λ) = end force / end displacement

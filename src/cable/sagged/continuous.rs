@@ -1,0 +1,501 @@
+//! The exact continuous limit (N → ∞) of a sagged cable's linearised dynamics, condensed
+//! onto its end: the end dynamic stiffness S(λ), dS/dλ and the blocked-eigenvalue count.
+//!
+//! ## The problem
+//!
+//! About the elastic catenary (`crate::sag::Catenary`: H, V(s) = V_a + w s,
+//! T = √(H² + V²), tangent t = (H, V)/T), with s the unstretched arclength and μ the mass per
+//! unstretched length,
+//!
+//! ```text
+//!   −(K(s) u′)′ = λ μ u   on s ∈ [0, L0],  u(0) = 0,
+//!   in plane:      K(s) = EA t tᵀ + T/(1 + T/EA) (I − t tᵀ)   (2 × 2, basis (h, up))
+//!   out of plane:  k(s) = T/(1 + T/EA)
+//! ```
+//!
+//! With p = K u′ the system is Hamiltonian, y = (u, p), y′ = A(s, λ) y,
+//! A = [[0, C(s)], [−λμ I, 0]], whose compliance has the closed form
+//! C = K⁻¹ = I/EA + n nᵀ/T (n the unit normal; out of plane c = 1/EA + 1/T). With U, P the
+//! solution from U(0) = 0, P(0) = I, the end stiffness is S(λ) = P(L0) U(L0)⁻¹ and the
+//! blocked (both ends held) eigenvalues are the λ where U(L0) is singular.
+//!
+//! ## The method: commutator-free Magnus of order 4 as a chain of exact straight segments
+//!
+//! The cable is cut into M steps [s_j, s_j+1] of length h. With A₁, A₂ the matrix A at the
+//! two Gauss points s_mid ∓ h/(2√3), the 4th-order commutator-free Magnus integrator
+//! (Blanes & Moan) is
+//!
+//! ```text
+//!   Φ_step = exp(h (α₂ A₁ + α₁ A₂)) · exp(h (α₁ A₁ + α₂ A₂)),   α₁,₂ = 1/4 ± √3/6.
+//! ```
+//!
+//! Since α₁ + α₂ = ½ and A is linear in (C, λμ), each factor is the exact transfer matrix of
+//! a *uniform straight sub-segment* of length h/2, mass μ and constant compliance
+//! C̃ = 2(α₁ C₁ + α₂ C₂) (resp. 2(α₂ C₁ + α₁ C₂)): the discrete model is itself a continuous
+//! self-adjoint cable with λ-independent piecewise-constant K̃ = C̃⁻¹ > 0. So
+//! - its S(λ), dS/dλ and blocked count are exact for that model (closed-form trigonometry
+//!   per sub-segment, Riccati recursion, Wittrick–Williams count: see `propagate`), and
+//!   the count jumps exactly where S has its poles, at any λ;
+//! - its eigenvalues converge to the true ones as O(h⁴) (the integrator's order);
+//! - a uniform straight cable (w = 0) is reproduced exactly (every sub-segment is the cable).
+//!
+//! C̃'s principal frame and compliances (axial c_a, transverse c_t, out-of-plane c_o) have
+//! closed forms: tr N̄ = β₁/T₁ + β₂/T₂, det N̄ = β₁β₂ sin²(θ₂ − θ₁)/(T₁T₂) with
+//! sin(θ₂ − θ₁) = H w (s₂ − s₁)/(T₁T₂), so c_a = 1/EA + det/ν_max has no cancellation.
+//! α₂ < 0 makes det N̄ < 0: c_a < 1/EA by ~ 0.03 δ²/T (δ the tangent's turn between the
+//! Gauss points); the mesh keeps c_a ≥ `AXIAL_MARGIN`/EA.
+//!
+//! ## Steps (error model)
+//!
+//! The coefficients vary with the tangent angle and ln T, both at rate |d(t, ln T)/ds| =
+//! w/T; their total variation is ν = ∫ w/T ds = asinh(V_e/H) − asinh(V_a/H) (H > 0) or
+//! |ln(V_e/V_a)| (H = 0). Steps are equal in ν (closed form: V(ν) = H sinh(asinh(V_a/H) + ν)),
+//! so each carries Δν = ν/M: the steps crowd where the tension is low. Measured against
+//! an independent integration (tests/sag_continuous.rs), the relative eigenvalue error is
+//! O(M⁻⁴) with, for an eigenvalue whose mode has total transverse phase Φ = ∫ √(λμ c) ds
+//! (≈ π per half-wave),
+//!
+//! ```text
+//!   error ≈ C · (Δν)² · (Φ/M)²,   C ≈ 1.5e-3 … 2e-3 (out of plane, string-like in plane),
+//!                                  C ≲ 0.05 (symmetric in-plane modes near Irvine's crossover)
+//! ```
+//!
+//! (the coefficient variation per step times the phase per step, squared: the frozen
+//! coefficients' error grows with the oscillation inside a step). The rule:
+//!
+//! ```text
+//!   M = max(⌈(C_ERR ν² (n_hw π)² / tol)^¼⌉, ⌈ν / NU_PER_STEP⌉,
+//!           steps keeping φ(λ_max) ≤ PHASE_PER_SEGMENT per sub-segment and c_a ≥ margin),
+//!   λ_max = (n_hw π)² / (μ (∫ √c_o ds)²)   (n_hw = params.max_halfwaves, tol = params.rel_tol),
+//! ```
+//!
+//! capped at `SAG_CONT_MAX_STEPS` (the set result says when the cap bit). Above λ_max the
+//! evaluation stays exact for the discrete model (count and poles consistent), with an error
+//! that grows with λ.
+
+mod propagate;
+
+use super::SagChainEval;
+use crate::sag::Catenary;
+
+/// Most Magnus steps of one cable (2 sub-segments each): the fixed capacity of the solver.
+/// By the error model, 128 steps keep 1e-9 for ν·n_hw ≤ 0.7 (ν ≈ 0.17 up to the 4th
+/// transverse half-wave); slacker cables get the cap and a larger error (`capped`).
+pub const SAG_CONT_MAX_STEPS: usize = 128;
+const MAX_SEGMENTS: usize = 2 * SAG_CONT_MAX_STEPS;
+
+/// Variation ν = ∫ w/T ds per step (rad) at least: the static (λ = 0) error ~ (Δν)⁴ EA/T.
+const NU_PER_STEP: f64 = 0.05;
+/// The fitted error constant: relative eigenvalue error ≈ C ν² Φ² / M⁴ (Φ the total
+/// transverse phase at λ). Measured 1.4e-3 … 1.9e-3 for out-of-plane and string-like
+/// in-plane modes, up to ~0.05 for the symmetric (sag-stiffened) in-plane modes of a
+/// shallow cable near Irvine's crossover (tests/sag_continuous: convergence study).
+const C_ERR: f64 = 0.05;
+/// Largest transverse phase across a sub-segment at λ_max (rad).
+const PHASE_PER_SEGMENT: f64 = 1.5;
+/// Smallest axial compliance of a sub-segment in units of 1/EA (see module docs).
+const AXIAL_MARGIN: f64 = 0.5;
+/// Mesh cuts at most: each further one re-cuts with more steps when a check fails.
+const MESH_PASSES: usize = 4;
+/// Below this ν the cable is straight to rounding: equal steps in s.
+const NU_STRAIGHT: f64 = 1e-12;
+/// H below this fraction of min(|V_a|, |V_e|): the cable is vertical (H = 0 formulas).
+const VERTICAL_H_RATIO: f64 = 1e-100;
+/// Magnus weights α₁,₂ = 1/4 ± √3/6 and the Gauss offset 1/(2√3).
+const ALPHA1: f64 = 0.25 + 0.288_675_134_594_812_9;
+const ALPHA2: f64 = 0.25 - 0.288_675_134_594_812_9;
+const GAUSS_HALF: f64 = 0.288_675_134_594_812_9;
+
+/// Errors of [`SagContinuous::set`].
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum SagContError {
+    /// A parameter is not finite or out of range (L0, EA, μ > 0; w, H ≥ 0).
+    #[error("sagged cable: {0} must be finite and in range")]
+    BadInput(&'static str),
+    /// The tension vanishes somewhere on the cable (H = 0 with V changing sign, or all zero).
+    #[error("sagged cable: the tension vanishes on the cable (H = 0, V from {v_anchor_n} N to {v_end_n} N)")]
+    Slack {
+        /// V at the anchor, N.
+        v_anchor_n: f64,
+        /// V at the end, N.
+        v_end_n: f64,
+    },
+}
+
+/// Mesh rule parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SagContinuousParams {
+    /// Transverse half-waves along the cable up to which `rel_tol` is kept (sets λ_max).
+    pub max_halfwaves: f64,
+    /// Relative eigenvalue error aimed at below λ_max (by the fitted error model).
+    pub rel_tol: f64,
+}
+
+impl Default for SagContinuousParams {
+    fn default() -> Self {
+        // The robot's search looks at the first few blocked modes of each cable.
+        SagContinuousParams {
+            max_halfwaves: 4.0,
+            rel_tol: 1e-9,
+        }
+    }
+}
+
+/// What [`SagContinuous::set`] chose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SagContMesh {
+    /// Magnus steps M (2M sub-segments).
+    pub steps: usize,
+    /// λ up to which the accuracy rule holds, rad²/s².
+    pub lambda_max_rad2_s2: f64,
+    /// The rule asked for more than `SAG_CONT_MAX_STEPS`: accuracy below the rule's.
+    pub capped: bool,
+    /// Total tangent/tension variation ν = ∫ w/T ds.
+    pub variation: f64,
+}
+
+/// One uniform sub-segment: the λ-independent data of its transfer matrix per direction
+/// (axial, transverse, out of plane).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct Segment {
+    /// (cos, sin) of its principal frame's angle relative to the previous sub-segment's.
+    rot: [f64; 2],
+    /// μ c ℓ² per direction (z = λ q), s²/rad².
+    q: [f64; 3],
+    /// c ℓ per direction, m/N.
+    cl: [f64; 3],
+    /// μ ℓ, kg.
+    mul: f64,
+}
+
+/// The continuous sagged cable: `set` once per pose (no allocation), `eval` at any λ.
+#[derive(Debug, Clone)]
+pub struct SagContinuous {
+    params: SagContinuousParams,
+    segs: [Segment; MAX_SEGMENTS],
+    n_seg: usize,
+    /// (cos θ, sin θ) of the last sub-segment's axial direction in (h, up).
+    final_rot: [f64; 2],
+    mesh: SagContMesh,
+}
+
+impl SagContinuous {
+    /// A solver with the given rule parameters (holds a straight placeholder cable).
+    pub fn new(params: SagContinuousParams) -> SagContinuous {
+        SagContinuous {
+            params,
+            segs: [Segment::default(); MAX_SEGMENTS],
+            n_seg: 0,
+            final_rot: [1.0, 0.0],
+            mesh: SagContMesh {
+                steps: 0,
+                lambda_max_rad2_s2: 0.0,
+                capped: false,
+                variation: 0.0,
+            },
+        }
+    }
+
+    /// Precompute the mesh of cable `cat` with mass `mu_kg_m` per unstretched length by the
+    /// step rule of the module docs. No allocation, bounded work (≤ MESH_PASSES cuts).
+    pub fn set(&mut self, cat: &Catenary, mu_kg_m: f64) -> Result<SagContMesh, SagContError> {
+        self.set_steps(cat, mu_kg_m, None)
+    }
+
+    /// As [`set`](Self::set) with exactly `steps` Magnus steps (clamped to 1..=MAX): for
+    /// convergence studies.
+    pub fn set_with_steps(
+        &mut self,
+        cat: &Catenary,
+        mu_kg_m: f64,
+        steps: usize,
+    ) -> Result<SagContMesh, SagContError> {
+        self.set_steps(cat, mu_kg_m, Some(steps))
+    }
+
+    /// The mesh chosen by the last successful `set`.
+    pub fn mesh(&self) -> SagContMesh {
+        self.mesh
+    }
+
+    /// S(λ), dS/dλ and the blocked count at λ = ω² (rad²/s²). No allocation; O(M).
+    pub fn eval(&self, lambda: f64) -> SagChainEval {
+        let segs = &self.segs[..self.n_seg];
+        let (s_in, ds_in, b_in) = propagate::eval_in(segs, self.final_rot, lambda);
+        let (s_out, ds_out, b_out) = propagate::eval_out(segs, lambda);
+        SagChainEval {
+            s_in,
+            ds_in,
+            s_out,
+            ds_out,
+            below: b_in + b_out,
+        }
+    }
+
+    /// In plane only: (S as [a, b, c] in (h, up), N/m; dS/dλ, kg; blocked count).
+    pub fn eval_in_plane(&self, lambda: f64) -> ([f64; 3], [f64; 3], u32) {
+        propagate::eval_in(&self.segs[..self.n_seg], self.final_rot, lambda)
+    }
+
+    /// Out of plane only: (s, N/m; ds/dλ, kg; blocked count).
+    pub fn eval_out_of_plane(&self, lambda: f64) -> (f64, f64, u32) {
+        propagate::eval_out(&self.segs[..self.n_seg], lambda)
+    }
+
+    fn set_steps(
+        &mut self,
+        cat: &Catenary,
+        mu: f64,
+        forced: Option<usize>,
+    ) -> Result<SagContMesh, SagContError> {
+        let p = Profile::new(cat, mu)?;
+        let nu = p.variation();
+        if let Some(m) = forced {
+            let m = m.clamp(1, SAG_CONT_MAX_STEPS);
+            let lmax = self.cut(&p, nu, m);
+            return Ok(self.record(m, lmax, false, nu));
+        }
+        let phase = self.params.max_halfwaves.max(0.0) * std::f64::consts::PI;
+        let tol = self.params.rel_tol.max(f64::EPSILON);
+        let m_err = (C_ERR * nu * nu * phase * phase / tol).sqrt().sqrt();
+        let m_nu = nu / NU_PER_STEP;
+        let wanted = m_err.max(m_nu).ceil();
+        let mut m = (wanted.min(1e9) as usize).clamp(1, SAG_CONT_MAX_STEPS);
+        let mut lmax = self.cut(&p, nu, m);
+        for _ in 1..MESH_PASSES {
+            let next = self.steps_needed(&p, m, lmax).min(SAG_CONT_MAX_STEPS);
+            if next <= m {
+                break;
+            }
+            m = next;
+            lmax = self.cut(&p, nu, m);
+        }
+        let capped = self.steps_needed(&p, m, lmax) > m || wanted > m as f64;
+        Ok(self.record(m, lmax, capped, nu))
+    }
+
+    fn record(&mut self, m: usize, lmax: f64, capped: bool, nu: f64) -> SagContMesh {
+        self.mesh = SagContMesh {
+            steps: m,
+            lambda_max_rad2_s2: lmax,
+            capped,
+            variation: nu,
+        };
+        self.mesh
+    }
+
+    /// Steps that would satisfy the phase and axial-margin checks on the current cut of m.
+    fn steps_needed(&self, p: &Profile, m: usize, lmax: f64) -> usize {
+        let mut phase_ratio = 0.0f64;
+        let mut margin_ratio = 0.0f64;
+        for g in &self.segs[..self.n_seg] {
+            // φ² = λ q_t; c_a = cl_a / ℓ with ℓ = mul/μ.
+            phase_ratio = phase_ratio.max((lmax * g.q[1]).sqrt() / PHASE_PER_SEGMENT);
+            let ca_ea = g.cl[0] * p.mu / g.mul * p.ea;
+            // c_a = 1/EA − O(δ²): the deficit shrinks as 1/M².
+            margin_ratio = margin_ratio.max(((1.0 - ca_ea).max(0.0) / (1.0 - AXIAL_MARGIN)).sqrt());
+        }
+        let r = phase_ratio.max(margin_ratio);
+        if r <= 1.0 {
+            m
+        } else {
+            ((m as f64) * r * 1.05).ceil() as usize
+        }
+    }
+
+    /// Cut the cable into m steps equal in ν; returns λ_max of the rule on this cut.
+    fn cut(&mut self, p: &Profile, nu: f64, m: usize) -> f64 {
+        let mut s0 = 0.0;
+        let mut prev_angle = 0.0;
+        let mut root_c = 0.0; // ∫ √c_o ds
+        for j in 0..m {
+            let s1 = if j + 1 == m {
+                p.l0
+            } else {
+                p.node_s(nu, (j + 1) as f64 / m as f64)
+            };
+            let h = s1 - s0;
+            let d = h * GAUSS_HALF;
+            let mid = 0.5 * (s0 + s1);
+            let (g1, g2) = (p.gauss(mid - d), p.gauss(mid + d));
+            let sin12 = p.h * p.w * (2.0 * d) / (g1.t * g2.t);
+            for (k, (b1, b2)) in [(2.0 * ALPHA1, 2.0 * ALPHA2), (2.0 * ALPHA2, 2.0 * ALPHA1)]
+                .into_iter()
+                .enumerate()
+            {
+                let (seg, angle) = p.segment(&g1, &g2, b1, b2, sin12, 0.5 * h);
+                let i = 2 * j + k;
+                let (sn, cs) = (angle - prev_angle).sin_cos();
+                self.segs[i] = Segment {
+                    rot: [cs, sn],
+                    ..seg
+                };
+                prev_angle = angle;
+                root_c += (seg.cl[2] / (0.5 * h)).sqrt() * 0.5 * h;
+            }
+            s0 = s1;
+        }
+        self.n_seg = 2 * m;
+        let (sn, cs) = prev_angle.sin_cos();
+        self.final_rot = [cs, sn];
+        let hw = self.params.max_halfwaves.max(0.0) * std::f64::consts::PI;
+        hw * hw / (p.mu * root_c * root_c)
+    }
+}
+
+/// The catenary's data the mesh needs, validated.
+struct Profile {
+    l0: f64,
+    ea: f64,
+    w: f64,
+    h: f64,
+    va: f64,
+    ve: f64,
+    mu: f64,
+    vertical: bool,
+}
+
+/// The tension state at a Gauss point.
+struct Gauss {
+    v: f64,
+    t: f64,
+}
+
+impl Profile {
+    fn new(cat: &Catenary, mu: f64) -> Result<Profile, SagContError> {
+        let ok = |x: f64| x.is_finite() && x > 0.0;
+        if !ok(cat.l0_m) {
+            return Err(SagContError::BadInput("L0"));
+        }
+        if !ok(cat.ea_n) {
+            return Err(SagContError::BadInput("EA"));
+        }
+        if !ok(mu) {
+            return Err(SagContError::BadInput("mu"));
+        }
+        if !(cat.w_n_m.is_finite() && cat.w_n_m >= 0.0) {
+            return Err(SagContError::BadInput("w"));
+        }
+        if !(cat.h_n.is_finite() && cat.h_n >= 0.0) {
+            return Err(SagContError::BadInput("H"));
+        }
+        let (va, w, l0) = (cat.v_anchor_n, cat.w_n_m, cat.l0_m);
+        let ve = va + w * l0;
+        if !(va.is_finite() && ve.is_finite()) {
+            return Err(SagContError::BadInput("V_a"));
+        }
+        let vmin = if va > 0.0 || ve < 0.0 {
+            va.abs().min(ve.abs())
+        } else {
+            0.0
+        };
+        if cat.h_n == 0.0 && vmin == 0.0 {
+            return Err(SagContError::Slack {
+                v_anchor_n: va,
+                v_end_n: ve,
+            });
+        }
+        Ok(Profile {
+            l0,
+            ea: cat.ea_n,
+            w,
+            h: cat.h_n,
+            va,
+            ve,
+            mu,
+            vertical: cat.h_n <= VERTICAL_H_RATIO * vmin,
+        })
+    }
+
+    /// ν = ∫ w/T ds over the cable, without cancellation.
+    fn variation(&self) -> f64 {
+        if self.w == 0.0 {
+            return 0.0;
+        }
+        if self.vertical {
+            let v0 = if self.va > 0.0 { self.va } else { -self.ve };
+            return (self.w * self.l0 / v0).ln_1p();
+        }
+        asinh_diff(
+            self.ve / self.h,
+            self.va / self.h,
+            self.w * self.l0 / self.h,
+        )
+    }
+
+    /// s where ∫₀ˢ w/T = frac · ν.
+    fn node_s(&self, nu: f64, frac: f64) -> f64 {
+        if nu < NU_STRAIGHT {
+            return frac * self.l0;
+        }
+        let x = frac * nu;
+        let s = if self.vertical {
+            if self.va > 0.0 {
+                self.va * x.exp_m1() / self.w
+            } else {
+                self.va * (-x).exp_m1() / self.w
+            }
+        } else {
+            // (H/w)(sinh(a + x) − sinh a) = (2H/w) cosh(a + x/2) sinh(x/2)
+            let a = (self.va / self.h).asinh();
+            2.0 * self.h / self.w * (a + 0.5 * x).cosh() * (0.5 * x).sinh()
+        };
+        s.clamp(0.0, self.l0)
+    }
+
+    fn gauss(&self, s: f64) -> Gauss {
+        let v = self.va + self.w * s;
+        Gauss {
+            v,
+            t: (self.h * self.h + v * v).sqrt(),
+        }
+    }
+
+    /// The sub-segment of compliance I/EA + β₁N₁ + β₂N₂ (N = n nᵀ/T) and length ℓ, and its
+    /// axial direction's angle in (h, up).
+    fn segment(
+        &self,
+        g1: &Gauss,
+        g2: &Gauss,
+        b1: f64,
+        b2: f64,
+        sin12: f64,
+        l: f64,
+    ) -> (Segment, f64) {
+        let (h, t1, t2) = (self.h, g1.t, g2.t);
+        let tr = b1 / t1 + b2 / t2;
+        let det = b1 * b2 * sin12 * sin12 / (t1 * t2);
+        let big = 0.5 * (tr + (tr * tr - 4.0 * det).max(0.0).sqrt());
+        let small = if big > 0.0 { det / big } else { 0.0 };
+        // N = [[V², −HV], [−HV, H²]]/T³: the major axis's angle, then the axial one ⟂ to it.
+        let (c1, c2) = (b1 / (t1 * t1 * t1), b2 / (t2 * t2 * t2));
+        let pq = c1 * (g1.v - h) * (g1.v + h) + c2 * (g2.v - h) * (g2.v + h);
+        let r2 = -2.0 * h * (c1 * g1.v + c2 * g2.v);
+        let angle = 0.5 * r2.atan2(pq) - std::f64::consts::FRAC_PI_2;
+        let inv_ea = 1.0 / self.ea;
+        let c = [inv_ea + small, inv_ea + big, inv_ea + tr];
+        let mu = self.mu;
+        let seg = Segment {
+            rot: [1.0, 0.0],
+            q: c.map(|ci| mu * ci * l * l),
+            cl: c.map(|ci| ci * l),
+            mul: mu * l,
+        };
+        (seg, angle)
+    }
+}
+
+/// asinh x − asinh y for x ≥ y with x − y = dxy given, without cancellation.
+fn asinh_diff(x: f64, y: f64, dxy: f64) -> f64 {
+    if y >= 0.0 {
+        let den = x * (1.0 + y * y).sqrt() + y * (1.0 + x * x).sqrt();
+        if den == 0.0 {
+            return 0.0;
+        }
+        (dxy * (x + y) / den).asinh()
+    } else if x <= 0.0 {
+        asinh_diff(-y, -x, dxy)
+    } else {
+        x.asinh() - y.asinh()
+    }
+}
