@@ -32,11 +32,14 @@ pub enum StatusCode {
     InvalidRequest = 9,
     /// An internal error of the service; see its log.
     InternalError = 10,
+    /// A sagging cable would go slack: its end tension is below the least any catenary
+    /// through its chord can have (its tension would reach zero along it). No numbers.
+    CableSlack = 11,
 }
 
 impl StatusCode {
     /// Every code, in numeric order.
-    pub const ALL: [StatusCode; 11] = [
+    pub const ALL: [StatusCode; 12] = [
         StatusCode::Ok,
         StatusCode::TensionInfeasible,
         StatusCode::InvalidInput,
@@ -48,6 +51,7 @@ impl StatusCode {
         StatusCode::TminOutOfRange,
         StatusCode::InvalidRequest,
         StatusCode::InternalError,
+        StatusCode::CableSlack,
     ];
 
     /// The wire value.
@@ -69,6 +73,7 @@ impl StatusCode {
             8 => StatusCode::TminOutOfRange,
             9 => StatusCode::InvalidRequest,
             10 => StatusCode::InternalError,
+            11 => StatusCode::CableSlack,
             _ => return None,
         })
     }
@@ -87,6 +92,7 @@ impl StatusCode {
             StatusCode::TminOutOfRange => "t_min_out_of_range",
             StatusCode::InvalidRequest => "invalid_request",
             StatusCode::InternalError => "internal_error",
+            StatusCode::CableSlack => "cable_slack",
         }
     }
 

@@ -5,7 +5,8 @@ use super::Status;
 use crate::cable::CableError;
 use crate::kinematics::KinematicsError;
 use crate::modal::ModalError;
-use crate::tension::TensionError;
+use crate::modal::sag::SagLoadError;
+use crate::tension::{SagTensionError, TensionError};
 
 /// Input rejected before any computation. Copy, no allocation; the Display text is what
 /// the CLI and the service log print after "invalid input: ".
@@ -68,6 +69,13 @@ pub enum EstimatorError {
         /// Rank at the scene's default pose.
         expected: u32,
     },
+    /// The sagged tension distribution failed (`[effects] sag`): a slack cable, an
+    /// infeasible wrench, a catenary that could not be solved, or no convergence.
+    #[error(transparent)]
+    Sag(#[from] SagTensionError),
+    /// The sagged cables could not be loaded into the modal solver.
+    #[error("sagged cable model: {0}")]
+    SagModel(SagLoadError),
 }
 
 impl EstimatorError {
@@ -89,6 +97,21 @@ impl EstimatorError {
             EstimatorError::Modal(ModalError::NotPositiveDefinite(_)) => Status::RankDeficient,
             EstimatorError::Modal(_) => Status::NotConverged,
             EstimatorError::RankDeficient { .. } => Status::RankDeficient,
+            EstimatorError::Sag(e) => sag_status(e),
+            EstimatorError::SagModel(_) => Status::InvalidInput,
+        }
+    }
+}
+
+/// The status of a sagged tension error: a slack cable is `CableSlack`; the QP's own
+/// errors as for the chord model.
+fn sag_status(e: &SagTensionError) -> Status {
+    match e {
+        SagTensionError::Slack { .. } => Status::CableSlack,
+        SagTensionError::Tension(t) => EstimatorError::Tension(*t).status(),
+        SagTensionError::Invalid { .. } => Status::InvalidInput,
+        SagTensionError::Catenary { .. } | SagTensionError::NoConvergence { .. } => {
+            Status::NotConverged
         }
     }
 }

@@ -41,6 +41,7 @@ mod modes;
 mod params;
 mod pipeline;
 mod reference;
+mod sagged;
 
 pub use auto::{resolve_auto, AutoChoice};
 pub use error::{AnalysisError, BuildError, EstimatorError, InputError, TminQueryError};
@@ -168,6 +169,14 @@ impl Estimator {
             .map_err(|e| default_pose(e.into()))?;
         est.expected_rank = c.tension.info().rank;
         c.tension.reset_warm_start();
+        if scene.model.sag {
+            // The sagged statics and modes at the default pose: a robot whose cables go
+            // slack there is unusable as described.
+            let t_min = est.t_min_n;
+            c.first_root(scene, &pose, &t_min[..n], 0, None, |_| {})
+                .map_err(default_pose)?;
+            c.reset_tension_warm_start();
+        }
         Ok(est)
     }
 
@@ -216,7 +225,7 @@ impl Estimator {
         self.last_ee = None;
         self.last_ok_position = None;
         self.last_lambda1 = f64::NAN;
-        self.cycle.tension.reset_warm_start();
+        self.cycle.reset_tension_warm_start();
     }
 
     /// One cycle: pose and T_min (N, the same for every cable) → estimate.
@@ -339,7 +348,7 @@ impl Estimator {
             None => false,
         };
         if !warm {
-            self.cycle.tension.reset_warm_start();
+            self.cycle.reset_tension_warm_start();
             self.cycle.modal.reset_tracking();
         }
         let warm_l = self.predict_lambda1(warm);
@@ -349,11 +358,10 @@ impl Estimator {
             &self.t_min_n[..n],
             self.expected_rank,
             warm_l,
-            |tension| {
-                let info = tension.info();
-                e.tension_iterations = info.iterations;
-                e.tension_warm = info.warm_start_accepted;
-                e.tensions_n[..n].copy_from_slice(tension.tensions_n());
+            |report| {
+                e.tension_iterations = report.iterations;
+                e.tension_warm = report.warm;
+                e.tensions_n[..n].copy_from_slice(report.tensions_n);
             },
         );
         let r1 = match root {
@@ -374,7 +382,7 @@ impl Estimator {
         e.eigen_residual = r1.residual;
         self.prev_lambda1 = if warm { self.last_lambda1 } else { f64::NAN };
         self.last_lambda1 = r1.lambda;
-        if self.params.ee_mode {
+        if self.params.ee_mode && self.cycle.sag.is_none() {
             self.ee_mode(&r1, warm_l.is_some(), e);
         }
         self.write_stiffness(e);
@@ -415,6 +423,14 @@ impl Estimator {
 
     /// The static end-effector stiffness of the loaded models into `e`.
     fn write_stiffness(&mut self, e: &mut Estimate) {
+        if let Some(sag) = &self.cycle.sag {
+            let dim = if self.scene.rigid { 6 } else { 3 };
+            let k = sag.static_stiffness().unwrap_or(Matrix6::repeat(f64::NAN));
+            e.stiffness6 = k;
+            e.stiffness_n_m = k.fixed_view::<3, 3>(0, 0).into_owned();
+            e.stiffness_dim = dim;
+            return;
+        }
         if self.scene.rigid {
             // Closed form: no evaluation of D(λ) out of the cycle's budget.
             let k6 = self.cycle.modal.static_stiffness6_closed();

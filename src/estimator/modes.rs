@@ -14,7 +14,10 @@ impl Estimator {
     /// any cycle, `Modal(NotLoaded)`.
     pub fn modes(&mut self, k: usize, out: &mut [Mode]) -> Result<usize, EstimatorError> {
         match self.estimate.status {
-            Status::Ok => Ok(self.cycle.modal.modes(k, out)?),
+            Status::Ok => match self.cycle.sag.as_mut() {
+                Some(sag) => Ok(sag.modal.modes(k, out)?),
+                None => Ok(self.cycle.modal.modes(k, out)?),
+            },
             _ => Err(self
                 .estimate
                 .error
@@ -30,8 +33,16 @@ impl Estimator {
     /// [`crate::modal::DENSE_MEMORY_BUDGET_BYTES`]. Offline use.
     pub fn dense_modes(&self, vectors: bool) -> Result<DenseModes, EstimatorError> {
         let (k, m) = self.dense_matrices()?;
-        let (ee, _) = self.cycle.modal.ee_matrices();
-        let dim = self.cycle.modal.dim();
+        let (ee, _, dim) = match &self.cycle.sag {
+            Some(sag) => {
+                let (m6, k6) = sag.modal.ee_matrices();
+                (m6, k6, sag.modal.dim())
+            }
+            None => {
+                let (m6, k6) = self.cycle.modal.ee_matrices();
+                (m6, k6, self.cycle.modal.dim())
+            }
+        };
         Ok(modal::dense_modes_ee(&k, &m, &ee, dim, vectors)?)
     }
 
@@ -44,6 +55,9 @@ impl Estimator {
                 .estimate
                 .error
                 .unwrap_or(EstimatorError::Modal(modal::ModalError::NotLoaded)));
+        }
+        if let Some(sag) = &self.cycle.sag {
+            return Ok(sag.dense_matrices(&self.cycle.geometry)?);
         }
         let models = &self.cycle.models;
         let (ee, k6) = self.cycle.modal.ee_matrices();

@@ -7,6 +7,7 @@
 //! [`Estimator::update`]: super::Estimator::update
 //! [`Estimator::t_min_for_f1`]: super::Estimator::t_min_for_f1
 
+use super::sagged::{SagPipeline, TensionReport};
 use super::EstimatorError;
 use crate::cable::{CableError, CableModel};
 use crate::kinematics::{Geometry, KinematicsError, Pose};
@@ -32,6 +33,9 @@ pub(super) struct Pipeline {
     loaded_at: u32,
     /// Each cable's upper tension bound, N (the scene's, fixed).
     t_max_n: [f64; MAX_CABLES],
+    /// The sagged forward model (`[effects] sag`): used instead of `tension`, `models` and
+    /// `modal` when present.
+    pub(super) sag: Option<SagPipeline>,
 }
 
 impl Pipeline {
@@ -51,6 +55,10 @@ impl Pipeline {
             models: vec![placeholder_model(); n],
             modal: ModalSolver::new(modal),
             loaded_at: 0,
+            sag: scene
+                .model
+                .sag
+                .then(|| SagPipeline::new(scene, tension, modal)),
         }
     }
 
@@ -74,14 +82,24 @@ impl Pipeline {
         t_min_n: &[f64],
         min_rank: u32,
         warm: Option<f64>,
-        on_tensions: impl FnOnce(&TensionSolver),
+        on_tensions: impl FnOnce(TensionReport<'_>),
     ) -> Result<Root, EstimatorError> {
         let n = scene.n_cables();
+        if let Some(sag) = self.sag.as_mut() {
+            let t_max = &self.t_max_n[..n];
+            let g = &self.geometry;
+            return sag.first_root(scene, pose, g, t_min_n, t_max, warm.is_some(), on_tensions);
+        }
         let res = self
             .tension
             .solve_wrench_bounds(&self.geometry, &wrench6(scene), t_min_n, &self.t_max_n[..n])
             .map(|_| ());
-        on_tensions(&self.tension);
+        let info = self.tension.info();
+        on_tensions(TensionReport {
+            iterations: info.iterations,
+            warm: info.warm_start_accepted,
+            tensions_n: self.tension.tensions_n(),
+        });
         res?;
         let rank = self.tension.info().rank;
         if rank < min_rank {
@@ -108,7 +126,18 @@ impl Pipeline {
 
     /// Evaluations of D(λ) since the modal solver was last loaded.
     pub(super) fn evaluations_since_load(&self) -> u32 {
-        self.modal.evaluations() - self.loaded_at
+        match &self.sag {
+            Some(sag) => sag.evaluations_since_load(),
+            None => self.modal.evaluations() - self.loaded_at,
+        }
+    }
+
+    /// Forget the tension solver's warm start (and the sagged model's).
+    pub(super) fn reset_tension_warm_start(&mut self) {
+        self.tension.reset_warm_start();
+        if let Some(sag) = self.sag.as_mut() {
+            sag.reset_warm_start();
+        }
     }
 }
 

@@ -1,0 +1,206 @@
+//! The forward model of one pose when the scene's cables sag (`[effects] sag = true`):
+//! the tension distribution on the cables' end tangents ([`SagTensionSolver`]: each cable
+//! on its elastic catenary, the end-effector in equilibrium with the cables' end forces),
+//! then each cable's chain about its sagged profile (`fem`: N straight elements between
+//! nodes on the catenary; `continuous`: the exact N → ∞ limit), then the structured
+//! solver's first root ([`SagModalSolver`]). Nothing here allocates after [`SagPipeline::new`].
+
+use super::EstimatorError;
+use crate::kinematics::{Geometry, Pose};
+use crate::modal::sag::{
+    assemble_sagged, SagCableFrame, SagDenseCable, SagEndEffector, SagLoadError, SagModalSolver,
+};
+use crate::modal::{ModalError, ModalParams, Root};
+use crate::sag::Catenary;
+use crate::scene::{ElementKind, Scene};
+use crate::tension::{SagCable, SagTensionParams, SagTensionSolver, TensionParams};
+use nalgebra::{DMatrix, Matrix6, Vector3};
+
+/// What a cycle's tension solve reports to the estimate.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct TensionReport<'a> {
+    /// Iterations of the tension solver (fixed-point passes when the cables sag).
+    pub(super) iterations: u32,
+    /// Whether the warm start was accepted.
+    pub(super) warm: bool,
+    /// The end-effector-end tensions, N (the closest ones after an infeasible solve).
+    pub(super) tensions_n: &'a [f64],
+}
+
+/// Every buffer of the sagged forward model, sized once.
+#[derive(Debug, Clone)]
+pub(super) struct SagPipeline {
+    /// The tension distribution on the end tangents (keeps its catenaries as warm start).
+    pub(super) tension: SagTensionSolver,
+    /// The structured solver on the sagged chains.
+    pub(super) modal: SagModalSolver,
+    /// Each cable's EA (N) and weight per unstretched length (N/m).
+    materials: Vec<SagCable>,
+    /// Each cable's mass per unstretched length, kg/m.
+    mu_kg_m: Vec<f64>,
+    /// Each cable's attachment frame of the last load.
+    frames: Vec<SagCableFrame>,
+    /// `modal`'s evaluation counter when it was last loaded.
+    loaded_at: u32,
+}
+
+impl SagPipeline {
+    /// Buffers for the cables of `scene` (allocates: set-up only).
+    pub(super) fn new(scene: &Scene, tension: TensionParams, modal: ModalParams) -> SagPipeline {
+        let n = scene.n_cables();
+        let gn = scene.gravity_m_s2.norm();
+        let n_el = match scene.model.element {
+            ElementKind::Fem => scene.model.elements_per_cable.max(1),
+            _ => 1,
+        };
+        let frame = SagCableFrame {
+            h: Vector3::x(),
+            arm_m: Vector3::zeros(),
+            end_force_n: Vector3::zeros(),
+        };
+        SagPipeline {
+            tension: SagTensionSolver::new(
+                n,
+                SagTensionParams {
+                    tension,
+                    ..SagTensionParams::default()
+                },
+            ),
+            modal: SagModalSolver::new(modal, n, n_el),
+            materials: scene
+                .cables
+                .iter()
+                .map(|c| SagCable {
+                    ea_n: c.ea_n(),
+                    w_n_m: c.mass_per_length_kg_m * gn,
+                })
+                .collect(),
+            mu_kg_m: scene.cables.iter().map(|c| c.mass_per_length_kg_m).collect(),
+            frames: vec![frame; n],
+            loaded_at: 0,
+        }
+    }
+
+    /// Forget the warm starts (tensions and first root).
+    pub(super) fn reset_warm_start(&mut self) {
+        self.tension.reset_warm_start();
+    }
+
+    /// At geometry `g` (the chords at `pose`): the sagged tension distribution for the
+    /// per-cable bounds (N, on the end-effector-end tension), shown to `on_tensions` (also
+    /// when it failed), the chains on the catenaries, and the first root (warm-started
+    /// from the last one when `warm`).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn first_root(
+        &mut self,
+        scene: &Scene,
+        pose: &Pose,
+        g: &Geometry,
+        t_min_n: &[f64],
+        t_max_n: &[f64],
+        warm: bool,
+        on_tensions: impl FnOnce(TensionReport<'_>),
+    ) -> Result<Root, EstimatorError> {
+        let w = super::pipeline::wrench6(scene);
+        let res = self
+            .tension
+            .solve(g, &self.materials, &scene.gravity_m_s2, &w, t_min_n, t_max_n)
+            .map(|_| ());
+        on_tensions(TensionReport {
+            iterations: self.tension.info().iterations,
+            warm: false,
+            tensions_n: self.tension.tensions_n(),
+        });
+        res?;
+        self.load(scene, pose, g)?;
+        self.loaded_at = self.modal.evaluations();
+        let r = if warm {
+            self.modal.first_root()
+        } else {
+            self.modal.first_root_cold()
+        };
+        Ok(r?)
+    }
+
+    /// Set each cable's chain on its catenary and load the end-effector.
+    fn load(&mut self, scene: &Scene, pose: &Pose, g: &Geometry) -> Result<(), EstimatorError> {
+        let n = scene.n_cables();
+        for i in 0..n {
+            let cat = self.tension.catenaries_of()[i];
+            let [h, up, _] = self.tension.basis(i);
+            self.frames[i] = SagCableFrame {
+                h,
+                arm_m: g.arm_m[i],
+                end_force_n: -(h * cat.h_n + up * cat.v_end_n()),
+            };
+            set_chain(&mut self.modal, i, scene, &cat, self.mu_kg_m[i])?;
+        }
+        let up = self.tension.basis(0)[1];
+        let ee = if scene.rigid {
+            let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
+            SagEndEffector::Rigid {
+                mass_kg: scene.ee_mass_kg,
+                inertia_kg_m2: rot * scene.ee_inertia_kg_m2 * rot.transpose(),
+            }
+        } else {
+            SagEndEffector::Point {
+                mass_kg: scene.ee_mass_kg,
+            }
+        };
+        self.modal
+            .load(&self.frames[..n], &up, &ee)
+            .map_err(EstimatorError::SagModel)
+    }
+
+    /// Evaluations of D(λ) since the solver was last loaded.
+    pub(super) fn evaluations_since_load(&self) -> u32 {
+        self.modal.evaluations().wrapping_sub(self.loaded_at)
+    }
+
+    /// The static end-effector stiffness of the loaded pose (3 × 3 or 6 × 6 block), N/m.
+    pub(super) fn static_stiffness(&self) -> Result<Matrix6<f64>, EstimatorError> {
+        Ok(self.modal.static_stiffness()?)
+    }
+
+    /// The dense reference's K (N/m) and M (kg) of the loaded pose (FEM chains only).
+    pub(super) fn dense_matrices(
+        &self,
+        g: &Geometry,
+    ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
+        let n = self.frames.len();
+        let (m6, k6) = self.modal.ee_matrices();
+        let up = self.tension.basis(0)[1];
+        let mut cables = Vec::with_capacity(n);
+        for i in 0..n {
+            cables.push(SagDenseCable {
+                chain: self.modal.chain(i),
+                h: self.frames[i].h,
+                arm_m: g.arm_m[i],
+            });
+        }
+        assemble_sagged(&cables, &up, &m6, &k6, self.modal.dim())
+    }
+
+    /// Each cable's catenary of the last tension solve.
+    pub(super) fn catenaries(&self) -> &[Catenary] {
+        self.tension.catenaries_of()
+    }
+}
+
+/// Cable `i`'s chain for the scene's element on catenary `cat`.
+fn set_chain(
+    modal: &mut SagModalSolver,
+    i: usize,
+    scene: &Scene,
+    cat: &Catenary,
+    mu_kg_m: f64,
+) -> Result<(), EstimatorError> {
+    let n_el = scene.model.elements_per_cable.clamp(1, MAX_ELEMENTS);
+    modal
+        .chain_mut(i)
+        .set_fem(cat, mu_kg_m, n_el)
+        .map_err(|e| EstimatorError::SagModel(SagLoadError::Chain(i, e)))
+}
+
+/// Largest element count per cable (the scene's limit).
+const MAX_ELEMENTS: usize = crate::scene::MAX_ELEMENTS_PER_CABLE;
