@@ -8,7 +8,8 @@
 //! accurate on low modes. So each eigenvalue must agree to DENSE_FACTOR·ε·λ_max/λ
 //! relative (the dense bound; its constant is not known a priori: the reduction
 //! L⁻¹KL⁻ᵀ and the assembly's sums add to it) plus the structured Newton tolerance 1e-12.
-//! Measured worst: 4.2 (single cable) and 7.4 (robots) × ε·λ_max/λ.
+//! Measured worst: 4.2 (single cable) and 7.4 (robots) × ε·λ_max/λ; the symmetric robot's
+//! 69 is a mode near λ_max where both errors are ~1e-14 (the structured Newton's own).
 //!
 //! Also the γ → 0 limit: without weight the sagged FEM is today's chord FEM (CableModel,
 //! closed-form uniform chains) fed with EA' = EA(1 + T/EA), μ' = μ/(1 + T/EA).
@@ -286,4 +287,46 @@ fn weightless_robot_equals_chord_fem() {
         }
     }
     eprintln!("weightless robot vs chord FEM: λ {worst:.2e}");
+}
+
+#[test]
+fn symmetric_robot_clusters_equal_dense() {
+    // Four identical cables at right angles: blocked modes of multiplicity 4, of which the
+    // end-effector absorbs at most 3 directions, so modes sit exactly on the chains' poles
+    // (end-effector still) and degenerate end-effector modes appear.
+    let one = robot(2, 0.6, 2.0e5, true)[1];
+    let cables: Vec<SagCable> = (0..4)
+        .map(|i| {
+            let phi = std::f64::consts::FRAC_PI_2 * i as f64;
+            SagCable {
+                h: Vector3::new(phi.cos(), phi.sin(), 0.0),
+                ..one
+            }
+        })
+        .collect();
+    let mut worst = 0.0f64;
+    for n_el in [3usize, 10] {
+        worst = worst.max(compare(&cables, n_el, &point(), 40));
+        let mut s = solver_for(&cables, n_el, &point());
+        let mut modes = vec![Mode::default(); 40];
+        let n = s.modes(40, &mut modes).unwrap();
+        let max_mult = modes[..n].iter().map(|m| m.multiplicity).max().unwrap();
+        assert!(max_mult >= 2, "no cluster found");
+        // A cluster's participations sum to the dense cluster's sum.
+        let (dl, _, dp) = dense_of(&s, &cables);
+        let mut i = 0;
+        while i < n {
+            let m = (modes[i].multiplicity as usize).clamp(1, n - i);
+            let sum_s: f64 = modes[i..i + m].iter().map(|m| m.ee_participation).sum();
+            let sum_d: f64 = dp[i..i + m].iter().sum();
+            assert!(
+                (sum_s - sum_d).abs() < 1e-6,
+                "cluster at {}: {sum_s} vs {sum_d} (λ {})",
+                i,
+                dl[i]
+            );
+            i += m;
+        }
+    }
+    eprintln!("symmetric robot: worst error {worst:.1} × ε·λmax/λ");
 }
