@@ -160,7 +160,13 @@ pub(super) fn tick_labels(a: &Axis, r: (f64, f64), values: &[f64]) -> Vec<String
         return exps
             .iter()
             .zip(values)
-            .map(|(&e, &v)| if plain { fmt_num(v) } else { power_of_ten(1.0, 0, e) })
+            .map(|(&e, &v)| {
+                if plain {
+                    fmt_num(v)
+                } else {
+                    power_of_ten(1.0, 0, e)
+                }
+            })
             .collect();
     }
     let step = linear_step(r).unwrap_or(1.0);
@@ -192,7 +198,10 @@ fn decimals(step: f64) -> usize {
 
 /// `m×10^e` as SVG text (mantissa with `d` decimals; `10^e` alone when m = 1 and d = 0).
 fn power_of_ten(m: f64, d: usize, e: i32) -> String {
-    let sup = format!(r#"10<tspan dy="-6" font-size="9">{}</tspan>"#, super::escape(&e.to_string()).replace('-', "−"));
+    let sup = format!(
+        r#"10<tspan dy="-6" font-size="9">{}</tspan>"#,
+        super::escape(&e.to_string()).replace('-', "−")
+    );
     if m == 1.0 && d == 0 {
         sup
     } else {

@@ -144,7 +144,11 @@ impl HeatPanel {
         }
         // A margin so that the frame and the anchors' squares are not cut by the border.
         let grew = ex != extent(&m.x) || ey != extent(&m.y);
-        let pad = if grew { VIEW_PAD * (ex.1 - ex.0).max(ey.1 - ey.0) } else { 0.0 };
+        let pad = if grew {
+            VIEW_PAD * (ex.1 - ex.0).max(ey.1 - ey.0)
+        } else {
+            0.0
+        };
         ((ex.0 - pad, ex.1 + pad), (ey.0 - pad, ey.1 + pad))
     }
 
@@ -372,13 +376,7 @@ fn tick(o: &mut String, line: (f64, f64, f64, f64), at: (f64, f64), anchor: &str
     let _ = writeln!(
         o,
         r##"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="#444"/><text x="{:.1}" y="{:.1}" font-size="11"{anchor}>{}</text>"##,
-        line.0,
-        line.1,
-        line.2,
-        line.3,
-        at.0,
-        at.1,
-        v
+        line.0, line.1, line.2, line.3, at.0, at.1, v
     );
 }
 

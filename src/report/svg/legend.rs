@@ -49,9 +49,20 @@ pub(super) struct LegendBox {
 pub(super) type Area = (f64, f64, f64, f64);
 
 /// The legend's place for `entries` in the plot area, avoiding `drawn` (module docs).
-pub(super) fn place(entries: &[LegendEntry], (ml, mt, pw, ph): Area, drawn: &[Segment]) -> LegendBox {
-    let chars = entries.iter().map(|e| e.name.chars().count()).max().unwrap_or(0);
-    let (w, h) = (chars as f64 * CHAR_PX + MARK_PX, entries.len() as f64 * ROW_PX + 8.0);
+pub(super) fn place(
+    entries: &[LegendEntry],
+    (ml, mt, pw, ph): Area,
+    drawn: &[Segment],
+) -> LegendBox {
+    let chars = entries
+        .iter()
+        .map(|e| e.name.chars().count())
+        .max()
+        .unwrap_or(0);
+    let (w, h) = (
+        chars as f64 * CHAR_PX + MARK_PX,
+        entries.len() as f64 * ROW_PX + 8.0,
+    );
     let (right, left, midx) = (ml + pw - w - INSET_PX, ml + INSET_PX, ml + (pw - w) / 2.0);
     let (top, bottom, midy) = (mt + INSET_PX, mt + ph - h - INSET_PX, mt + (ph - h) / 2.0);
     let candidates = [
@@ -67,11 +78,22 @@ pub(super) fn place(entries: &[LegendEntry], (ml, mt, pw, ph): Area, drawn: &[Se
     ];
     let fits = w + 2.0 * INSET_PX <= pw && h + 2.0 * INSET_PX <= ph;
     let free = |&(x, y): &(f64, f64)| {
-        let r = (x - CLEARANCE_PX, y - CLEARANCE_PX, x + w + CLEARANCE_PX, y + h + CLEARANCE_PX);
+        let r = (
+            x - CLEARANCE_PX,
+            y - CLEARANCE_PX,
+            x + w + CLEARANCE_PX,
+            y + h + CLEARANCE_PX,
+        );
         !drawn.iter().any(|s| segment_hits(*s, r))
     };
     match candidates.iter().find(|c| fits && free(c)) {
-        Some(&(x, y)) => LegendBox { x, y, w, h, outside: false },
+        Some(&(x, y)) => LegendBox {
+            x,
+            y,
+            w,
+            h,
+            outside: false,
+        },
         None => LegendBox {
             x: ml + pw + 2.0 * INSET_PX,
             y: mt,
@@ -83,7 +105,10 @@ pub(super) fn place(entries: &[LegendEntry], (ml, mt, pw, ph): Area, drawn: &[Se
 }
 
 /// Whether segment `s` meets the rectangle (x0, y0, x1, y1) (Liang–Barsky clipping).
-pub(super) fn segment_hits(((ax, ay), (bx, by)): Segment, (x0, y0, x1, y1): (f64, f64, f64, f64)) -> bool {
+pub(super) fn segment_hits(
+    ((ax, ay), (bx, by)): Segment,
+    (x0, y0, x1, y1): (f64, f64, f64, f64),
+) -> bool {
     let (dx, dy) = (bx - ax, by - ay);
     let (mut t0, mut t1) = (0.0f64, 1.0f64);
     for (p, q) in [(-dx, ax - x0), (dx, x1 - ax), (-dy, ay - y0), (dy, y1 - ay)] {
@@ -164,7 +189,13 @@ mod tests {
         assert!(segment_hits(((-5.0, 5.0), (15.0, 5.0)), r), "crossing");
         assert!(segment_hits(((2.0, 2.0), (2.0, 2.0)), r), "a point inside");
         assert!(!segment_hits(((-5.0, -1.0), (15.0, -1.0)), r), "above");
-        assert!(!segment_hits(((-5.0, 0.0), (0.0, -5.0)), (0.1, 0.1, 10.0, 10.0)), "past the corner");
-        assert!(segment_hits(((-5.0, 6.0), (6.0, -5.0)), r), "through the corner");
+        assert!(
+            !segment_hits(((-5.0, 0.0), (0.0, -5.0)), (0.1, 0.1, 10.0, 10.0)),
+            "past the corner"
+        );
+        assert!(
+            segment_hits(((-5.0, 6.0), (6.0, -5.0)), r),
+            "through the corner"
+        );
     }
 }

@@ -123,7 +123,11 @@ impl LinePlot {
         let entries = c.legend_entries();
         let place = legend::place(&entries, (ml, mt, pw, ph), &c.drawn_segments());
         // A legend outside widens the document by its width (the plot keeps its size).
-        let w = if place.outside { place.x + place.w + mr } else { w };
+        let w = if place.outside {
+            place.x + place.w + mr
+        } else {
+            w
+        };
         let mut o = header(w, h);
         title(&mut o, w, &self.title, &self.subtitle);
         c.frame_and_ticks(&mut o, xr, yr, h);
@@ -158,7 +162,6 @@ impl LinePlot {
 fn usable(a: &Axis, v: f64) -> bool {
     v.is_finite() && (!a.log || v > 0.0)
 }
-
 
 /// A plot being drawn: its data-to-pixel maps and plot area (px).
 struct Canvas<'a> {

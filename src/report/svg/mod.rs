@@ -93,7 +93,10 @@ pub fn rich(s: &str, font_px: f64) -> String {
     for (text, sub) in runs.iter().filter(|r| !r.0.is_empty()) {
         let t = escape(text);
         if *sub {
-            let _ = write!(o, r#"<tspan dy="{drop:.1}" font-size="{size:.1}">{t}</tspan>"#);
+            let _ = write!(
+                o,
+                r#"<tspan dy="{drop:.1}" font-size="{size:.1}">{t}</tspan>"#
+            );
         } else if shifted {
             let _ = write!(o, r#"<tspan dy="{:.1}">{t}</tspan>"#, -drop);
         } else {
@@ -264,14 +267,26 @@ mod tests {
     fn subscripts() {
         let sub = |t: &str| format!(r#"<tspan dy="3.0" font-size="9.0">{t}</tspan>"#);
         let back = |t: &str| format!(r#"<tspan dy="-3.0">{t}</tspan>"#);
-        assert_eq!(rich("T_min (N)", 12.0), format!("T{}{}", sub("min"), back(" (N)")));
+        assert_eq!(
+            rich("T_min (N)", 12.0),
+            format!("T{}{}", sub("min"), back(" (N)"))
+        );
         assert_eq!(rich("f1", 12.0), format!("f{}", sub("1")));
         assert_eq!(
             rich("|f1 − f1,ref|", 12.0),
-            format!("|f{}{}{}{}", sub("1"), back(" − f"), sub("1,ref"), back("|"))
+            format!(
+                "|f{}{}{}{}",
+                sub("1"),
+                back(" − f"),
+                sub("1,ref"),
+                back("|")
+            )
         );
         // Inside words, unknown subscripts and escaping: left as they are.
-        assert_eq!(rich("fig12 my_min x_y a<b", 12.0), "fig12 my_min x_y a&lt;b");
+        assert_eq!(
+            rich("fig12 my_min x_y a<b", 12.0),
+            "fig12 my_min x_y a&lt;b"
+        );
         assert_eq!(rich("f1x", 12.0), "f1x");
     }
 

@@ -36,9 +36,12 @@ pub fn contour(x: &[f64], y: &[f64], values: &[Option<f64>], level: f64) -> Vec<
         for ix in 0..nx - 1 {
             // Corners counter-clockwise from the bottom left.
             let c = [(ix, iy), (ix + 1, iy), (ix + 1, iy + 1), (ix, iy + 1)];
-            let (Some(v0), Some(v1), Some(v2), Some(v3)) =
-                (at(ix, iy), at(ix + 1, iy), at(ix + 1, iy + 1), at(ix, iy + 1))
-            else {
+            let (Some(v0), Some(v1), Some(v2), Some(v3)) = (
+                at(ix, iy),
+                at(ix + 1, iy),
+                at(ix + 1, iy + 1),
+                at(ix, iy + 1),
+            ) else {
                 continue;
             };
             let v = [v0, v1, v2, v3];
