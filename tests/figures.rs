@@ -62,6 +62,9 @@ fn sparse_plot() -> LinePlot {
     p
 }
 
+/// A rectangle (x0, y0, x1, y1), px.
+type Rect = (f64, f64, f64, f64);
+
 fn attr(n: roxmltree::Node, a: &str) -> f64 {
     n.attribute(a)
         .and_then(|v| v.parse().ok())
@@ -70,7 +73,7 @@ fn attr(n: roxmltree::Node, a: &str) -> f64 {
 
 /// The legend box (x0, y0, x1, y1) and every drawn point of the data, sampled every
 /// 0.25 px along lines and kept only inside the clip rectangle (what is visible).
-fn legend_and_samples(svg: &str) -> ((f64, f64, f64, f64), Vec<(f64, f64)>) {
+fn legend_and_samples(svg: &str) -> (Rect, Vec<(f64, f64)>) {
     let doc = roxmltree::Document::parse(svg).expect("well-formed SVG");
     let rect = |n: roxmltree::Node| {
         let (x, y) = (attr(n, "x"), attr(n, "y"));

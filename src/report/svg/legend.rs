@@ -28,7 +28,7 @@ pub(super) struct LegendEntry {
     pub color: String,
     /// How the sample is drawn.
     pub mark: Mark,
-    /// `stroke-dasharray` of a dashed sample (empty: the mark's default).
+    /// `stroke-dasharray` of the sample (empty: the mark's default).
     pub dash: String,
 }
 

@@ -212,14 +212,13 @@ impl Canvas<'_> {
     /// assigned in order to the series without one).
     fn legend_entries(&self) -> Vec<LegendEntry> {
         let mut out = Vec::new();
-        let n = self.plot.hlines.len();
-        for (k, l) in self.plot.hlines.iter().enumerate() {
+        for l in &self.plot.hlines {
             if usable(&self.plot.y, l.y) {
                 out.push(LegendEntry {
                     name: l.name.clone(),
                     color: l.color.clone(),
                     mark: Mark::Dashed,
-                    dash: hline_dash(k, n).0,
+                    dash: String::new(),
                 });
             }
         }
