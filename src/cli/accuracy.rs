@@ -2,11 +2,12 @@
 //! figures and this scene's section of accuracy.md.
 
 use super::args::{resolve_scene, SceneArgs};
+use super::figure::{self, parse_format};
 use super::CliError;
 use crate::report::accuracy_doc::{accuracy_markdown, hz, sci, update_section, us};
 use crate::report::accuracy_figures::{accuracy_csv, accuracy_svgs, file_stem, mode3_csv};
 use crate::report::csv::write_csv;
-use crate::report::write_file;
+use crate::report::figure::FigureFormat;
 use crate::study::accuracy::{self as study, dense_element_counts, AccuracyConfig};
 use clap::Args;
 use std::fmt::Write as _;
@@ -29,7 +30,7 @@ pub struct AccuracyArgs {
     /// are ignored: every model is run).
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Output directory: writes OUT/accuracy.md (this scene's section), OUT/img/*.svg
+    /// Output directory: writes OUT/accuracy.md (this scene's section), OUT/img/*.svg (.png, .pdf with --format)
     /// and OUT/data/*.csv. A new directory by default, so that a run from a checkout never
     /// rewrites the repository's docs/ (regenerate those with `--out-dir docs`).
     #[arg(long, default_value = DEFAULT_OUT_DIR)]
@@ -52,6 +53,10 @@ pub struct AccuracyArgs {
     /// Largest N of the dense mode-3 convergence study (paper Figs. 5 and 10); 0 skips it.
     #[arg(long, default_value_t = DEFAULT_DENSE_MAX)]
     pub dense_max: usize,
+    /// Figure format: svg, png (3 px per SVG px) or pdf (vector, font embedded). Default:
+    /// the figure path's extension, else svg; --format wins and sets the file's extension.
+    #[arg(long, value_parser = parse_format)]
+    pub format: Option<FigureFormat>,
 }
 
 /// The command that regenerates a section (options at their defaults left out).
@@ -125,15 +130,19 @@ pub fn run(a: &AccuracyArgs) -> Result<(), CliError> {
         )?;
     }
     let (e_n, cost, m3) = accuracy_svgs(&s, &r, &mode3);
-    let mut imgs = vec![
-        format!("accuracy-{stem}-error-vs-n.svg"),
-        format!("accuracy-{stem}-cost.svg"),
+    let fmt = a.format.unwrap_or_default();
+    let mut imgs = Vec::new();
+    let figures = [
+        ("error-vs-n", Some(e_n)),
+        ("cost", Some(cost)),
+        ("mode3", m3),
     ];
-    write_file(&imgd.join(&imgs[0]), &e_n)?;
-    write_file(&imgd.join(&imgs[1]), &cost)?;
-    if let Some(m3) = m3 {
-        imgs.push(format!("accuracy-{stem}-mode3.svg"));
-        write_file(&imgd.join(&imgs[2]), &m3)?;
+    for (part, svg) in figures {
+        if let Some(svg) = svg {
+            let name = format!("accuracy-{stem}-{part}.{}", fmt.ext());
+            figure::write(&imgd.join(&name), &svg, fmt)?;
+            imgs.push(name);
+        }
     }
     let rel: Vec<String> = imgs.iter().map(|i| format!("img/{i}")).collect();
     let body = accuracy_markdown(&s, &r, &mode3, &cmd, a.cycles, a.rounds.max(1), &rel);

@@ -2,10 +2,12 @@
 //! over a workspace grid, as a CSV and heat-map figures.
 
 use super::args::{parse_interval, resolve_scene, SceneArgs};
+use super::figure::{self, parse_format};
 use super::{output_paths, CliError};
 use crate::report::csv::{process_command_line, write_csv};
+use crate::report::figure::FigureFormat;
 use crate::report::map::{map_csv, map_svg, value_names};
-use crate::report::{with_ext, write_file};
+use crate::report::with_ext;
 use crate::scene::Scene;
 use crate::study::map::{self as study, Interval, MapConfig, MapResult};
 use crate::study::points::MAX_MODES;
@@ -110,9 +112,13 @@ pub struct MapArgs {
     /// Output prefix: writes PREFIX.csv, its metadata PREFIX.csv.json and PREFIX.svg.
     #[arg(long, default_value = "map")]
     pub out: PathBuf,
-    /// Write the figure here instead of PREFIX.svg.
-    #[arg(long)]
+    /// Write the figure here instead of PREFIX.svg (PREFIX.png, PREFIX.pdf with --format).
+    #[arg(long, visible_alias = "figure")]
     pub svg: Option<PathBuf>,
+    /// Figure format: svg, png (3 px per SVG px) or pdf (vector, font embedded). Default:
+    /// the figure path's extension, else svg; --format wins and sets the file's extension.
+    #[arg(long, value_parser = parse_format)]
+    pub format: Option<FigureFormat>,
     /// Worker threads (one estimator each).
     #[arg(long, default_value_t = 2)]
     pub threads: usize,
@@ -170,16 +176,16 @@ pub fn run(a: &MapArgs) -> Result<(), CliError> {
     let (s, m) = compute(a)?;
     let secs = t0.elapsed().as_secs_f64();
     let value = a.value.into();
-    let (csv_path, svg_path) = output_paths(&a.out, &a.svg);
+    let (csv_path, svg_path, fmt) = output_paths(&a.out, &a.svg, a.format)?;
     write_csv(&csv_path, map_csv(&s, &m), &process_command_line())?;
-    write_file(&svg_path, &map_svg(&s, &m, value))?;
+    figure::write(&svg_path, &map_svg(&s, &m, value), fmt)?;
     let mut written = vec![
         csv_path.display().to_string(),
         svg_path.display().to_string(),
     ];
     for &v in &a.show {
-        let p = shown_path(&svg_path, &value_names(v).2);
-        write_file(&p, &map_svg(&s, &m, v))?;
+        let p = shown_path(&svg_path, &value_names(v).2, fmt);
+        figure::write(&p, &map_svg(&s, &m, v), fmt)?;
         written.push(p.display().to_string());
     }
     println!(
@@ -198,16 +204,16 @@ pub fn run(a: &MapArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// The figure of a `--show` value next to the main figure: `DIR/NAME.svg` →
-/// `DIR/NAME-PART.svg` (`map.svg` → `map-k-min.svg`).
-fn shown_path(main_svg: &Path, part: &str) -> PathBuf {
-    let stem = match main_svg.extension() {
-        Some(e) if e == "svg" => main_svg.with_extension(""),
-        _ => main_svg.to_path_buf(),
+/// The figure of a `--show` value next to the main figure: `DIR/NAME.EXT` →
+/// `DIR/NAME-PART.EXT` (`map.svg` → `map-k-min.svg`), EXT the format's.
+fn shown_path(main: &Path, part: &str, fmt: FigureFormat) -> PathBuf {
+    let stem = match main.extension() {
+        Some(e) if e == fmt.ext() => main.with_extension(""),
+        _ => main.to_path_buf(),
     };
     let mut prefix = stem.into_os_string();
     prefix.push(format!("-{part}"));
-    with_ext(Path::new(&prefix), "svg")
+    with_ext(Path::new(&prefix), fmt.ext())
 }
 
 /// The smallest and largest valid value `v` of the map, and where.

@@ -25,6 +25,7 @@ pub mod args;
 pub mod bench;
 pub mod completions;
 pub mod error;
+pub mod figure;
 pub mod import;
 pub mod map;
 pub mod modes;
@@ -35,6 +36,7 @@ pub mod trajectory;
 pub use args::{resolve_scene, SceneArgs};
 pub use error::CliError;
 
+use crate::report::figure::FigureFormat;
 use crate::report::with_ext;
 use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
@@ -112,8 +114,19 @@ fn json_f64(x: f64) -> serde_json::Value {
     }
 }
 
-/// The CSV and figure paths of a command: PREFIX.csv, and `svg` or PREFIX.svg.
-fn output_paths(out: &Path, svg: &Option<PathBuf>) -> (PathBuf, PathBuf) {
-    let svg_path = svg.clone().unwrap_or_else(|| with_ext(out, "svg"));
-    (with_ext(out, "csv"), svg_path)
+/// The CSV and figure paths of a command: PREFIX.csv, and the figure at `svg` or
+/// PREFIX.EXT, in `format` ([`figure::target`]).
+fn output_paths(
+    out: &Path,
+    svg: &Option<PathBuf>,
+    format: Option<FigureFormat>,
+) -> Result<(PathBuf, PathBuf, FigureFormat), CliError> {
+    let (fig, fmt) = match svg {
+        Some(p) => figure::target(p, format)?,
+        None => {
+            let f = format.unwrap_or_default();
+            (with_ext(out, f.ext()), f)
+        }
+    };
+    Ok((with_ext(out, "csv"), fig, fmt))
 }

@@ -4,15 +4,16 @@
 //! ([`crate::report::shapes_csv`]) and an SVG ([`crate::report::svg::modes`]).
 
 use super::args::{resolve_scene, SceneArgs};
+use super::figure::{self, parse_format};
 use super::CliError;
 use crate::cable::CableModel;
 use crate::estimator::{build_models, resolve_auto};
 use crate::kinematics::{rotation_of, Geometry};
 use crate::modal::{self, ModalParams, ModalSolver, Mode, ModeShapes, ShapeParams};
 use crate::report::csv::{process_command_line, write_csv};
+use crate::report::figure::FigureFormat;
 use crate::report::shapes_csv::shapes_csv;
 use crate::report::svg::modes::modes_svg;
-use crate::report::write_file;
 use crate::scene::{ElementKind, Scene};
 use clap::Args;
 use nalgebra::{DMatrix, Matrix3, Matrix6};
@@ -37,9 +38,14 @@ pub struct ModesArgs {
     /// Write the mode shapes as CSV (mass-normalised, 1/√kg).
     #[arg(long)]
     pub csv: Option<PathBuf>,
-    /// Write the mode shapes as an SVG figure (axonometric view, one panel per mode).
-    #[arg(long)]
+    /// Write the mode shapes as a figure (axonometric view, one panel per mode): SVG, or
+    /// PNG / PDF by the extension or --format.
+    #[arg(long, visible_alias = "figure")]
     pub svg: Option<PathBuf>,
+    /// Figure format: svg, png (3 px per SVG px) or pdf (vector, font embedded). Default:
+    /// the figure path's extension, else svg; --format wins and sets the file's extension.
+    #[arg(long, value_parser = parse_format)]
+    pub format: Option<FigureFormat>,
 }
 
 /// One pose's model, as the shapes need it: geometry, tensions (Clarabel reference, N),
@@ -242,9 +248,14 @@ pub fn run(a: &ModesArgs) -> Result<(), CliError> {
         )?;
         println!("\nwrote {}", path.display());
     }
+    if a.format.is_some() && a.svg.is_none() {
+        let msg = "--format needs --svg PATH (the figure is written only there)";
+        return Err(CliError::Usage(msg.into()));
+    }
     if let Some(path) = &a.svg {
+        let (path, fmt) = figure::target(path, a.format)?;
         let k = a.modes.min(shapes.modes.len());
-        write_file(path, &modes_svg(sc, &pose.geometry, &shapes, k))?;
+        figure::write(&path, &modes_svg(sc, &pose.geometry, &shapes, k), fmt)?;
         println!("wrote {}", path.display());
     }
     Ok(())

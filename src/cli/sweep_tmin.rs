@@ -2,10 +2,11 @@
 //! a figure.
 
 use super::args::{parse_pairs, resolve_scene, Pairs, SceneArgs};
+use super::figure::{self, parse_format};
 use super::{output_paths, CliError};
 use crate::report::csv::{process_command_line, write_csv};
+use crate::report::figure::FigureFormat;
 use crate::report::tmin::{tmin_csv, tmin_svg, Compared};
-use crate::report::write_file;
 use crate::study::tmin::{self as study, TminConfig};
 use clap::Args;
 use std::path::PathBuf;
@@ -35,9 +36,13 @@ pub struct SweepTminArgs {
     /// Output prefix: writes PREFIX.csv, its metadata PREFIX.csv.json and PREFIX.svg.
     #[arg(long, default_value = "sweep-tmin")]
     pub out: PathBuf,
-    /// Write the figure here instead of PREFIX.svg.
-    #[arg(long)]
+    /// Write the figure here instead of PREFIX.svg (PREFIX.png, PREFIX.pdf with --format).
+    #[arg(long, visible_alias = "figure")]
     pub svg: Option<PathBuf>,
+    /// Figure format: svg, png (3 px per SVG px) or pdf (vector, font embedded). Default:
+    /// the figure path's extension, else svg; --format wins and sets the file's extension.
+    #[arg(long, value_parser = parse_format)]
+    pub format: Option<FigureFormat>,
     /// Skip the end-effector mode (f1 only).
     #[arg(long)]
     pub no_ee_mode: bool,
@@ -63,7 +68,7 @@ pub fn run(a: &SweepTminArgs) -> Result<(), CliError> {
         modes: a.modes,
     };
     let r = study::compute(&s, &cfg)?;
-    let (csv_path, svg_path) = output_paths(&a.out, &a.svg);
+    let (csv_path, svg_path, fmt) = output_paths(&a.out, &a.svg, a.format)?;
     write_csv(&csv_path, tmin_csv(&s, &r), &process_command_line())?;
     let compare = a.compare.as_ref().map(|c| Compared {
         label: &a.compare_label,
@@ -85,10 +90,8 @@ pub fn run(a: &SweepTminArgs) -> Result<(), CliError> {
             }
         }
     }
-    write_file(
-        &svg_path,
-        &tmin_svg(&s, &r, (from, to), cfg.ee_mode, compare),
-    )?;
+    let svg = tmin_svg(&s, &r, (from, to), cfg.ee_mode, compare);
+    figure::write(&svg_path, &svg, fmt)?;
     println!(
         "sweep-tmin: scene {}  T_min {from}..{to} N ({} values)  fit f1 = {:.6}·sqrt(T_min) Hz, max relative deviation {:.2e}  statuses: {}",
         s.name,

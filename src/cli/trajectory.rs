@@ -2,10 +2,11 @@
 //! path, as a CSV and a figure.
 
 use super::args::{resolve_scene, SceneArgs};
+use super::figure::{self, parse_format};
 use super::{output_paths, CliError};
 use crate::report::csv::{process_command_line, write_csv};
+use crate::report::figure::FigureFormat;
 use crate::report::trajectory::{trajectory_csv, trajectory_svg};
-use crate::report::write_file;
 use crate::study::trajectory::{self as study, PathSource, TrajectoryConfig};
 use crate::trajectory::CIRCLE_RADIUS_M;
 use clap::Args;
@@ -37,9 +38,13 @@ pub struct TrajectoryArgs {
     /// Output prefix: writes PREFIX.csv, its metadata PREFIX.csv.json and PREFIX.svg.
     #[arg(long, default_value = "trajectory")]
     pub out: PathBuf,
-    /// Write the figure here instead of PREFIX.svg.
-    #[arg(long)]
+    /// Write the figure here instead of PREFIX.svg (PREFIX.png, PREFIX.pdf with --format).
+    #[arg(long, visible_alias = "figure")]
     pub svg: Option<PathBuf>,
+    /// Figure format: svg, png (3 px per SVG px) or pdf (vector, font embedded). Default:
+    /// the figure path's extension, else svg; --format wins and sets the file's extension.
+    #[arg(long, value_parser = parse_format)]
+    pub format: Option<FigureFormat>,
     /// Worker threads (T_min curves are spread over them).
     #[arg(long, default_value_t = 2)]
     pub threads: usize,
@@ -75,7 +80,7 @@ impl TrajectoryArgs {
 pub fn run(a: &TrajectoryArgs) -> Result<(), CliError> {
     let s = resolve_scene(&a.scene)?;
     let t = study::run(&s, &a.config())?;
-    let (csv_path, svg_path) = output_paths(&a.out, &a.svg);
+    let (csv_path, svg_path, fmt) = output_paths(&a.out, &a.svg, a.format)?;
     write_csv(&csv_path, trajectory_csv(&s, &t), &process_command_line())?;
     println!(
         "trajectory: scene {}  {} poses × {} T_min values",
@@ -99,10 +104,8 @@ pub fn run(a: &TrajectoryArgs) -> Result<(), CliError> {
             );
         }
     }
-    write_file(
-        &svg_path,
-        &trajectory_svg(&s, &t, a.radius_m, !a.no_ee_mode),
-    )?;
+    let svg = trajectory_svg(&s, &t, a.radius_m, !a.no_ee_mode);
+    figure::write(&svg_path, &svg, fmt)?;
     println!("  wrote {} and {}", csv_path.display(), svg_path.display());
     Ok(())
 }

@@ -1,4 +1,5 @@
-//! `cablevib map`: the CSV of every grid point and the heat-map figure.
+//! `cablevib map`: the CSV of every grid point and the heat-map figure (with contour lines,
+//! the frame and the anchors projected on the map's plane).
 
 use super::csv::{point_columns, point_fields, scene_meta, Csv};
 use super::svg::{fmt_num, HeatMap, HeatPanel};
@@ -146,8 +147,22 @@ pub fn map_svg(s: &Scene, m: &MapResult, v: MapValue) -> String {
         maps,
         columns: panel_columns(m.axes[sl].len()),
         range: None,
+        frame: Some(frame(s, h, vv)),
+        anchors: s
+            .cables
+            .iter()
+            .map(|c| (c.anchor_m[h], c.anchor_m[vv]))
+            .collect(),
+        contours: true,
     }
     .to_svg()
+}
+
+/// The frame (the anchors' bounding box) projected on the map's plane, axes `h` and `v`:
+/// [x0, y0, x1, y1], m.
+fn frame(s: &Scene, h: usize, v: usize) -> [f64; 4] {
+    let (lo, hi) = s.frame_bounds_m();
+    [lo[h], lo[v], hi[h], hi[v]]
 }
 
 /// A shown value: 3 decimals (Hz-sized values keep today's format), or 4 significant

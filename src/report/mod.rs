@@ -5,6 +5,7 @@
 //! | module | what |
 //! |---|---|
 //! | [`svg`] | the SVG writer: line plots, heat maps |
+//! | [`figure`] | figure files: SVG, or PNG / PDF rendered from it (`--format`) |
 //! | [`csv`] | the one CSV writer (`csv` crate, `PATH.json` sidecars) and the number formats of every command's CSV |
 //! | [`map`](mod@map) | `cablevib map`: CSV and heat-map figure |
 //! | [`trajectory`](mod@trajectory) | `cablevib trajectory`: CSV and figure |
@@ -16,6 +17,7 @@
 pub mod accuracy_doc;
 pub mod accuracy_figures;
 pub mod csv;
+pub mod figure;
 pub mod map;
 pub mod shapes_csv;
 pub mod svg;
@@ -35,6 +37,14 @@ pub enum ReportError {
         /// Why.
         source: std::io::Error,
     },
+    /// A figure could not be rendered to its format.
+    #[error("{path}: {source}")]
+    Figure {
+        /// File.
+        path: PathBuf,
+        /// Why.
+        source: figure::FigureError,
+    },
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {
@@ -46,12 +56,18 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {
 
 /// Write `text` to `path`, creating parent directories.
 pub fn write_file(path: &Path, text: &str) -> Result<(), ReportError> {
+    create_parent(path)?;
+    std::fs::write(path, text).map_err(io_err(path))
+}
+
+/// Create the parent directories of `path`.
+fn create_parent(path: &Path) -> Result<(), ReportError> {
     if let Some(d) = path.parent() {
         if !d.as_os_str().is_empty() {
             std::fs::create_dir_all(d).map_err(io_err(d))?;
         }
     }
-    std::fs::write(path, text).map_err(io_err(path))
+    Ok(())
 }
 
 /// `PREFIX` + `ext` (`map` → `map.csv`), keeping any dots already in the prefix.

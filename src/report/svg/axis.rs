@@ -92,19 +92,21 @@ impl Mapper {
     }
 }
 
-/// Tick positions (value, is_major) within the range.
+/// Log axes draw minor ticks (2..9 × 10^e) up to this many decades; beyond, they crowd.
+const MINOR_DECADES: i32 = 6;
+
+/// Tick positions (value, is_major) within the range: on a log axis every decade is major
+/// (and labelled), on a linear axis a 1-2-2.5-5 step giving about 6 ticks.
 pub(super) fn ticks(a: &Axis, r: (f64, f64)) -> Vec<(f64, bool)> {
     let mut t = Vec::new();
     if a.log {
         let (l, h) = (r.0.log10().floor() as i32, r.1.log10().ceil() as i32);
-        let decades = (h - l).max(1);
-        let every = (decades as f64 / 8.0).ceil().max(1.0) as i32;
         for e in l..=h {
             let base = 10f64.powi(e);
-            if base >= r.0 * (1.0 - 1e-9) && base <= r.1 * (1.0 + 1e-9) && (e - l) % every == 0 {
+            if base >= r.0 * (1.0 - 1e-9) && base <= r.1 * (1.0 + 1e-9) {
                 t.push((base, true));
             }
-            if decades <= 6 {
+            if h - l <= MINOR_DECADES {
                 for k in 2..10 {
                     let v = base * k as f64;
                     if v > r.0 && v < r.1 {
@@ -115,17 +117,9 @@ pub(super) fn ticks(a: &Axis, r: (f64, f64)) -> Vec<(f64, bool)> {
         }
         return t;
     }
-    let span = r.1 - r.0;
-    if !(span > 0.0 && span.is_finite()) {
+    let Some(step) = linear_step(r) else {
         return t;
-    }
-    let raw = span / 6.0;
-    let mag = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 2.5, 5.0, 10.0]
-        .iter()
-        .map(|m| m * mag)
-        .find(|s| span / s <= 7.5)
-        .unwrap_or(10.0 * mag);
+    };
     let mut v = (r.0 / step).ceil() * step;
     while v <= r.1 + step * 1e-9 {
         let vv = if v.abs() < step * 1e-9 { 0.0 } else { v };
@@ -135,13 +129,82 @@ pub(super) fn ticks(a: &Axis, r: (f64, f64)) -> Vec<(f64, bool)> {
     t
 }
 
-pub(super) fn tick_label(a: &Axis, v: f64) -> String {
-    if a.log {
-        let e = v.log10().round() as i32;
-        if (-2..=3).contains(&e) {
-            return fmt_num(v);
-        }
-        return format!(r#"10<tspan dy="-6" font-size="9">{e}</tspan>"#);
+/// The step of a linear axis over `r`: 1, 2, 2.5 or 5 × 10^k, about 6 ticks.
+fn linear_step(r: (f64, f64)) -> Option<f64> {
+    let span = r.1 - r.0;
+    if !(span > 0.0 && span.is_finite()) {
+        return None;
     }
-    fmt_num(v)
+    let mag = 10f64.powf((span / 6.0).log10().floor());
+    let step = [1.0, 2.0, 2.5, 5.0, 10.0]
+        .iter()
+        .map(|m| m * mag)
+        .find(|s| span / s <= 7.5)
+        .unwrap_or(10.0 * mag);
+    Some(step)
+}
+
+/// Decades of a log axis whose labels are plain numbers (0.01 .. 1000); an axis reaching
+/// beyond labels every decade as a power of ten.
+const PLAIN_DECADES: std::ops::RangeInclusive<i32> = -2..=3;
+/// Linear tick values at or above this magnitude are written as m×10^e.
+const LINEAR_SCI_ABOVE: f64 = 1e5;
+
+/// The labels of the major ticks `values` of axis `a` (range `r`), in one style per axis:
+/// on a log axis all plain numbers or all powers of ten; on a linear axis all with the
+/// decimals of the step, or all as m×10^e with one exponent (SVG markup, escaped).
+pub(super) fn tick_labels(a: &Axis, r: (f64, f64), values: &[f64]) -> Vec<String> {
+    if a.log {
+        let exps: Vec<i32> = values.iter().map(|v| v.log10().round() as i32).collect();
+        let plain = exps.iter().all(|e| PLAIN_DECADES.contains(e));
+        return exps
+            .iter()
+            .zip(values)
+            .map(|(&e, &v)| {
+                if plain {
+                    fmt_num(v)
+                } else {
+                    power_of_ten(1.0, 0, e)
+                }
+            })
+            .collect();
+    }
+    let step = linear_step(r).unwrap_or(1.0);
+    let top = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if top >= LINEAR_SCI_ABOVE {
+        let e = top.log10().floor() as i32;
+        let d = decimals(step / 10f64.powi(e));
+        return values
+            .iter()
+            .map(|&v| power_of_ten(v / 10f64.powi(e), d, e))
+            .collect();
+    }
+    let d = decimals(step);
+    values
+        .iter()
+        .map(|&v| format!("{v:.d$}").replace('-', "−"))
+        .collect()
+}
+
+/// Decimals that show a multiple of `step` exactly (2.5 needs one more than 2).
+fn decimals(step: f64) -> usize {
+    (0..=9)
+        .find(|&d| {
+            let s = step * 10f64.powi(d);
+            (s - s.round()).abs() < 1e-6 * s.max(1.0)
+        })
+        .unwrap_or(9) as usize
+}
+
+/// `m×10^e` as SVG text (mantissa with `d` decimals; `10^e` alone when m = 1 and d = 0).
+fn power_of_ten(m: f64, d: usize, e: i32) -> String {
+    let sup = format!(
+        r#"10<tspan dy="-6" font-size="9">{}</tspan>"#,
+        super::escape(&e.to_string()).replace('-', "−")
+    );
+    if m == 1.0 && d == 0 {
+        sup
+    } else {
+        format!("{}×{sup}", format!("{m:.d$}").replace('-', "−"))
+    }
 }

@@ -1,7 +1,8 @@
 //! Heat maps on a grid of cell centres, several panels sharing one colour bar.
 
-use super::axis::{ticks, Axis};
-use super::{escape, fmt_num, header, subtitle_lines, title};
+use super::axis::{tick_labels, ticks, Axis};
+use super::overlay;
+use super::{escape, header, rich, subtitle_lines, title};
 use std::fmt::Write as _;
 
 /// One heat map: values on a regular grid of cell centres.
@@ -41,6 +42,13 @@ pub struct HeatPanel {
     pub columns: usize,
     /// Fixed colour range; `None` spans the valid values.
     pub range: Option<(f64, f64)>,
+    /// The robot's frame in the maps' coordinates (x0, y0, x1, y1), drawn dashed; the
+    /// panels grow to show it.
+    pub frame: Option<[f64; 4]>,
+    /// The anchors in the maps' coordinates, drawn as squares (inside the panels' view).
+    pub anchors: Vec<(f64, f64)>,
+    /// Contour lines at the colour bar's labelled values.
+    pub contours: bool,
 }
 
 /// Where the panels, the colour bar and the document edges are (px).
@@ -79,7 +87,7 @@ impl HeatPanel {
         let (span_x, span_y) = self
             .maps
             .first()
-            .map(|m| (extent(&m.x), extent(&m.y)))
+            .map(|m| self.view(m))
             .unwrap_or(((0.0, 1.0), (0.0, 1.0)));
         let aspect = ((span_y.1 - span_y.0) / (span_x.1 - span_x.0)).clamp(0.25, 4.0);
         let pw = if single { 460.0 } else { 230.0 };
@@ -95,6 +103,9 @@ impl HeatPanel {
         let nsub = subtitle_lines(w, &self.subtitle).len() as f64;
         let mt0 = mt0 + 46.0 + 15.0 * nsub;
         let h = h + 46.0 + 15.0 * nsub;
+        // Room for the colour bar's key rows under it.
+        let key = KEY_PX + KEY_ROW_PX * self.key_rows() as f64;
+        let h = h.max(mt0 + cap + colour_bar_height(rows, ph, cap, gap_y) + key);
         let l = Layout {
             cols,
             rows,
@@ -119,6 +130,43 @@ impl HeatPanel {
         self.colour_bar(&mut o, &l, (vmin, vmax));
         o.push_str("</svg>\n");
         o
+    }
+
+    /// The data range a panel shows: its grid, grown to the frame and the anchors.
+    fn view(&self, m: &HeatMap) -> ((f64, f64), (f64, f64)) {
+        let (mut ex, mut ey) = (extent(&m.x), extent(&m.y));
+        let frame = self.frame.map(|[a, b, c, d]| [(a, b), (c, d)]);
+        for (x, y) in frame.iter().flatten().chain(&self.anchors) {
+            if x.is_finite() && y.is_finite() {
+                ex = (ex.0.min(*x), ex.1.max(*x));
+                ey = (ey.0.min(*y), ey.1.max(*y));
+            }
+        }
+        // A margin so that the frame and the anchors' squares are not cut by the border.
+        let grew = ex != extent(&m.x) || ey != extent(&m.y);
+        let pad = if grew {
+            VIEW_PAD * (ex.1 - ex.0).max(ey.1 - ey.0)
+        } else {
+            0.0
+        };
+        ((ex.0 - pad, ex.1 + pad), (ey.0 - pad, ey.1 + pad))
+    }
+
+    /// Rows of the colour bar's key besides the hatched cells: contour, frame, anchor.
+    fn key_rows(&self) -> usize {
+        usize::from(self.contours) + 2 * usize::from(self.frame.is_some())
+    }
+
+    /// The contour levels: the colour bar's labelled values strictly inside the range.
+    fn levels(&self, (vmin, vmax): (f64, f64)) -> Vec<f64> {
+        if !self.contours {
+            return Vec::new();
+        }
+        major_ticks((vmin, vmax))
+            .into_iter()
+            .map(|(v, _)| v)
+            .filter(|&v| v > vmin && v < vmax)
+            .collect()
     }
 
     /// The colour range: fixed, or spanning the valid values.
@@ -149,8 +197,7 @@ impl HeatPanel {
         let m = &self.maps[k];
         let (pw, ph) = (l.pw, l.ph);
         let (x0, y0) = l.origin(k);
-        let ex = extent(&m.x);
-        let ey = extent(&m.y);
+        let (ex, ey) = self.view(m);
         let nx = m.x.len();
         let ny = m.y.len();
         let sx = pw / (ex.1 - ex.0);
@@ -163,7 +210,7 @@ impl HeatPanel {
                 r#"<text x="{:.1}" y="{:.1}" font-size="12" text-anchor="middle">{}</text>"#,
                 x0 + pw / 2.0,
                 y0 - 5.0,
-                escape(&m.caption)
+                rich(&m.caption, 12.0)
             );
         }
         for iy in 0..ny {
@@ -195,6 +242,11 @@ impl HeatPanel {
                 );
             }
         }
+        for level in self.levels((vmin, vmax)) {
+            let segs = overlay::contour(&m.x, &m.y, &m.values, level);
+            overlay::draw_contours(o, &segs, &px, &py);
+        }
+        overlay::draw_frame(o, self.frame, &self.anchors, &px, &py);
         let _ = writeln!(
             o,
             r##"<rect x="{x0:.1}" y="{y0:.1}" width="{pw:.1}" height="{ph:.1}" fill="none" stroke="#444" stroke-width="1"/>"##
@@ -203,14 +255,14 @@ impl HeatPanel {
             marker(o, (px(*mx), py(*my)), (x0, y0, pw), text);
         }
         // Axis ticks: a few nice values.
-        for v in major_ticks(ex) {
+        for (v, label) in major_ticks(ex) {
             let x = px(v);
             let line = (x, y0 + ph, x, y0 + ph + 4.0);
-            tick(o, line, (x, y0 + ph + 16.0), MIDDLE, v);
+            tick(o, line, (x, y0 + ph + 16.0), MIDDLE, &label);
         }
-        for v in major_ticks(ey) {
+        for (v, label) in major_ticks(ey) {
             let y = py(v);
-            tick(o, (x0 - 4.0, y, x0, y), (x0 - 6.0, y + 4.0), END, v);
+            tick(o, (x0 - 4.0, y, x0, y), (x0 - 6.0, y + 4.0), END, &label);
         }
         let (row, col) = (k / l.cols, k % l.cols);
         if row == l.rows - 1 || k + l.cols >= self.maps.len() {
@@ -219,7 +271,7 @@ impl HeatPanel {
                 r#"<text x="{:.1}" y="{:.1}" font-size="12" text-anchor="middle">{}</text>"#,
                 x0 + pw / 2.0,
                 y0 + ph + 32.0,
-                escape(&self.x_label)
+                rich(&self.x_label, 12.0)
             );
         }
         if col == 0 {
@@ -227,7 +279,7 @@ impl HeatPanel {
             let _ = writeln!(
                 o,
                 r#"<text x="{tx:.1}" y="{ty:.1}" font-size="12" text-anchor="middle" transform="rotate(-90 {tx:.1} {ty:.1})">{}</text>"#,
-                escape(&self.y_label)
+                rich(&self.y_label, 12.0)
             );
         }
     }
@@ -237,7 +289,7 @@ impl HeatPanel {
         let (cols, rows) = (l.cols, l.rows);
         let bx = l.ml + cols as f64 * l.pw + (cols - 1) as f64 * l.gap_x + 24.0;
         let by = l.mt0 + l.cap;
-        let bh = (rows as f64 * (l.ph + l.cap) + (rows - 1) as f64 * l.gap_y - l.cap).min(320.0);
+        let bh = colour_bar_height(rows, l.ph, l.cap, l.gap_y);
         let steps = COLOUR_BAR_STEPS;
         for i in 0..steps {
             let t0 = i as f64 / steps as f64;
@@ -253,21 +305,21 @@ impl HeatPanel {
             o,
             r##"<rect x="{bx:.1}" y="{by:.1}" width="16" height="{bh:.1}" fill="none" stroke="#444"/>"##
         );
-        for v in major_ticks((vmin, vmax)) {
+        for (v, label) in major_ticks((vmin, vmax)) {
             let yy = by + bh * (1.0 - (v - vmin) / (vmax - vmin));
             tick(
                 o,
                 (bx + 16.0, yy, bx + 20.0, yy),
                 (bx + 22.0, yy + 4.0),
                 "",
-                v,
+                &label,
             );
         }
         let (tx, ty) = (bx + 8.0, by + bh + 18.0);
         let _ = writeln!(
             o,
             r#"<text x="{tx:.1}" y="{ty:.1}" font-size="12" text-anchor="middle">{}</text>"#,
-            escape(&self.value_label)
+            rich(&self.value_label, 12.0)
         );
         let _ = writeln!(
             o,
@@ -277,8 +329,28 @@ impl HeatPanel {
             ty + 38.0,
             escape(&self.invalid_label)
         );
+        for v in self.levels((vmin, vmax)) {
+            let yy = by + bh * (1.0 - (v - vmin) / (vmax - vmin));
+            let seg = [((0.0, yy), (16.0, yy))];
+            overlay::draw_contours(o, &seg, &|x| bx + x, &|y| y);
+        }
+        let at = (bx, ty + 48.0);
+        overlay::draw_key(o, at, self.contours, self.frame.is_some());
     }
 }
+
+/// Height of the colour bar beside `rows` rows of panels of height `ph`, px (at most
+/// 320 px: a taller bar reads no better).
+fn colour_bar_height(rows: usize, ph: f64, cap: f64, gap_y: f64) -> f64 {
+    (rows as f64 * (ph + cap) + (rows - 1) as f64 * gap_y - cap).min(320.0)
+}
+
+/// Space under the colour bar for its label and the hatched-cell key, px.
+const KEY_PX: f64 = 72.0;
+/// One more row of the key, px.
+const KEY_ROW_PX: f64 = 16.0;
+/// Margin of a view grown to the frame, as a fraction of its larger side.
+const VIEW_PAD: f64 = 0.03;
 
 /// Colour-bar bands: enough that the steps of the piecewise-linear map do not show.
 const COLOUR_BAR_STEPS: usize = 64;
@@ -287,28 +359,24 @@ const COLOUR_BAR_STEPS: usize = 64;
 const MIDDLE: &str = r#" text-anchor="middle""#;
 const END: &str = r#" text-anchor="end""#;
 
-/// The major ticks of a linear axis spanning `range`.
-fn major_ticks(range: (f64, f64)) -> Vec<f64> {
+/// The major ticks of a linear axis spanning `range`, with their labels (one style).
+fn major_ticks(range: (f64, f64)) -> Vec<(f64, String)> {
     let a = Axis::linear("").with_range(range.0, range.1);
-    ticks(&a, range)
+    let v: Vec<f64> = ticks(&a, range)
         .into_iter()
         .filter(|&(_, major)| major)
         .map(|(v, _)| v)
-        .collect()
+        .collect();
+    let labels = tick_labels(&a, range, &v);
+    v.into_iter().zip(labels).collect()
 }
 
 /// One tick: a short line (x1, y1, x2, y2) and its value at `at`.
-fn tick(o: &mut String, line: (f64, f64, f64, f64), at: (f64, f64), anchor: &str, v: f64) {
+fn tick(o: &mut String, line: (f64, f64, f64, f64), at: (f64, f64), anchor: &str, v: &str) {
     let _ = writeln!(
         o,
         r##"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="#444"/><text x="{:.1}" y="{:.1}" font-size="11"{anchor}>{}</text>"##,
-        line.0,
-        line.1,
-        line.2,
-        line.3,
-        at.0,
-        at.1,
-        fmt_num(v)
+        line.0, line.1, line.2, line.3, at.0, at.1, v
     );
 }
 

@@ -1,7 +1,8 @@
 //! Line and scatter plots with a legend.
 
-use super::axis::{fit_range, tick_label, ticks, Axis, Mapper};
-use super::{escape, header, subtitle_lines, title, PALETTE};
+use super::axis::{fit_range, tick_labels, ticks, Axis, Mapper};
+use super::legend::{self, LegendEntry, Segment};
+use super::{escape, header, rich, subtitle_lines, title, PALETTE};
 use std::fmt::Write as _;
 
 /// How a series is drawn.
@@ -119,12 +120,19 @@ impl LinePlot {
             pw,
             ph,
         };
+        let entries = c.legend_entries();
+        let place = legend::place(&entries, (ml, mt, pw, ph), &c.drawn_segments());
+        // A legend outside widens the document by its width (the plot keeps its size).
+        let w = if place.outside {
+            place.x + place.w + mr
+        } else {
+            w
+        };
         let mut o = header(w, h);
         title(&mut o, w, &self.title, &self.subtitle);
-        let pts_px = c.drawn_pixels();
         c.frame_and_ticks(&mut o, xr, yr, h);
-        let legend = c.data(&mut o);
-        c.legend(&mut o, &legend, &pts_px);
+        c.data(&mut o);
+        legend::draw(&mut o, &entries, &place);
         o.push_str("</svg>\n");
         o
     }
@@ -155,9 +163,6 @@ fn usable(a: &Axis, v: f64) -> bool {
     v.is_finite() && (!a.log || v > 0.0)
 }
 
-/// A legend entry: name, colour, mark.
-type LegendEntry = (String, String, Mark);
-
 /// A plot being drawn: its data-to-pixel maps and plot area (px).
 struct Canvas<'a> {
     plot: &'a LinePlot,
@@ -175,43 +180,75 @@ impl Canvas<'_> {
         usable(&self.plot.x, x) && usable(&self.plot.y, y)
     }
 
-    /// Pixels covered by the data (points, segments sampled, reference lines), so the
-    /// legend can avoid them.
-    fn drawn_pixels(&self) -> Vec<(f64, f64)> {
-        let (xmap, ymap) = (&self.xmap, &self.ymap);
-        let mut pts_px: Vec<(f64, f64)> = Vec::new();
+    /// The drawn data in px: line segments, points (segments of length 0) and the
+    /// reference lines, so that the legend can avoid them.
+    fn drawn_segments(&self) -> Vec<Segment> {
+        let mut out: Vec<Segment> = Vec::new();
         for s in &self.plot.series {
             let mut prev: Option<(f64, f64)> = None;
             for &(x, y) in &s.points {
-                if self.usable(x, y) {
-                    let p = (xmap.map(x), ymap.map(y));
-                    // Sample along segments too, so the legend avoids lines, not just points.
-                    if let Some(q) = prev {
-                        for k in 1..8 {
-                            let t = k as f64 / 8.0;
-                            pts_px.push((q.0 + (p.0 - q.0) * t, q.1 + (p.1 - q.1) * t));
-                        }
-                    }
-                    pts_px.push(p);
-                    prev = if s.mark == Mark::Points {
-                        None
-                    } else {
-                        Some(p)
-                    };
-                } else {
+                if !self.usable(x, y) {
                     prev = None;
+                    continue;
                 }
+                let p = (self.xmap.map(x), self.ymap.map(y));
+                match prev {
+                    Some(q) if s.mark != Mark::Points => out.push((q, p)),
+                    _ => out.push((p, p)),
+                }
+                prev = Some(p);
             }
         }
         for l in &self.plot.hlines {
             if usable(&self.plot.y, l.y) {
-                let py = ymap.map(l.y);
-                for k in 0..=40 {
-                    pts_px.push((self.ml + self.pw * k as f64 / 40.0, py));
-                }
+                let py = self.ymap.map(l.y);
+                out.push(((self.ml, py), (self.ml + self.pw, py)));
             }
         }
-        pts_px
+        out
+    }
+
+    /// The legend rows: reference lines first, then the named series (palette colours
+    /// assigned in order to the series without one).
+    fn legend_entries(&self) -> Vec<LegendEntry> {
+        let mut out = Vec::new();
+        for l in &self.plot.hlines {
+            if usable(&self.plot.y, l.y) {
+                out.push(LegendEntry {
+                    name: l.name.clone(),
+                    color: l.color.clone(),
+                    mark: Mark::Dashed,
+                    dash: String::new(),
+                });
+            }
+        }
+        for (s, color) in self.plot.series.iter().zip(self.series_colors()) {
+            if !s.name.is_empty() {
+                out.push(LegendEntry {
+                    name: s.name.clone(),
+                    color,
+                    mark: s.mark,
+                    dash: String::new(),
+                });
+            }
+        }
+        out
+    }
+
+    /// Each series' colour: its own, or the next palette colour.
+    fn series_colors(&self) -> Vec<String> {
+        let mut next = 0usize;
+        self.plot
+            .series
+            .iter()
+            .map(|s| match &s.color {
+                Some(c) => c.clone(),
+                None => {
+                    next += 1;
+                    PALETTE[(next - 1) % PALETTE.len()].to_string()
+                }
+            })
+            .collect()
     }
 
     /// Frame, grid, tick labels and axis labels.
@@ -222,102 +259,86 @@ impl Canvas<'_> {
             o,
             r##"<rect x="{ml:.1}" y="{mt:.1}" width="{pw:.1}" height="{ph:.1}" fill="#ffffff" stroke="#444" stroke-width="1"/>"##
         );
-        for (v, major) in ticks(px_axis, xr) {
-            let px = self.xmap.map(v);
-            let (stroke, dash) = if major {
-                ("#d0d0d0", "")
-            } else {
-                ("#ececec", "")
-            };
-            let _ = writeln!(
-                o,
-                r#"<line x1="{px:.1}" y1="{mt:.1}" x2="{px:.1}" y2="{:.1}" stroke="{stroke}" stroke-width="1"{dash}/>"#,
-                mt + ph
-            );
-            if major {
-                let _ = writeln!(
-                    o,
-                    r#"<text x="{px:.1}" y="{:.1}" font-size="12" text-anchor="middle">{}</text>"#,
-                    mt + ph + 16.0,
-                    tick_label(px_axis, v)
-                );
-            }
-        }
-        for (v, major) in ticks(py_axis, yr) {
-            let py = self.ymap.map(v);
-            let stroke = if major { "#d0d0d0" } else { "#ececec" };
-            let _ = writeln!(
-                o,
-                r#"<line x1="{ml:.1}" y1="{py:.1}" x2="{:.1}" y2="{py:.1}" stroke="{stroke}" stroke-width="1"/>"#,
-                ml + pw
-            );
-            if major {
-                let _ = writeln!(
-                    o,
-                    r#"<text x="{:.1}" y="{:.1}" font-size="12" text-anchor="end">{}</text>"#,
-                    ml - 6.0,
-                    py + 4.0,
-                    tick_label(py_axis, v)
-                );
-            }
+        for (axis, r, vertical) in [(px_axis, xr, false), (py_axis, yr, true)] {
+            self.grid_and_labels(o, axis, r, vertical);
         }
         let _ = writeln!(
             o,
             r#"<text x="{:.1}" y="{:.1}" font-size="13" text-anchor="middle">{}</text>"#,
             ml + pw / 2.0,
             h - 14.0,
-            escape(&px_axis.label)
+            rich(&px_axis.label, 13.0)
         );
         let _ = writeln!(
             o,
             r#"<text x="16" y="{:.1}" font-size="13" text-anchor="middle" transform="rotate(-90 16 {:.1})">{}</text>"#,
             mt + ph / 2.0,
             mt + ph / 2.0,
-            escape(&py_axis.label)
+            rich(&py_axis.label, 13.0)
         );
     }
 
-    /// Reference lines and series, clipped to the plot area; returns the legend entries.
-    fn data(&self, o: &mut String) -> Vec<LegendEntry> {
+    /// The grid lines of one axis and the labels of its major ticks (one style per axis).
+    fn grid_and_labels(&self, o: &mut String, axis: &Axis, r: (f64, f64), vertical: bool) {
+        let (ml, mt, pw, ph) = (self.ml, self.mt, self.pw, self.ph);
+        let t = ticks(axis, r);
+        let majors: Vec<f64> = t.iter().filter(|x| x.1).map(|x| x.0).collect();
+        let labels = tick_labels(axis, r, &majors);
+        for &(v, major) in &t {
+            let stroke = if major { "#d0d0d0" } else { "#ececec" };
+            let (x1, y1, x2, y2) = if vertical {
+                let py = self.ymap.map(v);
+                (ml, py, ml + pw, py)
+            } else {
+                let px = self.xmap.map(v);
+                (px, mt, px, mt + ph)
+            };
+            let _ = writeln!(
+                o,
+                r#"<line x1="{x1:.1}" y1="{y1:.1}" x2="{x2:.1}" y2="{y2:.1}" stroke="{stroke}" stroke-width="1"/>"#
+            );
+        }
+        for (v, label) in majors.iter().zip(&labels) {
+            let (x, y, anchor) = if vertical {
+                (ml - 6.0, self.ymap.map(*v) + 4.0, "end")
+            } else {
+                (self.xmap.map(*v), mt + ph + 16.0, "middle")
+            };
+            let _ = writeln!(
+                o,
+                r#"<text x="{x:.1}" y="{y:.1}" font-size="12" text-anchor="{anchor}" class="tick">{label}</text>"#
+            );
+        }
+    }
+
+    /// Series, then the reference lines over them (dashed, so what they cross shows
+    /// through), clipped to the plot area.
+    fn data(&self, o: &mut String) {
         let (ml, mt, pw, ph) = (self.ml, self.mt, self.pw, self.ph);
         let _ = writeln!(
             o,
             r#"<defs><clipPath id="plotarea"><rect x="{ml:.1}" y="{mt:.1}" width="{pw:.1}" height="{ph:.1}"/></clipPath></defs>"#
         );
-        let _ = writeln!(o, r#"<g clip-path="url(#plotarea)">"#);
-        let mut legend: Vec<LegendEntry> = Vec::new();
-        for l in &self.plot.hlines {
+        let _ = writeln!(o, r#"<g class="data" clip-path="url(#plotarea)">"#);
+        let mut placed: Vec<(f64, f64)> = Vec::new();
+        for (s, color) in self.plot.series.iter().zip(self.series_colors()) {
+            self.series(o, s, &escape(&color), &mut placed);
+        }
+        let n = self.plot.hlines.len();
+        for (k, l) in self.plot.hlines.iter().enumerate() {
             if !usable(&self.plot.y, l.y) {
                 continue;
             }
             let py = self.ymap.map(l.y);
+            let (dash, offset) = hline_dash(k, n);
             let _ = writeln!(
                 o,
-                r#"<line x1="{ml:.1}" y1="{py:.1}" x2="{:.1}" y2="{py:.1}" stroke="{}" stroke-width="1.5" stroke-dasharray="8 4"/>"#,
+                r#"<line x1="{ml:.1}" y1="{py:.1}" x2="{:.1}" y2="{py:.1}" stroke="{}" stroke-width="1.8" stroke-dasharray="{dash}" stroke-dashoffset="{offset}"/>"#,
                 ml + pw,
                 escape(&l.color)
             );
-            legend.push((l.name.clone(), l.color.clone(), Mark::Dashed));
-        }
-        let mut next = 0usize;
-        let mut placed: Vec<(f64, f64)> = Vec::new();
-        for s in &self.plot.series {
-            let color = match &s.color {
-                Some(c) => c.clone(),
-                None => {
-                    let c = PALETTE[next % PALETTE.len()].to_string();
-                    next += 1;
-                    c
-                }
-            };
-            let col = escape(&color);
-            self.series(o, s, &col, &mut placed);
-            if !s.name.is_empty() {
-                legend.push((s.name.clone(), color, s.mark));
-            }
         }
         let _ = writeln!(o, "</g>");
-        legend
     }
 
     /// One series: its lines, its circles and its point labels (a label that would
@@ -386,96 +407,18 @@ impl Canvas<'_> {
             }
         }
     }
-
-    /// The legend box, in the candidate position covering the fewest drawn pixels.
-    fn legend(&self, o: &mut String, legend: &[LegendEntry], pts_px: &[(f64, f64)]) {
-        if legend.is_empty() {
-            return;
-        }
-        let (ml, mt, pw, ph) = (self.ml, self.mt, self.pw, self.ph);
-        let lw = legend
-            .iter()
-            .map(|(n, _, _)| n.chars().count())
-            .max()
-            .unwrap_or(0) as f64
-            * 6.6
-            + 42.0;
-        let lh = legend.len() as f64 * 17.0 + 8.0;
-        // The corner whose box covers the fewest drawn points.
-        let (right, left, midx) = (ml + pw - lw - 8.0, ml + 8.0, ml + (pw - lw) / 2.0);
-        let (top, bottom, midy) = (mt + 8.0, mt + ph - lh - 8.0, mt + (ph - lh) / 2.0);
-        let corners = [
-            (right, top),
-            (left, top),
-            (right, bottom),
-            (left, bottom),
-            (right, midy),
-            (left, midy),
-            (midx, top),
-            (midx, bottom),
-            (midx, midy),
-        ];
-        let cover = |&(x, y): &(f64, f64)| {
-            pts_px
-                .iter()
-                .filter(|p| p.0 >= x && p.0 <= x + lw && p.1 >= y && p.1 <= y + lh)
-                .count()
-        };
-        let (lx, ly) = corners
-            .iter()
-            .copied()
-            .min_by_key(|c| cover(c))
-            .unwrap_or(corners[0]);
-        let _ = writeln!(
-            o,
-            r##"<rect x="{lx:.1}" y="{ly:.1}" width="{lw:.1}" height="{lh:.1}" fill="#ffffff" fill-opacity="0.9" stroke="#999" stroke-width="0.8"/>"##
-        );
-        for (i, (name, color, mark)) in legend.iter().enumerate() {
-            let yy = ly + 14.0 + i as f64 * 17.0;
-            legend_mark(o, lx, yy, &escape(color), *mark);
-            let _ = writeln!(
-                o,
-                r#"<text x="{:.1}" y="{yy:.1}" font-size="12">{}</text>"#,
-                lx + 34.0,
-                escape(name)
-            );
-        }
-    }
 }
 
-/// The sample mark of one legend entry at (`lx`, `yy`).
-fn legend_mark(o: &mut String, lx: f64, yy: f64, col: &str, mark: Mark) {
-    match mark {
-        Mark::Points => {
-            let _ = writeln!(
-                o,
-                r#"<circle cx="{:.1}" cy="{:.1}" r="3.5" fill="{col}"/>"#,
-                lx + 17.0,
-                yy - 4.0
-            );
-        }
-        _ => {
-            let dash = if mark == Mark::Dashed {
-                r#" stroke-dasharray="6 4""#
-            } else {
-                ""
-            };
-            let _ = writeln!(
-                o,
-                r#"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{col}" stroke-width="2"{dash}/>"#,
-                lx + 6.0,
-                yy - 4.0,
-                lx + 28.0,
-                yy - 4.0
-            );
-            if mark == Mark::LinePoints {
-                let _ = writeln!(
-                    o,
-                    r#"<circle cx="{:.1}" cy="{:.1}" r="3" fill="{col}"/>"#,
-                    lx + 17.0,
-                    yy - 4.0
-                );
-            }
-        }
-    }
+/// Dash length of the reference lines, px.
+const HLINE_DASH_PX: f64 = 7.0;
+
+/// `stroke-dasharray` and `stroke-dashoffset` of reference line `k` of `n`: dashes of
+/// [`HLINE_DASH_PX`] with gaps that leave room for the other n − 1, each line shifted by
+/// one dash, so reference lines at the same value alternate instead of hiding each other.
+fn hline_dash(k: usize, n: usize) -> (String, String) {
+    let gap = HLINE_DASH_PX * (n.max(2) - 1) as f64;
+    (
+        format!("{HLINE_DASH_PX} {gap}"),
+        format!("{}", -HLINE_DASH_PX * k as f64),
+    )
 }

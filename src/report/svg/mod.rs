@@ -13,11 +13,14 @@
 //! | [`line_plot`] | [`LinePlot`] |
 //! | [`modes`] | the mode-shape figure (axonometric panels) |
 //! | [`heat_map`] | [`HeatPanel`], [`HeatMap`], the colour map |
+//! | [`overlay`] | over a heat map: contour lines (marching squares), the frame, the anchors |
 
 pub mod axis;
 pub mod heat_map;
+mod legend;
 pub mod line_plot;
 pub mod modes;
+pub mod overlay;
 
 pub use axis::Axis;
 pub use heat_map::{colormap, HeatMap, HeatPanel};
@@ -44,6 +47,88 @@ pub fn escape(s: &str) -> String {
         }
     }
     o
+}
+
+/// Letters written with a subscript after `_` (`T_min`, `k_min`, `f1,ref`): a whitelist,
+/// so that names with underscores (files, scenes) keep theirs.
+const SUBSCRIPT_WORDS: [&str; 5] = ["min", "max", "ref", "cont", "ee"];
+/// Tails that stay in the subscript after `fN` (`f1,ref` → f with subscript "1,ref").
+const SUBSCRIPT_TAILS: [&str; 2] = [",ref", ",cont"];
+/// A subscript's size and drop, fractions of the text's font size.
+const SUB_SIZE: f64 = 0.75;
+const SUB_DROP: f64 = 0.25;
+
+/// Escape `s` for SVG text of `font_px` and write its subscripts as subscripts: a lone
+/// letter followed by `_` and one of [`SUBSCRIPT_WORDS`] (`T_min` → T with subscript min),
+/// and `f` followed by digits (`f1` → f with subscript 1, `f1,ref` keeps ",ref" in it), each
+/// standing alone (not inside a longer word). Subscripts are `tspan`s shifted with `dy` and
+/// shifted back after, which every SVG renderer supports.
+pub fn rich(s: &str, font_px: f64) -> String {
+    let c: Vec<char> = s.chars().collect();
+    let mut runs: Vec<(String, bool)> = vec![(String::new(), false)];
+    let mut i = 0;
+    while i < c.len() {
+        let alone = i == 0 || !(c[i - 1].is_alphanumeric() || c[i - 1] == '_');
+        match subscript_at(&c, i).filter(|_| alone && c[i].is_ascii_alphabetic()) {
+            Some(end) => {
+                let skip = usize::from(c[i + 1] == '_');
+                runs.push((c[i + 1 + skip..end].iter().collect(), true));
+                if let Some(r) = runs.iter_mut().rev().nth(1) {
+                    r.0.push(c[i]);
+                }
+                runs.push((String::new(), false));
+                i = end;
+            }
+            None => {
+                if let Some(r) = runs.last_mut() {
+                    r.0.push(c[i]);
+                }
+                i += 1;
+            }
+        }
+    }
+    let (size, drop) = (font_px * SUB_SIZE, font_px * SUB_DROP);
+    let mut o = String::new();
+    let mut shifted = false;
+    for (text, sub) in runs.iter().filter(|r| !r.0.is_empty()) {
+        let t = escape(text);
+        if *sub {
+            let _ = write!(
+                o,
+                r#"<tspan dy="{drop:.1}" font-size="{size:.1}">{t}</tspan>"#
+            );
+        } else if shifted {
+            let _ = write!(o, r#"<tspan dy="{:.1}">{t}</tspan>"#, -drop);
+        } else {
+            o.push_str(&t);
+        }
+        shifted = *sub;
+    }
+    o
+}
+
+/// The end of the subscript starting after the letter at `i` (module docs of [`rich`]).
+fn subscript_at(c: &[char], i: usize) -> Option<usize> {
+    let ends_word = |j: usize| j >= c.len() || !(c[j].is_alphanumeric() || c[j] == '_');
+    let rest: String = c[i + 1..].iter().collect();
+    if let Some(r) = rest.strip_prefix('_') {
+        let w = SUBSCRIPT_WORDS.iter().find(|w| r.starts_with(**w))?;
+        let end = i + 2 + w.len();
+        return ends_word(end).then_some(end);
+    }
+    if c[i] != 'f' {
+        return None;
+    }
+    let digits = rest.chars().take_while(char::is_ascii_digit).count();
+    if digits == 0 {
+        return None;
+    }
+    let mut end = i + 1 + digits;
+    let after: String = c[end..].iter().collect();
+    if let Some(t) = SUBSCRIPT_TAILS.iter().find(|t| after.starts_with(**t)) {
+        end += t.len();
+    }
+    ends_word(end).then_some(end)
 }
 
 pub(crate) fn header(w: f64, h: f64) -> String {
@@ -80,7 +165,7 @@ pub(crate) fn title(o: &mut String, w: f64, t: &str, sub: &str) -> f64 {
         o,
         r#"<text x="{:.1}" y="24" font-size="16" font-weight="bold" text-anchor="middle">{}</text>"#,
         w / 2.0,
-        escape(t)
+        rich(t, 16.0)
     );
     let lines = subtitle_lines(w, sub);
     for (i, l) in lines.iter().enumerate() {
@@ -89,7 +174,7 @@ pub(crate) fn title(o: &mut String, w: f64, t: &str, sub: &str) -> f64 {
             r##"<text x="{:.1}" y="{:.0}" font-size="12" fill="#333" text-anchor="middle">{}</text>"##,
             w / 2.0,
             42.0 + 15.0 * i as f64,
-            escape(l)
+            rich(l, 12.0)
         );
     }
     40.0 + 15.0 * lines.len() as f64
@@ -169,10 +254,40 @@ mod tests {
             }],
             columns: 3,
             range: None,
+            frame: Some([-2.0, -2.0, 2.0, 2.0]),
+            anchors: vec![(-2.0, -2.0), (2.0, 2.0)],
+            contours: true,
         };
         let s = h.to_svg();
         assert!(balanced(&s), "{s}");
         assert!(s.contains("url(#hatch)"));
+    }
+
+    #[test]
+    fn subscripts() {
+        let sub = |t: &str| format!(r#"<tspan dy="3.0" font-size="9.0">{t}</tspan>"#);
+        let back = |t: &str| format!(r#"<tspan dy="-3.0">{t}</tspan>"#);
+        assert_eq!(
+            rich("T_min (N)", 12.0),
+            format!("T{}{}", sub("min"), back(" (N)"))
+        );
+        assert_eq!(rich("f1", 12.0), format!("f{}", sub("1")));
+        assert_eq!(
+            rich("|f1 − f1,ref|", 12.0),
+            format!(
+                "|f{}{}{}{}",
+                sub("1"),
+                back(" − f"),
+                sub("1,ref"),
+                back("|")
+            )
+        );
+        // Inside words, unknown subscripts and escaping: left as they are.
+        assert_eq!(
+            rich("fig12 my_min x_y a<b", 12.0),
+            "fig12 my_min x_y a&lt;b"
+        );
+        assert_eq!(rich("f1x", 12.0), "f1x");
     }
 
     #[test]
