@@ -6,6 +6,7 @@
 //! solver's first root ([`SagModalSolver`]). Nothing here allocates after [`SagPipeline::new`].
 
 use super::EstimatorError;
+use crate::cable::sagged::SagContinuousParams;
 use crate::kinematics::{Geometry, Pose};
 use crate::modal::sag::{
     assemble_sagged, SagCableFrame, SagDenseCable, SagEndEffector, SagLoadError, SagModalSolver,
@@ -49,9 +50,11 @@ impl SagPipeline {
     pub(super) fn new(scene: &Scene, tension: TensionParams, modal: ModalParams) -> SagPipeline {
         let n = scene.n_cables();
         let gn = scene.gravity_m_s2.norm();
-        let n_el = match scene.model.element {
-            ElementKind::Fem => scene.model.elements_per_cable.max(1),
-            _ => 1,
+        let modal = match scene.model.element {
+            ElementKind::Continuous => {
+                SagModalSolver::new_continuous(modal, n, SagContinuousParams::default())
+            }
+            _ => SagModalSolver::new(modal, n, scene.model.elements_per_cable.max(1)),
         };
         let frame = SagCableFrame {
             h: Vector3::x(),
@@ -66,7 +69,7 @@ impl SagPipeline {
                     ..SagTensionParams::default()
                 },
             ),
-            modal: SagModalSolver::new(modal, n, n_el),
+            modal,
             materials: scene
                 .cables
                 .iter()
@@ -167,6 +170,9 @@ impl SagPipeline {
         &self,
         g: &Geometry,
     ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
+        if self.modal.is_continuous() {
+            return Err(ModalError::NotAssemblable);
+        }
         let n = self.frames.len();
         let (m6, k6) = self.modal.ee_matrices();
         let up = self.tension.basis(0)[1];
@@ -195,6 +201,12 @@ fn set_chain(
     cat: &Catenary,
     mu_kg_m: f64,
 ) -> Result<(), EstimatorError> {
+    if modal.is_continuous() {
+        return modal
+            .set_continuous(i, cat, mu_kg_m)
+            .map(|_| ())
+            .map_err(EstimatorError::SagModel);
+    }
     let n_el = scene.model.elements_per_cable.clamp(1, MAX_ELEMENTS);
     modal
         .chain_mut(i)

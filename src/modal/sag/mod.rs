@@ -49,7 +49,9 @@ mod problem;
 pub use dense::{assemble_sagged, SagDenseCable};
 
 use super::{ModalError, ModalParams, Root};
-use crate::cable::sagged::{SagChain, SagChainError};
+use crate::cable::sagged::{
+    SagChain, SagChainError, SagContError, SagContMesh, SagContinuousParams,
+};
 use crate::modal::DynEval;
 use crate::sag::Catenary;
 use nalgebra::{Matrix3, Matrix6, Vector3};
@@ -117,6 +119,9 @@ pub enum SagLoadError {
     /// Cable i's chain could not be set.
     #[error("cable {0}: {1}")]
     Chain(usize, SagChainError),
+    /// Cable i's continuous chain could not be set.
+    #[error("cable {0}: {1}")]
+    Continuous(usize, SagContError),
 }
 
 /// The robot-level structured solver for sagged cables: built once, loaded per pose.
@@ -135,7 +140,23 @@ impl SagModalSolver {
     pub fn new(params: ModalParams, n_cables: usize, n_el_max: usize) -> SagModalSolver {
         SagModalSolver {
             params,
-            problem: SagProblem::new(n_cables, n_el_max),
+            problem: SagProblem::new(n_cables, n_el_max, None),
+            evaluations: 0,
+            last_lambda1: f64::NAN,
+            loaded: false,
+        }
+    }
+
+    /// Room for `n_cables` continuous (N → ∞) cables with the mesh rule `cont` (the only
+    /// allocation); set each with [`Self::set_continuous`] before [`Self::load`].
+    pub fn new_continuous(
+        params: ModalParams,
+        n_cables: usize,
+        cont: SagContinuousParams,
+    ) -> SagModalSolver {
+        SagModalSolver {
+            params,
+            problem: SagProblem::new(n_cables, 1, Some(cont)),
             evaluations: 0,
             last_lambda1: f64::NAN,
             loaded: false,
@@ -151,6 +172,34 @@ impl SagModalSolver {
     /// Cable i's chain.
     pub fn chain(&self, i: usize) -> &SagChain {
         &self.problem.chains[i]
+    }
+
+    /// Whether the solver holds continuous cables ([`Self::new_continuous`]).
+    pub fn is_continuous(&self) -> bool {
+        self.problem.continuous
+    }
+
+    /// Set cable i's continuous chain on catenary `cat` with mass `mu_kg_m` per unstretched
+    /// length (a solver built by [`Self::new_continuous`]). No allocation.
+    pub fn set_continuous(
+        &mut self,
+        i: usize,
+        cat: &Catenary,
+        mu_kg_m: f64,
+    ) -> Result<SagContMesh, SagLoadError> {
+        self.loaded = false;
+        let p = &mut self.problem;
+        if !p.continuous || i >= p.cont.len() {
+            return Err(SagLoadError::CableCount {
+                given: i + 1,
+                capacity: p.cont.len(),
+            });
+        }
+        let mesh = p.cont[i]
+            .set(cat, mu_kg_m)
+            .map_err(|e| SagLoadError::Continuous(i, e))?;
+        p.cont_static[i] = p.cont[i].eval(0.0);
+        Ok(mesh)
     }
 
     /// Load a pose whose chains 0 .. frames.len() are set: each cable's frame, the unit

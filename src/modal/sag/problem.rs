@@ -2,13 +2,16 @@
 //! end-effector, its mass) and the evaluation of D(λ), D'(λ) and the blocked count.
 
 use super::{SagCableFrame, SagEndEffector, SagLoadError};
-use crate::cable::sagged::{SagChain, SagChainEval};
+use crate::cable::sagged::{SagChain, SagChainEval, SagContinuous, SagContinuousParams};
 use crate::modal::attach_map;
 use crate::modal::DynEval;
 use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector3};
 
 /// (row, column) of the six distinct entries of a symmetric 3 × 3 matrix.
 const SYM3: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+/// The mode count reported for continuous cables (infinitely many modes): large enough
+/// for any request, small enough that sums of counts do not overflow.
+pub(super) const CONTINUOUS_MODES: usize = u32::MAX as usize / 2;
 /// |h| must be 1 and h ⟂ up to this (relative): the basis is the caller's, rounding only.
 const BASIS_TOL: f64 = 1e-9;
 
@@ -26,6 +29,11 @@ pub(super) struct CableProj {
 #[derive(Debug, Clone)]
 pub(super) struct SagProblem {
     pub(super) chains: Vec<SagChain>,
+    /// The continuous chains (empty unless the solver was built for them) and their
+    /// cached static evaluations; used instead of `chains` when `continuous`.
+    pub(super) cont: Vec<SagContinuous>,
+    pub(super) cont_static: Vec<SagChainEval>,
+    pub(super) continuous: bool,
     proj: Vec<CableProj>,
     /// Cables loaded.
     pub(super) n: usize,
@@ -43,13 +51,22 @@ pub(super) struct SagProblem {
 
 impl SagProblem {
     /// Room for `n_cables` chains of up to `n_el_max` elements each (the only allocation).
-    pub(super) fn new(n_cables: usize, n_el_max: usize) -> SagProblem {
+    pub(super) fn new(
+        n_cables: usize,
+        n_el_max: usize,
+        continuous: Option<SagContinuousParams>,
+    ) -> SagProblem {
         let zero = CableProj {
             p3: [[0.0; 6]; 4],
             p6: [Matrix6::zeros(); 4],
         };
+        let n_cont = if continuous.is_some() { n_cables } else { 0 };
+        let cont_params = continuous.unwrap_or_default();
         SagProblem {
             chains: (0..n_cables).map(|_| SagChain::new(n_el_max)).collect(),
+            cont: (0..n_cont).map(|_| SagContinuous::new(cont_params)).collect(),
+            cont_static: vec![SagChainEval::default(); n_cont],
+            continuous: continuous.is_some(),
             proj: vec![zero; n_cables],
             n: 0,
             dim: 3,
@@ -200,16 +217,28 @@ impl SagProblem {
     /// D(λ), D'(λ) and Σ_cables blocked count (one evaluation: every chain's recurrence).
     #[inline]
     pub(super) fn eval(&self, lambda: f64) -> DynEval {
-        self.assemble(lambda, |i| self.chains[i].eval(lambda))
+        if self.continuous {
+            self.assemble(lambda, |i| self.cont[i].eval(lambda))
+        } else {
+            self.assemble(lambda, |i| self.chains[i].eval(lambda))
+        }
     }
 
     /// D(0) and D'(0) from the chains' cached static evaluations (no recurrence).
     pub(super) fn static_eval(&self) -> DynEval {
-        self.assemble(0.0, |i| self.chains[i].static_eval())
+        if self.continuous {
+            self.assemble(0.0, |i| self.cont_static[i])
+        } else {
+            self.assemble(0.0, |i| self.chains[i].static_eval())
+        }
     }
 
-    /// Number of natural frequencies: the end-effector's DOF plus every blocked one.
+    /// Number of natural frequencies: the end-effector's DOF plus every blocked one
+    /// (unbounded for continuous cables: [`CONTINUOUS_MODES`]).
     pub(super) fn total_modes(&self) -> usize {
+        if self.continuous {
+            return CONTINUOUS_MODES;
+        }
         self.dim
             + self.chains[..self.n]
                 .iter()
