@@ -118,9 +118,9 @@ pub fn evaluate_with(
     w: &Workers,
 ) -> Result<Vec<PointResult>, StudyError> {
     let n = tr.position_m.len();
-    let jobs: Vec<(usize, usize)> = (0..t_mins.len()).map(|k| (k * n, (k + 1) * n)).collect();
-    evaluate_jobs_with(s, &jobs, n * t_mins.len(), w, |k| {
-        tr.position_m.iter().map(|p| (*p, t_mins[k])).collect()
+    let poses = tr.poses(s);
+    evaluate_jobs_with(s, t_mins.len(), n * t_mins.len(), w, |k| {
+        poses.iter().map(|p| (*p, t_mins[k])).collect()
     })
 }
 
