@@ -8,9 +8,9 @@ use crate::report::map::{map_csv, map_svg, value_names};
 use crate::report::{with_ext, write_file};
 use crate::scene::Scene;
 use crate::study::map::{self as study, Interval, MapConfig, MapResult, Tilt};
-use nalgebra::Vector3;
 use crate::study::points::MAX_MODES;
 use clap::{Args, ValueEnum};
+use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 

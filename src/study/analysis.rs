@@ -175,7 +175,9 @@ fn pose_of(scene: &Scene) -> Pose {
 
 /// The leading `dim` × `dim` block of `m` as rows (3: a point mass, 6: a rigid body).
 fn rows(m: &nalgebra::Matrix6<f64>, dim: usize) -> Vec<Vec<f64>> {
-    (0..dim).map(|r| (0..dim).map(|c| m[(r, c)]).collect()).collect()
+    (0..dim)
+        .map(|r| (0..dim).map(|c| m[(r, c)]).collect())
+        .collect()
 }
 
 /// The report's frame: everything but the modes and the times.
