@@ -185,6 +185,15 @@ impl Trajectory {
         }
     }
 
+    /// The orientation at time `t_s` (s from the start) when the trajectory has one (a CSV
+    /// with quaternion columns; slerp between samples), else `None` (the scene's applies).
+    pub fn orientation_at(&self, t_s: f64) -> Option<[f64; 4]> {
+        match self {
+            Trajectory::Circle(_) => None,
+            Trajectory::Samples(s) => s.orientation_at(t_s),
+        }
+    }
+
     /// Duration of a sampled trajectory, s (`None` for the endless circle).
     pub fn duration_s(&self) -> Option<f64> {
         match self {
