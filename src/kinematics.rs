@@ -258,8 +258,9 @@ mod tests {
             unit_quaternion([1.0, 0.0, 0.0, 0.0]),
             Ok([1.0, 0.0, 0.0, 0.0])
         );
-        // Four printed digits of cos 45°: accepted, and normalised to 1 within rounding.
-        let q = unit_quaternion([0.7071, 0.7071, 0.0, 0.0]).unwrap();
+        // A 60° turn printed to four digits (cos 30° = 0.866, |‖q‖ − 1| ≈ 2e-5): accepted,
+        // and normalised to 1 within rounding.
+        let q = unit_quaternion([0.866, 0.5, 0.0, 0.0]).unwrap();
         let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
         assert!((n - 1.0).abs() < 4.0 * f64::EPSILON, "{n}");
         assert!(matches!(

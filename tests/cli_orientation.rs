@@ -7,7 +7,7 @@ use cablevib::estimator::Estimator;
 use cablevib::kinematics::{rotated_about, unit_quaternion, Pose};
 use cablevib::scene::Scene;
 use cablevib::study::analysis::{analyze, AnalyzeOptions};
-use nalgebra::Vector3;
+use nalgebra::{DMatrix, Vector3};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -40,9 +40,9 @@ fn json(o: &Output) -> serde_json::Value {
     serde_json::from_slice(&o.stdout).unwrap()
 }
 
-/// The stiffness rows of an `analyze --json` object.
-fn stiffness(j: &serde_json::Value) -> Vec<Vec<f64>> {
-    j["stiffness_n_m"]
+/// The stiffness of an `analyze --json` object (square: every row as long as the count).
+fn stiffness(j: &serde_json::Value) -> DMatrix<f64> {
+    let rows: Vec<Vec<f64>> = j["stiffness_n_m"]
         .as_array()
         .unwrap()
         .iter()
@@ -53,7 +53,9 @@ fn stiffness(j: &serde_json::Value) -> Vec<Vec<f64>> {
                 .map(|x| x.as_f64().unwrap())
                 .collect()
         })
-        .collect()
+        .collect();
+    assert!(rows.iter().all(|r| r.len() == rows.len()), "{rows:?}");
+    DMatrix::from_fn(rows.len(), rows.len(), |r, c| rows[r][c])
 }
 
 /// Q_TILT by the command line's rule.
@@ -125,18 +127,17 @@ fn rigid_stiffness_is_6x6_symmetric_with_the_translational_block_unchanged() {
         let mut args = vec!["analyze", BOX, "--json"];
         args.extend(extra);
         let k = stiffness(&json(&run(&args)));
-        assert_eq!(k.len(), 6, "{extra:?}");
-        let scale = k.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        assert_eq!(k.nrows(), 6, "{extra:?}");
+        let scale = k.amax();
         for r in 0..6 {
-            assert_eq!(k[r].len(), 6);
             for c in 0..6 {
                 // The condensed stiffness is symmetric to rounding: 1e-12 of the largest
                 // entry allows ~1e4 roundings (8 cables, 10 elements each).
                 assert!(
-                    (k[r][c] - k[c][r]).abs() <= 1e-12 * scale,
+                    (k[(r, c)] - k[(c, r)]).abs() <= 1e-12 * scale,
                     "{extra:?} ({r},{c}): {} vs {}",
-                    k[r][c],
-                    k[c][r]
+                    k[(r, c)],
+                    k[(c, r)]
                 );
             }
         }
@@ -148,7 +149,7 @@ fn rigid_stiffness_is_6x6_symmetric_with_the_translational_block_unchanged() {
         let dense = extra.contains(&"dense");
         for r in 0..3 {
             for c in 0..3 {
-                let (got, want) = (k[r][c], e.stiffness_n_m[(r, c)]);
+                let (got, want) = (k[(r, c)], e.stiffness_n_m[(r, c)]);
                 if dense {
                     assert!((got - want).abs() <= 1e-8 * scale, "({r},{c}) {got} {want}");
                 } else {
@@ -159,7 +160,7 @@ fn rigid_stiffness_is_6x6_symmetric_with_the_translational_block_unchanged() {
     }
     // A point mass keeps its 3 × 3.
     let k = stiffness(&json(&run(&["analyze", "spatial-paper", "--json"])));
-    assert_eq!((k.len(), k[0].len()), (3, 3));
+    assert_eq!(k.shape(), (3, 3));
 }
 
 #[test]

@@ -320,7 +320,9 @@ fn replay(
             break;
         };
         // A CSV's quaternion columns, else the identity.
-        let q = trajectory.orientation_at(t_s).unwrap_or(IDENTITY_QUATERNION);
+        let q = trajectory
+            .orientation_at(t_s)
+            .unwrap_or(IDENTITY_QUATERNION);
         let pose = PoseSample::new(k as u64 + 1, monotonic_now_ns(), [p.x, p.y, p.z], q);
         input.send_pose(&pose)?;
         sent += 1;

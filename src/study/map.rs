@@ -230,15 +230,29 @@ fn grid(s: &Scene, cfg: &MapConfig) -> Result<[Vec<f64>; 3], StudyError> {
     Ok(axes)
 }
 
-/// The orientations of a map's panels: the scene's turned by each tilt angle, or the
-/// scene's alone; with the angles (degrees) and the unit axis.
+/// The orientations of a map's panels.
+struct PanelOrientations {
+    /// Unit quaternions [w, x, y, z]: the scene's turned by each tilt angle, or the scene's
+    /// alone.
+    quaternions: Vec<[f64; 4]>,
+    /// The tilt angles, degrees (empty without a tilt).
+    angles_deg: Vec<f64>,
+    /// The unit tilt axis (zero without a tilt).
+    axis: Vector3<f64>,
+}
+
+/// The orientations of a map's panels (`slices`: values on the slice axis).
 fn orientations(
     s: &Scene,
     cfg: &MapConfig,
     slices: usize,
-) -> Result<(Vec<[f64; 4]>, Vec<f64>, Vector3<f64>), StudyError> {
+) -> Result<PanelOrientations, StudyError> {
     let Some(t) = cfg.tilt else {
-        return Ok((vec![s.ee_orientation_wxyz], Vec::new(), Vector3::zeros()));
+        return Ok(PanelOrientations {
+            quaternions: vec![s.ee_orientation_wxyz],
+            angles_deg: Vec::new(),
+            axis: Vector3::zeros(),
+        });
     };
     let axis_norm = t.axis.norm();
     if !s.rigid {
@@ -273,18 +287,26 @@ fn orientations(
         )));
     }
     let axis = t.axis / axis_norm;
-    let qs = angles
+    let quaternions = angles
         .iter()
         .map(|a| rotated_about(&s.ee_orientation_wxyz, &axis, a.to_radians()))
         .collect();
-    Ok((qs, angles, axis))
+    Ok(PanelOrientations {
+        quaternions,
+        angles_deg: angles,
+        axis,
+    })
 }
 
 /// Evaluate the map of scene `s` at its T_min.
 pub fn compute(s: &Scene, cfg: &MapConfig) -> Result<MapResult, StudyError> {
     let axes = grid(s, cfg)?;
     let (h, v, sl) = cfg.plane.axes();
-    let (qs, tilts_deg, tilt_axis) = orientations(s, cfg, axes[sl].len())?;
+    let PanelOrientations {
+        quaternions: qs,
+        angles_deg: tilts_deg,
+        axis: tilt_axis,
+    } = orientations(s, cfg, axes[sl].len())?;
     let n = axes[h].len() * axes[v].len() * axes[sl].len() * qs.len();
     if n > MAX_GRID_POINTS {
         return Err(StudyError::Usage(format!("{n} grid points: too many")));
