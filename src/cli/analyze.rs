@@ -167,6 +167,14 @@ fn print_report(r: &AnalysisReport) {
         r.scene, p[0], p[1], p[2], r.t_min_n, r.element, r.elements_per_cable, r.solver,
         r.solve_seconds * 1e3
     );
+    if r.stiffness_n_m.len() == 6 {
+        // A rigid end-effector: its orientation is part of the pose.
+        let q = r.orientation_wxyz;
+        println!(
+            "orientation (w, x, y, z) ({}, {}, {}, {})",
+            q[0], q[1], q[2], q[3]
+        );
+    }
     println!("\n cable   tension (N)");
     for (i, t) in r.tensions_n.iter().enumerate() {
         println!(" {:>5}   {:>11.4}", i + 1, t);

@@ -14,7 +14,9 @@ pub const MAX_PERIOD_S: f64 = 3600.0;
 /// Where the poses come from.
 #[derive(Debug, Clone)]
 pub enum PathSource {
-    /// A CSV with columns t,x,y,z (s, m); see [`Samples::read_csv`].
+    /// A CSV with columns t,x,y,z or t,x,y,z,qw,qx,qy,qz (s, m, unit quaternion); see
+    /// [`Samples::read_csv`]. Without quaternion columns the poses take the scene's
+    /// orientation.
     Csv(PathBuf),
     /// The paper's circle around the scene's position, sampled every 1 ms.
     Circle {
@@ -36,9 +38,9 @@ pub struct TrajectoryConfig {
     pub ee_mode: bool,
     /// Modes kept per pose (1 ..= `points::MAX_MODES`).
     pub modes: usize,
-    /// Worker threads (T_min curves are spread over them).
+    /// Worker threads, T_min curves spread over them (0: one per core).
     pub threads: usize,
-    /// Print a percentage on stderr.
+    /// Show a progress bar on stderr (a terminal only).
     pub progress: bool,
 }
 
