@@ -116,15 +116,15 @@ fn sweeps_print_no_progress_when_stderr_is_not_a_terminal() {
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("no-progress");
     std::fs::create_dir_all(&dir).unwrap();
     let out = dir.join("m");
-    // ~2 000 points with 8 modes on one thread: over a second here (the bar's delay), so a
-    // terminal would show the bar; captured stderr must stay empty.
+    // ~5 000 points with 8 modes on one thread: about 2 s on a quiet machine, over the bar's
+    // one-second delay, so a terminal would show the bar; captured stderr must stay empty.
     let t0 = std::time::Instant::now();
     let o = run(&[
         "map",
         "spatial-paper",
         "--step",
-        "0.05",
-        "--z=1.2,1.25",
+        "0.04",
+        "--z=1.15,1.25",
         "--modes",
         "8",
         "--threads",
