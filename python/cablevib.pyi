@@ -79,12 +79,16 @@ def analyze(
     modes: int = 10,
     solver: str = "structured",
     compare_dense: bool = False,
+    orientation: Optional[_Vec] = None,
 ) -> Dict[str, Any]:
     """What ``cablevib analyze SCENE --json`` prints, as a dict with numpy arrays:
-    ``scene``, ``position_m`` (m), ``t_min_n`` (N), ``tensions_n`` (N), ``frequencies_hz``
-    (Hz), ``ee_participation``, ``multiplicity``, ``cluster_start``, ``dof``, ``element``,
-    ``elements_per_cable``, ``stiffness_n_m`` (N/m, 3 × 3), ``solver``, ``solve_seconds``,
-    ``dense_seconds``, ``compare_dense``. Overrides as ``--position`` (m), ``--t-min`` (N),
+    ``scene``, ``position_m`` (m), ``orientation_wxyz`` (unit quaternion), ``t_min_n`` (N),
+    ``tensions_n`` (N), ``frequencies_hz`` (Hz), ``ee_participation``, ``multiplicity``,
+    ``cluster_start``, ``dof``, ``element``, ``elements_per_cable``, ``stiffness_n_m``
+    (3 × 3, N/m, for a point mass; 6 × 6 for a rigid end-effector over x, y, z, θx, θy, θz:
+    blocks N/m, N/rad, N·m/m, N·m/rad), ``solver``, ``solve_seconds``,
+    ``dense_seconds``, ``compare_dense``. Overrides as ``--position`` (m), ``--orientation``
+    (unit quaternion w, x, y, z; rigid end-effectors only), ``--t-min`` (N),
     ``--element``, ``--elements``; ``solver`` is ``structured`` or ``dense``."""
 
 class Estimate:

@@ -33,6 +33,14 @@ impl Pose {
             orientation_wxyz: [1.0, 0.0, 0.0, 0.0],
         }
     }
+    /// A pose at `position_m` with the orientation of scene `s` (its `ee_orientation_wxyz`:
+    /// the scene file's, or `--orientation`).
+    pub fn in_scene(s: &crate::scene::Scene, position_m: Vector3<f64>) -> Pose {
+        Pose {
+            position_m,
+            orientation_wxyz: s.ee_orientation_wxyz,
+        }
+    }
     /// Every component finite.
     pub fn is_finite(&self) -> bool {
         self.position_m.iter().all(|x| x.is_finite())
@@ -81,6 +89,54 @@ pub fn rotation_of(q_wxyz: &[f64; 4]) -> nalgebra::Matrix3<f64> {
         q_wxyz[0], q_wxyz[1], q_wxyz[2], q_wxyz[3],
     ));
     q.to_rotation_matrix().into_inner()
+}
+
+/// Largest |‖q‖ − 1| accepted for an orientation given on the command line or in a
+/// trajectory file ([`unit_quaternion`]): quaternions printed with 4 significant digits pass
+/// (cos 45° written 0.7071 gives |‖q‖ − 1| ≈ 1e-5), a quaternion that is not meant to be a
+/// unit one (a typo, Euler angles, a missing component) does not.
+pub const QUATERNION_INPUT_TOL: f64 = 1e-3;
+
+/// Why an orientation given by a user is refused.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum QuaternionError {
+    /// A component is NaN or infinite.
+    #[error("orientation w,x,y,z must be four finite numbers, got {0:?}")]
+    NonFinite([f64; 4]),
+    /// The norm is not 1 within [`QUATERNION_INPUT_TOL`].
+    #[error("orientation w,x,y,z {q:?} has norm {norm}: a unit quaternion needs |norm − 1| <= {QUATERNION_INPUT_TOL}")]
+    NotUnit {
+        /// The quaternion as given.
+        q: [f64; 4],
+        /// Its norm.
+        norm: f64,
+    },
+}
+
+/// The orientation rule of the command line and trajectory files: four finite numbers
+/// w, x, y, z whose norm is 1 within [`QUATERNION_INPUT_TOL`], returned divided by their
+/// norm (an exact unit quaternion such as [1, 0, 0, 0] is returned unchanged).
+pub fn unit_quaternion(q: [f64; 4]) -> Result<[f64; 4], QuaternionError> {
+    if !q.iter().all(|x| x.is_finite()) {
+        return Err(QuaternionError::NonFinite(q));
+    }
+    let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if !((norm - 1.0).abs() <= QUATERNION_INPUT_TOL) {
+        return Err(QuaternionError::NotUnit { q, norm });
+    }
+    Ok(if norm == 1.0 { q } else { q.map(|x| x / norm) })
+}
+
+/// The orientation `q_wxyz` turned by `angle_rad` about the world axis `axis` (any
+/// non-zero length): R(axis, angle) · R(q), as a unit quaternion [w, x, y, z].
+pub fn rotated_about(q_wxyz: &[f64; 4], axis: &Vector3<f64>, angle_rad: f64) -> [f64; 4] {
+    use nalgebra::{Quaternion, Unit, UnitQuaternion};
+    let base = UnitQuaternion::from_quaternion(Quaternion::new(
+        q_wxyz[0], q_wxyz[1], q_wxyz[2], q_wxyz[3],
+    ));
+    let turn = UnitQuaternion::from_axis_angle(&Unit::new_normalize(*axis), angle_rad);
+    let r = (turn * base).into_inner();
+    [r.w, r.i, r.j, r.k]
 }
 
 /// Smallest cable length accepted, m. Below it the element stiffness EA/L is meaningless.
@@ -194,6 +250,41 @@ pub fn up_frame(gravity_m_s2: &Vector3<f64>) -> Matrix3<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::FRAC_PI_2;
+
+    #[test]
+    fn user_quaternions_are_normalised_or_refused() {
+        assert_eq!(
+            unit_quaternion([1.0, 0.0, 0.0, 0.0]),
+            Ok([1.0, 0.0, 0.0, 0.0])
+        );
+        // A 60° turn printed to four digits (cos 30° = 0.866, |‖q‖ − 1| ≈ 2e-5): accepted,
+        // and normalised to 1 within rounding.
+        let q = unit_quaternion([0.866, 0.5, 0.0, 0.0]).unwrap();
+        let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+        assert!((n - 1.0).abs() < 4.0 * f64::EPSILON, "{n}");
+        assert!(matches!(
+            unit_quaternion([1.0, 0.1, 0.0, 0.0]),
+            Err(QuaternionError::NotUnit { .. })
+        ));
+        assert!(matches!(
+            unit_quaternion([f64::NAN, 0.0, 0.0, 1.0]),
+            Err(QuaternionError::NonFinite(_))
+        ));
+        assert!(unit_quaternion([0.0; 4]).is_err());
+    }
+
+    #[test]
+    fn a_quarter_turn_about_z_maps_x_to_y() {
+        let q = rotated_about(
+            &[1.0, 0.0, 0.0, 0.0],
+            &Vector3::new(0.0, 0.0, 2.0),
+            FRAC_PI_2,
+        );
+        let x = rotation_of(&q) * Vector3::x();
+        // Closed form: R_z(90°) x = y; rounding of cos(π/2) only.
+        assert!((x - Vector3::y()).norm() < 1e-15, "{x}");
+    }
 
     #[test]
     fn center_of_spatial_paper() {

@@ -1,6 +1,7 @@
 //! The command line as a tool: completions and the man page come from the parser's own
 //! definitions, `--element` is checked by the parser, and `serve` takes its scene as a
-//! positional argument like the other commands (with `--scene` still accepted).
+//! positional argument like the other commands (with `--scene` still accepted). A sweep
+//! whose stderr is not a terminal prints no progress, only its summary on stdout.
 
 use std::process::{Command, Output};
 
@@ -108,4 +109,36 @@ fn analyze_writes_the_mode_shapes_with_a_sidecar() {
     // Not with --realtime: the parser says so.
     let o = run(&["analyze", "planar-paper", "--realtime", "--shapes", "x.csv"]);
     assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn sweeps_print_no_progress_when_stderr_is_not_a_terminal() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("no-progress");
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("m");
+    // ~5 000 points with 8 modes on one thread: about 2 s on a quiet machine, over the bar's
+    // one-second delay, so a terminal would show the bar; captured stderr must stay empty.
+    let t0 = std::time::Instant::now();
+    let o = run(&[
+        "map",
+        "spatial-paper",
+        "--step",
+        "0.04",
+        "--z=1.15,1.25",
+        "--modes",
+        "8",
+        "--threads",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        o.stderr.is_empty(),
+        "{:?}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let text = stdout(&o);
+    assert!(text.starts_with("map: scene spatial-paper"), "{text}");
+    eprintln!("(the sweep took {:.2} s)", t0.elapsed().as_secs_f64());
 }

@@ -1,7 +1,8 @@
 //! `cablevib.analyze`: the library's `study::analysis::analyze`, the function behind
 //! `cablevib analyze --json`, with the command line's scene overrides.
 
-use crate::convert::{json_to_py, position};
+use crate::convert::{floats, json_to_py, position};
+use cablevib::kinematics::unit_quaternion;
 use crate::error::CablevibError;
 use crate::scene::PyScene;
 use cablevib::scene::{ElementKind, Scene, MAX_ELEMENTS_PER_CABLE};
@@ -11,17 +12,19 @@ use pyo3::prelude::*;
 
 /// The analysis of one pose: what ``cablevib analyze SCENE --json`` prints, as a dict.
 ///
-/// ``position`` (m, 3 numbers), ``t_min`` (N, every cable), ``element`` (``fem``,
+/// ``position`` (m, 3 numbers), ``orientation`` (unit quaternion w, x, y, z: rigid
+/// end-effectors only, normalised when its norm is 1 within 1e-3), ``t_min`` (N, every cable), ``element`` (``fem``,
 /// ``catenary``, ``continuous``, ``massless`` or ``auto``) and ``elements`` (per cable)
-/// override the scene's, as ``--position``, ``--t-min``, ``--element`` and ``--elements``
+/// override the scene's, as ``--position``, ``--orientation``, ``--t-min``, ``--element`` and ``--elements``
 /// do; ``modes`` is the number of natural frequencies; ``solver`` is ``structured``
 /// (default) or ``dense`` (the dense reference); ``compare_dense`` also solves the same
 /// models densely and reports both (``--compare-dense``).
 ///
-/// Keys, units in their names: ``scene``, ``position_m``, ``t_min_n``, ``tensions_n``,
-/// ``frequencies_hz`` (ascending), ``ee_participation``, ``multiplicity``,
+/// Keys, units in their names: ``scene``, ``position_m``, ``orientation_wxyz``, ``t_min_n``,
+/// ``tensions_n``, ``frequencies_hz`` (ascending), ``ee_participation``, ``multiplicity``,
 /// ``cluster_start``, ``dof``, ``element``, ``elements_per_cable``, ``stiffness_n_m``
-/// (3 × 3), ``solver``, ``solve_seconds``, ``dense_seconds``, ``compare_dense``. Numeric
+/// (3 × 3 N/m for a point mass; 6 × 6 for a rigid end-effector: N/m, N/rad, N·m/m, N·m/rad
+/// blocks), ``solver``, ``solve_seconds``, ``dense_seconds``, ``compare_dense``. Numeric
 /// lists are numpy arrays (float64, int64 for counts and indices); absent values are None.
 /// Every number equals the command line's.
 ///
@@ -29,7 +32,8 @@ use pyo3::prelude::*;
 /// (infeasible tensions, outside the frame, …) or an override is out of range.
 #[pyfunction]
 #[pyo3(signature = (scene, position = None, t_min = None, element = None, elements = None,
-                    modes = 10, solver = "structured", compare_dense = false))]
+                    modes = 10, solver = "structured", compare_dense = false,
+                    orientation = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn analyze<'py>(
     py: Python<'py>,
@@ -41,10 +45,14 @@ pub fn analyze<'py>(
     modes: usize,
     solver: &str,
     compare_dense: bool,
+    orientation: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let mut s = scene.inner.clone();
     if let Some(p) = position {
         s.ee_position_m = finite_position(p)?;
+    }
+    if let Some(q) = orientation {
+        set_orientation(&mut s, q)?;
     }
     let s = with_overrides(s, t_min, element, elements)?;
     let opts = AnalyzeOptions {
@@ -70,6 +78,21 @@ fn finite_position(p: &Bound<'_, PyAny>) -> PyResult<nalgebra::Vector3<f64>> {
         )));
     }
     Ok(v)
+}
+
+/// `--orientation`'s rule (`cli::args::set_orientation`): a unit quaternion within
+/// `kinematics::QUATERNION_INPUT_TOL`, normalised; a point-mass scene refuses it.
+fn set_orientation(s: &mut Scene, q: &Bound<'_, PyAny>) -> PyResult<()> {
+    let q = floats::<4>(q, "orientation (unit quaternion w, x, y, z)")?;
+    let q = unit_quaternion(q).map_err(|e| CablevibError::new_err(e.to_string()))?;
+    if !s.rigid {
+        return Err(CablevibError::new_err(format!(
+            "orientation: scene `{}` has a point-mass end-effector, where orientation has no effect (a rigid one has `effects = [\"rotation\"]`)",
+            s.name
+        )));
+    }
+    s.ee_orientation_wxyz = q;
+    Ok(())
 }
 
 /// The command line's overrides (`cli::args::resolve_scene`) on a loaded scene, with its

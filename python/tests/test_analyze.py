@@ -26,10 +26,15 @@ CASES = [
     ("planar-paper", {"position": (0.4, -0.2, 0.0), "t_min": 35.0, "solver": "dense"}),
     ("planar-paper", {"element": "fem", "elements": 25, "modes": 4}),
     (str(SCENES / "box_6dof.toml"), {"modes": 8}),
+    # A rigid end-effector: 6 × 6 stiffness, and a 1° turn about x (normalised alike).
+    (str(SCENES / "box_6dof.toml"), {"orientation": (0.99996, 0.00873, 0.0, 0.0)}),
+    (str(SCENES / "box_6dof.toml"), {"orientation": (0.99996, 0.00873, 0.0, 0.0),
+                                     "solver": "dense"}),
 ]
 
 FLAGS = {"position": "--position", "t_min": "--t-min", "element": "--element",
-         "elements": "--elements", "modes": "--modes", "solver": "--solver"}
+         "elements": "--elements", "modes": "--modes", "solver": "--solver",
+         "orientation": "--orientation"}
 
 
 def cli_args(scene, kwargs):
@@ -37,7 +42,7 @@ def cli_args(scene, kwargs):
     for k, v in kwargs.items():
         if k == "compare_dense":
             args.append("--compare-dense")
-        elif k == "position":
+        elif k in ("position", "orientation"):
             args += [FLAGS[k], ",".join(repr(float(x)) for x in v)]
         else:
             args += [FLAGS[k], str(v)]
@@ -94,6 +99,10 @@ def test_paper_table_8_column():
     f = r["frequencies_hz"]
     assert abs(f[10] / f[8] - 1) <= 1e-10
     assert r["tensions_n"].shape == (8,) and r["stiffness_n_m"].shape == (3, 3)
+    # A rigid end-effector publishes its 6 × 6 stiffness, symmetric to rounding.
+    k = cablevib.analyze(cablevib.Scene.load(str(SCENES / "box_6dof.toml")))["stiffness_n_m"]
+    assert k.shape == (6, 6)
+    np.testing.assert_allclose(k, k.T, rtol=0, atol=1e-12 * np.abs(k).max())
     assert r["position_m"].tolist() == [0.0, 0.0, 1.25] and r["dof"] == 3 + 3 * 8 * 39
 
 
@@ -114,6 +123,7 @@ ERRORS = [
     ({"t_min": 0.0}, ("--t-min", "t_min")),
     ({"elements": 0}, ("--elements", "elements")),
     ({"elements": 10**9}, ("--elements", "elements")),
+    ({"orientation": (1.0, 0.0, 0.0, 0.0)}, ("--orientation", "orientation")),
 ]
 
 

@@ -167,6 +167,14 @@ fn print_report(r: &AnalysisReport) {
         r.scene, p[0], p[1], p[2], r.t_min_n, r.element, r.elements_per_cable, r.solver,
         r.solve_seconds * 1e3
     );
+    if r.stiffness_n_m.len() == 6 {
+        // A rigid end-effector: its orientation is part of the pose.
+        let q = r.orientation_wxyz;
+        println!(
+            "orientation (w, x, y, z) ({}, {}, {}, {})",
+            q[0], q[1], q[2], q[3]
+        );
+    }
     println!("\n cable   tension (N)");
     for (i, t) in r.tensions_n.iter().enumerate() {
         println!(" {:>5}   {:>11.4}", i + 1, t);
@@ -220,10 +228,19 @@ fn realtime_estimator(a: &AnalyzeArgs, s: &Scene) -> Result<Estimator, CliError>
     .map_err(|e| CliError::Analysis(e.to_string()))
 }
 
+/// The published static stiffness as JSON rows: 3 × 3 (N/m) for a point mass, 6 × 6 for a
+/// rigid end-effector (N/m, N/rad, N·m/m, N·m/rad blocks; see `AnalysisReport`).
+fn stiffness_rows(e: &crate::estimator::Estimate) -> Vec<Vec<serde_json::Value>> {
+    let d = e.stiffness_dim;
+    (0..d)
+        .map(|r| (0..d).map(|c| json_f64(e.stiffness6[(r, c)])).collect())
+        .collect()
+}
+
 fn analyze_realtime(a: &AnalyzeArgs, s: &Scene) -> Result<(), CliError> {
     let mut est = realtime_estimator(a, s)?;
     let t0 = Instant::now();
-    let e = *est.update(&Pose::at(s.ee_position_m), s.t_min_n);
+    let e = *est.update(&Pose::in_scene(s, s.ee_position_m), s.t_min_n);
     let ns = t0.elapsed().as_nanos();
     if a.json {
         let o = serde_json::json!({
@@ -236,7 +253,8 @@ fn analyze_realtime(a: &AnalyzeArgs, s: &Scene) -> Result<(), CliError> {
             "ee_mode_hz": json_f64(e.ee_mode_hz),
             "ee_mode_participation": json_f64(e.ee_mode_participation),
             "ee_mode_age_cycles": (e.ee_mode_age_cycles != u32::MAX).then_some(e.ee_mode_age_cycles),
-            "stiffness_n_m": e.stiffness_n_m.row_iter().map(|row| row.iter().map(|&x| json_f64(x)).collect::<Vec<_>>()).collect::<Vec<_>>(),
+            "orientation_wxyz": s.ee_orientation_wxyz,
+            "stiffness_n_m": stiffness_rows(&e),
             "element": s.model.element.as_str(),
             "elements_per_cable": s.model.elements_per_cable,
             "eigen_evaluations": e.eigen_evaluations,

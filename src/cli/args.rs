@@ -2,6 +2,7 @@
 //! parsers of the command line.
 
 use super::CliError;
+use crate::kinematics::unit_quaternion;
 use crate::scene::{ElementKind, Scene, MAX_ELEMENTS_PER_CABLE};
 use crate::study::map::Interval;
 use clap::{Args, ValueEnum};
@@ -15,6 +16,11 @@ pub struct SceneArgs {
     /// End-effector position x,y,z in m (default: the scene's).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     pub position: Option<Vector3<f64>>,
+    /// End-effector orientation w,x,y,z: a unit quaternion (|norm − 1| <= 1e-3, then
+    /// normalised; default: the scene's). Rigid end-effectors only: a point-mass scene
+    /// refuses it, since orientation has no effect there.
+    #[arg(long, value_parser = parse_quaternion, allow_hyphen_values = true, value_name = "W,X,Y,Z")]
+    pub orientation: Option<[f64; 4]>,
     /// Minimum cable tension T_min in N (default: the scene's).
     #[arg(long)]
     pub t_min: Option<f64>,
@@ -69,6 +75,15 @@ pub fn parse_vec3(s: &str) -> Result<Vector3<f64>, String> {
     Ok(Vector3::new(v[0], v[1], v[2]))
 }
 
+/// Parse `W,X,Y,Z`: a unit quaternion by [`unit_quaternion`]'s rule (normalised).
+pub fn parse_quaternion(s: &str) -> Result<[f64; 4], String> {
+    let v = parse_numbers(s)?;
+    let q: [f64; 4] = v
+        .try_into()
+        .map_err(|_| format!("expected four numbers W,X,Y,Z, got `{s}`"))?;
+    unit_quaternion(q).map_err(|e| e.to_string())
+}
+
 /// Parse `MIN,MAX` or a single value `V` (MIN = MAX = V).
 pub fn parse_interval(s: &str) -> Result<Interval, String> {
     let v = parse_numbers(s)?;
@@ -112,6 +127,9 @@ pub fn resolve_scene(a: &SceneArgs) -> Result<Scene, CliError> {
     if let Some(p) = a.position {
         s.ee_position_m = p;
     }
+    if let Some(q) = a.orientation {
+        set_orientation(&mut s, q)?;
+    }
     if let Some(t) = a.t_min {
         // The one T_min rule of scene files and set-points; per-cable values are replaced.
         s.set_uniform_t_min(t)
@@ -125,6 +143,18 @@ pub fn resolve_scene(a: &SceneArgs) -> Result<Scene, CliError> {
         )));
     }
     Ok(s.with_model(element, n))
+}
+
+/// Set the end-effector orientation of a rigid scene; a point-mass scene refuses it.
+pub fn set_orientation(s: &mut Scene, q_wxyz: [f64; 4]) -> Result<(), CliError> {
+    if !s.rigid {
+        return Err(CliError::Usage(format!(
+            "--orientation: scene `{}` has a point-mass end-effector, where orientation has no effect (a rigid one has `effects = [\"rotation\"]`)",
+            s.name
+        )));
+    }
+    s.ee_orientation_wxyz = q_wxyz;
+    Ok(())
 }
 
 #[cfg(test)]
@@ -143,5 +173,17 @@ mod tests {
         );
         assert!(parse_interval("1,-1").is_err());
         assert!(parse_interval("a").is_err());
+    }
+
+    #[test]
+    fn quaternions() {
+        assert_eq!(parse_quaternion("1,0,0,0").unwrap(), [1.0, 0.0, 0.0, 0.0]);
+        assert!(parse_quaternion("1,0,0")
+            .unwrap_err()
+            .contains("four numbers"));
+        assert!(parse_quaternion("2,0,0,0").unwrap_err().contains("norm 2"));
+        assert!(parse_quaternion("nan,0,0,1")
+            .unwrap_err()
+            .contains("finite"));
     }
 }

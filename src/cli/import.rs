@@ -1,7 +1,7 @@
 //! `cablevib import caspr`: a scene file from CASPR's bodies and cables XML files
 //! ([`crate::caspr`]).
 
-use super::args::parse_vec3;
+use super::args::{parse_vec3, ElementArg};
 use super::CliError;
 use crate::caspr::{import_files, ImportOptions};
 use crate::scene::ElementKind;
@@ -60,9 +60,9 @@ pub struct CasprArgs {
     /// when a force_min is 0).
     #[arg(long)]
     pub t_min: Option<f64>,
-    /// Element model written into the scene: fem, catenary, continuous, massless or auto.
-    #[arg(long, default_value = "fem")]
-    pub element: String,
+    /// Element model written into the scene.
+    #[arg(long, value_enum, default_value = "fem")]
+    pub element: ElementArg,
     /// Elements per cable written into the scene.
     #[arg(long, default_value_t = 10)]
     pub elements: usize,
@@ -77,12 +77,7 @@ pub fn run(a: &ImportArgs) -> Result<(), CliError> {
 
 /// `cablevib import caspr`: import, validate, write, summarise.
 fn caspr(a: &CasprArgs) -> Result<(), CliError> {
-    let element = ElementKind::parse(&a.element).ok_or_else(|| {
-        CliError::Usage(format!(
-            "--element `{}`: expected fem, catenary, continuous, massless or auto",
-            a.element
-        ))
-    })?;
+    let element = ElementKind::from(a.element);
     let opts = ImportOptions {
         cable_set: a.cable_set.clone(),
         weight_per_length_n_m: a.weight_per_length,

@@ -1,7 +1,7 @@
 //! `cablevib map`: f1 (and f2 .. fK, the end-effector mode, the softest static stiffness)
 //! over a workspace grid, as a CSV and heat-map figures.
 
-use super::args::{parse_interval, resolve_scene, SceneArgs};
+use super::args::{parse_interval, parse_vec3, resolve_scene, SceneArgs};
 use super::figure::{self, parse_format};
 use super::{output_paths, CliError};
 use crate::report::csv::{process_command_line, write_csv};
@@ -9,9 +9,10 @@ use crate::report::figure::FigureFormat;
 use crate::report::map::{map_csv, map_svg, value_names};
 use crate::report::with_ext;
 use crate::scene::Scene;
-use crate::study::map::{self as study, Interval, MapConfig, MapResult};
+use crate::study::map::{self as study, Interval, MapConfig, MapResult, Tilt};
 use crate::study::points::MAX_MODES;
 use clap::{Args, ValueEnum};
+use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -119,16 +120,29 @@ pub struct MapArgs {
     /// the figure path's extension, else svg; --format wins and sets the file's extension.
     #[arg(long, value_parser = parse_format)]
     pub format: Option<FigureFormat>,
-    /// Worker threads (one estimator each).
-    #[arg(long, default_value_t = 2)]
+    /// Worker threads, one estimator each (0: one per core). Any count gives the same
+    /// numbers, bit for bit.
+    #[arg(long, default_value_t = 0)]
     pub threads: usize,
+    /// Sweep the orientation (rigid end-effectors only; a point-mass scene refuses it): one
+    /// panel per angle MIN,MAX (degrees; or a single angle), the scene's orientation (or
+    /// --orientation) turned about --tilt-axis by each angle. The slice axis then takes a
+    /// single value.
+    #[arg(long, value_parser = parse_interval, allow_hyphen_values = true, value_name = "MIN,MAX")]
+    pub tilt_deg: Option<Interval>,
+    /// Rotation axis of --tilt-deg in the world frame, X,Y,Z (any length).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, default_value = "1,0,0", requires = "tilt_deg")]
+    pub tilt_axis: Vector3<f64>,
+    /// Angle step of --tilt-deg, degrees.
+    #[arg(long, default_value_t = 10.0, requires = "tilt_deg")]
+    pub tilt_step_deg: f64,
     /// Skip the end-effector mode (f1 only; faster).
     #[arg(long)]
     pub no_ee_mode: bool,
     /// Heat-map panels per row (3-D grids).
     #[arg(long, default_value_t = 4)]
     pub columns: usize,
-    /// No progress on stderr.
+    /// No progress bar (it is shown only on a terminal, after a second).
     #[arg(long)]
     pub quiet: bool,
 }
@@ -144,6 +158,11 @@ impl MapArgs {
             ee_mode: !self.no_ee_mode,
             modes: self.modes,
             progress: !self.quiet,
+            tilt: self.tilt_deg.map(|range_deg| Tilt {
+                axis: self.tilt_axis,
+                range_deg,
+                step_deg: self.tilt_step_deg,
+            }),
         }
     }
 }
@@ -194,7 +213,7 @@ pub fn run(a: &MapArgs) -> Result<(), CliError> {
         s.t_min_n,
         m.points.len(),
         secs,
-        a.threads,
+        m.threads,
         m.status_counts().summary()
     );
     for v in std::iter::once(value).chain(a.show.iter().copied()) {

@@ -18,8 +18,10 @@ pub struct TrajectoryArgs {
     /// Scene and overrides.
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Trajectory CSV with columns t,x,y,z (s, m; `#` comments and a header line are
-    /// skipped). Default: the paper's circle around the scene's position.
+    /// Trajectory CSV with columns t,x,y,z or t,x,y,z,qw,qx,qy,qz (s, m, unit quaternion;
+    /// `#` comments and a header line are skipped). Without quaternion columns every pose
+    /// takes the scene's orientation (or --orientation); a point-mass scene ignores them
+    /// with a warning. Default: the paper's circle around the scene's position.
     #[arg(long)]
     pub csv: Option<PathBuf>,
     /// Comma-separated T_min values, N, one curve each (default: the scene's T_min).
@@ -45,13 +47,13 @@ pub struct TrajectoryArgs {
     /// the figure path's extension, else svg; --format wins and sets the file's extension.
     #[arg(long, value_parser = parse_format)]
     pub format: Option<FigureFormat>,
-    /// Worker threads (T_min curves are spread over them).
-    #[arg(long, default_value_t = 2)]
+    /// Worker threads, T_min curves spread over them (0: one per core).
+    #[arg(long, default_value_t = 0)]
     pub threads: usize,
     /// Skip the end-effector mode (f1 only).
     #[arg(long)]
     pub no_ee_mode: bool,
-    /// No progress on stderr.
+    /// No progress bar (it is shown only on a terminal, after a second).
     #[arg(long)]
     pub quiet: bool,
 }
@@ -80,6 +82,12 @@ impl TrajectoryArgs {
 pub fn run(a: &TrajectoryArgs) -> Result<(), CliError> {
     let s = resolve_scene(&a.scene)?;
     let t = study::run(&s, &a.config())?;
+    if !s.rigid && !t.samples.orientation_wxyz.is_empty() {
+        eprintln!(
+            "warning: the quaternion columns have no effect: scene `{}` has a point-mass end-effector",
+            s.name
+        );
+    }
     let (csv_path, svg_path, fmt) = output_paths(&a.out, &a.svg, a.format)?;
     write_csv(&csv_path, trajectory_csv(&s, &t), &process_command_line())?;
     println!(

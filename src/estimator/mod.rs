@@ -265,6 +265,8 @@ impl Estimator {
     fn update_loaded(&mut self, pose: &Pose) -> &Estimate {
         let n = self.scene.n_cables();
         let mut e = Estimate::empty(n);
+        // The stiffness's dimension is the scene's even when the pose has no answer.
+        e.stiffness_dim = if self.scene.rigid { 6 } else { 3 };
         match self.run(pose, &mut e) {
             Ok(()) => {
                 e.status = Status::Ok;

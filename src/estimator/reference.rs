@@ -31,8 +31,12 @@ pub struct ReferenceAnalysis {
     pub modes: modal::DenseModes,
     /// Degrees of freedom of the assembled model.
     pub dof: usize,
-    /// Static end-effector stiffness, N/m.
+    /// Static end-effector stiffness, translational block, N/m.
     pub stiffness_n_m: Matrix3<f64>,
+    /// Static end-effector stiffness, 6 × 6 for a rigid body (N/m, N/rad, N·m/m, N·m/rad
+    /// blocks, as `Estimate::stiffness6`); the translational block and zeros elsewhere for a
+    /// point mass.
+    pub stiffness6: Matrix6<f64>,
 }
 
 /// The offline reference: Clarabel tensions, dense K and M, dense eigen-solve (with
@@ -90,20 +94,24 @@ pub fn reference_analysis_at(
     let dof = k.nrows();
     let dim = if scene.rigid { 6 } else { 3 };
     let modes = modal::dense_modes_ee(&k, &m, &ee, dim, vectors)?;
-    let stiffness_n_m = if scene.rigid {
+    let stiffness6 = if scene.rigid {
         modal::condense_static(&k, dim)
-            .fixed_view::<3, 3>(0, 0)
-            .into_owned()
     } else {
-        models
-            .iter()
-            .fold(Matrix3::zeros(), |a, cm| a + cm.static_stiffness)
+        let mut k6 = Matrix6::zeros();
+        k6.fixed_view_mut::<3, 3>(0, 0).copy_from(
+            &models
+                .iter()
+                .fold(Matrix3::zeros(), |a, cm| a + cm.static_stiffness),
+        );
+        k6
     };
+    let stiffness_n_m = stiffness6.fixed_view::<3, 3>(0, 0).into_owned();
     Ok(ReferenceAnalysis {
         tensions_n: t,
         modes,
         dof,
         stiffness_n_m,
+        stiffness6,
     })
 }
 

@@ -174,20 +174,32 @@ pub fn num_p(x: f64, digits: usize) -> String {
 }
 
 /// Columns of [`PointResult`] rows for a scene with `n` cables and `k` modes:
-/// position, T_min, status, f1, the end-effector mode, participations, tensions, then
+/// position, the orientation (`qw`, `qx`, `qy`, `qz`, when `orientation`: rigid
+/// end-effectors), T_min, status, f1, the end-effector mode, participations, tensions, then
 /// f2 .. fK and the smallest stiffness.
-pub fn point_columns(n: usize, k: usize) -> Vec<Column> {
+pub fn point_columns(n: usize, k: usize, orientation: bool) -> Vec<Column> {
     let mut c = vec![
         Column::new("x_m", "m", "end-effector position x"),
         Column::new("y_m", "m", "end-effector position y"),
         Column::new("z_m", "m", "end-effector position z"),
+    ];
+    if orientation {
+        for q in ["qw", "qx", "qy", "qz"] {
+            c.push(Column::new(
+                q,
+                "1",
+                format!("end-effector orientation, unit quaternion w, x, y, z: {q}"),
+            ));
+        }
+    }
+    c.extend([
         Column::new("t_min_n", "N", "lower tension bound of every cable"),
         Column::new("status", "", "estimator status (ok, tension_infeasible, ...); numbers are NaN unless ok"),
         Column::new("f1_hz", "Hz", "first natural frequency (mode 1)"),
         Column::new("ee_mode_hz", "Hz", "end-effector mode: lowest mode with end-effector participation at or above the scene's threshold"),
         Column::new("f1_ee_participation", "1", "end-effector participation of mode 1"),
         Column::new("ee_mode_participation", "1", "end-effector participation of the end-effector mode"),
-    ];
+    ]);
     for i in 1..=n {
         c.push(Column::new(
             format!("tension{i}_n"),
@@ -210,20 +222,26 @@ pub fn point_columns(n: usize, k: usize) -> Vec<Column> {
     c
 }
 
-/// The fields of one [`PointResult`] row (see [`point_columns`]).
-pub fn point_fields(r: &PointResult) -> Vec<String> {
+/// The fields of one [`PointResult`] row (see [`point_columns`], with the same
+/// `orientation`).
+pub fn point_fields(r: &PointResult, orientation: bool) -> Vec<String> {
     let e = &r.estimate;
     let mut s = vec![
         r.position_m.x.to_string(),
         r.position_m.y.to_string(),
         r.position_m.z.to_string(),
+    ];
+    if orientation {
+        s.extend(r.orientation_wxyz.iter().map(|q| q.to_string()));
+    }
+    s.extend([
         r.t_min_n.to_string(),
         e.status.as_str().to_string(),
         num(e.f1_hz),
         num(e.ee_mode_hz),
         num_p(e.f1_ee_participation, 4),
         num_p(e.ee_mode_participation, 4),
-    ];
+    ]);
     s.extend(e.tensions().iter().map(|t| num_p(*t, 6)));
     s.extend((2..=r.n_modes).map(|j| num(r.mode_hz(j))));
     s.push(num_p(r.stiffness_min_n_m, 6));

@@ -19,14 +19,23 @@ pub fn map_csv(s: &Scene, m: &MapResult) -> Csv {
         json!(format!("{}{}", AXIS_NAMES[h], AXIS_NAMES[v])),
     );
     meta.insert("slice_axis".into(), json!(AXIS_NAMES[sl]));
+    if !m.tilts_deg.is_empty() {
+        let a = m.tilt_axis;
+        meta.insert("tilt_axis".into(), json!([a.x, a.y, a.z]));
+        meta.insert("tilts_deg".into(), json!(m.tilts_deg));
+    }
     meta.insert("modes".into(), json!(modes_of(m)));
     meta.insert(
         "order".into(),
-        json!("slice-major, then the vertical axis, then the horizontal axis"),
+        json!(if m.tilts_deg.is_empty() {
+            "slice-major, then the vertical axis, then the horizontal axis"
+        } else {
+            "tilt-angle-major, then the vertical axis, then the horizontal axis"
+        }),
     );
-    let mut csv = Csv::new(point_columns(s.n_cables(), modes_of(m)), meta);
+    let mut csv = Csv::new(point_columns(s.n_cables(), modes_of(m), s.rigid), meta);
     for r in &m.points {
-        csv.row(point_fields(r));
+        csv.row(point_fields(r, s.rigid));
     }
     csv
 }
@@ -58,11 +67,11 @@ pub fn value_names(v: MapValue) -> (String, &'static str, String) {
 /// the maximum of the whole grid.
 fn panels(m: &MapResult, v: MapValue) -> Vec<HeatMap> {
     let unit = value_names(v).1;
-    let (h, vv, sl) = m.plane.axes();
+    let (h, vv, _) = m.plane.axes();
     let per = m.axes[h].len() * m.axes[vv].len();
     let gmax = m.max(v);
     let mut maps = Vec::new();
-    for (k, &ws) in m.axes[sl].iter().enumerate() {
+    for k in 0..m.panel_count() {
         let slice = &m.points[k * per..(k + 1) * per];
         let values: Vec<Option<f64>> = slice.iter().map(|p| pick(p, v)).collect();
         let mut markers = Vec::new();
@@ -73,16 +82,15 @@ fn panels(m: &MapResult, v: MapValue) -> Vec<HeatMap> {
             } else {
                 fmt_value(f)
             };
-            if m.axes[sl].len() == 1 || f == g {
+            if m.panel_count() == 1 || f == g {
                 markers.push((p[h], p[vv], text));
             }
         }
         let bad = values.iter().filter(|x| x.is_none()).count();
         maps.push(HeatMap {
             caption: format!(
-                "{} = {} m{}",
-                AXIS_NAMES[sl],
-                fmt_num(ws),
+                "{}{}",
+                panel_name(m, k),
                 if bad > 0 {
                     format!(" ({bad} without value)")
                 } else {
@@ -98,9 +106,35 @@ fn panels(m: &MapResult, v: MapValue) -> Vec<HeatMap> {
     maps
 }
 
+/// What panel k shows: `z = 1.25 m`, or `tilt 10°` when the map sweeps the orientation.
+fn panel_name(m: &MapResult, k: usize) -> String {
+    match m.tilts_deg.get(k) {
+        Some(a) => format!("tilt {}°", fmt_num(*a)),
+        None => {
+            let sl = m.plane.axes().2;
+            format!("{} = {} m", AXIS_NAMES[sl], fmt_num(m.axes[sl][k]))
+        }
+    }
+}
+
+/// The figure's title suffix: the slice of a one-slice map and the tilt axis.
+fn title_suffix(m: &MapResult) -> String {
+    let sl = m.plane.axes().2;
+    let at = format!("{} = {} m", AXIS_NAMES[sl], fmt_num(m.axes[sl][0]));
+    if !m.tilts_deg.is_empty() {
+        let a = m.tilt_axis;
+        let axis = [a.x, a.y, a.z].map(fmt_num).join(", ");
+        format!(" ({at}, tilted about ({axis}))")
+    } else if m.axes[sl].len() == 1 {
+        format!(" ({at})")
+    } else {
+        String::new()
+    }
+}
+
 /// The heat-map figure of a map.
 pub fn map_svg(s: &Scene, m: &MapResult, v: MapValue) -> String {
-    let (h, vv, sl) = m.plane.axes();
+    let (h, vv, _) = m.plane.axes();
     let nh = m.axes[h].len();
     let maps = panels(m, v);
     let counts = m.status_counts();
@@ -124,17 +158,8 @@ pub fn map_svg(s: &Scene, m: &MapResult, v: MapValue) -> String {
         let _ = write!(sub, ", min {} {unit}", fmt_value(f));
     }
     let _ = write!(sub, "; {}", counts.summary());
-    let single_slice = m.axes[sl].len() == 1;
     HeatPanel {
-        title: format!(
-            "{}: {vname}{}",
-            s.name,
-            if single_slice {
-                format!(" ({} = {} m)", AXIS_NAMES[sl], fmt_num(m.axes[sl][0]))
-            } else {
-                String::new()
-            }
-        ),
+        title: format!("{}: {vname}{}", s.name, title_suffix(m)),
         subtitle: sub,
         x_label: format!("{} (m)", AXIS_NAMES[h]),
         y_label: format!("{} (m)", AXIS_NAMES[vv]),
@@ -145,7 +170,7 @@ pub fn map_svg(s: &Scene, m: &MapResult, v: MapValue) -> String {
         },
         invalid_label: "no valid estimate".into(),
         maps,
-        columns: panel_columns(m.axes[sl].len()),
+        columns: panel_columns(m.panel_count()),
         range: None,
         frame: Some(frame(s, h, vv)),
         anchors: s

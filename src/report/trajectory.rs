@@ -34,7 +34,7 @@ pub fn trajectory_csv(s: &Scene, t: &TrajectoryStudy) -> Csv {
             "angle along the circle (NaN for a trajectory read from a CSV)",
         ),
     ];
-    cols.extend(point_columns(s.n_cables(), modes));
+    cols.extend(point_columns(s.n_cables(), modes, s.rigid));
     let mut csv = Csv::new(cols, meta);
     for (k, r) in t.points.iter().enumerate() {
         let i = k % n;
@@ -44,7 +44,7 @@ pub fn trajectory_csv(s: &Scene, t: &TrajectoryStudy) -> Csv {
             "NaN".into()
         };
         let mut row = vec![tr.t_s[i].to_string(), ang];
-        row.extend(point_fields(r));
+        row.extend(point_fields(r, s.rigid));
         csv.row(row);
     }
     csv

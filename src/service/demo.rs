@@ -319,12 +319,11 @@ fn replay(
         let Some(p) = trajectory.position_at(t_s) else {
             break;
         };
-        let pose = PoseSample::new(
-            k as u64 + 1,
-            monotonic_now_ns(),
-            [p.x, p.y, p.z],
-            IDENTITY_QUATERNION,
-        );
+        // A CSV's quaternion columns, else the identity.
+        let q = trajectory
+            .orientation_at(t_s)
+            .unwrap_or(IDENTITY_QUATERNION);
+        let pose = PoseSample::new(k as u64 + 1, monotonic_now_ns(), [p.x, p.y, p.z], q);
         input.send_pose(&pose)?;
         sent += 1;
         if t_s + 1.0 / a.rate_hz >= next_progress {

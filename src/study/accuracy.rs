@@ -179,13 +179,13 @@ fn timing(
 
 fn at_pose(s: &Scene) -> Result<Estimate, StudyError> {
     let mut est = build(s, estimator_params(s, true))?;
-    let e = *est.update(&Pose::at(s.ee_position_m), s.t_min_n);
+    let e = *est.update(&Pose::in_scene(s, s.ee_position_m), s.t_min_n);
     if e.is_ok() {
         return Ok(e);
     }
     // The end-effector mode may be what failed; f1 alone may still be valid.
     let mut est = build(s, estimator_params(s, false))?;
-    let e1 = *est.update(&Pose::at(s.ee_position_m), s.t_min_n);
+    let e1 = *est.update(&Pose::in_scene(s, s.ee_position_m), s.t_min_n);
     Ok(if e1.is_ok() { e1 } else { e })
 }
 

@@ -88,6 +88,9 @@ pub struct AnalysisReport {
     pub scene: String,
     /// End-effector position, m.
     pub position_m: [f64; 3],
+    /// End-effector orientation, unit quaternion [w, x, y, z] (the scene's; a point mass
+    /// has no orientation and keeps the identity).
+    pub orientation_wxyz: [f64; 4],
     /// Lower tension bound, N.
     pub t_min_n: f64,
     /// Cable tensions, N.
@@ -106,8 +109,13 @@ pub struct AnalysisReport {
     pub element: String,
     /// Elements per cable.
     pub elements_per_cable: usize,
-    /// Static end-effector stiffness (translational block), N/m.
-    pub stiffness_n_m: [[f64; 3]; 3],
+    /// Static end-effector stiffness, K = ∂(restoring wrench)/∂(displacement), as rows:
+    /// 3 × 3 (N/m) for a point mass; 6 × 6 for a rigid end-effector over the displacement
+    /// (x, y, z in m, then small rotations θx, θy, θz in rad about the world axes through
+    /// the centroid) and the wrench (force in N, then moment in N·m about the centroid):
+    /// blocks [[K_tt (N/m), K_tr (N/rad)], [K_rt (N·m/m), K_rr (N·m/rad)]]. The top-left
+    /// 3 × 3 block is the translational stiffness a point mass would report.
+    pub stiffness_n_m: Vec<Vec<f64>>,
     /// `structured` or `dense`.
     pub solver: &'static str,
     /// Time of the eigen-solve, s (structured: the K modes; dense: assembly and solve).
@@ -165,8 +173,11 @@ fn pose_of(scene: &Scene) -> Pose {
     }
 }
 
-fn rows3(m: &nalgebra::Matrix3<f64>) -> [[f64; 3]; 3] {
-    [0, 1, 2].map(|r| [0, 1, 2].map(|c| m[(r, c)]))
+/// The leading `dim` × `dim` block of `m` as rows (3: a point mass, 6: a rigid body).
+fn rows(m: &nalgebra::Matrix6<f64>, dim: usize) -> Vec<Vec<f64>> {
+    (0..dim)
+        .map(|r| (0..dim).map(|c| m[(r, c)]).collect())
+        .collect()
 }
 
 /// The report's frame: everything but the modes and the times.
@@ -175,6 +186,7 @@ fn report_frame(s: &Scene, solver: SolverChoice) -> AnalysisReport {
     AnalysisReport {
         scene: s.name.clone(),
         position_m: [p.x, p.y, p.z],
+        orientation_wxyz: s.ee_orientation_wxyz,
         t_min_n: s.t_min_n,
         tensions_n: Vec::new(),
         frequencies_hz: Vec::new(),
@@ -184,7 +196,7 @@ fn report_frame(s: &Scene, solver: SolverChoice) -> AnalysisReport {
         dof: None,
         element: s.model.element.as_str().to_string(),
         elements_per_cable: s.model.elements_per_cable,
-        stiffness_n_m: [[f64::NAN; 3]; 3],
+        stiffness_n_m: Vec::new(),
         solver: solver.as_str(),
         solve_seconds: f64::NAN,
         dense_seconds: None,
@@ -231,7 +243,7 @@ fn structured(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, An
     r.multiplicity = Some(modes.iter().map(|m| m.multiplicity).collect());
     r.cluster_start = Some(modes.iter().map(|m| m.cluster_start).collect());
     r.dof = model_dof(&s);
-    r.stiffness_n_m = rows3(&e.stiffness_n_m);
+    r.stiffness_n_m = rows(&e.stiffness6, e.stiffness_dim);
     r.solve_seconds = secs;
     if opts.compare_dense {
         let c = super::analysis_compare::compare(&mut est, &modes)?;
@@ -266,7 +278,7 @@ fn dense(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, Analyze
         .collect();
     r.ee_participation = a.modes.ee_participation[..k].to_vec();
     r.dof = Some(a.dof);
-    r.stiffness_n_m = rows3(&a.stiffness_n_m);
+    r.stiffness_n_m = rows(&a.stiffness6, if scene.rigid { 6 } else { 3 });
     r.solve_seconds = secs;
     r.dense_seconds = Some(secs);
     Ok(r)

@@ -1,8 +1,15 @@
 //! The first natural frequencies (f1 .. fK), the end-effector mode and the softest static
-//! stiffness over a workspace grid.
+//! stiffness over a workspace grid, at one orientation or over a sweep of orientations.
+//!
+//! Grid points are lo, lo + step, …, hi on each axis; the heat-map plane's two axes make a
+//! panel, and the third (slice) axis gives one panel per value. Every point takes the
+//! scene's orientation q₀ (the scene file's, or `--orientation`). With a [`Tilt`] (rigid
+//! end-effectors only) the panels are orientations instead: the slice axis takes one value
+//! and panel k has q_k = R(a, θ_k) · q₀, q₀ turned by θ_k about the world axis a.
 
 use super::points::{evaluate_points_with, status_histogram, PointResult, Workers};
 use super::{estimator_params, StudyError};
+use crate::kinematics::{rotated_about, Pose};
 use crate::scene::Scene;
 use crate::service::stats::StatusHistogram;
 use nalgebra::Vector3;
@@ -61,6 +68,21 @@ pub enum MapValue {
     StiffnessMin,
 }
 
+/// Most tilt angles of one map (one panel each).
+pub const MAX_TILTS: usize = 360;
+
+/// A sweep of the orientation: the scene's orientation turned about a fixed world axis by
+/// each angle of a range (rigid end-effectors only).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tilt {
+    /// The rotation axis in the world frame (any non-zero length).
+    pub axis: Vector3<f64>,
+    /// The angles, degrees: lo, lo + step, …, hi.
+    pub range_deg: Interval,
+    /// The angle step, degrees (> 0).
+    pub step_deg: f64,
+}
+
 /// What to map.
 #[derive(Debug, Clone)]
 pub struct MapConfig {
@@ -71,14 +93,17 @@ pub struct MapConfig {
     pub step_m: f64,
     /// The heat-map plane.
     pub plane: Plane,
-    /// Worker threads (one estimator each).
+    /// Worker threads, one estimator each (0: one per core).
     pub threads: usize,
     /// Compute the end-effector mode too.
     pub ee_mode: bool,
     /// Modes kept per point (1 ..= `points::MAX_MODES`).
     pub modes: usize,
-    /// Print a percentage on stderr.
+    /// Show a progress bar on stderr (a terminal only).
     pub progress: bool,
+    /// Sweep the orientation instead of the slice axis: one panel per tilt angle, the slice
+    /// axis at a single value.
+    pub tilt: Option<Tilt>,
 }
 
 /// Grid values lo, lo + step, …, hi (the last value snaps to hi when within 1e-9 step).
@@ -120,11 +145,26 @@ pub struct MapResult {
     pub axes: [Vec<f64>; 3],
     /// The heat-map plane.
     pub plane: Plane,
-    /// Results ordered slice-major, then vertical, then horizontal.
+    /// The tilt angles, degrees, when the map sweeps the orientation (one panel each, the
+    /// slice axis at one value); empty otherwise.
+    pub tilts_deg: Vec<f64>,
+    /// The tilt axis (world frame, unit) when `tilts_deg` is not empty.
+    pub tilt_axis: Vector3<f64>,
+    /// Results ordered panel-major (slice or tilt angle), then vertical, then horizontal.
     pub points: Vec<PointResult>,
+    /// Worker threads the map ran on.
+    pub threads: usize,
 }
 
 impl MapResult {
+    /// Number of panels: tilt angles when tilting, else slices.
+    pub fn panel_count(&self) -> usize {
+        if self.tilts_deg.is_empty() {
+            self.axes[self.plane.axes().2].len()
+        } else {
+            self.tilts_deg.len()
+        }
+    }
     /// Grid point with the largest valid `value`, and the value.
     pub fn max(&self, v: MapValue) -> Option<(Vector3<f64>, f64)> {
         max_of(&self.points, v)
@@ -190,23 +230,101 @@ fn grid(s: &Scene, cfg: &MapConfig) -> Result<[Vec<f64>; 3], StudyError> {
     Ok(axes)
 }
 
+/// The orientations of a map's panels.
+struct PanelOrientations {
+    /// Unit quaternions [w, x, y, z]: the scene's turned by each tilt angle, or the scene's
+    /// alone.
+    quaternions: Vec<[f64; 4]>,
+    /// The tilt angles, degrees (empty without a tilt).
+    angles_deg: Vec<f64>,
+    /// The unit tilt axis (zero without a tilt).
+    axis: Vector3<f64>,
+}
+
+/// The orientations of a map's panels (`slices`: values on the slice axis).
+fn orientations(
+    s: &Scene,
+    cfg: &MapConfig,
+    slices: usize,
+) -> Result<PanelOrientations, StudyError> {
+    let Some(t) = cfg.tilt else {
+        return Ok(PanelOrientations {
+            quaternions: vec![s.ee_orientation_wxyz],
+            angles_deg: Vec::new(),
+            axis: Vector3::zeros(),
+        });
+    };
+    let axis_norm = t.axis.norm();
+    if !s.rigid {
+        return Err(StudyError::Usage(format!(
+            "--tilt-deg: scene `{}` has a point-mass end-effector, where orientation has no effect",
+            s.name
+        )));
+    }
+    if !(axis_norm.is_finite() && axis_norm > 0.0) {
+        return Err(StudyError::Usage(format!(
+            "--tilt-axis {:?}: must be finite and non-zero",
+            t.axis.as_slice()
+        )));
+    }
+    if slices != 1 {
+        return Err(StudyError::Usage(
+            "--tilt-deg: the panels are the tilt angles, so the slice axis takes a single value"
+                .into(),
+        ));
+    }
+    if !(t.step_deg.is_finite() && t.step_deg > 0.0) {
+        return Err(StudyError::Usage(format!(
+            "--tilt-step-deg {:?}: must be > 0",
+            t.step_deg
+        )));
+    }
+    let angles = grid_axis(t.range_deg, t.step_deg)?;
+    if angles.len() > MAX_TILTS {
+        return Err(StudyError::Usage(format!(
+            "{} tilt angles: at most {MAX_TILTS}",
+            angles.len()
+        )));
+    }
+    let axis = t.axis / axis_norm;
+    let quaternions = angles
+        .iter()
+        .map(|a| rotated_about(&s.ee_orientation_wxyz, &axis, a.to_radians()))
+        .collect();
+    Ok(PanelOrientations {
+        quaternions,
+        angles_deg: angles,
+        axis,
+    })
+}
+
 /// Evaluate the map of scene `s` at its T_min.
 pub fn compute(s: &Scene, cfg: &MapConfig) -> Result<MapResult, StudyError> {
     let axes = grid(s, cfg)?;
     let (h, v, sl) = cfg.plane.axes();
-    let n = axes[0].len() * axes[1].len() * axes[2].len();
+    let PanelOrientations {
+        quaternions: qs,
+        angles_deg: tilts_deg,
+        axis: tilt_axis,
+    } = orientations(s, cfg, axes[sl].len())?;
+    let n = axes[h].len() * axes[v].len() * axes[sl].len() * qs.len();
     if n > MAX_GRID_POINTS {
         return Err(StudyError::Usage(format!("{n} grid points: too many")));
     }
     let mut points = Vec::with_capacity(n);
-    for &ws in &axes[sl] {
-        for &wv in &axes[v] {
-            for &wh in &axes[h] {
-                let mut p = Vector3::zeros();
-                p[h] = wh;
-                p[v] = wv;
-                p[sl] = ws;
-                points.push(p);
+    for q in &qs {
+        for &ws in &axes[sl] {
+            for &wv in &axes[v] {
+                for &wh in &axes[h] {
+                    let mut p = Vector3::zeros();
+                    p[h] = wh;
+                    p[v] = wv;
+                    p[sl] = ws;
+                    points.push(Pose {
+                        position_m: p,
+                        orientation_wxyz: *q,
+                    });
+                }
             }
         }
     }
@@ -220,7 +338,10 @@ pub fn compute(s: &Scene, cfg: &MapConfig) -> Result<MapResult, StudyError> {
     Ok(MapResult {
         axes,
         plane: cfg.plane,
+        tilts_deg,
+        tilt_axis,
         points: res,
+        threads: w.thread_count(),
     })
 }
 

@@ -8,8 +8,9 @@
 //! Every study drives [`Estimator::update`] (the per-cycle path, exact to ~1e-12 against
 //! the faithful model) and keeps one result per evaluated point — including the points where
 //! the estimator has no valid answer, which keep their status and NaN frequencies. Long
-//! studies split their points over worker threads ([`points`]: one estimator each,
-//! `std::thread::scope`) and may print a throttled percentage on stderr.
+//! studies split their points over a rayon pool ([`points`]: all cores by default, one
+//! estimator per worker, results equal bit for bit to one thread's) and show a progress bar
+//! with ETA when stderr is a terminal ([`progress`]).
 //!
 //! Studies take plain configuration structs in SI units and return results; rendering and
 //! files are the `report` layer's (above this one), option parsing is the command line's.
@@ -19,6 +20,7 @@ pub mod analysis;
 mod analysis_compare;
 pub mod map;
 pub mod points;
+pub mod progress;
 pub mod tmin;
 pub mod trajectory;
 

@@ -1,5 +1,6 @@
-//! Parallel evaluation of poses: one real-time estimator per worker thread, results in
-//! input order, a throttled progress line on stderr.
+//! Parallel evaluation of poses on a rayon pool (all cores unless told otherwise): one
+//! real-time estimator per worker, results in input order and equal bit for bit to the
+//! one-thread result, a progress bar with ETA on a terminal ([`super::progress`]).
 //!
 //! Each point keeps, besides the estimate, the frequencies of the first K modes
 //! (`Estimator::modes` right after the update, K ≤ [`MAX_MODES`]) and the smallest principal
@@ -7,6 +8,7 @@
 //! translational 3 × 3 block `Estimate::stiffness_n_m`, symmetric: its eigenvalues are
 //! real): the stiffness of the softest direction.
 
+use super::progress::Progress;
 use super::{build, StudyError};
 use crate::estimator::{Estimate, Estimator, EstimatorParams};
 use crate::kinematics::Pose;
@@ -14,9 +16,7 @@ use crate::modal::Mode;
 use crate::scene::Scene;
 use crate::service::stats::StatusHistogram;
 use nalgebra::Vector3;
-use std::io::Write as _;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::{Duration, Instant};
+use rayon::prelude::*;
 
 /// Most worker threads a study starts (more only contend for the same cores).
 pub const MAX_THREADS: usize = 64;
@@ -24,16 +24,15 @@ pub const MAX_THREADS: usize = 64;
 /// has 8 modes, so 16 covers it and the modes above it, for 128 bytes more per point (a
 /// point is ~0.5 kB).
 pub const MAX_MODES: usize = 16;
-/// Shortest time between two progress updates: at most 4 lines a second.
-const PROGRESS_INTERVAL: Duration = Duration::from_millis(250);
-/// How often the main thread looks at the workers' progress.
-const POLL_INTERVAL: Duration = Duration::from_millis(20);
 
 /// One evaluated point of a study.
 #[derive(Debug, Clone, Copy)]
 pub struct PointResult {
     /// End-effector position, m.
     pub position_m: Vector3<f64>,
+    /// End-effector orientation, unit quaternion [w, x, y, z] (the identity's or the
+    /// scene's for a point mass, where it has no effect).
+    pub orientation_wxyz: [f64; 4],
     /// T_min used, N.
     pub t_min_n: f64,
     /// What the real-time estimator returned (status, f1, end-effector mode, tensions).
@@ -85,15 +84,10 @@ pub fn stiffness_min_n_m(e: &Estimate) -> f64 {
     sym.symmetric_eigenvalues().min()
 }
 
-/// One study point: `est.update` at `position_m` and `t_min_n`, then the first `n_modes`
-/// modes of that pose (`n_modes` already checked by [`check_modes`]).
-pub fn evaluate_one(
-    est: &mut Estimator,
-    position_m: Vector3<f64>,
-    t_min_n: f64,
-    n_modes: usize,
-) -> PointResult {
-    let estimate = *est.update(&Pose::at(position_m), t_min_n);
+/// One study point: `est.update` at `pose` and `t_min_n`, then the first `n_modes` modes of
+/// that pose (`n_modes` already checked by [`check_modes`]).
+pub fn evaluate_one(est: &mut Estimator, pose: &Pose, t_min_n: f64, n_modes: usize) -> PointResult {
+    let estimate = *est.update(pose, t_min_n);
     let mut modes_hz = [f64::NAN; MAX_MODES];
     if estimate.is_ok() {
         if n_modes >= 2 {
@@ -105,7 +99,8 @@ pub fn evaluate_one(
         }
     }
     PointResult {
-        position_m,
+        position_m: pose.position_m,
+        orientation_wxyz: pose.orientation_wxyz,
         t_min_n,
         estimate,
         n_modes,
@@ -145,174 +140,91 @@ pub fn status_histogram(rows: &[PointResult]) -> StatusHistogram {
     h
 }
 
-/// Throttled progress line on stderr.
-struct Progress<'a> {
-    label: Option<&'a str>,
-    total: usize,
-    last: Instant,
-    last_pct: usize,
-}
-
-impl<'a> Progress<'a> {
-    fn new(label: Option<&'a str>, total: usize) -> Self {
-        Progress {
-            label,
-            total,
-            last: Instant::now(),
-            last_pct: usize::MAX,
-        }
-    }
-    fn show(&mut self, done: usize, force: bool) {
-        let Some(l) = self.label else { return };
-        let pct = (done * 100).checked_div(self.total).unwrap_or(100);
-        if pct != self.last_pct && (force || self.last.elapsed() >= PROGRESS_INTERVAL) {
-            eprint!("\r{l}: {pct:>3}% ({done}/{} points)", self.total);
-            let _ = std::io::stderr().flush();
-            self.last = Instant::now();
-            self.last_pct = pct;
-        }
-    }
-    fn finish(&mut self) {
-        if self.label.is_some() {
-            self.show(self.total, true);
-            eprintln!();
-        }
-    }
-}
-
-/// How a pool of workers evaluates points.
+/// How the workers evaluate points.
 #[derive(Debug, Clone, Copy)]
 pub struct Workers<'a> {
     /// Estimator parameters (one estimator per worker).
     pub params: EstimatorParams,
-    /// Worker threads (clamped to 1 ..= [`MAX_THREADS`] and to the number of jobs).
+    /// Worker threads: 0 = one per core (rayon's default), else clamped to
+    /// 1 ..= [`MAX_THREADS`].
     pub threads: usize,
-    /// `Some(label)`: a percentage on stderr, at most 4 times a second.
+    /// `Some(label)`: a progress bar with ETA on stderr ([`super::progress`]: only on a
+    /// terminal, and only once the sweep has run for a second).
     pub progress: Option<&'a str>,
     /// Modes kept per point (1 ..= [`MAX_MODES`]).
     pub n_modes: usize,
 }
 
-/// Evaluate `points` (positions, m) at `t_min_n` on `threads` threads, one estimator per
-/// thread, the first mode only. Work is handed out in runs of `chunk` consecutive points (so
-/// a thread's estimator may warm-start along a run); the result keeps the order of `points`.
-/// With `progress = Some(label)` a percentage is printed on stderr (at most 4 times a
-/// second). [`evaluate_points_with`] keeps more modes.
-pub fn evaluate_points(
-    scene: &Scene,
-    points: &[Vector3<f64>],
-    t_min_n: f64,
-    params: EstimatorParams,
-    threads: usize,
-    chunk: usize,
-    progress: Option<&str>,
-) -> Result<Vec<PointResult>, StudyError> {
-    let w = Workers {
-        params,
-        threads,
-        progress,
-        n_modes: 1,
-    };
-    evaluate_points_with(scene, points, t_min_n, chunk, &w)
+impl Workers<'_> {
+    /// The number of threads these workers run on (`threads`, or one per core for 0).
+    pub fn thread_count(&self) -> usize {
+        match self.threads {
+            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            t => t.min(MAX_THREADS),
+        }
+    }
 }
 
-/// [`evaluate_points`] with the workers `w` (and their mode count).
+/// Evaluate `poses` at `t_min_n` with the workers `w`, in runs of `chunk` consecutive
+/// points (a run shares a warm-started estimator); the result keeps the order of `poses`.
 pub fn evaluate_points_with(
     scene: &Scene,
-    points: &[Vector3<f64>],
+    poses: &[Pose],
     t_min_n: f64,
     chunk: usize,
     w: &Workers,
 ) -> Result<Vec<PointResult>, StudyError> {
-    let jobs: Vec<(usize, usize)> = (0..points.len())
-        .step_by(chunk.max(1))
-        .map(|a| (a, (a + chunk.max(1)).min(points.len())))
-        .collect();
-    evaluate_jobs_with(scene, &jobs, points.len(), w, |k| {
-        let (a, b) = jobs[k];
-        (a..b).map(|i| (points[i], t_min_n)).collect()
+    let chunk = chunk.max(1);
+    let n_jobs = poses.len().div_ceil(chunk);
+    evaluate_jobs_with(scene, n_jobs, poses.len(), w, |k| {
+        let (a, b) = (k * chunk, ((k + 1) * chunk).min(poses.len()));
+        poses[a..b].iter().map(|p| (*p, t_min_n)).collect()
     })
 }
 
-/// Shared worker pool: job k yields its (position, T_min) list; results are concatenated
-/// in job order. `total` is the number of points over all jobs (for the progress line).
-/// The first mode only; [`evaluate_jobs_with`] keeps more.
-pub fn evaluate_jobs<F>(
-    scene: &Scene,
-    jobs: &[(usize, usize)],
-    threads: usize,
-    progress: Option<&str>,
-    total: usize,
-    job_points: F,
-    params: EstimatorParams,
-) -> Result<Vec<PointResult>, StudyError>
-where
-    F: Fn(usize) -> Vec<(Vector3<f64>, f64)> + Sync,
-{
-    let w = Workers {
-        params,
-        threads,
-        progress,
-        n_modes: 1,
-    };
-    evaluate_jobs_with(scene, jobs, total, &w, job_points)
-}
-
-/// [`evaluate_jobs`] with the workers `w` (and their mode count).
+/// Evaluate `n_jobs` jobs on the workers `w`: job k is the list of (pose, T_min) that
+/// `job_points(k)` returns, evaluated in order by one estimator; the results are
+/// concatenated in job order. `total` is the number of points over all jobs (for the
+/// progress bar).
+///
+/// The jobs run on a rayon pool of [`Workers::thread_count`] threads, one estimator per
+/// worker (`map_init`). Every job starts from the same cold estimator (a copy of one built
+/// once), so a result does not depend on which worker ran its job nor on what that worker
+/// ran before: any thread count gives the one-thread result, bit for bit.
 pub fn evaluate_jobs_with<F>(
     scene: &Scene,
-    jobs: &[(usize, usize)],
+    n_jobs: usize,
     total: usize,
     w: &Workers,
     job_points: F,
 ) -> Result<Vec<PointResult>, StudyError>
 where
-    F: Fn(usize) -> Vec<(Vector3<f64>, f64)> + Sync,
+    F: Fn(usize) -> Vec<(Pose, f64)> + Sync,
 {
     let n_modes = check_modes(w.n_modes)?;
-    let (params, threads, progress) = (w.params, w.threads, w.progress);
-    let threads = threads.clamp(1, MAX_THREADS).min(jobs.len().max(1));
-    let next = AtomicUsize::new(0);
-    let done = AtomicUsize::new(0);
-    let mut prog = Progress::new(progress, total);
-    let mut per_job: Vec<Option<Vec<PointResult>>> = vec![None; jobs.len()];
-    let results = std::thread::scope(|sc| {
-        let handles: Vec<_> = (0..threads)
-            .map(|_| {
-                sc.spawn(|| -> Result<Vec<(usize, Vec<PointResult>)>, StudyError> {
-                    let mut est = build(scene, params)?;
-                    let mut local = Vec::new();
-                    loop {
-                        let k = next.fetch_add(1, Ordering::Relaxed);
-                        if k >= jobs.len() {
-                            break;
-                        }
-                        let pts = job_points(k);
-                        let mut out = Vec::with_capacity(pts.len());
-                        for (p, t) in pts {
-                            out.push(evaluate_one(&mut est, p, t, n_modes));
-                        }
-                        done.fetch_add(out.len(), Ordering::Relaxed);
-                        local.push((k, out));
-                    }
-                    Ok(local)
-                })
-            })
-            .collect();
-        while !handles.iter().all(|h| h.is_finished()) {
-            prog.show(done.load(Ordering::Relaxed), false);
-            std::thread::sleep(POLL_INTERVAL);
-        }
-        handles
-            .into_iter()
-            .map(|h| h.join().expect("study worker panicked"))
-            .collect::<Vec<_>>()
+    let cold = build(scene, w.params)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(w.thread_count())
+        .build()
+        .map_err(|e| StudyError::Build(format!("worker threads: {e}")))?;
+    let bar = Progress::new(w.progress, total);
+    let per_job: Vec<Vec<PointResult>> = pool.install(|| {
+        (0..n_jobs)
+            .into_par_iter()
+            .map_init(
+                || cold.clone(),
+                |est, k| {
+                    est.clone_from(&cold);
+                    let out: Vec<PointResult> = job_points(k)
+                        .into_iter()
+                        .map(|(pose, t)| evaluate_one(est, &pose, t, n_modes))
+                        .collect();
+                    bar.advance(out.len());
+                    out
+                },
+            )
+            .collect()
     });
-    prog.finish();
-    for r in results {
-        for (k, v) in r? {
-            per_job[k] = Some(v);
-        }
-    }
-    Ok(per_job.into_iter().flatten().flatten().collect())
+    bar.finish();
+    Ok(per_job.into_iter().flatten().collect())
 }

@@ -3,6 +3,7 @@
 
 use super::points::{check_modes, evaluate_one, valid, PointResult};
 use super::{build, estimator_params, StudyError};
+use crate::kinematics::Pose;
 use crate::scene::Scene;
 
 /// Most T_min values of one sweep.
@@ -81,9 +82,10 @@ pub fn compute(s: &Scene, cfg: &TminConfig) -> Result<TminSweep, StudyError> {
         })
         .collect();
     let mut est = build(s, estimator_params(s, ee_mode))?;
+    let pose = Pose::in_scene(s, s.ee_position_m);
     let points: Vec<PointResult> = ts
         .iter()
-        .map(|&t| evaluate_one(&mut est, s.ee_position_m, t, modes))
+        .map(|&t| evaluate_one(&mut est, &pose, t, modes))
         .collect();
     let f: Vec<f64> = points
         .iter()

@@ -14,7 +14,9 @@ pub const MAX_PERIOD_S: f64 = 3600.0;
 /// Where the poses come from.
 #[derive(Debug, Clone)]
 pub enum PathSource {
-    /// A CSV with columns t,x,y,z (s, m); see [`Samples::read_csv`].
+    /// A CSV with columns t,x,y,z or t,x,y,z,qw,qx,qy,qz (s, m, unit quaternion); see
+    /// [`Samples::read_csv`]. Without quaternion columns the poses take the scene's
+    /// orientation.
     Csv(PathBuf),
     /// The paper's circle around the scene's position, sampled every 1 ms.
     Circle {
@@ -36,9 +38,9 @@ pub struct TrajectoryConfig {
     pub ee_mode: bool,
     /// Modes kept per pose (1 ..= `points::MAX_MODES`).
     pub modes: usize,
-    /// Worker threads (T_min curves are spread over them).
+    /// Worker threads, T_min curves spread over them (0: one per core).
     pub threads: usize,
-    /// Print a percentage on stderr.
+    /// Show a progress bar on stderr (a terminal only).
     pub progress: bool,
 }
 
@@ -118,9 +120,9 @@ pub fn evaluate_with(
     w: &Workers,
 ) -> Result<Vec<PointResult>, StudyError> {
     let n = tr.position_m.len();
-    let jobs: Vec<(usize, usize)> = (0..t_mins.len()).map(|k| (k * n, (k + 1) * n)).collect();
-    evaluate_jobs_with(s, &jobs, n * t_mins.len(), w, |k| {
-        tr.position_m.iter().map(|p| (*p, t_mins[k])).collect()
+    let poses = tr.poses(s);
+    evaluate_jobs_with(s, t_mins.len(), n * t_mins.len(), w, |k| {
+        poses.iter().map(|p| (*p, t_mins[k])).collect()
     })
 }
 

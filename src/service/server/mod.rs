@@ -465,10 +465,12 @@ impl Server {
         out.f1_hz = e.f1_hz;
         out.ee_mode_hz = e.ee_mode_hz;
         out.ee_mode_age_cycles = e.ee_mode_age_cycles;
-        out.stiffness_dim = 3;
-        for r in 0..3 {
-            for c in 0..3 {
-                out.stiffness[3 * r + c] = e.stiffness_n_m[(r, c)];
+        // 3 × 3 (N/m) for a point mass, 6 × 6 (N/m, N/rad, N·m/m, N·m/rad) for a rigid body.
+        let dim = e.stiffness_dim;
+        out.stiffness_dim = dim as u32;
+        for r in 0..dim {
+            for c in 0..dim {
+                out.stiffness[dim * r + c] = e.stiffness6[(r, c)];
             }
         }
         out.compute_ns = compute_ns;

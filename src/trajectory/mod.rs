@@ -1,4 +1,4 @@
-//! End-effector trajectories: the paper's circle and sampled `t,x,y,z` files.
+//! End-effector trajectories: the paper's circle and sampled `t,x,y,z[,qw,qx,qy,qz]` files.
 //!
 //! The circle is the one trajectory every benchmark, test, sweep and the demo drive: radius
 //! [`CIRCLE_RADIUS_M`] around the scene's default position, in the plane perpendicular to
@@ -6,22 +6,19 @@
 //! is [`circle_pose`] (allocation-free, for per-cycle loops); [`Trajectory::circle`]
 //! evaluates the same curve at any time and [`Circle::sampled`] lists one revolution.
 //!
-//! ## Trajectory CSV files (one rule set, [`Samples::parse_csv`])
-//!
-//! - Each data row is `t,x,y,z`: exactly four finite numbers, time in s, position in m.
-//! - Times increase strictly from row to row.
-//! - Blank lines are skipped; `#` starts a comment that runs to the end of its line.
-//! - One header line (a row whose fields are not all numbers) is allowed before the first
-//!   data row.
-//! - At least one data row.
-//!
-//! Errors name the file and the line.
+//! Trajectory CSV files (`t,x,y,z` or `t,x,y,z,qw,qx,qy,qz`: time, position and optionally
+//! the orientation as a unit quaternion) are read by [`Samples`]; the rules are in
+//! [`samples`]'s docs.
+
+pub mod samples;
+
+pub use samples::Samples;
 
 use std::path::Path;
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::input_file::{InputError, MAX_TRAJECTORY_BYTES};
+use crate::input_file::InputError;
 use crate::kinematics::{up_frame, Pose};
 use crate::scene::Scene;
 
@@ -48,7 +45,7 @@ pub enum TrajectoryError {
         bound: &'static str,
     },
     /// The file could not be read: missing, not a regular file, over
-    /// [`MAX_TRAJECTORY_BYTES`] or not UTF-8.
+    /// [`MAX_TRAJECTORY_BYTES`](crate::input_file::MAX_TRAJECTORY_BYTES) or not UTF-8.
     #[error(transparent)]
     Input(#[from] InputError),
     /// A row breaks the CSV rules (see the module docs).
@@ -62,7 +59,7 @@ pub enum TrajectoryError {
         msg: String,
     },
     /// No data row.
-    #[error("{origin}: no t,x,y,z rows")]
+    #[error("{origin}: no data rows (t,x,y,z[,qw,qx,qy,qz])")]
     Empty {
         /// The file.
         origin: String,
@@ -76,14 +73,15 @@ fn horizontal_axes(gravity_m_s2: &Vector3<f64>) -> Matrix3<f64> {
 }
 
 /// Pose k of the paper's circle around `s`'s default position: time k·[`SAMPLE_PERIOD_S`],
-/// radius [`CIRCLE_RADIUS_M`], `period_s` per revolution. Allocation-free.
+/// radius [`CIRCLE_RADIUS_M`], `period_s` per revolution, at the scene's orientation.
+/// Allocation-free.
 pub fn circle_pose(s: &Scene, k: usize, period_s: f64) -> Pose {
     let frame = horizontal_axes(&s.gravity_m_s2);
     let th = 2.0 * std::f64::consts::PI * (k as f64 * SAMPLE_PERIOD_S) / period_s;
     let p = s.ee_position_m
         + frame.column(0) * (CIRCLE_RADIUS_M * th.cos())
         + frame.column(1) * (CIRCLE_RADIUS_M * th.sin());
-    Pose::at(p)
+    Pose::in_scene(s, p)
 }
 
 /// The paper's circle (any radius) around a centre, in the plane perpendicular to gravity.
@@ -138,6 +136,7 @@ impl Circle {
             t_s: Vec::with_capacity(n + 1),
             position_m: Vec::with_capacity(n + 1),
             angle_deg: Vec::with_capacity(n + 1),
+            orientation_wxyz: Vec::new(),
         };
         let centre = scene.ee_position_m;
         for k in 0..=n {
@@ -149,104 +148,6 @@ impl Circle {
                 .push(360.0 * k as f64 * SAMPLE_PERIOD_S / self.period_s);
         }
         t
-    }
-}
-
-/// Positions at listed times.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct Samples {
-    /// Times, s, strictly increasing.
-    pub t_s: Vec<f64>,
-    /// Positions, m.
-    pub position_m: Vec<Vector3<f64>>,
-    /// Angle along the circle, degrees (empty unless sampled from a [`Circle`]).
-    pub angle_deg: Vec<f64>,
-}
-
-impl Samples {
-    /// Reads a trajectory CSV file (rules in the module docs; a regular file of at most
-    /// [`MAX_TRAJECTORY_BYTES`]).
-    pub fn read_csv(path: &Path) -> Result<Samples, TrajectoryError> {
-        let text = crate::input_file::read_text(path, "trajectory CSV", MAX_TRAJECTORY_BYTES)?;
-        Samples::parse_csv(&text, &path.display().to_string())
-    }
-
-    /// Parses trajectory CSV text (rules in the module docs); `origin` names the source in
-    /// errors.
-    pub fn parse_csv(text: &str, origin: &str) -> Result<Samples, TrajectoryError> {
-        let mut s = Samples::default();
-        let mut header_seen = false;
-        for (i, line) in text.lines().enumerate() {
-            let row = |msg: String| TrajectoryError::Row {
-                origin: origin.to_string(),
-                line: i + 1,
-                msg,
-            };
-            let line = line.split('#').next().unwrap_or("").trim();
-            if line.is_empty() {
-                continue;
-            }
-            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-            let values = match fields
-                .iter()
-                .map(|f| f.parse::<f64>())
-                .collect::<Result<Vec<_>, _>>()
-            {
-                Ok(v) => v,
-                Err(_) if s.t_s.is_empty() && !header_seen => {
-                    header_seen = true;
-                    continue;
-                }
-                Err(e) => return Err(row(format!("`{line}`: {e}"))),
-            };
-            if values.len() != 4 || !values.iter().all(|v| v.is_finite()) {
-                return Err(row(format!(
-                    "expected four finite numbers t,x,y,z (s, m), got `{line}`"
-                )));
-            }
-            if let Some(&last) = s.t_s.last() {
-                if values[0] <= last {
-                    return Err(row(format!(
-                        "time {} s does not increase (previous {last} s)",
-                        values[0]
-                    )));
-                }
-            }
-            s.t_s.push(values[0]);
-            s.position_m
-                .push(Vector3::new(values[1], values[2], values[3]));
-        }
-        if s.t_s.is_empty() {
-            return Err(TrajectoryError::Empty {
-                origin: origin.to_string(),
-            });
-        }
-        Ok(s)
-    }
-
-    /// The position at time `t_s` (s from the first sample), m, linear between samples;
-    /// the first position before the start, `None` after the last sample.
-    pub fn position_at(&self, t_s: f64) -> Option<Vector3<f64>> {
-        let ts = &self.t_s;
-        let t = ts[0] + t_s;
-        if t > *ts.last()? {
-            return None;
-        }
-        let j = ts.partition_point(|&x| x <= t);
-        if j == 0 {
-            return Some(self.position_m[0]);
-        }
-        if j >= ts.len() {
-            return Some(self.position_m[ts.len() - 1]);
-        }
-        let (ta, tb) = (ts[j - 1], ts[j]);
-        let w = (t - ta) / (tb - ta);
-        Some(self.position_m[j - 1] * (1.0 - w) + self.position_m[j] * w)
-    }
-
-    /// Time from the first to the last sample, s.
-    pub fn duration_s(&self) -> f64 {
-        self.t_s[self.t_s.len() - 1] - self.t_s[0]
     }
 }
 
@@ -281,6 +182,15 @@ impl Trajectory {
         match self {
             Trajectory::Circle(c) => Some(c.position_at(t_s)),
             Trajectory::Samples(s) => s.position_at(t_s),
+        }
+    }
+
+    /// The orientation at time `t_s` (s from the start) when the trajectory has one (a CSV
+    /// with quaternion columns; slerp between samples), else `None` (the scene's applies).
+    pub fn orientation_at(&self, t_s: f64) -> Option<[f64; 4]> {
+        match self {
+            Trajectory::Circle(_) => None,
+            Trajectory::Samples(s) => s.orientation_at(t_s),
         }
     }
 
@@ -335,84 +245,5 @@ mod tests {
             let r = (p - scene.ee_position_m).norm();
             assert!((r - CIRCLE_RADIUS_M).abs() < 1e-12, "r = {r}");
         }
-    }
-
-    #[test]
-    fn csv_interpolates_and_ends() {
-        let t = Samples::parse_csv(
-            "t,x,y,z\n0,0,0,1\n# comment\n1.0, 1, 0, 1 # x\n2,1,2,1\n",
-            "x",
-        )
-        .unwrap();
-        assert_eq!(t.duration_s(), 2.0);
-        assert_eq!(t.position_at(0.5), Some(Vector3::new(0.5, 0.0, 1.0)));
-        assert_eq!(t.position_at(1.5), Some(Vector3::new(1.0, 1.0, 1.0)));
-        assert_eq!(t.position_at(2.0), Some(Vector3::new(1.0, 2.0, 1.0)));
-        assert_eq!(t.position_at(2.5), None);
-    }
-
-    #[test]
-    fn csv_rules_are_enforced() {
-        let bad = [
-            ("0,0,0,1\n0,1,1,1\n", "does not increase"),
-            ("0,0,0\n", "four finite numbers"),
-            ("0,0,0,1,5\n", "four finite numbers"),
-            ("0,0,0,nan\n", "four finite numbers"),
-            ("0,0,0,1\nfoo\n", "`foo`"),
-            ("t,x,y,z\nt,x,y,z\n0,0,0,1\n", "`t,x,y,z`"),
-            ("", "no t,x,y,z rows"),
-            ("# only a comment\n", "no t,x,y,z rows"),
-        ];
-        for (text, why) in bad {
-            let e = Samples::parse_csv(text, "f.csv").unwrap_err().to_string();
-            assert!(e.contains(why) && e.starts_with("f.csv"), "{text:?}: {e}");
-        }
-    }
-
-    /// `Samples::read_csv` of `path` in a thread, failing the test if it blocks.
-    fn read_within_timeout(path: &Path) -> Result<Samples, TrajectoryError> {
-        let p = path.to_path_buf();
-        crate::input_file::test_files::within_timeout(move || Samples::read_csv(&p))
-    }
-
-    #[test]
-    fn csv_from_devices_fifos_and_directories_is_refused_without_blocking() {
-        use crate::input_file::test_files::{fifo, temp_dir};
-        let dir = temp_dir("csv-kinds");
-        let fifo = fifo(&dir, "t.csv");
-        for (p, kind) in [
-            (fifo.as_path(), "FIFO"),
-            (Path::new("/dev/zero"), "character device"),
-            (Path::new("/dev/urandom"), "character device"),
-            (dir.as_path(), "directory"),
-        ] {
-            let msg = read_within_timeout(p).unwrap_err().to_string();
-            let name = p.display().to_string();
-            assert!(
-                msg.starts_with(&format!("{name}: is a {kind}")) && msg.contains("trajectory CSV"),
-                "{msg}"
-            );
-        }
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
-
-    #[test]
-    fn csv_over_the_limit_is_refused_and_a_small_file_read() {
-        use crate::input_file::test_files::{sparse, temp_dir};
-        use crate::input_file::MAX_TRAJECTORY_BYTES;
-        let dir = temp_dir("csv-size");
-        let big = sparse(&dir, "big.csv", MAX_TRAJECTORY_BYTES + 1);
-        let msg = read_within_timeout(&big).unwrap_err().to_string();
-        let expected = format!(
-            "{}: trajectory CSV is {} bytes, over the limit of {MAX_TRAJECTORY_BYTES} bytes",
-            big.display(),
-            MAX_TRAJECTORY_BYTES + 1
-        );
-        assert_eq!(msg, expected);
-        let small = dir.join("small.csv");
-        std::fs::write(&small, "t,x,y,z\n0,0,0,1\n1,1,0,1\n").unwrap();
-        let s = read_within_timeout(&small).unwrap();
-        std::fs::remove_dir_all(&dir).unwrap();
-        assert_eq!(s.duration_s(), 1.0);
     }
 }

@@ -1,0 +1,61 @@
+//! The progress bar of a long sweep: points done, percentage and ETA on stderr (indicatif).
+//!
+//! Drawn only when it helps a person watching: stderr is a terminal, and the sweep has
+//! already run for [`SHOW_AFTER`] (a sweep that ends sooner prints nothing). When stderr
+//! is a file or a pipe nothing is drawn at all, so logs and captured output hold only the
+//! command's summary. The bar is cleared when the sweep ends.
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::io::IsTerminal;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+/// A sweep shorter than this shows no bar: it would only flicker.
+pub const SHOW_AFTER: Duration = Duration::from_secs(1);
+/// Most redraws a second (indicatif's default is 20; 4 keep a shared terminal quiet).
+const REFRESH_PER_S: u8 = 4;
+/// The bar's layout: label, bar, points done of total, percentage, ETA.
+const TEMPLATE: &str = "{prefix}: [{bar:30}] {pos}/{len} points {percent:>3}% ETA {eta}";
+
+/// A progress bar that stays hidden until [`SHOW_AFTER`] has passed on a terminal.
+#[derive(Debug)]
+pub struct Progress {
+    /// None: no bar (not asked for, or stderr is not a terminal).
+    bar: Option<ProgressBar>,
+    shown: AtomicBool,
+}
+
+impl Progress {
+    /// A bar labelled `label` over `total` points; none when `label` is None or stderr is
+    /// not a terminal.
+    pub fn new(label: Option<&str>, total: usize) -> Progress {
+        let bar = label.filter(|_| std::io::stderr().is_terminal()).map(|l| {
+            let b = ProgressBar::with_draw_target(Some(total as u64), ProgressDrawTarget::hidden());
+            if let Ok(style) = ProgressStyle::with_template(TEMPLATE) {
+                b.set_style(style.progress_chars("=> "));
+            }
+            b.set_prefix(l.to_string());
+            b
+        });
+        Progress {
+            bar,
+            shown: AtomicBool::new(false),
+        }
+    }
+
+    /// `n` more points done (from any worker).
+    pub fn advance(&self, n: usize) {
+        let Some(b) = &self.bar else { return };
+        b.inc(n as u64);
+        if b.elapsed() >= SHOW_AFTER && !self.shown.swap(true, Ordering::Relaxed) {
+            b.set_draw_target(ProgressDrawTarget::stderr_with_hz(REFRESH_PER_S));
+        }
+    }
+
+    /// The sweep is over: clear the bar.
+    pub fn finish(&self) {
+        if let Some(b) = &self.bar {
+            b.finish_and_clear();
+        }
+    }
+}

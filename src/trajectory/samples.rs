@@ -1,0 +1,310 @@
+//! Sampled trajectories: poses at listed times, read from a CSV file.
+//!
+//! ## Trajectory CSV files (one rule set, [`Samples::parse_csv`])
+//!
+//! - Each data row is `t,x,y,z` (time in s, position in m) or `t,x,y,z,qw,qx,qy,qz` (and
+//!   the end-effector orientation as a unit quaternion w, x, y, z): 4 or 8 finite numbers.
+//!   Every data row has as many fields as the first one.
+//! - A quaternion follows the command line's rule ([`unit_quaternion`]): |‖q‖ − 1| at most
+//!   [`QUATERNION_INPUT_TOL`](crate::kinematics::QUATERNION_INPUT_TOL) (= 1e-3, so 4 printed digits pass), then divided by its norm;
+//!   otherwise the row is refused, naming its line. Without quaternion columns the poses
+//!   take the scene's orientation. A point-mass end-effector has no orientation: the
+//!   columns are then checked and have no effect (the command line says so once).
+//! - Times increase strictly from row to row.
+//! - Blank lines are skipped; `#` starts a comment that runs to the end of its line.
+//! - One header line (a row whose fields are not all numbers) is allowed before the first
+//!   data row.
+//! - At least one data row.
+//!
+//! Between samples the position is interpolated linearly and the orientation by slerp (the
+//! shorter arc). Errors name the file and the line.
+
+use std::path::Path;
+
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+use super::TrajectoryError;
+use crate::input_file::MAX_TRAJECTORY_BYTES;
+use crate::kinematics::{unit_quaternion, Pose};
+use crate::scene::Scene;
+
+/// Fields of a row without orientation: t, x, y, z.
+const FIELDS_POSITION: usize = 4;
+/// Fields of a row with orientation: t, x, y, z, qw, qx, qy, qz.
+const FIELDS_POSE: usize = 8;
+
+/// Poses at listed times.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Samples {
+    /// Times, s, strictly increasing.
+    pub t_s: Vec<f64>,
+    /// Positions, m.
+    pub position_m: Vec<Vector3<f64>>,
+    /// Orientations, unit quaternions [w, x, y, z], one per time; empty when the file has no
+    /// quaternion columns (the poses then take the scene's orientation).
+    pub orientation_wxyz: Vec<[f64; 4]>,
+    /// Angle along the circle, degrees (empty unless sampled from a [`Circle`]).
+    pub angle_deg: Vec<f64>,
+}
+
+impl Samples {
+    /// Reads a trajectory CSV file (rules in the module docs; a regular file of at most
+    /// [`MAX_TRAJECTORY_BYTES`]).
+    pub fn read_csv(path: &Path) -> Result<Samples, TrajectoryError> {
+        let text = crate::input_file::read_text(path, "trajectory CSV", MAX_TRAJECTORY_BYTES)?;
+        Samples::parse_csv(&text, &path.display().to_string())
+    }
+
+    /// Parses trajectory CSV text (rules in the module docs); `origin` names the source in
+    /// errors.
+    pub fn parse_csv(text: &str, origin: &str) -> Result<Samples, TrajectoryError> {
+        let mut s = Samples::default();
+        let mut header_seen = false;
+        let mut fields_per_row: Option<usize> = None;
+        for (i, line) in text.lines().enumerate() {
+            let row = |msg: String| TrajectoryError::Row {
+                origin: origin.to_string(),
+                line: i + 1,
+                msg,
+            };
+            let line = line.split('#').next().unwrap_or("").trim();
+            if line.is_empty() {
+                continue;
+            }
+            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+            let values = match fields
+                .iter()
+                .map(|f| f.parse::<f64>())
+                .collect::<Result<Vec<_>, _>>()
+            {
+                Ok(v) => v,
+                Err(_) if s.t_s.is_empty() && !header_seen => {
+                    header_seen = true;
+                    continue;
+                }
+                Err(e) => return Err(row(format!("`{line}`: {e}"))),
+            };
+            let width = *fields_per_row.get_or_insert(values.len());
+            if !(values.len() == FIELDS_POSITION || values.len() == FIELDS_POSE)
+                || !values.iter().all(|v| v.is_finite())
+            {
+                return Err(row(format!(
+                    "expected 4 or 8 finite numbers t,x,y,z[,qw,qx,qy,qz] (s, m, unit quaternion), got `{line}`"
+                )));
+            }
+            if values.len() != width {
+                return Err(row(format!(
+                    "expected as many fields as the first data row ({width}), got {} in `{line}`",
+                    values.len()
+                )));
+            }
+            if let Some(&last) = s.t_s.last() {
+                if values[0] <= last {
+                    return Err(row(format!(
+                        "time {} s does not increase (previous {last} s)",
+                        values[0]
+                    )));
+                }
+            }
+            s.t_s.push(values[0]);
+            s.position_m
+                .push(Vector3::new(values[1], values[2], values[3]));
+            if width == FIELDS_POSE {
+                let q = unit_quaternion([values[4], values[5], values[6], values[7]])
+                    .map_err(|e| row(e.to_string()))?;
+                s.orientation_wxyz.push(q);
+            }
+        }
+        if s.t_s.is_empty() {
+            return Err(TrajectoryError::Empty {
+                origin: origin.to_string(),
+            });
+        }
+        Ok(s)
+    }
+
+    /// The position at time `t_s` (s from the first sample), m, linear between samples;
+    /// the first position before the start, `None` after the last sample.
+    pub fn position_at(&self, t_s: f64) -> Option<Vector3<f64>> {
+        let (j, w) = self.segment(t_s)?;
+        if w == 0.0 {
+            return Some(self.position_m[j]);
+        }
+        Some(self.position_m[j] * (1.0 - w) + self.position_m[j + 1] * w)
+    }
+
+    /// The orientation at time `t_s` (s from the first sample), by slerp between samples
+    /// (the shorter arc); the first before the start, `None` after the last sample or when
+    /// the samples have no orientation.
+    pub fn orientation_at(&self, t_s: f64) -> Option<[f64; 4]> {
+        if self.orientation_wxyz.is_empty() {
+            return None;
+        }
+        let (j, w) = self.segment(t_s)?;
+        let q = |k: usize| {
+            let [w, x, y, z] = self.orientation_wxyz[k];
+            UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z))
+        };
+        if w == 0.0 {
+            return Some(self.orientation_wxyz[j]);
+        }
+        let r = q(j).slerp(&q(j + 1), w).into_inner();
+        Some([r.w, r.i, r.j, r.k])
+    }
+
+    /// Sample j and the weight w ∈ [0, 1) toward sample j + 1 at time `t_s` from the first
+    /// sample (w = 0 before the start and at or after the last sample's time); `None` after
+    /// the last sample.
+    fn segment(&self, t_s: f64) -> Option<(usize, f64)> {
+        let ts = &self.t_s;
+        let t = ts[0] + t_s;
+        if t > *ts.last()? {
+            return None;
+        }
+        let j = ts.partition_point(|&x| x <= t);
+        if j == 0 {
+            return Some((0, 0.0));
+        }
+        if j >= ts.len() {
+            return Some((ts.len() - 1, 0.0));
+        }
+        let (ta, tb) = (ts[j - 1], ts[j]);
+        Some((j - 1, (t - ta) / (tb - ta)))
+    }
+
+    /// Every sample as a pose: its own orientation, or the scene's when the samples have
+    /// none.
+    pub fn poses(&self, s: &Scene) -> Vec<Pose> {
+        self.position_m
+            .iter()
+            .enumerate()
+            .map(|(k, &p)| match self.orientation_wxyz.get(k) {
+                Some(&q) => Pose {
+                    position_m: p,
+                    orientation_wxyz: q,
+                },
+                None => Pose::in_scene(s, p),
+            })
+            .collect()
+    }
+
+    /// Time from the first to the last sample, s.
+    pub fn duration_s(&self) -> f64 {
+        self.t_s[self.t_s.len() - 1] - self.t_s[0]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_interpolates_and_ends() {
+        let t = Samples::parse_csv(
+            "t,x,y,z\n0,0,0,1\n# comment\n1.0, 1, 0, 1 # x\n2,1,2,1\n",
+            "x",
+        )
+        .unwrap();
+        assert_eq!(t.duration_s(), 2.0);
+        assert_eq!(t.position_at(0.5), Some(Vector3::new(0.5, 0.0, 1.0)));
+        assert_eq!(t.position_at(1.5), Some(Vector3::new(1.0, 1.0, 1.0)));
+        assert_eq!(t.position_at(2.0), Some(Vector3::new(1.0, 2.0, 1.0)));
+        assert_eq!(t.position_at(2.5), None);
+    }
+
+    #[test]
+    fn csv_rules_are_enforced() {
+        let bad = [
+            ("0,0,0,1\n0,1,1,1\n", "does not increase"),
+            ("0,0,0\n", "4 or 8 finite numbers"),
+            ("0,0,0,1,5\n", "4 or 8 finite numbers"),
+            ("0,0,0,nan\n", "4 or 8 finite numbers"),
+            (
+                "0,0,0,1\n1,0,0,1,1,0,0,0\n",
+                "as many fields as the first data row (4)",
+            ),
+            ("0,0,0,1,1,0,0,0\n1,0,0,1,2,0,0,0\n", "f.csv:2: orientation"),
+            ("0,0,0,1,1,0,0,0\n1,0,0,1,2,0,0,0\n", "norm 2"),
+            ("0,0,0,1\nfoo\n", "`foo`"),
+            ("t,x,y,z\nt,x,y,z\n0,0,0,1\n", "`t,x,y,z`"),
+            ("", "no data rows"),
+            ("# only a comment\n", "no data rows"),
+        ];
+        for (text, why) in bad {
+            let e = Samples::parse_csv(text, "f.csv").unwrap_err().to_string();
+            assert!(e.contains(why) && e.starts_with("f.csv"), "{text:?}: {e}");
+        }
+    }
+
+    /// `Samples::read_csv` of `path` in a thread, failing the test if it blocks.
+    fn read_within_timeout(path: &Path) -> Result<Samples, TrajectoryError> {
+        let p = path.to_path_buf();
+        crate::input_file::test_files::within_timeout(move || Samples::read_csv(&p))
+    }
+
+    #[test]
+    fn csv_from_devices_fifos_and_directories_is_refused_without_blocking() {
+        use crate::input_file::test_files::{fifo, temp_dir};
+        let dir = temp_dir("csv-kinds");
+        let fifo = fifo(&dir, "t.csv");
+        for (p, kind) in [
+            (fifo.as_path(), "FIFO"),
+            (Path::new("/dev/zero"), "character device"),
+            (Path::new("/dev/urandom"), "character device"),
+            (dir.as_path(), "directory"),
+        ] {
+            let msg = read_within_timeout(p).unwrap_err().to_string();
+            let name = p.display().to_string();
+            assert!(
+                msg.starts_with(&format!("{name}: is a {kind}")) && msg.contains("trajectory CSV"),
+                "{msg}"
+            );
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn csv_over_the_limit_is_refused_and_a_small_file_read() {
+        use crate::input_file::test_files::{sparse, temp_dir};
+        use crate::input_file::MAX_TRAJECTORY_BYTES;
+        let dir = temp_dir("csv-size");
+        let big = sparse(&dir, "big.csv", MAX_TRAJECTORY_BYTES + 1);
+        let msg = read_within_timeout(&big).unwrap_err().to_string();
+        let expected = format!(
+            "{}: trajectory CSV is {} bytes, over the limit of {MAX_TRAJECTORY_BYTES} bytes",
+            big.display(),
+            MAX_TRAJECTORY_BYTES + 1
+        );
+        assert_eq!(msg, expected);
+        let small = dir.join("small.csv");
+        std::fs::write(&small, "t,x,y,z\n0,0,0,1\n1,1,0,1\n").unwrap();
+        let s = read_within_timeout(&small).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(s.duration_s(), 1.0);
+    }
+
+    #[test]
+    fn quaternion_columns_are_normalised_and_interpolated_on_the_shortest_arc() {
+        let t = Samples::parse_csv(
+            "t,x,y,z,qw,qx,qy,qz\n0,0,0,1,1,0,0,0\n1,0,0,1,0.7071,0,0,0.7071\n",
+            "q.csv",
+        )
+        .unwrap();
+        assert_eq!(t.orientation_wxyz.len(), 2);
+        let q = t.orientation_wxyz[1];
+        let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+        // Normalised by the reader: 1 within a few roundings.
+        assert!((n - 1.0).abs() < 4.0 * f64::EPSILON, "{n}");
+        // Half-way between the identity and a quarter turn about z: an eighth turn
+        // (closed form cos(π/8), sin(π/8)); slerp's rounding only.
+        let h = t.orientation_at(0.5).unwrap();
+        let c = std::f64::consts::FRAC_PI_8;
+        let want = [c.cos(), 0.0, 0.0, c.sin()];
+        for (a, b) in h.iter().zip(want) {
+            assert!((a - b).abs() < 1e-12, "{h:?}");
+        }
+        // No quaternion columns: no orientations, so the scene's is used.
+        let p = Samples::parse_csv("0,0,0,1\n", "p.csv").unwrap();
+        assert!(p.orientation_wxyz.is_empty() && p.orientation_at(0.0).is_none());
+    }
+}
