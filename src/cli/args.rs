@@ -30,6 +30,10 @@ pub struct SceneArgs {
     /// Element model (default: the scene's).
     #[arg(long, value_enum)]
     pub element: Option<ElementArg>,
+    /// Effect `sag` on or off (default: the scene's `[effects] sag`): cables on their elastic
+    /// catenary (fem or continuous) or on their straight chords.
+    #[arg(long, value_name = "true|false", action = clap::ArgAction::Set)]
+    pub sag: Option<bool>,
 }
 
 /// `--element` values: the cable models of [`ElementKind`], as the command line spells them.
@@ -142,7 +146,17 @@ pub fn resolve_scene(a: &SceneArgs) -> Result<Scene, CliError> {
             "--elements {n}: must be in 1..={MAX_ELEMENTS_PER_CABLE}"
         )));
     }
-    Ok(s.with_model(element, n))
+    let on = a.sag.unwrap_or(s.model.sag);
+    if let Some(why) = crate::scene::sag_refusal(on, element) {
+        let given = match a.sag {
+            Some(_) => "--sag true".to_string(),
+            None => format!("scene `{}` has [effects] sag = true", s.name),
+        };
+        return Err(CliError::Usage(format!("{given}: {why}")));
+    }
+    let mut s = s.with_model(element, n);
+    s.model.sag = on;
+    Ok(s)
 }
 
 /// Set the end-effector orientation of a rigid scene; a point-mass scene refuses it.

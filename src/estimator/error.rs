@@ -4,8 +4,8 @@
 use super::Status;
 use crate::cable::CableError;
 use crate::kinematics::KinematicsError;
-use crate::modal::ModalError;
 use crate::modal::sag::SagLoadError;
+use crate::modal::ModalError;
 use crate::tension::{SagTensionError, TensionError};
 
 /// Input rejected before any computation. Copy, no allocation; the Display text is what

@@ -215,6 +215,13 @@ impl Estimator {
         self.cycle.modal.rescan_counts()
     }
 
+    /// With `[effects] sag`: each cable's elastic catenary of the last cycle's tension
+    /// solve (unstretched length, H, V, tensions along it, sag, Irvine's λ²); None for the
+    /// chord models.
+    pub fn sag_catenaries(&self) -> Option<&[crate::sag::Catenary]> {
+        self.cycle.sag.as_ref().map(|s| s.catenaries())
+    }
+
     /// Info of the last tension solve.
     pub fn tension_info(&self) -> TensionInfo {
         self.cycle.tension.info()

@@ -78,7 +78,11 @@ impl SagPipeline {
                     w_n_m: c.mass_per_length_kg_m * gn,
                 })
                 .collect(),
-            mu_kg_m: scene.cables.iter().map(|c| c.mass_per_length_kg_m).collect(),
+            mu_kg_m: scene
+                .cables
+                .iter()
+                .map(|c| c.mass_per_length_kg_m)
+                .collect(),
             frames: vec![frame; n],
             loaded_at: 0,
         }
@@ -107,7 +111,14 @@ impl SagPipeline {
         let w = super::pipeline::wrench6(scene);
         let res = self
             .tension
-            .solve(g, &self.materials, &scene.gravity_m_s2, &w, t_min_n, t_max_n)
+            .solve(
+                g,
+                &self.materials,
+                &scene.gravity_m_s2,
+                &w,
+                t_min_n,
+                t_max_n,
+            )
             .map(|_| ());
         on_tensions(TensionReport {
             iterations: self.tension.info().iterations,

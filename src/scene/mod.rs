@@ -121,6 +121,21 @@ impl ElementKind {
     }
 }
 
+/// Why `sag = on` cannot go with `element`, or None when it can: only `fem`, `continuous`
+/// and `auto` have a sagged model (the catenary element sags inside each element on the
+/// straight chord; a massless cable has no weight to sag under).
+pub fn sag_refusal(on: bool, element: ElementKind) -> Option<&'static str> {
+    match (on, element) {
+        (true, ElementKind::Massless) => Some(
+            "sag needs cable mass (a cable without weight does not sag): use model.element = \"fem\" or \"continuous\"",
+        ),
+        (true, ElementKind::Catenary) => Some(
+            "the catenary element sags only inside each element on the straight chord; on the sagged profile use model.element = \"fem\" or \"continuous\"",
+        ),
+        _ => None,
+    }
+}
+
 /// Material and geometry of one cable, SI units.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Cable {
@@ -292,10 +307,25 @@ impl Scene {
         (lo, hi)
     }
 
+    /// Switch the effect `sag` on or off (a command-line override); refused, with the
+    /// reason, for the elements that cannot sag ([`sag_refusal`]).
+    pub fn set_sag(&mut self, on: bool) -> Result<(), &'static str> {
+        match sag_refusal(on, self.model.element) {
+            Some(why) => Err(why),
+            None => {
+                self.model.sag = on;
+                Ok(())
+            }
+        }
+    }
+
     /// Copy with a different element model and element count (command-line overrides).
+    /// The effect `sag` is kept where the element has a sagged model and dropped where it
+    /// has none (catenary, massless: [`sag_refusal`]).
     pub fn with_model(&self, element: ElementKind, elements_per_cable: usize) -> Scene {
         let mut s = self.clone();
         s.model.element = element;
+        s.model.sag = self.model.sag && sag_refusal(true, element).is_none();
         if element != ElementKind::Massless {
             s.model.geometric_stiffness = true;
         }

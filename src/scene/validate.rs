@@ -277,16 +277,9 @@ fn validate_effects(
         }
     }
     let sag = fx.sag.unwrap_or(false);
-    match (sag, element) {
-        (true, ElementKind::Massless) => Err(ck.inv(
-            "effects.sag",
-            "sag needs cable mass (a cable without weight does not sag): use model.element = \"fem\" or \"continuous\"".into(),
-        )),
-        (true, ElementKind::Catenary) => Err(ck.inv(
-            "effects.sag",
-            "the catenary element sags only inside each element on the straight chord; on the sagged profile use model.element = \"fem\" or \"continuous\"".into(),
-        )),
-        _ => Ok((element, sag)),
+    match super::sag_refusal(sag, element) {
+        Some(why) => Err(ck.inv("effects.sag", why.into())),
+        None => Ok((element, sag)),
     }
 }
 
@@ -588,9 +581,17 @@ mod tests {
         let sagged = with("sag = true").unwrap();
         assert_eq!(sagged.model.element, ElementKind::Fem);
         assert!(sagged.model.sag);
-        assert!(!Scene::default_scene().model.sag, "no [effects]: the chord model");
-        let e = with("sag = true\ncable_mass = false").unwrap_err().to_string();
-        assert!(e.contains("effects.sag") && e.contains("does not sag"), "{e}");
+        assert!(
+            !Scene::default_scene().model.sag,
+            "no [effects]: the chord model"
+        );
+        let e = with("sag = true\ncable_mass = false")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("effects.sag") && e.contains("does not sag"),
+            "{e}"
+        );
         let cat = base.replace("element = \"fem\"", "element = \"catenary\"");
         let e = Scene::from_toml_str(&format!("{cat}\n[effects]\nsag = true\n"), "t.toml")
             .unwrap_err()

@@ -124,6 +124,25 @@ pub struct AnalysisReport {
     pub dense_seconds: Option<f64>,
     /// The comparison with the dense reference (when asked).
     pub compare_dense: Option<DenseComparison>,
+    /// Whether the cables sag (`[effects] sag`): then `tensions_n` are the tensions at the
+    /// end-effector end, and the fields below describe each cable's elastic catenary.
+    pub sag: bool,
+    /// Sagging cables: the tension at the anchor end of each cable, N.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tensions_anchor_n: Option<Vec<f64>>,
+    /// Sagging cables: the smallest tension along each cable, N.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tensions_min_n: Option<Vec<f64>>,
+    /// Sagging cables: the largest distance of each cable from its chord, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sag_m: Option<Vec<f64>>,
+    /// Sagging cables: Irvine's λ² of each cable (dimensionless; sag matters when it is
+    /// not ≪ 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub irvine_lambda2: Option<Vec<f64>>,
+    /// Sagging cables: each cable's unstretched length L0, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unstretched_length_m: Option<Vec<f64>>,
 }
 
 /// Why an analysis failed (one line each).
@@ -201,6 +220,25 @@ fn report_frame(s: &Scene, solver: SolverChoice) -> AnalysisReport {
         solve_seconds: f64::NAN,
         dense_seconds: None,
         compare_dense: None,
+        sag: s.model.sag,
+        tensions_anchor_n: None,
+        tensions_min_n: None,
+        sag_m: None,
+        irvine_lambda2: None,
+        unstretched_length_m: None,
+    }
+}
+
+/// The sagging cables' fields of the report from the estimator's last cycle (nothing for
+/// the chord models).
+fn fill_sag(r: &mut AnalysisReport, est: &Estimator) {
+    if let Some(cats) = est.sag_catenaries() {
+        let of = |f: fn(&crate::sag::Catenary) -> f64| Some(cats.iter().map(f).collect());
+        r.tensions_anchor_n = of(|c| c.tension_anchor_n());
+        r.tensions_min_n = of(|c| c.tension_min_n());
+        r.sag_m = of(|c| c.sag_m());
+        r.irvine_lambda2 = of(|c| c.irvine_lambda2());
+        r.unstretched_length_m = of(|c| c.l0_m);
     }
 }
 
@@ -245,6 +283,7 @@ fn structured(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, An
     r.dof = model_dof(&s);
     r.stiffness_n_m = rows(&e.stiffness6, e.stiffness_dim);
     r.solve_seconds = secs;
+    fill_sag(&mut r, &est);
     if opts.compare_dense {
         let c = super::analysis_compare::compare(&mut est, &modes)?;
         r.dense_seconds = Some(c.dense_seconds);
@@ -265,6 +304,9 @@ fn dense(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, Analyze
         let (resolved, _) = resolve_auto(scene).map_err(|e| AnalyzeError::Build(e.to_string()))?;
         return dense(&resolved, opts);
     }
+    if scene.model.sag {
+        return dense_sagged(scene, opts);
+    }
     let t0 = Instant::now();
     let a = reference_analysis_at(scene, &pose_of(scene), scene.t_min_n, true)
         .map_err(|e| AnalyzeError::Solve(e.to_string()))?;
@@ -281,6 +323,36 @@ fn dense(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, Analyze
     r.stiffness_n_m = rows(&a.stiffness6, if scene.rigid { 6 } else { 3 });
     r.solve_seconds = secs;
     r.dense_seconds = Some(secs);
+    Ok(r)
+}
+
+/// The dense reference of the sagged model: the same sagged tension distribution, then
+/// the whole robot assembled (straight elements between nodes on each catenary) and a
+/// dense generalised eigensolver.
+fn dense_sagged(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, AnalyzeError> {
+    let mut est = Estimator::new(scene).map_err(|e| AnalyzeError::Build(e.to_string()))?;
+    let e = *est.update(&pose_of(scene), scene.t_min_n);
+    if let Some(err) = e.error {
+        return Err(AnalyzeError::Status {
+            status: e.status.as_str(),
+            reason: err.to_string(),
+        });
+    }
+    let t0 = Instant::now();
+    let d = est
+        .dense_modes(true)
+        .map_err(|e| AnalyzeError::Solve(e.to_string()))?;
+    let secs = t0.elapsed().as_secs_f64();
+    let k = opts.modes.min(d.lambda.len());
+    let mut r = report_frame(scene, SolverChoice::Dense);
+    r.tensions_n = e.tensions().to_vec();
+    r.frequencies_hz = d.lambda[..k].iter().map(|&l| lambda_to_hz(l)).collect();
+    r.ee_participation = d.ee_participation[..k].to_vec();
+    r.dof = model_dof(scene);
+    r.stiffness_n_m = rows(&e.stiffness6, e.stiffness_dim);
+    r.solve_seconds = secs;
+    r.dense_seconds = Some(secs);
+    fill_sag(&mut r, &est);
     Ok(r)
 }
 

@@ -64,7 +64,9 @@ impl SagProblem {
         let cont_params = continuous.unwrap_or_default();
         SagProblem {
             chains: (0..n_cables).map(|_| SagChain::new(n_el_max)).collect(),
-            cont: (0..n_cont).map(|_| SagContinuous::new(cont_params)).collect(),
+            cont: (0..n_cont)
+                .map(|_| SagContinuous::new(cont_params))
+                .collect(),
             cont_static: vec![SagChainEval::default(); n_cont],
             continuous: continuous.is_some(),
             proj: vec![zero; n_cables],
