@@ -58,6 +58,7 @@ pub struct AnalyzeArgs {
 /// `cablevib analyze`.
 pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
     let s = resolve_scene(&a.scene)?;
+    super::args::warn_if_sag_matters(&s, None);
     let pos = s.ee_position_m;
     let s = if s.model.element == ElementKind::Auto {
         let resolved = match crate::estimator::resolve_auto(&s) {

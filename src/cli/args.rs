@@ -201,3 +201,16 @@ mod tests {
             .contains("finite"));
     }
 }
+
+/// Print the one-line warning of [`crate::estimator::sag_warning`] on stderr when `scene`
+/// has sag off but its cables sag enough to change f1 at `position_m` (the scene's pose
+/// elsewhere) by more than its tolerance.
+pub fn warn_if_sag_matters(scene: &Scene, position_m: Option<Vector3<f64>>) {
+    let pose = crate::kinematics::Pose {
+        position_m: position_m.unwrap_or(scene.ee_position_m),
+        orientation_wxyz: scene.ee_orientation_wxyz,
+    };
+    if let Some(w) = crate::estimator::sag_warning(scene, &pose) {
+        eprintln!("{w}");
+    }
+}

@@ -138,6 +138,7 @@ fn stats_period(s: f64) -> Result<Option<Duration>, CliError> {
 pub fn serve(a: &ServeArgs, allocations: AllocCounter) -> Result<(), CliError> {
     let stats_period = stats_period(a.stats_period_s)?;
     let scene = Scene::load(a.scene_name())?;
+    super::args::warn_if_sag_matters(&scene, None);
     let cfg = ServerConfig {
         instance: a.instance.clone(),
         wait: a.wait,

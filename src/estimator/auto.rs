@@ -1,6 +1,7 @@
 //! `element = "auto"`: pick the cheapest cable model whose f1 matches a converged reference
 //! within the scene's tolerance. Offline: runs at build time and allocates.
 
+use super::sag_check::{cables_can_sag, sagged_reference};
 use super::{BuildError, Estimator, EstimatorError, EstimatorParams, InputError};
 use crate::kinematics::{Geometry, Pose};
 use crate::scene::{ElementKind, Scene};
@@ -27,8 +28,16 @@ pub struct AutoChoice {
     pub tolerance: f64,
     /// Every candidate tried, cheapest first: (model, N, largest relative f1 error).
     pub candidates: Vec<(ElementKind, usize, f64)>,
-    /// The reference: the catenary element with this many elements per cable.
+    /// The reference: the continuous sagged model when some cable can sag (weight per
+    /// length > 0), else the catenary element with [`Self::reference_elements`] elements.
+    pub reference: String,
+    /// Elements per cable of the catenary reference (cables that cannot sag).
     pub reference_elements: usize,
+    /// Whether the pick is the sagged model (`[effects] sag`).
+    pub sag: bool,
+    /// Each cable's Irvine λ² at the default pose on the sagged reference (empty when no
+    /// cable can sag or the sagged model has no estimate there).
+    pub irvine_lambda2_per_cable: Vec<f64>,
     /// Sample poses used (the default pose and feasible poses on the 0.75 m circle).
     pub poses: usize,
     /// Largest Irvine parameter λ² = (γ⊥ L / T)² · EA / T over the cables at the default
@@ -40,40 +49,46 @@ pub struct AutoChoice {
 
 impl std::fmt::Display for AutoChoice {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let name = |el: ElementKind, n: usize| {
-            if el.is_discrete() {
-                format!("{} × {n}", el.as_str())
-            } else {
-                el.as_str().to_string()
-            }
-        };
+        let name = |el: ElementKind, n: usize| model_name(el, n, false);
         write!(
             f,
-            "auto picked {}: predicted f1 error {:.2e} (tolerance {:.1e}; largest over {} poses against catenary × {}; Irvine λ² ≤ {:.2e}, cable/end-effector mass ratio {:.3}). Tried:",
-            name(self.element, self.elements_per_cable),
+            "auto picked {}: predicted f1 error {:.2e} (tolerance {:.1e}; largest over {} poses against {}; Irvine λ² ≤ {:.2e}, cable/end-effector mass ratio {:.3}). Tried:",
+            model_name(self.element, self.elements_per_cable, self.sag),
             self.predicted_error,
             self.tolerance,
             self.poses,
-            self.reference_elements,
+            self.reference,
             self.irvine_lambda2,
             self.mass_ratio
         )?;
         for (el, n, err) in &self.candidates {
             write!(f, " {} {:.2e};", name(*el, *n), err)?;
         }
+        if self.sag && self.candidates.len() < CHORD_CANDIDATES + 1 {
+            write!(f, " continuous with sag (the reference)")?;
+        }
         Ok(())
     }
 }
 
 /// Resolve `element = "auto"`: evaluate, at the default pose and at feasible poses of the
-/// 0.75 m circle, the f1 of each candidate model in order of per-cycle cost — massless
+/// 0.75 m circle, the f1 of each chord candidate in order of per-cycle cost — massless
 /// cables, the continuous string (the N → ∞ limit of FEM, at the same cost as any FEM N),
-/// the catenary element at N = 4 and 16 — against the converged reference (catenary,
-/// N = 64), and pick the first whose largest relative error is within
-/// `model.f1_tolerance`. The reference itself is the fallback. Allocates: set-up only.
+/// the catenary element at N = 4 and 16 — against a converged reference, and pick the
+/// first whose largest relative error is within `model.f1_tolerance`. The reference is the
+/// continuous sagged model (`[effects] sag`, the N → ∞ limit of the sagged FEM) when some
+/// cable can sag (weight per length > 0 and gravity), else the catenary element at N = 64;
+/// it is the fallback, so a robot whose cables sag enough gets the sagged model. Reports
+/// each cable's Irvine λ² on the sagged reference. Allocates: set-up only.
 pub fn resolve_auto(scene: &Scene) -> Result<(Scene, AutoChoice), BuildError> {
     let tol = scene.model.f1_tolerance;
-    let reference = scene.with_model(ElementKind::Catenary, REF_N);
+    let chord_reference = scene.with_model(ElementKind::Catenary, REF_N);
+    let mut can_sag = cables_can_sag(scene);
+    let mut reference = if can_sag {
+        sagged_reference(scene)
+    } else {
+        chord_reference.clone()
+    };
     let mut poses = vec![Pose {
         position_m: scene.ee_position_m,
         orientation_wxyz: scene.ee_orientation_wxyz,
@@ -96,10 +111,20 @@ pub fn resolve_auto(scene: &Scene) -> Result<(Scene, AutoChoice), BuildError> {
         let e = est.update(pose, s.t_min_n);
         e.is_ok().then_some(e.f1_hz)
     };
-    let refs: Vec<(Pose, f64)> = poses
-        .iter()
-        .filter_map(|pose| f1_of(&reference, pose).map(|f| (*pose, f)))
-        .collect();
+    let refs_of = |r: &Scene| -> Vec<(Pose, f64)> {
+        poses
+            .iter()
+            .filter_map(|pose| f1_of(r, pose).map(|f| (*pose, f)))
+            .collect()
+    };
+    let mut refs = refs_of(&reference);
+    if refs.is_empty() && can_sag {
+        // The sagged model has no estimate at any sample pose (e.g. a planar robot whose
+        // cables' own weight is out of its plane): the chord reference decides.
+        can_sag = false;
+        reference = chord_reference;
+        refs = refs_of(&reference);
+    }
     if refs.is_empty() {
         Estimator::with_params(&reference, EstimatorParams::default())?;
         return Err(BuildError::DefaultPose {
@@ -109,12 +134,15 @@ pub fn resolve_auto(scene: &Scene) -> Result<(Scene, AutoChoice), BuildError> {
     }
     let mut massless = scene.with_model(ElementKind::Massless, 1);
     massless.model.geometric_stiffness = true;
-    let list = [
+    let mut list = [
         massless,
         scene.with_model(ElementKind::Continuous, 1),
         scene.with_model(ElementKind::Catenary, 4),
         scene.with_model(ElementKind::Catenary, 16),
     ];
+    for cand in &mut list {
+        cand.model.sag = false;
+    }
     let mut candidates = Vec::new();
     let mut pick: Option<(Scene, f64)> = None;
     for cand in list {
@@ -128,19 +156,70 @@ pub fn resolve_auto(scene: &Scene) -> Result<(Scene, AutoChoice), BuildError> {
         }
     }
     let (chosen, err) = pick.unwrap_or((reference, 0.0));
-    let (irvine, cable_mass) = default_pose_diagnostics(scene);
+    let (mut irvine, cable_mass) = default_pose_diagnostics(scene);
+    let per_cable = if can_sag {
+        sagged_lambda2(scene)
+    } else {
+        Vec::new()
+    };
+    if !per_cable.is_empty() {
+        irvine = per_cable.iter().copied().fold(0.0, f64::max);
+    }
     let choice = AutoChoice {
         element: chosen.model.element,
         elements_per_cable: chosen.model.elements_per_cable,
         predicted_error: err,
         tolerance: tol,
         candidates,
+        reference: if can_sag {
+            "continuous with sag".into()
+        } else {
+            format!("catenary × {REF_N}")
+        },
+        sag: chosen.model.sag,
+        irvine_lambda2_per_cable: per_cable,
         reference_elements: REF_N,
         poses: refs.len(),
         irvine_lambda2: irvine,
         mass_ratio: cable_mass / scene.ee_mass_kg,
     };
     Ok((chosen, choice))
+}
+
+/// The chord candidates `auto` tries before the sagged model.
+const CHORD_CANDIDATES: usize = 4;
+
+/// The name of a model in the pick's report.
+fn model_name(el: ElementKind, n: usize, sag: bool) -> String {
+    let base = if el.is_discrete() {
+        format!("{} × {n}", el.as_str())
+    } else {
+        el.as_str().to_string()
+    };
+    if sag {
+        format!("{base} with sag")
+    } else {
+        base
+    }
+}
+
+/// Each cable's Irvine λ² at the default pose on the sagged reference (empty when it has
+/// no estimate there).
+fn sagged_lambda2(scene: &Scene) -> Vec<f64> {
+    let reference = sagged_reference(scene);
+    let pose = Pose {
+        position_m: scene.ee_position_m,
+        orientation_wxyz: scene.ee_orientation_wxyz,
+    };
+    let Ok(mut est) = Estimator::with_params(&reference, EstimatorParams::default()) else {
+        return Vec::new();
+    };
+    if !est.update(&pose, scene.t_min_n).is_ok() {
+        return Vec::new();
+    }
+    est.sag_catenaries()
+        .map(|c| c.iter().map(|c| c.irvine_lambda2()).collect())
+        .unwrap_or_default()
 }
 
 /// At the scene's default pose (Clarabel tensions): the largest Irvine parameter λ² over

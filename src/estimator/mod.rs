@@ -41,6 +41,7 @@ mod modes;
 mod params;
 mod pipeline;
 mod reference;
+mod sag_check;
 mod sagged;
 
 pub use auto::{resolve_auto, AutoChoice};
@@ -51,6 +52,7 @@ pub use params::EstimatorParams;
 pub use reference::{
     build_models, reference_analysis, reference_analysis_at, structured_analysis, ReferenceAnalysis,
 };
+pub use sag_check::{cables_can_sag, sag_warning, sagged_reference, SagWarning};
 
 use crate::cable::{up_frame, CableModel};
 use crate::kinematics::Pose;
