@@ -80,6 +80,7 @@ def analyze(
     solver: str = "structured",
     compare_dense: bool = False,
     orientation: Optional[_Vec] = None,
+    sag: Optional[bool] = None,
 ) -> Dict[str, Any]:
     """What ``cablevib analyze SCENE --json`` prints, as a dict with numpy arrays:
     ``scene``, ``position_m`` (m), ``orientation_wxyz`` (unit quaternion), ``t_min_n`` (N),
@@ -87,9 +88,11 @@ def analyze(
     ``cluster_start``, ``dof``, ``element``, ``elements_per_cable``, ``stiffness_n_m``
     (3 × 3, N/m, for a point mass; 6 × 6 for a rigid end-effector over x, y, z, θx, θy, θz:
     blocks N/m, N/rad, N·m/m, N·m/rad), ``solver``, ``solve_seconds``,
-    ``dense_seconds``, ``compare_dense``. Overrides as ``--position`` (m), ``--orientation``
-    (unit quaternion w, x, y, z; rigid end-effectors only), ``--t-min`` (N),
-    ``--element``, ``--elements``; ``solver`` is ``structured`` or ``dense``."""
+    ``dense_seconds``, ``compare_dense``, ``sag``; with sagging cables also
+    ``tensions_anchor_n``, ``tensions_min_n`` (N), ``sag_m`` (m), ``irvine_lambda2`` and
+    ``unstretched_length_m`` (m), one per cable. Overrides as ``--position`` (m),
+    ``--orientation`` (unit quaternion w, x, y, z; rigid end-effectors only), ``--t-min`` (N),
+    ``--element``, ``--elements``, ``--sag``; ``solver`` is ``structured`` or ``dense``."""
 
 class Estimate:
     """One ``Estimator.update``: valid numbers only when ``ok``."""

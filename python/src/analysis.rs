@@ -24,7 +24,10 @@ use pyo3::prelude::*;
 /// ``tensions_n``, ``frequencies_hz`` (ascending), ``ee_participation``, ``multiplicity``,
 /// ``cluster_start``, ``dof``, ``element``, ``elements_per_cable``, ``stiffness_n_m``
 /// (3 × 3 N/m for a point mass; 6 × 6 for a rigid end-effector: N/m, N/rad, N·m/m, N·m/rad
-/// blocks), ``solver``, ``solve_seconds``, ``dense_seconds``, ``compare_dense``. Numeric
+/// blocks), ``solver``, ``solve_seconds``, ``dense_seconds``, ``compare_dense``, ``sag``;
+/// with sagging cables also ``tensions_anchor_n``, ``tensions_min_n`` (N), ``sag_m`` (m),
+/// ``irvine_lambda2`` and ``unstretched_length_m`` (m), one per cable. ``sag`` (True or
+/// False) overrides the scene's ``[effects] sag`` as ``--sag`` does. Numeric
 /// lists are numpy arrays (float64, int64 for counts and indices); absent values are None.
 /// Every number equals the command line's.
 ///
@@ -33,7 +36,7 @@ use pyo3::prelude::*;
 #[pyfunction]
 #[pyo3(signature = (scene, position = None, t_min = None, element = None, elements = None,
                     modes = 10, solver = "structured", compare_dense = false,
-                    orientation = None))]
+                    orientation = None, sag = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn analyze<'py>(
     py: Python<'py>,
@@ -46,6 +49,7 @@ pub fn analyze<'py>(
     solver: &str,
     compare_dense: bool,
     orientation: Option<&Bound<'py, PyAny>>,
+    sag: Option<bool>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let mut s = scene.inner.clone();
     if let Some(p) = position {
@@ -54,7 +58,13 @@ pub fn analyze<'py>(
     if let Some(q) = orientation {
         set_orientation(&mut s, q)?;
     }
-    let s = with_overrides(s, t_min, element, elements)?;
+    let on = sag.unwrap_or(s.model.sag);
+    let mut s = with_overrides(s, t_min, element, elements)?;
+    // The command line's rule: an element without a sagged model refuses sag.
+    if let Some(why) = cablevib::scene::sag_refusal(on, s.model.element) {
+        return Err(CablevibError::new_err(format!("sag={on}: {why}")));
+    }
+    s.model.sag = on;
     let opts = AnalyzeOptions {
         modes,
         solver: solver_choice(solver)?,

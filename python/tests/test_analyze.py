@@ -30,11 +30,16 @@ CASES = [
     (str(SCENES / "box_6dof.toml"), {"orientation": (0.99996, 0.00873, 0.0, 0.0)}),
     (str(SCENES / "box_6dof.toml"), {"orientation": (0.99996, 0.00873, 0.0, 0.0),
                                      "solver": "dense"}),
+    # Sagging cables: the sagged fields (anchor and smallest tensions, sag, λ², L0).
+    ("suspended-8", {"modes": 6}),
+    ("suspended-8", {"element": "continuous", "modes": 4}),
+    ("fast-like", {"sag": False, "modes": 4}),
+    ("spatial-paper", {"sag": True, "modes": 6}),
 ]
 
 FLAGS = {"position": "--position", "t_min": "--t-min", "element": "--element",
          "elements": "--elements", "modes": "--modes", "solver": "--solver",
-         "orientation": "--orientation"}
+         "orientation": "--orientation", "sag": "--sag"}
 
 
 def cli_args(scene, kwargs):
@@ -44,6 +49,8 @@ def cli_args(scene, kwargs):
             args.append("--compare-dense")
         elif k in ("position", "orientation"):
             args += [FLAGS[k], ",".join(repr(float(x)) for x in v)]
+        elif k == "sag":
+            args += [FLAGS[k], "true" if v else "false"]
         else:
             args += [FLAGS[k], str(v)]
     return args
