@@ -138,7 +138,11 @@ fn compare(name: &str, scene: &Scene, p: [f64; 3]) -> Row {
         ("end-effector-end tensions", row.t_ee, CONTINUUM_BAR),
         ("anchor-end tensions", row.t_anchor, CONTINUUM_BAR),
         ("smallest tension = H", row.t_min_h, CONTINUUM_BAR),
-        ("reference ee displacement / L0", row.ee_disp, EE_DISPLACEMENT_BAR),
+        (
+            "reference ee displacement / L0",
+            row.ee_disp,
+            EE_DISPLACEMENT_BAR,
+        ),
     ] {
         assert!(v <= ISSUE_BAR.min(bar), "{name}: {what} differs by {v:e}");
     }
@@ -151,7 +155,11 @@ fn check_reference_converged(name: &str, r: &RefAnswer) {
     for n in LEVELS {
         let lv = r.at_level(n);
         assert_eq!(lv["converged"], json!(true), "{name} n = {n}");
-        assert_eq!(lv["eigen"]["negative_eigenvalues"], json!(0), "{name} n = {n}");
+        assert_eq!(
+            lv["eigen"]["negative_eigenvalues"],
+            json!(0),
+            "{name} n = {n}"
+        );
     }
 }
 
@@ -180,7 +188,10 @@ fn interior_low_points(name: &str, fem: &AnalysisReport, r: &RefAnswer) -> (usiz
     for i in 0..t_min.len() {
         if t_min[i] < t_a[i].min(fem.tensions_n[i]) {
             count += 1;
-            eprintln!("{name}: cable {i} low point inside, T_min {} vs H {}", t_min[i], h[i]);
+            eprintln!(
+                "{name}: cable {i} low point inside, T_min {} vs H {}",
+                t_min[i], h[i]
+            );
             worst = worst.max(rel(t_min[i], h[i]));
         }
     }
@@ -253,5 +264,8 @@ fn heavy_paper_robot_matches_the_reference() {
         compare("heavy paper off-centre", &s, HEAVY_OFF_CENTRE_M),
     ];
     print_table(&rows);
-    assert_eq!(rows[0].low_points, 4, "the lower cables' low points are inside");
+    assert_eq!(
+        rows[0].low_points, 4,
+        "the lower cables' low points are inside"
+    );
 }

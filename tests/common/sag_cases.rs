@@ -1,5 +1,5 @@
-//! The sagging robots of the sag tests (tests/sag_vs_reference.rs, tests/hard_cases_sag.rs,
-//! tests/allocations_sag.rs) and a short way to analyse one of them at a pose.
+//! The sagging robots of the sag tests (tests/sag_vs_reference.rs, tests/hard_cases_sag.rs)
+//! and a short way to analyse one of them at a pose.
 //!
 //! - `fast-like` and `suspended-8`: the shipped scenes (scenes/fast_like.toml,
 //!   scenes/suspended_8.toml) at the centre and off-centre poses their comments suggest.
@@ -104,5 +104,8 @@ pub fn rel(a: f64, b: f64) -> f64 {
 
 /// The largest relative difference of two lists (compared up to the shorter's length).
 pub fn max_rel(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| rel(*x, *y)).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| rel(*x, *y))
+        .fold(0.0, f64::max)
 }
