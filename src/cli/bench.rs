@@ -61,7 +61,10 @@ fn run_circle(
     allocations: AllocCounter,
 ) -> CircleRun {
     // Warm-up cycle (cold start), then timed cycles.
-    est.update(&circle_pose_with_radius(s, 0, a.period_s, a.radius_m), s.t_min_n);
+    est.update(
+        &circle_pose_with_radius(s, 0, a.period_s, a.radius_m),
+        s.t_min_n,
+    );
     let mut ns = Vec::with_capacity(a.cycles);
     let mut evals = Vec::with_capacity(a.cycles);
     let mut statuses = StatusHistogram::default();
@@ -153,8 +156,7 @@ pub fn run(a: &BenchArgs, allocations: AllocCounter) -> Result<(), CliError> {
         || !(a.radius_m.is_finite() && a.radius_m >= 0.0)
     {
         return Err(CliError::Usage(
-            "--cycles must be > 0, --period-s finite and > 0, --radius-m finite and >= 0"
-                .into(),
+            "--cycles must be > 0, --period-s finite and > 0, --radius-m finite and >= 0".into(),
         ));
     }
     let mut p = estimator_params(&s, !a.no_ee_mode);

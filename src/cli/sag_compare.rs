@@ -113,7 +113,10 @@ fn print_summary(scene: &str, r: &SagCompare, secs: f64) {
         r.threads
     );
     for (name, pick) in [
-        ("chord ", (|q| &q.chord) as fn(&study::ComparePoint) -> &study::ModelPoint),
+        (
+            "chord ",
+            (|q| &q.chord) as fn(&study::ComparePoint) -> &study::ModelPoint,
+        ),
         ("sagged", |q| &q.sag),
     ] {
         let range = |f: fn(&study::ModelPoint) -> f64| {

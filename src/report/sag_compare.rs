@@ -37,7 +37,8 @@ fn model_columns(prefix: &str, what: &str, n: usize) -> Vec<Column> {
     let c = |name: &str, unit: &'static str, d: &str| {
         Column::new(format!("{prefix}_{name}"), unit, format!("{what}: {d}"))
     };
-    let mut cols = vec![
+    let mut cols =
+        vec![
         c("status", "", "estimator status; its numbers are NaN unless ok"),
         c("f1_hz", "Hz", "first natural frequency (analyze's frequencies_hz[0])"),
         c(
@@ -84,7 +85,11 @@ pub fn sag_compare_csv(s: &Scene, r: &SagCompare) -> Csv {
     );
     let n = s.n_cables();
     let mut cols = vec![
-        Column::new("offset_m", "m", "offset from the scene's position along the axis"),
+        Column::new(
+            "offset_m",
+            "m",
+            "offset from the scene's position along the axis",
+        ),
         Column::new("x_m", "m", "end-effector position x"),
         Column::new("y_m", "m", "end-effector position y"),
         Column::new("z_m", "m", "end-effector position z"),
@@ -124,7 +129,11 @@ pub fn statuses(r: &SagCompare, pick: fn(&ComparePoint) -> &ModelPoint) -> Statu
 }
 
 /// (offset, value) of each pose, NaN where the model has no answer (a gap in the line).
-fn curve(r: &SagCompare, pick: fn(&ComparePoint) -> &ModelPoint, f: fn(&ModelPoint) -> f64) -> Vec<(f64, f64)> {
+fn curve(
+    r: &SagCompare,
+    pick: fn(&ComparePoint) -> &ModelPoint,
+    f: fn(&ModelPoint) -> f64,
+) -> Vec<(f64, f64)> {
     r.points
         .iter()
         .map(|q| {
@@ -217,7 +226,12 @@ fn compose(title: &str, subtitle: &str, panels: &[String], columns: usize) -> St
 /// where a model has no answer is a gap in its curve (the subtitle counts the statuses).
 pub fn sag_compare_svg(s: &Scene, r: &SagCompare) -> String {
     let panels = [
-        panel(r, "first natural frequency f1", Axis::linear("f1 (Hz)"), |m| m.f1_hz),
+        panel(
+            r,
+            "first natural frequency f1",
+            Axis::linear("f1 (Hz)"),
+            |m| m.f1_hz,
+        ),
         panel(
             r,
             "softest static stiffness k_min",

@@ -135,13 +135,19 @@ fn span(s: &Scene, cfg: &SagCompareConfig) -> Result<Interval, StudyError> {
     }
     let c = (lo + hi) / 2.0 - s.ee_position_m[cfg.axis];
     let r = DEFAULT_HALF_SPAN_SHARE * (hi - lo);
-    Ok(Interval { lo: c - r, hi: c + r })
+    Ok(Interval {
+        lo: c - r,
+        hi: c + r,
+    })
 }
 
 /// Check the config and list the offsets of the line.
 fn offsets(s: &Scene, cfg: &SagCompareConfig) -> Result<(Interval, Vec<f64>), StudyError> {
     if cfg.axis > 2 {
-        return Err(StudyError::Usage(format!("axis {}: must be 0, 1 or 2", cfg.axis)));
+        return Err(StudyError::Usage(format!(
+            "axis {}: must be 0, 1 or 2",
+            cfg.axis
+        )));
     }
     if !(2..=MAX_POINTS).contains(&cfg.points) {
         return Err(StudyError::Usage(format!(
@@ -153,7 +159,13 @@ fn offsets(s: &Scene, cfg: &SagCompareConfig) -> Result<(Interval, Vec<f64>), St
     let n = cfg.points;
     let step = (iv.hi - iv.lo) / (n - 1) as f64;
     let o = (0..n)
-        .map(|k| if k + 1 == n { iv.hi } else { iv.lo + k as f64 * step })
+        .map(|k| {
+            if k + 1 == n {
+                iv.hi
+            } else {
+                iv.lo + k as f64 * step
+            }
+        })
         .collect();
     Ok((iv, o))
 }
@@ -236,7 +248,10 @@ pub fn evaluate_at(model: &Scene, cold: &Estimator, p: Vector3<f64>) -> ModelPoi
     r.tension_min_n = r.tensions_n.iter().copied().fold(f64::NAN, f64::min);
     if let Some(cats) = est.sag_catenaries() {
         let max = |f: fn(&crate::sag::Catenary) -> f64| cats.iter().map(f).fold(f64::NAN, f64::max);
-        r.tension_min_n = cats.iter().map(|c| c.tension_min_n()).fold(f64::NAN, f64::min);
+        r.tension_min_n = cats
+            .iter()
+            .map(|c| c.tension_min_n())
+            .fold(f64::NAN, f64::min);
         r.irvine_lambda2_max = max(|c| c.irvine_lambda2());
         r.sag_max_m = max(|c| c.sag_m());
     }
