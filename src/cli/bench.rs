@@ -1,5 +1,6 @@
-//! `cablevib bench`: the real-time estimator along the paper's circle, per-cycle latency,
-//! allocations, and the dense reference on a few poses for comparison.
+//! `cablevib bench`: the real-time estimator along the paper's circle (radius 0.75 m, or
+//! `--radius-m` for a larger robot), per-cycle latency, allocations, and the dense
+//! reference on a few poses for comparison.
 
 use super::args::{resolve_scene, SceneArgs};
 use super::{json_f64, AllocCounter, CliError};
@@ -8,7 +9,7 @@ use crate::modal::lambda_to_hz;
 use crate::scene::Scene;
 use crate::service::stats::{percentile, StatusHistogram};
 use crate::study::estimator_params;
-use crate::trajectory::{circle_pose, CIRCLE_RADIUS_M};
+use crate::trajectory::{circle_pose_with_radius, CIRCLE_RADIUS_M};
 use clap::Args;
 use std::time::Instant;
 
@@ -24,6 +25,10 @@ pub struct BenchArgs {
     /// Period of one revolution of the circle, s (poses are spaced 1 ms apart).
     #[arg(long, default_value_t = 4.0)]
     pub period_s: f64,
+    /// Radius of the circle around the scene's position, m (the paper's 0.75 m by default;
+    /// a 300 m robot needs metres to move its cables measurably).
+    #[arg(long, default_value_t = CIRCLE_RADIUS_M)]
+    pub radius_m: f64,
     /// Poses on which the dense reference is timed and compared (0 to skip).
     #[arg(long, default_value_t = 8)]
     pub dense_samples: usize,
@@ -56,7 +61,10 @@ fn run_circle(
     allocations: AllocCounter,
 ) -> CircleRun {
     // Warm-up cycle (cold start), then timed cycles.
-    est.update(&circle_pose(s, 0, a.period_s), s.t_min_n);
+    est.update(
+        &circle_pose_with_radius(s, 0, a.period_s, a.radius_m),
+        s.t_min_n,
+    );
     let mut ns = Vec::with_capacity(a.cycles);
     let mut evals = Vec::with_capacity(a.cycles);
     let mut statuses = StatusHistogram::default();
@@ -64,7 +72,7 @@ fn run_circle(
     let mut f1_max = (f64::NEG_INFINITY, 0usize);
     let alloc0 = allocations();
     for k in 1..=a.cycles {
-        let pose = circle_pose(s, k, a.period_s);
+        let pose = circle_pose_with_radius(s, k, a.period_s, a.radius_m);
         let t0 = Instant::now();
         let e = est.update(&pose, s.t_min_n);
         let dt = t0.elapsed().as_nanos() as u64;
@@ -109,7 +117,7 @@ fn dense_check(s: &Scene, a: &BenchArgs, p: EstimatorParams) -> Result<DenseChec
     if s.model.element.is_discrete() {
         for j in 0..a.dense_samples {
             let k = 1 + j * (a.cycles / a.dense_samples.max(1)).max(1);
-            let pose = circle_pose(s, k, a.period_s);
+            let pose = circle_pose_with_radius(s, k, a.period_s, a.radius_m);
             let t0 = Instant::now();
             let r = reference_analysis(s, &pose.position_m, s.t_min_n, true);
             let dt = t0.elapsed().as_nanos() as u64;
@@ -143,9 +151,12 @@ fn dense_check(s: &Scene, a: &BenchArgs, p: EstimatorParams) -> Result<DenseChec
 /// `cablevib bench`.
 pub fn run(a: &BenchArgs, allocations: AllocCounter) -> Result<(), CliError> {
     let s = resolve_scene(&a.scene)?;
-    if a.cycles == 0 || !(a.period_s.is_finite() && a.period_s > 0.0) {
+    if a.cycles == 0
+        || !(a.period_s.is_finite() && a.period_s > 0.0)
+        || !(a.radius_m.is_finite() && a.radius_m >= 0.0)
+    {
         return Err(CliError::Usage(
-            "--cycles must be > 0 and --period-s finite and > 0".into(),
+            "--cycles must be > 0, --period-s finite and > 0, --radius-m finite and >= 0".into(),
         ));
     }
     let mut p = estimator_params(&s, !a.no_ee_mode);
@@ -187,6 +198,7 @@ fn print_json(s: &Scene, a: &BenchArgs, p: EstimatorParams, c: &CircleRun, d: &D
         "elements_per_cable": s.model.elements_per_cable,
         "ee_mode": p.ee_mode,
         "cycles": a.cycles,
+        "radius_m": a.radius_m,
         "p50_ns": q(0.5), "p90_ns": q(0.9), "p99_ns": q(0.99), "p999_ns": q(0.999), "max_ns": q(1.0),
         "eigen_evaluations_p50": percentile(&c.evals, 0.5),
         "eigen_evaluations_p99": percentile(&c.evals, 0.99),
@@ -227,7 +239,7 @@ fn print_text(
         s.model.element.as_str(),
         s.model.elements_per_cable,
         a.cycles,
-        CIRCLE_RADIUS_M,
+        a.radius_m,
         a.period_s,
         if p.ee_mode { "" } else { ", f1 only" }
     );

@@ -13,6 +13,7 @@
 //! | `trajectory` | [`trajectory`](mod@trajectory) | f1 along the circle or a CSV path |
 //! | `modes` | [`modes`](mod@modes) | the lowest modes with their shapes: table, CSV, SVG |
 //! | `sweep-tmin` | [`sweep_tmin`] | f1 against T_min with the √T_min fit |
+//! | `sag-compare` | [`sag_compare`](mod@sag_compare) | chord vs sagged cables along a line: f1, k_min, tensions, λ² |
 //! | `completions`, `man` | [`completions`](mod@completions) | shell completions and the man page |
 //! | `import caspr` | [`import`](mod@import) | a scene file from CASPR's XML model files |
 //!
@@ -29,6 +30,7 @@ pub mod figure;
 pub mod import;
 pub mod map;
 pub mod modes;
+pub mod sag_compare;
 pub mod serve;
 pub mod sweep_tmin;
 pub mod trajectory;
@@ -73,6 +75,9 @@ pub enum Command {
     Trajectory(trajectory::TrajectoryArgs),
     /// f1 against T_min, with the √T_min fit.
     SweepTmin(sweep_tmin::SweepTminArgs),
+    /// Chord vs sagged cables along a line through the scene's pose: f1, the softest static
+    /// stiffness, the largest tension and Irvine's λ² of both models (CSV and figure).
+    SagCompare(sag_compare::SagCompareArgs),
     /// Print a shell completion script (bash, zsh, fish, elvish, powershell).
     Completions(completions::CompletionsArgs),
     /// Print the man page (roff): `cablevib man > cablevib.1`.
@@ -98,6 +103,7 @@ pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
         Command::Map(a) => map::run(&a),
         Command::Trajectory(a) => trajectory::run(&a),
         Command::SweepTmin(a) => sweep_tmin::run(&a),
+        Command::SagCompare(a) => sag_compare::run(&a),
         Command::Completions(a) => completions::completions(&a),
         Command::Man(a) => completions::man(&a),
         Command::Import(a) => import::run(&a),

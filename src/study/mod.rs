@@ -2,7 +2,8 @@
 //! prints ([`analysis`]: the first K modes by the structured engine or the dense reference),
 //! frequency maps over a workspace grid
 //! ([`map`]), frequencies along a trajectory ([`trajectory`]) and against the minimum tension
-//! ([`tmin`]), and what accuracy costs in time ([`accuracy`], with the dense mode-3
+//! ([`tmin`]), the chord and the sagged cable model side by side along a line
+//! ([`sag_compare`]), and what accuracy costs in time ([`accuracy`], with the dense mode-3
 //! convergence study of the paper's Figs. 5 and 10).
 //!
 //! Every study drives [`Estimator::update`] (the per-cycle path, exact to ~1e-12 against
@@ -21,6 +22,7 @@ mod analysis_compare;
 pub mod map;
 pub mod points;
 pub mod progress;
+pub mod sag_compare;
 pub mod tmin;
 pub mod trajectory;
 

@@ -76,11 +76,18 @@ fn horizontal_axes(gravity_m_s2: &Vector3<f64>) -> Matrix3<f64> {
 /// radius [`CIRCLE_RADIUS_M`], `period_s` per revolution, at the scene's orientation.
 /// Allocation-free.
 pub fn circle_pose(s: &Scene, k: usize, period_s: f64) -> Pose {
+    circle_pose_with_radius(s, k, period_s, CIRCLE_RADIUS_M)
+}
+
+/// Pose k of the circle of `radius_m` around `s`'s default position (as [`circle_pose`],
+/// which is this at [`CIRCLE_RADIUS_M`], bit for bit): for robots whose workspace is far
+/// larger than the paper's (`cablevib bench --radius-m`). Allocation-free.
+pub fn circle_pose_with_radius(s: &Scene, k: usize, period_s: f64, radius_m: f64) -> Pose {
     let frame = horizontal_axes(&s.gravity_m_s2);
     let th = 2.0 * std::f64::consts::PI * (k as f64 * SAMPLE_PERIOD_S) / period_s;
     let p = s.ee_position_m
-        + frame.column(0) * (CIRCLE_RADIUS_M * th.cos())
-        + frame.column(1) * (CIRCLE_RADIUS_M * th.sin());
+        + frame.column(0) * (radius_m * th.cos())
+        + frame.column(1) * (radius_m * th.sin());
     Pose::in_scene(s, p)
 }
 
