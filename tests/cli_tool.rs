@@ -129,6 +129,9 @@ fn sweeps_print_no_progress_when_stderr_is_not_a_terminal() {
         "8",
         "--threads",
         "1",
+        // Explicitly the chord model: no line saying that sag would matter.
+        "--sag",
+        "false",
         "--out",
         out.to_str().unwrap(),
     ]);

@@ -58,7 +58,6 @@ pub struct AnalyzeArgs {
 /// `cablevib analyze`.
 pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
     let s = resolve_scene(&a.scene)?;
-    super::args::warn_if_sag_matters(&s, None);
     let pos = s.ee_position_m;
     let s = if s.model.element == ElementKind::Auto {
         let resolved = match crate::estimator::resolve_auto(&s) {
@@ -99,6 +98,7 @@ pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
     } else {
         print_report(&r);
     }
+    super::args::warn_if_sag_matters(&s, None);
     Ok(())
 }
 

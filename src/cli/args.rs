@@ -156,6 +156,7 @@ pub fn resolve_scene(a: &SceneArgs) -> Result<Scene, CliError> {
     }
     let mut s = s.with_model(element, n);
     s.model.sag = on;
+    s.model.sag_explicit |= a.sag.is_some();
     Ok(s)
 }
 

@@ -184,8 +184,8 @@ fn check_shown(a: &MapArgs) -> Result<(), CliError> {
 pub fn compute(a: &MapArgs) -> Result<(Scene, MapResult), CliError> {
     check_shown(a)?;
     let s = resolve_scene(&a.scene)?;
-    super::args::warn_if_sag_matters(&s, None);
     let m = study::compute(&s, &a.config())?;
+    super::args::warn_if_sag_matters(&s, None);
     Ok((s, m))
 }
 

@@ -29,7 +29,7 @@ impl std::fmt::Display for SagWarning {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "warning: sag is off, but sagging cables change f1 by {:.1e} here ({:.4} → {:.4} Hz, over the tolerance {:.0e}; largest Irvine λ² = {:.3e}, cable {}): set [effects] sag = true or pass --sag true",
+            "warning: sag is off, but sagging cables change f1 by {:.1e} here ({:.4} → {:.4} Hz, over the tolerance {:.0e}; largest Irvine λ² = {:.3e}, cable {}): set [effects] sag = true (or false, to keep the chord model and this line quiet) or pass --sag true|false",
             self.f1_change,
             self.f1_chord_hz,
             self.f1_sag_hz,
@@ -54,11 +54,12 @@ pub fn sagged_reference(scene: &Scene) -> Scene {
     s
 }
 
-/// At `pose` and the scene's T_min: the warning when `scene` has sag off, its cables can
-/// sag, and sag changes f1 by more than `model.f1_tolerance`; None otherwise (also when
-/// either model has no valid estimate there: nothing to compare).
+/// At `pose` and the scene's T_min: the warning when `scene` has sag off (not chosen
+/// explicitly: `[effects] sag = false` or `--sag false` silence it), its cables can sag,
+/// and sag changes f1 by more than `model.f1_tolerance`; None otherwise (also when either
+/// model has no valid estimate there: nothing to compare).
 pub fn sag_warning(scene: &Scene, pose: &Pose) -> Option<SagWarning> {
-    if scene.model.sag || !cables_can_sag(scene) {
+    if scene.model.sag || scene.model.sag_explicit || !cables_can_sag(scene) {
         return None;
     }
     let mut chord = scene.with_model(ElementKind::Continuous, 1);

@@ -184,6 +184,10 @@ pub struct ModelSettings {
     /// (the default, and every scene without an `[effects]` table): every cable on its
     /// straight chord.
     pub sag: bool,
+    /// Whether `sag` was chosen explicitly (`[effects] sag = …` or `--sag`): then the
+    /// warning that sag would matter ([`crate::scene`] users: `estimator::sag_warning`) is
+    /// not printed for `sag = false`.
+    pub sag_explicit: bool,
 }
 
 /// A validated robot description. All fields SI.
@@ -314,6 +318,7 @@ impl Scene {
             Some(why) => Err(why),
             None => {
                 self.model.sag = on;
+                self.model.sag_explicit = true;
                 Ok(())
             }
         }

@@ -167,6 +167,7 @@ pub(super) fn scene_from_raw(raw: RawScene, file: &str) -> Result<Scene, SceneEr
             geometric_stiffness,
             f1_tolerance: raw.model.f1_tolerance,
             sag,
+            sag_explicit: fx.sag.is_some(),
         },
         rigid,
         ee_inertia_kg_m2: inertia,
