@@ -588,9 +588,17 @@ mod tests {
         let sagged = with("sag = true").unwrap();
         assert_eq!(sagged.model.element, ElementKind::Fem);
         assert!(sagged.model.sag);
-        assert!(!Scene::default_scene().model.sag, "no [effects]: the chord model");
-        let e = with("sag = true\ncable_mass = false").unwrap_err().to_string();
-        assert!(e.contains("effects.sag") && e.contains("does not sag"), "{e}");
+        assert!(
+            !Scene::default_scene().model.sag,
+            "no [effects]: the chord model"
+        );
+        let e = with("sag = true\ncable_mass = false")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("effects.sag") && e.contains("does not sag"),
+            "{e}"
+        );
         let cat = base.replace("element = \"fem\"", "element = \"catenary\"");
         let e = Scene::from_toml_str(&format!("{cat}\n[effects]\nsag = true\n"), "t.toml")
             .unwrap_err()

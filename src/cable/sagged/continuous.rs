@@ -73,10 +73,14 @@
 //! evaluation stays exact for the discrete model (count and poles consistent), with an error
 //! that grows with λ.
 
+mod kernel;
+mod profile;
 mod propagate;
+mod transfer;
 
 use super::SagChainEval;
 use crate::sag::Catenary;
+use profile::Profile;
 
 /// Most Magnus steps of one cable (2 sub-segments each): the fixed capacity of the solver.
 /// By the error model, 128 steps keep 1e-9 for ν·n_hw ≤ 0.7 (ν ≈ 0.17 up to the 4th
@@ -98,9 +102,9 @@ const AXIAL_MARGIN: f64 = 0.5;
 /// Mesh cuts at most: each further one re-cuts with more steps when a check fails.
 const MESH_PASSES: usize = 4;
 /// Below this ν the cable is straight to rounding: equal steps in s.
-const NU_STRAIGHT: f64 = 1e-12;
+pub(super) const NU_STRAIGHT: f64 = 1e-12;
 /// H below this fraction of min(|V_a|, |V_e|): the cable is vertical (H = 0 formulas).
-const VERTICAL_H_RATIO: f64 = 1e-100;
+pub(super) const VERTICAL_H_RATIO: f64 = 1e-100;
 /// Magnus weights α₁,₂ = 1/4 ± √3/6 and the Gauss offset 1/(2√3).
 const ALPHA1: f64 = 0.25 + 0.288_675_134_594_812_9;
 const ALPHA2: f64 = 0.25 - 0.288_675_134_594_812_9;
@@ -162,8 +166,8 @@ struct Segment {
     rot: [f64; 2],
     /// μ c ℓ² per direction (z = λ q), s²/rad².
     q: [f64; 3],
-    /// c ℓ per direction, m/N.
-    cl: [f64; 3],
+    /// 1/(c ℓ) per direction (the static stiffness), N/m.
+    k: [f64; 3],
     /// μ ℓ, kg.
     mul: f64,
 }
@@ -176,7 +180,10 @@ pub struct SagContinuous {
     n_seg: usize,
     /// (cos θ, sin θ) of the last sub-segment's axial direction in (h, up).
     final_rot: [f64; 2],
+    /// Largest q of any direction and sub-segment (picks the kernel per λ), s²/rad².
+    q_max: f64,
     mesh: SagContMesh,
+    static_eval: SagChainEval,
 }
 
 impl SagContinuous {
@@ -187,6 +194,8 @@ impl SagContinuous {
             segs: [Segment::default(); MAX_SEGMENTS],
             n_seg: 0,
             final_rot: [1.0, 0.0],
+            q_max: 0.0,
+            static_eval: SagChainEval::default(),
             mesh: SagContMesh {
                 steps: 0,
                 lambda_max_rad2_s2: 0.0,
@@ -220,26 +229,13 @@ impl SagContinuous {
 
     /// S(λ), dS/dλ and the blocked count at λ = ω² (rad²/s²). No allocation; O(M).
     pub fn eval(&self, lambda: f64) -> SagChainEval {
-        let segs = &self.segs[..self.n_seg];
-        let (s_in, ds_in, b_in) = propagate::eval_in(segs, self.final_rot, lambda);
-        let (s_out, ds_out, b_out) = propagate::eval_out(segs, lambda);
-        SagChainEval {
-            s_in,
-            ds_in,
-            s_out,
-            ds_out,
-            below: b_in + b_out,
-        }
+        propagate::eval(&self.segs[..self.n_seg], self.final_rot, self.q_max, lambda)
     }
 
-    /// In plane only: (S as [a, b, c] in (h, up), N/m; dS/dλ, kg; blocked count).
-    pub fn eval_in_plane(&self, lambda: f64) -> ([f64; 3], [f64; 3], u32) {
-        propagate::eval_in(&self.segs[..self.n_seg], self.final_rot, lambda)
-    }
-
-    /// Out of plane only: (s, N/m; ds/dλ, kg; blocked count).
-    pub fn eval_out_of_plane(&self, lambda: f64) -> (f64, f64, u32) {
-        propagate::eval_out(&self.segs[..self.n_seg], lambda)
+    /// The static end stiffness S(0) (computed by `set`): s_in (N/m, (h, up)) and s_out
+    /// (N/m); the derivatives are those at λ = 0.
+    pub fn static_eval(&self) -> SagChainEval {
+        self.static_eval
     }
 
     fn set_steps(
@@ -275,6 +271,11 @@ impl SagContinuous {
     }
 
     fn record(&mut self, m: usize, lmax: f64, capped: bool, nu: f64) -> SagContMesh {
+        self.q_max = self.segs[..self.n_seg]
+            .iter()
+            .flat_map(|g| g.q)
+            .fold(0.0, f64::max);
+        self.static_eval = self.eval(0.0);
         self.mesh = SagContMesh {
             steps: m,
             lambda_max_rad2_s2: lmax,
@@ -289,9 +290,9 @@ impl SagContinuous {
         let mut phase_ratio = 0.0f64;
         let mut margin_ratio = 0.0f64;
         for g in &self.segs[..self.n_seg] {
-            // φ² = λ q_t; c_a = cl_a / ℓ with ℓ = mul/μ.
+            // φ² = λ q_t; c_a = 1/(k_a ℓ) with ℓ = mul/μ.
             phase_ratio = phase_ratio.max((lmax * g.q[1]).sqrt() / PHASE_PER_SEGMENT);
-            let ca_ea = g.cl[0] * p.mu / g.mul * p.ea;
+            let ca_ea = p.mu / (g.k[0] * g.mul) * p.ea;
             // c_a = 1/EA − O(δ²): the deficit shrinks as 1/M².
             margin_ratio = margin_ratio.max(((1.0 - ca_ea).max(0.0) / (1.0 - AXIAL_MARGIN)).sqrt());
         }
@@ -331,7 +332,8 @@ impl SagContinuous {
                     ..seg
                 };
                 prev_angle = angle;
-                root_c += (seg.cl[2] / (0.5 * h)).sqrt() * 0.5 * h;
+                // √c_o ℓ = √(c_o ℓ · ℓ) = √(ℓ / k_o)
+                root_c += (0.5 * h / seg.k[2]).sqrt();
             }
             s0 = s1;
         }
@@ -340,162 +342,5 @@ impl SagContinuous {
         self.final_rot = [cs, sn];
         let hw = self.params.max_halfwaves.max(0.0) * std::f64::consts::PI;
         hw * hw / (p.mu * root_c * root_c)
-    }
-}
-
-/// The catenary's data the mesh needs, validated.
-struct Profile {
-    l0: f64,
-    ea: f64,
-    w: f64,
-    h: f64,
-    va: f64,
-    ve: f64,
-    mu: f64,
-    vertical: bool,
-}
-
-/// The tension state at a Gauss point.
-struct Gauss {
-    v: f64,
-    t: f64,
-}
-
-impl Profile {
-    fn new(cat: &Catenary, mu: f64) -> Result<Profile, SagContError> {
-        let ok = |x: f64| x.is_finite() && x > 0.0;
-        if !ok(cat.l0_m) {
-            return Err(SagContError::BadInput("L0"));
-        }
-        if !ok(cat.ea_n) {
-            return Err(SagContError::BadInput("EA"));
-        }
-        if !ok(mu) {
-            return Err(SagContError::BadInput("mu"));
-        }
-        if !(cat.w_n_m.is_finite() && cat.w_n_m >= 0.0) {
-            return Err(SagContError::BadInput("w"));
-        }
-        if !(cat.h_n.is_finite() && cat.h_n >= 0.0) {
-            return Err(SagContError::BadInput("H"));
-        }
-        let (va, w, l0) = (cat.v_anchor_n, cat.w_n_m, cat.l0_m);
-        let ve = va + w * l0;
-        if !(va.is_finite() && ve.is_finite()) {
-            return Err(SagContError::BadInput("V_a"));
-        }
-        let vmin = if va > 0.0 || ve < 0.0 {
-            va.abs().min(ve.abs())
-        } else {
-            0.0
-        };
-        if cat.h_n == 0.0 && vmin == 0.0 {
-            return Err(SagContError::Slack {
-                v_anchor_n: va,
-                v_end_n: ve,
-            });
-        }
-        Ok(Profile {
-            l0,
-            ea: cat.ea_n,
-            w,
-            h: cat.h_n,
-            va,
-            ve,
-            mu,
-            vertical: cat.h_n <= VERTICAL_H_RATIO * vmin,
-        })
-    }
-
-    /// ν = ∫ w/T ds over the cable, without cancellation.
-    fn variation(&self) -> f64 {
-        if self.w == 0.0 {
-            return 0.0;
-        }
-        if self.vertical {
-            let v0 = if self.va > 0.0 { self.va } else { -self.ve };
-            return (self.w * self.l0 / v0).ln_1p();
-        }
-        asinh_diff(
-            self.ve / self.h,
-            self.va / self.h,
-            self.w * self.l0 / self.h,
-        )
-    }
-
-    /// s where ∫₀ˢ w/T = frac · ν.
-    fn node_s(&self, nu: f64, frac: f64) -> f64 {
-        if nu < NU_STRAIGHT {
-            return frac * self.l0;
-        }
-        let x = frac * nu;
-        let s = if self.vertical {
-            if self.va > 0.0 {
-                self.va * x.exp_m1() / self.w
-            } else {
-                self.va * (-x).exp_m1() / self.w
-            }
-        } else {
-            // (H/w)(sinh(a + x) − sinh a) = (2H/w) cosh(a + x/2) sinh(x/2)
-            let a = (self.va / self.h).asinh();
-            2.0 * self.h / self.w * (a + 0.5 * x).cosh() * (0.5 * x).sinh()
-        };
-        s.clamp(0.0, self.l0)
-    }
-
-    fn gauss(&self, s: f64) -> Gauss {
-        let v = self.va + self.w * s;
-        Gauss {
-            v,
-            t: (self.h * self.h + v * v).sqrt(),
-        }
-    }
-
-    /// The sub-segment of compliance I/EA + β₁N₁ + β₂N₂ (N = n nᵀ/T) and length ℓ, and its
-    /// axial direction's angle in (h, up).
-    fn segment(
-        &self,
-        g1: &Gauss,
-        g2: &Gauss,
-        b1: f64,
-        b2: f64,
-        sin12: f64,
-        l: f64,
-    ) -> (Segment, f64) {
-        let (h, t1, t2) = (self.h, g1.t, g2.t);
-        let tr = b1 / t1 + b2 / t2;
-        let det = b1 * b2 * sin12 * sin12 / (t1 * t2);
-        let big = 0.5 * (tr + (tr * tr - 4.0 * det).max(0.0).sqrt());
-        let small = if big > 0.0 { det / big } else { 0.0 };
-        // N = [[V², −HV], [−HV, H²]]/T³: the major axis's angle, then the axial one ⟂ to it.
-        let (c1, c2) = (b1 / (t1 * t1 * t1), b2 / (t2 * t2 * t2));
-        let pq = c1 * (g1.v - h) * (g1.v + h) + c2 * (g2.v - h) * (g2.v + h);
-        let r2 = -2.0 * h * (c1 * g1.v + c2 * g2.v);
-        let angle = 0.5 * r2.atan2(pq) - std::f64::consts::FRAC_PI_2;
-        let inv_ea = 1.0 / self.ea;
-        let c = [inv_ea + small, inv_ea + big, inv_ea + tr];
-        let mu = self.mu;
-        let seg = Segment {
-            rot: [1.0, 0.0],
-            q: c.map(|ci| mu * ci * l * l),
-            cl: c.map(|ci| ci * l),
-            mul: mu * l,
-        };
-        (seg, angle)
-    }
-}
-
-/// asinh x − asinh y for x ≥ y with x − y = dxy given, without cancellation.
-fn asinh_diff(x: f64, y: f64, dxy: f64) -> f64 {
-    if y >= 0.0 {
-        let den = x * (1.0 + y * y).sqrt() + y * (1.0 + x * x).sqrt();
-        if den == 0.0 {
-            return 0.0;
-        }
-        (dxy * (x + y) / den).asinh()
-    } else if x <= 0.0 {
-        asinh_diff(-y, -x, dxy)
-    } else {
-        x.asinh() - y.asinh()
     }
 }
