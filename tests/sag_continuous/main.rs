@@ -105,50 +105,53 @@ fn reference_near(cat: &Catenary, mu: f64, l: f64) -> (f64, f64) {
 }
 
 /// Relative eigenvalue error of the rule's mesh on every test cable, for the blocked
-/// eigenvalues below λ_max (at most 8): ≤ 1e-9 (the requirement, the rule's tol) where the
-/// rule was not capped; where it was (the slackest cables), ≤ the error model's bound at
-/// the cap, 10 · C ν² Φ²/M⁴ with C = 0.05 and Φ = n_hw π (at least 1e-8). The reference's own Richardson
-/// estimate must be ≤ 1e-11 relative for the check to mean anything.
+/// eigenvalues below λ_max (at most 8), at rel_tol 1e-9 (offline default) and 1e-7 (real
+/// time): ≤ rel_tol where the rule was not capped; where it was (the slackest cables at
+/// 1e-9), ≤ the error model's value at the cap, C ν² Φ²/M⁴ with C = 0.2 and Φ = n_hw π.
+/// The reference's own Richardson estimate must be ≤ 1e-11 relative for the check to mean
+/// anything.
 #[test]
 fn eigenvalues_match_independent_integration() {
-    let mut worst = 0.0f64;
-    for (name, cat, mu) in cables() {
-        let mut sc = SagContinuous::new(SagContinuousParams::default());
-        let mesh = sc.set(&cat, mu).unwrap();
-        let phase = 4.0 * std::f64::consts::PI;
-        let tol = if mesh.capped {
-            // The fitted model is good to a factor of a few (see convergence study).
-            (10.0 * 0.05 * (mesh.variation * phase).powi(2) / (mesh.steps as f64).powi(4)).max(1e-8)
-        } else {
-            // The requirement is 1e-9; the symmetric in-plane modes of sagging cables miss it
-            // by up to ~5× at the rule's M (its error constant is fitted on too few cables):
-            // the check holds the measured state, the report says so.
-            1e-8
-        };
-        let mut line = String::new();
-        for k in 1..=8 {
-            let l = solver_eigenvalue(&sc, k);
-            if l > mesh.lambda_max_rad2_s2 {
-                break;
+    for rel_tol in [1e-9, 1e-7] {
+        let mut worst = 0.0f64;
+        for (name, cat, mu) in cables() {
+            let params = SagContinuousParams {
+                rel_tol,
+                ..SagContinuousParams::default()
+            };
+            let mut sc = SagContinuous::new(params);
+            let mesh = sc.set(&cat, mu).unwrap();
+            let phase = 4.0 * std::f64::consts::PI;
+            let tol = if mesh.capped {
+                0.2 * (mesh.variation * phase).powi(2) / (mesh.steps as f64).powi(4)
+            } else {
+                rel_tol
+            };
+            let mut line = String::new();
+            for k in 1..=8 {
+                let l = solver_eigenvalue(&sc, k);
+                if l > mesh.lambda_max_rad2_s2 {
+                    break;
+                }
+                let (r, est) = reference_near(&cat, mu, l);
+                assert!(est <= 1e-11 * r, "{name} k {k}: reference error {est}");
+                let err = (l - r).abs() / r;
+                line += &format!(" {err:.1e}");
+                worst = worst.max(err);
+                assert!(
+                    err <= tol,
+                    "{name} k {k}: {l} vs {r} ({err:.2e} > {tol:.1e})"
+                );
             }
-            let (r, est) = reference_near(&cat, mu, l);
-            assert!(est <= 1e-11 * r, "{name} k {k}: reference error {est}");
-            let err = (l - r).abs() / r;
-            line += &format!(" {err:.1e}");
-            worst = worst.max(err);
-            assert!(
-                err <= tol,
-                "{name} k {k}: {l} vs {r} ({err:.2e} > {tol:.1e})"
+            let m = mesh.steps;
+            let lam2 = cat.irvine_lambda2();
+            eprintln!(
+                "rel_tol {rel_tol:.0e} {name}: λ² {lam2:.2e}, M {m} (capped {}, tol {tol:.1e}):{line}",
+                mesh.capped
             );
         }
-        let m = mesh.steps;
-        let lam2 = cat.irvine_lambda2();
-        eprintln!(
-            "{name}: λ² {lam2:.2e}, M {m} (capped {}, tol {tol:.1e}):{line}",
-            mesh.capped
-        );
+        eprintln!("rel_tol {rel_tol:.0e}: worst relative eigenvalue error {worst:.2e}");
     }
-    eprintln!("worst relative eigenvalue error {worst:.2e}");
 }
 
 /// The convergence study: relative error of the first and third blocked eigenvalues at
@@ -328,13 +331,18 @@ fn count_steps_at_poles_and_derivative() {
     }
 }
 
-/// ns per eval (in plane + out of plane) at Irvine's λ² ≈ 1, 100, 1e4, next to the taut
-/// continuous chain's eval (axial + transverse) in the same run. No timed assert.
+/// ns per eval (in plane + out of plane) at Irvine's λ² ≈ 1, 100, 1e4, for rel_tol 1e-7
+/// and 1e-9, next to the taut continuous chain's eval (axial + transverse) and the sagged
+/// FEM chain (`SagChain::set_fem`) at N = 40 and 160, all in the same run, at
+/// λ = 0.7 λ₁ and at λ = 0.9 λ₄ (λ_k the continuous cable's blocked eigenvalues). No timed
+/// assert.
 #[test]
 #[ignore]
 fn timing_per_eval() {
+    use cablevib::cable::sagged::SagChain;
     use cablevib::cable::{Chain, ChainKind};
     use nalgebra::Matrix3;
+    use std::hint::black_box;
     use std::time::Instant;
     let level = |ea: f64, w: f64, h: f64| Catenary {
         l0_m: 5.0,
@@ -356,30 +364,92 @@ fn timing_per_eval() {
         mult: 1,
         proj: Matrix3::identity(),
     };
-    let (bar, string) = (chain(1e4), chain(10.0));
     const N: usize = 20000;
-    let t0 = Instant::now();
-    let mut acc = 0.0;
-    for i in 0..N {
-        let lam = 50.0 + (i % 7) as f64;
-        acc += bar.eval(lam).s + string.eval(lam).s;
-    }
-    let taut = t0.elapsed().as_nanos() as f64 / N as f64;
+    // The best of 10 rounds of N/10 evaluations (the machine is shared: the minimum is
+    // the least disturbed).
+    let time = |f: &dyn Fn(f64) -> f64, lam: f64| {
+        let mut best = f64::INFINITY;
+        for _ in 0..10 {
+            let t = Instant::now();
+            let mut acc = 0.0;
+            for i in 0..N / 10 {
+                acc += f(black_box(lam * (1.0 + 1e-4 * (i % 7) as f64)));
+            }
+            black_box(acc);
+            best = best.min(t.elapsed().as_nanos() as f64 / (N / 10) as f64);
+        }
+        best
+    };
+    let (bar, string) = (chain(1e4), chain(10.0));
+    let taut = time(&|l| bar.eval(l).s + string.eval(l).s, 50.0);
+    eprintln!("taut continuous chain pair (axial + transverse): {taut:.0} ns/eval");
     for (name, cat) in cases {
         let mu = cat.w_n_m / G;
-        let mut sc = SagContinuous::new(SagContinuousParams::default());
-        let t1 = Instant::now();
-        let mesh = sc.set(&cat, mu).unwrap();
-        let set_ns = t1.elapsed().as_nanos();
-        let l1 = 0.7 * solver_eigenvalue(&sc, 1);
-        let t2 = Instant::now();
-        for i in 0..N {
-            acc += sc.eval(l1 * (1.0 + 1e-3 * (i % 7) as f64)).s_out;
-        }
-        let ns = t2.elapsed().as_nanos() as f64 / N as f64;
         let lam2 = cat.irvine_lambda2();
-        let m = mesh.steps;
-        eprintln!("{name} (λ² {lam2:.2e}, M {m}): {ns:.0} ns/eval, set {set_ns} ns; taut chain pair {taut:.0} ns/eval");
+        let mut fem = SagChain::new(160);
+        let mut sc = SagContinuous::new(SagContinuousParams::default());
+        sc.set(&cat, mu).unwrap();
+        let (l1, l4) = (solver_eigenvalue(&sc, 1), solver_eigenvalue(&sc, 4));
+        let mut line = format!("{name} (λ² {lam2:.1e}), ns/eval at 0.7λ₁ | 0.9λ₄:");
+        for n in [40usize, 160] {
+            fem.set_fem(&cat, mu, n).unwrap();
+            let a = time(&|l| fem.eval(l).s_out, 0.7 * l1);
+            let b = time(&|l| fem.eval(l).s_out, 0.9 * l4);
+            line += &format!(" FEM N {n}: {a:.0} | {b:.0};");
+        }
+        for tol in [1e-7, 1e-9] {
+            let params = SagContinuousParams {
+                rel_tol: tol,
+                ..SagContinuousParams::default()
+            };
+            let mut sc = SagContinuous::new(params);
+            let t = Instant::now();
+            let mesh = sc.set(&cat, mu).unwrap();
+            let set_ns = t.elapsed().as_nanos();
+            let a = time(&|l| sc.eval(l).s_out, 0.7 * l1);
+            let b = time(&|l| sc.eval(l).s_out, 0.9 * l4);
+            let m = mesh.steps;
+            line += &format!(" cont {tol:.0e} (M {m}, set {set_ns} ns): {a:.0} | {b:.0};");
+        }
+        eprintln!("{line}");
     }
-    assert!(acc.is_finite());
+}
+
+/// The error model's constant, measured: for every test cable, M = 8 … 64 steps and the
+/// blocked eigenvalues below λ_max, C = err · M⁴ / (ν² Φ²) with Φ = n_hw π √(λ/λ_max) the
+/// mode's transverse phase. Printed (the rule's C_ERR must bound it); no assert.
+#[test]
+#[ignore]
+fn error_constant_study() {
+    let mut worst = 0.0f64;
+    for (name, cat, mu) in cables() {
+        let mut sc = SagContinuous::new(SagContinuousParams::default());
+        let mesh = sc.set_with_steps(&cat, mu, 128).unwrap();
+        let nu = mesh.variation;
+        let mut refs = Vec::new();
+        for k in 1..=8 {
+            let l = solver_eigenvalue(&sc, k);
+            if l > mesh.lambda_max_rad2_s2 {
+                break;
+            }
+            refs.push(reference_near(&cat, mu, l).0);
+        }
+        let mut line = format!("{name} (ν {nu:.3}):");
+        for m in [8usize, 16, 32, 64] {
+            let mesh = sc.set_with_steps(&cat, mu, m).unwrap();
+            line += &format!(" M {m}:");
+            for (k, &r) in refs.iter().enumerate() {
+                let l = solver_eigenvalue(&sc, k as u32 + 1);
+                let err = (l - r).abs() / r;
+                let phi = 4.0 * std::f64::consts::PI * (r / mesh.lambda_max_rad2_s2).sqrt();
+                let c = err * (m as f64).powi(4) / (nu * nu * phi * phi);
+                if err > 1e-12 && err < 1e-3 {
+                    worst = worst.max(c);
+                }
+                line += &format!(" {c:.1e}");
+            }
+        }
+        eprintln!("{line}");
+    }
+    eprintln!("largest C (errors in 1e-12 … 1e-3): {worst:.2e}");
 }

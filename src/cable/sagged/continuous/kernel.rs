@@ -1,25 +1,18 @@
-//! The λ-dependent functions of one uniform sub-segment, per principal direction.
+//! The λ-dependent functions of one uniform sub-segment, per principal direction, at
+//! z = λ μ c ℓ² (φ = √z its phase): C = cos √z, Sn = sin √z/√z (cosh, sinh for z < 0),
+//! Sp = dSn/dz, and from them x = (C − 1)/Sn = −φ tan(φ/2), h = 1/Sn = φ/sin φ and their
+//! z-derivatives (see `propagate` for their use).
 //!
-//! A uniform sub-segment of length ℓ, compliance c and mass μ per length, at z = λ μ c ℓ²
-//! (φ = √z its phase), has the fixed–fixed dynamic stiffness
-//!
-//! ```text
-//!   [[D, −e], [−e, D]],   D = g(z)/(c ℓ),  e = h(z)/(c ℓ),
-//!   g = φ cot φ = C/Sn,   h = φ / sin φ = 1/Sn,
-//!   C = cos √z,  Sn = sin √z / √z  (cosh, sinh for z < 0),
-//! ```
-//!
-//! and, with Sp = dSn/dz = (C − Sn)/(2z) and dC/dz = −Sn/2,
-//!
-//! ```text
-//!   dD/dλ = μ ℓ g′(z),  g′ = −½ − g Sp/Sn,      de/dλ = μ ℓ h′(z),  h′ = −Sp/Sn².
-//! ```
-//!
-//! C, Sn and Sp are entire in z: on |z| ≤ `Z_MID` they are summed as truncated Taylor
-//! polynomials (no sqrt, no trigonometry) whose first omitted term is below 1e-17, i.e.
-//! exact to rounding; `Tier` picks the shortest polynomial valid for the largest |z| of the
-//! evaluation. Beyond, the library's trigonometry (or exp for z < 0).
+//! All are entire (C, Sn, Sp) or analytic for |z| < π² (x, h): on |z| ≤ `Z_MID` they are
+//! summed as truncated Taylor polynomials (no sqrt, no trigonometry) whose first omitted
+//! term is below 1e-17, i.e. exact to rounding; the evaluation picks, per direction, the
+//! shortest polynomial valid for the largest |z| of the cable (`Z_TINY`: x, h directly, no
+//! division; `Z_SMALL`, `Z_MID`: C, Sn, Sp, one division). Beyond, `general` uses the
+//! library's trigonometry (or exp for z < 0).
 
+/// The division-free series of x and h hold for |z| ≤ this (first omitted terms, from the
+/// series' coefficients ~2/π²ᵏ: below 4e-3⁶ · 3e-6 < 1e-20, and 1e-17 for their derivatives).
+pub(super) const Z_TINY: f64 = 4e-3;
 /// Short polynomials hold for |z| ≤ this (first omitted terms: C 0.1⁷/14! < 1.2e-18,
 /// Sn 0.1⁷/15! < 1e-19, Sp 7·0.1⁶/15! < 6e-19).
 pub(super) const Z_SMALL: f64 = 0.1;
@@ -30,6 +23,72 @@ pub(super) const Z_MID: f64 = 2.25;
 /// Below this z (λ < 0) cosh √z would overflow within the cable: z is clamped (the eval
 /// stays finite; λ that negative is far outside any use).
 const MIN_Z: f64 = -1.0e4;
+
+/// What the symmetric recursion needs per direction, per unit static stiffness k = 1/(cℓ):
+/// x = (C − 1)/Sn = −φ tan(φ/2), h = 1/Sn = φ/sin φ and their z-derivatives
+/// (then D = k (x + h), e = k h, dD/dλ = μℓ (x′ + h′), de/dλ = μℓ h′).
+#[derive(Clone, Copy)]
+pub(super) struct Xh {
+    pub x: f64,
+    pub h: f64,
+    pub dx: f64,
+    pub dh: f64,
+}
+
+/// |z| ≤ Z_TINY: the Taylor series (no division)
+/// h = 1 + z/6 + 7z²/360 + 31z³/15120 + 127z⁴/604800 + 73z⁵/3421440,
+/// x = −(z/2 + z²/24 + z³/240 + 17z⁴/40320 + 31z⁵/725760).
+#[inline(always)]
+pub(super) fn tiny(z: f64) -> Xh {
+    const H: [f64; 6] = [
+        1.0,
+        1.0 / 6.0,
+        7.0 / 360.0,
+        31.0 / 15120.0,
+        127.0 / 604800.0,
+        73.0 / 3421440.0,
+    ];
+    const X: [f64; 6] = [
+        0.0,
+        -1.0 / 2.0,
+        -1.0 / 24.0,
+        -1.0 / 240.0,
+        -17.0 / 40320.0,
+        -31.0 / 725760.0,
+    ];
+    let h = horner(&H, z);
+    let x = horner(&X, z);
+    let dh = H[1] + z * (2.0 * H[2] + z * (3.0 * H[3] + z * (4.0 * H[4] + z * 5.0 * H[5])));
+    let dx = X[1] + z * (2.0 * X[2] + z * (3.0 * X[3] + z * (4.0 * X[4] + z * 5.0 * X[5])));
+    Xh { x, h, dx, dh }
+}
+
+/// x, h and derivatives from C − 1, Sn, Sp (one division): h′ = −Sp/Sn²,
+/// x′ = d((C − 1)/Sn)/dz = −½ − x Sp/Sn (with dC/dz = −Sn/2).
+#[inline(always)]
+fn xh(f: Csp) -> Xh {
+    // Sn ≥ sin 1.5/1.5 > 0.66 on the polynomials' range: no zero divisor.
+    let r = 1.0 / f.sn;
+    let x = f.cm1 * r;
+    Xh {
+        x,
+        h: r,
+        dx: -0.5 - x * f.sp * r,
+        dh: -f.sp * r * r,
+    }
+}
+
+/// |z| ≤ Z_SMALL.
+#[inline(always)]
+pub(super) fn small(z: f64) -> Xh {
+    xh(small_csp(z))
+}
+
+/// |z| ≤ Z_MID.
+#[inline(always)]
+pub(super) fn mid(z: f64) -> Xh {
+    xh(mid_csp(z))
+}
 
 /// C = cos √z, C − 1 (formed without cancellation), Sn = sin √z/√z, Sp = dSn/dz, and the
 /// sub-segment's own fixed–fixed eigenvalues below z (n ≥ 1 with nπ < √z).
@@ -44,7 +103,7 @@ pub(super) struct Csp {
 
 /// Σ (−z)ⁿ/(2n)!, Σ (−z)ⁿ/(2n+1)!, Σ n (−1)ⁿ zⁿ⁻¹/(2n+1)! to z⁶ (|z| ≤ Z_SMALL).
 #[inline(always)]
-pub(super) fn small(z: f64) -> Csp {
+pub(super) fn small_csp(z: f64) -> Csp {
     let cm1 = z
         * (-1.0 / 2.0
             + z * (1.0 / 24.0
@@ -108,7 +167,7 @@ fn horner(coef: &[f64], z: f64) -> f64 {
 
 /// C, Sn to z¹⁰ and Sp to z⁹ (|z| ≤ Z_MID).
 #[inline(always)]
-pub(super) fn mid(z: f64) -> Csp {
+pub(super) fn mid_csp(z: f64) -> Csp {
     let cm1 = z * horner(&C_COEF[1..], z);
     Csp {
         c: 1.0 + cm1,
@@ -123,7 +182,7 @@ pub(super) fn mid(z: f64) -> Csp {
 #[inline]
 pub(super) fn general(z: f64) -> Csp {
     if z.abs() <= Z_MID {
-        return mid(z);
+        return mid_csp(z);
     }
     if z > 0.0 {
         let phi = z.sqrt();
@@ -175,9 +234,9 @@ mod tests {
             let sn = s / phi;
             let cm1 = -2.0 * (0.5 * phi).sin().powi(2);
             let sp = (c - sn) / (2.0 * z);
-            let mut tiers = vec![mid(z), general(z), mid(-z)];
+            let mut tiers = vec![mid_csp(z), general(z), mid_csp(-z)];
             if z <= Z_SMALL {
-                tiers.push(small(z));
+                tiers.push(small_csp(z));
             }
             for (j, k) in tiers.into_iter().enumerate() {
                 if j == 2 {
@@ -192,6 +251,23 @@ mod tests {
                 assert!((k.sn - sn).abs() <= 3e-16, "z {z} Sn");
                 if z > 1e-2 {
                     assert!((k.sp - sp).abs() <= 1e-13 * sp.abs(), "z {z} Sp");
+                }
+            }
+        }
+    }
+
+    /// The three x, h kernels agree where their ranges overlap (z ∈ [0, Z_TINY], both signs):
+    /// x, h to 3e-16 of h, x′ and h′ to 3e-16 (no cancellation on either side).
+    #[test]
+    fn kernels_agree_on_overlaps() {
+        for i in 0..=200 {
+            for z in [Z_TINY * i as f64 / 200.0, -Z_TINY * i as f64 / 200.0] {
+                let t = tiny(z);
+                for k in [small(z), mid(z)] {
+                    assert!((k.x - t.x).abs() <= 3e-16, "z {z} x");
+                    assert!((k.h - t.h).abs() <= 3e-16, "z {z} h");
+                    assert!((k.dx - t.dx).abs() <= 3e-16, "z {z} x′");
+                    assert!((k.dh - t.dh).abs() <= 3e-16, "z {z} h′");
                 }
             }
         }

@@ -34,7 +34,7 @@
 //! symmetric form with polynomial C, Sn, Sp; beyond, the transfer form (`transfer`), robust
 //! where a sub-segment nears its own eigenvalue (Sn → 0, where D² − e² would cancel).
 
-use super::kernel::{self, Csp, Z_MID, Z_SMALL};
+use super::kernel::{self, Xh, Z_MID, Z_SMALL, Z_TINY};
 use super::{transfer, Segment};
 use crate::cable::sagged::SagChainEval;
 
@@ -89,61 +89,95 @@ struct De {
 }
 
 #[inline(always)]
-fn de(f: Csp, k: f64, mul: f64) -> De {
-    // Sn ≥ sin 1.5/1.5 > 0.66 on the polynomial kernels' range: no zero divisor.
-    let r = 1.0 / f.sn;
-    let g = f.c * r;
+fn de(f: Xh, k: f64, mul: f64) -> De {
     De {
-        d: k * g,
-        e: k * r,
-        x: k * f.cm1 * r,
-        dd: mul * (-0.5 - g * f.sp * r),
-        de: -mul * f.sp * r * r,
+        d: k * (f.x + f.h),
+        e: k * f.h,
+        x: k * f.x,
+        dd: mul * (f.dx + f.dh),
+        de: mul * f.dh,
     }
 }
 
-/// S(λ), dS/dλ and the count of the chain `segs`; `final_rot` turns the last
-/// sub-segment's frame into (h, up); `q_max` is the largest q of any direction.
-pub(super) fn eval(segs: &[Segment], final_rot: [f64; 2], q_max: f64, lambda: f64) -> SagChainEval {
-    let zmax = lambda.abs() * q_max;
-    if zmax <= Z_SMALL {
-        run(segs, final_rot, lambda, kernel::small)
-    } else if zmax <= Z_MID {
-        run(segs, final_rot, lambda, kernel::mid)
+/// Which polynomial holds for |z| ≤ `z`: 0 tiny, 1 small, 2 mid, 3 none.
+#[inline(always)]
+fn tier(z: f64) -> u8 {
+    if z <= Z_TINY {
+        0
+    } else if z <= Z_SMALL {
+        1
+    } else if z <= Z_MID {
+        2
     } else {
-        let (s_in, ds_in, b_in) = transfer::eval_in(segs, final_rot, lambda);
-        let (s_out, ds_out, b_out) = transfer::eval_out(segs, lambda);
-        SagChainEval {
-            s_in,
-            ds_in,
-            s_out,
-            ds_out,
-            below: b_in + b_out,
+        3
+    }
+}
+
+/// S(λ), dS/dλ and the count of the chain `segs`; `final_rot` turns the last sub-segment's
+/// frame into (h, up); `q_max` is the largest q of the axial and of the other directions.
+pub(super) fn eval(
+    segs: &[Segment],
+    final_rot: [f64; 2],
+    q_max: [f64; 2],
+    lambda: f64,
+) -> SagChainEval {
+    let (za, zt) = (lambda.abs() * q_max[0], lambda.abs() * q_max[1]);
+    match (tier(za), tier(zt)) {
+        (0, 0) => run(segs, final_rot, lambda, kernel::tiny, kernel::tiny),
+        (0, 1) => run(segs, final_rot, lambda, kernel::tiny, kernel::small),
+        (0, 2) => run(segs, final_rot, lambda, kernel::tiny, kernel::mid),
+        (1, 1) => run(segs, final_rot, lambda, kernel::small, kernel::small),
+        (a, t) if a <= 2 && t <= 2 => run(segs, final_rot, lambda, kernel::mid, kernel::mid),
+        _ => {
+            // Beyond the polynomials (or λ not finite): the transfer form.
+            let (s_in, ds_in, b_in) = transfer::eval_in(segs, final_rot, lambda);
+            let (s_out, ds_out, b_out) = transfer::eval_out(segs, lambda);
+            SagChainEval {
+                s_in,
+                ds_in,
+                s_out,
+                ds_out,
+                below: b_in + b_out,
+            }
         }
     }
 }
 
+/// The three directions' D, e, x of sub-segment `g` at λ.
 #[inline(always)]
-fn run(segs: &[Segment], final_rot: [f64; 2], lambda: f64, f: impl Fn(f64) -> Csp) -> SagChainEval {
+fn at(g: &Segment, lambda: f64, fa: &impl Fn(f64) -> Xh, ft: &impl Fn(f64) -> Xh) -> [De; 3] {
+    let (a, t, o) = (
+        fa(lambda * g.q[0]),
+        ft(lambda * g.q[1]),
+        ft(lambda * g.q[2]),
+    );
+    [
+        de(a, g.k[0], g.mul),
+        de(t, g.k[1], g.mul),
+        de(o, g.k[2], g.mul),
+    ]
+}
+
+/// The symmetric recursion with kernel `fa` for the axial direction, `ft` for the others.
+#[inline(always)]
+fn run(
+    segs: &[Segment],
+    final_rot: [f64; 2],
+    lambda: f64,
+    fa: impl Fn(f64) -> Xh,
+    ft: impl Fn(f64) -> Xh,
+) -> SagChainEval {
     let Some((first, rest)) = segs.split_first() else {
         return SagChainEval::default();
     };
-    let at = |g: &Segment| {
-        let (a, t, o) = (f(lambda * g.q[0]), f(lambda * g.q[1]), f(lambda * g.q[2]));
-        (
-            de(a, g.k[0], g.mul),
-            de(t, g.k[1], g.mul),
-            de(o, g.k[2], g.mul),
-        )
-    };
     // From the fixed anchor: S₁ = D₁.
-    let (a, t, o) = at(first);
+    let [a, t, o] = at(first, lambda, &fa, &ft);
     let mut below = 0;
     let mut s = [a.d, 0.0, t.d];
     let mut ds = [a.dd, 0.0, t.dd];
     let (mut so, mut dso) = (o.d, o.dd);
     for g in rest {
-        let (a, t, o) = at(g);
+        let [a, t, o] = at(g, lambda, &fa, &ft);
         // In plane, in this sub-segment's frame.
         let sr = rotate(s, g.rot[0], g.rot[1]);
         let dsr = rotate(ds, g.rot[0], g.rot[1]);
