@@ -3,6 +3,8 @@
 //! closed-form straight string/bar (`cable::Chain`), its
 //! own derivative and count; no allocation in set/eval; timings (#[ignore]).
 
+mod fem;
+mod irvine;
 mod rk4;
 
 use cablevib::alloc_count::{thread_allocations, CountingAlloc};
@@ -12,7 +14,7 @@ use cablevib::sag::Catenary;
 #[global_allocator]
 static A: CountingAlloc = CountingAlloc;
 
-const G: f64 = 9.81;
+pub const G: f64 = 9.81;
 
 /// Named test cables (catenary, μ): taut to very slack, anchor below/above, vertical.
 pub fn cables() -> Vec<(&'static str, Catenary, f64)> {
