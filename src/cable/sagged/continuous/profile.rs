@@ -14,6 +14,8 @@ pub(super) struct Profile {
     ve: f64,
     pub mu: f64,
     vertical: bool,
+    /// asinh(V_a/H) (0 for a vertical cable).
+    asinh_a: f64,
 }
 
 /// The tension state at a Gauss point.
@@ -56,6 +58,7 @@ impl Profile {
                 v_end_n: ve,
             });
         }
+        let vertical = cat.h_n <= VERTICAL_H_RATIO * vmin;
         Ok(Profile {
             l0,
             ea: cat.ea_n,
@@ -64,7 +67,12 @@ impl Profile {
             va,
             ve,
             mu,
-            vertical: cat.h_n <= VERTICAL_H_RATIO * vmin,
+            vertical,
+            asinh_a: if vertical {
+                0.0
+            } else {
+                (va / cat.h_n).asinh()
+            },
         })
     }
 
@@ -98,8 +106,7 @@ impl Profile {
             }
         } else {
             // (H/w)(sinh(a + x) − sinh a) = (2H/w) cosh(a + x/2) sinh(x/2)
-            let a = (self.va / self.h).asinh();
-            2.0 * self.h / self.w * (a + 0.5 * x).cosh() * (0.5 * x).sinh()
+            2.0 * self.h / self.w * (self.asinh_a + 0.5 * x).cosh() * (0.5 * x).sinh()
         };
         s.clamp(0.0, self.l0)
     }
@@ -122,7 +129,7 @@ impl Profile {
         b2: f64,
         sin12: f64,
         l: f64,
-    ) -> (Segment, f64) {
+    ) -> (Segment, [f64; 2]) {
         let (h, t1, t2) = (self.h, g1.t, g2.t);
         let tr = b1 / t1 + b2 / t2;
         let det = b1 * b2 * sin12 * sin12 / (t1 * t2);
@@ -132,7 +139,7 @@ impl Profile {
         let (c1, c2) = (b1 / (t1 * t1 * t1), b2 / (t2 * t2 * t2));
         let pq = c1 * (g1.v - h) * (g1.v + h) + c2 * (g2.v - h) * (g2.v + h);
         let r2 = -2.0 * h * (c1 * g1.v + c2 * g2.v);
-        let angle = 0.5 * r2.atan2(pq) - std::f64::consts::FRAC_PI_2;
+        let axis = axial_direction(pq, r2);
         let inv_ea = 1.0 / self.ea;
         let c = [inv_ea + small, inv_ea + big, inv_ea + tr];
         let mu = self.mu;
@@ -142,8 +149,28 @@ impl Profile {
             k: c.map(|ci| 1.0 / (ci * l)),
             mul: mu * l,
         };
-        (seg, angle)
+        (seg, axis)
     }
+}
+
+/// The unit axial direction (cos, sin) in (h, up), perpendicular to the major axis of
+/// angle ψ = ½ atan2(r2, pq) ∈ (−π/2, π/2], from cos 2ψ, sin 2ψ by the half-angle formulas
+/// on the branch without cancellation (no trigonometric call): axial = (sin ψ, −cos ψ).
+fn axial_direction(pq: f64, r2: f64) -> [f64; 2] {
+    let rho = pq.hypot(r2);
+    if !(rho > 0.0) {
+        // No preferred transverse direction (not reached for T > 0): horizontal axis.
+        return [1.0, 0.0];
+    }
+    let (c2, s2) = (pq / rho, r2 / rho);
+    let (c, s) = if c2 >= 0.0 {
+        let c = (0.5 * (1.0 + c2)).sqrt();
+        (c, s2 / (2.0 * c))
+    } else {
+        let s = (0.5 * (1.0 - c2)).sqrt().copysign(s2);
+        (s2 / (2.0 * s), s)
+    };
+    [s, -c]
 }
 
 /// asinh x − asinh y for x ≥ y with x − y = dxy given, without cancellation.

@@ -222,3 +222,62 @@ fn run(
         below,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cable::sagged::{SagContinuous, SagContinuousParams};
+    use crate::sag::Catenary;
+
+    /// The symmetric form with every kernel valid at λ agrees with the transfer form (an
+    /// independent algebra of the same sub-segments): S to 1e-11 of the stiffness scale plus
+    /// |S|, dS/dλ to 1e-9 of the mass scale plus |dS| (digits lost near the poles the sweep
+    /// passes),
+    /// the count exactly. λ sweeps up to where the largest sub-segment phase is 1.5.
+    #[test]
+    fn symmetric_form_matches_transfer_form() {
+        let cat = Catenary {
+            l0_m: 4.0,
+            ea_n: 5e4,
+            w_n_m: 0.981,
+            h_n: 40.0,
+            v_anchor_n: -1.2,
+        };
+        let mu = 0.1;
+        let mut sc = SagContinuous::new(SagContinuousParams::default());
+        for steps in [3usize, 40] {
+            sc.set_with_steps(&cat, mu, steps).unwrap();
+            let segs = &sc.segs[..sc.n_seg];
+            let top = Z_MID / sc.q_max[1];
+            let scale = segs.iter().map(|g| g.k[0]).fold(0.0, f64::max);
+            let mass = mu * cat.l0_m;
+            for i in 0..=300 {
+                let lam = top * i as f64 / 300.0;
+                let (za, zt) = (lam * sc.q_max[0], lam * sc.q_max[1]);
+                let (s_in, ds_in, b_in) = transfer::eval_in(segs, sc.final_rot, lam);
+                let (s_out, ds_out, b_out) = transfer::eval_out(segs, lam);
+                let mut kernels: Vec<SagChainEval> =
+                    vec![run(segs, sc.final_rot, lam, kernel::mid, kernel::mid)];
+                if zt <= Z_SMALL {
+                    kernels.push(run(segs, sc.final_rot, lam, kernel::small, kernel::small));
+                }
+                if za <= Z_TINY {
+                    kernels.push(run(segs, sc.final_rot, lam, kernel::tiny, kernel::mid));
+                }
+                for e in kernels {
+                    assert_eq!(e.below, b_in + b_out, "M {steps} λ {lam}");
+                    for j in 0..3 {
+                        let tol = 1e-11 * (scale + s_in[j].abs());
+                        assert!((e.s_in[j] - s_in[j]).abs() <= tol, "M {steps} λ {lam} S{j}");
+                        let tol = 1e-9 * (mass + ds_in[j].abs());
+                        assert!((e.ds_in[j] - ds_in[j]).abs() <= tol, "λ {lam} dS{j}");
+                    }
+                    let tol = 1e-11 * (scale + s_out.abs());
+                    assert!((e.s_out - s_out).abs() <= tol, "λ {lam} s_out");
+                    let tol = 1e-9 * (mass + ds_out.abs());
+                    assert!((e.ds_out - ds_out).abs() <= tol, "λ {lam} ds_out");
+                }
+            }
+        }
+    }
+}
