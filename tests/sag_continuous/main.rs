@@ -334,7 +334,7 @@ fn count_steps_at_poles_and_derivative() {
 }
 
 /// ns per eval (in plane + out of plane) at Irvine's λ² ≈ 1, 100, 1e4, for rel_tol 1e-7
-/// and 1e-9, next to the taut continuous chain's eval (axial + transverse) and the sagged
+/// (max_halfwaves 1 and 4) and 1e-9 (4), next to the taut continuous chain's eval (axial + transverse) and the sagged
 /// FEM chain (`SagChain::set_fem`) at N = 40 and 160, all in the same run, at
 /// λ = 0.7 λ₁ and at λ = 0.9 λ₄ (λ_k the continuous cable's blocked eigenvalues). No timed
 /// assert.
@@ -399,10 +399,10 @@ fn timing_per_eval() {
             let b = time(&|l| fem.eval(l).s_out, 0.9 * l4);
             line += &format!(" FEM N {n}: {a:.0} | {b:.0};");
         }
-        for tol in [1e-7, 1e-9] {
+        for (tol, n_hw) in [(1e-7, 1.0), (1e-7, 4.0), (1e-9, 4.0)] {
             let params = SagContinuousParams {
                 rel_tol: tol,
-                ..SagContinuousParams::default()
+                max_halfwaves: n_hw,
             };
             let mut sc = SagContinuous::new(params);
             let mesh = sc.set(&cat, mu).unwrap();
@@ -417,7 +417,9 @@ fn timing_per_eval() {
             let a = time(&|l| sc.eval(l).s_out, 0.7 * l1);
             let b = time(&|l| sc.eval(l).s_out, 0.9 * l4);
             let m = mesh.steps;
-            line += &format!(" cont {tol:.0e} (M {m}, set {set_ns:.0} ns): {a:.0} | {b:.0};");
+            line += &format!(
+                " cont {tol:.0e} n_hw {n_hw} (M {m}, set {set_ns:.0} ns): {a:.0} | {b:.0};"
+            );
         }
         eprintln!("{line}");
     }
@@ -460,4 +462,43 @@ fn error_constant_study() {
         eprintln!("{line}");
     }
     eprintln!("largest C (errors in 1e-12 … 1e-3): {worst:.2e}");
+}
+
+/// ns per eval against the number of steps M (fixed cost and cost per sub-segment), on the
+/// level λ² ≈ 100 cable at 0.7 λ₁. No timed assert.
+#[test]
+#[ignore]
+fn timing_against_steps() {
+    use std::hint::black_box;
+    use std::time::Instant;
+    let cat = Catenary {
+        l0_m: 5.0,
+        ea_n: 5e4,
+        w_n_m: 3.16,
+        h_n: 50.0,
+        v_anchor_n: -2.5 * 3.16,
+    };
+    let mu = cat.w_n_m / G;
+    let mut sc = SagContinuous::new(SagContinuousParams::default());
+    sc.set(&cat, mu).unwrap();
+    let lam = 0.7 * solver_eigenvalue(&sc, 1);
+    for m in [1usize, 2, 4, 8, 16, 32, 64, 128] {
+        sc.set_with_steps(&cat, mu, m).unwrap();
+        let mut best = f64::INFINITY;
+        for _ in 0..10 {
+            let t = Instant::now();
+            let mut acc = 0.0;
+            for i in 0..2000 {
+                acc += sc
+                    .eval(black_box(lam * (1.0 + 1e-4 * (i % 7) as f64)))
+                    .s_out;
+            }
+            black_box(acc);
+            best = best.min(t.elapsed().as_nanos() as f64 / 2000.0);
+        }
+        eprintln!(
+            "M {m:3}: {best:.0} ns/eval, {:.1} ns per sub-segment",
+            best / (2 * m) as f64
+        );
+    }
 }

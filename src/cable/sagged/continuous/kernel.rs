@@ -6,15 +6,15 @@
 //! All are entire (C, Sn, Sp) or analytic for |z| < π² (x, h): on |z| ≤ `Z_MID` they are
 //! summed as truncated Taylor polynomials (no sqrt, no trigonometry) whose first omitted
 //! term is below 1e-17, i.e. exact to rounding; the evaluation picks, per direction, the
-//! shortest polynomial valid for the largest |z| of the cable (`Z_TINY`: x, h directly, no
-//! division; `Z_SMALL`, `Z_MID`: C, Sn, Sp, one division). Beyond, `general` uses the
+//! shortest polynomial valid for the largest |z| of the cable (`Z_TINY`, `Z_SMALL`: the
+//! series of x, h directly, no division; `Z_MID`: C, Sn, Sp, one division). Beyond, `general` uses the
 //! library's trigonometry (or exp for z < 0).
 
-/// The division-free series of x and h hold for |z| ≤ this (first omitted terms, from the
-/// series' coefficients ~2/π²ᵏ: below 4e-3⁶ · 3e-6 < 1e-20, and 1e-17 for their derivatives).
+/// The 6-term series of x and h (`tiny`) hold for |z| ≤ this.
 pub(super) const Z_TINY: f64 = 4e-3;
-/// Short polynomials hold for |z| ≤ this (first omitted terms: C 0.1⁷/14! < 1.2e-18,
-/// Sn 0.1⁷/15! < 1e-19, Sp 7·0.1⁶/15! < 6e-19).
+/// The 10-term series of x and h (`small`) hold for |z| ≤ this, as do the short
+/// polynomials of C, Sn, Sp (first omitted terms: C 0.1⁷/14! < 1.2e-18, Sn 0.1⁷/15! <
+/// 1e-19, Sp 7·0.1⁶/15! < 6e-19) that cross-check them.
 pub(super) const Z_SMALL: f64 = 0.1;
 /// Long polynomials hold for |z| ≤ this (φ ≤ 1.5, the mesh's phase bound per sub-segment at
 /// λ_max; first omitted terms: C 2.25¹¹/22! < 6.7e-18, Sn 2.25¹¹/23! < 3e-19,
@@ -35,32 +35,65 @@ pub(super) struct Xh {
     pub dh: f64,
 }
 
-/// |z| ≤ Z_TINY: the Taylor series (no division)
-/// h = 1 + z/6 + 7z²/360 + 31z³/15120 + 127z⁴/604800 + 73z⁵/3421440,
-/// x = −(z/2 + z²/24 + z³/240 + 17z⁴/40320 + 31z⁵/725760).
+/// Terms of the division-free series of h and x (to z⁹).
+const XH_TERMS: usize = 10;
+
+/// The Taylor coefficients of h = 1/Sn and x = (C − 1)/Sn, by series division of the
+/// factorial series at compile time: h₀ = 1, hₙ = −Σⱼ₌₁ⁿ sⱼ hₙ₋ⱼ; xₙ = Σⱼ₌₁ⁿ cⱼ hₙ₋ⱼ
+/// (sⱼ = (−1)ʲ/(2j+1)!, cⱼ = (−1)ʲ/(2j)!): h = 1 + z/6 + 7z²/360 + …,
+/// x = −(z/2 + z²/24 + z³/240 + …). Both have radius π² (φ = π) and coefficients
+/// ≈ 2/π²ⁿ (h) and 4/π²ⁿ (x).
+const XH_COEF: [[f64; XH_TERMS]; 2] = {
+    let mut h = [0.0; XH_TERMS];
+    let mut x = [0.0; XH_TERMS];
+    h[0] = 1.0;
+    let mut n = 1;
+    while n < XH_TERMS {
+        let (mut hn, mut xn) = (0.0, 0.0);
+        let mut j = 1;
+        while j <= n {
+            hn -= S_COEF[j] * h[n - j];
+            xn += C_COEF[j] * h[n - j];
+            j += 1;
+        }
+        h[n] = hn;
+        x[n] = xn;
+        n += 1;
+    }
+    [h, x]
+};
+
+/// x, h and their derivatives from the first `N` terms of their series (no division).
+#[inline(always)]
+fn series<const N: usize>(z: f64) -> Xh {
+    let (hc, xc) = (&XH_COEF[0][..N], &XH_COEF[1][..N]);
+    let d = |c: &[f64]| {
+        c.iter()
+            .enumerate()
+            .skip(1)
+            .rev()
+            .fold(0.0, |acc, (k, &ck)| acc * z + k as f64 * ck)
+    };
+    Xh {
+        x: horner(xc, z),
+        h: horner(hc, z),
+        dx: d(xc),
+        dh: d(hc),
+    }
+}
+
+/// |z| ≤ Z_TINY: the series to z⁵ (first omitted terms ≈ 4 (z/π²)⁶ < 2e-20; derivatives
+/// 24 z⁵/π¹² < 3e-17).
 #[inline(always)]
 pub(super) fn tiny(z: f64) -> Xh {
-    const H: [f64; 6] = [
-        1.0,
-        1.0 / 6.0,
-        7.0 / 360.0,
-        31.0 / 15120.0,
-        127.0 / 604800.0,
-        73.0 / 3421440.0,
-    ];
-    const X: [f64; 6] = [
-        0.0,
-        -1.0 / 2.0,
-        -1.0 / 24.0,
-        -1.0 / 240.0,
-        -17.0 / 40320.0,
-        -31.0 / 725760.0,
-    ];
-    let h = horner(&H, z);
-    let x = horner(&X, z);
-    let dh = H[1] + z * (2.0 * H[2] + z * (3.0 * H[3] + z * (4.0 * H[4] + z * 5.0 * H[5])));
-    let dx = X[1] + z * (2.0 * X[2] + z * (3.0 * X[3] + z * (4.0 * X[4] + z * 5.0 * X[5])));
-    Xh { x, h, dx, dh }
+    series::<6>(z)
+}
+
+/// |z| ≤ Z_SMALL: the series to z⁹ (first omitted terms ≈ 4 (z/π²)¹⁰ < 5e-20; derivatives
+/// 40 z⁹/π²⁰ < 5e-18).
+#[inline(always)]
+pub(super) fn small(z: f64) -> Xh {
+    series::<XH_TERMS>(z)
 }
 
 /// x, h and derivatives from C − 1, Sn, Sp (one division): h′ = −Sp/Sn²,
@@ -78,9 +111,9 @@ fn xh(f: Csp) -> Xh {
     }
 }
 
-/// |z| ≤ Z_SMALL.
-#[inline(always)]
-pub(super) fn small(z: f64) -> Xh {
+/// |z| ≤ Z_SMALL, through C, Sn, Sp (the cross-check of `small`).
+#[cfg(test)]
+pub(super) fn small_div(z: f64) -> Xh {
     xh(small_csp(z))
 }
 
@@ -102,7 +135,7 @@ pub(super) struct Csp {
 }
 
 /// Σ (−z)ⁿ/(2n)!, Σ (−z)ⁿ/(2n+1)!, Σ n (−1)ⁿ zⁿ⁻¹/(2n+1)! to z⁶ (|z| ≤ Z_SMALL).
-#[inline(always)]
+#[cfg(test)]
 pub(super) fn small_csp(z: f64) -> Csp {
     let cm1 = z
         * (-1.0 / 2.0
@@ -256,18 +289,23 @@ mod tests {
         }
     }
 
-    /// The three x, h kernels agree where their ranges overlap (z ∈ [0, Z_TINY], both signs):
-    /// x, h to 3e-16 of h, x′ and h′ to 3e-16 (no cancellation on either side).
+    /// The x, h kernels agree where their ranges overlap (z ∈ [−Z_SMALL, Z_SMALL]; the
+    /// division-free series against C, Sn, Sp and a division): x, h, x′, h′ to 4e-16
+    /// (a few roundings, no cancellation on either side).
     #[test]
     fn kernels_agree_on_overlaps() {
-        for i in 0..=200 {
-            for z in [Z_TINY * i as f64 / 200.0, -Z_TINY * i as f64 / 200.0] {
-                let t = tiny(z);
-                for k in [small(z), mid(z)] {
-                    assert!((k.x - t.x).abs() <= 3e-16, "z {z} x");
-                    assert!((k.h - t.h).abs() <= 3e-16, "z {z} h");
-                    assert!((k.dx - t.dx).abs() <= 3e-16, "z {z} x′");
-                    assert!((k.dh - t.dh).abs() <= 3e-16, "z {z} h′");
+        for i in 0..=400 {
+            for z in [Z_SMALL * i as f64 / 400.0, -Z_SMALL * i as f64 / 400.0] {
+                let t = small(z);
+                let mut others = vec![small_div(z), mid(z)];
+                if z.abs() <= Z_TINY {
+                    others.push(tiny(z));
+                }
+                for k in others {
+                    assert!((k.x - t.x).abs() <= 4e-16, "z {z} x");
+                    assert!((k.h - t.h).abs() <= 4e-16, "z {z} h");
+                    assert!((k.dx - t.dx).abs() <= 4e-16, "z {z} x′");
+                    assert!((k.dh - t.dh).abs() <= 4e-16, "z {z} h′");
                 }
             }
         }

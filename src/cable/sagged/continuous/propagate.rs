@@ -127,6 +127,7 @@ pub(super) fn eval(
         (0, 1) => run(segs, final_rot, lambda, kernel::tiny, kernel::small),
         (0, 2) => run(segs, final_rot, lambda, kernel::tiny, kernel::mid),
         (1, 1) => run(segs, final_rot, lambda, kernel::small, kernel::small),
+        (1, 2) => run(segs, final_rot, lambda, kernel::small, kernel::mid),
         (a, t) if a <= 2 && t <= 2 => run(segs, final_rot, lambda, kernel::mid, kernel::mid),
         _ => {
             // Beyond the polynomials (or λ not finite): the transfer form.
