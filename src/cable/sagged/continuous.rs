@@ -310,15 +310,15 @@ impl SagContinuous {
 
     /// Steps that would satisfy the phase and axial-margin checks on the current cut of m.
     fn steps_needed(&self, p: &Profile, m: usize, lmax: f64) -> usize {
-        let mut phase_ratio = 0.0f64;
-        let mut margin_ratio = 0.0f64;
+        // Largest φ² = λ q_t and smallest c_a EA (c_a = 1/(k_a ℓ), ℓ = mul/μ); one sqrt each.
+        let (mut q_t, mut ca_min) = (0.0f64, f64::INFINITY);
         for g in &self.segs[..self.n_seg] {
-            // φ² = λ q_t; c_a = 1/(k_a ℓ) with ℓ = mul/μ.
-            phase_ratio = phase_ratio.max((lmax * g.q[1]).sqrt() / PHASE_PER_SEGMENT);
-            let ca_ea = p.mu / (g.k[0] * g.mul) * p.ea;
-            // c_a = 1/EA − O(δ²): the deficit shrinks as 1/M².
-            margin_ratio = margin_ratio.max(((1.0 - ca_ea).max(0.0) / (1.0 - AXIAL_MARGIN)).sqrt());
+            q_t = q_t.max(g.q[1]);
+            ca_min = ca_min.min(p.mu / (g.k[0] * g.mul) * p.ea);
         }
+        let phase_ratio = (lmax * q_t).sqrt() / PHASE_PER_SEGMENT;
+        // c_a = 1/EA − O(δ²): the deficit shrinks as 1/M².
+        let margin_ratio = ((1.0 - ca_min).max(0.0) / (1.0 - AXIAL_MARGIN)).sqrt();
         let r = phase_ratio.max(margin_ratio);
         if r <= 1.0 {
             m

@@ -157,7 +157,8 @@ impl Profile {
 /// angle ψ = ½ atan2(r2, pq) ∈ (−π/2, π/2], from cos 2ψ, sin 2ψ by the half-angle formulas
 /// on the branch without cancellation (no trigonometric call): axial = (sin ψ, −cos ψ).
 fn axial_direction(pq: f64, r2: f64) -> [f64; 2] {
-    let rho = pq.hypot(r2);
+    // pq, r2 ~ 1/T: their squares stay far inside the f64 range for any tension.
+    let rho = (pq * pq + r2 * r2).sqrt();
     if !(rho > 0.0) {
         // No preferred transverse direction (not reached for T > 0): horizontal axis.
         return [1.0, 0.0];
