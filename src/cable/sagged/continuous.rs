@@ -104,8 +104,9 @@ use crate::sag::Catenary;
 use profile::Profile;
 
 /// Most Magnus steps of one cable (2 sub-segments each): the fixed capacity of the solver.
-/// By the error model, 128 steps keep 1e-9 for ν·n_hw ≤ 0.7 (ν ≈ 0.17 up to the 4th
-/// transverse half-wave); slacker cables get the cap and a larger error (`capped`).
+/// By the error model, 128 steps keep 1e-9 for ν·n_hw ≤ 0.37 (ν ≈ 0.09 up to the 4th
+/// transverse half-wave) and 1e-7 for ν·n_hw ≤ 3.7; slacker cables get the cap and a
+/// larger error (`capped`).
 pub const SAG_CONT_MAX_STEPS: usize = 128;
 const MAX_SEGMENTS: usize = 2 * SAG_CONT_MAX_STEPS;
 
