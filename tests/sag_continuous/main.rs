@@ -1,9 +1,13 @@
 //! The continuous sagged cable (`cablevib::cable::sagged::SagContinuous`) against an
 //! independent integration (rk4.rs: RK4 + Richardson on the brief's K, no shared code), the
-//! closed-form straight string/bar (`cable::Chain`), its
-//! own derivative and count; no allocation in set/eval; timings (#[ignore]).
+//! closed-form straight string/bar (`cable::Chain`), Irvine's shallow-cable theory
+//! (irvine.rs), the sagged FEM chain's 1/N² convergence (fem.rs), its own derivative and
+//! count; no allocation in set/eval; timings (timing.rs, #[ignore]).
 
+mod fem;
+mod irvine;
 mod rk4;
+mod timing;
 
 use cablevib::alloc_count::{thread_allocations, CountingAlloc};
 use cablevib::cable::sagged::{SagContinuous, SagContinuousParams};
@@ -12,7 +16,7 @@ use cablevib::sag::Catenary;
 #[global_allocator]
 static A: CountingAlloc = CountingAlloc;
 
-const G: f64 = 9.81;
+pub const G: f64 = 9.81;
 
 /// Named test cables (catenary, μ): taut to very slack, anchor below/above, vertical.
 pub fn cables() -> Vec<(&'static str, Catenary, f64)> {
@@ -105,50 +109,53 @@ fn reference_near(cat: &Catenary, mu: f64, l: f64) -> (f64, f64) {
 }
 
 /// Relative eigenvalue error of the rule's mesh on every test cable, for the blocked
-/// eigenvalues below λ_max (at most 8): ≤ 1e-9 (the requirement, the rule's tol) where the
-/// rule was not capped; where it was (the slackest cables), ≤ the error model's bound at
-/// the cap, 10 · C ν² Φ²/M⁴ with C = 0.05 and Φ = n_hw π (at least 1e-8). The reference's own Richardson
-/// estimate must be ≤ 1e-11 relative for the check to mean anything.
+/// eigenvalues below λ_max (at most 8), at rel_tol 1e-9 (offline default) and 1e-7 (real
+/// time): ≤ rel_tol where the rule was not capped; where it was (the slackest cables at
+/// 1e-9), ≤ the error model's value at the cap, C ν² Φ²/M⁴ with C = 0.2 and Φ = n_hw π.
+/// The reference's own Richardson estimate must be ≤ 1e-11 relative for the check to mean
+/// anything.
 #[test]
 fn eigenvalues_match_independent_integration() {
-    let mut worst = 0.0f64;
-    for (name, cat, mu) in cables() {
-        let mut sc = SagContinuous::new(SagContinuousParams::default());
-        let mesh = sc.set(&cat, mu).unwrap();
-        let phase = 4.0 * std::f64::consts::PI;
-        let tol = if mesh.capped {
-            // The fitted model is good to a factor of a few (see convergence study).
-            (10.0 * 0.05 * (mesh.variation * phase).powi(2) / (mesh.steps as f64).powi(4)).max(1e-8)
-        } else {
-            // The requirement is 1e-9; the symmetric in-plane modes of sagging cables miss it
-            // by up to ~5× at the rule's M (its error constant is fitted on too few cables):
-            // the check holds the measured state, the report says so.
-            1e-8
-        };
-        let mut line = String::new();
-        for k in 1..=8 {
-            let l = solver_eigenvalue(&sc, k);
-            if l > mesh.lambda_max_rad2_s2 {
-                break;
+    for rel_tol in [1e-9, 1e-7] {
+        let mut worst = 0.0f64;
+        for (name, cat, mu) in cables() {
+            let params = SagContinuousParams {
+                rel_tol,
+                ..SagContinuousParams::default()
+            };
+            let mut sc = SagContinuous::new(params);
+            let mesh = sc.set(&cat, mu).unwrap();
+            let phase = 4.0 * std::f64::consts::PI;
+            let tol = if mesh.capped {
+                0.2 * (mesh.variation * phase).powi(2) / (mesh.steps as f64).powi(4)
+            } else {
+                rel_tol
+            };
+            let mut line = String::new();
+            for k in 1..=8 {
+                let l = solver_eigenvalue(&sc, k);
+                if l > mesh.lambda_max_rad2_s2 {
+                    break;
+                }
+                let (r, est) = reference_near(&cat, mu, l);
+                assert!(est <= 1e-11 * r, "{name} k {k}: reference error {est}");
+                let err = (l - r).abs() / r;
+                line += &format!(" {err:.1e}");
+                worst = worst.max(err);
+                assert!(
+                    err <= tol,
+                    "{name} k {k}: {l} vs {r} ({err:.2e} > {tol:.1e})"
+                );
             }
-            let (r, est) = reference_near(&cat, mu, l);
-            assert!(est <= 1e-11 * r, "{name} k {k}: reference error {est}");
-            let err = (l - r).abs() / r;
-            line += &format!(" {err:.1e}");
-            worst = worst.max(err);
-            assert!(
-                err <= tol,
-                "{name} k {k}: {l} vs {r} ({err:.2e} > {tol:.1e})"
+            let m = mesh.steps;
+            let lam2 = cat.irvine_lambda2();
+            eprintln!(
+                "rel_tol {rel_tol:.0e} {name}: λ² {lam2:.2e}, M {m} (capped {}, tol {tol:.1e}):{line}",
+                mesh.capped
             );
         }
-        let m = mesh.steps;
-        let lam2 = cat.irvine_lambda2();
-        eprintln!(
-            "{name}: λ² {lam2:.2e}, M {m} (capped {}, tol {tol:.1e}):{line}",
-            mesh.capped
-        );
+        eprintln!("rel_tol {rel_tol:.0e}: worst relative eigenvalue error {worst:.2e}");
     }
-    eprintln!("worst relative eigenvalue error {worst:.2e}");
 }
 
 /// The convergence study: relative error of the first and third blocked eigenvalues at
@@ -273,6 +280,7 @@ fn set_and_eval_allocate_nothing() {
             let e = sc.eval(10.0 * i as f64);
             acc += e.s_in[0] + e.s_out;
         }
+        acc += sc.static_eval().s_in[0];
         let bad = Catenary {
             h_n: f64::NAN,
             ..*cat
@@ -328,58 +336,41 @@ fn count_steps_at_poles_and_derivative() {
     }
 }
 
-/// ns per eval (in plane + out of plane) at Irvine's λ² ≈ 1, 100, 1e4, next to the taut
-/// continuous chain's eval (axial + transverse) in the same run. No timed assert.
+/// The error model's constant, measured: for every test cable, M = 8 … 64 steps and the
+/// blocked eigenvalues below λ_max, C = err · M⁴ / (ν² Φ²) with Φ = n_hw π √(λ/λ_max) the
+/// mode's transverse phase. Printed (the rule's C_ERR must bound it); no assert.
 #[test]
 #[ignore]
-fn timing_per_eval() {
-    use cablevib::cable::{Chain, ChainKind};
-    use nalgebra::Matrix3;
-    use std::time::Instant;
-    let level = |ea: f64, w: f64, h: f64| Catenary {
-        l0_m: 5.0,
-        ea_n: ea,
-        w_n_m: w,
-        h_n: h,
-        v_anchor_n: -2.5 * w,
-    };
-    let cases = [
-        ("λ² ≈ 1", level(5e4, 0.316, 50.0)),
-        ("λ² ≈ 100", level(5e4, 3.16, 50.0)),
-        ("λ² ≈ 1e4", level(1e5, 2.0, 10.0)),
-    ];
-    let chain = |k: f64| Chain {
-        kind: ChainKind::Continuous {
-            k_total: k,
-            m_total: 0.5,
-        },
-        mult: 1,
-        proj: Matrix3::identity(),
-    };
-    let (bar, string) = (chain(1e4), chain(10.0));
-    const N: usize = 20000;
-    let t0 = Instant::now();
-    let mut acc = 0.0;
-    for i in 0..N {
-        let lam = 50.0 + (i % 7) as f64;
-        acc += bar.eval(lam).s + string.eval(lam).s;
-    }
-    let taut = t0.elapsed().as_nanos() as f64 / N as f64;
-    for (name, cat) in cases {
-        let mu = cat.w_n_m / G;
+fn error_constant_study() {
+    let mut worst = 0.0f64;
+    for (name, cat, mu) in cables() {
         let mut sc = SagContinuous::new(SagContinuousParams::default());
-        let t1 = Instant::now();
-        let mesh = sc.set(&cat, mu).unwrap();
-        let set_ns = t1.elapsed().as_nanos();
-        let l1 = 0.7 * solver_eigenvalue(&sc, 1);
-        let t2 = Instant::now();
-        for i in 0..N {
-            acc += sc.eval(l1 * (1.0 + 1e-3 * (i % 7) as f64)).s_out;
+        let mesh = sc.set_with_steps(&cat, mu, 128).unwrap();
+        let nu = mesh.variation;
+        let mut refs = Vec::new();
+        for k in 1..=8 {
+            let l = solver_eigenvalue(&sc, k);
+            if l > mesh.lambda_max_rad2_s2 {
+                break;
+            }
+            refs.push(reference_near(&cat, mu, l).0);
         }
-        let ns = t2.elapsed().as_nanos() as f64 / N as f64;
-        let lam2 = cat.irvine_lambda2();
-        let m = mesh.steps;
-        eprintln!("{name} (λ² {lam2:.2e}, M {m}): {ns:.0} ns/eval, set {set_ns} ns; taut chain pair {taut:.0} ns/eval");
+        let mut line = format!("{name} (ν {nu:.3}):");
+        for m in [8usize, 16, 32, 64] {
+            let mesh = sc.set_with_steps(&cat, mu, m).unwrap();
+            line += &format!(" M {m}:");
+            for (k, &r) in refs.iter().enumerate() {
+                let l = solver_eigenvalue(&sc, k as u32 + 1);
+                let err = (l - r).abs() / r;
+                let phi = 4.0 * std::f64::consts::PI * (r / mesh.lambda_max_rad2_s2).sqrt();
+                let c = err * (m as f64).powi(4) / (nu * nu * phi * phi);
+                if err > 1e-12 && err < 1e-3 {
+                    worst = worst.max(c);
+                }
+                line += &format!(" {c:.1e}");
+            }
+        }
+        eprintln!("{line}");
     }
-    assert!(acc.is_finite());
+    eprintln!("largest C (errors in 1e-12 … 1e-3): {worst:.2e}");
 }

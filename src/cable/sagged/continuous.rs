@@ -33,9 +33,10 @@
 //! a *uniform straight sub-segment* of length h/2, mass μ and constant compliance
 //! C̃ = 2(α₁ C₁ + α₂ C₂) (resp. 2(α₂ C₁ + α₁ C₂)): the discrete model is itself a continuous
 //! self-adjoint cable with λ-independent piecewise-constant K̃ = C̃⁻¹ > 0. So
-//! - its S(λ), dS/dλ and blocked count are exact for that model (closed-form trigonometry
-//!   per sub-segment, Riccati recursion, Wittrick–Williams count: see `propagate`), and
-//!   the count jumps exactly where S has its poles, at any λ;
+//! - its S(λ), dS/dλ and blocked count are exact for that model (each sub-segment's
+//!   closed-form dynamic stiffness, a symmetric 2 × 2 Riccati recursion with one division
+//!   per node, Wittrick–Williams count: see `propagate`), and the count jumps exactly where
+//!   S has its poles, at any λ;
 //! - its eigenvalues converge to the true ones as O(h⁴) (the integrator's order);
 //! - a uniform straight cable (w = 0) is reproduced exactly (every sub-segment is the cable).
 //!
@@ -44,6 +45,19 @@
 //! sin(θ₂ − θ₁) = H w (s₂ − s₁)/(T₁T₂), so c_a = 1/EA + det/ν_max has no cancellation.
 //! α₂ < 0 makes det N̄ < 0: c_a < 1/EA by ~ 0.03 δ²/T (δ the tangent's turn between the
 //! Gauss points); the mesh keeps c_a ≥ `AXIAL_MARGIN`/EA.
+//!
+//! ## Cost
+//!
+//! `set` precomputes everything λ-independent per sub-segment: the relative rotation of its
+//! principal frame (cos, sin, from half-angle formulas: no trigonometric call), q = μ c ℓ²
+//! and k = 1/(c ℓ) per direction, μ ℓ, and the largest q of the axial and of the transverse
+//! directions. `eval` then picks, once, per direction, the shortest polynomial kernel valid
+//! for the largest z = λ q of the cable (`kernel`: z ≤ 4e-3 a division-free series,
+//! ≤ 0.1 and ≤ 2.25 Taylor polynomials of cos √z, sin √z/√z; all exact to rounding), so the
+//! inner loop has no trigonometry, no sqrt and no branch other than the count; λ beyond the
+//! polynomials (a sub-segment phase above 1.5, i.e. above λ_max) falls back to the
+//! transfer-matrix form with the library's trigonometry (`transfer`). In plane and out of
+//! plane run in one loop (their recursions are independent: the processor overlaps them).
 //!
 //! ## Steps (error model)
 //!
@@ -56,12 +70,19 @@
 //! (≈ π per half-wave),
 //!
 //! ```text
-//!   error ≈ C · (Δν)² · (Φ/M)²,   C ≈ 1.5e-3 … 2e-3 (out of plane, string-like in plane),
-//!                                  C ≲ 0.05 (symmetric in-plane modes near Irvine's crossover)
+//!   error ≈ C · (Δν)² · (Φ/M)²,   C ≈ 1.3e-3 … 3.4e-3 (out of plane, string-like in plane),
+//!                                  C ≲ 0.17 (symmetric in-plane modes, sag-stiffened)
 //! ```
 //!
 //! (the coefficient variation per step times the phase per step, squared: the frozen
-//! coefficients' error grows with the oscillation inside a step). The rule:
+//! coefficients' error grows with the oscillation inside a step; the symmetric in-plane
+//! modes are the most sensitive to the chain's total axial + geometric compliance, whose
+//! error the sub-segments' O(δ²) axial perturbation carries). The rule bounds all modes up
+//! to the n_hw-th transverse half-wave, so the first mode's error is typically far below
+//! tol: e.g. level cable, λ² ≈ 100, tol 1e-7: M = 75, measured errors ≤ 3.5e-8 over the
+//! first seven modes, 4.4e-11 on the first. A real-time caller that only needs the
+//! robot's first frequency sets n_hw to the half-waves its λ reaches (M ∝ √n_hw) and
+//! tol = 1e-7 (M ∝ tol^(−¼)). The rule:
 //!
 //! ```text
 //!   M = max(⌈(C_ERR ν² (n_hw π)² / tol)^¼⌉, ⌈ν / NU_PER_STEP⌉,
@@ -73,24 +94,30 @@
 //! evaluation stays exact for the discrete model (count and poles consistent), with an error
 //! that grows with λ.
 
+mod kernel;
+mod profile;
 mod propagate;
+mod transfer;
 
 use super::SagChainEval;
 use crate::sag::Catenary;
+use profile::Profile;
 
 /// Most Magnus steps of one cable (2 sub-segments each): the fixed capacity of the solver.
-/// By the error model, 128 steps keep 1e-9 for ν·n_hw ≤ 0.7 (ν ≈ 0.17 up to the 4th
-/// transverse half-wave); slacker cables get the cap and a larger error (`capped`).
+/// By the error model, 128 steps keep 1e-9 for ν·n_hw ≤ 0.37 (ν ≈ 0.09 up to the 4th
+/// transverse half-wave) and 1e-7 for ν·n_hw ≤ 3.7; slacker cables get the cap and a
+/// larger error (`capped`).
 pub const SAG_CONT_MAX_STEPS: usize = 128;
 const MAX_SEGMENTS: usize = 2 * SAG_CONT_MAX_STEPS;
 
 /// Variation ν = ∫ w/T ds per step (rad) at least: the static (λ = 0) error ~ (Δν)⁴ EA/T.
 const NU_PER_STEP: f64 = 0.05;
-/// The fitted error constant: relative eigenvalue error ≈ C ν² Φ² / M⁴ (Φ the total
-/// transverse phase at λ). Measured 1.4e-3 … 1.9e-3 for out-of-plane and string-like
-/// in-plane modes, up to ~0.05 for the symmetric (sag-stiffened) in-plane modes of a
-/// shallow cable near Irvine's crossover (tests/sag_continuous: convergence study).
-const C_ERR: f64 = 0.05;
+/// The error constant: relative eigenvalue error ≈ C ν² Φ² / M⁴ (Φ the mode's total
+/// transverse phase). Measured (tests/sag_continuous `error_constant_study`, M = 8 … 64,
+/// nine cables from taut to nearly free): 1.3e-3 … 3.4e-3 for out-of-plane and string-like
+/// in-plane modes, up to 0.17 for the symmetric (sag-stiffened) in-plane modes; the rule
+/// takes the bound over all, Φ = n_hw π.
+const C_ERR: f64 = 0.2;
 /// Largest transverse phase across a sub-segment at λ_max (rad).
 const PHASE_PER_SEGMENT: f64 = 1.5;
 /// Smallest axial compliance of a sub-segment in units of 1/EA (see module docs).
@@ -98,9 +125,9 @@ const AXIAL_MARGIN: f64 = 0.5;
 /// Mesh cuts at most: each further one re-cuts with more steps when a check fails.
 const MESH_PASSES: usize = 4;
 /// Below this ν the cable is straight to rounding: equal steps in s.
-const NU_STRAIGHT: f64 = 1e-12;
+pub(super) const NU_STRAIGHT: f64 = 1e-12;
 /// H below this fraction of min(|V_a|, |V_e|): the cable is vertical (H = 0 formulas).
-const VERTICAL_H_RATIO: f64 = 1e-100;
+pub(super) const VERTICAL_H_RATIO: f64 = 1e-100;
 /// Magnus weights α₁,₂ = 1/4 ± √3/6 and the Gauss offset 1/(2√3).
 const ALPHA1: f64 = 0.25 + 0.288_675_134_594_812_9;
 const ALPHA2: f64 = 0.25 - 0.288_675_134_594_812_9;
@@ -127,7 +154,8 @@ pub enum SagContError {
 pub struct SagContinuousParams {
     /// Transverse half-waves along the cable up to which `rel_tol` is kept (sets λ_max).
     pub max_halfwaves: f64,
-    /// Relative eigenvalue error aimed at below λ_max (by the fitted error model).
+    /// Relative eigenvalue error aimed at below λ_max (by the error model): 1e-9 by default
+    /// (offline); 1e-7 suits the real-time path (the physics' own error is ~1e-3).
     pub rel_tol: f64,
 }
 
@@ -162,8 +190,8 @@ struct Segment {
     rot: [f64; 2],
     /// μ c ℓ² per direction (z = λ q), s²/rad².
     q: [f64; 3],
-    /// c ℓ per direction, m/N.
-    cl: [f64; 3],
+    /// 1/(c ℓ) per direction (the static stiffness), N/m.
+    k: [f64; 3],
     /// μ ℓ, kg.
     mul: f64,
 }
@@ -176,7 +204,11 @@ pub struct SagContinuous {
     n_seg: usize,
     /// (cos θ, sin θ) of the last sub-segment's axial direction in (h, up).
     final_rot: [f64; 2],
+    /// Largest q of the axial direction and of the others over the sub-segments (they pick
+    /// the kernels per λ), s²/rad².
+    q_max: [f64; 2],
     mesh: SagContMesh,
+    static_eval: SagChainEval,
 }
 
 impl SagContinuous {
@@ -187,6 +219,8 @@ impl SagContinuous {
             segs: [Segment::default(); MAX_SEGMENTS],
             n_seg: 0,
             final_rot: [1.0, 0.0],
+            q_max: [0.0; 2],
+            static_eval: SagChainEval::default(),
             mesh: SagContMesh {
                 steps: 0,
                 lambda_max_rad2_s2: 0.0,
@@ -220,26 +254,13 @@ impl SagContinuous {
 
     /// S(λ), dS/dλ and the blocked count at λ = ω² (rad²/s²). No allocation; O(M).
     pub fn eval(&self, lambda: f64) -> SagChainEval {
-        let segs = &self.segs[..self.n_seg];
-        let (s_in, ds_in, b_in) = propagate::eval_in(segs, self.final_rot, lambda);
-        let (s_out, ds_out, b_out) = propagate::eval_out(segs, lambda);
-        SagChainEval {
-            s_in,
-            ds_in,
-            s_out,
-            ds_out,
-            below: b_in + b_out,
-        }
+        propagate::eval(&self.segs[..self.n_seg], self.final_rot, self.q_max, lambda)
     }
 
-    /// In plane only: (S as [a, b, c] in (h, up), N/m; dS/dλ, kg; blocked count).
-    pub fn eval_in_plane(&self, lambda: f64) -> ([f64; 3], [f64; 3], u32) {
-        propagate::eval_in(&self.segs[..self.n_seg], self.final_rot, lambda)
-    }
-
-    /// Out of plane only: (s, N/m; ds/dλ, kg; blocked count).
-    pub fn eval_out_of_plane(&self, lambda: f64) -> (f64, f64, u32) {
-        propagate::eval_out(&self.segs[..self.n_seg], lambda)
+    /// The static end stiffness S(0) (computed by `set`): s_in (N/m, (h, up)) and s_out
+    /// (N/m); the derivatives are those at λ = 0.
+    pub fn static_eval(&self) -> SagChainEval {
+        self.static_eval
     }
 
     fn set_steps(
@@ -275,6 +296,10 @@ impl SagContinuous {
     }
 
     fn record(&mut self, m: usize, lmax: f64, capped: bool, nu: f64) -> SagContMesh {
+        self.q_max = self.segs[..self.n_seg].iter().fold([0.0f64; 2], |m, g| {
+            [m[0].max(g.q[0]), m[1].max(g.q[1]).max(g.q[2])]
+        });
+        self.static_eval = self.eval(0.0);
         self.mesh = SagContMesh {
             steps: m,
             lambda_max_rad2_s2: lmax,
@@ -286,15 +311,15 @@ impl SagContinuous {
 
     /// Steps that would satisfy the phase and axial-margin checks on the current cut of m.
     fn steps_needed(&self, p: &Profile, m: usize, lmax: f64) -> usize {
-        let mut phase_ratio = 0.0f64;
-        let mut margin_ratio = 0.0f64;
+        // Largest φ² = λ q_t and smallest c_a EA (c_a = 1/(k_a ℓ), ℓ = mul/μ); one sqrt each.
+        let (mut q_t, mut ca_min) = (0.0f64, f64::INFINITY);
         for g in &self.segs[..self.n_seg] {
-            // φ² = λ q_t; c_a = cl_a / ℓ with ℓ = mul/μ.
-            phase_ratio = phase_ratio.max((lmax * g.q[1]).sqrt() / PHASE_PER_SEGMENT);
-            let ca_ea = g.cl[0] * p.mu / g.mul * p.ea;
-            // c_a = 1/EA − O(δ²): the deficit shrinks as 1/M².
-            margin_ratio = margin_ratio.max(((1.0 - ca_ea).max(0.0) / (1.0 - AXIAL_MARGIN)).sqrt());
+            q_t = q_t.max(g.q[1]);
+            ca_min = ca_min.min(p.mu / (g.k[0] * g.mul) * p.ea);
         }
+        let phase_ratio = (lmax * q_t).sqrt() / PHASE_PER_SEGMENT;
+        // c_a = 1/EA − O(δ²): the deficit shrinks as 1/M².
+        let margin_ratio = ((1.0 - ca_min).max(0.0) / (1.0 - AXIAL_MARGIN)).sqrt();
         let r = phase_ratio.max(margin_ratio);
         if r <= 1.0 {
             m
@@ -306,7 +331,8 @@ impl SagContinuous {
     /// Cut the cable into m steps equal in ν; returns λ_max of the rule on this cut.
     fn cut(&mut self, p: &Profile, nu: f64, m: usize) -> f64 {
         let mut s0 = 0.0;
-        let mut prev_angle = 0.0;
+        // The previous sub-segment's axial direction (cos, sin) in (h, up).
+        let mut prev = [1.0, 0.0];
         let mut root_c = 0.0; // ∫ √c_o ds
         for j in 0..m {
             let s1 = if j + 1 == m {
@@ -323,179 +349,22 @@ impl SagContinuous {
                 .into_iter()
                 .enumerate()
             {
-                let (seg, angle) = p.segment(&g1, &g2, b1, b2, sin12, 0.5 * h);
-                let i = 2 * j + k;
-                let (sn, cs) = (angle - prev_angle).sin_cos();
-                self.segs[i] = Segment {
-                    rot: [cs, sn],
-                    ..seg
-                };
-                prev_angle = angle;
-                root_c += (seg.cl[2] / (0.5 * h)).sqrt() * 0.5 * h;
+                let (seg, axis) = p.segment(&g1, &g2, b1, b2, sin12, 0.5 * h);
+                // The rotation from the previous frame to this one: cos, sin of the difference.
+                let rot = [
+                    axis[0] * prev[0] + axis[1] * prev[1],
+                    axis[1] * prev[0] - axis[0] * prev[1],
+                ];
+                self.segs[2 * j + k] = Segment { rot, ..seg };
+                prev = axis;
+                // √c_o ℓ = √(c_o ℓ · ℓ) = √(ℓ / k_o)
+                root_c += (0.5 * h / seg.k[2]).sqrt();
             }
             s0 = s1;
         }
         self.n_seg = 2 * m;
-        let (sn, cs) = prev_angle.sin_cos();
-        self.final_rot = [cs, sn];
+        self.final_rot = prev;
         let hw = self.params.max_halfwaves.max(0.0) * std::f64::consts::PI;
         hw * hw / (p.mu * root_c * root_c)
-    }
-}
-
-/// The catenary's data the mesh needs, validated.
-struct Profile {
-    l0: f64,
-    ea: f64,
-    w: f64,
-    h: f64,
-    va: f64,
-    ve: f64,
-    mu: f64,
-    vertical: bool,
-}
-
-/// The tension state at a Gauss point.
-struct Gauss {
-    v: f64,
-    t: f64,
-}
-
-impl Profile {
-    fn new(cat: &Catenary, mu: f64) -> Result<Profile, SagContError> {
-        let ok = |x: f64| x.is_finite() && x > 0.0;
-        if !ok(cat.l0_m) {
-            return Err(SagContError::BadInput("L0"));
-        }
-        if !ok(cat.ea_n) {
-            return Err(SagContError::BadInput("EA"));
-        }
-        if !ok(mu) {
-            return Err(SagContError::BadInput("mu"));
-        }
-        if !(cat.w_n_m.is_finite() && cat.w_n_m >= 0.0) {
-            return Err(SagContError::BadInput("w"));
-        }
-        if !(cat.h_n.is_finite() && cat.h_n >= 0.0) {
-            return Err(SagContError::BadInput("H"));
-        }
-        let (va, w, l0) = (cat.v_anchor_n, cat.w_n_m, cat.l0_m);
-        let ve = va + w * l0;
-        if !(va.is_finite() && ve.is_finite()) {
-            return Err(SagContError::BadInput("V_a"));
-        }
-        let vmin = if va > 0.0 || ve < 0.0 {
-            va.abs().min(ve.abs())
-        } else {
-            0.0
-        };
-        if cat.h_n == 0.0 && vmin == 0.0 {
-            return Err(SagContError::Slack {
-                v_anchor_n: va,
-                v_end_n: ve,
-            });
-        }
-        Ok(Profile {
-            l0,
-            ea: cat.ea_n,
-            w,
-            h: cat.h_n,
-            va,
-            ve,
-            mu,
-            vertical: cat.h_n <= VERTICAL_H_RATIO * vmin,
-        })
-    }
-
-    /// ν = ∫ w/T ds over the cable, without cancellation.
-    fn variation(&self) -> f64 {
-        if self.w == 0.0 {
-            return 0.0;
-        }
-        if self.vertical {
-            let v0 = if self.va > 0.0 { self.va } else { -self.ve };
-            return (self.w * self.l0 / v0).ln_1p();
-        }
-        asinh_diff(
-            self.ve / self.h,
-            self.va / self.h,
-            self.w * self.l0 / self.h,
-        )
-    }
-
-    /// s where ∫₀ˢ w/T = frac · ν.
-    fn node_s(&self, nu: f64, frac: f64) -> f64 {
-        if nu < NU_STRAIGHT {
-            return frac * self.l0;
-        }
-        let x = frac * nu;
-        let s = if self.vertical {
-            if self.va > 0.0 {
-                self.va * x.exp_m1() / self.w
-            } else {
-                self.va * (-x).exp_m1() / self.w
-            }
-        } else {
-            // (H/w)(sinh(a + x) − sinh a) = (2H/w) cosh(a + x/2) sinh(x/2)
-            let a = (self.va / self.h).asinh();
-            2.0 * self.h / self.w * (a + 0.5 * x).cosh() * (0.5 * x).sinh()
-        };
-        s.clamp(0.0, self.l0)
-    }
-
-    fn gauss(&self, s: f64) -> Gauss {
-        let v = self.va + self.w * s;
-        Gauss {
-            v,
-            t: (self.h * self.h + v * v).sqrt(),
-        }
-    }
-
-    /// The sub-segment of compliance I/EA + β₁N₁ + β₂N₂ (N = n nᵀ/T) and length ℓ, and its
-    /// axial direction's angle in (h, up).
-    fn segment(
-        &self,
-        g1: &Gauss,
-        g2: &Gauss,
-        b1: f64,
-        b2: f64,
-        sin12: f64,
-        l: f64,
-    ) -> (Segment, f64) {
-        let (h, t1, t2) = (self.h, g1.t, g2.t);
-        let tr = b1 / t1 + b2 / t2;
-        let det = b1 * b2 * sin12 * sin12 / (t1 * t2);
-        let big = 0.5 * (tr + (tr * tr - 4.0 * det).max(0.0).sqrt());
-        let small = if big > 0.0 { det / big } else { 0.0 };
-        // N = [[V², −HV], [−HV, H²]]/T³: the major axis's angle, then the axial one ⟂ to it.
-        let (c1, c2) = (b1 / (t1 * t1 * t1), b2 / (t2 * t2 * t2));
-        let pq = c1 * (g1.v - h) * (g1.v + h) + c2 * (g2.v - h) * (g2.v + h);
-        let r2 = -2.0 * h * (c1 * g1.v + c2 * g2.v);
-        let angle = 0.5 * r2.atan2(pq) - std::f64::consts::FRAC_PI_2;
-        let inv_ea = 1.0 / self.ea;
-        let c = [inv_ea + small, inv_ea + big, inv_ea + tr];
-        let mu = self.mu;
-        let seg = Segment {
-            rot: [1.0, 0.0],
-            q: c.map(|ci| mu * ci * l * l),
-            cl: c.map(|ci| ci * l),
-            mul: mu * l,
-        };
-        (seg, angle)
-    }
-}
-
-/// asinh x − asinh y for x ≥ y with x − y = dxy given, without cancellation.
-fn asinh_diff(x: f64, y: f64, dxy: f64) -> f64 {
-    if y >= 0.0 {
-        let den = x * (1.0 + y * y).sqrt() + y * (1.0 + x * x).sqrt();
-        if den == 0.0 {
-            return 0.0;
-        }
-        (dxy * (x + y) / den).asinh()
-    } else if x <= 0.0 {
-        asinh_diff(-y, -x, dxy)
-    } else {
-        x.asinh() - y.asinh()
     }
 }
