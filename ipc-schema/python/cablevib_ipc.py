@@ -60,6 +60,7 @@ STATUS_NON_UNIT_QUATERNION = 7
 STATUS_T_MIN_OUT_OF_RANGE = 8
 STATUS_INVALID_REQUEST = 9
 STATUS_INTERNAL_ERROR = 10
+STATUS_CABLE_SLACK = 11
 STATUS_NAMES = {
     0: "ok",
     1: "tension_infeasible",
@@ -72,6 +73,7 @@ STATUS_NAMES = {
     8: "t_min_out_of_range",
     9: "invalid_request",
     10: "internal_error",
+    11: "cable_slack",
 }
 
 
