@@ -29,6 +29,15 @@
 //! and a non-ok estimate carries NaN frequencies rather than stale ones. The inverse query
 //! [`Estimator::t_min_for_f1`] runs the same forward pipeline on its own buffers.
 //!
+//! **Sagging cables** (`[effects] sag`, the `sagged` pipeline): step 2 is the tension
+//! distribution on the cables' elastic catenaries (their end tangents replace the chords,
+//! a bounded fixed point; the bounds apply to the end-effector-end tension), steps 3-4 the
+//! chains about each sagged profile (fem: N elements on the catenary; continuous: the exact
+//! N → ∞ limit) and the structured solver of `modal::sag`; step 5 is D(0) of those chains.
+//! A pose where a cable would go slack is the status `CableSlack`. The end-effector mode is
+//! not tracked with sag (NaN, age `u32::MAX`); `modes` gives every mode's participation
+//! offline. [`sag_warning`] says when a scene with sag off should have it on.
+//!
 //! [`reference_analysis`] is the offline reference of the same model: Clarabel for the
 //! tensions, dense assembly and a dense generalized eigensolver for every frequency.
 //! [`resolve_auto`] picks the model of `element = "auto"` scenes. Both allocate.

@@ -52,7 +52,15 @@ impl SagPipeline {
         let gn = scene.gravity_m_s2.norm();
         let modal = match scene.model.element {
             ElementKind::Continuous => {
-                SagModalSolver::new_continuous(modal, n, SagContinuousParams::default())
+                // A per-cycle budget is the real-time configuration: f1 only, within every
+                // cable's first half-wave (SagContinuousParams::realtime); offline the
+                // default mesh holds 1e-9 up to four half-waves, for the first K modes.
+                let mesh = if modal.cycle_evaluations == u32::MAX {
+                    SagContinuousParams::default()
+                } else {
+                    SagContinuousParams::realtime()
+                };
+                SagModalSolver::new_continuous(modal, n, mesh)
             }
             _ => SagModalSolver::new(modal, n, scene.model.elements_per_cable.max(1)),
         };

@@ -43,7 +43,7 @@ pub struct Samples {
     /// Orientations, unit quaternions [w, x, y, z], one per time; empty when the file has no
     /// quaternion columns (the poses then take the scene's orientation).
     pub orientation_wxyz: Vec<[f64; 4]>,
-    /// Angle along the circle, degrees (empty unless sampled from a [`Circle`]).
+    /// Angle along the circle, degrees (empty unless sampled from a [`crate::trajectory::Circle`]).
     pub angle_deg: Vec<f64>,
 }
 

@@ -159,6 +159,18 @@ pub struct SagContinuousParams {
     pub rel_tol: f64,
 }
 
+impl SagContinuousParams {
+    /// The real-time configuration: only f1 is solved per cycle, and f1 lies below every
+    /// cable's first blocked (end held) eigenvalue, i.e. within its first transverse
+    /// half-wave; 1e-7 relative there is four orders below the model's own physical error.
+    pub fn realtime() -> SagContinuousParams {
+        SagContinuousParams {
+            max_halfwaves: 1.0,
+            rel_tol: 1e-7,
+        }
+    }
+}
+
 impl Default for SagContinuousParams {
     fn default() -> Self {
         // The robot's search looks at the first few blocked modes of each cable.

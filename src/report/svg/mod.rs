@@ -59,7 +59,7 @@ const SUB_SIZE: f64 = 0.75;
 const SUB_DROP: f64 = 0.25;
 
 /// Escape `s` for SVG text of `font_px` and write its subscripts as subscripts: a lone
-/// letter followed by `_` and one of [`SUBSCRIPT_WORDS`] (`T_min` → T with subscript min),
+/// letter followed by `_` and one of `SUBSCRIPT_WORDS` (`T_min` → T with subscript min),
 /// and `f` followed by digits (`f1` → f with subscript 1, `f1,ref` keeps ",ref" in it), each
 /// standing alone (not inside a longer word). Subscripts are `tspan`s shifted with `dy` and
 /// shifted back after, which every SVG renderer supports.
