@@ -1,4 +1,4 @@
-//! Every CSV that `map`, `trajectory`, `sweep-tmin` and `accuracy` write reads with plain
+//! Every CSV that `map`, `trajectory`, `sweep-tmin`, `sag-compare` and `accuracy` write reads with plain
 //! `pandas.read_csv(path)` — no options — with the columns docs/figures.md documents and one
 //! row per evaluated point; each has a `PATH.json` sidecar naming the same columns.
 //!
@@ -19,7 +19,7 @@ const PANDAS_VERSION: &str = "2.2.3";
 
 #[path = "common/sweep_cli.rs"]
 mod sweep_cli;
-use sweep_cli::{AccCli, MapCli, TminCli, TrajCli};
+use sweep_cli::{AccCli, MapCli, SagCli, TminCli, TrajCli};
 
 fn target_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target")
@@ -175,6 +175,28 @@ fn run_commands(d: &Path) -> Vec<Expect> {
     .unwrap();
     cli::accuracy::run(&cli.a).unwrap();
 
+    let sagc = d.join("sagc");
+    let cli = SagCli::try_parse_from([
+        "sag-compare",
+        "suspended-8",
+        "--points",
+        "3",
+        "--quiet",
+        "--out",
+        &s(&sagc),
+    ])
+    .unwrap();
+    cli::sag_compare::run(&cli.a).unwrap();
+    // Its exact header is checked in tests/sag_compare.rs; here pandas must read the same
+    // names as the csv crate does.
+    let sagc_cols: Vec<String> = csv::Reader::from_path(sagc.with_extension("csv"))
+        .unwrap()
+        .headers()
+        .unwrap()
+        .iter()
+        .map(String::from)
+        .collect();
+
     let mut traj_cols: Vec<String> = vec!["t_s".into(), "angle_deg".into()];
     traj_cols.extend(point_columns(4, 2));
     let mut tmin_cols: Vec<String> = ["t_min_n", "status", "f1_hz", "ee_mode_hz", "fit_hz"]
@@ -207,6 +229,12 @@ fn run_commands(d: &Path) -> Vec<Expect> {
             path: acc.join("data/accuracy-planar-paper.csv"),
             columns: split(acc_cols),
             rows: 3 + 2 * 2,
+        },
+        // Chord and sagged model along a line: 3 poses.
+        Expect {
+            path: sagc.with_extension("csv"),
+            columns: sagc_cols,
+            rows: 3,
         },
         // Dense study: FEM and catenary at N = 1, 2.
         Expect {

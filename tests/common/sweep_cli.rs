@@ -4,6 +4,7 @@
 
 use cablevib::cli::accuracy::AccuracyArgs;
 use cablevib::cli::map::MapArgs;
+use cablevib::cli::sag_compare::SagCompareArgs;
 use cablevib::cli::sweep_tmin::SweepTminArgs;
 use cablevib::cli::trajectory::TrajectoryArgs;
 use clap::Parser;
@@ -31,4 +32,10 @@ pub struct TminCli {
 pub struct AccCli {
     #[command(flatten)]
     pub a: AccuracyArgs,
+}
+/// `cablevib sag-compare` options.
+#[derive(Parser)]
+pub struct SagCli {
+    #[command(flatten)]
+    pub a: SagCompareArgs,
 }
