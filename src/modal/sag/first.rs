@@ -12,8 +12,18 @@ const GROWTH: f64 = 2.0;
 /// The cold start's Rayleigh guess is at least this, rad²/s² (a scale when D' vanishes).
 const GUESS_MIN: f64 = 1e-12;
 
-/// The first natural frequency's λ of `p`, from `warm` (the last root) or from the
-/// Rayleigh guess. `evals` counts the evaluations of D.
+/// A warm Newton iterate is accepted without one more evaluation once its step is below
+/// [`ModalParams::newton_accept`] (relative) and the error it leaves, estimated as
+/// step²/(previous step) (the worst case of a merely linear rate; the quadratic rate leaves
+/// far less), is below [`ModalParams::rel_tol`].
+#[inline]
+fn fast_accept(step: f64, last_step: f64, x: f64, params: &ModalParams) -> bool {
+    step <= params.newton_accept * x && step * step <= params.rel_tol * x * last_step
+}
+
+/// The first natural frequency's λ of `p`, from `warm` (a predicted λ, e.g. the last
+/// root) or from the Rayleigh guess. `evals` counts the evaluations of D; at most
+/// min(`max_evaluations`, `cycle_evaluations`) are spent, else `NoConvergence`.
 pub(super) fn first_root(
     p: &SagProblem,
     params: &ModalParams,
@@ -34,9 +44,13 @@ pub(super) fn first_root(
         }
     };
     let (mut lo, mut hi) = (0.0f64, f64::INFINITY);
+    let budget = params.max_evaluations.min(params.cycle_evaluations);
+    let fast = warm.is_some();
+    // The previous Newton step (NaN: none yet, so the first step is never fast-accepted).
+    let mut last_step = f64::NAN;
     loop {
         let used = evals.wrapping_sub(start);
-        if used >= params.max_evaluations {
+        if used >= budget {
             return Err(ModalError::NoConvergence {
                 evaluations: used,
                 lo,
@@ -63,9 +77,13 @@ pub(super) fn first_root(
             }
             if dmu < 0.0 {
                 next = x - mu / dmu;
-                if (next - x).abs() <= params.rel_tol * x && next > lo && next < hi {
+                let step = (next - x).abs();
+                let accept =
+                    step <= params.rel_tol * x || fast && fast_accept(step, last_step, x, params);
+                if accept && next > lo && next < hi {
                     return Ok(root(p, next, x, mu, &e, &v, *evals - start));
                 }
+                last_step = step;
             }
         }
         if hi.is_finite() && hi - lo <= params.rel_tol * hi {

@@ -217,6 +217,7 @@ impl SagModalSolver {
             self.problem.set_cable(i, f, up)?;
         }
         self.problem.n = frames.len();
+        self.problem.pack();
         self.loaded = true;
         Ok(())
     }
@@ -246,6 +247,7 @@ impl SagModalSolver {
             self.problem.set_cable(i, &frame, up)?;
         }
         self.problem.n = cables.len();
+        self.problem.pack();
         self.loaded = true;
         Ok(())
     }
@@ -272,9 +274,19 @@ impl SagModalSolver {
         self.problem.eval(lambda)
     }
 
-    /// Number of natural frequencies strictly below λ (Wittrick–Williams).
+    /// D(λ), D'(λ) and the blocked count by each chain's own recurrence, one chain after
+    /// the other ([`SagChain::eval`]): the reference of the lockstep evaluation
+    /// [`Self::eval`] uses (counted as an evaluation too).
+    pub fn eval_reference(&mut self, lambda: f64) -> DynEval {
+        self.evaluations = self.evaluations.wrapping_add(1);
+        self.problem.eval_reference(lambda)
+    }
+
+    /// Number of natural frequencies strictly below λ (Wittrick–Williams; one evaluation
+    /// without D').
     pub fn count_below(&mut self, lambda: f64) -> u32 {
-        let e = self.eval(lambda);
+        self.evaluations = self.evaluations.wrapping_add(1);
+        let e = self.problem.eval_with(lambda, false);
         e.below + e.eig().negatives() as u32
     }
 
@@ -319,7 +331,14 @@ impl SagModalSolver {
         self.first_root_from(None)
     }
 
-    fn first_root_from(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
+    /// The first natural frequency, Newton started from `warm` (a predicted λ, rad²/s², e.g.
+    /// the estimator's extrapolation of the last roots; accepted once a step is below
+    /// [`ModalParams::newton_accept`] with a rate that leaves an error below
+    /// [`ModalParams::rel_tol`]) or from the Rayleigh guess (`None`: cold). At most
+    /// min([`ModalParams::max_evaluations`], [`ModalParams::cycle_evaluations`])
+    /// evaluations of D(λ): one call is one cycle's first root; a root that does not fit is
+    /// `NoConvergence` (with its bracket), never a longer cycle.
+    pub fn first_root_from(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
         self.require_loaded()?;
         let r = first::first_root(&self.problem, &self.params, &mut self.evaluations, warm);
         self.last_lambda1 = r.as_ref().map_or(f64::NAN, |r| r.lambda);
