@@ -281,7 +281,9 @@ impl SagProblem {
     }
 }
 
-/// D(λ), D'(λ) and the blocked count being summed over the cables.
+/// D(λ), D'(λ) and the blocked count being summed over the cables (one on the stack per
+/// evaluation: boxing the large variant would allocate on the real-time path).
+#[allow(clippy::large_enum_variant)]
 enum Acc {
     /// Point mass: the six distinct entries ([`SYM3`] order).
     Point {
