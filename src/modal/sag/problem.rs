@@ -38,6 +38,8 @@ pub(super) struct SagProblem {
     /// count (`batched`); else they are evaluated one by one.
     batch: SagBatch,
     batched: bool,
+    /// Each loaded FEM chain's S(0), S'(0) (set by [`Self::pack`]).
+    static_fem: Vec<SagChainEval>,
     proj: Vec<CableProj>,
     /// Cables loaded.
     pub(super) n: usize,
@@ -75,6 +77,7 @@ impl SagProblem {
             continuous: continuous.is_some(),
             batch: SagBatch::new(if continuous.is_some() { 0 } else { n_cables }, n_el_max),
             batched: false,
+            static_fem: vec![SagChainEval::default(); n_cables],
             proj: vec![zero; n_cables],
             n: 0,
             dim: 3,
@@ -224,8 +227,20 @@ impl SagProblem {
 
     /// Pack the loaded FEM chains for the lockstep evaluation (no allocation); chains of
     /// different element counts stay on the one-by-one path.
+    /// Also caches each chain's static evaluation.
     pub(super) fn pack(&mut self) {
         self.batched = !self.continuous && self.batch.pack(&self.chains[..self.n]);
+        if self.continuous {
+            return;
+        }
+        let cache = &mut self.static_fem;
+        if self.batched {
+            self.batch.eval_with(0.0, true, |i, e| cache[i] = *e);
+        } else {
+            for (c, chain) in cache.iter_mut().zip(&self.chains[..self.n]) {
+                *c = chain.eval(0.0);
+            }
+        }
     }
 
     /// D(λ), D'(λ) and Σ_cables blocked count (one evaluation: every chain's recurrence).
@@ -263,7 +278,7 @@ impl SagProblem {
         if self.continuous {
             self.assemble(0.0, |i| self.cont_static[i])
         } else {
-            self.assemble(0.0, |i| self.chains[i].static_eval())
+            self.assemble(0.0, |i| self.static_fem[i])
         }
     }
 
