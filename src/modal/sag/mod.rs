@@ -16,7 +16,12 @@
 //! recurrence per cable. The Wittrick–Williams count J(λ) = Σ_i below_i(λ) + (negative
 //! eigenvalues of D(λ)) is the exact number of natural frequencies below λ.
 //!
-//! **First root** ([`SagModalSolver::first_root`]). The chains are not uniform, so their
+//! **Lockstep evaluation.** When every loaded FEM chain has the same element count, `load`
+//! packs them into a [`crate::cable::sagged::SagBatch`] and each evaluation runs all the
+//! recurrences side by side (bit-identical to one chain after the other,
+//! [`SagModalSolver::eval_reference`]); count-only evaluations skip S'.
+//!
+//! **First root** ([`SagModalSolver::first_root_from`]). The chains are not uniform, so their
 //! blocked eigenvalues (the poles of D) are not known in closed form; the count shows
 //! where they are. The first natural frequency lies at or below the lowest pole (blocking
 //! the end adds a constraint), where μ₁(D(λ)) falls monotonically from μ₁(D(0)) > 0; it is
@@ -26,7 +31,11 @@
 //! it (below > 0) is an upper bound, and a step that leaves the bracket is replaced by
 //! bisection. A root whose evaluation has no pole below it is the first eigenvalue by
 //! monotonicity (no certificate needed); a bracket that collapses onto a pole (a mode with
-//! the end-effector still) is reported there with participation 0.
+//! the end-effector still) is reported there with participation 0. Warm (from a predicted
+//! λ) an iterate is accepted once its step is below `newton_accept` with a rate that leaves
+//! less than `rel_tol`, or at the 1e-10 noise floor; where Newton from below overshoots the
+//! bracket, the step from its upper end is taken. At most min(`max_evaluations`,
+//! `cycle_evaluations`) evaluations per call, else `NoConvergence`.
 //!
 //! **First K modes** ([`SagModalSolver::modes`]): the count brackets mode k; bisection on
 //! the count while the blocked count differs at the bracket's ends (a pole inside), then,
