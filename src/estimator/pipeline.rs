@@ -88,7 +88,7 @@ impl Pipeline {
         if let Some(sag) = self.sag.as_mut() {
             let t_max = &self.t_max_n[..n];
             let g = &self.geometry;
-            return sag.first_root(scene, pose, g, t_min_n, t_max, warm.is_some(), on_tensions);
+            return sag.first_root(scene, pose, g, t_min_n, t_max, warm, on_tensions);
         }
         let res = self
             .tension

@@ -103,8 +103,8 @@ impl SagPipeline {
 
     /// At geometry `g` (the chords at `pose`): the sagged tension distribution for the
     /// per-cable bounds (N, on the end-effector-end tension), shown to `on_tensions` (also
-    /// when it failed), the chains on the catenaries, and the first root (warm-started
-    /// from the last one when `warm`).
+    /// when it failed), the chains on the catenaries, and the first root (Newton from the
+    /// predicted λ `warm`, rad²/s², cold when None).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn first_root(
         &mut self,
@@ -113,7 +113,7 @@ impl SagPipeline {
         g: &Geometry,
         t_min_n: &[f64],
         t_max_n: &[f64],
-        warm: bool,
+        warm: Option<f64>,
         on_tensions: impl FnOnce(TensionReport<'_>),
     ) -> Result<Root, EstimatorError> {
         let w = super::pipeline::wrench6(scene);
@@ -136,12 +136,7 @@ impl SagPipeline {
         res?;
         self.load(scene, pose, g)?;
         self.loaded_at = self.modal.evaluations();
-        let r = if warm {
-            self.modal.first_root()
-        } else {
-            self.modal.first_root_cold()
-        };
-        Ok(r?)
+        Ok(self.modal.first_root_from(warm)?)
     }
 
     /// Set each cable's chain on its catenary and load the end-effector.

@@ -67,4 +67,4 @@ mod flexibility;
 mod solve;
 
 pub use catenary::Catenary;
-pub use solve::{CableChord, SagError, SagInfo, SagParams};
+pub use solve::{CableChord, SagError, SagInfo, SagParams, SagTrack};

@@ -112,6 +112,24 @@ struct Eval {
     /// Jacobian ∂P/∂(φ, L0), rows x and z.
     j: [[f64; 2]; 2],
     det: f64,
+    /// The flexibility ∂P/∂(H, V_e) as [xx, xz, zz], m/N.
+    f: [f64; 3],
+}
+
+/// A taut solution with what predicts the next one ([`CableChord::solve_end_tension_tracked`]):
+/// the chord and end tension it solves, its (φ, L0), Newton's Jacobian J = ∂P/∂(φ, L0) and
+/// ∂P/∂T_e at fixed (φ, L0), so a nearby chord (X', Z') and tension T' start Newton from
+/// (φ, L0) − J⁻¹ (∂P/∂T_e ΔT − Δ(X, Z)): the first Newton step taken for free.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SagTrack {
+    /// The solution.
+    pub catenary: Catenary,
+    chord: [f64; 2],
+    t_end_n: f64,
+    phi: f64,
+    j: [[f64; 2]; 2],
+    det: f64,
+    dp_dt: [f64; 2],
 }
 
 impl CableChord {
@@ -170,6 +188,7 @@ impl CableChord {
             res: if res.is_nan() { f64::INFINITY } else { res },
             j,
             det,
+            f: [fxx, fxz, fzz],
         }
     }
 
@@ -222,6 +241,64 @@ impl CableChord {
         Ok((cat, info))
     }
 
+    /// [`Self::solve_end_tension`] warm-started from a tracked solution (of a nearby chord
+    /// and tension): Newton starts from its first-order prediction ([`SagTrack`]), and on
+    /// any failure the plain solve from its catenary follows. Returns the solution tracked
+    /// for the next call (the same catenary the plain solve converges to, within its
+    /// tolerance). Never allocates.
+    pub fn solve_end_tension_tracked(
+        &self,
+        t_end_n: f64,
+        warm: Option<&SagTrack>,
+        params: &SagParams,
+    ) -> Result<(Catenary, SagInfo, SagTrack), SagError> {
+        if let Some(start) = warm.and_then(|w| self.predict(w, t_end_n)) {
+            let mut iters = 0;
+            if self.validate().is_ok() && t_end_n > 0.0 && t_end_n.is_finite() {
+                if let Ok(e) = self.newton_eval(t_end_n, start, params, &mut iters) {
+                    let info = self.info(t_end_n, &e, iters);
+                    return Ok((e.cat, info, self.track(t_end_n, &e)));
+                }
+            }
+        }
+        let (cat, info) = self.solve_end_tension(t_end_n, warm.map(|w| &w.catenary), params)?;
+        // The fallback's solution, tracked (one more evaluation, off the usual path).
+        let phi = cat.v_end_n().atan2(cat.h_n);
+        let e = self.eval(t_end_n, phi, cat.l0_m);
+        Ok((cat, info, self.track(t_end_n, &e)))
+    }
+
+    /// The first-order start from `w` for this chord and `t`: None when it is not usable
+    /// (vertical chord, degenerate Jacobian, a step beyond Newton's own limits).
+    fn predict(&self, w: &SagTrack, t: f64) -> Option<(f64, f64)> {
+        if self.span_m == 0.0 || !(w.det < 0.0) || w.catenary.l0_m <= 0.0 {
+            return None;
+        }
+        let r = [
+            w.dp_dt[0] * (t - w.t_end_n) - (self.span_m - w.chord[0]),
+            w.dp_dt[1] * (t - w.t_end_n) - (self.rise_m - w.chord[1]),
+        ];
+        let dphi = -(w.j[1][1] * r[0] - w.j[0][1] * r[1]) / w.det;
+        let dl0 = -(-w.j[1][0] * r[0] + w.j[0][0] * r[1]) / w.det;
+        let l0 = w.catenary.l0_m;
+        let ok = dphi.abs() <= MAX_ANGLE_STEP_RAD
+            && dl0 >= -(1.0 - MIN_LENGTH_FRACTION) * l0
+            && (dphi + dl0).is_finite();
+        ok.then(|| (clamp_angle(w.phi + dphi), l0 + dl0))
+    }
+
+    fn track(&self, t: f64, e: &Eval) -> SagTrack {
+        SagTrack {
+            catenary: e.cat,
+            chord: [self.span_m, self.rise_m],
+            t_end_n: t,
+            phi: e.cat.v_end_n().atan2(e.cat.h_n),
+            j: e.j,
+            det: e.det,
+            dp_dt: Self::dp_dt(t, e),
+        }
+    }
+
     /// Damped Newton on (φ, L0) from `start`; `iters` accumulates across calls.
     fn newton(
         &self,
@@ -230,12 +307,24 @@ impl CableChord {
         params: &SagParams,
         iters: &mut u32,
     ) -> Result<(Catenary, SagInfo), SagError> {
+        let e = self.newton_eval(t, start, params, iters)?;
+        Ok((e.cat, self.info(t, &e, *iters)))
+    }
+
+    /// [`Self::newton`]'s converged iterate.
+    fn newton_eval(
+        &self,
+        t: f64,
+        start: (f64, f64),
+        params: &SagParams,
+        iters: &mut u32,
+    ) -> Result<Eval, SagError> {
         let tol = params.tolerance * self.length_m();
         let (mut phi, mut l0) = start;
         let mut e = self.eval(t, phi, l0);
         for _ in 0..params.max_iterations {
             if e.res <= tol && e.det < 0.0 {
-                return Ok((e.cat, self.info(t, &e, *iters)));
+                return Ok(e);
             }
             *iters += 1;
             if !(e.det < 0.0) {
@@ -264,7 +353,7 @@ impl CableChord {
             e = trial;
         }
         if e.res <= tol && e.det < 0.0 {
-            return Ok((e.cat, self.info(t, &e, *iters)));
+            return Ok(e);
         }
         Err(SagError::NoConvergence {
             iterations: *iters,
@@ -272,11 +361,16 @@ impl CableChord {
         })
     }
 
+    /// ∂P/∂T_e at fixed (φ, L0): F (cos φ, sin φ), m/N.
+    fn dp_dt(t: f64, e: &Eval) -> [f64; 2] {
+        let [fxx, fxz, fzz] = e.f;
+        let (c, s) = (e.cat.h_n / t, e.cat.v_end_n() / t);
+        [fxx * c + fxz * s, fxz * c + fzz * s]
+    }
+
     /// dφ/dT_e from the implicit function theorem: d(φ, L0)/dT_e = −J⁻¹ F (cos φ, sin φ).
     fn info(&self, t: f64, e: &Eval, iterations: u32) -> SagInfo {
-        let [fxx, fxz, fzz] = e.cat.flexibility_m_n();
-        let (c, s) = (e.cat.h_n / t, e.cat.v_end_n() / t);
-        let b = [fxx * c + fxz * s, fxz * c + fzz * s];
+        let b = Self::dp_dt(t, e);
         let dphi = -(e.j[1][1] * b[0] - e.j[0][1] * b[1]) / e.det;
         SagInfo {
             iterations,

@@ -44,7 +44,6 @@ pub struct SagChain {
     k_axial: f64,
     /// A pivot that is exactly singular is moved by this much, N/m.
     pub(super) nudge: f64,
-    static_eval: SagChainEval,
 }
 
 impl SagChain {
@@ -62,7 +61,6 @@ impl SagChain {
             l0_m: 0.0,
             k_axial: 0.0,
             nudge: 0.0,
-            static_eval: SagChainEval::default(),
         }
     }
 
@@ -133,7 +131,6 @@ impl SagChain {
         self.l0_m = l0;
         self.k_axial = k_axial;
         self.nudge = f64::EPSILON * k_max;
-        self.static_eval = self.eval(0.0);
         Ok(())
     }
 
@@ -164,7 +161,6 @@ impl SagChain {
         self.axial_n.clear();
         self.mass_kg = 0.0;
         self.l0_m = 0.0;
-        self.static_eval = SagChainEval::default();
     }
 
     /// Number of elements N (0 when nothing is set).
@@ -196,10 +192,11 @@ impl SagChain {
         }
     }
 
-    /// The static end stiffness S(0) (computed when the chain was set): s_in (N/m, (h, up))
-    /// and s_out (N/m); the derivatives are those at λ = 0.
+    /// The static end stiffness S(0): s_in (N/m, (h, up)) and s_out (N/m); the
+    /// derivatives are those at λ = 0. One evaluation, [`Self::eval`] at 0 (the robot-level
+    /// solver caches it per pose).
     pub fn static_eval(&self) -> SagChainEval {
-        self.static_eval
+        self.eval(0.0)
     }
 
     /// Element j (0 at the anchor).

@@ -54,10 +54,12 @@
 //! Cost: O(N) per evaluation, no allocation; the chain's element data are written into
 //! buffers sized once by [`SagChain::new`].
 
+mod batch;
 mod chain;
 mod continuous;
 mod recurrence;
 
+pub use batch::{SagBatch, SAG_LANES};
 pub use chain::{SagChain, SagElement};
 pub use continuous::*;
 

@@ -168,3 +168,107 @@ fn bad_inputs_are_errors() {
     assert_eq!(c.n_el(), 0);
     assert_eq!(c.eval(3.0), SagChainEval::default());
 }
+
+/// Chains of one element count with different materials and profiles (the batch's lanes
+/// must not mix), 11 of them: one full block of [`SAG_LANES`] and a partial one.
+fn varied_chains(n_el: usize) -> Vec<SagChain> {
+    (0..11)
+        .map(|i| {
+            let f = 1.0 + 0.37 * i as f64;
+            let mut c = SagChain::new(n_el);
+            let l0 = 5.0 + i as f64;
+            c.set_profile(
+                2.0e5 * f,
+                0.3 / f,
+                l0,
+                n_el,
+                |s| {
+                    let t = s / l0;
+                    [
+                        6.0 * t * f + 0.2 * (3.0 * t).sin(),
+                        2.0 * t * t - 0.8 * t * f,
+                    ]
+                },
+                |s| 100.0 * f + 300.0 * s / l0,
+            )
+            .unwrap();
+            c
+        })
+        .collect()
+}
+
+fn assert_same_bits(a: &SagChainEval, b: &SagChainEval, derivative: bool, what: &str) {
+    let bits = |e: &SagChainEval| [e.s_in[0], e.s_in[1], e.s_in[2], e.s_out].map(f64::to_bits);
+    let dbits = |e: &SagChainEval| [e.ds_in[0], e.ds_in[1], e.ds_in[2], e.ds_out].map(f64::to_bits);
+    assert_eq!(bits(a), bits(b), "S {what}: {a:?} vs {b:?}");
+    assert_eq!(a.below, b.below, "count {what}");
+    if derivative {
+        assert_eq!(dbits(a), dbits(b), "S' {what}: {a:?} vs {b:?}");
+    } else {
+        assert!(
+            a.ds_in.iter().chain([&a.ds_out]).all(|&x| x == 0.0),
+            "{what}"
+        );
+    }
+}
+
+/// The lockstep batch does the scalar recurrence's IEEE operations in the same order on
+/// every lane (no fusing, no reassociation in Rust): tolerance 0, bit for bit, with and
+/// without the derivative, below and above every blocked eigenvalue (counts up to ~3N).
+#[test]
+fn batch_equals_scalar_recurrence_bit_for_bit() {
+    for n_el in [1usize, 2, 7, 40] {
+        let chains = varied_chains(n_el);
+        let mut batch = SagBatch::new(chains.len(), 40);
+        assert!(batch.pack(&chains));
+        let lam_t = chains
+            .iter()
+            .map(|c| 12.0 * c.element(0).k_out.max(c.element(n_el - 1).k_out) / c.element_mass_kg())
+            .fold(0.0, f64::max);
+        for i in 0..80 {
+            let lambda = lam_t * 40.0 * (i as f64 / 80.0).powi(3) + 0.37 * i as f64;
+            for derivative in [true, false] {
+                let mut seen = 0;
+                batch.eval_with(lambda, derivative, |j, e| {
+                    assert_eq!(j, seen);
+                    seen += 1;
+                    let what = format!("N {n_el} chain {j} λ {lambda}");
+                    assert_same_bits(e, &chains[j].eval(lambda), derivative, &what);
+                });
+                assert_eq!(seen, chains.len());
+            }
+        }
+    }
+}
+
+/// An exactly singular pivot (λ exactly on a blocked eigenvalue) takes the nudge in the
+/// batch as in the scalar recurrence: a straight cable of 2 unit elements, element mass 3
+/// kg, axial force 2 N, at λ = 2 (λm/3 = 2 exactly): both pivots are exactly singular.
+#[test]
+fn batch_nudges_singular_pivots_like_the_scalar_recurrence() {
+    let mut c = SagChain::new(2);
+    c.set_profile(10.0, 3.0, 2.0, 2, |s| [s, 0.0], |_| 2.0)
+        .unwrap();
+    let chains = [c.clone(), c];
+    let mut batch = SagBatch::new(2, 2);
+    assert!(batch.pack(&chains));
+    batch.eval_with(2.0, true, |j, e| {
+        let s = chains[j].eval(2.0);
+        assert!(s.s_out.is_finite() && s.s_in.iter().all(|x| x.is_finite()));
+        assert_same_bits(e, &s, true, "singular");
+    });
+}
+
+#[test]
+fn batch_refuses_mixed_element_counts() {
+    let chains = [test_chain(3, 1e5, 0.1), test_chain(4, 1e5, 0.1)];
+    let mut batch = SagBatch::new(2, 4);
+    assert!(!batch.pack(&chains));
+    assert_eq!(batch.n_chains(), 0);
+    assert!(
+        !batch.pack(&[test_chain(5, 1e5, 0.1)]),
+        "above the capacity"
+    );
+    assert!(batch.pack(&chains[..1]));
+    assert_eq!(batch.n_chains(), 1);
+}

@@ -12,8 +12,27 @@ const GROWTH: f64 = 2.0;
 /// The cold start's Rayleigh guess is at least this, rad²/s² (a scale when D' vanishes).
 const GUESS_MIN: f64 = 1e-12;
 
-/// The first natural frequency's λ of `p`, from `warm` (the last root) or from the
-/// Rayleigh guess. `evals` counts the evaluations of D.
+/// A warm Newton step at or below this (relative) is accepted whatever the previous one:
+/// steps of rounding noise (μ₁'s own error, ~1e-12 of λ on stiff, heavy robots) do not
+/// shrink, and Newton's quadratic rate leaves ~K·step² ≪ 1e-12 (K = |μ₁''/2μ₁'|·λ, large
+/// only within ~1e-8 of a pole).
+const NOISE_STEP: f64 = 1e-10;
+
+/// A warm Newton iterate (after the first evaluation) is accepted without one more
+/// evaluation once its step is below [`ModalParams::newton_accept`] (relative) and either
+/// the error it leaves, estimated as step²/(previous step) (the worst case of a merely
+/// linear rate; the quadratic rate leaves far less), is below [`ModalParams::rel_tol`], or
+/// the step is at the noise floor ([`NOISE_STEP`]).
+#[inline]
+fn fast_accept(step: f64, last_step: f64, x: f64, params: &ModalParams) -> bool {
+    last_step.is_finite()
+        && step <= params.newton_accept * x
+        && (step * step <= params.rel_tol * x * last_step || step <= NOISE_STEP * x)
+}
+
+/// The first natural frequency's λ of `p`, from `warm` (a predicted λ, e.g. the last
+/// root) or from the Rayleigh guess. `evals` counts the evaluations of D; at most
+/// min(`max_evaluations`, `cycle_evaluations`) are spent, else `NoConvergence`.
 pub(super) fn first_root(
     p: &SagProblem,
     params: &ModalParams,
@@ -34,9 +53,16 @@ pub(super) fn first_root(
         }
     };
     let (mut lo, mut hi) = (0.0f64, f64::INFINITY);
+    let budget = params.max_evaluations.min(params.cycle_evaluations);
+    let fast = warm.is_some();
+    // The previous Newton step (NaN: none yet, so the first step is never fast-accepted).
+    let mut last_step = f64::NAN;
+    // Newton's next iterate from the upper end of the bracket when μ₁ < 0 there (NaN:
+    // none): where Newton from below overshoots (μ₁ concave), the step from above does not.
+    let mut from_hi = f64::NAN;
     loop {
         let used = evals.wrapping_sub(start);
-        if used >= params.max_evaluations {
+        if used >= budget {
             return Err(ModalError::NoConvergence {
                 evaluations: used,
                 lo,
@@ -51,21 +77,30 @@ pub(super) fn first_root(
         let mut next = f64::NAN;
         if e.below > 0 {
             // A pole below x: the first root is below it.
-            hi = hi.min(x);
+            if x < hi {
+                hi = x;
+                from_hi = f64::NAN;
+            }
         } else {
             if mu > 0.0 {
                 lo = lo.max(x);
-            } else {
-                hi = hi.min(x);
+            } else if x < hi {
+                hi = x;
+                from_hi = if dmu < 0.0 { x - mu / dmu } else { f64::NAN };
             }
             if mu == 0.0 {
                 return Ok(root(p, x, x, mu, &e, &v, *evals - start));
             }
             if dmu < 0.0 {
                 next = x - mu / dmu;
-                if (next - x).abs() <= params.rel_tol * x && next > lo && next < hi {
+                let step = (next - x).abs();
+                let accept =
+                    step <= params.rel_tol * x || fast && fast_accept(step, last_step, x, params);
+                // Inclusive: a step that rounds to 0 at the bracket's end is a root there.
+                if accept && next >= lo && next <= hi {
                     return Ok(root(p, next, x, mu, &e, &v, *evals - start));
                 }
+                last_step = step;
             }
         }
         if hi.is_finite() && hi - lo <= params.rel_tol * hi {
@@ -77,6 +112,9 @@ pub(super) fn first_root(
                 evaluations: *evals - start,
                 residual: 0.0,
             });
+        }
+        if !(next > lo && next < hi) && from_hi > lo && from_hi < hi {
+            next = from_hi;
         }
         if !(next > lo && next < hi) {
             next = if hi.is_finite() {

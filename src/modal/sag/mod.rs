@@ -16,7 +16,12 @@
 //! recurrence per cable. The Wittrick–Williams count J(λ) = Σ_i below_i(λ) + (negative
 //! eigenvalues of D(λ)) is the exact number of natural frequencies below λ.
 //!
-//! **First root** ([`SagModalSolver::first_root`]). The chains are not uniform, so their
+//! **Lockstep evaluation.** When every loaded FEM chain has the same element count, `load`
+//! packs them into a [`crate::cable::sagged::SagBatch`] and each evaluation runs all the
+//! recurrences side by side (bit-identical to one chain after the other,
+//! [`SagModalSolver::eval_reference`]); count-only evaluations skip S'.
+//!
+//! **First root** ([`SagModalSolver::first_root_from`]). The chains are not uniform, so their
 //! blocked eigenvalues (the poles of D) are not known in closed form; the count shows
 //! where they are. The first natural frequency lies at or below the lowest pole (blocking
 //! the end adds a constraint), where μ₁(D(λ)) falls monotonically from μ₁(D(0)) > 0; it is
@@ -26,7 +31,11 @@
 //! it (below > 0) is an upper bound, and a step that leaves the bracket is replaced by
 //! bisection. A root whose evaluation has no pole below it is the first eigenvalue by
 //! monotonicity (no certificate needed); a bracket that collapses onto a pole (a mode with
-//! the end-effector still) is reported there with participation 0.
+//! the end-effector still) is reported there with participation 0. Warm (from a predicted
+//! λ) an iterate is accepted once its step is below `newton_accept` with a rate that leaves
+//! less than `rel_tol`, or at the 1e-10 noise floor; where Newton from below overshoots the
+//! bracket, the step from its upper end is taken. At most min(`max_evaluations`,
+//! `cycle_evaluations`) evaluations per call, else `NoConvergence`.
 //!
 //! **First K modes** ([`SagModalSolver::modes`]): the count brackets mode k; bisection on
 //! the count while the blocked count differs at the bracket's ends (a pole inside), then,
@@ -217,6 +226,7 @@ impl SagModalSolver {
             self.problem.set_cable(i, f, up)?;
         }
         self.problem.n = frames.len();
+        self.problem.pack();
         self.loaded = true;
         Ok(())
     }
@@ -246,6 +256,7 @@ impl SagModalSolver {
             self.problem.set_cable(i, &frame, up)?;
         }
         self.problem.n = cables.len();
+        self.problem.pack();
         self.loaded = true;
         Ok(())
     }
@@ -272,9 +283,19 @@ impl SagModalSolver {
         self.problem.eval(lambda)
     }
 
-    /// Number of natural frequencies strictly below λ (Wittrick–Williams).
+    /// D(λ), D'(λ) and the blocked count by each chain's own recurrence, one chain after
+    /// the other ([`SagChain::eval`]): the reference of the lockstep evaluation
+    /// [`Self::eval`] uses (counted as an evaluation too).
+    pub fn eval_reference(&mut self, lambda: f64) -> DynEval {
+        self.evaluations = self.evaluations.wrapping_add(1);
+        self.problem.eval_reference(lambda)
+    }
+
+    /// Number of natural frequencies strictly below λ (Wittrick–Williams; one evaluation
+    /// without D').
     pub fn count_below(&mut self, lambda: f64) -> u32 {
-        let e = self.eval(lambda);
+        self.evaluations = self.evaluations.wrapping_add(1);
+        let e = self.problem.eval_with(lambda, false);
         e.below + e.eig().negatives() as u32
     }
 
@@ -319,7 +340,14 @@ impl SagModalSolver {
         self.first_root_from(None)
     }
 
-    fn first_root_from(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
+    /// The first natural frequency, Newton started from `warm` (a predicted λ, rad²/s², e.g.
+    /// the estimator's extrapolation of the last roots; accepted once a step is below
+    /// [`ModalParams::newton_accept`] with a rate that leaves an error below
+    /// [`ModalParams::rel_tol`]) or from the Rayleigh guess (`None`: cold). At most
+    /// min([`ModalParams::max_evaluations`], [`ModalParams::cycle_evaluations`])
+    /// evaluations of D(λ): one call is one cycle's first root; a root that does not fit is
+    /// `NoConvergence` (with its bracket), never a longer cycle.
+    pub fn first_root_from(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
         self.require_loaded()?;
         let r = first::first_root(&self.problem, &self.params, &mut self.evaluations, warm);
         self.last_lambda1 = r.as_ref().map_or(f64::NAN, |r| r.lambda);

@@ -2,7 +2,7 @@
 //! end-effector, its mass) and the evaluation of D(λ), D'(λ) and the blocked count.
 
 use super::{SagCableFrame, SagEndEffector, SagLoadError};
-use crate::cable::sagged::{SagChain, SagChainEval, SagContinuous, SagContinuousParams};
+use crate::cable::sagged::{SagBatch, SagChain, SagChainEval, SagContinuous, SagContinuousParams};
 use crate::modal::attach_map;
 use crate::modal::DynEval;
 use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector3};
@@ -34,6 +34,12 @@ pub(super) struct SagProblem {
     pub(super) cont: Vec<SagContinuous>,
     pub(super) cont_static: Vec<SagChainEval>,
     pub(super) continuous: bool,
+    /// The FEM chains packed for the lockstep evaluation, when they all have one element
+    /// count (`batched`); else they are evaluated one by one.
+    batch: SagBatch,
+    batched: bool,
+    /// Each loaded FEM chain's S(0), S'(0) (set by [`Self::pack`]).
+    static_fem: Vec<SagChainEval>,
     proj: Vec<CableProj>,
     /// Cables loaded.
     pub(super) n: usize,
@@ -69,6 +75,9 @@ impl SagProblem {
                 .collect(),
             cont_static: vec![SagChainEval::default(); n_cont],
             continuous: continuous.is_some(),
+            batch: SagBatch::new(if continuous.is_some() { 0 } else { n_cables }, n_el_max),
+            batched: false,
+            static_fem: vec![SagChainEval::default(); n_cables],
             proj: vec![zero; n_cables],
             n: 0,
             dim: 3,
@@ -162,68 +171,106 @@ impl SagProblem {
         Ok(())
     }
 
-    /// D, D' and the blocked count from the chains' evaluations `ev(i)`.
+    /// The accumulator of D(λ), D'(λ) and the blocked count before any cable is added.
     #[inline]
-    fn assemble(&self, lambda: f64, ev: impl Fn(usize) -> SagChainEval) -> DynEval {
-        let mut below = 0u32;
+    fn start(&self, lambda: f64) -> Acc {
         if self.dim == 3 {
             let m = self.ee_mass_kg;
-            let mut d = [-lambda * m, -lambda * m, -lambda * m, 0.0, 0.0, 0.0];
-            let mut dd = [-m, -m, -m, 0.0, 0.0, 0.0];
-            for i in 0..self.n {
-                let e = ev(i);
+            Acc::Point {
+                d: [-lambda * m, -lambda * m, -lambda * m, 0.0, 0.0, 0.0],
+                dd: [-m, -m, -m, 0.0, 0.0, 0.0],
+                below: 0,
+            }
+        } else {
+            Acc::Rigid {
+                d: self.k6 - self.m6 * lambda,
+                dd: -self.m6,
+                below: 0,
+            }
+        }
+    }
+
+    /// Add cable i's end stiffness `e` to the accumulator.
+    #[inline]
+    fn add(&self, acc: &mut Acc, i: usize, e: &SagChainEval) {
+        let s = [e.s_in[0], e.s_in[1], e.s_in[2], e.s_out];
+        let ds = [e.ds_in[0], e.ds_in[1], e.ds_in[2], e.ds_out];
+        match acc {
+            Acc::Point { d, dd, below } => {
                 let p = &self.proj[i].p3;
-                let s = [e.s_in[0], e.s_in[1], e.s_in[2], e.s_out];
-                let ds = [e.ds_in[0], e.ds_in[1], e.ds_in[2], e.ds_out];
                 for j in 0..6 {
                     d[j] += s[0] * p[0][j] + s[1] * p[1][j] + s[2] * p[2][j] + s[3] * p[3][j];
                     dd[j] += ds[0] * p[0][j] + ds[1] * p[1][j] + ds[2] * p[2][j] + ds[3] * p[3][j];
                 }
-                below += e.below;
+                *below += e.below;
             }
-            let (mut d6, mut dd6) = (Matrix6::zeros(), Matrix6::zeros());
-            for (j, &(r, c)) in SYM3.iter().enumerate() {
-                d6[(r, c)] = d[j];
-                d6[(c, r)] = d[j];
-                dd6[(r, c)] = dd[j];
-                dd6[(c, r)] = dd[j];
+            Acc::Rigid { d, dd, below } => {
+                let p = &self.proj[i].p6;
+                for q in 0..4 {
+                    *d += p[q] * s[q];
+                    *dd += p[q] * ds[q];
+                }
+                *below += e.below;
             }
-            return DynEval {
-                d: d6,
-                dd: dd6,
-                below,
-                dim: 3,
-            };
         }
-        let mut d = self.k6 - self.m6 * lambda;
-        let mut dd = -self.m6;
+    }
+
+    /// D, D' and the blocked count from the chains' evaluations `ev(i)`.
+    #[inline]
+    fn assemble(&self, lambda: f64, ev: impl Fn(usize) -> SagChainEval) -> DynEval {
+        let mut acc = self.start(lambda);
         for i in 0..self.n {
-            let e = ev(i);
-            let p = &self.proj[i].p6;
-            let s = [e.s_in[0], e.s_in[1], e.s_in[2], e.s_out];
-            let ds = [e.ds_in[0], e.ds_in[1], e.ds_in[2], e.ds_out];
-            for q in 0..4 {
-                d += p[q] * s[q];
-                dd += p[q] * ds[q];
-            }
-            below += e.below;
+            self.add(&mut acc, i, &ev(i));
         }
-        DynEval {
-            d,
-            dd,
-            below,
-            dim: 6,
+        acc.finish()
+    }
+
+    /// Pack the loaded FEM chains for the lockstep evaluation (no allocation); chains of
+    /// different element counts stay on the one-by-one path.
+    /// Also caches each chain's static evaluation.
+    pub(super) fn pack(&mut self) {
+        self.batched = !self.continuous && self.batch.pack(&self.chains[..self.n]);
+        if self.continuous {
+            return;
+        }
+        let cache = &mut self.static_fem;
+        if self.batched {
+            self.batch.eval_with(0.0, true, |i, e| cache[i] = *e);
+        } else {
+            for (c, chain) in cache.iter_mut().zip(&self.chains[..self.n]) {
+                *c = chain.eval(0.0);
+            }
         }
     }
 
     /// D(λ), D'(λ) and Σ_cables blocked count (one evaluation: every chain's recurrence).
     #[inline]
     pub(super) fn eval(&self, lambda: f64) -> DynEval {
+        self.eval_with(lambda, true)
+    }
+
+    /// As [`Self::eval`]; without `derivative` D' is not computed (it holds −M only):
+    /// for evaluations that only count.
+    pub(super) fn eval_with(&self, lambda: f64, derivative: bool) -> DynEval {
         if self.continuous {
             self.assemble(lambda, |i| self.cont[i].eval(lambda))
+        } else if self.batched {
+            let mut acc = self.start(lambda);
+            self.batch
+                .eval_with(lambda, derivative, |i, e| self.add(&mut acc, i, e));
+            acc.finish()
         } else {
             self.assemble(lambda, |i| self.chains[i].eval(lambda))
         }
+    }
+
+    /// D(λ) by the chains' one-by-one recurrence ([`SagChain::eval`]), the reference of
+    /// the lockstep path.
+    pub(super) fn eval_reference(&self, lambda: f64) -> DynEval {
+        if self.continuous {
+            return self.eval(lambda);
+        }
+        self.assemble(lambda, |i| self.chains[i].eval(lambda))
     }
 
     /// D(0) and D'(0) from the chains' cached static evaluations (no recurrence).
@@ -231,7 +278,7 @@ impl SagProblem {
         if self.continuous {
             self.assemble(0.0, |i| self.cont_static[i])
         } else {
-            self.assemble(0.0, |i| self.chains[i].static_eval())
+            self.assemble(0.0, |i| self.static_fem[i])
         }
     }
 
@@ -246,5 +293,52 @@ impl SagProblem {
                 .iter()
                 .map(|c| c.blocked_modes())
                 .sum::<usize>()
+    }
+}
+
+/// D(λ), D'(λ) and the blocked count being summed over the cables (one on the stack per
+/// evaluation: boxing the large variant would allocate on the real-time path).
+#[allow(clippy::large_enum_variant)]
+enum Acc {
+    /// Point mass: the six distinct entries ([`SYM3`] order).
+    Point {
+        d: [f64; 6],
+        dd: [f64; 6],
+        below: u32,
+    },
+    /// Rigid body.
+    Rigid {
+        d: Matrix6<f64>,
+        dd: Matrix6<f64>,
+        below: u32,
+    },
+}
+
+impl Acc {
+    #[inline]
+    fn finish(self) -> DynEval {
+        match self {
+            Acc::Point { d, dd, below } => {
+                let (mut d6, mut dd6) = (Matrix6::zeros(), Matrix6::zeros());
+                for (j, &(r, c)) in SYM3.iter().enumerate() {
+                    d6[(r, c)] = d[j];
+                    d6[(c, r)] = d[j];
+                    dd6[(r, c)] = dd[j];
+                    dd6[(c, r)] = dd[j];
+                }
+                DynEval {
+                    d: d6,
+                    dd: dd6,
+                    below,
+                    dim: 3,
+                }
+            }
+            Acc::Rigid { d, dd, below } => DynEval {
+                d,
+                dd,
+                below,
+                dim: 6,
+            },
+        }
     }
 }

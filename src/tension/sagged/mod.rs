@@ -13,7 +13,8 @@
 //!
 //! Method: fixed point on the end directions. Start from the chords (cold) or from the
 //! last call's end tensions (warm); repeat: (1) each cable's taut catenary for its T_e,i
-//! (warm-started from its last one) gives t_i; (2) the active-set QP ([`TensionSolver`],
+//! (Newton from the first-order prediction of its last solution for the new chord and
+//! tension, `CableChord::solve_end_tension_tracked`) gives t_i; (2) the active-set QP ([`TensionSolver`],
 //! itself warm-started) with columns t_i gives new T_e. Converged when no end direction
 //! moved more than `direction_tol_rad` in the last pass; at most `max_iterations` passes.
 //! The reported catenaries, tangents and tensions are those of the last QP and a final
@@ -28,7 +29,7 @@ mod solve;
 
 use super::{TensionError, TensionParams, TensionSolver};
 use crate::kinematics::Geometry;
-use crate::sag::{CableChord, Catenary, SagError, SagParams};
+use crate::sag::{CableChord, Catenary, SagError, SagParams, SagTrack};
 use nalgebra::Vector3;
 
 /// Parameters of the sagged tension distribution.
@@ -126,6 +127,8 @@ pub struct SagTensionSolver {
     tangent_geom: Geometry,
     chords: Vec<CableChord>,
     cats: Vec<Catenary>,
+    /// Each cable's last solution with its sensitivities (the next solve's start).
+    tracks: Vec<Option<SagTrack>>,
     h: Vec<Vector3<f64>>,
     n_out: Vec<Vector3<f64>>,
     up: Vector3<f64>,

@@ -34,6 +34,7 @@ impl SagTensionSolver {
             tangent_geom: Geometry::new(n_cables),
             chords: vec![chord; n_cables],
             cats: vec![blank; n_cables],
+            tracks: vec![None; n_cables],
             h: vec![Vector3::zeros(); n_cables],
             n_out: vec![Vector3::zeros(); n_cables],
             up: Vector3::z(),
@@ -67,6 +68,10 @@ impl SagTensionSolver {
             return Err(SagTensionError::Invalid {
                 what: "non-finite gravity",
             });
+        }
+        if !self.have_warm {
+            // Cold: nothing from an earlier solve; the passes of this one warm-start the next.
+            self.tracks.iter_mut().for_each(|t| *t = None);
         }
         self.set_chords(g, cables, gravity_m_s2);
         let r = self.fixed_point(w, t_min_n, t_max_n);
@@ -150,12 +155,10 @@ impl SagTensionSolver {
     fn catenaries(&mut self) -> Result<f64, SagTensionError> {
         let mut change: f64 = 0.0;
         for i in 0..self.t_end.len() {
-            let warm = self
-                .have_warm
-                .then_some(&self.cats[i])
-                .filter(|c| c.l0_m > 0.0);
-            let (cat, _) =
-                match self.chords[i].solve_end_tension(self.t_end[i], warm, &self.params.sag) {
+            let warm = self.tracks[i].as_ref().filter(|w| w.catenary.l0_m > 0.0);
+            let chord = &self.chords[i];
+            let (cat, _, track) =
+                match chord.solve_end_tension_tracked(self.t_end[i], warm, &self.params.sag) {
                     Ok(ok) => ok,
                     Err(e @ SagError::TooSlack { .. }) => {
                         return Err(SagTensionError::Slack {
@@ -189,6 +192,7 @@ impl SagTensionSolver {
             change = change.max(old.cross(&t).norm().atan2(old.dot(&t)));
             self.tangent_geom.unit[i] = t;
             self.cats[i] = cat;
+            self.tracks[i] = Some(track);
         }
         Ok(change)
     }
@@ -207,6 +211,7 @@ impl SagTensionSolver {
         self.have_warm = false;
         self.qp.reset_warm_start();
         self.cats.iter_mut().for_each(|c| c.l0_m = 0.0);
+        self.tracks.iter_mut().for_each(|t| *t = None);
     }
 
     /// End-effector-end tensions T_e,i of the last solve (the QP's closest solution after

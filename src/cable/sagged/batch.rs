@@ -1,0 +1,315 @@
+//! Several sagged FEM chains of one element count evaluated in lockstep: the recurrence of
+//! [`SagChain::eval`] (module docs) with the chains side by side in blocks of
+//! [`SAG_LANES`] (struct of arrays: element j of every chain of a block is one record), so
+//! the chains' independent dependency chains fill the pipeline and the SIMD lanes, with
+//! AVX-512 / AVX2 builds of the same operations chosen at run time.
+//!
+//! Every lane does exactly the IEEE operations of the scalar recurrence, in the same order
+//! (Rust never fuses or reassociates floating-point operations), and the singular-pivot
+//! nudge is a select instead of a branch: the results are bit-identical to
+//! [`SagChain::eval`] (a test checks it). The λ-derivative recurrence is skipped when the
+//! caller does not need S' (count-only evaluations): then `ds_in`, `ds_out` are 0.
+
+use super::chain::SagChain;
+use super::SagChainEval;
+
+/// Chains per block: one AVX-512 register, two AVX2 ones (independent chains per core).
+pub const SAG_LANES: usize = 8;
+
+/// Element j of every chain of a block: in-plane [a b; b c] and out-of-plane stiffness.
+#[derive(Debug, Clone, Copy)]
+struct ElemBlock {
+    a: [f64; SAG_LANES],
+    b: [f64; SAG_LANES],
+    c: [f64; SAG_LANES],
+    out: [f64; SAG_LANES],
+}
+
+/// A padding lane: a unit spring without mass (positive pivots, never written out).
+const PAD: ElemBlock = ElemBlock {
+    a: [1.0; SAG_LANES],
+    b: [0.0; SAG_LANES],
+    c: [1.0; SAG_LANES],
+    out: [1.0; SAG_LANES],
+};
+
+/// Per-block constants: element mass (kg) and the singular-pivot nudge (N/m) per lane.
+#[derive(Debug, Clone, Copy)]
+struct LaneConsts {
+    mass: [f64; SAG_LANES],
+    nudge: [f64; SAG_LANES],
+}
+
+/// The chains of one pose packed for lockstep evaluation: `new` allocates, [`Self::pack`]
+/// copies without allocating, [`Self::eval_with`] reads.
+#[derive(Debug, Clone)]
+pub struct SagBatch {
+    /// Block-major: block b's element j at `b * n_el + j`.
+    elems: Vec<ElemBlock>,
+    consts: Vec<LaneConsts>,
+    n_chains: usize,
+    n_el: usize,
+    cap_chains: usize,
+    cap_el: usize,
+}
+
+impl SagBatch {
+    /// Room for `n_chains` chains of up to `n_el_max` elements (the only allocation).
+    pub fn new(n_chains: usize, n_el_max: usize) -> SagBatch {
+        let blocks = n_chains.div_ceil(SAG_LANES);
+        let cap_el = n_el_max.max(1);
+        SagBatch {
+            elems: vec![PAD; blocks * cap_el],
+            consts: vec![
+                LaneConsts {
+                    mass: [0.0; SAG_LANES],
+                    nudge: [0.0; SAG_LANES],
+                };
+                blocks
+            ],
+            n_chains: 0,
+            n_el: 0,
+            cap_chains: n_chains,
+            cap_el,
+        }
+    }
+
+    /// Copy `chains` in (no allocation). Returns false, and holds nothing, when they do not
+    /// fit the batch: more chains or elements than its capacity, an empty chain, or
+    /// element counts that differ (the caller then evaluates them one by one).
+    pub fn pack(&mut self, chains: &[SagChain]) -> bool {
+        self.n_chains = 0;
+        self.n_el = 0;
+        let n_el = chains.first().map_or(0, SagChain::n_el);
+        if chains.len() > self.cap_chains
+            || n_el == 0
+            || n_el > self.cap_el
+            || chains.iter().any(|c| c.n_el() != n_el)
+        {
+            return false;
+        }
+        for (b, block) in chains.chunks(SAG_LANES).enumerate() {
+            let els = &mut self.elems[b * n_el..(b + 1) * n_el];
+            els.fill(PAD);
+            let consts = &mut self.consts[b];
+            consts.mass = [0.0; SAG_LANES];
+            consts.nudge = [0.0; SAG_LANES];
+            for (l, chain) in block.iter().enumerate() {
+                consts.mass[l] = chain.mass_kg;
+                consts.nudge[l] = chain.nudge;
+                for (e, (k, &ko)) in els.iter_mut().zip(chain.k_in.iter().zip(&chain.k_out)) {
+                    (e.a[l], e.b[l], e.c[l], e.out[l]) = (k[0], k[1], k[2], ko);
+                }
+            }
+        }
+        self.n_chains = chains.len();
+        self.n_el = n_el;
+        true
+    }
+
+    /// Chains packed (0 when the last pack failed).
+    pub fn n_chains(&self) -> usize {
+        self.n_chains
+    }
+
+    /// Every packed chain at λ (rad²/s²): `sink(i, eval)` for chain i in order; S' only
+    /// when `derivative` (else 0). No allocation.
+    pub fn eval_with(
+        &self,
+        lambda: f64,
+        derivative: bool,
+        mut sink: impl FnMut(usize, &SagChainEval),
+    ) {
+        let mut out = [SagChainEval::default(); SAG_LANES];
+        for (b, consts) in self.consts.iter().enumerate() {
+            let start = b * SAG_LANES;
+            if start >= self.n_chains {
+                break;
+            }
+            let els = &self.elems[b * self.n_el..(b + 1) * self.n_el];
+            eval_block(els, consts, lambda, derivative, &mut out);
+            let len = (self.n_chains - start).min(SAG_LANES);
+            for (l, e) in out[..len].iter().enumerate() {
+                sink(start + l, e);
+            }
+        }
+    }
+}
+
+/// One block, dispatched to the widest instruction set the CPU has (same results).
+fn eval_block(
+    els: &[ElemBlock],
+    k: &LaneConsts,
+    lambda: f64,
+    derivative: bool,
+    out: &mut [SagChainEval; SAG_LANES],
+) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F (checked just above).
+            unsafe { block_avx512(els, k, lambda, derivative, out) };
+            return;
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            unsafe { block_avx2(els, k, lambda, derivative, out) };
+            return;
+        }
+    }
+    block_dispatch(els, k, lambda, derivative, out);
+}
+
+/// [`block_dispatch`] compiled for AVX-512F (one register per lane array).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn block_avx512(
+    els: &[ElemBlock],
+    k: &LaneConsts,
+    lambda: f64,
+    derivative: bool,
+    out: &mut [SagChainEval; SAG_LANES],
+) {
+    block_dispatch(els, k, lambda, derivative, out);
+}
+
+/// [`block_dispatch`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn block_avx2(
+    els: &[ElemBlock],
+    k: &LaneConsts,
+    lambda: f64,
+    derivative: bool,
+    out: &mut [SagChainEval; SAG_LANES],
+) {
+    block_dispatch(els, k, lambda, derivative, out);
+}
+
+#[inline(always)]
+fn block_dispatch(
+    els: &[ElemBlock],
+    k: &LaneConsts,
+    lambda: f64,
+    derivative: bool,
+    out: &mut [SagChainEval; SAG_LANES],
+) {
+    if derivative {
+        block::<true>(els, k, lambda, out);
+    } else {
+        block::<false>(els, k, lambda, out);
+    }
+}
+
+/// The recurrence of [`SagChain::eval`] on every lane (`D`: with S'), lane-innermost.
+#[inline(always)]
+fn block<const D: bool>(
+    els: &[ElemBlock],
+    k: &LaneConsts,
+    lambda: f64,
+    out: &mut [SagChainEval; SAG_LANES],
+) {
+    const L: usize = SAG_LANES;
+    let m = k.mass;
+    let mut d3 = [0.0; L];
+    let mut d2 = [0.0; L];
+    let mut lm = [0.0; L];
+    let mut m3 = [0.0; L];
+    let mut m2 = [0.0; L];
+    for i in 0..L {
+        lm[i] = lambda * m[i];
+        d3[i] = lambda * m[i] / 3.0;
+        d2[i] = lambda * m[i] / 2.0;
+        m3[i] = m[i] / 3.0;
+        m2[i] = m[i] / 2.0;
+    }
+    let e0 = &els[0];
+    let (mut s0, mut s1, mut s2, mut so) = ([0.0; L], e0.b, [0.0; L], [0.0; L]);
+    let (mut ds0, mut ds1, mut ds2, mut dso) = ([0.0; L], [0.0; L], [0.0; L], [0.0; L]);
+    let (mut neg1, mut neg2, mut nego) = ([0u64; L], [0u64; L], [0u64; L]);
+    for i in 0..L {
+        s0[i] = e0.a[i] - d3[i];
+        s2[i] = e0.c[i] - d3[i];
+        so[i] = e0.out[i] - d3[i];
+        ds0[i] = -m[i] / 3.0;
+        ds2[i] = -m[i] / 3.0;
+        dso[i] = -m[i] / 3.0;
+    }
+    for ej in &els[1..] {
+        for i in 0..L {
+            // In plane: the pivot Q, nudged when exactly singular.
+            let mut q0 = s0[i] + ej.a[i] - d3[i];
+            let q1 = s1[i] + ej.b[i];
+            let mut q2 = s2[i] + ej.c[i] - d3[i];
+            let singular = q0 * q2 - q1 * q1 == 0.0;
+            if singular {
+                q0 += k.nudge[i];
+                q2 += k.nudge[i];
+            }
+            let mut det = q0 * q2 - q1 * q1;
+            if singular && det == 0.0 {
+                det = k.nudge[i] * k.nudge[i];
+            }
+            let negative = det < 0.0;
+            neg1[i] += negative as u64;
+            neg2[i] += (!negative & (q0 < 0.0)) as u64;
+            let (e0, e1, e2) = (s0[i] - d2[i], s1[i], s2[i] - d2[i]);
+            let inv = 1.0 / det;
+            let (ia, ib, ic) = (q2 * inv, -q1 * inv, q0 * inv);
+            let y00 = ia * e0 + ib * e1;
+            let y01 = ia * e1 + ib * e2;
+            let y10 = ib * e0 + ic * e1;
+            let y11 = ib * e1 + ic * e2;
+            let p00 = e0 * y00 + e1 * y10;
+            let p01 = e0 * y01 + e1 * y11;
+            let p10 = e1 * y00 + e2 * y10;
+            let p11 = e1 * y01 + e2 * y11;
+            if D {
+                let (dq0, dq1, dq2) = (ds0[i] - m3[i], ds1[i], ds2[i] - m3[i]);
+                let (de0, de1, de2) = (ds0[i] - m2[i], ds1[i], ds2[i] - m2[i]);
+                let dey0 = de0 * y00 + de1 * y10;
+                let dey01 = de0 * y01 + de1 * y11;
+                let dey10 = de1 * y00 + de2 * y10;
+                let dey1 = 0.5 * (dey01 + dey10);
+                let dey2 = de1 * y01 + de2 * y11;
+                let xy00 = dq0 * y00 + dq1 * y10;
+                let xy10 = dq1 * y00 + dq2 * y10;
+                let xy01 = dq0 * y01 + dq1 * y11;
+                let xy11 = dq1 * y01 + dq2 * y11;
+                let yqy0 = y00 * xy00 + y10 * xy10;
+                let yqy1 = y00 * xy01 + y10 * xy11;
+                let yqy2 = y01 * xy01 + y11 * xy11;
+                ds0[i] = ds0[i] - m[i] - 2.0 * dey0 + yqy0;
+                ds1[i] = ds1[i] - 2.0 * dey1 + yqy1;
+                ds2[i] = ds2[i] - m[i] - 2.0 * dey2 + yqy2;
+            }
+            s0[i] = s0[i] - lm[i] - p00;
+            s1[i] -= 0.5 * (p01 + p10);
+            s2[i] = s2[i] - lm[i] - p11;
+            // Out of plane: the scalar string.
+            let mut qo = so[i] + ej.out[i] - d3[i];
+            if qo == 0.0 {
+                qo = k.nudge[i];
+            }
+            nego[i] += (qo < 0.0) as u64;
+            let eo = so[i] - d2[i];
+            let yo = eo / qo;
+            if D {
+                let dqo = dso[i] - m3[i];
+                let deo = dso[i] - m2[i];
+                dso[i] = dso[i] - m[i] - 2.0 * deo * yo + dqo * yo * yo;
+            }
+            so[i] = so[i] - lm[i] - eo * yo;
+        }
+    }
+    for i in 0..L {
+        let keep = if D { 1.0 } else { 0.0 };
+        out[i] = SagChainEval {
+            s_in: [s0[i], s1[i], s2[i]],
+            ds_in: [keep * ds0[i], keep * ds1[i], keep * ds2[i]],
+            s_out: so[i],
+            ds_out: keep * dso[i],
+            below: (neg1[i] + 2 * neg2[i] + nego[i]) as u32,
+        };
+    }
+}
