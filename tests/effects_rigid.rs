@@ -125,7 +125,11 @@ fn sag_effect_hangs_the_cables_and_the_catenary_element_stays_a_chord_model() {
     assert!(s.model.sag);
     let e = f1(&s, s.ee_position_m, 60.0);
     assert!(e.is_ok(), "{:?}", e.error);
-    assert!(e.tensions_n[0] > 187.5 && e.tensions_n[0] < 189.0, "{}", e.tensions_n[0]);
+    assert!(
+        e.tensions_n[0] > 187.5 && e.tensions_n[0] < 189.0,
+        "{}",
+        e.tensions_n[0]
+    );
     // The paper's catenary element is a chord model: with sag off it reproduces Table 8.
     let cat = Scene::from_toml_str(
         &format!(
@@ -160,12 +164,19 @@ fn auto_picks_the_cheapest_model_within_the_tolerance() {
     assert_eq!(s.model.element, ElementKind::Continuous, "{c}");
     assert!(s.model.sag && c.sag, "{c}");
     assert!(c.candidates[0].2 > 1.0, "massless error {c}");
-    assert!(c.candidates[1].2 > 1e-3 && c.candidates[1].2 < 2e-3, "chord continuous {c}");
+    assert!(
+        c.candidates[1].2 > 1e-3 && c.candidates[1].2 < 2e-3,
+        "chord continuous {c}"
+    );
     assert_eq!(c.irvine_lambda2_per_cable.len(), 8, "{c}");
     // A looser tolerance takes the chord continuous string; the reported error is the real
     // one: recompute it at the default pose against the sagged reference.
     let (s, c) = resolve_auto(&with_tol(DEFAULT_SCENE_TOML, 2e-3)).unwrap();
-    assert_eq!((s.model.element, s.model.sag), (ElementKind::Continuous, false), "{c}");
+    assert_eq!(
+        (s.model.element, s.model.sag),
+        (ElementKind::Continuous, false),
+        "{c}"
+    );
     let r = f1(
         &cablevib::estimator::sagged_reference(&s),
         s.ee_position_m,
@@ -176,7 +187,11 @@ fn auto_picks_the_cheapest_model_within_the_tolerance() {
     assert!((got - r).abs() / r <= c.predicted_error * (1.0 + 1e-9));
     // A tolerance no cheap model meets falls back to the reference itself.
     let (s, c) = resolve_auto(&with_tol(DEFAULT_SCENE_TOML, 1e-7)).unwrap();
-    assert_eq!((s.model.element, s.model.sag), (ElementKind::Continuous, true), "{c}");
+    assert_eq!(
+        (s.model.element, s.model.sag),
+        (ElementKind::Continuous, true),
+        "{c}"
+    );
     assert_eq!(c.predicted_error, 0.0, "{c}");
     // Planar robot, loose tolerance: its first mode is the end-effector's, massless is enough.
     let (s, c) = resolve_auto(&with_tol(PLANAR_SCENE_TOML, 2e-3)).unwrap();
