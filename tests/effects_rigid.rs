@@ -146,6 +146,180 @@ fn sag_effect_hangs_the_cables_and_the_catenary_element_stays_a_chord_model() {
 }
 
 #[test]
+fn rigid_body_matches_the_dense_reference_on_random_poses() {
+    let scene = Scene::box_6dof();
+    let mut rng = Rng(7);
+    let mut checked = 0;
+    let mut worst = 0.0f64;
+    let mut worst_ee = 0.0f64;
+    for _ in 0..400 {
+        if checked == 100 {
+            break;
+        }
+        let p = Vector3::new(
+            -0.6 + 1.2 * rng.next(),
+            -0.6 + 1.2 * rng.next(),
+            0.8 + 0.9 * rng.next(),
+        );
+        let axis = Vector3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5).normalize();
+        let angle = 0.15 * (rng.next() - 0.5);
+        let q =
+            nalgebra::UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(axis), angle);
+        let pose = Pose {
+            position_m: p,
+            orientation_wxyz: [q.w, q.i, q.j, q.k],
+        };
+        let t_min = 40.0 + 40.0 * rng.next();
+        let Ok(r) = reference_analysis_at(&scene, &pose, t_min, true) else {
+            continue;
+        };
+        let mut est = Estimator::new(&scene).unwrap();
+        let e = *est.update(&pose, t_min);
+        assert!(e.is_ok(), "{:?} at {p:?}", e.error);
+        assert_eq!(e.stiffness_dim, 6);
+        for (a, b) in e.tensions().iter().zip(&r.tensions_n) {
+            assert!((a - b).abs() <= 1e-9 * b.max(1.0));
+        }
+        let l1 = r.modes.lambda[0];
+        let tol = (8.0 * dense_relative_accuracy(l1, r.modes.lambda_max)).max(1e-9);
+        let err = (e.f1_hz - lambda_to_hz(l1)).abs() / e.f1_hz;
+        assert!(
+            err <= tol,
+            "f1 {} vs dense {}: {err:.2e} > {tol:.2e}",
+            e.f1_hz,
+            lambda_to_hz(l1)
+        );
+        worst = worst.max(err);
+        let thr = scene.model.ee_participation_min;
+        let (k, lee) = r.modes.first_ee_mode(thr).unwrap();
+        if !r.modes.ee_participation[..=k]
+            .iter()
+            .any(|&q| (q - thr).abs() < 1e-3)
+        {
+            let tol = (8.0 * dense_relative_accuracy(lee, r.modes.lambda_max)).max(1e-9);
+            let err = (e.ee_mode_hz - lambda_to_hz(lee)).abs() / e.ee_mode_hz;
+            assert!(
+                err <= tol,
+                "ee {} vs dense {}: {err:.2e}",
+                e.ee_mode_hz,
+                lambda_to_hz(lee)
+            );
+            worst_ee = worst_ee.max(err);
+        }
+        // The 6 × 6 static stiffness equals the dense static condensation.
+        let kd = r.stiffness_n_m;
+        assert!(
+            (e.stiffness_n_m - kd).norm() <= 1e-8 * kd.norm(),
+            "{} vs {kd}",
+            e.stiffness_n_m
+        );
+        checked += 1;
+    }
+    assert_eq!(checked, 100);
+    eprintln!("6-DOF box robot, 100 random poses: worst |Δf1|/f1 {worst:.2e}, end-effector mode {worst_ee:.2e}");
+}
+
+#[test]
+fn rigid_body_keys_are_validated() {
+    let rigid = cablevib::scene::BOX_SCENE_TOML;
+    // Attachment points without the rotation effect are an error, not silently ignored.
+    let e = Scene::from_toml_str(&rigid.replace("rotation = true ", "rotation = false"), "t")
+        .unwrap_err();
+    assert!(e.to_string().contains("attachment"), "{e}");
+    // A non-definite inertia tensor is rejected.
+    let e = Scene::from_toml_str(&rigid.replace("0.6666667]]", "-0.6666667]]"), "t").unwrap_err();
+    assert!(e.to_string().contains("end_effector.inertia"), "{e}");
+    // A non-unit default orientation is rejected.
+    let e = Scene::from_toml_str(
+        &rigid.replace(
+            "orientation = [1.0, 0.0, 0.0, 0.0]",
+            "orientation = [1.0, 1.0, 0.0, 0.0]",
+        ),
+        "t",
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("end_effector.orientation"), "{e}");
+    // Rotation about the platform's vertical axis is held (crossed cables): the 6 × 6
+    // static stiffness is positive definite at the default pose.
+    let s = Scene::from_toml_str(rigid, "t").unwrap();
+    let e = f1(&s, s.ee_position_m, s.t_min_n);
+    assert!(e.is_ok() && e.stiffness6.cholesky().is_some());
+}
+
+#[test]
+fn inverse_t_min_reaches_the_required_frequency() {
+    for (scene, p) in [
+        (
+            Scene::default_scene().with_model(ElementKind::Fem, 10),
+            Vector3::new(0.2, 0.1, 1.0),
+        ),
+        (Scene::planar_paper(), Vector3::new(0.3, -0.4, 0.0)),
+        (Scene::box_6dof(), Vector3::new(0.1, 0.2, 1.3)),
+    ] {
+        let pose = Pose {
+            position_m: p,
+            orientation_wxyz: scene.ee_orientation_wxyz,
+        };
+        let mut est = Estimator::new(&scene).unwrap();
+        let base = *est.update(&pose, scene.t_min_n);
+        assert!(base.is_ok());
+        for factor in [0.7, 1.0, 1.3] {
+            let want = factor * base.f1_hz;
+            let a = match est.t_min_for_f1(&pose, want) {
+                Ok(a) => a,
+                Err(e) => panic!("{}: {e}", scene.name),
+            };
+            // Forward check with a fresh estimator at the answered T_min.
+            let mut fresh = Estimator::new(&scene).unwrap();
+            let e = *fresh.update(&pose, a.t_min_n);
+            assert!(e.is_ok());
+            let rel = (e.f1_hz - want) / want;
+            assert!(
+                (-1e-9..=1e-6).contains(&rel),
+                "{}: f1({}) = {} vs required {want}: {rel:.2e}",
+                scene.name,
+                a.t_min_n,
+                e.f1_hz
+            );
+            // Smallest: a slightly lower T_min misses the requirement.
+            let below = *fresh.update(&pose, a.t_min_n * (1.0 - 1e-4));
+            assert!(
+                below.f1_hz < want,
+                "{}: T_min is not the smallest",
+                scene.name
+            );
+            assert!(a.evaluations <= 100);
+            // Warm-started from a nearby hint (the service's path): the same answer, cheaper.
+            for hint in [a.t_min_n * 1.01, a.t_min_n * 0.99, scene.t_min_n] {
+                let b = est.t_min_for_f1_near(&pose, want, Some(hint)).unwrap();
+                assert!(
+                    (b.t_min_n - a.t_min_n).abs() <= 1e-6 * a.t_min_n,
+                    "hint {hint}: {} vs {}",
+                    b.t_min_n,
+                    a.t_min_n
+                );
+                if (hint / a.t_min_n - 1.0).abs() < 0.015 {
+                    assert!(
+                        b.evaluations < a.evaluations,
+                        "{} vs {}",
+                        b.evaluations,
+                        a.evaluations
+                    );
+                }
+            }
+        }
+        // Unreachable requirements are errors, not clamps.
+        assert!(est.t_min_for_f1(&pose, 100.0 * base.f1_hz).is_err());
+        assert!(est.t_min_for_f1(&pose, f64::NAN).is_err());
+        // The cycle's own state is untouched (the next cycle is warm-started: equal to the
+        // cold first cycle within Newton's stopping tolerance).
+        let again = *est.update(&pose, scene.t_min_n);
+        assert!((again.f1_hz - base.f1_hz).abs() <= 1e-12 * base.f1_hz);
+        assert!(!again.cold_start);
+    }
+}
+
+#[test]
 fn auto_picks_the_cheapest_model_within_the_tolerance() {
     use cablevib::estimator::resolve_auto;
     let with_tol = |text: &str, tol: f64| {
