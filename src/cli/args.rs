@@ -172,6 +172,19 @@ pub fn set_orientation(s: &mut Scene, q_wxyz: [f64; 4]) -> Result<(), CliError> 
     Ok(())
 }
 
+/// Print the one-line warning of [`crate::estimator::sag_warning`] on stderr when `scene`
+/// has sag off but its cables sag enough to change f1 at `position_m` (the scene's pose
+/// elsewhere) by more than its tolerance.
+pub fn warn_if_sag_matters(scene: &Scene, position_m: Option<Vector3<f64>>) {
+    let pose = crate::kinematics::Pose {
+        position_m: position_m.unwrap_or(scene.ee_position_m),
+        orientation_wxyz: scene.ee_orientation_wxyz,
+    };
+    if let Some(w) = crate::estimator::sag_warning(scene, &pose) {
+        eprintln!("{w}");
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -200,18 +213,5 @@ mod tests {
         assert!(parse_quaternion("nan,0,0,1")
             .unwrap_err()
             .contains("finite"));
-    }
-}
-
-/// Print the one-line warning of [`crate::estimator::sag_warning`] on stderr when `scene`
-/// has sag off but its cables sag enough to change f1 at `position_m` (the scene's pose
-/// elsewhere) by more than its tolerance.
-pub fn warn_if_sag_matters(scene: &Scene, position_m: Option<Vector3<f64>>) {
-    let pose = crate::kinematics::Pose {
-        position_m: position_m.unwrap_or(scene.ee_position_m),
-        orientation_wxyz: scene.ee_orientation_wxyz,
-    };
-    if let Some(w) = crate::estimator::sag_warning(scene, &pose) {
-        eprintln!("{w}");
     }
 }
