@@ -1,4 +1,4 @@
-//! Hard cases of the sagged model (issue 13), through the estimator, the library analysis
+//! Hard cases of the sagged model, through the estimator, the library analysis
 //! and the CLI rather than unit by unit:
 //!
 //! - `sag = false` is today's model bit for bit (the paper scenes, every element);

@@ -1,6 +1,6 @@
 //! The crate's sagged model against the independent reference (tests/py/sag_reference.py:
 //! a sagged nonlinear equilibrium of corotational truss chains in numpy/scipy, shares no
-//! code with the crate), on the robots issue 13 names: fast-like and suspended-8 (the
+//! code with the crate), on the large robots: fast-like and suspended-8 (the
 //! shipped sagging scenes) and the paper's spatial robot with a 50× heavier cable (t_min
 //! 30 N, lower cables very slack), each at its centre and off-centre.
 //!
@@ -19,7 +19,7 @@
 //! correction Richardson made, not its remaining error); the difference to the reference's N = 160 level is printed too (it is the two
 //! discretisations' O(1/N²) difference, not an error of either).
 //!
-//! Issue 13's bar is 1e-3 relative for f1..f6 (fem at N = 160), f1 (continuous), the
+//! The required bar is 1e-3 relative for f1..f6 (fem at N = 160), f1 (continuous), the
 //! static stiffness's principal values and the end-effector-end tensions. The measured
 //! differences are far smaller (printed as a table; see the constants for the bars this
 //! test holds them to).
@@ -42,7 +42,7 @@ use sag_cases::*;
 use sag_reference_py::{f64s, run_reference, scene_request, RefAnswer, LEVELS};
 use serde_json::{json, Value};
 
-/// Issue 13's bar: f1..f6 (fem, N = 160), f1 (continuous), the principal stiffnesses and
+/// The required bar: f1..f6 (fem, N = 160), f1 (continuous), the principal stiffnesses and
 /// the end-effector-end tensions within 1e-3 relative of the independent reference.
 const ISSUE_BAR: f64 = 1e-3;
 /// The continuous model, the tensions and L0 against the reference's extrapolation: the
