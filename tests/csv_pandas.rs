@@ -17,6 +17,8 @@ use std::process::Command;
 /// pandas pinned for the check (installs on Python 3.11).
 const PANDAS_VERSION: &str = "2.2.3";
 
+#[path = "common/pinned_venv.rs"]
+mod pinned_venv;
 #[path = "common/sweep_cli.rs"]
 mod sweep_cli;
 use sweep_cli::{AccCli, MapCli, SagCli, TminCli, TrajCli};
@@ -27,41 +29,10 @@ fn target_dir() -> PathBuf {
 
 /// The venv's python, created and provisioned on first use.
 fn venv_python() -> PathBuf {
-    let venv = target_dir().join(format!("venv-pandas-{PANDAS_VERSION}"));
-    let py = venv.join("bin").join("python");
-    let has = |py: &Path| {
-        Command::new(py)
-            .args([
-                "-c",
-                &format!("import pandas, sys; sys.exit(pandas.__version__ != '{PANDAS_VERSION}')"),
-            ])
-            .status()
-            .is_ok_and(|s| s.success())
-    };
-    if !has(&py) {
-        let st = Command::new("python3")
-            .args(["-m", "venv", venv.to_str().unwrap()])
-            .status()
-            .expect("python3 -m venv");
-        assert!(st.success(), "python3 -m venv failed");
-        let st = Command::new(&py)
-            .args([
-                "-m",
-                "pip",
-                "install",
-                "--quiet",
-                "--disable-pip-version-check",
-                &format!("pandas=={PANDAS_VERSION}"),
-            ])
-            .status()
-            .expect("pip install");
-        assert!(st.success(), "pip install pandas=={PANDAS_VERSION} failed");
-        assert!(
-            has(&py),
-            "pandas {PANDAS_VERSION} not importable after install"
-        );
-    }
-    py
+    pinned_venv::pinned_venv_python(
+        &format!("venv-pandas-{PANDAS_VERSION}"),
+        &[("pandas", "pandas", PANDAS_VERSION)],
+    )
 }
 
 /// Columns of a point row (map; trajectory after t_s, angle_deg), documented in

@@ -21,6 +21,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::OnceLock;
 
+#[path = "pinned_venv.rs"]
+mod pinned_venv;
+
 /// numpy pinned for the reference (wheels for Python 3.11).
 pub const NUMPY_VERSION: &str = "2.1.3";
 /// scipy pinned for the reference (wheels for Python 3.11, numpy 2.1).
@@ -42,43 +45,13 @@ pub fn script() -> PathBuf {
 pub fn venv_python() -> &'static Path {
     static PYTHON: OnceLock<PathBuf> = OnceLock::new();
     PYTHON.get_or_init(|| {
-        let venv = manifest().join(format!(
-            "target/py-sagref-numpy{NUMPY_VERSION}-scipy{SCIPY_VERSION}"
-        ));
-        let py = venv.join("bin/python");
-        let check = format!(
-            "import numpy, scipy, sys; sys.exit(numpy.__version__ != '{NUMPY_VERSION}' \
-             or scipy.__version__ != '{SCIPY_VERSION}')"
-        );
-        let has = |py: &Path| {
-            Command::new(py)
-                .args(["-c", &check])
-                .status()
-                .is_ok_and(|s| s.success())
-        };
-        if !has(&py) {
-            let st = Command::new("python3")
-                .args(["-m", "venv"])
-                .arg(&venv)
-                .status()
-                .expect("python3 -m venv");
-            assert!(st.success(), "python3 -m venv failed");
-            let st = Command::new(&py)
-                .args([
-                    "-m",
-                    "pip",
-                    "install",
-                    "--quiet",
-                    "--disable-pip-version-check",
-                ])
-                .arg(format!("numpy=={NUMPY_VERSION}"))
-                .arg(format!("scipy=={SCIPY_VERSION}"))
-                .status()
-                .expect("pip install");
-            assert!(st.success(), "pip install numpy, scipy failed");
-            assert!(has(&py), "numpy/scipy not importable after install");
-        }
-        py
+        pinned_venv::pinned_venv_python(
+            &format!("py-sagref-numpy{NUMPY_VERSION}-scipy{SCIPY_VERSION}"),
+            &[
+                ("numpy", "numpy", NUMPY_VERSION),
+                ("scipy", "scipy", SCIPY_VERSION),
+            ],
+        )
     })
 }
 

@@ -1,0 +1,53 @@
+//! A Python venv under target/ with pinned packages, created and provisioned on first use
+//! (by `python3 -m venv` and pip, by name and version: nothing installed by hand counts).
+//! Included by path from the tests that run Python.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The python of the venv `target/DIR_NAME`, with `packages` — (import name, pip name,
+/// version) — installed at exactly those versions; created when it is missing or stale.
+pub fn pinned_venv_python(dir_name: &str, packages: &[(&str, &str, &str)]) -> PathBuf {
+    let venv = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("target")
+        .join(dir_name);
+    let py = venv.join("bin").join("python");
+    let imports: Vec<&str> = packages.iter().map(|p| p.0).collect();
+    let stale: Vec<String> = packages
+        .iter()
+        .map(|(m, _, v)| format!("{m}.__version__ != '{v}'"))
+        .collect();
+    let check = format!(
+        "import sys, {}; sys.exit({})",
+        imports.join(", "),
+        stale.join(" or ")
+    );
+    let has = |py: &Path| {
+        Command::new(py)
+            .args(["-c", &check])
+            .status()
+            .is_ok_and(|s| s.success())
+    };
+    if !has(&py) {
+        let st = Command::new("python3")
+            .args(["-m", "venv"])
+            .arg(&venv)
+            .status()
+            .expect("python3 -m venv");
+        assert!(st.success(), "python3 -m venv failed");
+        let st = Command::new(&py)
+            .args([
+                "-m",
+                "pip",
+                "install",
+                "--quiet",
+                "--disable-pip-version-check",
+            ])
+            .args(packages.iter().map(|(_, name, v)| format!("{name}=={v}")))
+            .status()
+            .expect("pip install");
+        assert!(st.success(), "pip install {packages:?} failed");
+        assert!(has(&py), "{packages:?} not importable after install");
+    }
+    py
+}
