@@ -7,6 +7,9 @@ use cablevib::kinematics::Pose;
 use cablevib::modal::{dense_relative_accuracy, Mode};
 use cablevib::scene::{ElementKind, Scene};
 
+#[path = "common/pinned_venv.rs"]
+mod pinned_venv;
+
 /// Safety factor on the dense solver's backward-error bound ε·λ_max/λ (the constant of a
 /// backward-stable eigensolver's error is a modest multiple of ε).
 const DENSE_SAFETY: f64 = 8.0;
@@ -85,28 +88,7 @@ const CERT_REL: f64 = 1e-10;
 
 /// A venv under target/ with mpmath pinned; returns its python.
 fn mpmath_python() -> std::path::PathBuf {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/py-mpmath-1.3.0");
-    let py = root.join("bin/python");
-    let ok = |py: &std::path::Path| {
-        std::process::Command::new(py)
-            .args(["-c", "import mpmath; assert mpmath.__version__ == '1.3.0'"])
-            .status()
-            .is_ok_and(|s| s.success())
-    };
-    if !ok(&py) {
-        let st = std::process::Command::new("python3")
-            .args(["-m", "venv"])
-            .arg(&root)
-            .status()
-            .expect("python3 -m venv");
-        assert!(st.success(), "python3 -m venv failed");
-        let st = std::process::Command::new(root.join("bin/pip"))
-            .args(["install", "--quiet", "mpmath==1.3.0"])
-            .status()
-            .expect("pip");
-        assert!(st.success(), "pip install mpmath==1.3.0 failed");
-    }
-    py
+    pinned_venv::pinned_venv_python("py-mpmath-1.3.0", &[("mpmath", "mpmath", "1.3.0")])
 }
 
 /// `cablevib analyze ARGS --json` parsed.

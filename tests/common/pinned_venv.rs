@@ -1,9 +1,18 @@
 //! A Python venv under target/ with pinned packages, created and provisioned on first use
 //! (by `python3 -m venv` and pip, by name and version: nothing installed by hand counts).
 //! Included by path from the tests that run Python.
+//!
+//! Tests of one binary run in parallel threads, and several binaries may share a venv, so
+//! the check-and-create step runs under an in-process mutex and an exclusive lock on
+//! `target/DIR_NAME.lock`: the second caller waits, then finds the venv ready.
 
+use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::Mutex;
+
+/// Serialises the venv set-up between the threads of one test binary.
+static SETUP: Mutex<()> = Mutex::new(());
 
 /// The python of the venv `target/DIR_NAME`, with `packages` — (import name, pip name,
 /// version) — installed at exactly those versions; created when it is missing or stale.
@@ -28,6 +37,11 @@ pub fn pinned_venv_python(dir_name: &str, packages: &[(&str, &str, &str)]) -> Pa
             .status()
             .is_ok_and(|s| s.success())
     };
+    let _in_process = SETUP.lock().unwrap_or_else(|e| e.into_inner());
+    std::fs::create_dir_all(venv.parent().expect("target dir")).expect("create target/");
+    let lock = File::create(venv.with_file_name(format!("{dir_name}.lock")))
+        .expect("create the venv lock file");
+    lock.lock().expect("lock the venv lock file");
     if !has(&py) {
         let st = Command::new("python3")
             .args(["-m", "venv"])
