@@ -25,6 +25,7 @@
 //! (the first column of `up_frame(g)` for a vertical chord), n_i = h_i × up. With every
 //! w_i = 0 the tangents are the chords and the result is the chord solver's.
 
+mod newton;
 mod solve;
 
 use super::{TensionError, TensionParams, TensionSolver};
@@ -44,6 +45,9 @@ pub struct SagTensionParams {
     pub sag: SagParams,
     /// The QP's parameters.
     pub tension: TensionParams,
+    /// Accelerate the passes by Newton's step on the optimality system (`newton.rs`);
+    /// off, every pass is the plain fixed-point update.
+    pub newton: bool,
 }
 
 impl Default for SagTensionParams {
@@ -53,6 +57,7 @@ impl Default for SagTensionParams {
             direction_tol_rad: 1e-12,
             sag: SagParams::default(),
             tension: TensionParams::default(),
+            newton: true,
         }
     }
 }
@@ -133,6 +138,11 @@ pub struct SagTensionSolver {
     n_out: Vec<Vector3<f64>>,
     up: Vector3<f64>,
     t_end: Vec<f64>,
+    /// d t_i/dT_e,i of each cable's world end tangent at its current tension, 1/N.
+    dtan: Vec<Vector3<f64>>,
+    /// Newton's input and output (`newton.rs`).
+    newton_in: Vec<newton::NewtonCable>,
+    newton_out: Vec<f64>,
     have_warm: bool,
     info: SagTensionInfo,
 }

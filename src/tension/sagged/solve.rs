@@ -1,7 +1,9 @@
 //! `SagTensionSolver`'s construction, fixed-point solve and accessors (the method is
 //! documented in the module docs).
 
+use super::newton::{newton_step, NewtonCable};
 use super::{SagCable, SagTensionError, SagTensionInfo, SagTensionParams, SagTensionSolver};
+use crate::tension::Bound;
 use crate::kinematics::{up_frame, Geometry};
 use crate::sag::{CableChord, Catenary, SagError};
 use crate::tension::TensionSolver;
@@ -47,6 +49,9 @@ impl SagTensionSolver {
             n_out: vec![Vector3::zeros(); n_cables],
             up: Vector3::z(),
             t_end: vec![0.0; n_cables],
+            dtan: vec![Vector3::zeros(); n_cables],
+            newton_in: vec![NewtonCable::new(&Vector3::x(), &Vector3::zeros(), &Vector3::zeros(), 0.0, Bound::Free); n_cables],
+            newton_out: vec![0.0; n_cables],
             have_warm: false,
             info: SagTensionInfo::default(),
         }
@@ -150,6 +155,9 @@ impl SagTensionSolver {
                 converged = true;
                 break;
             }
+            if self.params.newton {
+                self.accelerate(w, lo, hi)?;
+            }
         }
         self.info = SagTensionInfo {
             iterations,
@@ -166,6 +174,36 @@ impl SagTensionSolver {
         Ok(())
     }
 
+    /// Replace the QP's tensions by Newton's step (`newton.rs`) from them, on the QP's
+    /// active set, with the catenaries at the new tensions; kept only when every free
+    /// tension stays strictly inside its bounds and every catenary exists (otherwise the
+    /// QP's tensions and catenaries are restored: the plain pass).
+    fn accelerate(&mut self, w: &[f64; 6], lo: &[f64], hi: &[f64]) -> Result<(), SagTensionError> {
+        let n = self.t_end.len();
+        let bounds = self.qp.bounds();
+        for i in 0..n {
+            let g = &self.tangent_geom;
+            self.newton_in[i] =
+                NewtonCable::new(&g.unit[i], &self.dtan[i], &g.arm_m[i], self.t_end[i], bounds[i]);
+        }
+        let proposed = newton_step(&self.newton_in[..n], w, &mut self.newton_out);
+        let inside = (0..n).all(|i| {
+            self.newton_in[i].bound != Bound::Free
+                || (self.newton_out[i] > lo[i] && self.newton_out[i] < hi[i])
+        });
+        if !(proposed && inside) {
+            return Ok(());
+        }
+        self.t_end.copy_from_slice(&self.newton_out[..n]);
+        if self.catenaries().is_err() {
+            for i in 0..n {
+                self.t_end[i] = self.newton_in[i].t_n;
+            }
+            self.catenaries()?;
+        }
+        Ok(())
+    }
+
     /// Each cable's catenary for its current T_e and its world end tangent; returns the
     /// largest change of direction, rad.
     fn catenaries(&mut self) -> Result<f64, SagTensionError> {
@@ -173,7 +211,7 @@ impl SagTensionSolver {
         for i in 0..self.t_end.len() {
             let warm = self.tracks[i].as_ref().filter(|w| w.catenary.l0_m > 0.0);
             let chord = &self.chords[i];
-            let (cat, _, track) =
+            let (cat, info, track) =
                 match chord.solve_end_tension_tracked(self.t_end[i], warm, &self.params.sag) {
                     Ok(ok) => ok,
                     Err(e @ SagError::TooSlack { .. }) => {
@@ -204,6 +242,12 @@ impl SagTensionSolver {
             }
             let [c, s] = cat.tangent_at(cat.l0_m);
             let t = self.h[i] * c + self.up * s;
+            let dphi = if info.dphi_dt_end_rad_n.is_finite() {
+                info.dphi_dt_end_rad_n
+            } else {
+                0.0
+            };
+            self.dtan[i] = (self.up * c - self.h[i] * s) * dphi;
             let old = self.tangent_geom.unit[i];
             change = change.max(old.cross(&t).norm().atan2(old.dot(&t)));
             self.tangent_geom.unit[i] = t;

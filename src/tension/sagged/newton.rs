@@ -1,0 +1,146 @@
+//! Newton's step on the fixed point's optimality system, the active set held (the
+//! accelerator of [`super::SagTensionSolver`]'s passes).
+//!
+//! A fixed point T = QP(A(T)) with free cables F and cables B on a bound satisfies, with
+//! the QP's multipliers μ (one per wrench row) and a_i(T_i) cable i's column of A (world end
+//! tangent t_i and r_i × t_i), both of which depend on its own tension only:
+//!
+//! ```text
+//!   r₁,i = T_i − a_i(T_i)·μ = 0   (i ∈ F: stationarity of ½‖T‖² − μᵀ(A T − w))
+//!   r₂   = Σ_i a_i(T_i) T_i − w = 0   (equilibrium, every cable)
+//! ```
+//!
+//! With a_i′ = dφ_i/dT_i (−s h_i + c up, r_i × …) the derivative of the column (φ_i the
+//! end tangent's angle above the horizontal, c, s its cosine and sine), d_i = 1 − a_i′·μ and
+//! b_i = a_i + a_i′ T_i, Newton's step is ΔT_i = (a_i·Δμ − r₁,i)/d_i (i ∈ F, ΔT = 0 on B)
+//! and, from the equilibrium row, the 6 × 6 system
+//!
+//! ```text
+//!   (Σ_F b_i a_iᵀ / d_i) Δμ = −r₂ + Σ_F b_i r₁,i / d_i.
+//! ```
+//!
+//! Rows of A that are zero for every cable (the moment rows of a point mass, the
+//! out-of-plane rows of a planar robot) are left out (Δμ = 0 there). The start μ is the
+//! least-squares multiplier of T_F on the current columns. Near the solution the step
+//! converges quadratically where the plain passes contract linearly (by a factor of 0.3 to
+//! 0.6 per pass on sagging robots); it is only proposed: the caller takes it when every
+//! d_i is safely positive and the new tensions stay inside their bounds, and the next QP
+//! pass decides the active set and convergence as before.
+
+use crate::tension::Bound;
+use nalgebra::{Matrix6, Vector3, Vector6};
+
+/// A row of A whose entries are all below this fraction of the largest entry is a zero row.
+const ZERO_ROW_REL: f64 = 1e-14;
+/// d_i = 1 − a_i′·μ below this: the step is not trusted (the cable's turn with tension
+/// rivals its stationarity).
+const MIN_DIAGONAL: f64 = 0.1;
+
+/// One cable's data for the step: its column, the column's derivative with its tension,
+/// its tension and whether it is free.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct NewtonCable {
+    /// a_i: (t_i, r_i × t_i).
+    pub(super) a: Vector6<f64>,
+    /// da_i/dT_i, 1/N.
+    pub(super) da: Vector6<f64>,
+    /// T_i, N.
+    pub(super) t_n: f64,
+    /// Which bound the QP put it on.
+    pub(super) bound: Bound,
+}
+
+impl NewtonCable {
+    /// Cable data from its end tangent `t`, the tangent's turn `dt_dt` (1/N), its arm and
+    /// tension.
+    pub(super) fn new(
+        t: &Vector3<f64>,
+        dt_dt: &Vector3<f64>,
+        arm_m: &Vector3<f64>,
+        t_n: f64,
+        bound: Bound,
+    ) -> NewtonCable {
+        let m = arm_m.cross(t);
+        let dm = arm_m.cross(dt_dt);
+        NewtonCable {
+            a: Vector6::new(t.x, t.y, t.z, m.x, m.y, m.z),
+            da: Vector6::new(dt_dt.x, dt_dt.y, dt_dt.z, dm.x, dm.y, dm.z),
+            t_n,
+            bound,
+        }
+    }
+}
+
+/// Newton's new tensions for `cables` and wrench `w` into `out` (N); false when the step is
+/// not defined (a singular system, a small d_i or a non-finite value): the caller keeps the
+/// plain pass.
+pub(super) fn newton_step(cables: &[NewtonCable], w: &[f64; 6], out: &mut [f64]) -> bool {
+    let rows = nonzero_rows(cables);
+    let Some(mu) = least_squares_multiplier(cables, &rows) else {
+        return false;
+    };
+    let mut m = Matrix6::<f64>::zeros();
+    let mut rhs = -Vector6::from_column_slice(w);
+    for c in cables {
+        rhs += c.a * c.t_n;
+    }
+    rhs = -rhs;
+    for c in cables.iter().filter(|c| c.bound == Bound::Free) {
+        let d = 1.0 - c.da.dot(&mu);
+        if !(d >= MIN_DIAGONAL) {
+            return false;
+        }
+        let b = c.a + c.da * c.t_n;
+        let r1 = c.t_n - c.a.dot(&mu);
+        m += b * c.a.transpose() / d;
+        rhs += b * (r1 / d);
+    }
+    let Some(dmu) = solve_on_rows(m, rhs, &rows) else {
+        return false;
+    };
+    for (c, o) in cables.iter().zip(out.iter_mut()) {
+        *o = match c.bound {
+            Bound::Free => {
+                let d = 1.0 - c.da.dot(&mu);
+                c.t_n + (c.a.dot(&dmu) - (c.t_n - c.a.dot(&mu))) / d
+            }
+            _ => c.t_n,
+        };
+    }
+    out.iter().all(|t| t.is_finite())
+}
+
+/// Which of the six rows carry an entry of some cable's column.
+fn nonzero_rows(cables: &[NewtonCable]) -> [bool; 6] {
+    let scale = cables.iter().map(|c| c.a.amax()).fold(0.0, f64::max);
+    let mut rows = [false; 6];
+    for (r, keep) in rows.iter_mut().enumerate() {
+        *keep = cables.iter().any(|c| c.a[r].abs() > ZERO_ROW_REL * scale);
+    }
+    rows
+}
+
+/// μ minimising ‖T_F − A_Fᵀ μ‖ on the kept rows: (A_F A_Fᵀ) μ = A_F T_F.
+fn least_squares_multiplier(cables: &[NewtonCable], rows: &[bool; 6]) -> Option<Vector6<f64>> {
+    let mut g = Matrix6::<f64>::zeros();
+    let mut rhs = Vector6::zeros();
+    for c in cables.iter().filter(|c| c.bound == Bound::Free) {
+        g += c.a * c.a.transpose();
+        rhs += c.a * c.t_n;
+    }
+    solve_on_rows(g, rhs, rows)
+}
+
+/// Solve m x = rhs on the kept rows and columns (x = 0 on the others) by full-pivot LU.
+fn solve_on_rows(mut m: Matrix6<f64>, mut rhs: Vector6<f64>, rows: &[bool; 6]) -> Option<Vector6<f64>> {
+    for (r, &keep) in rows.iter().enumerate() {
+        if !keep {
+            m.row_mut(r).fill(0.0);
+            m.column_mut(r).fill(0.0);
+            m[(r, r)] = 1.0;
+            rhs[r] = 0.0;
+        }
+    }
+    let x = m.full_piv_lu().solve(&rhs)?;
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
