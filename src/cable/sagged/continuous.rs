@@ -82,7 +82,8 @@
 //! tol: e.g. level cable, λ² ≈ 100, tol 1e-7: M = 75, measured errors ≤ 3.5e-8 over the
 //! first seven modes, 4.4e-11 on the first. A real-time caller that only needs the
 //! robot's first frequency sets n_hw to the half-waves its λ reaches (M ∝ √n_hw) and
-//! tol = 1e-7 (M ∝ tol^(−¼)). The rule:
+//! a looser tol (M ∝ tol^(−¼)): the rule bounds the worst mode up to n_hw, and the robot's
+//! first mode comes out 50 to 500 times better (`SagContinuousParams::realtime`). The rule:
 //!
 //! ```text
 //!   M = max(⌈(C_ERR ν² (n_hw π)² / tol)^¼⌉, ⌈ν / NU_PER_STEP⌉,
@@ -155,18 +156,21 @@ pub struct SagContinuousParams {
     /// Transverse half-waves along the cable up to which `rel_tol` is kept (sets λ_max).
     pub max_halfwaves: f64,
     /// Relative eigenvalue error aimed at below λ_max (by the error model): 1e-9 by default
-    /// (offline); 1e-7 suits the real-time path (the physics' own error is ~1e-3).
+    /// (offline); 1e-5 for the real-time path (`realtime`).
     pub rel_tol: f64,
 }
 
 impl SagContinuousParams {
     /// The real-time configuration: only f1 is solved per cycle, and f1 lies below every
     /// cable's first blocked (end held) eigenvalue, i.e. within its first transverse
-    /// half-wave; 1e-7 relative there is four orders below the model's own physical error.
+    /// half-wave. The rule's 1e-5 bounds every mode up to that half-wave; the robot's f1
+    /// was measured within 1.8e-7 of the offline mesh (1e-9, four half-waves) around the
+    /// bench circles of the shipped sag scenes (tests/sag_realtime.rs checks 1e-6), three
+    /// orders below the physics' own error (~1e-3), with a third of the steps of 1e-7.
     pub fn realtime() -> SagContinuousParams {
         SagContinuousParams {
             max_halfwaves: 1.0,
-            rel_tol: 1e-7,
+            rel_tol: 1e-5,
         }
     }
 }
