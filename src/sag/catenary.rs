@@ -49,7 +49,7 @@ fn x_catenary(h: f64, va: f64, v: f64, ta: f64, t: f64, w: f64, s: f64) -> f64 {
 pub(super) fn x_catenary_over_h(c: &Catenary) -> f64 {
     let (h, va, w, s) = (c.h_n, c.v_anchor_n, c.w_n_m, c.l0_m);
     let v = c.v_end_n();
-    let (ta, t) = (h.hypot(va), h.hypot(v));
+    let (ta, t) = (super::hypot_fast(h, va), super::hypot_fast(h, v));
     if va < 0.0 && v > 0.0 {
         return ((v / h).asinh() + (-va / h).asinh()) / w;
     }
@@ -89,7 +89,7 @@ impl Catenary {
 
     /// T(s) = √(H² + V(s)²), N.
     pub fn tension_at_n(&self, s_m: f64) -> f64 {
-        self.h_n.hypot(self.v_at_n(s_m))
+        super::hypot_fast(self.h_n, self.v_at_n(s_m))
     }
 
     /// Anchor-end tension T_a = T(0), N.
@@ -116,8 +116,8 @@ impl Catenary {
     pub fn point_at_m(&self, s_m: f64) -> [f64; 2] {
         let (h, va, w) = (self.h_n, self.v_anchor_n, self.w_n_m);
         let v = self.v_at_n(s_m);
-        let ta = h.hypot(va);
-        let t = h.hypot(v);
+        let ta = super::hypot_fast(h, va);
+        let t = super::hypot_fast(h, v);
         let x = h * s_m / self.ea_n + x_catenary(h, va, v, ta, t, w, s_m);
         let z = 0.5 * s_m * (va + v) / self.ea_n + z_catenary(va, v, ta, t, s_m);
         [x, z]
@@ -132,7 +132,7 @@ impl Catenary {
     /// zero tension (a slack point) the tangent is undefined; (0, 1) is returned there.
     pub fn tangent_at(&self, s_m: f64) -> [f64; 2] {
         let v = self.v_at_n(s_m);
-        let t = self.h_n.hypot(v);
+        let t = super::hypot_fast(self.h_n, v);
         if t > 0.0 {
             [self.h_n / t, v / t]
         } else {
@@ -172,7 +172,7 @@ impl Catenary {
     /// 0 for a vertical cable (H = 0 or span 0), where the weight is along the chord.
     pub fn irvine_lambda2(&self) -> f64 {
         let [x, z] = self.end_point_m();
-        let len = x.hypot(z);
+        let len = super::hypot_fast(x, z);
         if !(self.h_n > 0.0 && x > 0.0 && len > 0.0) {
             return 0.0;
         }

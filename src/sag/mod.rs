@@ -67,4 +67,21 @@ mod flexibility;
 mod solve;
 
 pub use catenary::Catenary;
+
+/// √(a² + b²) by one square root where a² + b² neither overflows nor leaves the normal
+/// range (every force and length of a cable), else the library's `hypot`: within ~1 ulp
+/// like `hypot`, at a fifth of its cost on the per-cycle path.
+#[inline]
+pub(crate) fn hypot_fast(a: f64, b: f64) -> f64 {
+    let s = a * a + b * b;
+    if s > HYPOT_SQUARE_MIN && s < HYPOT_SQUARE_MAX {
+        s.sqrt()
+    } else {
+        a.hypot(b)
+    }
+}
+
+/// The squared range where [`hypot_fast`] squares: normal numbers, far from overflow.
+const HYPOT_SQUARE_MIN: f64 = 1e-290;
+const HYPOT_SQUARE_MAX: f64 = 1e290;
 pub use solve::{CableChord, SagError, SagInfo, SagParams, SagTrack};

@@ -135,7 +135,7 @@ pub struct SagTrack {
 impl CableChord {
     /// Chord length L, m.
     pub fn length_m(&self) -> f64 {
-        self.span_m.hypot(self.rise_m)
+        super::hypot_fast(self.span_m, self.rise_m)
     }
 
     pub(super) fn validate(&self) -> Result<(), SagError> {

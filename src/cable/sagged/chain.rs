@@ -101,7 +101,7 @@ impl SagChain {
         for j in 0..n_el {
             let next = point(l0_total_m * (j + 1) as f64 / n_el as f64);
             let (dx, dz) = (next[0] - prev[0], next[1] - prev[1]);
-            let len = dx.hypot(dz);
+            let len = crate::sag::hypot_fast(dx, dz);
             let axial = tension(l0_total_m * (j as f64 + 0.5) / n_el as f64);
             if !(len > 0.0 && len.is_finite() && axial > 0.0 && axial.is_finite()) {
                 self.clear();
