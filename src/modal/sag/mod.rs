@@ -207,7 +207,7 @@ impl SagModalSolver {
         let mesh = p.cont[i]
             .set(cat, mu_kg_m)
             .map_err(|e| SagLoadError::Continuous(i, e))?;
-        p.cont_static[i] = p.cont[i].eval(0.0);
+        p.cont_static[i] = p.cont[i].static_eval();
         Ok(mesh)
     }
 

@@ -128,8 +128,12 @@ impl SagTensionSolver {
     fn fixed_point(&mut self, w: &[f64; 6], lo: &[f64], hi: &[f64]) -> Result<(), SagTensionError> {
         let mut change = f64::INFINITY;
         if self.have_warm {
-            // Start from the last end tensions on the new chords.
+            // Start from the last end tensions on the new chords, and Newton's step from
+            // them on the last active set (the first QP pass then starts near the answer).
             change = self.catenaries()?;
+            if self.params.newton {
+                self.accelerate(w, lo, hi)?;
+            }
         }
         let mut iterations = 0;
         let mut converged = false;
