@@ -326,3 +326,63 @@ fn newton_passes_find_the_plain_fixed_point() {
         );
     }
 }
+
+/// Where a very slack cable's tangent turns fast with its tension, the plain passes move
+/// away from the fixed point (suspended-8 along the bench's 1.5 m circle, poses 0-160 ms:
+/// they end `NoConvergence` there), and Newton's step reaches it. Checked without the
+/// solver's own convergence test: the reported tensions are the chord QP's answer on the
+/// reported end tangents (a fixed point T = QP(A(T)), 1e-9 relative: the tangents stop
+/// moving at 1e-12 rad), and the catenaries' end forces balance the load to 1e-9 of it.
+#[test]
+fn newton_reaches_fixed_points_the_plain_passes_leave() {
+    let s = Scene::load("scenes/suspended_8.toml").unwrap();
+    let n = s.n_cables();
+    let (lo, hi) = bounds(&s, s.t_min_n);
+    let gn = s.gravity_m_s2.norm();
+    let mats: Vec<SagCable> = s
+        .cables
+        .iter()
+        .map(|c| SagCable {
+            ea_n: c.ea_n(),
+            w_n_m: c.mass_per_length_kg_m * gn,
+        })
+        .collect();
+    let plain_params = SagTensionParams {
+        newton: false,
+        ..SagTensionParams::default()
+    };
+    let mut newton = SagTensionSolver::new(n, SagTensionParams::default());
+    let mut plain = SagTensionSolver::new(n, plain_params);
+    let mut qp = TensionSolver::new(n, TensionParams::default());
+    let mut plain_failures = 0;
+    let weight = s.wrench_n().norm();
+    for k in 0..=160 {
+        let p = cablevib::trajectory::circle_pose_with_radius(&s, k, 4.0, 1.5).position_m;
+        let g = geometry(&s, p);
+        let w = wrench6(&s);
+        if plain.solve(&g, &mats, &s.gravity_m_s2, &w, &lo, &hi).is_err() {
+            plain_failures += 1;
+        }
+        let t = newton
+            .solve(&g, &mats, &s.gravity_m_s2, &w, &lo, &hi)
+            .unwrap_or_else(|e| panic!("pose {k}: {e}"))
+            .to_vec();
+        let mut tangents = g.clone();
+        tangents.unit.copy_from_slice(newton.end_tangents());
+        let again = qp.solve_wrench_bounds(&tangents, &w, &lo, &hi).unwrap();
+        let mut force = s.gravity_m_s2 * s.ee_mass_kg;
+        for i in 0..n {
+            assert!(
+                (again[i] - t[i]).abs() <= 1e-9 * t[i],
+                "pose {k} cable {i}: QP on the end tangents {} N vs {} N",
+                again[i],
+                t[i]
+            );
+            let c = newton.catenaries_of()[i];
+            let [h, up, _] = newton.basis(i);
+            force -= h * c.h_n + up * c.v_end_n();
+        }
+        assert!(force.amax() <= 1e-9 * weight, "pose {k}: residual {force:?} N");
+    }
+    assert!(plain_failures > 0, "the plain passes converged at every pose");
+}

@@ -23,18 +23,22 @@
 //! out-of-plane rows of a planar robot) are left out (Δμ = 0 there). The start μ is the
 //! least-squares multiplier of T_F on the current columns. Near the solution the step
 //! converges quadratically where the plain passes contract linearly (by a factor of 0.3 to
-//! 0.6 per pass on sagging robots); it is only proposed: the caller takes it when every
-//! d_i is safely positive and the new tensions stay inside their bounds, and the next QP
-//! pass decides the active set and convergence as before.
+//! 0.6 per pass on sagging robots) or not at all: with a very slack cable d_i turns
+//! negative (its tangent turns so fast with its tension that the plain passes move away
+//! from the fixed point), and Newton's step still reaches it. It is only proposed: the
+//! caller takes it when every |d_i| is safely above zero and the new tensions stay inside
+//! their bounds, and the next QP pass decides the active set and convergence as before.
 
 use crate::tension::Bound;
 use nalgebra::{Matrix6, Vector3, Vector6};
 
 /// A row of A whose entries are all below this fraction of the largest entry is a zero row.
 const ZERO_ROW_REL: f64 = 1e-14;
-/// d_i = 1 − a_i′·μ below this: the step is not trusted (the cable's turn with tension
-/// rivals its stationarity).
-const MIN_DIAGONAL: f64 = 0.1;
+/// |d_i| = |1 − a_i′·μ| below this: the step is not defined (the cable's turn with its
+/// tension cancels its stationarity row). d_i < 0 is allowed: there the plain passes are
+/// unstable (they move away from the fixed point by the factor 1/|d_i| − … per pass) and
+/// only Newton's step reaches it.
+const MIN_DIAGONAL: f64 = 1e-3;
 
 /// One cable's data for the step: its column, the column's derivative with its tension,
 /// its tension and whether it is free.
@@ -87,7 +91,7 @@ pub(super) fn newton_step(cables: &[NewtonCable], w: &[f64; 6], out: &mut [f64])
     rhs = -rhs;
     for c in cables.iter().filter(|c| c.bound == Bound::Free) {
         let d = 1.0 - c.da.dot(&mu);
-        if !(d >= MIN_DIAGONAL) {
+        if !(d.abs() >= MIN_DIAGONAL) {
             return false;
         }
         let b = c.a + c.da * c.t_n;
