@@ -21,6 +21,9 @@ const VERTICAL_REL: f64 = 1e-14;
 const STALL_MAX_RAD: f64 = 1e-10;
 /// A pass that shrinks the directions' change by less than this factor has stalled.
 const STALL_CONTRACTION: f64 = 0.5;
+/// Newton's steps stop for the rest of a solve after a pass that shrank the directions'
+/// change by less than this factor (near the answer they shrink it quadratically).
+const NEWTON_CONTRACTION: f64 = 1.0;
 
 impl SagTensionSolver {
     /// Allocate for `n_cables` cables.
@@ -127,7 +130,8 @@ impl SagTensionSolver {
     /// The passes of the module docs.
     fn fixed_point(&mut self, w: &[f64; 6], lo: &[f64], hi: &[f64]) -> Result<(), SagTensionError> {
         let mut change = f64::INFINITY;
-        if self.have_warm {
+        let warm = self.have_warm;
+        if warm {
             // Start from the last end tensions on the new chords, and Newton's step from
             // them on the last active set (the first QP pass then starts near the answer).
             change = self.catenaries()?;
@@ -137,6 +141,7 @@ impl SagTensionSolver {
         }
         let mut iterations = 0;
         let mut converged = false;
+        let mut newton = self.params.newton;
         while iterations < self.params.max_iterations {
             iterations += 1;
             let before = change;
@@ -159,7 +164,11 @@ impl SagTensionSolver {
                 converged = true;
                 break;
             }
-            if self.params.newton {
+            // Newton's steps continue while the passes contract; otherwise (its active set
+            // or linearisation is wrong, e.g. far from the answer on a cold start where a
+            // cable is about to leave its bound) the plain passes take over.
+            newton &= warm || change <= NEWTON_CONTRACTION * before;
+            if newton {
                 self.accelerate(w, lo, hi)?;
             }
         }
