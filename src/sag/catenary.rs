@@ -1,9 +1,24 @@
 //! One cable's elastic catenary: tensions, profile, tangent, sag and Irvine's λ², in the
 //! cancellation-free forms of the module docs.
 
-/// Below this u = w s q the factor log1p(u)/u is summed as its series 1 − u/2 + u²/3 − u³/4
-/// (truncation error u⁴/5 < 2e-17), so that w = 0 and subnormal u need no special case.
-const LOG1P_SERIES_BELOW: f64 = 1e-4;
+/// Below this u = w s q the factor log1p(u)/u is summed as its series Σ (−u)^k/(k + 1),
+/// k ≤ 10 (truncation error u¹¹/12 < 2e-18), so that w = 0 and subnormal u need no special
+/// case, and a short piece of cable (an element's chord) needs no logarithm.
+const LOG1P_SERIES_BELOW: f64 = 0.03;
+/// 1/(k + 1), k = 0 ..= 10: the series' coefficients (alternating signs in the Horner form).
+const LOG1P_RATIO_SERIES: [f64; 11] = [
+    1.0,
+    1.0 / 2.0,
+    1.0 / 3.0,
+    1.0 / 4.0,
+    1.0 / 5.0,
+    1.0 / 6.0,
+    1.0 / 7.0,
+    1.0 / 8.0,
+    1.0 / 9.0,
+    1.0 / 10.0,
+    1.0 / 11.0,
+];
 
 /// One cable's elastic catenary in its vertical plane (see module docs for coordinates).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -23,7 +38,11 @@ pub struct Catenary {
 /// log1p(u)/u for u ≥ 0, accurate to an ulp or two (1 at u = 0).
 fn log1p_ratio(u: f64) -> f64 {
     if u < LOG1P_SERIES_BELOW {
-        1.0 - u * (0.5 - u * (1.0 / 3.0 - u * 0.25))
+        // Horner from the u¹⁰ term: 1 − u/2 + u²/3 − … + u¹⁰/11.
+        LOG1P_RATIO_SERIES
+            .iter()
+            .rev()
+            .fold(0.0, |acc, &c| c - u * acc)
     } else {
         u.ln_1p() / u
     }
@@ -120,6 +139,19 @@ impl Catenary {
         let t = super::hypot_fast(h, v);
         let x = h * s_m / self.ea_n + x_catenary(h, va, v, ta, t, w, s_m);
         let z = 0.5 * s_m * (va + v) / self.ea_n + z_catenary(va, v, ta, t, s_m);
+        [x, z]
+    }
+
+    /// The chord from the point at s1 to the point at s2 ≥ s1 (unstretched arclengths), m:
+    /// (x, z)(s2) − (x, z)(s1) by the same closed forms with the point at s1 as the anchor,
+    /// so no cancellation between two absolute positions (an element's chord in `fem`).
+    pub fn chord_between_m(&self, s1_m: f64, s2_m: f64) -> [f64; 2] {
+        let (h, w) = (self.h_n, self.w_n_m);
+        let (v1, v2) = (self.v_at_n(s1_m), self.v_at_n(s2_m));
+        let (t1, t2) = (super::hypot_fast(h, v1), super::hypot_fast(h, v2));
+        let l = s2_m - s1_m;
+        let x = h * l / self.ea_n + x_catenary(h, v1, v2, t1, t2, w, l);
+        let z = 0.5 * l * (v1 + v2) / self.ea_n + z_catenary(v1, v2, t1, t2, l);
         [x, z]
     }
 
@@ -307,6 +339,55 @@ mod tests {
                     (p[j] - acc[j]).abs() < 1e-13 * len,
                     "w {w} h {h} va {va}: {p:?} vs {acc:?}"
                 );
+            }
+        }
+    }
+
+    /// An element's chord (`chord_between_m`, the closed forms from a point inside the
+    /// cable) equals the composite-Simpson quadrature of (1 + T/EA)(H, V)/T over its piece
+    /// (an independent formulation, 2,000 intervals: error far below 1e-15 relative) to
+    /// 1e-14 of its length, for pieces of 1/40 and 1/3 of the cable before, across and after
+    /// the low point, a tiny weight, a heavy cable and a vertical one.
+    #[test]
+    fn element_chord_equals_the_quadrature_of_its_tangent() {
+        for &(w, h, va) in &[
+            (25e-9, 30.0, 40.0),
+            (25e-9, 30.0, -40.0),
+            (20.0, 30.0, -25.0),
+            (20.0, 3.0, 5.0),
+            (10.0, 0.0, -100.0),
+        ] {
+            let c = cat(2.0, 1e4, w, h, va);
+            for &(s1, s2) in &[(0.0, 0.05), (1.2, 1.25), (1.95, 2.0), (0.5, 1.1666), (1.0, 2.0)] {
+                let n = 2_000;
+                let dx = (s2 - s1) / n as f64;
+                let f = |s: f64| {
+                    let v = va + w * s;
+                    let t = h.hypot(v);
+                    let k = 1.0 + t / 1e4;
+                    [k * h / t, k * v / t]
+                };
+                let mut acc = [0.0; 2];
+                for i in 0..=n {
+                    let wt = if i == 0 || i == n {
+                        1.0
+                    } else if i % 2 == 1 {
+                        4.0
+                    } else {
+                        2.0
+                    };
+                    let g = f(s1 + i as f64 * dx);
+                    acc[0] += wt * g[0] * dx / 3.0;
+                    acc[1] += wt * g[1] * dx / 3.0;
+                }
+                let got = c.chord_between_m(s1, s2);
+                let len = acc[0].hypot(acc[1]);
+                for j in 0..2 {
+                    assert!(
+                        (got[j] - acc[j]).abs() <= 1e-14 * len,
+                        "w {w} h {h} va {va} [{s1}, {s2}]: {got:?} vs {acc:?}"
+                    );
+                }
             }
         }
     }

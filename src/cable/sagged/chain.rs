@@ -78,6 +78,23 @@ impl SagChain {
         point: impl Fn(f64) -> [f64; 2],
         tension: impl Fn(f64) -> f64,
     ) -> Result<(), SagChainError> {
+        let chord = |s1: f64, s2: f64| {
+            let (a, b) = (point(s1), point(s2));
+            [b[0] - a[0], b[1] - a[1]]
+        };
+        self.fill(ea_n, mu_kg_m, l0_total_m, n_el, chord, tension)
+    }
+
+    /// As `set_profile`, with element j's chord `chord(s_j, s_j+1)` ((x, z), m).
+    fn fill(
+        &mut self,
+        ea_n: f64,
+        mu_kg_m: f64,
+        l0_total_m: f64,
+        n_el: usize,
+        chord: impl Fn(f64, f64) -> [f64; 2],
+        tension: impl Fn(f64) -> f64,
+    ) -> Result<(), SagChainError> {
         self.clear();
         if n_el == 0 || n_el > self.capacity {
             return Err(SagChainError::ElementCount {
@@ -96,11 +113,11 @@ impl SagChain {
         }
         let l0 = l0_total_m / n_el as f64;
         let k_axial = ea_n / l0;
-        let mut prev = point(0.0);
         let mut k_max = 0.0f64;
+        let mut s0 = 0.0;
         for j in 0..n_el {
-            let next = point(l0_total_m * (j + 1) as f64 / n_el as f64);
-            let (dx, dz) = (next[0] - prev[0], next[1] - prev[1]);
+            let s1 = l0_total_m * (j + 1) as f64 / n_el as f64;
+            let [dx, dz] = chord(s0, s1);
             let len = crate::sag::hypot_fast(dx, dz);
             let axial = tension(l0_total_m * (j as f64 + 0.5) / n_el as f64);
             if !(len > 0.0 && len.is_finite() && axial > 0.0 && axial.is_finite()) {
@@ -125,7 +142,7 @@ impl SagChain {
             self.chord.push([c, s]);
             self.chord_m.push(len);
             self.axial_n.push(axial);
-            prev = next;
+            s0 = s1;
         }
         self.mass_kg = mu_kg_m * l0;
         self.l0_m = l0;
@@ -135,20 +152,21 @@ impl SagChain {
     }
 
     /// Fill the chain with `n_el` equal elements on the exact catenary `cat` (nodes at
-    /// `cat.point_at_m(s_j)`, N_j = `cat.tension_at_n` at each element's middle), mass per
-    /// unstretched length `mu_kg_m`. No allocation; on error the chain is left empty.
+    /// `cat.point_at_m(s_j)`, each element's chord by `cat.chord_between_m(s_j, s_j+1)`,
+    /// N_j = `cat.tension_at_n` at its middle), mass per unstretched length `mu_kg_m`. No
+    /// allocation; on error the chain is left empty.
     pub fn set_fem(
         &mut self,
         cat: &Catenary,
         mu_kg_m: f64,
         n_el: usize,
     ) -> Result<(), SagChainError> {
-        self.set_profile(
+        self.fill(
             cat.ea_n,
             mu_kg_m,
             cat.l0_m,
             n_el,
-            |s| cat.point_at_m(s),
+            |s1, s2| cat.chord_between_m(s1, s2),
             |s| cat.tension_at_n(s),
         )
     }
