@@ -318,7 +318,10 @@ fn newton_passes_find_the_plain_fixed_point() {
                 );
             }
         }
-        eprintln!("{}: passes {passes_newton} with Newton, {passes_plain} plain", s.name);
+        eprintln!(
+            "{}: passes {passes_newton} with Newton, {passes_plain} plain",
+            s.name
+        );
         assert!(
             2 * passes_newton <= passes_plain,
             "{}: {passes_newton} passes with Newton, {passes_plain} without",
@@ -360,7 +363,10 @@ fn newton_reaches_fixed_points_the_plain_passes_leave() {
         let p = cablevib::trajectory::circle_pose_with_radius(&s, k, 4.0, 1.5).position_m;
         let g = geometry(&s, p);
         let w = wrench6(&s);
-        if plain.solve(&g, &mats, &s.gravity_m_s2, &w, &lo, &hi).is_err() {
+        if plain
+            .solve(&g, &mats, &s.gravity_m_s2, &w, &lo, &hi)
+            .is_err()
+        {
             plain_failures += 1;
         }
         let t = newton
@@ -382,7 +388,13 @@ fn newton_reaches_fixed_points_the_plain_passes_leave() {
             let [h, up, _] = newton.basis(i);
             force -= h * c.h_n + up * c.v_end_n();
         }
-        assert!(force.amax() <= 1e-9 * weight, "pose {k}: residual {force:?} N");
+        assert!(
+            force.amax() <= 1e-9 * weight,
+            "pose {k}: residual {force:?} N"
+        );
     }
-    assert!(plain_failures > 0, "the plain passes converged at every pose");
+    assert!(
+        plain_failures > 0,
+        "the plain passes converged at every pose"
+    );
 }

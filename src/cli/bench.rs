@@ -22,7 +22,9 @@ pub struct BenchArgs {
     /// Cycles to time.
     #[arg(long, default_value_t = 20_000)]
     pub cycles: usize,
-    /// Period of one revolution of the circle, s (poses are spaced 1 ms apart).
+    /// Period of one revolution of the circle, s (poses are spaced 1 ms apart). With a large
+    /// radius, lengthen it: a pose step above 5 mm per cycle starts every cycle cold (e.g.
+    /// `--radius-m 30 --period-s 400`, 0.47 m/s).
     #[arg(long, default_value_t = 4.0)]
     pub period_s: f64,
     /// Radius of the circle around the scene's position, m (the paper's 0.75 m by default;

@@ -136,7 +136,11 @@ fn least_squares_multiplier(cables: &[NewtonCable], rows: &[bool; 6]) -> Option<
 }
 
 /// Solve m x = rhs on the kept rows and columns (x = 0 on the others) by full-pivot LU.
-fn solve_on_rows(mut m: Matrix6<f64>, mut rhs: Vector6<f64>, rows: &[bool; 6]) -> Option<Vector6<f64>> {
+fn solve_on_rows(
+    mut m: Matrix6<f64>,
+    mut rhs: Vector6<f64>,
+    rows: &[bool; 6],
+) -> Option<Vector6<f64>> {
     for (r, &keep) in rows.iter().enumerate() {
         if !keep {
             m.row_mut(r).fill(0.0);

@@ -3,9 +3,9 @@
 
 use super::newton::{newton_step, NewtonCable};
 use super::{SagCable, SagTensionError, SagTensionInfo, SagTensionParams, SagTensionSolver};
-use crate::tension::Bound;
 use crate::kinematics::{up_frame, Geometry};
 use crate::sag::{CableChord, Catenary, SagError};
+use crate::tension::Bound;
 use crate::tension::TensionSolver;
 use nalgebra::Vector3;
 
@@ -53,7 +53,16 @@ impl SagTensionSolver {
             up: Vector3::z(),
             t_end: vec![0.0; n_cables],
             dtan: vec![Vector3::zeros(); n_cables],
-            newton_in: vec![NewtonCable::new(&Vector3::x(), &Vector3::zeros(), &Vector3::zeros(), 0.0, Bound::Free); n_cables],
+            newton_in: vec![
+                NewtonCable::new(
+                    &Vector3::x(),
+                    &Vector3::zeros(),
+                    &Vector3::zeros(),
+                    0.0,
+                    Bound::Free
+                );
+                n_cables
+            ],
             newton_out: vec![0.0; n_cables],
             have_warm: false,
             info: SagTensionInfo::default(),
@@ -196,8 +205,13 @@ impl SagTensionSolver {
         let bounds = self.qp.bounds();
         for i in 0..n {
             let g = &self.tangent_geom;
-            self.newton_in[i] =
-                NewtonCable::new(&g.unit[i], &self.dtan[i], &g.arm_m[i], self.t_end[i], bounds[i]);
+            self.newton_in[i] = NewtonCable::new(
+                &g.unit[i],
+                &self.dtan[i],
+                &g.arm_m[i],
+                self.t_end[i],
+                bounds[i],
+            );
         }
         let proposed = newton_step(&self.newton_in[..n], w, &mut self.newton_out);
         let inside = (0..n).all(|i| {
