@@ -5,24 +5,13 @@
 mod sag_common;
 
 use cablevib::alloc_count::{thread_allocations, CountingAlloc};
-use cablevib::modal::sag::{SagCable, SagEndEffector, SagModalSolver};
+use cablevib::modal::sag::{SagEndEffector, SagModalSolver};
 use cablevib::modal::{ModalParams, Mode};
 use sag_common::*;
 use std::time::Instant;
 
 #[global_allocator]
 static A: CountingAlloc = CountingAlloc;
-
-/// Pose k: every cable's H and V_a moved by a few per cent (a smooth path).
-fn pose(base: &[SagCable], k: usize, out: &mut [SagCable]) {
-    let t = k as f64 * 1e-3;
-    for (i, (o, b)) in out.iter_mut().zip(base).enumerate() {
-        *o = *b;
-        let f = 1.0 + 0.05 * (t + i as f64).sin();
-        o.catenary.h_n *= f;
-        o.catenary.v_anchor_n *= f;
-    }
-}
 
 #[test]
 fn a_thousand_poses_allocate_nothing() {

@@ -4,22 +4,11 @@
 //! measurement of ns per element.
 mod sag_common;
 
-use cablevib::modal::sag::{SagCable, SagModalSolver};
+use cablevib::modal::sag::SagModalSolver;
 use cablevib::modal::{ModalError, ModalParams};
 use cablevib::sag::{CableChord, SagParams};
 use sag_common::*;
 use std::time::Instant;
-
-/// Pose k of a smooth path: every cable's H and V_a moved by a few per cent.
-fn pose(base: &[SagCable], k: usize, out: &mut [SagCable]) {
-    let t = k as f64 * 1e-3;
-    for (i, (o, b)) in out.iter_mut().zip(base).enumerate() {
-        *o = *b;
-        let f = 1.0 + 0.05 * (t + i as f64).sin();
-        o.catenary.h_n *= f;
-        o.catenary.v_anchor_n *= f;
-    }
-}
 
 /// The lockstep evaluation does every chain's scalar operations in the same order and
 /// sums the cables into D in the same order: tolerance 0 (bit for bit), for 5, 8 and 11

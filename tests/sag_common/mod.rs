@@ -71,3 +71,14 @@ pub fn rigid() -> SagEndEffector {
         inertia_kg_m2: Matrix3::new(0.20, 0.01, -0.02, 0.01, 0.25, 0.015, -0.02, 0.015, 0.30),
     }
 }
+
+/// Pose k: every cable's H and V_a moved by a few per cent (a smooth path).
+pub fn pose(base: &[SagCable], k: usize, out: &mut [SagCable]) {
+    let t = k as f64 * 1e-3;
+    for (i, (o, b)) in out.iter_mut().zip(base).enumerate() {
+        *o = *b;
+        let f = 1.0 + 0.05 * (t + i as f64).sin();
+        o.catenary.h_n *= f;
+        o.catenary.v_anchor_n *= f;
+    }
+}
