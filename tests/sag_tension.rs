@@ -330,51 +330,30 @@ fn newton_passes_find_the_plain_fixed_point() {
     }
 }
 
-/// Where a very slack cable's tangent turns fast with its tension, the plain passes move
-/// away from the fixed point (suspended-8 along the bench's 1.5 m circle, poses 0-160 ms:
-/// they end `NoConvergence` there), and Newton's step reaches it. Checked without the
+/// Suspended-8's cables hanging by their own weight (2.5 N/m).
+fn suspended_materials(s: &Scene) -> Vec<SagCable> {
+    materials(s, s.cables[0].mass_per_length_kg_m * s.gravity_m_s2.norm())
+}
+
+/// Solve warm along `positions` (m) with `solver` and check every answer without the
 /// solver's own convergence test: the reported tensions are the chord QP's answer on the
 /// reported end tangents (a fixed point T = QP(A(T)), 1e-9 relative: the tangents stop
 /// moving at 1e-12 rad), and the catenaries' end forces balance the load to 1e-9 of it.
-#[test]
-fn newton_reaches_fixed_points_the_plain_passes_leave() {
-    let s = Scene::load("scenes/suspended_8.toml").unwrap();
+fn check_fixed_points_along(s: &Scene, solver: &mut SagTensionSolver, positions: &[Vector3<f64>]) {
     let n = s.n_cables();
-    let (lo, hi) = bounds(&s, s.t_min_n);
-    let gn = s.gravity_m_s2.norm();
-    let mats: Vec<SagCable> = s
-        .cables
-        .iter()
-        .map(|c| SagCable {
-            ea_n: c.ea_n(),
-            w_n_m: c.mass_per_length_kg_m * gn,
-        })
-        .collect();
-    let plain_params = SagTensionParams {
-        newton: false,
-        ..SagTensionParams::default()
-    };
-    let mut newton = SagTensionSolver::new(n, SagTensionParams::default());
-    let mut plain = SagTensionSolver::new(n, plain_params);
+    let (lo, hi) = bounds(s, s.t_min_n);
+    let mats = suspended_materials(s);
     let mut qp = TensionSolver::new(n, TensionParams::default());
-    let mut plain_failures = 0;
     let weight = s.wrench_n().norm();
-    for k in 0..=160 {
-        let p = cablevib::trajectory::circle_pose_with_radius(&s, k, 4.0, 1.5).position_m;
-        let g = geometry(&s, p);
-        let w = wrench6(&s);
-        if plain
-            .solve(&g, &mats, &s.gravity_m_s2, &w, &lo, &hi)
-            .is_err()
-        {
-            plain_failures += 1;
-        }
-        let t = newton
+    let w = wrench6(s);
+    for (k, p) in positions.iter().enumerate() {
+        let g = geometry(s, *p);
+        let t = solver
             .solve(&g, &mats, &s.gravity_m_s2, &w, &lo, &hi)
             .unwrap_or_else(|e| panic!("pose {k}: {e}"))
             .to_vec();
         let mut tangents = g.clone();
-        tangents.unit.copy_from_slice(newton.end_tangents());
+        tangents.unit.copy_from_slice(solver.end_tangents());
         let again = qp.solve_wrench_bounds(&tangents, &w, &lo, &hi).unwrap();
         let mut force = s.gravity_m_s2 * s.ee_mass_kg;
         for i in 0..n {
@@ -384,8 +363,8 @@ fn newton_reaches_fixed_points_the_plain_passes_leave() {
                 again[i],
                 t[i]
             );
-            let c = newton.catenaries_of()[i];
-            let [h, up, _] = newton.basis(i);
+            let c = solver.catenaries_of()[i];
+            let [h, up, _] = solver.basis(i);
             force -= h * c.h_n + up * c.v_end_n();
         }
         assert!(
@@ -393,8 +372,65 @@ fn newton_reaches_fixed_points_the_plain_passes_leave() {
             "pose {k}: residual {force:?} N"
         );
     }
+}
+
+/// Where a very slack cable's tangent turns fast with its tension, the plain passes move
+/// away from the fixed point (suspended-8 along the bench's 1.5 m circle, poses 0-160 ms:
+/// they end `NoConvergence` there), and Newton's step reaches it (checked as
+/// [`check_fixed_points_along`]).
+#[test]
+fn newton_reaches_fixed_points_the_plain_passes_leave() {
+    let s = Scene::load("scenes/suspended_8.toml").unwrap();
+    let positions: Vec<Vector3<f64>> = (0..=160)
+        .map(|k| cablevib::trajectory::circle_pose_with_radius(&s, k, 4.0, 1.5).position_m)
+        .collect();
+    let plain_params = SagTensionParams {
+        newton: false,
+        ..SagTensionParams::default()
+    };
+    let mut plain = SagTensionSolver::new(s.n_cables(), plain_params);
+    let (lo, hi) = bounds(&s, s.t_min_n);
+    let mats = suspended_materials(&s);
+    let plain_failures = positions
+        .iter()
+        .filter(|p| {
+            let g = geometry(&s, **p);
+            let w = wrench6(&s);
+            plain
+                .solve(&g, &mats, &s.gravity_m_s2, &w, &lo, &hi)
+                .is_err()
+        })
+        .count();
     assert!(
         plain_failures > 0,
         "the plain passes converged at every pose"
+    );
+    let mut newton = SagTensionSolver::new(s.n_cables(), SagTensionParams::default());
+    check_fixed_points_along(&s, &mut newton, &positions);
+}
+
+/// Past a fold of the fixed point the free solution of a cable vanishes and only the one
+/// at its bound is left: suspended-8 along the 1 m circle about (−1, 0, 2) m (4 s, 1 ms
+/// apart), cable 4's tension falls from 64 N at 836 ms to 59 N at 852 ms, and at 853 ms
+/// no free fixed point is left near it. Newton's step with the cable held free then hops
+/// around the vanished root (this pose ended `NoConvergence` after 60 passes when the step
+/// did not correct its active set); with it the solve puts the cable on T_min and
+/// converges. Every pose from 800 to 900 ms is checked as [`check_fixed_points_along`].
+#[test]
+fn newton_steps_onto_the_bound_past_a_fold() {
+    let s = Scene::load("scenes/suspended_8.toml").unwrap();
+    let positions: Vec<Vector3<f64>> = (800..=900)
+        .map(|k| {
+            let th = std::f64::consts::TAU * (k as f64 * 1e-3) / 4.0;
+            s.ee_position_m + Vector3::new(th.cos() - 1.0, th.sin(), 0.0)
+        })
+        .collect();
+    let mut solver = SagTensionSolver::new(s.n_cables(), SagTensionParams::default());
+    check_fixed_points_along(&s, &mut solver, &positions);
+    let (lo, _) = bounds(&s, s.t_min_n);
+    assert_eq!(
+        solver.tensions_n()[3],
+        lo[3],
+        "cable 4 ends the path on T_min"
     );
 }

@@ -148,6 +148,8 @@ pub struct SagTensionSolver {
     /// Newton's input and output (`newton.rs`).
     newton_in: Vec<newton::NewtonCable>,
     newton_out: Vec<f64>,
+    /// The tensions before Newton's step (restored when its catenaries fail), N.
+    t_before: Vec<f64>,
     have_warm: bool,
     info: SagTensionInfo,
 }

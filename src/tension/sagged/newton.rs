@@ -26,8 +26,18 @@
 //! 0.6 per pass on sagging robots) or not at all: with a very slack cable d_i turns
 //! negative (its tangent turns so fast with its tension that the plain passes move away
 //! from the fixed point), and Newton's step still reaches it. It is only proposed: the
-//! caller takes it when every |d_i| is safely above zero and the new tensions stay inside
-//! their bounds, and the next QP pass decides the active set and convergence as before.
+//! caller takes it when every |d_i| is safely above zero, and the next QP pass decides the
+//! active set and convergence as before.
+//!
+//! **Active set of the step.** Because a_i turns with T_i, the fixed point need not be
+//! unique, and it can vanish: as the pose moves, a free cable's fixed point can meet a
+//! second one and disappear (a fold, where d_i → 0), and only the solution with that cable
+//! on its bound is left. Newton's step with the cable held free then hops around the
+//! vanished root and the passes never settle. So (`newton_step_bounded`) a free cable the
+//! step would take out of its bounds is put on that bound and the step recomputed; and
+//! after a pass that did not contract, the free cable nearest a fold (smallest |d_i|,
+//! `fold_candidate`) is put on its nearer bound before the step. Either guess is only a
+//! start: the QP pass after it frees the cable again if its bound was wrong.
 
 use crate::tension::Bound;
 use nalgebra::{Matrix6, Vector3, Vector6};
@@ -112,6 +122,52 @@ pub(super) fn newton_step(cables: &[NewtonCable], w: &[f64; 6], out: &mut [f64])
         };
     }
     out.iter().all(|t| t.is_finite())
+}
+
+/// Newton's step with its active set corrected: while the step takes free cables out of
+/// their bounds (`lo`, `hi`, N), the cable that goes farthest out (N) is put on that
+/// bound (its tension set to it) and the step is recomputed, at most once per
+/// cable. Where a cable's tangent turns with its tension, the fixed points on either side of
+/// a bound can both exist or neither; this step lands on the bound instead of leaving the
+/// passes to hop between the two active sets. False as [`newton_step`] or when no active
+/// set within the flips keeps every free cable inside its bounds.
+pub(super) fn newton_step_bounded(
+    cables: &mut [NewtonCable],
+    w: &[f64; 6],
+    lo: &[f64],
+    hi: &[f64],
+    out: &mut [f64],
+) -> bool {
+    for _ in 0..=cables.len() {
+        if !newton_step(cables, w, out) {
+            return false;
+        }
+        let worst = (0..cables.len())
+            .filter(|&i| cables[i].bound == Bound::Free)
+            .map(|i| (i, (lo[i] - out[i]).max(out[i] - hi[i])))
+            .filter(|&(_, v)| v >= 0.0)
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((i, _)) = worst else {
+            return true;
+        };
+        let below = out[i] <= lo[i];
+        cables[i].bound = if below { Bound::Lower } else { Bound::Upper };
+        cables[i].t_n = if below { lo[i] } else { hi[i] };
+    }
+    false
+}
+
+/// The free cable nearest a fold of the fixed point: the smallest |d_i| = |1 − a_i′·μ| at
+/// the least-squares multiplier μ of the free tensions. None without a free cable or a
+/// multiplier.
+pub(super) fn fold_candidate(cables: &[NewtonCable]) -> Option<usize> {
+    let rows = nonzero_rows(cables);
+    let mu = least_squares_multiplier(cables, &rows)?;
+    (0..cables.len())
+        .filter(|&i| cables[i].bound == Bound::Free)
+        .map(|i| (i, (1.0 - cables[i].da.dot(&mu)).abs()))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(i, _)| i)
 }
 
 /// Which of the six rows carry an entry of some cable's column.

@@ -1,7 +1,7 @@
 //! `SagTensionSolver`'s construction, fixed-point solve and accessors (the method is
 //! documented in the module docs).
 
-use super::newton::{newton_step, NewtonCable};
+use super::newton::{fold_candidate, newton_step_bounded, NewtonCable};
 use super::{SagCable, SagTensionError, SagTensionInfo, SagTensionParams, SagTensionSolver};
 use crate::kinematics::{up_frame, Geometry};
 use crate::sag::{CableChord, Catenary, SagError};
@@ -64,6 +64,7 @@ impl SagTensionSolver {
                 n_cables
             ],
             newton_out: vec![0.0; n_cables],
+            t_before: vec![0.0; n_cables],
             have_warm: false,
             info: SagTensionInfo::default(),
         }
@@ -145,7 +146,7 @@ impl SagTensionSolver {
             // them on the last active set (the first QP pass then starts near the answer).
             change = self.catenaries()?;
             if self.params.newton {
-                self.accelerate(w, lo, hi)?;
+                self.accelerate(w, lo, hi, false)?;
             }
         }
         let mut iterations = 0;
@@ -175,10 +176,13 @@ impl SagTensionSolver {
             }
             // Newton's steps continue while the passes contract; otherwise (its active set
             // or linearisation is wrong, e.g. far from the answer on a cold start where a
-            // cable is about to leave its bound) the plain passes take over.
-            newton &= warm || change <= NEWTON_CONTRACTION * before;
+            // cable is about to leave its bound) the plain passes take over. A warm solve
+            // keeps the steps, and after a pass that did not contract tries the free cable
+            // nearest a fold on its bound (its free fixed point may have vanished).
+            let contracted = change <= NEWTON_CONTRACTION * before;
+            newton &= warm || contracted;
             if newton {
-                self.accelerate(w, lo, hi)?;
+                self.accelerate(w, lo, hi, !contracted)?;
             }
         }
         self.info = SagTensionInfo {
@@ -197,10 +201,17 @@ impl SagTensionSolver {
     }
 
     /// Replace the QP's tensions by Newton's step (`newton.rs`) from them, on the QP's
-    /// active set, with the catenaries at the new tensions; kept only when every free
-    /// tension stays strictly inside its bounds and every catenary exists (otherwise the
-    /// QP's tensions and catenaries are restored: the plain pass).
-    fn accelerate(&mut self, w: &[f64; 6], lo: &[f64], hi: &[f64]) -> Result<(), SagTensionError> {
+    /// active set corrected by the step's bounds (and, with `fold`, with the free cable
+    /// nearest a fold put on its nearer bound first), with the catenaries at the new
+    /// tensions; the QP's tensions and catenaries stay (the plain pass) when the step is
+    /// not defined or a catenary does not exist.
+    fn accelerate(
+        &mut self,
+        w: &[f64; 6],
+        lo: &[f64],
+        hi: &[f64],
+        fold: bool,
+    ) -> Result<(), SagTensionError> {
         let n = self.t_end.len();
         let bounds = self.qp.bounds();
         for i in 0..n {
@@ -213,19 +224,21 @@ impl SagTensionSolver {
                 bounds[i],
             );
         }
-        let proposed = newton_step(&self.newton_in[..n], w, &mut self.newton_out);
-        let inside = (0..n).all(|i| {
-            self.newton_in[i].bound != Bound::Free
-                || (self.newton_out[i] > lo[i] && self.newton_out[i] < hi[i])
-        });
-        if !(proposed && inside) {
+        if fold {
+            if let Some(i) = fold_candidate(&self.newton_in[..n]) {
+                let c = &mut self.newton_in[i];
+                let lower = c.t_n - lo[i] <= hi[i] - c.t_n;
+                c.bound = if lower { Bound::Lower } else { Bound::Upper };
+                c.t_n = if lower { lo[i] } else { hi[i] };
+            }
+        }
+        if !newton_step_bounded(&mut self.newton_in[..n], w, lo, hi, &mut self.newton_out) {
             return Ok(());
         }
+        self.t_before.copy_from_slice(&self.t_end);
         self.t_end.copy_from_slice(&self.newton_out[..n]);
         if self.catenaries().is_err() {
-            for i in 0..n {
-                self.t_end[i] = self.newton_in[i].t_n;
-            }
+            self.t_end.copy_from_slice(&self.t_before);
             self.catenaries()?;
         }
         Ok(())
