@@ -434,3 +434,60 @@ fn newton_steps_onto_the_bound_past_a_fold() {
         "cable 4 ends the path on T_min"
     );
 }
+
+/// Along a smooth path the warm start is extrapolated from the last two answers: one pass
+/// per pose instead of two, to the same fixed point. Suspended-8 along the bench's 1 m
+/// circle, poses 0-400 ms: each answer equals (1e-9 relative, the solver's own tolerance
+/// being 1e-12 rad) that of a solver warm-started from the previous pose alone (no history
+/// to extrapolate), and at least 90 % of the poses take one pass (measured: all but the
+/// first two).
+#[test]
+fn extrapolated_warm_starts_take_one_pass_to_the_same_answer() {
+    let s = Scene::load("scenes/suspended_8.toml").unwrap();
+    let n = s.n_cables();
+    let (lo, hi) = bounds(&s, s.t_min_n);
+    let mats = suspended_materials(&s);
+    let w = wrench6(&s);
+    let at = |k: usize| {
+        geometry(
+            &s,
+            cablevib::trajectory::circle_pose_with_radius(&s, k, 4.0, 1.0).position_m,
+        )
+    };
+    let mut path = SagTensionSolver::new(n, SagTensionParams::default());
+    let mut one_pass = 0;
+    let poses = 400;
+    for k in 0..poses {
+        let g = at(k);
+        let t = path
+            .solve(&g, &mats, &s.gravity_m_s2, &w, &lo, &hi)
+            .unwrap_or_else(|e| panic!("pose {k}: {e}"))
+            .to_vec();
+        if path.info().iterations == 1 {
+            one_pass += 1;
+        }
+        if k == 0 {
+            continue;
+        }
+        let mut fresh = SagTensionSolver::new(n, SagTensionParams::default());
+        fresh
+            .solve(&at(k - 1), &mats, &s.gravity_m_s2, &w, &lo, &hi)
+            .unwrap();
+        let r = fresh
+            .solve(&g, &mats, &s.gravity_m_s2, &w, &lo, &hi)
+            .unwrap();
+        for i in 0..n {
+            assert!(
+                (r[i] - t[i]).abs() <= 1e-9 * t[i],
+                "pose {k} cable {i}: {} N extrapolated vs {} N",
+                t[i],
+                r[i]
+            );
+        }
+    }
+    eprintln!("{one_pass} of {poses} poses in one pass");
+    assert!(
+        10 * one_pass >= 9 * poses,
+        "{one_pass} of {poses} in one pass"
+    );
+}

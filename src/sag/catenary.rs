@@ -4,9 +4,9 @@
 /// Below this u = w s q the factor log1p(u)/u is summed as its series Σ (−u)^k/(k + 1),
 /// k ≤ 10 (truncation error u¹¹/12 < 2e-18), so that w = 0 and subnormal u need no special
 /// case, and a short piece of cable (an element's chord) needs no logarithm.
-const LOG1P_SERIES_BELOW: f64 = 0.03;
+pub(super) const LOG1P_SERIES_BELOW: f64 = 0.03;
 /// 1/(k + 1), k = 0 ..= 10: the series' coefficients (alternating signs in the Horner form).
-const LOG1P_RATIO_SERIES: [f64; 11] = [
+pub(super) const LOG1P_RATIO_SERIES: [f64; 11] = [
     1.0,
     1.0 / 2.0,
     1.0 / 3.0,

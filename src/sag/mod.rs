@@ -62,11 +62,13 @@
 //!   span it is the textbook (wL/H)² L/(H L_e/EA); for a vertical cable it is 0 (no sag).
 
 mod catenary;
+mod elements;
 mod family;
 mod flexibility;
 mod solve;
 
 pub use catenary::Catenary;
+pub use elements::CatenaryElements;
 
 /// √(a² + b²) by one square root where a² + b² neither overflows nor leaves the normal
 /// range (every force and length of a cable), else the library's `hypot`: within ~1 ulp

@@ -2,7 +2,7 @@
 //! buffers sized once, filled from a profile without allocating.
 
 use super::{SagChainError, SagChainEval};
-use crate::sag::Catenary;
+use crate::sag::{Catenary, CatenaryElements};
 
 /// One element of a sagged chain (element j runs from node j to node j + 1; node 0 is the
 /// anchor), as the dense reference assembles it.
@@ -44,6 +44,8 @@ pub struct SagChain {
     k_axial: f64,
     /// A pivot that is exactly singular is moved by this much, N/m.
     pub(super) nudge: f64,
+    /// Scratch of `set_fem`: the elements' chords and tensions on the catenary.
+    elements: CatenaryElements,
 }
 
 impl SagChain {
@@ -61,6 +63,7 @@ impl SagChain {
             l0_m: 0.0,
             k_axial: 0.0,
             nudge: 0.0,
+            elements: CatenaryElements::new(cap),
         }
     }
 
@@ -78,22 +81,24 @@ impl SagChain {
         point: impl Fn(f64) -> [f64; 2],
         tension: impl Fn(f64) -> f64,
     ) -> Result<(), SagChainError> {
-        let chord = |s1: f64, s2: f64| {
-            let (a, b) = (point(s1), point(s2));
-            [b[0] - a[0], b[1] - a[1]]
+        let s = |j: usize| l0_total_m * j as f64 / n_el as f64;
+        let element = |j: usize| {
+            let (a, b) = (point(s(j)), point(s(j + 1)));
+            let axial = tension(l0_total_m * (j as f64 + 0.5) / n_el as f64);
+            ([b[0] - a[0], b[1] - a[1]], axial)
         };
-        self.fill(ea_n, mu_kg_m, l0_total_m, n_el, chord, tension)
+        self.fill(ea_n, mu_kg_m, l0_total_m, n_el, element)
     }
 
-    /// As `set_profile`, with element j's chord `chord(s_j, s_j+1)` ((x, z), m).
+    /// As `set_profile`, with element j's chord ((x, z), m) and axial force (N) from
+    /// `element(j)`.
     fn fill(
         &mut self,
         ea_n: f64,
         mu_kg_m: f64,
         l0_total_m: f64,
         n_el: usize,
-        chord: impl Fn(f64, f64) -> [f64; 2],
-        tension: impl Fn(f64) -> f64,
+        element: impl Fn(usize) -> ([f64; 2], f64),
     ) -> Result<(), SagChainError> {
         self.clear();
         if n_el == 0 || n_el > self.capacity {
@@ -114,12 +119,9 @@ impl SagChain {
         let l0 = l0_total_m / n_el as f64;
         let k_axial = ea_n / l0;
         let mut k_max = 0.0f64;
-        let mut s0 = 0.0;
         for j in 0..n_el {
-            let s1 = l0_total_m * (j + 1) as f64 / n_el as f64;
-            let [dx, dz] = chord(s0, s1);
+            let ([dx, dz], axial) = element(j);
             let len = crate::sag::hypot_fast(dx, dz);
-            let axial = tension(l0_total_m * (j as f64 + 0.5) / n_el as f64);
             if !(len > 0.0 && len.is_finite() && axial > 0.0 && axial.is_finite()) {
                 self.clear();
                 return Err(SagChainError::BadElement {
@@ -142,7 +144,6 @@ impl SagChain {
             self.chord.push([c, s]);
             self.chord_m.push(len);
             self.axial_n.push(axial);
-            s0 = s1;
         }
         self.mass_kg = mu_kg_m * l0;
         self.l0_m = l0;
@@ -161,14 +162,15 @@ impl SagChain {
         mu_kg_m: f64,
         n_el: usize,
     ) -> Result<(), SagChainError> {
-        self.fill(
-            cat.ea_n,
-            mu_kg_m,
-            cat.l0_m,
-            n_el,
-            |s1, s2| cat.chord_between_m(s1, s2),
-            |s| cat.tension_at_n(s),
-        )
+        // The elements are computed into their own scratch, taken out while `fill` writes
+        // the chain (moving a Vec does not allocate).
+        let mut elements = std::mem::take(&mut self.elements);
+        elements.compute(cat, n_el);
+        let r = self.fill(cat.ea_n, mu_kg_m, cat.l0_m, n_el, |j| {
+            (elements.chord_m(j), elements.axial_n(j))
+        });
+        self.elements = elements;
+        r
     }
 
     fn clear(&mut self) {

@@ -12,19 +12,24 @@
 //! ```
 //!
 //! Method: fixed point on the end directions, T = QP(A(T)), accelerated by Newton. Start
-//! from the chords (cold) or from the last call's end tensions (warm); a pass is (1) each
+//! from the chords (cold) or from the last call's end tensions (warm; extrapolated
+//! linearly from the last two calls when both were warm and the last took at most two
+//! passes and the extrapolation keeps the active set); a pass is (1) the active-set QP
+//! ([`TensionSolver`], itself warm-started) with columns t_i gives new T_e; (2) each
 //! cable's taut catenary for its T_e,i (Newton from the first-order prediction of its last
 //! solution for the new chord and tension, `CableChord::solve_end_tension_tracked`) gives
-//! t_i; (2) the active-set QP ([`TensionSolver`], itself warm-started) with columns t_i
-//! gives new T_e. Converged when no end direction moved more than `direction_tol_rad` in
-//! the last pass; at most `max_iterations` passes. After each unconverged pass, and once
-//! from the warm start, Newton's step on the fixed point's optimality system with the
-//! QP's active set held (`newton.rs`) replaces the tensions (when it is defined and stays
-//! inside the bounds): two passes per warm cycle instead of 4-26 plain ones, and it reaches
-//! fixed points that the plain passes move away from (a very slack cable). The reported
-//! catenaries, tangents and tensions are those of the last QP and a final catenary pass, so
-//! the equilibrium residual is that of the QP plus the last, below tolerance, change of
-//! direction times the tensions.
+//! t_i. Converged when no end direction moved more than `direction_tol_rad` in the last
+//! pass, or, before (2), when the QP gave back the tensions the current tangents were
+//! solved at (to 1e-12 of the largest, and with a first-order change of direction
+//! |dt_i/dT_i|·|ΔT_i| below the tolerance): the current state is then the fixed point and
+//! no further catenary sweep is needed. At most `max_iterations` passes. After each
+//! unconverged pass, and once from the warm start, Newton's step on the fixed point's
+//! optimality system with the QP's active set held (`newton.rs`, which also corrects that
+//! active set near a fold) replaces the tensions: one pass per warm cycle on a smooth path
+//! instead of 4-26 plain ones, and it reaches fixed points that the plain passes move away
+//! from (a very slack cable). The reported catenaries, tangents and tensions are those of
+//! the last catenary sweep, and the QP on those tangents gives these tensions back to the
+//! tolerance.
 //!
 //! Plane basis of cable i: up = −g/|g|, h_i the horizontal part of its chord normalised
 //! (the first column of `up_frame(g)` for a vertical chord), n_i = h_i × up. With every
@@ -150,6 +155,13 @@ pub struct SagTensionSolver {
     newton_out: Vec<f64>,
     /// The tensions before Newton's step (restored when its catenaries fail), N.
     t_before: Vec<f64>,
+    /// The last solve's end tensions (N), kept while a warm solve starts from their
+    /// extrapolation.
+    t_last: Vec<f64>,
+    /// The end tensions of the solve before the last (N), valid when `have_prev`.
+    t_prev: Vec<f64>,
+    /// The last two solves were consecutive and successful (the warm start extrapolates).
+    have_prev: bool,
     have_warm: bool,
     info: SagTensionInfo,
 }

@@ -35,8 +35,8 @@
 //! on its bound is left. Newton's step with the cable held free then hops around the
 //! vanished root and the passes never settle. So (`newton_step_bounded`) a free cable the
 //! step would take out of its bounds is put on that bound and the step recomputed; and
-//! after a pass that did not contract, the free cable nearest a fold (smallest |d_i|,
-//! `fold_candidate`) is put on its nearer bound before the step. Either guess is only a
+//! after a pass that did not contract, the free cable nearest a fold (smallest |d_i|, when
+//! below `FOLD_DIAGONAL`, `fold_candidate`) is put on its nearer bound before the step. Either guess is only a
 //! start: the QP pass after it frees the cable again if its bound was wrong.
 
 use crate::tension::Bound;
@@ -49,6 +49,9 @@ const ZERO_ROW_REL: f64 = 1e-14;
 /// unstable (they move away from the fixed point by the factor 1/|d_i| − … per pass) and
 /// only Newton's step reaches it.
 const MIN_DIAGONAL: f64 = 1e-3;
+/// A free cable counts as near a fold when |d_i| is below this (d_i → 0 at the fold; a
+/// cable whose tangent barely turns with its tension has d_i ≈ 1).
+const FOLD_DIAGONAL: f64 = 0.5;
 
 /// One cable's data for the step: its column, the column's derivative with its tension,
 /// its tension and whether it is free.
@@ -158,14 +161,15 @@ pub(super) fn newton_step_bounded(
 }
 
 /// The free cable nearest a fold of the fixed point: the smallest |d_i| = |1 − a_i′·μ| at
-/// the least-squares multiplier μ of the free tensions. None without a free cable or a
-/// multiplier.
+/// the least-squares multiplier μ of the free tensions, when it is below [`FOLD_DIAGONAL`].
+/// None without such a cable or a multiplier.
 pub(super) fn fold_candidate(cables: &[NewtonCable]) -> Option<usize> {
     let rows = nonzero_rows(cables);
     let mu = least_squares_multiplier(cables, &rows)?;
     (0..cables.len())
         .filter(|&i| cables[i].bound == Bound::Free)
         .map(|i| (i, (1.0 - cables[i].da.dot(&mu)).abs()))
+        .filter(|&(_, d)| d < FOLD_DIAGONAL)
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(i, _)| i)
 }
