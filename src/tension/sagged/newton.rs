@@ -36,8 +36,9 @@
 //! vanished root and the passes never settle. So (`newton_step_bounded`) a free cable the
 //! step would take out of its bounds is put on that bound and the step recomputed; and
 //! after a pass that did not contract, the free cable nearest a fold (smallest |d_i|, when
-//! below `FOLD_DIAGONAL`, `fold_candidate`) is put on its nearer bound before the step. Either guess is only a
-//! start: the QP pass after it frees the cable again if its bound was wrong.
+//! below `FOLD_DIAGONAL`, `fold_candidate`) is put on its nearer bound before the step.
+//! Either guess is only a start: the QP pass after it frees the cable again if its bound
+//! was wrong.
 
 use crate::tension::Bound;
 use nalgebra::{Matrix6, Vector3, Vector6};
