@@ -12,9 +12,7 @@
 //! ```
 //!
 //! Method: fixed point on the end directions, T = QP(A(T)), accelerated by Newton. Start
-//! from the chords (cold) or from the last call's end tensions (warm; extrapolated
-//! linearly from the last two calls when both were warm and the last took at most two
-//! passes and the extrapolation keeps the active set); a pass is (1) the active-set QP
+//! from the chords (cold) or from the last call's end tensions (warm); a pass is (1) the active-set QP
 //! ([`TensionSolver`], itself warm-started) with columns t_i gives new T_e; (2) each
 //! cable's taut catenary for its T_e,i (Newton from the first-order prediction of its last
 //! solution for the new chord and tension, `CableChord::solve_end_tension_tracked`) gives
@@ -25,8 +23,8 @@
 //! no further catenary sweep is needed. At most `max_iterations` passes. After each
 //! unconverged pass, and once from the warm start, Newton's step on the fixed point's
 //! optimality system with the QP's active set held (`newton.rs`, which also corrects that
-//! active set near a fold) replaces the tensions: one pass per warm cycle on a smooth path
-//! instead of 4-26 plain ones, and it reaches fixed points that the plain passes move away
+//! active set near a fold) replaces the tensions: one or two passes per warm cycle instead
+//! of 4-26 plain ones, and it reaches fixed points that the plain passes move away
 //! from (a very slack cable). The reported catenaries, tangents and tensions are those of
 //! the last catenary sweep, and the QP on those tangents gives these tensions back to the
 //! tolerance.
@@ -155,13 +153,6 @@ pub struct SagTensionSolver {
     newton_out: Vec<f64>,
     /// The tensions before Newton's step (restored when its catenaries fail), N.
     t_before: Vec<f64>,
-    /// The last solve's end tensions (N), kept while a warm solve starts from their
-    /// extrapolation.
-    t_last: Vec<f64>,
-    /// The end tensions of the solve before the last (N), valid when `have_prev`.
-    t_prev: Vec<f64>,
-    /// The last two solves were consecutive and successful (the warm start extrapolates).
-    have_prev: bool,
     have_warm: bool,
     info: SagTensionInfo,
 }

@@ -25,15 +25,9 @@ const STALL_CONTRACTION: f64 = 0.5;
 /// change by less than this factor (near the answer they shrink it quadratically).
 const NEWTON_CONTRACTION: f64 = 1.0;
 
-/// A warm start is extrapolated from the last two solves only when the last one took at
-/// most this many passes: more passes mean a hard region (a cable whose tangent turns fast
-/// with its tension, an active set about to change), where Newton's basin is small and the
-/// last answer is the safer start.
-const EXTRAPOLATE_MAX_PASSES: u32 = 2;
-
 /// The QP's tensions equal the current ones when they differ by at most this fraction of
 /// the largest (a few ulps of it).
-const FIXED_POINT_TENSION_REL: f64 = 1e-12;
+const FIXED_POINT_TENSION_REL: f64 = 1e-14;
 
 /// Whether the QP's tensions `qp_n` on the current tangents give back the current tensions
 /// `t_n` (those the tangents were solved at), to [`FIXED_POINT_TENSION_REL`]: then the
@@ -92,9 +86,6 @@ impl SagTensionSolver {
             ],
             newton_out: vec![0.0; n_cables],
             t_before: vec![0.0; n_cables],
-            t_last: vec![0.0; n_cables],
-            t_prev: vec![0.0; n_cables],
-            have_prev: false,
             have_warm: false,
             info: SagTensionInfo::default(),
         }
@@ -130,18 +121,11 @@ impl SagTensionSolver {
             self.tracks.iter_mut().for_each(|t| *t = None);
         }
         self.set_chords(g, cables, gravity_m_s2);
-        let warm = self.have_warm;
         let r = self.fixed_point(w, t_min_n, t_max_n);
         if r.is_err() {
             self.have_warm = false;
-            self.have_prev = false;
         }
         r?;
-        // The last two answers of consecutive warm solves extrapolate the next start.
-        self.have_prev = warm;
-        if warm {
-            self.t_prev.copy_from_slice(&self.t_last);
-        }
         self.have_warm = true;
         Ok(&self.t_end)
     }
@@ -179,13 +163,8 @@ impl SagTensionSolver {
         let mut change = f64::INFINITY;
         let warm = self.have_warm;
         if warm {
-            // Start from the last end tensions on the new chords (extrapolated from the last
-            // two solves), and Newton's step from them on the last active set (the first
-            // QP pass then starts near the answer).
-            self.t_last.copy_from_slice(&self.t_end);
-            if self.have_prev && self.info.iterations <= EXTRAPOLATE_MAX_PASSES {
-                self.extrapolate(lo, hi);
-            }
+            // Start from the last end tensions on the new chords, and Newton's step from
+            // them on the last active set (the first QP pass then starts near the answer).
             change = self.catenaries()?;
             if self.params.newton {
                 self.accelerate(w, lo, hi, false)?;
@@ -252,28 +231,6 @@ impl SagTensionSolver {
             });
         }
         Ok(())
-    }
-
-    /// Start from 2 T_last − T_prev when it keeps every free cable strictly inside its
-    /// bounds and every bound cable where it was (the same active set), else from T_last:
-    /// where the active set is about to change the linear trend is no guide.
-    fn extrapolate(&mut self, lo: &[f64], hi: &[f64]) {
-        let n = self.t_end.len();
-        let same_set = (0..n).all(|i| {
-            let (last, prev) = (self.t_last[i], self.t_prev[i]);
-            let next = 2.0 * last - prev;
-            let on_bound = |t: f64| t == lo[i] || t == hi[i];
-            if on_bound(last) || on_bound(prev) {
-                last == prev
-            } else {
-                next > lo[i] && next < hi[i]
-            }
-        });
-        if same_set {
-            for i in 0..n {
-                self.t_end[i] = 2.0 * self.t_last[i] - self.t_prev[i];
-            }
-        }
     }
 
     /// Replace the QP's tensions by Newton's step (`newton.rs`) from them, on the QP's
@@ -385,7 +342,6 @@ impl SagTensionSolver {
     /// Forget the warm start (the next solve starts from the chords).
     pub fn reset_warm_start(&mut self) {
         self.have_warm = false;
-        self.have_prev = false;
         self.qp.reset_warm_start();
         self.cats.iter_mut().for_each(|c| c.l0_m = 0.0);
         self.tracks.iter_mut().for_each(|t| *t = None);
