@@ -58,6 +58,10 @@
 //! polynomials (a sub-segment phase above 1.5, i.e. above λ_max) falls back to the
 //! transfer-matrix form with the library's trigonometry (`transfer`). In plane and out of
 //! plane run in one loop (their recursions are independent: the processor overlaps them).
+//! `set` also keeps S(0) and dS/dλ(0) (the static stiffness, asked every cycle) from the
+//! closed form of `statics`: the sub-segments as springs in series and the consistent mass
+//! of the static shape, a sum without divisions per node (the recursion when a capped mesh
+//! left a sub-segment with a negative compliance).
 //!
 //! ## Steps (error model)
 //!
@@ -98,6 +102,7 @@
 mod kernel;
 mod profile;
 mod propagate;
+mod statics;
 mod transfer;
 
 use super::SagChainEval;
@@ -263,6 +268,12 @@ impl SagContinuous {
         self.set_steps(cat, mu_kg_m, Some(steps))
     }
 
+    /// The sub-segments of the last `set` (tests).
+    #[cfg(test)]
+    fn segments(&self) -> &[Segment] {
+        &self.segs[..self.n_seg]
+    }
+
     /// The mesh chosen by the last successful `set`.
     pub fn mesh(&self) -> SagContMesh {
         self.mesh
@@ -273,8 +284,9 @@ impl SagContinuous {
         propagate::eval(&self.segs[..self.n_seg], self.final_rot, self.q_max, lambda)
     }
 
-    /// The static end stiffness S(0) (computed by `set`): s_in (N/m, (h, up)) and s_out
-    /// (N/m); the derivatives are those at λ = 0.
+    /// The static end stiffness S(0) (computed by `set`, `statics`): s_in (N/m, (h, up))
+    /// and s_out (N/m); the derivatives are those at λ = 0 (kg). Equal to `eval(0.0)` to
+    /// rounding.
     pub fn static_eval(&self) -> SagChainEval {
         self.static_eval
     }
@@ -315,7 +327,9 @@ impl SagContinuous {
         self.q_max = self.segs[..self.n_seg].iter().fold([0.0f64; 2], |m, g| {
             [m[0].max(g.q[0]), m[1].max(g.q[1]).max(g.q[2])]
         });
-        self.static_eval = self.eval(0.0);
+        let segs = &self.segs[..self.n_seg];
+        self.static_eval =
+            statics::static_eval(segs, self.final_rot).unwrap_or_else(|| self.eval(0.0));
         self.mesh = SagContMesh {
             steps: m,
             lambda_max_rad2_s2: lmax,
