@@ -273,17 +273,9 @@ fn newton_passes_find_the_plain_fixed_point() {
     for (s, w, t_min) in cases {
         let n = s.n_cables();
         let (lo, hi) = bounds(&s, t_min);
-        let gn = s.gravity_m_s2.norm();
         let mats: Vec<SagCable> = match w {
             Some(w) => materials(&s, w),
-            None => s
-                .cables
-                .iter()
-                .map(|c| SagCable {
-                    ea_n: c.ea_n(),
-                    w_n_m: c.mass_per_length_kg_m * gn,
-                })
-                .collect(),
+            None => scene_materials(&s),
         };
         let plain_params = SagTensionParams {
             newton: false,
@@ -330,9 +322,16 @@ fn newton_passes_find_the_plain_fixed_point() {
     }
 }
 
-/// Suspended-8's cables hanging by their own weight (2.5 N/m).
-fn suspended_materials(s: &Scene) -> Vec<SagCable> {
-    materials(s, s.cables[0].mass_per_length_kg_m * s.gravity_m_s2.norm())
+/// The scene's cables hanging by their own weight.
+fn scene_materials(s: &Scene) -> Vec<SagCable> {
+    let gn = s.gravity_m_s2.norm();
+    s.cables
+        .iter()
+        .map(|c| SagCable {
+            ea_n: c.ea_n(),
+            w_n_m: c.mass_per_length_kg_m * gn,
+        })
+        .collect()
 }
 
 /// Solve warm along `positions` (m) with `solver` and check every answer without the
@@ -342,7 +341,7 @@ fn suspended_materials(s: &Scene) -> Vec<SagCable> {
 fn check_fixed_points_along(s: &Scene, solver: &mut SagTensionSolver, positions: &[Vector3<f64>]) {
     let n = s.n_cables();
     let (lo, hi) = bounds(s, s.t_min_n);
-    let mats = suspended_materials(s);
+    let mats = scene_materials(s);
     let mut qp = TensionSolver::new(n, TensionParams::default());
     let weight = s.wrench_n().norm();
     let w = wrench6(s);
@@ -390,7 +389,7 @@ fn newton_reaches_fixed_points_the_plain_passes_leave() {
     };
     let mut plain = SagTensionSolver::new(s.n_cables(), plain_params);
     let (lo, hi) = bounds(&s, s.t_min_n);
-    let mats = suspended_materials(&s);
+    let mats = scene_materials(&s);
     let plain_failures = positions
         .iter()
         .filter(|p| {
