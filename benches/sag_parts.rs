@@ -76,17 +76,6 @@ fn wrench6(s: &Scene) -> [f64; 6] {
     [f.x, f.y, f.z, 0.0, 0.0, 0.0]
 }
 
-fn materials(s: &Scene) -> Vec<SagCable> {
-    let gn = s.gravity_m_s2.norm();
-    s.cables
-        .iter()
-        .map(|c| SagCable {
-            ea_n: c.ea_n(),
-            w_n_m: c.mass_per_length_kg_m * gn,
-        })
-        .collect()
-}
-
 fn bounds(s: &Scene) -> (Vec<f64>, Vec<f64>) {
     let n = s.n_cables();
     (
@@ -101,7 +90,7 @@ type PoseCables = (Vec<Catenary>, Vec<SagCableFrame>, Vector3<f64>);
 /// Each cable's chord in its vertical plane at pose `g`, with its material.
 fn chords(s: &Scene, g: &Geometry) -> Vec<CableChord> {
     let up = -s.gravity_m_s2 / s.gravity_m_s2.norm();
-    materials(s)
+    SagCable::of_scene(s)
         .iter()
         .enumerate()
         .map(|(i, m)| {
@@ -121,7 +110,7 @@ fn sagged_poses(c: &Case, gs: &[Geometry]) -> Vec<PoseCables> {
     let s = &c.scene;
     let n = s.n_cables();
     let (lo, hi) = bounds(s);
-    let mats = materials(s);
+    let mats = SagCable::of_scene(s);
     let mut ts = SagTensionSolver::new(n, SagTensionParams::default());
     gs.iter()
         .map(|g| {
@@ -148,7 +137,7 @@ fn tension(c: &mut Criterion, case: &Case, gs: &[Geometry]) {
     let n = s.n_cables();
     let (lo, hi) = bounds(s);
     let w = wrench6(s);
-    let mats = materials(s);
+    let mats = SagCable::of_scene(s);
     let mut qp = TensionSolver::new(n, TensionParams::default());
     let mut k = 0usize;
     c.bench_function(&format!("sag_parts/{}/tension_chord", s.name), |b| {

@@ -275,7 +275,7 @@ fn newton_passes_find_the_plain_fixed_point() {
         let (lo, hi) = bounds(&s, t_min);
         let mats: Vec<SagCable> = match w {
             Some(w) => materials(&s, w),
-            None => scene_materials(&s),
+            None => SagCable::of_scene(&s),
         };
         let plain_params = SagTensionParams {
             newton: false,
@@ -322,18 +322,6 @@ fn newton_passes_find_the_plain_fixed_point() {
     }
 }
 
-/// The scene's cables hanging by their own weight.
-fn scene_materials(s: &Scene) -> Vec<SagCable> {
-    let gn = s.gravity_m_s2.norm();
-    s.cables
-        .iter()
-        .map(|c| SagCable {
-            ea_n: c.ea_n(),
-            w_n_m: c.mass_per_length_kg_m * gn,
-        })
-        .collect()
-}
-
 /// Solve warm along `positions` (m) with `solver` and check every answer without the
 /// solver's own convergence test: the reported tensions are the chord QP's answer on the
 /// reported end tangents (a fixed point T = QP(A(T)), 1e-9 relative: the tangents stop
@@ -341,7 +329,7 @@ fn scene_materials(s: &Scene) -> Vec<SagCable> {
 fn check_fixed_points_along(s: &Scene, solver: &mut SagTensionSolver, positions: &[Vector3<f64>]) {
     let n = s.n_cables();
     let (lo, hi) = bounds(s, s.t_min_n);
-    let mats = scene_materials(s);
+    let mats = SagCable::of_scene(s);
     let mut qp = TensionSolver::new(n, TensionParams::default());
     let weight = s.wrench_n().norm();
     let w = wrench6(s);
@@ -389,7 +377,7 @@ fn newton_reaches_fixed_points_the_plain_passes_leave() {
     };
     let mut plain = SagTensionSolver::new(s.n_cables(), plain_params);
     let (lo, hi) = bounds(&s, s.t_min_n);
-    let mats = scene_materials(&s);
+    let mats = SagCable::of_scene(&s);
     let plain_failures = positions
         .iter()
         .filter(|p| {

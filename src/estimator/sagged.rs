@@ -49,7 +49,6 @@ impl SagPipeline {
     /// Buffers for the cables of `scene` (allocates: set-up only).
     pub(super) fn new(scene: &Scene, tension: TensionParams, modal: ModalParams) -> SagPipeline {
         let n = scene.n_cables();
-        let gn = scene.gravity_m_s2.norm();
         let modal = match scene.model.element {
             ElementKind::Continuous => {
                 // A per-cycle budget is the real-time configuration: f1 only, within every
@@ -78,14 +77,7 @@ impl SagPipeline {
                 },
             ),
             modal,
-            materials: scene
-                .cables
-                .iter()
-                .map(|c| SagCable {
-                    ea_n: c.ea_n(),
-                    w_n_m: c.mass_per_length_kg_m * gn,
-                })
-                .collect(),
+            materials: SagCable::of_scene(scene),
             mu_kg_m: scene
                 .cables
                 .iter()

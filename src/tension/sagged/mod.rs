@@ -131,6 +131,22 @@ pub struct SagCable {
     pub w_n_m: f64,
 }
 
+impl SagCable {
+    /// Every cable of `scene` hanging by its own weight: EA and mass per length times |g|
+    /// (allocates: set-up only).
+    pub fn of_scene(scene: &crate::scene::Scene) -> Vec<SagCable> {
+        let gn = scene.gravity_m_s2.norm();
+        scene
+            .cables
+            .iter()
+            .map(|c| SagCable {
+                ea_n: c.ea_n(),
+                w_n_m: c.mass_per_length_kg_m * gn,
+            })
+            .collect()
+    }
+}
+
 /// The sagged tension solver: `new` allocates, `solve` does not.
 #[derive(Debug, Clone)]
 pub struct SagTensionSolver {
