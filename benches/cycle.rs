@@ -2,7 +2,7 @@
 //! `cargo bench --bench cycle`; the per-cycle latency distribution along the trajectory is
 //! measured by `cablevib bench` (percentiles, allocations, dense ratio in one run).
 use cablevib::cable::{catenary_block, up_frame, ChainKind};
-use cablevib::estimator::{build_models, reference_analysis, Estimator};
+use cablevib::estimator::{build_models, reference_analysis, Estimator, Tmin};
 use cablevib::kinematics::Geometry;
 use cablevib::modal::{eig3, ModalParams, ModalSolver};
 use cablevib::scene::{ElementKind, Scene};
@@ -94,7 +94,10 @@ fn cycles(c: &mut Criterion) {
             c.bench_function(&label, |b| {
                 b.iter(|| {
                     k += 1;
-                    black_box(est.update(&circle_pose(&s, k % 4000, 4.0), 60.0).f1_hz)
+                    black_box(
+                        est.update(&circle_pose(&s, k % 4000, 4.0), Tmin::Uniform(60.0))
+                            .f1_hz,
+                    )
                 })
             });
         }
@@ -109,10 +112,15 @@ fn dense(c: &mut Criterion) {
         group.bench_function(format!("spatial_fem{n}"), |b| {
             b.iter(|| {
                 black_box(
-                    reference_analysis(&s, &Vector3::new(0.3, 0.2, 1.0), 60.0, false)
-                        .unwrap()
-                        .modes
-                        .lambda[0],
+                    reference_analysis(
+                        &s,
+                        &Vector3::new(0.3, 0.2, 1.0),
+                        Tmin::Uniform(60.0),
+                        false,
+                    )
+                    .unwrap()
+                    .modes
+                    .lambda[0],
                 )
             })
         });

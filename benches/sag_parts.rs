@@ -16,7 +16,7 @@
 //! docs/sag.md (section 3) reads them: the parts a sagged cycle cannot skip already add up
 //! to more than twice the chord cycle.
 use cablevib::cable::sagged::SagContinuousParams;
-use cablevib::estimator::{Estimator, EstimatorParams};
+use cablevib::estimator::{Estimator, EstimatorParams, Tmin};
 use cablevib::kinematics::Geometry;
 use cablevib::modal::sag::{SagCableFrame, SagEndEffector, SagModalSolver};
 use cablevib::modal::{ModalParams, CYCLE_EVALUATIONS};
@@ -240,7 +240,7 @@ fn cycles(c: &mut Criterion, case: &Case) {
                 b.iter(|| {
                     k += 1;
                     let pose = circle_pose_with_radius(&s, k % POSES, case.period_s, case.radius_m);
-                    black_box(est.update(&pose, s.t_min_n).f1_hz)
+                    black_box(est.update(&pose, Tmin::Scene).f1_hz)
                 })
             });
         }

@@ -8,6 +8,7 @@
 //! own threads allocate meanwhile (output capture, the runner) is not charged to the
 //! estimator.
 use cablevib::alloc_count::{thread_allocations, CountingAlloc};
+use cablevib::estimator::Tmin;
 use cablevib::estimator::{Estimator, EstimatorParams, TminQueryError};
 use cablevib::kinematics::Pose;
 use cablevib::modal::CYCLE_EVALUATIONS;
@@ -46,24 +47,24 @@ fn ten_thousand_cycles_allocate_nothing() {
         let s = scene.with_model(el, n);
         let c = circle(&s);
         let mut est = Estimator::new(&s).unwrap();
-        est.update(&circle_pose(&s, &c, 0), s.t_min_n);
+        est.update(&circle_pose(&s, &c, 0), Tmin::Scene);
         let before = thread_allocations();
         let mut ok = 0;
         for k in 1..=10_000 {
             let e = match k % 1000 {
                 // Bad inputs on the same path: they must not allocate either.
-                17 => est.update(&Pose::at(Vector3::new(f64::NAN, 0.0, 1.0)), s.t_min_n),
-                18 => est.update(&circle_pose(&s, &c, k), -1.0),
-                19 => est.update(&Pose::at(Vector3::new(9.0, 9.0, 9.0)), s.t_min_n),
-                20 => est.update(&circle_pose(&s, &c, k), s.t_max_n * 0.99),
-                _ => est.update(&circle_pose(&s, &c, k), s.t_min_n),
+                17 => est.update(&Pose::at(Vector3::new(f64::NAN, 0.0, 1.0)), Tmin::Scene),
+                18 => est.update(&circle_pose(&s, &c, k), Tmin::Uniform(-1.0)),
+                19 => est.update(&Pose::at(Vector3::new(9.0, 9.0, 9.0)), Tmin::Scene),
+                20 => est.update(&circle_pose(&s, &c, k), Tmin::Uniform(s.t_max_n * 0.99)),
+                _ => est.update(&circle_pose(&s, &c, k), Tmin::Scene),
             };
             ok += e.is_ok() as usize;
         }
         // The inverse T_min query (the service's margin answer): answered or unreachable,
         // it allocates nothing either.
         let pose = circle_pose(&s, &c, 5);
-        let e = *est.update(&pose, s.t_min_n);
+        let e = *est.update(&pose, Tmin::Scene);
         assert!(e.is_ok(), "{} {el:?}: {:?}", s.name, e.error);
         let f = e.f1_hz;
         let q = est.t_min_for_f1(&pose, 1.05 * f);
@@ -107,11 +108,11 @@ fn continued_scans_allocate_nothing() {
         p.modal.max_scan_evaluations = cablevib::modal::SPREAD_SCAN_EVALUATIONS;
         let mut est = Estimator::with_params(&s, p).unwrap();
         let c = Circle::new(&s, 0.1, 4.0).unwrap();
-        est.update(&circle_pose(&s, &c, 0), s.t_min_n);
+        est.update(&circle_pose(&s, &c, 0), Tmin::Scene);
         let before = thread_allocations();
         let mut continued = 0;
         for k in 1..=3_000 {
-            let e = est.update(&circle_pose(&s, &c, k), s.t_min_n);
+            let e = est.update(&circle_pose(&s, &c, k), Tmin::Scene);
             assert!(e.eigen_evaluations <= budget);
             continued += (e.ee_mode_age_cycles != 0) as usize;
         }
@@ -136,7 +137,7 @@ fn per_cable_bounds_allocate_nothing() {
         let c = circle(&s);
         let mut est = Estimator::new(&s).unwrap();
         let mut bounds = [s.t_min_n; MAX_CABLES];
-        est.update_with_bounds(&circle_pose(&s, &c, 0), &bounds[..nc]);
+        est.update(&circle_pose(&s, &c, 0), Tmin::PerCable(&bounds[..nc]));
         let before = thread_allocations();
         let mut ok = 0;
         for k in 1..=10_000 {
@@ -150,15 +151,15 @@ fn per_cable_bounds_allocate_nothing() {
                 17 => {
                     let mut bad = bounds;
                     bad[1] = 0.0;
-                    est.update_with_bounds(&pose, &bad[..nc])
+                    est.update(&pose, Tmin::PerCable(&bad[..nc]))
                 }
                 18 => {
                     let mut bad = bounds;
                     bad[0] = f64::MIN_POSITIVE / 2.0;
-                    est.update_with_bounds(&pose, &bad[..nc])
+                    est.update(&pose, Tmin::PerCable(&bad[..nc]))
                 }
-                19 => est.update_with_bounds(&pose, &bounds[..nc - 1]),
-                _ => est.update_with_bounds(&pose, &bounds[..nc]),
+                19 => est.update(&pose, Tmin::PerCable(&bounds[..nc - 1])),
+                _ => est.update(&pose, Tmin::PerCable(&bounds[..nc])),
             };
             ok += e.is_ok() as usize;
         }

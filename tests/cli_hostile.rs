@@ -133,12 +133,13 @@ fn realtime_pose_outside_the_workspace_prints_its_status() {
     assert_no_panic("analyze 5,5,5", &o);
     let json: serde_json::Value =
         serde_json::from_slice(&o.stdout).expect("one JSON object on stdout");
-    assert_eq!(json["status"], "outside_workspace");
+    // No geometric pre-test: the tension distribution refuses it.
+    assert_eq!(json["status"], "tension_infeasible");
     assert!(json["f1_hz"].is_null());
     // Documented: a refused pose exits 1, naming the status, not the scene's default pose.
     assert_eq!(o.status.code(), Some(1));
     let err = stderr(&o);
-    assert!(err.contains("outside_workspace"), "{err}");
+    assert!(err.contains("tension_infeasible"), "{err}");
     assert!(!err.contains("default pose"), "{err}");
     // The same with the auto model, which is chosen at the scene's own pose.
     let o = run(&[
@@ -153,7 +154,7 @@ fn realtime_pose_outside_the_workspace_prints_its_status() {
     ]);
     assert_no_panic("analyze 5,5,5 auto", &o);
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
-    assert_eq!(json["status"], "outside_workspace");
+    assert_eq!(json["status"], "tension_infeasible");
     // A good pose still exits 0.
     let o = run(&["analyze", "spatial-paper", "--realtime", "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));

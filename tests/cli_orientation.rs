@@ -4,6 +4,7 @@
 //! and the 6 × 6 static stiffness of a rigid end-effector.
 
 use cablevib::estimator::Estimator;
+use cablevib::estimator::Tmin;
 use cablevib::kinematics::{rotated_about, unit_quaternion, Pose};
 use cablevib::scene::Scene;
 use cablevib::study::analysis::{analyze, AnalyzeOptions};
@@ -145,7 +146,7 @@ fn rigid_stiffness_is_6x6_symmetric_with_the_translational_block_unchanged() {
         // `stiffness_n_m`): equal bit for bit on the structured paths; the dense reference
         // condenses the assembled K independently, within 1e-8 (as tests/effects_rigid.rs).
         let mut est = Estimator::new(&s).unwrap();
-        let e = *est.update(&Pose::in_scene(&s, s.ee_position_m), s.t_min_n);
+        let e = *est.update(&Pose::in_scene(&s, s.ee_position_m), Tmin::Scene);
         let dense = extra.contains(&"dense");
         for r in 0..3 {
             for c in 0..3 {
@@ -192,12 +193,12 @@ fn bench_drives_the_circle_at_the_orientation() {
     let mut s = Scene::load(scene).unwrap();
     s.ee_orientation_wxyz = q_tilt();
     let mut est = Estimator::realtime(&s).unwrap();
-    est.update(&cablevib::trajectory::circle_pose(&s, 0, 4.0), s.t_min_n);
+    est.update(&cablevib::trajectory::circle_pose(&s, 0, 4.0), Tmin::Scene);
     let want = (1..=cycles)
         .map(|k| {
             let pose = cablevib::trajectory::circle_pose(&s, k, 4.0);
             assert_eq!(pose.orientation_wxyz, q_tilt());
-            est.update(&pose, s.t_min_n).f1_hz
+            est.update(&pose, Tmin::Scene).f1_hz
         })
         .fold(f64::INFINITY, f64::min);
     assert_eq!(tilted, want);

@@ -10,6 +10,7 @@
 //! are written out here by hand from the documentation, not taken from the code under test.
 
 use cablevib::cli;
+use cablevib::estimator::Tmin;
 use clap::Parser;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -315,7 +316,7 @@ fn map_modes_columns_are_the_estimator_modes_and_f1_is_unchanged() {
     let col = |n: &str| hk.iter().position(|c| c == n).unwrap();
     let mut checked = 0;
     for (row, p) in rowsk.iter().zip(&mk.points).step_by(2) {
-        let e = *est.update(&cablevib::kinematics::Pose::at(p.position_m), s.t_min_n);
+        let e = *est.update(&cablevib::kinematics::Pose::at(p.position_m), Tmin::Scene);
         assert_eq!(e.status, p.estimate.status);
         if !e.is_ok() {
             assert!(row[col("f2_hz")] == "NaN" && row[col("stiffness_min_n_m")] == "NaN");

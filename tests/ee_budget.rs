@@ -11,6 +11,7 @@
 //! - the first root's residual is small on converged answers and not on a perturbed λ.
 mod common;
 
+use cablevib::estimator::Tmin;
 use cablevib::estimator::{reference_analysis, Estimator};
 use cablevib::kinematics::Pose;
 use cablevib::modal::{hz_to_lambda, CYCLE_EVALUATIONS};
@@ -76,7 +77,7 @@ fn no_cycle_exceeds_the_budget_on_random_trajectories() {
         assert_eq!(budget, CYCLE_EVALUATIONS);
         let (mut ok, mut fresh, mut max) = (0, 0, 0);
         for pose in random_poses(&s, &mut rng, half, 4000) {
-            let e = *est.update(&pose, s.t_min_n);
+            let e = *est.update(&pose, Tmin::Scene);
             // The bound itself (counts, not time).
             assert!(
                 e.eigen_evaluations <= budget,
@@ -125,7 +126,7 @@ fn heavy_cable_end_effector_mode_meets_the_threshold() {
         position_m: s.ee_position_m,
         orientation_wxyz: s.ee_orientation_wxyz,
     };
-    let reference = reference_analysis(&s, &s.ee_position_m, s.t_min_n, true).unwrap();
+    let reference = reference_analysis(&s, &s.ee_position_m, Tmin::Scene, true).unwrap();
     let m = &reference.modes;
     let k = (0..m.lambda.len())
         .find(|&k| m.ee_participation[k] >= thr)
@@ -134,7 +135,7 @@ fn heavy_cable_end_effector_mode_meets_the_threshold() {
     let budget = est.params().modal.cycle_evaluations;
     let mut found = None;
     for cycle in 0..1000 {
-        let e = *est.update(&pose, s.t_min_n);
+        let e = *est.update(&pose, Tmin::Scene);
         assert!(e.is_ok(), "{:?}", e.error);
         assert!(e.eigen_evaluations <= budget);
         if e.ee_mode_hz.is_finite() {
@@ -167,7 +168,7 @@ fn heavy_cable_end_effector_mode_meets_the_threshold() {
     assert!((e.ee_mode_participation - m.ee_participation[k]).abs() <= 1e-6);
     // Stays found (and fresh) on the next cycles at the same pose.
     for _ in 0..10 {
-        let e = *est.update(&pose, s.t_min_n);
+        let e = *est.update(&pose, Tmin::Scene);
         assert_eq!(e.ee_mode_age_cycles, 0);
         assert!(e.ee_mode_participation >= thr);
     }
@@ -188,7 +189,7 @@ fn heavy_cable_continuous_never_reports_a_weak_mode() {
     let mut est = Estimator::realtime(&s).unwrap();
     let mut found = 0;
     for _ in 0..1000 {
-        let e = *est.update(&pose, s.t_min_n);
+        let e = *est.update(&pose, Tmin::Scene);
         assert!(e.is_ok());
         if e.ee_mode_hz.is_finite() {
             assert!(e.ee_mode_participation >= thr, "{e:?}");
@@ -217,7 +218,7 @@ fn residual_is_small_at_the_root_and_not_elsewhere() {
             position_m: s.ee_position_m,
             orientation_wxyz: s.ee_orientation_wxyz,
         };
-        let e = *est.update(&pose, s.t_min_n);
+        let e = *est.update(&pose, Tmin::Scene);
         assert!(e.is_ok());
         // Converged: within the solver's step tolerance (1e-9 accepted on warm steps).
         assert!(e.eigen_residual <= 1e-8, "{el:?}: {}", e.eigen_residual);

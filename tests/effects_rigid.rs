@@ -2,6 +2,7 @@
 //! end-effector matches the dense reference, and the inverse T_min query.
 #![allow(clippy::needless_range_loop)]
 mod common;
+use cablevib::estimator::Tmin;
 use cablevib::estimator::{reference_analysis_at, Estimator};
 use cablevib::kinematics::{Geometry, Pose};
 use cablevib::modal::{dense_relative_accuracy, lambda_to_hz};
@@ -17,7 +18,7 @@ fn f1(scene: &Scene, p: Vector3<f64>, t_min: f64) -> cablevib::estimator::Estima
             position_m: p,
             orientation_wxyz: scene.ee_orientation_wxyz,
         },
-        t_min,
+        Tmin::Uniform(t_min),
     )
 }
 
@@ -170,11 +171,11 @@ fn rigid_body_matches_the_dense_reference_on_random_poses() {
             orientation_wxyz: [q.w, q.i, q.j, q.k],
         };
         let t_min = 40.0 + 40.0 * rng.next();
-        let Ok(r) = reference_analysis_at(&scene, &pose, t_min, true) else {
+        let Ok(r) = reference_analysis_at(&scene, &pose, Tmin::Uniform(t_min), true) else {
             continue;
         };
         let mut est = Estimator::new(&scene).unwrap();
-        let e = *est.update(&pose, t_min);
+        let e = *est.update(&pose, Tmin::Uniform(t_min));
         assert!(e.is_ok(), "{:?} at {p:?}", e.error);
         assert_eq!(e.stiffness_dim, 6);
         for (a, b) in e.tensions().iter().zip(&r.tensions_n) {
@@ -261,7 +262,7 @@ fn inverse_t_min_reaches_the_required_frequency() {
             orientation_wxyz: scene.ee_orientation_wxyz,
         };
         let mut est = Estimator::new(&scene).unwrap();
-        let base = *est.update(&pose, scene.t_min_n);
+        let base = *est.update(&pose, Tmin::Scene);
         assert!(base.is_ok());
         for factor in [0.7, 1.0, 1.3] {
             let want = factor * base.f1_hz;
@@ -271,7 +272,7 @@ fn inverse_t_min_reaches_the_required_frequency() {
             };
             // Forward check with a fresh estimator at the answered T_min.
             let mut fresh = Estimator::new(&scene).unwrap();
-            let e = *fresh.update(&pose, a.t_min_n);
+            let e = *fresh.update(&pose, Tmin::Uniform(a.t_min_n));
             assert!(e.is_ok());
             let rel = (e.f1_hz - want) / want;
             assert!(
@@ -282,7 +283,7 @@ fn inverse_t_min_reaches_the_required_frequency() {
                 e.f1_hz
             );
             // Smallest: a slightly lower T_min misses the requirement.
-            let below = *fresh.update(&pose, a.t_min_n * (1.0 - 1e-4));
+            let below = *fresh.update(&pose, Tmin::Uniform(a.t_min_n * (1.0 - 1e-4)));
             assert!(
                 below.f1_hz < want,
                 "{}: T_min is not the smallest",
@@ -313,7 +314,7 @@ fn inverse_t_min_reaches_the_required_frequency() {
         assert!(est.t_min_for_f1(&pose, f64::NAN).is_err());
         // The cycle's own state is untouched (the next cycle is warm-started: equal to the
         // cold first cycle within Newton's stopping tolerance).
-        let again = *est.update(&pose, scene.t_min_n);
+        let again = *est.update(&pose, Tmin::Scene);
         assert!((again.f1_hz - base.f1_hz).abs() <= 1e-12 * base.f1_hz);
         assert!(!again.cold_start);
     }

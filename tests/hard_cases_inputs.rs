@@ -10,6 +10,7 @@
 //! tests/common/hard_cases.rs.
 mod common;
 
+use cablevib::estimator::Tmin;
 use cablevib::estimator::{reference_analysis, AnalysisError, Estimator, Status};
 use cablevib::kinematics::Pose;
 use cablevib::modal::lambda_to_hz;
@@ -95,13 +96,13 @@ fn bad_inputs_get_a_status_and_the_next_valid_input_is_exact() {
             "outside",
             Pose::at(Vector3::new(9.0, 0.2, 1.0)),
             60.0,
-            Status::OutsideWorkspace,
+            Status::TensionInfeasible,
         ),
         (
             "huge",
             Pose::at(Vector3::new(1e300, 0.2, 1.0)),
             60.0,
-            Status::OutsideWorkspace,
+            Status::TensionInfeasible,
         ),
         (
             "at anchor",
@@ -113,11 +114,11 @@ fn bad_inputs_get_a_status_and_the_next_valid_input_is_exact() {
     let mut est = Estimator::new(&s).unwrap();
     for (name, pose, t_min, want) in bad {
         // Warm the estimator on a nearby pose first, so a stale value would be available.
-        est.update(&Pose::at(good + Vector3::new(1e-3, 0.0, 0.0)), s.t_min_n);
-        let e = *est.update(&pose, t_min);
+        est.update(&Pose::at(good + Vector3::new(1e-3, 0.0, 0.0)), Tmin::Scene);
+        let e = *est.update(&pose, Tmin::Uniform(t_min));
         assert_eq!(e.status, want, "{name}: {:?}", e.error);
         assert_no_numbers(name, &e);
-        let next = *est.update(&Pose::at(good), s.t_min_n);
+        let next = *est.update(&Pose::at(good), Tmin::Scene);
         assert_sane(name, &next, &s, s.t_min_n);
         assert!(
             rel(next.f1_hz, reference.f1_hz) <= 1e-10
@@ -142,9 +143,9 @@ fn t_min_floor_is_accepted_and_below_it_is_not() {
     let mut est = Estimator::new(&s).unwrap();
     let p = Pose::at(s.ee_position_m);
     let below = f64::from_bits(T_MIN_FLOOR_N.to_bits() - 1);
-    let e = *est.update(&p, below);
+    let e = *est.update(&p, Tmin::Uniform(below));
     assert_eq!(e.status, Status::TminOutOfRange, "{below:e} N");
-    let e = *est.update(&p, T_MIN_FLOOR_N);
+    let e = *est.update(&p, Tmin::Uniform(T_MIN_FLOOR_N));
     assert_ne!(e.status, Status::TminOutOfRange, "{:?}", e.error);
     println!("t_min = {T_MIN_FLOOR_N:e} N: {:?}", e.status);
 }
@@ -177,7 +178,7 @@ fn per_cable_t_min_is_honoured_and_matches_the_reference() {
         Vector3::new(-0.4, 0.1, 1.3),
     ] {
         let pose = Pose::at(p);
-        let e = *est.update_with_bounds(&pose, lo);
+        let e = *est.update(&pose, Tmin::PerCable(lo));
         assert!(e.is_ok(), "{p:?}: {:?}", e.error);
         let g = geometry(&s, &p);
         let w = s.wrench_n();
@@ -197,7 +198,7 @@ fn per_cable_t_min_is_honoured_and_matches_the_reference() {
                 r[i]
             );
         }
-        let old = *collapsed.update(&pose, 100.0);
+        let old = *collapsed.update(&pose, Tmin::Uniform(100.0));
         assert!(old.is_ok());
         assert!(
             e.f1_hz < old.f1_hz,
@@ -217,8 +218,8 @@ fn per_cable_t_min_is_honoured_and_matches_the_reference() {
     let mut b = Estimator::new(&s).unwrap();
     for k in 0..50 {
         let pose = Pose::at(Vector3::new(0.01 * k as f64, 0.0, 1.2));
-        let x = *a.update(&pose, 70.0);
-        let y = *b.update_with_bounds(&pose, &[70.0; MAX_CABLES][..n]);
+        let x = *a.update(&pose, Tmin::Uniform(70.0));
+        let y = *b.update(&pose, Tmin::PerCable(&[70.0; MAX_CABLES][..n]));
         assert_eq!(x.f1_hz.to_bits(), y.f1_hz.to_bits(), "pose {k}");
         assert_eq!(x.tension_iterations, y.tension_iterations, "pose {k}");
         for (t, u) in x.tensions().iter().zip(y.tensions()) {
@@ -227,11 +228,11 @@ fn per_cable_t_min_is_honoured_and_matches_the_reference() {
     }
     // Refused like a bad uniform value.
     let pose = Pose::at(s.ee_position_m);
-    let e = *est.update_with_bounds(&pose, &lo[..n - 1]);
+    let e = *est.update(&pose, Tmin::PerCable(&lo[..n - 1]));
     assert_eq!(e.status, Status::TminOutOfRange, "wrong length");
     let mut zero = bounds;
     zero[2] = 0.0;
-    let e = *est.update_with_bounds(&pose, &zero[..n]);
+    let e = *est.update(&pose, Tmin::PerCable(&zero[..n]));
     assert_eq!(e.status, Status::TminOutOfRange, "a zero bound");
     assert_no_numbers("a zero bound", &e);
 }
@@ -258,7 +259,7 @@ fn scene_per_cable_bounds_are_the_default() {
     let n = s.n_cables();
     let mut est = Estimator::new(&s).unwrap();
     let defaults = est.default_t_min_n();
-    let e = *est.update_with_bounds(&Pose::at(s.ee_position_m), &defaults[..n]);
+    let e = *est.update(&Pose::at(s.ee_position_m), Tmin::PerCable(&defaults[..n]));
     assert!(e.is_ok(), "{:?}", e.error);
     for i in 0..n {
         let t = e.tensions()[i];
@@ -334,7 +335,7 @@ fn poses_approaching_an_anchor() {
                             .all(|&x| x >= s.t_min_n - 1e-9 && x <= s.t_max_n + 1e-9),
                         "{label}: closest tensions {t:?} outside the bounds"
                     );
-                    let r = reference_analysis(&s, &p, s.t_min_n, false);
+                    let r = reference_analysis(&s, &p, Tmin::Scene, false);
                     assert!(
                         matches!(
                             r,
@@ -369,7 +370,7 @@ fn poses_approaching_an_anchor() {
                 assert!(e.tensions().iter().all(|t| t.is_nan()), "{label}");
                 assert!(
                     matches!(
-                        reference_analysis(&s, &p, s.t_min_n, false),
+                        reference_analysis(&s, &p, Tmin::Scene, false),
                         Err(AnalysisError::Kinematics(_))
                     ),
                     "{label}: dense accepted the pose"

@@ -10,6 +10,7 @@
 //! tests/common/hard_cases.rs.
 mod common;
 
+use cablevib::estimator::Tmin;
 use cablevib::estimator::{build_models, Estimator, Status};
 use cablevib::kinematics::Pose;
 use cablevib::modal::{hz_to_lambda, lambda_to_hz, ModalParams, ModalSolver};
@@ -212,9 +213,9 @@ fn warm_started_end_effector_mode_equals_cold_along_a_path() {
     let mut mismatches = Vec::new();
     for k in 0..=steps {
         let p = a + (b - a) * (k as f64 / steps as f64);
-        let w = *warm.update(&Pose::at(p), t_min);
+        let w = *warm.update(&Pose::at(p), Tmin::Uniform(t_min));
         cold.reset();
-        let c = *cold.update(&Pose::at(p), t_min);
+        let c = *cold.update(&Pose::at(p), Tmin::Uniform(t_min));
         assert_eq!(w.status, c.status, "step {k}");
         if !w.is_ok() {
             continue;

@@ -22,6 +22,7 @@ mod sag_cases;
 mod sag_reference_py;
 
 use cablevib::alloc_count::{thread_allocations, CountingAlloc};
+use cablevib::estimator::Tmin;
 use cablevib::estimator::{Estimate, Estimator, Status};
 use cablevib::kinematics::Pose;
 use cablevib::scene::{ElementKind, Scene};
@@ -280,14 +281,14 @@ fn a_slack_pose_is_a_status() {
         let s = heavy.with_model(el, n);
         let mut est = Estimator::new(&s).expect("builds at the centre");
         assert_ok_is_finite(
-            est.update(&Pose::at(HEAVY_CENTRE_M.into()), s.t_min_n),
+            est.update(&Pose::at(HEAVY_CENTRE_M.into()), Tmin::Scene),
             "centre",
         );
-        let e = *est.update(&Pose::at(HEAVY_SLACK_M.into()), s.t_min_n);
+        let e = *est.update(&Pose::at(HEAVY_SLACK_M.into()), Tmin::Scene);
         assert_eq!(e.status, Status::CableSlack, "{el:?}: {:?}", e.error);
         assert_eq!(e.status as u32, 11);
         assert_not_ok_is_nan(&e, "slack");
-        let e = *est.update(&Pose::at(HEAVY_OFF_CENTRE_M.into()), s.t_min_n);
+        let e = *est.update(&Pose::at(HEAVY_OFF_CENTRE_M.into()), Tmin::Scene);
         assert_ok_is_finite(&e, "after the slack pose");
     }
     let file = format!("{}/heavy_paper_sag.toml", env!("CARGO_TARGET_TMPDIR"));
@@ -340,7 +341,7 @@ fn random_poses_are_ok_and_finite_or_a_status() {
             for _ in 0..300 {
                 let p = Vector3::from_fn(|i, _| rng.range(lo[i], hi[i]));
                 let t_min = s.t_min_n * 2.0 * 10f64.powf(rng.range(-3.0, 0.0));
-                let e = *est.update(&Pose::at(p), t_min);
+                let e = *est.update(&Pose::at(p), Tmin::Uniform(t_min));
                 let what = format!("{} {el:?} at {p:?}, T_min {t_min}", s.name);
                 if e.is_ok() {
                     assert_ok_is_finite(&e, &what);
@@ -378,11 +379,11 @@ fn the_sagged_realtime_path_allocates_nothing() {
             let c = Circle::new(&s, radius, 4.0).expect("circle");
             let pose = |k: usize| Pose::at(c.position_at(k as f64 * SAMPLE_PERIOD_S));
             let mut est = Estimator::realtime(&s).expect("estimator");
-            est.update(&pose(0), s.t_min_n);
+            est.update(&pose(0), Tmin::Scene);
             let before = thread_allocations();
             let mut ok = 0;
             for k in 1..=2000 {
-                ok += est.update(&pose(k), s.t_min_n).is_ok() as usize;
+                ok += est.update(&pose(k), Tmin::Scene).is_ok() as usize;
             }
             let after = thread_allocations();
             eprintln!("{} {el:?}: {ok} of 2000 cycles ok", s.name);

@@ -8,6 +8,7 @@
 //! tests/common/hard_cases.rs.
 mod common;
 
+use cablevib::estimator::Tmin;
 use cablevib::estimator::{reference_analysis, AnalysisError, Estimator, EstimatorParams, Status};
 use cablevib::kinematics::{Geometry, Pose};
 use cablevib::scene::Scene;
@@ -159,7 +160,7 @@ fn wrenches_just_inside_and_just_outside_the_feasible_set() {
         sc.ee_mass_kg = m_star * f;
         sc.ee_position_m = Vector3::new(0.0, 0.0, 1.0); // build at a roomier pose
         let mut est = Estimator::new(&sc).unwrap();
-        let e = *est.update(&Pose::at(s.ee_position_m), s.t_min_n);
+        let e = *est.update(&Pose::at(s.ee_position_m), Tmin::Scene);
         if e.status != want {
             failures.push(format!(
                 "estimator m = {} kg: {:?} ({:?}), want {want:?}",
@@ -191,15 +192,10 @@ fn wrenches_just_inside_and_just_outside_the_feasible_set() {
 /// and near the plane, infeasible. The planar robot (rank 2 by design) carries no
 /// out-of-plane wrench: asking for one is infeasible on f_z.
 ///
-/// (The estimator is given a 2 m workspace margin here: without it every pose of the
-/// suspended robot is refused, see `suspended_robot_poses_are_in_the_workspace`.)
 #[test]
 fn structure_matrix_losing_rank() {
     let s = suspended_scene();
-    let params = EstimatorParams {
-        workspace_margin_m: 2.0,
-        ..EstimatorParams::default()
-    };
+    let params = EstimatorParams::default();
     let mut seen_ok = 0;
     let mut seen_infeasible = 0;
     for delta in [0.5, 1e-1, 1e-2, 1e-3, 1e-4, 1e-6, 1e-9, 1e-12, 0.0] {
@@ -208,8 +204,8 @@ fn structure_matrix_losing_rank() {
             let label = format!("suspended δ {delta:e} x {x}");
             let e = *Estimator::with_params(&s, params)
                 .unwrap()
-                .update(&Pose::at(p), s.t_min_n);
-            let r = reference_analysis(&s, &p, s.t_min_n, true);
+                .update(&Pose::at(p), Tmin::Scene);
+            let r = reference_analysis(&s, &p, Tmin::Scene, true);
             match e.status {
                 Status::Ok => {
                     seen_ok += 1;

@@ -20,6 +20,7 @@
 //! and controller processes are this test binary re-executed with an environment variable
 //! that selects the `helper_*` function (ignored tests that do nothing otherwise).
 
+use cablevib::estimator::Tmin;
 use std::io::{BufRead, BufReader, Read};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -402,7 +403,7 @@ fn estimates_equal_the_library_bit_for_bit() {
         }
         let p = circle(5 * k);
         let got = client.estimate(p, q);
-        let want = *reference.update_with_bounds(&pose_at(p, q), &t_min_n);
+        let want = *reference.update(&pose_at(p, q), Tmin::PerCable(&t_min_n));
         if k >= 200 {
             let t = got.tensions();
             assert!(
@@ -472,18 +473,18 @@ fn every_bad_input_gets_its_status_and_the_next_pose_is_answered() {
             StatusCode::NonUnitQuaternion,
         ),
         (
-            "outside the frame (x)",
+            "outside the frame (x): no tensions hold it",
             [2.0, 0.0, 1.25],
             q,
             None,
-            StatusCode::OutsideWorkspace,
+            StatusCode::TensionInfeasible,
         ),
         (
-            "outside the frame (below the floor)",
-            [0.0, 0.0, -0.5],
+            "above every anchor: no tensions hold it",
+            [0.0, 0.0, 3.0],
             q,
             None,
-            StatusCode::OutsideWorkspace,
+            StatusCode::TensionInfeasible,
         ),
         (
             "T_min < 0",
@@ -534,7 +535,7 @@ fn every_bad_input_gets_its_status_and_the_next_pose_is_answered() {
         k += 1;
         let p = good(k);
         let got = client.estimate(p, q);
-        let want = *reference.update(&pose_at(p, q), t_min_n);
+        let want = *reference.update(&pose_at(p, q), Tmin::Uniform(t_min_n));
         assert!(want.is_ok(), "{what}: {:?}", want.error);
         assert_same(&got, &want, what);
     };
@@ -559,7 +560,7 @@ fn every_bad_input_gets_its_status_and_the_next_pose_is_answered() {
             got.f1_hz.is_nan() && got.ee_mode_hz.is_nan(),
             "{what}: no stale numbers"
         );
-        let want = *reference.update(&pose_at(p, quat), t_min_for_this);
+        let want = *reference.update(&pose_at(p, quat), Tmin::Uniform(t_min_for_this));
         assert_same(&got, &want, what);
         if status == StatusCode::TensionInfeasible {
             assert!(
@@ -694,9 +695,9 @@ fn margin_requests_answer_for_the_latest_pose() {
     }
 
     let e = client.estimate([2.0, 0.0, 1.0], IDENTITY_QUATERNION);
-    assert_eq!(e.status_code(), Some(StatusCode::OutsideWorkspace));
+    assert_eq!(e.status_code(), Some(StatusCode::TensionInfeasible));
     let r = query(&client, 5, 8.0);
-    assert_eq!(r.status_code(), Some(StatusCode::OutsideWorkspace));
+    assert_eq!(r.status_code(), Some(StatusCode::TensionInfeasible));
     assert_eq!(r.pose_sequence, e.pose_sequence);
     assert!(r.margin_hz.is_nan());
 }
@@ -899,13 +900,16 @@ fn service_killed_and_restarted_while_a_publisher_runs_recovers() {
     let output = EstimateOutput::open(&node, &names).expect("output");
     let reference = |seq: u64| {
         let mut est = Estimator::realtime(&scene).expect("estimator");
-        *est.update(&pose_at(circle(seq as usize), IDENTITY_QUATERNION), t_min_n)
+        *est.update(
+            &pose_at(circle(seq as usize), IDENTITY_QUATERNION),
+            Tmin::Uniform(t_min_n),
+        )
     };
     let scene_default = |seq: u64| {
         let mut est = Estimator::realtime(&scene).expect("estimator");
         *est.update(
             &pose_at(circle(seq as usize), IDENTITY_QUATERNION),
-            scene.t_min_n,
+            Tmin::Scene,
         )
     };
 

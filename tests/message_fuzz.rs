@@ -5,6 +5,7 @@
 //! status — never a panic, never a NaN in an estimate marked ok — and the next valid pose
 //! must be answered exactly as a fresh estimator answers it.
 use cablevib::estimator::Estimator;
+use cablevib::estimator::Tmin;
 use cablevib::kinematics::Pose;
 use cablevib::scene::Scene;
 use cablevib::service::server::setpoint_bounds;
@@ -97,7 +98,7 @@ proptest! {
         let mut t_min = [0.0; cablevib::scene::MAX_CABLES];
         let n = scene.n_cables();
         setpoint_bounds(&s, &mut t_min[..n]);
-        let e = *est.update_with_bounds(&pose_of(&p), &t_min[..n]);
+        let e = *est.update(&pose_of(&p), Tmin::PerCable(&t_min[..n]));
         ALL.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         if e.is_ok() {
             OK.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -117,9 +118,9 @@ proptest! {
         }
         // The next valid pose is answered exactly as by a fresh estimator.
         let good = Pose::at(Vector3::new(0.21, -0.13, 1.1));
-        let next = *est.update(&good, 60.0);
+        let next = *est.update(&good, Tmin::Uniform(60.0));
         let mut fresh = Estimator::new(&scene).unwrap();
-        let want = *fresh.update(&good, 60.0);
+        let want = *fresh.update(&good, Tmin::Uniform(60.0));
         prop_assert!(next.is_ok() && want.is_ok());
         prop_assert!((next.f1_hz - want.f1_hz).abs() <= 1e-11 * want.f1_hz);
         prop_assert!((next.ee_mode_hz - want.ee_mode_hz).abs() <= 1e-10 * want.ee_mode_hz);

@@ -3,6 +3,7 @@
 //! assembled K and M (good to ε·λ_max/λ relative, `dense_relative_accuracy`).
 
 use cablevib::estimator::Estimator;
+use cablevib::estimator::Tmin;
 use cablevib::kinematics::Pose;
 use cablevib::modal::{dense_relative_accuracy, Mode};
 use cablevib::scene::{ElementKind, Scene};
@@ -23,7 +24,7 @@ fn estimator_at_default(s: &Scene) -> Estimator {
         position_m: s.ee_position_m,
         orientation_wxyz: s.ee_orientation_wxyz,
     };
-    let st = est.update(&pose, s.t_min_n).status;
+    let st = est.update(&pose, Tmin::Scene).status;
     assert_eq!(st.as_str(), "ok", "{}", s.name);
     est
 }

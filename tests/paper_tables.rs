@@ -13,6 +13,7 @@
 //! it. `printed_tables_are_0_531_percent_above` checks exactly that, at print precision.
 mod common;
 use cablevib::estimator::reference_analysis;
+use cablevib::estimator::Tmin;
 use cablevib::modal::{dense_relative_accuracy, lambda_to_hz};
 use common::*;
 
@@ -24,7 +25,7 @@ fn check_dense(
     faithful: &[Option<f64>],
     modes: usize,
 ) -> f64 {
-    let r = reference_analysis(scene, &scene.ee_position_m, scene.t_min_n, false).unwrap();
+    let r = reference_analysis(scene, &scene.ee_position_m, Tmin::Scene, false).unwrap();
     let mut worst = 0.0f64;
     for (i, f) in faithful.iter().enumerate().take(modes) {
         match f {
@@ -117,7 +118,7 @@ fn table8_spatial_fem_and_catenary_modes_1_to_8_and_tensions() {
                 &f64s(&row[key]),
                 8,
             ));
-            let r = reference_analysis(&s, &s.ee_position_m, tmin, false).unwrap();
+            let r = reference_analysis(&s, &s.ee_position_m, Tmin::Uniform(tmin), false).unwrap();
             for (got, want) in r.tensions_n.iter().zip(f64s(&row["tensions"])) {
                 assert!(rel(*got, want.unwrap()) < 1e-9, "tension {got} vs {want:?}");
             }

@@ -13,6 +13,7 @@
 //! and N ≤ 10. Fixed seed, no failure persistence: deterministic.
 mod common;
 
+use cablevib::estimator::Tmin;
 use cablevib::estimator::{reference_analysis, Estimate, Estimator, EstimatorParams, Status};
 use cablevib::kinematics::Pose;
 use cablevib::modal::{assemble, hz_to_lambda, lambda_to_hz, DenseModes};
@@ -128,12 +129,10 @@ fn config(cases: u32) -> Config {
     }
 }
 
-/// An estimator that accepts any position (the random frames are not boxes around the
-/// end-effector; the workspace check is tested in tests/hard_cases_inputs.rs).
+/// An estimator with the scene's participation threshold.
 fn estimator(s: &Scene) -> Option<Estimator> {
     let mut p = EstimatorParams::default();
     p.modal.ee_participation_min = s.model.ee_participation_min;
-    p.workspace_margin_m = 10.0;
     Estimator::with_params(s, p).ok()
 }
 
@@ -234,7 +233,7 @@ proptest! {
             prop_assume!(false);
             unreachable!()
         };
-        let e = *est.update(&Pose::at(s.ee_position_m), s.t_min_n);
+        let e = *est.update(&Pose::at(s.ee_position_m), Tmin::Scene);
         prop_assert!(
             e.status == Status::Ok,
             "status {:?} ({:?}) at the pose the estimator was built at",
@@ -245,7 +244,7 @@ proptest! {
         let (k, m) = assemble(est.cable_models(), s.ee_mass_kg).unwrap();
         symmetric_pd("K", &k)?;
         symmetric_pd("M", &m)?;
-        let r = reference_analysis(s, &s.ee_position_m, s.t_min_n, true);
+        let r = reference_analysis(s, &s.ee_position_m, Tmin::Scene, true);
         let r = match r {
             Ok(r) => r,
             Err(err) => {
@@ -271,11 +270,11 @@ proptest! {
         };
         let p0 = s.ee_position_m;
         let p1 = p0 + r.step * 1e-6;
-        let e0 = *warm.update(&Pose::at(p0), s.t_min_n);
-        let e1 = *warm.update(&Pose::at(p1), s.t_min_n);
+        let e0 = *warm.update(&Pose::at(p0), Tmin::Scene);
+        let e1 = *warm.update(&Pose::at(p1), Tmin::Scene);
         prop_assert!(e0.is_ok(), "{:?}", e0.error);
         prop_assume!(e1.is_ok()); // a step across the feasible boundary
-        let c1 = *estimator(s).unwrap().update(&Pose::at(p1), s.t_min_n);
+        let c1 = *estimator(s).unwrap().update(&Pose::at(p1), Tmin::Scene);
         prop_assert!(c1.is_ok());
         let d = (e1.f1_hz - e0.f1_hz).abs() / e0.f1_hz;
         prop_assert!(d <= 1e-4, "f1 jumps by {d:.2e} over 1e-6 m: {} -> {}", e0.f1_hz, e1.f1_hz);

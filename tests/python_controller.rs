@@ -24,6 +24,7 @@ use std::sync::{Arc, OnceLock};
 use std::time::{Duration, Instant};
 
 use cablevib::estimator::Estimator;
+use cablevib::estimator::Tmin;
 use cablevib::kinematics::Pose;
 use cablevib::scene::Scene;
 use cablevib::service::ports::{
@@ -273,7 +274,7 @@ fn python_controller_gets_estimates_and_margins() {
     };
     let want = *Estimator::new(&scene)
         .expect("estimator")
-        .update(&pose, scene.t_min_n);
+        .update(&pose, Tmin::Scene);
     assert!(want.is_ok(), "{:?}", want.error);
 
     let mut service = Guard::spawn(

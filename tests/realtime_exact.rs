@@ -1,6 +1,7 @@
 //! The real-time path's f1 against the faithful values (1e-9 relative), which a dense f64
 //! solver cannot reach on the planar robot (its accuracy there is ε·λ_max/λ ≈ 1e-6).
 mod common;
+use cablevib::estimator::Tmin;
 use cablevib::estimator::{structured_analysis, Estimator};
 use cablevib::kinematics::Pose;
 use cablevib::scene::ElementKind;
@@ -9,7 +10,7 @@ use common::*;
 const TOL: f64 = 1e-9;
 
 fn check(label: &str, s: &cablevib::scene::Scene, f1: f64) -> f64 {
-    let e = structured_analysis(s, &s.ee_position_m, s.t_min_n);
+    let e = structured_analysis(s, &s.ee_position_m, Tmin::Scene);
     assert!(e.is_ok(), "{label}: {:?}", e.error);
     let err = rel(e.f1_hz, f1);
     assert!(
@@ -71,7 +72,7 @@ fn continuous_model_is_the_richardson_limit_of_fem() {
         let f = |el: ElementKind, n: usize| {
             let s = base.with_model(el, n);
             let mut est = Estimator::new(&s).unwrap();
-            let e = *est.update(&Pose::at(s.ee_position_m), s.t_min_n);
+            let e = *est.update(&Pose::at(s.ee_position_m), Tmin::Scene);
             assert!(e.is_ok(), "{:?}", e.error);
             e.f1_hz
         };

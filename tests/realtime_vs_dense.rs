@@ -5,6 +5,7 @@
 //! 8·ε·λ_max/λ (relative, on λ; half that on f) + 1e-10, computed per pose and mode.
 //! Tensions: 1e-9 relative against Clarabel (tolerances 1e-13).
 mod common;
+use cablevib::estimator::Tmin;
 use cablevib::estimator::{reference_analysis, Estimator};
 use cablevib::kinematics::Pose;
 use cablevib::modal::{dense_relative_accuracy, lambda_to_hz};
@@ -42,11 +43,11 @@ fn random_poses_agree(scene: &Scene, count: usize, seed: u64) -> (usize, f64, f6
             p
         };
         let t_min = scene.t_min_n * (0.5 + rng.next());
-        let Ok(r) = reference_analysis(scene, &p, t_min, true) else {
+        let Ok(r) = reference_analysis(scene, &p, Tmin::Uniform(t_min), true) else {
             continue;
         };
         let mut est = Estimator::new(scene).unwrap();
-        let e = *est.update(&Pose::at(p), t_min);
+        let e = *est.update(&Pose::at(p), Tmin::Uniform(t_min));
         assert!(
             e.is_ok(),
             "pose {p:?} t_min {t_min}: dense solved but real-time says {:?}",
@@ -144,9 +145,9 @@ fn tracked_path_equals_cold_path_along_the_circle() {
             let mut warm_cycles = 0;
             for k in 0..4000 {
                 let pose = circle_pose(&s, k, 4.0);
-                let w = *warm.update(&pose, s.t_min_n);
+                let w = *warm.update(&pose, Tmin::Scene);
                 cold.reset();
-                let c = *cold.update(&pose, s.t_min_n);
+                let c = *cold.update(&pose, Tmin::Scene);
                 assert!(w.is_ok() && c.is_ok());
                 warm_cycles += (!w.cold_start) as usize;
                 assert!(

@@ -8,6 +8,7 @@
 //! the physical model's own error against the sagged reference (~1e-3).
 
 use cablevib::estimator::Estimator;
+use cablevib::estimator::Tmin;
 use cablevib::scene::{ElementKind, Scene};
 use cablevib::trajectory::circle_pose_with_radius;
 
@@ -22,8 +23,8 @@ fn largest_gap(scene: Scene, radius_m: f64, period_s: f64) -> f64 {
     let period_cycles = (period_s * 1e3) as usize;
     for k in (0..period_cycles).step_by(period_cycles / 24) {
         let p = circle_pose_with_radius(&s, k, period_s, radius_m);
-        let a = *realtime.update(&p, s.t_min_n);
-        let b = *offline.update(&p, s.t_min_n);
+        let a = *realtime.update(&p, Tmin::Scene);
+        let b = *offline.update(&p, Tmin::Scene);
         assert!(a.is_ok() && b.is_ok(), "{} k {k}: {a:?} / {b:?}", s.name);
         worst = worst.max((a.f1_hz / b.f1_hz - 1.0).abs());
     }

@@ -8,6 +8,7 @@
 //! panic and never NaN in an ok estimate. Every fixed-size array key of the format, made too
 //! long, too short, of mixed types or with a trailing NaN, is refused with a message that
 //! names the key and says what is wrong. Fixed seed, no failure persistence.
+use cablevib::estimator::Tmin;
 use cablevib::estimator::{Estimator, Status};
 use cablevib::kinematics::Pose;
 use cablevib::scene::{
@@ -248,7 +249,10 @@ fn check_scene(s: &Scene) -> Result<(), TestCaseError> {
             (0.05, 0.5 * s.t_min_n),
             (0.0, s.t_max_n),
         ] {
-            let e = *est.update(&Pose::at(centre + Vector3::new(dx, -dx, dx)), t_min);
+            let e = *est.update(
+                &Pose::at(centre + Vector3::new(dx, -dx, dx)),
+                Tmin::Uniform(t_min),
+            );
             if e.status == Status::Ok {
                 prop_assert!(
                     e.f1_hz.is_finite() && e.f1_hz > 0.0,

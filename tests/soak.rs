@@ -19,6 +19,7 @@
 mod common;
 
 use cablevib::alloc_count::{thread_allocated_bytes, thread_allocations, CountingAlloc};
+use cablevib::estimator::Tmin;
 use cablevib::estimator::{Estimator, Status};
 use cablevib::kinematics::Pose;
 use cablevib::scene::{ElementKind, Scene};
@@ -113,7 +114,7 @@ fn soak(scene: &Scene, cycles: usize, seed: u64) -> Report {
     let mut n_solver_fail = 0usize;
     let mut slowest = (0u64, Status::Ok, Vector3::zeros(), 0.0);
     // Warm up once outside the measurement (the first cold start).
-    est.update(&Pose::at(p), t_min);
+    est.update(&Pose::at(p), Tmin::Uniform(t_min));
 
     let rss_before = rss_kb();
     let allocations_before = thread_allocations();
@@ -177,7 +178,7 @@ fn soak(scene: &Scene, cycles: usize, seed: u64) -> Report {
         }
         injected += bad as u64;
         let t0 = Instant::now();
-        let e = est.update(&pose, tm);
+        let e = est.update(&pose, Tmin::Uniform(tm));
         let dt = t0.elapsed().as_nanos().min(u64::MAX as u128) as u64;
         latency[k] = dt;
         status[(e.status.as_u32() as usize).min(N_STATUS - 1)] += 1;
@@ -228,7 +229,7 @@ fn soak(scene: &Scene, cycles: usize, seed: u64) -> Report {
         if k % 101 == 0 {
             let e = *e;
             cold.reset();
-            let c = cold.update(&pose, tm);
+            let c = cold.update(&pose, Tmin::Uniform(tm));
             cold_checks += 1;
             if c.status != e.status {
                 fail(

@@ -7,6 +7,7 @@
 //! (a sum of O(1) terms; they agree to ~1e-15). For the weighted sum, the dense solver's own
 //! accuracy: each term p_k/λ_k is off by up to 8·ε·λ_max/λ_k relative (its λ_k), which on
 //! the planar robot (λ_max/λ_1 ~ 1e9) dominates; plus 1e-11 relative.
+use cablevib::estimator::Tmin;
 use cablevib::estimator::{reference_analysis, Estimator};
 use cablevib::kinematics::Pose;
 use cablevib::modal::dense_relative_accuracy;
@@ -15,7 +16,7 @@ use nalgebra::Vector3;
 
 fn check(label: &str, scene: &Scene, p: Vector3<f64>) {
     let t_min = scene.t_min_n;
-    let r = reference_analysis(scene, &p, t_min, true).expect("feasible pose");
+    let r = reference_analysis(scene, &p, Tmin::Uniform(t_min), true).expect("feasible pose");
     let m = &r.modes;
     let sum: f64 = m.ee_participation.iter().sum();
     let weighted: f64 = m
@@ -25,7 +26,7 @@ fn check(label: &str, scene: &Scene, p: Vector3<f64>) {
         .map(|(p, l)| p / l)
         .sum();
     let mut est = Estimator::new(scene).unwrap();
-    let e = *est.update(&Pose::at(p), t_min);
+    let e = *est.update(&Pose::at(p), Tmin::Uniform(t_min));
     assert!(e.is_ok(), "{label}: {:?}", e.status);
     let total = est.modal().participation_total();
     let over = est.modal().participation_over_lambda();
@@ -79,6 +80,6 @@ fn continuous_sum_is_the_dimension() {
     // A continuous cable's end carries no lumped mass: the participation sums to 3.
     let s = Scene::default_scene().with_model(ElementKind::Continuous, 1);
     let mut est = Estimator::new(&s).unwrap();
-    assert!(est.update(&Pose::at(s.ee_position_m), s.t_min_n).is_ok());
+    assert!(est.update(&Pose::at(s.ee_position_m), Tmin::Scene).is_ok());
     assert!((est.modal().participation_total() - 3.0).abs() <= 1e-12);
 }

@@ -3,6 +3,7 @@
 //! f1 follows a·√T_min with the coefficient of docs/model.md (section 2.2).
 
 use cablevib::cli::{self, CliError};
+use cablevib::estimator::Tmin;
 use cablevib::scene::{ElementKind, Scene};
 use cablevib::study::accuracy::AccuracyConfig;
 use cablevib::study::tmin::TminConfig;
@@ -160,7 +161,7 @@ fn map_csv_has_every_grid_point_and_marks_infeasible_ones() {
     let e = cablevib::estimator::structured_analysis(
         &Scene::default_scene(),
         &nalgebra::Vector3::new(0.0, 0.0, 1.25),
-        60.0,
+        cablevib::estimator::Tmin::Uniform(60.0),
     );
     let f: f64 = centre[f1].parse().unwrap();
     assert!((f - e.f1_hz).abs() <= 1e-7 * e.f1_hz, "{f} vs {}", e.f1_hz);
@@ -253,7 +254,15 @@ fn trajectory_from_csv_and_default_circle() {
     let tr = Circle::new(&s, 0.75, 0.2).unwrap().sampled(&s);
     assert_eq!(tr.t_s.len(), 201);
     assert!((tr.position_m[50].norm() - 0.75).abs() < 1e-12);
-    let r = study::trajectory::evaluate(&s, &tr, &[20.0, 40.0], true, 2, None).unwrap();
+    let r = study::trajectory::evaluate(
+        &s,
+        &tr,
+        &[Tmin::Uniform(20.0), Tmin::Uniform(40.0)],
+        true,
+        2,
+        None,
+    )
+    .unwrap();
     let n = tr.t_s.len();
     for i in 0..n {
         let (a, b) = (&r[i].estimate, &r[n + i].estimate);

@@ -4,7 +4,7 @@
 use crate::convert::{array1, floats, matrix3, matrix6, position};
 use crate::error::CablevibError;
 use crate::scene::PyScene;
-use cablevib::estimator::{Estimate, Estimator, TminAnswer};
+use cablevib::estimator::{Estimate, Estimator, Tmin, TminAnswer};
 use cablevib::kinematics::Pose;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -48,15 +48,12 @@ impl PyEstimator {
         let pose = self.pose(position, orientation)?;
         let n = self.inner.scene().n_cables();
         let e = match t_min {
-            None => {
-                let bounds = self.inner.default_t_min_n();
-                *self.inner.update_with_bounds(&pose, &bounds[..n])
-            }
+            None => *self.inner.update(&pose, Tmin::Scene),
             Some(t) => match t.extract::<f64>() {
-                Ok(uniform) => *self.inner.update(&pose, uniform),
+                Ok(uniform) => *self.inner.update(&pose, Tmin::Uniform(uniform)),
                 Err(_) => {
                     let per_cable = per_cable_t_min(t, n)?;
-                    *self.inner.update_with_bounds(&pose, &per_cable)
+                    *self.inner.update(&pose, Tmin::PerCable(&per_cable))
                 }
             },
         };

@@ -84,7 +84,7 @@ def test_refused_pose_has_the_clis_status_and_message(run_cli):
     rc, j = cli_realtime(run_cli, "spatial-paper", (9.0, 0.0, 1.2))
     assert rc == 1
     e = cablevib.Estimator(s).update([9.0, 0.0, 1.2])
-    assert e.status == "outside_workspace" and e.status_code == 5 and not e.ok
+    assert e.status == "tension_infeasible" and e.status_code == 1 and not e.ok
     assert math.isnan(e.f1_hz) and np.isnan(e.stiffness_n_m).all()
     assert_same_as_cli(e, j)
 

@@ -5,7 +5,7 @@
 
 use super::args::{resolve_scene, SceneArgs};
 use super::{json_f64, CliError};
-use crate::estimator::{BuildError, Estimator, Status};
+use crate::estimator::{BuildError, Estimator, Status, Tmin};
 use crate::kinematics::Pose;
 use crate::scene::{ElementKind, Scene};
 use crate::study::analysis::{
@@ -164,8 +164,8 @@ fn print_report(r: &AnalysisReport) {
         .dof
         .map_or("continuous".to_string(), |d| format!("{d} DOF"));
     println!(
-        "scene {}  position ({:.4}, {:.4}, {:.4}) m  T_min {} N  model {} × {} elements/cable  ({dof}, {} solve {:.3} ms)",
-        r.scene, p[0], p[1], p[2], r.t_min_n, r.element, r.elements_per_cable, r.solver,
+        "scene {}  position ({:.4}, {:.4}, {:.4}) m  T_min {}  model {} × {} elements/cable  ({dof}, {} solve {:.3} ms)",
+        r.scene, p[0], p[1], p[2], r.t_min_label, r.element, r.elements_per_cable, r.solver,
         r.solve_seconds * 1e3
     );
     if r.stiffness_n_m.len() == 6 {
@@ -241,7 +241,7 @@ fn stiffness_rows(e: &crate::estimator::Estimate) -> Vec<Vec<serde_json::Value>>
 fn analyze_realtime(a: &AnalyzeArgs, s: &Scene) -> Result<(), CliError> {
     let mut est = realtime_estimator(a, s)?;
     let t0 = Instant::now();
-    let e = *est.update(&Pose::in_scene(s, s.ee_position_m), s.t_min_n);
+    let e = *est.update(&Pose::in_scene(s, s.ee_position_m), Tmin::Scene);
     let ns = t0.elapsed().as_nanos();
     if a.json {
         let o = serde_json::json!({

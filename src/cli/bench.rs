@@ -4,7 +4,7 @@
 
 use super::args::{resolve_scene, SceneArgs};
 use super::{json_f64, AllocCounter, CliError};
-use crate::estimator::{reference_analysis, Estimator, EstimatorParams};
+use crate::estimator::{reference_analysis, Estimator, EstimatorParams, Tmin};
 use crate::modal::lambda_to_hz;
 use crate::scene::Scene;
 use crate::service::stats::{percentile, StatusHistogram};
@@ -65,7 +65,7 @@ fn run_circle(
     // Warm-up cycle (cold start), then timed cycles.
     est.update(
         &circle_pose_with_radius(s, 0, a.period_s, a.radius_m),
-        s.t_min_n,
+        Tmin::Scene,
     );
     let mut ns = Vec::with_capacity(a.cycles);
     let mut evals = Vec::with_capacity(a.cycles);
@@ -76,7 +76,7 @@ fn run_circle(
     for k in 1..=a.cycles {
         let pose = circle_pose_with_radius(s, k, a.period_s, a.radius_m);
         let t0 = Instant::now();
-        let e = est.update(&pose, s.t_min_n);
+        let e = est.update(&pose, Tmin::Scene);
         let dt = t0.elapsed().as_nanos() as u64;
         ns.push(dt);
         evals.push(e.eigen_evaluations);
@@ -121,14 +121,14 @@ fn dense_check(s: &Scene, a: &BenchArgs, p: EstimatorParams) -> Result<DenseChec
             let k = 1 + j * (a.cycles / a.dense_samples.max(1)).max(1);
             let pose = circle_pose_with_radius(s, k, a.period_s, a.radius_m);
             let t0 = Instant::now();
-            let r = reference_analysis(s, &pose.position_m, s.t_min_n, true);
+            let r = reference_analysis(s, &pose.position_m, Tmin::Scene, true);
             let dt = t0.elapsed().as_nanos() as u64;
             let Ok(r) = r else { continue };
             dense_ns.push(dt);
             let mut cold =
                 Estimator::with_params(s, p).map_err(|e| CliError::Analysis(e.to_string()))?;
             let t1 = Instant::now();
-            let e = *cold.update(&pose, s.t_min_n);
+            let e = *cold.update(&pose, Tmin::Scene);
             rt_on_samples.push(t1.elapsed().as_nanos() as u64);
             if e.is_ok() {
                 max_rel_err_f1 =

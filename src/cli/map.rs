@@ -209,9 +209,9 @@ pub fn run(a: &MapArgs) -> Result<(), CliError> {
         written.push(p.display().to_string());
     }
     println!(
-        "map: scene {}  T_min {} N  {} points in {:.2} s ({} threads)  statuses: {}",
+        "map: scene {}  T_min {}  {} points in {:.2} s ({} threads)  statuses: {}",
         s.name,
-        s.t_min_n,
+        s.t_min_label(),
         m.points.len(),
         secs,
         m.threads,

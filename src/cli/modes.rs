@@ -7,7 +7,7 @@ use super::args::{resolve_scene, SceneArgs};
 use super::figure::{self, parse_format};
 use super::CliError;
 use crate::cable::CableModel;
-use crate::estimator::{build_models, resolve_auto};
+use crate::estimator::{build_models, resolve_auto, Tmin};
 use crate::kinematics::{rotation_of, Geometry};
 use crate::modal::{self, ModalParams, ModalSolver, Mode, ModeShapes, ShapeParams};
 use crate::report::csv::{process_command_line, write_csv};
@@ -68,7 +68,8 @@ pub struct PoseModel {
 
 impl PoseModel {
     /// The model of `scene` at its own pose (`ee_position_m`, `ee_orientation_wxyz`) and
-    /// uniform T_min `scene.t_min_n`, with the tensions of the Clarabel reference.
+    /// each cable's own lower bound (`Tmin::Scene`), with the tensions of the Clarabel
+    /// reference.
     pub fn new(scene: &Scene) -> Result<PoseModel, CliError> {
         let scene = if scene.model.element == ElementKind::Auto {
             resolve_auto(scene)
@@ -90,10 +91,11 @@ impl PoseModel {
         r.map_err(|e| CliError::Analysis(e.to_string()))?;
         let w = scene.wrench_n();
         let t_max: Vec<f64> = (0..n).map(|i| scene.cable_t_max_n(i)).collect();
+        let t_min = Tmin::Scene.per_cable(&scene);
         let tensions_n = crate::tension::clarabel_reference_bounds(
             &geometry,
             &[w.x, w.y, w.z, 0.0, 0.0, 0.0],
-            &vec![scene.t_min_n; n],
+            &t_min[..n],
             &t_max,
         )
         .map_err(|e| CliError::Analysis(e.to_string()))?;
@@ -219,12 +221,12 @@ pub fn run(a: &ModesArgs) -> Result<(), CliError> {
     let sc = &pose.scene;
     let p = sc.ee_position_m;
     println!(
-        "scene {}  position ({:.4}, {:.4}, {:.4}) m  T_min {} N  model {} × {}  ({} modes with shapes in {:.1} ms)",
+        "scene {}  position ({:.4}, {:.4}, {:.4}) m  T_min {}  model {} × {}  ({} modes with shapes in {:.1} ms)",
         sc.name,
         p.x,
         p.y,
         p.z,
-        sc.t_min_n,
+        sc.t_min_label(),
         sc.model.element.as_str(),
         sc.model.elements_per_cable,
         shapes.modes.len(),

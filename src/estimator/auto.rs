@@ -2,7 +2,7 @@
 //! within the scene's tolerance. Offline: runs at build time and allocates.
 
 use super::sag_check::{cables_can_sag, sagged_reference};
-use super::{BuildError, Estimator, EstimatorError, EstimatorParams, InputError};
+use super::{BuildError, Estimator, EstimatorError, EstimatorParams, InputError, Tmin};
 use crate::kinematics::{Geometry, Pose};
 use crate::scene::{ElementKind, Scene};
 use crate::trajectory::{Circle, CIRCLE_RADIUS_M};
@@ -108,7 +108,7 @@ pub fn resolve_auto(scene: &Scene) -> Result<(Scene, AutoChoice), BuildError> {
             ..EstimatorParams::default()
         };
         let mut est = Estimator::with_params(s, p).ok()?;
-        let e = est.update(pose, s.t_min_n);
+        let e = est.update(pose, Tmin::Scene);
         e.is_ok().then_some(e.f1_hz)
     };
     let refs_of = |r: &Scene| -> Vec<(Pose, f64)> {
@@ -214,7 +214,7 @@ fn sagged_lambda2(scene: &Scene) -> Vec<f64> {
     let Ok(mut est) = Estimator::with_params(&reference, EstimatorParams::default()) else {
         return Vec::new();
     };
-    if !est.update(&pose, scene.t_min_n).is_ok() {
+    if !est.update(&pose, Tmin::Scene).is_ok() {
         return Vec::new();
     }
     est.sag_catenaries()
@@ -230,8 +230,18 @@ fn default_pose_diagnostics(scene: &Scene) -> (f64, f64) {
         scene.cables.iter().map(|c| &c.anchor_m),
         &scene.ee_position_m,
     );
-    let t = crate::tension::clarabel_reference(&g, &scene.wrench_n(), scene.t_min_n, scene.t_max_n)
-        .unwrap_or_default();
+    let n = scene.n_cables();
+    let (t_min_n, t_max_n) = (
+        Tmin::Scene.per_cable(scene),
+        super::pipeline::cable_t_max_n(scene),
+    );
+    let t = crate::tension::clarabel_reference_bounds(
+        &g,
+        &super::pipeline::wrench6(scene),
+        &t_min_n[..n],
+        &t_max_n[..n],
+    )
+    .unwrap_or_default();
     let gn = scene.gravity_m_s2.norm();
     let down = if gn > 0.0 {
         scene.gravity_m_s2 / gn

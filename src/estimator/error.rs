@@ -22,9 +22,6 @@ pub enum InputError {
     /// [`crate::scene::check_t_min`]), or per-cable bounds of the wrong count.
     #[error("t_min not finite, ≤ 0, subnormal or above t_max")]
     TminOutOfRange,
-    /// The position lies outside the anchors' bounding box (plus the workspace margin).
-    #[error("position outside the anchors' frame")]
-    OutsideWorkspace,
     /// `element = "auto"`: the reference model is solvable at none of the sample poses.
     #[error("no feasible pose to choose the auto model")]
     NoFeasiblePose,
@@ -37,7 +34,6 @@ impl InputError {
             InputError::NonFinitePose => Status::InvalidInput,
             InputError::NonUnitQuaternion => Status::NonUnitQuaternion,
             InputError::TminOutOfRange => Status::TminOutOfRange,
-            InputError::OutsideWorkspace => Status::OutsideWorkspace,
             InputError::NoFeasiblePose => Status::InvalidInput,
         }
     }
@@ -181,17 +177,16 @@ mod tests {
     use super::*;
 
     /// The wire status each input error is meant to carry.
-    const STATUS_TABLE: [(InputError, Status); 5] = [
+    const STATUS_TABLE: [(InputError, Status); 4] = [
         (InputError::NonFinitePose, Status::InvalidInput),
         (InputError::NonUnitQuaternion, Status::NonUnitQuaternion),
         (InputError::TminOutOfRange, Status::TminOutOfRange),
-        (InputError::OutsideWorkspace, Status::OutsideWorkspace),
         (InputError::NoFeasiblePose, Status::InvalidInput),
     ];
 
     /// The Display text of `EstimatorError::Input` before the enum existed (the message was
     /// a `&'static str`), one per variant.
-    const OLD_TEXTS: [(InputError, &str); 5] = [
+    const OLD_TEXTS: [(InputError, &str); 4] = [
         (InputError::NonFinitePose, "invalid input: non-finite pose"),
         (
             InputError::NonUnitQuaternion,
@@ -200,10 +195,6 @@ mod tests {
         (
             InputError::TminOutOfRange,
             "invalid input: t_min not finite, ≤ 0, subnormal or above t_max",
-        ),
-        (
-            InputError::OutsideWorkspace,
-            "invalid input: position outside the anchors' frame",
         ),
         (
             InputError::NoFeasiblePose,
@@ -230,8 +221,7 @@ mod tests {
             InputError::NonFinitePose => 0,
             InputError::NonUnitQuaternion => 1,
             InputError::TminOutOfRange => 2,
-            InputError::OutsideWorkspace => 3,
-            InputError::NoFeasiblePose => 4,
+            InputError::NoFeasiblePose => 3,
         }
     }
 

@@ -1,8 +1,9 @@
 //! The per-cycle pipeline and the offline reference pipeline.
 //!
 //! One cycle ([`Estimator::update`]) takes a pose — centroid position p (m) and orientation
-//! quaternion — and one lower tension bound T_min (N, the same for every cable; per cable
-//! with [`Estimator::update_with_bounds`]), and computes:
+//! quaternion — and the lower tension bounds T_min,i (N): the scene's own per cable
+//! ([`Tmin::Scene`]), one value for every cable ([`Tmin::Uniform`]) or one per cable
+//! ([`Tmin::PerCable`]), and computes:
 //!
 //! 1. the cable geometry: unit directions s_i and lengths L_i (m) from the anchors to the
 //!    end-effector (to its attachment points for a rigid body);
@@ -52,6 +53,7 @@ mod pipeline;
 mod reference;
 mod sag_check;
 mod sagged;
+mod t_min;
 
 pub use auto::{resolve_auto, AutoChoice};
 pub use error::{AnalysisError, BuildError, EstimatorError, InputError, TminQueryError};
@@ -62,6 +64,7 @@ pub use reference::{
     build_models, reference_analysis, reference_analysis_at, structured_analysis, ReferenceAnalysis,
 };
 pub use sag_check::{cables_can_sag, sag_warning, sagged_reference, SagWarning};
+pub use t_min::Tmin;
 
 use crate::cable::{up_frame, CableModel};
 use crate::kinematics::Pose;
@@ -71,10 +74,6 @@ use crate::tension::TensionInfo;
 use nalgebra::{Matrix3, Matrix6, Vector3};
 use pipeline::{wrench6, Pipeline};
 
-/// Anchors spread less than this (m) along an axis count as flat along it (all at one
-/// height, or a planar robot's normal): that axis does not bound the workspace.
-const FLAT_AXIS_M: f64 = 1e-9;
-
 /// The real-time estimator of one scene.
 #[derive(Debug, Clone)]
 pub struct Estimator {
@@ -83,7 +82,6 @@ pub struct Estimator {
     /// The cycle's solvers (their warm state carries from cycle to cycle).
     cycle: Pipeline,
     expected_rank: u32,
-    bounds: (Vector3<f64>, Vector3<f64>),
     last_ok_position: Option<Vector3<f64>>,
     /// λ₁ of the last three warm cycles (rad²/s²; NaN where there is none): the predictor's
     /// history, newest first.
@@ -139,13 +137,12 @@ impl Estimator {
             params,
             cycle: Pipeline::new(scene, frame, params.tension, params.modal),
             expected_rank: 0,
-            bounds: scene.frame_bounds_m(),
             last_ok_position: None,
             last_lambda1: f64::NAN,
             prev_lambda1: f64::NAN,
             prev2_lambda1: f64::NAN,
             last_t_min_n: [f64::NAN; MAX_CABLES],
-            t_min_n: pipeline::cable_t_min_n(scene),
+            t_min_n: Tmin::Scene.per_cable(scene),
             t_max_n: pipeline::cable_t_max_n(scene),
             estimate: Estimate::empty(n),
             inverse: Pipeline::new(
@@ -250,37 +247,24 @@ impl Estimator {
         self.cycle.reset_tension_warm_start();
     }
 
-    /// One cycle: pose and T_min (N, the same for every cable) → estimate.
+    /// One cycle: pose and lower tension bounds → estimate. `Tmin::Scene` takes each
+    /// cable's own bound from the scene (`cables[i].t_min`, else `tension.t_min`);
+    /// `Tmin::Uniform(t)` gives every cable t; `Tmin::PerCable(&t)` cable i `t[i]`. No
+    /// allocation.
     ///
-    /// A T_min the scene would refuse ([`crate::scene::check_t_min`] against each cable's
-    /// T_max: not finite, not > 0, subnormal, above T_max) gives the status
-    /// `TminOutOfRange` and no numbers.
-    pub fn update(&mut self, pose: &Pose, t_min_n: f64) -> &Estimate {
-        let n = self.scene.n_cables();
-        self.t_min_n[..n].fill(t_min_n);
-        self.update_loaded(pose)
-    }
-
-    /// One cycle with a lower bound per cable: `t_min_n[i]` (N) for cable i, one value per
-    /// cable of the scene. With every value equal this is [`Self::update`], bit for bit.
-    /// Every value must pass [`crate::scene::check_t_min`] against its cable's T_max, and
-    /// the slice must have one value per cable; otherwise the status is `TminOutOfRange`.
-    /// No allocation.
-    pub fn update_with_bounds(&mut self, pose: &Pose, t_min_n: &[f64]) -> &Estimate {
-        let n = self.scene.n_cables();
-        if t_min_n.len() == n {
-            self.t_min_n[..n].copy_from_slice(t_min_n);
-        } else {
-            // A wrong length is refused like an out-of-range value (NaN fails the rule).
-            self.t_min_n[..n].fill(f64::NAN);
-        }
+    /// A bound the scene would refuse ([`crate::scene::check_t_min`] against the cable's
+    /// T_max: not finite, not > 0, subnormal, above T_max), or a per-cable slice whose
+    /// length is not the scene's cable count, gives the status `TminOutOfRange` and no
+    /// numbers.
+    pub fn update(&mut self, pose: &Pose, t_min: Tmin<'_>) -> &Estimate {
+        t_min.fill(&self.scene, &mut self.t_min_n);
         self.update_loaded(pose)
     }
 
     /// The scene's default lower bounds (N), one per cable: `cables[i].t_min`, else its
     /// `tension.t_min`.
     pub fn default_t_min_n(&self) -> [f64; MAX_CABLES] {
-        pipeline::cable_t_min_n(&self.scene)
+        Tmin::Scene.per_cable(&self.scene)
     }
 
     /// One cycle with the lower bounds already in `self.t_min_n`.
@@ -314,7 +298,9 @@ impl Estimator {
         &self.estimate
     }
 
-    /// Reject a pose or T_min before any computation.
+    /// Reject a pose or T_min before any computation. There is no geometric pre-test of
+    /// the position: whether the robot can hold a pose is the tension distribution's answer
+    /// (`TensionInfeasible`), and a pose at an anchor is the kinematics' (`CableTooShort`).
     fn check_input(&self, pose: &Pose) -> Result<(), InputError> {
         if !pose.is_finite() {
             return Err(InputError::NonFinitePose);
@@ -326,15 +312,6 @@ impl Estimator {
         let bounds = self.t_min_n[..n].iter().zip(&self.t_max_n[..n]);
         if !bounds.into_iter().all(|(&lo, &hi)| is_valid_t_min(lo, hi)) {
             return Err(InputError::TminOutOfRange);
-        }
-        let m = self.params.workspace_margin_m;
-        let p = pose.position_m;
-        // Axes along which the anchors are flat (all at one height for a suspended robot,
-        // a planar robot's normal) do not bound the workspace; tension feasibility does.
-        let flat = |i: usize| self.bounds.1[i] - self.bounds.0[i] <= FLAT_AXIS_M;
-        if (0..3).any(|i| !flat(i) && (p[i] < self.bounds.0[i] - m || p[i] > self.bounds.1[i] + m))
-        {
-            return Err(InputError::OutsideWorkspace);
         }
         Ok(())
     }

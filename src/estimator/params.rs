@@ -16,8 +16,6 @@ pub struct EstimatorParams {
     pub warm_t_min_change: f64,
     /// Tolerance on the quaternion norm.
     pub quaternion_tol: f64,
-    /// How far outside the anchors' bounding box (m) a position may be before it is rejected.
-    pub workspace_margin_m: f64,
     /// Compute the end-effector mode (costs a scan over the string modes below it).
     pub ee_mode: bool,
 }
@@ -30,7 +28,6 @@ impl Default for EstimatorParams {
             warm_jump_m: 0.005,
             warm_t_min_change: 1e-3,
             quaternion_tol: 1e-6,
-            workspace_margin_m: 0.0,
             ee_mode: true,
         }
     }

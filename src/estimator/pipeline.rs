@@ -170,15 +170,6 @@ pub(super) fn cable_t_max_n(scene: &Scene) -> [f64; MAX_CABLES] {
     t
 }
 
-/// Each cable's default lower tension bound of `scene`, N (entries past its cables unused).
-pub(super) fn cable_t_min_n(scene: &Scene) -> [f64; MAX_CABLES] {
-    let mut t = [scene.t_min_n; MAX_CABLES];
-    for (i, v) in t.iter_mut().enumerate().take(scene.n_cables()) {
-        *v = scene.cable_t_min_n(i);
-    }
-    t
-}
-
 /// The wrench the cables carry as (force N, moment N·m).
 pub(super) fn wrench6(scene: &Scene) -> [f64; 6] {
     let f = scene.wrench_n();

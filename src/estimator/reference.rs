@@ -3,7 +3,7 @@
 //! Allocates: for tests, sweeps and the CLI, never inside the cycle.
 
 use super::pipeline::{fill_models, placeholder_model, update_geometry, wrench6};
-use super::{resolve_auto, AnalysisError, BuildError, Estimate, Estimator};
+use super::{resolve_auto, AnalysisError, BuildError, Estimate, Estimator, Tmin};
 use crate::cable::{up_frame, CableError, CableModel};
 use crate::kinematics::{Geometry, Pose};
 use crate::modal;
@@ -44,39 +44,40 @@ pub struct ReferenceAnalysis {
 pub fn reference_analysis(
     scene: &Scene,
     position_m: &Vector3<f64>,
-    t_min_n: f64,
+    t_min: Tmin<'_>,
     vectors: bool,
 ) -> Result<ReferenceAnalysis, AnalysisError> {
     let pose = Pose {
         position_m: *position_m,
         orientation_wxyz: scene.ee_orientation_wxyz,
     };
-    reference_analysis_at(scene, &pose, t_min_n, vectors)
+    reference_analysis_at(scene, &pose, t_min, vectors)
 }
 
 /// [`reference_analysis`] at a full pose (orientation matters for a rigid end-effector).
 pub fn reference_analysis_at(
     scene: &Scene,
     pose: &Pose,
-    t_min_n: f64,
+    t_min: Tmin<'_>,
     vectors: bool,
 ) -> Result<ReferenceAnalysis, AnalysisError> {
     if scene.model.element == ElementKind::Auto {
         let resolved = resolve_auto(scene)
             .map(|(s, _)| s)
             .map_err(|e| AnalysisError::Auto(e.to_string()))?;
-        return reference_analysis_at(&resolved, pose, t_min_n, vectors);
+        return reference_analysis_at(&resolved, pose, t_min, vectors);
     }
     let mut g = Geometry::new(scene.n_cables());
     let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
     update_geometry(scene, &mut g, pose)?;
-    // Uniform T_min (N) for every cable; each cable's own T_max from the scene.
+    // The lower bounds `t_min` names; each cable's own T_max from the scene.
     let n = scene.n_cables();
+    let t_min_n = t_min.per_cable(scene);
     let t_max_n = super::pipeline::cable_t_max_n(scene);
     let t = crate::tension::clarabel_reference_bounds(
         &g,
         &wrench6(scene),
-        &vec![t_min_n; n],
+        &t_min_n[..n],
         &t_max_n[..n],
     )?;
     let models = build_models(scene, &g, &t)?;
@@ -117,14 +118,14 @@ pub fn reference_analysis_at(
 
 /// The structured solver run once (allocating; for offline use): tensions from the
 /// active-set solver, then f1 and the end-effector mode.
-pub fn structured_analysis(scene: &Scene, position_m: &Vector3<f64>, t_min_n: f64) -> Estimate {
+pub fn structured_analysis(scene: &Scene, position_m: &Vector3<f64>, t_min: Tmin<'_>) -> Estimate {
     match Estimator::new(scene) {
         Ok(mut est) => *est.update(
             &Pose {
                 position_m: *position_m,
                 orientation_wxyz: scene.ee_orientation_wxyz,
             },
-            t_min_n,
+            t_min,
         ),
         Err(BuildError::DefaultPose { reason, .. }) => {
             let mut e = Estimate::empty(scene.n_cables());

@@ -4,7 +4,7 @@
 //! chord model is the wrong physics for this robot, and `analyze`, `serve` and `map` say
 //! so once. Offline: builds two estimators (allocates).
 
-use super::{Estimator, EstimatorParams};
+use super::{Estimator, EstimatorParams, Tmin};
 use crate::kinematics::Pose;
 use crate::scene::{ElementKind, Scene};
 
@@ -72,10 +72,10 @@ pub fn sag_warning(scene: &Scene, pose: &Pose) -> Option<SagWarning> {
     };
     let f1_chord = Estimator::with_params(&chord, params)
         .ok()?
-        .update(pose, scene.t_min_n)
+        .update(pose, Tmin::Scene)
         .f1_hz;
     let mut est = Estimator::with_params(&sagged, params).ok()?;
-    let f1_sag = est.update(pose, scene.t_min_n).f1_hz;
+    let f1_sag = est.update(pose, Tmin::Scene).f1_hz;
     let (cable, lambda2_max) = est
         .sag_catenaries()?
         .iter()

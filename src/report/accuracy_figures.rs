@@ -184,11 +184,11 @@ fn error_vs_n(s: &Scene, r: &AccuracyReport) -> String {
         Axis::log("|f1 − f1,ref| / f1,ref"),
     );
     p.subtitle = format!(
-        "pose ({}, {}, {}) m, T_min {} N; reference f1,ref = {:.9} Hz (catenary N = {}, Richardson)",
+        "pose ({}, {}, {}) m, T_min {}; reference f1,ref = {:.9} Hz (catenary N = {}, Richardson)",
         s.ee_position_m.x,
         s.ee_position_m.y,
         s.ee_position_m.z,
-        s.t_min_n,
+        s.t_min_label(),
         r.f1_ref_hz,
         r.max_elements
     );
@@ -231,13 +231,13 @@ fn cost(s: &Scene, r: &AccuracyReport) -> String {
         Axis::log("|f1 − f1,ref| / f1,ref"),
     );
     q.subtitle = format!(
-        "{} cycles along the r = {} m circle per model; error at ({}, {}, {}) m, T_min {} N",
+        "{} cycles along the r = {} m circle per model; error at ({}, {}, {}) m, T_min {}",
         "timed",
         CIRCLE_RADIUS_M,
         s.ee_position_m.x,
         s.ee_position_m.y,
         s.ee_position_m.z,
-        s.t_min_n
+        s.t_min_label()
     );
     // N labelled next to their points: the ends and a few in between.
     let lab_ns = [1usize, 4, 10, 40, r.max_elements];
@@ -292,8 +292,11 @@ fn mode3_svg(s: &Scene, mode3: &[Mode3Row]) -> String {
         Axis::linear("frequency of mode 3 (Hz)"),
     );
     m.subtitle = format!(
-        "dense reference (all modes), pose ({}, {}, {}) m, T_min {} N",
-        s.ee_position_m.x, s.ee_position_m.y, s.ee_position_m.z, s.t_min_n
+        "dense reference (all modes), pose ({}, {}, {}) m, T_min {}",
+        s.ee_position_m.x,
+        s.ee_position_m.y,
+        s.ee_position_m.z,
+        s.t_min_label()
     );
     for (k, el) in [ElementKind::Fem, ElementKind::Catenary].iter().enumerate() {
         let pts: Vec<(f64, f64)> = mode3

@@ -150,6 +150,12 @@ pub fn scene_meta(command: &str, s: &Scene) -> Map<String, Value> {
         }),
     );
     m.insert("t_min_n".into(), json!(s.t_min_n));
+    if s.has_per_cable_bounds() {
+        let lo: Vec<f64> = (0..s.n_cables()).map(|i| s.cable_t_min_n(i)).collect();
+        let hi: Vec<f64> = (0..s.n_cables()).map(|i| s.cable_t_max_n(i)).collect();
+        m.insert("cable_t_min_n".into(), json!(lo));
+        m.insert("cable_t_max_n".into(), json!(hi));
+    }
     m.insert("t_max_n".into(), json!(s.t_max_n));
     m.insert("cables".into(), json!(s.n_cables()));
     m.insert(

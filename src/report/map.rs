@@ -140,10 +140,10 @@ pub fn map_svg(s: &Scene, m: &MapResult, v: MapValue) -> String {
     let counts = m.status_counts();
     let (vname, unit, _) = value_names(v);
     let mut sub = format!(
-        "{} × {} elements/cable, T_min {} N, T_max {} N, step {} m",
+        "{} × {} elements/cable, T_min {}, T_max {} N, step {} m",
         s.model.element.as_str(),
         s.model.elements_per_cable,
-        s.t_min_n,
+        s.t_min_label(),
         s.t_max_n,
         fmt_num(if nh > 1 {
             m.axes[h][1] - m.axes[h][0]

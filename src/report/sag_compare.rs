@@ -256,10 +256,10 @@ pub fn sag_compare_svg(s: &Scene, r: &SagCompare) -> String {
         p.z
     );
     let subtitle = format!(
-        "{} × {} elements/cable, T_min {} N; chord: {}; sagged: {}",
+        "{} × {} elements/cable, T_min {}; chord: {}; sagged: {}",
         s.model.element.as_str(),
         s.model.elements_per_cable,
-        s.t_min_n,
+        s.t_min_label(),
         statuses(r, |q| &q.chord).summary(),
         statuses(r, |q| &q.sag).summary()
     );

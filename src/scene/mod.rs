@@ -261,6 +261,20 @@ impl Scene {
         self.cables[i].t_max_n.unwrap_or(self.t_max_n)
     }
 
+    /// The cables' lower bounds for a one-line summary: `"60 N"` when every cable has the
+    /// same, else `"4.06-10 N per cable"` (lowest-highest).
+    pub fn t_min_label(&self) -> String {
+        let t = (0..self.n_cables()).map(|i| self.cable_t_min_n(i));
+        let (lo, hi) = t.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+        if lo == hi || self.n_cables() == 0 {
+            format!("{} N", self.t_min_n.min(lo))
+        } else {
+            format!("{lo}-{hi} N per cable")
+        }
+    }
+
     /// Whether some cable has bounds of its own (`cables[i].t_min` or `.t_max`).
     pub fn has_per_cable_bounds(&self) -> bool {
         self.cables

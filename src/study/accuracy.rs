@@ -5,7 +5,7 @@
 
 use super::points::valid;
 use super::{build, estimator_params, StudyError};
-use crate::estimator::{reference_analysis, Estimate, Status};
+use crate::estimator::{reference_analysis, Estimate, Status, Tmin};
 use crate::kinematics::Pose;
 use crate::modal::lambda_to_hz;
 use crate::scene::{ElementKind, Scene};
@@ -154,14 +154,14 @@ fn timing(
         return Ok(((0, 0), 0));
     }
     let mut est = build(s, estimator_params(s, ee_mode))?;
-    est.update(&circle_pose(s, 0, period_s), s.t_min_n);
+    est.update(&circle_pose(s, 0, period_s), Tmin::Scene);
     let mut ns = Vec::with_capacity(cycles);
     let mut ev = Vec::with_capacity(cycles);
     let mut ok = 0usize;
     for k in 1..=cycles {
         let pose = circle_pose(s, k, period_s);
         let t0 = Instant::now();
-        let e = est.update(&pose, s.t_min_n);
+        let e = est.update(&pose, Tmin::Scene);
         ns.push(t0.elapsed().as_nanos() as u64);
         ev.push(e.eigen_evaluations as u64);
         ok += e.is_ok() as usize;
@@ -179,13 +179,13 @@ fn timing(
 
 fn at_pose(s: &Scene) -> Result<Estimate, StudyError> {
     let mut est = build(s, estimator_params(s, true))?;
-    let e = *est.update(&Pose::in_scene(s, s.ee_position_m), s.t_min_n);
+    let e = *est.update(&Pose::in_scene(s, s.ee_position_m), Tmin::Scene);
     if e.is_ok() {
         return Ok(e);
     }
     // The end-effector mode may be what failed; f1 alone may still be valid.
     let mut est = build(s, estimator_params(s, false))?;
-    let e1 = *est.update(&Pose::in_scene(s, s.ee_position_m), s.t_min_n);
+    let e1 = *est.update(&Pose::in_scene(s, s.ee_position_m), Tmin::Scene);
     Ok(if e1.is_ok() { e1 } else { e })
 }
 
@@ -335,7 +335,7 @@ pub fn compute_mode3(s: &Scene, ns: &[usize]) -> Result<Vec<Mode3Row>, StudyErro
         for &n in ns {
             let m = s.with_model(el, n);
             let t0 = Instant::now();
-            let r = reference_analysis(&m, &m.ee_position_m, m.t_min_n, false).map_err(|e| {
+            let r = reference_analysis(&m, &m.ee_position_m, Tmin::Scene, false).map_err(|e| {
                 StudyError::Build(format!("dense reference, {} N={n}: {e}", el.as_str()))
             })?;
             let seconds = t0.elapsed().as_secs_f64();

@@ -10,7 +10,7 @@
 //! process: both times, their ratio, and the largest relative difference of the K
 //! eigenvalues next to the dense solver's own bound ε·λ_max/λ.
 
-use crate::estimator::{reference_analysis_at, resolve_auto, Estimator};
+use crate::estimator::{reference_analysis_at, resolve_auto, Estimator, Tmin};
 use crate::kinematics::Pose;
 use crate::modal::{dense_relative_accuracy, lambda_to_hz, Mode};
 use crate::scene::{ElementKind, Scene};
@@ -91,8 +91,13 @@ pub struct AnalysisReport {
     /// End-effector orientation, unit quaternion [w, x, y, z] (the scene's; a point mass
     /// has no orientation and keeps the identity).
     pub orientation_wxyz: [f64; 4],
-    /// Lower tension bound, N.
+    /// The scene-wide lower tension bound (`[tension] t_min`), N.
     pub t_min_n: f64,
+    /// Each cable's lower tension bound used, N (its own `t_min`, else `t_min_n`).
+    pub cable_t_min_n: Vec<f64>,
+    /// The lower bounds for the report's header line (`"60 N"`, `"4.06-10 N per cable"`).
+    #[serde(skip)]
+    pub t_min_label: String,
     /// Cable tensions, N.
     pub tensions_n: Vec<f64>,
     /// The first K natural frequencies, Hz, ascending.
@@ -207,6 +212,8 @@ fn report_frame(s: &Scene, solver: SolverChoice) -> AnalysisReport {
         position_m: [p.x, p.y, p.z],
         orientation_wxyz: s.ee_orientation_wxyz,
         t_min_n: s.t_min_n,
+        cable_t_min_n: (0..s.n_cables()).map(|i| s.cable_t_min_n(i)).collect(),
+        t_min_label: s.t_min_label(),
         tensions_n: Vec::new(),
         frequencies_hz: Vec::new(),
         ee_participation: Vec::new(),
@@ -259,7 +266,7 @@ fn model_dof(s: &Scene) -> Option<usize> {
 /// The structured path: the estimator's cycle at the pose, then its K modes.
 fn structured(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, AnalyzeError> {
     let mut est = Estimator::new(scene).map_err(|e| AnalyzeError::Build(e.to_string()))?;
-    let e = *est.update(&pose_of(scene), scene.t_min_n);
+    let e = *est.update(&pose_of(scene), Tmin::Scene);
     if let Some(err) = e.error {
         return Err(AnalyzeError::Status {
             status: e.status.as_str(),
@@ -308,7 +315,7 @@ fn dense(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, Analyze
         return dense_sagged(scene, opts);
     }
     let t0 = Instant::now();
-    let a = reference_analysis_at(scene, &pose_of(scene), scene.t_min_n, true)
+    let a = reference_analysis_at(scene, &pose_of(scene), Tmin::Scene, true)
         .map_err(|e| AnalyzeError::Solve(e.to_string()))?;
     let secs = t0.elapsed().as_secs_f64();
     let k = opts.modes.min(a.modes.lambda.len());
@@ -331,7 +338,7 @@ fn dense(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, Analyze
 /// dense generalised eigensolver.
 fn dense_sagged(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, AnalyzeError> {
     let mut est = Estimator::new(scene).map_err(|e| AnalyzeError::Build(e.to_string()))?;
-    let e = *est.update(&pose_of(scene), scene.t_min_n);
+    let e = *est.update(&pose_of(scene), Tmin::Scene);
     if let Some(err) = e.error {
         return Err(AnalyzeError::Status {
             status: e.status.as_str(),
@@ -369,7 +376,7 @@ pub fn assembled_matrices(
     scene: &Scene,
 ) -> Result<(nalgebra::DMatrix<f64>, nalgebra::DMatrix<f64>), AnalyzeError> {
     let mut est = Estimator::new(scene).map_err(|e| AnalyzeError::Build(e.to_string()))?;
-    let e = *est.update(&pose_of(scene), scene.t_min_n);
+    let e = *est.update(&pose_of(scene), Tmin::Scene);
     if let Some(err) = e.error {
         return Err(AnalyzeError::Status {
             status: e.status.as_str(),

@@ -9,6 +9,7 @@
 
 use super::points::{evaluate_points_with, status_histogram, PointResult, Workers};
 use super::{estimator_params, StudyError};
+use crate::estimator::Tmin;
 use crate::kinematics::{rotated_about, Pose};
 use crate::scene::Scene;
 use crate::service::stats::StatusHistogram;
@@ -334,7 +335,7 @@ pub fn compute(s: &Scene, cfg: &MapConfig) -> Result<MapResult, StudyError> {
         progress: cfg.progress.then_some("map"),
         n_modes: cfg.modes,
     };
-    let res = evaluate_points_with(s, &points, s.t_min_n, axes[h].len(), &w)?;
+    let res = evaluate_points_with(s, &points, Tmin::Scene, axes[h].len(), &w)?;
     Ok(MapResult {
         axes,
         plane: cfg.plane,

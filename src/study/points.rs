@@ -10,7 +10,7 @@
 
 use super::progress::Progress;
 use super::{build, StudyError};
-use crate::estimator::{Estimate, Estimator, EstimatorParams};
+use crate::estimator::{Estimate, Estimator, EstimatorParams, Tmin};
 use crate::kinematics::Pose;
 use crate::modal::Mode;
 use crate::scene::Scene;
@@ -84,10 +84,16 @@ pub fn stiffness_min_n_m(e: &Estimate) -> f64 {
     sym.symmetric_eigenvalues().min()
 }
 
-/// One study point: `est.update` at `pose` and `t_min_n`, then the first `n_modes` modes of
-/// that pose (`n_modes` already checked by [`check_modes`]).
-pub fn evaluate_one(est: &mut Estimator, pose: &Pose, t_min_n: f64, n_modes: usize) -> PointResult {
-    let estimate = *est.update(pose, t_min_n);
+/// One study point: `est.update` at `pose` and the lower bounds `t_min`, then the first
+/// `n_modes` modes of that pose (`n_modes` already checked by [`check_modes`]).
+pub fn evaluate_one(
+    est: &mut Estimator,
+    pose: &Pose,
+    t_min: Tmin<'_>,
+    n_modes: usize,
+) -> PointResult {
+    let estimate = *est.update(pose, t_min);
+    let t_min_n = t_min.lowest_n(est.scene());
     let mut modes_hz = [f64::NAN; MAX_MODES];
     if estimate.is_ok() {
         if n_modes >= 2 {
@@ -165,12 +171,12 @@ impl Workers<'_> {
     }
 }
 
-/// Evaluate `poses` at `t_min_n` with the workers `w`, in runs of `chunk` consecutive
+/// Evaluate `poses` at the lower bounds `t_min` with the workers `w`, in runs of `chunk` consecutive
 /// points (a run shares a warm-started estimator); the result keeps the order of `poses`.
 pub fn evaluate_points_with(
     scene: &Scene,
     poses: &[Pose],
-    t_min_n: f64,
+    t_min: Tmin<'static>,
     chunk: usize,
     w: &Workers,
 ) -> Result<Vec<PointResult>, StudyError> {
@@ -178,7 +184,7 @@ pub fn evaluate_points_with(
     let n_jobs = poses.len().div_ceil(chunk);
     evaluate_jobs_with(scene, n_jobs, poses.len(), w, |k| {
         let (a, b) = (k * chunk, ((k + 1) * chunk).min(poses.len()));
-        poses[a..b].iter().map(|p| (*p, t_min_n)).collect()
+        poses[a..b].iter().map(|p| (*p, t_min)).collect()
     })
 }
 
@@ -199,7 +205,7 @@ pub fn evaluate_jobs_with<F>(
     job_points: F,
 ) -> Result<Vec<PointResult>, StudyError>
 where
-    F: Fn(usize) -> Vec<(Pose, f64)> + Sync,
+    F: Fn(usize) -> Vec<(Pose, Tmin<'static>)> + Sync,
 {
     let n_modes = check_modes(w.n_modes)?;
     let cold = build(scene, w.params)?;

@@ -26,7 +26,7 @@ use super::map::Interval;
 use super::points::{stiffness_min_n_m, MAX_THREADS};
 use super::progress::Progress;
 use super::{build, StudyError};
-use crate::estimator::{Estimator, EstimatorParams, Status};
+use crate::estimator::{Estimator, EstimatorParams, Status, Tmin};
 use crate::kinematics::Pose;
 use crate::modal::Mode;
 use crate::scene::Scene;
@@ -225,7 +225,7 @@ pub fn evaluate_at(model: &Scene, cold: &Estimator, p: Vector3<f64>) -> ModelPoi
         position_m: p,
         orientation_wxyz: at.ee_orientation_wxyz,
     };
-    let e = *est.update(&pose, at.t_min_n);
+    let e = *est.update(&pose, Tmin::Scene);
     let n = at.n_cables();
     let mut r = ModelPoint {
         status: e.status,

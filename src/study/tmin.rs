@@ -3,6 +3,7 @@
 
 use super::points::{check_modes, evaluate_one, valid, PointResult};
 use super::{build, estimator_params, StudyError};
+use crate::estimator::Tmin;
 use crate::kinematics::Pose;
 use crate::scene::Scene;
 
@@ -85,7 +86,7 @@ pub fn compute(s: &Scene, cfg: &TminConfig) -> Result<TminSweep, StudyError> {
     let pose = Pose::in_scene(s, s.ee_position_m);
     let points: Vec<PointResult> = ts
         .iter()
-        .map(|&t| evaluate_one(&mut est, &pose, t, modes))
+        .map(|&t| evaluate_one(&mut est, &pose, Tmin::Uniform(t), modes))
         .collect();
     let f: Vec<f64> = points
         .iter()

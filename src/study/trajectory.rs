@@ -3,6 +3,7 @@
 
 use super::points::{evaluate_jobs_with, status_histogram, valid, PointResult, Workers};
 use super::{estimator_params, StudyError};
+use crate::estimator::Tmin;
 use crate::scene::Scene;
 use crate::service::stats::StatusHistogram;
 use crate::trajectory::{Circle, Samples};
@@ -32,7 +33,8 @@ pub enum PathSource {
 pub struct TrajectoryConfig {
     /// The poses.
     pub path: PathSource,
-    /// T_min values, N, one curve each (empty: the scene's T_min).
+    /// T_min values, N, one curve each, every cable at that value (empty: one curve at the
+    /// scene's own per-cable bounds).
     pub t_mins_n: Vec<f64>,
     /// Compute the end-effector mode too.
     pub ee_mode: bool,
@@ -49,7 +51,8 @@ pub struct TrajectoryConfig {
 pub struct TrajectoryStudy {
     /// The poses (with their angle along the circle when the path is the circle).
     pub samples: Samples,
-    /// The T_min of each curve, N.
+    /// The T_min of each curve, N (for the scene's own bounds, the lowest of its cables'
+    /// lower bounds).
     pub t_mins_n: Vec<f64>,
     /// Results, T_min-major: curve k is `points[k * n..(k + 1) * n]` for n poses.
     pub points: Vec<PointResult>,
@@ -98,7 +101,7 @@ pub struct CurveSummary {
 pub fn evaluate(
     s: &Scene,
     tr: &Samples,
-    t_mins: &[f64],
+    t_mins: &[Tmin<'static>],
     ee_mode: bool,
     threads: usize,
     progress: Option<&str>,
@@ -116,7 +119,7 @@ pub fn evaluate(
 pub fn evaluate_with(
     s: &Scene,
     tr: &Samples,
-    t_mins: &[f64],
+    t_mins: &[Tmin<'static>],
     w: &Workers,
 ) -> Result<Vec<PointResult>, StudyError> {
     let n = tr.position_m.len();
@@ -128,12 +131,8 @@ pub fn evaluate_with(
 
 /// Check the T_min values, make or read the poses and evaluate every curve.
 pub fn run(s: &Scene, cfg: &TrajectoryConfig) -> Result<TrajectoryStudy, StudyError> {
-    let t_mins = if cfg.t_mins_n.is_empty() {
-        vec![s.t_min_n]
-    } else {
-        cfg.t_mins_n.clone()
-    };
-    if let Some(t) = t_mins
+    if let Some(t) = cfg
+        .t_mins_n
         .iter()
         .find(|t| !(t.is_finite() && **t >= 0.0 && **t <= s.t_max_n))
     {
@@ -164,10 +163,15 @@ pub fn run(s: &Scene, cfg: &TrajectoryConfig) -> Result<TrajectoryStudy, StudyEr
         progress: cfg.progress.then_some("trajectory"),
         n_modes: cfg.modes,
     };
-    let points = evaluate_with(s, &tr, &t_mins, &w)?;
+    let curves: Vec<Tmin<'static>> = if cfg.t_mins_n.is_empty() {
+        vec![Tmin::Scene]
+    } else {
+        cfg.t_mins_n.iter().map(|&t| Tmin::Uniform(t)).collect()
+    };
+    let points = evaluate_with(s, &tr, &curves, &w)?;
     Ok(TrajectoryStudy {
         samples: tr,
-        t_mins_n: t_mins,
+        t_mins_n: curves.iter().map(|t| t.lowest_n(s)).collect(),
         points,
     })
 }

@@ -7,6 +7,7 @@
 //! real-time path's own Newton tolerance is 1e-12 relative), applied to the frequency
 //! (conservative: a relative error δ in λ is δ/2 in f).
 use super::rel;
+use cablevib::estimator::Tmin;
 use cablevib::estimator::{
     build_models, reference_analysis, Estimate, Estimator, ReferenceAnalysis, Status,
 };
@@ -29,11 +30,11 @@ pub fn dense_tol(lambda: f64, modes: &DenseModes) -> f64 {
 /// The real-time estimate of one pose from a fresh (cold) estimator.
 pub fn realtime(s: &Scene, p: Vector3<f64>, t_min: f64) -> Estimate {
     let mut est = Estimator::new(s).unwrap_or_else(|e| panic!("{}: {e}", s.name));
-    *est.update(&Pose::at(p), t_min)
+    *est.update(&Pose::at(p), Tmin::Uniform(t_min))
 }
 
 pub fn dense(s: &Scene, p: Vector3<f64>, t_min: f64) -> ReferenceAnalysis {
-    reference_analysis(s, &p, t_min, true)
+    reference_analysis(s, &p, Tmin::Uniform(t_min), true)
         .unwrap_or_else(|e| panic!("{}: dense reference at {p:?}, t_min {t_min}: {e}", s.name))
 }
 

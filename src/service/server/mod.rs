@@ -54,7 +54,7 @@ use super::ports::{self, Ipc, ServicePorts, MAX_PUBLISHERS, POSE_BUFFER};
 use super::rt;
 use super::stats::{Percentiles, Ring, SequenceGaps, StatusHistogram};
 use super::{ServiceError, WaitMode};
-use crate::estimator::Estimator;
+use crate::estimator::{Estimator, Tmin};
 use crate::kinematics::Pose;
 use crate::scene::{is_valid_t_min, Scene};
 use inverse_worker::{InverseJob, InverseWorker};
@@ -451,7 +451,7 @@ impl Server {
         let t0 = monotonic_now_ns();
         let e = *self
             .estimator
-            .update_with_bounds(&pose, &self.cycle_t_min_n[..n_cables]);
+            .update(&pose, Tmin::PerCable(&self.cycle_t_min_n[..n_cables]));
         let compute_ns = monotonic_now_ns().saturating_sub(t0);
 
         let n = e.n_cables.min(MAX_CABLES);
