@@ -331,3 +331,99 @@ anchor = [7.0, -5.0, 5.395]
     let v = json_of(&["analyze", path, "--json", "--realtime"]);
     assert_eq!(v["status"], "ok", "{v}");
 }
+
+/// A platform whose eight attachments all lie on its z axis (CASPR's DrainageService robot,
+/// written out here): spinning about that axis moves no attachment point, so by geometry
+/// that direction has no stiffness and no frequency. Before, f1 ≈ 0 Hz came out with status
+/// ok (1e-14 Hz real time, 3e-5 Hz dense). Now: status `mechanism` naming the spin about
+/// z, in the estimator and in `analyze` (structured, dense, `--realtime`); the same robot
+/// with its attachments moved 5 cm off the axis is held and answers ok.
+#[test]
+fn a_free_spin_is_a_mechanism_not_a_frequency() {
+    let cables = [
+        ([0.08, 3.923, 2.29], -0.5),
+        ([3.923, 3.923, 0.103], -0.5),
+        ([3.923, 3.923, 2.29], 0.5),
+        ([3.922, 0.077, 0.103], -0.5),
+        ([3.922, 0.077, 2.29], 0.5),
+        ([0.08, 0.075, 0.109], 0.5),
+        ([0.08, 0.075, 2.287], -0.5),
+        ([0.08, 3.923, 0.105], 0.5),
+    ];
+    let scene_text = |off_axis: f64| {
+        let mut t = String::from(
+            "name = \"drainage\"\ngravity = [0.0, 0.0, -9.81]\n[end_effector]\nmass = 1.5\n\
+             position = [2.0, 2.0, 0.5]\ninertia = [[0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1]]\n\
+             [cable]\nyoungs_modulus = 1e11\narea = 1e-5\nweight_per_length = 0.5\n\
+             [tension]\nt_min = 1.0\nt_max = 30.0\n[model]\nelement = \"fem\"\nelements_per_cable = 10\n\
+             [effects]\nrotation = true\nsag = false\n",
+        );
+        for (a, z) in cables.iter() {
+            // Off the axis: towards the anchor horizontally, so the cable's pull has no
+            // moment about z and the pose stays in equilibrium.
+            let (dx, dy): (f64, f64) = (a[0] - 2.0, a[1] - 2.0);
+            let h = (dx * dx + dy * dy).sqrt();
+            let (x, y) = (off_axis * dx / h, off_axis * dy / h);
+            t.push_str(&format!(
+                "[[cables]]\nanchor = [{}, {}, {}]\nattachment = [{x}, {y}, {z}]\n",
+                a[0], a[1], a[2]
+            ));
+        }
+        t
+    };
+    let dir = temp_dir("mechanism");
+    let file = dir.join("drainage.toml");
+    std::fs::write(&file, scene_text(0.0)).unwrap();
+    let path = file.to_str().unwrap();
+    let s = Scene::load(path).unwrap();
+    let mut est = Estimator::new(&s).unwrap();
+    let e = *est.update(&Pose::in_scene(&s, s.ee_position_m), Tmin::Scene);
+    assert_eq!(e.status, Status::Mechanism, "{:?}", e.error);
+    assert!(e.f1_hz.is_nan() && e.ee_mode_hz.is_nan());
+    match e.error {
+        Some(cablevib::estimator::EstimatorError::Mechanism { direction }) => {
+            // Unit rotation about z (the closed form), nothing else.
+            assert!((direction[5] - 1.0).abs() <= 1e-9, "{direction:?}");
+            assert!(
+                direction[..5].iter().all(|x| x.abs() <= 1e-6),
+                "{direction:?}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    // The tensions are still the equilibrium's (they are valid at a mechanism).
+    let r =
+        cablevib::estimator::reference_analysis(&s, &s.ee_position_m, Tmin::Scene, false).unwrap();
+    for (a, b) in e.tensions().iter().zip(&r.tensions_n) {
+        assert!((a - b).abs() <= 1e-6 * s.t_max_n, "{a} vs Clarabel {b}");
+    }
+    for extra in [
+        &[][..],
+        &["--solver", "dense"][..],
+        &["--realtime", "--json"][..],
+    ] {
+        let mut args = vec!["analyze", path];
+        args.extend_from_slice(extra);
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(1), "{extra:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains("mechanism") && err.contains("rotation about (0.000, 0.000, 1.000)"),
+            "{extra:?}: {err}"
+        );
+    }
+    // Every attachment 5 cm off the axis: the spin is held, f1 > 0 and equal to the dense one.
+    std::fs::write(&file, scene_text(0.05)).unwrap();
+    let s = Scene::load(path).unwrap();
+    let mut est = Estimator::new(&s).unwrap();
+    let e = *est.update(&Pose::in_scene(&s, s.ee_position_m), Tmin::Scene);
+    assert_eq!(e.status, Status::Ok, "{:?}", e.error);
+    let r =
+        cablevib::estimator::reference_analysis(&s, &s.ee_position_m, Tmin::Scene, false).unwrap();
+    let f1_dense = cablevib::modal::lambda_to_hz(r.modes.lambda[0]);
+    assert!(
+        e.f1_hz > 0.01 && (e.f1_hz - f1_dense).abs() <= 1e-6 * f1_dense,
+        "{} vs {f1_dense}",
+        e.f1_hz
+    );
+}

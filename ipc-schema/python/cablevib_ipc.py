@@ -61,6 +61,7 @@ STATUS_T_MIN_OUT_OF_RANGE = 8
 STATUS_INVALID_REQUEST = 9
 STATUS_INTERNAL_ERROR = 10
 STATUS_CABLE_SLACK = 11
+STATUS_MECHANISM = 12
 STATUS_NAMES = {
     0: "ok",
     1: "tension_infeasible",
@@ -74,6 +75,7 @@ STATUS_NAMES = {
     9: "invalid_request",
     10: "internal_error",
     11: "cable_slack",
+    12: "mechanism",
 }
 
 

@@ -20,7 +20,8 @@ pub enum StatusCode {
     NotConverged = 3,
     /// The structure or stiffness matrix is rank deficient at this pose.
     RankDeficient = 4,
-    /// The position lies outside the frame spanned by the anchors.
+    /// The position is at an anchor (a cable shorter than 1e-6 m). A position the robot
+    /// cannot hold is `TensionInfeasible`: there is no geometric pre-test of the workspace.
     OutsideWorkspace = 5,
     /// No pose has been received yet (margin queries before the first estimate).
     NoPoseYet = 6,
@@ -35,11 +36,15 @@ pub enum StatusCode {
     /// A sagging cable would go slack: its end tension is below the least any catenary
     /// through its chord can have (its tension would reach zero along it). No numbers.
     CableSlack = 11,
+    /// A direction of the end-effector has no stiffness at this pose (a mechanism, e.g. the
+    /// spin of a platform whose attachments lie on one axis): no natural frequency exists.
+    /// The tensions are valid; f1 and the stiffness are NaN.
+    Mechanism = 12,
 }
 
 impl StatusCode {
     /// Every code, in numeric order.
-    pub const ALL: [StatusCode; 12] = [
+    pub const ALL: [StatusCode; 13] = [
         StatusCode::Ok,
         StatusCode::TensionInfeasible,
         StatusCode::InvalidInput,
@@ -52,6 +57,7 @@ impl StatusCode {
         StatusCode::InvalidRequest,
         StatusCode::InternalError,
         StatusCode::CableSlack,
+        StatusCode::Mechanism,
     ];
 
     /// The wire value.
@@ -74,6 +80,7 @@ impl StatusCode {
             9 => StatusCode::InvalidRequest,
             10 => StatusCode::InternalError,
             11 => StatusCode::CableSlack,
+            12 => StatusCode::Mechanism,
             _ => return None,
         })
     }
@@ -93,6 +100,7 @@ impl StatusCode {
             StatusCode::InvalidRequest => "invalid_request",
             StatusCode::InternalError => "internal_error",
             StatusCode::CableSlack => "cable_slack",
+            StatusCode::Mechanism => "mechanism",
         }
     }
 

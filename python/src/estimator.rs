@@ -154,7 +154,7 @@ pub struct PyEstimate {
 #[pymethods]
 impl PyEstimate {
     /// Status as a string: ``ok``, ``tension_infeasible``, ``invalid_input``,
-    /// ``not_converged``, ``rank_deficient``, ``outside_workspace``,
+    /// ``not_converged``, ``rank_deficient``, ``outside_workspace`` (at an anchor),
     /// ``non_unit_quaternion``, ``t_min_out_of_range``, … (the service's codes).
     #[getter]
     fn status(&self) -> &'static str {

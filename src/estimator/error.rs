@@ -72,6 +72,44 @@ pub enum EstimatorError {
     /// The sagged cables could not be loaded into the modal solver.
     #[error("sagged cable model: {0}")]
     SagModel(SagLoadError),
+    /// The static stiffness does not hold one direction of the end-effector (a mechanism):
+    /// there is no natural frequency (see [`crate::modal::free_direction`]).
+    #[error("a mechanism: the end-effector direction {} has no stiffness, so there is no natural frequency", FreeDirection(.direction))]
+    Mechanism {
+        /// The free direction: translation (m) then rotation (rad) for a rigid body, unit
+        /// length; the rotational part is 0 for a point mass.
+        direction: [f64; 6],
+    },
+}
+
+/// Displays a free direction: its translation and rotation parts, the small entries
+/// dropped (e.g. `rotation about (0, 0, 1)`).
+struct FreeDirection<'a>(&'a [f64; 6]);
+
+impl std::fmt::Display for FreeDirection<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let d = self.0;
+        let part = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let (t, r) = (part(&d[..3]), part(&d[3..]));
+        let unit = |v: &[f64], n: f64| {
+            let c = |x: f64| if (x / n).abs() < 1e-6 { 0.0 } else { x / n };
+            format!("({:.3}, {:.3}, {:.3})", c(v[0]), c(v[1]), c(v[2]))
+        };
+        match (t > 1e-6, r > 1e-6) {
+            (true, true) => write!(
+                f,
+                "translation {} with rotation about {}",
+                unit(&d[..3], t),
+                unit(&d[3..], r)
+            ),
+            (false, true) => write!(f, "rotation about {}", unit(&d[3..], r)),
+            _ => write!(
+                f,
+                "translation along {}",
+                unit(&d[..3], t.max(f64::MIN_POSITIVE))
+            ),
+        }
+    }
 }
 
 impl EstimatorError {
@@ -95,6 +133,7 @@ impl EstimatorError {
             EstimatorError::RankDeficient { .. } => Status::RankDeficient,
             EstimatorError::Sag(e) => sag_status(e),
             EstimatorError::SagModel(_) => Status::InvalidInput,
+            EstimatorError::Mechanism { .. } => Status::Mechanism,
         }
     }
 }

@@ -283,10 +283,12 @@ impl Estimator {
                 e.status = err.status();
                 e.error = Some(err);
                 e.f1_hz = f64::NAN;
+                e.f1_ee_participation = f64::NAN;
                 e.ee_mode_hz = f64::NAN;
                 e.stiffness_n_m = Matrix3::repeat(f64::NAN);
                 e.stiffness6 = Matrix6::repeat(f64::NAN);
-                if e.status != Status::TensionInfeasible {
+                // An infeasible solve has its closest tensions, a mechanism valid ones.
+                if !matches!(e.status, Status::TensionInfeasible | Status::Mechanism) {
                     e.tensions_n = [f64::NAN; MAX_CABLES];
                 }
                 self.last_ok_position = None;
@@ -391,11 +393,13 @@ impl Estimator {
         self.prev2_lambda1 = if warm { self.prev_lambda1 } else { f64::NAN };
         self.prev_lambda1 = if warm { self.last_lambda1 } else { f64::NAN };
         self.last_lambda1 = r1.lambda;
-        if self.params.ee_mode && self.cycle.sag.is_none() {
-            self.ee_mode(&r1, warm_l.is_some(), e);
-        }
         self.write_stiffness(e);
         e.eigen_evaluations = self.cycle.evaluations_since_load();
+        check_mechanism(&self.scene, pose, &e.stiffness6, r1.lambda)?;
+        if self.params.ee_mode && self.cycle.sag.is_none() {
+            self.ee_mode(&r1, warm_l.is_some(), e);
+            e.eigen_evaluations = self.cycle.evaluations_since_load();
+        }
         Ok(())
     }
 
@@ -456,5 +460,37 @@ impl Estimator {
             e.stiffness6.fixed_view_mut::<3, 3>(0, 0).copy_from(&k);
             e.stiffness_dim = 3;
         }
+    }
+}
+
+/// A mechanism of `scene` at `pose` (a direction its static stiffness `k6` — N/m, N/rad,
+/// N·m/m, N·m/rad blocks; the leading 3 × 3 for a point mass — does not hold) is the error
+/// [`EstimatorError::Mechanism`] naming the direction, never an f1 ≈ 0. Only a λ₁ (rad²/s²)
+/// that the cheap pre-test [`crate::modal::may_be_mechanism`] lets through pays for the
+/// eigen-decomposition. No allocation (fixed-size matrices). The estimator's cycle and the
+/// dense reference analysis both call it.
+pub fn check_mechanism(
+    scene: &Scene,
+    pose: &Pose,
+    k6: &Matrix6<f64>,
+    lambda1: f64,
+) -> Result<(), EstimatorError> {
+    let dim = if scene.rigid { 6 } else { 3 };
+    let mut m = Matrix6::zeros();
+    m.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(Matrix3::identity() * scene.ee_mass_kg));
+    if scene.rigid {
+        let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
+        m.fixed_view_mut::<3, 3>(3, 3)
+            .copy_from(&(rot * scene.ee_inertia_kg_m2 * rot.transpose()));
+    }
+    if !crate::modal::may_be_mechanism(lambda1, k6, &m, dim) {
+        return Ok(());
+    }
+    match crate::modal::free_direction(k6, &m, dim) {
+        Some(d) => Err(EstimatorError::Mechanism {
+            direction: [d[0], d[1], d[2], d[3], d[4], d[5]],
+        }),
+        None => Ok(()),
     }
 }

@@ -65,7 +65,8 @@
 //! evaluation of D(λ). `first_mode`: the first root and its certificate. `ee_tracker`: the
 //! end-effector mode, scanned and tracked. `spectrum`: the first K modes
 //! ([`ModalSolver::modes`], [`Mode`], [`SpectrumParams`]). `solver`: [`ModalSolver`], which
-//! composes them. `eig3` and `rigid`: small kernels both solvers use. `sag`: the same
+//! composes them. `eig3` and `rigid`: small kernels both solvers use. `mechanism`: a
+//! direction the static stiffness does not hold ([`free_direction`]). `sag`: the same
 //! structured solver (and its dense reference) for cables sagging on their catenaries,
 //! whose chains are not uniform ([`sag::SagModalSolver`]).
 
@@ -75,6 +76,7 @@ mod ee_tracker;
 mod eig3;
 mod error;
 mod first_mode;
+mod mechanism;
 mod rigid;
 pub mod sag;
 mod shapes;
@@ -89,6 +91,7 @@ pub use dynamic_stiffness::{DynEval, EigD};
 pub use ee_tracker::RescanCounts;
 pub use eig3::{eig3, eig3_jacobi, Eig3};
 pub use error::ModalError;
+pub use mechanism::{free_direction, may_be_mechanism, MECHANISM_REL};
 pub use rigid::{attach_map, rigid_geometric_stiffness};
 pub use shapes::{
     ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_CONTINUOUS_SAMPLES, MAX_MULTIPLICITY,

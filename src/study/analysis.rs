@@ -10,7 +10,7 @@
 //! process: both times, their ratio, and the largest relative difference of the K
 //! eigenvalues next to the dense solver's own bound ε·λ_max/λ.
 
-use crate::estimator::{reference_analysis_at, resolve_auto, Estimator, Tmin};
+use crate::estimator::{check_mechanism, reference_analysis_at, resolve_auto, Estimator, Tmin};
 use crate::kinematics::Pose;
 use crate::modal::{dense_relative_accuracy, lambda_to_hz, Mode};
 use crate::scene::{ElementKind, Scene};
@@ -317,6 +317,13 @@ fn dense(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, Analyze
     let t0 = Instant::now();
     let a = reference_analysis_at(scene, &pose_of(scene), Tmin::Scene, true)
         .map_err(|e| AnalyzeError::Solve(e.to_string()))?;
+    let lambda1 = a.modes.lambda.first().copied().unwrap_or(f64::NAN);
+    if let Err(err) = check_mechanism(scene, &pose_of(scene), &a.stiffness6, lambda1) {
+        return Err(AnalyzeError::Status {
+            status: err.status().as_str(),
+            reason: err.to_string(),
+        });
+    }
     let secs = t0.elapsed().as_secs_f64();
     let k = opts.modes.min(a.modes.lambda.len());
     let mut r = report_frame(scene, SolverChoice::Dense);

@@ -31,7 +31,7 @@
 //! before a pose (from the same thread) always applies to that pose, since the poses are
 //! drained before the set-points. A per-cable set-point gives each cable its own lower bound
 //! (cables past its per-cable values take its uniform value; [`setpoint_bounds`]), passed to
-//! [`Estimator::update_with_bounds`]. Before any set-point the scene's bounds are in force
+//! [`Estimator::update`] with [`Tmin::PerCable`]. Before any set-point the scene's bounds are in force
 //! (`cables[i].t_min`, else `tension.t_min`). A set-point with a value the scene file would
 //! refuse (the one rule of [`crate::scene::check_t_min`]: not finite, zero, negative,
 //! subnormal, above that cable's T_max — `TminSetpoint::zeroed()` is one) is reported once,
