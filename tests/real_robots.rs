@@ -427,3 +427,70 @@ fn a_free_spin_is_a_mechanism_not_a_frequency() {
         e.f1_hz
     );
 }
+
+/// `analyze --realtime --json` prints the estimate with its status whatever refuses the
+/// pose: a default pose the cables cannot hold (`--t-min 350` on the paper robot, as CASPR's
+/// FAST robot at its own pose), a refused orientation of a rigid platform, a `--position`
+/// at an anchor. Before, the first two printed no JSON ("at its default pose: ..."). A
+/// per-cable t_max behind an infeasibility is named as the cables' own bounds, not one range.
+#[test]
+fn realtime_json_prints_every_refused_pose_with_its_status() {
+    for (args, status) in [
+        (
+            &["spatial-paper", "--t-min", "350"][..],
+            "tension_infeasible",
+        ),
+        (
+            &[
+                "scenes/box_6dof.toml",
+                "--orientation",
+                "0.7071068,0.7071068,0,0",
+            ][..],
+            "tension_infeasible",
+        ),
+        (
+            &["spatial-paper", "--position", "1.25,1.25,2.5"][..],
+            "outside_workspace",
+        ),
+    ] {
+        let mut a = vec!["analyze"];
+        a.extend_from_slice(args);
+        a.extend_from_slice(&["--realtime", "--json"]);
+        let o = Command::new(env!("CARGO_BIN_EXE_cablevib"))
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .args(&a)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(1), "{a:?}");
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| {
+            panic!(
+                "{a:?}: no JSON ({e}): {}",
+                String::from_utf8_lossy(&o.stderr)
+            )
+        });
+        assert_eq!(v["status"], status, "{a:?}: {v}");
+        assert!(v["f1_hz"].is_null(), "{a:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!err.contains("default pose"), "{a:?}: {err}");
+    }
+    let dir = temp_dir("own_t_max");
+    let text = include_str!("../scenes/spatial_paper.toml").replacen(
+        "[[cables]]\nanchor = [1.25, 1.25, 0.0]",
+        "[[cables]]\nanchor = [1.25, 1.25, 0.0]\nt_max = 101.0",
+        1,
+    );
+    let file = dir.join("own_t_max.toml");
+    std::fs::write(&file, text).unwrap();
+    let o = run(&[
+        "analyze",
+        file.to_str().unwrap(),
+        "--position",
+        "0.9,0.9,0.5",
+        "--realtime",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("tension_infeasible") && err.contains("each cable's own bounds"),
+        "{err}"
+    );
+}

@@ -129,6 +129,7 @@ pub fn resolve_auto(scene: &Scene) -> Result<(Scene, AutoChoice), BuildError> {
         Estimator::with_params(&reference, EstimatorParams::default())?;
         return Err(BuildError::DefaultPose {
             scene: scene.name.clone(),
+            position_m: scene.ee_position_m.into(),
             reason: EstimatorError::Input(InputError::NoFeasiblePose),
         });
     }

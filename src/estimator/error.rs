@@ -181,11 +181,15 @@ impl From<InputError> for TminQueryError {
 /// Errors building an estimator.
 #[derive(Debug, thiserror::Error)]
 pub enum BuildError {
-    /// The scene's default pose is not solvable: the robot is unusable as described.
-    #[error("scene `{scene}` at its default pose: {reason}")]
+    /// The scene's pose (its `position`, or the command line's `--position`) has no
+    /// answer that makes the robot usable (e.g. a cable of zero length): the message names
+    /// the pose, which is the scene file's default only when no other was given.
+    #[error("scene `{scene}` at ({}, {}, {}) m: {reason}", .position_m[0], .position_m[1], .position_m[2])]
     DefaultPose {
         /// Scene name.
         scene: String,
+        /// The pose's position, m.
+        position_m: [f64; 3],
         /// Why.
         reason: EstimatorError,
     },
@@ -300,11 +304,12 @@ mod tests {
         }
         let build = BuildError::DefaultPose {
             scene: "s".into(),
+            position_m: [0.5, 0.0, 1.25],
             reason: InputError::NoFeasiblePose.into(),
         };
         assert_eq!(
             build.to_string(),
-            "scene `s` at its default pose: invalid input: no feasible pose to choose the auto model"
+            "scene `s` at (0.5, 0, 1.25) m: invalid input: no feasible pose to choose the auto model"
         );
     }
 }

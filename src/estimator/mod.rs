@@ -162,6 +162,7 @@ impl Estimator {
         // Expected rank: the rank at the default pose.
         let default_pose = |e: EstimatorError| BuildError::DefaultPose {
             scene: scene.name.clone(),
+            position_m: scene.ee_position_m.into(),
             reason: e,
         };
         let pose = Pose {
@@ -171,22 +172,34 @@ impl Estimator {
         let c = &mut est.cycle;
         c.set_pose(scene, &pose)
             .map_err(|e| default_pose(e.into()))?;
-        c.tension
+        // The structure matrix's rank is set up before feasibility is decided, so a default
+        // pose the cables cannot hold (a robot whose force_min is too high there, a --t-min
+        // near t_max) still gives it; such a pose is then estimated like any other, with the
+        // status TensionInfeasible. Only a default pose with no rank at all is refused.
+        let solved = c
+            .tension
             .solve_wrench_bounds(
                 &c.geometry,
                 &wrench6(scene),
                 &est.t_min_n[..n],
                 &est.t_max_n[..n],
             )
-            .map_err(|e| default_pose(e.into()))?;
+            .map(|_| ());
         est.expected_rank = c.tension.info().rank;
         c.tension.reset_warm_start();
-        if scene.model.sag {
-            // The sagged statics and modes at the default pose: a robot whose cables go
-            // slack there is unusable as described.
+        match solved {
+            Ok(_) | Err(crate::tension::TensionError::Infeasible { .. }) => {}
+            Err(e) => return Err(default_pose(e.into())),
+        }
+        if scene.model.sag && solved.is_ok() {
+            // The sagged statics and modes at the default pose: only a failure other than
+            // the statuses of a pose (infeasible, slack) makes the robot unusable.
             let t_min = est.t_min_n;
-            c.first_root(scene, &pose, &t_min[..n], 0, None, |_| {})
-                .map_err(default_pose)?;
+            match c.first_root(scene, &pose, &t_min[..n], 0, None, |_| {}) {
+                Ok(_) => {}
+                Err(e) if matches!(e.status(), Status::TensionInfeasible | Status::CableSlack) => {}
+                Err(e) => return Err(default_pose(e)),
+            }
             c.reset_tension_warm_start();
         }
         Ok(est)

@@ -17,10 +17,12 @@ pub enum TensionError {
     NonFinite,
     /// No tensions within the bounds produce the wrench.
     #[error(
-        "tension infeasible: wrench component {} cannot be reached within [{t_min_n}, {t_max_n}] N; \
+        "tension infeasible: wrench component {} cannot be reached within {}; \
          closest tensions leave a residual force ({:.4}, {:.4}, {:.4}) N, moment ({:.4}, {:.4}, {:.4}) N·m; \
          cables at t_max: {}, at t_min: {}",
-        ["f_x", "f_y", "f_z", "m_x", "m_y", "m_z"][*worst_component], residual_n[0], residual_n[1], residual_n[2],
+        ["f_x", "f_y", "f_z", "m_x", "m_y", "m_z"][*worst_component],
+        BoundsFmt(*t_min_n, *t_max_n, *per_cable_bounds),
+        residual_n[0], residual_n[1], residual_n[2],
         residual_n[3], residual_n[4], residual_n[5],
         fmt_mask(*at_upper_mask), fmt_mask(*at_lower_mask)
     )]
@@ -33,10 +35,12 @@ pub enum TensionError {
         at_upper_mask: u32,
         /// Bit i set: cable i at T_min in the closest solution.
         at_lower_mask: u32,
-        /// Lower bound, N.
+        /// Lower bound, N (the lowest of the cables' when they differ).
         t_min_n: f64,
-        /// Upper bound, N.
+        /// Upper bound, N (the highest of the cables' when they differ).
         t_max_n: f64,
+        /// The cables' bounds differ: the message then names each cable's own, not one range.
+        per_cable_bounds: bool,
     },
     /// The bounded iteration count ran out (should not happen; reported, not hidden).
     #[error("active-set method did not converge in {iterations} iterations")]
@@ -73,6 +77,22 @@ impl std::fmt::Display for MaskFmt {
         Ok(())
     }
 }
+/// `[60, 350] N` for bounds every cable shares, else the extremes of the cables' own.
+struct BoundsFmt(f64, f64, bool);
+
+impl std::fmt::Display for BoundsFmt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.2 {
+            false => write!(f, "[{}, {}] N", self.0, self.1),
+            true => write!(
+                f,
+                "each cable's own bounds (lowest t_min {} N, highest t_max {} N)",
+                self.0, self.1
+            ),
+        }
+    }
+}
+
 fn fmt_mask(m: u32) -> MaskFmt {
     MaskFmt(m)
 }

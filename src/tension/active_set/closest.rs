@@ -86,6 +86,7 @@ impl TensionSolver {
             at_lower_mask: dn,
             t_min_n: lo_min,
             t_max_n: hi_max,
+            per_cable_bounds: self.bounds_differ(),
         }
     }
 }

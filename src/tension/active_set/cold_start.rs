@@ -135,6 +135,7 @@ impl TensionSolver {
                     at_lower_mask: 0,
                     t_min_n: self.lo_min(),
                     t_max_n: self.hi_max(),
+                    per_cable_bounds: self.bounds_differ(),
                 });
             }
             let t = t1.min(t2);

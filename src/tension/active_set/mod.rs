@@ -190,6 +190,13 @@ impl TensionSolver {
             .fold(f64::NEG_INFINITY, f64::max)
     }
 
+    /// Whether the current solve's cables have different bounds (reported in errors).
+    fn bounds_differ(&self) -> bool {
+        let n = self.n;
+        let differ = |v: &[f64]| v[..n].iter().any(|x| *x != v[0]);
+        n > 0 && (differ(&self.lo) || differ(&self.hi))
+    }
+
     /// Smallest lower bound of the current solve, N (reported in errors).
     fn lo_min(&self) -> f64 {
         self.lo[..self.n]
