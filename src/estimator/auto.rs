@@ -130,7 +130,7 @@ pub fn resolve_auto(scene: &Scene) -> Result<(Scene, AutoChoice), BuildError> {
         return Err(BuildError::DefaultPose {
             scene: scene.name.clone(),
             position_m: scene.ee_position_m.into(),
-            reason: EstimatorError::Input(InputError::NoFeasiblePose),
+            reason: Box::new(EstimatorError::Input(InputError::NoFeasiblePose)),
         });
     }
     let mut massless = scene.with_model(ElementKind::Massless, 1);

@@ -191,7 +191,7 @@ pub enum BuildError {
         /// The pose's position, m.
         position_m: [f64; 3],
         /// Why.
-        reason: EstimatorError,
+        reason: Box<EstimatorError>,
     },
 }
 
@@ -305,7 +305,7 @@ mod tests {
         let build = BuildError::DefaultPose {
             scene: "s".into(),
             position_m: [0.5, 0.0, 1.25],
-            reason: InputError::NoFeasiblePose.into(),
+            reason: Box::new(InputError::NoFeasiblePose.into()),
         };
         assert_eq!(
             build.to_string(),

@@ -163,7 +163,7 @@ impl Estimator {
         let default_pose = |e: EstimatorError| BuildError::DefaultPose {
             scene: scene.name.clone(),
             position_m: scene.ee_position_m.into(),
-            reason: e,
+            reason: Box::new(e),
         };
         let pose = Pose {
             position_m: scene.ee_position_m,

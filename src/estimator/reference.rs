@@ -130,7 +130,7 @@ pub fn structured_analysis(scene: &Scene, position_m: &Vector3<f64>, t_min: Tmin
         Err(BuildError::DefaultPose { reason, .. }) => {
             let mut e = Estimate::empty(scene.n_cables());
             e.status = reason.status();
-            e.error = Some(reason);
+            e.error = Some(*reason);
             e
         }
     }
