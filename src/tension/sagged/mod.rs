@@ -1,5 +1,5 @@
-//! Tension distribution with sagging cables: the chord model's QP with each cable's chord
-//! direction replaced by its catenary's end tangent.
+//! Tension distribution with sagging cables: the least Σ T² over the exact sagged
+//! equilibrium, each cable pulling along its catenary's end tangent.
 //!
 //! Cable i hangs as an elastic catenary (`crate::sag`) through its chord, anchor a_i →
 //! attachment point, with end-effector-end tension T_e,i; it pulls the end-effector with
