@@ -26,12 +26,14 @@
 //! (`CableChord::solve_end_tension_tracked`, warm from its last solution); (2) the active-set
 //! QP ([`TensionSolver`], warm-started) on the linearised equilibrium, min ½‖T′‖² subject to
 //! Σ b_i T′_i = Σ b_i T_i − F(T) and the bounds, gives the active set and a step with the
-//! Hessian approximated by I; (3) on that active set, the Newton–KKT step with the
+//! Hessian approximated by I; (3) from that active set, corrected until it is the
+//! subproblem's KKT point (at most 2n + 2 sets, `kkt.rs`), the Newton–KKT step with the
 //! Lagrangian's exact diagonal Hessian D_i = 1 − λ·b_i′ (b_i′ by the secant of b_i between
-//! the iterations of a solve, kept from one call to the next, D_i clamped to
-//! [0.05, 20], `solve.rs`) replaces it when it is the subproblem's KKT point; (4) the step is
-//! safeguarded by backtracking on the ℓ1 merit ½‖T‖² + ρ‖F(T)‖₁ (ρ above twice the
-//! largest multiplier). Converged when the step is below `step_tol_rel` of the largest
+//! the iterations of a solve, kept from one call to the next, D_i clamped to [0.05, 1e4],
+//! `solve.rs`) replaces it (when no set is found, the D = I step stays); (4) the step is
+//! safeguarded by backtracking on the ℓ1 merit ½‖T‖² + ρ‖F(T)‖₁ (ρ at least twice the
+//! largest multiplier, at most 12 halvings; steps below 1e-6 of the largest tension are
+//! taken in full). Converged when the step is below `step_tol_rel` of the largest
 //! tension: the current tensions, with the catenaries and tangents at them, are then the
 //! KKT point to that step. At most `max_iterations` iterations, else `NoConvergence`.
 //!
