@@ -31,8 +31,8 @@
 //! [`Estimator::t_min_for_f1`] runs the same forward pipeline on its own buffers.
 //!
 //! **Sagging cables** (`[effects] sag`, the `sagged` pipeline): step 2 is the tension
-//! distribution on the cables' elastic catenaries (their end tangents replace the chords,
-//! a bounded fixed point; the bounds apply to the end-effector-end tension), steps 3-4 the
+//! distribution on the cables' elastic catenaries (the least Σ T² on the exact sagged
+//! equilibrium, a bounded SQP; the bounds apply to the end-effector-end tension), steps 3-4 the
 //! chains about each sagged profile (fem: N elements on the catenary; continuous: the exact
 //! N → ∞ limit) and the structured solver of `modal::sag`; step 5 is D(0) of those chains.
 //! A pose where a cable would go slack is the status `CableSlack`. The end-effector mode is

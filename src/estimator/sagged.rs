@@ -1,6 +1,6 @@
 //! The forward model of one pose when the scene's cables sag (`[effects] sag = true`):
-//! the tension distribution on the cables' end tangents ([`SagTensionSolver`]: each cable
-//! on its elastic catenary, the end-effector in equilibrium with the cables' end forces),
+//! the tension distribution ([`SagTensionSolver`]: the least Σ T² with each cable on its
+//! elastic catenary and the end-effector in equilibrium with the cables' end forces),
 //! then each cable's chain about its sagged profile (`fem`: N straight elements between
 //! nodes on the catenary; `continuous`: the exact N → ∞ limit), then the structured
 //! solver's first root ([`SagModalSolver`]). Nothing here allocates after [`SagPipeline::new`].
@@ -20,7 +20,7 @@ use nalgebra::{DMatrix, Matrix6, Vector3};
 /// What a cycle's tension solve reports to the estimate.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct TensionReport<'a> {
-    /// Iterations of the tension solver (fixed-point passes when the cables sag).
+    /// Iterations of the tension solver (SQP iterations when the cables sag).
     pub(super) iterations: u32,
     /// Whether the warm start was accepted.
     pub(super) warm: bool,
@@ -31,7 +31,7 @@ pub(super) struct TensionReport<'a> {
 /// Every buffer of the sagged forward model, sized once.
 #[derive(Debug, Clone)]
 pub(super) struct SagPipeline {
-    /// The tension distribution on the end tangents (keeps its catenaries as warm start).
+    /// The sagged tension distribution (keeps its catenaries as warm start).
     pub(super) tension: SagTensionSolver,
     /// The structured solver on the sagged chains.
     pub(super) modal: SagModalSolver,

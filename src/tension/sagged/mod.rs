@@ -1,5 +1,5 @@
-//! Tension distribution with sagging cables: the chord model's QP with each cable's chord
-//! direction replaced by its catenary's end tangent.
+//! Tension distribution with sagging cables: the least Σ T² over the exact sagged
+//! equilibrium, each cable pulling along its catenary's end tangent.
 //!
 //! Cable i hangs as an elastic catenary (`crate::sag`) through its chord, anchor a_i →
 //! attachment point, with end-effector-end tension T_e,i; it pulls the end-effector with
@@ -11,61 +11,65 @@
 //!     minimise Σ T_e,i²   subject to   A(t(T_e)) T_e = w,   t_min,i ≤ T_e,i ≤ t_max,i.
 //! ```
 //!
-//! Method: fixed point on the end directions, T = QP(A(T)), accelerated by Newton. Start
-//! from the chords (cold) or from the last call's end tensions (warm); a pass is (1) the active-set QP
-//! ([`TensionSolver`], itself warm-started) with columns t_i gives new T_e; (2) each
-//! cable's taut catenary for its T_e,i (Newton from the first-order prediction of its last
-//! solution for the new chord and tension, `CableChord::solve_end_tension_tracked`) gives
-//! t_i. Converged when no end direction moved more than `direction_tol_rad` in the last
-//! pass, or, before (2), when the QP gave back the tensions the current tangents were
-//! solved at (to 1e-12 of the largest, and with a first-order change of direction
-//! |dt_i/dT_i|·|ΔT_i| below the tolerance): the current state is then the fixed point and
-//! no further catenary sweep is needed. At most `max_iterations` passes. After each
-//! unconverged pass, and once from the warm start, Newton's step on the fixed point's
-//! optimality system with the QP's active set held (`newton.rs`, which also corrects that
-//! active set near a fold) replaces the tensions: one or two passes per warm cycle instead
-//! of 4-26 plain ones, and it reaches fixed points that the plain passes move away
-//! from (a very slack cable). The reported catenaries, tangents and tensions are those of
-//! the last catenary sweep, and the QP on those tangents gives these tensions back to the
-//! tolerance.
+//! Its answer is the least Σ T_e,i² over the exact sagged equilibrium: each cable's end
+//! force f_i(T_i) = T_i a_i(T_i) is a function of its own end tension through its catenary,
+//! so the constraint Σ f_i(T_i) = w is nonlinear, and the answer is a KKT point of that
+//! problem (stationarity T_i = b_i·λ + ν_i with b_i = df_i/dT_i = a_i + T_i a_i′, ν_i ≥ 0 at
+//! T_min and ≤ 0 at T_max, zero for a free cable). It is not the fixed point T = QP(A(T))
+//! of the chord QP on the end tangents (stationarity T_i = a_i·λ): that fixed point is not
+//! unique where a cable's tangent turns with its tension, and the passes toward it could
+//! cycle between two active sets.
+//!
+//! Method: SQP on the exact constraint (`solve.rs`, `kkt.rs`). Start from the chord QP's
+//! tensions (cold) or the last call's end tensions (warm, clamped into the bounds). An
+//! iteration: (1) each cable's taut catenary at its T_e,i gives a_i and a_i′
+//! (`CableChord::solve_end_tension_tracked`, warm from its last solution); (2) the active-set
+//! QP ([`TensionSolver`], warm-started) on the linearised equilibrium, min ½‖T′‖² subject to
+//! Σ b_i T′_i = Σ b_i T_i − F(T) and the bounds, gives the active set and a step with the
+//! Hessian approximated by I; (3) from that active set, corrected until it is the
+//! subproblem's KKT point (at most 2n + 2 sets, `kkt.rs`), the Newton–KKT step with the
+//! Lagrangian's exact diagonal Hessian D_i = 1 − λ·b_i′ (b_i′ by the secant of b_i between
+//! the iterations of a solve, kept from one call to the next, D_i clamped to [0.05, 1e4],
+//! `solve.rs`) replaces it (when no set is found, the D = I step stays); (4) the step is
+//! safeguarded by backtracking on the ℓ1 merit ½‖T‖² + ρ‖F(T)‖₁ (ρ at least twice the
+//! largest multiplier, at most 12 halvings; steps below 1e-6 of the largest tension are
+//! taken in full). Converged when the step is below `step_tol_rel` of the largest
+//! tension: the current tensions, with the catenaries and tangents at them, are then the
+//! KKT point to that step. At most `max_iterations` iterations, else `NoConvergence`.
 //!
 //! Plane basis of cable i: up = −g/|g|, h_i the horizontal part of its chord normalised
 //! (the first column of `up_frame(g)` for a vertical chord), n_i = h_i × up. With every
 //! w_i = 0 the tangents are the chords and the result is the chord solver's.
 
-mod newton;
+mod kkt;
 mod solve;
 
 use super::{TensionError, TensionParams, TensionSolver};
 use crate::kinematics::Geometry;
 use crate::sag::{CableChord, Catenary, SagError, SagParams, SagTrack};
-use nalgebra::Vector3;
+use nalgebra::{Vector3, Vector6};
 
 /// Parameters of the sagged tension distribution.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SagTensionParams {
-    /// Largest number of fixed-point passes (catenaries + QP).
+    /// Largest number of SQP iterations (catenaries, QP, Newton–KKT step, line search).
     pub max_iterations: u32,
-    /// Converged when every end tangent moved less than this, rad. 1e-12 rad times the
-    /// tensions keeps the equilibrium residual ~1e-12 of the load.
-    pub direction_tol_rad: f64,
+    /// Converged when the SQP step is below this fraction of the largest end tension (the
+    /// equilibrium residual and the stationarity residual are then of that order).
+    pub step_tol_rel: f64,
     /// The catenary solver's parameters.
     pub sag: SagParams,
     /// The QP's parameters.
     pub tension: TensionParams,
-    /// Accelerate the passes by Newton's step on the optimality system (`newton.rs`);
-    /// off, every pass is the plain fixed-point update.
-    pub newton: bool,
 }
 
 impl Default for SagTensionParams {
     fn default() -> Self {
         SagTensionParams {
             max_iterations: 60,
-            direction_tol_rad: 1e-12,
+            step_tol_rel: 1e-11,
             sag: SagParams::default(),
             tension: TensionParams::default(),
-            newton: true,
         }
     }
 }
@@ -73,10 +77,12 @@ impl Default for SagTensionParams {
 /// What the last solve did.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SagTensionInfo {
-    /// Fixed-point passes.
+    /// SQP iterations.
     pub iterations: u32,
-    /// Largest end-direction change of the last pass, rad.
-    pub direction_change_rad: f64,
+    /// Catenary sweeps (one per iteration and one per backtracking trial).
+    pub sweeps: u32,
+    /// Largest |ΔT_e,i| of the last SQP step, N.
+    pub step_n: f64,
     /// ‖Σ T_e,i t_i − w_force‖∞ of the reported state, N.
     pub residual_force_n: f64,
     /// ‖Σ T_e,i r_i × t_i − w_moment‖∞ of the reported state, N·m.
@@ -112,13 +118,13 @@ pub enum SagTensionError {
         /// Which input.
         what: &'static str,
     },
-    /// The fixed point did not settle.
-    #[error("sagged tension distribution did not converge in {iterations} passes (end directions still moved {direction_change_rad:.3e} rad)")]
+    /// The SQP did not settle within its iterations.
+    #[error("sagged tension distribution did not converge in {iterations} iterations (last step {step_n:.3e} N)")]
     NoConvergence {
-        /// Passes done.
+        /// Iterations done.
         iterations: u32,
-        /// Largest end-direction change of the last pass, rad.
-        direction_change_rad: f64,
+        /// Largest |ΔT_e,i| of the last step, N.
+        step_n: f64,
     },
 }
 
@@ -152,8 +158,10 @@ impl SagCable {
 pub struct SagTensionSolver {
     params: SagTensionParams,
     qp: TensionSolver,
-    /// The geometry handed to the QP: unit = end tangents, arms and lengths copied.
+    /// The end tangents' geometry: unit = t_i, arms and lengths copied.
     tangent_geom: Geometry,
+    /// The linearised equilibrium handed to the QP: unit = t_i + T_i dt_i/dT_i (not unit).
+    lin_geom: Geometry,
     chords: Vec<CableChord>,
     cats: Vec<Catenary>,
     /// Each cable's last solution with its sensitivities (the next solve's start).
@@ -164,11 +172,18 @@ pub struct SagTensionSolver {
     t_end: Vec<f64>,
     /// d t_i/dT_e,i of each cable's world end tangent at its current tension, 1/N.
     dtan: Vec<Vector3<f64>>,
-    /// Newton's input and output (`newton.rs`).
-    newton_in: Vec<newton::NewtonCable>,
-    newton_out: Vec<f64>,
-    /// The tensions before Newton's step (restored when its catenaries fail), N.
-    t_before: Vec<f64>,
+    /// The Newton–KKT step's input (`kkt.rs`).
+    kkt: Vec<kkt::KktCable>,
+    /// The step's target tensions, N.
+    t_new: Vec<f64>,
+    /// The tensions at the start of a line search, N.
+    t_base: Vec<f64>,
+    /// b_i at the start of a line search (for the secant).
+    b_prev: Vec<Vector6<f64>>,
+    /// db_i/dT_i by the secant, 1/N (kept from call to call).
+    db: Vec<Vector6<f64>>,
+    /// The last step's multipliers λ (force N, moment N·m per unit).
+    lambda: Vector6<f64>,
     have_warm: bool,
     info: SagTensionInfo,
 }

@@ -1,50 +1,37 @@
-//! `SagTensionSolver`'s construction, fixed-point solve and accessors (the method is
-//! documented in the module docs).
+//! `SagTensionSolver`'s construction, SQP solve and accessors (the method is documented in
+//! the module docs).
 
-use super::newton::{fold_candidate, newton_step_bounded, NewtonCable};
+use super::kkt::{kkt_step, multiplier_of, KktCable};
 use super::{SagCable, SagTensionError, SagTensionInfo, SagTensionParams, SagTensionSolver};
 use crate::kinematics::{up_frame, Geometry};
 use crate::sag::{CableChord, Catenary, SagError};
-use crate::tension::Bound;
 use crate::tension::TensionSolver;
-use nalgebra::Vector3;
+use nalgebra::{Vector3, Vector6};
 
 /// Below this horizontal part (relative to the chord length) a chord counts as vertical
 /// and takes the fixed horizontal h of `up_frame`: its catenary has H ≈ 0 there, so the
 /// choice of h does not change the force.
 const VERTICAL_REL: f64 = 1e-14;
 
-/// A pass whose end directions moved less than this (rad) while barely contracting has
-/// stalled and is accepted: 1e-10 rad moves a cable's end force by 1e-10 of its tension
-/// (the stall is ~1e-11 rad where it was measured, at poses where the QP's active set
-/// changes; the reported residual says what it left).
-const STALL_MAX_RAD: f64 = 1e-10;
-/// A pass that shrinks the directions' change by less than this factor has stalled.
-const STALL_CONTRACTION: f64 = 0.5;
-/// Newton's steps stop for the rest of a solve after a pass that shrank the directions'
-/// change by less than this factor (near the answer they shrink it quadratically).
-const NEWTON_CONTRACTION: f64 = 1.0;
-
-/// The QP's tensions equal the current ones when they differ by at most this fraction of
-/// the largest (a few ulps of it).
-const FIXED_POINT_TENSION_REL: f64 = 1e-14;
-
-/// Whether the QP's tensions `qp_n` on the current tangents give back the current tensions
-/// `t_n` (those the tangents were solved at), to [`FIXED_POINT_TENSION_REL`]: then the
-/// largest first-order change of direction another pass would make, max |dt_i/dT_i|·|ΔT_i|
-/// (rad, `dtan` the tangents' turn per newton), else None.
-fn fixed_point_reached(qp_n: &[f64], t_n: &[f64], dtan: &[Vector3<f64>]) -> Option<f64> {
-    let scale = t_n.iter().fold(0.0f64, |m, t| m.max(t.abs()));
-    let mut moved = 0.0f64;
-    for ((q, t), d) in qp_n.iter().zip(t_n).zip(dtan) {
-        let dt = (q - t).abs();
-        if !(dt <= FIXED_POINT_TENSION_REL * scale) {
-            return None;
-        }
-        moved = moved.max(d.norm() * dt);
-    }
-    Some(moved)
-}
+/// Bounds of the Hessian's diagonal D_i = 1 − λ·b_i′: positive, so that every subproblem is
+/// strictly convex (a clamped D_i only slows the convergence, the answer is the KKT point
+/// whatever D). 1 is exact for a weightless cable; a very slack cable (heavy cables on the
+/// paper's robot at T_min, `tests/sag_tension.rs`) needs more than 20.
+const D_MIN: f64 = 0.05;
+const D_MAX: f64 = 1e4;
+/// The secant of b_i is taken over a tension change above this fraction of the tension
+/// (below it, rounding in b_i dominates the difference).
+const SECANT_MIN_REL: f64 = 1e-7;
+/// Step halvings of the line search.
+const MAX_HALVINGS: u32 = 12;
+/// Armijo's fraction of the merit's predicted decrease.
+const ARMIJO: f64 = 1e-4;
+/// Steps below this fraction of the largest tension are taken in full (the region of the
+/// Newton–KKT step's fast local convergence, where an ℓ1 merit can reject good steps).
+const FULL_STEP_REL: f64 = 1e-6;
+/// A free cable out of its bounds, or a bound multiplier of the wrong sign, by less than
+/// this fraction of the largest tension is accepted in the Newton–KKT step (rounding).
+const KKT_TOL_REL: f64 = 1e-9;
 
 impl SagTensionSolver {
     /// Allocate for `n_cables` cables.
@@ -66,6 +53,7 @@ impl SagTensionSolver {
             params,
             qp: TensionSolver::new(n_cables, params.tension),
             tangent_geom: Geometry::new(n_cables),
+            lin_geom: Geometry::new(n_cables),
             chords: vec![chord; n_cables],
             cats: vec![blank; n_cables],
             tracks: vec![None; n_cables],
@@ -74,18 +62,12 @@ impl SagTensionSolver {
             up: Vector3::z(),
             t_end: vec![0.0; n_cables],
             dtan: vec![Vector3::zeros(); n_cables],
-            newton_in: vec![
-                NewtonCable::new(
-                    &Vector3::x(),
-                    &Vector3::zeros(),
-                    &Vector3::zeros(),
-                    0.0,
-                    Bound::Free
-                );
-                n_cables
-            ],
-            newton_out: vec![0.0; n_cables],
-            t_before: vec![0.0; n_cables],
+            kkt: vec![KktCable::blank(); n_cables],
+            t_new: vec![0.0; n_cables],
+            t_base: vec![0.0; n_cables],
+            b_prev: vec![Vector6::zeros(); n_cables],
+            db: vec![Vector6::zeros(); n_cables],
+            lambda: Vector6::zeros(),
             have_warm: false,
             info: SagTensionInfo::default(),
         }
@@ -121,7 +103,7 @@ impl SagTensionSolver {
             self.tracks.iter_mut().for_each(|t| *t = None);
         }
         self.set_chords(g, cables, gravity_m_s2);
-        let r = self.fixed_point(w, t_min_n, t_max_n);
+        let r = self.sqp(w, t_min_n, t_max_n);
         if r.is_err() {
             self.have_warm = false;
         }
@@ -155,132 +137,186 @@ impl SagTensionSolver {
             self.tangent_geom.arm_m[i] = g.arm_m[i];
             self.tangent_geom.length_m[i] = g.length_m[i];
             self.tangent_geom.unit[i] = g.unit[i];
+            self.lin_geom.arm_m[i] = g.arm_m[i];
+            self.lin_geom.length_m[i] = g.length_m[i];
         }
     }
 
-    /// The passes of the module docs.
-    fn fixed_point(&mut self, w: &[f64; 6], lo: &[f64], hi: &[f64]) -> Result<(), SagTensionError> {
-        let mut change = f64::INFINITY;
+    /// The SQP of the module docs.
+    fn sqp(&mut self, w: &[f64; 6], lo: &[f64], hi: &[f64]) -> Result<(), SagTensionError> {
+        let n = self.t_end.len();
         let warm = self.have_warm;
         if warm {
-            // Start from the last end tensions on the new chords, and Newton's step from
-            // them on the last active set (the first QP pass then starts near the answer).
-            change = self.catenaries()?;
-            if self.params.newton {
-                self.accelerate(w, lo, hi, false)?;
+            for ((t, l), h) in self.t_end.iter_mut().zip(lo).zip(hi) {
+                *t = t.clamp(*l, *h);
             }
-        }
-        let mut iterations = 0;
-        let mut converged = false;
-        let mut newton = self.params.newton;
-        while iterations < self.params.max_iterations {
-            iterations += 1;
-            let before = change;
-            let t = self.qp.solve_wrench_bounds(&self.tangent_geom, w, lo, hi);
-            let t = match t {
-                Ok(t) => t,
+        } else {
+            // Cold: the chord QP (tangent_geom holds the chords after set_chords).
+            match self.qp.solve_wrench_bounds(&self.tangent_geom, w, lo, hi) {
+                Ok(t) => self.t_end.copy_from_slice(t),
                 Err(e) => {
                     self.t_end.copy_from_slice(self.qp.tensions_n());
                     return Err(e.into());
                 }
-            };
-            // The catenaries are those of the current tensions (after the warm start or a
-            // pass): when the QP on their tangents gives these tensions back, they are the
-            // fixed point, and no further catenary sweep is needed to see it.
-            if warm || iterations > 1 {
-                if let Some(moved) = fixed_point_reached(t, &self.t_end, &self.dtan) {
-                    if moved < self.params.direction_tol_rad {
-                        change = moved;
-                        converged = true;
-                        break;
+            }
+            self.db.iter_mut().for_each(|d| *d = Vector6::zeros());
+            self.lambda = Vector6::zeros();
+        }
+        self.info = SagTensionInfo::default();
+        self.catenaries()?;
+        self.info.sweeps = 1;
+        let mut rho: f64 = 0.0;
+        let mut iterations = 0;
+        let mut converged = false;
+        let mut step = f64::INFINITY;
+        while iterations < self.params.max_iterations {
+            iterations += 1;
+            let scale = self.t_end.iter().fold(0.0f64, |m, t| m.max(t.abs()));
+            let res = self.residual6(w);
+            // The linearised equilibrium B T′ = B T − F(T) and the D = I subproblem.
+            let mut rhs = -res;
+            for i in 0..n {
+                let v = self.tangent_geom.unit[i] + self.dtan[i] * self.t_end[i];
+                self.lin_geom.unit[i] = v;
+                let m = self.lin_geom.arm_m[i].cross(&v);
+                let b = Vector6::new(v.x, v.y, v.z, m.x, m.y, m.z);
+                rhs += b * self.t_end[i];
+                self.kkt[i] = KktCable {
+                    b,
+                    t_n: self.t_end[i],
+                    d: (1.0 - self.lambda.dot(&self.db[i])).clamp(D_MIN, D_MAX),
+                    bound: crate::tension::Bound::Free,
+                };
+            }
+            let rhs6 = [rhs[0], rhs[1], rhs[2], rhs[3], rhs[4], rhs[5]];
+            match self.qp.solve_wrench_bounds(&self.lin_geom, &rhs6, lo, hi) {
+                Ok(t) => self.t_new.copy_from_slice(t),
+                Err(e) => {
+                    self.t_end.copy_from_slice(self.qp.tensions_n());
+                    return Err(e.into());
+                }
+            }
+            for (c, b) in self.kkt.iter_mut().zip(self.qp.bounds()) {
+                c.bound = *b;
+            }
+            // The Newton–KKT step on that active set with the exact Hessian's diagonal.
+            let tol = KKT_TOL_REL * scale;
+            match kkt_step(&mut self.kkt, &res, lo, hi, tol, &mut self.t_base) {
+                Some(l) => {
+                    self.t_new.copy_from_slice(&self.t_base);
+                    self.lambda = l;
+                }
+                None => {
+                    if let Some(l) = multiplier_of(&self.kkt, &self.t_new) {
+                        self.lambda = l;
                     }
                 }
             }
-            self.t_end.copy_from_slice(t);
-            change = self.catenaries()?;
-            // Converged below the tolerance; or stalled near it: where the QP's active set
-            // is about to change, the fixed point contracts by barely anything per pass (or
-            // hops by ~1e-11 rad between two active sets), so more passes gain nothing.
-            if change < self.params.direction_tol_rad
-                || (change < STALL_MAX_RAD && change > STALL_CONTRACTION * before)
-            {
+            step = self
+                .t_new
+                .iter()
+                .zip(&self.t_end)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            if step <= self.params.step_tol_rel * scale {
                 converged = true;
                 break;
             }
-            // Newton's steps continue while the passes contract; otherwise (its active set
-            // or linearisation is wrong, e.g. far from the answer on a cold start where a
-            // cable is about to leave its bound) the plain passes take over. A warm solve
-            // keeps the steps, and after a pass that did not contract tries the free cable
-            // nearest a fold on its bound (its free fixed point may have vanished).
-            let contracted = change <= NEWTON_CONTRACTION * before;
-            newton &= warm || contracted;
-            if newton {
-                self.accelerate(w, lo, hi, !contracted)?;
-            }
+            self.line_search(w, &res, &mut rho, step <= FULL_STEP_REL * scale)?;
         }
-        self.info = SagTensionInfo {
-            iterations,
-            direction_change_rad: change,
-            ..self.info
-        };
+        self.info.iterations = iterations;
+        self.info.step_n = step;
         self.residual(w);
         if !converged {
             return Err(SagTensionError::NoConvergence {
                 iterations,
-                direction_change_rad: change,
+                step_n: step,
             });
         }
         Ok(())
     }
 
-    /// Replace the QP's tensions by Newton's step (`newton.rs`) from them, on the QP's
-    /// active set corrected by the step's bounds (and, with `fold`, with the free cable
-    /// nearest a fold put on its nearer bound first), with the catenaries at the new
-    /// tensions; the QP's tensions and catenaries stay (the plain pass) when the step is
-    /// not defined or a catenary does not exist.
-    fn accelerate(
+    /// Move from the current tensions toward `t_new` by backtracking on the ℓ1 merit
+    /// ½‖T‖² + ρ‖F(T)‖₁ (`res` = F at the current tensions; ρ raised to twice the largest
+    /// multiplier), the full step when `full`; then the secant of each b_i.
+    fn line_search(
         &mut self,
         w: &[f64; 6],
-        lo: &[f64],
-        hi: &[f64],
-        fold: bool,
+        res: &Vector6<f64>,
+        rho: &mut f64,
+        full: bool,
     ) -> Result<(), SagTensionError> {
         let n = self.t_end.len();
-        let bounds = self.qp.bounds();
+        *rho = rho.max(2.0 * self.lambda.amax());
+        let res1 = res.lp_norm(1);
+        let phi0 = 0.5 * self.t_end.iter().map(|t| t * t).sum::<f64>() + *rho * res1;
+        let slope = self
+            .t_end
+            .iter()
+            .zip(&self.t_new)
+            .map(|(t, u)| t * (u - t))
+            .sum::<f64>()
+            - *rho * res1;
+        self.t_base.copy_from_slice(&self.t_end);
         for i in 0..n {
-            let g = &self.tangent_geom;
-            self.newton_in[i] = NewtonCable::new(
-                &g.unit[i],
-                &self.dtan[i],
-                &g.arm_m[i],
-                self.t_end[i],
-                bounds[i],
-            );
+            self.b_prev[i] = self.kkt[i].b;
         }
-        if fold {
-            if let Some(i) = fold_candidate(&self.newton_in[..n]) {
-                let c = &mut self.newton_in[i];
-                let lower = c.t_n - lo[i] <= hi[i] - c.t_n;
-                c.bound = if lower { Bound::Lower } else { Bound::Upper };
-                c.t_n = if lower { lo[i] } else { hi[i] };
+        let mut alpha = 1.0;
+        let mut halvings = 0;
+        loop {
+            for i in 0..n {
+                self.t_end[i] = if alpha == 1.0 {
+                    self.t_new[i]
+                } else {
+                    self.t_base[i] + alpha * (self.t_new[i] - self.t_base[i])
+                };
             }
+            self.info.sweeps += 1;
+            let last = halvings == MAX_HALVINGS;
+            match self.catenaries() {
+                Ok(()) => {
+                    let phi = 0.5 * self.t_end.iter().map(|t| t * t).sum::<f64>()
+                        + *rho * self.residual6(w).lp_norm(1);
+                    let tol = 1e-14 * phi0.abs();
+                    if full || last || phi <= phi0 + ARMIJO * alpha * slope + tol {
+                        break;
+                    }
+                }
+                Err(e) if last => return Err(e),
+                Err(_) => {}
+            }
+            alpha *= 0.5;
+            halvings += 1;
         }
-        if !newton_step_bounded(&mut self.newton_in[..n], w, lo, hi, &mut self.newton_out) {
-            return Ok(());
-        }
-        self.t_before.copy_from_slice(&self.t_end);
-        self.t_end.copy_from_slice(&self.newton_out[..n]);
-        if self.catenaries().is_err() {
-            self.t_end.copy_from_slice(&self.t_before);
-            self.catenaries()?;
+        for i in 0..n {
+            let dt = self.t_end[i] - self.t_base[i];
+            if dt.abs() > SECANT_MIN_REL * self.t_end[i].abs() {
+                let v = self.tangent_geom.unit[i] + self.dtan[i] * self.t_end[i];
+                let m = self.lin_geom.arm_m[i].cross(&v);
+                let b = Vector6::new(v.x, v.y, v.z, m.x, m.y, m.z);
+                self.db[i] = (b - self.b_prev[i]) / dt;
+            }
         }
         Ok(())
     }
 
-    /// Each cable's catenary for its current T_e and its world end tangent; returns the
-    /// largest change of direction, rad.
-    fn catenaries(&mut self) -> Result<f64, SagTensionError> {
-        let mut change: f64 = 0.0;
+    /// F(T) = Σ T_e,i a_i − w at the current tensions and tangents (N, N·m).
+    fn residual6(&self, w: &[f64; 6]) -> Vector6<f64> {
+        let g = &self.tangent_geom;
+        let f = g.wrench_of(&self.t_end);
+        let m = g.moment_of(&self.t_end);
+        Vector6::new(
+            f.x - w[0],
+            f.y - w[1],
+            f.z - w[2],
+            m.x - w[3],
+            m.y - w[4],
+            m.z - w[5],
+        )
+    }
+
+    /// Each cable's catenary for its current T_e, its world end tangent and the tangent's
+    /// turn with the tension.
+    fn catenaries(&mut self) -> Result<(), SagTensionError> {
         for i in 0..self.t_end.len() {
             let warm = self.tracks[i].as_ref().filter(|w| w.catenary.l0_m > 0.0);
             let chord = &self.chords[i];
@@ -321,13 +357,11 @@ impl SagTensionSolver {
                 0.0
             };
             self.dtan[i] = (self.up * c - self.h[i] * s) * dphi;
-            let old = self.tangent_geom.unit[i];
-            change = change.max(old.cross(&t).norm().atan2(old.dot(&t)));
             self.tangent_geom.unit[i] = t;
             self.cats[i] = cat;
             self.tracks[i] = Some(track);
         }
-        Ok(change)
+        Ok(())
     }
 
     /// Equilibrium residual of the reported state (tensions and tangents).
