@@ -6,7 +6,7 @@
 //! one answer whatever the path, and a timing print (ignored test).
 #![allow(clippy::needless_range_loop)] // index loops mirror the per-cable maths
 use cablevib::alloc_count::{thread_allocations, CountingAlloc};
-use cablevib::estimator::Estimator;
+use cablevib::estimator::{Estimator, Tmin};
 use cablevib::kinematics::Pose;
 use cablevib::kinematics::{rotation_of, Geometry};
 use cablevib::sag::{CableChord, SagParams};
@@ -723,7 +723,7 @@ fn bench_circles_where_the_active_set_changes_are_all_ok() {
         let mut changes = 0;
         let mut last: Option<Vec<bool>> = None;
         for k in 0..4000 {
-            let e = est.update(&pose_at(k), s.t_min_n);
+            let e = est.update(&pose_at(k), Tmin::Scene);
             if !e.is_ok() {
                 not_ok.push((k, e.status));
                 continue;
