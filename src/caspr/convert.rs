@@ -111,14 +111,14 @@ fn material(
     if o.youngs_modulus_pa.is_none() {
         if let Some(who) = names(&|c| c.k_n.is_none()) {
             missing.push(format!(
-                "--youngs-modulus (Pa: {who} cable_ideal, rigid in CASPR)"
+                "--youngs-modulus (Pa) for the cable_ideal cables, rigid in CASPR ({who})"
             ));
         }
     }
     if o.t_min_n.is_none() {
         if let Some(who) = names(&|c| !(c.force_min_n > 0.0)) {
             missing.push(format!(
-                "--t-min (N: {who} with force_min ≤ 0, a slack cable, which has no stiffness)"
+                "--t-min (N) for the cables with force_min ≤ 0, slack ones without stiffness ({who})"
             ));
         }
     }
