@@ -36,9 +36,9 @@ fn read(name: &str) -> String {
 fn ipanema_opts() -> ImportOptions {
     ImportOptions {
         cable_set: None,
-        weight_per_length_n_m: 0.02,
+        weight_per_length_n_m: Some(0.02),
         youngs_modulus_pa: Some(1.0e11),
-        area_m2: 1.767e-6,
+        area_m2: Some(1.767e-6),
         position_m: None,
         t_min_n: Some(10.0),
         element: ElementKind::Fem,
@@ -49,9 +49,9 @@ fn ipanema_opts() -> ImportOptions {
 /// The paper's planar cable: E = 2.0e10 Pa, A = π (2 mm)², γ = 0.067 N/m.
 fn planar_opts() -> ImportOptions {
     ImportOptions {
-        weight_per_length_n_m: 0.067,
+        weight_per_length_n_m: Some(0.067),
         youngs_modulus_pa: Some(2.0e10),
-        area_m2: std::f64::consts::PI * 0.002 * 0.002,
+        area_m2: Some(std::f64::consts::PI * 0.002 * 0.002),
         t_min_n: None,
         ..ipanema_opts()
     }

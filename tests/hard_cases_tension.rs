@@ -303,3 +303,55 @@ fn clarabel_reference_handles_wide_tension_ranges() {
         failures.join("\n")
     );
 }
+
+/// Upper bounds many orders above the load (CASPR's "unbounded" force_max = 9999999999 N):
+/// the Clarabel reference must still balance the wrench. Independent check: A T − w formed
+/// here from the geometry's unit vectors, relative to the load scale max(|w|, Σ|T_i|), at
+/// most 1e-9 (the reference polishes on the KKT system of its active set, exact to a few
+/// roundings); and the active-set solver's answer, which does not depend on t_max when no
+/// cable reaches it, agrees to 1e-9 of the largest tension.
+#[test]
+fn clarabel_reference_balances_the_load_with_huge_upper_bounds() {
+    let spatial = Scene::default_scene();
+    let mut checked = 0;
+    for (p, m, lo) in [
+        (Vector3::new(0.3, 0.2, 1.0), 1.0, 5.0),
+        (Vector3::new(0.0, 0.0, 1.2), 1.0, 5.0),
+        (Vector3::new(-0.4, 0.3, 0.8), 3.0, 1.0),
+        (Vector3::new(0.3, 0.2, 1.0), 30.0, 60.0),
+    ] {
+        for hi in [1e7, 9_999_999_999.0, 1e15] {
+            let mut sc = spatial.clone();
+            sc.ee_mass_kg = m;
+            let g = geometry(&sc, &p);
+            let w = sc.wrench_n();
+            let t = clarabel_reference(&g, &w, lo, hi)
+                .unwrap_or_else(|e| panic!("{p:?} m {m} [{lo}, {hi:e}]: {e}"));
+            let f = t
+                .iter()
+                .zip(&g.unit)
+                .fold(Vector3::zeros(), |a, (ti, s)| a + s * *ti);
+            let scale = w.norm().max(t.iter().map(|x| x.abs()).sum());
+            let res = (f - w).norm() / scale;
+            assert!(
+                res <= 1e-9,
+                "{p:?} m {m} [{lo}, {hi:e}]: residual {res:.3e} of the load, tensions {t:.4?}"
+            );
+            assert!(t.iter().all(|&x| x >= lo && x <= hi), "{t:?}");
+            let mut ts = TensionSolver::new(sc.n_cables(), TensionParams::default());
+            let a = ts.solve(&g, &w, lo, 350.0).unwrap().to_vec();
+            let tmax = a.iter().copied().fold(0.0, f64::max);
+            let d = a
+                .iter()
+                .zip(&t)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                d <= 1e-9 * tmax,
+                "{p:?} m {m} [{lo}, {hi:e}]: differ by {d:.2e} N"
+            );
+            checked += 1;
+        }
+    }
+    println!("{checked} reference answers with t_max up to 1e15 N balanced the load");
+}

@@ -9,13 +9,33 @@
 //! joint (`ref="joint"`) is moved to the centre of mass by the parallel-axis theorem,
 //! I_G = I_O − m (|r_G|² I − r_G r_Gᵀ), as CASPR itself does.
 
-use super::xml::At;
+use super::xml::{message_number, At};
 use super::CasprError;
-use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
-/// The platform joint types a single-link robot can have, with their q layouts.
-const SUPPORTED_JOINTS: &str =
-    "SPATIAL_EULER_XYZ, SPATIAL_QUATERNION, TRANSLATIONAL_XYZ, PLANAR_XY";
+/// The platform joint types imported: CASPR's joints that let one link move freely in
+/// translation (with or without rotation).
+const SUPPORTED_JOINTS: &str = "SPATIAL_EULER_XYZ, T_XYZ, PLANAR_XY";
+
+/// CASPR's other joint types (its `JointType` enumeration): each constrains the link's
+/// translation, so the link is not a cable-driven platform this import handles.
+const OTHER_CASPR_JOINTS: [&str; 15] = [
+    "R_X",
+    "R_Y",
+    "R_Z",
+    "R_AXIS",
+    "U_XY",
+    "U_YZ",
+    "U_XZ",
+    "P_X",
+    "P_XY",
+    "P_XZ",
+    "P_AXIS",
+    "PLANAR_YZ",
+    "PLANAR_XZ",
+    "S_EULER_XYZ",
+    "S_FIXED_XYZ",
+];
 
 /// The one moving link of a CASPR model.
 #[derive(Debug, Clone, PartialEq)]
@@ -26,6 +46,8 @@ pub struct Link {
     pub joint: String,
     /// True for `PLANAR_XY`: the x-y plane carries the weight (CASPR's gravity is −z).
     pub planar_xy: bool,
+    /// True for `T_XYZ`: the joint locks the rotation (the link only translates).
+    pub rotation_locked: bool,
     /// Link-frame origin at the initial pose (`q_initial`), inertial frame, m.
     pub origin_m: Vector3<f64>,
     /// Orientation of the link frame at the initial pose.
@@ -77,18 +99,21 @@ fn link(l: At) -> Result<Link, CasprError> {
     let parent_num = parent.number("num")?;
     if parent_num != 0.0 {
         return Err(parent.err(format!(
-            "parent link {parent_num}: a single platform must hang from the base (0)"
+            "parent link {}: a single platform must hang from the base (0)",
+            message_number(parent_num)
         )));
     }
     let parent_location = parent.vec3("location")?;
     let j = l.child("joint")?;
-    let (joint, planar_xy, t, rotation) = joint(j)?;
+    let (joint, t, rotation) = joint(j)?;
+    let planar_xy = joint == "PLANAR_XY";
+    let rotation_locked = joint == "T_XYZ";
     let phys = l.child("physical")?;
     let mass_kg = phys.number("mass")?;
     if !(mass_kg > 0.0) {
         return Err(phys
             .child("mass")?
-            .err(format!("must be > 0 kg, got {mass_kg}")));
+            .err(format!("must be > 0 kg, got {}", message_number(mass_kg))));
     }
     let com_m = phys.vec3("com_location")?;
     let inertia_com_kg_m2 = inertia(phys.child("inertia")?, mass_kg, &com_m)?;
@@ -96,6 +121,7 @@ fn link(l: At) -> Result<Link, CasprError> {
         name,
         joint,
         planar_xy,
+        rotation_locked,
         origin_m: parent_location + t,
         rotation,
         mass_kg,
@@ -104,30 +130,40 @@ fn link(l: At) -> Result<Link, CasprError> {
     })
 }
 
-/// A joint's type, whether it is PLANAR_XY, its initial translation (m) and rotation.
-type JointPose = (String, bool, Vector3<f64>, UnitQuaternion<f64>);
+/// A joint's type, its initial translation (m) and rotation.
+type JointPose = (String, Vector3<f64>, UnitQuaternion<f64>);
 
-/// `<joint type=".." q_initial="..">`: the type, whether it is PLANAR_XY, the initial
-/// translation and rotation. A missing `q_initial` is CASPR's default (zero translation,
-/// identity rotation).
+/// `<joint type=".." q_initial="..">`: the type, the initial translation and rotation. Only
+/// CASPR's own type names are read (its `JointType`); a missing `q_initial` is CASPR's
+/// default (zero translation, identity rotation).
 fn joint(j: At) -> Result<JointPose, CasprError> {
     let ty = j.attr("type")?.trim().to_string();
     let n = match ty.as_str() {
         "SPATIAL_EULER_XYZ" => 6,
-        "SPATIAL_QUATERNION" => 7,
-        "TRANSLATIONAL_XYZ" | "PLANAR_XY" => 3,
-        _ => {
+        "T_XYZ" | "PLANAR_XY" => 3,
+        other if OTHER_CASPR_JOINTS.contains(&other) => {
             return Err(j.err(format!(
-                "joint type `{ty}` is not a free platform joint ({SUPPORTED_JOINTS})"
+                "CASPR joint `{ty}` constrains the link's translation: not a cable-driven platform ({SUPPORTED_JOINTS} are imported)"
             )))
+        }
+        _ => {
+            let hint = match ty.as_str() {
+                "TRANSLATIONAL_XYZ" => " (CASPR's translational joint is T_XYZ)",
+                "SPATIAL_QUATERNION" | "SPATIAL" => {
+                    " (CASPR's JointType has no quaternion joint; use SPATIAL_EULER_XYZ)"
+                }
+                _ => "",
+            };
+            return Err(j.err(format!(
+                "joint type `{}` is not one of CASPR's{hint}; {SUPPORTED_JOINTS} are imported",
+                short_name(&ty)
+            )));
         }
     };
     let q = match j.node.attribute("q_initial") {
         Some(s) => j.numbers(s, n)?,
-        None if ty == "SPATIAL_QUATERNION" => vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
         None => vec![0.0; n],
     };
-    let id = UnitQuaternion::identity();
     let (t, r) = match ty.as_str() {
         // R = Rx(α) Ry(β) Rz(γ), CASPR's SphericalEulerXYZ.
         "SPATIAL_EULER_XYZ" => (
@@ -136,25 +172,24 @@ fn joint(j: At) -> Result<JointPose, CasprError> {
                 * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), q[4])
                 * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q[5]),
         ),
-        "SPATIAL_QUATERNION" => {
-            let quat = Quaternion::new(q[3], q[4], q[5], q[6]);
-            if !(quat.norm() > 0.0) {
-                return Err(j.err("q_initial: the quaternion (e0 e1 e2 e3) is zero"));
-            }
-            (
-                Vector3::new(q[0], q[1], q[2]),
-                UnitQuaternion::from_quaternion(quat),
-            )
-        }
-        "TRANSLATIONAL_XYZ" => (Vector3::new(q[0], q[1], q[2]), id),
+        // T_XYZ: q = [x, y, z], no rotation (CASPR's TranslationalXYZ).
+        "T_XYZ" => (Vector3::new(q[0], q[1], q[2]), UnitQuaternion::identity()),
         // PLANAR_XY: q = [x, y, θ], θ about z.
         _ => (
             Vector3::new(q[0], q[1], 0.0),
             UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q[2]),
         ),
     };
-    let planar = ty == "PLANAR_XY";
-    Ok((ty, planar, t, r))
+    Ok((ty, t, r))
+}
+
+/// At most 40 characters of a name from the file, for messages.
+fn short_name(s: &str) -> String {
+    if s.chars().count() > 40 {
+        format!("{}…", s.chars().take(40).collect::<String>())
+    } else {
+        s.to_string()
+    }
 }
 
 /// `<inertia ref="com|joint">` with `Ixx` … `Iyz`: the tensor about the centre of mass.

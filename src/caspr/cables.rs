@@ -7,7 +7,7 @@
 //! link-frame origin for `joint` or from the centre of mass for `com`). Other cable types
 //! (passive springs, variable-stiffness drives) and multi-segment cables are refused.
 
-use super::xml::At;
+use super::xml::{message_number, At};
 use super::CasprError;
 use nalgebra::Vector3;
 
@@ -59,33 +59,46 @@ pub(super) fn read_set(
         .elements()
         .filter(|n| n.has_tag_name("cable_set"))
         .collect();
-    let ids: Vec<&str> = sets
-        .iter()
-        .map(|n| n.attribute("id").unwrap_or(""))
-        .collect();
+    // CASPR selects a set by its id: every set needs one, and no two may share it.
+    let mut ids: Vec<&str> = Vec::with_capacity(sets.len());
+    for n in &sets {
+        let at = root.at(*n);
+        let id = at.attr("id")?.trim();
+        if id.is_empty() {
+            return Err(at.err("empty `id`: CASPR selects cable sets by id"));
+        }
+        if let Some(j) = ids.iter().position(|i| *i == id) {
+            return Err(at.err(format!(
+                "cable set id `{}` is also the id of the set on line {}: ids must be unique",
+                short(id),
+                line_of(&sets[j])
+            )));
+        }
+        ids.push(id);
+    }
+    let listed = || {
+        if ids.is_empty() {
+            "none".to_string()
+        } else {
+            ids.iter().map(|i| short(i)).collect::<Vec<_>>().join(", ")
+        }
+    };
     let id = match (wanted, root.node.attribute("default_cable_set")) {
         (Some(w), _) => w,
-        (None, Some(d)) => d,
+        (None, Some(d)) => d.trim(),
         (None, None) if sets.len() == 1 => ids[0],
         (None, None) => {
             return Err(root.err(format!(
                 "no default_cable_set and {} cable sets: pick one with --cable-set ({})",
                 sets.len(),
-                ids.join(", ")
+                listed()
             )))
         }
     };
     let Some(k) = ids.iter().position(|i| *i == id) else {
         return Err(CasprError::Model {
             file: file.to_string(),
-            message: format!(
-                "no cable set `{id}`; the file has: {}",
-                if ids.is_empty() {
-                    "none".to_string()
-                } else {
-                    ids.join(", ")
-                }
-            ),
+            message: format!("no cable set `{}`; the file has: {}", short(id), listed()),
         });
     };
     let set = root.at(sets[k]);
@@ -94,6 +107,24 @@ pub(super) fn read_set(
         .map(|n| cable(set.at(n)))
         .collect::<Result<Vec<_>, _>>()?;
     Ok((id.to_string(), cables))
+}
+
+/// Line (1-based) of an element, for messages.
+fn line_of(n: &roxmltree::Node) -> u32 {
+    n.document().text_pos_at(n.range().start).row
+}
+
+/// At most 40 characters of a name from the file, control characters as `?`.
+fn short(s: &str) -> String {
+    let clean: String = s
+        .chars()
+        .map(|c| if c.is_control() { '?' } else { c })
+        .collect();
+    if clean.chars().count() > 40 {
+        format!("{}…", clean.chars().take(40).collect::<String>())
+    } else {
+        clean
+    }
 }
 
 /// One `<cable_ideal>` or `<cable_linear_spring>`.
@@ -120,9 +151,10 @@ fn cable(c: At) -> Result<CasprCable, CasprError> {
     let k_n = if ty == "cable_linear_spring" {
         let k = p.number("K")?;
         if !(k > 0.0) {
-            return Err(p
-                .child("K")?
-                .err(format!("cable `{name}`: K must be > 0 N, got {k}")));
+            return Err(p.child("K")?.err(format!(
+                "cable `{name}`: K must be > 0 N, got {}",
+                message_number(k)
+            )));
         }
         Some(k)
     } else {
@@ -140,12 +172,22 @@ fn cable(c: At) -> Result<CasprCable, CasprError> {
     })
 }
 
-/// `<attachments>`: one location on link 0 and one on link 1, in either order.
+/// `<attachments>`: one location on link 0 and one on link 1, in either order. Pulleys
+/// (CASPR's `base_rotating_pulley` and the like) are refused by name, as is any other
+/// element.
 fn attachments(a: At, name: &str) -> Result<(Vector3<f64>, Vector3<f64>), CasprError> {
-    let all: Vec<_> = a
-        .elements()
-        .filter(|n| n.has_tag_name("attachment"))
-        .collect();
+    if let Some(other) = a.elements().find(|n| !n.has_tag_name("attachment")) {
+        let tag = other.tag_name().name();
+        let message = if tag.contains("pulley") {
+            format!(
+                "cable `{name}`: pulleys are not supported yet (only straight cables from a fixed anchor point); pick a cable set without pulleys"
+            )
+        } else {
+            format!("cable `{name}`: unexpected element in <attachments>; expected <attachment>")
+        };
+        return Err(a.at(other).err(message));
+    }
+    let all: Vec<_> = a.elements().collect();
     if all.len() != 2 {
         return Err(a.err(format!(
             "cable `{name}`: {} attachments; only straight cables from the base (link 0) to the platform (link 1) are supported",
@@ -164,12 +206,14 @@ fn attachments(a: At, name: &str) -> Result<(Vector3<f64>, Vector3<f64>), CasprE
             &mut platform
         } else {
             return Err(at.err(format!(
-                "cable `{name}`: link {link}: expected 0 (base) or 1 (platform)"
+                "cable `{name}`: link {}: expected 0 (base) or 1 (platform)",
+                message_number(link)
             )));
         };
         if slot.replace(loc).is_some() {
             return Err(at.err(format!(
-                "cable `{name}`: both attachments are on link {link}; one must be on 0 and one on 1"
+                "cable `{name}`: both attachments are on link {}; one must be on 0 and one on 1",
+                message_number(link)
             )));
         }
     }

@@ -4,6 +4,7 @@
 
 use super::bodies::Link;
 use super::cables::{AttachmentReference, CasprCable};
+use super::xml::message_number;
 use super::{CasprError, ImportOptions};
 use crate::scene::MAX_ELEMENTS_PER_CABLE;
 use nalgebra::Vector3;
@@ -31,12 +32,17 @@ pub(super) fn check_options(o: &ImportOptions) -> Result<(), CasprError> {
             Ok(())
         } else {
             Err(CasprError::Options(format!(
-                "{what} must be finite and > 0, got {x:?}"
+                "{what} must be finite and > 0, got {}",
+                message_number(x)
             )))
         }
     };
-    positive(o.weight_per_length_n_m, "weight per length (N/m)")?;
-    positive(o.area_m2, "area (m²)")?;
+    if let Some(g) = o.weight_per_length_n_m {
+        positive(g, "weight per length (N/m)")?;
+    }
+    if let Some(a) = o.area_m2 {
+        positive(a, "area (m²)")?;
+    }
     if let Some(e) = o.youngs_modulus_pa {
         positive(e, "Young's modulus (Pa)")?;
     }
@@ -46,7 +52,10 @@ pub(super) fn check_options(o: &ImportOptions) -> Result<(), CasprError> {
     if let Some(p) = o.position_m {
         if !p.iter().all(|x| x.is_finite()) {
             return Err(CasprError::Options(format!(
-                "position must be finite, got {p:?}"
+                "position must be finite, got ({}, {}, {})",
+                message_number(p.x),
+                message_number(p.y),
+                message_number(p.z)
             )));
         }
     }
@@ -59,8 +68,85 @@ pub(super) fn check_options(o: &ImportOptions) -> Result<(), CasprError> {
     Ok(())
 }
 
+/// The materials the scene needs from the options, once every one is known to be given.
+struct Material {
+    /// Weight per length γ, N/m.
+    weight_per_length_n_m: f64,
+    /// Cross-section A, m².
+    area_m2: f64,
+}
+
+/// Every option the cable set needs and the command line did not give, reported at once
+/// (naming the cables file): weight per length and area always, Young's modulus when a
+/// cable is a `cable_ideal`, T_min when a force_min is ≤ 0.
+fn material(
+    o: &ImportOptions,
+    cables: &[CasprCable],
+    src: &Sources,
+) -> Result<Material, CasprError> {
+    let names = |f: &dyn Fn(&CasprCable) -> bool| {
+        let hit: Vec<&str> = cables
+            .iter()
+            .filter(|c| f(c))
+            .map(|c| c.name.as_str())
+            .collect();
+        match hit.as_slice() {
+            [] => None,
+            [one] => Some(format!("cable `{}`", safe(one))),
+            [first, .., last] => Some(format!(
+                "{} cables, `{}` … `{}`",
+                hit.len(),
+                safe(first),
+                safe(last)
+            )),
+        }
+    };
+    let mut missing = Vec::new();
+    if o.weight_per_length_n_m.is_none() {
+        missing.push("--weight-per-length (N/m: CASPR's cables have no weight)".to_string());
+    }
+    if o.area_m2.is_none() {
+        missing.push("--area (m²)".to_string());
+    }
+    if o.youngs_modulus_pa.is_none() {
+        if let Some(who) = names(&|c| c.k_n.is_none()) {
+            missing.push(format!(
+                "--youngs-modulus (Pa) for the cable_ideal cables, rigid in CASPR ({who})"
+            ));
+        }
+    }
+    if o.t_min_n.is_none() {
+        if let Some(who) = names(&|c| !(c.force_min_n > 0.0)) {
+            missing.push(format!(
+                "--t-min (N) for the cables with force_min ≤ 0, slack ones without stiffness ({who})"
+            ));
+        }
+    }
+    match (o.weight_per_length_n_m, o.area_m2) {
+        (Some(g), Some(a)) if missing.is_empty() => Ok(Material {
+            weight_per_length_n_m: g,
+            area_m2: a,
+        }),
+        _ => Err(CasprError::Model {
+            file: src.cables.to_string(),
+            message: format!(
+                "cable set `{}` needs {} more option{}: {}",
+                safe(src.cable_set),
+                missing.len(),
+                if missing.len() == 1 { "" } else { "s" },
+                missing.join("; ")
+            ),
+        }),
+    }
+}
+
 /// One cable in scene terms.
 struct SceneCable {
+    /// Anchor, inertial frame, m: CASPR's, or shifted by the attachment offset when the
+    /// joint locks the rotation (`anchor_shifted`).
+    anchor_m: Vector3<f64>,
+    /// True when `anchor_m` is CASPR's anchor minus the rotated attachment offset (T_XYZ).
+    anchor_shifted: bool,
     /// Attachment from the centre of mass, body frame, m.
     attachment_m: Vector3<f64>,
     /// Lower bound, N.
@@ -72,10 +158,17 @@ struct SceneCable {
 }
 
 /// The scene values of each cable, or the first reason one cannot be imported.
+///
+/// A joint that locks the rotation (T_XYZ) makes the platform a 3-DOF body whose
+/// attachment offsets b_i = R (r_A − r_G) never turn: the cable runs from a_i to p + b_i,
+/// i.e. from a_i − b_i to p. So the scene is a point mass at p with each anchor shifted to
+/// a_i − b_i: the same cable vectors, lengths and directions at every position, the force
+/// rows of the equilibrium only (the joint takes the moment).
 fn scene_cables(
     cables: &[CasprCable],
     link: &Link,
     o: &ImportOptions,
+    m: &Material,
     src: &Sources,
 ) -> Result<Vec<SceneCable>, CasprError> {
     let model = |message: String| CasprError::Model {
@@ -88,30 +181,29 @@ fn scene_cables(
             AttachmentReference::Joint => c.platform_m - link.com_m,
             AttachmentReference::Com => c.platform_m,
         };
+        // `material` has refused a force_min ≤ 0 without --t-min.
         let t_min_n = o.t_min_n.unwrap_or(c.force_min_n);
-        if !(t_min_n > 0.0) {
-            return Err(model(format!(
-                "cable `{}`: force_min = {} N lets the cable go slack, where it has no stiffness; give a T_min > 0 (--t-min)",
-                c.name, c.force_min_n
-            )));
-        }
         if !(c.force_max_n >= t_min_n) {
             return Err(model(format!(
-                "cable `{}`: force_max = {} N is below T_min = {t_min_n} N",
-                c.name, c.force_max_n
+                "cable `{}`: force_max = {} N is below T_min = {} N",
+                safe(&c.name),
+                message_number(c.force_max_n),
+                message_number(t_min_n)
             )));
         }
-        if c.k_n.is_none() && o.youngs_modulus_pa.is_none() {
-            return Err(CasprError::Options(format!(
-                "cable `{}` is a cable_ideal (rigid in CASPR): give its Young's modulus (--youngs-modulus)",
-                c.name
-            )));
-        }
+        let shift = link.rotation_locked && attachment_m != Vector3::zeros();
+        let (anchor_m, attachment_m) = if shift {
+            (c.base_m - link.rotation * attachment_m, Vector3::zeros())
+        } else {
+            (c.base_m, attachment_m)
+        };
         out.push(SceneCable {
+            anchor_m,
+            anchor_shifted: shift,
             attachment_m,
             t_min_n,
             t_max_n: c.force_max_n,
-            spring_e_pa: c.k_n.map(|k| k / o.area_m2),
+            spring_e_pa: c.k_n.map(|k| k / m.area_m2),
         });
     }
     Ok(out)
@@ -124,7 +216,8 @@ pub(super) fn scene_toml(
     o: &ImportOptions,
     src: &Sources,
 ) -> Result<String, CasprError> {
-    let sc = scene_cables(cables, link, o, src)?;
+    let m = material(o, cables, src)?;
+    let sc = scene_cables(cables, link, o, &m, src)?;
     let model = |message: String| CasprError::Model {
         file: src.cables.to_string(),
         message,
@@ -151,7 +244,7 @@ pub(super) fn scene_toml(
     let mut t = String::new();
     header(&mut t, link, src);
     end_effector(&mut t, link, o, rigid);
-    materials_and_model(&mut t, o, &sc, rigid);
+    materials_and_model(&mut t, o, &m, &sc, rigid, link.rotation_locked);
     for (c, s) in cables.iter().zip(&sc) {
         cable(&mut t, c, s, o);
     }
@@ -239,7 +332,14 @@ fn end_effector(t: &mut String, link: &Link, o: &ImportOptions, rigid: bool) {
 }
 
 /// `[cable]`, `[tension]`, `[model]` and `[effects]`.
-fn materials_and_model(t: &mut String, o: &ImportOptions, sc: &[SceneCable], rigid: bool) {
+fn materials_and_model(
+    t: &mut String,
+    o: &ImportOptions,
+    m: &Material,
+    sc: &[SceneCable],
+    rigid: bool,
+    rotation_locked: bool,
+) {
     let _ = writeln!(t, "\n[cable]");
     let _ = writeln!(
         t,
@@ -248,11 +348,11 @@ fn materials_and_model(t: &mut String, o: &ImportOptions, sc: &[SceneCable], rig
     if let Some(e) = o.youngs_modulus_pa {
         let _ = writeln!(t, "youngs_modulus = {e:?}   # Pa, --youngs-modulus");
     }
-    let _ = writeln!(t, "area = {:?}   # m², --area", o.area_m2);
+    let _ = writeln!(t, "area = {:?}   # m², --area", m.area_m2);
     let _ = writeln!(
         t,
         "weight_per_length = {:?}   # N/m, --weight-per-length",
-        o.weight_per_length_n_m
+        m.weight_per_length_n_m
     );
     let lo = sc.iter().map(|c| c.t_min_n).fold(f64::INFINITY, f64::min);
     let hi = sc
@@ -273,6 +373,8 @@ fn materials_and_model(t: &mut String, o: &ImportOptions, sc: &[SceneCable], rig
     let _ = writeln!(t, "\n[effects]");
     let why = if rigid {
         "attachment points off the centre of mass: rigid platform, 6 DOF"
+    } else if rotation_locked && sc.iter().any(|c| c.anchor_shifted) {
+        "T_XYZ locks the rotation: 3 DOF, force rows only; each anchor is shifted by its attachment offset so the cable runs as in CASPR"
     } else {
         "every attachment at the centre of mass: point mass, 3 DOF"
     };
@@ -287,11 +389,20 @@ fn cable(t: &mut String, c: &CasprCable, s: &SceneCable, o: &ImportOptions) {
         "cable_ideal"
     };
     let _ = writeln!(t, "\n[[cables]]   # \"{}\" ({kind})", safe(&c.name));
-    let _ = writeln!(
-        t,
-        "anchor = {}   # m, CASPR link 0 location",
-        vec3(&c.base_m)
-    );
+    if s.anchor_shifted {
+        let _ = writeln!(
+            t,
+            "anchor = {}   # m, CASPR link 0 location {} minus the attachment offset (T_XYZ)",
+            vec3(&s.anchor_m),
+            vec3(&c.base_m)
+        );
+    } else {
+        let _ = writeln!(
+            t,
+            "anchor = {}   # m, CASPR link 0 location",
+            vec3(&s.anchor_m)
+        );
+    }
     let _ = writeln!(
         t,
         "attachment = {}   # m, from the centre of mass",

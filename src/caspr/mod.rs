@@ -24,7 +24,10 @@
 //!
 //! so every attachment point lands where CASPR puts it: o + R r_A = position + R·attachment.
 //! When every attachment is at G the platform is a point mass (3 DOF, no inertia written);
-//! otherwise `effects.rotation = true` (6 DOF, inertia about G, at least 6 cables).
+//! otherwise `effects.rotation = true` (6 DOF, inertia about G, at least 6 cables). A
+//! `T_XYZ` joint locks the rotation: the platform is a point mass whose anchors are shifted
+//! by the attachment offsets, `anchor = a_i − R (r_A − r_G)`, so every cable runs as in
+//! CASPR and only the force rows of the equilibrium count (the joint takes the moment).
 //! Gravity is CASPR's, −9.81 m/s² along z; a `PLANAR_XY` joint carries the weight in its
 //! plane, so the cables do not (`weight_carried = false`).
 //!
@@ -43,6 +46,7 @@ mod xml;
 
 pub use bodies::Link;
 pub use cables::{AttachmentReference, CasprCable};
+pub use xml::message_number;
 
 use crate::input_file::{read_text, InputError};
 use crate::scene::{ElementKind, Scene, SceneError};
@@ -88,7 +92,8 @@ pub enum CasprError {
         /// What is wrong.
         message: String,
     },
-    /// An import option is missing or out of range.
+    /// An import option is out of range (missing ones are a [`CasprError::Model`] naming
+    /// the cables file and every option the set needs).
     #[error("{0}")]
     Options(String),
     /// The scene written does not validate (a value CASPR allows and the scene does not).
@@ -101,16 +106,18 @@ pub enum CasprError {
 pub struct ImportOptions {
     /// Cable set id; None: the file's `default_cable_set`.
     pub cable_set: Option<String>,
-    /// Cable weight per length γ, N/m.
-    pub weight_per_length_n_m: f64,
+    /// Cable weight per length γ, N/m (required: None is reported with every other
+    /// missing option).
+    pub weight_per_length_n_m: Option<f64>,
     /// Young's modulus E of `cable_ideal` cables, Pa (None: the set must have none).
     pub youngs_modulus_pa: Option<f64>,
-    /// Cable cross-section A, m².
-    pub area_m2: f64,
+    /// Cable cross-section A, m² (required, as `weight_per_length_n_m`).
+    pub area_m2: Option<f64>,
     /// Link-frame origin of the default pose (CASPR's joint translation), m; None: the
     /// model's `q_initial`.
     pub position_m: Option<Vector3<f64>>,
-    /// Lower tension bound for every cable, N; None: each cable's force_min.
+    /// Lower tension bound for every cable, N; None: each cable's force_min (then every
+    /// force_min must be > 0).
     pub t_min_n: Option<f64>,
     /// Element model written into the scene.
     pub element: ElementKind,

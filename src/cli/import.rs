@@ -3,7 +3,7 @@
 
 use super::args::{parse_vec3, ElementArg};
 use super::CliError;
-use crate::caspr::{import_files, ImportOptions};
+use crate::caspr::{import_files, message_number, ImportOptions};
 use crate::scene::ElementKind;
 use clap::{Args, Subcommand};
 use nalgebra::Vector3;
@@ -42,12 +42,13 @@ pub struct CasprArgs {
     /// Cable set id (default: the file's default_cable_set).
     #[arg(long)]
     pub cable_set: Option<String>,
-    /// Cable weight per length, N/m (not in CASPR).
+    /// Cable weight per length, N/m (not in CASPR; required: every missing option is
+    /// reported at once).
     #[arg(long)]
-    pub weight_per_length: f64,
-    /// Cable cross-section, m² (not in CASPR).
+    pub weight_per_length: Option<f64>,
+    /// Cable cross-section, m² (not in CASPR; required).
     #[arg(long)]
-    pub area: f64,
+    pub area: Option<f64>,
     /// Young's modulus of cable_ideal cables, Pa (not in CASPR; a cable_linear_spring's
     /// K, N, gives E = K / area instead).
     #[arg(long)]
@@ -97,20 +98,23 @@ fn caspr(a: &CasprArgs) -> Result<(), CliError> {
         ))
     })?;
     let s = &imported.scene;
+    let p = &s.ee_position_m;
     println!(
         "{}: {} cables (set `{}`), {} kg, {}, centre of mass at [{}, {}, {}] m",
         a.output.display(),
         s.n_cables(),
         imported.cable_set,
-        s.ee_mass_kg,
+        message_number(s.ee_mass_kg),
         if s.rigid {
             "rigid platform (6 DOF)"
+        } else if imported.link.rotation_locked {
+            "platform with locked rotation (T_XYZ, 3 DOF)"
         } else {
             "point mass (3 DOF)"
         },
-        s.ee_position_m.x,
-        s.ee_position_m.y,
-        s.ee_position_m.z
+        message_number(p.x),
+        message_number(p.y),
+        message_number(p.z)
     );
     Ok(())
 }

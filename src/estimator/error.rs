@@ -125,7 +125,9 @@ impl EstimatorError {
             EstimatorError::Tension(TensionError::InvalidBounds { .. }) => Status::TminOutOfRange,
             EstimatorError::Tension(TensionError::NonFinite) => Status::InvalidInput,
             EstimatorError::Tension(
-                TensionError::NotConverged { .. } | TensionError::ReferenceFailed { .. },
+                TensionError::NotConverged { .. }
+                | TensionError::ReferenceFailed { .. }
+                | TensionError::ReferenceRejected { .. },
             ) => Status::NotConverged,
             EstimatorError::Cable(_) => Status::RankDeficient,
             EstimatorError::Modal(ModalError::NotPositiveDefinite(_)) => Status::RankDeficient,

@@ -56,6 +56,20 @@ pub enum TensionError {
         /// Iterations done.
         iterations: u32,
     },
+    /// The Clarabel reference's answer failed its check (equilibrium or bounds) on every
+    /// attempt: it is not returned.
+    #[error(
+        "Clarabel reference rejected its own answer: equilibrium residual {residual_rel:.3e} of the load \
+         (tolerance {tol_rel:e}), largest bound excess {bound_violation_n:.3e} N"
+    )]
+    ReferenceRejected {
+        /// ‖A T − w‖∞ relative to the load (NaN for a non-finite answer).
+        residual_rel: f64,
+        /// The tolerance on `residual_rel`.
+        tol_rel: f64,
+        /// Largest amount by which a tension left its bounds, N (≤ 0 when none did).
+        bound_violation_n: f64,
+    },
 }
 
 struct MaskFmt(u32);

@@ -45,7 +45,10 @@ pub use active_set::TensionSolver;
 pub use error::TensionError;
 pub use info::{Bound, TensionInfo};
 pub use params::TensionParams;
-pub use reference::{clarabel_reference, clarabel_reference_bounds, clarabel_reference_wrench};
+pub use reference::{
+    clarabel_reference, clarabel_reference_bounds, clarabel_reference_wrench,
+    EQUILIBRIUM_CHECK_REL, UNBOUNDED_T_MAX_RATIO,
+};
 pub use sagged::{SagCable, SagTensionError, SagTensionInfo, SagTensionParams, SagTensionSolver};
 
 /// Largest number of equality rows: force (3) and moment (3).

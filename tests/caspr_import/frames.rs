@@ -158,8 +158,14 @@ fn inertia_about_the_joint_is_moved_to_the_centre_of_mass() {
     assert!((im.scene.ee_inertia_kg_m2 - i_g).abs().max() < 1e-15);
 }
 
+/// CASPR's translational joint T_XYZ locks the rotation: the platform is a point mass whose
+/// anchors are shifted by the attachment offsets, so each cable vector p − anchor is CASPR's
+/// o + r_A − a_i (o = parent location + q, written out here) at the default pose and at any
+/// other position. Names CASPR cannot load (TRANSLATIONAL_XYZ, SPATIAL_QUATERNION) and
+/// CASPR joints that constrain the translation are refused, one line naming the file,
+/// line and element.
 #[test]
-fn quaternion_and_translational_joints_give_the_same_pose_as_euler_angles() {
+fn t_xyz_locks_the_rotation_and_other_joint_names_are_refused() {
     let opts = ImportOptions {
         t_min_n: None,
         ..ipanema_opts()
@@ -173,32 +179,53 @@ fn quaternion_and_translational_joints_give_the_same_pose_as_euler_angles() {
             "c.xml",
             &opts,
         )
-        .expect("imports")
-        .scene
     };
-    let com = "0.03 -0.02 0.12";
-    // A rotation by θ about z: Euler (0, 0, θ) and the quaternion (cos θ/2, 0, 0, sin θ/2).
-    let th: f64 = 0.3;
-    let euler = import(bodies(com, &format!("0.1 0.2 1.4 0 0 {th}"), "com", i_g));
-    let q = format!(
-        "0.1 0.2 1.4 {:?} 0 0 {:?}",
-        (th / 2.0).cos(),
-        (th / 2.0).sin()
-    );
-    let quat =
-        import(bodies(com, &q, "com", i_g).replace("SPATIAL_EULER_XYZ", "SPATIAL_QUATERNION"));
-    let rot =
-        |s: &cablevib::scene::Scene| cablevib::kinematics::rotation_of(&s.ee_orientation_wxyz);
-    // Two routes to the same rotation, each a few roundings of numbers ≤ 1.
-    assert!((rot(&euler) - rot(&quat)).abs().max() < 1e-15);
-    assert!((rot(&euler) - euler_xyz(0.0, 0.0, th)).abs().max() < 1e-15);
-    assert!((euler.ee_position_m - quat.ee_position_m).norm() < 1e-15);
-    // TRANSLATIONAL_XYZ: no rotation, q = x y z.
-    let tr =
-        bodies(com, "0.1 0.2 1.4", "com", i_g).replace("SPATIAL_EULER_XYZ", "TRANSLATIONAL_XYZ");
-    let s = import(tr);
+    let com = Vector3::new(0.03, -0.02, 0.12);
+    let com_s = "0.03 -0.02 0.12";
+    let tr = bodies(com_s, "0.1 0.2 1.4", "com", i_g).replace("SPATIAL_EULER_XYZ", "T_XYZ");
+    let im = import(tr).expect("T_XYZ imports");
+    let s = &im.scene;
+    assert!(!s.rigid, "a locked rotation is a 3-DOF platform");
     assert_eq!(s.ee_orientation_wxyz, [1.0, 0.0, 0.0, 0.0]);
-    // Parent location (0.5, 0, 0.25) + q + r_G, each sum exact to within one rounding.
-    let expect = Vector3::new(0.5 + 0.1 + 0.03, 0.0 + 0.2 - 0.02, 0.25 + 1.4 + 0.12);
-    assert!((s.ee_position_m - expect).norm() < 1e-15);
+    assert!(im.toml.contains("T_XYZ locks the rotation"), "{}", im.toml);
+    // Parent location (0.5, 0, 0.25) + q, each sum exact to within one rounding.
+    let o = Vector3::new(0.5 + 0.1, 0.0 + 0.2, 0.25 + 1.4);
+    assert!((s.ee_position_m - (o + com)).norm() < 1e-15);
+    for (i, c) in s.cables.iter().enumerate() {
+        let (x, y) = [(1.5, 1.5), (-1.5, 1.5), (-1.5, -1.5), (1.5, -1.5)][i % 4];
+        let a = Vector3::new(x, y, if i < 4 { 3.0 } else { 0.0 });
+        assert_eq!(c.attachment_m, Vector3::zeros());
+        // At the default pose and 0.3 m away: the cable runs from CASPR's anchor to o + r_A.
+        for d in [Vector3::zeros(), Vector3::new(0.3, -0.2, 0.1)] {
+            let caspr = (o + d + box_corners()[i]) - a;
+            let scene = (s.ee_position_m + d) - c.anchor_m;
+            assert!(
+                (scene - caspr).norm() < 1e-14,
+                "cable {i}: {scene} vs {caspr}"
+            );
+        }
+    }
+    // Names CASPR's JointType does not have, and CASPR joints that are not platforms.
+    for (ty, q, needle) in [
+        (
+            "TRANSLATIONAL_XYZ",
+            "0.1 0.2 1.4",
+            "CASPR's translational joint is T_XYZ",
+        ),
+        (
+            "SPATIAL_QUATERNION",
+            "0.1 0.2 1.4 1 0 0 0",
+            "no quaternion joint",
+        ),
+        ("S_EULER_XYZ", "0 0 0", "constrains the link's translation"),
+        ("R_Z", "0", "constrains the link's translation"),
+    ] {
+        let e = import(bodies(com_s, q, "com", i_g).replace("SPATIAL_EULER_XYZ", ty))
+            .expect_err(ty)
+            .to_string();
+        assert!(e.starts_with("b.xml:4: <joint>:"), "{e}");
+        assert!(e.contains(needle) && e.contains(ty), "{e}");
+        assert!(e.contains("SPATIAL_EULER_XYZ, T_XYZ, PLANAR_XY"), "{e}");
+        assert_eq!(e.lines().count(), 1, "{e}");
+    }
 }

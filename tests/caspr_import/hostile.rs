@@ -104,15 +104,38 @@ fn what_caspr_lacks_must_come_from_the_options() {
         t_min_n: None,
         ..o.clone()
     };
-    let needles = ["c.xml", "cable `cable 1`", "force_min = 0", "--t-min"];
+    let needles = ["c.xml", "`cable 1` … `cable 8`", "force_min ≤ 0", "--t-min"];
     refused(&b, &c, &slack, &needles);
     let rigid = ImportOptions {
         youngs_modulus_pa: None,
         ..o.clone()
     };
-    refused(&b, &c, &rigid, &["cable `cable 1`", "--youngs-modulus"]);
+    let needles = [
+        "c.xml: ",
+        "`cable 1` … `cable 8`",
+        "cable_ideal",
+        "--youngs-modulus",
+    ];
+    refused(&b, &c, &rigid, &needles);
+    // Everything missing: every option named at once, in one line naming the file.
+    let none = ImportOptions {
+        weight_per_length_n_m: None,
+        area_m2: None,
+        youngs_modulus_pa: None,
+        t_min_n: None,
+        ..o.clone()
+    };
+    let needles = [
+        "c.xml: ",
+        "needs 4 more options",
+        "--weight-per-length",
+        "--area",
+        "--youngs-modulus",
+        "--t-min",
+    ];
+    refused(&b, &c, &none, &needles);
     let nan_area = ImportOptions {
-        area_m2: f64::NAN,
+        area_m2: Some(f64::NAN),
         ..o.clone()
     };
     refused(&b, &c, &nan_area, &["area", "NaN"]);
@@ -275,4 +298,76 @@ fn mutated_files_never_panic() {
     // Most mutations hit a number, a tag or an attribute; the rest land in comments or
     // white space and import as before.
     assert!(refused > 0);
+}
+
+/// Cable-set ids, pulleys and huge numbers: each message says what is wrong, naming the
+/// file, line and element, in one line of bounded length.
+#[test]
+fn set_ids_pulleys_and_huge_numbers_are_reported_clearly() {
+    let (b, c, o) = ipanema_texts();
+    // Sets without ids (CASPR selects sets by id): named, never "pick one with ( , )".
+    let no_ids = c
+        .replace(r#"<cable_set id="original">"#, "<cable_set>")
+        .replace(r#"<cable_set id="springs">"#, "<cable_set>")
+        .replace(r#" default_cable_set="original""#, "");
+    let needles = ["c.xml:15: <cable_set>", "missing attribute `id`"];
+    refused(&b, &no_ids, &o, &needles);
+    // A duplicate id is refused, naming both lines (it once took the first silently).
+    let twice = c.replace(
+        r#"<cable_set id="springs">"#,
+        r#"<cable_set id="original">"#,
+    );
+    let needles = ["c.xml:145: <cable_set>", "`original`", "line 15", "unique"];
+    refused(&b, &twice, &o, &needles);
+    // A pulley: named with its line, and said to be unsupported (not "1 attachments").
+    let pulley = c.replacen(
+        "<attachment>\n          <link>0</link>",
+        "<base_rotating_pulley>\n          <link>0</link>",
+        1,
+    );
+    assert_ne!(pulley, c, "the test must put a pulley in");
+    let pulley = pulley.replacen("</attachment>", "</base_rotating_pulley>", 1);
+    let needles = [
+        "c.xml:",
+        "<base_rotating_pulley>",
+        "pulleys are not supported yet",
+    ];
+    refused(&b, &pulley, &o, &needles);
+    // Numbers from the file in messages: compact, not 309 digits.
+    let huge = b.replace("<mass>25.0</mass>", "<mass>-1e308</mass>");
+    let e = import_str(&huge, "b.xml", &c, "c.xml", &o)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("-1e308") && e.len() < 120, "{e}");
+    let huge = c.replacen(
+        "<force_max>720.0</force_max>",
+        "<force_max>1e-300</force_max>",
+        1,
+    );
+    let e = import_str(&b, "b.xml", &huge, "c.xml", &o)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("1e-300") && e.len() < 160, "{e}");
+}
+
+/// `import caspr` without the material flags: every missing flag in one line, naming the
+/// cables file (clap once reported two, and the import then one more per run).
+#[test]
+fn cli_reports_every_missing_flag_at_once() {
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli_missing.toml");
+    let (b, c) = (data("ipanema1_bodies.xml"), data("ipanema1_cables.xml"));
+    let args = ["import", "caspr", b.to_str().unwrap(), c.to_str().unwrap()];
+    let o = run(&[&args[..], &["-o", out.to_str().unwrap()]].concat());
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
+    for flag in [
+        "--weight-per-length",
+        "--area",
+        "--youngs-modulus",
+        "--t-min",
+    ] {
+        assert!(e.contains(flag), "`{flag}` not in {e}");
+    }
+    assert!(e.contains("ipanema1_cables.xml"), "{e}");
 }

@@ -22,7 +22,8 @@ const DEPENDENT_ROW_RESIDUAL_REL: f64 = 1e-9;
 /// within this multiple of the feasibility tolerance (the cold answer carries the
 /// iteration's rounding; the polish only fixes it).
 const POLISH_ACCEPT_FACTOR: f64 = 1e3;
-/// Optimality tolerance of [`TensionSolver::polish`], relative to max(1, T_max): the
+/// Optimality tolerance of [`TensionSolver::polish`], relative to the problem's scale (N,
+/// given by the caller: not T_max, which may be many orders above the load): the
 /// reference's bound patterns are guessed from an interior-point answer, so a looser test
 /// than the real-time solver's.
 const REFERENCE_POLISH_TOL_REL: f64 = 1e-9;
@@ -317,8 +318,9 @@ impl TensionSolver {
     }
 
     /// Exact solution for a given bound pattern (the KKT system of that active set), if it
-    /// is optimal within `tol` (N): the polish step of [`super::clarabel_reference`]. The
-    /// bounds (N) are per cable, of length n.
+    /// is optimal within a tolerance relative to `scale_n` (N, the size of the tensions and
+    /// the wrench): the polish step of [`super::clarabel_reference`]. The bounds (N) are
+    /// per cable, of length n.
     pub(super) fn polish(
         &mut self,
         g: &Geometry,
@@ -326,13 +328,14 @@ impl TensionSolver {
         t_min_n: &[f64],
         t_max_n: &[f64],
         pattern: &[Bound],
+        scale_n: f64,
     ) -> Option<Vec<f64>> {
         let n = self.n;
         self.lo[..n].copy_from_slice(t_min_n);
         self.hi[..n].copy_from_slice(t_max_n);
         self.setup_rows(g, w_n);
         self.bound[..n].copy_from_slice(pattern);
-        let tol = REFERENCE_POLISH_TOL_REL * self.hi_max().max(1.0);
+        let tol = REFERENCE_POLISH_TOL_REL * scale_n.max(1.0);
         if self.kkt_solve() && self.kkt_is_optimal(tol) {
             return Some(
                 (0..n)
