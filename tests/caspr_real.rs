@@ -32,7 +32,7 @@
 //! `--t-min 1` only where a force_min is ≤ 0.
 
 use cablevib::caspr::{import_files, ImportOptions};
-use cablevib::estimator::{BuildError, Estimator, Status};
+use cablevib::estimator::{BuildError, Estimator, Status, Tmin};
 use cablevib::kinematics::Pose;
 use cablevib::scene::{ElementKind, Scene};
 use clarabel::algebra::CscMatrix;
@@ -473,10 +473,9 @@ fn estimator_answer(s: &Scene) -> Result<Vec<f64>, String> {
         position_m: s.ee_position_m,
         orientation_wxyz: s.ee_orientation_wxyz,
     };
-    let lo: Vec<f64> = (0..s.n_cables()).map(|i| s.cable_t_min_n(i)).collect();
     match Estimator::new(s) {
         Ok(mut est) => {
-            let e = est.update_with_bounds(&pose, &lo);
+            let e = est.update(&pose, Tmin::Scene);
             if e.status == Status::Ok {
                 Ok(e.tensions().to_vec())
             } else {
