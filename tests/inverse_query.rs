@@ -95,7 +95,7 @@ struct Tally {
     finer_narrow: usize,
     finer_wide: usize,
     above_hint: usize,
-    floor_answers: usize,
+    unreachable_contradicted: usize,
     worst_shortfall: f64,
     evaluations: Vec<u32>,
     micros: Vec<f64>,
@@ -132,10 +132,25 @@ fn run(s: &Scene, n_poses: usize, seed: u64) -> Tally {
             let what = format!("{} at {:?}, {want} Hz", s.name, pose.position_m);
             let a = match r {
                 Ok(a) => a,
-                Err(TminQueryError::Unreachable { f1_max_hz, .. }) => {
+                Err(TminQueryError::Unreachable {
+                    f1_max_hz, t_min_n, ..
+                }) => {
                     assert!(f1_max_hz < want, "{what}");
                     assert!(factor > 1.0, "{what}: unreachable below f1 in force");
                     t.unreachable += 1;
+                    // Checked: no T_min of two independent scans meets it (128 points over
+                    // the full range, 128 from half to twice the T_min of the largest f1).
+                    let t_max = s.t_max_n;
+                    let full = (1..=128).map(|k| t_max * k as f64 / 128.0);
+                    let (a, b) = (0.5 * t_min_n, (2.0 * t_min_n).min(t_max));
+                    let near = (0..128).map(|k| a + (b - a) * k as f64 / 127.0);
+                    if full
+                        .chain(near)
+                        .any(|tk| f1_cold(&mut cold, &pose, tk).is_some_and(|f| f >= want))
+                    {
+                        eprintln!("{what}: unreachable, but a scan meets it");
+                        t.unreachable_contradicted += 1;
+                    }
                     continue;
                 }
                 Err(e) => {
@@ -163,10 +178,6 @@ fn run(s: &Scene, n_poses: usize, seed: u64) -> Tally {
                 t.above_hint += 1;
             }
             // Smallest at the query's resolution.
-            if a.resolution_n == 0.0 {
-                t.floor_answers += 1;
-                continue;
-            }
             let below = a.t_min_n - a.resolution_n;
             if f1_cold(&mut cold, &pose, below).is_some_and(|f| f >= want) {
                 eprintln!("{what}: f1({below}) reaches it, answer {}", a.t_min_n);
@@ -212,9 +223,9 @@ fn report(s: &Scene, t: &mut Tally) {
     };
     let (m50, m99) = (pct(&mut t.micros, 0.5), pct(&mut t.micros, 0.99));
     eprintln!(
-        "{}: {} poses, {} queries: {} answered ({:.1} %), {} unreachable, {} failed; \
+        "{}: {} poses, {} queries: {} answered ({:.1} %), {} unreachable ({} contradicted), {} failed; \
          checks: not reached {}, f1(answer − resolution) reaches {}, finer scan: narrow ranges {} wide {}, \
-         above the T_min in force {}; {} at the floor; worst shortfall {:.1e}; \
+         above the T_min in force {}; worst shortfall {:.1e}; \
          evaluations p50 {e50} max {emax}; time p50 {m50:.0} µs p99 {m99:.0} µs",
         s.name,
         t.poses,
@@ -222,13 +233,13 @@ fn report(s: &Scene, t: &mut Tally) {
         t.answered,
         100.0 * t.answered as f64 / t.queries as f64,
         t.unreachable,
+        t.unreachable_contradicted,
         t.failed,
         t.not_reached,
         t.below_reaches,
         t.finer_narrow,
         t.finer_wide,
         t.above_hint,
-        t.floor_answers,
         t.worst_shortfall,
     );
 }
@@ -236,6 +247,7 @@ fn report(s: &Scene, t: &mut Tally) {
 fn check(s: &Scene, t: &Tally, n_poses: usize) {
     assert_eq!(t.poses, n_poses, "{}: too few ok poses", s.name);
     assert_eq!(t.failed, 0, "{}", s.name);
+    assert_eq!(t.unreachable_contradicted, 0, "{}", s.name);
     assert_eq!(t.not_reached, 0, "{}", s.name);
     assert_eq!(t.below_reaches, 0, "{}", s.name);
     assert_eq!(t.finer_wide, 0, "{}", s.name);

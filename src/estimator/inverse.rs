@@ -38,10 +38,13 @@
 //!    pose fails at every T_min (the first probe's error).
 //! 2. **The top of the scan.** The smallest ok probe that meets the requirement (so the
 //!    answer never exceeds a hint that already meets it); when none does, the ceiling b of
-//!    the ok window: T_max when ok, else bisection on the status (ok or not) between the
-//!    largest ok probe and the smallest not-ok one above it (T_max), geometric midpoints
-//!    while the bracket spans a ratio above 2, then arithmetic ones, until it is narrower
-//!    than 10⁻⁹ of its upper end (at most [`EDGE_BISECTIONS`] steps).
+//!    the ok window: T_max when not infeasible, else bisection on "tensions infeasible or
+//!    not" between the largest ok probe and the smallest infeasible one above it (T_max),
+//!    geometric midpoints while the bracket spans a ratio above 2, then arithmetic ones,
+//!    until it is narrower than 10⁻⁹ of its upper end (at most [`EDGE_BISECTIONS`] steps).
+//!    Other failures do not end the window: the sagged solve fails to converge on gaps
+//!    inside it (`fast-like` at (76.0, −35.9, 62.9) m: at 63.0 and 66.5 kN, ok from 68 to
+//!    97 kN, where f1 rises from the 0.185 Hz it has below).
 //! 3. **The scan.** F at t₀ and at [`SCAN_CELLS`] equal steps h = (top − t₀)/64 up to the
 //!    top; the first ok point with F ≥ f ends it (t₀ itself: the answer). Points where the
 //!    model is not ok (below the sagged window's floor, or in a gap of it) count as not
@@ -67,15 +70,15 @@
 //! the tension distribution; such points lie on ranges far narrower than h and are what the
 //! resolution leaves out. docs/inverse.md gives the checks over random poses.
 //!
-//! Unreachable assumes the ok window ends at its ceiling: ok ranges above a gap in the
-//! window are not scanned.
+//! Unreachable assumes the window ends where the tensions become infeasible: ok ranges above
+//! an infeasible range are not scanned.
 //!
 //! Bound: [`MAX_EVALUATIONS`] = probes (4 + 31) + ceiling (1 + 48) + scan 64 + crossing 60
 //! = 208 forward evaluations. Usually far fewer: with taut cables t₀ is ok and the hint,
 //! when it meets the requirement, ends step 2 with one evaluation, leaving ≤ 64 scan points
 //! and ~5-10 crossing steps (about 60 evaluations in all on the shipped scenes).
 
-use super::{Estimator, EstimatorError, InputError, TminQueryError};
+use super::{Estimator, EstimatorError, InputError, Status, TminQueryError};
 use crate::kinematics::Pose;
 use crate::modal::lambda_to_hz;
 use crate::scene::MAX_CABLES;
@@ -140,11 +143,24 @@ struct Search<'p> {
     evals: u32,
 }
 
-/// One forward evaluation: T_min (N) and f1 (Hz), `None` when the model failed there.
+/// One forward evaluation: T_min (N) and f1 (Hz), `None` when the model failed there;
+/// `infeasible` when it failed because no tension distribution exists (above the ceiling).
 #[derive(Debug, Clone, Copy)]
 struct Probe {
     t: f64,
     f: Option<f64>,
+    infeasible: bool,
+}
+
+impl Probe {
+    /// The probe of one evaluation at `t` (N).
+    fn of(t: f64, r: Result<f64, EstimatorError>) -> Probe {
+        Probe {
+            t,
+            f: r.ok(),
+            infeasible: r.is_err_and(|e| e.status() == Status::TensionInfeasible),
+        }
+    }
 }
 
 impl Estimator {
@@ -200,7 +216,7 @@ impl Estimator {
         let in_range = |t: f64| t.is_finite() && t >= t0 && t <= t_max;
 
         // 1. Probes until one is ok.
-        let mut probes = [Probe { t: 0.0, f: None }; MAX_PROBES];
+        let mut probes = [Probe::of(0.0, Ok(0.0)); MAX_PROBES];
         let mut n = 0;
         let mut first_err = None;
         let sweep = (1..=SWEEP_POINTS)
@@ -213,16 +229,13 @@ impl Estimator {
             if !in_range(t) || probes[..n].iter().any(|p| p.t == t) {
                 continue;
             }
-            let f = match self.inverse_f1(&mut s, t) {
-                Ok(f) => Some(f),
-                Err(e) => {
-                    first_err.get_or_insert(e);
-                    None
-                }
-            };
-            probes[n] = Probe { t, f };
+            let r = self.inverse_f1(&mut s, t);
+            if let Err(e) = r {
+                first_err.get_or_insert(e);
+            }
+            probes[n] = Probe::of(t, r);
             n += 1;
-            if f.is_some() {
+            if r.is_ok() {
                 break;
             }
         }
@@ -252,7 +265,7 @@ impl Estimator {
                     .unwrap_or(&lowest_ok);
                 let above = probes
                     .iter()
-                    .filter(|p| p.f.is_none() && p.t > highest_ok.t)
+                    .filter(|p| p.infeasible && p.t > highest_ok.t)
                     .map(|p| p.t)
                     .min_by(f64::total_cmp);
                 self.ceiling(&mut s, highest_ok, above, t_max)
@@ -269,10 +282,7 @@ impl Estimator {
                 top
             } else {
                 let t = t0 + k as f64 * h;
-                Probe {
-                    t,
-                    f: self.inverse_f1(&mut s, t).ok(),
-                }
+                Probe::of(t, self.inverse_f1(&mut s, t))
             };
             match (p.f, prev) {
                 (Some(f), None) if f >= f_required_hz => {
@@ -298,10 +308,12 @@ impl Estimator {
         })
     }
 
-    /// The ceiling of the ok window: `inside` is ok, `outside` (N) the nearest known not-ok
-    /// T_min above it, if any; `end` (N, T_max) is tried when none is known. Bisection on the
-    /// status (geometric midpoints while the bracket spans a ratio above 2) to
-    /// [`EDGE_TOL_REL`]; returns the last ok point.
+    /// The ceiling of the ok window: `inside` is ok, `outside` (N) the nearest known T_min
+    /// above it where the tensions are infeasible, if any; `end` (N, T_max) is tried when
+    /// none is known. Bisection on "infeasible or not" (geometric midpoints while the bracket
+    /// spans a ratio above 2) to [`EDGE_TOL_REL`]; returns the last point below the
+    /// infeasibility (ok, or failed for another reason: a gap in the window, such as a
+    /// sagged solve that does not converge, is not taken for its ceiling).
     fn ceiling(
         &mut self,
         s: &mut Search<'_>,
@@ -313,9 +325,9 @@ impl Estimator {
         let mut bad = match outside {
             Some(t) => t,
             None if inside.t == end => return inside,
-            None => match self.inverse_f1(s, end) {
-                Ok(f) => return Probe { t: end, f: Some(f) },
-                Err(_) => end,
+            None => match Probe::of(end, self.inverse_f1(s, end)) {
+                p if p.infeasible => end,
+                p => return p,
             },
         };
         for _ in 0..EDGE_BISECTIONS {
@@ -328,9 +340,9 @@ impl Estimator {
             } else {
                 0.5 * (lo + hi)
             };
-            match self.inverse_f1(s, mid) {
-                Ok(f) => ok = Probe { t: mid, f: Some(f) },
-                Err(_) => bad = mid,
+            match Probe::of(mid, self.inverse_f1(s, mid)) {
+                p if p.infeasible => bad = mid,
+                p => ok = p,
             }
         }
         ok
