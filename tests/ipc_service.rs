@@ -622,7 +622,7 @@ fn margin_requests_answer_for_the_latest_pose() {
     // a requirement starts it (NaN, age unknown); repeated, the request gets the answer at
     // this pose (age 0: no pose in between). Unreachable is +∞.
     // Up to 2 s: the worker rests 19× each search's time, at most 0.2 s, so even after a long
-    // search (an unreachable requirement, ~0.7 s) the next answer comes within about a second.
+    // search (at most 208 forward evaluations) the next answer comes within about a second.
     let settled = |client: &Client, seq: u64, required: f64| {
         for _ in 0..400 {
             let r = query(client, seq, required);

@@ -65,18 +65,19 @@
 //! ([`TminAnswer::resolution_n`]) between two scan points: the answer is the smallest at
 //! resolution h. For taut cables such a range needs F to rise above f and fall back within
 //! one step, i.e. an active-set change inside the step (F² is concave between them); the
-//! pieces of F on the paper robot are tens of newtons wide, against h ≈ 0.5 N for a 30 N
-//! answer. With sag the forward model also jumps at isolated T_min to another fixed point of
-//! the tension distribution; such points lie on ranges far narrower than h and are what the
-//! resolution leaves out. docs/inverse.md gives the checks over random poses.
+//! pieces of F on the paper robot are tens of newtons wide, against h ≈ 0.9 N for its 31 N
+//! answer with 60 N in force. With sag the forward model also jumps at isolated T_min to
+//! another fixed point of the tension distribution; such points lie on ranges far narrower
+//! than h and are what the resolution leaves out. docs/inverse.md gives the checks over
+//! random poses.
 //!
 //! Unreachable assumes the window ends where the tensions become infeasible: ok ranges above
 //! an infeasible range are not scanned.
 //!
 //! Bound: [`MAX_EVALUATIONS`] = probes (4 + 31) + ceiling (1 + 48) + scan 64 + crossing 60
-//! = 208 forward evaluations. Usually far fewer: with taut cables t₀ is ok and the hint,
-//! when it meets the requirement, ends step 2 with one evaluation, leaving ≤ 64 scan points
-//! and ~5-10 crossing steps (about 60 evaluations in all on the shipped scenes).
+//! = 208 forward evaluations. Usually far fewer: the hint is ok and, when it meets the
+//! requirement, the top (no ceiling search), leaving ≤ 64 scan points and ~5-10 crossing
+//! steps (56-60 evaluations at the median on the shipped scenes, docs/inverse.md).
 
 use super::{Estimator, EstimatorError, InputError, Status, TminQueryError};
 use crate::kinematics::Pose;

@@ -26,12 +26,13 @@ const IDLE_PARK: Duration = Duration::from_millis(20);
 /// twentieth of a core, whatever the requests, so that on a machine with few cores it cannot
 /// take the estimate loop's (measured on 2 cores under a 1 kHz flood of changing requirements:
 /// with a quarter of a core the loop estimated 89 % of the poses, with a twentieth 98 %, as
-/// without the flood 99 %). A search takes ~5 ms, so answers to a requirement that changes
+/// without the flood 99 %). A search takes a few ms (2.4 ms median, 15 ms p99 on the paper
+/// robot; 11 and 35 ms with sag: docs/inverse.md), so answers to a requirement that changes
 /// every request are up to ~0.1 s old (`t_min_required_age_cycles` says how old).
 const REST_PER_WORK: u32 = 19;
-/// The longest rest after one search: a rare long search (an unreachable requirement can take
-/// ~0.7 s) must not hold back the answer to the next requirement for 19 times as long; searches
-/// of the usual ~5 ms rest their full 19×.
+/// The longest rest after one search: a rare long search (up to 208 forward evaluations) must
+/// not hold back the answer to the next requirement for 19 times as long; searches of up to
+/// ~10 ms rest their full 19×.
 const MAX_REST: Duration = Duration::from_millis(200);
 /// Niceness of the worker thread (Linux: lowest priority), so that the scheduler prefers the
 /// estimate loop when both want a core.
