@@ -154,6 +154,9 @@ class TminAnswer:
         """f1 at that T_min, Hz."""
     @property
     def evaluations(self) -> int: ...
+    @property
+    def resolution_n(self) -> float:
+        """The scan step, N: the answer is the smallest T_min at this resolution."""
 
 class Estimator:
     """The real-time estimator of one scene, warm-started from call to call."""

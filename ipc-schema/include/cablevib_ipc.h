@@ -162,8 +162,10 @@ typedef struct cablevib_margin_response {
     double f1_hz;               /* Hz */
     double margin_hz;           /* f1_hz - required_f1_hz, Hz */
     double margin_ratio;        /* f1_hz / required_f1_hz */
-    double t_min_required_n;    /* T_min (every cable) reaching exactly this requirement, N;
-                                 * NaN if unknown or unreachable */
+    double t_min_required_n;    /* smallest T_min (every cable) reaching this requirement, N;
+                                 * +INFINITY if no feasible T_min reaches it; NaN while not
+                                 * known. A failed search answers with its own status (not
+                                 * OK) and its age */
     uint64_t timestamp_ns;      /* cablevib's CLOCK_MONOTONIC when answering, ns */
 } cablevib_margin_response_t;
 

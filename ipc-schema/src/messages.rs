@@ -527,7 +527,8 @@ pub struct MarginResponse {
     /// `sequence` of the pose whose estimate the answer is based on (0 if none).
     pub pose_sequence: u64,
     /// A [`StatusCode`] as `u32` (that of the latest estimate, or [`StatusCode::NoPoseYet`],
-    /// or [`StatusCode::InvalidRequest`]).
+    /// or [`StatusCode::InvalidRequest`], or that of a failed inverse T_min search at an ok
+    /// estimate).
     pub status: u32,
     /// How many estimates old `t_min_required_n` is: 0 = computed at the pose of
     /// `pose_sequence`; k > 0 = at the pose k estimates earlier (the inverse search runs
@@ -540,10 +541,11 @@ pub struct MarginResponse {
     pub margin_hz: f64,
     /// `f1_hz / required_f1_hz` (below 1: below the requirement).
     pub margin_ratio: f64,
-    /// Minimum cable tension (the same for every cable) that brings f1 to exactly this
+    /// The smallest cable tension floor (the same for every cable) at which f1 reaches this
     /// request's requirement, N, at the pose `t_min_required_age_cycles` estimates before
-    /// `pose_sequence`; NaN when unknown (not computed yet for this requirement, or
-    /// unreachable).
+    /// `pose_sequence`; +∞ when no feasible T_min reaches it; NaN while not known (not
+    /// computed yet for this requirement). When the search failed at that pose the response
+    /// carries the search's status instead of `Ok` (and its age).
     pub t_min_required_n: f64,
     /// cablevib's `CLOCK_MONOTONIC` when answering, ns.
     pub timestamp_ns: u64,

@@ -61,10 +61,11 @@ impl PyEstimator {
     }
 
     /// The smallest T_min (N, the same for every cable) for which f1 at ``position`` (m)
-    /// reaches ``required_f1_hz`` (Hz): regula falsi on the fast path (about 20 forward
+    /// reaches ``required_f1_hz`` (Hz), searched within the range of T_min where the model is
+    /// ok (a scan of 64 steps, then regula falsi on the first crossing; at most 257 forward
     /// evaluations). Leaves the warm state of ``update`` untouched. Returns a TminAnswer;
     /// raises CablevibError when the requirement is unreachable (the message gives the
-    /// largest feasible T_min and its f1) or the pose is infeasible at every T_min.
+    /// largest f1 found and its T_min) or the pose is infeasible at every T_min.
     #[pyo3(signature = (position, required_f1_hz, orientation = None))]
     fn t_min_for_f1(
         &mut self,
@@ -322,10 +323,18 @@ impl PyTminAnswer {
         self.inner.evaluations
     }
 
+    /// The scan step, N: the answer is the smallest T_min at this resolution (a smaller
+    /// one can reach the requirement only on a range narrower than it; 0 when the answer is
+    /// the smallest feasible T_min).
+    #[getter]
+    fn resolution_n(&self) -> f64 {
+        self.inner.resolution_n
+    }
+
     fn __repr__(&self) -> String {
         format!(
-            "TminAnswer(t_min_n={}, f1_hz={}, evaluations={})",
-            self.inner.t_min_n, self.inner.f1_hz, self.inner.evaluations
+            "TminAnswer(t_min_n={}, f1_hz={}, evaluations={}, resolution_n={})",
+            self.inner.t_min_n, self.inner.f1_hz, self.inner.evaluations, self.inner.resolution_n
         )
     }
 }

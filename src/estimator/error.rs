@@ -159,12 +159,12 @@ pub enum TminQueryError {
     /// The requirement is not finite and positive.
     #[error("required f1 {0} Hz must be finite and > 0")]
     BadRequirement(f64),
-    /// Even the largest feasible T_min does not reach the requirement.
-    #[error("f1 ≥ {required_hz:.4} Hz is unreachable: the largest feasible T_min {t_min_n:.3} N gives {f1_max_hz:.4} Hz")]
+    /// No feasible T_min reaches the requirement (none of the search's scan points does).
+    #[error("f1 ≥ {required_hz:.4} Hz is unreachable: the most any feasible T_min gives is {f1_max_hz:.4} Hz (at {t_min_n:.3} N)")]
     Unreachable {
         /// Required, Hz.
         required_hz: f64,
-        /// Best f1, Hz.
+        /// The largest f1 the search found, Hz.
         f1_max_hz: f64,
         /// At this T_min, N.
         t_min_n: f64,

@@ -58,7 +58,7 @@ mod t_min;
 pub use auto::{resolve_auto, AutoChoice};
 pub use error::{AnalysisError, BuildError, EstimatorError, InputError, TminQueryError};
 pub use estimate::{Estimate, Status};
-pub use inverse::TminAnswer;
+pub use inverse::{TminAnswer, MAX_EVALUATIONS as TMIN_QUERY_MAX_EVALUATIONS};
 pub use params::EstimatorParams;
 pub use reference::{
     build_models, reference_analysis, reference_analysis_at, structured_analysis, ReferenceAnalysis,

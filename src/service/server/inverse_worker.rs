@@ -2,9 +2,8 @@
 //! loop.
 //!
 //! The search (the smallest uniform T_min reaching a required f1 at a pose,
-//! [`Estimator::t_min_for_f1_near`]) needs 2 to ~80 forward evaluations (tension solve and
-//! first root each): a few µs with a close hint, ~5 ms when the requirement changes between
-//! requests. Run inline it starved the loop; spread over the cycles a requirement that
+//! [`Estimator::t_min_for_f1_near`]) needs up to 257 forward evaluations (tension solve and
+//! first root each; usually 20 to 80), ~0.3 to 10 ms on the shipped scenes. Run inline it starved the loop; spread over the cycles a requirement that
 //! changes every request would restart it before it ends. So it runs here, on its own copy
 //! of the estimator (its own buffers; set up once), and always on the newest request: the
 //! loop posts (pose, requirement) into a one-slot mailbox with `try_lock` (never waits: a
@@ -17,7 +16,7 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-use crate::estimator::Estimator;
+use crate::estimator::{Estimator, Status as StatusCode, TminAnswer, TminQueryError};
 use crate::kinematics::Pose;
 
 /// The worker sleeps at most this long between looks at the mailbox (it is also woken by
@@ -27,12 +26,13 @@ const IDLE_PARK: Duration = Duration::from_millis(20);
 /// twentieth of a core, whatever the requests, so that on a machine with few cores it cannot
 /// take the estimate loop's (measured on 2 cores under a 1 kHz flood of changing requirements:
 /// with a quarter of a core the loop estimated 89 % of the poses, with a twentieth 98 %, as
-/// without the flood 99 %). A search takes ~5 ms, so answers to a requirement that changes
+/// without the flood 99 %). A search takes a few ms (2.4 ms median, 15 ms p99 on the paper
+/// robot; 11 and 35 ms with sag: docs/inverse.md), so answers to a requirement that changes
 /// every request are up to ~0.1 s old (`t_min_required_age_cycles` says how old).
 const REST_PER_WORK: u32 = 19;
-/// The longest rest after one search: a rare long search (an unreachable requirement can take
-/// ~0.7 s) must not hold back the answer to the next requirement for 19 times as long; searches
-/// of the usual ~5 ms rest their full 19×.
+/// The longest rest after one search: a rare long search (up to 208 forward evaluations) must
+/// not hold back the answer to the next requirement for 19 times as long; searches of up to
+/// ~10 ms rest their full 19×.
 const MAX_REST: Duration = Duration::from_millis(200);
 /// Niceness of the worker thread (Linux: lowest priority), so that the scheduler prefers the
 /// estimate loop when both want a core.
@@ -46,17 +46,29 @@ pub struct InverseJob {
     pub cycle: u64,
     /// Required first natural frequency, Hz.
     pub required_f1_hz: f64,
-    /// Start of the search, N (the last answer for this requirement, or the T_min in force).
+    /// The T_min in force, N (the largest of the cables' when they differ): when it already
+    /// reaches the requirement, the answer is at most it.
     pub hint_n: f64,
 }
 
-/// A finished search: T_min (N; NaN when unreachable or refused) for `required_f1_hz` at
-/// the pose of cycle `cycle`.
+/// A finished search for `required_f1_hz` at the pose of cycle `cycle`: `Ok` with the
+/// smallest T_min (N), +∞ when no feasible T_min reaches the requirement; or the status of
+/// the pose's failure (the forward model failed at every T_min the search tried).
 #[derive(Debug, Clone, Copy)]
 pub struct InverseAnswer {
     pub required_f1_hz: f64,
     pub cycle: u64,
-    pub t_min_n: f64,
+    pub t_min_n: Result<f64, StatusCode>,
+}
+
+/// The answer of the inverse query as the service carries it (see [`InverseAnswer`]).
+pub fn carried(r: Result<TminAnswer, TminQueryError>) -> Result<f64, StatusCode> {
+    match r {
+        Ok(a) => Ok(a.t_min_n),
+        Err(TminQueryError::Unreachable { .. }) => Ok(f64::INFINITY),
+        Err(TminQueryError::BadRequirement(_)) => Err(StatusCode::InvalidRequest),
+        Err(TminQueryError::Pose(e)) => Err(e.status()),
+    }
 }
 
 #[derive(Debug, Default)]
@@ -137,9 +149,7 @@ fn worker_loop(est: &mut Estimator, mailbox: &Mutex<Mailbox>, stop: &AtomicBool)
             continue;
         };
         let t0 = std::time::Instant::now();
-        let t = est
-            .t_min_for_f1_near(&j.pose, j.required_f1_hz, Some(j.hint_n))
-            .map_or(f64::NAN, |a| a.t_min_n);
+        let t = carried(est.t_min_for_f1_near(&j.pose, j.required_f1_hz, Some(j.hint_n)));
         let worked = t0.elapsed();
         if let Ok(mut m) = mailbox.lock() {
             m.answer = Some(InverseAnswer {

@@ -519,8 +519,11 @@ impl Server {
             };
             let req = *request.payload();
             // The smallest T_min reaching the required f1: the inverse thread's last answer
-            // when it is for this requirement (with its age in cycles), NaN otherwise; this
-            // request becomes the thread's next job. A copy in, a copy out: no search here.
+            // when it is for this requirement (with its age in cycles: a T_min, +∞ when
+            // unreachable, or the status of a failed search), NaN while there is none; this
+            // request becomes the thread's next job, with the T_min in force as its hint (the
+            // answer never exceeds it when it already reaches the requirement). A copy in, a
+            // copy out: no search here.
             let (t_min_required, age) = match self.latest {
                 Some(l) if l.status.is_ok() && req.is_valid() => {
                     let known = self
@@ -531,24 +534,21 @@ impl Server {
                         pose: l.pose,
                         cycle: l.cycle,
                         required_f1_hz: req.required_f1_hz,
-                        hint_n: known
-                            .map(|a| a.t_min_n)
-                            .filter(|t| t.is_finite())
-                            .unwrap_or(self.t_min_range_n().1),
+                        hint_n: self.t_min_range_n().1,
                     });
                     match known {
-                        Some(a) if a.t_min_n.is_finite() => {
+                        Some(a) => {
                             let age = l.cycle.saturating_sub(a.cycle);
                             (a.t_min_n, age.min(u64::from(u32::MAX - 1)) as u32)
                         }
-                        _ => (f64::NAN, cablevib_ipc::T_MIN_AGE_UNKNOWN),
+                        None => (Ok(f64::NAN), cablevib_ipc::T_MIN_AGE_UNKNOWN),
                     }
                 }
-                _ => (f64::NAN, cablevib_ipc::T_MIN_AGE_UNKNOWN),
+                _ => (Ok(f64::NAN), cablevib_ipc::T_MIN_AGE_UNKNOWN),
             };
             let now = monotonic_now_ns();
             let mut response = margin_response(&req, self.latest, t_min_required, now);
-            if response.is_ok() {
+            if response.is_ok() || t_min_required.is_err() {
                 response.t_min_required_age_cycles = age;
             }
             if request.send_copy(response).is_err() {
@@ -703,20 +703,22 @@ fn display_range((lo, hi): (f64, f64)) -> String {
 
 /// The answer to margin request `req` given the latest estimate: `InvalidRequest` for a
 /// required frequency that is not finite and positive, `NoPoseYet` before the first estimate,
-/// the latest estimate's status when it is not ok, otherwise f1 and the margin.
-/// `t_min_required_n` is the smallest T_min (N) reaching the required f1 at the latest pose
-/// ([`Estimator::t_min_for_f1`]), NaN when unreachable.
+/// the latest estimate's status when it is not ok, the inverse search's status when it
+/// failed at the pose (`t_min_required` an error), otherwise f1 and the margin.
+/// `t_min_required` is the smallest T_min (N) reaching the required f1
+/// ([`Estimator::t_min_for_f1_near`]): +∞ when unreachable, NaN when not known yet.
 fn margin_response(
     req: &cablevib_ipc::MarginRequest,
     latest: Option<Latest>,
-    t_min_required_n: f64,
+    t_min_required: Result<f64, StatusCode>,
     now_ns: u64,
 ) -> MarginResponse {
     let pose_sequence = latest.map_or(0, |l| l.pose_sequence);
-    let status = match latest {
+    let status = match (latest, t_min_required) {
         _ if !req.is_valid() => StatusCode::InvalidRequest,
-        None => StatusCode::NoPoseYet,
-        Some(l) if l.status.is_ok() => {
+        (None, _) => StatusCode::NoPoseYet,
+        (Some(l), Err(failed)) if l.status.is_ok() => failed,
+        (Some(l), Ok(t_min_required_n)) if l.status.is_ok() => {
             return MarginResponse::from_f1(
                 req,
                 pose_sequence,
@@ -726,7 +728,7 @@ fn margin_response(
                 now_ns,
             )
         }
-        Some(l) => l.status,
+        (Some(l), _) => l.status,
     };
     let mut r = MarginResponse::with_status(req, status, now_ns);
     r.pose_sequence = pose_sequence;

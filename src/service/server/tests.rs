@@ -43,7 +43,7 @@ fn set_points_the_scene_would_refuse_are_refused() {
 #[test]
 fn margin_answers() {
     let req = MarginRequest::new(5, 0, 8.0);
-    let none = margin_response(&req, None, f64::NAN, 1);
+    let none = margin_response(&req, None, Ok(f64::NAN), 1);
     assert_eq!(none.status_code(), Some(StatusCode::NoPoseYet));
     let ok = Latest {
         cycle: 0,
@@ -52,16 +52,16 @@ fn margin_answers() {
         f1_hz: 9.5,
         pose: Pose::at(Vector3::new(0.0, 0.0, 1.25)),
     };
-    let r = margin_response(&req, Some(ok), 42.0, 1);
+    let r = margin_response(&req, Some(ok), Ok(42.0), 1);
     assert!(r.is_ok());
     assert_eq!((r.pose_sequence, r.f1_hz, r.margin_hz), (9, 9.5, 1.5));
     assert_eq!(r.t_min_required_n, 42.0);
     let bad_req = MarginRequest::new(6, 0, -1.0);
     assert_eq!(
-        margin_response(&bad_req, None, f64::NAN, 1).status_code(),
+        margin_response(&bad_req, None, Ok(f64::NAN), 1).status_code(),
         Some(StatusCode::InvalidRequest)
     );
-    let r = margin_response(&bad_req, Some(ok), f64::NAN, 1);
+    let r = margin_response(&bad_req, Some(ok), Ok(f64::NAN), 1);
     assert_eq!(r.status_code(), Some(StatusCode::InvalidRequest));
     assert!(r.margin_hz.is_nan());
     let failed = Latest {
@@ -69,8 +69,44 @@ fn margin_answers() {
         f1_hz: f64::NAN,
         ..ok
     };
-    let r = margin_response(&req, Some(failed), f64::NAN, 1);
+    let r = margin_response(&req, Some(failed), Ok(f64::NAN), 1);
     assert_eq!(r.status_code(), Some(StatusCode::OutsideWorkspace));
     assert_eq!(r.pose_sequence, 9);
     assert!(r.f1_hz.is_nan());
+    // A failed inverse search is its status (never ok with a NaN T_min); an unreachable
+    // requirement is ok with T_min +∞.
+    let r = margin_response(&req, Some(ok), Err(StatusCode::CableSlack), 1);
+    assert_eq!(r.status_code(), Some(StatusCode::CableSlack));
+    assert_eq!(r.pose_sequence, 9);
+    assert!(r.f1_hz.is_nan() && r.t_min_required_n.is_nan());
+    let r = margin_response(&req, Some(ok), Ok(f64::INFINITY), 1);
+    assert!(r.is_ok() && r.t_min_required_n == f64::INFINITY);
+}
+
+#[test]
+fn the_inverse_answer_carries_failures_as_statuses() {
+    use crate::estimator::{EstimatorError, InputError, TminAnswer, TminQueryError};
+    use inverse_worker::carried;
+    let a = TminAnswer {
+        t_min_n: 12.5,
+        f1_hz: 9.0,
+        evaluations: 30,
+        resolution_n: 0.5,
+    };
+    assert_eq!(carried(Ok(a)), Ok(12.5));
+    let unreachable = TminQueryError::Unreachable {
+        required_hz: 50.0,
+        f1_max_hz: 11.0,
+        t_min_n: 88.0,
+    };
+    assert_eq!(carried(Err(unreachable)), Ok(f64::INFINITY));
+    let bad_pose = EstimatorError::Input(InputError::NonFinitePose);
+    assert_eq!(
+        carried(Err(TminQueryError::Pose(bad_pose))),
+        Err(StatusCode::InvalidInput)
+    );
+    assert_eq!(
+        carried(Err(TminQueryError::BadRequirement(f64::NAN))),
+        Err(StatusCode::InvalidRequest)
+    );
 }
