@@ -344,10 +344,13 @@ fn a_sagged_scene_answers_within_its_ok_window() {
     }
 }
 
-/// fast-like at (76.0, −35.9, 62.9) m: the sagged tension distribution does not converge at
-/// 63.0 and 66.5 kN but is ok up to ≈ 97 kN, where f1 rises from the 0.185 Hz it has below
-/// 66 kN. 0.2033 Hz is reached at ≈ 80.6 kN: a gap inside the window is not its ceiling
-/// (before: "unreachable", the ceiling taken at the gap).
+/// fast-like at (76.0, −35.9, 62.9) m: the old sagged tension distribution (a fixed point)
+/// did not converge at 63.0 and 66.5 kN but was ok up to ≈ 97 kN, and the query took the gap
+/// for the window's ceiling ("unreachable"). The least-Σ T² distribution converges at every
+/// T_min there (checked below), so the gap is gone and the pose's own T_min already meets
+/// the requirement; the answer is still checked by a cold forward path (reached, and not
+/// reached one resolution step below). The ceiling is where the tensions become infeasible,
+/// not the first failure (`inverse::ceiling`), whatever failure a future model may have.
 #[test]
 fn a_gap_in_the_sagged_window_is_not_its_ceiling() {
     let s = Scene::load("fast-like").expect("scene");
@@ -359,6 +362,12 @@ fn a_gap_in_the_sagged_window_is_not_its_ceiling() {
     let want = 0.20331109703250091;
     let mut est = Estimator::new(&s).expect("estimator");
     let mut cold = Estimator::new(&s).expect("estimator");
+    for t in [63.0e3, 66.5e3] {
+        assert!(
+            f1_cold(&mut cold, &pose, t).is_some(),
+            "the old gap at {t} N"
+        );
+    }
     let a = match est.t_min_for_f1_near(&pose, want, Some(s.t_min_n)) {
         Ok(a) => a,
         Err(e) => panic!("{e}"),
@@ -367,10 +376,9 @@ fn a_gap_in_the_sagged_window_is_not_its_ceiling() {
     assert!(f >= want * (1.0 - REACHED_TOL_REL), "{f}");
     let below = a.t_min_n - a.resolution_n;
     assert!(
-        f1_cold(&mut cold, &pose, below).is_none_or(|f| f < want),
+        below <= 0.0 || f1_cold(&mut cold, &pose, below).is_none_or(|f| f < want),
         "{a:?}"
     );
-    assert!((80e3..81e3).contains(&a.t_min_n), "{a:?}");
 }
 
 /// The query allocates nothing on the sagged path either (answered, unreachable, and a pose

@@ -476,11 +476,12 @@ impl Estimator {
     }
 }
 
-/// A mechanism of `scene` at `pose` (a direction its static stiffness `k6` — N/m, N/rad,
-/// N·m/m, N·m/rad blocks; the leading 3 × 3 for a point mass — does not hold) is the error
-/// [`EstimatorError::Mechanism`] naming the direction, never an f1 ≈ 0. Only a λ₁ (rad²/s²)
-/// that the cheap pre-test [`crate::modal::may_be_mechanism`] lets through pays for the
-/// eigen-decomposition. No allocation (fixed-size matrices). The estimator's cycle and the
+/// A mechanism of `scene` at `pose` — a motion of a rigid end-effector that moves none of
+/// its attachments ([`crate::modal::free_direction`]) — is the error
+/// [`EstimatorError::Mechanism`] naming that motion, never an f1 ≈ 0. Only a λ₁ (rad²/s²)
+/// that the cheap pre-test [`crate::modal::may_be_mechanism`] lets through against the
+/// static stiffness `k6` (N/m, N/rad, N·m/m, N·m/rad blocks) pays for the test. A point mass
+/// has no mechanism. No allocation (fixed-size matrices). The estimator's cycle and the
 /// dense reference analysis both call it.
 pub fn check_mechanism(
     scene: &Scene,
@@ -488,19 +489,23 @@ pub fn check_mechanism(
     k6: &Matrix6<f64>,
     lambda1: f64,
 ) -> Result<(), EstimatorError> {
-    let dim = if scene.rigid { 6 } else { 3 };
+    if !scene.rigid {
+        return Ok(());
+    }
+    let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
     let mut m = Matrix6::zeros();
     m.fixed_view_mut::<3, 3>(0, 0)
         .copy_from(&(Matrix3::identity() * scene.ee_mass_kg));
-    if scene.rigid {
-        let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
-        m.fixed_view_mut::<3, 3>(3, 3)
-            .copy_from(&(rot * scene.ee_inertia_kg_m2 * rot.transpose()));
-    }
-    if !crate::modal::may_be_mechanism(lambda1, k6, &m, dim) {
+    m.fixed_view_mut::<3, 3>(3, 3)
+        .copy_from(&(rot * scene.ee_inertia_kg_m2 * rot.transpose()));
+    if !crate::modal::may_be_mechanism(lambda1, k6, &m, 6) {
         return Ok(());
     }
-    match crate::modal::free_direction(k6, &m, dim) {
+    let mut arms = [Vector3::zeros(); MAX_CABLES];
+    for (a, c) in arms.iter_mut().zip(&scene.cables) {
+        *a = rot * c.attachment_m;
+    }
+    match crate::modal::free_direction(&arms[..scene.n_cables()]) {
         Some(d) => Err(EstimatorError::Mechanism {
             direction: [d[0], d[1], d[2], d[3], d[4], d[5]],
         }),
