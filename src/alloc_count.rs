@@ -366,7 +366,7 @@ mod tests {
         // SAFETY: as above.
         unsafe {
             let p = a.alloc(small);
-            assert!(in_pool(p) && p as usize % POOL_BLOCK_ALIGN == 0);
+            assert!(in_pool(p) && (p as usize).is_multiple_of(POOL_BLOCK_ALIGN));
             let q = a.alloc(large);
             assert!(!in_pool(q), "larger than a block: the system allocator");
             a.dealloc(q, large);
