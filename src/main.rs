@@ -5,8 +5,10 @@ use clap::Parser;
 #[global_allocator]
 static GLOBAL: cablevib::alloc_count::CountingAlloc = cablevib::alloc_count::CountingAlloc;
 
+/// The calling thread's allocations from the system allocator (the cycle runs on it; the
+/// service's pool hits are counted apart).
 fn allocations() -> u64 {
-    cablevib::alloc_count::allocations()
+    cablevib::alloc_count::thread_system_allocations()
 }
 
 /// Restores the default action of SIGPIPE (terminate quietly), which the Rust runtime sets to

@@ -108,6 +108,11 @@ pub struct BenchIpcArgs {
     /// One JSON object on stdout instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// Serve iceoryx2's per-loan and per-request allocations on the service thread from the
+    /// constant-time block pool (true, as `serve` does) or from the system allocator (false:
+    /// to measure the difference)
+    #[arg(long, value_name = "true|false", default_value_t = true, action = clap::ArgAction::Set)]
+    pub alloc_pool: bool,
 }
 
 /// Longest `--stats-period-s`, s: one line a day is already rarer than anyone watches a log;
@@ -180,6 +185,7 @@ pub fn bench_ipc(a: &BenchIpcArgs) -> Result<(), CliError> {
         gap_us: a.gap_us,
         cpu: a.cpu,
         json: a.json,
+        alloc_pool: a.alloc_pool,
     };
     Ok(crate::service::bench_ipc(&scene, &cfg)?)
 }

@@ -258,6 +258,9 @@ impl Estimator {
         self.last_ok_position = None;
         self.last_lambda1 = f64::NAN;
         self.cycle.reset_tension_warm_start();
+        if let Some(sag) = self.cycle.sag.as_mut() {
+            sag.forget_pending();
+        }
     }
 
     /// One cycle: pose and lower tension bounds → estimate. `Tmin::Scene` takes each

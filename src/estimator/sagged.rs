@@ -93,6 +93,11 @@ impl SagPipeline {
         self.tension.reset_warm_start();
     }
 
+    /// Forget a first-root search the cycle's budget cut.
+    pub(super) fn forget_pending(&mut self) {
+        self.modal.forget_pending();
+    }
+
     /// At geometry `g` (the chords at `pose`): the sagged tension distribution for the
     /// per-cable bounds (N, on the end-effector-end tension), shown to `on_tensions` (also
     /// when it failed), the chains on the catenaries, and the first root (Newton from the

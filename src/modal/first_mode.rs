@@ -140,6 +140,8 @@ impl RootFinder<'_> {
             2.0 * lo.max(1.0)
         };
         let tol = self.params.rel_tol;
+        // The one probe next to a bounding pole has been spent.
+        let mut probed = false;
         loop {
             if self.evaluations() - start >= self.params.max_evaluations || self.exhausted() {
                 return Err(ModalError::NoConvergence {
@@ -169,7 +171,13 @@ impl RootFinder<'_> {
                 let w = x - pole_lo;
                 (g, dg) = (g * w, dg * w + g);
             }
-            let mut xn = if dg < 0.0 { x - g / dg } else { f64::NAN };
+            // D' overflows within rounding of a pole (its entries grow as 1/(pole − λ)²): no
+            // Newton step from a non-finite slope.
+            let mut xn = if dg < 0.0 && dg.is_finite() {
+                x - g / dg
+            } else {
+                f64::NAN
+            };
             let collapsed = hi.is_finite() && (hi - lo) <= COLLAPSE_ULPS * f64::EPSILON * x.abs();
             let step = (xn - x).abs();
             let accept = if fast && self.evaluations() - start > 1 {
@@ -193,7 +201,20 @@ impl RootFinder<'_> {
                 });
             }
             if !(xn > lo && xn < hi) {
-                xn = if hi.is_finite() {
+                xn = if !probed && hi == pole_hi && !(xn < hi) {
+                    // Newton puts the root at or past the pole above, or has no step (D'
+                    // overflowed next to it): the root may be closer to the pole than the
+                    // bracket resolves (a cable nearly slack: its string mode, the
+                    // end-effector still, a hair below the pole). Probe inside the collapse
+                    // width below the pole: μ > 0 there collapses the bracket, μ < 0 moves
+                    // its upper end (Newton then runs inside it).
+                    probed = true;
+                    hi * (1.0 - 0.5 * COLLAPSE_ULPS * f64::EPSILON)
+                } else if !probed && lo == pole_lo && lo > 0.0 && !(xn > lo) {
+                    // The same a hair above the pole below.
+                    probed = true;
+                    lo * (1.0 + 0.5 * COLLAPSE_ULPS * f64::EPSILON)
+                } else if hi.is_finite() {
                     0.5 * (lo + hi)
                 } else {
                     2.0 * x

@@ -154,6 +154,7 @@ pub fn bench_mode(
             stats_period: None,
             cpu: a.cpu,
             node_name: "cablevib-bench-serve".into(),
+            alloc_pool: a.alloc_pool,
             ..ServerConfig::default()
         };
         server::spawn_thread(scene, cfg, stop)?

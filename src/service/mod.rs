@@ -167,6 +167,9 @@ pub struct BenchIpcConfig {
     pub cpu: Option<usize>,
     /// One JSON object on stdout instead of the table.
     pub json: bool,
+    /// The service thread serves iceoryx2's per-loan allocations from the block pool
+    /// ([`server::ServerConfig::alloc_pool`]).
+    pub alloc_pool: bool,
 }
 
 /// Routes `tracing` (and iceoryx2's logs) to stderr, filtered by `RUST_LOG` (default

@@ -35,7 +35,9 @@
 //! λ) an iterate is accepted once its step is below `newton_accept` with a rate that leaves
 //! less than `rel_tol`, or at the 1e-10 noise floor; where Newton from below overshoots the
 //! bracket, the step from its upper end is taken. At most min(`max_evaluations`,
-//! `cycle_evaluations`) evaluations per call, else `NoConvergence`.
+//! `cycle_evaluations`) evaluations per call, else `NoConvergence`; a search cut by the
+//! cycle's budget is continued by the next call (bracket and all on the same loaded problem,
+//! from its last iterate on another), up to `max_evaluations` over the calls.
 //!
 //! **First K modes** ([`SagModalSolver::modes`]): the count brackets mode k; bisection on
 //! the count while the blocked count differs at the bracket's ends (a pole inside), then,
@@ -141,6 +143,8 @@ pub struct SagModalSolver {
     evaluations: u32,
     /// The last first root, rad²/s² (NaN: none; the warm start).
     last_lambda1: f64,
+    /// A first-root search the last cycle's budget cut, continued by the next call.
+    pending: Option<first::Pending>,
     loaded: bool,
 }
 
@@ -152,6 +156,7 @@ impl SagModalSolver {
             problem: SagProblem::new(n_cables, n_el_max, None),
             evaluations: 0,
             last_lambda1: f64::NAN,
+            pending: None,
             loaded: false,
         }
     }
@@ -168,6 +173,7 @@ impl SagModalSolver {
             problem: SagProblem::new(n_cables, 1, Some(cont)),
             evaluations: 0,
             last_lambda1: f64::NAN,
+            pending: None,
             loaded: false,
         }
     }
@@ -335,6 +341,11 @@ impl SagModalSolver {
         self.first_root_from(warm.is_finite().then_some(warm))
     }
 
+    /// Forget a first-root search the cycle's budget cut (the next call starts afresh).
+    pub fn forget_pending(&mut self) {
+        self.pending = None;
+    }
+
     /// The first natural frequency from the Rayleigh guess (ignores the last root).
     pub fn first_root_cold(&mut self) -> Result<Root, ModalError> {
         self.first_root_from(None)
@@ -346,10 +357,19 @@ impl SagModalSolver {
     /// [`ModalParams::rel_tol`]) or from the Rayleigh guess (`None`: cold). At most
     /// min([`ModalParams::max_evaluations`], [`ModalParams::cycle_evaluations`])
     /// evaluations of D(λ): one call is one cycle's first root; a root that does not fit is
-    /// `NoConvergence` (with its bracket), never a longer cycle.
+    /// `NoConvergence` (with its bracket), never a longer cycle, and the search is continued
+    /// by the next call: from where it stopped on the same loaded problem (a static pose),
+    /// from its last iterate (when `warm` is None) on another one, until a root is found or
+    /// [`ModalParams::max_evaluations`] are spent on it over the calls.
     pub fn first_root_from(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
         self.require_loaded()?;
-        let r = first::first_root(&self.problem, &self.params, &mut self.evaluations, warm);
+        let r = first::first_root(
+            &self.problem,
+            &self.params,
+            &mut self.evaluations,
+            warm,
+            &mut self.pending,
+        );
         self.last_lambda1 = r.as_ref().map_or(f64::NAN, |r| r.lambda);
         r
     }

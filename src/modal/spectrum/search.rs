@@ -21,6 +21,9 @@ const SUPERLINEAR_RATIO: f64 = 1e-2;
 /// Relative step of the symmetric residue quotient at a pole (error O(h²) from the other
 /// modes, while the cluster's own spread there is below the pole probe, ≪ h).
 const RESIDUE_STEP: f64 = 1e-7;
+/// A bracket whose first pole (or lower end) is below this fraction of its upper end is
+/// bisected geometrically (√(lo·hi)); narrower ones at the midpoint.
+const WIDE_RANGE: f64 = 1e-6;
 
 /// J, the blocked count and λ at one count probe.
 #[derive(Debug, Clone, Copy)]
@@ -199,7 +202,21 @@ impl<'a> SpectrumSearch<'a> {
             }
             let (_, pc) = self.p.pole_interval(pb * (1.0 + eta));
             if pc < hi.x {
-                let pr = self.probe(0.5 * (lo.x + hi.x));
+                // Bisection; across many decades (a nearly slack cable's string modes far
+                // below the others) geometric from the first pole up, so that the count
+                // reaches the low poles in a few probes.
+                let floor = lo.x.max(pb);
+                let x = if floor < WIDE_RANGE * hi.x {
+                    (floor.sqrt() * hi.x.sqrt()).max(floor)
+                } else {
+                    0.5 * (lo.x + hi.x)
+                };
+                let x = if x > lo.x && x < hi.x {
+                    x
+                } else {
+                    0.5 * (lo.x + hi.x)
+                };
+                let pr = self.probe(x);
                 if pr.count as usize > i {
                     hi = pr;
                 } else {

@@ -18,10 +18,14 @@
 //! event ([`WaitMode::Event`]), checks for SIGINT/SIGTERM (iceoryx2's handler, installed by the
 //! first `node.wait`) and, once per stats period, logs statistics through `tracing`.
 //!
-//! Nothing in steps 1–4 allocates except iceoryx2 itself, which in 0.10 allocates once per loan
-//! (one per published estimate, one per margin response) and once per received request; the
-//! heap allocations per cycle are counted (with the binary's counting allocator) and logged
-//! next to iceoryx2's expected share, so that a regression shows. Every loop over a queue is bounded. Bad input never
+//! Nothing in steps 1–4 allocates except iceoryx2 itself, which in 0.10 allocates a small
+//! shared state once per loan (one per published estimate, one per margin response) and once
+//! per received request, whatever the service type (no API or configuration avoids it). The
+//! service thread holds the counting allocator's block pool ([`crate::alloc_count::claim_pool`])
+//! while it runs, so those come from a constant-time pool instead of the system allocator. The
+//! heap allocations of the service thread per cycle are counted (with the binary's counting
+//! allocator): from the system allocator (0 in the loop) and from the pool, logged next to
+//! iceoryx2's expected share, so that a regression shows. Every loop over a queue is bounded. Bad input never
 //! stops the loop: the estimate carries the status ([`StatusCode`]) and the next valid pose is
 //! answered normally.
 //!
@@ -59,7 +63,9 @@ use crate::kinematics::Pose;
 use crate::scene::{is_valid_t_min, Scene};
 use inverse_worker::{InverseJob, InverseWorker};
 
-/// Heap allocation counter (the binary's global allocator), or a function returning 0.
+/// Heap allocation counter of the calling thread from the system allocator (the binary's
+/// global allocator, e.g. [`crate::alloc_count::thread_system_allocations`]), or a function
+/// returning 0.
 pub type AllocCounter = fn() -> u64;
 
 /// A counter that counts nothing (when no counting allocator is installed).
@@ -113,8 +119,9 @@ fn log_start(scene: &Scene, cfg: &ServerConfig) {
 fn log_stop(reason: StopReason, report: &ServerReport) {
     tracing::info!(
         "stopped ({}): {} cycles, compute {}, skipped poses {}, overwritten poses {}, invalid \
-         inputs {}, margin requests {}, heap allocations per cycle {:.2} (iceoryx2's per loan and per request: \
-         {:.2})",
+         inputs {}, margin requests {}, heap allocations per cycle {:.2} from the system allocator \
+         ({} in the first cycle: iceoryx2 connecting), {:.2} from the pool (iceoryx2's per loan and \
+         per request: {:.2})",
         match reason {
             StopReason::Signal => "signal",
             StopReason::Requested => "stop requested",
@@ -127,13 +134,16 @@ fn log_stop(reason: StopReason, report: &ServerReport) {
         report.invalid_inputs,
         report.margin_requests,
         report.allocations_per_cycle,
+        report.allocations_first_cycle,
+        report.pool_allocations_per_cycle,
         report.iceoryx2_allocations_per_cycle
     );
 }
 
 /// Runs the service for `scene` in its own thread (named `cablevib-serve`), as the demo and
 /// the IPC benchmark do; when it ends, for any reason, `stop` is set so the other threads
-/// stop too.
+/// stop too. The thread's allocations are counted when the process's global allocator is
+/// [`crate::alloc_count::CountingAlloc`] (0 otherwise).
 pub fn spawn_thread(
     scene: Scene,
     cfg: ServerConfig,
@@ -142,7 +152,12 @@ pub fn spawn_thread(
     std::thread::Builder::new()
         .name("cablevib-serve".into())
         .spawn(move || {
-            let r = run(&scene, &cfg, &stop, no_allocation_counter);
+            let r = run(
+                &scene,
+                &cfg,
+                &stop,
+                crate::alloc_count::thread_system_allocations,
+            );
             stop.store(true, Ordering::Release);
             r
         })
@@ -169,6 +184,10 @@ pub struct ServerConfig {
     /// Check SIGINT/SIGTERM through the node (the process's iceoryx2 signal handler). Turn off
     /// when another thread of the same process owns signal handling.
     pub handle_signals: bool,
+    /// Serve iceoryx2's per-loan and per-request allocations from the counting allocator's
+    /// constant-time block pool ([`crate::alloc_count::claim_pool`]; default true). Off: from
+    /// the system allocator (to measure the difference).
+    pub alloc_pool: bool,
 }
 
 impl Default for ServerConfig {
@@ -182,6 +201,7 @@ impl Default for ServerConfig {
             realtime: false,
             node_name: "cablevib-serve".into(),
             handle_signals: true,
+            alloc_pool: true,
         }
     }
 }
@@ -225,8 +245,15 @@ pub struct ServerReport {
     pub stale_nodes_removed: usize,
     /// Compute time per cycle over the last [`RUN_RING`] cycles, ns.
     pub compute: Percentiles,
-    /// Heap allocations on the cycle path per cycle (0 when no counting allocator is given).
+    /// Heap allocations from the system allocator on the cycle path (the service thread) per
+    /// cycle after the first (0 when no counting allocator is given).
     pub allocations_per_cycle: f64,
+    /// Heap allocations from the system allocator in the first cycle: iceoryx2 connecting the
+    /// first pose publisher's data segment (once per run).
+    pub allocations_first_cycle: u64,
+    /// Heap allocations served by the block pool on the cycle path per cycle (iceoryx2's per
+    /// loan and per request; 0 without the counting allocator).
+    pub pool_allocations_per_cycle: f64,
     /// Of those, the ones iceoryx2 0.10 makes by design per cycle: one per loan (estimate,
     /// margin response) and one per received margin request.
     pub iceoryx2_allocations_per_cycle: f64,
@@ -268,6 +295,8 @@ struct PeriodCounters {
     /// The first refused value of the last refused set-point of the period, N.
     rejected_t_min: Option<f64>,
     allocations: u64,
+    /// Allocations served by the pool.
+    pool_allocations: u64,
     /// Allocations iceoryx2 0.10 makes by design: one per loan (estimate, margin response) and
     /// one per received request.
     iceoryx2_allocations: u64,
@@ -295,6 +324,9 @@ pub struct Server {
     pose_gaps: SequenceGaps<UniquePublisherId, MAX_PUBLISHERS>,
     period: PeriodCounters,
     total: PeriodCounters,
+    /// System allocations of the first cycle (not in the counters: iceoryx2 connecting the
+    /// first pose publisher's data segment, once).
+    first_cycle_allocations: u64,
     period_ring: Ring,
     run_ring: Ring,
 }
@@ -339,6 +371,7 @@ impl Server {
             pose_gaps: SequenceGaps::default(),
             period: PeriodCounters::default(),
             total: PeriodCounters::default(),
+            first_cycle_allocations: 0,
             period_ring: Ring::new(PERIOD_RING),
             run_ring: Ring::new(RUN_RING),
         })
@@ -363,6 +396,7 @@ impl Server {
     /// whether anything was received.
     pub fn poll(&mut self) -> bool {
         let a0 = (self.allocations)();
+        let p0 = crate::alloc_count::thread_pool_allocations();
         let mut iceoryx2_allocations = 0;
 
         // Poses first, then set-points: a set-point sent before a pose (by the same sender) is
@@ -400,7 +434,15 @@ impl Server {
         worked |= answered > 0;
 
         if cycle {
-            self.period.allocations += (self.allocations)().wrapping_sub(a0);
+            let d = (self.allocations)().wrapping_sub(a0);
+            if self.cycles() == 1 {
+                // iceoryx2 connecting the ports (mapping the first publisher's segment).
+                self.first_cycle_allocations = d;
+            } else {
+                self.period.allocations += d;
+            }
+            self.period.pool_allocations +=
+                crate::alloc_count::thread_pool_allocations().wrapping_sub(p0);
             self.period.iceoryx2_allocations += iceoryx2_allocations;
         }
         worked
@@ -579,8 +621,8 @@ impl Server {
             tracing::info!(
                 "{} cycles in {:.1} s; compute p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs; \
                  skipped poses {} (total {}); overwritten poses {} (total {}); invalid inputs {}{}; T_min set-points {}, in force \
-                 {} N; margin requests {}; heap allocations per cycle {:.2} (iceoryx2's per loan \
-                 and per request: {:.2}){}",
+                 {} N; margin requests {}; heap allocations per cycle {:.2} from the system \
+                 allocator, {:.2} from the pool (iceoryx2's per loan and per request: {:.2}){}",
                 p.cycles,
                 period_s,
                 compute.p50_ns as f64 / 1e3,
@@ -596,6 +638,7 @@ impl Server {
                 in_force,
                 p.margin,
                 per_cycle(p.allocations),
+                per_cycle(p.pool_allocations),
                 per_cycle(p.iceoryx2_allocations),
                 if p.ipc_errors > 0 {
                     format!("; iceoryx2 errors {}", p.ipc_errors)
@@ -621,6 +664,7 @@ impl Server {
         t.t_min += p.t_min;
         t.ipc_errors += p.ipc_errors;
         t.allocations += p.allocations;
+        t.pool_allocations += p.pool_allocations;
         t.iceoryx2_allocations += p.iceoryx2_allocations;
         t.status.merge(&p.status);
         self.period = PeriodCounters::default();
@@ -653,7 +697,13 @@ impl Server {
             ipc_errors: t.ipc_errors,
             stale_nodes_removed,
             compute: self.run_ring.percentiles(),
-            allocations_per_cycle: per(t.allocations),
+            allocations_per_cycle: if t.cycles > 1 {
+                t.allocations as f64 / (t.cycles - 1) as f64
+            } else {
+                0.0
+            },
+            allocations_first_cycle: self.first_cycle_allocations,
+            pool_allocations_per_cycle: per(t.pool_allocations),
             iceoryx2_allocations_per_cycle: per(t.iceoryx2_allocations),
         }
     }
@@ -770,6 +820,17 @@ pub fn run(
 
     apply_rt_settings(cfg);
     log_start(scene, cfg);
+    // iceoryx2's per-loan and per-request allocations from here on come from the pool
+    // (constant time), when this thread is its only holder and the counting allocator is
+    // installed; released when the loop ends.
+    let _pool = if cfg.alloc_pool {
+        crate::alloc_count::claim_pool()
+    } else {
+        None
+    };
+    if cfg.alloc_pool && _pool.is_none() {
+        tracing::warn!("the allocation pool is held by another thread: iceoryx2's per-loan allocations use the system allocator");
+    }
 
     let period_ns = cfg
         .stats_period
