@@ -170,15 +170,16 @@ def test_wrong_shapes_raise():
 def test_unbuildable_scene_has_the_clis_message(run_cli, tmp_path):
     path = tmp_path / "away.toml"
     text = (SCENES / "spatial_paper.toml").read_text()
-    # At anchor 1: a cable of zero length, no pose to estimate at all.
-    path.write_text(text.replace("position = [0.0, 0.0, 1.25]", "position = [1.25, 1.25, 2.5]"))
+    # The auto model with every cable at t_max: no pose to choose the model at.
+    text = text.replace("t_min = 60.0", "t_min = 350.0").replace('element = "fem"', 'element = "auto"')
+    path.write_text(text)
     s = cablevib.Scene.load(str(path))
     with pytest.raises(cablevib.CablevibError) as e:
         cablevib.Estimator(s)
     p = run_cli("analyze", str(path), "--realtime")
     assert p.returncode == 1
     assert f"cablevib: {e.value}" == p.stderr.strip()
-    assert str(e.value).startswith("scene `spatial-paper` at (1.25, 1.25, 2.5) m:")
+    assert str(e.value).startswith("scene `spatial-paper` at (0, 0, 1.25) m:")
 
 
 def circle(n, step_m):
