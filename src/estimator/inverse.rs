@@ -24,11 +24,11 @@
 //!   shapes of a Rayleigh quotient affine in t is concave in t: the requirement is met on one
 //!   interval per piece, and F dips only where the active set changes.
 //!
-//! With sag every evaluation starts the tension distribution cold (from the chords): its
-//! fixed point T = QP(A(T)) is not unique where the set of cables at T_min changes, and
-//! warm-started from a neighbouring t it can land on another one (on `suspended-8`, 0.373
-//! against 0.452 Hz at one pose and T_min). Cold, F is a function of t, the one a fresh
-//! estimator computes, so an answer can be checked by anyone.
+//! With sag every evaluation starts the tension distribution cold (from the chords), so F
+//! is exactly the function a fresh estimator computes and an answer can be checked by
+//! anyone. (The sagged distribution, the least Σ T² on the exact sagged equilibrium, has one
+//! answer per pose; the cold start costs a few SQP iterations and removes any dependence on
+//! the search's path.)
 //!
 //! # The search
 //!
@@ -66,10 +66,7 @@
 //! resolution h. For taut cables such a range needs F to rise above f and fall back within
 //! one step, i.e. an active-set change inside the step (F² is concave between them); the
 //! pieces of F on the paper robot are tens of newtons wide, against h ≈ 0.9 N for its 31 N
-//! answer with 60 N in force. With sag the forward model also jumps at isolated T_min to
-//! another fixed point of the tension distribution; such points lie on ranges far narrower
-//! than h and are what the resolution leaves out. docs/inverse.md gives the checks over
-//! random poses.
+//! answer with 60 N in force. docs/inverse.md gives the checks over random poses.
 //!
 //! Unreachable assumes the window ends where the tensions become infeasible: ok ranges above
 //! an infeasible range are not scanned.
@@ -413,7 +410,7 @@ impl Estimator {
     fn inverse_f1(&mut self, s: &mut Search<'_>, t_min_n: f64) -> Result<f64, EstimatorError> {
         s.evals += 1;
         if self.inverse.sag.is_some() {
-            // Cold: the sagged fixed point depends on its start (see the module doc).
+            // Cold: F is then what a fresh estimator computes (see the module doc).
             self.inverse.reset_tension_warm_start();
         }
         // The query is uniform: the same T_min for every cable (per-cable set-points do not
