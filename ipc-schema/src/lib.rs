@@ -104,7 +104,8 @@ pub use attributes::{
 pub use compat::{explain_publish_subscribe_mismatch, explain_request_response_mismatch, TypeInfo};
 pub use messages::{
     EstimateSample, MarginRequest, MarginResponse, Message, PoseSample, SchemaError, TminSetpoint,
-    EE_MODE_AGE_UNKNOWN, IDENTITY_QUATERNION, T_MIN_AGE_UNKNOWN,
+    EE_MODE_AGE_UNKNOWN, IDENTITY_QUATERNION, REQUIRED_F1_MAX_HZ, REQUIRED_F1_MIN_HZ,
+    T_MIN_AGE_UNKNOWN,
 };
 pub use names::{
     prefixed, ServiceNames, ALL_SERVICES, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST,

@@ -709,12 +709,15 @@ impl Server {
     }
 }
 
-/// The lower bounds (N) of set-point `s` for the cables of `out`, one per cable: its
-/// per-cable value, its uniform value past those; every entry NaN when the set-point is
-/// malformed (more per-cable values than [`MAX_CABLES`]), so that it is refused. Does not
-/// check the values (see [`first_refused`]). No allocation.
+/// The lower bounds (N) of set-point `s` for the cables of `out` (one entry per cable of the
+/// robot), one per cable: its per-cable value, its uniform value past those; every entry NaN
+/// when the set-point is malformed, so that it is refused: not
+/// [`TminSetpoint::is_well_formed`] (more per-cable values than [`MAX_CABLES`], a value in
+/// use not finite or negative), or more per-cable values than the robot has cables (values
+/// for cables that do not exist are a client's mistake, never ignored). Does not check the
+/// values against the scene's rule (see [`first_refused`]). No allocation.
 pub fn setpoint_bounds(s: &TminSetpoint, out: &mut [f64]) {
-    if s.per_cable_count as usize > MAX_CABLES {
+    if !s.is_well_formed() || s.per_cable_count as usize > out.len() {
         out.fill(f64::NAN);
         return;
     }
@@ -752,7 +755,7 @@ fn display_range((lo, hi): (f64, f64)) -> String {
 }
 
 /// The answer to margin request `req` given the latest estimate: `InvalidRequest` for a
-/// required frequency that is not finite and positive, `NoPoseYet` before the first estimate,
+/// required frequency outside `MarginRequest::is_valid`'s range, `NoPoseYet` before the first estimate,
 /// the latest estimate's status when it is not ok, the inverse search's status when it
 /// failed at the pose (`t_min_required` an error), otherwise f1 and the margin.
 /// `t_min_required` is the smallest T_min (N) reaching the required f1
