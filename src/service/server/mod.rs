@@ -5,7 +5,8 @@
 //! 1. drain the pose subscriber, keeping the newest pose (the older ones are *skipped* and
 //!    counted); poses that never reached the service because the subscriber queue
 //!    ([`POSE_BUFFER`]) overflowed between two drains are *overwritten*, counted from the gaps
-//!    in each publisher's pose sequence ([`SequenceGaps`]);
+//!    in each publisher's pose sequence ([`SequenceGaps`]: forward and within a window only; a
+//!    sequence that goes back or jumps is a counted reset, never a wrap-around loss);
 //! 2. drain the T_min subscriber; the newest set-point becomes *pending*;
 //! 3. if a pose came, apply the pending set-point and estimate the pose, then publish the
 //!    estimate and notify the wake-controller event;
@@ -118,8 +119,8 @@ fn log_start(scene: &Scene, cfg: &ServerConfig) {
 /// The log line at the end of a run.
 fn log_stop(reason: StopReason, report: &ServerReport) {
     tracing::info!(
-        "stopped ({}): {} cycles, compute {}, skipped poses {}, overwritten poses {}, invalid \
-         inputs {}, margin requests {}, heap allocations per cycle {:.2} from the system allocator \
+        "stopped ({}): {} cycles, compute {}, skipped poses {}, overwritten poses {}, pose \
+         sequence resets {}, invalid inputs {}, margin requests {}, heap allocations per cycle {:.2} from the system allocator \
          ({} in the first cycle: iceoryx2 connecting), {:.2} from the pool (iceoryx2's per loan and \
          per request: {:.2})",
         match reason {
@@ -131,6 +132,7 @@ fn log_stop(reason: StopReason, report: &ServerReport) {
         report.compute.display_us(),
         report.skipped_poses,
         report.overwritten_poses,
+        report.sequence_resets,
         report.invalid_inputs,
         report.margin_requests,
         report.allocations_per_cycle,
@@ -227,10 +229,15 @@ pub struct ServerReport {
     /// Poses received but not estimated because a newer one was queued.
     pub skipped_poses: u64,
     /// Poses never received: overwritten in the subscriber queue ([`POSE_BUFFER`], safe
-    /// overflow) before a drain, counted from the gaps in each publisher's pose sequence.
-    /// Every pose a connected publisher sent after its first received one is estimated,
-    /// skipped or overwritten: `cycles + skipped_poses + overwritten_poses` = poses sent.
+    /// overflow) before a drain, counted from the gaps in each publisher's pose sequence
+    /// (forward only, within [`super::stats::SEQUENCE_GAP_WINDOW`]). Every pose a connected
+    /// publisher that numbers its poses one by one sent after its first received one is
+    /// estimated, skipped or overwritten: `cycles + skipped_poses + overwritten_poses` = poses
+    /// sent.
     pub overwritten_poses: u64,
+    /// Times a publisher's pose sequence went back, repeated or jumped past the window (a
+    /// restarted counter, a broken or hostile publisher): counted here, never as poses lost.
+    pub sequence_resets: u64,
     /// Estimates whose status was not ok.
     pub invalid_inputs: u64,
     /// Estimates per status code (index = wire value; the last slot collects unknown codes).
@@ -690,6 +697,7 @@ impl Server {
             cycles: t.cycles,
             skipped_poses: t.skipped,
             overwritten_poses: t.overwritten,
+            sequence_resets: self.pose_gaps.resets(),
             invalid_inputs: t.invalid,
             status_counts: t.status,
             t_min_setpoints: t.t_min,
