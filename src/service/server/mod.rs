@@ -101,7 +101,7 @@ fn log_start(scene: &Scene, cfg: &ServerConfig) {
         "serving instance \"{}\" ({}): scene `{}` ({} cables, {} × {} elements/cable), wait {}, T_min {} N, \
          T_max {} N",
         cfg.instance,
-        if cfg.instance.is_empty() {
+        if cfg.instance.trim_matches('/').is_empty() {
             "bare service names".to_string()
         } else {
             format!("services \"{}/cablevib/...\"", cfg.instance.trim_matches('/'))
@@ -814,6 +814,7 @@ pub fn run(
     stop: &AtomicBool,
     allocations: AllocCounter,
 ) -> Result<ServerReport, ServiceError> {
+    cablevib_ipc::check_instance(&cfg.instance).map_err(|e| ServiceError::Usage(e.to_string()))?;
     let (removed, failed) = ports::remove_stale_nodes();
     if removed > 0 {
         tracing::info!("removed the stale resources of {removed} dead iceoryx2 node(s)");
