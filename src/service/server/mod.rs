@@ -12,8 +12,9 @@
 //!    estimate and notify the wake-controller event;
 //! 4. answer every queued margin request from the latest estimate: f1 and the margin of this
 //!    cycle, and the T_min that reaches the requirement from the inverse search, which runs
-//!    on a thread of its own (`server/inverse_worker.rs`) on the newest request, so that no request
-//!    pattern costs the loop more than a copy per request.
+//!    on a thread of its own (`server/inverse_worker.rs`) on each client's newest request, the
+//!    clients served round robin (one client's flood costs only its own answers), so that no
+//!    request pattern costs the loop more than a copy per request.
 //!
 //! Between iterations the loop busy-polls ([`WaitMode::Spin`]) or blocks on the wake-service
 //! event ([`WaitMode::Event`]), checks for SIGINT/SIGTERM (iceoryx2's handler, installed by the
@@ -62,7 +63,7 @@ use super::{ServiceError, WaitMode};
 use crate::estimator::{Estimator, Tmin};
 use crate::kinematics::Pose;
 use crate::scene::{is_valid_t_min, Scene};
-use inverse_worker::{InverseJob, InverseWorker};
+use inverse_worker::{ClientSlots, InverseJob, InverseWorker};
 
 /// Heap allocation counter of the calling thread from the system allocator (the binary's
 /// global allocator, e.g. [`crate::alloc_count::thread_system_allocations`]), or a function
@@ -324,6 +325,8 @@ pub struct Server {
     cycle_t_min_n: [f64; MAX_CABLES],
     /// The inverse T_min search beside the loop.
     inverse: InverseWorker,
+    /// Each margin client's slot in the inverse search's mailbox.
+    margin_clients: ClientSlots<iceoryx2::identifiers::UniqueClientId>,
     pending_t_min: Option<TminSetpoint>,
     latest: Option<Latest>,
     /// Last pose sequence per publisher, for the poses overwritten in the queue. One slot per
@@ -373,6 +376,7 @@ impl Server {
             t_min_n,
             cycle_t_min_n: t_min_n,
             inverse,
+            margin_clients: ClientSlots::default(),
             pending_t_min: None,
             latest: None,
             pose_gaps: SequenceGaps::default(),
@@ -567,6 +571,12 @@ impl Server {
                 }
             };
             let req = *request.payload();
+            // Each client has its own slot of the inverse search: its requests replace only
+            // its own job, and the search serves the clients round robin.
+            let (slot, new_client) = self.margin_clients.slot(request.header().client_id());
+            if new_client {
+                self.inverse.clear(slot);
+            }
             // The smallest T_min reaching the required f1: the inverse thread's last answer
             // when it is for this requirement (with its age in cycles: a T_min, +∞ when
             // unreachable, or the status of a failed search), NaN while there is none; this
@@ -577,14 +587,17 @@ impl Server {
                 Some(l) if l.status.is_ok() && req.is_valid() => {
                     let known = self
                         .inverse
-                        .answer()
+                        .answer(slot)
                         .filter(|a| a.required_f1_hz == req.required_f1_hz);
-                    self.inverse.post(InverseJob {
-                        pose: l.pose,
-                        cycle: l.cycle,
-                        required_f1_hz: req.required_f1_hz,
-                        hint_n: self.t_min_range_n().1,
-                    });
+                    self.inverse.post(
+                        slot,
+                        InverseJob {
+                            pose: l.pose,
+                            cycle: l.cycle,
+                            required_f1_hz: req.required_f1_hz,
+                            hint_n: self.t_min_range_n().1,
+                        },
+                    );
                     match known {
                         Some(a) => {
                             let age = l.cycle.saturating_sub(a.cycle);
