@@ -66,6 +66,20 @@ fn serve_huge_stats_period_is_a_usage_error() {
     assert_usage_error("serve 5e-324", &o, "--stats-period-s 5e-324 must be");
 }
 
+/// An instance name iceoryx2 would refuse is refused up front with one line naming the
+/// allowed characters (before: "InvalidContent" alone, from iceoryx2).
+#[test]
+fn serve_bad_instance_names_the_allowed_characters() {
+    for bad in ["é/ü", "a b", "x:y"] {
+        let o = run(&["serve", "--instance", bad, "--max-cycles", "1"]);
+        assert_usage_error(
+            &format!("serve --instance {bad}"),
+            &o,
+            "only ASCII letters, digits",
+        );
+    }
+}
+
 /// Waits for `child` and checks it ended quietly: exit 0 or killed by SIGPIPE, no panic.
 fn assert_quiet_end(what: &str, child: std::process::Child) {
     let o = child.wait_with_output().expect("wait");

@@ -232,10 +232,17 @@ impl Gen<'_> {
 }
 
 /// The service's rule, restated: the lower bounds (N) a set-point gives each of the `n`
-/// cables, and whether they are accepted.
+/// cables, and whether they are accepted. More per-cable values than cables, or a value in
+/// use (the uniform one included) that is not finite or is negative, refuses the whole
+/// set-point (docs/security.md: `TminSetpoint::is_well_formed` and the cable count).
 fn setpoint_rule(s: &TminSetpoint, t_max: &[f64]) -> ([f64; MAX_CABLES], bool) {
     let mut b = [f64::NAN; MAX_CABLES];
-    if s.per_cable_count as usize <= MAX_CABLES {
+    let count = s.per_cable_count as usize;
+    let in_use = |v: f64| v.is_finite() && v >= 0.0;
+    let well_formed = count <= t_max.len()
+        && in_use(s.t_min_n)
+        && s.per_cable_t_min_n[..count].iter().all(|&v| in_use(v));
+    if well_formed {
         for (i, v) in b.iter_mut().enumerate().take(t_max.len()) {
             *v = if i < s.per_cable_count as usize {
                 s.per_cable_t_min_n[i]

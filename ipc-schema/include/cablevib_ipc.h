@@ -46,6 +46,10 @@
 /* ee_mode_age_cycles / t_min_required_age_cycles when nothing is known. */
 #define CABLEVIB_AGE_UNKNOWN 4294967295u
 
+/* The range of a margin request's required_f1_hz, Hz; outside it: status invalid_request. */
+#define CABLEVIB_REQUIRED_F1_MIN_HZ 1e-6
+#define CABLEVIB_REQUIRED_F1_MAX_HZ 1e6
+
 /* iceoryx2 type names; they end with "::v<CABLEVIB_SCHEMA_VERSION>". */
 #define CABLEVIB_TYPE_NAME_POSE_SAMPLE "cablevib::PoseSample::v2"
 #define CABLEVIB_TYPE_NAME_T_MIN_SETPOINT "cablevib::TminSetpoint::v2"
@@ -146,7 +150,7 @@ typedef struct cablevib_margin_request {
     CABLEVIB_IOX2_TYPE_NAME(CABLEVIB_TYPE_NAME_MARGIN_REQUEST)
     uint64_t sequence;       /* echoed as request_sequence */
     uint64_t timestamp_ns;   /* requester's CLOCK_MONOTONIC, ns */
-    double required_f1_hz;   /* required first natural frequency, Hz (> 0) */
+    double required_f1_hz;   /* required first natural frequency, Hz, in [CABLEVIB_REQUIRED_F1_MIN_HZ, _MAX_HZ] */
 } cablevib_margin_request_t;
 
 /* Margin answer for the latest estimated pose (response). 64 bytes. NaN unless status OK. */

@@ -23,6 +23,11 @@ import ctypes
 SCHEMA_VERSION = 2
 MAX_CABLES = 16
 MAX_STIFFNESS_DIM = 6
+AGE_UNKNOWN = 4294967295
+
+# The range of MarginRequest.required_f1_hz, Hz (outside: STATUS_INVALID_REQUEST).
+REQUIRED_F1_MIN_HZ = 1e-6
+REQUIRED_F1_MAX_HZ = 1e6
 
 # iceoryx2 service names (prefix them with prefixed()).
 SERVICE_POSE = "cablevib/pose"

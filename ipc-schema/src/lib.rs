@@ -104,12 +104,14 @@ pub use attributes::{
 pub use compat::{explain_publish_subscribe_mismatch, explain_request_response_mismatch, TypeInfo};
 pub use messages::{
     EstimateSample, MarginRequest, MarginResponse, Message, PoseSample, SchemaError, TminSetpoint,
-    EE_MODE_AGE_UNKNOWN, IDENTITY_QUATERNION, T_MIN_AGE_UNKNOWN,
+    EE_MODE_AGE_UNKNOWN, IDENTITY_QUATERNION, REQUIRED_F1_MAX_HZ, REQUIRED_F1_MIN_HZ,
+    T_MIN_AGE_UNKNOWN,
 };
 pub use names::{
-    prefixed, ServiceNames, ALL_SERVICES, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST,
-    EVENT_ID_MARGIN_RESPONSE, EVENT_ID_POSE, EVENT_ID_T_MIN, SERVICE_ESTIMATE, SERVICE_MARGIN,
-    SERVICE_POSE, SERVICE_T_MIN, SERVICE_WAKE_CONTROLLER, SERVICE_WAKE_SERVICE,
+    check_instance, prefixed, InstanceError, ServiceNames, ALL_SERVICES, EVENT_ID_ESTIMATE,
+    EVENT_ID_MARGIN_REQUEST, EVENT_ID_MARGIN_RESPONSE, EVENT_ID_POSE, EVENT_ID_T_MIN,
+    INSTANCE_CHARACTERS, MAX_INSTANCE_LEN, SERVICE_ESTIMATE, SERVICE_MARGIN, SERVICE_POSE,
+    SERVICE_T_MIN, SERVICE_WAKE_CONTROLLER, SERVICE_WAKE_SERVICE,
 };
 pub use status::{status_str, StatusCode, StatusText};
 

@@ -268,6 +268,15 @@ impl Message for TminSetpoint {
 // EstimateSample
 // ---------------------------------------------------------------------------------------------
 
+/// The smallest required f1 a margin request may carry, Hz (a period of ~12 days). Below
+/// it the margin ratio `f1 / required` of a finite f1 overflows to +∞ (5e-324 Hz did): no
+/// cable robot's vibration requirement is that slow, so smaller values are refused.
+pub const REQUIRED_F1_MIN_HZ: f64 = 1e-6;
+/// The largest required f1 a margin request may carry, Hz: far above any cable robot's first
+/// mode (tens of Hz; the stiffest cable's axial modes are kHz), so that a larger value is a
+/// client's mistake and is refused rather than answered with a margin of −1e308 Hz.
+pub const REQUIRED_F1_MAX_HZ: f64 = 1e6;
+
 /// [`EstimateSample::ee_mode_age_cycles`] when no end-effector mode is known.
 pub const EE_MODE_AGE_UNKNOWN: u32 = u32::MAX;
 /// [`MarginResponse::t_min_required_age_cycles`] when no T_min is known for the requirement.
@@ -473,7 +482,8 @@ pub struct MarginRequest {
     pub sequence: u64,
     /// Requester's `CLOCK_MONOTONIC` time, ns.
     pub timestamp_ns: u64,
-    /// The first natural frequency the controller needs to stay above, Hz (> 0).
+    /// The first natural frequency the controller needs to stay above, Hz, in
+    /// [[`REQUIRED_F1_MIN_HZ`], [`REQUIRED_F1_MAX_HZ`]] (outside: status `invalid_request`).
     pub required_f1_hz: f64,
 }
 
@@ -496,9 +506,10 @@ impl MarginRequest {
         }
     }
 
-    /// `required_f1_hz` is finite and positive.
+    /// `required_f1_hz` is within [[`REQUIRED_F1_MIN_HZ`], [`REQUIRED_F1_MAX_HZ`]] (so finite
+    /// and positive, and the margin ratio of a finite f1 is finite).
     pub fn is_valid(&self) -> bool {
-        self.required_f1_hz.is_finite() && self.required_f1_hz > 0.0
+        (REQUIRED_F1_MIN_HZ..=REQUIRED_F1_MAX_HZ).contains(&self.required_f1_hz)
     }
 }
 
@@ -753,6 +764,13 @@ mod tests {
         assert!(req.is_valid());
         assert!(!MarginRequest::new(0, 0, 0.0).is_valid());
         assert!(!MarginRequest::new(0, 0, f64::NAN).is_valid());
+        // A degenerate requirement would give a ratio of +inf or a margin of -1e308 Hz.
+        for bad in [5e-324, 1e-7, 2e6, f64::INFINITY, -1.0] {
+            assert!(!MarginRequest::new(0, 0, bad).is_valid(), "{bad}");
+        }
+        for good in [REQUIRED_F1_MIN_HZ, 8.0, REQUIRED_F1_MAX_HZ] {
+            assert!(MarginRequest::new(0, 0, good).is_valid(), "{good}");
+        }
         let r = MarginResponse::from_f1(&req, 7, StatusCode::Ok, 5.0, f64::NAN, 200);
         assert_eq!((r.request_sequence, r.pose_sequence), (9, 7));
         assert_eq!((r.margin_hz, r.margin_ratio), (1.0, 1.25));

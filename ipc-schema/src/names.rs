@@ -51,6 +51,41 @@ pub fn prefixed(instance: &str, base: &str) -> String {
     }
 }
 
+/// The longest instance name, bytes (the longest service name it makes stays far below
+/// iceoryx2's 255).
+pub const MAX_INSTANCE_LEN: usize = 64;
+
+/// The characters an instance name may contain, for messages.
+pub const INSTANCE_CHARACTERS: &str = "ASCII letters, digits, '_', '-', '.' and '/'";
+
+/// An instance name [`check_instance`] refuses.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "instance name {instance}: only {INSTANCE_CHARACTERS} are allowed, at most {MAX_INSTANCE_LEN} bytes"
+)]
+pub struct InstanceError {
+    /// The name as given (quoted and escaped, cut to its first characters).
+    pub instance: String,
+}
+
+/// Checks instance name `instance` (before [`prefixed`]): at most [`MAX_INSTANCE_LEN`] bytes
+/// of [`INSTANCE_CHARACTERS`] (`""`, and only `/`, are the bare names). Other characters
+/// (`é`, spaces, `:`) are refused here with one line naming the allowed ones, instead of
+/// iceoryx2's bare "InvalidContent" when the service is opened.
+pub fn check_instance(instance: &str) -> Result<(), InstanceError> {
+    let allowed = |c: char| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.' | '/');
+    if instance.len() > MAX_INSTANCE_LEN || !instance.chars().all(allowed) {
+        let mut shown: String = instance.chars().take(MAX_INSTANCE_LEN).collect();
+        if shown.len() < instance.len() {
+            shown.push('…');
+        }
+        return Err(InstanceError {
+            instance: format!("{shown:?}"),
+        });
+    }
+    Ok(())
+}
+
 /// The four service names of one cablevib instance.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ServiceNames {
@@ -102,6 +137,33 @@ impl Default for ServiceNames {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn instance_names_are_checked_with_a_message_naming_the_allowed_characters() {
+        for ok in [
+            "",
+            "/",
+            "robot1",
+            "lab/left_arm-2.0",
+            &"a".repeat(MAX_INSTANCE_LEN),
+        ] {
+            assert!(check_instance(ok).is_ok(), "{ok}");
+        }
+        for bad in [
+            "é/ü",
+            "a b",
+            "x:y",
+            "\0",
+            "iox2://x",
+            &"a".repeat(MAX_INSTANCE_LEN + 1),
+        ] {
+            let e = check_instance(bad).unwrap_err().to_string();
+            assert!(
+                e.contains(INSTANCE_CHARACTERS) && !e.contains('\n'),
+                "{bad}: {e}"
+            );
+        }
+    }
 
     #[test]
     fn prefixing() {

@@ -29,7 +29,8 @@ pub enum StatusCode {
     NonUnitQuaternion = 7,
     /// A T_min set-point below zero, above T_max or non-finite; the previous one stays in force.
     TminOutOfRange = 8,
-    /// A margin request with a required frequency that is not finite and positive.
+    /// A margin request with a required frequency outside [`crate::REQUIRED_F1_MIN_HZ`],
+    /// [`crate::REQUIRED_F1_MAX_HZ`] (NaN included).
     InvalidRequest = 9,
     /// An internal error of the service; see its log.
     InternalError = 10,

@@ -53,6 +53,14 @@ fn expected_constants() -> Vec<(String, String)> {
             cablevib_ipc::T_MIN_AGE_UNKNOWN.to_string(),
         ),
         (
+            "CABLEVIB_REQUIRED_F1_MIN_HZ".into(),
+            format!("{:e}", cablevib_ipc::REQUIRED_F1_MIN_HZ),
+        ),
+        (
+            "CABLEVIB_REQUIRED_F1_MAX_HZ".into(),
+            format!("{:e}", cablevib_ipc::REQUIRED_F1_MAX_HZ),
+        ),
+        (
             "CABLEVIB_MAX_STIFFNESS_DIM".into(),
             MAX_STIFFNESS_DIM.to_string(),
         ),
@@ -231,6 +239,22 @@ fn compile_and_run(compiler: &str, flags: &[&str], source: &str, tag: &str, ext:
     String::from_utf8(run.stdout).unwrap()
 }
 
+/// A constant as the C program prints it: a double (`1e-6`) as `%g` does (`1e-06`; the
+/// double constants are powers of ten), anything else as is.
+fn c_printed(value: &str) -> String {
+    if value.starts_with('"') || !value.contains('e') {
+        return value.to_owned();
+    }
+    let x: f64 = value.parse().expect("a double");
+    let exp = x.log10().round() as i32;
+    assert_eq!(
+        x,
+        format!("1e{exp}").parse::<f64>().unwrap(),
+        "{value}: a power of ten"
+    );
+    format!("1e{}{:02}", if exp < 0 { '-' } else { '+' }, exp.abs())
+}
+
 /// The lines both the C program and the Rust table produce.
 fn struct_line(l: &StructLayout) -> String {
     format!("struct {} size {} align {}", l.c_name, l.size, l.align)
@@ -249,7 +273,7 @@ fn expected_output() -> String {
         }
     }
     for (name, value) in expected_constants() {
-        s += &format!("const {name} {value}\n");
+        s += &format!("const {name} {}\n", c_printed(&value));
     }
     for c in StatusCode::ALL {
         s += &format!("const {} {}\n", status_c_name(c), c.as_u32());
@@ -289,6 +313,8 @@ fn c_program() -> String {
     for (name, value) in expected_constants() {
         if value.starts_with('"') {
             p += &format!("  printf(\"const {name} \\\"%s\\\"\\n\", {name});\n");
+        } else if value.contains('e') {
+            p += &format!("  printf(\"const {name} %g\\n\", (double)({name}));\n");
         } else {
             p += &format!("  printf(\"const {name} %llu\\n\", (unsigned long long)({name}));\n");
         }

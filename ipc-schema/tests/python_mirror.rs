@@ -21,10 +21,11 @@ use std::path::{Path, PathBuf};
 use cablevib_ipc::layout::{FieldLayout, StructLayout, ALL_LAYOUTS};
 use cablevib_ipc::{
     StatusCode, ALL_ATTRIBUTE_KEYS, ALL_SERVICES, ATTR_CABLEVIB_VERSION, ATTR_ELEMENTS_PER_CABLE,
-    ATTR_ELEMENT_MODEL, ATTR_SCENE, ATTR_SCHEMA_VERSION, ATTR_UNITS, EVENT_ID_ESTIMATE,
-    EVENT_ID_MARGIN_REQUEST, EVENT_ID_MARGIN_RESPONSE, EVENT_ID_POSE, EVENT_ID_T_MIN, MAX_CABLES,
-    MAX_STIFFNESS_DIM, SCHEMA_VERSION, SERVICE_ESTIMATE, SERVICE_MARGIN, SERVICE_POSE,
-    SERVICE_T_MIN, SERVICE_WAKE_CONTROLLER, SERVICE_WAKE_SERVICE, UNITS,
+    ATTR_ELEMENT_MODEL, ATTR_SCENE, ATTR_SCHEMA_VERSION, ATTR_UNITS, EE_MODE_AGE_UNKNOWN,
+    EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST, EVENT_ID_MARGIN_RESPONSE, EVENT_ID_POSE,
+    EVENT_ID_T_MIN, MAX_CABLES, MAX_STIFFNESS_DIM, REQUIRED_F1_MAX_HZ, REQUIRED_F1_MIN_HZ,
+    SCHEMA_VERSION, SERVICE_ESTIMATE, SERVICE_MARGIN, SERVICE_POSE, SERVICE_T_MIN,
+    SERVICE_WAKE_CONTROLLER, SERVICE_WAKE_SERVICE, T_MIN_AGE_UNKNOWN, UNITS,
 };
 
 const BLESS_ENV: &str = "CABLEVIB_BLESS";
@@ -83,14 +84,28 @@ import ctypes
 "#;
 
 fn render_constants(out: &mut String) {
-    let ints: [(&str, usize); 3] = [
+    assert_eq!(
+        EE_MODE_AGE_UNKNOWN, T_MIN_AGE_UNKNOWN,
+        "one AGE_UNKNOWN, as in the C header"
+    );
+    let ints: [(&str, usize); 4] = [
         ("SCHEMA_VERSION", SCHEMA_VERSION as usize),
         ("MAX_CABLES", MAX_CABLES),
         ("MAX_STIFFNESS_DIM", MAX_STIFFNESS_DIM),
+        ("AGE_UNKNOWN", T_MIN_AGE_UNKNOWN as usize),
     ];
     out.push('\n');
     for (name, v) in ints {
         writeln!(out, "{name} = {v}").unwrap();
+    }
+    out.push_str(
+        "\n# The range of MarginRequest.required_f1_hz, Hz (outside: STATUS_INVALID_REQUEST).\n",
+    );
+    for (name, v) in [
+        ("REQUIRED_F1_MIN_HZ", REQUIRED_F1_MIN_HZ),
+        ("REQUIRED_F1_MAX_HZ", REQUIRED_F1_MAX_HZ),
+    ] {
+        writeln!(out, "{name} = {v:e}").unwrap();
     }
     assert_eq!(ALL_SERVICES.len(), 4, "a new service needs a line here");
     out.push_str("\n# iceoryx2 service names (prefix them with prefixed()).\n");

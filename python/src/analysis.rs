@@ -2,9 +2,9 @@
 //! `cablevib analyze --json`, with the command line's scene overrides.
 
 use crate::convert::{floats, json_to_py, position};
-use cablevib::kinematics::unit_quaternion;
 use crate::error::CablevibError;
 use crate::scene::PyScene;
+use cablevib::kinematics::unit_quaternion;
 use cablevib::scene::{ElementKind, Scene, MAX_ELEMENTS_PER_CABLE};
 use cablevib::study::analysis::{analyze as analyze_scene, AnalyzeOptions, SolverChoice};
 use pyo3::exceptions::PyValueError;

@@ -8,7 +8,7 @@ use nalgebra::{Matrix3, Matrix6, Vector3};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{PyByteArray, PyBytes, PyDict, PyList, PyMemoryView, PyString};
 
 /// numpy.asarray, imported once.
 static ASARRAY: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
@@ -55,9 +55,28 @@ pub fn matrix6<'py>(py: Python<'py>, m: &Matrix6<f64>, dim: usize) -> PyResult<B
     array2(py, &rows)
 }
 
-/// `N` numbers from any Python sequence of numbers (list, tuple, numpy array); `what` names
-/// the argument and its unit in the error. Non-finite values pass: the caller decides.
+/// Refuses `bytes`, `bytearray`, `memoryview` and `str`: sequences that are not of numbers,
+/// though bytes iterate as small integers (`bytearray(b'\0\0\1')` was taken as the position
+/// (0, 0, 1) m).
+pub fn refuse_non_number_sequence(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<()> {
+    if obj.is_instance_of::<PyBytes>()
+        || obj.is_instance_of::<PyByteArray>()
+        || obj.is_instance_of::<PyMemoryView>()
+        || obj.is_instance_of::<PyString>()
+    {
+        let t = obj.get_type().name()?;
+        return Err(PyTypeError::new_err(format!(
+            "{what}: expected numbers, got {t} (bytes and text are not numbers)"
+        )));
+    }
+    Ok(())
+}
+
+/// `N` numbers from any Python sequence of numbers (list, tuple, numpy array; not bytes,
+/// bytearray, memoryview or str); `what` names the argument and its unit in the error.
+/// Non-finite values pass: the caller decides.
 pub fn floats<const N: usize>(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<[f64; N]> {
+    refuse_non_number_sequence(obj, what)?;
     let v: Vec<f64> = obj
         .extract()
         .map_err(|_| PyTypeError::new_err(format!("{what}: expected a sequence of {N} numbers")))?;

@@ -130,6 +130,7 @@ impl PyEstimator {
 
 /// One T_min per cable (N) from a sequence of `n` numbers.
 fn per_cable_t_min(t: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<f64>> {
+    crate::convert::refuse_non_number_sequence(t, "t_min")?;
     let v: Vec<f64> = t.extract().map_err(|_| {
         PyValueError::new_err(format!(
             "t_min: expected a number (N) or {n} numbers, one per cable"

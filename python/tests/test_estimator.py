@@ -167,6 +167,18 @@ def test_wrong_shapes_raise():
         est.update([0.0, 0.0, 1.25], orientation=[1.0, 0.0, 0.0])
 
 
+def test_bytes_and_text_are_not_numbers():
+    # bytearray(b'\0\0\1') iterates as 0, 0, 1: it was taken as a position in m.
+    est = cablevib.Estimator(cablevib.Scene.load("spatial-paper"))
+    for bad in (bytearray(b"\0\0\1"), b"\0\0\1", memoryview(b"\0\0\1"), "001"):
+        with pytest.raises(TypeError, match=r"position .*expected numbers"):
+            est.update(bad)
+        with pytest.raises(TypeError, match=r"orientation .*expected numbers"):
+            est.update([0.0, 0.0, 1.25], orientation=bytes(4) if not isinstance(bad, str) else "1000")
+    with pytest.raises(TypeError, match=r"t_min: expected numbers"):
+        est.update([0.0, 0.0, 1.25], t_min=bytes(8))
+
+
 def test_unbuildable_scene_has_the_clis_message(run_cli, tmp_path):
     path = tmp_path / "away.toml"
     text = (SCENES / "spatial_paper.toml").read_text()

@@ -30,10 +30,43 @@ pub struct SceneArgs {
     /// Element model (default: the scene's).
     #[arg(long, value_enum)]
     pub element: Option<ElementArg>,
+    /// The scene's effect flags.
+    #[command(flatten)]
+    pub effects: EffectArgs,
+}
+
+/// The scene's effect flags, taken by every command that takes a scene (the offline ones
+/// through [`SceneArgs`], `serve`, `demo` and `bench-ipc` directly).
+#[derive(Debug, Args, Clone, Default)]
+pub struct EffectArgs {
     /// Effect `sag` on or off (default: the scene's `[effects] sag`): cables on their elastic
     /// catenary (fem or continuous) or on their straight chords.
     #[arg(long, value_name = "true|false", action = clap::ArgAction::Set)]
     pub sag: Option<bool>,
+}
+
+impl EffectArgs {
+    /// Whether sag is on for scene `s` with element model `element`: `--sag`, else the
+    /// scene's; an error when that model cannot take it.
+    fn sag_for(&self, s: &Scene, element: ElementKind) -> Result<bool, CliError> {
+        let on = self.sag.unwrap_or(s.model.sag);
+        if let Some(why) = crate::scene::sag_refusal(on, element) {
+            let given = match self.sag {
+                Some(_) => "--sag true".to_string(),
+                None => format!("scene `{}` has [effects] sag = true", s.name),
+            };
+            return Err(CliError::Usage(format!("{given}: {why}")));
+        }
+        Ok(on)
+    }
+
+    /// Applies the flags to `s` (its own element model).
+    pub fn apply(&self, s: &mut Scene) -> Result<(), CliError> {
+        let on = self.sag_for(s, s.model.element)?;
+        s.model.sag = on;
+        s.model.sag_explicit |= self.sag.is_some();
+        Ok(())
+    }
 }
 
 /// `--element` values: the cable models of [`ElementKind`], as the command line spells them.
@@ -146,17 +179,10 @@ pub fn resolve_scene(a: &SceneArgs) -> Result<Scene, CliError> {
             "--elements {n}: must be in 1..={MAX_ELEMENTS_PER_CABLE}"
         )));
     }
-    let on = a.sag.unwrap_or(s.model.sag);
-    if let Some(why) = crate::scene::sag_refusal(on, element) {
-        let given = match a.sag {
-            Some(_) => "--sag true".to_string(),
-            None => format!("scene `{}` has [effects] sag = true", s.name),
-        };
-        return Err(CliError::Usage(format!("{given}: {why}")));
-    }
+    let on = a.effects.sag_for(&s, element)?;
     let mut s = s.with_model(element, n);
     s.model.sag = on;
-    s.model.sag_explicit |= a.sag.is_some();
+    s.model.sag_explicit |= a.effects.sag.is_some();
     Ok(s)
 }
 

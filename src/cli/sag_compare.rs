@@ -76,14 +76,14 @@ impl SagCompareArgs {
 
 /// `cablevib sag-compare`: writes PREFIX.csv, PREFIX.csv.json and the figure.
 pub fn run(a: &SagCompareArgs) -> Result<(), CliError> {
-    if a.scene.sag.is_some() {
+    if a.scene.effects.sag.is_some() {
         return Err(CliError::Usage(
             "--sag: sag-compare evaluates both models (sag false and sag true)".into(),
         ));
     }
     // Resolved with sag on: the element must be one the sagged model has.
     let mut args = a.scene.clone();
-    args.sag = Some(true);
+    args.effects.sag = Some(true);
     let s = resolve_scene(&args)?;
     if s.model.element == ElementKind::Auto {
         return Err(CliError::Usage(

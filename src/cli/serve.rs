@@ -20,6 +20,9 @@ pub struct ServeArgs {
     /// positional like in the other commands).
     #[arg(long = "scene", id = "scene_option", value_name = "SCENE")]
     pub scene_option: Option<String>,
+    /// The scene's effect flags.
+    #[command(flatten)]
+    pub effects: super::args::EffectArgs,
     /// Instance name prefixing every service name ("NAME/cablevib/pose", ...), so that several
     /// robots (or tests) share a machine; empty: the bare names.
     #[arg(long, default_value = "")]
@@ -85,6 +88,9 @@ pub struct DemoArgs {
     /// Scene file (TOML), or `spatial-paper` / `planar-paper`.
     #[arg(long, default_value = "spatial-paper")]
     pub scene: String,
+    /// The scene's effect flags.
+    #[command(flatten)]
+    pub effects: super::args::EffectArgs,
 }
 
 /// `cablevib bench-ipc` options.
@@ -105,6 +111,9 @@ pub struct BenchIpcArgs {
     /// Scene file (TOML), or `spatial-paper` / `planar-paper`.
     #[arg(long, default_value = "spatial-paper")]
     pub scene: String,
+    /// The scene's effect flags.
+    #[command(flatten)]
+    pub effects: super::args::EffectArgs,
     /// One JSON object on stdout instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -139,10 +148,18 @@ fn stats_period(s: f64) -> Result<Option<Duration>, CliError> {
     Duration::try_from_secs_f64(s).map(Some).map_err(|_| bad())
 }
 
+/// Scene `name` with the effect flags applied.
+fn load_scene(name: &str, effects: &super::args::EffectArgs) -> Result<Scene, CliError> {
+    let mut scene = Scene::load(name)?;
+    effects.apply(&mut scene)?;
+    Ok(scene)
+}
+
 /// `cablevib serve`: loads the scene and runs the service until SIGINT/SIGTERM.
 pub fn serve(a: &ServeArgs, allocations: AllocCounter) -> Result<(), CliError> {
     let stats_period = stats_period(a.stats_period_s)?;
-    let scene = Scene::load(a.scene_name())?;
+    cablevib_ipc::check_instance(&a.instance).map_err(|e| CliError::Usage(e.to_string()))?;
+    let scene = load_scene(a.scene_name(), &a.effects)?;
     super::args::warn_if_sag_matters(&scene, None);
     let cfg = ServerConfig {
         instance: a.instance.clone(),
@@ -159,7 +176,7 @@ pub fn serve(a: &ServeArgs, allocations: AllocCounter) -> Result<(), CliError> {
 
 /// `cablevib demo`: service, replay publisher and controller on one scene.
 pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
-    let scene = Scene::load(&a.scene)?;
+    let scene = load_scene(&a.scene, &a.effects)?;
     let t_min_schedule = match &a.t_min_schedule {
         Some(s) => Some(TminSchedule::parse(s)?),
         None => None,
@@ -178,7 +195,7 @@ pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
 
 /// `cablevib bench-ipc`: pose-published → estimate-received latency.
 pub fn bench_ipc(a: &BenchIpcArgs) -> Result<(), CliError> {
-    let scene = Scene::load(&a.scene)?;
+    let scene = load_scene(&a.scene, &a.effects)?;
     let cfg = BenchIpcConfig {
         samples: a.samples,
         wait: a.wait,
@@ -188,4 +205,33 @@ pub fn bench_ipc(a: &BenchIpcArgs) -> Result<(), CliError> {
         alloc_pool: a.alloc_pool,
     };
     Ok(crate::service::bench_ipc(&scene, &cfg)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Cli, Command};
+    use clap::Parser;
+
+    /// `serve` warns "pass --sag true|false": every service command takes it, and the scene
+    /// it runs has the effect set (before: `--sag` was an unknown argument to all three).
+    #[test]
+    fn service_commands_take_the_scene_effect_flags() {
+        for (args, on) in [
+            (&["cablevib", "serve", "--sag", "false"][..], false),
+            (&["cablevib", "serve", "--sag", "true"][..], true),
+            (&["cablevib", "demo", "--sag", "true"][..], true),
+            (&["cablevib", "bench-ipc", "--sag", "false"][..], false),
+        ] {
+            let cli = Cli::try_parse_from(args).unwrap_or_else(|e| panic!("{args:?}: {e}"));
+            let (name, effects) = match &cli.command {
+                Command::Serve(a) => (a.scene_name().to_owned(), a.effects.clone()),
+                Command::Demo(a) => (a.scene.clone(), a.effects.clone()),
+                Command::BenchIpc(a) => (a.scene.clone(), a.effects.clone()),
+                other => panic!("{other:?}"),
+            };
+            let scene = super::load_scene(&name, &effects).unwrap();
+            assert_eq!(scene.model.sag, on, "{args:?}");
+            assert!(scene.model.sag_explicit, "{args:?}");
+        }
+    }
 }

@@ -267,6 +267,13 @@ impl SampleLog {
     }
 }
 
+/// The largest forward step of one sender's sequence taken as messages lost, 2²⁰ (~10⁶):
+/// the poses a sender can send between two drains of the service (a drain at least every
+/// 50 ms in event mode, continuously when spinning) beyond the queue's 16: 10⁶ is a stall of
+/// one second at 1 MHz, far beyond any pose rate and stall seen. A larger step is not a loss
+/// but a sender that jumped its counter (hostile or broken): counted as a reset.
+pub const SEQUENCE_GAP_WINDOW: u64 = 1 << 20;
+
 /// Poses lost in a queue, counted from the senders' sequence numbers. Every sender increments
 /// its sequence by one per message, so a gap between two consecutive sequences received from
 /// the same sender (`key`: iceoryx2's publisher id in the service) is that many messages that
@@ -275,24 +282,39 @@ impl SampleLog {
 /// - The first sequence of a sender counts nothing (what it sent before we were connected
 ///   never reached our queue). A restarted sender is a new key, so its sequence starting
 ///   again from 1 (or anywhere) is never compared with its predecessor's.
-/// - A sequence not above the last one of the same key (a duplicate, or a sender that
-///   restarted its counter on the same port) counts nothing and becomes the new base:
-///   iceoryx2 delivers one publisher's samples in order, so going down means a restart, and
-///   the next gap is measured from there instead of from a stale, larger value.
-/// - Up to `N` senders are tracked; a new one beyond that replaces the one heard from least
-///   recently (its next sample then counts as a first).
+/// - Gaps count only forward and within [`SEQUENCE_GAP_WINDOW`]. A sequence not above the
+///   last one of the same key (a duplicate, or a sender that restarted its counter on the
+///   same port), or more than the window above it (a jump), counts no loss: it is a *reset*
+///   (counted per sender and in total) and becomes the new base, so the next gap is measured
+///   from there. iceoryx2 delivers one publisher's samples in order, so an honest sender
+///   never resets; a hostile one (sequences 1, 2⁶³, 1, …) adds at most the window per
+///   message to its own count and nothing to any other sender's.
+/// - Up to `N` senders are tracked, each with its own counts; a new one beyond that replaces
+///   the one heard from least recently (its next sample then counts as a first).
 ///
 /// Fixed capacity, no allocation, O(N) per message.
 #[derive(Debug, Clone, Copy)]
 pub struct SequenceGaps<K: Copy + Eq, const N: usize> {
-    /// (sender, last sequence received, when last heard from in `clock` ticks).
-    senders: [Option<(K, u64, u64)>; N],
+    senders: [Option<Sender<K>>; N],
     /// Messages received (any key), for the least-recently-heard eviction.
     clock: u64,
     /// Messages missing between consecutive sequences of one sender, in total.
     lost: u64,
-    /// Times a sender's sequence did not advance (duplicates and counter restarts).
-    restarts: u64,
+    /// Times a sender's sequence did not advance or jumped past the window, in total.
+    resets: u64,
+}
+
+/// One tracked sender of [`SequenceGaps`].
+#[derive(Debug, Clone, Copy)]
+struct Sender<K> {
+    key: K,
+    /// The last sequence received.
+    last: u64,
+    /// When last heard from, in `clock` ticks.
+    heard: u64,
+    /// Its messages lost and its resets.
+    lost: u64,
+    resets: u64,
 }
 
 impl<K: Copy + Eq, const N: usize> Default for SequenceGaps<K, N> {
@@ -301,7 +323,7 @@ impl<K: Copy + Eq, const N: usize> Default for SequenceGaps<K, N> {
             senders: [None; N],
             clock: 0,
             lost: 0,
-            restarts: 0,
+            resets: 0,
         }
     }
 }
@@ -309,38 +331,48 @@ impl<K: Copy + Eq, const N: usize> Default for SequenceGaps<K, N> {
 impl<K: Copy + Eq, const N: usize> SequenceGaps<K, N> {
     /// Records sequence `seq` received from sender `key`; returns how many of that sender's
     /// messages are missing just before it (0 when it follows the previous one, is the
-    /// sender's first, or does not advance).
+    /// sender's first, or is a reset: not above the last, or a jump past
+    /// [`SEQUENCE_GAP_WINDOW`]).
     pub fn record(&mut self, key: K, seq: u64) -> u64 {
         self.clock += 1;
         let now = self.clock;
-        let slot = match self
+        let Some(slot) = self
             .senders
             .iter()
-            .position(|s| s.is_some_and(|(k, _, _)| k == key))
-        {
-            Some(i) => i,
-            None => {
-                // A free slot, else the sender heard from least recently.
-                let i = self
-                    .senders
-                    .iter()
-                    .enumerate()
-                    .min_by_key(|(_, s)| s.map_or(0, |(_, _, t)| t))
-                    .map_or(0, |(i, _)| i);
-                self.senders[i] = Some((key, seq, now));
-                return 0;
+            .position(|s| s.is_some_and(|s| s.key == key))
+        else {
+            // A free slot, else the sender heard from least recently.
+            let i = self
+                .senders
+                .iter()
+                .enumerate()
+                .min_by_key(|(_, s)| s.map_or(0, |s| s.heard))
+                .map_or(0, |(i, _)| i);
+            if let Some(slot) = self.senders.get_mut(i) {
+                *slot = Some(Sender {
+                    key,
+                    last: seq,
+                    heard: now,
+                    lost: 0,
+                    resets: 0,
+                });
             }
-        };
-        let Some((_, last, _)) = self.senders[slot] else {
             return 0;
         };
-        self.senders[slot] = Some((key, seq, now));
-        if seq > last {
+        let Some(s) = self.senders[slot].as_mut() else {
+            return 0;
+        };
+        let last = s.last;
+        s.last = seq;
+        s.heard = now;
+        if seq > last && seq - last - 1 <= SEQUENCE_GAP_WINDOW {
             let gap = seq - last - 1;
-            self.lost += gap;
+            s.lost = s.lost.saturating_add(gap);
+            self.lost = self.lost.saturating_add(gap);
             gap
         } else {
-            self.restarts += 1;
+            s.resets += 1;
+            self.resets += 1;
             0
         }
     }
@@ -350,9 +382,19 @@ impl<K: Copy + Eq, const N: usize> SequenceGaps<K, N> {
         self.lost
     }
 
-    /// Times a sender's sequence did not advance (duplicates and counter restarts).
-    pub fn restarts(&self) -> u64 {
-        self.restarts
+    /// Resets in total: a sender's sequence did not advance (duplicates, counter restarts) or
+    /// jumped past [`SEQUENCE_GAP_WINDOW`].
+    pub fn resets(&self) -> u64 {
+        self.resets
+    }
+
+    /// (messages lost, resets) of sender `key` while tracked (None when it is not).
+    pub fn of(&self, key: K) -> Option<(u64, u64)> {
+        self.senders
+            .iter()
+            .flatten()
+            .find(|s| s.key == key)
+            .map(|s| (s.lost, s.resets))
     }
 }
 
@@ -568,7 +610,7 @@ mod tests {
         for seq in 1..=1000 {
             assert_eq!(g.record(7, seq), 0);
         }
-        assert_eq!((g.lost(), g.restarts()), (0, 0));
+        assert_eq!((g.lost(), g.resets()), (0, 0));
     }
 
     #[test]
@@ -593,7 +635,7 @@ mod tests {
             g.record(7, seq);
         }
         assert_eq!(g.lost(), 0, "a duplicate or a step back is no loss");
-        assert_eq!(g.restarts(), 2);
+        assert_eq!(g.resets(), 2);
         // Out of order: 4 missing at 5, then 4 late: it re-bases, and 5 follows it.
         let mut g = SequenceGaps::<u32, 4>::default();
         for seq in [1, 2, 3, 5, 4, 5, 6] {
@@ -626,6 +668,62 @@ mod tests {
         assert_eq!(g.record(1, 11), 0, "each sender against its own sequence");
         assert_eq!(g.record(3, 3), 1);
         assert_eq!(g.lost(), 1);
+    }
+
+    /// A hostile sender (sequences 1, 2⁶³, 1, …, u64::MAX, 0, random) counts resets, never
+    /// a wrap-around loss (before: "overwritten poses 9223372036854775802"), and leaves an
+    /// honest sender's count exact over 10⁵ messages: received + lost = the sequences it sent
+    /// from its first received one on, counted independently by the sender loop.
+    #[test]
+    fn sequence_gaps_hostile_sequences_leave_another_senders_count_exact() {
+        let mut g = SequenceGaps::<u32, 4>::default();
+        let (mut received, mut first) = (0u64, None);
+        let mut honest_seq = 0u64;
+        let mut rng = 0x9e37_79b9_7f4a_7c15u64;
+        let mut hostile_lost = 0u64;
+        for i in 0..100_000u64 {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            let h = match i % 6 {
+                0 | 2 => 1,
+                1 => 1 << 63,
+                3 => u64::MAX,
+                4 => 0,
+                _ => rng,
+            };
+            hostile_lost += g.record(9, h);
+            // Honest: sends 1 to 20 poses; the queue lets the last 1 to 3 of them through.
+            let burst = 1 + rng % 20;
+            honest_seq += burst;
+            for k in (0..burst.min(1 + (rng >> 32) % 3)).rev() {
+                let seq = honest_seq - k;
+                first.get_or_insert(seq);
+                let _ = g.record(7, seq);
+                received += 1;
+            }
+        }
+        let (lost, resets) = g.of(7).unwrap();
+        assert_eq!(resets, 0, "an honest sender never resets");
+        let sent_from_first = honest_seq - first.unwrap() + 1;
+        assert_eq!(received + lost, sent_from_first);
+        let (h_lost, h_resets) = g.of(9).unwrap();
+        assert_eq!(h_lost, hostile_lost);
+        assert!(h_resets > 60_000, "{h_resets}");
+        // Only the random forward steps within the window count, each at most the window.
+        assert!(h_lost <= 100_000 / 6 * SEQUENCE_GAP_WINDOW, "{h_lost}");
+        assert_eq!(g.lost(), lost + h_lost);
+        assert_eq!(g.resets(), h_resets);
+        // The reported case: 1, 2⁶³, 1 is two resets and no loss.
+        let mut g = SequenceGaps::<u32, 4>::default();
+        for seq in [1, 1 << 63, 1] {
+            assert_eq!(g.record(3, seq), 0);
+        }
+        assert_eq!((g.lost(), g.resets()), (0, 2));
+        // Within the window a step is a loss; one past it is a reset.
+        assert_eq!(g.record(3, 2 + SEQUENCE_GAP_WINDOW), SEQUENCE_GAP_WINDOW);
+        assert_eq!(g.record(3, 3 + 2 * SEQUENCE_GAP_WINDOW + 1), 0);
+        assert_eq!(g.resets(), 3);
     }
 
     #[test]

@@ -5,9 +5,13 @@
 //! [`Estimator::t_min_for_f1_near`]) needs up to 257 forward evaluations (tension solve and
 //! first root each; usually 20 to 80), ~0.3 to 10 ms on the shipped scenes. Run inline it starved the loop; spread over the cycles a requirement that
 //! changes every request would restart it before it ends. So it runs here, on its own copy
-//! of the estimator (its own buffers; set up once), and always on the newest request: the
-//! loop posts (pose, requirement) into a one-slot mailbox with `try_lock` (never waits: a
-//! busy mailbox keeps the older job) and reads the last finished answer the same way. The
+//! of the estimator (its own buffers; set up once). The mailbox has one slot per margin
+//! client ([`SLOTS`], the service's `MAX_CLIENTS`): the loop posts each client's newest
+//! (pose, requirement) into that client's slot with `try_lock` (never waits: a busy mailbox
+//! keeps the older job) and reads that client's last finished answer the same way. The worker
+//! serves the slots with a job round robin, so a client that floods changing requirements
+//! only replaces its own job and costs the others at most one search per turn (with one
+//! shared slot, one such client took another's finite answers from 394 of 395 to 0). The
 //! loop's work per request is a copy in and a copy out; no request pattern reaches the
 //! estimate loop. Nothing here allocates after [`InverseWorker::spawn`].
 
@@ -71,10 +75,15 @@ pub fn carried(r: Result<TminAnswer, TminQueryError>) -> Result<f64, StatusCode>
     }
 }
 
+/// Slots of the mailbox: one per margin client the service admits.
+pub const SLOTS: usize = crate::service::ports::MAX_CLIENTS;
+
 #[derive(Debug, Default)]
 struct Mailbox {
-    job: Option<InverseJob>,
-    answer: Option<InverseAnswer>,
+    /// Each slot's newest job not started yet.
+    jobs: [Option<InverseJob>; SLOTS],
+    /// Each slot's last finished answer.
+    answers: [Option<InverseAnswer>; SLOTS],
 }
 
 /// The worker thread and its mailbox.
@@ -82,8 +91,8 @@ pub struct InverseWorker {
     mailbox: Arc<Mutex<Mailbox>>,
     stop: Arc<AtomicBool>,
     handle: Option<JoinHandle<()>>,
-    /// The last answer read (the loop's copy).
-    answer: Option<InverseAnswer>,
+    /// The last answer read per slot (the loop's copy).
+    answers: [Option<InverseAnswer>; SLOTS],
 }
 
 impl InverseWorker {
@@ -100,29 +109,50 @@ impl InverseWorker {
             mailbox,
             stop,
             handle: Some(handle),
-            answer: None,
+            answers: [None; SLOTS],
         })
     }
 
-    /// Post `job` (replacing a job not started yet) and wake the worker; a busy mailbox
-    /// drops it (the next request posts again). Never waits.
-    pub fn post(&mut self, job: InverseJob) {
+    /// Post `job` into slot `slot` (< [`SLOTS`]; replacing that slot's job not started yet)
+    /// and wake the worker; a busy mailbox drops it (the next request posts again). Never
+    /// waits.
+    pub fn post(&mut self, slot: usize, job: InverseJob) {
         if let Ok(mut m) = self.mailbox.try_lock() {
-            m.job = Some(job);
+            if let Some(j) = m.jobs.get_mut(slot) {
+                *j = Some(job);
+            }
         }
         if let Some(h) = &self.handle {
             h.thread().unpark();
         }
     }
 
-    /// The last finished answer (refreshed from the mailbox when it is free). Never waits.
-    pub fn answer(&mut self) -> Option<InverseAnswer> {
+    /// Slot `slot`'s last finished answer (refreshed from the mailbox when it is free).
+    /// Never waits.
+    pub fn answer(&mut self, slot: usize) -> Option<InverseAnswer> {
         if let Ok(m) = self.mailbox.try_lock() {
-            if m.answer.is_some() {
-                self.answer = m.answer;
+            for (mine, theirs) in self.answers.iter_mut().zip(&m.answers) {
+                if theirs.is_some() {
+                    *mine = *theirs;
+                }
             }
         }
-        self.answer
+        self.answers.get(slot).copied().flatten()
+    }
+
+    /// Forget slot `slot`'s job and answer (its client is gone; a new one takes the slot).
+    /// Never waits: a busy mailbox keeps them, and the new client's answers are told apart by
+    /// their requirement.
+    pub fn clear(&mut self, slot: usize) {
+        if let Ok(mut m) = self.mailbox.try_lock() {
+            if slot < SLOTS {
+                m.jobs[slot] = None;
+                m.answers[slot] = None;
+            }
+        }
+        if let Some(a) = self.answers.get_mut(slot) {
+            *a = None;
+        }
     }
 }
 
@@ -136,23 +166,34 @@ impl Drop for InverseWorker {
     }
 }
 
-/// Take the newest job, search, post the answer; park when idle.
+/// Take the next slot's job (a slot without any answer yet first, so that a new client's
+/// first answer waits for at most one search; otherwise round robin from the slot after the
+/// last one served), search, post the answer into that slot; park when idle.
 fn worker_loop(est: &mut Estimator, mailbox: &Mutex<Mailbox>, stop: &AtomicBool) {
     lower_priority();
+    let mut next = 0;
     while !stop.load(Ordering::Acquire) {
         let job = match mailbox.lock() {
-            Ok(mut m) => m.job.take(),
+            Ok(mut m) => {
+                // A client without any answer yet (a new one) first, then round robin.
+                let order = || (0..SLOTS).map(|k| (next + k) % SLOTS);
+                let i = order()
+                    .find(|&i| m.jobs[i].is_some() && m.answers[i].is_none())
+                    .or_else(|| order().find(|&i| m.jobs[i].is_some()));
+                i.and_then(|i| m.jobs[i].take().map(|j| (i, j)))
+            }
             Err(_) => return,
         };
-        let Some(j) = job else {
+        let Some((slot, j)) = job else {
             std::thread::park_timeout(IDLE_PARK);
             continue;
         };
+        next = (slot + 1) % SLOTS;
         let t0 = std::time::Instant::now();
         let t = carried(est.t_min_for_f1_near(&j.pose, j.required_f1_hz, Some(j.hint_n)));
         let worked = t0.elapsed();
         if let Ok(mut m) = mailbox.lock() {
-            m.answer = Some(InverseAnswer {
+            m.answers[slot] = Some(InverseAnswer {
                 required_f1_hz: j.required_f1_hz,
                 cycle: j.cycle,
                 t_min_n: t,
@@ -176,3 +217,46 @@ fn lower_priority() {
 /// Elsewhere the worker keeps the default priority (its rest still halves its share).
 #[cfg(not(target_os = "linux"))]
 fn lower_priority() {}
+
+/// Which mailbox slot each margin client has: up to [`SLOTS`] clients (the service admits no
+/// more); a new client beyond that takes the slot of the one heard from least recently (a
+/// client that has gone). Fixed size, no allocation, O(SLOTS) per request.
+#[derive(Debug, Clone, Copy)]
+pub struct ClientSlots<K: Copy + Eq> {
+    /// (client, when last heard from in `clock` ticks).
+    clients: [Option<(K, u64)>; SLOTS],
+    clock: u64,
+}
+
+impl<K: Copy + Eq> Default for ClientSlots<K> {
+    fn default() -> Self {
+        ClientSlots {
+            clients: [None; SLOTS],
+            clock: 0,
+        }
+    }
+}
+
+impl<K: Copy + Eq> ClientSlots<K> {
+    /// The slot of client `key`, and whether it was just given to it (a new client).
+    pub fn slot(&mut self, key: K) -> (usize, bool) {
+        self.clock += 1;
+        let now = self.clock;
+        if let Some(i) = self
+            .clients
+            .iter()
+            .position(|c| c.is_some_and(|(k, _)| k == key))
+        {
+            self.clients[i] = Some((key, now));
+            return (i, false);
+        }
+        let i = self
+            .clients
+            .iter()
+            .enumerate()
+            .min_by_key(|(_, c)| c.map_or(0, |(_, t)| t))
+            .map_or(0, |(i, _)| i);
+        self.clients[i] = Some((key, now));
+        (i, true)
+    }
+}

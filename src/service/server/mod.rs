@@ -5,14 +5,16 @@
 //! 1. drain the pose subscriber, keeping the newest pose (the older ones are *skipped* and
 //!    counted); poses that never reached the service because the subscriber queue
 //!    ([`POSE_BUFFER`]) overflowed between two drains are *overwritten*, counted from the gaps
-//!    in each publisher's pose sequence ([`SequenceGaps`]);
+//!    in each publisher's pose sequence ([`SequenceGaps`]: forward and within a window only; a
+//!    sequence that goes back or jumps is a counted reset, never a wrap-around loss);
 //! 2. drain the T_min subscriber; the newest set-point becomes *pending*;
 //! 3. if a pose came, apply the pending set-point and estimate the pose, then publish the
 //!    estimate and notify the wake-controller event;
 //! 4. answer every queued margin request from the latest estimate: f1 and the margin of this
 //!    cycle, and the T_min that reaches the requirement from the inverse search, which runs
-//!    on a thread of its own (`server/inverse_worker.rs`) on the newest request, so that no request
-//!    pattern costs the loop more than a copy per request.
+//!    on a thread of its own (`server/inverse_worker.rs`) on each client's newest request, the
+//!    clients served round robin (one client's flood costs only its own answers), so that no
+//!    request pattern costs the loop more than a copy per request.
 //!
 //! Between iterations the loop busy-polls ([`WaitMode::Spin`]) or blocks on the wake-service
 //! event ([`WaitMode::Event`]), checks for SIGINT/SIGTERM (iceoryx2's handler, installed by the
@@ -61,7 +63,7 @@ use super::{ServiceError, WaitMode};
 use crate::estimator::{Estimator, Tmin};
 use crate::kinematics::Pose;
 use crate::scene::{is_valid_t_min, Scene};
-use inverse_worker::{InverseJob, InverseWorker};
+use inverse_worker::{ClientSlots, InverseJob, InverseWorker};
 
 /// Heap allocation counter of the calling thread from the system allocator (the binary's
 /// global allocator, e.g. [`crate::alloc_count::thread_system_allocations`]), or a function
@@ -100,7 +102,7 @@ fn log_start(scene: &Scene, cfg: &ServerConfig) {
         "serving instance \"{}\" ({}): scene `{}` ({} cables, {} × {} elements/cable), wait {}, T_min {} N, \
          T_max {} N",
         cfg.instance,
-        if cfg.instance.is_empty() {
+        if cfg.instance.trim_matches('/').is_empty() {
             "bare service names".to_string()
         } else {
             format!("services \"{}/cablevib/...\"", cfg.instance.trim_matches('/'))
@@ -118,8 +120,8 @@ fn log_start(scene: &Scene, cfg: &ServerConfig) {
 /// The log line at the end of a run.
 fn log_stop(reason: StopReason, report: &ServerReport) {
     tracing::info!(
-        "stopped ({}): {} cycles, compute {}, skipped poses {}, overwritten poses {}, invalid \
-         inputs {}, margin requests {}, heap allocations per cycle {:.2} from the system allocator \
+        "stopped ({}): {} cycles, compute {}, skipped poses {}, overwritten poses {}, pose \
+         sequence resets {}, invalid inputs {}, margin requests {}, heap allocations per cycle {:.2} from the system allocator \
          ({} in the first cycle: iceoryx2 connecting), {:.2} from the pool (iceoryx2's per loan and \
          per request: {:.2})",
         match reason {
@@ -131,6 +133,7 @@ fn log_stop(reason: StopReason, report: &ServerReport) {
         report.compute.display_us(),
         report.skipped_poses,
         report.overwritten_poses,
+        report.sequence_resets,
         report.invalid_inputs,
         report.margin_requests,
         report.allocations_per_cycle,
@@ -227,10 +230,15 @@ pub struct ServerReport {
     /// Poses received but not estimated because a newer one was queued.
     pub skipped_poses: u64,
     /// Poses never received: overwritten in the subscriber queue ([`POSE_BUFFER`], safe
-    /// overflow) before a drain, counted from the gaps in each publisher's pose sequence.
-    /// Every pose a connected publisher sent after its first received one is estimated,
-    /// skipped or overwritten: `cycles + skipped_poses + overwritten_poses` = poses sent.
+    /// overflow) before a drain, counted from the gaps in each publisher's pose sequence
+    /// (forward only, within [`super::stats::SEQUENCE_GAP_WINDOW`]). Every pose a connected
+    /// publisher that numbers its poses one by one sent after its first received one is
+    /// estimated, skipped or overwritten: `cycles + skipped_poses + overwritten_poses` = poses
+    /// sent.
     pub overwritten_poses: u64,
+    /// Times a publisher's pose sequence went back, repeated or jumped past the window (a
+    /// restarted counter, a broken or hostile publisher): counted here, never as poses lost.
+    pub sequence_resets: u64,
     /// Estimates whose status was not ok.
     pub invalid_inputs: u64,
     /// Estimates per status code (index = wire value; the last slot collects unknown codes).
@@ -317,6 +325,8 @@ pub struct Server {
     cycle_t_min_n: [f64; MAX_CABLES],
     /// The inverse T_min search beside the loop.
     inverse: InverseWorker,
+    /// Each margin client's slot in the inverse search's mailbox.
+    margin_clients: ClientSlots<iceoryx2::identifiers::UniqueClientId>,
     pending_t_min: Option<TminSetpoint>,
     latest: Option<Latest>,
     /// Last pose sequence per publisher, for the poses overwritten in the queue. One slot per
@@ -366,6 +376,7 @@ impl Server {
             t_min_n,
             cycle_t_min_n: t_min_n,
             inverse,
+            margin_clients: ClientSlots::default(),
             pending_t_min: None,
             latest: None,
             pose_gaps: SequenceGaps::default(),
@@ -560,6 +571,12 @@ impl Server {
                 }
             };
             let req = *request.payload();
+            // Each client has its own slot of the inverse search: its requests replace only
+            // its own job, and the search serves the clients round robin.
+            let (slot, new_client) = self.margin_clients.slot(request.header().client_id());
+            if new_client {
+                self.inverse.clear(slot);
+            }
             // The smallest T_min reaching the required f1: the inverse thread's last answer
             // when it is for this requirement (with its age in cycles: a T_min, +∞ when
             // unreachable, or the status of a failed search), NaN while there is none; this
@@ -570,14 +587,17 @@ impl Server {
                 Some(l) if l.status.is_ok() && req.is_valid() => {
                     let known = self
                         .inverse
-                        .answer()
+                        .answer(slot)
                         .filter(|a| a.required_f1_hz == req.required_f1_hz);
-                    self.inverse.post(InverseJob {
-                        pose: l.pose,
-                        cycle: l.cycle,
-                        required_f1_hz: req.required_f1_hz,
-                        hint_n: self.t_min_range_n().1,
-                    });
+                    self.inverse.post(
+                        slot,
+                        InverseJob {
+                            pose: l.pose,
+                            cycle: l.cycle,
+                            required_f1_hz: req.required_f1_hz,
+                            hint_n: self.t_min_range_n().1,
+                        },
+                    );
                     match known {
                         Some(a) => {
                             let age = l.cycle.saturating_sub(a.cycle);
@@ -690,6 +710,7 @@ impl Server {
             cycles: t.cycles,
             skipped_poses: t.skipped,
             overwritten_poses: t.overwritten,
+            sequence_resets: self.pose_gaps.resets(),
             invalid_inputs: t.invalid,
             status_counts: t.status,
             t_min_setpoints: t.t_min,
@@ -709,12 +730,15 @@ impl Server {
     }
 }
 
-/// The lower bounds (N) of set-point `s` for the cables of `out`, one per cable: its
-/// per-cable value, its uniform value past those; every entry NaN when the set-point is
-/// malformed (more per-cable values than [`MAX_CABLES`]), so that it is refused. Does not
-/// check the values (see [`first_refused`]). No allocation.
+/// The lower bounds (N) of set-point `s` for the cables of `out` (one entry per cable of the
+/// robot), one per cable: its per-cable value, its uniform value past those; every entry NaN
+/// when the set-point is malformed, so that it is refused: not
+/// [`TminSetpoint::is_well_formed`] (more per-cable values than [`MAX_CABLES`], a value in
+/// use not finite or negative), or more per-cable values than the robot has cables (values
+/// for cables that do not exist are a client's mistake, never ignored). Does not check the
+/// values against the scene's rule (see [`first_refused`]). No allocation.
 pub fn setpoint_bounds(s: &TminSetpoint, out: &mut [f64]) {
-    if s.per_cable_count as usize > MAX_CABLES {
+    if !s.is_well_formed() || s.per_cable_count as usize > out.len() {
         out.fill(f64::NAN);
         return;
     }
@@ -752,7 +776,7 @@ fn display_range((lo, hi): (f64, f64)) -> String {
 }
 
 /// The answer to margin request `req` given the latest estimate: `InvalidRequest` for a
-/// required frequency that is not finite and positive, `NoPoseYet` before the first estimate,
+/// required frequency outside `MarginRequest::is_valid`'s range, `NoPoseYet` before the first estimate,
 /// the latest estimate's status when it is not ok, the inverse search's status when it
 /// failed at the pose (`t_min_required` an error), otherwise f1 and the margin.
 /// `t_min_required` is the smallest T_min (N) reaching the required f1
@@ -803,6 +827,7 @@ pub fn run(
     stop: &AtomicBool,
     allocations: AllocCounter,
 ) -> Result<ServerReport, ServiceError> {
+    cablevib_ipc::check_instance(&cfg.instance).map_err(|e| ServiceError::Usage(e.to_string()))?;
     let (removed, failed) = ports::remove_stale_nodes();
     if removed > 0 {
         tracing::info!("removed the stale resources of {removed} dead iceoryx2 node(s)");
