@@ -44,9 +44,9 @@ pub mod cables;
 mod convert;
 mod xml;
 
+pub use crate::input_file::message_number;
 pub use bodies::Link;
 pub use cables::{AttachmentReference, CasprCable};
-pub use xml::message_number;
 
 use crate::input_file::{read_text, InputError};
 use crate::scene::{ElementKind, Scene, SceneError};

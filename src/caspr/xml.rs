@@ -177,27 +177,6 @@ impl<'a, 'i> At<'a, 'i> {
     }
 }
 
-/// A number from the user for a message: up to 6 significant digits, plain between 1e-3
-/// and 1e6, else in scientific notation (`1e308`, not 309 digits); NaN and ±inf as such.
-pub fn message_number(x: f64) -> String {
-    if !x.is_finite() || x == 0.0 {
-        return format!("{x}");
-    }
-    let plain = format!("{x}");
-    if plain.len() <= 10 {
-        return plain;
-    }
-    if (1e-3..1e6).contains(&x.abs()) {
-        let s = format!("{x:.6}");
-        return s.trim_end_matches('0').trim_end_matches('.').to_string();
-    }
-    let s = format!("{x:.5e}");
-    match s.split_once('e') {
-        Some((m, e)) => format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.')),
-        None => s,
-    }
-}
-
 /// At most 40 characters of `s` on one line, for messages.
 fn short(s: &str) -> String {
     let one_line: String = s.split_whitespace().collect::<Vec<_>>().join(" ");
