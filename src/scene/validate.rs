@@ -586,6 +586,18 @@ mod tests {
     use super::super::DEFAULT_SCENE_TOML;
     use super::*;
 
+    /// A paper scene's text without its `[effects]` table (`sag = false`), so that a test can
+    /// append a table of its own.
+    fn without_effects(text: &str) -> String {
+        let i = text.find("[effects]\n").expect("[effects]");
+        let j = i
+            + text[i..]
+                .find("\n\n")
+                .expect("a blank line after [effects]")
+            + 2;
+        format!("{}{}", &text[..i], &text[j..])
+    }
+
     fn err(text: &str) -> String {
         Scene::from_toml_str(text, "t.toml")
             .unwrap_err()
@@ -594,7 +606,7 @@ mod tests {
 
     #[test]
     fn effects_select_the_model() {
-        let base = DEFAULT_SCENE_TOML;
+        let base = &without_effects(DEFAULT_SCENE_TOML);
         let with = |fx: &str| Scene::from_toml_str(&format!("{base}\n[effects]\n{fx}\n"), "t.toml");
         let sagged = with("sag = true").unwrap();
         assert_eq!(sagged.model.element, ElementKind::Fem);
