@@ -5,6 +5,9 @@
 //! would otherwise be read until memory runs out, a FIFO would block forever, and a
 //! directory would give an obscure OS error; each is refused with a one-line message that
 //! names the file and what it is.
+//!
+//! What a message quotes from those files is kept short: [`message_number`] (a number in at
+//! most 6 significant digits) and [`message_excerpt`] (a line cut and escaped).
 
 use std::fs::{File, FileType, Metadata, OpenOptions};
 use std::io::Read;
@@ -162,6 +165,52 @@ fn read_at_most(f: &mut File, limit_bytes: u64) -> std::io::Result<Vec<u8>> {
     Ok(bytes)
 }
 
+/// A number from the user for a message: up to 6 significant digits, plain between 1e-3
+/// and 1e6, else in scientific notation (`1e308`, not 309 digits); NaN and ±inf as such.
+pub fn message_number(x: f64) -> String {
+    if !x.is_finite() || x == 0.0 {
+        return format!("{x}");
+    }
+    let plain = format!("{x}");
+    if plain.len() <= 10 {
+        return plain;
+    }
+    if (1e-3..1e6).contains(&x.abs()) {
+        let s = format!("{x:.6}");
+        return s.trim_end_matches('0').trim_end_matches('.').to_string();
+    }
+    let s = format!("{x:.5e}");
+    match s.split_once('e') {
+        Some((m, e)) => format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.')),
+        None => s,
+    }
+}
+
+/// Longest excerpt of a user's line quoted in a message, characters.
+pub const MESSAGE_EXCERPT_CHARS: usize = 80;
+
+/// A line from a user's file for a message: at most [`MESSAGE_EXCERPT_CHARS`] characters,
+/// control characters (NUL, CR, ESC, …) escaped as `\0`, `\r`, `\u{1b}`, and `…` with the
+/// line's length in bytes when it was cut. A message stays one short line whatever the
+/// file holds.
+pub fn message_excerpt(line: &str) -> String {
+    let mut out = String::new();
+    for (k, c) in line.chars().enumerate() {
+        if k == MESSAGE_EXCERPT_CHARS {
+            out.push_str(&format!("… ({} bytes)", line.len()));
+            break;
+        }
+        if c == '\0' {
+            out.push_str("\\0");
+        } else if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
 /// Hostile files for tests: a FIFO, a sparse file, and a guard against a read that blocks.
 #[cfg(test)]
 pub(crate) mod test_files {
@@ -213,6 +262,30 @@ pub(crate) mod test_files {
 mod tests {
     use super::test_files::*;
     use super::*;
+
+    #[test]
+    fn message_excerpts_are_short_and_escaped() {
+        assert_eq!(message_excerpt("0,1,2,3"), "0,1,2,3");
+        assert_eq!(
+            message_excerpt("a\0b\rc\u{1b}d\te"),
+            "a\\0b\\rc\\u{1b}d\\te"
+        );
+        let long = "x".repeat(5_000_000);
+        let m = message_excerpt(&long);
+        assert_eq!(
+            m,
+            format!("{}… (5000000 bytes)", "x".repeat(MESSAGE_EXCERPT_CHARS))
+        );
+    }
+
+    #[test]
+    fn message_numbers_are_compact() {
+        assert_eq!(message_number(1e308), "1e308");
+        assert_eq!(message_number(-1e308), "-1e308");
+        assert_eq!(message_number(25.0), "25");
+        assert_eq!(message_number(0.1 + 0.2), "0.3");
+        assert_eq!(message_number(f64::NAN), "NaN");
+    }
 
     /// `read_text` of a test file, failing the test if it blocks.
     fn read_with_timeout(path: &Path, limit: u64) -> Result<String, InputError> {

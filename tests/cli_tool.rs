@@ -145,3 +145,18 @@ fn sweeps_print_no_progress_when_stderr_is_not_a_terminal() {
     assert!(text.starts_with("map: scene spatial-paper"), "{text}");
     eprintln!("(the sweep took {:.2} s)", t0.elapsed().as_secs_f64());
 }
+
+#[test]
+fn the_paper_scenes_analyze_without_a_sag_warning() {
+    // The paper's robots are its chord model by definition: their files say `sag = false`,
+    // so a new user's first command prints no warning.
+    for scene in ["spatial-paper", "planar-paper"] {
+        let o = run(&["analyze", scene]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(
+            o.stderr.is_empty(),
+            "{scene}: {:?}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+}

@@ -10,6 +10,18 @@ use cablevib::tension::clarabel_reference;
 use common::Rng;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
+/// A paper scene's text without its `[effects]` table (`sag = false`), so that a test can
+/// append a table of its own.
+fn without_effects(text: &str) -> String {
+    let i = text.find("[effects]\n").expect("[effects]");
+    let j = i
+        + text[i..]
+            .find("\n\n")
+            .expect("a blank line after [effects]")
+        + 2;
+    format!("{}{}", &text[..i], &text[j..])
+}
+
 fn f1(scene: &Scene, p: Vector3<f64>, t_min: f64) -> cablevib::estimator::Estimate {
     let mut est = Estimator::new(scene).unwrap();
     *est.update(
@@ -52,6 +64,7 @@ fn massless_cables_equal_the_spring_model() {
             } else {
                 "cable_mass = false\ngeometric_stiffness = false"
             };
+            let text = without_effects(text);
             let s = Scene::from_toml_str(&format!("{text}\n[effects]\n{fx}\n"), "t").unwrap();
             let e = f1(&s, p, s.t_min_n);
             let want = spring_f1(&s, p, s.t_min_n, geometric);
@@ -117,7 +130,10 @@ fn sag_effect_hangs_the_cables_and_the_catenary_element_stays_a_chord_model() {
     // upper cables carry their own weight's share too, so their end tensions rise above
     // the chord model's 60 + m g √3/4 = 187.4356 N (sagged: 188.06 N, docs/sag.md).
     let s = Scene::from_toml_str(
-        &format!("{DEFAULT_SCENE_TOML}\n[effects]\nsag = true\n"),
+        &format!(
+            "{}\n[effects]\nsag = true\n",
+            without_effects(DEFAULT_SCENE_TOML)
+        ),
         "t",
     )
     .unwrap();
@@ -134,7 +150,8 @@ fn sag_effect_hangs_the_cables_and_the_catenary_element_stays_a_chord_model() {
     let cat = Scene::from_toml_str(
         &format!(
             "{}\n[effects]\nsag = false\n",
-            DEFAULT_SCENE_TOML.replace("element = \"fem\"", "element = \"catenary\"")
+            without_effects(DEFAULT_SCENE_TOML)
+                .replace("element = \"fem\"", "element = \"catenary\"")
         ),
         "t",
     )

@@ -205,3 +205,21 @@ fn continuous_element_rows_equal_analyze_and_sag_flag_is_refused() {
     assert!(!r.status.success());
     assert!(String::from_utf8_lossy(&r.stderr).contains("both models"));
 }
+
+#[test]
+fn spans_beyond_the_offset_bound_are_refused_in_one_line() {
+    let out = tmp("huge-span");
+    let _ = std::fs::remove_file(out.with_extension("csv"));
+    let o = out.to_str().unwrap();
+    for span in ["--span-m=-1e308,1e308", "--span-m=0,2e6"] {
+        let r = run(&["sag-compare", "spatial-paper", span, "--quiet", "--out", o]);
+        let e = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success(), "{span}: exit 0, {e}");
+        assert!(
+            e.trim().lines().count() == 1 && e.contains("--span-m") && e.contains("±1e6"),
+            "{span}: {e}"
+        );
+        assert!(!e.contains("000000000000"), "compact numbers: {e}");
+        assert!(!out.with_extension("csv").exists(), "{span}: no CSV");
+    }
+}

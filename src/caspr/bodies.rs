@@ -9,8 +9,9 @@
 //! joint (`ref="joint"`) is moved to the centre of mass by the parallel-axis theorem,
 //! I_G = I_O − m (|r_G|² I − r_G r_Gᵀ), as CASPR itself does.
 
-use super::xml::{message_number, At};
+use super::xml::At;
 use super::CasprError;
+use crate::input_file::message_number;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 /// The platform joint types imported: CASPR's joints that let one link move freely in

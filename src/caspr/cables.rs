@@ -7,8 +7,9 @@
 //! link-frame origin for `joint` or from the centre of mass for `com`). Other cable types
 //! (passive springs, variable-stiffness drives) and multi-segment cables are refused.
 
-use super::xml::{message_number, At};
+use super::xml::At;
 use super::CasprError;
+use crate::input_file::message_number;
 use nalgebra::Vector3;
 
 /// Where a platform attachment location is measured from.

@@ -4,8 +4,8 @@
 
 use super::bodies::Link;
 use super::cables::{AttachmentReference, CasprCable};
-use super::xml::message_number;
 use super::{CasprError, ImportOptions};
+use crate::input_file::message_number;
 use crate::scene::MAX_ELEMENTS_PER_CABLE;
 use nalgebra::Vector3;
 use std::fmt::Write as _;

@@ -44,9 +44,9 @@ pub mod cables;
 mod convert;
 mod xml;
 
+pub use crate::input_file::message_number;
 pub use bodies::Link;
 pub use cables::{AttachmentReference, CasprCable};
-pub use xml::message_number;
 
 use crate::input_file::{read_text, InputError};
 use crate::scene::{ElementKind, Scene, SceneError};
@@ -63,6 +63,16 @@ pub enum CasprError {
     /// A file could not be read (missing, not a regular file, too large, not UTF-8).
     #[error(transparent)]
     Input(#[from] InputError),
+    /// A DOCTYPE with an internal subset, where a file can declare its own entities, whose
+    /// expansion is unbounded: refused before parsing.
+    #[error(
+        "{file}: a DOCTYPE with an internal subset (`<!DOCTYPE x [...]>`, which can declare \
+         entities) is refused: CASPR's files name an external DTD only"
+    )]
+    InternalDtd {
+        /// File name.
+        file: String,
+    },
     /// Not well-formed XML.
     #[error("{file}: malformed XML: {message}")]
     Xml {

@@ -11,9 +11,16 @@ use roxmltree::{Document, Node, ParsingOptions};
 const MAX_XML_NODES: u32 = 1_000_000;
 
 /// Parses `text` (the contents of `file`). CASPR's files start with a `<!DOCTYPE ...>`
-/// naming an external DTD, so DTDs are allowed; external entities are never loaded (no
-/// resolver), and roxmltree refuses recursive entity expansion.
+/// naming an external DTD, so such a DOCTYPE is allowed; a DOCTYPE with an internal subset
+/// (`[...]`, the only place a file can declare its own entities) is refused before parsing,
+/// so no entity is ever expanded and the parsed text is never longer than the file.
+/// External entities are never loaded (no resolver).
 pub(super) fn parse<'a>(text: &'a str, file: &str) -> Result<Document<'a>, CasprError> {
+    if has_internal_subset(text) {
+        return Err(CasprError::InternalDtd {
+            file: file.to_string(),
+        });
+    }
     let opt = ParsingOptions {
         allow_dtd: true,
         nodes_limit: MAX_XML_NODES,
@@ -23,6 +30,42 @@ pub(super) fn parse<'a>(text: &'a str, file: &str) -> Result<Document<'a>, Caspr
         file: file.to_string(),
         message: e.to_string(),
     })
+}
+
+/// Whether the prolog of `text` (before the root element) has a DOCTYPE with an internal
+/// subset: an unquoted `[` inside `<!DOCTYPE ...>`. Comments and processing instructions
+/// before it are skipped; text that is not well-formed is left to the parser.
+fn has_internal_subset(text: &str) -> bool {
+    let mut rest = text.trim_start_matches('\u{feff}');
+    loop {
+        rest = rest.trim_start();
+        if let Some(r) = rest.strip_prefix("<?") {
+            match r.find("?>") {
+                Some(i) => rest = &r[i + 2..],
+                None => return false,
+            }
+        } else if let Some(r) = rest.strip_prefix("<!--") {
+            match r.find("-->") {
+                Some(i) => rest = &r[i + 3..],
+                None => return false,
+            }
+        } else if let Some(r) = rest.strip_prefix("<!DOCTYPE") {
+            let mut quote: Option<char> = None;
+            for ch in r.chars() {
+                match (quote, ch) {
+                    (Some(q), c) if c == q => quote = None,
+                    (Some(_), _) => {}
+                    (None, '"' | '\'') => quote = Some(ch),
+                    (None, '[') => return true,
+                    (None, '>') => return false,
+                    (None, _) => {}
+                }
+            }
+            return false;
+        } else {
+            return false;
+        }
+    }
 }
 
 /// A node of one file, for messages that name the file and the line.
@@ -78,22 +121,37 @@ impl<'a, 'i> At<'a, 'i> {
             .ok_or_else(|| self.err(format!("missing attribute `{name}`")))
     }
 
-    /// The element's text, trimmed (empty when it has none).
-    pub fn text(&self) -> &'a str {
-        self.node.text().unwrap_or("").trim()
+    /// The element's whole text: all its text children joined (comments and processing
+    /// instructions between them are not text, as in XML's text content), so
+    /// `<mass>2<!-- x -->5.0</mass>` reads `25.0`, not `2`. An element child inside a value
+    /// is an error naming this element.
+    pub fn text(&self) -> Result<String, CasprError> {
+        let mut s = String::new();
+        for n in self.node.children() {
+            if n.is_element() {
+                return Err(self.err(format!(
+                    "a value may not contain elements (found <{}>)",
+                    n.tag_name().name()
+                )));
+            }
+            if let Some(t) = n.text().filter(|_| n.is_text()) {
+                s.push_str(t);
+            }
+        }
+        Ok(s)
     }
 
     /// The text of child `tag` as one finite number.
     pub fn number(&self, tag: &str) -> Result<f64, CasprError> {
         let c = self.child(tag)?;
-        let v = c.numbers(c.text(), 1)?;
+        let v = c.numbers(&c.text()?, 1)?;
         Ok(v[0])
     }
 
     /// The text of child `tag` as three finite numbers separated by white space.
     pub fn vec3(&self, tag: &str) -> Result<Vector3<f64>, CasprError> {
         let c = self.child(tag)?;
-        let v = c.numbers(c.text(), 3)?;
+        let v = c.numbers(&c.text()?, 3)?;
         Ok(Vector3::new(v[0], v[1], v[2]))
     }
 
@@ -116,27 +174,6 @@ impl<'a, 'i> At<'a, 'i> {
                 Err(_) => Err(self.err(format!("`{}` is not a number", short(w)))),
             })
             .collect()
-    }
-}
-
-/// A number from the user for a message: up to 6 significant digits, plain between 1e-3
-/// and 1e6, else in scientific notation (`1e308`, not 309 digits); NaN and ±inf as such.
-pub fn message_number(x: f64) -> String {
-    if !x.is_finite() || x == 0.0 {
-        return format!("{x}");
-    }
-    let plain = format!("{x}");
-    if plain.len() <= 10 {
-        return plain;
-    }
-    if (1e-3..1e6).contains(&x.abs()) {
-        let s = format!("{x:.6}");
-        return s.trim_end_matches('0').trim_end_matches('.').to_string();
-    }
-    let s = format!("{x:.5e}");
-    match s.split_once('e') {
-        Some((m, e)) => format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.')),
-        None => s,
     }
 }
 

@@ -36,8 +36,8 @@ pub struct SagCompareArgs {
     /// World axis of the line through the scene's position.
     #[arg(long, value_enum, default_value = "x")]
     pub axis: LineAxis,
-    /// Offsets A,B from the scene's position along the axis, m (default: the central 80 %
-    /// of the anchors' extent along the axis).
+    /// Offsets A,B from the scene's position along the axis, m, each within ±1e6 m
+    /// (default: the central 80 % of the anchors' extent along the axis).
     #[arg(long, value_parser = parse_interval, allow_hyphen_values = true, value_name = "A,B")]
     pub span_m: Option<Interval>,
     /// Poses on the line, ends included (2 ..= 10000); each is solved twice.

@@ -11,6 +11,7 @@ use super::parse::{
 use super::{
     Cable, ElementKind, ModelSettings, Scene, SceneError, MAX_CABLES, MAX_ELEMENTS_PER_CABLE,
 };
+use crate::input_file::message_number;
 use nalgebra::{Matrix3, Vector3};
 
 /// Largest accepted |g|, m/s²: far above any planet's, so only a unit mistake exceeds it.
@@ -127,7 +128,7 @@ pub(super) fn scene_from_raw(raw: RawScene, file: &str) -> Result<Scene, SceneEr
     let ck = Checker { file };
     validate_name(&ck, &raw.name)?;
     let (gravity, g) = validate_gravity(&ck, &raw.gravity)?;
-    let (ee_mass, ee_pos) = validate_end_effector(&ck, &raw.end_effector)?;
+    let (ee_mass, ee_pos) = validate_end_effector(&ck, &raw.end_effector, g)?;
     let (t_min, t_max) = validate_tension_bounds(&ck, &raw.tension)?;
     let (n, part) = validate_model(&ck, &raw.model)?;
     let fx = raw.effects.unwrap_or_default();
@@ -188,18 +189,34 @@ fn validate_gravity(ck: &Checker, raw: &RawArray) -> Result<(Vector3<f64>, f64),
     let gravity = ck.finite3("gravity", raw)?;
     let g = gravity.norm();
     if g > MAX_GRAVITY_M_S2 {
-        return Err(ck.inv("gravity", format!("|g| = {g} m/s² is implausible (> 1000)")));
+        return Err(ck.inv(
+            "gravity",
+            format!("|g| = {} m/s² is implausible (> 1000)", message_number(g)),
+        ));
     }
     Ok((gravity, g))
 }
 
-/// `[end_effector]` mass (kg, > 0) and position (m, finite); its inertia and orientation
-/// are checked with the effects that use them.
+/// `[end_effector]` mass (kg, > 0, with a finite weight m·|g| for `g` = |g|, m/s²) and
+/// position (m, finite); its inertia and orientation are checked with the effects that use
+/// them.
 fn validate_end_effector(
     ck: &Checker,
     raw: &RawEndEffector,
+    g: f64,
 ) -> Result<(f64, Vector3<f64>), SceneError> {
     let ee_mass = ck.positive("end_effector.mass", raw.mass)?;
+    if !(ee_mass * g).is_finite() {
+        return Err(ck.inv(
+            "end_effector.mass",
+            format!(
+                "{} kg weighs {} kg × {} m/s², which is not a finite force",
+                message_number(ee_mass),
+                message_number(ee_mass),
+                message_number(g)
+            ),
+        ));
+    }
     let ee_pos = ck.finite3("end_effector.position", &raw.position)?;
     Ok((ee_mass, ee_pos))
 }
@@ -569,6 +586,18 @@ mod tests {
     use super::super::DEFAULT_SCENE_TOML;
     use super::*;
 
+    /// A paper scene's text without its `[effects]` table (`sag = false`), so that a test can
+    /// append a table of its own.
+    fn without_effects(text: &str) -> String {
+        let i = text.find("[effects]\n").expect("[effects]");
+        let j = i
+            + text[i..]
+                .find("\n\n")
+                .expect("a blank line after [effects]")
+            + 2;
+        format!("{}{}", &text[..i], &text[j..])
+    }
+
     fn err(text: &str) -> String {
         Scene::from_toml_str(text, "t.toml")
             .unwrap_err()
@@ -577,7 +606,7 @@ mod tests {
 
     #[test]
     fn effects_select_the_model() {
-        let base = DEFAULT_SCENE_TOML;
+        let base = &without_effects(DEFAULT_SCENE_TOML);
         let with = |fx: &str| Scene::from_toml_str(&format!("{base}\n[effects]\n{fx}\n"), "t.toml");
         let sagged = with("sag = true").unwrap();
         assert_eq!(sagged.model.element, ElementKind::Fem);
@@ -677,6 +706,19 @@ mod tests {
         }
         let floor = format!("t_min = {:e}", f64::MIN_POSITIVE);
         assert!(Scene::from_toml_str(&base.replace("t_min = 60.0", &floor), "t.toml").is_ok());
+    }
+
+    #[test]
+    fn a_mass_whose_weight_is_not_finite_is_refused_naming_the_key() {
+        let base = DEFAULT_SCENE_TOML;
+        let e = err(&base.replace("mass = 30.0", "mass = 1e308"));
+        assert!(
+            e.contains("t.toml") && e.contains("end_effector.mass") && e.contains("1e308 kg"),
+            "{e}"
+        );
+        assert!(e.len() < 200, "compact numbers: {e}");
+        let e = err(&base.replace("[0.0, 0.0, -9.81]", "[0.0, 0.0, -1e100]"));
+        assert!(e.contains("gravity") && e.contains("1e100 m/s²"), "{e}");
     }
 
     #[test]

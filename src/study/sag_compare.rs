@@ -27,6 +27,7 @@ use super::points::{stiffness_min_n_m, MAX_THREADS};
 use super::progress::Progress;
 use super::{build, StudyError};
 use crate::estimator::{Estimator, EstimatorParams, Status, Tmin};
+use crate::input_file::message_number;
 use crate::kinematics::Pose;
 use crate::modal::Mode;
 use crate::scene::Scene;
@@ -35,6 +36,10 @@ use rayon::prelude::*;
 
 /// Most poses on the line (each costs two estimator builds).
 pub const MAX_POINTS: usize = 10_000;
+/// Largest offset from the scene's position along the axis, m (either end of the span): a
+/// thousand kilometres holds any cable robot's frame many times over, and keeps the span's
+/// length, its steps and every position finite.
+pub const MAX_OFFSET_M: f64 = 1e6;
 /// The default span covers the central 80 % of the frame along the axis: this is half of it.
 const DEFAULT_HALF_SPAN_SHARE: f64 = 0.4;
 
@@ -156,6 +161,13 @@ fn offsets(s: &Scene, cfg: &SagCompareConfig) -> Result<(Interval, Vec<f64>), St
         )));
     }
     let iv = span(s, cfg)?;
+    if !(iv.lo.abs() <= MAX_OFFSET_M && iv.hi.abs() <= MAX_OFFSET_M && iv.lo <= iv.hi) {
+        return Err(StudyError::Usage(format!(
+            "--span-m {},{}: must be finite offsets in m with MIN <= MAX, each within ±{MAX_OFFSET_M:e}",
+            message_number(iv.lo),
+            message_number(iv.hi),
+        )));
+    }
     let n = cfg.points;
     let step = (iv.hi - iv.lo) / (n - 1) as f64;
     let o = (0..n)
@@ -284,5 +296,16 @@ mod tests {
         assert_eq!((o[0], o[6]), (-0.3, 0.7));
         let bad = SagCompareConfig { points: 1, ..cfg };
         assert!(offsets(&s, &bad).is_err());
+        // Ends at the bound are taken; beyond it (or not finite after subtraction) refused.
+        let at = |lo: f64, hi: f64| SagCompareConfig {
+            span_m: Some(Interval { lo, hi }),
+            ..cfg
+        };
+        let (_, o) = offsets(&s, &at(-MAX_OFFSET_M, MAX_OFFSET_M)).unwrap();
+        assert!(o.iter().all(|x| x.is_finite()));
+        for (lo, hi) in [(-1e308, 1e308), (0.0, 1.0000001e6), (f64::NAN, 1.0)] {
+            let e = offsets(&s, &at(lo, hi)).unwrap_err().to_string();
+            assert!(e.contains("±1e6"), "{e}");
+        }
     }
 }

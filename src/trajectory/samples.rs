@@ -11,20 +11,23 @@
 //!   take the scene's orientation. A point-mass end-effector has no orientation: the
 //!   columns are then checked and have no effect (the command line says so once).
 //! - Times increase strictly from row to row.
+//! - Lines end with LF, CR LF or CR alone (each counts as one line in messages); a UTF-8
+//!   byte-order mark at the start of the file is not part of the first line.
 //! - Blank lines are skipped; `#` starts a comment that runs to the end of its line.
 //! - One header line (a row whose fields are not all numbers) is allowed before the first
 //!   data row.
 //! - At least one data row.
 //!
 //! Between samples the position is interpolated linearly and the orientation by slerp (the
-//! shorter arc). Errors name the file and the line.
+//! shorter arc). Errors name the file and the line, quoting at most 80 characters of it
+//! with control characters escaped, and numbers in at most 6 significant digits.
 
 use std::path::Path;
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use super::TrajectoryError;
-use crate::input_file::MAX_TRAJECTORY_BYTES;
+use crate::input_file::{message_excerpt, message_number, MAX_TRAJECTORY_BYTES};
 use crate::kinematics::{unit_quaternion, Pose};
 use crate::scene::Scene;
 
@@ -61,13 +64,15 @@ impl Samples {
         let mut s = Samples::default();
         let mut header_seen = false;
         let mut fields_per_row: Option<usize> = None;
-        for (i, line) in text.lines().enumerate() {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        for (i, line) in lines(text).enumerate() {
             let row = |msg: String| TrajectoryError::Row {
                 origin: origin.to_string(),
                 line: i + 1,
                 msg,
             };
             let line = line.split('#').next().unwrap_or("").trim();
+            let quoted = message_excerpt(line);
             if line.is_empty() {
                 continue;
             }
@@ -82,27 +87,28 @@ impl Samples {
                     header_seen = true;
                     continue;
                 }
-                Err(e) => return Err(row(format!("`{line}`: {e}"))),
+                Err(e) => return Err(row(format!("`{quoted}`: {e}"))),
             };
             let width = *fields_per_row.get_or_insert(values.len());
             if !(values.len() == FIELDS_POSITION || values.len() == FIELDS_POSE)
                 || !values.iter().all(|v| v.is_finite())
             {
                 return Err(row(format!(
-                    "expected 4 or 8 finite numbers t,x,y,z[,qw,qx,qy,qz] (s, m, unit quaternion), got `{line}`"
+                    "expected 4 or 8 finite numbers t,x,y,z[,qw,qx,qy,qz] (s, m, unit quaternion), got `{quoted}`"
                 )));
             }
             if values.len() != width {
                 return Err(row(format!(
-                    "expected as many fields as the first data row ({width}), got {} in `{line}`",
+                    "expected as many fields as the first data row ({width}), got {} in `{quoted}`",
                     values.len()
                 )));
             }
             if let Some(&last) = s.t_s.last() {
                 if values[0] <= last {
                     return Err(row(format!(
-                        "time {} s does not increase (previous {last} s)",
-                        values[0]
+                        "time {} s does not increase (previous {} s)",
+                        message_number(values[0]),
+                        message_number(last)
                     )));
                 }
             }
@@ -194,6 +200,13 @@ impl Samples {
     }
 }
 
+/// The lines of `text`, each ended by LF, CR LF or CR alone (Python's universal newlines),
+/// without their ends.
+fn lines(text: &str) -> impl Iterator<Item = &str> {
+    text.split('\n')
+        .flat_map(|l| l.strip_suffix('\r').unwrap_or(l).split('\r'))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -234,6 +247,59 @@ mod tests {
             let e = Samples::parse_csv(text, "f.csv").unwrap_err().to_string();
             assert!(e.contains(why) && e.starts_with("f.csv"), "{text:?}: {e}");
         }
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_not_a_header() {
+        // 5 rows in, 5 out: the t = 0 row after the mark is data, not a header.
+        let rows = "0,0,0,1\n1,0,0,1\n2,0,0,1\n3,0,0,1\n4,0,0,1\n";
+        let t = Samples::parse_csv(&format!("\u{feff}{rows}"), "b.csv").unwrap();
+        assert_eq!(t.t_s, [0.0, 1.0, 2.0, 3.0, 4.0]);
+        // With a header after the mark the header is skipped as usual.
+        let h = Samples::parse_csv(&format!("\u{feff}t,x,y,z\n{rows}"), "b.csv").unwrap();
+        assert_eq!(h.t_s.len(), 5);
+    }
+
+    #[test]
+    fn cr_only_and_crlf_line_ends_are_read_with_their_line_numbers() {
+        let lf = Samples::parse_csv("t,x,y,z\n0,0,0,1\n1,1,0,1\n", "f.csv").unwrap();
+        for text in [
+            "t,x,y,z\r0,0,0,1\r1,1,0,1\r",
+            "t,x,y,z\r\n0,0,0,1\r\n1,1,0,1\r\n",
+            "t,x,y,z\r0,0,0,1\n1,1,0,1",
+        ] {
+            assert_eq!(Samples::parse_csv(text, "f.csv").unwrap(), lf, "{text:?}");
+        }
+        // Line numbers count each line end once.
+        for text in ["0,0,0,1\r0,1,1,1\r", "0,0,0,1\r\n0,1,1,1\r\n"] {
+            let e = Samples::parse_csv(text, "f.csv").unwrap_err().to_string();
+            assert!(e.starts_with("f.csv:2:"), "{text:?}: {e}");
+        }
+    }
+
+    #[test]
+    fn errors_quote_a_short_escaped_excerpt_and_compact_numbers() {
+        let long = format!("0,0,0,1\n{}\0junk\n", "9".repeat(5_000_000));
+        let e = Samples::parse_csv(&long, "f.csv").unwrap_err().to_string();
+        assert!(
+            e.len() < 200 && e.contains("… (5000005 bytes)"),
+            "{}",
+            &e[..200.min(e.len())]
+        );
+        let nul = Samples::parse_csv("0,0,0,1\n1,\0,0,1\n", "f.csv")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            nul.contains("`1,\\0,0,1`") && !nul.contains('\0'),
+            "{nul:?}"
+        );
+        let back = Samples::parse_csv("1e308,0,0,1\n-1e308,0,0,1\n", "f.csv")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            back.contains("time -1e308 s does not increase (previous 1e308 s)"),
+            "{back}"
+        );
     }
 
     /// `Samples::read_csv` of `path` in a thread, failing the test if it blocks.

@@ -32,8 +32,8 @@ fn malformed_xml_and_unsupported_models_are_refused() {
     let (b, c, o) = ipanema_texts();
     refused(&first_half(&b), &c, &o, &["b.xml", "malformed XML"]);
     refused(&b, "<cables><cable_set", &o, &["c.xml", "malformed XML"]);
-    // Entity expansion is bounded by the XML parser.
-    refused(&laughs(), &c, &o, &["b.xml", "malformed XML"]);
+    // No entity is ever expanded: a DOCTYPE that can declare one is refused.
+    refused(&laughs(), &c, &o, &["b.xml", "internal subset", "refused"]);
     let two = b.replace("</links>", &format!("{}</links>", link_block(&b)));
     refused(&two, &c, &o, &["b.xml", "2 moving links"]);
     let revolute = b.replace("SPATIAL_EULER_XYZ", "REVOLUTE_Z");
@@ -177,6 +177,64 @@ fn laughs() -> String {
         s += &format!("<!ENTITY l{k} \"{prev}\">\n");
     }
     s + "]>\n<links>&l9;</links>"
+}
+
+/// A flat expansion (no nesting for the parser's depth limit to catch): one `len`-byte
+/// entity referenced `refs` times inside `<links>`, in an otherwise valid bodies file.
+fn wide_entity(b: &str, len: usize, refs: usize) -> String {
+    let decl = format!(
+        "<!DOCTYPE bodies_system [\n<!ENTITY e \"{}\">\n]>\n",
+        "x".repeat(len)
+    );
+    let start = b.find("<bodies_system").expect("root element");
+    let s = decl + &b[start..];
+    s.replacen("<links>", &format!("<links>{}", "&e;".repeat(refs)), 1)
+}
+
+#[test]
+fn entity_declarations_are_refused_before_any_expansion() {
+    let (b, c, o) = ipanema_texts();
+    // 1 KiB × 4000 references: 4 MiB of expansion from a 13 kB file.
+    let wide = wide_entity(&b, 1024, 4000);
+    assert!(wide.len() < 20_000, "small file: {}", wide.len());
+    refused(
+        &wide,
+        &c,
+        &o,
+        &["b.xml", "internal subset", "external DTD only"],
+    );
+    // In the cables file too, and after a comment and a processing instruction.
+    let dtd = "<?xml version=\"1.0\"?>\n<!-- [ -->\n<?pi [ ?>\n\
+               <!DOCTYPE cables SYSTEM \"a[b.dtd\" [ <!ENTITY e \"1\"> ]>\n";
+    let start = c.find("<cables").expect("root element");
+    let cables = format!("{dtd}{}", &c[start..]);
+    refused(&b, &cables, &o, &["c.xml", "internal subset"]);
+    // CASPR's own form (an external DTD, a `[` only inside its quoted name) is read.
+    let external = format!("<!DOCTYPE cables SYSTEM \"../a[1].dtd\">\n{}", &c[start..]);
+    import_str(&b, "b.xml", &external, "c.xml", &o).expect("external DTD is read");
+}
+
+#[test]
+fn a_value_is_the_whole_text_of_its_element() {
+    let (b, c, o) = ipanema_texts();
+    let plain = import_str(&b, "b.xml", &c, "c.xml", &o).expect("plain");
+    let split = b.replace("<mass>25.0</mass>", "<mass>2<!-- x -->5.0</mass>");
+    let split = import_str(&split, "b.xml", &c, "c.xml", &o).expect("comment inside");
+    let lead = b.replace("<mass>25.0</mass>", "<mass><!-- x -->25.0</mass>");
+    let lead = import_str(&lead, "b.xml", &c, "c.xml", &o).expect("comment before");
+    let cdata = b.replace("<mass>25.0</mass>", "<mass><![CDATA[2]]>5.0</mass>");
+    let cdata = import_str(&cdata, "b.xml", &c, "c.xml", &o).expect("CDATA");
+    // The test file's mass is 25.0 kg, read exactly.
+    for s in [&plain, &split, &lead, &cdata] {
+        assert_eq!(s.link.mass_kg, 25.0);
+    }
+    let nested = b.replace("<mass>25.0</mass>", "<mass>2<b/>5.0</mass>");
+    refused(
+        &nested,
+        &c,
+        &o,
+        &["b.xml:", "<mass>", "may not contain elements", "<b>"],
+    );
 }
 
 /// `import caspr` of the IPAnema test robot into `out`, without --t-min.

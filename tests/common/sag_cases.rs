@@ -47,8 +47,12 @@ pub fn heavy_paper_toml() -> String {
         &format!("weight_per_length = {HEAVY_WEIGHT_PER_LENGTH_N_M}"),
     );
     let t = swap(&t, "t_min = 60.0", &format!("t_min = {HEAVY_T_MIN_N}"));
-    assert!(!t.contains("[effects]"));
-    t + "\n[effects]\nsag = true\n"
+    let t = t.replacen("[effects]\nsag = false", "[effects]\nsag = true", 1);
+    assert!(
+        t.contains("[effects]\nsag = true"),
+        "spatial_paper.toml lost its sag line"
+    );
+    t
 }
 
 /// The heavy paper robot (see the module docs), checked to be the paper's robot otherwise.
