@@ -7,20 +7,9 @@ use cablevib::kinematics::{Geometry, Pose};
 use cablevib::modal::{dense_relative_accuracy, lambda_to_hz};
 use cablevib::scene::{ElementKind, Scene, DEFAULT_SCENE_TOML, PLANAR_SCENE_TOML};
 use cablevib::tension::clarabel_reference;
+use common::without_effects;
 use common::Rng;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
-
-/// A paper scene's text without its `[effects]` table (`sag = false`), so that a test can
-/// append a table of its own.
-fn without_effects(text: &str) -> String {
-    let i = text.find("[effects]\n").expect("[effects]");
-    let j = i
-        + text[i..]
-            .find("\n\n")
-            .expect("a blank line after [effects]")
-        + 2;
-    format!("{}{}", &text[..i], &text[j..])
-}
 
 fn f1(scene: &Scene, p: Vector3<f64>, t_min: f64) -> cablevib::estimator::Estimate {
     let mut est = Estimator::new(scene).unwrap();

@@ -16,6 +16,7 @@
 //!   allocator), fem and continuous, on the heavy paper robot, fast-like and suspended-8.
 
 mod common;
+use common::without_effects;
 #[path = "common/sag_cases.rs"]
 mod sag_cases;
 #[path = "common/sag_reference_py.rs"]
@@ -39,18 +40,6 @@ static A: CountingAlloc = CountingAlloc;
 
 const SPATIAL_TOML: &str = include_str!("../scenes/spatial_paper.toml");
 const PLANAR_TOML: &str = include_str!("../scenes/planar_paper.toml");
-
-/// A paper scene's text without its `[effects]` table (`sag = false`), so that a test can
-/// append a table of its own.
-fn without_effects(text: &str) -> String {
-    let i = text.find("[effects]\n").expect("[effects]");
-    let j = i
-        + text[i..]
-            .find("\n\n")
-            .expect("a blank line after [effects]")
-        + 2;
-    format!("{}{}", &text[..i], &text[j..])
-}
 
 /// The analysis JSON without its run times (the only fields that may differ run to run).
 fn timeless_json(s: &Scene) -> String {

@@ -136,3 +136,15 @@ impl Rng {
         }
     }
 }
+
+/// A paper scene's text without its `[effects]` table (`sag = false`), so that a test can
+/// append a table of its own.
+pub fn without_effects(text: &str) -> String {
+    let i = text.find("[effects]\n").expect("[effects]");
+    let j = i
+        + text[i..]
+            .find("\n\n")
+            .expect("a blank line after [effects]")
+        + 2;
+    format!("{}{}", &text[..i], &text[j..])
+}
