@@ -71,6 +71,7 @@
 // Layer 0
 pub mod alloc_count;
 pub mod input_file;
+mod simd;
 // Layer 1
 pub mod scene;
 // Layer 2

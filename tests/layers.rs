@@ -6,7 +6,7 @@
 //!
 //! | rank | modules |
 //! |---|---|
-//! | 0 | `input_file`, `alloc_count` |
+//! | 0 | `input_file`, `alloc_count`, `simd` |
 //! | 1 | `scene` |
 //! | 2 | `kinematics`, `caspr`, `sag` |
 //! | 3 | `trajectory`, `tension`, `cable` |
@@ -26,6 +26,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("input_file", 0),
     ("scene", 1),
     ("alloc_count", 0),
+    ("simd", 0),
     ("kinematics", 2),
     ("caspr", 2),
     ("sag", 2),

@@ -17,35 +17,32 @@ const BATCH_PHI_MAX: f64 = 1e5;
 /// is cheaper than the O(N) recurrence).
 pub const BATCH_MAX_ELEMENTS: usize = 64;
 
-/// Several uniform chains with the same element count `n_el` (2 ..= [`BATCH_MAX_ELEMENTS`])
-/// at one λ, by the Chebyshev recurrence in differential form, written chain-innermost so
-/// the chains run side by side (no trigonometry, no division inside the loop).
-///
-/// With δ = 1 − c = ½λm/(k + λm/6) and U_j = U_j(1 − δ): D_j = U_j − U_{j−1} obeys
-/// D_{j+1} = D_j − 2δU_j, U_{j+1} = U_j + D_{j+1} (U_0 = D_0 = 1), which never forms
-/// 1 − U_{N−2}/U_{N−1} by cancellation. Then s = −λm/2 + (k + λm/6)·D_{N−1}/U_{N−1}; the
-/// δ-derivatives follow the same recurrence; the blocked count is the number of sign
-/// changes of U_0 … U_{N−1} (Sturm: LDLᵀ pivots −β U_j/U_{j−1}, a zero counted positive).
-/// For δ < 3 (every λ ≥ 0) |U_j| ≤ 5^j, so nothing overflows for N ≤ 400.
-/// `k`, `m` (N/m, kg) are per element; results go to `out` (same length).
-pub fn eval_discrete_batch(k: &[f64], m: &[f64], n_el: usize, lambda: f64, out: &mut [ChainEval]) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above).
-            unsafe { batch_avx2(k, m, n_el, lambda, out) };
-            return;
-        }
-    }
-    batch_generic(k, m, n_el, lambda, out);
-}
-
-/// [`batch_generic`] compiled for AVX2 (4 lanes); the same IEEE operations in the same
-/// order, so bit-identical results.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn batch_avx2(k: &[f64], m: &[f64], n_el: usize, lambda: f64, out: &mut [ChainEval]) {
-    batch_generic(k, m, n_el, lambda, out);
+crate::simd::dispatch! {
+    /// Several uniform chains with the same element count `n_el`
+    /// (2 ..= [`BATCH_MAX_ELEMENTS`]) at one λ, by the Chebyshev recurrence in differential
+    /// form, written chain-innermost so the chains run side by side (no trigonometry, no
+    /// division inside the loop).
+    ///
+    /// With δ = 1 − c = ½λm/(k + λm/6) and U_j = U_j(1 − δ): D_j = U_j − U_{j−1} obeys
+    /// D_{j+1} = D_j − 2δU_j, U_{j+1} = U_j + D_{j+1} (U_0 = D_0 = 1), which never forms
+    /// 1 − U_{N−2}/U_{N−1} by cancellation. Then s = −λm/2 + (k + λm/6)·D_{N−1}/U_{N−1};
+    /// the δ-derivatives follow the same recurrence; the blocked count is the number of
+    /// sign changes of U_0 … U_{N−1} (Sturm: LDLᵀ pivots −β U_j/U_{j−1}, a zero counted
+    /// positive).
+    /// For δ < 3 (every λ ≥ 0) |U_j| ≤ 5^j, so nothing overflows for N ≤ 400.
+    /// `k`, `m` (N/m, kg) are per element; results go to `out` (same length).
+    ///
+    /// Runs the portable body compiled for AVX2 when the CPU has it (the same IEEE
+    /// operations in the same order, so bit-identical results).
+    pub fn eval_discrete_batch(
+        k: &[f64],
+        m: &[f64],
+        n_el: usize,
+        lambda: f64,
+        out: &mut [ChainEval],
+    ) = batch_generic;
+    features ["avx2"];
+    tiers discrete_tier;
 }
 
 /// Chains per block of the batched evaluations (fixed-size lanes: no per-call clearing of
@@ -125,29 +122,22 @@ fn sin_cos_kernel(r: f64) -> (f64, f64) {
     (r * z * (S1 + z * ps), z * pc - 0.5 * z)
 }
 
-/// [`super::Chain::eval`] of several continuous chains (K, m per chain: `k`, `m`, N/m and
-/// kg) at one λ: one square root of λ, and cot φ from a Cody-Waite reduction by π/2 (two
-/// parts; φ ≤ 1e5 here) and fdlibm's polynomial kernels instead of a library sin/cos per
-/// chain, branch-free so that it vectorizes (an AVX2 build is chosen at run time: the same
-/// operations, so the same results). Agrees with the scalar form within its conditioning
-/// (tested). Chains outside 1e-3 ≤ φ ≤ 1e5 (`BATCH_PHI_MIN`, `BATCH_PHI_MAX`), or with
-/// K or m ≤ 0, and λ ≤ 0 take the scalar form.
-pub fn eval_continuous_batch(k: &[f64], m: &[f64], lambda: f64, out: &mut [ChainEval]) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above).
-            unsafe { continuous_avx2(k, m, lambda, out) };
-            return;
-        }
-    }
-    continuous_generic(k, m, lambda, out);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn continuous_avx2(k: &[f64], m: &[f64], lambda: f64, out: &mut [ChainEval]) {
-    continuous_generic(k, m, lambda, out);
+crate::simd::dispatch! {
+    /// [`super::Chain::eval`] of several continuous chains (K, m per chain: `k`, `m`, N/m
+    /// and kg) at one λ: one square root of λ, and cot φ from a Cody-Waite reduction by π/2
+    /// (two parts; φ ≤ 1e5 here) and fdlibm's polynomial kernels instead of a library
+    /// sin/cos per chain, branch-free so that it vectorizes (an AVX2 build is chosen at run
+    /// time: the same operations, so the same results). Agrees with the scalar form within
+    /// its conditioning (tested). Chains outside 1e-3 ≤ φ ≤ 1e5 (`BATCH_PHI_MIN`,
+    /// `BATCH_PHI_MAX`), or with K or m ≤ 0, and λ ≤ 0 take the scalar form.
+    pub fn eval_continuous_batch(
+        k: &[f64],
+        m: &[f64],
+        lambda: f64,
+        out: &mut [ChainEval],
+    ) = continuous_generic;
+    features ["avx2"];
+    tiers continuous_tier;
 }
 
 #[inline(always)]
@@ -285,6 +275,79 @@ mod tests {
             }
         }
         eprintln!("continuous batch vs library: worst difference / tolerance {worst:.2}");
+    }
+
+    /// Every tier the CPU has (AVX2) against the portable body, bit for bit (tolerance 0:
+    /// the same IEEE operations in the same order), on seeded random chains: 1 to 19 per
+    /// call (full and partial blocks), k and m from 1e-150 to 1e150 and from typical ranges,
+    /// λ from 1e-30 to 1e30, 0 and negative, every element count the batch takes.
+    #[test]
+    fn dispatched_tiers_equal_the_portable_body_bit_for_bit() {
+        let mut rng = crate::simd::TestRng::new(0x5eed_ba7c);
+        let bits = |e: &[ChainEval]| -> Vec<(u64, u64, u32)> {
+            e.iter()
+                .map(|c| (c.s.to_bits(), c.ds.to_bits(), c.below))
+                .collect()
+        };
+        let zero = ChainEval {
+            s: 0.0,
+            ds: 0.0,
+            below: 0,
+        };
+        let mut tiers_run = 0;
+        for trial in 0..3000 {
+            let n = 1 + (rng.next_u64() % 19) as usize;
+            let extreme = trial % 3 == 0;
+            let (k, m): (Vec<f64>, Vec<f64>) = (0..n)
+                .map(|_| {
+                    if extreme {
+                        (rng.decades(-150.0, 150.0), rng.decades(-150.0, 150.0))
+                    } else {
+                        (rng.decades(2.0, 9.0), rng.decades(-5.0, 0.0))
+                    }
+                })
+                .unzip();
+            let lambda = match trial % 7 {
+                0 => 0.0,
+                1 => -rng.decades(-3.0, 6.0),
+                2 => rng.decades(-30.0, 30.0),
+                _ => rng.decades(-2.0, 8.0),
+            };
+            let n_el = 2 + (rng.next_u64() % (BATCH_MAX_ELEMENTS as u64 - 1)) as usize;
+            let mut want = vec![zero; n];
+            discrete_tier(0, &k, &m, n_el, lambda, &mut want).unwrap();
+            let mut want_c = vec![zero; n];
+            continuous_tier(0, &k, &m, lambda, &mut want_c).unwrap();
+            for tier in 1..=2 {
+                let mut got = vec![zero; n];
+                if discrete_tier(tier, &k, &m, n_el, lambda, &mut got).is_some() {
+                    tiers_run += 1;
+                    assert_eq!(
+                        bits(&got),
+                        bits(&want),
+                        "discrete tier {tier} trial {trial}"
+                    );
+                }
+                let mut got_c = vec![zero; n];
+                if continuous_tier(tier, &k, &m, lambda, &mut got_c).is_some() {
+                    assert_eq!(
+                        bits(&got_c),
+                        bits(&want_c),
+                        "continuous tier {tier} trial {trial}"
+                    );
+                }
+            }
+            let mut got = vec![zero; n];
+            eval_discrete_batch(&k, &m, n_el, lambda, &mut got);
+            assert_eq!(bits(&got), bits(&want), "discrete dispatched trial {trial}");
+            eval_continuous_batch(&k, &m, lambda, &mut got);
+            assert_eq!(
+                bits(&got),
+                bits(&want_c),
+                "continuous dispatched trial {trial}"
+            );
+        }
+        eprintln!("discrete batch: {tiers_run} tier runs beside the portable body");
     }
 
     #[test]
