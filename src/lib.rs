@@ -47,23 +47,18 @@
 //! ## Layers
 //!
 //! Each layer uses only the layers below it (`tests/layers.rs` checks every `crate::` path),
-//! so the crate reads bottom-up:
+//! so the crate reads bottom-up; the modules are declared below in layer order. The table of
+//! layers, what each module owns and a pose's path through one cycle are in
+//! `docs/architecture.md`.
 //!
-//! | layer | modules | what |
-//! |---|---|---|
-//! | 0 | [`input_file`], [`alloc_count`] | bounded reading of scene and trajectory files; a counting allocator |
-//! | 1 | [`scene`] | robot description, TOML parsing and validation, `Scene::load` |
-//! | 2 | [`kinematics`], [`caspr`], [`sag`] | poses, cable vectors and lengths, the structure matrix; import of CASPR's XML models into a scene; the sagging cable's elastic catenary |
-//! | 3 | [`trajectory`], [`tension`], [`cable`] | the paper's circle and CSV paths; the tension QP (active set, Clarabel reference); element models and chains |
-//! | 4 | [`modal`] | D(λ) of the loaded chains, the first mode, the end-effector tracker, the dense reference |
-//! | 5 | [`estimator`] | the per-cycle pipeline, the inverse T_min query, the offline `auto` choice and reference |
-//! | 6 | [`service`], [`study`] | iceoryx2 wiring; offline studies (maps, trajectories, T_min sweeps, accuracy) |
-//! | 7 | [`report`] | the studies' CSV files, SVG plots and Markdown |
-//! | 8 | [`cli`] | the command line, used by the binary alone |
+//! ## Example
 //!
-//! A pose's path through one cycle: [`service`] takes it from iceoryx2 →
-//! [`estimator::Estimator::update`] → [`kinematics`] → [`tension`] → [`cable`] → [`modal`]
-//! → [`estimator::Estimate`] → [`service`] publishes it.
+//! The README's example (also `examples/estimate.rs`): f1 and the tensions along a line
+//! through the paper's spatial robot.
+//!
+//! ```
+#![doc = include_str!("../examples/estimate.rs")]
+//! ```
 #![warn(missing_docs)]
 // Numerical kernels index several arrays with one loop variable; iterator chains would
 // hide the maths. `!(x > 0.0)` is used on purpose: it is also true for NaN.

@@ -2,19 +2,8 @@
 //! layer below the file's own (or to its own module), so the dependency graph has no
 //! cycles and a reader can learn the crate bottom-up from `src/lib.rs`.
 //!
-//! The layers, bottom-up (the same list as the crate docs and the README):
-//!
-//! | rank | modules |
-//! |---|---|
-//! | 0 | `input_file`, `alloc_count`, `simd` |
-//! | 1 | `scene` |
-//! | 2 | `kinematics`, `caspr`, `sag` |
-//! | 3 | `trajectory`, `tension`, `cable` |
-//! | 4 | `modal` |
-//! | 5 | `estimator` |
-//! | 6 | `service`, `study` |
-//! | 7 | `report` |
-//! | 8 | `cli` (used by `main.rs` alone) |
+//! The layers, with what each module owns, are described in one place,
+//! `docs/architecture.md`; [`LAYERS`] below is their machine-readable form.
 //!
 //! Modules of one rank do not use each other, with the exceptions in [`SIBLING_EDGES`].
 

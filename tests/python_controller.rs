@@ -4,7 +4,7 @@
 //!   `check_layout.py` compares `ctypes.sizeof`, alignment, type names, every field's offset,
 //!   size and element type, and the constants with a JSON export of
 //!   `cablevib_ipc::layout::ALL_LAYOUTS` written here;
-//! - `examples/python/controller.py` (the file the README runs) against `cablevib serve` as a
+//! - `examples/python/controller.py` (the file docs/service.md runs) against `cablevib serve` as a
 //!   separate process, with poses published from this test: estimates arrive with status ok
 //!   and the f1 of the library's `Estimator` for the same pose, margin answers arrive;
 //! - a service carrying another schema-version attribute: the Python controller exits with a

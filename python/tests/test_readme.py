@@ -1,5 +1,6 @@
-"""The README's "Use from Python" snippet is python/examples/quickstart.py, verbatim, and
-it runs; the package declares numpy as a dependency."""
+"""The snippet of docs/python.md (the Python package's page, linked from the README) is
+python/examples/quickstart.py, verbatim, and it runs; the package declares numpy as a
+dependency."""
 
 import importlib.metadata
 import re
@@ -12,10 +13,9 @@ EXAMPLE = REPO / "python" / "examples" / "quickstart.py"
 
 
 def readme_snippet() -> str:
-    text = (REPO / "README.md").read_text()
-    section = text.split("\n## Use from Python\n", 1)[1].split("\n## ", 1)[0]
-    blocks = re.findall(r"```python\n(.*?)```", section, flags=re.S)
-    assert len(blocks) == 1, "one python block in the section"
+    text = (REPO / "docs" / "python.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    assert len(blocks) == 1, "one python block in docs/python.md"
     return blocks[0]
 
 
