@@ -13,11 +13,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let x = -0.4 + 0.2 * i as f64; // m, along x through the default pose
         let pose = Pose::in_scene(&scene, Vector3::new(x, 0.0, 1.25));
         let e = est.update(&pose, Tmin::Scene); // one control cycle
-        let t = e.tensions();
-        println!(
-            "x {x:+.1} m: {:?}, f1 {:.4} Hz, T {t:.1?} N",
-            e.status, e.f1_hz
-        );
+        let (f1, t) = (e.f1_hz, e.tensions());
+        println!("x {x:+.1} m: {:?}, f1 {f1:.4} Hz, T {t:.1?} N", e.status);
     }
     Ok(())
 }

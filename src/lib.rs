@@ -88,3 +88,32 @@ pub mod study;
 pub mod report;
 // Layer 8
 pub mod cli;
+
+#[cfg(test)]
+mod readme_tests {
+    /// The README's Rust example is `examples/estimate.rs` (below its `//!` header), which
+    /// the crate docs above run as a doctest: so the README's code compiles and runs.
+    #[test]
+    fn readme_example_is_the_doctested_example() {
+        let root = env!("CARGO_MANIFEST_DIR");
+        let readme = std::fs::read_to_string(format!("{root}/README.md")).expect("README.md");
+        let example = std::fs::read_to_string(format!("{root}/examples/estimate.rs"))
+            .expect("examples/estimate.rs");
+        let blocks: Vec<&str> = readme
+            .split("```rust\n")
+            .skip(1)
+            .map(|b| b.split("```").next().unwrap_or(""))
+            .collect();
+        assert_eq!(blocks.len(), 1, "one Rust block in README.md");
+        let body: String = example
+            .lines()
+            .skip_while(|l| l.starts_with("//!"))
+            .skip_while(|l| l.is_empty())
+            .map(|l| format!("{l}\n"))
+            .collect();
+        assert_eq!(
+            blocks[0], body,
+            "README.md's example differs from examples/estimate.rs"
+        );
+    }
+}
