@@ -90,7 +90,7 @@ def test_analyze_equals_the_cli_to_the_last_bit(cli_json, scene, kwargs):
 
 
 def test_paper_table_8_column():
-    # README / docs: `analyze scenes/spatial_paper.toml` gives the Table 8 (60 N) FEM column
+    # docs/cli.md: `analyze scenes/spatial_paper.toml` gives the Table 8 (60 N) FEM column
     # of the faithful model, printed to 6 decimals: 11.185488 (×3), 11.186243 (×5),
     # 19.765427 (×2) Hz. Tolerance: half a unit of the last printed digit.
     table = [11.185488] * 3 + [11.186243] * 5 + [19.765427] * 2

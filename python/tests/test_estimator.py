@@ -210,8 +210,8 @@ def test_warm_sweep_matches_cold_estimates():
     for i in range(0, len(path), 17):
         cold = cablevib.Estimator(s).update(path[i])
         assert cold.cold_start
-        # The warm path converges to the same root: README's warm-vs-cold bounds (f1
-        # ≤ 1e-11, end-effector mode ≤ 1e-10 relative).
+        # The warm path converges to the same root: the warm-vs-cold bounds of
+        # docs/accuracy.md (f1 ≤ 1e-11, end-effector mode ≤ 1e-10 relative).
         assert abs(estimates[i].f1_hz / cold.f1_hz - 1) <= 1e-11
         assert abs(estimates[i].ee_mode_hz / cold.ee_mode_hz - 1) <= 1e-10
     f1 = np.array([e.f1_hz for e in estimates])
