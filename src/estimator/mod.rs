@@ -40,7 +40,9 @@
 //! offline. [`sag_warning`] says when a scene with sag off should have it on.
 //!
 //! [`reference_analysis`] is the offline reference of the same model: Clarabel for the
-//! tensions, dense assembly and a dense generalized eigensolver for every frequency.
+//! tensions, dense assembly and a dense generalized eigensolver for every frequency. It
+//! reads a [`PoseModel`] (one pose's geometry, tensions, cable models and [`EndEffector`]),
+//! built from the same pieces as the cycle's forward model; so does `cablevib modes`.
 //! [`resolve_auto`] picks the model of `element = "auto"` scenes. Both allocate.
 
 mod auto;

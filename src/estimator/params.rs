@@ -327,9 +327,8 @@ mod tests {
         assert_eq!(back, d);
     }
 
-    /// The sagged continuous mesh is the parameters' choice, no longer read off the cycle
-    /// budget (which used to pick the real-time mesh whenever the budget was finite): with
-    /// the real-time budget and the offline mesh, f1 at the default pose of the sagging
+    /// The sagged continuous mesh is the parameters' choice, independent of the cycle
+    /// budget: with the real-time budget and the offline mesh, f1 at the default pose of the sagging
     /// `suspended-8` is bit for bit the offline estimator's (same mesh, same Newton
     /// iterates: the budget only cuts a search, and this one fits), and differs from the
     /// real-time preset's (the real-time mesh, 1e-5 rule, moves f1 by ~1e-7 relative).
