@@ -183,8 +183,8 @@ fn chains(c: &mut Criterion, case: &Case, poses: &[PoseCables]) {
     let ee = SagEndEffector::Point {
         mass_kg: s.ee_mass_kg,
     };
-    // The real-time budget, as the service runs it (it also selects the continuous
-    // chains' real-time mesh).
+    // The real-time budget and the continuous chains' real-time mesh, as the service runs
+    // them (EstimatorParams::realtime).
     let params = ModalParams {
         cycle_evaluations: CYCLE_EVALUATIONS,
         ..ModalParams::default()
@@ -227,11 +227,10 @@ fn cycles(c: &mut Criterion, case: &Case) {
         for sag in [false, true] {
             let mut s = case.scene.with_model(el, ELEMENTS);
             s.model.sag = sag;
-            let mut p = EstimatorParams {
+            let p = EstimatorParams {
                 ee_mode: false,
-                ..EstimatorParams::default()
+                ..EstimatorParams::realtime()
             };
-            p.modal.cycle_evaluations = CYCLE_EVALUATIONS;
             let mut est = Estimator::with_params(&s, p).unwrap();
             let model = if sag { "sag" } else { "chord" };
             let label = format!("sag_parts/{}/cycle_{model}_{}", s.name, el.as_str());

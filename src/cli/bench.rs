@@ -8,7 +8,6 @@ use crate::estimator::{reference_analysis, Estimator, EstimatorParams, Tmin};
 use crate::modal::lambda_to_hz;
 use crate::scene::Scene;
 use crate::service::stats::{percentile, StatusHistogram};
-use crate::study::estimator_params;
 use crate::trajectory::{circle_pose_with_radius, CIRCLE_RADIUS_M};
 use clap::Args;
 use std::time::Instant;
@@ -161,10 +160,11 @@ pub fn run(a: &BenchArgs, allocations: AllocCounter) -> Result<(), CliError> {
             "--cycles must be > 0, --period-s finite and > 0, --radius-m finite and >= 0".into(),
         ));
     }
-    let mut p = estimator_params(&s, !a.no_ee_mode);
-    // The real-time budget, as the service runs.
-    p.modal.cycle_evaluations = crate::modal::CYCLE_EVALUATIONS;
-    p.modal.max_scan_evaluations = crate::modal::SPREAD_SCAN_EVALUATIONS;
+    // The real-time preset, as the service runs.
+    let p = EstimatorParams {
+        ee_mode: !a.no_ee_mode,
+        ..EstimatorParams::realtime().for_scene(&s)
+    };
     let mut est = Estimator::with_params(&s, p).map_err(|e| CliError::Analysis(e.to_string()))?;
     let c = run_circle(&mut est, &s, a, allocations);
     // Dense reference on a sample of poses, timed in the same run.

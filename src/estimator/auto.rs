@@ -234,11 +234,11 @@ fn default_pose_diagnostics(scene: &Scene) -> (f64, f64) {
     let n = scene.n_cables();
     let (t_min_n, t_max_n) = (
         Tmin::Scene.per_cable(scene),
-        super::pipeline::cable_t_max_n(scene),
+        super::forward::cable_t_max_n(scene),
     );
     let t = crate::tension::clarabel_reference_bounds(
         &g,
-        &super::pipeline::wrench6(scene),
+        &scene.wrench6_n(),
         &t_min_n[..n],
         &t_max_n[..n],
     )

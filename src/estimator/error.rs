@@ -195,6 +195,9 @@ pub enum BuildError {
         /// Why.
         reason: Box<EstimatorError>,
     },
+    /// A parameter is out of its bounds ([`super::EstimatorParams::check`]).
+    #[error(transparent)]
+    Params(#[from] super::ParamsError),
 }
 
 /// Errors of the reference pipeline.

@@ -1,5 +1,5 @@
 //! The inverse query: the smallest uniform T_min (N) for which f1 at a pose reaches a
-//! required frequency f (Hz). Runs the forward [`Pipeline`](super::pipeline::Pipeline) on
+//! required frequency f (Hz). Runs the forward model ([`Forward`](super::forward::Forward)) on
 //! the estimator's second set of buffers, so the cycle's warm state is untouched. No
 //! allocation; at most [`MAX_EVALUATIONS`] forward evaluations (tension distribution + f1).
 //!
@@ -409,7 +409,7 @@ impl Estimator {
     /// f1 (Hz) at the search's pose (geometry already set) for T_min = `t_min_n`.
     fn inverse_f1(&mut self, s: &mut Search<'_>, t_min_n: f64) -> Result<f64, EstimatorError> {
         s.evals += 1;
-        if self.inverse.sag.is_some() {
+        if self.inverse.is_sagged() {
             // Cold: F is then what a fresh estimator computes (see the module doc).
             self.inverse.reset_tension_warm_start();
         }

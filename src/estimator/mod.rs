@@ -16,8 +16,8 @@
 //!    end-effector participation (0 ..= 1); and, when enabled, the end-effector mode;
 //! 5. the static end-effector stiffness (N/m; N/rad and N·m/rad blocks for a rigid body).
 //!
-//! **Budget.** With [`ModalParams::cycle_evaluations`] finite (the real-time configuration,
-//! [`Estimator::realtime`]: [`crate::modal::CYCLE_EVALUATIONS`] = 32) a cycle never evaluates
+//! **Budget.** With [`ModalParams::cycle_evaluations`] finite (the real-time preset,
+//! [`EstimatorParams::realtime`]: [`crate::modal::CYCLE_EVALUATIONS`] = 32) a cycle never evaluates
 //! D(λ) more often than that: f1 is solved exactly first, the end-effector mode with what is
 //! left, and the end-effector work that does not fit is continued in the next cycles; the
 //! estimate then carries the last answer and its age ([`Estimate::ee_mode_age_cycles`]).
@@ -40,47 +40,51 @@
 //! offline. [`sag_warning`] says when a scene with sag off should have it on.
 //!
 //! [`reference_analysis`] is the offline reference of the same model: Clarabel for the
-//! tensions, dense assembly and a dense generalized eigensolver for every frequency.
+//! tensions, dense assembly and a dense generalized eigensolver for every frequency. It
+//! reads a [`PoseModel`] (one pose's geometry, tensions, cable models and [`EndEffector`]),
+//! built from the same pieces as the cycle's forward model; so does `cablevib modes`.
 //! [`resolve_auto`] picks the model of `element = "auto"` scenes. Both allocate.
 
 mod auto;
 mod error;
 mod estimate;
+mod forward;
 mod inverse;
 mod modes;
 mod params;
-mod pipeline;
+mod pose_model;
 mod reference;
 mod sag_check;
-mod sagged;
 mod t_min;
 
 pub use auto::{resolve_auto, AutoChoice};
 pub use error::{AnalysisError, BuildError, EstimatorError, InputError, TminQueryError};
 pub use estimate::{Estimate, Status};
+pub use forward::EndEffector;
 pub use inverse::{TminAnswer, MAX_EVALUATIONS as TMIN_QUERY_MAX_EVALUATIONS};
-pub use params::EstimatorParams;
+pub use params::{EstimatorParams, ParamsError, SagModelParams};
+pub use pose_model::{build_models, PoseModel};
 pub use reference::{
-    build_models, reference_analysis, reference_analysis_at, structured_analysis, ReferenceAnalysis,
+    reference_analysis, reference_analysis_at, structured_analysis, ReferenceAnalysis,
 };
 pub use sag_check::{cables_can_sag, sag_warning, sagged_reference, SagWarning};
 pub use t_min::Tmin;
 
-use crate::cable::{up_frame, CableModel};
+use crate::cable::CableModel;
 use crate::kinematics::Pose;
 use crate::modal::{lambda_to_hz, ModalParams, ModalSolver};
 use crate::scene::{is_valid_t_min, ElementKind, Scene, MAX_CABLES};
 use crate::tension::TensionInfo;
+use forward::Forward;
 use nalgebra::{Matrix3, Matrix6, Vector3};
-use pipeline::{wrench6, Pipeline};
 
 /// The real-time estimator of one scene.
 #[derive(Debug, Clone)]
 pub struct Estimator {
     scene: Scene,
     params: EstimatorParams,
-    /// The cycle's solvers (their warm state carries from cycle to cycle).
-    cycle: Pipeline,
+    /// The cycle's forward model (its warm state carries from cycle to cycle).
+    cycle: Forward,
     expected_rank: u32,
     last_ok_position: Option<Vector3<f64>>,
     /// λ₁ of the last three warm cycles (rad²/s²; NaN where there is none): the predictor's
@@ -95,8 +99,8 @@ pub struct Estimator {
     /// Each cable's upper bound (N), from the scene.
     t_max_n: [f64; MAX_CABLES],
     estimate: Estimate,
-    /// Scratch solvers of the inverse query (so it leaves the cycle's warm state alone).
-    inverse: Pipeline,
+    /// The inverse query's forward model (so it leaves the cycle's warm state alone).
+    inverse: Forward,
     auto: Option<AutoChoice>,
     /// The last end-effector answer (Hz, participation, age in cycles), None when unknown.
     last_ee: Option<(f64, f64, u32)>,
@@ -105,25 +109,19 @@ pub struct Estimator {
 impl Estimator {
     /// Build for a scene with default parameters (the scene's participation threshold).
     pub fn new(scene: &Scene) -> Result<Estimator, BuildError> {
-        let mut p = EstimatorParams::default();
-        p.modal.ee_participation_min = scene.model.ee_participation_min;
-        Self::with_params(scene, p)
+        Self::with_params(scene, EstimatorParams::default().for_scene(scene))
     }
 
-    /// [`Self::new`] with the real-time per-cycle evaluation budget
-    /// ([`crate::modal::CYCLE_EVALUATIONS`]) and the spread scan's bound
-    /// ([`crate::modal::SPREAD_SCAN_EVALUATIONS`]), as the service runs it.
+    /// [`Self::new`] with the real-time preset ([`EstimatorParams::realtime`]), as the
+    /// service runs it.
     pub fn realtime(scene: &Scene) -> Result<Estimator, BuildError> {
-        let mut p = EstimatorParams::default();
-        p.modal.ee_participation_min = scene.model.ee_participation_min;
-        p.modal.cycle_evaluations = crate::modal::CYCLE_EVALUATIONS;
-        p.modal.max_scan_evaluations = crate::modal::SPREAD_SCAN_EVALUATIONS;
-        Self::with_params(scene, p)
+        Self::with_params(scene, EstimatorParams::realtime().for_scene(scene))
     }
 
-    /// Build with explicit parameters. Allocates everything the cycle needs and checks
-    /// the scene's default pose.
+    /// Build with explicit parameters (refused when [`EstimatorParams::check`] fails).
+    /// Allocates everything the cycle needs and checks the scene's default pose.
     pub fn with_params(scene: &Scene, params: EstimatorParams) -> Result<Estimator, BuildError> {
+        params.check()?;
         if scene.model.element == ElementKind::Auto {
             let (resolved, choice) = resolve_auto(scene)?;
             let mut est = Self::with_params(&resolved, params)?;
@@ -131,11 +129,10 @@ impl Estimator {
             return Ok(est);
         }
         let n = scene.n_cables();
-        let frame = up_frame(&scene.gravity_m_s2);
         let mut est = Estimator {
             scene: scene.clone(),
             params,
-            cycle: Pipeline::new(scene, frame, params.tension, params.modal),
+            cycle: Forward::new(scene, &params.cycle_forward()),
             expected_rank: 0,
             last_ok_position: None,
             last_lambda1: f64::NAN,
@@ -143,19 +140,9 @@ impl Estimator {
             prev2_lambda1: f64::NAN,
             last_t_min_n: [f64::NAN; MAX_CABLES],
             t_min_n: Tmin::Scene.per_cable(scene),
-            t_max_n: pipeline::cable_t_max_n(scene),
+            t_max_n: forward::cable_t_max_n(scene),
             estimate: Estimate::empty(n),
-            inverse: Pipeline::new(
-                scene,
-                frame,
-                params.tension,
-                ModalParams {
-                    certify: false,
-                    // The inverse query is not a cycle: unlimited.
-                    cycle_evaluations: u32::MAX,
-                    ..params.modal
-                },
-            ),
+            inverse: Forward::new(scene, &params.t_min_query_forward()),
             auto: None,
             last_ee: None,
         };
@@ -176,22 +163,13 @@ impl Estimator {
         // pose the cables cannot hold (a robot whose force_min is too high there, a --t-min
         // near t_max) still gives it; such a pose is then estimated like any other, with the
         // status TensionInfeasible. Only a default pose with no rank at all is refused.
-        let solved = c
-            .tension
-            .solve_wrench_bounds(
-                &c.geometry,
-                &wrench6(scene),
-                &est.t_min_n[..n],
-                &est.t_max_n[..n],
-            )
-            .map(|_| ());
-        est.expected_rank = c.tension.info().rank;
-        c.tension.reset_warm_start();
+        let (solved, rank) = c.chord_tensions(scene, &est.t_min_n[..n], params.tension);
+        est.expected_rank = rank;
         match solved {
             Ok(_) | Err(crate::tension::TensionError::Infeasible { .. }) => {}
             Err(e) => return Err(default_pose(e.into())),
         }
-        if scene.model.sag && solved.is_ok() {
+        if c.is_sagged() && solved.is_ok() {
             // The sagged statics and modes at the default pose: only a failure other than
             // the statuses of a pose (infeasible, slack) makes the robot unusable.
             let t_min = est.t_min_n;
@@ -225,31 +203,38 @@ impl Estimator {
         &self.estimate
     }
 
-    /// The cable models of the last successful cycle.
+    /// The cable models of the last successful cycle (none when the cables sag: their
+    /// chains live in the sagged solver, see [`Self::dense_matrices`]).
     pub fn cable_models(&self) -> &[CableModel] {
-        &self.cycle.models
+        self.cycle.cable_models()
     }
 
-    /// The structured eigen solver as loaded at the last pose (its sum rules, counters).
+    /// The structured eigen solver of taut cables as loaded at the last pose (its sum
+    /// rules, counters). When the cables sag it has no loaded pose (its queries answer
+    /// `NotLoaded`); [`Self::modes`] and [`Self::dense_modes`] serve both models.
     pub fn modal(&self) -> &ModalSolver {
-        &self.cycle.modal
+        static UNLOADED: std::sync::OnceLock<ModalSolver> = std::sync::OnceLock::new();
+        self.cycle
+            .taut_modal()
+            .unwrap_or_else(|| UNLOADED.get_or_init(|| ModalSolver::new(ModalParams::default())))
     }
 
-    /// End-effector bookkeeping counters (see [`ModalSolver::rescan_counts`]).
+    /// End-effector bookkeeping counters (see [`ModalSolver::rescan_counts`]; zero when the
+    /// cables sag).
     pub fn rescan_counts(&self) -> crate::modal::RescanCounts {
-        self.cycle.modal.rescan_counts()
+        self.cycle.rescan_counts()
     }
 
     /// With `[effects] sag`: each cable's elastic catenary of the last cycle's tension
     /// solve (unstretched length, H, V, tensions along it, sag, Irvine's λ²); None for the
     /// chord models.
     pub fn sag_catenaries(&self) -> Option<&[crate::sag::Catenary]> {
-        self.cycle.sag.as_ref().map(|s| s.catenaries())
+        self.cycle.catenaries()
     }
 
-    /// Info of the last tension solve.
+    /// Info of the last tension solve (with sag: its SQP iterations).
     pub fn tension_info(&self) -> TensionInfo {
-        self.cycle.tension.info()
+        self.cycle.tension_info()
     }
 
     /// Forget every warm start: the next cycle starts cold.
@@ -257,10 +242,7 @@ impl Estimator {
         self.last_ee = None;
         self.last_ok_position = None;
         self.last_lambda1 = f64::NAN;
-        self.cycle.reset_tension_warm_start();
-        if let Some(sag) = self.cycle.sag.as_mut() {
-            sag.forget_pending();
-        }
+        self.cycle.reset();
     }
 
     /// One cycle: pose and lower tension bounds → estimate. `Tmin::Scene` takes each
@@ -374,8 +356,7 @@ impl Estimator {
             None => false,
         };
         if !warm {
-            self.cycle.reset_tension_warm_start();
-            self.cycle.modal.reset_tracking();
+            self.cycle.start_cold();
         }
         let warm_l = self.predict_lambda1(warm);
         let root = self.cycle.first_root(
@@ -412,7 +393,7 @@ impl Estimator {
         self.write_stiffness(e);
         e.eigen_evaluations = self.cycle.evaluations_since_load();
         check_mechanism(&self.scene, pose, &e.stiffness6, r1.lambda)?;
-        if self.params.ee_mode && self.cycle.sag.is_none() {
+        if self.params.ee_mode {
             self.ee_mode(&r1, warm_l.is_some(), e);
             e.eigen_evaluations = self.cycle.evaluations_since_load();
         }
@@ -429,8 +410,11 @@ impl Estimator {
             // A cold start (a jump): the last answer belongs to another pose.
             self.last_ee = None;
         }
-        let thr = self.cycle.modal.params().ee_participation_min;
-        match self.cycle.modal.ee_mode_tracked(r1, warm) {
+        let thr = self.params.modal.ee_participation_min;
+        let Some(tracked) = self.cycle.ee_mode_tracked(r1, warm) else {
+            return;
+        };
+        match tracked {
             Ok(Some(r)) if r.ee_participation >= thr => {
                 self.last_ee = Some((lambda_to_hz(r.lambda), r.ee_participation, 0));
             }
@@ -452,30 +436,10 @@ impl Estimator {
 
     /// The static end-effector stiffness of the loaded models into `e`.
     fn write_stiffness(&mut self, e: &mut Estimate) {
-        if let Some(sag) = &self.cycle.sag {
-            let dim = if self.scene.rigid { 6 } else { 3 };
-            let k = sag.static_stiffness().unwrap_or(Matrix6::repeat(f64::NAN));
-            e.stiffness6 = k;
-            e.stiffness_n_m = k.fixed_view::<3, 3>(0, 0).into_owned();
-            e.stiffness_dim = dim;
-            return;
-        }
-        if self.scene.rigid {
-            // Closed form: no evaluation of D(λ) out of the cycle's budget.
-            let k6 = self.cycle.modal.static_stiffness6_closed();
-            e.stiffness6 = k6;
-            e.stiffness_n_m = k6.fixed_view::<3, 3>(0, 0).into_owned();
-            e.stiffness_dim = 6;
-        } else {
-            let mut k = Matrix3::zeros();
-            for cm in &self.cycle.models {
-                k += cm.static_stiffness;
-            }
-            e.stiffness_n_m = k;
-            e.stiffness6 = Matrix6::zeros();
-            e.stiffness6.fixed_view_mut::<3, 3>(0, 0).copy_from(&k);
-            e.stiffness_dim = 3;
-        }
+        let k6 = self.cycle.static_stiffness(&self.scene);
+        e.stiffness6 = k6;
+        e.stiffness_n_m = k6.fixed_view::<3, 3>(0, 0).into_owned();
+        e.stiffness_dim = if self.scene.rigid { 6 } else { 3 };
     }
 }
 
@@ -495,15 +459,11 @@ pub fn check_mechanism(
     if !scene.rigid {
         return Ok(());
     }
-    let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
-    let mut m = Matrix6::zeros();
-    m.fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(Matrix3::identity() * scene.ee_mass_kg));
-    m.fixed_view_mut::<3, 3>(3, 3)
-        .copy_from(&(rot * scene.ee_inertia_kg_m2 * rot.transpose()));
+    let m = EndEffector::of_body(scene, pose).mass6();
     if !crate::modal::may_be_mechanism(lambda1, k6, &m, 6) {
         return Ok(());
     }
+    let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
     let mut arms = [Vector3::zeros(); MAX_CABLES];
     for (a, c) in arms.iter_mut().zip(&scene.cables) {
         *a = rot * c.attachment_m;

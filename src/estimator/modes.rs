@@ -14,10 +14,7 @@ impl Estimator {
     /// any cycle, `Modal(NotLoaded)`.
     pub fn modes(&mut self, k: usize, out: &mut [Mode]) -> Result<usize, EstimatorError> {
         match self.estimate.status {
-            Status::Ok => match self.cycle.sag.as_mut() {
-                Some(sag) => Ok(sag.modal.modes(k, out)?),
-                None => Ok(self.cycle.modal.modes(k, out)?),
-            },
+            Status::Ok => Ok(self.cycle.modes(k, out)?),
             _ => Err(self
                 .estimate
                 .error
@@ -33,16 +30,7 @@ impl Estimator {
     /// [`crate::modal::DENSE_MEMORY_BUDGET_BYTES`]. Offline use.
     pub fn dense_modes(&self, vectors: bool) -> Result<DenseModes, EstimatorError> {
         let (k, m) = self.dense_matrices()?;
-        let (ee, _, dim) = match &self.cycle.sag {
-            Some(sag) => {
-                let (m6, k6) = sag.modal.ee_matrices();
-                (m6, k6, sag.modal.dim())
-            }
-            None => {
-                let (m6, k6) = self.cycle.modal.ee_matrices();
-                (m6, k6, self.cycle.modal.dim())
-            }
-        };
+        let (ee, dim) = self.cycle.ee_mass();
         Ok(modal::dense_modes_ee(&k, &m, &ee, dim, vectors)?)
     }
 
@@ -56,18 +44,6 @@ impl Estimator {
                 .error
                 .unwrap_or(EstimatorError::Modal(modal::ModalError::NotLoaded)));
         }
-        if let Some(sag) = &self.cycle.sag {
-            return Ok(sag.dense_matrices(&self.cycle.geometry)?);
-        }
-        let models = &self.cycle.models;
-        let (ee, k6) = self.cycle.modal.ee_matrices();
-        Ok(if self.scene.rigid {
-            let inertia = ee.fixed_view::<3, 3>(3, 3).into_owned();
-            let kgeo = k6.fixed_view::<3, 3>(3, 3).into_owned();
-            let arms = &self.cycle.geometry.arm_m;
-            modal::assemble_rigid(models, self.scene.ee_mass_kg, &inertia, arms, &kgeo)?
-        } else {
-            modal::assemble(models, self.scene.ee_mass_kg)?
-        })
+        Ok(self.cycle.dense_matrices(&self.scene)?)
     }
 }

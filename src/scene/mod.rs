@@ -314,6 +314,13 @@ impl Scene {
         }
     }
 
+    /// [`Self::wrench_n`] as the wrench the tension distributions take: (force N, moment
+    /// N·m) about the centroid, where the weight acts (so the moment is zero).
+    pub fn wrench6_n(&self) -> [f64; 6] {
+        let f = self.wrench_n();
+        [f.x, f.y, f.z, 0.0, 0.0, 0.0]
+    }
+
     /// Axis-aligned bounding box of the anchors, m (the frame).
     pub fn frame_bounds_m(&self) -> (Vector3<f64>, Vector3<f64>) {
         let mut lo = Vector3::repeat(f64::INFINITY);

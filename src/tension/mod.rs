@@ -105,8 +105,7 @@ mod tests {
             .map(|i| if i % 2 == 1 { 100.0 } else { 10.0 })
             .collect();
         let hi = vec![s.t_max_n; n];
-        let w = s.wrench_n();
-        let w6 = [w.x, w.y, w.z, 0.0, 0.0, 0.0];
+        let w6 = s.wrench6_n();
         let mut ts = TensionSolver::new(n, TensionParams::default());
         let mut active_raised = 0;
         for p in [

@@ -357,7 +357,7 @@ mod tests {
         )
         .unwrap();
         let w = s.wrench_n();
-        let w6 = [w.x, w.y, w.z, 0.0, 0.0, 0.0];
+        let w6 = s.wrench6_n();
         let n = s.n_cables();
         let (lo, hi) = (vec![60.0; n], vec![350.0; n]);
         let mut ts = TensionSolver::new(n, TensionParams::default());

@@ -3,34 +3,23 @@
 //! elastic catenary and the end-effector in equilibrium with the cables' end forces),
 //! then each cable's chain about its sagged profile (`fem`: N straight elements between
 //! nodes on the catenary; `continuous`: the exact N → ∞ limit), then the structured
-//! solver's first root ([`SagModalSolver`]). Nothing here allocates after [`SagPipeline::new`].
+//! solver's first root ([`SagModalSolver`]). Nothing here allocates after [`SagModel::new`].
 
-use super::EstimatorError;
-use crate::cable::sagged::SagContinuousParams;
+use super::{EndEffector, ForwardParams, TensionReport};
+use crate::estimator::EstimatorError;
 use crate::kinematics::{Geometry, Pose};
 use crate::modal::sag::{
     assemble_sagged, SagCableFrame, SagDenseCable, SagEndEffector, SagLoadError, SagModalSolver,
 };
-use crate::modal::{ModalError, ModalParams, Root};
+use crate::modal::{ModalError, Root};
 use crate::sag::Catenary;
 use crate::scene::{ElementKind, Scene};
-use crate::tension::{SagCable, SagTensionParams, SagTensionSolver, TensionParams};
+use crate::tension::{SagCable, SagTensionSolver};
 use nalgebra::{DMatrix, Matrix6, Vector3};
-
-/// What a cycle's tension solve reports to the estimate.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct TensionReport<'a> {
-    /// Iterations of the tension solver (SQP iterations when the cables sag).
-    pub(super) iterations: u32,
-    /// Whether the warm start was accepted.
-    pub(super) warm: bool,
-    /// The end-effector-end tensions, N (the closest ones after an infeasible solve).
-    pub(super) tensions_n: &'a [f64],
-}
 
 /// Every buffer of the sagged forward model, sized once.
 #[derive(Debug, Clone)]
-pub(super) struct SagPipeline {
+pub(in crate::estimator) struct SagModel {
     /// The sagged tension distribution (keeps its catenaries as warm start).
     pub(super) tension: SagTensionSolver,
     /// The structured solver on the sagged chains.
@@ -45,37 +34,23 @@ pub(super) struct SagPipeline {
     loaded_at: u32,
 }
 
-impl SagPipeline {
+impl SagModel {
     /// Buffers for the cables of `scene` (allocates: set-up only).
-    pub(super) fn new(scene: &Scene, tension: TensionParams, modal: ModalParams) -> SagPipeline {
+    pub(super) fn new(scene: &Scene, params: &ForwardParams) -> SagModel {
         let n = scene.n_cables();
         let modal = match scene.model.element {
             ElementKind::Continuous => {
-                // A per-cycle budget is the real-time configuration: f1 only, within every
-                // cable's first half-wave (SagContinuousParams::realtime); offline the
-                // default mesh holds 1e-9 up to four half-waves, for the first K modes.
-                let mesh = if modal.cycle_evaluations == u32::MAX {
-                    SagContinuousParams::default()
-                } else {
-                    SagContinuousParams::realtime()
-                };
-                SagModalSolver::new_continuous(modal, n, mesh)
+                SagModalSolver::new_continuous(params.modal, n, params.sag_continuous)
             }
-            _ => SagModalSolver::new(modal, n, scene.model.elements_per_cable.max(1)),
+            _ => SagModalSolver::new(params.modal, n, scene.model.elements_per_cable.max(1)),
         };
         let frame = SagCableFrame {
             h: Vector3::x(),
             arm_m: Vector3::zeros(),
             end_force_n: Vector3::zeros(),
         };
-        SagPipeline {
-            tension: SagTensionSolver::new(
-                n,
-                SagTensionParams {
-                    tension,
-                    ..SagTensionParams::default()
-                },
-            ),
+        SagModel {
+            tension: SagTensionSolver::new(n, params.sag_tension),
             modal,
             materials: SagCable::of_scene(scene),
             mu_kg_m: scene
@@ -113,7 +88,7 @@ impl SagPipeline {
         warm: Option<f64>,
         on_tensions: impl FnOnce(TensionReport<'_>),
     ) -> Result<Root, EstimatorError> {
-        let w = super::pipeline::wrench6(scene);
+        let w = scene.wrench6_n();
         let res = self
             .tension
             .solve(
@@ -150,11 +125,11 @@ impl SagPipeline {
             set_chain(&mut self.modal, i, scene, &cat, self.mu_kg_m[i])?;
         }
         let up = self.tension.basis(0)[1];
-        let ee = if scene.rigid {
-            let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
+        let body = EndEffector::of_body(scene, pose);
+        let ee = if body.rigid {
             SagEndEffector::Rigid {
-                mass_kg: scene.ee_mass_kg,
-                inertia_kg_m2: rot * scene.ee_inertia_kg_m2 * rot.transpose(),
+                mass_kg: body.mass_kg,
+                inertia_kg_m2: body.inertia_kg_m2,
             }
         } else {
             SagEndEffector::Point {

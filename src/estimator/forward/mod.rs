@@ -1,0 +1,489 @@
+//! The forward model of one pose: geometry → tension distribution → cable models → modal
+//! solver loaded → first root. One [`Forward`] owns the cable geometry and one of two
+//! models, chosen by the scene's `[effects] sag`:
+//!
+//! - [`Model::Taut`]: straight chords — the active-set tension distribution, the scene's
+//!   element on each chord, the structured solver of `modal` (`taut.rs`);
+//! - [`Model::Sagged`]: the cables' elastic catenaries — the sagged tension distribution,
+//!   chains about the sagged profiles, the structured solver of `modal::sag` (`sagged.rs`).
+//!
+//! The cycle ([`Estimator::update`]) and the inverse T_min query
+//! ([`Estimator::t_min_for_f1`]) each own one, so the query leaves the cycle's warm state
+//! alone. Nothing here allocates after [`Forward::new`].
+//!
+//! The pieces of the model that do not depend on how the tensions were found — the
+//! geometry at a pose ([`update_geometry`]), the cable models ([`fill_models`]) and the
+//! end-effector at the pose ([`EndEffector`]) — are written here once, for the cycle, the
+//! dense reference and `cablevib modes` ([`PoseModel`](super::PoseModel)).
+//!
+//! [`Estimator::update`]: super::Estimator::update
+//! [`Estimator::t_min_for_f1`]: super::Estimator::t_min_for_f1
+
+mod sagged;
+mod taut;
+
+use super::EstimatorError;
+use crate::cable::sagged::SagContinuousParams;
+use crate::cable::{CableError, CableModel};
+use crate::kinematics::{Geometry, KinematicsError, Pose};
+use crate::modal::{self, ModalError, ModalParams, ModalSolver, Mode, RescanCounts, Root};
+use crate::sag::Catenary;
+use crate::scene::{ElementKind, Scene, MAX_CABLES};
+use crate::tension::{SagTensionParams, TensionError, TensionInfo, TensionParams, TensionSolver};
+use nalgebra::{DMatrix, Matrix3, Matrix6, Vector3};
+use sagged::SagModel;
+use taut::TautModel;
+
+/// The parameters of one forward model (the cycle's, or the inverse query's): see
+/// [`super::EstimatorParams`], which holds them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct ForwardParams {
+    /// The chord tension distribution (taut cables; also the rank check at build).
+    pub(super) tension: TensionParams,
+    /// The structured solver (both models).
+    pub(super) modal: ModalParams,
+    /// The sagged tension distribution.
+    pub(super) sag_tension: SagTensionParams,
+    /// The mesh rule of continuous sagged chains.
+    pub(super) sag_continuous: SagContinuousParams,
+}
+
+/// What a cycle's tension solve reports to the estimate.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct TensionReport<'a> {
+    /// Iterations of the tension solver (SQP iterations when the cables sag).
+    pub(super) iterations: u32,
+    /// Whether the warm start was accepted.
+    pub(super) warm: bool,
+    /// The end-effector-end tensions, N (the closest ones after an infeasible solve).
+    pub(super) tensions_n: &'a [f64],
+}
+
+/// Which model of the cables, with the buffers it (and only it) uses.
+// The taut model's solver is ~36 KB of fixed-size buffers, the sagged one's ~8 KB: the
+// enum is built once per estimator and never moved on the cycle's path, so the variants
+// stay inline (no pointer to follow in every cycle) rather than boxed.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone)]
+pub(super) enum Model {
+    /// Straight chords.
+    Taut(TautModel),
+    /// Cables on their elastic catenaries (`[effects] sag`).
+    Sagged(SagModel),
+}
+
+/// Every buffer of one forward evaluation, sized once.
+#[derive(Debug, Clone)]
+pub(super) struct Forward {
+    /// Cable geometry at the current pose (the chords, for both models).
+    pub(super) geometry: Geometry,
+    /// Each cable's upper tension bound, N (the scene's, fixed).
+    t_max_n: [f64; MAX_CABLES],
+    /// The model of the cables.
+    pub(super) model: Model,
+}
+
+impl Forward {
+    /// Buffers for the cables of `scene`, the model its `[effects] sag` names (allocates:
+    /// set-up only).
+    pub(super) fn new(scene: &Scene, params: &ForwardParams) -> Forward {
+        let n = scene.n_cables();
+        Forward {
+            geometry: Geometry::new(n),
+            t_max_n: cable_t_max_n(scene),
+            model: if scene.model.sag {
+                Model::Sagged(SagModel::new(scene, params))
+            } else {
+                Model::Taut(TautModel::new(scene, params))
+            },
+        }
+    }
+
+    /// Whether the cables sag.
+    pub(super) fn is_sagged(&self) -> bool {
+        matches!(self.model, Model::Sagged(_))
+    }
+
+    /// Cable geometry of `scene` at `pose`.
+    pub(super) fn set_pose(&mut self, scene: &Scene, pose: &Pose) -> Result<(), KinematicsError> {
+        update_geometry(scene, &mut self.geometry, pose)
+    }
+
+    /// The chord tension distribution at the pose of the last [`Self::set_pose`] for the
+    /// lower bounds `t_min_n` (N) and the scene's upper ones, cold, and its structure
+    /// matrix's rank (set up before feasibility is decided, so an infeasible pose has it
+    /// too). The estimator's build takes the rank its cycles expect from it. Leaves no warm
+    /// start behind. The taut model uses its own solver; the sagged one, which has none, a
+    /// solver made for the call (allocates: set-up only).
+    pub(super) fn chord_tensions(
+        &mut self,
+        scene: &Scene,
+        t_min_n: &[f64],
+        params: TensionParams,
+    ) -> (Result<(), TensionError>, u32) {
+        let n = scene.n_cables();
+        let mut own;
+        let ts = match &mut self.model {
+            Model::Taut(t) => &mut t.tension,
+            Model::Sagged(_) => {
+                own = TensionSolver::new(n, params);
+                &mut own
+            }
+        };
+        let w = scene.wrench6_n();
+        let solved = ts
+            .solve_wrench_bounds(&self.geometry, &w, t_min_n, &self.t_max_n[..n])
+            .map(|_| ());
+        let rank = ts.info().rank;
+        ts.reset_warm_start();
+        (solved, rank)
+    }
+
+    /// At the pose of the last [`Self::set_pose`]: solve the tensions for the per-cable
+    /// lower bounds `t_min_n` (N, one per cable) and the scene's upper bounds, show the
+    /// solver to `on_tensions` (also when the solve failed: an infeasible solve still has
+    /// its closest tensions), reject a structure matrix of rank below `min_rank` (0 accepts
+    /// any; taut cables), build the cable models, load the modal solver and find the first
+    /// root, warm-started from `warm` (λ, rad²/s²), within the modal parameters' per-cycle
+    /// budget of D(λ) evaluations. A `Modal` error comes only from the root search, after
+    /// the modal solver was loaded; every other error comes before it is loaded.
+    pub(super) fn first_root(
+        &mut self,
+        scene: &Scene,
+        pose: &Pose,
+        t_min_n: &[f64],
+        min_rank: u32,
+        warm: Option<f64>,
+        on_tensions: impl FnOnce(TensionReport<'_>),
+    ) -> Result<Root, EstimatorError> {
+        let t_max_n = &self.t_max_n[..scene.n_cables()];
+        let g = &self.geometry;
+        match &mut self.model {
+            Model::Taut(t) => t.first_root(
+                scene,
+                pose,
+                g,
+                t_min_n,
+                t_max_n,
+                min_rank,
+                warm,
+                on_tensions,
+            ),
+            Model::Sagged(s) => s.first_root(scene, pose, g, t_min_n, t_max_n, warm, on_tensions),
+        }
+    }
+
+    /// Evaluations of D(λ) since the modal solver was last loaded.
+    pub(super) fn evaluations_since_load(&self) -> u32 {
+        match &self.model {
+            Model::Taut(t) => t.evaluations_since_load(),
+            Model::Sagged(s) => s.evaluations_since_load(),
+        }
+    }
+
+    /// A cold start of the cycle: forget the tension solver's warm start (and, taut, the
+    /// end-effector mode's tracking).
+    pub(super) fn start_cold(&mut self) {
+        match &mut self.model {
+            Model::Taut(t) => {
+                t.tension.reset_warm_start();
+                t.modal.reset_tracking();
+            }
+            Model::Sagged(s) => s.reset_warm_start(),
+        }
+    }
+
+    /// Forget the tension solver's warm start.
+    pub(super) fn reset_tension_warm_start(&mut self) {
+        match &mut self.model {
+            Model::Taut(t) => t.tension.reset_warm_start(),
+            Model::Sagged(s) => s.reset_warm_start(),
+        }
+    }
+
+    /// Forget every warm start ([`super::Estimator::reset`]): the tensions', and a sagged
+    /// first-root search the cycle's budget cut.
+    pub(super) fn reset(&mut self) {
+        match &mut self.model {
+            Model::Taut(t) => t.tension.reset_warm_start(),
+            Model::Sagged(s) => {
+                s.reset_warm_start();
+                s.forget_pending();
+            }
+        }
+    }
+
+    /// The end-effector mode of the loaded pose, tracked from the last cycle's
+    /// ([`ModalSolver::ee_mode_tracked`]; `r1` this cycle's first root, `warm` whether the
+    /// cycle is warm); None with sagging cables, whose end-effector mode is not tracked.
+    pub(super) fn ee_mode_tracked(
+        &mut self,
+        r1: &Root,
+        warm: bool,
+    ) -> Option<Result<Option<Root>, ModalError>> {
+        match &mut self.model {
+            Model::Taut(t) => Some(t.modal.ee_mode_tracked(r1, warm)),
+            Model::Sagged(_) => None,
+        }
+    }
+
+    /// The static end-effector stiffness of the loaded models (3 × 3 or 6 × 6 block, N/m,
+    /// N/rad, N·m/rad; NaN when the sagged D(0) fails).
+    pub(super) fn static_stiffness(&self, scene: &Scene) -> Matrix6<f64> {
+        match &self.model {
+            Model::Taut(t) => t.static_stiffness(scene),
+            Model::Sagged(s) => s.static_stiffness().unwrap_or(Matrix6::repeat(f64::NAN)),
+        }
+    }
+
+    /// The first `k` natural frequencies of the loaded pose into `out` (see
+    /// [`ModalSolver::modes`]).
+    pub(super) fn modes(&mut self, k: usize, out: &mut [Mode]) -> Result<usize, ModalError> {
+        match &mut self.model {
+            Model::Taut(t) => t.modal.modes(k, out),
+            Model::Sagged(s) => s.modal.modes(k, out),
+        }
+    }
+
+    /// The end-effector's mass matrix of the loaded pose (kg, kg·m²) and its dimension.
+    pub(super) fn ee_mass(&self) -> (Matrix6<f64>, usize) {
+        match &self.model {
+            Model::Taut(t) => (t.modal.ee_matrices().0, t.modal.dim()),
+            Model::Sagged(s) => (s.modal.ee_matrices().0, s.modal.dim()),
+        }
+    }
+
+    /// The assembled K (N/m) and M (kg) of the loaded models (the dense reference's).
+    pub(super) fn dense_matrices(
+        &self,
+        scene: &Scene,
+    ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
+        match &self.model {
+            Model::Taut(t) => t.dense_matrices(scene, &self.geometry),
+            Model::Sagged(s) => s.dense_matrices(&self.geometry),
+        }
+    }
+
+    /// The taut cable models of the last successful load (none when the cables sag).
+    pub(super) fn cable_models(&self) -> &[CableModel] {
+        match &self.model {
+            Model::Taut(t) => &t.models,
+            Model::Sagged(_) => &[],
+        }
+    }
+
+    /// The taut structured solver (None when the cables sag).
+    pub(super) fn taut_modal(&self) -> Option<&ModalSolver> {
+        match &self.model {
+            Model::Taut(t) => Some(&t.modal),
+            Model::Sagged(_) => None,
+        }
+    }
+
+    /// End-effector bookkeeping counters (zero when the cables sag: no end-effector mode).
+    pub(super) fn rescan_counts(&self) -> RescanCounts {
+        match &self.model {
+            Model::Taut(t) => t.modal.rescan_counts(),
+            Model::Sagged(_) => RescanCounts::default(),
+        }
+    }
+
+    /// Info of the last tension solve (sagged: its SQP iterations, the rest default).
+    pub(super) fn tension_info(&self) -> TensionInfo {
+        match &self.model {
+            Model::Taut(t) => t.tension.info(),
+            Model::Sagged(s) => TensionInfo {
+                iterations: s.tension.info().iterations,
+                ..TensionInfo::default()
+            },
+        }
+    }
+
+    /// Each cable's catenary of the last sagged tension solve (None for taut cables).
+    pub(super) fn catenaries(&self) -> Option<&[Catenary]> {
+        match &self.model {
+            Model::Taut(_) => None,
+            Model::Sagged(s) => Some(s.catenaries()),
+        }
+    }
+}
+
+/// Cable geometry of `scene` at `pose`: rigid-body attachments rotated by the pose's
+/// orientation, or all cables at the centroid. No allocation.
+pub(super) fn update_geometry(
+    scene: &Scene,
+    g: &mut Geometry,
+    pose: &Pose,
+) -> Result<(), KinematicsError> {
+    if scene.rigid {
+        let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
+        g.update_rigid(
+            scene.cables.iter().map(|c| &c.anchor_m),
+            scene.cables.iter().map(|c| &c.attachment_m),
+            &pose.position_m,
+            &rot,
+        )
+    } else {
+        g.update(scene.cables.iter().map(|c| &c.anchor_m), &pose.position_m)
+    }
+}
+
+/// Each cable's upper tension bound of `scene`, N (entries past its cables unused).
+pub(super) fn cable_t_max_n(scene: &Scene) -> [f64; MAX_CABLES] {
+    let mut t = [scene.t_max_n; MAX_CABLES];
+    for (i, v) in t.iter_mut().enumerate().take(scene.n_cables()) {
+        *v = scene.cable_t_max_n(i);
+    }
+    t
+}
+
+/// Cable models of `scene` for geometry `g` and tensions into `out` (`frame`: the scene's
+/// up frame, [`crate::cable::up_frame`]). No allocation.
+pub(super) fn fill_models(
+    scene: &Scene,
+    frame: &Matrix3<f64>,
+    g: &Geometry,
+    tensions_n: &[f64],
+    out: &mut [CableModel],
+) -> Result<(), CableError> {
+    let gn = scene.gravity_m_s2.norm();
+    for (i, (c, m)) in scene.cables.iter().zip(out.iter_mut()).enumerate() {
+        *m = CableModel::build(
+            scene.model.element,
+            scene.model.elements_per_cable,
+            &g.unit[i],
+            g.length_m[i],
+            tensions_n[i],
+            c.ea_n(),
+            c.mass_per_length_kg_m,
+            c.mass_per_length_kg_m * gn,
+            frame,
+            scene.model.geometric_stiffness,
+        )?;
+    }
+    Ok(())
+}
+
+/// A valid stand-in cable model (a 1 N/m massless spring) for preallocated model buffers.
+pub(super) fn placeholder_model() -> CableModel {
+    CableModel::build(
+        ElementKind::Massless,
+        1,
+        &Vector3::x(),
+        1.0,
+        1.0,
+        1.0,
+        0.0,
+        0.0,
+        &Matrix3::identity(),
+        true,
+    )
+    .expect("a unit massless spring is a valid model")
+}
+
+/// The end-effector of one pose as the modal solvers and the dense assembly take it: a
+/// point mass, or a rigid body with its world inertia R I Rᵀ and the tensions' rotational
+/// geometric stiffness. Fixed size: no allocation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EndEffector {
+    /// A rigid body (else a point mass).
+    pub rigid: bool,
+    /// Mass, kg.
+    pub mass_kg: f64,
+    /// World-frame inertia about the centroid, kg·m² (rigid body; zero for a point mass).
+    pub inertia_kg_m2: Matrix3<f64>,
+    /// Rotational geometric stiffness of the tensions, N·m/rad (rigid body, after
+    /// [`Self::with_tensions`]; zero otherwise).
+    pub k_geo_rot: Matrix3<f64>,
+}
+
+impl EndEffector {
+    /// The end-effector of `scene` at `pose`, without the tensions' stiffness.
+    pub fn of_body(scene: &Scene, pose: &Pose) -> EndEffector {
+        let inertia_kg_m2 = if scene.rigid {
+            let rot = crate::kinematics::rotation_of(&pose.orientation_wxyz);
+            rot * scene.ee_inertia_kg_m2 * rot.transpose()
+        } else {
+            Matrix3::zeros()
+        };
+        EndEffector {
+            rigid: scene.rigid,
+            mass_kg: scene.ee_mass_kg,
+            inertia_kg_m2,
+            k_geo_rot: Matrix3::zeros(),
+        }
+    }
+
+    /// The end-effector of `scene` at `pose` holding cables of geometry `g` (at that pose)
+    /// with tensions `tensions_n` (N): a rigid body carries their rotational geometric
+    /// stiffness ([`modal::rigid_geometric_stiffness`]).
+    pub fn with_tensions(
+        scene: &Scene,
+        pose: &Pose,
+        g: &Geometry,
+        tensions_n: &[f64],
+    ) -> EndEffector {
+        let mut ee = Self::of_body(scene, pose);
+        if ee.rigid {
+            ee.k_geo_rot = modal::rigid_geometric_stiffness(&g.unit, &g.arm_m, tensions_n);
+        }
+        ee
+    }
+
+    /// 3 (point mass) or 6 (rigid body).
+    pub fn dim(&self) -> usize {
+        if self.rigid {
+            6
+        } else {
+            3
+        }
+    }
+
+    /// The mass matrix (its leading [`Self::dim`] block), kg and kg·m².
+    pub fn mass6(&self) -> Matrix6<f64> {
+        let mut m = Matrix6::zeros();
+        m.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(Matrix3::identity() * self.mass_kg));
+        if self.rigid {
+            m.fixed_view_mut::<3, 3>(3, 3)
+                .copy_from(&self.inertia_kg_m2);
+        }
+        m
+    }
+
+    /// Load `solver` with the cable models `models` attached at `arms_m` (m, world frame
+    /// from the centroid; rigid body only). No allocation.
+    pub fn load(&self, solver: &mut ModalSolver, models: &[CableModel], arms_m: &[Vector3<f64>]) {
+        if self.rigid {
+            solver.load_rigid(
+                models,
+                self.mass_kg,
+                &self.inertia_kg_m2,
+                arms_m,
+                &self.k_geo_rot,
+            );
+        } else {
+            solver.load(models, self.mass_kg);
+        }
+    }
+
+    /// The dense K (N/m) and M (kg) of the cable models with this end-effector
+    /// ([`modal::assemble`], [`modal::assemble_rigid`]; not for continuous cables).
+    pub fn assemble(
+        &self,
+        models: &[CableModel],
+        arms_m: &[Vector3<f64>],
+    ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
+        if self.rigid {
+            modal::assemble_rigid(
+                models,
+                self.mass_kg,
+                &self.inertia_kg_m2,
+                arms_m,
+                &self.k_geo_rot,
+            )
+        } else {
+            modal::assemble(models, self.mass_kg)
+        }
+    }
+}
