@@ -19,7 +19,7 @@ args = ap.parse_args()
 
 scene = cablevib.Scene.load("spatial-paper")
 # A grid over the central workspace, in the order a map walks it (x fastest).
-side = max(2, round(args.poses ** (1 / 3)))
+side = max(2, int(np.ceil(args.poses ** (1 / 3) - 1e-9)))
 xs = np.linspace(-0.9, 0.9, side)
 zs = np.linspace(0.35, 2.15, side)
 pos = np.array([(x, y, z) for z in zs for y in xs for x in xs])[: args.poses]

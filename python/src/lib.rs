@@ -1,4 +1,5 @@
-//! Python bindings of cablevib (PyO3): the module `cablevib`.
+//! Python bindings of cablevib (PyO3): the extension module `cablevib._cablevib`, which the
+//! package `cablevib` (py/cablevib/__init__.py) re-exports.
 //!
 //! | Python | Rust |
 //! |---|---|
@@ -25,7 +26,7 @@ use pyo3::prelude::*;
 /// cablevib: tension distribution, stiffness and natural frequencies of cable-driven
 /// parallel robots (SI units: m, N, N/m, Hz).
 #[pymodule]
-#[pyo3(name = "cablevib")]
+#[pyo3(name = "_cablevib")]
 fn cablevib_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("CablevibError", m.py().get_type::<error::CablevibError>())?;
     m.add_function(wrap_pyfunction!(analysis::analyze, m)?)?;
