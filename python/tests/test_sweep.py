@@ -219,3 +219,21 @@ def test_speed_script_runs_and_agrees():
                         "--poses", "600"], capture_output=True, text=True, check=False)
     assert p.returncode == 0, p.stderr
     assert "equal bit for bit" in p.stdout, p.stdout
+
+
+def test_sweep_releases_the_gil():
+    """Another Python thread runs while a sweep computes (it would be stopped for the whole
+    sweep if the GIL were held)."""
+    import threading
+
+    s = cablevib.Scene.load("spatial-paper")
+    p = np.tile(grid(6), (8, 1))
+    done = threading.Event()
+    t = threading.Thread(target=lambda: (cablevib.sweep(s, p, threads=1), done.set()))
+    ticks = 0
+    t.start()
+    while not done.is_set():
+        ticks += 1
+        done.wait(0.001)
+    t.join()
+    assert ticks > 10, ticks
