@@ -15,12 +15,14 @@ const MAX_DEPTH: usize = 4;
 
 /// True for a sequence (list, tuple, numpy array), false for a number or a string.
 pub fn is_sequence(obj: &Bound<'_, PyAny>) -> bool {
-    !obj.is_instance_of::<PyString>()
-        && (obj.hasattr("tolist").unwrap_or(false)
-            && obj
-                .getattr("ndim")
-                .is_ok_and(|d| d.extract::<usize>().is_ok_and(|d| d > 0))
-            || obj.cast::<pyo3::types::PySequence>().is_ok())
+    if obj.is_instance_of::<PyString>() {
+        return false;
+    }
+    // A numpy array or scalar by its dimension (a 0-d array is one number).
+    if let Ok(d) = obj.getattr("ndim") {
+        return d.extract::<usize>().is_ok_and(|d| d > 0);
+    }
+    obj.cast::<pyo3::types::PySequence>().is_ok()
 }
 
 /// The TOML text of a Python value.

@@ -147,6 +147,10 @@ def test_scene_from_arrays_is_the_scene_file():
     s2 = cablevib.Scene.from_arrays(**paper_arrays(area_m2=np.full(8, 50.265e-6),
                                                    cable_t_min_n=np.full(8, 70.0)))
     assert "area = 5.0265e-5" in s2.toml
+    # numpy scalars and 0-d arrays are one number (every cable's), as a float is.
+    for e in (np.float64(2.01e10), np.array(2.01e10), 20100000000):
+        s3 = cablevib.Scene.from_arrays(**paper_arrays(youngs_modulus_pa=e))
+        assert "[cable]\nyoungs_modulus = " in s3.toml and repr(s3) == repr(ref)
     np.testing.assert_array_equal(s2.cable_t_min_n, np.full(8, 70.0))
 
 
