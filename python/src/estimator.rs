@@ -19,6 +19,10 @@ use pyo3::types::PyDict;
 #[pyclass(name = "Estimator", module = "cablevib")]
 pub struct PyEstimator {
     inner: Estimator,
+    /// The estimator as built, before any update: where every chunk of a sweep starts.
+    cold: Estimator,
+    /// Where the scene it was built from came from (its `scene` pickles as that scene).
+    origin: Option<crate::scene::Origin>,
 }
 
 #[pymethods]
@@ -27,7 +31,12 @@ impl PyEstimator {
     fn new(scene: &PyScene) -> PyResult<Self> {
         let inner =
             Estimator::new(&scene.inner).map_err(|e| CablevibError::new_err(e.to_string()))?;
-        Ok(PyEstimator { inner })
+        let cold = inner.clone();
+        Ok(PyEstimator {
+            inner,
+            cold,
+            origin: scene.origin.clone(),
+        })
     }
 
     /// One cycle at ``position`` (m, 3 numbers) with ``orientation`` (unit quaternion
@@ -60,6 +69,39 @@ impl PyEstimator {
         Ok(PyEstimate { inner: e })
     }
 
+    /// Many poses in one call: ``positions`` (m, shape (n, 3)), ``orientations`` (unit
+    /// quaternions [w, x, y, z], shape (n, 4); default the scene's) and ``t_min`` (N, shape
+    /// (n,) for one bound per pose or (n, n_cables) for one per cable; default the scene's
+    /// bounds). Returns a dict of numpy arrays, one row per pose: ``positions_m``,
+    /// ``orientations_wxyz``, ``t_min_n`` (the lowest bound, as the CSVs' column),
+    /// ``status_code`` (uint32), ``status`` (str), ``ok`` (bool), ``tensions_n`` (n,
+    /// n_cables), ``f1_hz``, ``f1_ee_participation``, ``ee_mode_hz``,
+    /// ``ee_mode_participation``, ``stiffness_principal_n_m`` (n, 3: the eigenvalues of the
+    /// translational stiffness block, ascending, N/m), ``k_min_n_m`` (its first column); and
+    /// ``threads`` and ``chunk_poses`` (ints).
+    ///
+    /// The GIL is released while the poses run on ``threads`` workers (0: one per core).
+    /// The poses are cut into chunks of ``chunk_poses`` consecutive poses; each chunk is
+    /// evaluated in order by a copy of this estimator as it was built (warm-started within
+    /// the chunk), so the numbers are the same bit for bit for any thread count, and equal
+    /// to ``for each chunk: e = Estimator(scene); [e.update(...) for each pose]``. The
+    /// estimator's own warm state (``update``) is neither used nor changed. Refused poses
+    /// keep their status and NaN frequencies, as ``update``'s.
+    #[pyo3(signature = (positions, orientations = None, t_min = None, threads = 0, chunk_poses = crate::sweep::DEFAULT_CHUNK_POSES))]
+    fn sweep<'py>(
+        &self,
+        py: Python<'py>,
+        positions: &Bound<'py, PyAny>,
+        orientations: Option<&Bound<'py, PyAny>>,
+        t_min: Option<&Bound<'py, PyAny>>,
+        threads: usize,
+        chunk_poses: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let n = self.cold.scene().n_cables();
+        let inp = crate::sweep::input(positions, orientations, t_min, n)?;
+        crate::sweep::sweep(py, &self.cold, inp, threads, chunk_poses)
+    }
+
     /// The smallest T_min (N, the same for every cable) for which f1 at ``position`` (m)
     /// reaches ``required_f1_hz`` (Hz), searched within the range of T_min where the model is
     /// ok (a scan of 64 steps, then regula falsi on the first crossing; at most 257 forward
@@ -90,6 +132,7 @@ impl PyEstimator {
     fn scene(&self) -> PyScene {
         PyScene {
             inner: self.inner.scene().clone(),
+            origin: self.origin.clone(),
         }
     }
 

@@ -1,10 +1,12 @@
-//! Python bindings of cablevib (PyO3): the module `cablevib`.
+//! Python bindings of cablevib (PyO3): the extension module `cablevib._cablevib`, which the
+//! package `cablevib` (py/cablevib/__init__.py) re-exports.
 //!
 //! | Python | Rust |
 //! |---|---|
 //! | `Scene.load(path_or_name)` | [`cablevib::scene::Scene::load`] |
 //! | `analyze(scene, ...)` | [`cablevib::study::analysis::analyze`] (what `cablevib analyze --json` prints) |
 //! | `Estimator(scene).update(...)` | [`cablevib::estimator::Estimator::update`] |
+//! | `Estimator.sweep(...)`, `sweep(scene, ...)` | [`cablevib::estimator::Estimator::update`] over many poses on worker threads ([`sweep`]) |
 //! | `Estimator.t_min_for_f1(...)` | [`cablevib::estimator::Estimator::t_min_for_f1`] |
 //! | `CablevibError` | every library error, with its `Display` text |
 //!
@@ -16,16 +18,19 @@ mod convert;
 mod error;
 mod estimator;
 mod scene;
+mod sweep;
+mod toml_text;
 
 use pyo3::prelude::*;
 
 /// cablevib: tension distribution, stiffness and natural frequencies of cable-driven
 /// parallel robots (SI units: m, N, N/m, Hz).
 #[pymodule]
-#[pyo3(name = "cablevib")]
+#[pyo3(name = "_cablevib")]
 fn cablevib_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("CablevibError", m.py().get_type::<error::CablevibError>())?;
     m.add_function(wrap_pyfunction!(analysis::analyze, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep::sweep_scene, m)?)?;
     m.add_class::<scene::PyScene>()?;
     m.add_class::<estimator::PyEstimator>()?;
     m.add_class::<estimator::PyEstimate>()?;

@@ -9,7 +9,7 @@ use crate::report::figure::FigureFormat;
 use crate::report::map::{map_csv, map_svg, value_names};
 use crate::report::with_ext;
 use crate::scene::Scene;
-use crate::study::map::{self as study, Interval, MapConfig, MapResult, Tilt};
+use crate::study::map::{self as study, Interval, MapConfig, MapResult, Shard, Tilt};
 use crate::study::points::MAX_MODES;
 use clap::{Args, ValueEnum};
 use nalgebra::Vector3;
@@ -145,12 +145,22 @@ pub struct MapArgs {
     /// No progress bar (it is shown only on a terminal, after a second).
     #[arg(long)]
     pub quiet: bool,
+    /// Evaluate shard I of N only (1 <= I <= N), e.g. one task of a batch scheduler's array
+    /// job: a contiguous, balanced run of the grid's rows. Writes PREFIX.csv and its sidecar
+    /// (no figures: a shard holds part of the grid); the shards' CSVs, in order and with the
+    /// header kept from the first only, are the unsharded CSV byte for byte.
+    #[arg(long, value_name = "I/N", conflicts_with_all = ["svg", "format", "show"])]
+    pub shard: Option<String>,
 }
 
 impl MapArgs {
-    /// The study configuration of these options.
-    pub fn config(&self) -> MapConfig {
-        MapConfig {
+    /// The study configuration of these options (a bad `--shard` is a one-line usage error).
+    pub fn config(&self) -> Result<MapConfig, CliError> {
+        let shard = match &self.shard {
+            Some(t) => Some(Shard::parse(t).map_err(|e| CliError::Usage(format!("--shard {e}")))?),
+            None => None,
+        };
+        Ok(MapConfig {
             ranges_m: [self.x, self.y, self.z],
             step_m: self.step,
             plane: self.plane.into(),
@@ -163,7 +173,8 @@ impl MapArgs {
                 range_deg,
                 step_deg: self.tilt_step_deg,
             }),
-        }
+            shard,
+        })
     }
 }
 
@@ -183,8 +194,9 @@ fn check_shown(a: &MapArgs) -> Result<(), CliError> {
 /// Resolve the scene and compute the map (no files).
 pub fn compute(a: &MapArgs) -> Result<(Scene, MapResult), CliError> {
     check_shown(a)?;
+    let cfg = a.config()?;
     let s = resolve_scene(&a.scene)?;
-    let m = study::compute(&s, &a.config())?;
+    let m = study::compute(&s, &cfg)?;
     super::args::warn_if_sag_matters(&s, None);
     Ok((s, m))
 }
@@ -198,18 +210,25 @@ pub fn run(a: &MapArgs) -> Result<(), CliError> {
     let value = a.value.into();
     let (csv_path, svg_path, fmt) = output_paths(&a.out, &a.svg, a.format)?;
     write_csv(&csv_path, map_csv(&s, &m), &process_command_line())?;
-    figure::write(&svg_path, &map_svg(&s, &m, value), fmt)?;
-    let mut written = vec![
-        csv_path.display().to_string(),
-        svg_path.display().to_string(),
-    ];
-    for &v in &a.show {
-        let p = shown_path(&svg_path, &value_names(v).2, fmt);
-        figure::write(&p, &map_svg(&s, &m, v), fmt)?;
-        written.push(p.display().to_string());
+    let mut written = vec![csv_path.display().to_string()];
+    if m.shard.is_none() {
+        figure::write(&svg_path, &map_svg(&s, &m, value), fmt)?;
+        written.push(svg_path.display().to_string());
+        for &v in &a.show {
+            let p = shown_path(&svg_path, &value_names(v).2, fmt);
+            figure::write(&p, &map_svg(&s, &m, v), fmt)?;
+            written.push(p.display().to_string());
+        }
     }
+    let of_grid = match m.shard {
+        Some(sh) => format!(
+            " (shard {}/{} of {} grid points; no figures)",
+            sh.index, sh.count, m.grid_points
+        ),
+        None => String::new(),
+    };
     println!(
-        "map: scene {}  T_min {}  {} points in {:.2} s ({} threads)  statuses: {}",
+        "map: scene {}  T_min {}  {} points{of_grid} in {:.2} s ({} threads)  statuses: {}",
         s.name,
         s.t_min_label(),
         m.points.len(),

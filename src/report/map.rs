@@ -25,6 +25,12 @@ pub fn map_csv(s: &Scene, m: &MapResult) -> Csv {
         meta.insert("tilts_deg".into(), json!(m.tilts_deg));
     }
     meta.insert("modes".into(), json!(modes_of(m)));
+    if let Some(sh) = m.shard {
+        meta.insert(
+            "shard".into(),
+            json!({"index": sh.index, "count": sh.count, "grid_points": m.grid_points}),
+        );
+    }
     meta.insert(
         "order".into(),
         json!(if m.tilts_deg.is_empty() {
@@ -40,9 +46,10 @@ pub fn map_csv(s: &Scene, m: &MapResult) -> Csv {
     csv
 }
 
-/// The mode count of a map (1 for an empty one).
+/// The mode count of a map (its configured count, so an empty shard has the columns of
+/// the others).
 fn modes_of(m: &MapResult) -> usize {
-    m.points.first().map_or(1, |p| p.n_modes)
+    m.modes
 }
 
 /// Name, unit and file-name part of a shown value.

@@ -105,6 +105,54 @@ pub struct MapConfig {
     /// Sweep the orientation instead of the slice axis: one panel per tilt angle, the slice
     /// axis at a single value.
     pub tilt: Option<Tilt>,
+    /// Evaluate one shard of the grid only (see [`Shard`]); `None`: the whole grid.
+    pub shard: Option<Shard>,
+}
+
+/// Most shards a grid is split into.
+pub const MAX_SHARDS: usize = 1_000_000;
+
+/// Shard `index` (1-based) of `count`: a contiguous, balanced slice of a map's grid, for a
+/// batch scheduler's array job.
+///
+/// The unit is a grid row (the points along the horizontal axis, which one estimator
+/// evaluates warm-started from the row's first point): with R rows in the grid's order,
+/// shard i holds rows ⌊(i − 1)·R/N⌋ .. ⌊i·R/N⌋ (shards differ by at most one row; a shard
+/// may be empty when N > R). Every row starts from the same cold estimator, so a shard's
+/// points are the unsharded map's points bit for bit, and the shards' CSVs, in order and
+/// with the header kept only from the first, are the unsharded CSV byte for byte.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// Which shard, 1 ..= `count`.
+    pub index: usize,
+    /// How many shards, 1 ..= [`MAX_SHARDS`].
+    pub count: usize,
+}
+
+impl Shard {
+    /// Parse `I/N` (1 ≤ I ≤ N ≤ [`MAX_SHARDS`]).
+    pub fn parse(text: &str) -> Result<Shard, String> {
+        let t = text.trim();
+        let bad = || format!("`{t}`: expected I/N with 1 <= I <= N (e.g. 2/8)");
+        let (i, n) = t.split_once('/').ok_or_else(bad)?;
+        let (Ok(index), Ok(count)) = (i.trim().parse::<usize>(), n.trim().parse::<usize>()) else {
+            return Err(bad());
+        };
+        if count == 0 || count > MAX_SHARDS {
+            return Err(format!("`{t}`: N must be within 1..={MAX_SHARDS}"));
+        }
+        if index == 0 || index > count {
+            return Err(format!("`{t}`: I must be within 1..={count}"));
+        }
+        Ok(Shard { index, count })
+    }
+
+    /// The rows `[a, b)` of this shard among `rows`.
+    pub fn rows(&self, rows: usize) -> std::ops::Range<usize> {
+        // u128: rows × count cannot overflow.
+        let at = |k: usize| ((k as u128 * rows as u128) / self.count as u128) as usize;
+        at(self.index - 1)..at(self.index)
+    }
 }
 
 /// Grid values lo, lo + step, …, hi (the last value snaps to hi when within 1e-9 step).
@@ -155,6 +203,12 @@ pub struct MapResult {
     pub points: Vec<PointResult>,
     /// Worker threads the map ran on.
     pub threads: usize,
+    /// The shard evaluated (`points` then holds its rows only), `None` for the whole grid.
+    pub shard: Option<Shard>,
+    /// Grid points of the whole grid (all shards).
+    pub grid_points: usize,
+    /// Modes kept per point (the CSV's f1_hz .. fK_hz columns, also for an empty shard).
+    pub modes: usize,
 }
 
 impl MapResult {
@@ -329,13 +383,19 @@ pub fn compute(s: &Scene, cfg: &MapConfig) -> Result<MapResult, StudyError> {
             }
         }
     }
+    let row = axes[h].len();
+    let grid_points = points.len();
+    if let Some(sh) = cfg.shard {
+        let r = sh.rows(grid_points / row);
+        points = points[r.start * row..r.end * row].to_vec();
+    }
     let w = Workers {
         params: estimator_params(s, cfg.ee_mode),
         threads: cfg.threads,
         progress: cfg.progress.then_some("map"),
         n_modes: cfg.modes,
     };
-    let res = evaluate_points_with(s, &points, Tmin::Scene, axes[h].len(), &w)?;
+    let res = evaluate_points_with(s, &points, Tmin::Scene, row, &w)?;
     Ok(MapResult {
         axes,
         plane: cfg.plane,
@@ -343,6 +403,9 @@ pub fn compute(s: &Scene, cfg: &MapConfig) -> Result<MapResult, StudyError> {
         tilt_axis,
         points: res,
         threads: w.thread_count(),
+        shard: cfg.shard,
+        grid_points,
+        modes: cfg.modes,
     })
 }
 
@@ -358,5 +421,32 @@ mod tests {
         assert_eq!(g[10], 0.0);
         let g = grid_axis(Interval { lo: 0.25, hi: 1.25 }, 0.1).unwrap();
         assert_eq!(g.len(), 11);
+    }
+
+    #[test]
+    fn shards_cover_the_rows_once_and_balanced() {
+        for rows in [0, 1, 5, 7, 21, 100] {
+            for count in 1..=9 {
+                let mut next = 0;
+                for index in 1..=count {
+                    let r = Shard { index, count }.rows(rows);
+                    assert_eq!(r.start, next, "rows {rows}, shard {index}/{count}");
+                    assert!(r.len() == rows / count || r.len() == rows / count + 1);
+                    next = r.end;
+                }
+                assert_eq!(next, rows);
+            }
+        }
+    }
+
+    #[test]
+    fn shard_specs() {
+        assert_eq!(Shard::parse("2/3"), Ok(Shard { index: 2, count: 3 }));
+        for bad in [
+            "0/3", "4/3", "1/0", "a/b", "1/", "/2", "3", "", "1/2/3", "-1/2",
+        ] {
+            let e = Shard::parse(bad).unwrap_err();
+            assert!(!e.contains('\n'), "{e}");
+        }
     }
 }

@@ -11,6 +11,7 @@ __version__: str
 
 _Vec = Union[Sequence[float], npt.NDArray[np.floating[Any]]]
 _F64 = npt.NDArray[np.float64]
+_Arr = Union[Sequence[Sequence[float]], npt.NDArray[np.floating[Any]]]
 
 class CablevibError(ValueError):
     """An error of cablevib, with the command line's one-line message."""
@@ -24,6 +25,43 @@ class Scene:
     @staticmethod
     def from_toml(text: str, source: str = "<string>") -> "Scene":
         """Parse a scene from TOML text; ``source`` names it in error messages."""
+    @staticmethod
+    def from_arrays(
+        anchors_m: _Arr,
+        ee_mass_kg: float,
+        ee_position_m: _Vec,
+        *,
+        attachments_m: Optional[_Arr] = None,
+        name: str = "from-arrays",
+        gravity_m_s2: Optional[_Vec] = None,
+        ee_orientation_wxyz: Optional[_Vec] = None,
+        ee_inertia_kg_m2: Optional[_Arr] = None,
+        weight_carried: Optional[bool] = None,
+        youngs_modulus_pa: Union[None, float, _Vec] = None,
+        area_m2: Union[None, float, _Vec] = None,
+        weight_per_length_n_m: Union[None, float, _Vec] = None,
+        mass_per_length_kg_m: Union[None, float, _Vec] = None,
+        t_min_n: Optional[float] = None,
+        t_max_n: Optional[float] = None,
+        cable_t_min_n: Optional[_Vec] = None,
+        cable_t_max_n: Optional[_Vec] = None,
+        element: str = "fem",
+        elements: Optional[int] = None,
+        ee_participation_min: Optional[float] = None,
+        f1_tolerance: Optional[float] = None,
+        sag: Optional[bool] = None,
+        rotation: Optional[bool] = None,
+        geometric_stiffness: Optional[bool] = None,
+        cable_mass: Optional[bool] = None,
+        source: str = "<arrays>",
+    ) -> "Scene":
+        """A scene from arrays (m, kg, Pa, m², N/m, kg/m, N), written as a scene file's TOML
+        text and validated as one: a bad value raises the scene file's error. Material
+        given as one number is every cable's, as n numbers one per cable."""
+    @property
+    def toml(self) -> Optional[str]:
+        """The TOML text the scene was read from (None for an embedded scene by name);
+        a scene pickles by it (or by its embedded name)."""
     @property
     def name(self) -> str: ...
     @property
@@ -93,6 +131,16 @@ def analyze(
     ``unstretched_length_m`` (m), one per cable. Overrides as ``--position`` (m),
     ``--orientation`` (unit quaternion w, x, y, z; rigid end-effectors only), ``--t-min`` (N),
     ``--element``, ``--elements``, ``--sag``; ``solver`` is ``structured`` or ``dense``."""
+
+def sweep(
+    scene: Scene,
+    positions: _Arr,
+    orientations: Optional[_Arr] = None,
+    t_min: Union[None, _Vec, _Arr] = None,
+    threads: int = 0,
+    chunk_poses: int = 256,
+) -> Dict[str, Any]:
+    """``Estimator(scene).sweep(...)``."""
 
 class Estimate:
     """One ``Estimator.update``: valid numbers only when ``ok``."""
@@ -175,6 +223,22 @@ class Estimator:
     ) -> TminAnswer:
         """The smallest T_min (N) for which f1 at ``position`` (m) reaches
         ``required_f1_hz`` (Hz)."""
+    def sweep(
+        self,
+        positions: _Arr,
+        orientations: Optional[_Arr] = None,
+        t_min: Union[None, _Vec, _Arr] = None,
+        threads: int = 0,
+        chunk_poses: int = 256,
+    ) -> Dict[str, Any]:
+        """Many poses in one call, the GIL released, on ``threads`` workers (0: one per
+        core): positions (n, 3) m, orientations (n, 4), t_min (n,) or (n, n_cables) N. A dict
+        of numpy arrays, one row per pose: ``positions_m``, ``orientations_wxyz``,
+        ``t_min_n``, ``status_code``, ``status``, ``ok``, ``tensions_n`` (n, n_cables),
+        ``f1_hz``, ``f1_ee_participation``, ``ee_mode_hz``, ``ee_mode_participation``,
+        ``stiffness_principal_n_m`` (n, 3, ascending, N/m), ``k_min_n_m``; and ``threads``,
+        ``chunk_poses``. Bit for bit the loop ``for each chunk of chunk_poses poses:
+        e = Estimator(scene); e.update(...) pose by pose``, for any thread count."""
     def reset(self) -> None: ...
     @property
     def scene(self) -> Scene: ...
