@@ -36,7 +36,9 @@
 //! chains about each sagged profile (fem: N elements on the catenary; continuous: the exact
 //! N → ∞ limit) and the structured solver of `modal::sag`; step 5 is D(0) of those chains.
 //! A pose where a cable would go slack is the status `CableSlack`. The end-effector mode is
-//! not tracked with sag (NaN, age `u32::MAX`); `modes` gives every mode's participation
+//! found with sag by an ascending sweep of the sagged spectrum (the chains' poles are not
+//! known in closed form), spread over the cycles by the cycle's evaluation budget, the
+//! last answer reported with its age meanwhile; `modes` gives every mode's participation
 //! offline. [`sag_warning`] says when a scene with sag off should have it on.
 //!
 //! [`reference_analysis`] is the offline reference of the same model: Clarabel for the
@@ -260,6 +262,7 @@ impl Estimator {
         self.cycle.reset_tension_warm_start();
         if let Some(sag) = self.cycle.sag.as_mut() {
             sag.forget_pending();
+            sag.modal.reset_tracking();
         }
     }
 
@@ -412,7 +415,7 @@ impl Estimator {
         self.write_stiffness(e);
         e.eigen_evaluations = self.cycle.evaluations_since_load();
         check_mechanism(&self.scene, pose, &e.stiffness6, r1.lambda)?;
-        if self.params.ee_mode && self.cycle.sag.is_none() {
+        if self.params.ee_mode {
             self.ee_mode(&r1, warm_l.is_some(), e);
             e.eigen_evaluations = self.cycle.evaluations_since_load();
         }
@@ -430,9 +433,17 @@ impl Estimator {
             self.last_ee = None;
         }
         let thr = self.cycle.modal.params().ee_participation_min;
-        match self.cycle.modal.ee_mode_tracked(r1, warm) {
-            Ok(Some(r)) if r.ee_participation >= thr => {
-                self.last_ee = Some((lambda_to_hz(r.lambda), r.ee_participation, 0));
+        let found = match self.cycle.sag.as_mut() {
+            Some(sag) => sag.ee_mode(warm),
+            None => self
+                .cycle
+                .modal
+                .ee_mode_tracked(r1, warm)
+                .map(|o| o.map(|r| (r.lambda, r.ee_participation))),
+        };
+        match found {
+            Ok(Some((lambda, p))) if p >= thr => {
+                self.last_ee = Some((lambda_to_hz(lambda), p, 0));
             }
             // Still being worked on: the last answer, one cycle older.
             Ok(None) => {

@@ -3,7 +3,7 @@
 //! elastic catenary and the end-effector in equilibrium with the cables' end forces),
 //! then each cable's chain about its sagged profile (`fem`: N straight elements between
 //! nodes on the catenary; `continuous`: the exact N → ∞ limit), then the structured
-//! solver's first root ([`SagModalSolver`]). Nothing here allocates after [`SagPipeline::new`].
+//! solver's first root ([`SagModalSolver`]) and its end-effector mode. Nothing here allocates after [`SagPipeline::new`].
 
 use super::EstimatorError;
 use crate::cable::sagged::SagContinuousParams;
@@ -164,6 +164,16 @@ impl SagPipeline {
         self.modal
             .load(&self.frames[..n], &up, &ee)
             .map_err(EstimatorError::SagModel)
+    }
+
+    /// The end-effector mode (λ in rad²/s², participation) within what is left of this
+    /// cycle's budget: Ok(None) while the sweep goes on over the cycles (`warm` false
+    /// restarts it).
+    pub(super) fn ee_mode(&mut self, warm: bool) -> Result<Option<(f64, f64)>, ModalError> {
+        Ok(self
+            .modal
+            .ee_mode_tracked(warm)?
+            .map(|m| (m.lambda, m.ee_participation)))
     }
 
     /// Evaluations of D(λ) since the solver was last loaded.

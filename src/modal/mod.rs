@@ -74,6 +74,7 @@ mod dense;
 mod dynamic_stiffness;
 mod ee_tracker;
 mod eig3;
+mod engine;
 mod error;
 mod first_mode;
 mod mechanism;
