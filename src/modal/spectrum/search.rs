@@ -23,6 +23,11 @@ const NOISY_CLUSTER_PROBE: f64 = 100.0;
 /// cluster's count probes, twice where they are widened, and the residue quotient's two
 /// evaluations), so that a cycle never exceeds its budget.
 const CLUSTER_RESERVE: u32 = 6;
+/// A bracket left by a search the cycle's budget cut is widened by this (relative, on each
+/// side) before it is probed again in the next cycle: along the bench's circle a mode's λ
+/// moves by ~1e-4 (relative) per 1 ms cycle, so the narrowed bracket of the last cycle
+/// would miss it, while a bracket 2e-3 wide still needs only a few Newton steps.
+const RESUME_WIDEN: f64 = 1e-3;
 /// Relative step of the symmetric residue quotient at a pole (error O(h²) from the other
 /// modes, while the cluster's own spread there is below the pole probe, ≪ h).
 const RESIDUE_STEP: f64 = 1e-7;
@@ -212,6 +217,8 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
             return self.mode(i);
         }
         self.mode_start = self.p.evaluations();
+        // The pose may have moved since the bracket was narrowed: widen it a little.
+        let (lo, hi) = (lo * (1.0 - RESUME_WIDEN), hi * (1.0 + RESUME_WIDEN));
         self.check_budget(lo, hi)?;
         let a = self.probe(lo);
         self.check_budget(lo, hi)?;
