@@ -36,7 +36,9 @@
 //! chains about each sagged profile (fem: N elements on the catenary; continuous: the exact
 //! N → ∞ limit) and the structured solver of `modal::sag`; step 5 is D(0) of those chains.
 //! A pose where a cable would go slack is the status `CableSlack`. The end-effector mode is
-//! not tracked with sag (NaN, age `u32::MAX`); `modes` gives every mode's participation
+//! found with sag by an ascending sweep of the sagged spectrum (the chains' poles are not
+//! known in closed form), spread over the cycles by the cycle's evaluation budget, the
+//! last answer reported with its age meanwhile; `modes` gives every mode's participation
 //! offline. [`sag_warning`] says when a scene with sag off should have it on.
 //!
 //! [`reference_analysis`] is the offline reference of the same model: Clarabel for the
@@ -411,12 +413,9 @@ impl Estimator {
             self.last_ee = None;
         }
         let thr = self.params.modal.ee_participation_min;
-        let Some(tracked) = self.cycle.ee_mode_tracked(r1, warm) else {
-            return;
-        };
-        match tracked {
-            Ok(Some(r)) if r.ee_participation >= thr => {
-                self.last_ee = Some((lambda_to_hz(r.lambda), r.ee_participation, 0));
+        match self.cycle.ee_mode_tracked(r1, warm) {
+            Ok(Some((lambda, p))) if p >= thr => {
+                self.last_ee = Some((lambda_to_hz(lambda), p, 0));
             }
             // Still being worked on: the last answer, one cycle older.
             Ok(None) => {

@@ -6,6 +6,7 @@
 //! [`EvalScratch`] holds the buffers one evaluation writes (and the evaluation counter).
 
 use super::eig3::eig3;
+use super::engine::SYM3;
 use super::rigid::{attach_map, RigidParts};
 use crate::cable::{
     eval_continuous_batch, eval_discrete_batch, CableModel, Chain, ChainEval, ChainKind,
@@ -21,9 +22,6 @@ use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector6};
 
 /// Largest number of chains (a [`CableModel`] has up to three).
 pub(super) const MAX_CHAINS: usize = 3 * MAX_CABLES;
-
-/// (row, column) of the six distinct entries of a symmetric 3 × 3 matrix.
-const SYM3: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
 
 /// D(λ), D'(λ) and the blocked count at one λ. D is 3 × 3 (point mass, in the top-left
 /// block) or 6 × 6 (rigid body: translation then rotation).

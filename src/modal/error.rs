@@ -19,8 +19,9 @@ pub enum ModalError {
         /// Upper end of the last bracket, rad²/s².
         hi: f64,
     },
-    /// No mode with enough end-effector participation within the scan bound.
-    #[error("no end-effector mode found within {0} pole intervals")]
+    /// No mode with enough end-effector participation within the scan bound (pole
+    /// intervals scanned by the taut tracker, modes swept on sagged cables).
+    #[error("no end-effector mode found within {0} pole intervals or modes")]
     NoEeMode(u32),
     /// The dense mass matrix is not positive definite (bad input).
     #[error("mass matrix is not positive definite")]

@@ -6,6 +6,7 @@
 //! only). The first root's own state between cycles is [`FirstRootState`].
 
 use super::dynamic_stiffness::{quad, DynEval, EvalScratch, LoadedChains};
+use super::engine::{BRACKET_MIN, COLLAPSE_ULPS};
 use super::{ModalError, ModalParams, Root};
 use nalgebra::{Matrix6, Vector6};
 
@@ -18,14 +19,11 @@ const CERT_PROBE: f64 = 1e-10;
 /// Newton function vanishes at the pole).
 const RAYLEIGH_CAP: f64 = 0.999;
 /// Without poles (massless cables) the upper bracket starts at twice the guess (at least
-/// this, rad²/s²) ...
-const BRACKET_MIN: f64 = 1e-12;
-/// ... and grows by this factor ...
-const BRACKET_GROWTH: f64 = 4.0;
+/// [`BRACKET_MIN`]) and grows by this factor per probe (D is linear in λ there, so no mode
+/// can be skipped, and 4 reaches the root in half the probes of 2) ...
+const UPPER_BRACKET_GROWTH: f64 = 4.0;
 /// ... at most this many times (4²⁰⁰ covers any finite λ).
 const BRACKET_STEPS: usize = 200;
-/// The bracket counts as collapsed when narrower than this many ε relative to λ.
-const COLLAPSE_ULPS: f64 = 4.0;
 
 /// The relative residual of an eigenvalue μ of D(λ) at λ (D'(λ) = `dd`):
 /// |μ| / (|λ|·max_ij |D'_ij|), the eigenvalue against the size of the inertia term λ·D'
@@ -311,7 +309,7 @@ impl RootFinder<'_> {
             if e.eig().values[0] < 0.0 {
                 return Ok(h);
             }
-            h *= BRACKET_GROWTH;
+            h *= UPPER_BRACKET_GROWTH;
         }
         Err(ModalError::NoConvergence {
             evaluations: self.evaluations() - start,

@@ -60,7 +60,8 @@
 //! M and D' in kg (kg·m²), λ in rad²/s², f in Hz; participations are dimensionless (0 ..= 1)
 //! and Σ_k p_k/λ_k is in s²/rad².
 //!
-//! **Layout.** `dense`: the offline reference (refused beyond
+//! **Layout.** `engine`: the condensed problem behind one trait (taut and sagged) and the
+//! constants its searches share. `dense`: the offline reference (refused beyond
 //! [`DENSE_MEMORY_BUDGET_BYTES`]). `dynamic_stiffness`: the loaded problem and the
 //! evaluation of D(λ). `first_mode`: the first root and its certificate. `ee_tracker`: the
 //! end-effector mode, scanned and tracked. `spectrum`: the first K modes
@@ -74,6 +75,7 @@ mod dense;
 mod dynamic_stiffness;
 mod ee_tracker;
 mod eig3;
+mod engine;
 mod error;
 mod first_mode;
 mod mechanism;

@@ -209,21 +209,27 @@ impl Forward {
             Model::Sagged(s) => {
                 s.reset_warm_start();
                 s.forget_pending();
+                s.modal.reset_tracking();
             }
         }
     }
 
-    /// The end-effector mode of the loaded pose, tracked from the last cycle's
-    /// ([`ModalSolver::ee_mode_tracked`]; `r1` this cycle's first root, `warm` whether the
-    /// cycle is warm); None with sagging cables, whose end-effector mode is not tracked.
+    /// The end-effector mode of the loaded pose (λ in rad²/s², participation) within what
+    /// is left of the cycle's budget: taut cables track it from the last cycle's
+    /// ([`ModalSolver::ee_mode_tracked`]; `r1` this cycle's first root), sagging cables
+    /// sweep their spectrum upwards over the cycles ([`SagModel::ee_mode`]); `warm` whether
+    /// the cycle is warm. Ok(None) while the work goes on over the cycles.
     pub(super) fn ee_mode_tracked(
         &mut self,
         r1: &Root,
         warm: bool,
-    ) -> Option<Result<Option<Root>, ModalError>> {
+    ) -> Result<Option<(f64, f64)>, ModalError> {
         match &mut self.model {
-            Model::Taut(t) => Some(t.modal.ee_mode_tracked(r1, warm)),
-            Model::Sagged(_) => None,
+            Model::Taut(t) => Ok(t
+                .modal
+                .ee_mode_tracked(r1, warm)?
+                .map(|r| (r.lambda, r.ee_participation))),
+            Model::Sagged(s) => s.ee_mode(warm),
         }
     }
 

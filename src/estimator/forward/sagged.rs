@@ -3,7 +3,8 @@
 //! elastic catenary and the end-effector in equilibrium with the cables' end forces),
 //! then each cable's chain about its sagged profile (`fem`: N straight elements between
 //! nodes on the catenary; `continuous`: the exact N → ∞ limit), then the structured
-//! solver's first root ([`SagModalSolver`]). Nothing here allocates after [`SagModel::new`].
+//! solver's first root ([`SagModalSolver`]) and its end-effector mode. Nothing here
+//! allocates after [`SagModel::new`].
 
 use super::{EndEffector, ForwardParams, TensionReport};
 use crate::estimator::EstimatorError;
@@ -139,6 +140,21 @@ impl SagModel {
         self.modal
             .load(&self.frames[..n], &up, &ee)
             .map_err(EstimatorError::SagModel)
+    }
+
+    /// The end-effector mode (λ in rad²/s², participation) within what is left of this
+    /// cycle's budget: Ok(None) while the sweep goes on over the cycles (`warm` false
+    /// restarts it). Continuous cables: unknown (NaN), since their mesh rule
+    /// ([`SagContinuousParams`]) holds its accuracy only up to the cables' first few
+    /// half-waves, and the end-effector mode of a sagging robot lies above tens of them.
+    pub(super) fn ee_mode(&mut self, warm: bool) -> Result<Option<(f64, f64)>, ModalError> {
+        if self.modal.is_continuous() {
+            return Ok(Some((f64::NAN, f64::NAN)));
+        }
+        Ok(self
+            .modal
+            .ee_mode_tracked(warm)?
+            .map(|m| (m.lambda, m.ee_participation)))
     }
 
     /// Evaluations of D(λ) since the solver was last loaded.

@@ -3,21 +3,17 @@
 
 use super::problem::SagProblem;
 use crate::modal::dynamic_stiffness::quad;
+use crate::modal::engine::{BRACKET_GROWTH, BRACKET_MIN, NOISE_STEP};
 use crate::modal::first_mode::relative_residual;
 use crate::modal::{ModalError, ModalParams, Root};
 use nalgebra::Matrix6;
 
-/// Without a pole above, the bracket's upper end is unknown: a step that leaves the
-/// bracket doubles the iterate instead of bisecting.
-const GROWTH: f64 = 2.0;
-/// The cold start's Rayleigh guess is at least this, rad²/s² (a scale when D' vanishes).
-const GUESS_MIN: f64 = 1e-12;
-
-/// A warm Newton step at or below this (relative) is accepted whatever the previous one:
-/// steps of rounding noise (μ₁'s own error, ~1e-12 of λ on stiff, heavy robots) do not
-/// shrink, and Newton's quadratic rate leaves ~K·step² ≪ 1e-12 (K = |μ₁''/2μ₁'|·λ, large
-/// only within ~1e-8 of a pole).
-const NOISE_STEP: f64 = 1e-10;
+// Without a pole above, the bracket's upper end is unknown: a step that leaves the
+// bracket multiplies the iterate by BRACKET_GROWTH instead of bisecting. The cold start's
+// Rayleigh guess is at least BRACKET_MIN (a scale when D' vanishes). A warm Newton step at
+// or below NOISE_STEP (relative) is accepted whatever the previous one: steps of rounding
+// noise do not shrink, and Newton's quadratic rate leaves ~K·step² ≪ 1e-12
+// (K = |μ₁''/2μ₁'|·λ, large only within ~1e-8 of a pole).
 
 /// A warm Newton iterate (after the first evaluation) is accepted without one more
 /// evaluation once its step is below [`ModalParams::newton_accept`] (relative) and either
@@ -107,7 +103,7 @@ pub(super) fn first_root(
         _ => {
             let kin = -quad(&e0.dd, &eg0.vectors[0], e0.dim);
             Search::from(
-                (eg0.values[0] / kin.max(f64::MIN_POSITIVE)).max(GUESS_MIN),
+                (eg0.values[0] / kin.max(f64::MIN_POSITIVE)).max(BRACKET_MIN),
                 false,
             )
         }
@@ -197,7 +193,7 @@ fn search(
             next = if hi.is_finite() {
                 0.5 * (lo + hi)
             } else {
-                GROWTH * x
+                BRACKET_GROWTH * x
             };
         }
         s.x = next;

@@ -59,14 +59,15 @@ mod problem;
 
 pub use dense::{assemble_sagged, SagDenseCable};
 
-use super::{ModalError, ModalParams, Root};
+use super::spectrum::{ee_sweep, EeSweep, SweepStep};
+use super::{ModalError, ModalParams, Mode, Root, SpectrumParams};
 use crate::cable::sagged::{
     SagChain, SagChainError, SagContError, SagContMesh, SagContinuousParams,
 };
 use crate::modal::DynEval;
 use crate::sag::Catenary;
 use nalgebra::{Matrix3, Matrix6, Vector3};
-use problem::SagProblem;
+use problem::{SagProblem, SagView};
 
 /// How one cable of a pose attaches to the end-effector.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -145,6 +146,11 @@ pub struct SagModalSolver {
     last_lambda1: f64,
     /// A first-root search the last cycle's budget cut, continued by the next call.
     pending: Option<first::Pending>,
+    /// The evaluation counter when this cycle's first root began (the cycle's budget
+    /// counts from there).
+    cycle_base: u32,
+    /// An end-effector sweep the budget cut, continued by the next cycle.
+    sweep: Option<EeSweep>,
     loaded: bool,
 }
 
@@ -157,6 +163,8 @@ impl SagModalSolver {
             evaluations: 0,
             last_lambda1: f64::NAN,
             pending: None,
+            cycle_base: 0,
+            sweep: None,
             loaded: false,
         }
     }
@@ -174,6 +182,8 @@ impl SagModalSolver {
             evaluations: 0,
             last_lambda1: f64::NAN,
             pending: None,
+            cycle_base: 0,
+            sweep: None,
             loaded: false,
         }
     }
@@ -363,6 +373,7 @@ impl SagModalSolver {
     /// [`ModalParams::max_evaluations`] are spent on it over the calls.
     pub fn first_root_from(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
         self.require_loaded()?;
+        self.cycle_base = self.evaluations;
         let r = first::first_root(
             &self.problem,
             &self.params,
@@ -372,5 +383,61 @@ impl SagModalSolver {
         );
         self.last_lambda1 = r.as_ref().map_or(f64::NAN, |r| r.lambda);
         r
+    }
+
+    /// The end-effector mode of the loaded pose: the lowest mode whose participation is at
+    /// least [`ModalParams::ee_participation_min`], by an ascending sweep of the spectrum
+    /// (every mode below it solved and read; at most [`ModalParams::max_scan_intervals`]
+    /// modes). Offline use; forgets a sweep in progress.
+    pub fn ee_mode(&mut self) -> Result<Mode, ModalError> {
+        self.require_loaded()?;
+        self.sweep = None;
+        match self.ee_step(u32::MAX)? {
+            Some(m) => Ok(m),
+            None => Err(ModalError::NoEeMode(0)),
+        }
+    }
+
+    /// The end-effector mode within what is left of this cycle's budget
+    /// ([`ModalParams::cycle_evaluations`], counted from the start of this cycle's
+    /// [`Self::first_root_from`]): Ok(Some) when the sweep ends in this call, Ok(None) when
+    /// the budget cut it (it goes on in the next call, on that call's pose). `warm` false
+    /// (a jump) forgets a sweep in progress. No allocation.
+    pub fn ee_mode_tracked(&mut self, warm: bool) -> Result<Option<Mode>, ModalError> {
+        self.require_loaded()?;
+        if !warm {
+            self.sweep = None;
+        }
+        let budget = match self.params.cycle_evaluations {
+            u32::MAX => u32::MAX,
+            b => b.saturating_sub(self.evaluations.wrapping_sub(self.cycle_base)),
+        };
+        self.ee_step(budget)
+    }
+
+    /// Forget an end-effector sweep in progress.
+    pub fn reset_tracking(&mut self) {
+        self.sweep = None;
+    }
+
+    /// One step of the end-effector sweep with `budget` evaluations.
+    fn ee_step(&mut self, budget: u32) -> Result<Option<Mode>, ModalError> {
+        let view = SagView {
+            p: &self.problem,
+            evals: &mut self.evaluations,
+        };
+        let params = SpectrumParams::default();
+        let r = ee_sweep(
+            view,
+            &params,
+            self.params.ee_participation_min,
+            budget,
+            self.params.max_scan_intervals,
+            &mut self.sweep,
+        )?;
+        Ok(match r {
+            SweepStep::Done(m) => Some(m),
+            SweepStep::Paused => None,
+        })
     }
 }

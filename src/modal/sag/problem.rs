@@ -4,11 +4,10 @@
 use super::{SagCableFrame, SagEndEffector, SagLoadError};
 use crate::cable::sagged::{SagBatch, SagChain, SagChainEval, SagContinuous, SagContinuousParams};
 use crate::modal::attach_map;
+use crate::modal::engine::{Condensed, SYM3};
 use crate::modal::DynEval;
 use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector3};
 
-/// (row, column) of the six distinct entries of a symmetric 3 × 3 matrix.
-const SYM3: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
 /// The mode count reported for continuous cables (infinitely many modes): large enough
 /// for any request, small enough that sums of counts do not overflow.
 pub(super) const CONTINUOUS_MODES: usize = u32::MAX as usize / 2;
@@ -340,5 +339,49 @@ impl Acc {
                 dim: 6,
             },
         }
+    }
+}
+
+/// The sagged problem as the searches see it: the loaded pose (read) and the solver's
+/// evaluation counter (written). Its poles are seen only through the count.
+pub(super) struct SagView<'a> {
+    pub(super) p: &'a SagProblem,
+    pub(super) evals: &'a mut u32,
+}
+
+impl Condensed for SagView<'_> {
+    #[inline]
+    fn eval(&mut self, lambda: f64) -> DynEval {
+        *self.evals = self.evals.wrapping_add(1);
+        self.p.eval(lambda)
+    }
+    #[inline]
+    fn count_eval(&mut self, lambda: f64) -> DynEval {
+        *self.evals = self.evals.wrapping_add(1);
+        self.p.eval_with(lambda, false)
+    }
+    #[inline]
+    fn zero_eval(&mut self) -> DynEval {
+        self.p.static_eval()
+    }
+    #[inline]
+    fn evaluations(&self) -> u32 {
+        *self.evals
+    }
+    #[inline]
+    fn dim(&self) -> usize {
+        self.p.dim
+    }
+    #[inline]
+    fn ee_mass(&self) -> &Matrix6<f64> {
+        &self.p.m6
+    }
+    #[inline]
+    fn total_modes(&self) -> usize {
+        self.p.total_modes()
+    }
+    #[inline]
+    fn pole_interval(&self, _lambda: f64) -> Option<(f64, f64)> {
+        None
     }
 }

@@ -3,14 +3,14 @@
 //! null space in a pole-free interval or from the residue of D⁻¹ at a pole.
 
 use super::search::Member;
-use crate::modal::dynamic_stiffness::{DynEval, EigD, LoadedChains};
+use crate::modal::dynamic_stiffness::{DynEval, EigD};
 use nalgebra::{Matrix6, SymmetricEigen, Vector6};
 
 /// M_ee as a 6 × 6 positive definite matrix: the unused rows of a point mass (dim 3) hold
 /// the identity, which only ever meets zero rows of R.
-fn mass_padded(p: &LoadedChains) -> Matrix6<f64> {
-    let mut m = p.m6;
-    for j in p.dim..6 {
+fn mass_padded(m6: &Matrix6<f64>, dim: usize) -> Matrix6<f64> {
+    let mut m = *m6;
+    for j in dim..6 {
         m[(j, j)] = 1.0;
     }
     m
@@ -61,14 +61,15 @@ pub(super) fn branch_residue(e: &DynEval, eg: &EigD, branch: usize, r: usize) ->
 
 /// The participations of a cluster from its residue block R: the eigenvalues of
 /// M_ee^{1/2} R M_ee^{1/2}, largest first.
-pub(super) fn participations(p: &LoadedChains, r: &Matrix6<f64>) -> [f64; 6] {
-    congruent_values(&mass_padded(p), r)
+pub(super) fn participations(m6: &Matrix6<f64>, dim: usize, r: &Matrix6<f64>) -> [f64; 6] {
+    congruent_values(&mass_padded(m6, dim), r)
 }
 
 /// The participations of the cluster at λ from the residue of D⁻¹, by the symmetric
 /// quotient R = ½λh[D(λ(1 − h))⁻¹ − D(λ(1 + h))⁻¹] (`em`, `ep` the two evaluations).
 pub(super) fn residue_participations(
-    p: &LoadedChains,
+    m6: &Matrix6<f64>,
+    dim: usize,
     lambda: f64,
     h: f64,
     em: &DynEval,
@@ -76,7 +77,7 @@ pub(super) fn residue_participations(
 ) -> [f64; 6] {
     let pad = |d: &Matrix6<f64>| {
         let mut d = *d;
-        for j in p.dim..6 {
+        for j in dim..6 {
             d[(j, j)] = 1.0;
         }
         d
@@ -86,7 +87,7 @@ pub(super) fn residue_participations(
     };
     let r = (im - ip) * (0.5 * lambda * h);
     let r = (r + r.transpose()) * 0.5;
-    congruent_values(&mass_padded(p), &r)
+    congruent_values(&mass_padded(m6, dim), &r)
 }
 
 /// Members of a cluster whose roots agree to this (relative) are one numerically degenerate

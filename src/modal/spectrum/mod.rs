@@ -50,13 +50,16 @@
 //! (closed-form chains), so K modes cost the same at N = 10 and N = 10⁶.
 
 mod cluster;
+mod ee_sweep;
 mod search;
 
 use super::dynamic_stiffness::LoadedChains;
+use super::engine::TautView;
 use super::solver::ModalSolver;
 use super::ModalError;
 use crate::cable::ChainKind;
-use search::SpectrumSearch;
+pub(in crate::modal) use ee_sweep::{ee_sweep, EeSweep, SweepStep};
+pub(in crate::modal) use search::SpectrumSearch;
 
 /// One natural frequency of the loaded problem.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
@@ -120,7 +123,11 @@ impl ModalSolver {
         out: &mut [Mode],
     ) -> Result<usize, ModalError> {
         let n = k.min(out.len()).min(self.problem.total_modes());
-        let mut s = SpectrumSearch::new(&self.problem, &mut self.scratch, params);
+        let view = TautView {
+            p: &self.problem,
+            s: &mut self.scratch,
+        };
+        let mut s = SpectrumSearch::new(view, params);
         s.start()?;
         for (i, slot) in out[..n].iter_mut().enumerate() {
             *slot = s.mode(i)?;

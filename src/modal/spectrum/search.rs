@@ -1,23 +1,33 @@
 //! The search for one mode: count brackets, pole probes, safeguarded Newton on a branch.
 
+//!
+//! Generic over the condensed problem ([`Condensed`]): where the chains' poles are known
+//! (taut) the bracket is narrowed by probes around them; where only the count shows them
+//! (sagged) it is bisected while the blocked count differs at its ends, and a bracket
+//! narrower than the pole probe with a pole inside reports the mode there.
+
 use super::cluster::{members_residue, participations, residue_participations};
 use super::{Mode, SpectrumParams};
-use crate::modal::dynamic_stiffness::{quad, DynEval, EigD, EvalScratch, LoadedChains};
+use crate::modal::dynamic_stiffness::{quad, DynEval, EigD};
+use crate::modal::engine::{
+    Condensed, BRACKET_GROWTH, BRACKET_MIN, COLLAPSE_ULPS, NOISE_STEP, SUPERLINEAR_RATIO,
+};
 use crate::modal::{lambda_to_hz, ModalError};
-
-/// Without a better scale, the first bracket starts here (rad²/s²).
-const BRACKET_MIN: f64 = 1e-12;
-/// Upper brackets grow by this factor per count probe.
-const BRACKET_GROWTH: f64 = 2.0;
-/// The bracket counts as collapsed when narrower than this many ε relative to λ.
-const COLLAPSE_ULPS: f64 = 4.0;
-/// A Newton step below this (relative) that is also below [`SUPERLINEAR_RATIO`] times the
-/// previous one shows superlinear convergence: the iterate after it is within ~(step)²
-/// (relative) of the root, far below the target, and it is accepted (steps of rounding
-/// noise, ~1e-13, end the iteration this way instead of bouncing).
-const NOISE_STEP: f64 = 1e-10;
-/// See [`NOISE_STEP`]: quadratic convergence shrinks steps far faster than this.
-const SUPERLINEAR_RATIO: f64 = 1e-2;
+/// Where the count alone shows the poles (sagged chains) and a mode's cluster probes do
+/// not straddle it, they are tried again this many times wider. Next to a pole the sagged
+/// chains' recurrence carries noise far above ε·‖D‖ (measured: 5e-3 on μ₂ of suspended-8
+/// at N = 10 near λ = 2600 rad²/s², where μ₁ ≈ −2.9e6 N/m), which puts Newton's root
+/// ~3e-10 (relative) from the dense one, outside the default 1e-10 probes.
+const NOISY_CLUSTER_PROBE: f64 = 100.0;
+/// Evaluations a cycle budget keeps for the end of a mode after its search loops (the
+/// cluster's count probes, twice where they are widened, and the residue quotient's two
+/// evaluations), so that a cycle never exceeds its budget.
+const CLUSTER_RESERVE: u32 = 6;
+/// A bracket left by a search the cycle's budget cut is widened by this (relative, on each
+/// side) before it is probed again in the next cycle: along the bench's circle a mode's λ
+/// moves by ~1e-4 (relative) per 1 ms cycle, so the narrowed bracket of the last cycle
+/// would miss it, while a bracket 2e-3 wide still needs only a few Newton steps.
+const RESUME_WIDEN: f64 = 1e-3;
 /// Relative step of the symmetric residue quotient at a pole (error O(h²) from the other
 /// modes, while the cluster's own spread there is below the pole probe, ≪ h).
 const RESIDUE_STEP: f64 = 1e-7;
@@ -50,7 +60,7 @@ enum Found {
 
 /// The current cluster: its count probes, first index, multiplicity and participations.
 #[derive(Debug, Clone, Copy)]
-struct Cluster {
+pub(in crate::modal) struct Cluster {
     lo: Probe,
     hi: Probe,
     start: usize,
@@ -64,33 +74,24 @@ struct Cluster {
 /// One solved member of a pole-free cluster: its root, the evaluation there, its branch.
 pub(super) type Member = (f64, DynEval, EigD, usize);
 
-/// One sweep over the spectrum of the loaded problem, ascending.
-pub(super) struct SpectrumSearch<'a> {
-    p: &'a LoadedChains,
-    s: &'a mut EvalScratch,
-    params: &'a SpectrumParams,
+/// What a sweep keeps between calls (plain data): the current cluster and the first
+/// bracket's scale. A sweep spread over cycles keeps it between them.
+#[derive(Debug, Clone, Copy)]
+pub(in crate::modal) struct SweepState {
     cl: Cluster,
     /// A scale for the first bracket: the Rayleigh estimate μ₁(0)/(−μ₁'(0)), rad²/s².
     scale: f64,
-    /// Evaluation counter at the start of the current mode.
-    mode_start: u32,
 }
 
-impl<'a> SpectrumSearch<'a> {
-    pub(super) fn new(
-        p: &'a LoadedChains,
-        s: &'a mut EvalScratch,
-        params: &'a SpectrumParams,
-    ) -> SpectrumSearch<'a> {
+impl SweepState {
+    /// Nothing found yet (before [`SpectrumSearch::start`]).
+    pub(in crate::modal) fn new() -> SweepState {
         let zero = Probe {
             x: 0.0,
             count: 0,
             below: 0,
         };
-        SpectrumSearch {
-            p,
-            s,
-            params,
+        SweepState {
             cl: Cluster {
                 lo: zero,
                 hi: zero,
@@ -101,19 +102,73 @@ impl<'a> SpectrumSearch<'a> {
                 presolved: 0,
             },
             scale: f64::NAN,
+        }
+    }
+}
+
+/// One sweep over the spectrum of the loaded problem, ascending.
+pub(in crate::modal) struct SpectrumSearch<'a, P: Condensed> {
+    p: P,
+    params: &'a SpectrumParams,
+    st: SweepState,
+    /// Evaluation counter at the start of the current mode.
+    mode_start: u32,
+    /// The evaluation counter at which the caller's cycle budget is spent (with
+    /// `cycle_base`; `u32::MAX`: no cycle budget) ...
+    cycle_base: u32,
+    cycle_budget: u32,
+    /// ... and whether it cut the last search (not a failure: the bracket it left in the
+    /// error is where to go on).
+    pub(in crate::modal) cut: bool,
+}
+
+impl<'a, P: Condensed> SpectrumSearch<'a, P> {
+    pub(in crate::modal) fn new(p: P, params: &'a SpectrumParams) -> SpectrumSearch<'a, P> {
+        Self::resume(p, params, SweepState::new())
+    }
+
+    /// A sweep from a kept state (see [`SweepState`]).
+    pub(in crate::modal) fn resume(
+        p: P,
+        params: &'a SpectrumParams,
+        st: SweepState,
+    ) -> SpectrumSearch<'a, P> {
+        SpectrumSearch {
+            p,
+            params,
+            st,
             mode_start: 0,
+            cycle_base: 0,
+            cycle_budget: u32::MAX,
+            cut: false,
         }
     }
 
+    /// Stop every search after `evaluations` more evaluations (marking [`Self::cut`]).
+    pub(in crate::modal) fn set_cycle_budget(&mut self, evaluations: u32) {
+        self.cycle_base = self.p.evaluations();
+        self.cycle_budget = evaluations;
+    }
+
+    /// The state to keep.
+    pub(in crate::modal) fn state(&self) -> SweepState {
+        self.st
+    }
+
+    /// The problem searched.
+    pub(in crate::modal) fn problem(&mut self) -> &mut P {
+        &mut self.p
+    }
+
     /// Check D(0) > 0 (then J(0) = 0) and take the first bracket's scale.
-    pub(super) fn start(&mut self) -> Result<(), ModalError> {
-        let e = self.s.eval(self.p, 0.0);
+    pub(in crate::modal) fn start(&mut self) -> Result<(), ModalError> {
+        let e = self.p.zero_eval();
         let eg = e.eig();
         if !(eg.values[0] > 0.0) {
             return Err(ModalError::NotPositiveDefinite(eg.values[0]));
         }
         let kin = -quad(&e.dd, &eg.vectors[0], e.dim);
-        self.scale = if kin > 0.0 {
+        self.st.scale = if kin > 0.0 {
             eg.values[0] / kin
         } else {
             BRACKET_MIN
@@ -122,9 +177,9 @@ impl<'a> SpectrumSearch<'a> {
     }
 
     /// Mode `i` (0-based); modes must be asked for in order 0, 1, 2, ...
-    pub(super) fn mode(&mut self, i: usize) -> Result<Mode, ModalError> {
-        self.mode_start = self.s.evaluations;
-        let cl = self.cl;
+    pub(in crate::modal) fn mode(&mut self, i: usize) -> Result<Mode, ModalError> {
+        self.mode_start = self.p.evaluations();
+        let cl = self.st.cl;
         if cl.mult > 0 && (i as u64) < cl.hi.count as u64 && i >= cl.start {
             let j = i - cl.start;
             let lambda = if j < cl.presolved {
@@ -149,19 +204,53 @@ impl<'a> SpectrumSearch<'a> {
         self.new_cluster(i, found)
     }
 
+    /// Mode `i` from the bracket (lo, hi) a cut search left (re-probed here; when it
+    /// no longer brackets mode `i`, or `i` belongs to the current cluster, as [`Self::mode`]).
+    pub(in crate::modal) fn mode_within(
+        &mut self,
+        i: usize,
+        lo: f64,
+        hi: f64,
+    ) -> Result<Mode, ModalError> {
+        let cl = self.st.cl;
+        if cl.mult > 0 && (i as u64) < cl.hi.count as u64 && i >= cl.start {
+            return self.mode(i);
+        }
+        self.mode_start = self.p.evaluations();
+        // The pose may have moved since the bracket was narrowed: widen it a little.
+        let (lo, hi) = (lo * (1.0 - RESUME_WIDEN), hi * (1.0 + RESUME_WIDEN));
+        self.check_budget(lo, hi)?;
+        let a = self.probe(lo);
+        self.check_budget(lo, hi)?;
+        let b = self.probe(hi);
+        if !(a.count as usize <= i && (b.count as usize) > i) {
+            return self.mode(i);
+        }
+        let found = self.solve(i, a, b)?;
+        self.new_cluster(i, found)
+    }
+
     /// Count probe at x.
     fn probe(&mut self, x: f64) -> Probe {
-        let e = self.s.eval(self.p, x);
-        Probe {
-            x,
-            count: e.below + e.eig().negatives() as u32,
-            below: e.below,
-        }
+        let (count, below) = self.p.count(x);
+        Probe { x, count, below }
     }
 
     /// The budget error, or nothing.
-    fn check_budget(&self, lo: f64, hi: f64) -> Result<(), ModalError> {
-        let used = self.s.evaluations - self.mode_start;
+    fn check_budget(&mut self, lo: f64, hi: f64) -> Result<(), ModalError> {
+        let now = self.p.evaluations();
+        let used = now.wrapping_sub(self.mode_start);
+        let cycle_used = now.wrapping_sub(self.cycle_base);
+        if self.cycle_budget != u32::MAX
+            && cycle_used.saturating_add(CLUSTER_RESERVE) >= self.cycle_budget
+        {
+            self.cut = true;
+            return Err(ModalError::NoConvergence {
+                evaluations: used,
+                lo,
+                hi,
+            });
+        }
         if used >= self.params.max_evaluations_per_mode {
             return Err(ModalError::NoConvergence {
                 evaluations: used,
@@ -177,7 +266,7 @@ impl<'a> SpectrumSearch<'a> {
         let mut x = if lo.x > 0.0 {
             lo.x * BRACKET_GROWTH
         } else {
-            (BRACKET_GROWTH * self.scale).max(BRACKET_MIN)
+            (BRACKET_GROWTH * self.st.scale).max(BRACKET_MIN)
         };
         loop {
             self.check_budget(lo.x, x)?;
@@ -196,11 +285,27 @@ impl<'a> SpectrumSearch<'a> {
         let eta = self.params.pole_probe;
         loop {
             self.check_budget(lo.x, hi.x)?;
-            let (pa, pb) = self.p.pole_interval(lo.x);
+            let Some((pa, pb)) = self.p.pole_interval(lo.x) else {
+                // The poles are seen only through the count: the bracket is pole-free
+                // once the blocked count is the same at both ends.
+                if lo.below == hi.below {
+                    return self.newton(i, lo, hi, 0.0, f64::INFINITY);
+                }
+                if hi.x - lo.x <= eta * hi.x {
+                    return Ok(Found::Pole(0.5 * (lo.x + hi.x)));
+                }
+                let mid = self.probe(0.5 * (lo.x + hi.x));
+                if mid.count as usize > i {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+                continue;
+            };
             if pb >= hi.x {
                 return self.newton(i, lo, hi, pa, pb);
             }
-            let (_, pc) = self.p.pole_interval(pb * (1.0 + eta));
+            let (_, pc) = self.p.pole_interval(pb * (1.0 + eta)).unwrap_or((pb, pb));
             if pc < hi.x {
                 // Bisection; across many decades (a nearly slack cable's string modes far
                 // below the others) geometric from the first pole up, so that the count
@@ -257,7 +362,7 @@ impl<'a> SpectrumSearch<'a> {
         pb: f64,
     ) -> Result<Found, ModalError> {
         let branch = i.checked_sub(lo.below as usize).unwrap_or(usize::MAX);
-        if branch >= self.p.dim {
+        if branch >= self.p.dim() {
             return Err(ModalError::CountMismatch(lo.x));
         }
         let mut x = 0.5 * (lo.x + hi.x);
@@ -265,7 +370,7 @@ impl<'a> SpectrumSearch<'a> {
         let mut width = [hi.x - lo.x; 2];
         loop {
             self.check_budget(lo.x, hi.x)?;
-            let e = self.s.eval(self.p, x);
+            let e = self.p.eval(x);
             let eg = e.eig();
             let mu = eg.values[branch];
             let dmu = quad(&e.dd, &eg.vectors[branch], e.dim);
@@ -286,11 +391,7 @@ impl<'a> SpectrumSearch<'a> {
                 let lambda = if inside { xn } else { x };
                 // D' at the root itself: near a pole it changes by 2·step/distance, and the
                 // participation reads it (one more evaluation).
-                let eval = if lambda != x {
-                    self.s.eval(self.p, lambda)
-                } else {
-                    e
-                };
+                let eval = if lambda != x { self.p.eval(lambda) } else { e };
                 return Ok(Found::Branch {
                     lambda,
                     eig: eval.eig(),
@@ -319,36 +420,48 @@ impl<'a> SpectrumSearch<'a> {
             Found::Branch { lambda, .. } => *lambda,
         };
         let d = self.params.cluster_probe;
-        let lo = self.probe(lambda * (1.0 - d));
-        let hi = self.probe(lambda * (1.0 + d));
+        let mut lo = self.probe(lambda * (1.0 - d));
+        let mut hi = self.probe(lambda * (1.0 + d));
+        if !(lo.count as usize <= i && (hi.count as usize) > i)
+            && self.p.pole_interval(lambda).is_none()
+        {
+            // Count-only poles (sagged chains): next to a pole the chains' recurrence
+            // carries more noise than the probe's width; probe once more, wider.
+            let d = NOISY_CLUSTER_PROBE * d;
+            lo = self.probe(lambda * (1.0 - d));
+            hi = self.probe(lambda * (1.0 + d));
+        }
         if !(lo.count as usize <= i && (hi.count as usize) > i) {
             return Err(ModalError::CountMismatch(lambda));
         }
         let mult = hi.count - i as u32;
-        let (pa, pb) = self.p.pole_interval(lo.x);
-        let pole_free = pb > hi.x && pa < lo.x;
+        let pole_free = match self.p.pole_interval(lo.x) {
+            Some((pa, pb)) => pb > hi.x && pa < lo.x,
+            None => lo.below == hi.below,
+        };
+        let (m6, dim) = (*self.p.ee_mass(), self.p.dim());
         let mut lambdas = [lambda; 6];
         let mut presolved = 0;
         let parts = match found {
             Found::Branch {
                 eval, eig, branch, ..
-            } if pole_free && branch + mult as usize <= self.p.dim => {
+            } if pole_free && branch + mult as usize <= dim => {
                 let mut members = [(lambda, eval, eig, branch); 6];
                 for k in 1..mult as usize {
                     members[k] = self.member(i + k, lo, hi)?;
                     lambdas[k] = members[k].0;
                 }
                 presolved = mult as usize;
-                participations(self.p, &members_residue(&members[..mult as usize]))
+                participations(&m6, dim, &members_residue(&members[..mult as usize]))
             }
             _ => {
                 let h = RESIDUE_STEP;
-                let em = self.s.eval(self.p, lambda * (1.0 - h));
-                let ep = self.s.eval(self.p, lambda * (1.0 + h));
-                residue_participations(self.p, lambda, h, &em, &ep)
+                let em = self.p.eval(lambda * (1.0 - h));
+                let ep = self.p.eval(lambda * (1.0 + h));
+                residue_participations(&m6, dim, lambda, h, &em, &ep)
             }
         };
-        self.cl = Cluster {
+        self.st.cl = Cluster {
             lo,
             hi,
             start: i,
@@ -368,7 +481,7 @@ impl<'a> SpectrumSearch<'a> {
 
     /// Member `i` of a pole-free cluster bracketed by `lo`, `hi` (its own budget).
     fn member(&mut self, i: usize, lo: Probe, hi: Probe) -> Result<Member, ModalError> {
-        self.mode_start = self.s.evaluations;
+        self.mode_start = self.p.evaluations();
         match self.solve(i, lo, hi)? {
             Found::Branch {
                 lambda,
