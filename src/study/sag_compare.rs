@@ -190,8 +190,8 @@ pub fn compute(s: &Scene, cfg: &SagCompareConfig) -> Result<SagCompare, StudyErr
     // Built at the default pose: the fallback of the poses an estimator cannot be built at,
     // and the check that both models exist for this scene.
     let cold = [
-        build(&models[0], EstimatorParams::default())?,
-        build(&models[1], EstimatorParams::default())?,
+        build(&models[0], no_ee_mode())?,
+        build(&models[1], no_ee_mode())?,
     ];
     let threads = match cfg.threads {
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
@@ -228,11 +228,21 @@ pub fn compute(s: &Scene, cfg: &SagCompareConfig) -> Result<SagCompare, StudyErr
     })
 }
 
+/// The estimator's defaults without the end-effector mode: the comparison reports f1 and
+/// the statics only, and with sagging cables the end-effector mode is a sweep of the
+/// spectrum that would cost most of each point's time.
+fn no_ee_mode() -> EstimatorParams {
+    EstimatorParams {
+        ee_mode: false,
+        ..EstimatorParams::default()
+    }
+}
+
 /// One model at position `p`, as `analyze --position p` computes it.
 pub fn evaluate_at(model: &Scene, cold: &Estimator, p: Vector3<f64>) -> ModelPoint {
     let mut at = model.clone();
     at.ee_position_m = p;
-    let mut est = Estimator::new(&at).unwrap_or_else(|_| cold.clone());
+    let mut est = Estimator::with_params(&at, no_ee_mode()).unwrap_or_else(|_| cold.clone());
     let pose = Pose {
         position_m: p,
         orientation_wxyz: at.ee_orientation_wxyz,
