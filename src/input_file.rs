@@ -200,6 +200,17 @@ pub fn message_number(x: f64) -> String {
     }
 }
 
+/// A number for a message with `decimals` fixed decimals (`-12.3457` for 4), as
+/// `format!("{x:.decimals$}")` writes it, except from 1e6 in magnitude on: there
+/// [`message_number`]'s compact form (`1e307`, not 308 digits and the decimals).
+pub fn message_fixed(x: f64, decimals: usize) -> String {
+    if x.is_finite() && x.abs() >= 1e6 {
+        message_number(x)
+    } else {
+        format!("{x:.decimals$}")
+    }
+}
+
 /// Longest excerpt of a user's line quoted in a message, characters.
 pub const MESSAGE_EXCERPT_CHARS: usize = 80;
 

@@ -3,6 +3,7 @@
 
 use super::Status;
 use crate::cable::CableError;
+use crate::input_file::{message_fixed, message_number};
 use crate::kinematics::KinematicsError;
 use crate::modal::sag::SagLoadError;
 use crate::modal::ModalError;
@@ -157,10 +158,15 @@ fn sag_status(e: &SagTensionError) -> Status {
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum TminQueryError {
     /// The requirement is not finite and positive.
-    #[error("required f1 {0} Hz must be finite and > 0")]
+    #[error("required f1 {} Hz must be finite and > 0", message_number(*.0))]
     BadRequirement(f64),
     /// No feasible T_min reaches the requirement (none of the search's scan points does).
-    #[error("f1 ≥ {required_hz:.4} Hz is unreachable: the most any feasible T_min gives is {f1_max_hz:.4} Hz (at {t_min_n:.3} N)")]
+    #[error(
+        "f1 ≥ {} Hz is unreachable: the most any feasible T_min gives is {} Hz (at {} N)",
+        message_fixed(*required_hz, 4),
+        message_fixed(*f1_max_hz, 4),
+        message_fixed(*t_min_n, 3)
+    )]
     Unreachable {
         /// Required, Hz.
         required_hz: f64,
@@ -186,7 +192,12 @@ pub enum BuildError {
     /// The scene's pose (its `position`, or the command line's `--position`) has no
     /// answer that makes the robot usable (e.g. a cable of zero length): the message names
     /// the pose, which is the scene file's default only when no other was given.
-    #[error("scene `{scene}` at ({}, {}, {}) m: {reason}", .position_m[0], .position_m[1], .position_m[2])]
+    #[error(
+        "scene `{scene}` at ({}, {}, {}) m: {reason}",
+        message_number(.position_m[0]),
+        message_number(.position_m[1]),
+        message_number(.position_m[2])
+    )]
     DefaultPose {
         /// Scene name.
         scene: String,
