@@ -26,6 +26,11 @@ pub enum InputError {
     /// `element = "auto"`: the reference model is solvable at none of the sample poses.
     #[error("no feasible pose to choose the auto model")]
     NoFeasiblePose,
+    /// A rotation (a quaternion other than the identity, see
+    /// [`crate::kinematics::Pose::has_identity_orientation`]) on a point-mass end-effector,
+    /// which has no orientation: refused as the command line refuses `--orientation` there.
+    #[error("an orientation other than the identity on a point-mass end-effector, which has none")]
+    OrientationOnPointMass,
 }
 
 impl InputError {
@@ -36,6 +41,7 @@ impl InputError {
             InputError::NonUnitQuaternion => Status::NonUnitQuaternion,
             InputError::TminOutOfRange => Status::TminOutOfRange,
             InputError::NoFeasiblePose => Status::InvalidInput,
+            InputError::OrientationOnPointMass => Status::InvalidInput,
         }
     }
 }
@@ -233,16 +239,17 @@ mod tests {
     use super::*;
 
     /// The wire status each input error is meant to carry.
-    const STATUS_TABLE: [(InputError, Status); 4] = [
+    const STATUS_TABLE: [(InputError, Status); 5] = [
         (InputError::NonFinitePose, Status::InvalidInput),
         (InputError::NonUnitQuaternion, Status::NonUnitQuaternion),
         (InputError::TminOutOfRange, Status::TminOutOfRange),
         (InputError::NoFeasiblePose, Status::InvalidInput),
+        (InputError::OrientationOnPointMass, Status::InvalidInput),
     ];
 
     /// The Display text of `EstimatorError::Input` before the enum existed (the message was
     /// a `&'static str`), one per variant.
-    const OLD_TEXTS: [(InputError, &str); 4] = [
+    const OLD_TEXTS: [(InputError, &str); 5] = [
         (InputError::NonFinitePose, "invalid input: non-finite pose"),
         (
             InputError::NonUnitQuaternion,
@@ -255,6 +262,11 @@ mod tests {
         (
             InputError::NoFeasiblePose,
             "invalid input: no feasible pose to choose the auto model",
+        ),
+        // Added after the enum (no old text): its own.
+        (
+            InputError::OrientationOnPointMass,
+            "invalid input: an orientation other than the identity on a point-mass end-effector, which has none",
         ),
     ];
 
@@ -278,6 +290,7 @@ mod tests {
             InputError::NonUnitQuaternion => 1,
             InputError::TminOutOfRange => 2,
             InputError::NoFeasiblePose => 3,
+            InputError::OrientationOnPointMass => 4,
         }
     }
 

@@ -139,17 +139,18 @@ impl Samples {
     }
 
     /// Every sample as a pose: its own orientation, or the scene's when the samples have
-    /// none.
+    /// none or the end-effector is a point mass.
     pub fn poses(&self, s: &Scene) -> Vec<Pose> {
         self.position_m
             .iter()
             .enumerate()
             .map(|(k, &p)| match self.orientation_wxyz.get(k) {
-                Some(&q) => Pose {
+                // A point mass has no orientation: the columns have no effect there.
+                Some(&q) if s.rigid => Pose {
                     position_m: p,
                     orientation_wxyz: q,
                 },
-                None => Pose::in_scene(s, p),
+                _ => Pose::in_scene(s, p),
             })
             .collect()
     }
@@ -172,14 +173,15 @@ pub struct Row {
 }
 
 impl Row {
-    /// This row as a pose: its own orientation, or the scene's when the file has none.
+    /// This row as a pose: its own orientation, or the scene's when the file has none or
+    /// the end-effector is a point mass (which has no orientation).
     pub fn pose(&self, s: &Scene) -> Pose {
         match self.orientation_wxyz {
-            Some(q) => Pose {
+            Some(q) if s.rigid => Pose {
                 position_m: self.position_m,
                 orientation_wxyz: q,
             },
-            None => Pose::in_scene(s, self.position_m),
+            _ => Pose::in_scene(s, self.position_m),
         }
     }
 }
