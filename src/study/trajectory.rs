@@ -6,8 +6,9 @@
 //! command writes them out) and keeps only what is bounded: per curve one estimator, the
 //! summary (accumulated), and at most [`FIGURE_MAX_POINTS`] points for the figure. Memory is
 //! therefore independent of the number of poses: per chunk [`CHUNK_POSES`] poses and
-//! [`CHUNK_POSES`] results per curve (~0.5 kB each, ~2 MB per curve), plus the figure's
-//! points (~5 MB per curve), plus one line of the file ([`crate::trajectory::samples::MAX_LINE_BYTES`]).
+//! [`CHUNK_POSES`] results per curve (872 bytes each: 3.6 MB per curve), plus the figure's
+//! points (at most 8.7 MB per curve), plus one estimator per curve, plus one line of the file
+//! ([`crate::trajectory::samples::MAX_LINE_BYTES`]).
 
 use super::points::{
     check_modes, evaluate_jobs_with, evaluate_one, status_histogram, valid, PointResult, Workers,
