@@ -300,7 +300,8 @@ fn trajectory_streams_in_bounded_memory_and_equals_the_collected_study() {
     };
     let tr = Circle::new(&s, 0.75, 12.5).unwrap().sampled(&s);
     let n = tr.t_s.len();
-    assert!(n > FIGURE_MAX_POINTS && n > 3 * CHUNK_POSES);
+    assert!(n > FIGURE_MAX_POINTS, "{n}");
+    assert!(n > 3 * CHUNK_POSES, "{n}");
     let all = study::trajectory::evaluate(&s, &tr, &curves, true, 2, None).unwrap();
     let mut seen = vec![Vec::new(); curves.len()];
     let mut largest_chunk = 0;
