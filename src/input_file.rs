@@ -78,23 +78,7 @@ pub fn read_text(path: &Path, what: &'static str, limit_bytes: u64) -> Result<St
         what,
         source,
     };
-    // Checked twice. `std::fs::metadata` (follows symlinks) refuses a FIFO or device before
-    // anything is opened: opening a FIFO blocks until a writer appears and opening some
-    // devices has side effects. The path can still be swapped between that check and the
-    // open, so the open is non-blocking (O_NONBLOCK: no effect on regular files) and the
-    // opened handle is checked again; that second check is the one that cannot race.
-    check_kind_and_size(
-        &std::fs::metadata(path).map_err(io)?,
-        &file,
-        what,
-        limit_bytes,
-    )?;
-    let mut f = OpenOptions::new()
-        .read(true)
-        .custom_flags(libc::O_NONBLOCK)
-        .open(path)
-        .map_err(io)?;
-    check_kind_and_size(&f.metadata().map_err(io)?, &file, what, limit_bytes)?;
+    let mut f = open_checked(path, what, limit_bytes)?;
     let bytes = read_at_most(&mut f, limit_bytes).map_err(io)?;
     if bytes.len() as u64 > limit_bytes {
         // The file grew after the size check (or its size is not known, as in /proc).
@@ -110,6 +94,36 @@ pub fn read_text(path: &Path, what: &'static str, limit_bytes: u64) -> Result<St
         what,
         offset: e.utf8_error().valid_up_to(),
     })
+}
+
+/// Opens `path` for reading when it is a regular file of at most `limit_bytes` bytes (the
+/// checks of [`read_text`], for a reader that streams the file: it must still stop at
+/// `limit_bytes`, since the file can grow after the check).
+pub fn open_checked(path: &Path, what: &'static str, limit_bytes: u64) -> Result<File, InputError> {
+    let file = path.display().to_string();
+    let io = |source| InputError::Io {
+        file: file.clone(),
+        what,
+        source,
+    };
+    // Checked twice. `std::fs::metadata` (follows symlinks) refuses a FIFO or device before
+    // anything is opened: opening a FIFO blocks until a writer appears and opening some
+    // devices has side effects. The path can still be swapped between that check and the
+    // open, so the open is non-blocking (O_NONBLOCK: no effect on regular files) and the
+    // opened handle is checked again; that second check is the one that cannot race.
+    check_kind_and_size(
+        &std::fs::metadata(path).map_err(io)?,
+        &file,
+        what,
+        limit_bytes,
+    )?;
+    let f = OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(path)
+        .map_err(io)?;
+    check_kind_and_size(&f.metadata().map_err(io)?, &file, what, limit_bytes)?;
+    Ok(f)
 }
 
 /// A regular file of at most `limit_bytes` bytes.
@@ -183,6 +197,17 @@ pub fn message_number(x: f64) -> String {
     match s.split_once('e') {
         Some((m, e)) => format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.')),
         None => s,
+    }
+}
+
+/// A number for a message with `decimals` fixed decimals (`-12.3457` for 4), as
+/// `format!("{x:.decimals$}")` writes it, except from 1e6 in magnitude on: there
+/// [`message_number`]'s compact form (`1e307`, not 308 digits and the decimals).
+pub fn message_fixed(x: f64, decimals: usize) -> String {
+    if x.is_finite() && x.abs() >= 1e6 {
+        message_number(x)
+    } else {
+        format!("{x:.decimals$}")
     }
 }
 

@@ -38,7 +38,12 @@ impl Pose {
     pub fn in_scene(s: &crate::scene::Scene, position_m: Vector3<f64>) -> Pose {
         Pose {
             position_m,
-            orientation_wxyz: s.ee_orientation_wxyz,
+            // A point mass has no orientation: the identity, whatever the scene file says.
+            orientation_wxyz: if s.rigid {
+                s.ee_orientation_wxyz
+            } else {
+                [1.0, 0.0, 0.0, 0.0]
+            },
         }
     }
     /// Every component finite.
@@ -50,6 +55,15 @@ impl Pose {
     pub fn has_unit_quaternion(&self, tol: f64) -> bool {
         let n2: f64 = self.orientation_wxyz.iter().map(|q| q * q).sum();
         (n2.sqrt() - 1.0).abs() <= tol
+    }
+    /// The orientation is the identity (no rotation) within [`QUATERNION_INPUT_TOL`]: the
+    /// quaternion's vector part is at most that fraction of its norm (a rotation of at most
+    /// 2·asin(1e-3) ≈ 0.11°; q and −q alike). The one rule of what "an orientation" is on a
+    /// point-mass end-effector, which has none: anything else is refused there.
+    pub fn has_identity_orientation(&self) -> bool {
+        let [w, x, y, z] = self.orientation_wxyz;
+        let v = (x * x + y * y + z * z).sqrt();
+        v <= QUATERNION_INPUT_TOL * (w * w + v * v).sqrt()
     }
 }
 

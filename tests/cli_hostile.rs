@@ -269,3 +269,60 @@ fn replay_example_bounds_its_durations() {
         assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
     }
 }
+
+/// Numbers of the user's scale in the tension and estimator messages print compactly
+/// (`message_number`, or fixed decimals below 1e6): a 1e307 kg mass's infeasibility residual
+/// was 309 digits long (`9810000000000000522839…`), as were the bounds, a required f1 and a
+/// position of 1e308. The usual values keep their usual form (`[60, 350] N`, `0.0000`).
+#[test]
+fn user_scale_numbers_in_tension_and_estimator_messages_print_compactly() {
+    let d = temp_dir("heavy");
+    let scene = d.join("heavy.toml");
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/spatial_paper.toml"),
+    )
+    .unwrap();
+    assert!(text.contains("\nmass = 30.0 "));
+    std::fs::write(
+        &scene,
+        text.replacen("\nmass = 30.0 ", "\nmass = 1e307 ", 1),
+    )
+    .unwrap();
+    let o = run(&["analyze", scene.to_str().unwrap()]);
+    assert_no_panic("analyze 1e307 kg", &o);
+    let err = stderr(&o);
+    assert!(
+        err.contains("within [60, 350] N; closest tensions leave a residual force (0.0000, 0.0000, 9.81e307) N")
+            && err.len() < 400,
+        "{err}"
+    );
+    use cablevib::estimator::TminQueryError;
+    use cablevib::tension::TensionError;
+    let msgs = [
+        (
+            TminQueryError::BadRequirement(1e308).to_string(),
+            "required f1 1e308 Hz",
+        ),
+        (
+            TminQueryError::Unreachable {
+                required_hz: 1e300,
+                f1_max_hz: 12.345678,
+                t_min_n: 1e307,
+            }
+            .to_string(),
+            "f1 ≥ 1e300 Hz is unreachable: the most any feasible T_min gives is 12.3457 Hz (at 1e307 N)",
+        ),
+        (
+            TensionError::InvalidBounds {
+                t_min_n: -1e308,
+                t_max_n: 1e308,
+            }
+            .to_string(),
+            "t_min = -1e308 N, t_max = 1e308 N",
+        ),
+    ];
+    for (msg, want) in msgs {
+        assert!(msg.contains(want) && msg.len() < 200, "{msg}");
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}

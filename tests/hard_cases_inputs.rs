@@ -150,6 +150,61 @@ fn t_min_floor_is_accepted_and_below_it_is_not() {
     println!("t_min = {T_MIN_FLOOR_N:e} N: {:?}", e.status);
 }
 
+/// One rule for an orientation on a point-mass end-effector, which has none (the command
+/// line refuses `--orientation` there): the estimator's input check refuses a quaternion
+/// whose vector part exceeds `QUATERNION_INPUT_TOL` (1e-3) of its norm, with `InvalidInput`
+/// and no numbers, in `update` and in the inverse query; the identity (either sign, or within
+/// the tolerance) gives the identity's answer bit for bit; a rigid end-effector takes the
+/// rotation. Before, `Estimator` and the service estimated the rotated pose as the identity.
+/// The service (tests/hostile_client.rs, rotated poses among 10⁵ messages) and Python
+/// (python/tests/test_estimator.py) refuse the same poses.
+#[test]
+fn a_rotation_on_a_point_mass_is_refused_and_the_identity_accepted() {
+    use cablevib::kinematics::QUATERNION_INPUT_TOL;
+    let s = Scene::default_scene();
+    assert!(!s.rigid);
+    let mut est = Estimator::new(&s).unwrap();
+    let at = |q: [f64; 4]| Pose {
+        position_m: s.ee_position_m,
+        orientation_wxyz: q,
+    };
+    let tilt = |v: f64| [(1.0 - v * v).sqrt(), 0.0, v, 0.0];
+    let plain = *est.update(&at([1.0, 0.0, 0.0, 0.0]), Tmin::Scene);
+    assert!(plain.is_ok());
+    for q in [
+        tilt(1.1 * QUATERNION_INPUT_TOL),
+        tilt(0.5),
+        [0.0, 0.0, 0.0, 1.0],
+    ] {
+        let e = *est.update(&at(q), Tmin::Scene);
+        assert_eq!(e.status, Status::InvalidInput, "{q:?}");
+        assert!(e.f1_hz.is_nan(), "{q:?}");
+        let msg = e.error.unwrap().to_string();
+        assert!(msg.contains("point-mass end-effector"), "{msg}");
+        let inv = est.t_min_for_f1(&at(q), 5.0).unwrap_err().to_string();
+        assert!(inv.contains("point-mass end-effector"), "{inv}");
+    }
+    for q in [[-1.0, 0.0, 0.0, 0.0], tilt(0.9 * QUATERNION_INPUT_TOL)] {
+        let mut fresh = Estimator::new(&s).unwrap();
+        let e = *fresh.update(&at(q), Tmin::Scene);
+        assert_eq!(e.f1_hz.to_bits(), plain.f1_hz.to_bits(), "{q:?}");
+    }
+    let rigid = Scene::from_path(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/box_6dof.toml"
+    )))
+    .unwrap();
+    let mut r = Estimator::new(&rigid).unwrap();
+    let e = *r.update(
+        &Pose {
+            position_m: rigid.ee_position_m,
+            orientation_wxyz: tilt(0.05),
+        },
+        Tmin::Scene,
+    );
+    assert!(e.is_ok(), "{:?}", e.error);
+}
+
 // ---------------------------------------------------------------------------------------
 // Per-cable lower bounds
 // ---------------------------------------------------------------------------------------

@@ -18,7 +18,9 @@
 //!   previous bounds stay in force;
 //! - the status of every bad input, in the estimator's order of checks (`InputError`):
 //!   non-finite pose → `InvalidInput`, non-unit quaternion (tolerance 1e-6) →
-//!   `NonUnitQuaternion`, refused set-point → `TminOutOfRange` (a position outside the
+//!   `NonUnitQuaternion`, a rotation on the point-mass scene (vector part > 1e-3 of the norm:
+//!   the valid poses are identity-oriented, the rotated ones refused) → `InvalidInput`,
+//!   refused set-point → `TminOutOfRange` (a position outside the
 //!   anchors' box is no input error: the tension distribution answers it, and the reference
 //!   estimator's answer is compared);
 //! - no panic: the service thread returns `Ok` with every pose estimated, none skipped, no
@@ -54,6 +56,9 @@ const ANSWER: Duration = Duration::from_secs(10);
 const T_MIN_BUFFER: u64 = 4;
 /// The estimator's quaternion tolerance (`EstimatorParams::quaternion_tol`).
 const QUATERNION_TOL: f64 = 1e-6;
+/// The identity's tolerance on a point mass (`kinematics::QUATERNION_INPUT_TOL`, the command
+/// line's): a vector part of at most this fraction of the quaternion's norm.
+const IDENTITY_TOL: f64 = 1e-3;
 /// Resident-memory growth allowed after the warm-up, bytes, besides the compute-time rings
 /// (see `rss_bound`): iceoryx2 maps its segments when the ports open, the estimators and
 /// rings are allocated before the first message, and the client keeps only counters; what is
@@ -111,7 +116,9 @@ struct Gen<'a> {
 }
 
 impl Gen<'_> {
-    /// A pose near the circle trajectory with a small random rotation (unit quaternion).
+    /// A pose near the circle trajectory, identity-oriented (the scene's end-effector is a
+    /// point mass, which has no orientation): [1, 0, 0, 0], sometimes −1 or a rotation
+    /// within the identity's tolerance.
     fn valid_pose(&mut self) -> ([f64; 3], [f64; 4]) {
         self.k += 1;
         let c = cablevib::trajectory::circle_pose(self.scene, 7 * self.k, 4.0).position_m;
@@ -121,10 +128,12 @@ impl Gen<'_> {
             c.y + r.range(-0.02, 0.02),
             c.z + r.range(-0.02, 0.02),
         ];
-        let v = r.unit() * r.range(0.0, 0.05);
-        let q = [1.0, v.x, v.y, v.z];
-        let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-        (p, q.map(|x| x / norm))
+        let q = match r.next_u64() % 4 {
+            0 => [-1.0, 0.0, 0.0, 0.0],
+            1 => rotation(r, 0.0, 0.9 * IDENTITY_TOL),
+            _ => [1.0, 0.0, 0.0, 0.0],
+        };
+        (p, q)
     }
 
     fn next(&mut self) -> Msg {
@@ -135,7 +144,13 @@ impl Gen<'_> {
         let t_max = self.t_max[0];
         let t0 = self.scene.t_min_n;
         match u {
-            u if u < 0.40 => Msg::Pose(pose(p, q), "valid pose"),
+            u if u < 0.36 => Msg::Pose(pose(p, q), "valid pose"),
+            u if u < 0.40 => {
+                // A rotation past the identity's tolerance (the rotated poses that used to
+                // be "valid"): refused on a point mass.
+                let q = rotation(r, 1.1 * IDENTITY_TOL, 0.05);
+                Msg::Pose(pose(p, q), "rotated pose on a point mass")
+            }
             u if u < 0.45 => {
                 let mut p = p;
                 let bad = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY];
@@ -231,6 +246,12 @@ impl Gen<'_> {
     }
 }
 
+/// A unit quaternion of a random axis whose vector part has a norm in [lo, hi].
+fn rotation(r: &mut Rng, lo: f64, hi: f64) -> [f64; 4] {
+    let v = r.unit() * r.range(lo, hi);
+    [(1.0 - v.norm_squared()).sqrt(), v.x, v.y, v.z]
+}
+
 /// The service's rule, restated: the lower bounds (N) a set-point gives each of the `n`
 /// cables, and whether they are accepted. More per-cable values than cables, or a value in
 /// use (the uniform one included) that is not finite or is negative, refuses the whole
@@ -259,12 +280,18 @@ fn setpoint_rule(s: &TminSetpoint, t_max: &[f64]) -> ([f64; MAX_CABLES], bool) {
 }
 
 /// The status an input must get before any computation, in the estimator's order of checks
-/// (None: the pose passes them and is estimated).
+/// (None: the pose passes them and is estimated). The scene's end-effector is a point mass:
+/// an orientation other than the identity (vector part over `IDENTITY_TOL` of the norm) is
+/// refused, as `analyze` refuses `--orientation` there.
 fn input_status(p: &PoseSample, bounds_ok: bool) -> Option<StatusCode> {
+    let [w, x, y, z] = p.orientation_wxyz;
+    let v = (x * x + y * y + z * z).sqrt();
     if !p.is_finite() {
         Some(StatusCode::InvalidInput)
     } else if !p.has_unit_quaternion(QUATERNION_TOL) {
         Some(StatusCode::NonUnitQuaternion)
+    } else if v > IDENTITY_TOL * (w * w + v * v).sqrt() {
+        Some(StatusCode::InvalidInput)
     } else if !bounds_ok {
         Some(StatusCode::TminOutOfRange)
     } else {

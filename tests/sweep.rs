@@ -271,6 +271,122 @@ fn trajectory_from_csv_and_default_circle() {
     }
 }
 
+/// `study::trajectory::run` streams (chunks of `CHUNK_POSES`, bounded state) and gives what
+/// the collecting evaluation gives, bit for bit, for every curve (checked against
+/// `study::trajectory::evaluate`, which evaluates all poses at once into one vector): the
+/// results handed to the sink, the summaries (against `TrajectoryStudy::summary` of the
+/// collected points) and the CSV (row order curve-major across chunks, the later curves
+/// spilled and appended). The figure keeps at most `FIGURE_MAX_POINTS` + 1 points per curve
+/// (every ⌈n / cap⌉-th and the last), where before it kept every pose.
+#[test]
+fn trajectory_streams_in_bounded_memory_and_equals_the_collected_study() {
+    use cablevib::study::trajectory::{
+        run, PathSource, TrajectoryConfig, TrajectoryStudy, CHUNK_POSES, FIGURE_MAX_POINTS,
+    };
+    let s = Scene::planar_paper();
+    let t_mins = [20.0, 40.0];
+    let curves = [Tmin::Uniform(20.0), Tmin::Uniform(40.0)];
+    // The circle: 12.5 s at 1 ms is 12 501 poses (> the figure cap, > 3 chunks).
+    let cfg = TrajectoryConfig {
+        path: PathSource::Circle {
+            radius_m: 0.75,
+            period_s: 12.5,
+        },
+        t_mins_n: t_mins.to_vec(),
+        ee_mode: true,
+        modes: 1,
+        threads: 2,
+        progress: false,
+    };
+    let tr = Circle::new(&s, 0.75, 12.5).unwrap().sampled(&s);
+    let n = tr.t_s.len();
+    assert!(n > FIGURE_MAX_POINTS, "{n}");
+    assert!(n > 3 * CHUNK_POSES, "{n}");
+    let all = study::trajectory::evaluate(&s, &tr, &curves, true, 2, None).unwrap();
+    let mut seen = vec![Vec::new(); curves.len()];
+    let mut largest_chunk = 0;
+    let t = run(&s, &cfg, |c, results| {
+        largest_chunk = largest_chunk.max(c.poses.len());
+        for (k, r) in results.iter().enumerate() {
+            seen[k].extend(r.iter().map(|p| p.estimate.f1_hz.to_bits()));
+        }
+        Ok::<(), StudyError>(())
+    })
+    .unwrap();
+    assert_eq!(largest_chunk, CHUNK_POSES);
+    for (k, got) in seen.iter().enumerate() {
+        let want: Vec<u64> = all[k * n..(k + 1) * n]
+            .iter()
+            .map(|p| p.estimate.f1_hz.to_bits())
+            .collect();
+        assert!(got == &want, "curve {k}: streamed results differ");
+    }
+    let collected = TrajectoryStudy {
+        samples: tr.clone(),
+        poses: n,
+        summaries: Vec::new(),
+        t_mins_n: t_mins.to_vec(),
+        points: all.clone(),
+    };
+    let stride = n.div_ceil(FIGURE_MAX_POINTS);
+    for k in 0..curves.len() {
+        assert_eq!(t.summary(k), collected.summary(k), "curve {k}");
+        let fig = t.curve(k);
+        assert!(fig.len() <= FIGURE_MAX_POINTS + 1, "{}", fig.len());
+        assert_eq!(fig[1].position_m, tr.position_m[stride]);
+        assert_eq!(fig[fig.len() - 1].position_m, tr.position_m[n - 1]);
+    }
+    assert_eq!((t.poses, t.samples.t_s.len()), (n, t.curve(0).len()));
+
+    // Through the command: a CSV path of 5000 rows (CR LF ends, > one chunk), 2 curves; the
+    // CSV's rows are curve-major and carry the collected results.
+    let d = tmp("traj-stream");
+    let input = d.join("path.csv");
+    let mut text = String::from("t,x,y,z\r\n");
+    for i in 0..5000 {
+        let th = i as f64 * 1e-3;
+        text += &format!("{th},{},{},0\r\n", 0.5 * th.cos(), 0.5 * th.sin());
+    }
+    std::fs::write(&input, &text).unwrap();
+    let samples = cablevib::trajectory::Samples::parse_csv(&text, "x").unwrap();
+    let all = study::trajectory::evaluate(&s, &samples, &curves, true, 1, None).unwrap();
+    let out = d.join("t");
+    let cli = TrajCli::try_parse_from([
+        "trajectory",
+        "planar-paper",
+        "--csv",
+        input.to_str().unwrap(),
+        "--t-mins",
+        "20,40",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+    .unwrap();
+    cli::trajectory::run(&cli.a).unwrap();
+    let (h, rows) = read_csv(&out.with_extension("csv"));
+    let (ts, f1) = (
+        h.iter().position(|c| c == "t_s").unwrap(),
+        h.iter().position(|c| c == "f1_hz").unwrap(),
+    );
+    assert_eq!(rows.len(), 2 * 5000);
+    for (j, row) in rows.iter().enumerate() {
+        assert_eq!(row[ts], samples.t_s[j % 5000].to_string(), "row {j}");
+        assert_eq!(
+            row[f1],
+            cablevib::report::csv::num(all[j].estimate.f1_hz),
+            "row {j}"
+        );
+    }
+    // No spill file is left beside it.
+    let left: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name())
+        .collect();
+    assert_eq!(left.len(), 4, "{left:?}");
+}
+
 #[test]
 fn sweep_tmin_fits_sqrt_with_the_model_coefficient() {
     let s = Scene::planar_paper();

@@ -62,7 +62,9 @@
 typedef enum cablevib_status {
     CABLEVIB_STATUS_OK = 0,
     CABLEVIB_STATUS_TENSION_INFEASIBLE = 1,
-    CABLEVIB_STATUS_INVALID_INPUT = 2,
+    CABLEVIB_STATUS_INVALID_INPUT = 2,      /* non-finite or malformed input, e.g. an orientation
+                                             * other than the identity (vector part over 1e-3
+                                             * of the norm) on a point-mass end-effector */
     CABLEVIB_STATUS_NOT_CONVERGED = 3,
     CABLEVIB_STATUS_RANK_DEFICIENT = 4,
     CABLEVIB_STATUS_OUTSIDE_WORKSPACE = 5,

@@ -14,7 +14,9 @@ pub enum StatusCode {
     Ok = 0,
     /// No tension distribution satisfies T_min ≤ T ≤ T_max and the wrench balance.
     TensionInfeasible = 1,
-    /// The input has a non-finite (NaN/Inf) component or is otherwise malformed.
+    /// The input has a non-finite (NaN/Inf) component or is otherwise malformed, e.g. an
+    /// orientation other than the identity (vector part over 1e-3 of the quaternion's norm)
+    /// on a point-mass end-effector, which has none.
     InvalidInput = 2,
     /// An iterative solver (tension or eigen) stopped at its iteration limit.
     NotConverged = 3,

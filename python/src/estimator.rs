@@ -154,18 +154,21 @@ impl PyEstimator {
 }
 
 impl PyEstimator {
-    /// The pose of `position` and `orientation` (default: the scene's orientation).
+    /// The pose of `position` and `orientation` (default: the scene's orientation; an
+    /// orientation on a point-mass scene is refused by the estimator's input check).
     fn pose(
         &self,
         position_obj: &Bound<'_, PyAny>,
         orientation: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Pose> {
+        let position_m = position(position_obj)?;
         let orientation_wxyz = match orientation {
             Some(q) => floats::<4>(q, "orientation (unit quaternion w, x, y, z)")?,
-            None => self.inner.scene().ee_orientation_wxyz,
+            // The scene's (the identity on a point mass, which has no orientation).
+            None => Pose::in_scene(self.inner.scene(), position_m).orientation_wxyz,
         };
         Ok(Pose {
-            position_m: position(position_obj)?,
+            position_m,
             orientation_wxyz,
         })
     }

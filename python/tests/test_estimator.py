@@ -145,6 +145,31 @@ def test_status_codes_of_bad_input():
     assert est.update(p).ok
 
 
+def test_a_rotation_on_a_point_mass_is_refused_as_by_the_estimator_and_the_service():
+    """One rule (the estimator's input check, `Pose::has_identity_orientation`): on a point
+    mass an orientation whose vector part exceeds 1e-3 of its norm is `invalid_input`, the
+    identity (either sign, or within that tolerance) is estimated; a rigid scene takes the
+    rotation. tests/hard_cases_inputs.rs and tests/hostile_client.rs check the same rule in
+    the library and through the service."""
+    s = cablevib.Scene.load("spatial-paper")
+    est = cablevib.Estimator(s)
+    p = s.ee_position_m
+    half = math.sqrt(0.5)
+    for q in ([half, 0.0, 0.0, half], [math.sqrt(1 - 0.0011**2), 0.0011, 0.0, 0.0]):
+        e = est.update(p, orientation=q)
+        assert (e.status, e.status_code, e.ok) == ("invalid_input", 2, False), q
+        assert "point-mass" in e.error
+        with pytest.raises(cablevib.CablevibError, match="point-mass"):
+            est.t_min_for_f1(p, 5.0, orientation=q)
+    plain = est.update(p)
+    for q in ([1.0, 0.0, 0.0, 0.0], [-1.0, 0.0, 0.0, 0.0], [math.sqrt(1 - 0.0009**2), 0.0, 0.0009, 0.0]):
+        e = est.update(p, orientation=q)
+        assert e.ok and e.f1_hz == plain.f1_hz, q
+    rigid = cablevib.Estimator(cablevib.Scene.load(str(SCENES / "box_6dof.toml")))
+    r = rigid.update(rigid.scene.ee_position_m, orientation=[math.cos(0.05), 0.0, 0.0, math.sin(0.05)])
+    assert r.status != "invalid_input", r.error
+
+
 def test_per_cable_t_min_equal_values_is_the_uniform_update():
     s = cablevib.Scene.load("spatial-paper")
     a = cablevib.Estimator(s).update([0.2, 0.1, 1.3], t_min=70.0)

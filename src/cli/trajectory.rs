@@ -4,9 +4,9 @@
 use super::args::{resolve_scene, SceneArgs};
 use super::figure::{self, parse_format};
 use super::{output_paths, CliError};
-use crate::report::csv::{process_command_line, write_csv};
+use crate::report::csv::process_command_line;
 use crate::report::figure::FigureFormat;
-use crate::report::trajectory::{trajectory_csv, trajectory_svg};
+use crate::report::trajectory::{trajectory_svg, TrajectoryCsv};
 use crate::study::trajectory::{self as study, PathSource, TrajectoryConfig};
 use crate::trajectory::CIRCLE_RADIUS_M;
 use clap::Args;
@@ -81,19 +81,35 @@ impl TrajectoryArgs {
 /// `cablevib trajectory`: writes PREFIX.csv, PREFIX.csv.json and PREFIX.svg.
 pub fn run(a: &TrajectoryArgs) -> Result<(), CliError> {
     let s = resolve_scene(&a.scene)?;
-    let t = study::run(&s, &a.config())?;
+    let (csv_path, svg_path, fmt) = output_paths(&a.out, &a.svg, a.format)?;
+    // Written chunk by chunk, created with the first chunk (after every row was checked).
+    let mut csv: Option<TrajectoryCsv> = None;
+    let t = study::run(&s, &a.config(), |c, results| {
+        let out = match &mut csv {
+            Some(out) => out,
+            None => csv.insert(TrajectoryCsv::create(
+                &csv_path,
+                &s,
+                &c.t_mins_n,
+                c.total_poses,
+                c.modes,
+            )?),
+        };
+        out.chunk(c, results).map_err(CliError::from)
+    })?;
+    if let Some(out) = csv {
+        out.finish(&process_command_line())?;
+    }
     if !s.rigid && !t.samples.orientation_wxyz.is_empty() {
         eprintln!(
             "warning: the quaternion columns have no effect: scene `{}` has a point-mass end-effector",
             s.name
         );
     }
-    let (csv_path, svg_path, fmt) = output_paths(&a.out, &a.svg, a.format)?;
-    write_csv(&csv_path, trajectory_csv(&s, &t), &process_command_line())?;
     println!(
         "trajectory: scene {}  {} poses × {} T_min values",
         s.name,
-        t.samples.position_m.len(),
+        t.poses,
         t.t_mins_n.len()
     );
     for (k, &tm) in t.t_mins_n.iter().enumerate() {

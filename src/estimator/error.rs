@@ -3,6 +3,7 @@
 
 use super::Status;
 use crate::cable::CableError;
+use crate::input_file::{message_fixed, message_number};
 use crate::kinematics::KinematicsError;
 use crate::modal::sag::SagLoadError;
 use crate::modal::ModalError;
@@ -25,6 +26,11 @@ pub enum InputError {
     /// `element = "auto"`: the reference model is solvable at none of the sample poses.
     #[error("no feasible pose to choose the auto model")]
     NoFeasiblePose,
+    /// A rotation (a quaternion other than the identity, see
+    /// [`crate::kinematics::Pose::has_identity_orientation`]) on a point-mass end-effector,
+    /// which has no orientation: refused as the command line refuses `--orientation` there.
+    #[error("an orientation other than the identity on a point-mass end-effector, which has none")]
+    OrientationOnPointMass,
 }
 
 impl InputError {
@@ -35,6 +41,7 @@ impl InputError {
             InputError::NonUnitQuaternion => Status::NonUnitQuaternion,
             InputError::TminOutOfRange => Status::TminOutOfRange,
             InputError::NoFeasiblePose => Status::InvalidInput,
+            InputError::OrientationOnPointMass => Status::InvalidInput,
         }
     }
 }
@@ -157,10 +164,15 @@ fn sag_status(e: &SagTensionError) -> Status {
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum TminQueryError {
     /// The requirement is not finite and positive.
-    #[error("required f1 {0} Hz must be finite and > 0")]
+    #[error("required f1 {} Hz must be finite and > 0", message_number(*.0))]
     BadRequirement(f64),
     /// No feasible T_min reaches the requirement (none of the search's scan points does).
-    #[error("f1 ≥ {required_hz:.4} Hz is unreachable: the most any feasible T_min gives is {f1_max_hz:.4} Hz (at {t_min_n:.3} N)")]
+    #[error(
+        "f1 ≥ {} Hz is unreachable: the most any feasible T_min gives is {} Hz (at {} N)",
+        message_fixed(*required_hz, 4),
+        message_fixed(*f1_max_hz, 4),
+        message_fixed(*t_min_n, 3)
+    )]
     Unreachable {
         /// Required, Hz.
         required_hz: f64,
@@ -186,7 +198,12 @@ pub enum BuildError {
     /// The scene's pose (its `position`, or the command line's `--position`) has no
     /// answer that makes the robot usable (e.g. a cable of zero length): the message names
     /// the pose, which is the scene file's default only when no other was given.
-    #[error("scene `{scene}` at ({}, {}, {}) m: {reason}", .position_m[0], .position_m[1], .position_m[2])]
+    #[error(
+        "scene `{scene}` at ({}, {}, {}) m: {reason}",
+        message_number(.position_m[0]),
+        message_number(.position_m[1]),
+        message_number(.position_m[2])
+    )]
     DefaultPose {
         /// Scene name.
         scene: String,
@@ -225,16 +242,17 @@ mod tests {
     use super::*;
 
     /// The wire status each input error is meant to carry.
-    const STATUS_TABLE: [(InputError, Status); 4] = [
+    const STATUS_TABLE: [(InputError, Status); 5] = [
         (InputError::NonFinitePose, Status::InvalidInput),
         (InputError::NonUnitQuaternion, Status::NonUnitQuaternion),
         (InputError::TminOutOfRange, Status::TminOutOfRange),
         (InputError::NoFeasiblePose, Status::InvalidInput),
+        (InputError::OrientationOnPointMass, Status::InvalidInput),
     ];
 
     /// The Display text of `EstimatorError::Input` before the enum existed (the message was
     /// a `&'static str`), one per variant.
-    const OLD_TEXTS: [(InputError, &str); 4] = [
+    const OLD_TEXTS: [(InputError, &str); 5] = [
         (InputError::NonFinitePose, "invalid input: non-finite pose"),
         (
             InputError::NonUnitQuaternion,
@@ -247,6 +265,11 @@ mod tests {
         (
             InputError::NoFeasiblePose,
             "invalid input: no feasible pose to choose the auto model",
+        ),
+        // Added after the enum (no old text): its own.
+        (
+            InputError::OrientationOnPointMass,
+            "invalid input: an orientation other than the identity on a point-mass end-effector, which has none",
         ),
     ];
 
@@ -270,6 +293,7 @@ mod tests {
             InputError::NonUnitQuaternion => 1,
             InputError::TminOutOfRange => 2,
             InputError::NoFeasiblePose => 3,
+            InputError::OrientationOnPointMass => 4,
         }
     }
 

@@ -200,6 +200,9 @@ impl Estimator {
         if !pose.has_unit_quaternion(self.params.quaternion_tol) {
             return Err(InputError::NonUnitQuaternion.into());
         }
+        if !self.scene.rigid && !pose.has_identity_orientation() {
+            return Err(InputError::OrientationOnPointMass.into());
+        }
         self.inverse
             .set_pose(&self.scene, pose)
             .map_err(EstimatorError::from)?;

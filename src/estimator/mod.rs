@@ -310,6 +310,9 @@ impl Estimator {
         if !pose.has_unit_quaternion(self.params.quaternion_tol) {
             return Err(InputError::NonUnitQuaternion);
         }
+        if !self.scene.rigid && !pose.has_identity_orientation() {
+            return Err(InputError::OrientationOnPointMass);
+        }
         let n = self.scene.n_cables();
         let bounds = self.t_min_n[..n].iter().zip(&self.t_max_n[..n]);
         if !bounds.into_iter().all(|(&lo, &hi)| is_valid_t_min(lo, hi)) {

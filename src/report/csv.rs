@@ -86,22 +86,142 @@ impl Csv {
         let _ = self.writer.flush();
         let text =
             String::from_utf8(self.writer.into_inner().unwrap_or_default()).unwrap_or_default();
-        let mut m = Map::new();
-        m.insert(
-            "format".into(),
-            json!("csv: one header row, no comment lines; NaN where no value"),
-        );
-        m.insert("command_line".into(), json!(command_line));
-        m.extend(self.meta);
-        m.insert("rows".into(), json!(self.rows));
-        let cols: Vec<Value> = self
-            .columns
-            .iter()
-            .map(|c| json!({"name": c.name, "unit": c.unit, "description": c.description}))
-            .collect();
-        m.insert("columns".into(), Value::Array(cols));
-        let side = serde_json::to_string_pretty(&Value::Object(m)).unwrap_or_default() + "\n";
+        let side = sidecar_text(&self.columns, self.meta, self.rows, command_line);
         (text, side)
+    }
+}
+
+/// The sidecar JSON of a CSV of `rows` data rows with `columns`, `meta` and `command_line`.
+fn sidecar_text(
+    columns: &[Column],
+    meta: Map<String, Value>,
+    rows: usize,
+    command_line: &str,
+) -> String {
+    let mut m = Map::new();
+    m.insert(
+        "format".into(),
+        json!("csv: one header row, no comment lines; NaN where no value"),
+    );
+    m.insert("command_line".into(), json!(command_line));
+    m.extend(meta);
+    m.insert("rows".into(), json!(rows));
+    let cols: Vec<Value> = columns
+        .iter()
+        .map(|c| json!({"name": c.name, "unit": c.unit, "description": c.description}))
+        .collect();
+    m.insert("columns".into(), Value::Array(cols));
+    serde_json::to_string_pretty(&Value::Object(m)).unwrap_or_default() + "\n"
+}
+
+/// A CSV written row by row to its file (the same bytes as [`Csv`] and [`write_csv`], in
+/// bounded memory), with the rows of later *sections* spilled to files beside it until
+/// [`CsvFile::finish`] appends them in order: a document whose order (e.g. curve-major) is
+/// not the order its rows are computed in.
+#[derive(Debug)]
+pub struct CsvFile {
+    path: std::path::PathBuf,
+    columns: Vec<Column>,
+    meta: Map<String, Value>,
+    /// Section 0 (the file itself), then the spill files of sections 1, 2, ...
+    sections: Vec<(
+        std::path::PathBuf,
+        csv::Writer<std::io::BufWriter<std::fs::File>>,
+    )>,
+    rows: usize,
+}
+
+impl CsvFile {
+    /// Creates `path` (and its parent directories) with the header row of `columns`, and
+    /// `sections − 1` spill files `PATH.partK`; `meta` goes to the sidecar.
+    pub fn create(
+        path: &Path,
+        columns: Vec<Column>,
+        meta: Map<String, Value>,
+        sections: usize,
+    ) -> Result<CsvFile, ReportError> {
+        super::create_parent(path)?;
+        let mut out = CsvFile {
+            path: path.to_path_buf(),
+            columns,
+            meta,
+            sections: Vec::new(),
+            rows: 0,
+        };
+        for k in 0..sections.max(1) {
+            let p = if k == 0 {
+                path.to_path_buf()
+            } else {
+                std::path::PathBuf::from(format!("{}.part{k}", path.display()))
+            };
+            let f = std::fs::File::create(&p).map_err(super::io_err(&p))?;
+            let w = csv::Writer::from_writer(std::io::BufWriter::new(f));
+            out.sections.push((p, w));
+        }
+        let header: Vec<&str> = out.columns.iter().map(|c| c.name.as_str()).collect();
+        let (p, w) = &mut out.sections[0];
+        w.write_record(&header).map_err(|e| csv_err(p, e))?;
+        Ok(out)
+    }
+
+    /// Appends one row (one field per column) to section `k`.
+    pub fn row<I, S>(&mut self, k: usize, fields: I) -> Result<(), ReportError>
+    where
+        I: IntoIterator<Item = S>,
+        S: AsRef<[u8]>,
+    {
+        let Some((p, w)) = self.sections.get_mut(k) else {
+            return Ok(());
+        };
+        w.write_record(fields).map_err(|e| csv_err(p, e))?;
+        self.rows += 1;
+        Ok(())
+    }
+
+    /// Appends the sections to the file in order, removes the spill files and writes the
+    /// sidecar (with `command_line` and the row count).
+    pub fn finish(mut self, command_line: &str) -> Result<(), ReportError> {
+        let mut sections = std::mem::take(&mut self.sections).into_iter();
+        let Some((path, first)) = sections.next() else {
+            return Ok(());
+        };
+        let mut out = first
+            .into_inner()
+            .map_err(|e| super::io_err(&path)(e.into_error()))?;
+        for (p, w) in sections {
+            w.into_inner()
+                .map_err(|e| super::io_err(&p)(e.into_error()))?
+                .into_inner()
+                .map_err(|e| super::io_err(&p)(e.into_error()))?;
+            let mut part = std::fs::File::open(&p).map_err(super::io_err(&p))?;
+            std::io::copy(&mut part, &mut out).map_err(super::io_err(&path))?;
+            std::fs::remove_file(&p).map_err(super::io_err(&p))?;
+        }
+        std::io::Write::flush(&mut out).map_err(super::io_err(&path))?;
+        let side = sidecar_text(
+            &self.columns,
+            std::mem::take(&mut self.meta),
+            self.rows,
+            command_line,
+        );
+        write_file(&sidecar_path(&self.path), &side)
+    }
+}
+
+impl Drop for CsvFile {
+    /// Removes the spill files left by an error (after [`CsvFile::finish`] there are none).
+    fn drop(&mut self) {
+        for (p, _) in self.sections.iter().skip(1) {
+            let _ = std::fs::remove_file(p);
+        }
+    }
+}
+
+/// A `csv` crate error as an I/O error of `path`.
+fn csv_err(path: &Path, e: csv::Error) -> ReportError {
+    ReportError::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::other(e.to_string()),
     }
 }
 

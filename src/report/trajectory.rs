@@ -1,26 +1,30 @@
 //! `cablevib trajectory`: the CSV of every pose and T_min, and the figure.
 
-use super::csv::{point_columns, point_fields, scene_meta, Column, Csv};
+use super::csv::{point_columns, point_fields, scene_meta, Column, CsvFile};
 use super::ee_curve_differs;
 use super::svg::{Axis, LinePlot, Mark, Series, PALETTE};
+use super::ReportError;
 use crate::estimator::Estimate;
 use crate::scene::Scene;
 use crate::study::points::{valid, PointResult};
-use crate::study::trajectory::TrajectoryStudy;
+use crate::study::trajectory::{Chunk, TrajectoryStudy};
 use serde_json::json;
 use std::fmt::Write as _;
+use std::path::Path;
 
-/// The CSV: one row per pose and T_min (T_min-major), with time and angle, then the
-/// columns of [`point_columns`].
-pub fn trajectory_csv(s: &Scene, t: &TrajectoryStudy) -> Csv {
-    let tr = &t.samples;
-    let n = tr.position_m.len();
-    let modes = t.points.first().map_or(1, |p| p.n_modes);
+/// The CSV's columns and sidecar metadata: one row per pose and T_min (T_min-major), with
+/// time and angle, then the columns of [`point_columns`]; `poses` per curve, `modes` per pose.
+fn trajectory_columns(
+    s: &Scene,
+    t_mins_n: &[f64],
+    poses: usize,
+    modes: usize,
+) -> (Vec<Column>, serde_json::Map<String, serde_json::Value>) {
     let mut meta = scene_meta("trajectory", s);
     // The curves' T_min values are `t_mins_n` (and the t_min_n column).
     meta.remove("t_min_n");
-    meta.insert("t_mins_n".into(), json!(t.t_mins_n));
-    meta.insert("poses".into(), json!(n));
+    meta.insert("t_mins_n".into(), json!(t_mins_n));
+    meta.insert("poses".into(), json!(poses));
     meta.insert("modes".into(), json!(modes));
     meta.insert(
         "order".into(),
@@ -35,19 +39,54 @@ pub fn trajectory_csv(s: &Scene, t: &TrajectoryStudy) -> Csv {
         ),
     ];
     cols.extend(point_columns(s.n_cables(), modes, s.rigid));
-    let mut csv = Csv::new(cols, meta);
-    for (k, r) in t.points.iter().enumerate() {
-        let i = k % n;
-        let ang = if t.is_circle() {
-            format!("{}", tr.angle_deg[i])
-        } else {
-            "NaN".into()
-        };
-        let mut row = vec![tr.t_s[i].to_string(), ang];
-        row.extend(point_fields(r, s.rigid));
-        csv.row(row);
+    (cols, meta)
+}
+
+/// The trajectory CSV written chunk by chunk as [`crate::study::trajectory::run`] computes it
+/// (curve 0 straight to the file, the other curves to spill files appended at the end), in
+/// memory independent of the number of poses.
+#[derive(Debug)]
+pub struct TrajectoryCsv {
+    file: CsvFile,
+    rigid: bool,
+}
+
+impl TrajectoryCsv {
+    /// Creates `path` for `t_mins_n.len()` curves of `poses` poses with `modes` modes each.
+    pub fn create(
+        path: &Path,
+        s: &Scene,
+        t_mins_n: &[f64],
+        poses: usize,
+        modes: usize,
+    ) -> Result<TrajectoryCsv, ReportError> {
+        let (cols, meta) = trajectory_columns(s, t_mins_n, poses, modes);
+        Ok(TrajectoryCsv {
+            file: CsvFile::create(path, cols, meta, t_mins_n.len())?,
+            rigid: s.rigid,
+        })
     }
-    csv
+
+    /// The rows of one chunk: `results[k]` are curve k's results for the chunk's poses.
+    pub fn chunk(&mut self, c: &Chunk, results: &[Vec<PointResult>]) -> Result<(), ReportError> {
+        for (k, rows) in results.iter().enumerate() {
+            for (i, r) in rows.iter().enumerate() {
+                let ang = match c.angle_deg.get(i) {
+                    Some(a) => format!("{a}"),
+                    None => "NaN".into(),
+                };
+                let mut row = vec![c.t_s[i].to_string(), ang];
+                row.extend(point_fields(r, self.rigid));
+                self.file.row(k, row)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Completes the CSV and writes its sidecar.
+    pub fn finish(self, command_line: &str) -> Result<(), ReportError> {
+        self.file.finish(command_line)
+    }
 }
 
 /// (x, valid value) of each row.

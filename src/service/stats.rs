@@ -274,6 +274,14 @@ impl SampleLog {
 /// but a sender that jumped its counter (hostile or broken): counted as a reset.
 pub const SEQUENCE_GAP_WINDOW: u64 = 1 << 20;
 
+/// The fastest a sender can send, poses per second, for [`SequenceGaps`]' budget: 10⁷ (one
+/// pose per 100 ns), above what one iceoryx2 publisher can loan, write and send.
+pub const SEQUENCE_MAX_RATE_PER_S: u64 = 10_000_000;
+
+/// Losses a sender may have besides its rate budget: the poses it can queue after its first
+/// received one before that one is read (the pose queue, `service::ports::POSE_BUFFER`).
+pub const SEQUENCE_QUEUE_SLACK: u64 = 16;
+
 /// Poses lost in a queue, counted from the senders' sequence numbers. Every sender increments
 /// its sequence by one per message, so a gap between two consecutive sequences received from
 /// the same sender (`key`: iceoryx2's publisher id in the service) is that many messages that
@@ -289,6 +297,11 @@ pub const SEQUENCE_GAP_WINDOW: u64 = 1 << 20;
 ///   from there. iceoryx2 delivers one publisher's samples in order, so an honest sender
 ///   never resets; a hostile one (sequences 1, 2⁶³, 1, …) adds at most the window per
 ///   message to its own count and nothing to any other sender's.
+/// - A sender's losses are bounded by what it can have sent: at most
+///   [`SEQUENCE_QUEUE_SLACK`] + [`SEQUENCE_MAX_RATE_PER_S`] × the time since its first
+///   received sequence. A forward step past that budget is a reset too. So one hostile
+///   sender adds at most 16 + 10⁷ per second connected to the total, not a window per
+///   message (2²⁰ per message, before), and nothing to another sender's count.
 /// - Up to `N` senders are tracked, each with its own counts; a new one beyond that replaces
 ///   the one heard from least recently (its next sample then counts as a first).
 ///
@@ -312,9 +325,25 @@ struct Sender<K> {
     last: u64,
     /// When last heard from, in `clock` ticks.
     heard: u64,
-    /// Its messages lost and its resets.
+    /// When its first sequence was received, ns (monotonic).
+    first_ns: u64,
+    /// Its messages received, lost and its resets.
+    received: u64,
     lost: u64,
     resets: u64,
+}
+
+/// One sender's counts in [`SequenceGaps`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SenderCounts<K> {
+    /// The sender.
+    pub key: K,
+    /// Its messages received while tracked.
+    pub received: u64,
+    /// Its messages missing between consecutive sequences (overwritten).
+    pub lost: u64,
+    /// Its resets (a sequence back, repeated, or past the window or the budget).
+    pub resets: u64,
 }
 
 impl<K: Copy + Eq, const N: usize> Default for SequenceGaps<K, N> {
@@ -329,11 +358,11 @@ impl<K: Copy + Eq, const N: usize> Default for SequenceGaps<K, N> {
 }
 
 impl<K: Copy + Eq, const N: usize> SequenceGaps<K, N> {
-    /// Records sequence `seq` received from sender `key`; returns how many of that sender's
-    /// messages are missing just before it (0 when it follows the previous one, is the
-    /// sender's first, or is a reset: not above the last, or a jump past
-    /// [`SEQUENCE_GAP_WINDOW`]).
-    pub fn record(&mut self, key: K, seq: u64) -> u64 {
+    /// Records sequence `seq` received from sender `key` at `now_ns` (monotonic); returns
+    /// how many of that sender's messages are missing just before it (0 when it follows the
+    /// previous one, is the sender's first, or is a reset: not above the last, or a jump past
+    /// [`SEQUENCE_GAP_WINDOW`] or past the sender's budget).
+    pub fn record(&mut self, key: K, seq: u64, now_ns: u64) -> u64 {
         self.clock += 1;
         let now = self.clock;
         let Some(slot) = self
@@ -353,6 +382,8 @@ impl<K: Copy + Eq, const N: usize> SequenceGaps<K, N> {
                     key,
                     last: seq,
                     heard: now,
+                    first_ns: now_ns,
+                    received: 1,
                     lost: 0,
                     resets: 0,
                 });
@@ -365,7 +396,11 @@ impl<K: Copy + Eq, const N: usize> SequenceGaps<K, N> {
         let last = s.last;
         s.last = seq;
         s.heard = now;
-        if seq > last && seq - last - 1 <= SEQUENCE_GAP_WINDOW {
+        s.received += 1;
+        let budget = (SEQUENCE_QUEUE_SLACK
+            + now_ns.saturating_sub(s.first_ns) / (1_000_000_000 / SEQUENCE_MAX_RATE_PER_S))
+            .saturating_sub(s.lost);
+        if seq > last && seq - last - 1 <= SEQUENCE_GAP_WINDOW.min(budget) {
             let gap = seq - last - 1;
             s.lost = s.lost.saturating_add(gap);
             self.lost = self.lost.saturating_add(gap);
@@ -386,6 +421,16 @@ impl<K: Copy + Eq, const N: usize> SequenceGaps<K, N> {
     /// jumped past [`SEQUENCE_GAP_WINDOW`].
     pub fn resets(&self) -> u64 {
         self.resets
+    }
+
+    /// The counts of every tracked sender.
+    pub fn senders(&self) -> impl Iterator<Item = SenderCounts<K>> + '_ {
+        self.senders.iter().flatten().map(|s| SenderCounts {
+            key: s.key,
+            received: s.received,
+            lost: s.lost,
+            resets: s.resets,
+        })
     }
 
     /// (messages lost, resets) of sender `key` while tracked (None when it is not).
@@ -604,11 +649,16 @@ mod tests {
         assert_eq!(l.samples(), &[0, 1, 2]);
     }
 
+    /// A sender's first message at 0, the later ones of the simple cases 1 s later (a budget
+    /// of 10⁷ poses, larger than any gap they make).
+    const NOW: u64 = 0;
+    const SEC: u64 = 1_000_000_000;
+
     #[test]
     fn sequence_gaps_in_order_count_nothing() {
         let mut g = SequenceGaps::<u32, 4>::default();
         for seq in 1..=1000 {
-            assert_eq!(g.record(7, seq), 0);
+            assert_eq!(g.record(7, seq, NOW), 0);
         }
         assert_eq!((g.lost(), g.resets()), (0, 0));
     }
@@ -617,14 +667,14 @@ mod tests {
     fn sequence_gaps_count_the_missing_sequences() {
         let mut g = SequenceGaps::<u32, 4>::default();
         assert_eq!(
-            g.record(7, 5),
+            g.record(7, 5, NOW),
             0,
             "a sender's first sequence counts nothing"
         );
-        assert_eq!(g.record(7, 6), 0);
-        assert_eq!(g.record(7, 10), 3, "7, 8, 9 never received");
-        assert_eq!(g.record(7, 11), 0);
-        assert_eq!(g.record(7, 1011), 999);
+        assert_eq!(g.record(7, 6, SEC), 0);
+        assert_eq!(g.record(7, 10, SEC), 3, "7, 8, 9 never received");
+        assert_eq!(g.record(7, 11, SEC), 0);
+        assert_eq!(g.record(7, 1011, SEC), 999);
         assert_eq!(g.lost(), 1002);
     }
 
@@ -632,14 +682,14 @@ mod tests {
     fn sequence_gaps_duplicates_and_steps_back_count_nothing() {
         let mut g = SequenceGaps::<u32, 4>::default();
         for seq in [1, 2, 2, 3, 1, 2, 3, 4] {
-            g.record(7, seq);
+            g.record(7, seq, NOW);
         }
         assert_eq!(g.lost(), 0, "a duplicate or a step back is no loss");
         assert_eq!(g.resets(), 2);
         // Out of order: 4 missing at 5, then 4 late: it re-bases, and 5 follows it.
         let mut g = SequenceGaps::<u32, 4>::default();
         for seq in [1, 2, 3, 5, 4, 5, 6] {
-            g.record(7, seq);
+            g.record(7, seq, NOW);
         }
         assert_eq!(g.lost(), 1);
     }
@@ -649,24 +699,28 @@ mod tests {
         // Same key, counter back to 1 after a long run: nothing, and the next gap is measured
         // from the new base, not from the old one.
         let mut g = SequenceGaps::<u32, 4>::default();
-        g.record(7, 1_000_000);
-        assert_eq!(g.record(7, 1), 0);
-        assert_eq!(g.record(7, 2), 0);
-        assert_eq!(g.record(7, 4), 1);
+        g.record(7, 1_000_000, NOW);
+        assert_eq!(g.record(7, 1, SEC), 0);
+        assert_eq!(g.record(7, 2, SEC), 0);
+        assert_eq!(g.record(7, 4, SEC), 1);
         assert_eq!(g.lost(), 1);
         // A restarted sender is a new key: a large first sequence is not compared with the
         // old sender's, nor is a small one.
         let mut g = SequenceGaps::<u32, 4>::default();
-        g.record(1, 10);
+        g.record(1, 10, NOW);
         assert_eq!(
-            g.record(2, u64::MAX - 1),
+            g.record(2, u64::MAX - 1, NOW),
             0,
             "new sender, large first sequence"
         );
-        assert_eq!(g.record(2, u64::MAX), 0);
-        assert_eq!(g.record(3, 1), 0);
-        assert_eq!(g.record(1, 11), 0, "each sender against its own sequence");
-        assert_eq!(g.record(3, 3), 1);
+        assert_eq!(g.record(2, u64::MAX, SEC), 0);
+        assert_eq!(g.record(3, 1, NOW), 0);
+        assert_eq!(
+            g.record(1, 11, SEC),
+            0,
+            "each sender against its own sequence"
+        );
+        assert_eq!(g.record(3, 3, SEC), 1);
         assert_eq!(g.lost(), 1);
     }
 
@@ -682,6 +736,9 @@ mod tests {
         let mut rng = 0x9e37_79b9_7f4a_7c15u64;
         let mut hostile_lost = 0u64;
         for i in 0..100_000u64 {
+            // 2 µs per round: the honest sender's burst of at most 20 is 10⁷ per second, the
+            // budget's rate.
+            let now = i * 2_000;
             rng ^= rng << 13;
             rng ^= rng >> 7;
             rng ^= rng << 17;
@@ -692,14 +749,14 @@ mod tests {
                 4 => 0,
                 _ => rng,
             };
-            hostile_lost += g.record(9, h);
+            hostile_lost += g.record(9, h, now);
             // Honest: sends 1 to 20 poses; the queue lets the last 1 to 3 of them through.
             let burst = 1 + rng % 20;
             honest_seq += burst;
             for k in (0..burst.min(1 + (rng >> 32) % 3)).rev() {
                 let seq = honest_seq - k;
                 first.get_or_insert(seq);
-                let _ = g.record(7, seq);
+                let _ = g.record(7, seq, now);
                 received += 1;
             }
         }
@@ -710,31 +767,65 @@ mod tests {
         let (h_lost, h_resets) = g.of(9).unwrap();
         assert_eq!(h_lost, hostile_lost);
         assert!(h_resets > 60_000, "{h_resets}");
-        // Only the random forward steps within the window count, each at most the window.
-        assert!(h_lost <= 100_000 / 6 * SEQUENCE_GAP_WINDOW, "{h_lost}");
+        // Only the random forward steps within the budget count: at most the slack and the
+        // rate over the 0.2 s of the run.
+        assert!(
+            h_lost <= SEQUENCE_QUEUE_SLACK + 200_000_000 / 100,
+            "{h_lost}"
+        );
         assert_eq!(g.lost(), lost + h_lost);
         assert_eq!(g.resets(), h_resets);
         // The reported case: 1, 2⁶³, 1 is two resets and no loss.
         let mut g = SequenceGaps::<u32, 4>::default();
         for seq in [1, 1 << 63, 1] {
-            assert_eq!(g.record(3, seq), 0);
+            assert_eq!(g.record(3, seq, NOW), 0);
         }
         assert_eq!((g.lost(), g.resets()), (0, 2));
         // Within the window a step is a loss; one past it is a reset.
-        assert_eq!(g.record(3, 2 + SEQUENCE_GAP_WINDOW), SEQUENCE_GAP_WINDOW);
-        assert_eq!(g.record(3, 3 + 2 * SEQUENCE_GAP_WINDOW + 1), 0);
+        assert_eq!(
+            g.record(3, 2 + SEQUENCE_GAP_WINDOW, SEC),
+            SEQUENCE_GAP_WINDOW
+        );
+        assert_eq!(g.record(3, 3 + 2 * SEQUENCE_GAP_WINDOW + 1, SEC), 0);
         assert_eq!(g.resets(), 3);
+    }
+
+    /// A sender stepping its sequence forward by the window on every message (1 µs apart)
+    /// counted 2²⁰ lost poses per message, 10¹¹ over 10⁵ messages, in the service's total;
+    /// now its losses stay within its budget (16 + 10⁷ per second since its first message:
+    /// ~10⁶ here), the steps past it are resets, and another sender's count is untouched.
+    #[test]
+    fn sequence_gaps_one_sender_cannot_inflate_the_total() {
+        let mut g = SequenceGaps::<u32, 4>::default();
+        let (mut seq, mut honest) = (0u64, 0u64);
+        for i in 0..100_000u64 {
+            let now = i * 1_000;
+            seq += SEQUENCE_GAP_WINDOW + 1;
+            g.record(9, seq, now);
+            honest += 1;
+            assert_eq!(g.record(7, honest, now), 0);
+        }
+        let elapsed_ns = 99_999 * 1_000;
+        let (lost, resets) = g.of(9).unwrap();
+        assert!(lost <= SEQUENCE_QUEUE_SLACK + elapsed_ns / 100, "{lost}");
+        assert!(resets > 99_000, "{resets}");
+        assert_eq!(g.of(7), Some((0, 0)));
+        assert_eq!(g.lost(), lost);
     }
 
     #[test]
     fn sequence_gaps_evict_the_least_recent_sender() {
         let mut g = SequenceGaps::<u32, 2>::default();
-        g.record(1, 1);
-        g.record(2, 1);
-        g.record(1, 2);
-        g.record(3, 100); // replaces sender 2, heard from least recently
-        assert_eq!(g.record(1, 3), 0, "sender 1 is still tracked");
-        assert_eq!(g.record(2, 50), 0, "sender 2 starts over: a first sequence");
+        g.record(1, 1, NOW);
+        g.record(2, 1, NOW);
+        g.record(1, 2, NOW);
+        g.record(3, 100, NOW); // replaces sender 2, heard from least recently
+        assert_eq!(g.record(1, 3, NOW), 0, "sender 1 is still tracked");
+        assert_eq!(
+            g.record(2, 50, NOW),
+            0,
+            "sender 2 starts over: a first sequence"
+        );
         assert_eq!(g.lost(), 0);
     }
 

@@ -1,12 +1,27 @@
 //! The first natural frequencies (f1 .. fK) and the end-effector mode along a trajectory,
 //! for one or several T_min values.
+//!
+//! [`run`] streams: it reads a CSV twice (once to check every row and count them, once to
+//! evaluate), [`CHUNK_POSES`] poses at a time, hands each chunk's results to a sink (the
+//! command writes them out) and keeps only what is bounded: per curve one estimator, the
+//! summary (accumulated), and at most [`FIGURE_MAX_POINTS`] points for the figure. Memory is
+//! therefore independent of the number of poses: per chunk [`CHUNK_POSES`] poses and
+//! [`CHUNK_POSES`] results per curve (872 bytes each: 3.6 MB per curve), plus the figure's
+//! points (at most 8.7 MB per curve), plus one estimator per curve, plus one line of the file
+//! ([`crate::trajectory::samples::MAX_LINE_BYTES`]).
 
-use super::points::{evaluate_jobs_with, status_histogram, valid, PointResult, Workers};
-use super::{estimator_params, StudyError};
-use crate::estimator::Tmin;
+use super::points::{
+    check_modes, evaluate_jobs_with, evaluate_one, status_histogram, valid, PointResult, Workers,
+};
+use super::progress::Progress;
+use super::{build, estimator_params, StudyError};
+use crate::estimator::{Estimator, Tmin};
+use crate::kinematics::Pose;
 use crate::scene::Scene;
 use crate::service::stats::StatusHistogram;
-use crate::trajectory::{Circle, Samples};
+use crate::trajectory::samples::{visit_csv, Row};
+use crate::trajectory::{Circle, Samples, TrajectoryError};
+use rayon::prelude::*;
 use std::path::PathBuf;
 
 /// Longest circle period, s (one hour of 1 ms samples is already 3.6 million poses).
@@ -46,11 +61,24 @@ pub struct TrajectoryConfig {
     pub progress: bool,
 }
 
+/// Poses evaluated per chunk by [`run`].
+pub const CHUNK_POSES: usize = 4096;
+/// Most points per curve [`run`] keeps for the figure: with more poses it keeps every
+/// ⌈poses / this⌉-th one and the last (the summaries still count every pose).
+pub const FIGURE_MAX_POINTS: usize = 10_000;
+
 /// A computed trajectory study.
 #[derive(Debug, Clone)]
 pub struct TrajectoryStudy {
-    /// The poses (with their angle along the circle when the path is the circle).
+    /// The poses (with their angle along the circle when the path is the circle); from
+    /// [`run`], the poses kept for the figure (at most [`FIGURE_MAX_POINTS`]).
     pub samples: Samples,
+    /// Poses evaluated per curve (from [`run`], more than `samples` holds when the
+    /// trajectory has more than [`FIGURE_MAX_POINTS`] poses).
+    pub poses: usize,
+    /// The summary of each curve over every pose, when computed while streaming (empty:
+    /// [`TrajectoryStudy::summary`] computes it from `points`).
+    pub summaries: Vec<CurveSummary>,
     /// The T_min of each curve, N (for the scene's own bounds, the lowest of its cables'
     /// lower bounds).
     pub t_mins_n: Vec<f64>,
@@ -70,6 +98,9 @@ impl TrajectoryStudy {
     }
     /// The summary of curve `k`.
     pub fn summary(&self, k: usize) -> CurveSummary {
+        if let Some(c) = self.summaries.get(k) {
+            return *c;
+        }
         let rows = self.curve(k);
         let ok: Vec<f64> = rows
             .iter()
@@ -85,7 +116,7 @@ impl TrajectoryStudy {
 }
 
 /// The range of f1 along one curve and its statuses.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CurveSummary {
     /// Smallest valid f1, Hz (+∞ when none is valid).
     pub f1_min_hz: f64,
@@ -129,8 +160,148 @@ pub fn evaluate_with(
     })
 }
 
-/// Check the T_min values, make or read the poses and evaluate every curve.
-pub fn run(s: &Scene, cfg: &TrajectoryConfig) -> Result<TrajectoryStudy, StudyError> {
+/// One chunk of consecutive poses of [`run`].
+#[derive(Debug, Clone, Default)]
+pub struct Chunk {
+    /// Times, s.
+    pub t_s: Vec<f64>,
+    /// Angles along the circle, deg (empty for a CSV).
+    pub angle_deg: Vec<f64>,
+    /// The poses.
+    pub poses: Vec<Pose>,
+    /// Poses per curve in the whole trajectory.
+    pub total_poses: usize,
+    /// The T_min of each curve, N (as in [`TrajectoryStudy::t_mins_n`]).
+    pub t_mins_n: Vec<f64>,
+    /// Modes per pose.
+    pub modes: usize,
+}
+
+impl Chunk {
+    fn clear(&mut self) {
+        self.t_s.clear();
+        self.angle_deg.clear();
+        self.poses.clear();
+    }
+}
+
+/// An error of the second reading of a CSV in [`run`]: the file's or the sink's.
+enum ReadOrSink<E> {
+    Read(TrajectoryError),
+    Sink(E),
+}
+
+impl<E> From<TrajectoryError> for ReadOrSink<E> {
+    fn from(e: TrajectoryError) -> Self {
+        ReadOrSink::Read(e)
+    }
+}
+
+/// The state [`run`] keeps between chunks: bounded whatever the number of poses.
+struct Stream<'a, F> {
+    scene: &'a Scene,
+    curves: &'a [Tmin<'static>],
+    n_modes: usize,
+    pool: rayon::ThreadPool,
+    /// One estimator per curve, warm from the curve's previous chunk.
+    estimators: Vec<Estimator>,
+    bar: Progress,
+    chunk: Chunk,
+    /// Poses evaluated so far per curve.
+    done: usize,
+    /// Keep every `stride`-th pose (and the last, `poses - 1`) for the figure.
+    stride: usize,
+    poses: usize,
+    figure: Samples,
+    /// Whether the poses have their own orientation (kept for the figure's samples).
+    orientation: bool,
+    figure_points: Vec<Vec<PointResult>>,
+    summaries: Vec<CurveSummary>,
+    sink: F,
+}
+
+impl<F, E> Stream<'_, F>
+where
+    F: FnMut(&Chunk, &[Vec<PointResult>]) -> Result<(), E>,
+{
+    fn push(&mut self, t_s: f64, angle_deg: Option<f64>, pose: Pose) -> Result<(), E> {
+        self.chunk.t_s.push(t_s);
+        self.chunk.angle_deg.extend(angle_deg);
+        self.chunk.poses.push(pose);
+        if self.chunk.poses.len() == CHUNK_POSES {
+            self.flush()?;
+        }
+        Ok(())
+    }
+
+    /// Evaluates the chunk (each curve on its own worker, in pose order), accumulates the
+    /// summaries and the figure's points, hands the results to the sink.
+    fn flush(&mut self) -> Result<(), E> {
+        let (chunk, n_modes) = (&self.chunk, self.n_modes);
+        if chunk.poses.is_empty() {
+            return Ok(());
+        }
+        let bar = &self.bar;
+        let estimators = &mut self.estimators;
+        let curves = self.curves;
+        let results: Vec<Vec<PointResult>> = self.pool.install(|| {
+            estimators
+                .par_iter_mut()
+                .zip(curves.par_iter())
+                .map(|(est, &t)| {
+                    let out: Vec<PointResult> = chunk
+                        .poses
+                        .iter()
+                        .map(|p| evaluate_one(est, p, t, n_modes))
+                        .collect();
+                    bar.advance(out.len());
+                    out
+                })
+                .collect()
+        });
+        for (i, pose) in chunk.poses.iter().enumerate() {
+            let j = self.done + i;
+            if j.is_multiple_of(self.stride) || j + 1 == self.poses {
+                self.figure.t_s.push(chunk.t_s[i]);
+                self.figure.position_m.push(pose.position_m);
+                if self.orientation {
+                    self.figure.orientation_wxyz.push(pose.orientation_wxyz);
+                }
+                if let Some(&a) = chunk.angle_deg.get(i) {
+                    self.figure.angle_deg.push(a);
+                }
+                for (fig, r) in self.figure_points.iter_mut().zip(&results) {
+                    fig.push(r[i]);
+                }
+            }
+        }
+        for (c, rows) in self.summaries.iter_mut().zip(&results) {
+            for r in rows {
+                let f = valid(&r.estimate, r.estimate.f1_hz);
+                if f.is_finite() {
+                    c.f1_min_hz = c.f1_min_hz.min(f);
+                    c.f1_max_hz = c.f1_max_hz.max(f);
+                }
+                c.counts.record(r.estimate.status);
+            }
+        }
+        self.done += chunk.poses.len();
+        (self.sink)(chunk, &results)?;
+        self.chunk.clear();
+        Ok(())
+    }
+}
+
+/// Check the T_min values, make or read the poses and evaluate every curve, streaming (see
+/// the module docs): `sink` gets each chunk of poses with its results, one list per curve
+/// in the order of the T_min values; the study returned holds the exact summaries and the
+/// figure's points. The results equal [`evaluate_with`]'s bit for bit (each curve runs its
+/// poses in order on one estimator, from the same cold start).
+pub fn run<E, F>(s: &Scene, cfg: &TrajectoryConfig, sink: F) -> Result<TrajectoryStudy, E>
+where
+    E: From<StudyError>,
+    F: FnMut(&Chunk, &[Vec<PointResult>]) -> Result<(), E>,
+{
     if let Some(t) = cfg
         .t_mins_n
         .iter()
@@ -139,10 +310,16 @@ pub fn run(s: &Scene, cfg: &TrajectoryConfig) -> Result<TrajectoryStudy, StudyEr
         return Err(StudyError::Usage(format!(
             "--t-mins {t:?}: must be within [0, t_max = {:?} N]",
             s.t_max_n
-        )));
+        ))
+        .into());
     }
-    let tr = match &cfg.path {
-        PathSource::Csv(p) => Samples::read_csv(p)?,
+    let circle = match &cfg.path {
+        // First pass: every row checked (and counted) before anything is evaluated or written.
+        PathSource::Csv(p) => {
+            let shape =
+                visit_csv(p, |_| Ok::<(), TrajectoryError>(())).map_err(StudyError::from)?;
+            Err((p, shape))
+        }
         &PathSource::Circle { radius_m, period_s } => {
             if !(period_s.is_finite()
                 && period_s > 0.0
@@ -152,10 +329,15 @@ pub fn run(s: &Scene, cfg: &TrajectoryConfig) -> Result<TrajectoryStudy, StudyEr
             {
                 return Err(StudyError::Usage(
                     "--period-s must be in (0, 3600] and --radius-m finite and >= 0".into(),
-                ));
+                )
+                .into());
             }
-            Circle::new(s, radius_m, period_s)?.sampled(s)
+            Ok(Circle::new(s, radius_m, period_s).map_err(StudyError::from)?)
         }
+    };
+    let poses = match &circle {
+        Ok(c) => c.sample_count(),
+        Err((_, shape)) => shape.rows,
     };
     let w = Workers {
         params: estimator_params(s, cfg.ee_mode),
@@ -168,10 +350,75 @@ pub fn run(s: &Scene, cfg: &TrajectoryConfig) -> Result<TrajectoryStudy, StudyEr
     } else {
         cfg.t_mins_n.iter().map(|&t| Tmin::Uniform(t)).collect()
     };
-    let points = evaluate_with(s, &tr, &curves, &w)?;
+    let n_modes = check_modes(w.n_modes)?;
+    let cold = build(s, w.params)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(w.thread_count())
+        .build()
+        .map_err(|e| StudyError::Build(format!("worker threads: {e}")))?;
+    let empty = CurveSummary {
+        f1_min_hz: f64::INFINITY,
+        f1_max_hz: f64::NEG_INFINITY,
+        counts: StatusHistogram::default(),
+    };
+    let mut st = Stream {
+        scene: s,
+        curves: &curves,
+        n_modes,
+        pool,
+        estimators: vec![cold; curves.len()],
+        bar: Progress::new(w.progress, poses * curves.len()),
+        chunk: Chunk {
+            total_poses: poses,
+            t_mins_n: curves.iter().map(|t| t.lowest_n(s)).collect(),
+            modes: n_modes,
+            ..Chunk::default()
+        },
+        done: 0,
+        stride: poses.div_ceil(FIGURE_MAX_POINTS).max(1),
+        poses,
+        figure: Samples::default(),
+        orientation: false,
+        figure_points: vec![Vec::new(); curves.len()],
+        summaries: vec![empty; curves.len()],
+        sink,
+    };
+    match &circle {
+        Ok(c) => {
+            for k in 0..poses {
+                let (t_s, p, angle) = c.sample(s, k);
+                st.push(t_s, Some(angle), Pose::in_scene(s, p))?;
+            }
+        }
+        Err((p, shape)) => {
+            st.orientation = shape.orientation;
+            let again = visit_csv(p, |r: Row| {
+                st.push(r.t_s, None, r.pose(st.scene))
+                    .map_err(ReadOrSink::Sink)
+            })
+            .map_err(|e| match e {
+                ReadOrSink::Read(t) => E::from(StudyError::from(t)),
+                ReadOrSink::Sink(e) => e,
+            })?;
+            if again != *shape {
+                return Err(StudyError::Usage(format!(
+                    "{}: the file changed while it was read ({} rows, then {})",
+                    p.display(),
+                    shape.rows,
+                    again.rows
+                ))
+                .into());
+            }
+        }
+    }
+    st.flush()?;
+    st.bar.finish();
+    let points = st.figure_points.concat();
     Ok(TrajectoryStudy {
-        samples: tr,
-        t_mins_n: curves.iter().map(|t| t.lowest_n(s)).collect(),
+        samples: st.figure,
+        poses,
+        summaries: st.summaries,
+        t_mins_n: st.chunk.t_mins_n,
         points,
     })
 }

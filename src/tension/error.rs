@@ -1,11 +1,17 @@
 //! Errors of the tension distribution; an infeasible wrench carries the closest solution's
 //! residual and active bounds.
 
+use crate::input_file::{message_fixed, message_number};
+
 /// Errors of the tension distribution.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum TensionError {
     /// T_min > T_max, or a bound not finite, or T_min < 0.
-    #[error("invalid tension bounds: t_min = {t_min_n:?} N, t_max = {t_max_n:?} N (need 0 ≤ t_min ≤ t_max, finite)")]
+    #[error(
+        "invalid tension bounds: t_min = {} N, t_max = {} N (need 0 ≤ t_min ≤ t_max, finite)",
+        message_number(*t_min_n),
+        message_number(*t_max_n)
+    )]
     InvalidBounds {
         /// Lower bound, N.
         t_min_n: f64,
@@ -18,12 +24,12 @@ pub enum TensionError {
     /// No tensions within the bounds produce the wrench.
     #[error(
         "tension infeasible: wrench component {} cannot be reached within {}; \
-         closest tensions leave a residual force ({:.4}, {:.4}, {:.4}) N, moment ({:.4}, {:.4}, {:.4}) N·m; \
+         closest tensions leave a residual force ({}, {}, {}) N, moment ({}, {}, {}) N·m; \
          cables at t_max: {}, at t_min: {}",
         ["f_x", "f_y", "f_z", "m_x", "m_y", "m_z"][*worst_component],
         BoundsFmt(*t_min_n, *t_max_n, *per_cable_bounds),
-        residual_n[0], residual_n[1], residual_n[2],
-        residual_n[3], residual_n[4], residual_n[5],
+        Residual(residual_n, 0), Residual(residual_n, 1), Residual(residual_n, 2),
+        Residual(residual_n, 3), Residual(residual_n, 4), Residual(residual_n, 5),
         fmt_mask(*at_upper_mask), fmt_mask(*at_lower_mask)
     )]
     Infeasible {
@@ -72,6 +78,16 @@ pub enum TensionError {
     },
 }
 
+/// Component `.1` of a residual, 4 decimals (compact from 1e6 on: a 1e307 kg mass's
+/// residual is `-9.81e307`, not 309 digits).
+struct Residual<'a>(&'a [f64; 6], usize);
+
+impl std::fmt::Display for Residual<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&message_fixed(self.0[self.1], 4))
+    }
+}
+
 struct MaskFmt(u32);
 impl std::fmt::Display for MaskFmt {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -97,11 +113,17 @@ struct BoundsFmt(f64, f64, bool);
 impl std::fmt::Display for BoundsFmt {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self.2 {
-            false => write!(f, "[{}, {}] N", self.0, self.1),
+            false => write!(
+                f,
+                "[{}, {}] N",
+                message_number(self.0),
+                message_number(self.1)
+            ),
             true => write!(
                 f,
                 "each cable's own bounds (lowest t_min {} N, highest t_max {} N)",
-                self.0, self.1
+                message_number(self.0),
+                message_number(self.1)
             ),
         }
     }

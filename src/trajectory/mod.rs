@@ -145,16 +145,30 @@ impl Circle {
             angle_deg: Vec::with_capacity(n + 1),
             orientation_wxyz: Vec::new(),
         };
-        let centre = scene.ee_position_m;
         for k in 0..=n {
-            let p = circle_pose(scene, k, self.period_s).position_m;
-            let p = centre + (p - centre) * (self.radius_m / CIRCLE_RADIUS_M);
-            t.t_s.push(k as f64 * SAMPLE_PERIOD_S);
+            let (t_s, p, angle_deg) = self.sample(scene, k);
+            t.t_s.push(t_s);
             t.position_m.push(p);
-            t.angle_deg
-                .push(360.0 * k as f64 * SAMPLE_PERIOD_S / self.period_s);
+            t.angle_deg.push(angle_deg);
         }
         t
+    }
+
+    /// Samples in [`Circle::sampled`]: one more than the steps of one revolution.
+    pub fn sample_count(&self) -> usize {
+        (self.period_s / SAMPLE_PERIOD_S).round().max(1.0) as usize + 1
+    }
+
+    /// Sample `k` of [`Circle::sampled`]: time (s), position (m), angle along the circle (deg).
+    pub fn sample(&self, scene: &Scene, k: usize) -> (f64, Vector3<f64>, f64) {
+        let centre = scene.ee_position_m;
+        let p = circle_pose(scene, k, self.period_s).position_m;
+        let p = centre + (p - centre) * (self.radius_m / CIRCLE_RADIUS_M);
+        (
+            k as f64 * SAMPLE_PERIOD_S,
+            p,
+            360.0 * k as f64 * SAMPLE_PERIOD_S / self.period_s,
+        )
     }
 }
 

@@ -27,7 +27,9 @@ use std::path::Path;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use super::TrajectoryError;
-use crate::input_file::{message_excerpt, message_number, MAX_TRAJECTORY_BYTES};
+use crate::input_file::{
+    message_excerpt, message_number, open_checked, InputError, MAX_TRAJECTORY_BYTES,
+};
 use crate::kinematics::{unit_quaternion, Pose};
 use crate::scene::Scene;
 
@@ -52,81 +54,39 @@ pub struct Samples {
 
 impl Samples {
     /// Reads a trajectory CSV file (rules in the module docs; a regular file of at most
-    /// [`MAX_TRAJECTORY_BYTES`]).
+    /// [`MAX_TRAJECTORY_BYTES`]). The samples take memory in proportion to the file;
+    /// [`visit_csv`] reads a file row by row in bounded memory.
     pub fn read_csv(path: &Path) -> Result<Samples, TrajectoryError> {
-        let text = crate::input_file::read_text(path, "trajectory CSV", MAX_TRAJECTORY_BYTES)?;
-        Samples::parse_csv(&text, &path.display().to_string())
+        let mut s = Samples::default();
+        visit_csv(path, |r| {
+            s.push(&r);
+            Ok::<(), TrajectoryError>(())
+        })?;
+        Ok(s)
     }
 
     /// Parses trajectory CSV text (rules in the module docs); `origin` names the source in
     /// errors.
     pub fn parse_csv(text: &str, origin: &str) -> Result<Samples, TrajectoryError> {
         let mut s = Samples::default();
-        let mut header_seen = false;
-        let mut fields_per_row: Option<usize> = None;
+        let mut p = RowParser::new(origin);
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         for (i, line) in lines(text).enumerate() {
-            let row = |msg: String| TrajectoryError::Row {
-                origin: origin.to_string(),
-                line: i + 1,
-                msg,
-            };
-            let line = line.split('#').next().unwrap_or("").trim();
-            let quoted = message_excerpt(line);
-            if line.is_empty() {
-                continue;
-            }
-            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-            let values = match fields
-                .iter()
-                .map(|f| f.parse::<f64>())
-                .collect::<Result<Vec<_>, _>>()
-            {
-                Ok(v) => v,
-                Err(_) if s.t_s.is_empty() && !header_seen => {
-                    header_seen = true;
-                    continue;
-                }
-                Err(e) => return Err(row(format!("`{quoted}`: {e}"))),
-            };
-            let width = *fields_per_row.get_or_insert(values.len());
-            if !(values.len() == FIELDS_POSITION || values.len() == FIELDS_POSE)
-                || !values.iter().all(|v| v.is_finite())
-            {
-                return Err(row(format!(
-                    "expected 4 or 8 finite numbers t,x,y,z[,qw,qx,qy,qz] (s, m, unit quaternion), got `{quoted}`"
-                )));
-            }
-            if values.len() != width {
-                return Err(row(format!(
-                    "expected as many fields as the first data row ({width}), got {} in `{quoted}`",
-                    values.len()
-                )));
-            }
-            if let Some(&last) = s.t_s.last() {
-                if values[0] <= last {
-                    return Err(row(format!(
-                        "time {} s does not increase (previous {} s)",
-                        message_number(values[0]),
-                        message_number(last)
-                    )));
-                }
-            }
-            s.t_s.push(values[0]);
-            s.position_m
-                .push(Vector3::new(values[1], values[2], values[3]));
-            if width == FIELDS_POSE {
-                let q = unit_quaternion([values[4], values[5], values[6], values[7]])
-                    .map_err(|e| row(e.to_string()))?;
-                s.orientation_wxyz.push(q);
+            if let Some(r) = p.line(i + 1, line)? {
+                s.push(&r);
             }
         }
-        if s.t_s.is_empty() {
-            return Err(TrajectoryError::Empty {
-                origin: origin.to_string(),
-            });
-        }
+        p.finish()?;
         Ok(s)
+    }
+
+    /// Appends one row.
+    fn push(&mut self, r: &Row) {
+        self.t_s.push(r.t_s);
+        self.position_m.push(r.position_m);
+        if let Some(q) = r.orientation_wxyz {
+            self.orientation_wxyz.push(q);
+        }
     }
 
     /// The position at time `t_s` (s from the first sample), m, linear between samples;
@@ -179,17 +139,18 @@ impl Samples {
     }
 
     /// Every sample as a pose: its own orientation, or the scene's when the samples have
-    /// none.
+    /// none or the end-effector is a point mass.
     pub fn poses(&self, s: &Scene) -> Vec<Pose> {
         self.position_m
             .iter()
             .enumerate()
             .map(|(k, &p)| match self.orientation_wxyz.get(k) {
-                Some(&q) => Pose {
+                // A point mass has no orientation: the columns have no effect there.
+                Some(&q) if s.rigid => Pose {
                     position_m: p,
                     orientation_wxyz: q,
                 },
-                None => Pose::in_scene(s, p),
+                _ => Pose::in_scene(s, p),
             })
             .collect()
     }
@@ -197,6 +158,273 @@ impl Samples {
     /// Time from the first to the last sample, s.
     pub fn duration_s(&self) -> f64 {
         self.t_s[self.t_s.len() - 1] - self.t_s[0]
+    }
+}
+
+/// One data row of a trajectory CSV.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Row {
+    /// Time, s.
+    pub t_s: f64,
+    /// Position, m.
+    pub position_m: Vector3<f64>,
+    /// Orientation, unit quaternion [w, x, y, z] (normalised), when the file has the columns.
+    pub orientation_wxyz: Option<[f64; 4]>,
+}
+
+impl Row {
+    /// This row as a pose: its own orientation, or the scene's when the file has none or
+    /// the end-effector is a point mass (which has no orientation).
+    pub fn pose(&self, s: &Scene) -> Pose {
+        match self.orientation_wxyz {
+            Some(q) if s.rigid => Pose {
+                position_m: self.position_m,
+                orientation_wxyz: q,
+            },
+            _ => Pose::in_scene(s, self.position_m),
+        }
+    }
+}
+
+/// The rules of the module docs, one line at a time: the one parser of [`Samples::parse_csv`]
+/// and [`visit_csv`].
+#[derive(Debug)]
+struct RowParser<'a> {
+    origin: &'a str,
+    header_seen: bool,
+    fields_per_row: Option<usize>,
+    last_t_s: Option<f64>,
+    rows: usize,
+}
+
+impl<'a> RowParser<'a> {
+    fn new(origin: &'a str) -> Self {
+        RowParser {
+            origin,
+            header_seen: false,
+            fields_per_row: None,
+            last_t_s: None,
+            rows: 0,
+        }
+    }
+
+    /// Line `number` (from 1, without its end): a data row, or nothing (blank, comment,
+    /// header).
+    fn line(&mut self, number: usize, line: &str) -> Result<Option<Row>, TrajectoryError> {
+        let row = |msg: String| TrajectoryError::Row {
+            origin: self.origin.to_string(),
+            line: number,
+            msg,
+        };
+        let line = line.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            return Ok(None);
+        }
+        let quoted = || message_excerpt(line);
+        let mut values = [0.0; FIELDS_POSE];
+        let mut n = 0;
+        let mut parse_error = None;
+        for f in line.split(',').map(str::trim) {
+            match f.parse::<f64>() {
+                Ok(v) if n < FIELDS_POSE => values[n] = v,
+                Ok(_) => {}
+                Err(e) => {
+                    parse_error = Some(e);
+                    break;
+                }
+            }
+            n += 1;
+        }
+        if let Some(e) = parse_error {
+            if self.rows == 0 && !self.header_seen {
+                self.header_seen = true;
+                return Ok(None);
+            }
+            return Err(row(format!("`{}`: {e}", quoted())));
+        }
+        let width = *self.fields_per_row.get_or_insert(n);
+        if !(n == FIELDS_POSITION || n == FIELDS_POSE) || !values[..n].iter().all(|v| v.is_finite())
+        {
+            return Err(row(format!(
+                "expected 4 or 8 finite numbers t,x,y,z[,qw,qx,qy,qz] (s, m, unit quaternion), got `{}`",
+                quoted()
+            )));
+        }
+        if n != width {
+            return Err(row(format!(
+                "expected as many fields as the first data row ({width}), got {n} in `{}`",
+                quoted()
+            )));
+        }
+        if let Some(last) = self.last_t_s {
+            if values[0] <= last {
+                return Err(row(format!(
+                    "time {} s does not increase (previous {} s)",
+                    message_number(values[0]),
+                    message_number(last)
+                )));
+            }
+        }
+        let orientation_wxyz = if width == FIELDS_POSE {
+            Some(
+                unit_quaternion([values[4], values[5], values[6], values[7]])
+                    .map_err(|e| row(e.to_string()))?,
+            )
+        } else {
+            None
+        };
+        self.last_t_s = Some(values[0]);
+        self.rows += 1;
+        Ok(Some(Row {
+            t_s: values[0],
+            position_m: Vector3::new(values[1], values[2], values[3]),
+            orientation_wxyz,
+        }))
+    }
+
+    /// The end of the input: an error when it had no data row.
+    fn finish(&self) -> Result<(), TrajectoryError> {
+        if self.rows == 0 {
+            return Err(TrajectoryError::Empty {
+                origin: self.origin.to_string(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Longest line [`visit_csv`] reads, bytes (1 MiB; a data row is at most 8 numbers, ~200
+/// bytes): a longer line is refused, so one line cannot take the memory of the file.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+
+/// What [`visit_csv`] read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CsvShape {
+    /// Data rows.
+    pub rows: usize,
+    /// Whether the rows have quaternion columns.
+    pub orientation: bool,
+}
+
+/// Reads the trajectory CSV file `path` row by row (the rules of the module docs; a regular
+/// file of at most [`MAX_TRAJECTORY_BYTES`]), calling `f` on each data row in order; stops
+/// at the first error, the file's or `f`'s. Memory: one line, at most [`MAX_LINE_BYTES`],
+/// whatever the file's length.
+pub fn visit_csv<E, F>(path: &Path, mut f: F) -> Result<CsvShape, E>
+where
+    E: From<TrajectoryError>,
+    F: FnMut(Row) -> Result<(), E>,
+{
+    use std::io::{BufReader, Read};
+    const WHAT: &str = "trajectory CSV";
+    let file = path.display().to_string();
+    let io = |source| {
+        TrajectoryError::Input(InputError::Io {
+            file: file.clone(),
+            what: WHAT,
+            source,
+        })
+    };
+    let handle = open_checked(path, WHAT, MAX_TRAJECTORY_BYTES).map_err(TrajectoryError::from)?;
+    let mut reader = BufReader::new(handle.take(MAX_TRAJECTORY_BYTES + 1));
+    let mut p = RowParser::new(&file);
+    let mut buf = Vec::new();
+    let (mut offset, mut number, mut orientation, mut after_cr) = (0u64, 0usize, false, false);
+    loop {
+        let start = offset;
+        let Some((read, dropped_lf)) = next_line(&mut reader, &mut buf, after_cr).map_err(io)?
+        else {
+            break;
+        };
+        // A CR LF pair is one line end: the LF after a CR is dropped from the next line.
+        let start = start + dropped_lf as u64;
+        offset += read as u64;
+        if offset > MAX_TRAJECTORY_BYTES {
+            // The file grew after the size check.
+            return Err(TrajectoryError::Input(InputError::TooLarge {
+                file,
+                what: WHAT,
+                size_bytes: offset,
+                limit_bytes: MAX_TRAJECTORY_BYTES,
+            })
+            .into());
+        }
+        number += 1;
+        after_cr = buf.last() == Some(&b'\r');
+        if matches!(buf.last(), Some(b'\r' | b'\n')) {
+            buf.pop();
+        } else if buf.len() > MAX_LINE_BYTES {
+            return Err(TrajectoryError::Row {
+                origin: file.clone(),
+                line: number,
+                msg: format!(
+                    "line longer than {MAX_LINE_BYTES} bytes: `{}`",
+                    message_excerpt(&String::from_utf8_lossy(&buf[..200]))
+                ),
+            }
+            .into());
+        }
+        let text = std::str::from_utf8(&buf).map_err(|e| {
+            TrajectoryError::Input(InputError::NotUtf8 {
+                file: file.clone(),
+                what: WHAT,
+                offset: (start as usize) + e.valid_up_to(),
+            })
+        })?;
+        let text = if start == 0 {
+            text.strip_prefix('\u{feff}').unwrap_or(text)
+        } else {
+            text
+        };
+        if let Some(r) = p.line(number, text)? {
+            orientation = r.orientation_wxyz.is_some();
+            f(r)?;
+        }
+    }
+    p.finish()?;
+    Ok(CsvShape {
+        rows: p.rows,
+        orientation,
+    })
+}
+
+/// The next line of `reader` into `buf` with its end (LF or CR; at most
+/// [`MAX_LINE_BYTES`] + 1 bytes: a longer line is returned cut, without an end), skipping
+/// one LF first when `after_cr` (the second byte of a CR LF). Returns the bytes consumed and
+/// whether an LF was skipped, or `None` at the end of the input.
+fn next_line(
+    reader: &mut impl std::io::BufRead,
+    buf: &mut Vec<u8>,
+    mut after_cr: bool,
+) -> std::io::Result<Option<(usize, bool)>> {
+    buf.clear();
+    let (mut consumed, mut dropped_lf) = (0, false);
+    loop {
+        let chunk = reader.fill_buf()?;
+        if chunk.is_empty() {
+            return Ok((!buf.is_empty()).then_some((consumed, dropped_lf)));
+        }
+        if after_cr {
+            after_cr = false;
+            if chunk[0] == b'\n' {
+                reader.consume(1);
+                consumed += 1;
+                dropped_lf = true;
+                continue;
+            }
+        }
+        let room = MAX_LINE_BYTES + 1 - buf.len();
+        let end = chunk
+            .iter()
+            .take(room)
+            .position(|&b| b == b'\n' || b == b'\r');
+        let take = end.map_or(chunk.len().min(room), |e| e + 1);
+        buf.extend_from_slice(&chunk[..take]);
+        reader.consume(take);
+        consumed += take;
+        if end.is_some() || buf.len() > MAX_LINE_BYTES {
+            return Ok(Some((consumed, dropped_lf)));
+        }
     }
 }
 
@@ -347,6 +575,56 @@ mod tests {
         let s = read_within_timeout(&small).unwrap();
         std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(s.duration_s(), 1.0);
+    }
+
+    /// The file reader (`visit_csv`, line by line) and the text parser read the same rows
+    /// with the same line numbers, across its buffer's edges (a CR LF pair split between two
+    /// reads included); a line over `MAX_LINE_BYTES` is refused without being held whole, and
+    /// a byte that is not UTF-8 is named by its offset in the file.
+    #[test]
+    fn the_file_reader_streams_what_the_text_parser_reads() {
+        use crate::input_file::test_files::temp_dir;
+        let dir = temp_dir("csv-stream");
+        let f = dir.join("t.csv");
+        let mut body = String::from("\u{feff}# c\r\nt,x,y,z,qw,qx,qy,qz\r\n");
+        for i in 0..20_000 {
+            let end = ["\n", "\r", "\r\n"][i % 3];
+            body += &format!("{i}.5, 0.{i}, 1, 2, 1, 0, 0, 0 # {i}{end}\n");
+        }
+        for text in [body.as_str(), "0,0,0,1\r1,0,0,1\r\n\r2,0,0,1", "0,1,2,3"] {
+            std::fs::write(&f, text).unwrap();
+            let streamed = Samples::read_csv(&f).unwrap();
+            assert_eq!(streamed, Samples::parse_csv(text, "x").unwrap());
+            let shape = visit_csv(&f, |_| Ok::<(), TrajectoryError>(())).unwrap();
+            assert_eq!(shape.rows, streamed.t_s.len());
+        }
+        for (text, want) in [
+            (
+                "0,0,0,1\r\n\r\n0,1,1,1\n",
+                "t.csv:3: time 0 s does not increase",
+            ),
+            ("0,0,0,1\r\r1,\0,0,1", "t.csv:3: `1,\\0,0,1`"),
+            ("# only\r", "no data rows"),
+        ] {
+            std::fs::write(&f, text).unwrap();
+            let e = Samples::read_csv(&f).unwrap_err().to_string();
+            assert!(e.contains(want), "{text:?}: {e}");
+        }
+        let long = format!("0,0,0,1\n{}\n", "9".repeat(3 * MAX_LINE_BYTES));
+        std::fs::write(&f, long).unwrap();
+        let e = Samples::read_csv(&f).unwrap_err().to_string();
+        assert!(
+            e.contains(":2: line longer than 1048576 bytes") && e.len() < 300,
+            "{}",
+            &e[..300.min(e.len())]
+        );
+        std::fs::write(&f, b"0,0,0,1\n1,0,0,\xff\n").unwrap();
+        let e = Samples::read_csv(&f).unwrap_err().to_string();
+        assert!(
+            e.contains("not UTF-8 text (invalid byte at offset 14)"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -19,6 +19,12 @@ pub struct PoseInput {
 }
 
 impl PoseInput {
+    /// The pose publisher's id (the key of the service's per-publisher sequence counts,
+    /// `ServerReport::pose_publishers`).
+    pub fn publisher_id(&self) -> iceoryx2::identifiers::UniquePublisherId {
+        self.pose.id()
+    }
+
     /// Opens (or creates) the pose, T_min and wake-service services of instance `names`.
     pub fn open(node: &Node<Ipc>, names: &ServiceNames) -> Result<PoseInput, ServiceError> {
         let pose_factory = open_pubsub::<PoseSample>(node, &names.pose, POSE_SETTINGS)?;

@@ -58,7 +58,7 @@ use nalgebra::Vector3;
 
 use super::ports::{self, Ipc, ServicePorts, MAX_PUBLISHERS, POSE_BUFFER};
 use super::rt;
-use super::stats::{Percentiles, Ring, SequenceGaps, StatusHistogram};
+use super::stats::{Percentiles, Ring, SenderCounts, SequenceGaps, StatusHistogram};
 use super::{ServiceError, WaitMode};
 use crate::estimator::{Estimator, Tmin};
 use crate::kinematics::Pose;
@@ -236,9 +236,15 @@ pub struct ServerReport {
     /// estimated, skipped or overwritten: `cycles + skipped_poses + overwritten_poses` = poses
     /// sent.
     pub overwritten_poses: u64,
-    /// Times a publisher's pose sequence went back, repeated or jumped past the window (a
-    /// restarted counter, a broken or hostile publisher): counted here, never as poses lost.
+    /// Times a publisher's pose sequence went back, repeated or jumped past the window or its
+    /// budget (a restarted counter, a broken or hostile publisher): counted here, never as
+    /// poses lost.
     pub sequence_resets: u64,
+    /// Per pose publisher still tracked at the end: poses received, overwritten (lost) and
+    /// resets. For each publisher that numbers its poses one by one from its first received
+    /// one, received + overwritten = poses sent; the totals are their sums (plus those of
+    /// publishers no longer tracked).
+    pub pose_publishers: Vec<SenderCounts<UniquePublisherId>>,
     /// Estimates whose status was not ok.
     pub invalid_inputs: u64,
     /// Estimates per status code (index = wire value; the last slot collects unknown codes).
@@ -418,8 +424,11 @@ impl Server {
         while received < DRAIN_LIMIT as u64 {
             match self.ports.pose.receive() {
                 Ok(Some(s)) => {
-                    self.period.overwritten +=
-                        self.pose_gaps.record(s.header().publisher_id(), s.sequence);
+                    self.period.overwritten += self.pose_gaps.record(
+                        s.header().publisher_id(),
+                        s.sequence,
+                        monotonic_now_ns(),
+                    );
                     newest = Some(*s);
                     received += 1;
                 }
@@ -711,6 +720,7 @@ impl Server {
             skipped_poses: t.skipped,
             overwritten_poses: t.overwritten,
             sequence_resets: self.pose_gaps.resets(),
+            pose_publishers: self.pose_gaps.senders().collect(),
             invalid_inputs: t.invalid,
             status_counts: t.status,
             t_min_setpoints: t.t_min,
