@@ -46,24 +46,29 @@
 //!
 //! ## Layers
 //!
-//! Each layer uses only the layers below it (`tests/layers.rs` checks every `crate::` path),
-//! so the crate reads bottom-up:
+//! This crate is the core: it builds the estimator and the offline studies with nothing of
+//! iceoryx2, clap or the renderers. The workspace adds three crates on top of it:
+//! `cablevib-ipc` (ipc-schema/: the wire messages, re-exporting [`status`]),
+//! `cablevib-service` (service/: the iceoryx2 service) and `cablevib-cli` (cli/: reports,
+//! the command line and the `cablevib` binary); the Python bindings (python/) use the core
+//! alone. Each layer uses only the layers below it (`tests/layers/` checks every `crate::`
+//! path and every crate's dependencies), so the code reads bottom-up:
 //!
 //! | layer | modules | what |
 //! |---|---|---|
-//! | 0 | [`input_file`], [`alloc_count`] | bounded reading of scene and trajectory files; a counting allocator |
-//! | 1 | [`scene`] | robot description, TOML parsing and validation, `Scene::load` |
+//! | 0 | [`input_file`], [`alloc_count`], [`status`] | bounded reading of scene and trajectory files; a counting allocator; the cycle's status codes |
+//! | 1 | [`scene`], [`stats`] | robot description, TOML parsing and validation, `Scene::load`; preallocated rings, percentiles, status counts |
 //! | 2 | [`kinematics`], [`caspr`], [`sag`] | poses, cable vectors and lengths, the structure matrix; import of CASPR's XML models into a scene; the sagging cable's elastic catenary |
 //! | 3 | [`trajectory`], [`tension`], [`cable`] | the paper's circle and CSV paths; the tension QP (active set, Clarabel reference); element models and chains |
 //! | 4 | [`modal`] | D(λ) of the loaded chains, the first mode, the end-effector tracker, the dense reference |
 //! | 5 | [`estimator`] | the per-cycle pipeline, the inverse T_min query, the offline `auto` choice and reference |
-//! | 6 | [`service`], [`study`] | iceoryx2 wiring; offline studies (maps, trajectories, T_min sweeps, accuracy) |
-//! | 7 | [`report`] | the studies' CSV files, SVG plots and Markdown |
-//! | 8 | [`cli`] | the command line, used by the binary alone |
+//! | 6 | [`study`] | offline studies (maps, trajectories, T_min sweeps, accuracy) |
+//! | service | `cablevib-service` | iceoryx2 wiring: the service loop, ports, demo, IPC bench |
+//! | cli | `cablevib-cli` | `report` (the studies' CSV files, SVG plots, Markdown), then `cli` (the command line) |
 //!
-//! A pose's path through one cycle: [`service`] takes it from iceoryx2 →
+//! A pose's path through one cycle: the service takes it from iceoryx2 →
 //! [`estimator::Estimator::update`] → [`kinematics`] → [`tension`] → [`cable`] → [`modal`]
-//! → [`estimator::Estimate`] → [`service`] publishes it.
+//! → [`estimator::Estimate`] → the service publishes it.
 #![warn(missing_docs)]
 // Numerical kernels index several arrays with one loop variable; iterator chains would
 // hide the maths. `!(x > 0.0)` is used on purpose: it is also true for NaN.
@@ -71,8 +76,10 @@
 // Layer 0
 pub mod alloc_count;
 pub mod input_file;
+pub mod status;
 // Layer 1
 pub mod scene;
+pub mod stats;
 // Layer 2
 pub mod caspr;
 pub mod kinematics;
@@ -86,9 +93,4 @@ pub mod modal;
 // Layer 5
 pub mod estimator;
 // Layer 6
-pub mod service;
 pub mod study;
-// Layer 7
-pub mod report;
-// Layer 8
-pub mod cli;

@@ -2,7 +2,7 @@
 //! after construction. The one place percentiles and status counts are computed: the
 //! service, the benchmarks and the offline sweeps all use it.
 
-use cablevib_ipc::{status_str, StatusCode};
+use crate::status::{status_str, StatusCode};
 
 /// Slots of a [`StatusHistogram`]: one per wire value below it; the last slot also collects
 /// every larger (unknown) wire value.

@@ -1,10 +1,10 @@
-//! Status codes carried as `u32` in [`EstimateSample::status`](crate::EstimateSample::status)
-//! and [`MarginResponse::status`](crate::MarginResponse::status).
+//! The outcome of one estimator cycle ([`StatusCode`], also `estimator::Status`), carried
+//! as `u32` in the IPC messages' `status` fields (`cablevib-ipc` re-exports this module).
 
 /// Outcome of one estimator cycle, as carried on the wire (`u32`).
 ///
 /// The numeric values are part of the schema: they never change and a retired code is never
-/// reused. A new code may be added within the same [`SCHEMA_VERSION`](crate::SCHEMA_VERSION);
+/// reused. A new code may be added within the same schema version (`cablevib_ipc::SCHEMA_VERSION`);
 /// a receiver that does not know a code ([`StatusCode::from_u32`] returns `None`) must treat
 /// the sample as "not valid".
 #[repr(u32)]
@@ -29,8 +29,8 @@ pub enum StatusCode {
     NonUnitQuaternion = 7,
     /// A T_min set-point below zero, above T_max or non-finite; the previous one stays in force.
     TminOutOfRange = 8,
-    /// A margin request with a required frequency outside [`crate::REQUIRED_F1_MIN_HZ`],
-    /// [`crate::REQUIRED_F1_MAX_HZ`] (NaN included).
+    /// A margin request with a required frequency outside `cablevib_ipc::REQUIRED_F1_MIN_HZ`,
+    /// `cablevib_ipc::REQUIRED_F1_MAX_HZ` (NaN included).
     InvalidRequest = 9,
     /// An internal error of the service; see its log.
     InternalError = 10,

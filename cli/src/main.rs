@@ -26,14 +26,14 @@ fn default_sigpipe() {
 
 fn main() {
     default_sigpipe();
-    let cli = cablevib::cli::Cli::parse();
+    let cli = cablevib_cli::cli::Cli::parse();
     if let Err(e) = run(cli) {
         eprintln!("cablevib: {e:#}");
         std::process::exit(1);
     }
 }
 
-fn run(cli: cablevib::cli::Cli) -> anyhow::Result<()> {
-    cablevib::cli::run(cli, allocations)?;
+fn run(cli: cablevib_cli::cli::Cli) -> anyhow::Result<()> {
+    cablevib_cli::cli::run(cli, allocations)?;
     Ok(())
 }

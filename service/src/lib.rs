@@ -27,17 +27,24 @@
 //! service notifies [`SERVICE_WAKE_CONTROLLER`](cablevib_ipc::SERVICE_WAKE_CONTROLLER) after
 //! each estimate, so a controller can block too.
 
+#![warn(missing_docs)]
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod bench;
 pub mod demo;
 pub mod ports;
 pub mod rt;
 pub mod schedule;
 pub mod server;
-pub mod stats;
+/// The statistics live in the core (the offline studies use them too).
+pub use cablevib::stats;
 
 use core::sync::atomic::AtomicBool;
 
 use clap::ValueEnum;
+
+// The core's modules, under the paths the service's files name (`crate::scene::...`).
+use cablevib::{alloc_count, estimator, kinematics, scene, trajectory};
 
 use crate::estimator::BuildError;
 use crate::scene::{Scene, SceneError};

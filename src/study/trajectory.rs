@@ -5,7 +5,7 @@ use super::points::{evaluate_jobs_with, status_histogram, valid, PointResult, Wo
 use super::{estimator_params, StudyError};
 use crate::estimator::Tmin;
 use crate::scene::Scene;
-use crate::service::stats::StatusHistogram;
+use crate::stats::StatusHistogram;
 use crate::trajectory::{Circle, Samples};
 use std::path::PathBuf;
 

@@ -76,7 +76,7 @@ pub fn carried(r: Result<TminAnswer, TminQueryError>) -> Result<f64, StatusCode>
 }
 
 /// Slots of the mailbox: one per margin client the service admits.
-pub const SLOTS: usize = crate::service::ports::MAX_CLIENTS;
+pub const SLOTS: usize = crate::ports::MAX_CLIENTS;
 
 #[derive(Debug, Default)]
 struct Mailbox {
