@@ -21,10 +21,10 @@
 
 use std::time::{Duration, Instant};
 
-use cablevib::service::ports::{create_node, EstimateOutput, MarginClient};
-use cablevib::service::stats::{GapDetector, GapEvent, SampleLog, StatusHistogram};
-use cablevib::service::WaitMode;
 use cablevib_ipc::{monotonic_now_ns, status_str, MarginRequest, ServiceNames};
+use cablevib_service::ports::{create_node, EstimateOutput, MarginClient};
+use cablevib_service::stats::{GapDetector, GapEvent, SampleLog, StatusHistogram};
+use cablevib_service::WaitMode;
 use clap::Parser;
 
 /// Default outage threshold, ms: 100 expected periods at the replay's 1 kHz, far above the

@@ -15,10 +15,10 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
-use cablevib::service::ports::{create_node, PoseInput};
-use cablevib::service::TminSchedule;
 use cablevib::trajectory::Trajectory;
 use cablevib_ipc::{monotonic_now_ns, PoseSample, ServiceNames, TminSetpoint, IDENTITY_QUATERNION};
+use cablevib_service::ports::{create_node, PoseInput};
+use cablevib_service::TminSchedule;
 use clap::Parser;
 
 /// Publish poses (and T_min set-points) to a cablevib service.

@@ -1,8 +1,33 @@
-//! Shared helpers of the integration tests: the paper's tables and scene builders, the one
-//! test random-number generator, and (in [`hard_cases`]) the real-time-against-dense checks
-//! of the hard-case tests.
-#![allow(dead_code)]
+//! Shared helpers of the workspace's integration tests (every crate's `tests/<area>/`): the
+//! paper's tables and scene builders, the one test random-number generator, the counting
+//! allocator's set-up ([`count_allocations!`]), and
+//!
+//! | module | what |
+//! |---|---|
+//! | [`hard_cases`] | the real-time-against-dense checks of the hard-case tests |
+//! | [`sag_cases`] | the sagged scenes and poses the sag tests share |
+//! | [`sag_reference_py`] | the independent sagged-cable reference, tests/py/sag_reference.py |
+//! | [`sag_robot`] | sagged chains (`modal::sag`) of a small robot, for the sagged FEM tests |
+//! | [`pinned_venv`] | a Python venv under target/ with pinned packages |
 pub mod hard_cases;
+pub mod pinned_venv;
+pub mod sag_cases;
+pub mod sag_reference_py;
+pub mod sag_robot;
+
+/// The allocator every test that counts allocations runs under: `count_allocations!();` at
+/// the root of a test binary (its `main.rs`) sets [`cablevib::alloc_count::CountingAlloc`]
+/// as the global allocator, so `alloc_count::thread_system_allocations` counts the calling
+/// thread's allocations. One set-up for every binary (a binary has one global allocator).
+#[macro_export]
+macro_rules! count_allocations {
+    () => {
+        #[global_allocator]
+        static COUNTING_ALLOCATOR: $crate::CountingAlloc = $crate::CountingAlloc;
+    };
+}
+#[doc(hidden)]
+pub use cablevib::alloc_count::CountingAlloc;
 
 use cablevib::scene::{ElementKind, Scene};
 use nalgebra::Vector3;
@@ -10,7 +35,7 @@ use serde_json::Value;
 
 /// The paper's tables with the faithful values (tests/data/paper_tables.json).
 pub fn tables() -> Value {
-    serde_json::from_str(include_str!("../data/paper_tables.json")).expect("valid json")
+    serde_json::from_str(include_str!("../../tests/data/paper_tables.json")).expect("valid json")
 }
 
 pub fn table(n: u64) -> Value {

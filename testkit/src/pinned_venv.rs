@@ -1,6 +1,5 @@
 //! A Python venv under target/ with pinned packages, created and provisioned on first use
 //! (by `python3 -m venv` and pip, by name and version: nothing installed by hand counts).
-//! Included by path from the tests that run Python.
 //!
 //! Tests of one binary run in parallel threads, and several binaries may share a venv, so
 //! the check-and-create step runs under an in-process mutex and an exclusive lock on
@@ -17,7 +16,7 @@ static SETUP: Mutex<()> = Mutex::new(());
 /// The python of the venv `target/DIR_NAME`, with `packages` — (import name, pip name,
 /// version) — installed at exactly those versions; created when it is missing or stale.
 pub fn pinned_venv_python(dir_name: &str, packages: &[(&str, &str, &str)]) -> PathBuf {
-    let venv = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+    let venv = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
         .join("target")
         .join(dir_name);
     let py = venv.join("bin").join("python");

@@ -9,8 +9,6 @@
 //!   tension) are very slack, with their lowest point between their ends at the centre.
 //!   Its off-centre pose (+0.3, +0.2, 0) m from the centre is feasible; (+0.5, −0.3, +0.2) m
 //!   makes cable 5 slack.
-#![allow(dead_code)]
-
 use cablevib::scene::{ElementKind, Scene};
 use cablevib::study::analysis::{analyze, AnalysisReport, AnalyzeOptions};
 use nalgebra::{Matrix3, Vector3};

@@ -12,8 +12,6 @@
 //! ~1e-8 relative on these scenes. Use [`RefAnswer::extrapolated`] for the continuous
 //! (N → ∞) values and [`RefAnswer::at_level`] for the model at a given element count.
 
-#![allow(dead_code)]
-
 use cablevib::scene::Scene;
 use serde_json::{json, Value};
 use std::io::Write;
@@ -21,8 +19,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::OnceLock;
 
-#[path = "pinned_venv.rs"]
-mod pinned_venv;
+use crate::pinned_venv;
 
 /// numpy pinned for the reference (wheels for Python 3.11).
 pub const NUMPY_VERSION: &str = "2.1.3";
@@ -33,7 +30,7 @@ pub const SCIPY_VERSION: &str = "1.14.1";
 pub const LEVELS: [usize; 3] = [80, 160, 320];
 
 fn manifest() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
 }
 
 /// The reference script.

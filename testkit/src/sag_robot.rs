@@ -2,8 +2,6 @@
 //! own (L0, EA, w, H, V_a) and its plane by its horizontal unit h, so the tests need no
 //! statics solver (the vibration problem only needs each cable's profile and frame; the
 //! end points need not meet for the dense/structured comparison).
-#![allow(dead_code)]
-
 use cablevib::modal::sag::{SagCable, SagEndEffector};
 use cablevib::sag::Catenary;
 use nalgebra::{Matrix3, Vector3};

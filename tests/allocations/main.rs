@@ -7,7 +7,7 @@
 //! The allocator (`cablevib::alloc_count`) is read per thread, so what the test harness's
 //! own threads allocate meanwhile (output capture, the runner) is not charged to the
 //! estimator.
-use cablevib::alloc_count::{thread_allocations, CountingAlloc};
+use cablevib::alloc_count::thread_allocations;
 use cablevib::estimator::Tmin;
 use cablevib::estimator::{Estimator, EstimatorParams, TminQueryError};
 use cablevib::kinematics::Pose;
@@ -16,8 +16,7 @@ use cablevib::scene::{ElementKind, Scene, MAX_CABLES};
 use cablevib::trajectory::{Circle, CIRCLE_RADIUS_M, SAMPLE_PERIOD_S};
 use nalgebra::Vector3;
 
-#[global_allocator]
-static A: CountingAlloc = CountingAlloc;
+cablevib_testkit::count_allocations!();
 
 /// The paper's circle around the default position (radius 0.75 m; 0.2 m for the rigid-body
 /// robot, whose feasible workspace is smaller), 4 s per turn.

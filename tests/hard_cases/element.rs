@@ -7,13 +7,12 @@
 //! docs/hard-cases.md lists the cases, the expected behaviour and these tests. The shared
 //! checks and their tolerance (real-time against the dense reference) are in
 //! tests/common/hard_cases.rs.
-mod common;
 
 use cablevib::cable::{catenary_block, fem_block, up_frame};
 use cablevib::estimator::Status;
 use cablevib::scene::{ElementKind, Scene};
-use common::hard_cases::*;
-use common::rel;
+use cablevib_testkit::hard_cases::*;
+use cablevib_testkit::rel;
 use nalgebra::{Matrix3, Vector3};
 
 /// The largest value of T/(2EA) over the cables at one estimate.

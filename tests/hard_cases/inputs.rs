@@ -8,7 +8,6 @@
 //! docs/hard-cases.md lists the cases, the expected behaviour and these tests. The shared
 //! checks and their tolerance (real-time against the dense reference) are in
 //! tests/common/hard_cases.rs.
-mod common;
 
 use cablevib::estimator::Tmin;
 use cablevib::estimator::{reference_analysis, AnalysisError, Estimator, Status};
@@ -16,8 +15,8 @@ use cablevib::kinematics::Pose;
 use cablevib::modal::lambda_to_hz;
 use cablevib::scene::{ElementKind, Scene, MAX_CABLES, T_MIN_FLOOR_N};
 use cablevib::tension::{clarabel_reference_bounds, TensionError};
-use common::hard_cases::*;
-use common::rel;
+use cablevib_testkit::hard_cases::*;
+use cablevib_testkit::rel;
 use nalgebra::Vector3;
 
 // ---------------------------------------------------------------------------------------

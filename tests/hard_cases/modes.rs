@@ -8,15 +8,14 @@
 //! docs/hard-cases.md lists the cases, the expected behaviour and these tests. The shared
 //! checks and their tolerance (real-time against the dense reference) are in
 //! tests/common/hard_cases.rs.
-mod common;
 
 use cablevib::estimator::Tmin;
 use cablevib::estimator::{build_models, Estimator, Status};
 use cablevib::kinematics::Pose;
 use cablevib::modal::{hz_to_lambda, lambda_to_hz, ModalParams, ModalSolver};
 use cablevib::scene::{ElementKind, Scene};
-use common::hard_cases::*;
-use common::rel;
+use cablevib_testkit::hard_cases::*;
+use cablevib_testkit::rel;
 use nalgebra::Vector3;
 
 // ---------------------------------------------------------------------------------------

@@ -6,15 +6,14 @@
 //! docs/hard-cases.md lists the cases, the expected behaviour and these tests. The shared
 //! checks and their tolerance (real-time against the dense reference) are in
 //! tests/common/hard_cases.rs.
-mod common;
 
 use cablevib::estimator::Tmin;
 use cablevib::estimator::{reference_analysis, AnalysisError, Estimator, EstimatorParams, Status};
 use cablevib::kinematics::{Geometry, Pose};
 use cablevib::scene::Scene;
 use cablevib::tension::{clarabel_reference, TensionError, TensionParams, TensionSolver};
-use common::hard_cases::*;
-use common::{rel, Rng};
+use cablevib_testkit::hard_cases::*;
+use cablevib_testkit::{rel, Rng};
 use nalgebra::Vector3;
 
 // ---------------------------------------------------------------------------------------

@@ -8,16 +8,13 @@
 //! which has no cycle budget; the highest of 400 random poses below the frame).
 //! Before the continuation every cycle there restarted the search cold and was cut at the
 //! same place: `not_converged` for ever.
-use cablevib::alloc_count::{thread_allocations, CountingAlloc};
+use cablevib::alloc_count::thread_allocations;
 use cablevib::estimator::Tmin;
 use cablevib::estimator::{Estimator, Status};
 use cablevib::kinematics::Pose;
 use cablevib::modal::{dense_relative_accuracy, hz_to_lambda};
 use cablevib::scene::Scene;
 use nalgebra::Vector3;
-
-#[global_allocator]
-static A: CountingAlloc = CountingAlloc;
 
 fn scene() -> Scene {
     Scene::load(concat!(

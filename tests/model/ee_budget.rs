@@ -9,14 +9,13 @@
 //!   end-effector mode): checked against the dense spectrum's participations (an independent
 //!   formulation: assembled K and M, dense symmetric eigensolver);
 //! - the first root's residual is small on converged answers and not on a perturbed λ.
-mod common;
 
 use cablevib::estimator::Tmin;
 use cablevib::estimator::{reference_analysis, Estimator};
 use cablevib::kinematics::Pose;
 use cablevib::modal::{hz_to_lambda, CYCLE_EVALUATIONS};
 use cablevib::scene::{ElementKind, Scene};
-use common::Rng;
+use cablevib_testkit::Rng;
 use nalgebra::Vector3;
 
 /// The heavy-cable scene of the test data (the paper's robot, cables 50× heavier).

@@ -1,14 +1,13 @@
 //! Effects switched off remove their contribution exactly, the rigid-body
 //! end-effector matches the dense reference, and the inverse T_min query.
 #![allow(clippy::needless_range_loop)]
-mod common;
 use cablevib::estimator::{reference_analysis_at, Estimator, Tmin, TMIN_QUERY_MAX_EVALUATIONS};
 use cablevib::kinematics::{Geometry, Pose};
 use cablevib::modal::{dense_relative_accuracy, lambda_to_hz};
 use cablevib::scene::{ElementKind, Scene, DEFAULT_SCENE_TOML, PLANAR_SCENE_TOML};
 use cablevib::tension::clarabel_reference;
-use common::without_effects;
-use common::Rng;
+use cablevib_testkit::without_effects;
+use cablevib_testkit::Rng;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
 fn f1(scene: &Scene, p: Vector3<f64>, t_min: f64) -> cablevib::estimator::Estimate {
@@ -147,7 +146,10 @@ fn sag_effect_hangs_the_cables_and_the_catenary_element_stays_a_chord_model() {
     .unwrap();
     assert_eq!(cat.model.element, ElementKind::Catenary);
     let e = f1(&cat, cat.ee_position_m, 60.0);
-    let want = common::f64s(&common::table(8)["rows"][0]["faithful_analytical_N40"])[0].unwrap();
+    let want =
+        cablevib_testkit::f64s(&cablevib_testkit::table(8)["rows"][0]["faithful_analytical_N40"])
+            [0]
+        .unwrap();
     assert!((e.f1_hz - want).abs() < 1e-9 * want);
 }
 

@@ -22,16 +22,12 @@
 //! `measure_300_poses` (ignored) gives the numbers of docs/inverse.md:
 //! `cargo test --release --test inverse_query -- --ignored --nocapture`.
 
-mod common;
-use cablevib::alloc_count::{thread_allocations, CountingAlloc};
+use cablevib::alloc_count::thread_allocations;
 use cablevib::estimator::{Estimator, Tmin, TminQueryError, TMIN_QUERY_MAX_EVALUATIONS};
 use cablevib::kinematics::Pose;
 use cablevib::scene::Scene;
-use common::Rng;
+use cablevib_testkit::Rng;
 use nalgebra::Vector3;
-
-#[global_allocator]
-static A: CountingAlloc = CountingAlloc;
 
 /// f1 at the answer may fall short of the requirement by this much (relative) in a cold
 /// forward evaluation (see the module doc).

@@ -11,11 +11,10 @@
 //! (docs/model.md section 3), so the faithful model sits ≈0.531% below the printed tables —
 //! the same factor for end-effector and string modes, so no physical parameter explains
 //! it. `printed_tables_are_0_531_percent_above` checks exactly that, at print precision.
-mod common;
 use cablevib::estimator::reference_analysis;
 use cablevib::estimator::Tmin;
 use cablevib::modal::{dense_relative_accuracy, lambda_to_hz};
-use common::*;
+use cablevib_testkit::*;
 
 const DENSE_TOL: f64 = 5e-6;
 

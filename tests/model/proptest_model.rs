@@ -11,14 +11,13 @@
 //! lower rings, or all on the top for a suspended robot), the end-effector inside, random EA,
 //! weight per length, end-effector mass, tension bounds, element (FEM, catenary, massless)
 //! and N ≤ 10. Fixed seed, no failure persistence: deterministic.
-mod common;
 
 use cablevib::estimator::Tmin;
 use cablevib::estimator::{reference_analysis, Estimate, Estimator, EstimatorParams, Status};
 use cablevib::kinematics::Pose;
 use cablevib::modal::{assemble, hz_to_lambda, lambda_to_hz, DenseModes};
 use cablevib::scene::{Cable, ElementKind, Scene};
-use common::hard_cases::{catenary_conditioning, dense_tol};
+use cablevib_testkit::hard_cases::{catenary_conditioning, dense_tol};
 use nalgebra::{DMatrix, Vector3};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};

@@ -1,11 +1,10 @@
 //! The real-time path's f1 against the faithful values (1e-9 relative), which a dense f64
 //! solver cannot reach on the planar robot (its accuracy there is ε·λ_max/λ ≈ 1e-6).
-mod common;
 use cablevib::estimator::Tmin;
 use cablevib::estimator::{structured_analysis, Estimator};
 use cablevib::kinematics::Pose;
 use cablevib::scene::ElementKind;
-use common::*;
+use cablevib_testkit::*;
 
 const TOL: f64 = 1e-9;
 

@@ -4,14 +4,13 @@
 //! Tolerance for f1 and the end-effector mode against the dense solver: its own accuracy,
 //! 8·ε·λ_max/λ (relative, on λ; half that on f) + 1e-10, computed per pose and mode.
 //! Tensions: 1e-9 relative against Clarabel (tolerances 1e-13).
-mod common;
 use cablevib::estimator::Tmin;
 use cablevib::estimator::{reference_analysis, Estimator};
 use cablevib::kinematics::Pose;
 use cablevib::modal::{dense_relative_accuracy, lambda_to_hz};
 use cablevib::scene::{ElementKind, Scene};
 use cablevib::trajectory::circle_pose;
-use common::Rng;
+use cablevib_testkit::Rng;
 use nalgebra::Vector3;
 
 fn random_poses_agree(scene: &Scene, count: usize, seed: u64) -> (usize, f64, f64) {

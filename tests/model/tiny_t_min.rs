@@ -15,7 +15,7 @@
 //! λ_j = 2k(1 − cos θ_j) / (m (4 + 2 cos θ_j)/6), θ_j = jπ/N; a continuous string
 //! (π/L)² T/μ; massless cables leave the 3 × 3 problem K u = λ m u with
 //! K = Σ EA/L e eᵀ + T/L (I − e eᵀ) (the massless-spring limit as T → 0).
-use cablevib::alloc_count::{thread_allocations, CountingAlloc};
+use cablevib::alloc_count::thread_allocations;
 use cablevib::estimator::Tmin;
 use cablevib::estimator::{Estimator, Status};
 use cablevib::kinematics::Pose;
@@ -24,9 +24,6 @@ use cablevib::scene::{ElementKind, Scene, T_MIN_FLOOR_N};
 use cablevib::trajectory::{Circle, CIRCLE_RADIUS_M, SAMPLE_PERIOD_S};
 use nalgebra::{Matrix3, Vector3};
 use std::f64::consts::PI;
-
-#[global_allocator]
-static A: CountingAlloc = CountingAlloc;
 
 /// T_min from 1e-12 N down to the rule's floor: every 8th decade and the floor itself.
 fn tiny_t_mins() -> Vec<f64> {

@@ -9,12 +9,9 @@ mod irvine;
 mod rk4;
 mod timing;
 
-use cablevib::alloc_count::{thread_allocations, CountingAlloc};
+use cablevib::alloc_count::thread_allocations;
 use cablevib::cable::sagged::{SagContinuous, SagContinuousParams};
 use cablevib::sag::Catenary;
-
-#[global_allocator]
-static A: CountingAlloc = CountingAlloc;
 
 pub const G: f64 = 9.81;
 

@@ -2,16 +2,12 @@
 //! their catenaries (bad inputs mixed in), each with D(λ), the count, the static
 //! stiffness, a warm first root and the first 10 modes, for a point mass and a rigid
 //! body. Plus an ignored measurement of the evaluation and solve times.
-mod sag_common;
 
-use cablevib::alloc_count::{thread_allocations, CountingAlloc};
+use cablevib::alloc_count::thread_allocations;
 use cablevib::modal::sag::{SagEndEffector, SagModalSolver};
 use cablevib::modal::{ModalParams, Mode};
-use sag_common::*;
+use cablevib_testkit::sag_robot::*;
 use std::time::Instant;
-
-#[global_allocator]
-static A: CountingAlloc = CountingAlloc;
 
 #[test]
 fn a_thousand_poses_allocate_nothing() {

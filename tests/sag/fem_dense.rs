@@ -13,7 +13,6 @@
 //!
 //! Also the γ → 0 limit: without weight the sagged FEM is today's chord FEM (CableModel,
 //! closed-form uniform chains) fed with EA' = EA(1 + T/EA), μ' = μ/(1 + T/EA).
-mod sag_common;
 
 use cablevib::cable::{up_frame, CableModel};
 use cablevib::modal::sag::{
@@ -21,8 +20,8 @@ use cablevib::modal::sag::{
 };
 use cablevib::modal::{dense_modes_ee, rigid_geometric_stiffness, ModalParams, ModalSolver, Mode};
 use cablevib::scene::ElementKind;
+use cablevib_testkit::sag_robot::*;
 use nalgebra::{Matrix3, Vector3};
-use sag_common::*;
 
 /// Factor on the dense solver's bound ε·λ_max/λ: ~9× the measured worst (module docs).
 const DENSE_FACTOR: f64 = 64.0;

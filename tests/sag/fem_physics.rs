@@ -4,14 +4,13 @@
 //!
 //! A chain's blocked (end held) eigenvalues are the fixed-fixed cable's: the λ where its
 //! Wittrick–Williams count `below` steps, found here by bisection on the count.
-mod sag_common;
 
 use cablevib::cable::sagged::SagChain;
 use cablevib::modal::sag::{SagCable, SagModalSolver};
 use cablevib::modal::{ModalParams, Mode};
 use cablevib::sag::Catenary;
+use cablevib_testkit::sag_robot::*;
 use nalgebra::Vector3;
-use sag_common::*;
 
 /// The first `k` blocked eigenvalues of `c` (λ, rad²/s²) by bisection on its count, to
 /// 1e-13 relative.

@@ -2,12 +2,11 @@
 //! (batched) recurrence against the one-by-one recurrence, the warm first root from a
 //! predicted λ against the cold one, and the cycle's evaluation budget. Plus an ignored
 //! measurement of ns per element.
-mod sag_common;
 
 use cablevib::modal::sag::SagModalSolver;
 use cablevib::modal::{ModalError, ModalParams};
 use cablevib::sag::{CableChord, SagParams};
-use sag_common::*;
+use cablevib_testkit::sag_robot::*;
 use std::time::Instant;
 
 /// The lockstep evaluation does every chain's scalar operations in the same order and

@@ -5,7 +5,7 @@
 //! (KKT checked by a finite-difference Jacobian, Clarabel and a dense multiplier solve), it is
 //! one answer whatever the path, and a timing print (ignored test).
 #![allow(clippy::needless_range_loop)] // index loops mirror the per-cable maths
-use cablevib::alloc_count::{thread_allocations, CountingAlloc};
+use cablevib::alloc_count::thread_allocations;
 use cablevib::estimator::{Estimator, Tmin};
 use cablevib::kinematics::Pose;
 use cablevib::kinematics::{rotation_of, Geometry};
@@ -16,9 +16,6 @@ use cablevib::tension::{
     TensionError, TensionParams, TensionSolver,
 };
 use nalgebra::{DMatrix, DVector, Vector3};
-
-#[global_allocator]
-static A: CountingAlloc = CountingAlloc;
 
 fn geometry(s: &Scene, p: Vector3<f64>) -> Geometry {
     let mut g = Geometry::new(s.n_cables());

@@ -31,15 +31,10 @@
 //! the differences measured, so the sorted lists pair each mode with its counterpart. The
 //! reference computes 8 modes so a cluster cut at the 6th mode is still complete there.
 
-#[path = "common/sag_cases.rs"]
-mod sag_cases;
-#[path = "common/sag_reference_py.rs"]
-mod sag_reference_py;
-
 use cablevib::scene::{ElementKind, Scene};
 use cablevib::study::analysis::AnalysisReport;
-use sag_cases::*;
-use sag_reference_py::{f64s, run_reference, scene_request, RefAnswer, LEVELS};
+use cablevib_testkit::sag_cases::*;
+use cablevib_testkit::sag_reference_py::{f64s, run_reference, scene_request, RefAnswer, LEVELS};
 use serde_json::{json, Value};
 
 /// The required bar: f1..f6 (fem, N = 160), f1 (continuous), the principal stiffnesses and

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// The rigid 6-DOF scene of the repository.
-const BOX: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/box_6dof.toml");
+const BOX: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/box_6dof.toml");
 /// A small turn about x (1°, printed to 5 digits): feasible for the box at its pose.
 const Q_TILT: &str = "0.99996,0.00873,0,0";
 
@@ -168,7 +168,7 @@ fn rigid_stiffness_is_6x6_symmetric_with_the_translational_block_unchanged() {
 fn bench_drives_the_circle_at_the_orientation() {
     // The imported IPAnema-like robot: rigid, and feasible along the whole circle.
     let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
+        concat!(env!("CARGO_MANIFEST_DIR"), "/.."),
         "/tests/data/caspr/ipanema1.toml"
     );
     let cycles = 20;

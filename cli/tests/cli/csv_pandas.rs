@@ -9,8 +9,8 @@
 //! (PANDAS_VERSION); it needs `python3` with the venv module and PyPI. The expected columns
 //! are written out here by hand from the documentation, not taken from the code under test.
 
-use cablevib::cli;
 use cablevib::estimator::Tmin;
+use cablevib_cli::cli;
 use clap::Parser;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -18,19 +18,15 @@ use std::process::Command;
 /// pandas pinned for the check (installs on Python 3.11).
 const PANDAS_VERSION: &str = "2.2.3";
 
-#[path = "common/pinned_venv.rs"]
-mod pinned_venv;
-#[path = "common/sweep_cli.rs"]
-mod sweep_cli;
-use sweep_cli::{AccCli, MapCli, SagCli, TminCli, TrajCli};
+use super::sweep_cli::{AccCli, MapCli, SagCli, TminCli, TrajCli};
 
 fn target_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target")
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/..")).join("target")
 }
 
 /// The venv's python, created and provisioned on first use.
 fn venv_python() -> PathBuf {
-    pinned_venv::pinned_venv_python(
+    cablevib_testkit::pinned_venv::pinned_venv_python(
         &format!("venv-pandas-{PANDAS_VERSION}"),
         &[("pandas", "pandas", PANDAS_VERSION)],
     )

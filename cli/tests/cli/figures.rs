@@ -3,8 +3,8 @@
 //! decade in range; `--format png|pdf` writes a decodable PNG / a one-page PDF; `--format`
 //! mistakes are one-line errors.
 
-use cablevib::report::figure::{figure_path, render, FigureFormat, PNG_SCALE};
-use cablevib::report::svg::{Axis, HLine, LinePlot, Mark, Series};
+use cablevib_cli::report::figure::{figure_path, render, FigureFormat, PNG_SCALE};
+use cablevib_cli::report::svg::{Axis, HLine, LinePlot, Mark, Series};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

@@ -3,9 +3,9 @@
 //! `assemble_rigid`) and a dense symmetric eigensolver on L⁻¹KL⁻ᵀ (M = LLᵀ) written here,
 //! sharing nothing with the shapes' chain closed forms and bordered null space. Continuous
 //! cables, which have no dense assembly, are checked against the FEM shapes as N grows.
-use cablevib::cli::modes::PoseModel;
 use cablevib::modal::{ModalParams, ModalSolver, Mode, ModeShapes, ShapeParams, MAX_MULTIPLICITY};
 use cablevib::scene::{ElementKind, Scene};
+use cablevib_cli::cli::modes::PoseModel;
 use nalgebra::{DMatrix, DVector, Matrix6};
 
 /// Modes checked per case (clusters cut by the limit are completed).
@@ -19,7 +19,8 @@ const DENSE_ULPS: f64 = 10.0;
 const SUBSPACE_TOL: f64 = 1e-7;
 
 fn pose(name: &str, element: ElementKind, n: usize) -> PoseModel {
-    let s = Scene::load(name).unwrap().with_model(element, n);
+    let path = format!("{}/../{name}", env!("CARGO_MANIFEST_DIR"));
+    let s = Scene::load(&path).unwrap().with_model(element, n);
     PoseModel::new(&s).unwrap()
 }
 
@@ -390,8 +391,8 @@ fn continuous_shapes_are_the_limit_of_fem() {
 /// mode asked for.
 #[test]
 fn csv_and_svg_of_the_rigid_box() {
-    use cablevib::report::shapes_csv::{shapes_csv, SHAPES_HEADER};
-    use cablevib::report::svg::modes::modes_svg;
+    use cablevib_cli::report::shapes_csv::{shapes_csv, SHAPES_HEADER};
+    use cablevib_cli::report::svg::modes::modes_svg;
     let pm = pose("scenes/box_6dof.toml", ElementKind::Fem, 6);
     let mut solver = ModalSolver::new(ModalParams::default());
     pm.load(&mut solver);

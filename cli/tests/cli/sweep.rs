@@ -2,19 +2,17 @@
 //! marked (not dropped), the SVG figures are well-formed, the FEM converges as 1/N², and
 //! f1 follows a·√T_min with the coefficient of docs/model.md (section 2.2).
 
-use cablevib::cli::{self, CliError};
 use cablevib::estimator::Tmin;
 use cablevib::scene::{ElementKind, Scene};
 use cablevib::study::accuracy::AccuracyConfig;
 use cablevib::study::tmin::TminConfig;
 use cablevib::study::{self, StudyError};
 use cablevib::trajectory::{Circle, TrajectoryError};
+use cablevib_cli::cli::{self, CliError};
 use clap::Parser;
 use std::path::{Path, PathBuf};
 
-#[path = "common/sweep_cli.rs"]
-mod sweep_cli;
-use sweep_cli::{AccCli, MapCli, TminCli, TrajCli};
+use super::sweep_cli::{AccCli, MapCli, TminCli, TrajCli};
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("cablevib-sweep-{}-{name}", std::process::id()));

@@ -2,11 +2,11 @@
 //! options from the same command lines a user types (`MapCli::try_parse_from([...])`).
 //! Included by path from the sweep tests (it needs none of `common`'s other helpers).
 
-use cablevib::cli::accuracy::AccuracyArgs;
-use cablevib::cli::map::MapArgs;
-use cablevib::cli::sag_compare::SagCompareArgs;
-use cablevib::cli::sweep_tmin::SweepTminArgs;
-use cablevib::cli::trajectory::TrajectoryArgs;
+use cablevib_cli::cli::accuracy::AccuracyArgs;
+use cablevib_cli::cli::map::MapArgs;
+use cablevib_cli::cli::sag_compare::SagCompareArgs;
+use cablevib_cli::cli::sweep_tmin::SweepTminArgs;
+use cablevib_cli::cli::trajectory::TrajectoryArgs;
 use clap::Parser;
 
 /// `cablevib map` options.

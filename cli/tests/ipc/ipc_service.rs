@@ -31,17 +31,17 @@ use std::time::{Duration, Instant};
 use cablevib::estimator::{Estimate, Estimator};
 use cablevib::kinematics::Pose;
 use cablevib::scene::Scene;
-use cablevib::service::ports::{
-    create_node, load_iceoryx2_config, open_event, open_margin, open_pubsub, EstimateOutput,
-    MarginClient, PoseInput, ESTIMATE_BUFFER, ESTIMATE_SETTINGS, MAX_CLIENTS, MAX_NODES,
-    MAX_PUBLISHERS, MAX_SUBSCRIBERS, POSE_BUFFER, POSE_SETTINGS, T_MIN_SETTINGS,
-};
-use cablevib::service::WaitMode;
 use cablevib::trajectory::Trajectory;
 use cablevib_ipc::{
     monotonic_now_ns, EstimateSample, MarginRequest, PoseSample, ServiceNames, StatusCode,
     TminSetpoint, EVENT_ID_POSE, IDENTITY_QUATERNION,
 };
+use cablevib_service::ports::{
+    create_node, load_iceoryx2_config, open_event, open_margin, open_pubsub, EstimateOutput,
+    MarginClient, PoseInput, ESTIMATE_BUFFER, ESTIMATE_SETTINGS, MAX_CLIENTS, MAX_NODES,
+    MAX_PUBLISHERS, MAX_SUBSCRIBERS, POSE_BUFFER, POSE_SETTINGS, T_MIN_SETTINGS,
+};
+use cablevib_service::WaitMode;
 use iceoryx2::node::{NodeState, NodeView};
 use iceoryx2::prelude::*;
 use nalgebra::Vector3;

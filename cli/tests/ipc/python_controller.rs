@@ -27,16 +27,16 @@ use cablevib::estimator::Estimator;
 use cablevib::estimator::Tmin;
 use cablevib::kinematics::Pose;
 use cablevib::scene::Scene;
-use cablevib::service::ports::{
-    create_node, EstimateOutput, Ipc, MarginClient, PoseInput, ServiceAttributes, ServicePorts,
-};
-use cablevib::service::ServiceError;
 use cablevib_ipc::layout::ALL_LAYOUTS;
 use cablevib_ipc::{
     monotonic_now_ns, EstimateSample, MarginRequest, MarginResponse, PoseSample, ServiceNames,
     ATTR_ELEMENTS_PER_CABLE, ATTR_ELEMENT_MODEL, ATTR_SCENE, ATTR_SCHEMA_VERSION, ATTR_UNITS,
     IDENTITY_QUATERNION, MAX_CABLES, MAX_STIFFNESS_DIM, SCHEMA_VERSION, UNITS,
 };
+use cablevib_service::ports::{
+    create_node, EstimateOutput, Ipc, MarginClient, PoseInput, ServiceAttributes, ServicePorts,
+};
+use cablevib_service::ServiceError;
 use iceoryx2::prelude::*;
 use iceoryx2::service::attribute::{AttributeKey, AttributeValue};
 use serde_json::{json, Value};
@@ -57,7 +57,7 @@ const REQUIRED_HZ: f64 = 8.0;
 const F1_TOL_HZ: f64 = 1e-9;
 
 fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
 }
 
 fn work_dir() -> PathBuf {

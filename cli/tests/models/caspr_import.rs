@@ -23,7 +23,7 @@ use std::process::{Command, Output};
 const BIN: &str = env!("CARGO_BIN_EXE_cablevib");
 
 fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
         .join("tests/data/caspr")
         .join(name)
 }
@@ -203,9 +203,7 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-#[path = "caspr_import/frames.rs"]
 mod frames;
-#[path = "caspr_import/hostile.rs"]
 mod hostile;
 
 #[test]

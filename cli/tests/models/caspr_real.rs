@@ -67,7 +67,7 @@ const ROBOTS: [&str; 9] = [
 ];
 
 fn model_config() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/caspr/model_config")
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/..")).join("tests/data/caspr/model_config")
 }
 
 fn files(stem: &str) -> (PathBuf, PathBuf) {

@@ -15,31 +15,23 @@
 //! - the real-time path with sag allocates nothing per cycle along a circle (counting
 //!   allocator), fem and continuous, on the heavy paper robot, fast-like and suspended-8.
 
-mod common;
-use common::without_effects;
-#[path = "common/sag_cases.rs"]
-mod sag_cases;
-#[path = "common/sag_reference_py.rs"]
-mod sag_reference_py;
+use cablevib_testkit::without_effects;
 
-use cablevib::alloc_count::{thread_allocations, CountingAlloc};
+use cablevib::alloc_count::thread_allocations;
 use cablevib::estimator::Tmin;
 use cablevib::estimator::{Estimate, Estimator, Status};
 use cablevib::kinematics::Pose;
 use cablevib::scene::{ElementKind, Scene};
 use cablevib::study::analysis::{analyze, AnalyzeOptions};
 use cablevib::trajectory::{Circle, SAMPLE_PERIOD_S};
-use common::Rng;
+use cablevib_testkit::sag_cases::*;
+use cablevib_testkit::sag_reference_py::{run_reference, scene_request, RefAnswer, LEVELS};
+use cablevib_testkit::Rng;
 use nalgebra::Vector3;
-use sag_cases::*;
-use sag_reference_py::{run_reference, scene_request, RefAnswer, LEVELS};
 use serde_json::{json, Value};
 
-#[global_allocator]
-static A: CountingAlloc = CountingAlloc;
-
-const SPATIAL_TOML: &str = include_str!("../scenes/spatial_paper.toml");
-const PLANAR_TOML: &str = include_str!("../scenes/planar_paper.toml");
+const SPATIAL_TOML: &str = include_str!("../../../scenes/spatial_paper.toml");
+const PLANAR_TOML: &str = include_str!("../../../scenes/planar_paper.toml");
 
 /// The analysis JSON without its run times (the only fields that may differ run to run).
 fn timeless_json(s: &Scene) -> String {

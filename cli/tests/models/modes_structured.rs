@@ -8,9 +8,6 @@ use cablevib::kinematics::Pose;
 use cablevib::modal::{dense_relative_accuracy, Mode};
 use cablevib::scene::{ElementKind, Scene};
 
-#[path = "common/pinned_venv.rs"]
-mod pinned_venv;
-
 /// Safety factor on the dense solver's backward-error bound ε·λ_max/λ (the constant of a
 /// backward-stable eigensolver's error is a modest multiple of ε).
 const DENSE_SAFETY: f64 = 8.0;
@@ -89,7 +86,10 @@ const CERT_REL: f64 = 1e-10;
 
 /// A venv under target/ with mpmath pinned; returns its python.
 fn mpmath_python() -> std::path::PathBuf {
-    pinned_venv::pinned_venv_python("py-mpmath-1.3.0", &[("mpmath", "mpmath", "1.3.0")])
+    cablevib_testkit::pinned_venv::pinned_venv_python(
+        "py-mpmath-1.3.0",
+        &[("mpmath", "mpmath", "1.3.0")],
+    )
 }
 
 /// `cablevib analyze ARGS --json` parsed.
@@ -143,8 +143,8 @@ fn certified_counts(est: &Estimator, sigmas: &[(f64, f64)]) -> Vec<u64> {
         "m": triplets(&m),
         "sigmas": sigmas.iter().map(|&(l, r)| [format!("{l:?}"), format!("{r:e}")]).collect::<Vec<_>>(),
     });
-    let script =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/py/inertia_certificate.py");
+    let script = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .join("tests/py/inertia_certificate.py");
     let mut child = std::process::Command::new(mpmath_python())
         .arg(script)
         .stdin(std::process::Stdio::piped())
@@ -223,7 +223,7 @@ fn spatial_paper_n40_certified_in_40_digits() {
 
 #[test]
 fn planar_paper_certified_in_40_digits() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/planar_paper.toml");
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/planar_paper.toml");
     certify_analyze(path, &Scene::load(path).unwrap());
 }
 

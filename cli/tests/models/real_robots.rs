@@ -7,7 +7,6 @@
 //! from the anchors of the scene file. Tolerances: equilibrium 1e-9 of |w| (the active set
 //! solves a 3 × 3 system exactly up to rounding); the two QP solvers agree to 1e-6 of T_max
 //! (Clarabel's default tolerances are 1e-8 relative on the KKT residual).
-mod common;
 
 use cablevib::estimator::{reference_analysis, Estimator, Status, Tmin};
 use cablevib::kinematics::{Geometry, Pose};
@@ -30,7 +29,7 @@ fn temp_dir(name: &str) -> PathBuf {
 
 /// scenes/spatial_paper.toml with `t_min = 100.0` on its fifth `[[cables]]` entry.
 fn per_cable_scene_file(dir: &Path) -> PathBuf {
-    let text = include_str!("../scenes/spatial_paper.toml");
+    let text = include_str!("../../../scenes/spatial_paper.toml");
     let mut out = String::new();
     let mut k = 0;
     for line in text.lines() {
@@ -457,7 +456,7 @@ fn realtime_json_prints_every_refused_pose_with_its_status() {
         a.extend_from_slice(args);
         a.extend_from_slice(&["--realtime", "--json"]);
         let o = Command::new(env!("CARGO_BIN_EXE_cablevib"))
-            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
             .args(&a)
             .output()
             .unwrap();
@@ -474,7 +473,7 @@ fn realtime_json_prints_every_refused_pose_with_its_status() {
         assert!(!err.contains("default pose"), "{a:?}: {err}");
     }
     let dir = temp_dir("own_t_max");
-    let text = include_str!("../scenes/spatial_paper.toml").replacen(
+    let text = include_str!("../../../scenes/spatial_paper.toml").replacen(
         "[[cables]]\nanchor = [1.25, 1.25, 0.0]",
         "[[cables]]\nanchor = [1.25, 1.25, 0.0]\nt_max = 101.0",
         1,

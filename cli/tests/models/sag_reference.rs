@@ -11,10 +11,9 @@
 //! `reference_at(scene, pose, l0, modes)` is the entry point for comparisons with the
 //! crate's sagged model.
 
-#[path = "common/sag_reference_py.rs"]
-mod sag_reference_py;
-
-use sag_reference_py::{f64s, reference_at, run_reference, scene_request, RefAnswer, LEVELS};
+use cablevib_testkit::sag_reference_py::{
+    f64s, reference_at, run_reference, scene_request, RefAnswer, LEVELS,
+};
 use serde_json::{json, Value};
 use std::f64::consts::PI;
 
@@ -27,7 +26,7 @@ const SCENE_POSES: [(&str, [f64; 3], [f64; 3]); 2] = [
 ];
 
 fn scene_path(rel: &str) -> String {
-    format!("{}/{rel}", env!("CARGO_MANIFEST_DIR"))
+    format!("{}/{rel}", concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
 }
 
 /// `cablevib analyze SCENE --position P --json` (the crate's chord model) parsed.

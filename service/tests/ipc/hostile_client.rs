@@ -28,7 +28,6 @@
 //!   (bound below).
 //!
 //! `CABLEVIB_HOSTILE_MESSAGES` changes the message count (default 10⁵).
-mod common;
 
 use cablevib::estimator::Tmin;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -38,14 +37,14 @@ use std::time::{Duration, Instant};
 use cablevib::estimator::{Estimate, Estimator};
 use cablevib::kinematics::Pose;
 use cablevib::scene::Scene;
-use cablevib::service::ports::{create_node, EstimateOutput, PoseInput};
-use cablevib::service::server::{spawn_thread, ServerConfig};
-use cablevib::service::WaitMode;
 use cablevib_ipc::{
     monotonic_now_ns, EstimateSample, PoseSample, ServiceNames, StatusCode, TminSetpoint,
     MAX_CABLES,
 };
-use common::Rng;
+use cablevib_service::ports::{create_node, EstimateOutput, PoseInput};
+use cablevib_service::server::{spawn_thread, ServerConfig};
+use cablevib_service::WaitMode;
+use cablevib_testkit::Rng;
 use nalgebra::Vector3;
 
 /// Longest wait for one estimate or for the service's ports.

@@ -13,10 +13,10 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use cablevib::scene::Scene;
-use cablevib::service::ports::{create_node, EstimateOutput, PoseInput};
-use cablevib::service::server::{spawn_thread, ServerConfig};
-use cablevib::service::WaitMode;
 use cablevib_ipc::{monotonic_now_ns, PoseSample, ServiceNames, IDENTITY_QUATERNION};
+use cablevib_service::ports::{create_node, EstimateOutput, PoseInput};
+use cablevib_service::server::{spawn_thread, ServerConfig};
+use cablevib_service::WaitMode;
 
 /// Longest wait for anything (service start, an estimate, the thread's end).
 const TIMEOUT: Duration = Duration::from_secs(20);

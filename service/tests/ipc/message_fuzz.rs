@@ -8,8 +8,8 @@ use cablevib::estimator::Estimator;
 use cablevib::estimator::Tmin;
 use cablevib::kinematics::Pose;
 use cablevib::scene::Scene;
-use cablevib::service::server::setpoint_bounds;
 use cablevib_ipc::{MarginRequest, PoseSample, TminSetpoint};
+use cablevib_service::server::setpoint_bounds;
 use nalgebra::Vector3;
 use proptest::prelude::*;
 

@@ -13,18 +13,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use cablevib::alloc_count::CountingAlloc;
 use cablevib::scene::Scene;
-use cablevib::service::ports::{create_node, EstimateOutput, MarginClient, PoseInput};
-use cablevib::service::server::{spawn_thread, ServerConfig};
-use cablevib::service::WaitMode;
 use cablevib::trajectory::{Circle, CIRCLE_RADIUS_M, SAMPLE_PERIOD_S};
 use cablevib_ipc::{
     monotonic_now_ns, MarginRequest, PoseSample, ServiceNames, IDENTITY_QUATERNION,
 };
-
-#[global_allocator]
-static A: CountingAlloc = CountingAlloc;
+use cablevib_service::ports::{create_node, EstimateOutput, MarginClient, PoseInput};
+use cablevib_service::server::{spawn_thread, ServerConfig};
+use cablevib_service::WaitMode;
 
 /// Longest wait for anything (service start, an answer).
 const TIMEOUT: Duration = Duration::from_secs(20);
@@ -32,7 +28,7 @@ const TIMEOUT: Duration = Duration::from_secs(20);
 const CYCLES: u64 = 100_000;
 
 /// Serves `cycles` poses (a margin request every 10th) with the pool on or off; the report.
-fn serve(cycles: u64, alloc_pool: bool) -> cablevib::service::server::ServerReport {
+fn serve(cycles: u64, alloc_pool: bool) -> cablevib_service::server::ServerReport {
     let instance = format!("cvtest_{}_serve_alloc_{alloc_pool}", std::process::id());
     let names = ServiceNames::new(&instance);
     let scene = Scene::default_scene();

@@ -8,7 +8,7 @@
 //! has NaN frequencies (nothing stale). Every 101 cycles a cold estimator answers the same
 //! input and must agree (status, and f1 / end-effector mode to 1e-9), so warm starts never
 //! pass off a stale or wrong value. Zero heap allocations in the measured loop (the counting
-//! `#[global_allocator]` of `cablevib::alloc_count`, read on the soak thread around the
+//! allocator of `cablevib::alloc_count` (the binary's `count_allocations!`), read on the soak thread around the
 //! loop, so the test harness's other threads are not charged) and no
 //! resident-memory growth. Prints the count of each status and the latency percentiles.
 //!
@@ -16,20 +16,16 @@
 //! `cargo test --release --test soak -- --ignored --nocapture` runs the long one
 //! (10⁶ cycles of the paper's spatial robot, FEM N = 40, plus 2·10⁵ with the catenary
 //! element); its figures are recorded in docs/hard-cases.md.
-mod common;
 
-use cablevib::alloc_count::{thread_allocated_bytes, thread_allocations, CountingAlloc};
+use cablevib::alloc_count::{thread_allocated_bytes, thread_allocations};
 use cablevib::estimator::Tmin;
 use cablevib::estimator::{Estimator, Status};
 use cablevib::kinematics::Pose;
 use cablevib::scene::{ElementKind, Scene};
-use cablevib::service::stats::percentile;
-use common::Rng;
+use cablevib_service::stats::percentile;
+use cablevib_testkit::Rng;
 use nalgebra::Vector3;
 use std::time::Instant;
-
-#[global_allocator]
-static GLOBAL: CountingAlloc = CountingAlloc;
 
 /// Resident set size, kB (Linux; 0 elsewhere).
 fn rss_kb() -> u64 {
