@@ -4,7 +4,7 @@
 /// Outcome of one estimator cycle, as carried on the wire (`u32`).
 ///
 /// The numeric values are part of the schema: they never change and a retired code is never
-/// reused. A new code may be added within the same schema version (`cablevib_ipc::SCHEMA_VERSION`);
+/// reused. A new code may be added within the same schema version (`SCHEMA_VERSION` of `cablevib-ipc`);
 /// a receiver that does not know a code ([`StatusCode::from_u32`] returns `None`) must treat
 /// the sample as "not valid".
 #[repr(u32)]
@@ -29,8 +29,8 @@ pub enum StatusCode {
     NonUnitQuaternion = 7,
     /// A T_min set-point below zero, above T_max or non-finite; the previous one stays in force.
     TminOutOfRange = 8,
-    /// A margin request with a required frequency outside `cablevib_ipc::REQUIRED_F1_MIN_HZ`,
-    /// `cablevib_ipc::REQUIRED_F1_MAX_HZ` (NaN included).
+    /// A margin request with a required frequency outside `REQUIRED_F1_MIN_HZ`,
+    /// `REQUIRED_F1_MAX_HZ` of `cablevib-ipc` (NaN included).
     InvalidRequest = 9,
     /// An internal error of the service; see its log.
     InternalError = 10,
