@@ -1,4 +1,4 @@
-//! The sagging robots of the sag tests (tests/sag_vs_reference.rs, tests/hard_cases_sag.rs)
+//! The sagging robots of the sag tests (tests/sag/vs_reference.rs, cli/tests/models/hard_cases_sag.rs)
 //! and a short way to analyse one of them at a pose.
 //!
 //! - `fast-like` and `suspended-8`: the shipped scenes (scenes/fast_like.toml,

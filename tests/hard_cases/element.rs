@@ -6,7 +6,7 @@
 //! Every test prints what it measured (`cargo test --release --test hard_cases_element -- --nocapture`);
 //! docs/hard-cases.md lists the cases, the expected behaviour and these tests. The shared
 //! checks and their tolerance (real-time against the dense reference) are in
-//! tests/common/hard_cases.rs.
+//! testkit/src/hard_cases.rs.
 
 use cablevib::cable::{catenary_block, fem_block, up_frame};
 use cablevib::estimator::Status;

@@ -7,7 +7,7 @@
 //! Every test prints what it measured (`cargo test --release --test hard_cases_inputs -- --nocapture`);
 //! docs/hard-cases.md lists the cases, the expected behaviour and these tests. The shared
 //! checks and their tolerance (real-time against the dense reference) are in
-//! tests/common/hard_cases.rs.
+//! testkit/src/hard_cases.rs.
 
 use cablevib::estimator::Tmin;
 use cablevib::estimator::{reference_analysis, AnalysisError, Estimator, Status};

@@ -2,7 +2,7 @@
 //!
 //! - the real-time f1 and end-effector mode equal the dense reference within its accuracy
 //!   (SAFETY·ε·λ_max/λ + 1e-9, SAFETY = 8, plus SAFETY·ε·EA/T for the catenary element,
-//!   whose block is formed in global axes; see tests/common/hard_cases.rs);
+//!   whose block is formed in global axes; see testkit/src/hard_cases.rs);
 //! - the assembled K and M (`modal::assemble`) are symmetric and positive definite;
 //! - frequencies are continuous along small pose steps (1e-6 m), and the warm-started
 //!   estimator equals a cold one.
@@ -135,12 +135,12 @@ fn estimator(s: &Scene) -> Option<Estimator> {
     Estimator::with_params(s, p).ok()
 }
 
-/// The tolerance on mode `lambda` (see tests/common/hard_cases.rs) plus `extra`.
+/// The tolerance on mode `lambda` (see testkit/src/hard_cases.rs) plus `extra`.
 fn tol_of(lambda: f64, m: &DenseModes, extra: f64) -> f64 {
     dense_tol(lambda, m) + extra
 }
 
-/// Real-time against dense: f1, and the end-effector mode as in tests/common/hard_cases.rs
+/// Real-time against dense: f1, and the end-effector mode as in testkit/src/hard_cases.rs
 /// (a dense mode within tolerance whose participation is ≥ thr − 1e-3, none clearly below it
 /// with participation ≥ thr + 1e-3).
 fn check_against_dense(

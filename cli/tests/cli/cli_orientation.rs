@@ -144,7 +144,7 @@ fn rigid_stiffness_is_6x6_symmetric_with_the_translational_block_unchanged() {
         }
         // The translational block is the 3 × 3 the tool published before (the estimator's
         // `stiffness_n_m`): equal bit for bit on the structured paths; the dense reference
-        // condenses the assembled K independently, within 1e-8 (as tests/effects_rigid.rs).
+        // condenses the assembled K independently, within 1e-8 (as tests/model/effects_rigid.rs).
         let mut est = Estimator::new(&s).unwrap();
         let e = *est.update(&Pose::in_scene(&s, s.ee_position_m), Tmin::Scene);
         let dense = extra.contains(&"dense");

@@ -155,7 +155,7 @@ fn run_commands(d: &Path) -> Vec<Expect> {
     ])
     .unwrap();
     cli::sag_compare::run(&cli.a).unwrap();
-    // Its exact header is checked in tests/sag_compare.rs; here pandas must read the same
+    // Its exact header is checked in cli/tests/cli/sag_compare.rs; here pandas must read the same
     // names as the csv crate does.
     let sagc_cols: Vec<String> = csv::Reader::from_path(sagc.with_extension("csv"))
         .unwrap()

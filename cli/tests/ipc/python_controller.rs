@@ -52,7 +52,7 @@ const CONTROLLER_SECONDS: &str = "2";
 /// Required frequency of the margin requests, Hz.
 const REQUIRED_HZ: f64 = 8.0;
 /// The service runs the same `Estimator` on the same pose (bit-for-bit equality is shown by
-/// tests/ipc_service.rs) and Python's JSON writes floats with the shortest round-trip repr, so
+/// cli/tests/ipc/ipc_service.rs) and Python's JSON writes floats with the shortest round-trip repr, so
 /// any difference is a defect; 1e-9 Hz only leaves room for the decimal text.
 const F1_TOL_HZ: f64 = 1e-9;
 

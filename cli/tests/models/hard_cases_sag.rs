@@ -46,7 +46,7 @@ fn timeless_json(s: &Scene) -> String {
 
 /// The paper scenes without `[effects]` and with `[effects] sag = false` (as the files
 /// say it) analyse to the same JSON, every number bit for bit (serde's shortest round-trip text), for every
-/// element. (The paper tables themselves: tests/paper_tables.rs.)
+/// element. (The paper tables themselves: tests/model/paper_tables.rs.)
 #[test]
 fn sag_false_is_bit_identical_to_no_effects_table() {
     for text in [SPATIAL_TOML, PLANAR_TOML] {
@@ -150,7 +150,7 @@ fn with_vertical_cable() -> Scene {
 /// The vertical cable against the independent reference (which treats a cable with no
 /// horizontal span on its own branch): the continuous model's f1..f6, principal
 /// stiffness and tensions within 1e-6 of the reference's extrapolation (as in
-/// tests/sag_vs_reference.rs: measured differences there ≤ 2e-9), fem at N = 160 within
+/// tests/sag/vs_reference.rs: measured differences there ≤ 2e-9), fem at N = 160 within
 /// 2e-4 (its c/N² discretisation error). And the pose 1e-7 m beside it (a nearly vertical
 /// cable on the inclined branch) gives the same answer to 1e-5 (the geometry moves by
 /// ~1e-7 of the lengths, and a vertical cable's out-of-plane basis is arbitrary only
@@ -212,7 +212,7 @@ fn all_finite(v: &[f64]) -> bool {
 /// The heavy paper robot's centre: the four lower cables' lowest points lie between their
 /// ends (smallest tension below both end tensions); suspended-8's off-centre pose has
 /// cables with λ² above 1e4. Every number finite, for fem and continuous. (Both are
-/// compared with the independent reference in tests/sag_vs_reference.rs, including the
+/// compared with the independent reference in tests/sag/vs_reference.rs, including the
 /// interior low point's tension = H.)
 #[test]
 fn interior_low_points_and_huge_lambda2_are_finite() {

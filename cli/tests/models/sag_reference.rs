@@ -7,7 +7,7 @@
 //! scenes/suspended_8.toml) checked with the crate's chord model at their suggested poses.
 //!
 //! The reference runs in a venv under target/ with pinned numpy and scipy (see
-//! tests/common/sag_reference_py.rs; needs `python3` with venv and PyPI). The helper
+//! testkit/src/sag_reference_py.rs; needs `python3` with venv and PyPI). The helper
 //! `reference_at(scene, pose, l0, modes)` is the entry point for comparisons with the
 //! crate's sagged model.
 
