@@ -19,7 +19,11 @@ const DENSE_ULPS: f64 = 10.0;
 const SUBSPACE_TOL: f64 = 1e-7;
 
 fn pose(name: &str, element: ElementKind, n: usize) -> PoseModel {
-    let path = format!("{}/../{name}", env!("CARGO_MANIFEST_DIR"));
+    // A scene file is found from the repository root; a built-in name as it is.
+    let path = match name.ends_with(".toml") {
+        true => format!("{}/../{name}", env!("CARGO_MANIFEST_DIR")),
+        false => name.to_string(),
+    };
     let s = Scene::load(&path).unwrap().with_model(element, n);
     PoseModel::new(&s).unwrap()
 }
