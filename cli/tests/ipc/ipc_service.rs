@@ -200,7 +200,7 @@ fn spawn_helper(name: &str, instance: &str, seq_base: u64) -> Proc {
     let mut cmd = Command::new(exe);
     cmd.args([
         "--exact",
-        &format!("helper_{name}"),
+        &format!("ipc_service::helper_{name}"),
         "--ignored",
         "--nocapture",
         "--test-threads=1",
