@@ -46,10 +46,15 @@
 //!
 //! ## Layers
 //!
-//! Each layer uses only the layers below it (`tests/layers.rs` checks every `crate::` path),
-//! so the crate reads bottom-up; the modules are declared below in layer order. The table of
-//! layers, what each module owns and a pose's path through one cycle are in
-//! `docs/architecture.md`.
+//! This crate is the core: it builds the estimator and the offline studies with nothing of
+//! iceoryx2, clap or the renderers. The workspace adds three crates on top of it:
+//! `cablevib-ipc` (ipc-schema/: the wire messages, re-exporting [`status`]),
+//! `cablevib-service` (service/: the iceoryx2 service) and `cablevib-cli` (cli/: reports,
+//! the command line and the `cablevib` binary); the Python bindings (python/) use the core
+//! alone. Each layer uses only the layers below it (`tests/layers/` checks every `crate::`
+//! path and every crate's dependencies), so the code reads bottom-up; the modules are
+//! declared below in layer order. The table of layers, what each module owns and a pose's
+//! path through one cycle are in `docs/architecture.md`.
 //!
 //! ## Example
 //!
@@ -67,8 +72,10 @@
 pub mod alloc_count;
 pub mod input_file;
 mod simd;
+pub mod status;
 // Layer 1
 pub mod scene;
+pub mod stats;
 // Layer 2
 pub mod caspr;
 pub mod kinematics;
@@ -82,13 +89,7 @@ pub mod modal;
 // Layer 5
 pub mod estimator;
 // Layer 6
-pub mod service;
 pub mod study;
-// Layer 7
-pub mod report;
-// Layer 8
-pub mod cli;
-
 #[cfg(test)]
 mod readme_tests {
     /// The README's Rust example is `examples/estimate.rs` (below its `//!` header), which

@@ -3,7 +3,7 @@
 
     python3 check_layout.py LAYOUT.json
 
-LAYOUT.json (written by tests/python_controller.rs of the workspace root from
+LAYOUT.json (written by cli/tests/ipc/python_controller.rs of the workspace root from
 cablevib_ipc::layout::ALL_LAYOUTS and the crate's constants) holds
 {"structs": [{"rust_name", "type_name", "size", "align", "fields": [{"name", "offset",
 "size", "elem", "len"}]}], "constants": {NAME: value}}. Every struct must have the same

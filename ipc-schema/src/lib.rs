@@ -95,7 +95,9 @@ pub mod compat;
 pub mod layout;
 pub mod messages;
 pub mod names;
-pub mod status;
+/// The status codes are the core's (`cablevib::status`): one definition for the estimator
+/// and the wire.
+pub use cablevib::status;
 
 pub use attributes::{
     schema_version_value, ALL_ATTRIBUTE_KEYS, ATTR_CABLEVIB_VERSION, ATTR_ELEMENTS_PER_CABLE,
@@ -115,8 +117,9 @@ pub use names::{
 };
 pub use status::{status_str, StatusCode, StatusText};
 
-/// Largest number of cables a message can describe (length of the per-cable arrays).
-pub const MAX_CABLES: usize = 16;
+/// Largest number of cables a message can describe (length of the per-cable arrays): the
+/// core's limit on a scene.
+pub use cablevib::scene::MAX_CABLES;
 
 /// Largest end-effector stiffness dimension (6: three translations, three rotations).
 pub const MAX_STIFFNESS_DIM: usize = 6;

@@ -13,7 +13,7 @@
 //! and commit the result. That ctypes lays the generated structs out as Rust does is checked
 //! by Python itself (the module compares `ctypes.sizeof`, `ctypes.alignment` and every field
 //! offset with the table it was generated from when imported), and against a JSON export of
-//! the table by `tests/python_controller.rs` of the workspace root.
+//! the table by `cli/tests/ipc/python_controller.rs` of the workspace root.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

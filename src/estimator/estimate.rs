@@ -4,7 +4,7 @@ use super::EstimatorError;
 use crate::scene::MAX_CABLES;
 use nalgebra::{Matrix3, Matrix6};
 
-pub use cablevib_ipc::StatusCode as Status;
+pub use crate::status::StatusCode as Status;
 
 /// The result of one cycle. Fixed size, Copy.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -34,8 +34,9 @@ pub const PLANAR_SCENE_TOML: &str = include_str!("../../scenes/planar_paper.toml
 /// A 6-DOF robot: 8 cables, 3 × 3 × 2.5 m frame, box platform with attachment points.
 pub const BOX_SCENE_TOML: &str = include_str!("../../scenes/box_6dof.toml");
 
-/// Largest number of cables a scene may have (fixed by the IPC message layout).
-pub const MAX_CABLES: usize = cablevib_ipc::MAX_CABLES;
+/// Largest number of cables a scene may have; the IPC messages' per-cable arrays
+/// (`cablevib-ipc`) have this length.
+pub const MAX_CABLES: usize = 16;
 
 /// Largest number of elements per cable accepted. The structured path costs O(1) in it
 /// (closed-form chains, a bounded pole table); the dense reference refuses models beyond

@@ -9,7 +9,7 @@ use crate::estimator::{reference_analysis, Estimate, Status, Tmin};
 use crate::kinematics::Pose;
 use crate::modal::lambda_to_hz;
 use crate::scene::{ElementKind, Scene};
-use crate::service::stats::percentile;
+use crate::stats::percentile;
 use crate::trajectory::circle_pose;
 use std::time::Instant;
 

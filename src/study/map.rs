@@ -12,7 +12,7 @@ use super::{estimator_params, StudyError};
 use crate::estimator::Tmin;
 use crate::kinematics::{rotated_about, Pose};
 use crate::scene::Scene;
-use crate::service::stats::StatusHistogram;
+use crate::stats::StatusHistogram;
 use nalgebra::Vector3;
 
 /// Most values on one grid axis.

@@ -14,7 +14,7 @@ use crate::estimator::{Estimate, Estimator, EstimatorParams, Tmin};
 use crate::kinematics::Pose;
 use crate::modal::Mode;
 use crate::scene::Scene;
-use crate::service::stats::StatusHistogram;
+use crate::stats::StatusHistogram;
 use nalgebra::Vector3;
 use rayon::prelude::*;
 

@@ -18,7 +18,7 @@ use super::{build, estimator_params, StudyError};
 use crate::estimator::{Estimator, Tmin};
 use crate::kinematics::Pose;
 use crate::scene::Scene;
-use crate::service::stats::StatusHistogram;
+use crate::stats::StatusHistogram;
 use crate::trajectory::samples::{visit_csv, Row};
 use crate::trajectory::{Circle, Samples, TrajectoryError};
 use rayon::prelude::*;

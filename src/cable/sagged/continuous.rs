@@ -69,7 +69,7 @@
 //! w/T; their total variation is ν = ∫ w/T ds = asinh(V_e/H) − asinh(V_a/H) (H > 0) or
 //! |ln(V_e/V_a)| (H = 0). Steps are equal in ν (closed form: V(ν) = H sinh(asinh(V_a/H) + ν)),
 //! so each carries Δν = ν/M: the steps crowd where the tension is low. Measured against
-//! an independent integration (tests/sag_continuous.rs), the relative eigenvalue error is
+//! an independent integration (tests/sag/continuous.rs), the relative eigenvalue error is
 //! O(M⁻⁴) with, for an eigenvalue whose mode has total transverse phase Φ = ∫ √(λμ c) ds
 //! (≈ π per half-wave),
 //!
@@ -170,7 +170,7 @@ impl SagContinuousParams {
     /// cable's first blocked (end held) eigenvalue, i.e. within its first transverse
     /// half-wave. The rule's 1e-5 bounds every mode up to that half-wave; the robot's f1
     /// was measured within 1.8e-7 of the offline mesh (1e-9, four half-waves) around the
-    /// bench circles of the shipped sag scenes (tests/sag_realtime.rs checks 1e-6), three
+    /// bench circles of the shipped sag scenes (tests/sag/realtime.rs checks 1e-6), three
     /// orders below the physics' own error (~1e-3), with a third of the steps of 1e-7.
     pub fn realtime() -> SagContinuousParams {
         SagContinuousParams {

@@ -16,7 +16,7 @@ const VERTICAL_REL: f64 = 1e-14;
 /// Bounds of the Hessian's diagonal D_i = 1 − λ·b_i′: positive, so that every subproblem is
 /// strictly convex (a clamped D_i only slows the convergence, the answer is the KKT point
 /// whatever D). 1 is exact for a weightless cable; a very slack cable (heavy cables on the
-/// paper's robot at T_min, `tests/sag_tension.rs`) needs more than 20.
+/// paper's robot at T_min, `tests/sag/tension.rs`) needs more than 20.
 const D_MIN: f64 = 0.05;
 const D_MAX: f64 = 1e4;
 /// The secant of b_i is taken over a tension change above this fraction of the tension

@@ -1,0 +1,15 @@
+//! The cablevib command line: [`report`] writes the studies' CSV files, SVG plots and
+//! Markdown, [`cli`] parses the commands and runs them (the `cablevib` binary is
+//! `src/main.rs`). It builds on the core (`cablevib`: scene → estimator and the studies) and
+//! the service (`cablevib-service`).
+#![warn(missing_docs)]
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
+// The core's modules and the service, under the paths the files name (`crate::scene::...`).
+use cablevib::{cable, caspr, estimator, kinematics, modal, scene, study, tension, trajectory};
+use cablevib_service as service;
+
+// Layer 7
+pub mod report;
+// Layer 8
+pub mod cli;

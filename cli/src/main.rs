@@ -1,0 +1,39 @@
+//! The `cablevib` command-line tool. See `cablevib --help`.
+use clap::Parser;
+
+/// Counts heap allocations so `cablevib bench` and `serve` can report allocations per cycle.
+#[global_allocator]
+static GLOBAL: cablevib::alloc_count::CountingAlloc = cablevib::alloc_count::CountingAlloc;
+
+/// The calling thread's allocations from the system allocator (the cycle runs on it; the
+/// service's pool hits are counted apart).
+fn allocations() -> u64 {
+    cablevib::alloc_count::thread_system_allocations()
+}
+
+/// Restores the default action of SIGPIPE (terminate quietly), which the Rust runtime sets to
+/// "ignore" before `main`: a reader that closes the pipe early (`cablevib ... | head`) then
+/// ends the process the way it ends `cat` or `grep` (status 141 in a shell), instead of
+/// `println!` panicking on EPIPE. Done once here, so every print of every command (and
+/// clap's help) is covered. iceoryx2 does not rely on SIGPIPE being ignored: its socket-pair
+/// sends pass MSG_NOSIGNAL and its events use datagram sockets, which never raise it.
+fn default_sigpipe() {
+    // SAFETY: called first in main, before any thread exists; SIG_DFL is a valid disposition.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+fn main() {
+    default_sigpipe();
+    let cli = cablevib_cli::cli::Cli::parse();
+    if let Err(e) = run(cli) {
+        eprintln!("cablevib: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run(cli: cablevib_cli::cli::Cli) -> anyhow::Result<()> {
+    cablevib_cli::cli::run(cli, allocations)?;
+    Ok(())
+}

@@ -1,0 +1,14 @@
+//! The command line and its files: every command's options and refusals, orientation,
+//! CSV files read back by pandas, figures, mode shapes, the sweeps and `sag-compare`.
+//! Area binary of the command-line crate (see tests/README.md at the repository root).
+
+mod cli_hostile;
+mod cli_orientation;
+mod cli_tool;
+mod csv_pandas;
+mod figures;
+mod map_shard;
+mod mode_shapes;
+mod sag_compare;
+mod sweep;
+mod sweep_cli;

@@ -1,0 +1,6 @@
+//! The service end to end through the `cablevib` binary: `serve`, `demo`, a Rust peer and
+//! the Python controller example.
+//! Area binary of the command-line crate (see tests/README.md at the repository root).
+
+mod ipc_service;
+mod python_controller;
