@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Python controller of a running `cablevib serve`, over iceoryx2 (zero-copy shared memory).
 
-The Python twin of examples/controller.rs: takes the estimates as they arrive, asks the
+The Python twin of service/examples/controller.rs: takes the estimates as they arrive, asks the
 service for its vibration margin against --required-hz (request-response: MarginRequest ->
 MarginResponse, margin = f1 - required for the latest pose), prints f1 and the margin once per
 second and a summary at the end.
@@ -253,7 +253,7 @@ def run(ports, a):
                 s.lost_margins += 1
                 pending = None
         if pending is None and s.estimates > asked_at:
-            # One request per new estimate, as examples/controller.rs does.
+            # One request per new estimate, as service/examples/controller.rs does.
             asked_at = s.estimates
             sequence += 1
             sent_ns = time.monotonic_ns()

@@ -149,7 +149,7 @@ def test_a_rotation_on_a_point_mass_is_refused_as_by_the_estimator_and_the_servi
     """One rule (the estimator's input check, `Pose::has_identity_orientation`): on a point
     mass an orientation whose vector part exceeds 1e-3 of its norm is `invalid_input`, the
     identity (either sign, or within that tolerance) is estimated; a rigid scene takes the
-    rotation. tests/hard_cases_inputs.rs and tests/hostile_client.rs check the same rule in
+    rotation. tests/hard_cases/inputs.rs and service/tests/ipc/hostile_client.rs check the same rule in
     the library and through the service."""
     s = cablevib.Scene.load("spatial-paper")
     est = cablevib.Estimator(s)

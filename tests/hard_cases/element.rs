@@ -3,7 +3,7 @@
 //! the catenary element as the weight per length γ goes to 0 (element and whole robot, at
 //! every mesh size), a cable near slack, and EA/T from 1e2 to 1e9.
 //!
-//! Every test prints what it measured (`cargo test --release --test hard_cases_element -- --nocapture`);
+//! Every test prints what it measured (`cargo test --release --test hard_cases element -- --nocapture`);
 //! docs/hard-cases.md lists the cases, the expected behaviour and these tests. The shared
 //! checks and their tolerance (real-time against the dense reference) are in
 //! testkit/src/hard_cases.rs.

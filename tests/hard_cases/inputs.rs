@@ -4,7 +4,7 @@
 //! below the minimum cable length; the poses of a suspended robot (every anchor at one
 //! height) are in its workspace.
 //!
-//! Every test prints what it measured (`cargo test --release --test hard_cases_inputs -- --nocapture`);
+//! Every test prints what it measured (`cargo test --release --test hard_cases inputs -- --nocapture`);
 //! docs/hard-cases.md lists the cases, the expected behaviour and these tests. The shared
 //! checks and their tolerance (real-time against the dense reference) are in
 //! testkit/src/hard_cases.rs.
@@ -155,7 +155,7 @@ fn t_min_floor_is_accepted_and_below_it_is_not() {
 /// and no numbers, in `update` and in the inverse query; the identity (either sign, or within
 /// the tolerance) gives the identity's answer bit for bit; a rigid end-effector takes the
 /// rotation. Before, `Estimator` and the service estimated the rotated pose as the identity.
-/// The service (tests/hostile_client.rs, rotated poses among 10⁵ messages) and Python
+/// The service (service/tests/ipc/hostile_client.rs, rotated poses among 10⁵ messages) and Python
 /// (python/tests/test_estimator.py) refuse the same poses.
 #[test]
 fn a_rotation_on_a_point_mass_is_refused_and_the_identity_accepted() {

@@ -4,7 +4,7 @@
 //! warm-started end-effector mode against a cold start along a path, and very light and
 //! very heavy end-effectors.
 //!
-//! Every test prints what it measured (`cargo test --release --test hard_cases_modes -- --nocapture`);
+//! Every test prints what it measured (`cargo test --release --test hard_cases modes -- --nocapture`);
 //! docs/hard-cases.md lists the cases, the expected behaviour and these tests. The shared
 //! checks and their tolerance (real-time against the dense reference) are in
 //! testkit/src/hard_cases.rs.

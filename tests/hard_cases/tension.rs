@@ -2,7 +2,7 @@
 //! feasible set (active-set solver warm and cold, Clarabel, and the estimator), the
 //! structure matrix losing rank, and wide tension ranges on the Clarabel reference.
 //!
-//! Every test prints what it measured (`cargo test --release --test hard_cases_tension -- --nocapture`);
+//! Every test prints what it measured (`cargo test --release --test hard_cases tension -- --nocapture`);
 //! docs/hard-cases.md lists the cases, the expected behaviour and these tests. The shared
 //! checks and their tolerance (real-time against the dense reference) are in
 //! testkit/src/hard_cases.rs.

@@ -20,7 +20,7 @@
 //! uniform in a box inside each robot's frame, kept where the forward model is ok at the
 //! scene's T_min. `seeded_sample` (40 poses per scene) runs in the suite;
 //! `measure_300_poses` (ignored) gives the numbers of docs/inverse.md:
-//! `cargo test --release --test inverse_query -- --ignored --nocapture`.
+//! `cargo test --release --test model inverse_query -- --ignored --nocapture`.
 
 use cablevib::alloc_count::thread_allocations;
 use cablevib::estimator::{Estimator, Tmin, TminQueryError, TMIN_QUERY_MAX_EVALUATIONS};

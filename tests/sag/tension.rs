@@ -218,7 +218,7 @@ fn solve_does_not_allocate() {
 }
 
 /// Solve time with the heavy cables at the centre and off-centre, cold and warm
-/// (`cargo test --release --test sag_tension -- --ignored --nocapture`). No assert on time.
+/// (`cargo test --release --test sag tension -- --ignored --nocapture`). No assert on time.
 #[test]
 #[ignore]
 fn timing_heavy_cables() {

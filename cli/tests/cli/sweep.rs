@@ -372,7 +372,7 @@ fn trajectory_streams_in_bounded_memory_and_equals_the_collected_study() {
         assert_eq!(row[ts], samples.t_s[j % 5000].to_string(), "row {j}");
         assert_eq!(
             row[f1],
-            cablevib::report::csv::num(all[j].estimate.f1_hz),
+            cablevib_cli::report::csv::num(all[j].estimate.f1_hz),
             "row {j}"
         );
     }

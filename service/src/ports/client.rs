@@ -8,7 +8,7 @@ use super::*;
 // The controller's side
 // ---------------------------------------------------------------------------------------------
 
-/// A pose and T_min publisher (what a motion controller or `examples/replay.rs` sends), which
+/// A pose and T_min publisher (what a motion controller or `service/examples/replay.rs` sends), which
 /// notifies the wake-service event after each message so that a service in `--wait event`
 /// mode wakes up.
 pub struct PoseInput {

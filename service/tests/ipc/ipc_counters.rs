@@ -124,9 +124,7 @@ const HOSTILE_POSES: u64 = 100_000;
 ///   resets = the publishers' sums.
 #[test]
 fn a_hostile_publisher_leaves_another_publishers_counts_exact() {
-    use cablevib::service::stats::{
-        SEQUENCE_GAP_WINDOW, SEQUENCE_MAX_RATE_PER_S, SEQUENCE_QUEUE_SLACK,
-    };
+    use cablevib::stats::{SEQUENCE_GAP_WINDOW, SEQUENCE_MAX_RATE_PER_S, SEQUENCE_QUEUE_SLACK};
     let instance = format!("cvtest_{}_two_publishers", std::process::id());
     let names = ServiceNames::new(&instance);
     let scene = Scene::default_scene();

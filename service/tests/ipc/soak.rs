@@ -13,7 +13,7 @@
 //! resident-memory growth. Prints the count of each status and the latency percentiles.
 //!
 //! `cargo test --test soak` runs the short soak (2 × 20 000 cycles);
-//! `cargo test --release --test soak -- --ignored --nocapture` runs the long one
+//! `cargo test --release -p cablevib-service --test ipc soak -- --ignored --nocapture` runs the long one
 //! (10⁶ cycles of the paper's spatial robot, FEM N = 40, plus 2·10⁵ with the catenary
 //! element); its figures are recorded in docs/hard-cases.md.
 
@@ -421,7 +421,7 @@ fn soak_short() {
 }
 
 #[test]
-#[ignore = "long soak (10^6 cycles): cargo test --release --test soak -- --ignored --nocapture"]
+#[ignore = "long soak (10^6 cycles): cargo test --release -p cablevib-service --test ipc soak -- --ignored --nocapture"]
 fn soak_long_1m_cycles() {
     let s = Scene::default_scene();
     let mut problems = report("long spatial fem N=40", &soak(&s, 1_000_000, 0x50A6_1000));
