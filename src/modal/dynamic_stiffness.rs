@@ -6,7 +6,6 @@
 //! [`EvalScratch`] holds the buffers one evaluation writes (and the evaluation counter).
 
 use super::eig3::eig3;
-use super::engine::SYM3;
 use super::rigid::{attach_map, RigidParts};
 use crate::cable::{
     eval_continuous_batch, eval_discrete_batch, CableModel, Chain, ChainEval, ChainKind,
@@ -19,6 +18,15 @@ use crate::scene::MAX_CABLES;
 /// [`crate::scene::MAX_ELEMENTS_PER_CABLE`]) compute each one by trigonometry.
 const POLE_TABLE_MAX_ELEMENTS: usize = 10_000;
 use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector6};
+
+/// (row, column) of the six distinct entries of a symmetric 3 × 3 matrix, in the order
+/// both solvers store a point mass's D and D' while summing the chains.
+///
+/// Why: a point mass's D is a symmetric 3 × 3 block; summing its six distinct entries
+/// instead of nine (or 36 in a 6 × 6) is what keeps one evaluation cheap, and the two
+/// solvers must agree on the order to share the assembly's conventions.
+pub(in crate::modal) const SYM3: [(usize, usize); 6] =
+    [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
 
 /// Largest number of chains (a [`CableModel`] has up to three).
 pub(super) const MAX_CHAINS: usize = 3 * MAX_CABLES;

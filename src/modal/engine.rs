@@ -12,15 +12,6 @@
 use super::dynamic_stiffness::{DynEval, EvalScratch, LoadedChains};
 use nalgebra::Matrix6;
 
-/// (row, column) of the six distinct entries of a symmetric 3 × 3 matrix, in the order
-/// both solvers store a point mass's D and D' while summing the chains.
-///
-/// Why: a point mass's D is a symmetric 3 × 3 block; summing its six distinct entries
-/// instead of nine (or 36 in a 6 × 6) is what keeps one evaluation cheap, and the two
-/// solvers must agree on the order to share the assembly's conventions.
-pub(in crate::modal) const SYM3: [(usize, usize); 6] =
-    [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
-
 /// The first upper bracket of a search starts here when no better scale is known,
 /// rad²/s² (and a cold first root's Rayleigh guess is at least this).
 ///

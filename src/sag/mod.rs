@@ -63,7 +63,6 @@
 
 mod catenary;
 mod elements;
-mod family;
 mod flexibility;
 mod solve;
 

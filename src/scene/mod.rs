@@ -361,6 +361,17 @@ impl Scene {
     }
 }
 
+impl Scene {
+    /// Parse and validate TOML text; `file` names the source in error messages.
+    pub fn from_toml_str(text: &str, file: &str) -> Result<Scene, SceneError> {
+        let raw: parse::RawScene = toml::from_str(text).map_err(|e| SceneError::Parse {
+            file: file.to_string(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        validate::scene_from_raw(raw, file)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -3,7 +3,7 @@
 //! value ([`RawArray`]) and checked element by element in `validate`: serde's `[f64; N]`
 //! would silently drop elements past the N-th, and its errors cannot name `cables[i]`.
 
-use super::{ElementKind, Scene, SceneError};
+use super::ElementKind;
 use serde::Deserialize;
 
 /// A fixed-size array of numbers as written (any TOML value): `validate` checks that it is
@@ -101,15 +101,4 @@ pub(super) struct RawCable {
     pub(super) mass_per_length: Option<f64>,
     pub(super) t_min: Option<f64>,
     pub(super) t_max: Option<f64>,
-}
-
-impl Scene {
-    /// Parse and validate TOML text; `file` names the source in error messages.
-    pub fn from_toml_str(text: &str, file: &str) -> Result<Scene, SceneError> {
-        let raw: RawScene = toml::from_str(text).map_err(|e| SceneError::Parse {
-            file: file.to_string(),
-            message: e.to_string().trim_end().to_string(),
-        })?;
-        super::validate::scene_from_raw(raw, file)
-    }
 }

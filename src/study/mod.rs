@@ -18,7 +18,6 @@
 
 pub mod accuracy;
 pub mod analysis;
-mod analysis_compare;
 pub mod map;
 pub mod points;
 pub mod progress;

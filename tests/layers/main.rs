@@ -365,7 +365,6 @@ fn two_file_cycles(src: &Path) -> Vec<String> {
 }
 
 #[test]
-#[ignore = "the code has two-file import cycles inside modules (listed by the test); they are being removed"]
 fn no_two_files_of_a_module_use_each_other() {
     let mut cycles = Vec::new();
     for dir in ["src", "service/src", "cli/src"] {

@@ -279,7 +279,7 @@ fn user_scale_numbers_in_tension_and_estimator_messages_print_compactly() {
     let d = temp_dir("heavy");
     let scene = d.join("heavy.toml");
     let text = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/spatial_paper.toml"),
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/spatial_paper.toml"),
     )
     .unwrap();
     assert!(text.contains("\nmass = 30.0 "));

@@ -111,7 +111,7 @@ impl Member {
     }
 }
 
-/// A root found by [`track_root`](super::search::track_root) or a neighbour search.
+/// A root found by the search's `track_root` or a neighbour search.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Tracked {
     pub(super) root: Root,

@@ -4,7 +4,8 @@
 use super::{SagCableFrame, SagEndEffector, SagLoadError};
 use crate::cable::sagged::{SagBatch, SagChain, SagChainEval, SagContinuous, SagContinuousParams};
 use crate::modal::attach_map;
-use crate::modal::engine::{Condensed, SYM3};
+use crate::modal::dynamic_stiffness::SYM3;
+use crate::modal::engine::Condensed;
 use crate::modal::DynEval;
 use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector3};
 

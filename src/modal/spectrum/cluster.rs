@@ -2,7 +2,7 @@
 //! M_ee^{1/2} R M_ee^{1/2}, R = Σ_{cluster} φ_ee φ_eeᵀ (mass-normalised modes), from D's
 //! null space in a pole-free interval or from the residue of D⁻¹ at a pole.
 
-use super::search::Member;
+use super::Member;
 use crate::modal::dynamic_stiffness::{DynEval, EigD};
 use nalgebra::{Matrix6, SymmetricEigen, Vector6};
 

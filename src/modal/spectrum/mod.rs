@@ -54,12 +54,16 @@ mod ee_sweep;
 mod search;
 
 use super::dynamic_stiffness::LoadedChains;
+use super::dynamic_stiffness::{DynEval, EigD};
 use super::engine::TautView;
 use super::solver::ModalSolver;
 use super::ModalError;
 use crate::cable::ChainKind;
 pub(in crate::modal) use ee_sweep::{ee_sweep, EeSweep, SweepStep};
 pub(in crate::modal) use search::SpectrumSearch;
+
+/// One solved member of a pole-free cluster: its root, the evaluation there, its branch.
+type Member = (f64, DynEval, EigD, usize);
 
 /// One natural frequency of the loaded problem.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]

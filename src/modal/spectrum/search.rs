@@ -7,7 +7,7 @@
 //! narrower than the pole probe with a pole inside reports the mode there.
 
 use super::cluster::{members_residue, participations, residue_participations};
-use super::{Mode, SpectrumParams};
+use super::{Member, Mode, SpectrumParams};
 use crate::modal::dynamic_stiffness::{quad, DynEval, EigD};
 use crate::modal::engine::{
     Condensed, BRACKET_GROWTH, BRACKET_MIN, COLLAPSE_ULPS, NOISE_STEP, SUPERLINEAR_RATIO,
@@ -70,9 +70,6 @@ pub(in crate::modal) struct Cluster {
     lambdas: [f64; 6],
     presolved: usize,
 }
-
-/// One solved member of a pole-free cluster: its root, the evaluation there, its branch.
-pub(super) type Member = (f64, DynEval, EigD, usize);
 
 /// What a sweep keeps between calls (plain data): the current cluster and the first
 /// bracket's scale. A sweep spread over cycles keeps it between them.

@@ -112,6 +112,46 @@ fn xh(f: Csp) -> Xh {
 }
 
 /// |z| ≤ Z_SMALL, through C, Sn, Sp (the cross-check of `small`).
+/// Replaces an exact zero divisor by a tiny one of the given scale (a pivot that is zero to
+/// the last bit: λ on a node's conjugate point; counted as non-negative).
+#[inline(always)]
+pub(super) fn nonzero(x: f64, scale: f64) -> f64 {
+    if x == 0.0 {
+        f64::MIN_POSITIVE.max(f64::EPSILON * f64::EPSILON * scale.abs())
+    } else {
+        x
+    }
+}
+
+/// Negative eigenvalues of a symmetric 2 × 2 matrix from its determinant and trace.
+#[inline(always)]
+pub(super) fn neg2(det: f64, tr: f64) -> u32 {
+    if det < 0.0 {
+        1
+    } else if tr < 0.0 {
+        // det > 0: both negative; det = 0: one zero, one negative.
+        if det > 0.0 {
+            2
+        } else {
+            1
+        }
+    } else {
+        0
+    }
+}
+
+/// Δᵀ S Δ for symmetric S = [s11, s12, s22] and the rotation Δ = [[c, −s], [s, c]].
+#[inline(always)]
+pub(super) fn rotate(m: [f64; 3], c: f64, s: f64) -> [f64; 3] {
+    let (cc, ss, cs) = (c * c, s * s, c * s);
+    let x = cs * (m[2] - m[0]);
+    [
+        cc * m[0] + 2.0 * cs * m[1] + ss * m[2],
+        x + (cc - ss) * m[1],
+        ss * m[0] - 2.0 * cs * m[1] + cc * m[2],
+    ]
+}
+
 #[cfg(test)]
 pub(super) fn small_div(z: f64) -> Xh {
     xh(small_csp(z))

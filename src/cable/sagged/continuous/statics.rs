@@ -18,7 +18,7 @@
 //! into (h, up) at the end. No blocked eigenvalue lies below 0. This is the same model as `propagate::eval` at λ = 0
 //! (one Riccati step per node there, a sum here); they agree to rounding (tested).
 
-use super::propagate::rotate;
+use super::kernel::rotate;
 use super::Segment;
 use crate::cable::sagged::SagChainEval;
 

@@ -15,7 +15,7 @@
 //! b > 0).
 
 use super::kernel;
-use super::propagate::{neg2, nonzero, rotate};
+use super::kernel::{neg2, nonzero, rotate};
 use super::Segment;
 
 /// One direction's transfer coefficients (a, b, c) and their λ-derivatives, and √z.

@@ -1,7 +1,7 @@
 //! `analyze --compare-dense`: the structured K modes against the dense spectrum of the
 //! same models, both timed in one process.
 
-use super::analysis::{dense_bound, AnalyzeError, DenseComparison};
+use super::{dense_bound, AnalyzeError, DenseComparison};
 use crate::estimator::Estimator;
 use crate::modal::Mode;
 use std::time::Instant;

@@ -12,17 +12,21 @@
 //! loop, so the test harness's other threads are not charged) and no
 //! resident-memory growth. Prints the count of each status and the latency percentiles.
 //!
-//! `cargo test --test soak` runs the short soak (2 × 20 000 cycles);
-//! `cargo test --release -p cablevib-service --test ipc soak -- --ignored --nocapture` runs the long one
+//! Its own test binary: it measures the whole process's resident memory, which tests running
+//! beside it in one binary would grow. `cargo test --release --test soak` runs the short soak
+//! (2 × 20 000 cycles); `cargo test --release --test soak -- --ignored --nocapture` runs the long one
 //! (10⁶ cycles of the paper's spatial robot, FEM N = 40, plus 2·10⁵ with the catenary
 //! element); its figures are recorded in docs/hard-cases.md.
+
+// The allocation counts need the counting allocator.
+cablevib_testkit::count_allocations!();
 
 use cablevib::alloc_count::{thread_allocated_bytes, thread_allocations};
 use cablevib::estimator::Tmin;
 use cablevib::estimator::{Estimator, Status};
 use cablevib::kinematics::Pose;
 use cablevib::scene::{ElementKind, Scene};
-use cablevib_service::stats::percentile;
+use cablevib::stats::percentile;
 use cablevib_testkit::Rng;
 use nalgebra::Vector3;
 use std::time::Instant;
@@ -336,7 +340,7 @@ fn report(label: &str, r: &Report) -> Vec<String> {
     );
     for (code, &n) in r.status.iter().enumerate() {
         if n > 0 {
-            let name = cablevib_ipc::StatusCode::from_u32(code as u32)
+            let name = cablevib::status::StatusCode::from_u32(code as u32)
                 .map(|s| s.as_str())
                 .unwrap_or("?");
             eprintln!(
@@ -421,7 +425,7 @@ fn soak_short() {
 }
 
 #[test]
-#[ignore = "long soak (10^6 cycles): cargo test --release -p cablevib-service --test ipc soak -- --ignored --nocapture"]
+#[ignore = "long soak (10^6 cycles): cargo test --release --test soak -- --ignored --nocapture"]
 fn soak_long_1m_cycles() {
     let s = Scene::default_scene();
     let mut problems = report("long spatial fem N=40", &soak(&s, 1_000_000, 0x50A6_1000));

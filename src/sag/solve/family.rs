@@ -8,8 +8,8 @@
 //! when T_e falls below the target the taut solution is bracketed and bisected; when T_e
 //! rises first, the minimum is refined by golden section and the target is TooSlack.
 
-use super::solve::{CableChord, SagError, SagInfo, SagParams};
-use super::Catenary;
+use super::{CableChord, SagError, SagInfo, SagParams};
+use crate::sag::Catenary;
 
 /// Ratio of successive lengths of the march along the family.
 const MARCH_FACTOR: f64 = 1.03;

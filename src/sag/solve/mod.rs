@@ -18,7 +18,9 @@
 //! A vertical chord (span 0) is solved in closed form: H = 0, and ∫(1 + T/EA) ds = |Z|
 //! with T linear in s is a quadratic in L0.
 
-use super::{family, Catenary};
+use super::Catenary;
+
+mod family;
 
 /// Largest change of the end angle in one Newton step, rad.
 const MAX_ANGLE_STEP_RAD: f64 = 0.25;

@@ -10,6 +10,8 @@
 //! process: both times, their ratio, and the largest relative difference of the K
 //! eigenvalues next to the dense solver's own bound ε·λ_max/λ.
 
+mod compare;
+
 use crate::estimator::{check_mechanism, reference_analysis_at, resolve_auto, Estimator, Tmin};
 use crate::kinematics::Pose;
 use crate::modal::{dense_relative_accuracy, lambda_to_hz, Mode};
@@ -292,7 +294,7 @@ fn structured(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, An
     r.solve_seconds = secs;
     fill_sag(&mut r, &est);
     if opts.compare_dense {
-        let c = super::analysis_compare::compare(&mut est, &modes)?;
+        let c = compare::compare(&mut est, &modes)?;
         r.dense_seconds = Some(c.dense_seconds);
         r.compare_dense = Some(c);
     }
