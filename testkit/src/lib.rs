@@ -134,7 +134,9 @@ impl Rng {
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
         z ^ (z >> 31)
     }
-    /// Uniform in [0, 1).
+    /// Uniform in [0, 1). (Not an `Iterator`: the tests call it as a plain method, a stream
+    /// without end.)
+    #[allow(clippy::should_implement_trait)]
     pub fn next(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
     }
