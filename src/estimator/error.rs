@@ -217,9 +217,10 @@ pub enum BuildError {
     Params(#[from] super::ParamsError),
 }
 
-/// Errors of the reference pipeline.
+/// Errors of the offline reference pipeline ([`reference_analysis`](super::reference_analysis)
+/// and the pose model it is built on).
 #[derive(Debug, thiserror::Error)]
-pub enum AnalysisError {
+pub enum ReferenceError {
     /// Kinematics.
     #[error(transparent)]
     Kinematics(#[from] KinematicsError),

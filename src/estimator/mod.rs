@@ -60,7 +60,7 @@ mod sag_check;
 mod t_min;
 
 pub use auto::{resolve_auto, AutoChoice};
-pub use error::{AnalysisError, BuildError, EstimatorError, InputError, TminQueryError};
+pub use error::{BuildError, EstimatorError, InputError, ReferenceError, TminQueryError};
 pub use estimate::{Estimate, Status};
 pub use forward::EndEffector;
 pub use inverse::{TminAnswer, MAX_EVALUATIONS as TMIN_QUERY_MAX_EVALUATIONS};

@@ -4,7 +4,7 @@
 //! ([`super::reference_analysis`]) and `cablevib modes` read it. Allocates.
 
 use super::forward::{fill_models, placeholder_model, update_geometry, EndEffector};
-use super::{resolve_auto, AnalysisError, Tmin};
+use super::{resolve_auto, ReferenceError, Tmin};
 use crate::cable::{up_frame, CableError, CableModel};
 use crate::kinematics::{Geometry, Pose};
 use crate::modal::{self, ModalSolver};
@@ -42,7 +42,7 @@ pub struct PoseModel {
 impl PoseModel {
     /// The model of `scene` at its own pose (`ee_position_m`, `ee_orientation_wxyz`) and
     /// each cable's own lower bound (`Tmin::Scene`).
-    pub fn new(scene: &Scene) -> Result<PoseModel, AnalysisError> {
+    pub fn new(scene: &Scene) -> Result<PoseModel, ReferenceError> {
         let pose = Pose {
             position_m: scene.ee_position_m,
             orientation_wxyz: scene.ee_orientation_wxyz,
@@ -52,10 +52,10 @@ impl PoseModel {
 
     /// The model of `scene` at `pose` with the lower bounds `t_min` (each cable's upper
     /// bound the scene's), the tensions of the Clarabel reference.
-    pub fn at(scene: &Scene, pose: &Pose, t_min: Tmin<'_>) -> Result<PoseModel, AnalysisError> {
+    pub fn at(scene: &Scene, pose: &Pose, t_min: Tmin<'_>) -> Result<PoseModel, ReferenceError> {
         let scene = if scene.model.element == ElementKind::Auto {
             resolve_auto(scene)
-                .map_err(|e| AnalysisError::Auto(e.to_string()))?
+                .map_err(|e| ReferenceError::Auto(e.to_string()))?
                 .0
         } else {
             scene.clone()

@@ -2,7 +2,7 @@
 //! a dense generalized eigensolver for every frequency; and the structured solver run once.
 //! Allocates: for tests, sweeps and the CLI, never inside the cycle.
 
-use super::{AnalysisError, BuildError, Estimate, Estimator, PoseModel, Status, Tmin};
+use super::{BuildError, Estimate, Estimator, PoseModel, ReferenceError, Status, Tmin};
 use crate::kinematics::Pose;
 use crate::modal;
 use crate::scene::Scene;
@@ -32,7 +32,7 @@ pub fn reference_analysis(
     position_m: &Vector3<f64>,
     t_min: Tmin<'_>,
     vectors: bool,
-) -> Result<ReferenceAnalysis, AnalysisError> {
+) -> Result<ReferenceAnalysis, ReferenceError> {
     let pose = Pose {
         position_m: *position_m,
         orientation_wxyz: scene.ee_orientation_wxyz,
@@ -46,7 +46,7 @@ pub fn reference_analysis_at(
     pose: &Pose,
     t_min: Tmin<'_>,
     vectors: bool,
-) -> Result<ReferenceAnalysis, AnalysisError> {
+) -> Result<ReferenceAnalysis, ReferenceError> {
     let pm = PoseModel::at(scene, pose, t_min)?;
     let (k, m) = pm.dense()?;
     let dof = k.nrows();

@@ -10,7 +10,7 @@
 //! testkit/src/hard_cases.rs.
 
 use cablevib::estimator::Tmin;
-use cablevib::estimator::{reference_analysis, AnalysisError, Estimator, Status};
+use cablevib::estimator::{reference_analysis, Estimator, ReferenceError, Status};
 use cablevib::kinematics::Pose;
 use cablevib::modal::lambda_to_hz;
 use cablevib::scene::{ElementKind, Scene, MAX_CABLES, T_MIN_FLOOR_N};
@@ -393,7 +393,7 @@ fn poses_approaching_an_anchor() {
                     assert!(
                         matches!(
                             r,
-                            Err(AnalysisError::Tension(TensionError::Infeasible { .. }))
+                            Err(ReferenceError::Tension(TensionError::Infeasible { .. }))
                         ),
                         "{label}: dense {:?}",
                         r.map(|r| r.modes.lambda[0])
@@ -425,7 +425,7 @@ fn poses_approaching_an_anchor() {
                 assert!(
                     matches!(
                         reference_analysis(&s, &p, Tmin::Scene, false),
-                        Err(AnalysisError::Kinematics(_))
+                        Err(ReferenceError::Kinematics(_))
                     ),
                     "{label}: dense accepted the pose"
                 );

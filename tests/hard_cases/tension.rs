@@ -8,7 +8,7 @@
 //! testkit/src/hard_cases.rs.
 
 use cablevib::estimator::Tmin;
-use cablevib::estimator::{reference_analysis, AnalysisError, Estimator, EstimatorParams, Status};
+use cablevib::estimator::{reference_analysis, Estimator, EstimatorParams, ReferenceError, Status};
 use cablevib::kinematics::{Geometry, Pose};
 use cablevib::scene::Scene;
 use cablevib::tension::{clarabel_reference, TensionError, TensionParams, TensionSolver};
@@ -218,7 +218,7 @@ fn structure_matrix_losing_rank() {
                     assert!(
                         matches!(
                             r,
-                            Err(AnalysisError::Tension(TensionError::Infeasible { .. }))
+                            Err(ReferenceError::Tension(TensionError::Infeasible { .. }))
                         ),
                         "{label}: real-time infeasible, dense {:?}",
                         r.map(|r| r.tensions_n)
