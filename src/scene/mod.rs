@@ -19,6 +19,7 @@ use serde::Deserialize;
 use std::path::Path;
 
 mod bounds;
+mod damping;
 use crate::input_file::{InputError, MAX_SCENE_BYTES};
 
 mod load;
@@ -26,6 +27,9 @@ mod parse;
 mod validate;
 
 pub use bounds::{check_t_min, is_valid_t_min, TminRangeError, T_MIN_FLOOR_N};
+pub use damping::{
+    Damping, MAX_LOSS_FACTOR, MAX_MODAL_RATIO, MAX_RAYLEIGH_ALPHA_PER_S, MAX_RAYLEIGH_BETA_S,
+};
 
 /// The embedded default scene: the paper's spatial robot (Tables 5-6).
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../../scenes/spatial_paper.toml");
@@ -220,6 +224,8 @@ pub struct Scene {
     pub ee_inertia_kg_m2: nalgebra::Matrix3<f64>,
     /// Default orientation, unit quaternion [w, x, y, z].
     pub ee_orientation_wxyz: [f64; 4],
+    /// Damping (`[damping]`); [`Damping::None`] without the table.
+    pub damping: Damping,
 }
 
 impl Scene {

@@ -23,6 +23,8 @@ pub(super) struct RawScene {
     pub(super) model: RawModel,
     #[serde(default)]
     pub(super) effects: Option<RawEffects>,
+    #[serde(default)]
+    pub(super) damping: Option<RawDamping>,
     pub(super) cables: Vec<RawCable>,
 }
 
@@ -34,6 +36,16 @@ pub(super) struct RawEffects {
     pub(super) cable_mass: Option<bool>,
     pub(super) sag: Option<bool>,
     pub(super) rotation: Option<bool>,
+}
+
+/// `[damping]`: one kind at a time (checked in `validate`).
+#[derive(Debug, Deserialize, Default, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawDamping {
+    pub(super) loss_factor: Option<f64>,
+    pub(super) rayleigh_alpha: Option<f64>,
+    pub(super) rayleigh_beta: Option<f64>,
+    pub(super) modal_ratio: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -5,11 +5,12 @@
 
 use super::bounds::{check_t_min, TminRangeError};
 use super::parse::{
-    RawArray, RawCable, RawCableDefaults, RawEffects, RawEndEffector, RawModel, RawScene,
-    RawTension,
+    RawArray, RawCable, RawCableDefaults, RawDamping, RawEffects, RawEndEffector, RawModel,
+    RawScene, RawTension,
 };
 use super::{
-    Cable, ElementKind, ModelSettings, Scene, SceneError, MAX_CABLES, MAX_ELEMENTS_PER_CABLE,
+    Cable, Damping, ElementKind, ModelSettings, Scene, SceneError, MAX_CABLES,
+    MAX_ELEMENTS_PER_CABLE,
 };
 use crate::input_file::message_number;
 use nalgebra::{Matrix3, Vector3};
@@ -139,6 +140,7 @@ pub(super) fn scene_from_raw(raw: RawScene, file: &str) -> Result<Scene, SceneEr
     validate_rigid_cable_count(&ck, rigid, raw.cables.len())?;
     let geometric_stiffness = validate_geometric_stiffness(&ck, fx, element)?;
     validate_cable_count(&ck, raw.cables.len())?;
+    let damping = validate_damping(&ck, raw.damping)?;
     let at = CableContext {
         defaults: raw.cable,
         ee_pos,
@@ -173,6 +175,80 @@ pub(super) fn scene_from_raw(raw: RawScene, file: &str) -> Result<Scene, SceneEr
         rigid,
         ee_inertia_kg_m2: inertia,
         ee_orientation_wxyz: orientation,
+        damping,
+    })
+}
+
+/// `[damping]`: at most one kind; each value finite, ≥ 0 and below its bound (ζ < 1 and
+/// η < 2: critical damping is not a structure's; Rayleigh α, β bounded against unit slips).
+fn validate_damping(ck: &Checker, raw: Option<RawDamping>) -> Result<Damping, SceneError> {
+    let Some(d) = raw else {
+        return Ok(Damping::None);
+    };
+    let rayleigh = d.rayleigh_alpha.is_some() || d.rayleigh_beta.is_some();
+    let kinds = [d.loss_factor.is_some(), rayleigh, d.modal_ratio.is_some()];
+    match kinds.iter().filter(|&&k| k).count() {
+        0 => {
+            return Err(ck.inv(
+                "damping",
+                "an empty [damping] table: give loss_factor, rayleigh_alpha/rayleigh_beta or modal_ratio (or drop the table for no damping)".into(),
+            ))
+        }
+        1 => {}
+        _ => {
+            return Err(ck.inv(
+                "damping",
+                "give one kind of damping: loss_factor, rayleigh_alpha/rayleigh_beta or modal_ratio, not several".into(),
+            ))
+        }
+    }
+    let bounded = |key: &str, x: f64, max: f64, what: &str| -> Result<f64, SceneError> {
+        if x.is_finite() && (0.0..max).contains(&x) {
+            Ok(x)
+        } else {
+            Err(ck.inv(
+                key,
+                format!(
+                    "{} must be finite, ≥ 0 and < {} ({what})",
+                    message_number(x),
+                    message_number(max)
+                ),
+            ))
+        }
+    };
+    if let Some(eta) = d.loss_factor {
+        let eta = bounded(
+            "damping.loss_factor",
+            eta,
+            super::MAX_LOSS_FACTOR,
+            "η/2 = 1 is critical damping",
+        )?;
+        return Ok(Damping::LossFactor { eta });
+    }
+    if let Some(zeta) = d.modal_ratio {
+        let zeta = bounded(
+            "damping.modal_ratio",
+            zeta,
+            super::MAX_MODAL_RATIO,
+            "a fraction of critical damping; 1 is critical",
+        )?;
+        return Ok(Damping::ModalRatio { zeta });
+    }
+    let alpha_per_s = bounded(
+        "damping.rayleigh_alpha",
+        d.rayleigh_alpha.unwrap_or(0.0),
+        super::MAX_RAYLEIGH_ALPHA_PER_S,
+        "1/s",
+    )?;
+    let beta_s = bounded(
+        "damping.rayleigh_beta",
+        d.rayleigh_beta.unwrap_or(0.0),
+        super::MAX_RAYLEIGH_BETA_S,
+        "s",
+    )?;
+    Ok(Damping::Rayleigh {
+        alpha_per_s,
+        beta_s,
     })
 }
 
@@ -602,6 +678,46 @@ mod tests {
         Scene::from_toml_str(text, "t.toml")
             .unwrap_err()
             .to_string()
+    }
+
+    #[test]
+    fn damping_one_kind_within_bounds() {
+        let base = DEFAULT_SCENE_TOML;
+        let with = |d: &str| Scene::from_toml_str(&format!("{base}\n[damping]\n{d}\n"), "t.toml");
+        assert_eq!(Scene::default_scene().damping, Damping::None);
+        assert_eq!(
+            with("loss_factor = 0.02").unwrap().damping,
+            Damping::LossFactor { eta: 0.02 }
+        );
+        assert_eq!(
+            with("modal_ratio = 0.01").unwrap().damping,
+            Damping::ModalRatio { zeta: 0.01 }
+        );
+        let r = with("rayleigh_beta = 1e-4").unwrap().damping;
+        assert_eq!(
+            r,
+            Damping::Rayleigh {
+                alpha_per_s: 0.0,
+                beta_s: 1e-4
+            }
+        );
+        // ζ(ω) = α/(2ω) + βω/2: with β alone, 1e-4 · 100 / 2.
+        assert_eq!(r.modal_ratio(100.0), 5e-3);
+        for (bad, key) in [
+            ("modal_ratio = 1.0", "damping.modal_ratio"),
+            ("modal_ratio = -0.01", "damping.modal_ratio"),
+            ("modal_ratio = nan", "damping.modal_ratio"),
+            ("loss_factor = 2.5", "damping.loss_factor"),
+            ("rayleigh_alpha = inf", "damping.rayleigh_alpha"),
+            ("rayleigh_beta = -1e-3", "damping.rayleigh_beta"),
+            ("loss_factor = 0.02\nmodal_ratio = 0.01", "one kind"),
+            ("", "empty [damping]"),
+        ] {
+            let e = with(bad).unwrap_err().to_string();
+            assert!(e.contains(key) && !e.contains('\n'), "{bad}: {e}");
+        }
+        let e = with("zeta = 0.01").unwrap_err().to_string();
+        assert!(e.contains("zeta"), "unknown keys are refused: {e}");
     }
 
     #[test]
