@@ -15,6 +15,7 @@
 //! | [`schedule`] | T_min schedules (replay); trajectories are [`crate::trajectory`]'s |
 //! | [`stats`] | preallocated rings and percentiles |
 //! | [`demo`](mod@demo) | `cablevib demo`: service, replay and controller in one process |
+//! | [`hold`] | holding f1: the T_min set-point a controller publishes from the margin answers |
 //! | [`bench`](mod@bench) | `cablevib bench-ipc`: pose-published → estimate-received latency |
 //!
 //! # Waiting: spin or event
@@ -32,6 +33,8 @@
 
 pub mod bench;
 pub mod demo;
+mod demo_hold;
+pub mod hold;
 pub mod ports;
 pub mod rt;
 pub mod schedule;

@@ -1,0 +1,538 @@
+//! Holding f1: the T_min set-point a controller publishes from the service's margin answers
+//! so that the first natural frequency stays at or above a requirement (`--hold-f1 HZ` of the
+//! example controllers and of `cablevib demo`).
+//!
+//! The margin answer carries f1 at the latest pose and `t_min_required_n`, the smallest
+//! uniform T_min at which f1 reaches the *requested* frequency (computed beside the loop, at a
+//! pose `t_min_required_age_cycles` estimates old). [`F1Hold`] turns a sequence of answers
+//! into set-points:
+//!
+//! - The controller asks for the T_min of `required + guard` ([`HoldParams::request_hz`]): the
+//!   guard covers the pose's motion between the pose the answer's T_min was computed at and
+//!   the poses the set-point applies to.
+//! - **Raise** (f1 < required + guard): the set-point becomes the answer's T_min at once (a
+//!   step: f1 below the requirement is what the hold exists to end; a ramp would leave it
+//!   below for the ramp's duration). An answer older than the pose it comes with never
+//!   lowers the set-point while raising (it is the T_min of an earlier pose); a fresh one
+//!   (age 0) may, since f1 is not monotone in T_min (docs/inverse.md) and the answer is the
+//!   T_min that reaches the requirement at this very pose.
+//! - **Relax** (f1 ≥ required + relax band): the set-point falls towards the answer's T_min at
+//!   most [`HoldParams::relax_rate_n_per_s`] per second of the service's clock (the answers'
+//!   `timestamp_ns`), so the cables' tensions fall smoothly.
+//! - **Hold** in between: the hysteresis band (guard, relax band) keeps the set-point from
+//!   chattering between raise and relax as f1 moves about the requirement.
+//! - The set-point stays within [floor, ceiling]: the floor is the T_min the hold relaxes to
+//!   (the scene's), the ceiling the smallest of the cables' t_max (a uniform set-point above a
+//!   cable's t_max is refused by the service). An unreachable requirement (`t_min_required_n`
+//!   = +∞) or an answer above the ceiling gives the ceiling, with the action saying so.
+//! - Answers that are not ok, or carry no T_min yet (NaN), change nothing.
+//!
+//! One implementation, used by `cablevib demo` and `service/examples/controller.rs`;
+//! `examples/python/hold_f1.py` mirrors it and `examples/python/hold_f1_cases.json` (written
+//! and checked by this module's tests, checked by python/tests/test_hold_f1.py) holds a fixed
+//! sequence both must reproduce.
+
+use cablevib_ipc::{MarginResponse, REQUIRED_F1_MAX_HZ, REQUIRED_F1_MIN_HZ};
+
+/// Default guard above the requirement, Hz (`--hold-guard-hz`): on the paper's circle (4 s per
+/// revolution) f1 at a fixed T_min moves by less than 0.5 Hz/s, and the answer's T_min is a
+/// few to ~35 ms old (docs/inverse.md), so f1 drifts by well under 0.02 Hz before the next
+/// answer corrects it; 0.05 Hz leaves a factor of 2.5 for a loaded machine.
+pub const DEFAULT_GUARD_HZ: f64 = 0.05;
+/// Default relax band, Hz (`--hold-relax-band-hz`): relax only when f1 is at least this far
+/// above the requirement. It must exceed the guard; 0.15 Hz is three guards, so a relax step
+/// never brings f1 straight back under the guard.
+pub const DEFAULT_RELAX_BAND_HZ: f64 = 0.15;
+/// Default relax rate, N/s (`--hold-relax-n-per-s`): 20 N/s takes a 60 N set-point from
+/// 120 N back to 60 N in 3 s, slow against the robot's modes (periods of 0.1 s and shorter).
+pub const DEFAULT_RELAX_RATE_N_PER_S: f64 = 20.0;
+/// Largest guard or relax band, Hz (a band wider than any requirement is a typo).
+pub const MAX_BAND_HZ: f64 = 1e3;
+/// Largest relax rate, N/s (above it the "rate limit" limits nothing at any cycle rate).
+pub const MAX_RELAX_RATE_N_PER_S: f64 = 1e9;
+
+/// What the hold acts on. [`HoldParams::new`] checks every value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HoldParams {
+    /// The first natural frequency to hold, Hz.
+    pub required_hz: f64,
+    /// Guard above the requirement, Hz: the margin query asks for `required + guard`.
+    pub guard_hz: f64,
+    /// The set-point relaxes only when f1 ≥ required + this, Hz (> guard).
+    pub relax_band_hz: f64,
+    /// Largest decrease of the set-point per second, N/s.
+    pub relax_rate_n_per_s: f64,
+    /// Lowest set-point (the T_min the hold relaxes to: the scene's), N.
+    pub floor_n: f64,
+    /// Highest set-point (the smallest of the cables' t_max), N.
+    pub ceiling_n: f64,
+}
+
+/// A bad hold parameter (one line).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum HoldError {
+    /// A value outside its range.
+    #[error("{what} {value:?} must be {bound}")]
+    OutOfRange {
+        /// The option or field.
+        what: &'static str,
+        /// The value given.
+        value: f64,
+        /// The range it must be in.
+        bound: String,
+    },
+}
+
+fn check(what: &'static str, value: f64, ok: bool, bound: String) -> Result<(), HoldError> {
+    if ok && value.is_finite() {
+        Ok(())
+    } else {
+        Err(HoldError::OutOfRange { what, value, bound })
+    }
+}
+
+impl HoldParams {
+    /// Holds `required_hz` between `floor_n` and `ceiling_n` with the default guard, band and
+    /// rate.
+    pub fn new(required_hz: f64, floor_n: f64, ceiling_n: f64) -> Result<HoldParams, HoldError> {
+        HoldParams {
+            required_hz,
+            guard_hz: DEFAULT_GUARD_HZ,
+            relax_band_hz: DEFAULT_RELAX_BAND_HZ,
+            relax_rate_n_per_s: DEFAULT_RELAX_RATE_N_PER_S,
+            floor_n,
+            ceiling_n,
+        }
+        .checked()
+    }
+
+    /// `self` when every value is in range, else the first one that is not.
+    pub fn checked(self) -> Result<HoldParams, HoldError> {
+        let p = self;
+        check(
+            "hold-f1 (Hz)",
+            p.required_hz,
+            p.required_hz >= REQUIRED_F1_MIN_HZ && p.required_hz <= REQUIRED_F1_MAX_HZ,
+            format!("in [{REQUIRED_F1_MIN_HZ}, {REQUIRED_F1_MAX_HZ}] Hz"),
+        )?;
+        check(
+            "hold guard (Hz)",
+            p.guard_hz,
+            (0.0..=MAX_BAND_HZ).contains(&p.guard_hz)
+                && p.required_hz + p.guard_hz <= REQUIRED_F1_MAX_HZ,
+            format!("in [0, {MAX_BAND_HZ}] Hz, with hold-f1 + guard ≤ {REQUIRED_F1_MAX_HZ} Hz"),
+        )?;
+        check(
+            "hold relax band (Hz)",
+            p.relax_band_hz,
+            p.relax_band_hz > p.guard_hz && p.relax_band_hz <= MAX_BAND_HZ,
+            format!("> the guard ({} Hz) and ≤ {MAX_BAND_HZ} Hz", p.guard_hz),
+        )?;
+        check(
+            "hold relax rate (N/s)",
+            p.relax_rate_n_per_s,
+            p.relax_rate_n_per_s > 0.0 && p.relax_rate_n_per_s <= MAX_RELAX_RATE_N_PER_S,
+            format!("in (0, {MAX_RELAX_RATE_N_PER_S}] N/s"),
+        )?;
+        check(
+            "hold ceiling (N)",
+            p.ceiling_n,
+            p.ceiling_n > 0.0,
+            "finite and > 0 N (the smallest cable t_max)".into(),
+        )?;
+        check(
+            "hold floor (N)",
+            p.floor_n,
+            p.floor_n > 0.0 && p.floor_n <= p.ceiling_n,
+            format!(
+                "in (0, {}] N (the ceiling, the smallest cable t_max)",
+                p.ceiling_n
+            ),
+        )?;
+        Ok(p)
+    }
+
+    /// The frequency the margin query asks for, Hz: required + guard.
+    pub fn request_hz(&self) -> f64 {
+        self.required_hz + self.guard_hz
+    }
+}
+
+/// The parts of a margin answer the hold reads (the fields of [`MarginResponse`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HoldInput {
+    /// The answer's status is ok.
+    pub ok: bool,
+    /// f1 at the latest pose, Hz.
+    pub f1_hz: f64,
+    /// The smallest T_min reaching [`HoldParams::request_hz`], N (+∞ unreachable, NaN unknown).
+    pub t_min_required_n: f64,
+    /// How many estimates old `t_min_required_n` is.
+    pub t_min_required_age_cycles: u32,
+    /// The service's clock when answering, ns.
+    pub timestamp_ns: u64,
+}
+
+impl From<&MarginResponse> for HoldInput {
+    fn from(r: &MarginResponse) -> HoldInput {
+        HoldInput {
+            ok: r.is_ok(),
+            f1_hz: r.f1_hz,
+            t_min_required_n: r.t_min_required_n,
+            t_min_required_age_cycles: r.t_min_required_age_cycles,
+            timestamp_ns: r.timestamp_ns,
+        }
+    }
+}
+
+/// What one answer did to the set-point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HoldAction {
+    /// Not ok, or no T_min known yet: nothing changes.
+    NoAnswer,
+    /// f1 within the band: the set-point stays.
+    Held,
+    /// f1 under required + guard: the set-point became the answer's T_min.
+    Raised,
+    /// f1 ≥ required + relax band: the set-point fell towards the answer's T_min (rate-limited).
+    Relaxed,
+    /// The answer's T_min is above the ceiling, or the requirement is unreachable: the
+    /// set-point is the ceiling (f1 may stay below the requirement).
+    Ceiling,
+}
+
+impl HoldAction {
+    /// Lower-case name (the Python mirror's).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            HoldAction::NoAnswer => "no_answer",
+            HoldAction::Held => "held",
+            HoldAction::Raised => "raised",
+            HoldAction::Relaxed => "relaxed",
+            HoldAction::Ceiling => "ceiling",
+        }
+    }
+}
+
+/// The hold's state: the set-point in force and the time of the last answer.
+#[derive(Debug, Clone)]
+pub struct F1Hold {
+    params: HoldParams,
+    setpoint_n: f64,
+    last_timestamp_ns: Option<u64>,
+}
+
+impl F1Hold {
+    /// A hold starting at the floor (the scene's T_min, in force before any set-point).
+    pub fn new(params: HoldParams) -> F1Hold {
+        F1Hold {
+            setpoint_n: params.floor_n,
+            params,
+            last_timestamp_ns: None,
+        }
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &HoldParams {
+        &self.params
+    }
+
+    /// The set-point in force, N.
+    pub fn setpoint_n(&self) -> f64 {
+        self.setpoint_n
+    }
+
+    /// Takes one margin answer; returns what it did. The set-point changed (and should be
+    /// published) when [`Self::setpoint_n`] differs from before the call.
+    pub fn on_answer(&mut self, a: &HoldInput) -> HoldAction {
+        let p = self.params;
+        let dt_s = match self.last_timestamp_ns {
+            Some(last) => a.timestamp_ns.saturating_sub(last) as f64 * 1e-9,
+            None => 0.0,
+        };
+        self.last_timestamp_ns = Some(a.timestamp_ns.max(self.last_timestamp_ns.unwrap_or(0)));
+        let t = a.t_min_required_n;
+        if !a.ok || t.is_nan() || !a.f1_hz.is_finite() || t <= 0.0 {
+            return HoldAction::NoAnswer;
+        }
+        let above_ceiling = t > p.ceiling_n;
+        let target = t.clamp(p.floor_n, p.ceiling_n);
+        if a.f1_hz < p.required_hz + p.guard_hz {
+            self.setpoint_n = if a.t_min_required_age_cycles == 0 {
+                target
+            } else {
+                self.setpoint_n.max(target)
+            };
+            if above_ceiling {
+                HoldAction::Ceiling
+            } else {
+                HoldAction::Raised
+            }
+        } else if a.f1_hz >= p.required_hz + p.relax_band_hz && target < self.setpoint_n {
+            self.setpoint_n = target.max(self.setpoint_n - p.relax_rate_n_per_s * dt_s);
+            HoldAction::Relaxed
+        } else {
+            HoldAction::Held
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params() -> HoldParams {
+        HoldParams::new(9.5, 60.0, 350.0).unwrap()
+    }
+
+    fn answer(f1_hz: f64, t: f64, age: u32, ms: u64) -> HoldInput {
+        HoldInput {
+            ok: true,
+            f1_hz,
+            t_min_required_n: t,
+            t_min_required_age_cycles: age,
+            timestamp_ns: ms * 1_000_000,
+        }
+    }
+
+    /// Below the guard the set-point steps to the answer's T_min at once; an old answer never
+    /// lowers it while raising, a fresh one does (f1 is not monotone in T_min).
+    #[test]
+    fn raises_at_once_to_the_answer() {
+        let mut h = F1Hold::new(params());
+        assert_eq!(h.on_answer(&answer(9.0, 95.0, 3, 0)), HoldAction::Raised);
+        assert_eq!(h.setpoint_n(), 95.0);
+        // Within the guard (9.5 ≤ f1 < 9.55) is still a raise.
+        assert_eq!(h.on_answer(&answer(9.52, 99.0, 3, 1)), HoldAction::Raised);
+        assert_eq!(h.setpoint_n(), 99.0);
+        assert_eq!(h.on_answer(&answer(9.4, 90.0, 2, 2)), HoldAction::Raised);
+        assert_eq!(
+            h.setpoint_n(),
+            99.0,
+            "an old, lower answer does not lower it"
+        );
+        assert_eq!(h.on_answer(&answer(9.4, 90.0, 0, 3)), HoldAction::Raised);
+        assert_eq!(
+            h.setpoint_n(),
+            90.0,
+            "a fresh answer is the T_min of this pose"
+        );
+    }
+
+    /// Relaxing: only when f1 ≥ required + band, by at most rate·dt (the answers' clock), never
+    /// below the answer's T_min or the floor; inside the band nothing moves (hysteresis).
+    #[test]
+    fn relaxes_at_the_rate_only_above_the_band() {
+        let mut h = F1Hold::new(params());
+        h.on_answer(&answer(9.0, 120.0, 1, 0));
+        assert_eq!(h.setpoint_n(), 120.0);
+        // In the band [9.55, 9.65): held, whatever the answer's T_min.
+        assert_eq!(h.on_answer(&answer(9.6, 70.0, 1, 100)), HoldAction::Held);
+        assert_eq!(h.setpoint_n(), 120.0);
+        // Ample: 20 N/s × 0.5 s = 10 N.
+        assert_eq!(h.on_answer(&answer(9.8, 70.0, 1, 600)), HoldAction::Relaxed);
+        assert!((h.setpoint_n() - 110.0).abs() < 1e-12, "{}", h.setpoint_n());
+        // A long pause: the step stops at the answer's T_min.
+        assert_eq!(
+            h.on_answer(&answer(9.8, 70.0, 1, 60_000)),
+            HoldAction::Relaxed
+        );
+        assert_eq!(h.setpoint_n(), 70.0);
+        // An answer below the floor relaxes to the floor.
+        h.on_answer(&answer(9.8, 10.0, 1, 120_000));
+        assert_eq!(h.setpoint_n(), 60.0);
+        // At the floor, ample f1 holds.
+        assert_eq!(
+            h.on_answer(&answer(9.9, 10.0, 1, 130_000)),
+            HoldAction::Held
+        );
+        // A clock going back gives no relax step (dt = 0), never a negative one.
+        h.on_answer(&answer(9.0, 100.0, 1, 140_000));
+        h.on_answer(&answer(9.9, 70.0, 1, 100_000));
+        assert_eq!(h.setpoint_n(), 100.0);
+    }
+
+    /// An unreachable requirement, or a T_min above the smallest t_max, gives the ceiling.
+    #[test]
+    fn clamps_to_the_ceiling() {
+        let mut h = F1Hold::new(HoldParams::new(9.5, 60.0, 300.0).unwrap());
+        assert_eq!(h.on_answer(&answer(9.0, 320.0, 1, 0)), HoldAction::Ceiling);
+        assert_eq!(h.setpoint_n(), 300.0);
+        let mut h = F1Hold::new(params());
+        assert_eq!(
+            h.on_answer(&answer(9.0, f64::INFINITY, 1, 0)),
+            HoldAction::Ceiling
+        );
+        assert_eq!(h.setpoint_n(), 350.0);
+    }
+
+    /// Not ok, NaN (not known yet), a non-positive or non-finite f1: nothing changes.
+    #[test]
+    fn ignores_answers_without_a_t_min() {
+        let mut h = F1Hold::new(params());
+        let mut a = answer(9.0, 95.0, 1, 0);
+        a.ok = false;
+        assert_eq!(h.on_answer(&a), HoldAction::NoAnswer);
+        for (f1, t) in [(9.0, f64::NAN), (f64::NAN, 95.0), (9.0, -1.0), (9.0, 0.0)] {
+            assert_eq!(h.on_answer(&answer(f1, t, 1, 0)), HoldAction::NoAnswer);
+        }
+        assert_eq!(h.setpoint_n(), 60.0);
+    }
+
+    /// A fixed sequence of answers through every branch (raise, old and fresh answers,
+    /// band, relax at the rate and to the target, floor, ceiling, unreachable, not ok, NaN, a
+    /// clock going back), its set-points and actions written to
+    /// `examples/python/hold_f1_cases.json`, which python/tests/test_hold_f1.py runs through the
+    /// Python mirror: the file must be what this implementation produces
+    /// (`CABLEVIB_BLESS=1 cargo test --release -p cablevib-service --lib hold` rewrites it).
+    #[test]
+    fn the_python_mirror_s_cases_are_this_implementation_s() {
+        let p = HoldParams {
+            relax_rate_n_per_s: 25.0,
+            ..HoldParams::new(9.5, 60.0, 300.0).unwrap()
+        };
+        let mut inputs = vec![
+            answer(9.0, f64::NAN, u32::MAX, 0),
+            answer(9.1, 90.0, 4, 1),
+            answer(9.52, 92.5, 4, 2),
+            answer(9.4, 85.0, 3, 3),
+            answer(9.4, 85.0, 0, 4),
+            answer(9.6, 70.0, 2, 5),
+            answer(9.7, 70.0, 2, 105),
+            answer(9.7, 70.0, 2, 505),
+            answer(9.9, 50.0, 2, 5_000),
+            answer(9.9, 50.0, 2, 6_000),
+            answer(9.2, 310.0, 2, 6_001),
+            answer(9.8, 200.0, 2, 6_002),
+            answer(9.8, 200.0, 2, 7_002),
+            answer(9.0, f64::INFINITY, 1, 7_003),
+            answer(9.8, 65.0, 1, 7_000),
+            answer(9.8, 65.0, 1, 8_000),
+        ];
+        let mut not_ok = answer(8.0, 100.0, 1, 8_001);
+        not_ok.ok = false;
+        inputs.push(not_ok);
+        inputs.push(answer(f64::NAN, 100.0, 1, 8_002));
+        let num = |x: f64| {
+            if x.is_finite() {
+                serde_json::json!(x)
+            } else {
+                serde_json::json!(format!("{x}"))
+            }
+        };
+        let mut h = F1Hold::new(p);
+        let steps: Vec<serde_json::Value> = inputs
+            .iter()
+            .map(|a| {
+                let action = h.on_answer(a);
+                serde_json::json!({
+                    "ok": a.ok,
+                    "f1_hz": num(a.f1_hz),
+                    "t_min_required_n": num(a.t_min_required_n),
+                    "t_min_required_age_cycles": a.t_min_required_age_cycles,
+                    "timestamp_ns": a.timestamp_ns,
+                    "setpoint_n": h.setpoint_n(),
+                    "action": action.as_str(),
+                })
+            })
+            .collect();
+        let actions: std::collections::BTreeSet<&str> = steps
+            .iter()
+            .map(|s| s["action"].as_str().unwrap())
+            .collect();
+        assert_eq!(actions.len(), 5, "every action occurs: {actions:?}");
+        let doc = serde_json::json!({
+            "about": "F1Hold cases: service/src/hold.rs writes them, examples/python/hold_f1.py must reproduce them",
+            "params": {
+                "required_hz": p.required_hz,
+                "guard_hz": p.guard_hz,
+                "relax_band_hz": p.relax_band_hz,
+                "relax_rate_n_per_s": p.relax_rate_n_per_s,
+                "floor_n": p.floor_n,
+                "ceiling_n": p.ceiling_n,
+            },
+            "steps": steps,
+        });
+        let text = serde_json::to_string_pretty(&doc).unwrap() + "\n";
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../examples/python/hold_f1_cases.json"
+        );
+        if std::env::var_os("CABLEVIB_BLESS").is_some_and(|v| v == "1") {
+            std::fs::write(path, &text).unwrap();
+        }
+        let stored = std::fs::read_to_string(path).unwrap_or_default();
+        assert!(
+            stored == text,
+            "{path} is not what F1Hold produces; rewrite it with CABLEVIB_BLESS=1 cargo test \
+             --release -p cablevib-service --lib hold (and check the Python mirror)"
+        );
+    }
+
+    /// Bad parameters are one-line errors naming the value.
+    #[test]
+    fn bad_parameters_are_errors() {
+        let p = params();
+        for (bad, what) in [
+            (
+                HoldParams {
+                    required_hz: -1.0,
+                    ..p
+                },
+                "hold-f1",
+            ),
+            (
+                HoldParams {
+                    required_hz: f64::NAN,
+                    ..p
+                },
+                "hold-f1",
+            ),
+            (
+                HoldParams {
+                    guard_hz: -0.1,
+                    ..p
+                },
+                "guard",
+            ),
+            (
+                HoldParams {
+                    relax_band_hz: 0.05,
+                    ..p
+                },
+                "relax band",
+            ),
+            (
+                HoldParams {
+                    relax_rate_n_per_s: 0.0,
+                    ..p
+                },
+                "relax rate",
+            ),
+            (
+                HoldParams {
+                    relax_rate_n_per_s: f64::INFINITY,
+                    ..p
+                },
+                "relax rate",
+            ),
+            (
+                HoldParams {
+                    floor_n: 400.0,
+                    ..p
+                },
+                "floor",
+            ),
+            (
+                HoldParams {
+                    ceiling_n: f64::NAN,
+                    ..p
+                },
+                "ceiling",
+            ),
+        ] {
+            let e = bad.checked().unwrap_err().to_string();
+            assert!(e.contains(what) && !e.contains('\n'), "{e}");
+        }
+    }
+}
