@@ -6,8 +6,12 @@ hold_f1_cases.json next to this file is a fixed sequence of answers with the set
 actions the Rust implementation produces (its tests write and check the file);
 python/tests/test_hold_f1.py checks that this module reproduces them exactly.
 
-- raise (f1 < required + guard): the set-point becomes the answer's T_min at once; an answer
-  older than its pose (age > 0) never lowers it while raising, a fresh one (age 0) may;
+- raise (f1 < required + guard), at once: a fresh answer (age 0) sets the answer's T_min; an
+  older one the largest of the set-point, the answer's T_min and base * (request / f1)^2
+  (f1 ~ sqrt(T_min)), base the smaller of the set-point and the one before its last change
+  when the answer's pose is at most IN_FLIGHT_POSES after the pose that changed it, else the
+  set-point;
+- a tension_infeasible answer above the floor sends the set-point back to the floor;
 - relax (f1 >= required + relax band): towards the answer's T_min, at most
   relax_rate_n_per_s per second of the answers' timestamps;
 - hold in between; the set-point stays within [floor_n, ceiling_n] (+inf or a T_min above
@@ -17,11 +21,15 @@ python/tests/test_hold_f1.py checks that this module reproduces them exactly.
 import math
 
 # Defaults, as service/src/hold.rs.
-DEFAULT_GUARD_HZ = 0.05
-DEFAULT_RELAX_BAND_HZ = 0.15
+DEFAULT_GUARD_HZ = 0.1
+DEFAULT_RELAX_BAND_HZ = 0.25
 DEFAULT_RELAX_RATE_N_PER_S = 20.0
 MAX_BAND_HZ = 1e3
 MAX_RELAX_RATE_N_PER_S = 1e9
+IN_FLIGHT_POSES = 1
+# cablevib_ipc's status codes ok and tension_infeasible.
+STATUS_OK = 0
+STATUS_TENSION_INFEASIBLE = 1
 # cablevib_ipc's REQUIRED_F1_MIN_HZ / REQUIRED_F1_MAX_HZ (the margin request's range).
 REQUIRED_F1_MIN_HZ = 1e-6
 REQUIRED_F1_MAX_HZ = 1e6
@@ -75,11 +83,24 @@ class F1Hold:
     def __init__(self, params):
         self.params = params
         self.setpoint_n = params.floor_n
+        self.previous_n = params.floor_n
+        self.change_pose_sequence = 0
         self.last_timestamp_ns = None
 
-    def on_answer(self, ok, f1_hz, t_min_required_n, t_min_required_age_cycles, timestamp_ns):
+    def on_answer(self, ok, f1_hz, t_min_required_n, t_min_required_age_cycles, timestamp_ns,
+                  pose_sequence, tension_infeasible=False):
         """Takes one margin answer's fields; returns the action ("no_answer", "held", "raised",
-        "relaxed", "ceiling"). Publish when self.setpoint_n changed."""
+        "relaxed", "ceiling", "infeasible"). Publish when self.setpoint_n changed."""
+        before = self.setpoint_n
+        action = self._step(ok, f1_hz, t_min_required_n, t_min_required_age_cycles, timestamp_ns,
+                            pose_sequence, tension_infeasible)
+        if self.setpoint_n != before:
+            self.previous_n = before
+            self.change_pose_sequence = pose_sequence
+        return action
+
+    def _step(self, ok, f1_hz, t_min_required_n, t_min_required_age_cycles, timestamp_ns,
+              pose_sequence, tension_infeasible):
         p = self.params
         if self.last_timestamp_ns is None:
             dt_s = 0.0
@@ -87,17 +108,26 @@ class F1Hold:
         else:
             dt_s = max(0, timestamp_ns - self.last_timestamp_ns) * 1e-9
             self.last_timestamp_ns = max(timestamp_ns, self.last_timestamp_ns)
+        if tension_infeasible and self.setpoint_n > p.floor_n:
+            self.setpoint_n = p.floor_n
+            return "infeasible"
         t = t_min_required_n
-        if not ok or math.isnan(t) or not math.isfinite(f1_hz) or t <= 0.0:
+        if not ok or math.isnan(t) or not (math.isfinite(f1_hz) and f1_hz > 0.0) or t <= 0.0:
             return "no_answer"
-        above_ceiling = t > p.ceiling_n
         target = min(max(t, p.floor_n), p.ceiling_n)
-        if f1_hz < p.required_hz + p.guard_hz:
+        request_hz = p.request_hz()
+        if f1_hz < request_hz:
             if t_min_required_age_cycles == 0:
                 self.setpoint_n = target
             else:
-                self.setpoint_n = max(self.setpoint_n, target)
-            return "ceiling" if above_ceiling else "raised"
+                r = request_hz / f1_hz
+                if pose_sequence <= self.change_pose_sequence + IN_FLIGHT_POSES:
+                    base = min(self.setpoint_n, self.previous_n)
+                else:
+                    base = self.setpoint_n
+                scaled = min(base * (r * r), p.ceiling_n)
+                self.setpoint_n = max(self.setpoint_n, target, scaled)
+            return "ceiling" if t > p.ceiling_n or self.setpoint_n >= p.ceiling_n else "raised"
         if f1_hz >= p.required_hz + p.relax_band_hz and target < self.setpoint_n:
             self.setpoint_n = max(target, self.setpoint_n - p.relax_rate_n_per_s * dt_s)
             return "relaxed"
@@ -105,5 +135,6 @@ class F1Hold:
 
     def on_response(self, r):
         """on_answer with a cablevib_ipc.MarginResponse (status 0 is ok)."""
-        return self.on_answer(r.status == 0, r.f1_hz, r.t_min_required_n,
-                              r.t_min_required_age_cycles, r.timestamp_ns)
+        return self.on_answer(r.status == STATUS_OK, r.f1_hz, r.t_min_required_n,
+                              r.t_min_required_age_cycles, r.timestamp_ns, r.pose_sequence,
+                              r.status == STATUS_TENSION_INFEASIBLE)

@@ -32,11 +32,12 @@ def test_the_python_hold_reproduces_the_rust_cases():
     actions = set()
     for k, s in enumerate(doc["steps"]):
         action = hold.on_answer(s["ok"], number(s["f1_hz"]), number(s["t_min_required_n"]),
-                                s["t_min_required_age_cycles"], s["timestamp_ns"])
+                                s["t_min_required_age_cycles"], s["timestamp_ns"],
+                                s["pose_sequence"], s["tension_infeasible"])
         # Exact: the same operations in the same order on the same doubles.
         assert (action, hold.setpoint_n) == (s["action"], s["setpoint_n"]), "step %d: %r" % (k, s)
         actions.add(action)
-    assert actions == {"no_answer", "held", "raised", "relaxed", "ceiling"}
+    assert actions == {"no_answer", "held", "raised", "relaxed", "ceiling", "infeasible"}
 
 
 @pytest.mark.parametrize("kwargs, what", [

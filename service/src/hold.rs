@@ -10,12 +10,19 @@
 //! - The controller asks for the T_min of `required + guard` ([`HoldParams::request_hz`]): the
 //!   guard covers the pose's motion between the pose the answer's T_min was computed at and
 //!   the poses the set-point applies to.
-//! - **Raise** (f1 < required + guard): the set-point becomes the answer's T_min at once (a
-//!   step: f1 below the requirement is what the hold exists to end; a ramp would leave it
-//!   below for the ramp's duration). An answer older than the pose it comes with never
-//!   lowers the set-point while raising (it is the T_min of an earlier pose); a fresh one
-//!   (age 0) may, since f1 is not monotone in T_min (docs/inverse.md) and the answer is the
-//!   T_min that reaches the requirement at this very pose.
+//! - **Raise** (f1 < required + guard): at once (a step: f1 below the requirement is what the
+//!   hold exists to end; a ramp would leave it below for the ramp's duration). A fresh answer
+//!   (age 0) sets the answer's T_min, even when lower (f1 is not monotone in T_min:
+//!   docs/inverse.md; the answer is the T_min that reaches the request at this very pose).
+//!   An older answer is the T_min of an earlier pose, while f1 is of the latest one: the
+//!   set-point becomes the largest of itself, the answer's T_min, and set-point ×
+//!   (request / f1)², the T_min that brings this f1 to the request if f1 ∝ √T_min. Within one
+//!   set of cables at their bound f1² is concave in T_min (docs/inverse.md), so that step
+//!   never overshoots there; repeated at each answer it closes the gap from below. (The
+//!   inverse search takes milliseconds to a few tenths of a second on a loaded machine,
+//!   while f1 along the paper's circle moves by up to 2 Hz/s: the step keeps f1 above the
+//!   requirement between two searches.) A step may be counted twice when the next answer
+//!   comes before the set-point applied; the relax takes the excess back.
 //! - **Relax** (f1 ≥ required + relax band): the set-point falls towards the answer's T_min at
 //!   most [`HoldParams::relax_rate_n_per_s`] per second of the service's clock (the answers'
 //!   `timestamp_ns`), so the cables' tensions fall smoothly.
@@ -32,17 +39,20 @@
 //! and checked by this module's tests, checked by python/tests/test_hold_f1.py) holds a fixed
 //! sequence both must reproduce.
 
-use cablevib_ipc::{MarginResponse, REQUIRED_F1_MAX_HZ, REQUIRED_F1_MIN_HZ};
+use cablevib_ipc::{MarginResponse, StatusCode, REQUIRED_F1_MAX_HZ, REQUIRED_F1_MIN_HZ};
 
 /// Default guard above the requirement, Hz (`--hold-guard-hz`): on the paper's circle (4 s per
-/// revolution) f1 at a fixed T_min moves by less than 0.5 Hz/s, and the answer's T_min is a
-/// few to ~35 ms old (docs/inverse.md), so f1 drifts by well under 0.02 Hz before the next
-/// answer corrects it; 0.05 Hz leaves a factor of 2.5 for a loaded machine.
-pub const DEFAULT_GUARD_HZ: f64 = 0.05;
+/// revolution) f1 at a fixed T_min moves by up to 2 Hz/s (measured, `demo --hold-f1 9.5`),
+/// 0.002 Hz per 1 kHz cycle; the √T_min step corrects it at each answer, so 0.1 Hz covers 50
+/// ms without an answer (the controller's longest stalls on this shared 2-core machine were
+/// ~20 ms).
+pub const DEFAULT_GUARD_HZ: f64 = 0.1;
 /// Default relax band, Hz (`--hold-relax-band-hz`): relax only when f1 is at least this far
-/// above the requirement. It must exceed the guard; 0.15 Hz is three guards, so a relax step
-/// never brings f1 straight back under the guard.
-pub const DEFAULT_RELAX_BAND_HZ: f64 = 0.15;
+/// above the requirement. It must exceed the guard: a raise lands f1 at the guard, and a relax
+/// that began right above it would lower f1 back under it at the next step, so that raise and
+/// relax alternated at every answer; 0.15 Hz above the guard is 75 ms of the circle's fastest
+/// drift.
+pub const DEFAULT_RELAX_BAND_HZ: f64 = 0.25;
 /// Default relax rate, N/s (`--hold-relax-n-per-s`): 20 N/s takes a 60 N set-point from
 /// 120 N back to 60 N in 3 s, slow against the robot's modes (periods of 0.1 s and shorter).
 pub const DEFAULT_RELAX_RATE_N_PER_S: f64 = 20.0;
@@ -171,6 +181,11 @@ pub struct HoldInput {
     pub t_min_required_age_cycles: u32,
     /// The service's clock when answering, ns.
     pub timestamp_ns: u64,
+    /// The pose sequence of the estimate the answer is of.
+    pub pose_sequence: u64,
+    /// The answer's status is `tension_infeasible` (no tension distribution within
+    /// [T_min, t_max] at the latest pose).
+    pub tension_infeasible: bool,
 }
 
 impl From<&MarginResponse> for HoldInput {
@@ -181,6 +196,8 @@ impl From<&MarginResponse> for HoldInput {
             t_min_required_n: r.t_min_required_n,
             t_min_required_age_cycles: r.t_min_required_age_cycles,
             timestamp_ns: r.timestamp_ns,
+            pose_sequence: r.pose_sequence,
+            tension_infeasible: r.status == StatusCode::TensionInfeasible.as_u32(),
         }
     }
 }
@@ -199,6 +216,9 @@ pub enum HoldAction {
     /// The answer's T_min is above the ceiling, or the requirement is unreachable: the
     /// set-point is the ceiling (f1 may stay below the requirement).
     Ceiling,
+    /// The latest pose's tensions are infeasible above the floor: the set-point went back to
+    /// the floor (the next ok answer raises it to a feasible T_min again).
+    Infeasible,
 }
 
 impl HoldAction {
@@ -210,23 +230,35 @@ impl HoldAction {
             HoldAction::Raised => "raised",
             HoldAction::Relaxed => "relaxed",
             HoldAction::Ceiling => "ceiling",
+            HoldAction::Infeasible => "infeasible",
         }
     }
 }
 
-/// The hold's state: the set-point in force and the time of the last answer.
+/// The hold's state: the set-point in force, the one before its last change and the pose of
+/// the answer that changed it, and the time of the last answer.
 #[derive(Debug, Clone)]
 pub struct F1Hold {
     params: HoldParams,
     setpoint_n: f64,
+    previous_n: f64,
+    change_pose_sequence: u64,
     last_timestamp_ns: Option<u64>,
 }
+
+/// Poses after the one whose answer changed the set-point that may still have been estimated
+/// under the previous one: the service applies a set-point from the next pose it takes after
+/// it arrives, and the controller publishes within microseconds of the answer, so the pose
+/// already being estimated meanwhile is the one at risk.
+pub const IN_FLIGHT_POSES: u64 = 1;
 
 impl F1Hold {
     /// A hold starting at the floor (the scene's T_min, in force before any set-point).
     pub fn new(params: HoldParams) -> F1Hold {
         F1Hold {
             setpoint_n: params.floor_n,
+            previous_n: params.floor_n,
+            change_pose_sequence: 0,
             params,
             last_timestamp_ns: None,
         }
@@ -245,25 +277,54 @@ impl F1Hold {
     /// Takes one margin answer; returns what it did. The set-point changed (and should be
     /// published) when [`Self::setpoint_n`] differs from before the call.
     pub fn on_answer(&mut self, a: &HoldInput) -> HoldAction {
+        let before = self.setpoint_n;
+        let action = self.step(a);
+        if self.setpoint_n != before {
+            self.previous_n = before;
+            self.change_pose_sequence = a.pose_sequence;
+        }
+        action
+    }
+
+    fn step(&mut self, a: &HoldInput) -> HoldAction {
         let p = self.params;
         let dt_s = match self.last_timestamp_ns {
             Some(last) => a.timestamp_ns.saturating_sub(last) as f64 * 1e-9,
             None => 0.0,
         };
         self.last_timestamp_ns = Some(a.timestamp_ns.max(self.last_timestamp_ns.unwrap_or(0)));
+        if a.tension_infeasible && self.setpoint_n > p.floor_n {
+            self.setpoint_n = p.floor_n;
+            return HoldAction::Infeasible;
+        }
         let t = a.t_min_required_n;
-        if !a.ok || t.is_nan() || !a.f1_hz.is_finite() || t <= 0.0 {
+        if !a.ok || t.is_nan() || !(a.f1_hz.is_finite() && a.f1_hz > 0.0) || t <= 0.0 {
             return HoldAction::NoAnswer;
         }
-        let above_ceiling = t > p.ceiling_n;
         let target = t.clamp(p.floor_n, p.ceiling_n);
-        if a.f1_hz < p.required_hz + p.guard_hz {
+        let request_hz = p.request_hz();
+        if a.f1_hz < request_hz {
             self.setpoint_n = if a.t_min_required_age_cycles == 0 {
                 target
             } else {
-                self.setpoint_n.max(target)
+                // The answer is of an earlier pose; f1 is of this one. f1 ≈ a·√T_min: the
+                // T_min that brings this f1 to the request, which never overshoots within
+                // one active set (f1² is concave in T_min there: docs/inverse.md). An f1 of
+                // the pose that changed the set-point or of the next [`IN_FLIGHT_POSES`] may
+                // be under the set-point before (the same estimate answered twice, a pose
+                // estimated before the change applied): the smaller of the two is its base,
+                // so the step does not compound.
+                let r = request_hz / a.f1_hz;
+                let in_flight = a.pose_sequence <= self.change_pose_sequence + IN_FLIGHT_POSES;
+                let base = if in_flight {
+                    self.setpoint_n.min(self.previous_n)
+                } else {
+                    self.setpoint_n
+                };
+                let scaled = (base * (r * r)).min(p.ceiling_n);
+                self.setpoint_n.max(target).max(scaled)
             };
-            if above_ceiling {
+            if t > p.ceiling_n || self.setpoint_n >= p.ceiling_n {
                 HoldAction::Ceiling
             } else {
                 HoldAction::Raised
@@ -292,30 +353,65 @@ mod tests {
             t_min_required_n: t,
             t_min_required_age_cycles: age,
             timestamp_ns: ms * 1_000_000,
+            pose_sequence: ms + 1,
+            tension_infeasible: false,
         }
     }
 
-    /// Below the guard the set-point steps to the answer's T_min at once; an old answer never
-    /// lowers it while raising, a fresh one does (f1 is not monotone in T_min).
+    /// Below the guard the set-point steps at once to the answer's T_min or the √T_min step,
+    /// whichever is larger; an old answer never lowers it, a fresh one does (f1 is not
+    /// monotone in T_min).
     #[test]
     fn raises_at_once_to_the_answer() {
         let mut h = F1Hold::new(params());
         assert_eq!(h.on_answer(&answer(9.0, 95.0, 3, 0)), HoldAction::Raised);
         assert_eq!(h.setpoint_n(), 95.0);
-        // Within the guard (9.5 ≤ f1 < 9.55) is still a raise.
+        // Within the guard (9.5 ≤ f1 < 9.6) is still a raise.
         assert_eq!(h.on_answer(&answer(9.52, 99.0, 3, 1)), HoldAction::Raised);
         assert_eq!(h.setpoint_n(), 99.0);
+        // An old, lower answer: the √T_min step from this f1 (9.4 Hz at 99 N → 9.6 Hz).
         assert_eq!(h.on_answer(&answer(9.4, 90.0, 2, 2)), HoldAction::Raised);
-        assert_eq!(
-            h.setpoint_n(),
-            99.0,
-            "an old, lower answer does not lower it"
-        );
+        let r: f64 = 9.6 / 9.4;
+        // Its base is the smaller of the set-point and the one before (95 N): the f1 may be of
+        // a pose estimated before 99 N applied.
+        assert_eq!(h.setpoint_n(), 95.0 * (r * r));
         assert_eq!(h.on_answer(&answer(9.4, 90.0, 0, 3)), HoldAction::Raised);
         assert_eq!(
             h.setpoint_n(),
             90.0,
             "a fresh answer is the T_min of this pose"
+        );
+    }
+
+    /// The √T_min step on a model whose f1² is affine in T_min with a positive intercept
+    /// (concave, as within one active set; f1² = a + b·T): from stale answers only, the
+    /// set-point climbs to the exact T* = (f² − a)/b from below, never above it (the closed
+    /// form is the independent check), within 1e-9 relative (the iteration's contraction
+    /// a/(a + b·T) ≈ 0.3 per step leaves rounding only after 40 steps).
+    #[test]
+    fn the_sqrt_step_never_overshoots_a_concave_f1_squared() {
+        let (a, b) = (30.0, 1.0); // Hz², Hz²/N: f1(60 N) = 9.49 Hz
+        let p = params();
+        let f = p.request_hz();
+        let t_star = (f * f - a) / b;
+        let mut h = F1Hold::new(p);
+        // A set-point decided on the answer of pose k applies from pose k + 2 (one pose in
+        // flight, the worst case IN_FLIGHT_POSES covers).
+        let mut decided = vec![h.setpoint_n(); 2];
+        for k in 0..200 {
+            let f1 = (a + b * decided[k]).sqrt();
+            h.on_answer(&answer(f1, p.floor_n, 5, k as u64));
+            decided.push(h.setpoint_n());
+            assert!(
+                h.setpoint_n() <= t_star * (1.0 + 1e-12),
+                "{k}: {}",
+                h.setpoint_n()
+            );
+        }
+        assert!(
+            (h.setpoint_n() / t_star - 1.0).abs() < 1e-9,
+            "{} vs {t_star}",
+            h.setpoint_n()
         );
     }
 
@@ -326,8 +422,8 @@ mod tests {
         let mut h = F1Hold::new(params());
         h.on_answer(&answer(9.0, 120.0, 1, 0));
         assert_eq!(h.setpoint_n(), 120.0);
-        // In the band [9.55, 9.65): held, whatever the answer's T_min.
-        assert_eq!(h.on_answer(&answer(9.6, 70.0, 1, 100)), HoldAction::Held);
+        // In the band [9.6, 9.75): held, whatever the answer's T_min.
+        assert_eq!(h.on_answer(&answer(9.7, 70.0, 1, 100)), HoldAction::Held);
         assert_eq!(h.setpoint_n(), 120.0);
         // Ample: 20 N/s × 0.5 s = 10 N.
         assert_eq!(h.on_answer(&answer(9.8, 70.0, 1, 600)), HoldAction::Relaxed);
@@ -350,6 +446,37 @@ mod tests {
         h.on_answer(&answer(9.0, 100.0, 1, 140_000));
         h.on_answer(&answer(9.9, 70.0, 1, 100_000));
         assert_eq!(h.setpoint_n(), 100.0);
+    }
+
+    /// The same answer (one estimate answered again, or a pose estimated before the set-point
+    /// applied) steps the set-point once: the √T_min step does not compound.
+    #[test]
+    fn a_repeated_answer_does_not_compound() {
+        let mut h = F1Hold::new(params());
+        h.on_answer(&answer(9.0, 60.0, 5, 0));
+        let once = h.setpoint_n();
+        let r: f64 = 9.6 / 9.0;
+        assert_eq!(once, 60.0 * (r * r));
+        for k in 1..100 {
+            let mut again = answer(9.0, 60.0, 5, k);
+            again.pose_sequence = 1;
+            h.on_answer(&again);
+        }
+        assert_eq!(h.setpoint_n(), once);
+    }
+
+    /// A pose whose tensions are infeasible under the set-point sends it back to the floor;
+    /// at the floor the status changes nothing.
+    #[test]
+    fn infeasible_tensions_go_back_to_the_floor() {
+        let mut h = F1Hold::new(params());
+        h.on_answer(&answer(9.0, 200.0, 5, 0));
+        assert_eq!(h.setpoint_n(), 200.0);
+        let mut a = answer(f64::NAN, f64::NAN, 5, 1);
+        (a.ok, a.tension_infeasible) = (false, true);
+        assert_eq!(h.on_answer(&a), HoldAction::Infeasible);
+        assert_eq!(h.setpoint_n(), 60.0);
+        assert_eq!(h.on_answer(&a), HoldAction::NoAnswer);
     }
 
     /// An unreachable requirement, or a T_min above the smallest t_max, gives the ceiling.
@@ -398,8 +525,8 @@ mod tests {
             answer(9.4, 85.0, 3, 3),
             answer(9.4, 85.0, 0, 4),
             answer(9.6, 70.0, 2, 5),
-            answer(9.7, 70.0, 2, 105),
-            answer(9.7, 70.0, 2, 505),
+            answer(9.8, 70.0, 2, 105),
+            answer(9.8, 70.0, 2, 505),
             answer(9.9, 50.0, 2, 5_000),
             answer(9.9, 50.0, 2, 6_000),
             answer(9.2, 310.0, 2, 6_001),
@@ -413,6 +540,13 @@ mod tests {
         not_ok.ok = false;
         inputs.push(not_ok);
         inputs.push(answer(f64::NAN, 100.0, 1, 8_002));
+        inputs.push(answer(9.3, 100.0, 3, 8_003));
+        inputs.push(answer(9.3, 100.0, 3, 8_004));
+        inputs.push(answer(9.45, 90.0, 3, 8_005));
+        let mut infeasible = answer(f64::NAN, f64::NAN, u32::MAX, 8_006);
+        (infeasible.ok, infeasible.tension_infeasible) = (false, true);
+        inputs.push(infeasible);
+        inputs.push(infeasible);
         let num = |x: f64| {
             if x.is_finite() {
                 serde_json::json!(x)
@@ -431,6 +565,8 @@ mod tests {
                     "t_min_required_n": num(a.t_min_required_n),
                     "t_min_required_age_cycles": a.t_min_required_age_cycles,
                     "timestamp_ns": a.timestamp_ns,
+                    "pose_sequence": a.pose_sequence,
+                    "tension_infeasible": a.tension_infeasible,
                     "setpoint_n": h.setpoint_n(),
                     "action": action.as_str(),
                 })
@@ -440,7 +576,7 @@ mod tests {
             .iter()
             .map(|s| s["action"].as_str().unwrap())
             .collect();
-        assert_eq!(actions.len(), 5, "every action occurs: {actions:?}");
+        assert_eq!(actions.len(), 6, "every action occurs: {actions:?}");
         let doc = serde_json::json!({
             "about": "F1Hold cases: service/src/hold.rs writes them, examples/python/hold_f1.py must reproduce them",
             "params": {

@@ -162,6 +162,11 @@ pub struct DemoConfig {
     pub period_s: f64,
     /// T_min schedule (default: the scene's T_min throughout).
     pub t_min_schedule: Option<TminSchedule>,
+    /// Hold f1 at or above this, Hz, with the T_min set-points of [`hold::F1Hold`] (None: the
+    /// controller only asks for the margin).
+    pub hold_f1_hz: Option<f64>,
+    /// With `hold_f1_hz`: write one CSV row per ok estimate after the hold's first answer.
+    pub hold_csv: Option<std::path::PathBuf>,
 }
 
 /// What `cablevib bench-ipc` measures (the scene is passed beside it).
