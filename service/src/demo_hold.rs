@@ -252,7 +252,7 @@ pub(crate) fn summary(
         log.setpoints.len(),
         fmt_n(lo),
         fmt_n(hi),
-        action_counts(&log.actions),
+        HoldAction::summary(&log.actions),
         p.required_hz,
         after.len(),
     );
@@ -287,22 +287,6 @@ pub(crate) fn summary(
 
 fn fmt_n(x: f64) -> String {
     format!("{x:.2}")
-}
-
-fn action_counts(c: &[u64; 6]) -> String {
-    [
-        HoldAction::NoAnswer,
-        HoldAction::Held,
-        HoldAction::Raised,
-        HoldAction::Relaxed,
-        HoldAction::Ceiling,
-        HoldAction::Infeasible,
-    ]
-    .iter()
-    .filter(|a| c[**a as usize] > 0)
-    .map(|a| format!("{} {}", a.as_str(), c[*a as usize]))
-    .collect::<Vec<_>>()
-    .join(", ")
 }
 
 /// One row per ok estimate after the first answer: time, f1, the set-point published last

@@ -222,6 +222,26 @@ pub enum HoldAction {
 }
 
 impl HoldAction {
+    /// Every action, in the order of their `as usize` values (for counting them).
+    pub const ALL: [HoldAction; 6] = [
+        HoldAction::NoAnswer,
+        HoldAction::Held,
+        HoldAction::Raised,
+        HoldAction::Relaxed,
+        HoldAction::Ceiling,
+        HoldAction::Infeasible,
+    ];
+
+    /// "raised 12, relaxed 3": the non-zero counts of `counts` (indexed by `as usize`).
+    pub fn summary(counts: &[u64; 6]) -> String {
+        HoldAction::ALL
+            .iter()
+            .filter(|a| counts[**a as usize] > 0)
+            .map(|a| format!("{} {}", a.as_str(), counts[*a as usize]))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
     /// Lower-case name (the Python mirror's).
     pub fn as_str(self) -> &'static str {
         match self {
