@@ -14,8 +14,8 @@ python/tests/test_hold_f1.py checks that this module reproduces them exactly.
 - a tension_infeasible answer above the floor sends the set-point back to the floor;
 - relax (f1 >= required + relax band): towards the answer's T_min, at most
   relax_rate_n_per_s per second of the answers' timestamps;
-- hold in between; the set-point stays within [floor_n, ceiling_n] (+inf or a T_min above
-  the ceiling gives the ceiling); not-ok answers and NaN T_min change nothing.
+- hold in between; the set-point stays within [floor_n, ceiling_n] (a T_min above the
+  ceiling gives the ceiling; +inf, unreachable, leaves the set-point as it is); not-ok answers and NaN T_min change nothing.
 """
 
 import math
@@ -90,7 +90,7 @@ class F1Hold:
     def on_answer(self, ok, f1_hz, t_min_required_n, t_min_required_age_cycles, timestamp_ns,
                   pose_sequence, tension_infeasible=False):
         """Takes one margin answer's fields; returns the action ("no_answer", "held", "raised",
-        "relaxed", "ceiling", "infeasible"). Publish when self.setpoint_n changed."""
+        "relaxed", "ceiling", "unreachable", "infeasible"). Publish when self.setpoint_n changed."""
         before = self.setpoint_n
         action = self._step(ok, f1_hz, t_min_required_n, t_min_required_age_cycles, timestamp_ns,
                             pose_sequence, tension_infeasible)
@@ -114,6 +114,8 @@ class F1Hold:
         t = t_min_required_n
         if not ok or math.isnan(t) or not (math.isfinite(f1_hz) and f1_hz > 0.0) or t <= 0.0:
             return "no_answer"
+        if t == math.inf:
+            return "unreachable"
         target = min(max(t, p.floor_n), p.ceiling_n)
         request_hz = p.request_hz()
         if f1_hz < request_hz:

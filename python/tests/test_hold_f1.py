@@ -37,7 +37,8 @@ def test_the_python_hold_reproduces_the_rust_cases():
         # Exact: the same operations in the same order on the same doubles.
         assert (action, hold.setpoint_n) == (s["action"], s["setpoint_n"]), "step %d: %r" % (k, s)
         actions.add(action)
-    assert actions == {"no_answer", "held", "raised", "relaxed", "ceiling", "infeasible"}
+    assert actions == {"no_answer", "held", "raised", "relaxed", "ceiling", "unreachable",
+                       "infeasible"}
 
 
 @pytest.mark.parametrize("kwargs, what", [

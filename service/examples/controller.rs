@@ -126,7 +126,7 @@ struct Hold {
     below: u64,
     counted: u64,
     setpoint_range: (f64, f64),
-    actions: [u64; 6],
+    actions: [u64; 7],
 }
 
 impl Hold {
@@ -193,7 +193,7 @@ fn main() -> anyhow::Result<()> {
             below: 0,
             counted: 0,
             setpoint_range: (p.floor_n, p.floor_n),
-            actions: [0; 6],
+            actions: [0; 7],
         }),
         None => None,
     };

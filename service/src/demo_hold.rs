@@ -44,8 +44,7 @@ pub(crate) fn params(scene: &Scene, hold_hz: f64) -> Result<HoldParams, ServiceE
     let ceiling = (0..scene.n_cables())
         .map(|i| scene.cable_t_max_n(i))
         .fold(f64::INFINITY, f64::min);
-    HoldParams::new(hold_hz, scene.t_min_n, ceiling)
-        .map_err(|e| ServiceError::Usage(format!("--hold-f1: {e}")))
+    HoldParams::new(hold_hz, scene.t_min_n, ceiling).map_err(|e| ServiceError::Usage(e.to_string()))
 }
 
 /// One ok estimate the hold saw.
@@ -67,7 +66,7 @@ pub(crate) struct DemoHold {
     seen: Vec<Seen>,
     /// (published at, ns; value, N) of every set-point.
     setpoints: Vec<(u64, f64)>,
-    actions: [u64; 6],
+    actions: [u64; 7],
 }
 
 /// What the hold recorded, for the summary.
@@ -77,7 +76,7 @@ pub(crate) struct HoldLog {
     start_ns: Option<u64>,
     seen: Vec<Seen>,
     setpoints: Vec<(u64, f64)>,
-    actions: [u64; 6],
+    actions: [u64; 7],
 }
 
 impl DemoHold {
@@ -95,7 +94,7 @@ impl DemoHold {
             start_ns: None,
             seen: Vec::with_capacity(capacity),
             setpoints: Vec::with_capacity(capacity),
-            actions: [0; 6],
+            actions: [0; 7],
         })
     }
 

@@ -30,8 +30,12 @@
 //!   chattering between raise and relax as f1 moves about the requirement.
 //! - The set-point stays within [floor, ceiling]: the floor is the T_min the hold relaxes to
 //!   (the scene's), the ceiling the smallest of the cables' t_max (a uniform set-point above a
-//!   cable's t_max is refused by the service). An unreachable requirement (`t_min_required_n`
-//!   = +∞) or an answer above the ceiling gives the ceiling, with the action saying so.
+//!   cable's t_max is refused by the service). An answer above the ceiling gives the ceiling;
+//!   an unreachable requirement (`t_min_required_n` = +∞) leaves the set-point as it is (no
+//!   feasible T_min reaches it; more T_min only risks infeasible tensions); the action says
+//!   which.
+//! - An answer whose status is `tension_infeasible` while the set-point is above the floor
+//!   sends it back to the floor (the next ok answer raises it to a feasible T_min again).
 //! - Answers that are not ok, or carry no T_min yet (NaN), change nothing.
 //!
 //! One implementation, used by `cablevib demo` and `service/examples/controller.rs`;
@@ -213,9 +217,13 @@ pub enum HoldAction {
     Raised,
     /// f1 ≥ required + relax band: the set-point fell towards the answer's T_min (rate-limited).
     Relaxed,
-    /// The answer's T_min is above the ceiling, or the requirement is unreachable: the
+    /// The answer's T_min is above the ceiling (a cable's t_max below the scene's): the
     /// set-point is the ceiling (f1 may stay below the requirement).
     Ceiling,
+    /// No feasible T_min reaches the request at the answer's pose (`t_min_required_n` = +∞):
+    /// the set-point stays (raising it further buys no f1 there and may make the tensions
+    /// infeasible).
+    Unreachable,
     /// The latest pose's tensions are infeasible above the floor: the set-point went back to
     /// the floor (the next ok answer raises it to a feasible T_min again).
     Infeasible,
@@ -223,17 +231,18 @@ pub enum HoldAction {
 
 impl HoldAction {
     /// Every action, in the order of their `as usize` values (for counting them).
-    pub const ALL: [HoldAction; 6] = [
+    pub const ALL: [HoldAction; 7] = [
         HoldAction::NoAnswer,
         HoldAction::Held,
         HoldAction::Raised,
         HoldAction::Relaxed,
         HoldAction::Ceiling,
+        HoldAction::Unreachable,
         HoldAction::Infeasible,
     ];
 
     /// "raised 12, relaxed 3": the non-zero counts of `counts` (indexed by `as usize`).
-    pub fn summary(counts: &[u64; 6]) -> String {
+    pub fn summary(counts: &[u64; 7]) -> String {
         HoldAction::ALL
             .iter()
             .filter(|a| counts[**a as usize] > 0)
@@ -250,6 +259,7 @@ impl HoldAction {
             HoldAction::Raised => "raised",
             HoldAction::Relaxed => "relaxed",
             HoldAction::Ceiling => "ceiling",
+            HoldAction::Unreachable => "unreachable",
             HoldAction::Infeasible => "infeasible",
         }
     }
@@ -320,6 +330,9 @@ impl F1Hold {
         let t = a.t_min_required_n;
         if !a.ok || t.is_nan() || !(a.f1_hz.is_finite() && a.f1_hz > 0.0) || t <= 0.0 {
             return HoldAction::NoAnswer;
+        }
+        if t == f64::INFINITY {
+            return HoldAction::Unreachable;
         }
         let target = t.clamp(p.floor_n, p.ceiling_n);
         let request_hz = p.request_hz();
@@ -499,18 +512,20 @@ mod tests {
         assert_eq!(h.on_answer(&a), HoldAction::NoAnswer);
     }
 
-    /// An unreachable requirement, or a T_min above the smallest t_max, gives the ceiling.
+    /// A T_min above the smallest t_max gives the ceiling; an unreachable requirement leaves
+    /// the set-point where it is.
     #[test]
     fn clamps_to_the_ceiling() {
         let mut h = F1Hold::new(HoldParams::new(9.5, 60.0, 300.0).unwrap());
         assert_eq!(h.on_answer(&answer(9.0, 320.0, 1, 0)), HoldAction::Ceiling);
         assert_eq!(h.setpoint_n(), 300.0);
         let mut h = F1Hold::new(params());
+        h.on_answer(&answer(9.0, 80.0, 1, 0));
         assert_eq!(
-            h.on_answer(&answer(9.0, f64::INFINITY, 1, 0)),
-            HoldAction::Ceiling
+            h.on_answer(&answer(9.0, f64::INFINITY, 1, 1)),
+            HoldAction::Unreachable
         );
-        assert_eq!(h.setpoint_n(), 350.0);
+        assert_eq!(h.setpoint_n(), 80.0);
     }
 
     /// Not ok, NaN (not known yet), a non-positive or non-finite f1: nothing changes.
@@ -596,7 +611,7 @@ mod tests {
             .iter()
             .map(|s| s["action"].as_str().unwrap())
             .collect();
-        assert_eq!(actions.len(), 6, "every action occurs: {actions:?}");
+        assert_eq!(actions.len(), 7, "every action occurs: {actions:?}");
         let doc = serde_json::json!({
             "about": "F1Hold cases: service/src/hold.rs writes them, examples/python/hold_f1.py must reproduce them",
             "params": {
