@@ -205,7 +205,35 @@ pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
         hold_f1_hz: a.hold_f1,
         hold_csv: a.hold_csv.clone(),
     };
-    Ok(crate::service::demo(&scene, &cfg)?)
+    crate::service::demo(&scene, &cfg)?;
+    if let (Some(hz), Some(csv)) = (a.hold_f1, &a.hold_csv) {
+        hold_figures(csv, hz)?;
+    }
+    Ok(())
+}
+
+/// The figures of the `--hold-csv` record, next to it: PATH without its extension +
+/// `-f1.svg` and `-tmin.svg` (none when the demo wrote no record).
+fn hold_figures(csv: &std::path::Path, hold_hz: f64) -> Result<(), CliError> {
+    let Ok(text) = std::fs::read_to_string(csv) else {
+        return Ok(());
+    };
+    let Some((f1, t_min)) = crate::report::hold::hold_svgs(&text, hold_hz) else {
+        return Err(CliError::Usage(format!(
+            "{}: not a --hold-csv record",
+            csv.display()
+        )));
+    };
+    let stem = csv.with_extension("");
+    for (suffix, svg) in [("-f1.svg", f1), ("-tmin.svg", t_min)] {
+        let mut name = stem.clone().into_os_string();
+        name.push(suffix);
+        let path = std::path::PathBuf::from(name);
+        std::fs::write(&path, svg)
+            .map_err(|e| CliError::Usage(format!("{}: {e}", path.display())))?;
+        println!("  hold: figure written to {}", path.display());
+    }
+    Ok(())
 }
 
 /// `cablevib bench-ipc`: pose-published → estimate-received latency.
