@@ -5,6 +5,8 @@
 //! estimates every pose; the controller thread takes every estimate, measures the latency from
 //! the pose's timestamp to its arrival, and asks the service for its margin against
 //! `--required-hz` after each one. A line of progress per second, then a summary.
+//! With `--hold-f1 HZ` the controller also holds f1 with T_min set-points (`demo_hold.rs`)
+//! and the summary adds the hold's lines.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;

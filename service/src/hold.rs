@@ -640,6 +640,14 @@ mod tests {
         );
     }
 
+    /// `ALL` is in the order of the `as usize` values the counts are indexed by.
+    #[test]
+    fn all_actions_are_in_discriminant_order() {
+        for (i, a) in HoldAction::ALL.iter().enumerate() {
+            assert_eq!(*a as usize, i, "{a:?}");
+        }
+    }
+
     /// Bad parameters are one-line errors naming the value.
     #[test]
     fn bad_parameters_are_errors() {
