@@ -101,7 +101,8 @@ pub struct DemoArgs {
     pub hold_f1: Option<f64>,
     /// With --hold-f1: write one CSV row per ok estimate after the first answer (t_s,
     /// pose_sequence, f1_hz, setpoint_n, sum_t2_n2, and the fixed T_min's fixed_t_min_n,
-    /// f1_fixed_hz, sum_t2_fixed_n2).
+    /// f1_fixed_hz, sum_t2_fixed_n2), and the figures of f1 and T_min against time next to it
+    /// (PATH without its extension + -f1.svg and -tmin.svg).
     #[arg(long, value_name = "PATH", requires = "hold_f1")]
     pub hold_csv: Option<std::path::PathBuf>,
 }
