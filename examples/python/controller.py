@@ -17,6 +17,14 @@ definitions it imports (ipc-schema/python/cablevib_ipc.py, generated from the Ru
 
 The service must be running (the controller waits --connect-timeout-s for it): unlike the
 Rust peers, this script opens the services and never creates them.
+
+With --hold-f1 HZ it acts on the margin, as the Rust controller does: it asks for HZ + guard
+and publishes the uniform T_min set-point of hold_f1.py (the mirror of service/src/hold.rs:
+raised at once, relaxed rate-limited above a hysteresis band, between --hold-floor-n and
+--hold-ceiling-n; docs/service.md, "Holding f1"):
+
+    venv/bin/python examples/python/controller.py --instance demo --seconds 5 \
+        --hold-f1 9.5 --hold-floor-n 60 --hold-ceiling-n 350
 """
 
 import argparse
@@ -32,6 +40,7 @@ sys.path.insert(
 )
 
 import cablevib_ipc as cv  # noqa: E402
+import hold_f1  # noqa: E402
 import iceoryx2 as iox2  # noqa: E402
 
 # How long one blocking wait on the wake-controller event lasts at most, s: the loop checks the
@@ -58,11 +67,43 @@ def parse_args():
     p.add_argument("--connect-timeout-s", type=float, default=10.0,
                    help="how long to wait for the service to come up, s (default 10)")
     p.add_argument("--json", action="store_true", help="end with a one-line JSON summary on stdout")
+    p.add_argument("--hold-f1", type=float, metavar="HZ",
+                   help="hold f1 at or above HZ: publish the T_min set-point the margin answers name "
+                        "(raised at once below HZ + guard, relaxed when f1 >= HZ + relax band); the "
+                        "margin is then asked against HZ + guard; needs --hold-floor-n and "
+                        "--hold-ceiling-n")
+    p.add_argument("--hold-floor-n", type=float, metavar="N",
+                   help="lowest set-point the hold relaxes to, N: the scene's T_min")
+    p.add_argument("--hold-ceiling-n", type=float, metavar="N",
+                   help="highest set-point, N: the smallest t_max of the scene's cables")
+    p.add_argument("--hold-guard-hz", type=float, default=hold_f1.DEFAULT_GUARD_HZ, metavar="HZ",
+                   help="guard above HZ the hold raises to, Hz (default %(default)s)")
+    p.add_argument("--hold-relax-band-hz", type=float, default=hold_f1.DEFAULT_RELAX_BAND_HZ,
+                   metavar="HZ", help="relax only when f1 >= HZ + this, Hz (> the guard; default "
+                   "%(default)s)")
+    p.add_argument("--hold-relax-n-per-s", type=float, default=hold_f1.DEFAULT_RELAX_RATE_N_PER_S,
+                   metavar="N_PER_S", help="largest decrease of the set-point per second, N/s "
+                   "(default %(default)s)")
     a = p.parse_args()
     if not (math.isfinite(a.seconds) and a.seconds > 0):
         fail("--seconds must be finite and > 0")
     if not (math.isfinite(a.required_hz) and a.required_hz > 0):
         fail("--required-hz must be finite and > 0")
+    a.hold = None
+    if a.hold_f1 is not None:
+        if a.hold_floor_n is None or a.hold_ceiling_n is None:
+            fail("--hold-f1 needs --hold-floor-n (the scene's T_min, N) and --hold-ceiling-n "
+                 "(the smallest cable t_max, N)")
+        try:
+            a.hold = hold_f1.HoldParams(a.hold_f1, a.hold_floor_n, a.hold_ceiling_n,
+                                        guard_hz=a.hold_guard_hz,
+                                        relax_band_hz=a.hold_relax_band_hz,
+                                        relax_rate_n_per_s=a.hold_relax_n_per_s)
+        except hold_f1.HoldError as e:
+            fail(str(e))
+        a.required_hz = a.hold.request_hz()
+    elif a.hold_floor_n is not None or a.hold_ceiling_n is not None:
+        fail("--hold-floor-n and --hold-ceiling-n need --hold-f1")
     return a
 
 
@@ -98,7 +139,7 @@ def schema_verifier():
 class Ports:
     """Estimate subscriber, margin client, and the two wake-up event ports."""
 
-    def __init__(self, node, instance, timeout_s):
+    def __init__(self, node, instance, timeout_s, t_min_publisher=False):
         names = {base: cv.prefixed(instance, base) for base in (
             cv.SERVICE_ESTIMATE, cv.SERVICE_MARGIN, cv.SERVICE_WAKE_SERVICE, cv.SERVICE_WAKE_CONTROLLER)}
         self.estimate_name = names[cv.SERVICE_ESTIMATE]
@@ -126,6 +167,20 @@ class Ports:
         wake_controller = node.service_builder(iox2.ServiceName.new(names[cv.SERVICE_WAKE_CONTROLLER])).event().open()
         self.notifier = wake_service.notifier_builder().create()
         self.listener = wake_controller.listener_builder().create()
+        self.t_min = None
+        if t_min_publisher:
+            try:
+                t_min = node.service_builder(iox2.ServiceName.new(cv.prefixed(instance, cv.SERVICE_T_MIN))) \
+                    .publish_subscribe(cv.TminSetpoint).open_with_attributes(schema_verifier())
+            except iox2.PublishSubscribeOpenError as e:
+                fail("cannot open the T_min service of instance \"%s\": %s" % (instance, e))
+            self.t_min = t_min.publisher_builder().create()
+
+    def send_t_min(self, sequence, t_min_n):
+        """Publishes a uniform T_min set-point (N) and wakes the service."""
+        self.t_min.send_copy(cv.TminSetpoint(sequence=sequence, timestamp_ns=time.monotonic_ns(),
+                                             t_min_n=t_min_n))
+        self.notifier.notify_with_custom_event_id(iox2.EventId.new(cv.EVENT_ID_T_MIN))
 
     def estimates(self):
         """Copies of every queued estimate, oldest first (each sample is released at once)."""
@@ -179,6 +234,14 @@ class Summary:
         # (CLOCK_MONOTONIC, the clock of every *timestamp_ns field).
         self.latency_ns = []
         self.margin_rtt_ns = []
+        # --hold-f1: set-points published, actions, and the ok estimates below the requirement
+        # after the first answer that carried a T_min (hold_start_ns, CLOCK_MONOTONIC).
+        self.hold_start_ns = None
+        self.hold_setpoints = 0
+        self.hold_setpoint_range = None
+        self.hold_actions = {}
+        self.hold_counted = 0
+        self.hold_below = 0
 
     def estimate(self, e, now_ns):
         self.estimates += 1
@@ -199,6 +262,27 @@ class Summary:
             self.margin_min = min(self.margin_min, r.margin_hz)
         self.last_margin = r
 
+    def hold_answer(self, hold, ports, r):
+        """Takes a margin answer into the hold; publishes a changed set-point."""
+        before = hold.setpoint_n
+        action = hold.on_response(r)
+        self.hold_actions[action] = self.hold_actions.get(action, 0) + 1
+        if hold.setpoint_n != before:
+            self.hold_setpoints += 1
+            ports.send_t_min(self.hold_setpoints, hold.setpoint_n)
+            lo, hi = self.hold_setpoint_range or (hold.params.floor_n, hold.params.floor_n)
+            self.hold_setpoint_range = (min(lo, hold.setpoint_n), max(hi, hold.setpoint_n))
+        if action != "no_answer" and self.hold_start_ns is None:
+            self.hold_start_ns = time.monotonic_ns()
+
+    def hold_estimate(self, hold, e):
+        """Counts an ok estimate of a pose the service took after the hold's first answer."""
+        if self.hold_start_ns is not None and e.status == cv.STATUS_OK \
+                and e.receive_timestamp_ns > self.hold_start_ns:
+            self.hold_counted += 1
+            if e.f1_hz < hold.params.required_hz:
+                self.hold_below += 1
+
     def as_json(self, required_hz):
         def num(x):
             return x if math.isfinite(x) else None
@@ -217,6 +301,12 @@ class Summary:
             "lost_margins": self.lost_margins,
             "latency_us": percentiles_us(self.latency_ns),
             "margin_rtt_us": percentiles_us(self.margin_rtt_ns),
+            "hold": None if self.hold_start_ns is None and not self.hold_actions else {
+                "setpoints": self.hold_setpoints,
+                "setpoint_range_n": self.hold_setpoint_range,
+                "actions": self.hold_actions,
+                "counted": self.hold_counted,
+                "below": self.hold_below},
             "last_margin": None if m is None else {
                 "status": cv.status_str(m.status), "pose_sequence": m.pose_sequence,
                 "f1_hz": num(m.f1_hz), "margin_hz": num(m.margin_hz),
@@ -238,17 +328,22 @@ def percentiles_us(samples_ns):
 
 def run(ports, a):
     s = Summary(ports.attributes)
+    hold = None if a.hold is None else hold_f1.F1Hold(a.hold)
     start = time.monotonic()
     next_print = 1.0
     pending, sent_ns, sequence, asked_at = None, 0, 0, 0
     while time.monotonic() - start < a.seconds:
         for e in ports.estimates():
             s.estimate(e, time.monotonic_ns())
+            if hold is not None:
+                s.hold_estimate(hold, e)
         if pending is not None:
             r = take_response(pending)
             if r is not None:
                 s.margin(r, time.monotonic_ns() - sent_ns)
                 pending = None
+                if hold is not None:
+                    s.hold_answer(hold, ports, r)
             elif time.monotonic_ns() - sent_ns > MARGIN_TIMEOUT_S * 1e9:
                 s.lost_margins += 1
                 pending = None
@@ -265,6 +360,8 @@ def run(ports, a):
             print("controller.py: t = %.1f s  f1 = %.6f Hz (%s)  margin = %s" % (
                 t, s.last_estimate.f1_hz, cv.status_str(s.last_estimate.status),
                 "none yet" if m is None else "%.6f Hz (%s)" % (m.margin_hz, cv.status_str(m.status))))
+            if hold is not None:
+                print("controller.py: T_min set-point %.3f N" % hold.setpoint_n)
         ports.wait(WAIT_SLICE_S)
     return s
 
@@ -275,7 +372,7 @@ def main():
     # The name starts with "cablevib", so `cablevib serve` cleans up after this node if the
     # process dies.
     node = iox2.NodeBuilder.new().name(iox2.NodeName.new("cablevib-py-controller")).create(iox2.ServiceType.Ipc)
-    ports = Ports(node, a.instance, a.connect_timeout_s)
+    ports = Ports(node, a.instance, a.connect_timeout_s, t_min_publisher=a.hold is not None)
     attrs = ", ".join("%s=%s" % kv for kv in sorted(ports.attributes.items()))
     print('controller.py: taking estimates from "%s" for %g s, margin against %g Hz' % (
         ports.estimate_name, a.seconds, a.required_hz))
@@ -291,6 +388,13 @@ def main():
         if p is not None:
             print("controller.py: %s: p50 %.1f us  p99 %.1f us  max %.1f us (%d samples)" % (
                 what, p["p50"], p["p99"], p["max"], len(samples)))
+    if a.hold is not None:
+        lo, hi = s.hold_setpoint_range or (a.hold.floor_n, a.hold.floor_n)
+        print("controller.py: hold f1 >= %g Hz: %d set-points (%.2f..%.2f N; actions %s); ok estimates "
+              "below %g Hz after the first answer: %d of %d" % (
+                  a.hold.required_hz, s.hold_setpoints, lo, hi,
+                  ", ".join("%s %d" % kv for kv in sorted(s.hold_actions.items())),
+                  a.hold.required_hz, s.hold_below, s.hold_counted))
     if a.json:
         print(s.as_json(a.required_hz))
     return 0

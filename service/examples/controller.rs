@@ -18,11 +18,25 @@
 //! An outage of the service (no estimate for `--outage-ms`) prints one line when it starts and
 //! one when the estimates resume, with its duration; the summary counts the outages, the
 //! longest and their total time ([`GapDetector`]).
+//!
+//! With `--hold-f1 HZ` it also acts on the margin: it asks for HZ + guard and publishes the
+//! uniform T_min set-point [`F1Hold`] derives from each answer (the service's
+//! `t_min_required_n`, raised at once, relaxed rate-limited above a hysteresis band, between
+//! `--hold-floor-n` and `--hold-ceiling-n`; docs/service.md, "Holding f1"):
+//!
+//! ```text
+//! cargo run --release --example controller -- --instance demo --seconds 10 \
+//!     --hold-f1 9.5 --hold-floor-n 60 --hold-ceiling-n 350
+//! ```
 
 use std::time::{Duration, Instant};
 
-use cablevib_ipc::{monotonic_now_ns, status_str, MarginRequest, ServiceNames};
-use cablevib_service::ports::{create_node, EstimateOutput, MarginClient};
+use cablevib_ipc::{monotonic_now_ns, status_str, MarginRequest, ServiceNames, TminSetpoint};
+use cablevib_service::hold::{
+    F1Hold, HoldAction, HoldInput, HoldParams, DEFAULT_GUARD_HZ, DEFAULT_RELAX_BAND_HZ,
+    DEFAULT_RELAX_RATE_N_PER_S,
+};
+use cablevib_service::ports::{create_node, EstimateOutput, MarginClient, PoseInput};
 use cablevib_service::stats::{GapDetector, GapEvent, SampleLog, StatusHistogram};
 use cablevib_service::WaitMode;
 use clap::Parser;
@@ -56,6 +70,96 @@ struct Args {
     /// An outage is this long without an estimate, ms.
     #[arg(long, default_value_t = DEFAULT_OUTAGE_MS)]
     outage_ms: f64,
+    /// Hold f1 at or above HZ: publish the T_min set-point the margin answers name (raised at
+    /// once when f1 < HZ + guard, relaxed at --hold-relax-n-per-s when f1 ≥ HZ + relax band).
+    /// The margin is then asked against HZ + guard instead of --required-hz. Needs
+    /// --hold-floor-n and --hold-ceiling-n.
+    #[arg(long, value_name = "HZ", conflicts_with = "no_margin")]
+    hold_f1: Option<f64>,
+    /// Lowest set-point the hold relaxes to, N: the scene's T_min.
+    #[arg(long, value_name = "N", requires = "hold_f1")]
+    hold_floor_n: Option<f64>,
+    /// Highest set-point, N: the smallest t_max of the scene's cables (the service refuses a
+    /// uniform set-point above any cable's t_max).
+    #[arg(long, value_name = "N", requires = "hold_f1")]
+    hold_ceiling_n: Option<f64>,
+    /// Guard above HZ the hold raises to, Hz (covers f1's drift between two answers).
+    #[arg(long, value_name = "HZ", default_value_t = DEFAULT_GUARD_HZ, requires = "hold_f1")]
+    hold_guard_hz: f64,
+    /// Relax only when f1 ≥ HZ + this, Hz (> the guard: the hysteresis band).
+    #[arg(long, value_name = "HZ", default_value_t = DEFAULT_RELAX_BAND_HZ, requires = "hold_f1")]
+    hold_relax_band_hz: f64,
+    /// Largest decrease of the set-point per second, N/s.
+    #[arg(long, value_name = "N_PER_S", default_value_t = DEFAULT_RELAX_RATE_N_PER_S, requires = "hold_f1")]
+    hold_relax_n_per_s: f64,
+}
+
+/// The hold of `--hold-f1`, checked (one-line errors).
+fn hold_params(a: &Args) -> anyhow::Result<Option<HoldParams>> {
+    let Some(required_hz) = a.hold_f1 else {
+        return Ok(None);
+    };
+    let (Some(floor_n), Some(ceiling_n)) = (a.hold_floor_n, a.hold_ceiling_n) else {
+        anyhow::bail!(
+            "--hold-f1 needs --hold-floor-n (the scene's T_min, N) and --hold-ceiling-n (the \
+             smallest cable t_max, N)"
+        );
+    };
+    let p = HoldParams {
+        required_hz,
+        guard_hz: a.hold_guard_hz,
+        relax_band_hz: a.hold_relax_band_hz,
+        relax_rate_n_per_s: a.hold_relax_n_per_s,
+        floor_n,
+        ceiling_n,
+    };
+    Ok(Some(p.checked()?))
+}
+
+/// `--hold-f1`: the hold, its T_min publisher and what it did.
+struct Hold {
+    hold: F1Hold,
+    input: PoseInput,
+    sequence: u64,
+    /// The first answer that carried a T_min (controller's clock, ns): the count starts there.
+    start_ns: Option<u64>,
+    below: u64,
+    counted: u64,
+    setpoint_range: (f64, f64),
+    actions: [u64; 7],
+}
+
+impl Hold {
+    fn on_estimate(&mut self, e: &cablevib_ipc::EstimateSample) {
+        if let Some(start) = self.start_ns {
+            if e.is_ok() && e.receive_timestamp_ns > start {
+                self.counted += 1;
+                if e.f1_hz < self.hold.params().required_hz {
+                    self.below += 1;
+                }
+            }
+        }
+    }
+
+    fn on_answer(&mut self, r: &cablevib_ipc::MarginResponse) -> anyhow::Result<()> {
+        let before = self.hold.setpoint_n();
+        let action = self.hold.on_answer(&HoldInput::from(r));
+        self.actions[action as usize] += 1;
+        let now = self.hold.setpoint_n();
+        if now != before {
+            self.sequence += 1;
+            let setpoint = TminSetpoint::uniform(self.sequence, monotonic_now_ns(), now);
+            self.input.send_t_min(&setpoint)?;
+            self.setpoint_range = (
+                self.setpoint_range.0.min(now),
+                self.setpoint_range.1.max(now),
+            );
+        }
+        if action != HoldAction::NoAnswer && self.start_ns.is_none() {
+            self.start_ns = Some(monotonic_now_ns());
+        }
+        Ok(())
+    }
 }
 
 /// Longest `--seconds`, s: a day, far beyond any run, keeps the latency log's size finite.
@@ -75,18 +179,48 @@ fn main() -> anyhow::Result<()> {
         a.outage_ms.is_finite() && a.outage_ms > 0.0,
         "--outage-ms must be finite and > 0"
     );
+    let hold_params = hold_params(&a)?;
     let names = ServiceNames::new(&a.instance);
     let node = create_node("cablevib-controller")?;
     let estimates = EstimateOutput::open(&node, &names)?;
     let margin = MarginClient::open(&node, &names)?;
+    let mut hold = match hold_params {
+        Some(p) => Some(Hold {
+            hold: F1Hold::new(p),
+            input: PoseInput::open(&node, &names)?,
+            sequence: 0,
+            start_ns: None,
+            below: 0,
+            counted: 0,
+            setpoint_range: (p.floor_n, p.floor_n),
+            actions: [0; 7],
+        }),
+        None => None,
+    };
+    let required_hz = hold
+        .as_ref()
+        .map_or(a.required_hz, |h| h.hold.params().request_hz());
     // Whoever created the estimate service (usually `cablevib serve`) defined its schema
     // version as an attribute: refuse to talk across schemas, and say what the service runs.
     let attributes = estimates.attributes();
     attributes.check_schema(&names.estimate, true)?;
     println!(
         "controller: taking estimates from \"{}\" for {} s (wait {}), margin against {} Hz",
-        names.estimate, a.seconds, a.wait, a.required_hz
+        names.estimate, a.seconds, a.wait, required_hz
     );
+    if let Some(h) = &hold {
+        let p = h.hold.params();
+        println!(
+            "controller: holding f1 ≥ {} Hz: T_min raised at once below {} Hz, relaxed at ≤ {} \
+             N/s above {} Hz, within [{}, {}] N",
+            p.required_hz,
+            p.request_hz(),
+            p.relax_rate_n_per_s,
+            p.required_hz + p.relax_band_hz,
+            p.floor_n,
+            p.ceiling_n
+        );
+    }
     println!("controller: service attributes: {attributes}");
 
     let capacity = ((a.seconds * 20_000.0) as usize + 1000).min(MAX_LOGGED_SAMPLES);
@@ -126,6 +260,9 @@ fn main() -> anyhow::Result<()> {
         }
         last_sequence = e.pose_sequence;
         status_counts.record_wire(e.status);
+        if let Some(h) = &mut hold {
+            h.on_estimate(&e);
+        }
         if e.is_ok() {
             f1_min = f1_min.min(e.f1_hz);
             f1_max = f1_max.max(e.f1_hz);
@@ -134,7 +271,7 @@ fn main() -> anyhow::Result<()> {
         if !a.no_margin {
             request_sequence += 1;
             let t0 = monotonic_now_ns();
-            let request = MarginRequest::new(request_sequence, t0, a.required_hz);
+            let request = MarginRequest::new(request_sequence, t0, required_hz);
             match margin.query(&request, a.wait, Duration::from_millis(5))? {
                 Some(r) => {
                     margin_rtt.push(monotonic_now_ns().saturating_sub(t0));
@@ -142,6 +279,9 @@ fn main() -> anyhow::Result<()> {
                     if r.is_ok() {
                         margin_hz = r.margin_hz;
                         worst_margin = worst_margin.min(r.margin_hz);
+                    }
+                    if let Some(h) = &mut hold {
+                        h.on_answer(&r)?;
                     }
                 }
                 None => unanswered += 1,
@@ -157,6 +297,9 @@ fn main() -> anyhow::Result<()> {
                 e.f1_hz,
                 margin_hz
             );
+            if let Some(h) = &hold {
+                println!("controller: T_min set-point {:.3} N", h.hold.setpoint_n());
+            }
             next_print += 1.0;
         }
     }
@@ -174,10 +317,7 @@ fn main() -> anyhow::Result<()> {
         println!("  f1: {f1_min:.4} … {f1_max:.4} Hz");
     }
     if worst_margin.is_finite() {
-        println!(
-            "  worst margin against {} Hz: {worst_margin:+.4} Hz",
-            a.required_hz
-        );
+        println!("  worst margin against {required_hz} Hz: {worst_margin:+.4} Hz");
     }
     println!("  statuses: {}", status_counts.summary());
     println!(
@@ -188,6 +328,20 @@ fn main() -> anyhow::Result<()> {
         println!(
             "  margin query round trip: {} ({unanswered} unanswered within 5 ms)",
             margin_rtt.percentiles().display_us()
+        );
+    }
+    if let Some(h) = &hold {
+        println!(
+            "  hold f1 ≥ {} Hz: {} set-points ({:.2}..{:.2} N; actions {}); ok estimates below \
+             {} Hz after the first answer: {} of {}",
+            h.hold.params().required_hz,
+            h.sequence,
+            h.setpoint_range.0,
+            h.setpoint_range.1,
+            HoldAction::summary(&h.actions),
+            h.hold.params().required_hz,
+            h.below,
+            h.counted
         );
     }
     if stale > 0 {

@@ -5,6 +5,8 @@
 //! estimates every pose; the controller thread takes every estimate, measures the latency from
 //! the pose's timestamp to its arrival, and asks the service for its margin against
 //! `--required-hz` after each one. A line of progress per second, then a summary.
+//! With `--hold-f1 HZ` the controller also holds f1 with T_min set-points (`demo_hold.rs`)
+//! and the summary adds the hold's lines.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
@@ -57,6 +59,8 @@ struct ControllerLog {
     /// (pose sequence, margin Hz, status) of each margin answer.
     margins: Vec<(u64, f64, u32)>,
     margin_timeouts: u64,
+    /// What `--hold-f1` recorded.
+    hold: Option<super::demo_hold::HoldLog>,
 }
 
 /// Shared progress counters (read once per second by the main thread).
@@ -69,10 +73,12 @@ struct Progress {
     not_ok: AtomicU64,
 }
 
+#[allow(clippy::too_many_arguments)]
 fn controller(
     names: ServiceNames,
     wait: WaitMode,
     required_hz: f64,
+    hold: Option<super::hold::HoldParams>,
     capacity: usize,
     stop: Arc<AtomicBool>,
     ready: Arc<AtomicBool>,
@@ -81,6 +87,11 @@ fn controller(
     let node = create_node("cablevib-demo-controller")?;
     let estimates = EstimateOutput::open(&node, &names)?;
     let margin = MarginClient::open(&node, &names)?;
+    let mut hold = hold
+        .map(|p| super::demo_hold::DemoHold::open(&node, &names, p, capacity))
+        .transpose()?;
+    // With --hold-f1 the margin is asked against the hold's requirement (+ guard).
+    let required_hz = hold.as_ref().map_or(required_hz, |h| h.request_hz());
     ready.store(true, Ordering::Release);
     let mut log = ControllerLog {
         seen: Vec::with_capacity(capacity),
@@ -88,6 +99,7 @@ fn controller(
         margin_rtt: SampleLog::with_capacity(capacity),
         margins: Vec::with_capacity(capacity),
         margin_timeouts: 0,
+        hold: None,
     };
     let mut request_sequence = 0;
     while !stop.load(Ordering::Acquire) {
@@ -104,6 +116,9 @@ fn controller(
                 ee_mode_hz: e.ee_mode_hz,
             });
         }
+        if let Some(h) = &mut hold {
+            h.on_estimate(&e);
+        }
         request_sequence += 1;
         let t0 = monotonic_now_ns();
         let request = MarginRequest::new(request_sequence, t0, required_hz);
@@ -112,6 +127,9 @@ fn controller(
                 log.margin_rtt.push(monotonic_now_ns().saturating_sub(t0));
                 if log.margins.len() < capacity {
                     log.margins.push((r.pose_sequence, r.margin_hz, r.status));
+                }
+                if let Some(h) = &mut hold {
+                    h.on_answer(&r)?;
                 }
                 progress
                     .last_margin_bits
@@ -130,6 +148,7 @@ fn controller(
             progress.not_ok.fetch_add(1, Ordering::Relaxed);
         }
     }
+    log.hold = hold.map(super::demo_hold::DemoHold::finish);
     Ok(log)
 }
 
@@ -146,6 +165,12 @@ fn validate(a: &DemoConfig) -> Result<(), ServiceError> {
             "--rate-hz {:?} must be in [1, {MAX_RATE_HZ}] Hz",
             a.rate_hz
         ));
+    }
+    if a.hold_f1_hz.is_some() && a.t_min_schedule.is_some() {
+        return bad("--hold-f1 and --t-min-schedule both set T_min: give one".into());
+    }
+    if a.hold_csv.is_some() && a.hold_f1_hz.is_none() {
+        return bad("--hold-csv needs --hold-f1".into());
     }
     if !(a.required_hz.is_finite() && a.required_hz > 0.0) {
         return bad(format!(
@@ -192,6 +217,10 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
     // The service's own log lines would interleave with the progress: warnings only.
     init_tracing("warn");
     let trajectory = Trajectory::circle(scene, a.period_s)?;
+    let hold = match a.hold_f1_hz {
+        Some(hz) => Some(super::demo_hold::params(scene, hz)?),
+        None => None,
+    };
     let schedule = a.t_min_schedule.clone().unwrap_or_default();
     let instance = format!("cablevib_demo_{}", std::process::id());
     let names = ServiceNames::new(&instance);
@@ -231,6 +260,7 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
                     names,
                     wait,
                     required,
+                    hold,
                     capacity,
                     stop.clone(),
                     ready,
@@ -267,6 +297,9 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
     let server_report = server_report?;
     let log = log?;
     summary(a, &trajectory, sent, &server_report, &log);
+    if let Some(h) = &log.hold {
+        super::demo_hold::summary(scene, a, &trajectory, h)?;
+    }
     Ok(())
 }
 
@@ -421,7 +454,7 @@ fn summary(
         println!(
             "  margin f1 − {:.2} Hz (required): worst {:+.4} Hz ({}); below the requirement in \
              {} of {} answers{}",
-            a.required_hz,
+            log.hold.as_ref().map_or(a.required_hz, |h| h.request_hz()),
             worst.1,
             where_(worst.0),
             below,

@@ -15,6 +15,7 @@
 //! | [`schedule`] | T_min schedules (replay); trajectories are [`crate::trajectory`]'s |
 //! | [`stats`] | preallocated rings and percentiles |
 //! | [`demo`](mod@demo) | `cablevib demo`: service, replay and controller in one process |
+//! | [`hold`] | holding f1: the T_min set-point a controller publishes from the margin answers |
 //! | [`bench`](mod@bench) | `cablevib bench-ipc`: pose-published → estimate-received latency |
 //!
 //! # Waiting: spin or event
@@ -32,6 +33,8 @@
 
 pub mod bench;
 pub mod demo;
+mod demo_hold;
+pub mod hold;
 pub mod ports;
 pub mod rt;
 pub mod schedule;
@@ -159,6 +162,11 @@ pub struct DemoConfig {
     pub period_s: f64,
     /// T_min schedule (default: the scene's T_min throughout).
     pub t_min_schedule: Option<TminSchedule>,
+    /// Hold f1 at or above this, Hz, with the T_min set-points of [`hold::F1Hold`] (None: the
+    /// controller only asks for the margin).
+    pub hold_f1_hz: Option<f64>,
+    /// With `hold_f1_hz`: write one CSV row per ok estimate after the hold's first answer.
+    pub hold_csv: Option<std::path::PathBuf>,
 }
 
 /// What `cablevib bench-ipc` measures (the scene is passed beside it).

@@ -91,6 +91,20 @@ pub struct DemoArgs {
     /// The scene's effect flags.
     #[command(flatten)]
     pub effects: super::args::EffectArgs,
+    /// Hold the first natural frequency at or above HZ: the controller publishes the T_min
+    /// set-point the margin answers name (raised at once below HZ + 0.1 Hz guard, relaxed at
+    /// ≤ 20 N/s when f1 ≥ HZ + 0.25 Hz, between the scene's T_min and the smallest cable
+    /// t_max; docs/service.md, "Holding f1"). The summary counts the ok estimates below HZ
+    /// after the first answer and compares the mean Σ T² with the fixed T_min that meets HZ
+    /// at every pose. The margin is then asked against HZ + guard (--required-hz is unused).
+    #[arg(long, value_name = "HZ", conflicts_with = "t_min_schedule")]
+    pub hold_f1: Option<f64>,
+    /// With --hold-f1: write one CSV row per ok estimate after the first answer (t_s,
+    /// pose_sequence, f1_hz, setpoint_n, sum_t2_n2, and the fixed T_min's fixed_t_min_n,
+    /// f1_fixed_hz, sum_t2_fixed_n2), and the figures of f1 and T_min against time next to it
+    /// (PATH without its extension + -f1.svg and -tmin.svg).
+    #[arg(long, value_name = "PATH", requires = "hold_f1")]
+    pub hold_csv: Option<std::path::PathBuf>,
 }
 
 /// `cablevib bench-ipc` options.
@@ -189,8 +203,38 @@ pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
         rate_hz: a.rate_hz,
         period_s: a.period_s,
         t_min_schedule,
+        hold_f1_hz: a.hold_f1,
+        hold_csv: a.hold_csv.clone(),
     };
-    Ok(crate::service::demo(&scene, &cfg)?)
+    crate::service::demo(&scene, &cfg)?;
+    if let (Some(hz), Some(csv)) = (a.hold_f1, &a.hold_csv) {
+        hold_figures(csv, hz)?;
+    }
+    Ok(())
+}
+
+/// The figures of the `--hold-csv` record, next to it: PATH without its extension +
+/// `-f1.svg` and `-tmin.svg` (none when the demo wrote no record).
+fn hold_figures(csv: &std::path::Path, hold_hz: f64) -> Result<(), CliError> {
+    let Ok(text) = std::fs::read_to_string(csv) else {
+        return Ok(());
+    };
+    let Some((f1, t_min)) = crate::report::hold::hold_svgs(&text, hold_hz) else {
+        return Err(CliError::Usage(format!(
+            "{}: not a --hold-csv record",
+            csv.display()
+        )));
+    };
+    let stem = csv.with_extension("");
+    for (suffix, svg) in [("-f1.svg", f1), ("-tmin.svg", t_min)] {
+        let mut name = stem.clone().into_os_string();
+        name.push(suffix);
+        let path = std::path::PathBuf::from(name);
+        std::fs::write(&path, svg)
+            .map_err(|e| CliError::Usage(format!("{}: {e}", path.display())))?;
+        println!("  hold: figure written to {}", path.display());
+    }
+    Ok(())
 }
 
 /// `cablevib bench-ipc`: pose-published → estimate-received latency.

@@ -11,6 +11,7 @@
 //! | [`trajectory`](mod@trajectory) | `cablevib trajectory`: CSV and figure |
 //! | [`shapes_csv`] | `cablevib modes`: the mode-shape CSV |
 //! | [`tmin`] | `cablevib sweep-tmin`: CSV and figure |
+//! | [`hold`](mod@hold) | `cablevib demo --hold-f1 --hold-csv`: the figures of the hold's record |
 //! | [`sag_compare`] | `cablevib sag-compare`: CSV and four-panel figure |
 //! | [`accuracy_figures`] | `cablevib accuracy`: CSVs and figures |
 //! | [`accuracy_doc`] | `cablevib accuracy`: the Markdown section and its splicing |
@@ -19,6 +20,7 @@ pub mod accuracy_doc;
 pub mod accuracy_figures;
 pub mod csv;
 pub mod figure;
+pub mod hold;
 pub mod map;
 pub mod sag_compare;
 pub mod shapes_csv;

@@ -2,5 +2,6 @@
 //! the Python controller example.
 //! Area binary of the command-line crate (see tests/README.md at the repository root).
 
+mod demo_hold;
 mod ipc_service;
 mod python_controller;

@@ -7,6 +7,8 @@
 //! - `examples/python/controller.py` (the file docs/service.md runs) against `cablevib serve` as a
 //!   separate process, with poses published from this test: estimates arrive with status ok
 //!   and the f1 of the library's `Estimator` for the same pose, margin answers arrive;
+//! - `controller.py --hold-f1` holds f1 at a fixed pose with T_min set-points (none of the
+//!   estimates after its first answer below the requirement);
 //! - a service carrying another schema-version attribute: the Python controller exits with a
 //!   one-line error, the Rust ports refuse it;
 //! - a Rust client reads the attributes `cablevib serve` defined (scene, cable model, ...).
@@ -357,6 +359,79 @@ fn python_controller_gets_estimates_and_margins() {
         scene.model.elements_per_cable.to_string()
     );
     assert_eq!(a[ATTR_UNITS], UNITS);
+}
+
+/// `controller.py --hold-f1` against `cablevib serve` at a fixed pose whose f1 at the scene's
+/// T_min is 0.3 Hz below the requirement: the Python hold (`examples/python/hold_f1.py`)
+/// publishes set-points on the service's T_min topic, the service applies them, and no ok
+/// estimate of a pose taken after the first answer is below the requirement. Independent of
+/// the service: the library's `Estimator` at the highest set-point published meets the
+/// requirement (f1 at a uniform T_min, cold start).
+#[test]
+fn python_controller_holds_f1() {
+    let python = venv_python();
+    let inst = instance("hold");
+    let scene = Scene::load("spatial-paper").expect("scene");
+    let position = test_pose(&scene);
+    let pose = Pose {
+        position_m: position.into(),
+        orientation_wxyz: IDENTITY_QUATERNION,
+    };
+    let mut estimator = Estimator::new(&scene).expect("estimator");
+    let at_scene = estimator.update(&pose, Tmin::Scene).f1_hz;
+    let hold_hz = at_scene + 0.3;
+
+    let mut service = Guard::spawn(
+        "cablevib serve",
+        Command::new(BIN)
+            .args(["serve", "--scene", "spatial-paper", "--instance", &inst])
+            .args(["--wait", "event", "--stats-period-s", "0"])
+            .args(["--max-cycles", "200000"]),
+    );
+    let stop = Arc::new(AtomicBool::new(false));
+    let publisher = publish_poses(&inst, position, stop.clone());
+    let out = run(
+        "controller.py --hold-f1",
+        Command::new(python)
+            .env_remove("IOX2_LOG_LEVEL")
+            .arg(root().join("examples/python/controller.py"))
+            .args([
+                "--instance",
+                &inst,
+                "--seconds",
+                CONTROLLER_SECONDS,
+                "--json",
+            ])
+            .args(["--connect-timeout-s", "60"])
+            .args(["--hold-f1", &hold_hz.to_string()])
+            .args(["--hold-floor-n", &scene.t_min_n.to_string()])
+            .args(["--hold-ceiling-n", &scene.t_max_n.to_string()]),
+    );
+    stop.store(true, Ordering::Release);
+    publisher.join().expect("publisher");
+    service.interrupt();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "controller.py failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let s: Value = serde_json::from_str(stdout.lines().last().unwrap_or(""))
+        .unwrap_or_else(|e| panic!("{e}: {stdout}"));
+    let h = &s["hold"];
+    assert!(h["setpoints"].as_u64().unwrap() >= 1, "{s}");
+    assert!(h["counted"].as_u64().unwrap() > 0, "{s}");
+    assert_eq!(h["below"].as_u64(), Some(0), "{s}");
+    assert!(s["f1_max_hz"].as_f64().unwrap() >= hold_hz, "{s}");
+    let highest = h["setpoint_range_n"][1].as_f64().unwrap();
+    assert!(highest > scene.t_min_n && highest <= scene.t_max_n, "{s}");
+    estimator.reset();
+    let e = estimator.update(&pose, Tmin::Uniform(highest));
+    assert!(
+        e.is_ok() && e.f1_hz >= hold_hz,
+        "{} Hz at {highest} N",
+        e.f1_hz
+    );
 }
 
 /// Creates the estimate and margin services of `inst` as a program of schema version "999"
