@@ -257,7 +257,7 @@ pub(crate) fn summary(
     );
     if poses.len() != after.len() || poses.is_empty() {
         println!("  hold: no poses to compare with a fixed T_min");
-        return Ok(());
+        return no_record(a, "no poses to compare with a fixed T_min");
     }
     match fixed_t_min(scene, &poses, p.required_hz, p.floor_n) {
         Ok((t_fixed, at)) => {
@@ -279,9 +279,24 @@ pub(crate) fn summary(
                 println!("  hold: per-estimate record written to {}", path.display());
             }
         }
-        Err(e) => println!("  hold: no fixed T_min to compare with: {e}"),
+        Err(e) => {
+            println!("  hold: no fixed T_min to compare with: {e}");
+            return no_record(a, &format!("no fixed T_min to compare with: {e}"));
+        }
     }
     Ok(())
+}
+
+/// A requested `--hold-csv` that cannot be written is an error (so that nothing reads an
+/// older file at that path as this run's record); without the option, nothing to report.
+fn no_record(a: &DemoConfig, why: &str) -> Result<(), ServiceError> {
+    match &a.hold_csv {
+        Some(path) => Err(ServiceError::Usage(format!(
+            "--hold-csv {}: no record written: {why}",
+            path.display()
+        ))),
+        None => Ok(()),
+    }
 }
 
 fn fmt_n(x: f64) -> String {
