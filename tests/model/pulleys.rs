@@ -64,11 +64,11 @@ fn static_stiffness_equals_finite_differences_of_the_equilibrium_with_pulleys() 
         assert!(rel <= 1e-6, "{p}: {rel:e}\n{k}\n{k_fd}");
         // The pulleys' own term.
         let mut pinned = Matrix3::zeros();
-        for i in 0..s.n_cables() {
+        for (i, (c, &ti)) in s.cables.iter().zip(t0).enumerate() {
             let u = g0.unit[i];
             let l = g0.free_length_m(i);
-            pinned += u * u.transpose() * (s.cables[i].ea_n() / l)
-                + (Matrix3::identity() - u * u.transpose()) * (t0[i] / l);
+            pinned += u * u.transpose() * (c.ea_n() / l)
+                + (Matrix3::identity() - u * u.transpose()) * (ti / l);
         }
         let own = g0
             .pulley_stiffness(t0, 3)
@@ -102,4 +102,68 @@ fn structured_f1_with_pulleys_equals_the_dense_reference() {
         );
         assert!((e.stiffness_n_m - r.stiffness_n_m).norm() <= 1e-9 * r.stiffness_n_m.norm());
     }
+}
+
+/// The rigid platform's pulley term Σ T_i (sin φ/a − 1/L) G_iᵀ n nᵀ G_i (6 × 6) against
+/// central differences, on CAROCA with its pulleys: with fixed tensions T_i and the fixed
+/// map G_i = [I, −[r_i]×] of the pose, f(q) = Σ T_i G_iᵀ s_i(p + R(θ) R₀ b_i) has the
+/// derivative Σ T_i G_iᵀ (∂s_i/∂B) G_i; minus the part of cables pinned at their exit points,
+/// (I − s sᵀ)/L, what is left is the pulleys' term. h = 1e-6 (m, rad): 1e-5 relative to
+/// that term (rounding ~ε·T/h against a term of ~T·R/(a L) ≈ 1e-2·T).
+#[test]
+fn the_rigid_pulley_term_equals_finite_differences() {
+    use cablevib::kinematics::rotation_of;
+    use nalgebra::{Matrix6, Rotation3, Vector6};
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/caroca_with_rotating_pulleys.toml"
+    );
+    let s = Scene::from_path(std::path::Path::new(path)).unwrap();
+    assert!(s.rigid);
+    let t: Vec<f64> = (0..s.n_cables()).map(|i| 100.0 + 15.0 * i as f64).collect();
+    let p0 = s.ee_position_m + Vector3::new(0.1, -0.05, 0.2);
+    let r0 = rotation_of(&[0.98, 0.1, -0.05, 0.15]);
+    let geometry = |p: &Vector3<f64>, rot: &Matrix3<f64>| {
+        let mut g = Geometry::for_scene(&s);
+        g.update_rigid(
+            s.cables.iter().map(|c| &c.anchor_m),
+            s.cables.iter().map(|c| &c.attachment_m),
+            p,
+            rot,
+        )
+        .unwrap();
+        g
+    };
+    let g0 = geometry(&p0, &r0);
+    let gmap = |i: usize, s_vec: &Vector3<f64>| {
+        let rs = g0.arm_m[i].cross(s_vec);
+        Vector6::new(s_vec.x, s_vec.y, s_vec.z, rs.x, rs.y, rs.z)
+    };
+    let f = |q: &Vector6<f64>| {
+        let th = Vector3::new(q[3], q[4], q[5]);
+        let rot = Rotation3::new(th).into_inner() * r0;
+        let g = geometry(&(p0 + Vector3::new(q[0], q[1], q[2])), &rot);
+        (0..s.n_cables()).fold(Vector6::zeros(), |acc, i| acc + gmap(i, &g.unit[i]) * t[i])
+    };
+    let h = 1e-6;
+    let mut fd = Matrix6::zeros();
+    for j in 0..6 {
+        let d = Vector6::ith(j, h);
+        fd.set_column(j, &((f(&d) - f(&-d)) / (2.0 * h)));
+    }
+    let mut pinned = Matrix6::zeros();
+    for (i, &ti) in t.iter().enumerate() {
+        let u = g0.unit[i];
+        let k3 = (Matrix3::identity() - u * u.transpose()) * (ti / g0.free_length_m(i));
+        let mut gi = nalgebra::Matrix3x6::zeros();
+        gi.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&Matrix3::identity());
+        gi.fixed_view_mut::<3, 3>(0, 3)
+            .copy_from(&(-g0.arm_m[i].cross_matrix()));
+        pinned += gi.transpose() * k3 * gi;
+    }
+    let own = g0.pulley_stiffness(&t, 6);
+    let rel = ((fd - pinned) - own).norm() / own.norm();
+    assert!(own.norm() > 1.0, "{own}");
+    assert!(rel <= 1e-5, "{rel:e}\n{own}\n{}", fd - pinned);
 }
