@@ -13,8 +13,19 @@
 //! A point-mass end-effector has every r_i = 0, so its moment rows vanish and A is 3 × n. A
 //! rigid one (scene effect `rotation`) has r_i = R b_i, with b_i in its body frame and R its
 //! orientation ([`Geometry::update_rigid`]).
+//!
+//! A cable with a swivel pulley at its anchor ([`crate::scene::Pulley`]) starts its free
+//! length at the pulley's exit point instead ([`pulley`]): s_i, L_i and the fixed end of the
+//! free cable ([`Geometry::exit_m`]) are the exit point's, and the wrapped arc
+//! ([`Geometry::wrap_arc_m`]) is the cable between the anchor and the exit point. A
+//! geometry made with [`Geometry::for_scene`] knows the scene's pulleys; one made with
+//! [`Geometry::new`] has none.
 
-use nalgebra::{Matrix3, Vector3};
+pub mod pulley;
+
+use crate::scene::Pulley;
+use nalgebra::{Matrix3, Matrix6, Vector3};
+pub use pulley::{pulley_exit, PulleyExit};
 
 /// End-effector pose: position (m) and orientation (unit quaternion w, x, y, z).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -83,6 +94,27 @@ pub enum KinematicsError {
     /// A non-finite position.
     #[error("non-finite position")]
     NonFinite,
+    /// A cable's attachment point is on its pulley's swivel axis: the pulley plane is not
+    /// defined.
+    #[error("cable {cable}: the attachment point is {distance_m:.3e} m from its pulley's swivel axis (< {min_m:.1e} m): the pulley plane is not defined")]
+    AlongSwivelAxis {
+        /// Cable index.
+        cable: usize,
+        /// The attachment point's distance from the axis, m.
+        distance_m: f64,
+        /// The smallest accepted distance, m.
+        min_m: f64,
+    },
+    /// A cable's attachment point is inside its pulley's circle (or on it): no tangent.
+    #[error("cable {cable}: the attachment point is inside its pulley's circle (free length {free_length_m:.3e} m < {min_m:.1e} m)")]
+    InsidePulley {
+        /// Cable index.
+        cable: usize,
+        /// The free length from the tangent point, m (0 inside the circle).
+        free_length_m: f64,
+        /// The smallest accepted free length, m.
+        min_m: f64,
+    },
 }
 
 /// Cable geometry at one pose, preallocated for a fixed number of cables.
@@ -95,6 +127,12 @@ pub struct Geometry {
     /// Attachment points relative to the centroid in the world frame, r_i = R b_i, m
     /// (zero for a point mass). The structure matrix's moment rows are r_i × s_i.
     pub arm_m: Vec<Vector3<f64>>,
+    /// The fixed end of each free cable, m: its anchor, or its pulley's exit point.
+    pub exit_m: Vec<Vector3<f64>>,
+    /// Each cable's pulley (None: the cable leaves from its anchor).
+    pulleys: Vec<Option<Pulley>>,
+    /// Each cable's pulley at the pose (meaningful where `pulleys` has one).
+    exits: Vec<Option<PulleyExit>>,
 }
 
 /// Rotation matrix of a unit quaternion [w, x, y, z] (normalised first).
@@ -163,7 +201,69 @@ impl Geometry {
             unit: vec![Vector3::zeros(); n],
             length_m: vec![0.0; n],
             arm_m: vec![Vector3::zeros(); n],
+            exit_m: vec![Vector3::zeros(); n],
+            pulleys: vec![None; n],
+            exits: vec![None; n],
         }
+    }
+
+    /// Allocate for the cables of `scene`, with their pulleys.
+    pub fn for_scene(scene: &crate::scene::Scene) -> Geometry {
+        let mut g = Geometry::new(scene.n_cables());
+        for (p, c) in g.pulleys.iter_mut().zip(&scene.cables) {
+            *p = c.pulley;
+        }
+        g
+    }
+
+    /// Whether some cable has a pulley.
+    pub fn has_pulleys(&self) -> bool {
+        self.pulleys.iter().any(|p| p.is_some())
+    }
+
+    /// Cable `i`'s pulley at the last successful update (None without a pulley).
+    pub fn pulley_exit(&self, i: usize) -> Option<&PulleyExit> {
+        self.exits[i].as_ref()
+    }
+
+    /// Free length of cable `i`, m: from its anchor, or from its pulley's exit point
+    /// (= `length_m[i]`).
+    pub fn free_length_m(&self, i: usize) -> f64 {
+        self.length_m[i]
+    }
+
+    /// The cable wrapped on cable `i`'s pulley, m: radius × wrap angle (0 without a
+    /// pulley). Together with the free length it is the cable's length from the anchor.
+    pub fn wrap_arc_m(&self, i: usize) -> f64 {
+        self.exits[i].map_or(0.0, |e| e.wrap_arc_m)
+    }
+
+    /// Wrap angle of cable `i`'s pulley, rad (0 without a pulley).
+    pub fn wrap_rad(&self, i: usize) -> f64 {
+        self.exits[i].map_or(0.0, |e| e.wrap_rad)
+    }
+
+    /// The pulleys' own term of the static stiffness for tensions `t_n` (N), N/m, N/rad,
+    /// N·m/rad: Σ_i T_i (sin φ_i / a_i − 1/L_i) G_iᵀ n_i n_iᵀ G_i with G_i = [I, −[r_i]×]
+    /// (`dim` 3: the translational block only), to add to the stiffness of cables pinned at
+    /// their exit points ([`pulley`] module docs). Zero without pulleys. No allocation.
+    pub fn pulley_stiffness(&self, t_n: &[f64], dim: usize) -> Matrix6<f64> {
+        let mut k = Matrix6::zeros();
+        for (i, e) in self.exits.iter().enumerate() {
+            let Some(e) = e else { continue };
+            let c = t_n[i] * e.softening_per_m;
+            let n = e.normal;
+            // δB = δp + δθ × r, so n·δB = n·δp + (r × n)·δθ.
+            let rn = self.arm_m[i].cross(&n);
+            let g6 = nalgebra::Vector6::new(n.x, n.y, n.z, rn.x, rn.y, rn.z);
+            k += g6 * g6.transpose() * c;
+        }
+        if dim == 3 {
+            k.fixed_view_mut::<3, 3>(3, 3).fill(0.0);
+            k.fixed_view_mut::<3, 3>(0, 3).fill(0.0);
+            k.fixed_view_mut::<3, 3>(3, 0).fill(0.0);
+        }
+        k
     }
 
     /// Number of cables.
@@ -181,6 +281,15 @@ impl Geometry {
             return Err(KinematicsError::NonFinite);
         }
         for (i, a) in anchors_m.enumerate().take(self.unit.len()) {
+            if let Some(pulley) = &self.pulleys[i] {
+                let e = pulley_exit(i, a, pulley, &(p_m + self.arm_m[i]))?;
+                self.length_m[i] = e.free_length_m;
+                self.unit[i] = e.unit;
+                self.exit_m[i] = e.exit_m;
+                self.exits[i] = Some(e);
+                continue;
+            }
+            self.exit_m[i] = *a;
             let l = p_m + self.arm_m[i] - a;
             let len = l.norm();
             if len.is_nan() || len < MIN_CABLE_LENGTH_M {

@@ -4,7 +4,13 @@
 //! `attachment_reference` (`joint` or `com`), `<force_min>`, `<force_max>` (N) and exactly
 //! two `<attachment>`s, one on the base (`<link>0</link>`, location in the inertial frame,
 //! m) and one on the platform (`<link>1</link>`, location in the link frame, m, from the
-//! link-frame origin for `joint` or from the centre of mass for `com`). Other cable types
+//! link-frame origin for `joint` or from the centre of mass for `com`). The base attachment
+//! may instead be a swivel pulley: `<base_rotating_pulley>` (`<fixed_location>`, the entry
+//! point on the swivel axis, m; `<pulley_radius>`, m; `<cable_entry_vector>`) or
+//! `<screw_base_rotating_pulley>` (`<constant_winch_point>`, `<cable_pulley_entry_vector>`,
+//! `<pulley_radius>`, and the drum's `<winch_vector>`, `<winch_radius>`,
+//! `<winch_groove_width>`, read and checked: the screw drive's outlet motion along the drum
+//! is not modelled, the pulley stays at the constant winch point). Other cable types
 //! (passive springs, variable-stiffness drives) and multi-segment cables are refused.
 
 use super::xml::At;
@@ -38,6 +44,20 @@ pub struct CasprCable {
     pub force_max_n: f64,
     /// `<K>` of a `cable_linear_spring`, N (axial rigidity EA); None for `cable_ideal`.
     pub k_n: Option<f64>,
+    /// The swivel pulley at the base (`base_m` is then its entry point on the axis).
+    pub pulley: Option<CasprPulley>,
+}
+
+/// A swivel pulley at a cable's base attachment, as CASPR gives it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CasprPulley {
+    /// `<pulley_radius>`, m (≥ 0).
+    pub radius_m: f64,
+    /// `<cable_entry_vector>` (or `<cable_pulley_entry_vector>`), non-zero, as written.
+    pub entry: Vector3<f64>,
+    /// A `screw_base_rotating_pulley`: its drum's (winch vector, radius m, groove width m),
+    /// read but not modelled (the pulley stays at the constant winch point).
+    pub screw: Option<(Vector3<f64>, f64, f64)>,
 }
 
 /// The cable types read.
@@ -161,7 +181,7 @@ fn cable(c: At) -> Result<CasprCable, CasprError> {
     } else {
         None
     };
-    let (base_m, platform_m) = attachments(c.child("attachments")?, &name)?;
+    let (base_m, platform_m, pulley) = attachments(c.child("attachments")?, &name)?;
     Ok(CasprCable {
         name,
         base_m,
@@ -170,18 +190,75 @@ fn cable(c: At) -> Result<CasprCable, CasprError> {
         force_min_n,
         force_max_n,
         k_n,
+        pulley,
     })
 }
 
-/// `<attachments>`: one location on link 0 and one on link 1, in either order. Pulleys
-/// (CASPR's `base_rotating_pulley` and the like) are refused by name, as is any other
-/// element.
-fn attachments(a: At, name: &str) -> Result<(Vector3<f64>, Vector3<f64>), CasprError> {
-    if let Some(other) = a.elements().find(|n| !n.has_tag_name("attachment")) {
+/// The pulley elements read in place of the base attachment.
+const PULLEYS: [&str; 2] = ["base_rotating_pulley", "screw_base_rotating_pulley"];
+
+/// A pulley element: its entry point on the swivel axis (m) and the pulley.
+fn pulley(at: At, name: &str) -> Result<(Vector3<f64>, CasprPulley), CasprError> {
+    let screw = at.node.has_tag_name("screw_base_rotating_pulley");
+    let (point_tag, entry_tag) = if screw {
+        ("constant_winch_point", "cable_pulley_entry_vector")
+    } else {
+        ("fixed_location", "cable_entry_vector")
+    };
+    let point = at.vec3(point_tag)?;
+    let radius_m = at.number("pulley_radius")?;
+    if !(radius_m >= 0.0) {
+        return Err(at.child("pulley_radius")?.err(format!(
+            "cable `{name}`: pulley_radius must be >= 0 m, got {}",
+            message_number(radius_m)
+        )));
+    }
+    let entry = at.vec3(entry_tag)?;
+    if entry == Vector3::zeros() {
+        return Err(at
+            .child(entry_tag)?
+            .err(format!("cable `{name}`: the entry vector must not be zero")));
+    }
+    let screw = if screw {
+        let v = at.vec3("winch_vector")?;
+        let r = at.number("winch_radius")?;
+        let h = at.number("winch_groove_width")?;
+        if !(r > 0.0 && h >= 0.0) {
+            return Err(at.err(format!(
+                "cable `{name}`: winch_radius must be > 0 m and winch_groove_width >= 0 m, got {} and {}",
+                message_number(r),
+                message_number(h)
+            )));
+        }
+        Some((v, r, h))
+    } else {
+        None
+    };
+    Ok((
+        point,
+        CasprPulley {
+            radius_m,
+            entry,
+            screw,
+        },
+    ))
+}
+
+/// The base and platform points and the pulley of one cable's `<attachments>`.
+type Attachments = (Vector3<f64>, Vector3<f64>, Option<CasprPulley>);
+
+/// `<attachments>`: one location on link 0 (or a pulley, [`PULLEYS`], in its place) and one
+/// on link 1, in either order. Any other element is refused by name.
+fn attachments(a: At, name: &str) -> Result<Attachments, CasprError> {
+    if let Some(other) = a
+        .elements()
+        .find(|n| !n.has_tag_name("attachment") && !PULLEYS.contains(&n.tag_name().name()))
+    {
         let tag = other.tag_name().name();
         let message = if tag.contains("pulley") {
             format!(
-                "cable `{name}`: pulleys are not supported yet (only straight cables from a fixed anchor point); pick a cable set without pulleys"
+                "cable `{name}`: this pulley type is not supported (only {})",
+                PULLEYS.join(", ")
             )
         } else {
             format!("cable `{name}`: unexpected element in <attachments>; expected <attachment>")
@@ -197,8 +274,19 @@ fn attachments(a: At, name: &str) -> Result<(Vector3<f64>, Vector3<f64>), CasprE
     }
     let mut base = None;
     let mut platform = None;
+    let mut pulley_of = None;
     for n in all {
         let at = a.at(n);
+        if !n.has_tag_name("attachment") {
+            let (point, p) = pulley(at, name)?;
+            if base.replace(point).is_some() {
+                return Err(at.err(format!(
+                    "cable `{name}`: two base attachments; one must be on link 0 and one on 1"
+                )));
+            }
+            pulley_of = Some(p);
+            continue;
+        }
         let link = at.number("link")?;
         let loc = at.vec3("location")?;
         let slot = if link == 0.0 {
@@ -219,7 +307,7 @@ fn attachments(a: At, name: &str) -> Result<(Vector3<f64>, Vector3<f64>), CasprE
         }
     }
     match (base, platform) {
-        (Some(b), Some(p)) => Ok((b, p)),
+        (Some(b), Some(p)) => Ok((b, p, pulley_of)),
         _ => Err(a.err(format!(
             "cable `{name}`: needs one attachment on link 0 and one on link 1"
         ))),

@@ -243,6 +243,9 @@ pub(super) fn scene_toml(
     }
     let mut t = String::new();
     header(&mut t, link, src);
+    if cables.iter().any(|c| c.pulley.is_some()) {
+        let _ = writeln!(t, "# {}", super::PULLEY_NOT_MODELLED);
+    }
     end_effector(&mut t, link, o, rigid);
     materials_and_model(&mut t, o, &m, &sc, rigid, link.rotation_locked);
     for (c, s) in cables.iter().zip(&sc) {
@@ -389,13 +392,20 @@ fn cable(t: &mut String, c: &CasprCable, s: &SceneCable, o: &ImportOptions) {
         "cable_ideal"
     };
     let _ = writeln!(t, "\n[[cables]]   # \"{}\" ({kind})", safe(&c.name));
+    let base = match &c.pulley {
+        None => "link 0 location",
+        Some(p) if p.screw.is_some() => "screw pulley's constant_winch_point",
+        Some(_) => "pulley's fixed_location",
+    };
     if s.anchor_shifted {
         let _ = writeln!(
             t,
-            "anchor = {}   # m, CASPR link 0 location {} minus the attachment offset (T_XYZ)",
+            "anchor = {}   # m, CASPR {base} {} minus the attachment offset (T_XYZ)",
             vec3(&s.anchor_m),
             vec3(&c.base_m)
         );
+    } else if c.pulley.is_some() {
+        let _ = writeln!(t, "anchor = {}   # m, CASPR {base}", vec3(&s.anchor_m));
     } else {
         let _ = writeln!(
             t,
@@ -415,6 +425,19 @@ fn cable(t: &mut String, c: &CasprCable, s: &SceneCable, o: &ImportOptions) {
     };
     let _ = writeln!(t, "t_min = {:?}   # N, {from}", s.t_min_n);
     let _ = writeln!(t, "t_max = {:?}   # N, CASPR force_max", s.t_max_n);
+    if let Some(p) = &c.pulley {
+        let _ = writeln!(
+            t,
+            "pulley = {{ radius = {:?}, entry_direction = {} }}   # m; CASPR {}",
+            p.radius_m,
+            vec3(&p.entry),
+            if p.screw.is_some() {
+                "screw_base_rotating_pulley (outlet motion along the drum not modelled)"
+            } else {
+                "base_rotating_pulley"
+            }
+        );
+    }
     if let (Some(e), Some(k)) = (s.spring_e_pa, c.k_n) {
         let _ = writeln!(
             t,

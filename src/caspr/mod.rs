@@ -46,7 +46,7 @@ mod xml;
 
 pub use crate::input_file::message_number;
 pub use bodies::Link;
-pub use cables::{AttachmentReference, CasprCable};
+pub use cables::{AttachmentReference, CasprCable, CasprPulley};
 
 use crate::input_file::{read_text, InputError};
 use crate::scene::{ElementKind, Scene, SceneError};
@@ -148,6 +148,19 @@ pub struct Imported {
     pub link: Link,
     /// The cables as read.
     pub cables: Vec<CasprCable>,
+}
+
+/// What an import of cables with pulleys does not model, in one line.
+pub const PULLEY_NOT_MODELLED: &str = "pulleys: the swivel geometry is modelled (exit point, free length, wrap); not modelled: pulley inertia and friction, the cable between winch and pulley, and a screw drive's outlet motion along its drum (the pulley stays at constant_winch_point)";
+
+impl Imported {
+    /// [`PULLEY_NOT_MODELLED`] when a cable has a pulley, else None.
+    pub fn not_modelled(&self) -> Option<&'static str> {
+        self.cables
+            .iter()
+            .any(|c| c.pulley.is_some())
+            .then_some(PULLEY_NOT_MODELLED)
+    }
 }
 
 /// Imports from the two files (read with the crate's bounded reader).

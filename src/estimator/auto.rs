@@ -226,7 +226,7 @@ fn sagged_lambda2(scene: &Scene) -> Vec<f64> {
 /// At the scene's default pose (Clarabel tensions): the largest Irvine parameter λ² over
 /// the cables (0 when the tensions are not available) and the total cable mass, kg.
 fn default_pose_diagnostics(scene: &Scene) -> (f64, f64) {
-    let mut g = Geometry::new(scene.n_cables());
+    let mut g = Geometry::for_scene(scene);
     let _ = g.update(
         scene.cables.iter().map(|c| &c.anchor_m),
         &scene.ee_position_m,

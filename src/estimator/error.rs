@@ -125,9 +125,11 @@ impl EstimatorError {
         match self {
             EstimatorError::Input(input) => input.status(),
             EstimatorError::Kinematics(KinematicsError::NonFinite) => Status::InvalidInput,
-            EstimatorError::Kinematics(KinematicsError::CableTooShort { .. }) => {
-                Status::OutsideWorkspace
-            }
+            EstimatorError::Kinematics(
+                KinematicsError::CableTooShort { .. }
+                | KinematicsError::AlongSwivelAxis { .. }
+                | KinematicsError::InsidePulley { .. },
+            ) => Status::OutsideWorkspace,
             EstimatorError::Tension(TensionError::Infeasible { .. }) => Status::TensionInfeasible,
             EstimatorError::Tension(TensionError::InvalidBounds { .. }) => Status::TminOutOfRange,
             EstimatorError::Tension(TensionError::NonFinite) => Status::InvalidInput,

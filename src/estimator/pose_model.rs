@@ -61,7 +61,7 @@ impl PoseModel {
             scene.clone()
         };
         let n = scene.n_cables();
-        let mut geometry = Geometry::new(n);
+        let mut geometry = Geometry::for_scene(&scene);
         update_geometry(&scene, &mut geometry, pose)?;
         let t_min_n = t_min.per_cable(&scene);
         let t_max_n = super::forward::cable_t_max_n(&scene);

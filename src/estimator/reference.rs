@@ -63,6 +63,13 @@ pub fn reference_analysis_at(
         );
         k6
     };
+    // The pulleys' own term (zero without pulleys; the dense K holds the chains pinned at
+    // the exit points).
+    let stiffness6 = if pm.geometry.has_pulleys() {
+        stiffness6 + pm.geometry.pulley_stiffness(&pm.tensions_n, dim)
+    } else {
+        stiffness6
+    };
     let stiffness_n_m = stiffness6.fixed_view::<3, 3>(0, 0).into_owned();
     Ok(ReferenceAnalysis {
         tensions_n: pm.tensions_n,

@@ -160,6 +160,25 @@ pub struct Cable {
     /// This cable's own upper tension bound, N (`cables[i].t_max`); None: the scene's
     /// [`Scene::t_max_n`]. See [`Scene::cable_t_max_n`].
     pub t_max_n: Option<f64>,
+    /// A swivel pulley at the anchor (`cables[i].pulley`, else `[cable.pulley]`); None: the
+    /// cable leaves from the anchor point itself. See [`Pulley`].
+    pub pulley: Option<Pulley>,
+}
+
+/// A swivel pulley at a cable's anchor (the standard model of CASPR's
+/// `base_rotating_pulley`). The cable arrives from the winch along the swivel axis, which
+/// passes through the anchor (the fixed point where the cable enters the pulley) in the
+/// direction [`Self::entry_unit`]; the pulley turns about that axis to keep the attachment
+/// point in its plane, and the cable leaves it tangent to its circle of radius
+/// [`Self::radius_m`] (the circle touches the axis at the anchor). Kinematics:
+/// `kinematics::pulley`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pulley {
+    /// Unit direction of the cable entering the pulley at the anchor, along the swivel axis
+    /// (`entry_direction`, any non-zero length in the file; CASPR's `cable_entry_vector`).
+    pub entry_unit: Vector3<f64>,
+    /// Radius of the pulley (to the cable's centre line), m, ≥ 0.
+    pub radius_m: f64,
 }
 
 impl Cable {

@@ -63,13 +63,22 @@ fn default_true() -> bool {
     true
 }
 
-#[derive(Debug, Deserialize, Default, Clone, Copy)]
+#[derive(Debug, Deserialize, Default, Clone)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawCableDefaults {
     pub(super) youngs_modulus: Option<f64>,
     pub(super) area: Option<f64>,
     pub(super) weight_per_length: Option<f64>,
     pub(super) mass_per_length: Option<f64>,
+    pub(super) pulley: Option<RawPulley>,
+}
+
+/// `[cable.pulley]` / `[cables.pulley]`: a swivel pulley at the anchor.
+#[derive(Debug, Deserialize, Clone)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawPulley {
+    pub(super) radius: f64,
+    pub(super) entry_direction: RawArray,
 }
 
 #[derive(Debug, Deserialize)]
@@ -113,4 +122,5 @@ pub(super) struct RawCable {
     pub(super) mass_per_length: Option<f64>,
     pub(super) t_min: Option<f64>,
     pub(super) t_max: Option<f64>,
+    pub(super) pulley: Option<RawPulley>,
 }

@@ -6,10 +6,10 @@
 use super::bounds::{check_t_min, TminRangeError};
 use super::parse::{
     RawArray, RawCable, RawCableDefaults, RawDamping, RawEffects, RawEndEffector, RawModel,
-    RawScene, RawTension,
+    RawPulley, RawScene, RawTension,
 };
 use super::{
-    Cable, Damping, ElementKind, ModelSettings, Scene, SceneError, MAX_CABLES,
+    Cable, Damping, ElementKind, ModelSettings, Pulley, Scene, SceneError, MAX_CABLES,
     MAX_ELEMENTS_PER_CABLE,
 };
 use crate::input_file::message_number;
@@ -529,6 +529,11 @@ fn validate_cable(
     let mu = validate_mass_per_length(ck, i, c, d, at.g)?;
     validate_axial_rigidity(ck, i, e * a)?;
     validate_cable_bounds(ck, at, i, c)?;
+    let pulley = match (&c.pulley, &d.pulley) {
+        (Some(p), _) => Some(validate_pulley(ck, &cable_key(i, "pulley"), p)?),
+        (None, Some(p)) => Some(validate_pulley(ck, "cable.pulley", p)?),
+        (None, None) => None,
+    };
     Ok(Cable {
         anchor_m: anchor,
         youngs_modulus_pa: e,
@@ -537,6 +542,34 @@ fn validate_cable(
         attachment_m: attachment,
         t_min_n: c.t_min,
         t_max_n: c.t_max,
+        pulley,
+    })
+}
+
+/// A pulley table (`key`: `cables[i].pulley` or `cable.pulley`): radius finite and ≥ 0,
+/// entry direction three finite numbers, not all zero (normalised here).
+fn validate_pulley(ck: &Checker, key: &str, p: &RawPulley) -> Result<Pulley, SceneError> {
+    if !(p.radius.is_finite() && p.radius >= 0.0) {
+        return Err(ck.inv(
+            &format!("{key}.radius"),
+            format!("must be finite and >= 0 m, got {:?}", p.radius),
+        ));
+    }
+    let dkey = format!("{key}.entry_direction");
+    let d = ck.finite3(&dkey, &p.entry_direction)?;
+    let norm = d.norm();
+    if !(norm > 0.0 && norm.is_finite()) {
+        return Err(ck.inv(
+            &dkey,
+            format!(
+                "must be a non-zero direction (the swivel axis), got {:?}",
+                [d.x, d.y, d.z]
+            ),
+        ));
+    }
+    Ok(Pulley {
+        entry_unit: d / norm,
+        radius_m: p.radius,
     })
 }
 
@@ -765,6 +798,64 @@ mod tests {
         let anchor = "anchor = [1.25, 1.25, 2.5]";
         assert!(base.contains(anchor));
         base.replacen(anchor, &format!("{anchor}\n{extra}"), 1)
+    }
+
+    #[test]
+    fn pulleys_parse_default_and_are_checked() {
+        assert!(Scene::default_scene()
+            .cables
+            .iter()
+            .all(|c| c.pulley.is_none()));
+        let own = "pulley = { radius = 0.05, entry_direction = [0, 0, 2] }";
+        let s = Scene::from_toml_str(&with_first_cable(own), "t.toml").unwrap();
+        let p = s.cables[0].pulley.unwrap();
+        assert_eq!((p.radius_m, p.entry_unit), (0.05, Vector3::z()));
+        assert!(s.cables[1].pulley.is_none());
+        // `[cable.pulley]` is every other cable's.
+        let def = DEFAULT_SCENE_TOML.replacen(
+            "[tension]",
+            "[cable.pulley]\nradius = 0.02\nentry_direction = [1, 0, 0]\n[tension]",
+            1,
+        );
+        assert!(def.contains("[cable.pulley]"));
+        let s = Scene::from_toml_str(&def, "t.toml").unwrap();
+        assert!(s.cables.iter().all(|c| c.pulley.unwrap().radius_m == 0.02));
+        for (bad, key, what) in [
+            (
+                "radius = -0.1, entry_direction = [0, 0, 1]",
+                "cables[0].pulley.radius",
+                ">= 0",
+            ),
+            (
+                "radius = nan, entry_direction = [0, 0, 1]",
+                "cables[0].pulley.radius",
+                ">= 0",
+            ),
+            (
+                "radius = 0.1, entry_direction = [0, 0, 0]",
+                "cables[0].pulley.entry_direction",
+                "non-zero",
+            ),
+            (
+                "radius = 0.1, entry_direction = [0, 1]",
+                "cables[0].pulley.entry_direction",
+                "expected 3",
+            ),
+            ("radius = 0.1", "pulley", "entry_direction"),
+            (
+                "radius = 0.1, entry_direction = [0, 0, 1], axis = 1",
+                "pulley",
+                "axis",
+            ),
+        ] {
+            let e = Scene::from_toml_str(
+                &with_first_cable(&format!("pulley = {{ {bad} }}")),
+                "t.toml",
+            )
+            .unwrap_err()
+            .to_string();
+            assert!(e.contains(key) && e.contains(what), "{bad}: {e}");
+        }
     }
 
     #[test]

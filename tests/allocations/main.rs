@@ -18,6 +18,15 @@ use nalgebra::Vector3;
 
 cablevib_testkit::count_allocations!();
 
+/// A shipped scene file `scenes/NAME.toml`.
+fn scene_file(name: &str) -> Scene {
+    Scene::load(&format!(
+        "{}/scenes/{name}.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+}
+
 /// The paper's circle around the default position (radius 0.75 m; 0.2 m for the rigid-body
 /// robot, whose feasible workspace is smaller), 4 s per turn.
 fn circle(s: &Scene) -> Circle {
@@ -42,6 +51,18 @@ fn ten_thousand_cycles_allocate_nothing() {
         (Scene::default_scene(), ElementKind::Massless, 1),
         (Scene::planar_paper(), ElementKind::Fem, 10),
         (Scene::box_6dof(), ElementKind::Fem, 10),
+        // Swivel pulleys at every anchor: the paper robot and CAROCA (rigid platform).
+        (scene_file("spatial_paper_pulleys"), ElementKind::Fem, 40),
+        (
+            scene_file("spatial_paper_pulleys"),
+            ElementKind::Continuous,
+            1,
+        ),
+        (
+            scene_file("caroca_with_rotating_pulleys"),
+            ElementKind::Fem,
+            10,
+        ),
     ] {
         let s = scene.with_model(el, n);
         let c = circle(&s);

@@ -12,6 +12,7 @@ mod effects_rigid;
 mod inverse_query;
 mod paper_tables;
 mod proptest_model;
+mod pulleys;
 mod realtime_exact;
 mod realtime_vs_dense;
 mod scene_fuzz;

@@ -116,5 +116,8 @@ fn caspr(a: &CasprArgs) -> Result<(), CliError> {
         message_number(p.y),
         message_number(p.z)
     );
+    if let Some(note) = imported.not_modelled() {
+        println!("{note}");
+    }
     Ok(())
 }

@@ -27,15 +27,15 @@ use nalgebra::Vector3;
 /// The CSV header.
 pub const SHAPES_HEADER: &str = "mode,frequency_hz,cable,node,x_m,y_m,z_m,ux,uy,uz";
 
-/// The undeformed positions (m) of cable `i`'s nodes at `fractions` of its chord, anchor to
-/// attachment point.
+/// The undeformed positions (m) of cable `i`'s nodes at `fractions` of its chord, anchor (or
+/// its pulley's exit point, `geometry.exit_m`) to attachment point.
 pub fn node_positions(
     scene: &Scene,
     geometry: &Geometry,
     i: usize,
     fractions: &[f64],
 ) -> Vec<Vector3<f64>> {
-    let a = scene.cables[i].anchor_m;
+    let a = geometry.exit_m[i];
     let end = scene.ee_position_m + geometry.arm_m[i];
     fractions.iter().map(|&t| a + (end - a) * t).collect()
 }

@@ -4,8 +4,14 @@
 //!
 //! For each set, checked against code written here, independent of `src/caspr`:
 //!
-//! - **Sets with pulleys** are refused, one line naming `<base_rotating_pulley>` and saying
-//!   pulleys are not supported yet.
+//! - **Sets with pulleys** (`<base_rotating_pulley>`) import, each pulley at CASPR's
+//!   `fixed_location` with its radius and entry vector; at the default pose the exit point,
+//!   free length, direction and wrapped arc of every cable equal CASPR's own formulas
+//!   (`BaseRotatingPulleyAttachment.ComputePulleyLeavingLocation`: the centre
+//!   r_C = r_F + R·unit((v_F × v_FB) × v_F), ρ = R/|r_B − r_C|, the exit point
+//!   r_A = r_C + ρ²(r_B − r_C) − ρ√(1 − ρ²) n̂ × (r_B − r_C), the arc R·acos(n1·n2)),
+//!   evaluated here, to 1e-12 (m). Their tensions are not checked against the LP here (its
+//!   directions are the straight anchor ones).
 //! - **Geometry**: the XML is read here with roxmltree (a few lines), CASPR's kinematics
 //!   re-derived: link-frame origin o = parent location + q (x y z), R = Rx(α) Ry(β) Rz(γ)
 //!   written out with sin and cos (identity for T_XYZ), attachment point P_i = o + R r_A
@@ -102,6 +108,8 @@ struct Link {
 /// One cable of a set: anchor a_i, platform point P_i (inertial frame), bounds.
 struct Cable {
     anchor: Vector3<f64>,
+    /// A `base_rotating_pulley` at the anchor: (radius m, entry vector).
+    pulley: Option<(f64, Vector3<f64>)>,
     point: Vector3<f64>,
     force_min: f64,
     force_max: f64,
@@ -166,8 +174,8 @@ fn read_link(xml: &str) -> Link {
     }
 }
 
-/// Every cable set: its id and its cables, or None when a cable has a pulley.
-fn read_sets(xml: &str, link: &Link) -> Vec<(String, Option<Vec<Cable>>)> {
+/// Every cable set: its id and its cables.
+fn read_sets(xml: &str, link: &Link) -> Vec<(String, Vec<Cable>)> {
     let doc = roxmltree::Document::parse_with_options(
         xml,
         roxmltree::ParsingOptions {
@@ -183,17 +191,20 @@ fn read_sets(xml: &str, link: &Link) -> Vec<(String, Option<Vec<Cable>>)> {
         .filter(|n| n.has_tag_name("cable_set"))
     {
         let id = set.attribute("id").unwrap().to_string();
-        let mut cables = Some(Vec::new());
+        let mut cables = Vec::new();
         for c in set.children().filter(|n| n.is_element()) {
             let at = child(c, "attachments");
-            if at
+            let (mut anchor, mut local, mut pulley) = (None, None, None);
+            for p in at
                 .children()
-                .any(|n| n.tag_name().name().contains("pulley"))
+                .filter(|n| n.has_tag_name("base_rotating_pulley"))
             {
-                cables = None;
-                break;
+                anchor = Some(v3(text(p, "fixed_location")));
+                pulley = Some((
+                    text(p, "pulley_radius").trim().parse().unwrap(),
+                    v3(text(p, "cable_entry_vector")),
+                ));
             }
-            let (mut anchor, mut local) = (None, None);
             for a in at.children().filter(|n| n.has_tag_name("attachment")) {
                 let loc = v3(text(a, "location"));
                 match text(a, "link") {
@@ -209,14 +220,13 @@ fn read_sets(xml: &str, link: &Link) -> Vec<(String, Option<Vec<Cable>>)> {
                 r => panic!("{r}"),
             };
             let p = child(c, "properties");
-            if let Some(v) = cables.as_mut() {
-                v.push(Cable {
-                    anchor: anchor.unwrap(),
-                    point: link.origin + link.rot * from_origin,
-                    force_min: text(p, "force_min").parse().unwrap(),
-                    force_max: text(p, "force_max").parse().unwrap(),
-                });
-            }
+            cables.push(Cable {
+                anchor: anchor.unwrap(),
+                pulley,
+                point: link.origin + link.rot * from_origin,
+                force_min: text(p, "force_min").parse().unwrap(),
+                force_max: text(p, "force_max").parse().unwrap(),
+            });
         }
         out.push((id, cables));
     }
@@ -382,6 +392,63 @@ fn check_scene(who: &str, s: &Scene, link: &Link, cables: &[Cable], t_min_opt: O
     }
 }
 
+/// CASPR's `ComputePulleyLeavingLocation`, written out from its source: entry point r_F,
+/// entry vector v_F, platform point r_B, radius R → (exit point r_A, arc, centre r_C).
+fn caspr_pulley_exit(
+    r_f: Vector3<f64>,
+    v_f: Vector3<f64>,
+    r_b: Vector3<f64>,
+    r: f64,
+) -> (Vector3<f64>, f64, Vector3<f64>) {
+    let v_fb = r_b - r_f;
+    let n_plane = v_f.cross(&v_fb);
+    let n_plane_unit = n_plane / n_plane.norm();
+    let v_fc = n_plane.cross(&v_f);
+    let r_c = r_f + r * v_fc / v_fc.norm();
+    let rho = r / (r_b - r_c).norm();
+    let r_a = r_c + rho * rho * (r_b - r_c)
+        - rho * (1.0 - rho * rho).sqrt() * n_plane_unit.cross(&(r_b - r_c));
+    let n1 = (r_f - r_c) / (r_f - r_c).norm();
+    let n2 = (r_a - r_c) / (r_a - r_c).norm();
+    (r_a, r * n1.dot(&n2).acos(), r_c)
+}
+
+/// The scene's pulley geometry at its default pose against [`caspr_pulley_exit`] (1e-12 m);
+/// the smallest and largest wrapped arc, m.
+fn check_pulleys(who: &str, s: &Scene, cables: &[Cable]) -> (f64, f64) {
+    use cablevib::kinematics::{rotation_of, Geometry};
+    let mut g = Geometry::for_scene(s);
+    let rot = rotation_of(&s.ee_orientation_wxyz);
+    let anchors = s.cables.iter().map(|c| &c.anchor_m);
+    if s.rigid {
+        let b = s.cables.iter().map(|c| &c.attachment_m);
+        g.update_rigid(anchors, b, &s.ee_position_m, &rot)
+    } else {
+        g.update(anchors, &s.ee_position_m)
+    }
+    .unwrap_or_else(|e| panic!("{who}: {e}"));
+    let mut arcs = (f64::INFINITY, 0.0f64);
+    for (i, c) in cables.iter().enumerate() {
+        let (r, v) = c.pulley.expect("every cable of the set has a pulley");
+        let (r_a, arc, _) = caspr_pulley_exit(c.anchor, v, c.point, r);
+        let e = g.pulley_exit(i).expect("imported with its pulley");
+        assert!(
+            (e.exit_m - r_a).norm() < GEOM,
+            "{who} cable {i}: exit {} vs CASPR {r_a}",
+            e.exit_m
+        );
+        assert!((g.wrap_arc_m(i) - arc).abs() < GEOM, "{who} cable {i}: arc");
+        let l = (c.point - r_a).norm();
+        assert!((g.free_length_m(i) - l).abs() < GEOM, "{who} cable {i}: L");
+        assert!(
+            (g.unit[i] - (c.point - r_a) / l).norm() < GEOM,
+            "{who} cable {i}: direction"
+        );
+        arcs = (arcs.0.min(arc), arcs.1.max(arc));
+    }
+    arcs
+}
+
 /// What one check of tensions found, for the summary.
 #[derive(Debug)]
 enum Outcome {
@@ -535,20 +602,20 @@ fn check_robot(
     assert!(!sets.is_empty(), "{name}");
     for (id, cables) in sets {
         let who = format!("{name} `{id}`");
-        let Some(cables) = cables else {
-            let o = options(&id, &[]);
-            let e = import_files(bodies, cables_file, &o)
-                .expect_err(&who)
-                .to_string();
-            assert!(
-                e.contains("<base_rotating_pulley>") && e.contains("pulleys are not supported yet"),
-                "{who}: {e}"
-            );
-            assert_eq!(e.lines().count(), 1, "{e}");
-            summary.push(format!("{who}: pulleys, refused"));
-            continue;
-        };
         let o = options(&id, &cables);
+        if cables.iter().any(|c| c.pulley.is_some()) {
+            let im = import_files(bodies, cables_file, &o).unwrap_or_else(|e| panic!("{who}: {e}"));
+            check_scene(&who, &im.scene, &link, &cables, o.t_min_n);
+            let arcs = check_pulleys(&who, &im.scene, &cables);
+            assert!(im.not_modelled().is_some(), "{who}");
+            summary.push(format!(
+                "{who}: {} cables with pulleys, geometry = CASPR's (wrapped arcs {:.4}-{:.4} m)",
+                cables.len(),
+                arcs.0,
+                arcs.1
+            ));
+            continue;
+        }
         let im = import_files(bodies, cables_file, &o).unwrap_or_else(|e| panic!("{who}: {e}"));
         let s = &im.scene;
         check_scene(&who, s, &link, &cables, o.t_min_n);
@@ -622,7 +689,6 @@ fn dense_solver_balances_example_spatial_with_unbounded_cables() {
     let (b, c) = files(ROBOTS[8]);
     let link = read_link(&std::fs::read_to_string(&b).unwrap());
     for (id, cables) in read_sets(&std::fs::read_to_string(&c).unwrap(), &link) {
-        let cables = cables.unwrap();
         let im = import_files(&b, &c, &options(&id, &cables)).unwrap();
         let file = tmp(&format!("caspr_real_dense_{id}.toml"));
         std::fs::write(&file, &im.toml).unwrap();

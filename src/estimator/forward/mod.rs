@@ -87,9 +87,8 @@ impl Forward {
     /// Buffers for the cables of `scene`, the model its `[effects] sag` names (allocates:
     /// set-up only).
     pub(super) fn new(scene: &Scene, params: &ForwardParams) -> Forward {
-        let n = scene.n_cables();
         Forward {
-            geometry: Geometry::new(n),
+            geometry: Geometry::for_scene(scene),
             t_max_n: cable_t_max_n(scene),
             model: if scene.model.sag {
                 Model::Sagged(SagModel::new(scene, params))
@@ -237,7 +236,15 @@ impl Forward {
     /// N/rad, N·m/rad; NaN when the sagged D(0) fails).
     pub(super) fn static_stiffness(&self, scene: &Scene) -> Matrix6<f64> {
         match &self.model {
-            Model::Taut(t) => t.static_stiffness(scene),
+            Model::Taut(t) => {
+                let k = t.static_stiffness(scene);
+                if self.geometry.has_pulleys() {
+                    let dim = if scene.rigid { 6 } else { 3 };
+                    k + self.geometry.pulley_stiffness(t.tension.tensions_n(), dim)
+                } else {
+                    k
+                }
+            }
             Model::Sagged(s) => s.static_stiffness().unwrap_or(Matrix6::repeat(f64::NAN)),
         }
     }

@@ -377,7 +377,8 @@ fn set_ids_pulleys_and_huge_numbers_are_reported_clearly() {
     );
     let needles = ["c.xml:145: <cable_set>", "`original`", "line 15", "unique"];
     refused(&b, &twice, &o, &needles);
-    // A pulley: named with its line, and said to be unsupported (not "1 attachments").
+    // A pulley without its keys: named with its line and the missing key (not "1
+    // attachments").
     let pulley = c.replacen(
         "<attachment>\n          <link>0</link>",
         "<base_rotating_pulley>\n          <link>0</link>",
@@ -388,9 +389,13 @@ fn set_ids_pulleys_and_huge_numbers_are_reported_clearly() {
     let needles = [
         "c.xml:",
         "<base_rotating_pulley>",
-        "pulleys are not supported yet",
+        "missing <fixed_location>",
     ];
     refused(&b, &pulley, &o, &needles);
+    // A pulley type CASPR has but the import does not read: named, with the ones it reads.
+    let other = pulley.replace("base_rotating_pulley", "winch_pulley");
+    let needles = ["<winch_pulley>", "pulley type is not supported"];
+    refused(&b, &other, &o, &needles);
     // Numbers from the file in messages: compact, not 309 digits.
     let huge = b.replace("<mass>25.0</mass>", "<mass>-1e308</mass>");
     let e = import_str(&huge, "b.xml", &c, "c.xml", &o)
@@ -428,4 +433,33 @@ fn cli_reports_every_missing_flag_at_once() {
         assert!(e.contains(flag), "`{flag}` not in {e}");
     }
     assert!(e.contains("ipanema1_cables.xml"), "{e}");
+}
+
+/// A `screw_base_rotating_pulley` imports as a swivel pulley at its constant winch point
+/// (the outlet's motion along the drum is the stated simplification), and the import says
+/// in one line what it does not model; a negative pulley radius is refused, named.
+#[test]
+fn a_screw_pulley_imports_at_its_winch_point() {
+    let (b, c, o) = ipanema_texts();
+    let base = "<attachment>\n          <link>0</link>\n          <location>-2.0 1.5 2.0</location>\n        </attachment>";
+    assert!(c.contains(base), "the first cable's base attachment");
+    let screw = "<screw_base_rotating_pulley>\n          <constant_winch_point>-2.0 1.5 2.0</constant_winch_point>\n          <cable_pulley_entry_vector>0 0 2</cable_pulley_entry_vector>\n          <pulley_radius>0.03</pulley_radius>\n          <winch_vector>1 0 0</winch_vector>\n          <winch_radius>0.05</winch_radius>\n          <winch_groove_width>0.002</winch_groove_width>\n        </screw_base_rotating_pulley>";
+    let im = import_str(&b, "b.xml", &c.replacen(base, screw, 1), "c.xml", &o).unwrap();
+    let p = im.scene.cables[0].pulley.expect("cable 1 has its pulley");
+    assert_eq!(p.radius_m, 0.03);
+    assert_eq!(p.entry_unit, nalgebra::Vector3::z());
+    assert_eq!(
+        im.scene.cables[0].anchor_m,
+        nalgebra::Vector3::new(-2.0, 1.5, 2.0)
+    );
+    assert!(im.scene.cables[1..].iter().all(|c| c.pulley.is_none()));
+    let note = im.not_modelled().expect("a note");
+    assert!(
+        note.contains("screw") && note.lines().count() == 1,
+        "{note}"
+    );
+    assert!(im.toml.contains("screw_base_rotating_pulley"));
+    let bad = screw.replace("<pulley_radius>0.03", "<pulley_radius>-0.03");
+    let needles = ["c.xml:", "<pulley_radius>", "must be >= 0"];
+    refused(&b, &c.replacen(base, &bad, 1), &o, &needles);
 }
