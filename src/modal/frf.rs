@@ -159,6 +159,33 @@ impl ModalSolver {
     }
 }
 
+/// The receptance at each frequency of `freqs_hz` (Hz) of the loaded `solver` (loaded with
+/// `models`, arms `arms_m` for a rigid end-effector) with `damping`: exact at a complex λ
+/// for loss-factor, Rayleigh or no damping; for modal damping by [`ModalBasis`] over the
+/// modes below `modal_cutoff_hz` (at most [`MAX_FRF_MODES`]) with the static correction.
+/// The one computation behind `cablevib frf` and the Python `frf`.
+pub fn receptance_over(
+    solver: &mut ModalSolver,
+    models: &[CableModel],
+    arms_m: &[Vector3<f64>],
+    damping: &Damping,
+    freqs_hz: &[f64],
+    modal_cutoff_hz: f64,
+) -> Result<Vec<Matrix6<Complex64>>, FrfError> {
+    let w = |f: f64| 2.0 * std::f64::consts::PI * f;
+    if let Damping::ModalRatio { zeta } = *damping {
+        let basis = ModalBasis::new(solver, models, arms_m, modal_cutoff_hz, MAX_FRF_MODES)?;
+        return Ok(freqs_hz
+            .iter()
+            .map(|&f| basis.receptance(zeta, w(f)))
+            .collect());
+    }
+    freqs_hz
+        .iter()
+        .map(|&f| solver.receptance(damping, w(f)))
+        .collect()
+}
+
 /// The end-effector part of a pose's lowest modes, for modal damping: natural frequencies,
 /// mass-normalised end-effector shapes and the residual flexibility of the modes left out.
 #[derive(Debug, Clone)]

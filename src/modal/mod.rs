@@ -96,8 +96,8 @@ pub use ee_tracker::RescanCounts;
 pub use eig3::{eig3, eig3_jacobi, Eig3};
 pub use error::ModalError;
 pub use frf::{
-    complex_shift, dense_receptance, frequency_grid, FrfError, ModalBasis, MAX_FRF_MODES,
-    MAX_FRF_POINTS,
+    complex_shift, dense_receptance, frequency_grid, receptance_over, FrfError, ModalBasis,
+    MAX_FRF_MODES, MAX_FRF_POINTS,
 };
 pub use mechanism::{free_direction, may_be_mechanism, MECHANISM_REL};
 pub use rigid::{attach_map, rigid_geometric_stiffness};

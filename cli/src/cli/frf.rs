@@ -9,7 +9,7 @@ use super::figure::{self, parse_format};
 use super::modes::pose_model;
 use super::{json_f64, CliError};
 use crate::modal::{
-    dense_receptance, frequency_grid, lambda_to_hz, ModalBasis, ModalParams, ModalSolver,
+    dense_receptance, frequency_grid, lambda_to_hz, receptance_over, ModalParams, ModalSolver,
 };
 use crate::report::csv::{process_command_line, write_csv};
 use crate::report::figure::FigureFormat;
@@ -217,31 +217,15 @@ pub fn run(a: &FrfArgs) -> Result<(), CliError> {
         .filter(|&f| f >= a.from_hz)
         .collect();
     let t0 = Instant::now();
-    let w = |f: f64| 2.0 * std::f64::consts::PI * f;
-    let h: Vec<Matrix6<Complex64>> = if let Damping::ModalRatio { zeta } = damping {
-        let basis = ModalBasis::new(
-            &mut solver,
-            &pose.models,
-            &pose.geometry.arm_m,
-            MODAL_CUTOFF_RATIO * a.to_hz,
-            crate::modal::MAX_FRF_MODES,
-        )
-        .map_err(|e| CliError::Analysis(e.to_string()))?;
-        freqs
-            .iter()
-            .map(|&f| basis.receptance(zeta, w(f)))
-            .collect()
-    } else {
-        let mut out = Vec::with_capacity(freqs.len());
-        for &f in &freqs {
-            out.push(
-                solver
-                    .receptance(&damping, w(f))
-                    .map_err(|e| CliError::Analysis(e.to_string()))?,
-            );
-        }
-        out
-    };
+    let h = receptance_over(
+        &mut solver,
+        &pose.models,
+        &pose.geometry.arm_m,
+        &damping,
+        &freqs,
+        MODAL_CUTOFF_RATIO * a.to_hz,
+    )
+    .map_err(|e| CliError::Analysis(e.to_string()))?;
     let structured_s = t0.elapsed().as_secs_f64();
     let dense = if a.dense {
         Some(dense_compare(&pose, &damping, &freqs, &h)?)
