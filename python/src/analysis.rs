@@ -79,7 +79,7 @@ pub fn analyze<'py>(
 }
 
 /// A position (m) whose three components are finite, as `--position` requires.
-fn finite_position(p: &Bound<'_, PyAny>) -> PyResult<nalgebra::Vector3<f64>> {
+pub(crate) fn finite_position(p: &Bound<'_, PyAny>) -> PyResult<nalgebra::Vector3<f64>> {
     let v = position(p)?;
     if !v.iter().all(|x| x.is_finite()) {
         return Err(PyValueError::new_err(format!(
@@ -107,7 +107,7 @@ fn set_orientation(s: &mut Scene, q: &Bound<'_, PyAny>) -> PyResult<()> {
 
 /// The command line's overrides (`cli::args::resolve_scene`) on a loaded scene, with its
 /// rules and messages, the option named as the Python argument (`t_min` for `--t-min`).
-fn with_overrides(
+pub(crate) fn with_overrides(
     mut s: Scene,
     t_min: Option<f64>,
     element: Option<&str>,

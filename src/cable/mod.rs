@@ -34,11 +34,15 @@ mod batch;
 mod chain;
 mod element;
 pub mod sagged;
+mod scalar;
 
 pub use crate::kinematics::up_frame;
 pub use batch::{eval_continuous_batch, eval_discrete_batch, BATCH_MAX_ELEMENTS};
-pub use chain::{end_mass_q, eval_discrete_recurrence, Chain, ChainEval, ChainKind};
+pub use chain::{
+    chain_recurrence, end_mass_q, eval_discrete_recurrence, Chain, ChainEval, ChainKind,
+};
 pub use element::{catenary_block, catenary_flexibility, catenary_modes, fem_block};
+pub use scalar::ChainScalar;
 
 /// Errors of the element models.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]

@@ -18,6 +18,7 @@ use crate::scene::MAX_CABLES;
 /// [`crate::scene::MAX_ELEMENTS_PER_CABLE`]) compute each one by trigonometry.
 const POLE_TABLE_MAX_ELEMENTS: usize = 10_000;
 use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector6};
+use num_complex::Complex64;
 
 /// (row, column) of the six distinct entries of a symmetric 3 × 3 matrix, in the order
 /// both solvers store a point mass's D and D' while summing the chains.
@@ -395,6 +396,24 @@ impl LoadedChains {
             below: 0,
             dim: self.dim,
         }
+    }
+
+    /// D(λ) at a complex λ (the damped frequency response, `frf`): K₆ − λM₆ + Σ_chains
+    /// s_c(λ) P_c (P_c through the attachment map for a rigid body), each chain by its
+    /// recurrence at complex λ ([`Chain::eval_at`]). Point mass: the leading 3 × 3 block.
+    pub(super) fn d_complex(&self, lambda: Complex64) -> Matrix6<Complex64> {
+        let re = |x: f64| Complex64::new(x, 0.0);
+        let mut d = self.k6.map(re) - self.m6.map(re) * lambda;
+        for i in 0..self.n_chains {
+            let s = self.chains[i].eval_at(lambda).s;
+            if self.dim == 6 {
+                d += self.q6[i].map(|x| re(x) * s);
+            } else {
+                let mut v = d.fixed_view_mut::<3, 3>(0, 0);
+                v += self.chains[i].proj.map(|x| re(x) * s);
+            }
+        }
+        d
     }
 
     /// Participation of the mode at root λ with null vector v (unit): the end-effector's

@@ -60,7 +60,8 @@
 //! M and D' in kg (kg·m²), λ in rad²/s², f in Hz; participations are dimensionless (0 ..= 1)
 //! and Σ_k p_k/λ_k is in s²/rad².
 //!
-//! **Layout.** `engine`: the condensed problem behind one trait (taut and sagged) and the
+//! **Layout.** `frf`: the frequency response at the end-effector (damped receptance, exact at a complex λ; modal
+//! superposition for modal damping). `engine`: the condensed problem behind one trait (taut and sagged) and the
 //! constants its searches share. `dense`: the offline reference (refused beyond
 //! [`DENSE_MEMORY_BUDGET_BYTES`]). `dynamic_stiffness`: the loaded problem and the
 //! evaluation of D(λ). `first_mode`: the first root and its certificate. `ee_tracker`: the
@@ -78,6 +79,7 @@ mod eig3;
 mod engine;
 mod error;
 mod first_mode;
+mod frf;
 mod mechanism;
 mod rigid;
 pub mod sag;
@@ -93,6 +95,10 @@ pub use dynamic_stiffness::{DynEval, EigD};
 pub use ee_tracker::RescanCounts;
 pub use eig3::{eig3, eig3_jacobi, Eig3};
 pub use error::ModalError;
+pub use frf::{
+    complex_shift, dense_receptance, frequency_grid, receptance_over, FrfError, ModalBasis,
+    MAX_FRF_MODES, MAX_FRF_POINTS,
+};
 pub use mechanism::{free_direction, may_be_mechanism, MECHANISM_REL};
 pub use rigid::{attach_map, rigid_geometric_stiffness};
 pub use shapes::{

@@ -12,6 +12,7 @@
 //! | `map` | [`map`](mod@map) | f1 over a workspace grid |
 //! | `trajectory` | [`trajectory`](mod@trajectory) | f1 along the circle or a CSV path |
 //! | `modes` | [`modes`](mod@modes) | the lowest modes with their shapes: table, CSV, SVG |
+//! | `frf` | [`frf`](mod@frf) | the end-effector receptance over a band: CSV, Bode figure, JSON |
 //! | `sweep-tmin` | [`sweep_tmin`] | f1 against T_min with the √T_min fit |
 //! | `sag-compare` | [`sag_compare`](mod@sag_compare) | chord vs sagged cables along a line: f1, k_min, tensions, λ² |
 //! | `completions`, `man` | [`completions`](mod@completions) | shell completions and the man page |
@@ -27,6 +28,7 @@ pub mod bench;
 pub mod completions;
 pub mod error;
 pub mod figure;
+pub mod frf;
 pub mod import;
 pub mod map;
 pub mod modes;
@@ -86,6 +88,9 @@ pub enum Command {
     Import(import::ImportArgs),
     /// The lowest modes of one pose with their shapes: table, CSV and SVG.
     Modes(modes::ModesArgs),
+    /// The end-effector receptance H(ω) over a frequency band (the scene's damping): table,
+    /// CSV, Bode figure, JSON.
+    Frf(frf::FrfArgs),
 }
 
 /// Heap allocation counter supplied by the binary's global allocator (0 when none).
@@ -108,6 +113,7 @@ pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
         Command::Man(a) => completions::man(&a),
         Command::Import(a) => import::run(&a),
         Command::Modes(a) => modes::run(&a),
+        Command::Frf(a) => frf::run(&a),
     }
 }
 

@@ -20,6 +20,7 @@ pub mod accuracy_doc;
 pub mod accuracy_figures;
 pub mod csv;
 pub mod figure;
+pub mod frf;
 pub mod hold;
 pub mod map;
 pub mod sag_compare;

@@ -7,6 +7,7 @@ mod cli_orientation;
 mod cli_tool;
 mod csv_pandas;
 mod figures;
+mod frf;
 mod map_shard;
 mod mode_shapes;
 mod sag_compare;

@@ -13,6 +13,7 @@ from ._cablevib import (
     TminAnswer,
     __version__,
     analyze,
+    frf,
     sweep,
 )
 
@@ -23,5 +24,6 @@ __all__ = [
     "Scene",
     "TminAnswer",
     "analyze",
+    "frf",
     "sweep",
 ]

@@ -2,7 +2,7 @@
 parallel robots (Python bindings of the Rust crate). SI units: m, kg, N, N/m, Hz."""
 
 import os
-from typing import Any, Dict, Optional, Sequence, Union
+from typing import Any, Dict, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -131,6 +131,26 @@ def analyze(
     ``unstretched_length_m`` (m), one per cable. Overrides as ``--position`` (m),
     ``--orientation`` (unit quaternion w, x, y, z; rigid end-effectors only), ``--t-min`` (N),
     ``--element``, ``--elements``, ``--sag``; ``solver`` is ``structured`` or ``dense``."""
+
+def frf(
+    scene: Scene,
+    from_hz: float = 0.5,
+    to_hz: float = 50.0,
+    points: int = 1000,
+    log: bool = False,
+    position: Optional[_Vec] = None,
+    t_min: Optional[float] = None,
+    element: Optional[str] = None,
+    elements: Optional[int] = None,
+    loss_factor: Optional[float] = None,
+    rayleigh: Optional[Tuple[float, float]] = None,
+    modal_ratio: Optional[float] = None,
+    undamped: bool = False,
+) -> Dict[str, Any]:
+    """What ``cablevib frf SCENE --json`` prints: ``frequencies_hz`` (N), ``receptance_re``,
+    ``receptance_im`` (N × d × d numpy arrays, m/N; d = 3, or 6 for a rigid end-effector,
+    translations first), ``damping``, ``dim``. Damping: the scene's, or one of
+    ``loss_factor`` (η), ``rayleigh`` ((α 1/s, β s)), ``modal_ratio`` (ζ), ``undamped``."""
 
 def sweep(
     scene: Scene,

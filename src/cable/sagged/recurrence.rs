@@ -3,19 +3,21 @@
 
 use super::chain::SagChain;
 use super::SagChainEval;
+use crate::cable::ChainScalar;
+use num_complex::Complex64;
 
 /// A symmetric 2 × 2 matrix [a b; b c] as [a, b, c].
-type Sym2 = [f64; 3];
+type Sym2<T = f64> = [T; 3];
 /// A general 2 × 2 matrix, row-major [[y00, y01], [y10, y11]].
-type Mat2 = [[f64; 2]; 2];
+type Mat2<T = f64> = [[T; 2]; 2];
 
 /// Number of negative eigenvalues of the symmetric 2 × 2 matrix `q` with determinant `det`
 /// (≠ 0): one when det < 0, both when det > 0 and the diagonal is negative.
 #[inline]
-fn negatives2(q: &Sym2, det: f64) -> u32 {
-    if det < 0.0 {
+fn negatives2<T: ChainScalar>(q: &Sym2<T>, det: T) -> u32 {
+    if det.is_negative() {
         1
-    } else if q[0] < 0.0 {
+    } else if q[0].is_negative() {
         2
     } else {
         0
@@ -24,8 +26,8 @@ fn negatives2(q: &Sym2, det: f64) -> u32 {
 
 /// Y = Q⁻¹ E for symmetric Q (determinant `det` ≠ 0) and E.
 #[inline]
-fn solve2(q: &Sym2, det: f64, e: &Sym2) -> Mat2 {
-    let inv = 1.0 / det;
+fn solve2<T: ChainScalar>(q: &Sym2<T>, det: T, e: &Sym2<T>) -> Mat2<T> {
+    let inv = det.recip();
     // Q⁻¹ = [c −b; −b a]/det.
     let (ia, ib, ic) = (q[2] * inv, -q[1] * inv, q[0] * inv);
     [
@@ -37,17 +39,17 @@ fn solve2(q: &Sym2, det: f64, e: &Sym2) -> Mat2 {
 /// Sym(Xᵀ Y) for symmetric X given as [a, b, c] and general Y: the symmetric part of
 /// Xᵀ Y = X Y (entries 00, 01 averaged with 10, 11).
 #[inline]
-fn sym_xy(x: &Sym2, y: &Mat2) -> Sym2 {
+fn sym_xy<T: ChainScalar>(x: &Sym2<T>, y: &Mat2<T>) -> Sym2<T> {
     let p00 = x[0] * y[0][0] + x[1] * y[1][0];
     let p01 = x[0] * y[0][1] + x[1] * y[1][1];
     let p10 = x[1] * y[0][0] + x[2] * y[1][0];
     let p11 = x[1] * y[0][1] + x[2] * y[1][1];
-    [p00, 0.5 * (p01 + p10), p11]
+    [p00, (p01 + p10) * 0.5, p11]
 }
 
 /// Yᵀ X Y for symmetric X and general Y (symmetric result).
 #[inline]
-fn congruence(x: &Sym2, y: &Mat2) -> Sym2 {
+fn congruence<T: ChainScalar>(x: &Sym2<T>, y: &Mat2<T>) -> Sym2<T> {
     // X Y columns, then Yᵀ (X Y).
     let xy00 = x[0] * y[0][0] + x[1] * y[1][0];
     let xy10 = x[1] * y[0][0] + x[2] * y[1][0];
@@ -79,29 +81,47 @@ impl SagChain {
         }
     }
 
+    /// S(λ) at a complex λ (the damped frequency response): the same recurrences
+    /// instantiated for [`Complex64`]; (in-plane [a, b, c] in (h, up), out-of-plane s), N/m.
+    pub fn eval_at(&self, lambda: Complex64) -> ([Complex64; 3], Complex64) {
+        if self.n_el() == 0 {
+            let z = Complex64::new(0.0, 0.0);
+            return ([z; 3], z);
+        }
+        (
+            self.eval_in_plane(lambda).0,
+            self.eval_out_of_plane(lambda).0,
+        )
+    }
+
     /// The in-plane 2 × 2 recurrence: (S_N, S'_N, negative pivot eigenvalues).
-    fn eval_in_plane(&self, lambda: f64) -> (Sym2, Sym2, u32) {
+    fn eval_in_plane<T: ChainScalar>(&self, lambda: T) -> (Sym2<T>, Sym2<T>, u32) {
         let m = self.mass_kg;
         let (d3, d2) = (lambda * m / 3.0, lambda * m / 2.0);
         let k = &self.k_in;
-        let mut s = [k[0][0] - d3, k[0][1], k[0][2] - d3];
-        let mut ds = [-m / 3.0, 0.0, -m / 3.0];
+        let re = T::re;
+        let mut s = [re(k[0][0]) - d3, re(k[0][1]), re(k[0][2]) - d3];
+        let mut ds = [re(-m / 3.0), re(0.0), re(-m / 3.0)];
         let mut below = 0u32;
         for kj in &k[1..] {
-            let mut q = [s[0] + kj[0] - d3, s[1] + kj[1], s[2] + kj[2] - d3];
-            let dq = [ds[0] - m / 3.0, ds[1], ds[2] - m / 3.0];
+            let mut q = [
+                s[0] + re(kj[0]) - d3,
+                s[1] + re(kj[1]),
+                s[2] + re(kj[2]) - d3,
+            ];
+            let dq = [ds[0] - re(m / 3.0), ds[1], ds[2] - re(m / 3.0)];
             let mut det = q[0] * q[2] - q[1] * q[1];
-            if det == 0.0 {
-                q[0] += self.nudge;
-                q[2] += self.nudge;
+            if det.is_zero() {
+                q[0] = q[0] + re(self.nudge);
+                q[2] = q[2] + re(self.nudge);
                 det = q[0] * q[2] - q[1] * q[1];
-                if det == 0.0 {
-                    det = self.nudge * self.nudge;
+                if det.is_zero() {
+                    det = re(self.nudge * self.nudge);
                 }
             }
             below += negatives2(&q, det);
             let e = [s[0] - d2, s[1], s[2] - d2];
-            let de = [ds[0] - m / 2.0, ds[1], ds[2] - m / 2.0];
+            let de = [ds[0] - re(m / 2.0), ds[1], ds[2] - re(m / 2.0)];
             let y = solve2(&q, det, &e);
             let eqe = sym_xy(&e, &y);
             let dey = sym_xy(&de, &y);
@@ -112,34 +132,35 @@ impl SagChain {
                 s[2] - lambda * m - eqe[2],
             ];
             ds = [
-                ds[0] - m - 2.0 * dey[0] + yqy[0],
-                ds[1] - 2.0 * dey[1] + yqy[1],
-                ds[2] - m - 2.0 * dey[2] + yqy[2],
+                ds[0] - re(m) - dey[0] * 2.0 + yqy[0],
+                ds[1] - dey[1] * 2.0 + yqy[1],
+                ds[2] - re(m) - dey[2] * 2.0 + yqy[2],
             ];
         }
         (s, ds, below)
     }
 
     /// The out-of-plane scalar recurrence: (s_N, s'_N, negative pivots).
-    fn eval_out_of_plane(&self, lambda: f64) -> (f64, f64, u32) {
+    fn eval_out_of_plane<T: ChainScalar>(&self, lambda: T) -> (T, T, u32) {
         let m = self.mass_kg;
         let (d3, d2) = (lambda * m / 3.0, lambda * m / 2.0);
         let k = &self.k_out;
-        let mut s = k[0] - d3;
-        let mut ds = -m / 3.0;
+        let re = T::re;
+        let mut s = re(k[0]) - d3;
+        let mut ds = re(-m / 3.0);
         let mut below = 0u32;
         for &kj in &k[1..] {
-            let mut q = s + kj - d3;
-            if q == 0.0 {
-                q = self.nudge;
+            let mut q = s + re(kj) - d3;
+            if q.is_zero() {
+                q = re(self.nudge);
             }
-            below += (q < 0.0) as u32;
-            let dq = ds - m / 3.0;
+            below += q.is_negative() as u32;
+            let dq = ds - re(m / 3.0);
             let e = s - d2;
-            let de = ds - m / 2.0;
+            let de = ds - re(m / 2.0);
             let y = e / q;
             s = s - lambda * m - e * y;
-            ds = ds - m - 2.0 * de * y + dq * y * y;
+            ds = ds - re(m) - de * 2.0 * y + dq * y * y;
         }
         (s, ds, below)
     }

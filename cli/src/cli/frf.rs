@@ -1,0 +1,385 @@
+//! `cablevib frf`: the receptance H(ω) at the end-effector of one pose over a frequency
+//! band ([`crate::modal::frf`]: exact at a complex λ for loss-factor and Rayleigh damping,
+//! modal superposition with static correction for modal damping), as a table, a CSV
+//! ([`crate::report::frf`]), a Bode figure and JSON; `--dense` also solves the assembled
+//! complex problem at every frequency and prints the difference and both times.
+
+use super::args::{resolve_scene, SceneArgs};
+use super::figure::{self, parse_format};
+use super::modes::pose_model;
+use super::{json_f64, CliError};
+use crate::modal::{
+    dense_receptance, frequency_grid, lambda_to_hz, receptance_over, ModalParams, ModalSolver,
+};
+use crate::report::csv::{process_command_line, write_csv};
+use crate::report::figure::FigureFormat;
+use crate::report::frf::{bode_svg, frf_csv, frf_meta, FrfData, COORDS};
+use crate::scene::{
+    Damping, MAX_LOSS_FACTOR, MAX_MODAL_RATIO, MAX_RAYLEIGH_ALPHA_PER_S, MAX_RAYLEIGH_BETA_S,
+};
+use clap::Args;
+use nalgebra::Matrix6;
+use num_complex::Complex64;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Default and largest ratio of the modal-damping basis's cut-off to the band's top: the
+/// modes below 4 × `--to-hz` are superposed, the others taken quasi-statically.
+const MODAL_CUTOFF_RATIO: f64 = 4.0;
+/// Natural frequencies marked and listed: the modes with at least this end-effector
+/// participation (1 %).
+const MARK_PARTICIPATION: f64 = 0.01;
+
+/// `cablevib frf`.
+#[derive(Debug, Args)]
+pub struct FrfArgs {
+    /// Scene and overrides.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Lowest frequency, Hz (≥ 0; > 0 with --log).
+    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
+    pub from_hz: f64,
+    /// Highest frequency, Hz (> --from-hz).
+    #[arg(long, default_value_t = 50.0, allow_hyphen_values = true)]
+    pub to_hz: f64,
+    /// Number of frequencies, 1..=100000 (both ends included).
+    #[arg(long, default_value_t = 1000)]
+    pub points: usize,
+    /// Geometric spacing (default: even).
+    #[arg(long)]
+    pub log: bool,
+    /// Load directions reported: comma-separated of x, y, z (rx, ry, rz for a rigid body);
+    /// default all.
+    #[arg(long, value_delimiter = ',')]
+    pub input: Vec<String>,
+    /// Response directions reported (as --input); default all.
+    #[arg(long, value_delimiter = ',')]
+    pub output: Vec<String>,
+    /// Loss factor η (replaces the scene's [damping]), 0 <= η < 2.
+    #[arg(long, allow_hyphen_values = true)]
+    pub loss_factor: Option<f64>,
+    /// Rayleigh damping α,β (1/s, s; replaces the scene's [damping]).
+    #[arg(long, value_parser = parse_vec2, allow_hyphen_values = true, value_name = "ALPHA,BETA")]
+    pub rayleigh: Option<(f64, f64)>,
+    /// Modal damping ratio ζ in every mode (replaces the scene's [damping]), 0 <= ζ < 1.
+    #[arg(long, allow_hyphen_values = true)]
+    pub modal_ratio: Option<f64>,
+    /// No damping (replaces the scene's [damping]): H is infinite on a natural frequency.
+    #[arg(long)]
+    pub undamped: bool,
+    /// Also solve the assembled dense complex problem at every frequency (fem and catenary;
+    /// loss factor, Rayleigh or none): print the largest relative difference and both times.
+    #[arg(long)]
+    pub dense: bool,
+    /// Write the response as CSV (and its .json sidecar).
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// Write the Bode figure: SVG, or PNG / PDF by the extension or --format.
+    #[arg(long, visible_alias = "figure")]
+    pub svg: Option<PathBuf>,
+    /// Figure format: svg, png or pdf.
+    #[arg(long, value_parser = parse_format)]
+    pub format: Option<FigureFormat>,
+    /// One JSON object on stdout: frequencies_hz, receptance_re, receptance_im (N × d × d,
+    /// m/N, translations first), natural_frequencies_hz, damping.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Parse `ALPHA,BETA` (two numbers; the range is checked with the damping).
+fn parse_vec2(s: &str) -> Result<(f64, f64), String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().map_err(|e| format!("`{x}`: {e}")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [a, b] => Ok((a, b)),
+        _ => Err(format!("expected two numbers ALPHA,BETA, got `{s}`")),
+    }
+}
+
+/// The damping asked for: the options, else the scene's; out-of-range values refused.
+fn damping(a: &FrfArgs, scene: Damping) -> Result<Damping, CliError> {
+    let given = [
+        a.loss_factor.is_some(),
+        a.rayleigh.is_some(),
+        a.modal_ratio.is_some(),
+        a.undamped,
+    ];
+    if given.iter().filter(|&&g| g).count() > 1 {
+        let msg = "give one of --loss-factor, --rayleigh, --modal-ratio, --undamped";
+        return Err(CliError::Usage(msg.into()));
+    }
+    let bad = |name: &str, v: f64, max: f64| {
+        CliError::Usage(format!("{name} {v}: must be finite, >= 0 and < {max}"))
+    };
+    let ok = |v: f64, max: f64| v.is_finite() && v >= 0.0 && v < max;
+    if let Some(eta) = a.loss_factor {
+        if !ok(eta, MAX_LOSS_FACTOR) {
+            return Err(bad("--loss-factor", eta, MAX_LOSS_FACTOR));
+        }
+        return Ok(Damping::LossFactor { eta });
+    }
+    if let Some((alpha, beta)) = a.rayleigh {
+        if !ok(alpha, MAX_RAYLEIGH_ALPHA_PER_S) {
+            return Err(bad("--rayleigh alpha", alpha, MAX_RAYLEIGH_ALPHA_PER_S));
+        }
+        if !ok(beta, MAX_RAYLEIGH_BETA_S) {
+            return Err(bad("--rayleigh beta", beta, MAX_RAYLEIGH_BETA_S));
+        }
+        return Ok(Damping::Rayleigh {
+            alpha_per_s: alpha,
+            beta_s: beta,
+        });
+    }
+    if let Some(zeta) = a.modal_ratio {
+        if !ok(zeta, MAX_MODAL_RATIO) {
+            return Err(bad("--modal-ratio", zeta, MAX_MODAL_RATIO));
+        }
+        return Ok(Damping::ModalRatio { zeta });
+    }
+    if a.undamped {
+        return Ok(Damping::None);
+    }
+    Ok(scene)
+}
+
+/// Coordinates named in `names` (all `dim` when empty).
+fn coords(names: &[String], dim: usize, opt: &str) -> Result<Vec<usize>, CliError> {
+    if names.is_empty() {
+        return Ok((0..dim).collect());
+    }
+    let mut out = Vec::new();
+    for n in names {
+        let i = COORDS[..dim]
+            .iter()
+            .position(|c| c.eq_ignore_ascii_case(n.trim()))
+            .ok_or_else(|| {
+                CliError::Usage(format!(
+                    "{opt} `{n}`: expected one of {}",
+                    COORDS[..dim].join(", ")
+                ))
+            })?;
+        if !out.contains(&i) {
+            out.push(i);
+        }
+    }
+    Ok(out)
+}
+
+fn damping_label(d: &Damping) -> String {
+    match *d {
+        Damping::None => "none".into(),
+        Damping::LossFactor { eta } => format!("loss factor η = {eta}"),
+        Damping::Rayleigh {
+            alpha_per_s,
+            beta_s,
+        } => format!("Rayleigh α = {alpha_per_s} 1/s, β = {beta_s} s"),
+        Damping::ModalRatio { zeta } => format!("modal ratio ζ = {zeta}"),
+    }
+}
+
+/// `cablevib frf`.
+pub fn run(a: &FrfArgs) -> Result<(), CliError> {
+    let freqs = frequency_grid(a.from_hz, a.to_hz, a.points, a.log)
+        .map_err(|e| CliError::Usage(format!("--from-hz/--to-hz/--points: {e}")))?;
+    if a.format.is_some() && a.svg.is_none() {
+        let msg = "--format needs --svg PATH (the figure is written only there)";
+        return Err(CliError::Usage(msg.into()));
+    }
+    let s = resolve_scene(&a.scene)?;
+    if s.model.sag {
+        let msg = format!(
+            "scene `{}` has sag on: the frequency response covers taut (chord) cables; --sag false for them",
+            s.name
+        );
+        return Err(CliError::Usage(msg));
+    }
+    let damping = damping(a, s.damping)?;
+    let pose = pose_model(&s)?;
+    let dim = pose.dim();
+    let outputs = coords(&a.output, dim, "--output")?;
+    let inputs = coords(&a.input, dim, "--input")?;
+    let mut solver = ModalSolver::new(ModalParams::default());
+    pose.load(&mut solver);
+    // The natural frequencies in the band whose modes move the end-effector (marked on the
+    // figure; the string modes the end-effector hardly feels are left out).
+    let n_band = solver.count_below(crate::modal::hz_to_lambda(a.to_hz)) as usize;
+    let mut modes = vec![crate::modal::Mode::default(); n_band.min(1000)];
+    let nm = solver
+        .modes(modes.len(), &mut modes)
+        .map_err(|e| CliError::Analysis(e.to_string()))?;
+    let natural_hz: Vec<f64> = modes[..nm]
+        .iter()
+        .enumerate()
+        .filter(|(i, m)| m.cluster_start == *i && m.ee_participation >= MARK_PARTICIPATION)
+        .map(|(_, m)| lambda_to_hz(m.lambda))
+        .filter(|&f| f >= a.from_hz)
+        .collect();
+    let t0 = Instant::now();
+    let h = receptance_over(
+        &mut solver,
+        &pose.models,
+        &pose.geometry.arm_m,
+        &damping,
+        &freqs,
+        MODAL_CUTOFF_RATIO * a.to_hz,
+    )
+    .map_err(|e| CliError::Analysis(e.to_string()))?;
+    let structured_s = t0.elapsed().as_secs_f64();
+    let dense = if a.dense {
+        Some(dense_compare(&pose, &damping, &freqs, &h)?)
+    } else {
+        None
+    };
+    let pairs: Vec<(usize, usize)> = outputs
+        .iter()
+        .flat_map(|&o| inputs.iter().map(move |&i| (o, i)))
+        .collect();
+    let data = FrfData {
+        frequencies_hz: freqs,
+        h,
+        pairs,
+        natural_hz,
+    };
+    let sc = &pose.scene;
+    let p = sc.ee_position_m;
+    if a.json {
+        let cube = |part: fn(&Complex64) -> f64| -> Vec<Vec<Vec<serde_json::Value>>> {
+            data.h
+                .iter()
+                .map(|m| {
+                    (0..dim)
+                        .map(|i| (0..dim).map(|j| json_f64(part(&m[(i, j)]))).collect())
+                        .collect()
+                })
+                .collect()
+        };
+        let mut o = serde_json::json!({
+            "scene": sc.name,
+            "position_m": [p.x, p.y, p.z],
+            "model": sc.model.element.as_str(),
+            "elements_per_cable": sc.model.elements_per_cable,
+            "damping": damping.kind_str(),
+            "damping_description": damping_label(&damping),
+            "dim": dim,
+            "coordinates": &COORDS[..dim],
+            "frequencies_hz": data.frequencies_hz,
+            "receptance_re": cube(|z| z.re),
+            "receptance_im": cube(|z| z.im),
+            "natural_frequencies_hz": data.natural_hz,
+            "natural_frequencies_min_participation": MARK_PARTICIPATION,
+            "structured_s": structured_s,
+        });
+        if let Some((err, dense_s)) = dense {
+            o["dense_max_rel_diff"] = json_f64(err);
+            o["dense_s"] = json_f64(dense_s);
+        }
+        println!("{o}");
+    } else {
+        println!(
+            "scene {}  position ({:.4}, {:.4}, {:.4}) m  model {} × {}  damping: {}",
+            sc.name,
+            p.x,
+            p.y,
+            p.z,
+            sc.model.element.as_str(),
+            sc.model.elements_per_cable,
+            damping_label(&damping)
+        );
+        println!(
+            "{} frequencies {} .. {} Hz{} in {:.3} ms ({:.2} µs each)",
+            data.frequencies_hz.len(),
+            a.from_hz,
+            a.to_hz,
+            if a.log { " (log)" } else { "" },
+            structured_s * 1e3,
+            structured_s * 1e6 / data.frequencies_hz.len() as f64
+        );
+        let nat: Vec<String> = data.natural_hz.iter().map(|f| format!("{f:.4}")).collect();
+        println!(
+            "natural frequencies in the band with end-effector participation >= {} % (Hz): {}",
+            MARK_PARTICIPATION * 100.0,
+            nat.join(", ")
+        );
+        for &(o, i) in &data.pairs {
+            let (k, peak) = data
+                .h
+                .iter()
+                .map(|m| m[(o, i)].norm())
+                .enumerate()
+                .fold((0, 0.0f64), |b, (k, v)| if v > b.1 { (k, v) } else { b });
+            println!(
+                "  H {}/{}: peak |H| {:.4e} at {:.4} Hz",
+                COORDS[o], COORDS[i], peak, data.frequencies_hz[k]
+            );
+        }
+        if let Some((err, dense_s)) = dense {
+            println!(
+                "dense complex solve ({} DOF) at every frequency: {:.3} s; largest relative difference {:.2e}; structured {:.0}× faster",
+                pose.dense().map(|(k, _)| k.nrows()).unwrap_or(0),
+                dense_s,
+                err,
+                dense_s / structured_s.max(1e-12)
+            );
+        }
+    }
+    let meta = frf_meta(&sc.name, &damping_label(&damping), &data.natural_hz);
+    if let Some(path) = &a.csv {
+        write_csv(path, frf_csv(&data, meta), &process_command_line())?;
+        if !a.json {
+            println!("wrote {}", path.display());
+        }
+    }
+    if let Some(path) = &a.svg {
+        let (path, fmt) = figure::target(path, a.format)?;
+        let title = format!(
+            "Receptance at the end-effector, {} at ({:.2}, {:.2}, {:.2}) m",
+            sc.name, p.x, p.y, p.z
+        );
+        let sub = format!(
+            "{} × {}; damping: {}",
+            sc.model.element.as_str(),
+            sc.model.elements_per_cable,
+            damping_label(&damping)
+        );
+        figure::write(&path, &bode_svg(&data, &title, &sub, a.log), fmt)?;
+        if !a.json {
+            println!("wrote {}", path.display());
+        }
+    }
+    Ok(())
+}
+
+/// The dense complex solve at every frequency: (largest relative Frobenius difference from
+/// `h`, seconds).
+fn dense_compare(
+    pose: &crate::estimator::PoseModel,
+    damping: &Damping,
+    freqs: &[f64],
+    h: &[Matrix6<Complex64>],
+) -> Result<(f64, f64), CliError> {
+    if let Damping::ModalRatio { .. } = damping {
+        let msg = "--dense: modal damping has no damping matrix to assemble (loss factor, Rayleigh or none)";
+        return Err(CliError::Usage(msg.into()));
+    }
+    let (k, m) = pose
+        .dense()
+        .map_err(|e| CliError::Analysis(format!("--dense: {e}")))?;
+    let dim = pose.dim();
+    let t0 = Instant::now();
+    let mut worst = 0.0f64;
+    for (&f, hs) in freqs.iter().zip(h) {
+        let r = dense_receptance(&k, &m, dim, damping, 2.0 * std::f64::consts::PI * f)
+            .map_err(|e| CliError::Analysis(e.to_string()))?;
+        let (mut num, mut den) = (0.0, 0.0);
+        for i in 0..dim {
+            for j in 0..dim {
+                num += (hs[(i, j)] - r[(i, j)]).norm_sqr();
+                den += r[(i, j)].norm_sqr();
+            }
+        }
+        worst = worst.max((num / den).sqrt());
+    }
+    Ok((worst, t0.elapsed().as_secs_f64()))
+}

@@ -1,0 +1,136 @@
+//! `cablevib frf`: the JSON layout (N × d × d, translations first) checked against the
+//! library's receptance (independent of the command's formatting), the exactness check
+//! `--dense` on a small model, and hostile ranges and damping values: one-line errors, no
+//! panic.
+
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_cablevib");
+
+fn run(args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .env("RUST_BACKTRACE", "0")
+        .output()
+        .expect("the binary runs")
+}
+
+/// The JSON's receptance at each frequency is the library's `ModalSolver::receptance` at the
+/// same pose and damping (an independent path: the library called directly).
+#[test]
+fn json_is_the_library_receptance() {
+    let o = run(&[
+        "frf",
+        "spatial-paper",
+        "--elements",
+        "10",
+        "--loss-factor",
+        "0.02",
+        "--from-hz",
+        "1",
+        "--to-hz",
+        "40",
+        "--points",
+        "5",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let f = v["frequencies_hz"].as_array().unwrap();
+    assert_eq!(f.len(), 5);
+    assert_eq!(f[0].as_f64(), Some(1.0));
+    assert_eq!(f[4].as_f64(), Some(40.0));
+    let re = v["receptance_re"].as_array().unwrap();
+    assert_eq!(re.len(), 5);
+    assert_eq!(re[0].as_array().unwrap().len(), 3);
+    let mut s = cablevib::scene::Scene::default_scene();
+    s.model.element = cablevib::scene::ElementKind::Fem;
+    s.model.elements_per_cable = 10;
+    let p = cablevib::estimator::PoseModel::new(&s).unwrap();
+    let mut solver = cablevib::modal::ModalSolver::new(Default::default());
+    p.load(&mut solver);
+    let d = cablevib::scene::Damping::LossFactor { eta: 0.02 };
+    for (k, fk) in f.iter().enumerate() {
+        let w = 2.0 * std::f64::consts::PI * fk.as_f64().unwrap();
+        let h = solver.receptance(&d, w).unwrap();
+        for i in 0..3 {
+            for j in 0..3 {
+                let r = v["receptance_re"][k][i][j].as_f64().unwrap();
+                let im = v["receptance_im"][k][i][j].as_f64().unwrap();
+                assert_eq!((r, im), (h[(i, j)].re, h[(i, j)].im), "f {fk} ({i}, {j})");
+            }
+        }
+    }
+}
+
+/// `--dense` prints the dense complex solve's difference: below 1e-9 on N = 10.
+#[test]
+fn dense_check_agrees() {
+    let o = run(&[
+        "frf",
+        "spatial-paper",
+        "--elements",
+        "10",
+        "--rayleigh",
+        "0.5,2e-4",
+        "--points",
+        "20",
+        "--dense",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let e = v["dense_max_rel_diff"].as_f64().unwrap();
+    assert!(e < 1e-9, "{e}");
+}
+
+/// A ≥ B, NaN, 0 or too many points, a damping ratio ≥ 1 or < 0, a bad direction, sag on:
+/// exit code 1 and one line naming the cause.
+#[test]
+fn hostile_inputs_are_one_line_errors() {
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["--from-hz", "10", "--to-hz", "5"],
+            "need finite 0 <= from < to",
+        ),
+        (
+            &["--from-hz", "5", "--to-hz", "5"],
+            "need finite 0 <= from < to",
+        ),
+        (&["--from-hz", "NaN"], "need finite 0 <= from < to"),
+        (&["--to-hz", "inf"], "need finite 0 <= from < to"),
+        (&["--points", "0"], "0 frequencies"),
+        (&["--points", "100001"], "need 1 ..= 100000"),
+        (&["--log", "--from-hz", "0"], "needs from > 0"),
+        (&["--modal-ratio", "1"], "--modal-ratio 1"),
+        (&["--modal-ratio", "-0.01"], "--modal-ratio -0.01"),
+        (&["--loss-factor", "NaN"], "--loss-factor NaN"),
+        (&["--rayleigh", "1,2"], "--rayleigh beta 2"),
+        (
+            &["--loss-factor", "0.1", "--modal-ratio", "0.1"],
+            "give one of",
+        ),
+        (&["--input", "rx"], "--input `rx`"),
+        (
+            &["--modal-ratio", "0.01", "--dense"],
+            "--dense: modal damping",
+        ),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["frf", "spatial-paper", "--elements", "4"];
+        args.extend_from_slice(extra);
+        let o = run(&args);
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert_eq!(o.status.code(), Some(1), "{extra:?}: {err}");
+        assert!(!err.contains("panicked"), "{extra:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{extra:?}: {err}");
+        assert!(err.contains(needle), "{extra:?}: {err}");
+    }
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/suspended_8.toml");
+    let o = run(&["frf", scene]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("sag on") && o.status.code() == Some(1),
+        "{err}"
+    );
+}
