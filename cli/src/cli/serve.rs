@@ -91,6 +91,9 @@ pub struct DemoArgs {
     /// The scene's effect flags.
     #[command(flatten)]
     pub effects: super::args::EffectArgs,
+    /// A monitor beside the demo (Foxglove, MCAP).
+    #[command(flatten)]
+    pub monitor: super::monitor::DemoMonitorArgs,
 }
 
 /// `cablevib bench-ipc` options.
@@ -190,7 +193,12 @@ pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
         period_s: a.period_s,
         t_min_schedule,
     };
-    Ok(crate::service::demo(&scene, &cfg)?)
+    let monitor = super::monitor::start_beside_demo(&a.monitor, &scene, &a.scene, a.required_hz)?;
+    crate::service::demo(&scene, &cfg)?;
+    match monitor {
+        Some(m) => m.finish(),
+        None => Ok(()),
+    }
 }
 
 /// `cablevib bench-ipc`: pose-published → estimate-received latency.
