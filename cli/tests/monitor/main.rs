@@ -92,16 +92,14 @@ fn start_monitor(args: &[&str]) -> (Child, String, std::thread::JoinHandle<Vec<S
         }
         lines
     });
-    let line = rx
-        .recv_timeout(Duration::from_secs(60))
-        .unwrap_or_else(|_| {
-            let _ = child.kill();
-            let out = child.wait_with_output().unwrap();
-            panic!(
-                "the monitor did not attach: {}",
-                String::from_utf8_lossy(&out.stderr)
-            )
-        });
+    let Ok(line) = rx.recv_timeout(Duration::from_secs(60)) else {
+        let _ = child.kill();
+        let out = child.wait_with_output().unwrap();
+        panic!(
+            "the monitor did not attach: {}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    };
     (child, line, reader)
 }
 
