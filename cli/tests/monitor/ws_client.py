@@ -1,4 +1,6 @@
-"""A Foxglove WebSocket protocol client (subprotocol foxglove.websocket.v1) for the monitor test.
+"""A Foxglove WebSocket protocol client for the monitor test. It offers the protocol's v1
+subprotocol under both its names, `foxglove.websocket.v1` and `foxglove.sdk.v1` (the same v1
+messages: the Foxglove SDK's server accepts only the second name), and checks that v1 was chosen.
 
 ws_client.py URL T_MIN_N T_MAX_N: connects, reads serverInfo and the channel advertisements,
 subscribes to the estimate, pose and scene channels, decodes JSON estimates and poses and the
@@ -40,8 +42,10 @@ def colour(t, lo, hi):
 
 
 async def main(url, t_min, t_max):
-    async with websockets.connect(url, subprotocols=["foxglove.websocket.v1"], max_size=None) as ws:
-        assert ws.subprotocol == "foxglove.websocket.v1", ws.subprotocol
+    # proxy=None: a proxy from the environment must not stand between the test and 127.0.0.1.
+    async with websockets.connect(url, subprotocols=["foxglove.websocket.v1", "foxglove.sdk.v1"],
+                                  max_size=None, proxy=None) as ws:
+        assert ws.subprotocol in ("foxglove.websocket.v1", "foxglove.sdk.v1"), ws.subprotocol
         channels = {}
         info = None
         while len(channels) < 5:
@@ -99,7 +103,7 @@ async def main(url, t_min, t_max):
                     got = (line.color.r, line.color.g, line.color.b)
                     # The same three operations in IEEE double on both sides: equal to 1e-15.
                     assert all(abs(a - b) <= 1e-15 for a, b in zip(got, want)), (got, want, t)
-                print(f"OK scene update of pose {seq}: {len(lines)} cable colours and the "
+                print(f"OK subprotocol {ws.subprotocol}: scene update of pose {seq}: {len(lines)} cable colours and the "
                       f"end-effector pose match; received {counts}")
                 return 0
         print(f"FAIL no matching scene update; received {counts}")
