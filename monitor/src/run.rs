@@ -137,6 +137,9 @@ pub struct Attached {
     pub attributes: ReadAttributes,
 }
 
+/// One message in the queue. Unboxed on purpose: the queue's slots are sized once, and a box
+/// per estimate would allocate 1000 times a second.
+#[allow(clippy::large_enum_variant)]
 enum Record {
     Pose(PoseSample),
     Tmin(TminSetpoint),
