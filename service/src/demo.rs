@@ -211,6 +211,12 @@ fn print_header(scene: &Scene, a: &DemoConfig, trajectory: &Trajectory, schedule
     );
 }
 
+/// The instance the demo's services run under: `cablevib_demo_{pid}` (a monitor started beside
+/// the demo attaches to it).
+pub fn instance_name() -> String {
+    format!("cablevib_demo_{}", std::process::id())
+}
+
 /// Runs the demo and prints its summary.
 pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
     validate(a)?;
@@ -222,7 +228,7 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
         None => None,
     };
     let schedule = a.t_min_schedule.clone().unwrap_or_default();
-    let instance = format!("cablevib_demo_{}", std::process::id());
+    let instance = instance_name();
     let names = ServiceNames::new(&instance);
     let n_poses = (a.seconds * a.rate_hz).round().max(1.0) as usize;
     let capacity = n_poses + LOG_SLACK;

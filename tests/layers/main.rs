@@ -4,7 +4,8 @@
 //!   its own module), so the dependency graph has no cycles and a reader can learn the code
 //!   bottom-up from `src/lib.rs`;
 //! - the core (this crate) depends on none of the service, the command line, the wire schema,
-//!   iceoryx2, clap or the renderers, and the service not on the command line, in their
+//!   iceoryx2, clap, the renderers or the monitor's Foxglove and MCAP crates, the service not on
+//!   the command line or the monitor, and the monitor not on the command line, in their
 //!   `Cargo.toml` and in their sources;
 //! - inside a module no two files use each other (no two-file import cycle).
 //!
@@ -16,8 +17,8 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-/// (module, rank): every top-level module of the core, then the service crate and the two
-/// modules of the command-line crate.
+/// (module, rank): every top-level module of the core, then the service crate, the monitor
+/// crate and the two modules of the command-line crate.
 const LAYERS: &[(&str, u32)] = &[
     ("input_file", 0),
     ("alloc_count", 0),
@@ -35,6 +36,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("estimator", 5),
     ("study", 6),
     ("service", 7),
+    ("monitor", 8),
     ("report", 8),
     ("cli", 9),
 ];
@@ -43,10 +45,13 @@ const LAYERS: &[(&str, u32)] = &[
 const SIBLING_EDGES: &[(&str, &str, &str)] = &[];
 
 /// The workspace's crates above the core: (directory, how its files are ranked). The
-/// service's files all belong to `service`; the command line's to their first directory
-/// (`report` or `cli`; `lib.rs` and `main.rs` to `cli`).
-const UPPER_CRATES: &[(&str, Option<&str>)] =
-    &[("service/src", Some("service")), ("cli/src", None)];
+/// service's files all belong to `service`, the monitor's to `monitor`; the command line's to
+/// their first directory (`report` or `cli`; `lib.rs` and `main.rs` to `cli`).
+const UPPER_CRATES: &[(&str, Option<&str>)] = &[
+    ("service/src", Some("service")),
+    ("monitor/src", Some("monitor")),
+    ("cli/src", None),
+];
 
 /// What each crate must not depend on (its `Cargo.toml` `[dependencies]`) nor name in its
 /// sources (as `name::`).
@@ -57,7 +62,10 @@ const FORBIDDEN: &[(&str, &[&str])] = &[
             "cablevib-ipc",
             "cablevib-service",
             "cablevib-cli",
+            "cablevib-monitor",
             "iceoryx2",
+            "foxglove",
+            "mcap",
             "clap",
             "clap_complete",
             "clap_mangen",
@@ -66,14 +74,21 @@ const FORBIDDEN: &[(&str, &[&str])] = &[
             "tracing-subscriber",
         ],
     ),
-    ("service", &["cablevib-cli"]),
+    (
+        "service",
+        &["cablevib-cli", "cablevib-monitor", "foxglove", "mcap"],
+    ),
+    ("monitor", &["cablevib-cli", "clap"]),
     (
         "python",
         &[
             "cablevib-ipc",
             "cablevib-service",
             "cablevib-cli",
+            "cablevib-monitor",
             "iceoryx2",
+            "foxglove",
+            "mcap",
             "clap",
         ],
     ),
@@ -190,8 +205,8 @@ fn layer_violations(
             }
             let Some(r) = rank(&dep) else {
                 // A module of the file's own crate that is not a layer (the service's own
-                // modules: `crate::ports`, …) is the file's own module.
-                if module == "service" {
+                // modules: `crate::ports`, …; the monitor's) is the file's own module.
+                if module == "service" || module == "monitor" {
                     continue;
                 }
                 violations.push(format!("{}: unknown module crate::{dep}", file.display()));

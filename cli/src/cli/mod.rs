@@ -8,6 +8,7 @@
 //! | `analyze` | [`analyze`](mod@analyze) | tensions and natural frequencies of one pose |
 //! | `bench` | [`bench`](mod@bench) | per-cycle latency of the real-time estimator along the circle |
 //! | `serve`, `demo`, `bench-ipc` | [`serve`](mod@serve) | the iceoryx2 service, the demo, the IPC latency |
+//! | `monitor`, `replay`, `demo --monitor` | [`monitor`](mod@monitor) | Foxglove live view and MCAP recording of a service; replay of a recording |
 //! | `accuracy` | [`accuracy`](mod@accuracy) | what accuracy costs: error and time of every model |
 //! | `map` | [`map`](mod@map) | f1 over a workspace grid |
 //! | `trajectory` | [`trajectory`](mod@trajectory) | f1 along the circle or a CSV path |
@@ -32,6 +33,7 @@ pub mod frf;
 pub mod import;
 pub mod map;
 pub mod modes;
+pub mod monitor;
 pub mod sag_compare;
 pub mod serve;
 pub mod sweep_tmin;
@@ -69,6 +71,10 @@ pub enum Command {
     Demo(serve::DemoArgs),
     /// Measure pose-published → estimate-received latency over iceoryx2.
     BenchIpc(serve::BenchIpcArgs),
+    /// Attach to a running service: live in Foxglove (WebSocket) and recorded to MCAP.
+    Monitor(monitor::MonitorArgs),
+    /// Replay the poses and T_min set-points of an MCAP recording into a service.
+    Replay(monitor::ReplayArgs),
     /// What accuracy costs in time: f1 error and per-cycle time of every model, with plots.
     Accuracy(accuracy::AccuracyArgs),
     /// f1 over a workspace grid: heat-map SVG and CSV (infeasible points marked).
@@ -104,6 +110,8 @@ pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
         Command::Serve(a) => serve::serve(&a, allocations),
         Command::Demo(a) => serve::demo(&a),
         Command::BenchIpc(a) => serve::bench_ipc(&a),
+        Command::Monitor(a) => monitor::monitor(&a),
+        Command::Replay(a) => monitor::replay(&a),
         Command::Accuracy(a) => accuracy::run(&a),
         Command::Map(a) => map::run(&a),
         Command::Trajectory(a) => trajectory::run(&a),

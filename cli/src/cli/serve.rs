@@ -105,6 +105,9 @@ pub struct DemoArgs {
     /// (PATH without its extension + -f1.svg and -tmin.svg).
     #[arg(long, value_name = "PATH", requires = "hold_f1")]
     pub hold_csv: Option<std::path::PathBuf>,
+    /// A monitor beside the demo (Foxglove, MCAP).
+    #[command(flatten)]
+    pub monitor: super::monitor::DemoMonitorArgs,
 }
 
 /// `cablevib bench-ipc` options.
@@ -206,7 +209,11 @@ pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
         hold_f1_hz: a.hold_f1,
         hold_csv: a.hold_csv.clone(),
     };
+    let monitor = super::monitor::start_beside_demo(&a.monitor, &scene, &a.scene, a.required_hz)?;
     crate::service::demo(&scene, &cfg)?;
+    if let Some(m) = monitor {
+        m.finish()?;
+    }
     if let (Some(hz), Some(csv)) = (a.hold_f1, &a.hold_csv) {
         hold_figures(csv, hz)?;
     }

@@ -255,7 +255,7 @@ fn wait_for<T>(
             WaitMode::Spin => core::hint::spin_loop(),
             WaitMode::Event => {
                 // Wakes on any notification (or spuriously on a signal); poll again either way.
-                let _ = wake.timed_wait(|_| {}, (timeout - elapsed).min(Duration::from_millis(10)));
+                listener_timed_wait(wake, (timeout - elapsed).min(Duration::from_millis(10)));
             }
         }
     }

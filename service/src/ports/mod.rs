@@ -142,6 +142,19 @@ pub const NODE_NAME_PREFIX: &str = "cablevib";
 const OPEN_RETRIES: usize = 200;
 const OPEN_RETRY_SLEEP: Duration = Duration::from_millis(5);
 
+/// The shortest wait handed to iceoryx2's `Listener::timed_wait`: 1 µs. Its Unix-datagram
+/// implementation sets `SO_RCVTIMEO` from the duration's whole microseconds, and a zero
+/// timeout there means "no timeout": a wait under 1 µs (the remainder of a timeout, computed
+/// just before it ran out) blocked until the next notification, forever on a quiet service.
+pub const MIN_LISTENER_WAIT: Duration = Duration::from_micros(1);
+
+/// Waits on `listener` for up to `timeout` (at least [`MIN_LISTENER_WAIT`]), discarding the
+/// event ids: returns on a notification, a signal or the timeout. Every timed wait of
+/// cablevib goes through here.
+pub fn listener_timed_wait(listener: &Listener<Ipc>, timeout: Duration) {
+    let _ = listener.timed_wait(|_| {}, timeout.max(MIN_LISTENER_WAIT));
+}
+
 fn ipc_error(context: impl Into<String>, reason: impl core::fmt::Debug) -> ServiceError {
     ServiceError::Ipc {
         context: context.into(),
@@ -269,5 +282,36 @@ impl ServicePorts {
         let _ = self
             .wake_out
             .notify_with_custom_event_id(EventId::new(event_id));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_wait_shorter_than_a_microsecond_returns() {
+        // Before `listener_timed_wait` clamped it, a 500 ns wait was a 0 µs SO_RCVTIMEO, i.e.
+        // no timeout: with nobody notifying, the wait never returned (the monitor test's
+        // controller hung there). The thread must end; the 60 s bound only decides that the
+        // test failed, it measures nothing.
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let node = create_node("cablevib-test-short-wait").unwrap();
+            let name = format!("cablevib_test_short_wait_{}", std::process::id());
+            let listener = open_event(&node, &name)
+                .unwrap()
+                .listener_builder()
+                .create()
+                .unwrap();
+            for nanos in [1, 500, 999] {
+                listener_timed_wait(&listener, Duration::from_nanos(nanos));
+            }
+            let _ = tx.send(());
+        });
+        assert!(
+            rx.recv_timeout(Duration::from_secs(60)).is_ok(),
+            "a sub-microsecond timed wait did not return"
+        );
     }
 }

@@ -731,10 +731,10 @@ pub fn run(
                 period_ns.saturating_sub(monotonic_now_ns().saturating_sub(period_start)),
             );
             // Returns early on a notification (or a signal); either way we poll next.
-            let _ = server
-                .ports
-                .wake_in
-                .timed_wait(|_| {}, until_stats.min(EVENT_TIMEOUT));
+            crate::ports::listener_timed_wait(
+                &server.ports.wake_in,
+                until_stats.min(EVENT_TIMEOUT),
+            );
         }
         let worked = server.poll();
         if !worked && cfg.wait == WaitMode::Spin {
