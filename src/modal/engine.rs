@@ -9,8 +9,8 @@
 //! the spectrum search (`spectrum`) and the end-effector sweep are written once over it and
 //! monomorphised for each (no dynamic dispatch, no allocation).
 
-use super::dynamic_stiffness::{DynEval, EvalScratch, LoadedChains};
-use nalgebra::Matrix6;
+use super::dynamic_stiffness::{quad, DynEval, EvalScratch, LoadedChains};
+use nalgebra::{Matrix6, Vector6};
 
 /// The first upper bracket of a search starts here when no better scale is known,
 /// rad²/s² (and a cold first root's Rayleigh guess is at least this).
@@ -81,6 +81,28 @@ pub(in crate::modal) trait Condensed {
     /// above), when the chains' blocked eigenvalues are known in closed form; None when
     /// only the count shows them (the searches then bisect on the blocked count).
     fn pole_interval(&self, lambda: f64) -> Option<(f64, f64)>;
+    /// Whether [`Self::pole_interval`] knows the poles (else the count alone shows them).
+    fn poles_known(&self) -> bool;
+    /// The lowest pole of D, rad²/s² (∞: none), when the poles are known.
+    fn lowest_pole(&self) -> Option<f64>;
+    /// D(0) without a counted evaluation: from the chains' static end stiffness (D'(0) is
+    /// left zero where that needs an evaluation of the chains).
+    fn static_eval(&self) -> DynEval;
+
+    /// The end-effector participation of the mode with unit null vector v at a root where
+    /// D' = `dd`: the end-effector's share vᵀ M_ee v / vᵀ(−D')v of the mode's kinetic-energy
+    /// norm (0 when that norm is not positive).
+    #[inline]
+    fn participation(&self, dd: &Matrix6<f64>, v: &Vector6<f64>) -> f64 {
+        let dim = self.dim();
+        let kin = -quad(dd, v, dim);
+        let own = quad(self.ee_mass(), v, dim);
+        if kin > 0.0 {
+            (own / kin).min(1.0)
+        } else {
+            0.0
+        }
+    }
 
     /// Number of natural frequencies strictly below λ (Wittrick–Williams), with the
     /// blocked count: (J(λ), blocked).
@@ -129,5 +151,17 @@ impl Condensed for TautView<'_> {
     #[inline]
     fn pole_interval(&self, lambda: f64) -> Option<(f64, f64)> {
         Some(self.p.pole_interval(lambda))
+    }
+    #[inline]
+    fn poles_known(&self) -> bool {
+        true
+    }
+    #[inline]
+    fn lowest_pole(&self) -> Option<f64> {
+        Some(self.p.lowest_pole())
+    }
+    #[inline]
+    fn static_eval(&self) -> DynEval {
+        self.p.static_eval()
     }
 }

@@ -9,7 +9,7 @@ use super::{
     PARTNER_SEARCHES, P_ADD, P_DROP, P_LAZY, P_MARGIN, P_PARTNER, P_STRONG, SEARCH_BOUND,
     SEARCH_LOSS,
 };
-use crate::modal::first_mode::RootFinder;
+use crate::modal::first_mode::TautFinder;
 use crate::modal::Root;
 
 /// A followed root farther than this (relative) from its prediction is another mode that
@@ -33,7 +33,7 @@ impl EeTracker {
     /// One warm cycle of the watched modes; Err(reason) when a full scan is needed.
     pub(super) fn track_watched(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut TautFinder<'_>,
         thr: f64,
     ) -> Result<Root, RescanReason> {
         self.follow_members(f, false);
@@ -43,7 +43,7 @@ impl EeTracker {
     /// Follow the watched modes one step: every one with participation ≥ [`P_LAZY`] and
     /// the weak one followed longest ago (`stale_only`: those not followed this cycle).
     /// Then keep them in index order, distinct, and drop the weak ones.
-    fn follow_members(&mut self, f: &mut RootFinder<'_>, stale_only: bool) {
+    fn follow_members(&mut self, f: &mut TautFinder<'_>, stale_only: bool) {
         let mut rr = usize::MAX;
         if !stale_only {
             let mut oldest = 0;
@@ -138,7 +138,7 @@ impl EeTracker {
     /// the answer, neighbour searches, the certificate.
     fn partners_and_answer(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut TautFinder<'_>,
         thr: f64,
     ) -> Result<Root, RescanReason> {
         self.search_partners(f);
@@ -165,7 +165,7 @@ impl EeTracker {
     /// energy with one chain is mixing with that chain's string mode, which sits just
     /// across the chain's nearest pole; watch it before the participation moves there (at
     /// most [`PARTNER_SEARCHES`] searches).
-    fn search_partners(&mut self, f: &mut RootFinder<'_>) {
+    fn search_partners(&mut self, f: &mut TautFinder<'_>) {
         let mut searches = 0;
         let mut i = 0;
         while i < self.n_members && searches < PARTNER_SEARCHES {
@@ -211,7 +211,7 @@ impl EeTracker {
     /// Search the neighbours of the watched mode whose participation changed most since
     /// its neighbours were last searched (first those never searched): a flood fill towards
     /// the participation the watched modes miss.
-    fn search_neighbours(&mut self, f: &mut RootFinder<'_>) {
+    fn search_neighbours(&mut self, f: &mut TautFinder<'_>) {
         let mut pick = None;
         let mut change = SEARCH_LOSS;
         let mut oldest = (u64::MAX, 0);
@@ -283,7 +283,7 @@ impl EeTracker {
     /// The lowest watched mode with participation ≥ the threshold, solved to full accuracy
     /// (and so is any watched mode below it within [`P_MARGIN`] of the threshold);
     /// Err(NoneReached) when there is none, Err(Lost) when an exact solve fails.
-    fn select_answer(&mut self, f: &mut RootFinder<'_>, thr: f64) -> Result<Root, RescanReason> {
+    fn select_answer(&mut self, f: &mut TautFinder<'_>, thr: f64) -> Result<Root, RescanReason> {
         let exact = f.params.newton_accept;
         for i in 0..self.n_members {
             let m = self.members[i];

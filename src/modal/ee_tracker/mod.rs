@@ -21,7 +21,7 @@ mod phases;
 mod scan;
 mod search;
 
-use super::first_mode::RootFinder;
+use super::first_mode::TautFinder;
 use super::{ModalError, Root};
 use member::{predict, Member};
 use scan::{ScanState, ScanStep};
@@ -213,7 +213,7 @@ impl EeTracker {
     /// (`first` is the known first root, not solved again).
     pub(super) fn ee_mode(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut TautFinder<'_>,
         sums: SumRules,
         first: &Root,
     ) -> Result<Root, ModalError> {
@@ -223,7 +223,7 @@ impl EeTracker {
         }
         let start = f.evaluations();
         self.scan = Some(ScanState::new(
-            f.problem,
+            f.view.p,
             0.0,
             first.lambda,
             f64::INFINITY,
@@ -252,7 +252,7 @@ impl EeTracker {
     /// in the next cycle (a scan in progress, or a warm cycle cut short).
     pub(super) fn ee_mode_tracked(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut TautFinder<'_>,
         sums: SumRules,
         first: &Root,
         warm: bool,
@@ -298,7 +298,7 @@ impl EeTracker {
     /// Weak episode: no mode reached the threshold at the last full scan; follow the most
     /// end-effector-like mode and rescan fully every [`WEAK_RESCAN_CYCLES`] cycles. Some(its
     /// root) while it stays below the threshold; None (nothing watched) when a scan is due.
-    fn follow_weak(&mut self, f: &mut RootFinder<'_>, thr: f64) -> Option<Root> {
+    fn follow_weak(&mut self, f: &mut TautFinder<'_>, thr: f64) -> Option<Root> {
         self.ee_skip -= 1;
         if self.n_members == 1 {
             let m = self.members[0];
@@ -319,8 +319,8 @@ impl EeTracker {
     }
 
     /// Watch the first root: branch 0 below the lowest pole, index 0.
-    fn watch_first(&mut self, f: &RootFinder<'_>, first: &Root) {
-        let lp = f.problem.lowest_pole();
+    fn watch_first(&mut self, f: &TautFinder<'_>, first: &Root) {
+        let lp = f.view.p.lowest_pole();
         self.insert_member(Member::new(
             first.lambda,
             first.ee_participation,

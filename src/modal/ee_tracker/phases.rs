@@ -8,14 +8,14 @@ use super::{
     EeTracker, RescanReason, CERT_MARGIN, PHASES_PER_CYCLE, P_ADD, RESCAN_WINDOW,
     WEAK_RESCAN_CYCLES,
 };
-use crate::modal::first_mode::RootFinder;
+use crate::modal::first_mode::TautFinder;
 use crate::modal::{ModalError, Root};
 
 impl EeTracker {
     /// Track, scan, or continue a scan, until an answer or the budget's end.
     pub(super) fn ee_phases(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut TautFinder<'_>,
         first: &Root,
         thr: f64,
     ) -> Result<Option<Root>, ModalError> {
@@ -48,7 +48,7 @@ impl EeTracker {
     /// whether it started from a window.
     fn run_scan(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut TautFinder<'_>,
     ) -> Option<(Result<Root, ModalError>, bool, bool)> {
         let resumed = self.scan.is_some_and(|s| s.resumed > 0);
         let window = self.scan.is_some_and(|s| s.window);
@@ -74,7 +74,7 @@ impl EeTracker {
     /// window that did not certify).
     fn scan_done(
         &mut self,
-        f: &RootFinder<'_>,
+        f: &TautFinder<'_>,
         r: Result<Root, ModalError>,
         resumed: bool,
         window: bool,
@@ -107,7 +107,7 @@ impl EeTracker {
         };
         if r.ee_participation < thr {
             // Weak: watch only this mode until the next full scan.
-            let (a, b) = f.problem.pole_interval(r.lambda);
+            let (a, b) = f.view.p.pole_interval(r.lambda);
             self.members[0] = Member::new(r.lambda, r.ee_participation, 0, 0, a, b);
             self.n_members = 1;
             self.ee_skip = WEAK_RESCAN_CYCLES;
@@ -118,7 +118,7 @@ impl EeTracker {
     /// Start a scan for `reason`: from 10 % below the lowest watched mode after a failed
     /// warm cycle (the watched modes are those the participation moves among; the modes
     /// below stay unwatched and covered by the bound), from zero otherwise.
-    fn start_scan(&mut self, f: &RootFinder<'_>, first: &Root, reason: RescanReason) {
+    fn start_scan(&mut self, f: &TautFinder<'_>, first: &Root, reason: RescanReason) {
         let window = if reason != RescanReason::Cold && self.n_members > 0 {
             RESCAN_WINDOW * self.members[0].lambda
         } else {
@@ -130,13 +130,13 @@ impl EeTracker {
                 self.watch_first(f, first);
             }
             let skip = window * (1.0 - scan::WINDOW_EDGE);
-            self.scan = Some(ScanState::new(f.problem, window, skip, f64::INFINITY, true));
+            self.scan = Some(ScanState::new(f.view.p, window, skip, f64::INFINITY, true));
         } else {
             if first.ee_participation >= P_ADD {
                 self.watch_first(f, first);
             }
             self.scan = Some(ScanState::new(
-                f.problem,
+                f.view.p,
                 0.0,
                 first.lambda,
                 f64::INFINITY,

@@ -5,7 +5,7 @@
 use super::member::Member;
 use super::{EeTracker, MAX_MEMBERS, P_ADD, SCAN_BOUND};
 use crate::modal::dynamic_stiffness::{LoadedChains, MAX_CHAINS};
-use crate::modal::first_mode::RootFinder;
+use crate::modal::first_mode::TautFinder;
 use crate::modal::{ModalError, Root};
 
 /// Poles of different chains closer than this (relative) are one pole of the scan.
@@ -57,7 +57,7 @@ fn next_distinct_pole(
 /// blocked count there and the branches [na, nb) that have a root in it (two evaluations
 /// at most).
 fn interval_branches(
-    f: &mut RootFinder<'_>,
+    f: &mut TautFinder<'_>,
     a: f64,
     b: f64,
     lo: f64,
@@ -76,7 +76,7 @@ fn interval_branches(
         below = e.below;
         e.eig().negatives()
     } else {
-        f.problem.dim
+        f.view.p.dim
     };
     (below, na, nb)
 }
@@ -173,7 +173,7 @@ impl EeTracker {
     ///
     /// [`ModalParams::max_scan_intervals`]: crate::modal::ModalParams::max_scan_intervals
     /// [`ModalParams::max_scan_evaluations`]: crate::modal::ModalParams::max_scan_evaluations
-    pub(super) fn scan_step(&mut self, f: &mut RootFinder<'_>) -> ScanStep {
+    pub(super) fn scan_step(&mut self, f: &mut TautFinder<'_>) -> ScanStep {
         let Some(mut st) = self.scan else {
             return ScanStep::Done(Err(ModalError::NoEeMode(0)));
         };
@@ -195,7 +195,7 @@ impl EeTracker {
     /// The scan's loop over the intervals; None when the budget ran out (state in `st`).
     fn scan_intervals(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut TautFinder<'_>,
         st: &mut ScanState,
         begin: u32,
     ) -> Option<Result<Root, ModalError>> {
@@ -203,8 +203,8 @@ impl EeTracker {
         while st.intervals < f.params.max_scan_intervals
             && st.spent + (f.evaluations() - begin) <= f.params.max_scan_evaluations
         {
-            let a = st.a(f.problem);
-            let (b, bc, bj) = next_distinct_pole(f.problem, &mut st.next_pole, a);
+            let a = st.a(f.view.p);
+            let (b, bc, bj) = next_distinct_pole(f.view.p, &mut st.next_pole, a);
             if a > st.limit {
                 break;
             }
@@ -235,7 +235,7 @@ impl EeTracker {
     /// The roots of one pole interval (a, b) from branch `st.branch` on.
     fn scan_interval(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut TautFinder<'_>,
         st: &mut ScanState,
         a: f64,
         b: f64,

@@ -21,23 +21,19 @@
 //! recurrences side by side (bit-identical to one chain after the other,
 //! [`SagModalSolver::eval_reference`]); count-only evaluations skip S'.
 //!
-//! **First root** ([`SagModalSolver::first_root_from`]). The chains are not uniform, so their
-//! blocked eigenvalues (the poles of D) are not known in closed form; the count shows
-//! where they are. The first natural frequency lies at or below the lowest pole (blocking
-//! the end adds a constraint), where μ₁(D(λ)) falls monotonically from μ₁(D(0)) > 0; it is
-//! the zero of μ₁ with no pole below it. Newton's method on μ₁ (μ₁' = vᵀD'v) runs from the
-//! last root (warm) or from the Rayleigh guess μ₁(0)/(−μ₁'(0)) (cold), inside a bracket
-//! [lo, hi] kept by the signs of μ₁ and by the blocked count: an iterate with a pole below
-//! it (below > 0) is an upper bound, and a step that leaves the bracket is replaced by
-//! bisection. A root whose evaluation has no pole below it is the first eigenvalue by
-//! monotonicity (no certificate needed); a bracket that collapses onto a pole (a mode with
-//! the end-effector still) is reported there with participation 0. Warm (from a predicted
-//! λ) an iterate is accepted once its step is below `newton_accept` with a rate that leaves
-//! less than `rel_tol`, or at the 1e-10 noise floor; where Newton from below overshoots the
-//! bracket, the step from its upper end is taken. At most min(`max_evaluations`,
-//! `cycle_evaluations`) evaluations per call, else `NoConvergence`; a search cut by the
-//! cycle's budget is continued by the next call (bracket and all on the same loaded problem,
-//! from its last iterate on another), up to `max_evaluations` over the calls.
+//! **First root** ([`SagModalSolver::first_root_from`]): the taut solver's first root
+//! (`modal::first_mode`, written once over the condensed problem). The chains are not
+//! uniform, so their blocked eigenvalues (the poles of D) are not known in closed form; the
+//! count shows where they are. The first natural frequency lies at or below the lowest
+//! pole, where μ₁(D(λ)) falls monotonically from μ₁(D(0)) > 0: safeguarded Newton on μ₁
+//! from the last root (warm) or the Rayleigh guess (cold), inside a bracket kept by the
+//! signs of μ₁ and by the blocked count (an iterate with a pole below it is an upper
+//! bound); a bracket that collapses onto a pole (a mode with the end-effector still) is
+//! reported there with participation 0. The count certifies the root on cold starts and
+//! every 256th warm one. At most min(`max_evaluations`, `cycle_evaluations`) evaluations
+//! per call, else `NoConvergence`; a search cut by the cycle's budget is continued by the
+//! next call (bracket and all on the same loaded problem, from its last iterate on
+//! another), up to `max_evaluations` over the calls.
 //!
 //! **First K modes** ([`SagModalSolver::modes`]): the count brackets mode k; bisection on
 //! the count while the blocked count differs at the bracket's ends (a pole inside), then,
@@ -49,16 +45,16 @@
 //! **Static stiffness** ([`SagModalSolver::static_stiffness`]): D(0), N/m (N·m/rad in the
 //! rotational block), from each chain's cached S(0).
 //!
-//! Files: `problem` (the loaded pose, D(λ)), `first` (first root), `modes` (first K),
+//! Files: `problem` (the loaded pose, D(λ)), `modes` (first K),
 //! `dense` (the assembled reference).
 
 mod dense;
-mod first;
 mod modes;
 mod problem;
 
 pub use dense::{assemble_sagged, SagDenseCable};
 
+use super::first_mode::{FirstRootState, RootFinder};
 use super::spectrum::{ee_sweep, EeSweep, SweepStep};
 use super::{ModalError, ModalParams, Mode, Root, SpectrumParams};
 use crate::cable::sagged::{
@@ -144,8 +140,9 @@ pub struct SagModalSolver {
     evaluations: u32,
     /// The last first root, rad²/s² (NaN: none; the warm start).
     last_lambda1: f64,
-    /// A first-root search the last cycle's budget cut, continued by the next call.
-    pending: Option<first::Pending>,
+    /// The first root's state between calls (certificate schedule, weighted sum rule, a
+    /// search the last cycle's budget cut).
+    first: FirstRootState,
     /// The evaluation counter when this cycle's first root began (the cycle's budget
     /// counts from there).
     cycle_base: u32,
@@ -162,7 +159,7 @@ impl SagModalSolver {
             problem: SagProblem::new(n_cables, n_el_max, None),
             evaluations: 0,
             last_lambda1: f64::NAN,
-            pending: None,
+            first: FirstRootState::new(),
             cycle_base: 0,
             sweep: None,
             loaded: false,
@@ -181,7 +178,7 @@ impl SagModalSolver {
             problem: SagProblem::new(n_cables, 1, Some(cont)),
             evaluations: 0,
             last_lambda1: f64::NAN,
-            pending: None,
+            first: FirstRootState::new(),
             cycle_base: 0,
             sweep: None,
             loaded: false,
@@ -353,7 +350,7 @@ impl SagModalSolver {
 
     /// Forget a first-root search the cycle's budget cut (the next call starts afresh).
     pub fn forget_pending(&mut self) {
-        self.pending = None;
+        self.first.pending = None;
     }
 
     /// The first natural frequency from the Rayleigh guess (ignores the last root).
@@ -374,13 +371,16 @@ impl SagModalSolver {
     pub fn first_root_from(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
         self.require_loaded()?;
         self.cycle_base = self.evaluations;
-        let r = first::first_root(
-            &self.problem,
-            &self.params,
-            &mut self.evaluations,
-            warm,
-            &mut self.pending,
-        );
+        let mut f = RootFinder {
+            params: &self.params,
+            view: SagView {
+                p: &self.problem,
+                evals: &mut self.evaluations,
+            },
+            budget_base: self.cycle_base,
+            budget: self.params.cycle_evaluations,
+        };
+        let r = f.first_root(&mut self.first, warm);
         self.last_lambda1 = r.as_ref().map_or(f64::NAN, |r| r.lambda);
         r
     }

@@ -385,4 +385,16 @@ impl Condensed for SagView<'_> {
     fn pole_interval(&self, _lambda: f64) -> Option<(f64, f64)> {
         None
     }
+    #[inline]
+    fn poles_known(&self) -> bool {
+        false
+    }
+    #[inline]
+    fn lowest_pole(&self) -> Option<f64> {
+        None
+    }
+    #[inline]
+    fn static_eval(&self) -> DynEval {
+        self.p.static_eval()
+    }
 }
