@@ -89,6 +89,24 @@ pub(in crate::modal) trait Condensed {
     /// left zero where that needs an evaluation of the chains).
     fn static_eval(&self) -> DynEval;
 
+    /// The pole-free interval around the λ of the last evaluation (the chains' blocked
+    /// counts there), when the poles are known.
+    fn last_pole_interval(&self) -> Option<(f64, f64)>;
+    /// Σ_k p_k over all modes, tr(M_ee M_∞⁻¹) (the plain sum rule; see the module docs of
+    /// `modal`): from `load` where it is known in closed form, else from one evaluation far
+    /// below zero.
+    fn participation_total(&mut self) -> f64;
+    /// The taut problem itself, for what walks its closed-form poles (the end-effector
+    /// tracker's pole-interval scan and neighbour search); None for the others.
+    fn taut(&mut self) -> Option<TautView<'_>>;
+    /// The chain holding the largest share of the kinetic-energy norm of mode shape v at
+    /// the last evaluation (at x, D' = `dd`): (share, its pole nearest x, whether above,
+    /// the pole's key); (0, NaN, false, `u32::MAX`) where the poles are not known.
+    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
+        let _ = (x, dd, v);
+        (0.0, f64::NAN, false, u32::MAX)
+    }
+
     /// The end-effector participation of the mode with unit null vector v at a root where
     /// D' = `dd`: the end-effector's share vᵀ M_ee v / vᵀ(−D')v of the mode's kinetic-energy
     /// norm (0 when that norm is not positive).
@@ -163,5 +181,88 @@ impl Condensed for TautView<'_> {
     #[inline]
     fn static_eval(&self) -> DynEval {
         self.p.static_eval()
+    }
+    #[inline]
+    fn last_pole_interval(&self) -> Option<(f64, f64)> {
+        Some(self.s.last_pole_interval(self.p))
+    }
+    #[inline]
+    fn participation_total(&mut self) -> f64 {
+        self.p.p_total
+    }
+    #[inline]
+    fn taut(&mut self) -> Option<TautView<'_>> {
+        Some(TautView {
+            p: self.p,
+            s: &mut *self.s,
+        })
+    }
+    #[inline]
+    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
+        self.s.coupling(self.p, x, dd, v)
+    }
+}
+
+/// A borrowed problem is the problem (a search may run on a view it does not own).
+impl<C: Condensed> Condensed for &mut C {
+    #[inline]
+    fn eval(&mut self, lambda: f64) -> DynEval {
+        (**self).eval(lambda)
+    }
+    #[inline]
+    fn count_eval(&mut self, lambda: f64) -> DynEval {
+        (**self).count_eval(lambda)
+    }
+    #[inline]
+    fn zero_eval(&mut self) -> DynEval {
+        (**self).zero_eval()
+    }
+    #[inline]
+    fn evaluations(&self) -> u32 {
+        (**self).evaluations()
+    }
+    #[inline]
+    fn dim(&self) -> usize {
+        (**self).dim()
+    }
+    #[inline]
+    fn ee_mass(&self) -> &Matrix6<f64> {
+        (**self).ee_mass()
+    }
+    #[inline]
+    fn total_modes(&self) -> usize {
+        (**self).total_modes()
+    }
+    #[inline]
+    fn pole_interval(&self, lambda: f64) -> Option<(f64, f64)> {
+        (**self).pole_interval(lambda)
+    }
+    #[inline]
+    fn poles_known(&self) -> bool {
+        (**self).poles_known()
+    }
+    #[inline]
+    fn lowest_pole(&self) -> Option<f64> {
+        (**self).lowest_pole()
+    }
+    #[inline]
+    fn static_eval(&self) -> DynEval {
+        (**self).static_eval()
+    }
+    #[inline]
+    fn last_pole_interval(&self) -> Option<(f64, f64)> {
+        (**self).last_pole_interval()
+    }
+    #[inline]
+    fn participation_total(&mut self) -> f64 {
+        (**self).participation_total()
+    }
+    #[inline]
+    fn taut(&mut self) -> Option<TautView<'_>> {
+        (**self).taut()
+    }
+    #[inline]
+    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
+        (**self).coupling(x, dd, v)
     }
 }

@@ -130,6 +130,18 @@ impl<P: Condensed> RootFinder<'_, P> {
         self.left() == 0
     }
 
+    /// The taut finder on the same problem and budget (None where the poles are not known
+    /// in closed form).
+    pub(super) fn as_taut(&mut self) -> Option<TautFinder<'_>> {
+        let (params, budget_base, budget) = (self.params, self.budget_base, self.budget);
+        self.view.taut().map(|view| RootFinder {
+            params,
+            view,
+            budget_base,
+            budget,
+        })
+    }
+
     /// The end-effector participation of the mode with null vector v, D' = `dd`.
     #[inline]
     pub(super) fn participation(&self, dd: &Matrix6<f64>, v: &Vector6<f64>) -> f64 {

@@ -55,8 +55,9 @@ mod problem;
 pub use dense::{assemble_sagged, SagDenseCable};
 
 use super::first_mode::{FirstRootState, RootFinder};
-use super::spectrum::{ee_sweep, EeSweep, SweepStep};
-use super::{ModalError, ModalParams, Mode, Root, SpectrumParams};
+use super::ee_tracker::{EeTracker, RescanCounts, SumRules};
+use super::engine::Condensed;
+use super::{ModalError, ModalParams, Root};
 use crate::cable::sagged::{
     SagChain, SagChainError, SagContError, SagContMesh, SagContinuousParams,
 };
@@ -146,8 +147,8 @@ pub struct SagModalSolver {
     /// The evaluation counter when this cycle's first root began (the cycle's budget
     /// counts from there).
     cycle_base: u32,
-    /// An end-effector sweep the budget cut, continued by the next cycle.
-    sweep: Option<EeSweep>,
+    /// The end-effector mode tracker's state between cycles.
+    tracker: EeTracker,
     loaded: bool,
 }
 
@@ -161,7 +162,7 @@ impl SagModalSolver {
             last_lambda1: f64::NAN,
             first: FirstRootState::new(),
             cycle_base: 0,
-            sweep: None,
+            tracker: EeTracker::new(),
             loaded: false,
         }
     }
@@ -180,7 +181,7 @@ impl SagModalSolver {
             last_lambda1: f64::NAN,
             first: FirstRootState::new(),
             cycle_base: 0,
-            sweep: None,
+            tracker: EeTracker::new(),
             loaded: false,
         }
     }
@@ -385,59 +386,80 @@ impl SagModalSolver {
         r
     }
 
-    /// The end-effector mode of the loaded pose: the lowest mode whose participation is at
-    /// least [`ModalParams::ee_participation_min`], by an ascending sweep of the spectrum
-    /// (every mode below it solved and read; at most [`ModalParams::max_scan_intervals`]
-    /// modes). Offline use; forgets a sweep in progress.
-    pub fn ee_mode(&mut self) -> Result<Mode, ModalError> {
-        self.require_loaded()?;
-        self.sweep = None;
-        match self.ee_step(u32::MAX)? {
-            Some(m) => Ok(m),
-            None => Err(ModalError::NoEeMode(0)),
-        }
-    }
-
-    /// The end-effector mode within what is left of this cycle's budget
-    /// ([`ModalParams::cycle_evaluations`], counted from the start of this cycle's
-    /// [`Self::first_root_from`]): Ok(Some) when the sweep ends in this call, Ok(None) when
-    /// the budget cut it (it goes on in the next call, on that call's pose). `warm` false
-    /// (a jump) forgets a sweep in progress. No allocation.
-    pub fn ee_mode_tracked(&mut self, warm: bool) -> Result<Option<Mode>, ModalError> {
-        self.require_loaded()?;
-        if !warm {
-            self.sweep = None;
-        }
-        let budget = match self.params.cycle_evaluations {
-            u32::MAX => u32::MAX,
-            b => b.saturating_sub(self.evaluations.wrapping_sub(self.cycle_base)),
-        };
-        self.ee_step(budget)
-    }
-
-    /// Forget an end-effector sweep in progress.
-    pub fn reset_tracking(&mut self) {
-        self.sweep = None;
-    }
-
-    /// One step of the end-effector sweep with `budget` evaluations.
-    fn ee_step(&mut self, budget: u32) -> Result<Option<Mode>, ModalError> {
-        let view = SagView {
-            p: &self.problem,
-            evals: &mut self.evaluations,
-        };
-        let params = SpectrumParams::default();
-        let r = ee_sweep(
-            view,
-            &params,
-            self.params.ee_participation_min,
+    /// The root finder on the loaded problem with this cycle's budget (counted from the
+    /// start of this cycle's [`Self::first_root_from`]), and beside it the tracker and the
+    /// sum rules (the plain one from one evaluation far below zero).
+    fn tracker_parts(&mut self, budget: u32) -> (RootFinder<'_, SagView<'_>>, &mut EeTracker) {
+        let f = RootFinder {
+            params: &self.params,
+            view: SagView {
+                p: &self.problem,
+                evals: &mut self.evaluations,
+            },
+            budget_base: self.cycle_base,
             budget,
-            self.params.max_scan_intervals,
-            &mut self.sweep,
-        )?;
-        Ok(match r {
-            SweepStep::Done(m) => Some(m),
-            SweepStep::Paused => None,
-        })
+        };
+        (f, &mut self.tracker)
+    }
+
+    /// The sum rules of the loaded pose (one evaluation for the plain one; the weighted one
+    /// from the last first root).
+    fn sums(&mut self, budget: u32) -> SumRules {
+        let over_lambda = self.first.flex0;
+        let (mut f, _) = self.tracker_parts(budget);
+        let total = if f.left() > 0 {
+            f.view.participation_total()
+        } else {
+            f64::INFINITY
+        };
+        SumRules { total, over_lambda }
+    }
+
+    /// The end-effector mode of the loaded pose: the lowest mode whose participation is at
+    /// least [`ModalParams::ee_participation_min`], by the taut solver's tracker
+    /// ([`crate::modal::ModalSolver::ee_mode_tracked`]) on the sagged problem: its scan is
+    /// an ascending sweep of the spectrum (every mode below the answer solved and read; at
+    /// most [`ModalParams::max_scan_intervals`] modes). `first` is this pose's first root
+    /// (not solved again). Offline use: not bounded by the cycle's budget.
+    pub fn ee_mode(&mut self, first: &Root) -> Result<Root, ModalError> {
+        self.require_loaded()?;
+        let sums = self.sums(u32::MAX);
+        let (mut f, tracker) = self.tracker_parts(u32::MAX);
+        tracker.ee_mode(&mut f, sums, first)
+    }
+
+    /// The end-effector mode, tracked from the last cycle when `warm`, within what is left
+    /// of this cycle's budget ([`ModalParams::cycle_evaluations`], counted from the start of
+    /// this cycle's [`Self::first_root_from`]): the method of
+    /// [`crate::modal::ModalSolver::ee_mode_tracked`] (watched modes followed by Newton on
+    /// their branch of D, certified by the sum rules; scans spread over the cycles), where
+    /// the poles are seen only through the count: a followed mode that crosses a pole is
+    /// lost (the next scan finds it again), and there are no partner or neighbour searches
+    /// (they walk closed-form poles). Ok(None) while the work goes on over the cycles
+    /// (`first`: this cycle's first root). No allocation.
+    pub fn ee_mode_tracked(&mut self, first: &Root, warm: bool) -> Result<Option<Root>, ModalError> {
+        self.require_loaded()?;
+        let budget = self.params.cycle_evaluations;
+        let thr = self.params.ee_participation_min;
+        let sums = if first.ee_participation >= thr {
+            SumRules {
+                total: f64::INFINITY,
+                over_lambda: self.first.flex0,
+            }
+        } else {
+            self.sums(budget)
+        };
+        let (mut f, tracker) = self.tracker_parts(budget);
+        tracker.ee_mode_tracked(&mut f, sums, first, warm)
+    }
+
+    /// Forget the tracked end-effector mode (the next [`Self::ee_mode_tracked`] scans).
+    pub fn reset_tracking(&mut self) {
+        self.tracker.reset();
+    }
+
+    /// Counters of the end-effector bookkeeping (scans by reason, modes lost and dropped).
+    pub fn rescan_counts(&self) -> RescanCounts {
+        self.tracker.counts()
     }
 }

@@ -50,7 +50,6 @@
 //! (closed-form chains), so K modes cost the same at N = 10 and N = 10⁶.
 
 mod cluster;
-mod ee_sweep;
 mod search;
 
 use super::dynamic_stiffness::LoadedChains;
@@ -59,8 +58,7 @@ use super::engine::TautView;
 use super::solver::ModalSolver;
 use super::ModalError;
 use crate::cable::ChainKind;
-pub(in crate::modal) use ee_sweep::{ee_sweep, EeSweep, SweepStep};
-pub(in crate::modal) use search::SpectrumSearch;
+pub(in crate::modal) use search::{SpectrumSearch, SweepState};
 
 /// One solved member of a pole-free cluster: its root, the evaluation there, its branch.
 type Member = (f64, DynEval, EigD, usize);
