@@ -131,6 +131,26 @@ pub(in crate::modal) trait Condensed {
     }
 }
 
+/// The [`Condensed`] methods read from the loaded problem `self.p` (its `dim`, `m6` and
+/// `total_modes()`), the same for the taut and the sagged view.
+macro_rules! ee_from_problem {
+    () => {
+        #[inline]
+        fn dim(&self) -> usize {
+            self.p.dim
+        }
+        #[inline]
+        fn ee_mass(&self) -> &nalgebra::Matrix6<f64> {
+            &self.p.m6
+        }
+        #[inline]
+        fn total_modes(&self) -> usize {
+            self.p.total_modes()
+        }
+    };
+}
+pub(in crate::modal) use ee_from_problem;
+
 /// The taut problem: the loaded chains (read) and the evaluation scratch (written).
 pub(in crate::modal) struct TautView<'a> {
     pub(in crate::modal) p: &'a LoadedChains,
@@ -154,18 +174,7 @@ impl Condensed for TautView<'_> {
     fn evaluations(&self) -> u32 {
         self.s.evaluations
     }
-    #[inline]
-    fn dim(&self) -> usize {
-        self.p.dim
-    }
-    #[inline]
-    fn ee_mass(&self) -> &Matrix6<f64> {
-        &self.p.m6
-    }
-    #[inline]
-    fn total_modes(&self) -> usize {
-        self.p.total_modes()
-    }
+    ee_from_problem!();
     #[inline]
     fn pole_interval(&self, lambda: f64) -> Option<(f64, f64)> {
         Some(self.p.pole_interval(lambda))

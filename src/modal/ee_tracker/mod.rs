@@ -223,13 +223,7 @@ impl EeTracker {
             return Ok(*first);
         }
         let start = f.evaluations();
-        self.scan = Some(ScanState::new(
-            &f.view,
-            0.0,
-            first.lambda,
-            f64::INFINITY,
-            false,
-        ));
+        self.scan = Some(ScanState::from_zero(&f.view, first.lambda));
         let r = match self.scan_step(f) {
             ScanStep::Done(r) => r,
             ScanStep::Paused => {

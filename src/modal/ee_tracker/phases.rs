@@ -151,13 +151,7 @@ impl EeTracker {
             if first.ee_participation >= P_ADD {
                 self.watch_first(f, first);
             }
-            self.scan = Some(ScanState::new(
-                &f.view,
-                0.0,
-                first.lambda,
-                f64::INFINITY,
-                false,
-            ));
+            self.scan = Some(ScanState::from_zero(&f.view, first.lambda));
         }
     }
 

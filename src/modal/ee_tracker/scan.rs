@@ -160,6 +160,11 @@ impl ScanState {
         }
     }
 
+    /// A scan from zero, skipping the known first root at `first` (rad²/s²).
+    pub(super) fn from_zero<P: Condensed>(p: &P, first: f64) -> Self {
+        Self::new(p, 0.0, first, f64::INFINITY, false)
+    }
+
     /// The lower end of the current interval on the loaded problem, rad²/s².
     fn a(&self, p: &LoadedChains) -> f64 {
         match self.a_key {

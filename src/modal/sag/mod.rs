@@ -233,13 +233,25 @@ impl SagModalSolver {
         up: &Vector3<f64>,
         ee: &SagEndEffector,
     ) -> Result<(), SagLoadError> {
+        self.load_with(frames.len(), up, ee, |_, i| Ok(frames[i]))
+    }
+
+    /// Load `n` cables, cable i's chain set and its frame given by `cable(problem, i)`.
+    fn load_with(
+        &mut self,
+        n: usize,
+        up: &Vector3<f64>,
+        ee: &SagEndEffector,
+        mut cable: impl FnMut(&mut SagProblem, usize) -> Result<SagCableFrame, SagLoadError>,
+    ) -> Result<(), SagLoadError> {
         self.loaded = false;
-        self.check_count(frames.len())?;
+        self.check_count(n)?;
         self.problem.set_end_effector(ee)?;
-        for (i, f) in frames.iter().enumerate() {
-            self.problem.set_cable(i, f, up)?;
+        for i in 0..n {
+            let frame = cable(&mut self.problem, i)?;
+            self.problem.set_cable(i, &frame, up)?;
         }
-        self.problem.n = frames.len();
+        self.problem.n = n;
         self.problem.pack();
         self.loaded = true;
         Ok(())
@@ -254,25 +266,17 @@ impl SagModalSolver {
         up: &Vector3<f64>,
         ee: &SagEndEffector,
     ) -> Result<(), SagLoadError> {
-        self.loaded = false;
-        self.check_count(cables.len())?;
-        self.problem.set_end_effector(ee)?;
-        for (i, c) in cables.iter().enumerate() {
-            self.problem.chains[i]
+        self.load_with(cables.len(), up, ee, |p, i| {
+            let c = &cables[i];
+            p.chains[i]
                 .set_fem(&c.catenary, c.mu_kg_m, n_el)
                 .map_err(|e| SagLoadError::Chain(i, e))?;
-            let cat = &c.catenary;
-            let frame = SagCableFrame {
+            Ok(SagCableFrame {
                 h: c.h,
                 arm_m: c.arm_m,
-                end_force_n: -(c.h * cat.h_n + up * cat.v_end_n()),
-            };
-            self.problem.set_cable(i, &frame, up)?;
-        }
-        self.problem.n = cables.len();
-        self.problem.pack();
-        self.loaded = true;
-        Ok(())
+                end_force_n: -(c.h * c.catenary.h_n + up * c.catenary.v_end_n()),
+            })
+        })
     }
 
     fn check_count(&self, given: usize) -> Result<(), SagLoadError> {

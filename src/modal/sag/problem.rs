@@ -5,7 +5,7 @@ use super::{SagCableFrame, SagEndEffector, SagLoadError};
 use crate::cable::sagged::{SagBatch, SagChain, SagChainEval, SagContinuous, SagContinuousParams};
 use crate::modal::attach_map;
 use crate::modal::dynamic_stiffness::SYM3;
-use crate::modal::engine::{Condensed, TautView};
+use crate::modal::engine::{ee_from_problem, Condensed, TautView};
 use crate::modal::DynEval;
 use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector3};
 
@@ -369,18 +369,7 @@ impl Condensed for SagView<'_> {
     fn evaluations(&self) -> u32 {
         *self.evals
     }
-    #[inline]
-    fn dim(&self) -> usize {
-        self.p.dim
-    }
-    #[inline]
-    fn ee_mass(&self) -> &Matrix6<f64> {
-        &self.p.m6
-    }
-    #[inline]
-    fn total_modes(&self) -> usize {
-        self.p.total_modes()
-    }
+    ee_from_problem!();
     #[inline]
     fn pole_interval(&self, _lambda: f64) -> Option<(f64, f64)> {
         None
