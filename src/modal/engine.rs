@@ -4,10 +4,11 @@
 //! Both structured solvers reduce the free vibration problem to the end-effector's dynamic
 //! stiffness D(λ) (3 × 3 or 6 × 6), its derivative D'(λ) = −(a mass matrix) and the blocked
 //! count of the chains (Wittrick–Williams). The taut chains ([`TautView`]: uniform chains,
-//! their blocked eigenvalues known in closed form) and the sagged ones (`sag::problem::SagView`:
+//! their blocked eigenvalues known in closed form) and the sagged ones (`sagged::problem::SagView`:
 //! non-uniform chains, their poles only seen through the count) implement [`Condensed`];
-//! the spectrum search (`spectrum`) and the end-effector sweep are written once over it and
-//! monomorphised for each (no dynamic dispatch, no allocation).
+//! the first root (`first_mode`), the end-effector tracker (`ee_tracker`) and the spectrum
+//! search (`spectrum`) are written once over it and monomorphised for each (no dynamic
+//! dispatch, no allocation).
 
 use super::dynamic_stiffness::{quad, DynEval, EvalScratch, LoadedChains};
 use nalgebra::{Matrix6, Vector6};

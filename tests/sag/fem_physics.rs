@@ -6,7 +6,7 @@
 //! Wittrick–Williams count `below` steps, found here by bisection on the count.
 
 use cablevib::cable::sagged::SagChain;
-use cablevib::modal::sag::{SagCable, SagModalSolver};
+use cablevib::modal::sagged::{SagCable, SagModalSolver};
 use cablevib::modal::{ModalParams, Mode};
 use cablevib::sag::Catenary;
 use cablevib_testkit::sag_robot::*;

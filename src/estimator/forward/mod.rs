@@ -5,7 +5,7 @@
 //! - [`Model::Taut`]: straight chords — the active-set tension distribution, the scene's
 //!   element on each chord, the structured solver of `modal` (`taut.rs`);
 //! - [`Model::Sagged`]: the cables' elastic catenaries — the sagged tension distribution,
-//!   chains about the sagged profiles, the structured solver of `modal::sag` (`sagged.rs`).
+//!   chains about the sagged profiles, the structured solver of `modal::sagged` (`sagged.rs`).
 //!
 //! The cycle ([`Estimator::update`]) and the inverse T_min query
 //! ([`Estimator::t_min_for_f1`]) each own one, so the query leaves the cycle's warm state

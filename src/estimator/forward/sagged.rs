@@ -9,7 +9,7 @@
 use super::{EndEffector, ForwardParams, TensionReport};
 use crate::estimator::EstimatorError;
 use crate::kinematics::{Geometry, Pose};
-use crate::modal::sag::{
+use crate::modal::sagged::{
     assemble_sagged, SagCableFrame, SagDenseCable, SagEndEffector, SagLoadError, SagModalSolver,
 };
 use crate::modal::{ModalError, Root};
@@ -109,7 +109,7 @@ impl SagModel {
         res?;
         self.load(scene, pose, g)?;
         self.loaded_at = self.modal.evaluations();
-        Ok(self.modal.first_root_from(warm)?)
+        Ok(self.modal.first_root(warm)?)
     }
 
     /// Set each cable's chain on its catenary and load the end-effector.

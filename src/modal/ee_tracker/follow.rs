@@ -3,7 +3,7 @@
 //! with the sum-rule bound.
 
 use super::member::{predict, SearchSide};
-use super::search::{neighbour, partner, track_root};
+use super::track::{neighbour, partner, track_root};
 use super::{
     EeTracker, RescanReason, ANSWER_ACCEPT, CERT_MARGIN, CHEAP_ACCEPT, NEIGHBOUR_WALK,
     PARTNER_SEARCHES, P_ADD, P_DROP, P_LAZY, P_MARGIN, P_PARTNER, P_STRONG, SEARCH_BOUND,
@@ -284,7 +284,11 @@ impl EeTracker {
     /// The lowest watched mode with participation ≥ the threshold, solved to full accuracy
     /// (and so is any watched mode below it within [`P_MARGIN`] of the threshold);
     /// Err(NoneReached) when there is none, Err(Lost) when an exact solve fails.
-    fn select_answer<P: Condensed>(&mut self, f: &mut RootFinder<'_, P>, thr: f64) -> Result<Root, RescanReason> {
+    fn select_answer<P: Condensed>(
+        &mut self,
+        f: &mut RootFinder<'_, P>,
+        thr: f64,
+    ) -> Result<Root, RescanReason> {
         let exact = f.params.newton_accept;
         for i in 0..self.n_members {
             let m = self.members[i];

@@ -6,7 +6,7 @@
 //! - [`member`]: one watched mode, its predictor, the watch list;
 //! - [`scan`]: the scan over the pole intervals (cold start and rescans);
 //! - [`follow`]: one warm cycle (follow, partner and neighbour searches, certificate);
-//! - [`search`]: the Newton searches it uses (follow a root, a neighbour, a partner);
+//! - [`track`]: the Newton searches it uses (follow a root, a neighbour, a partner);
 //! - [`phases`]: one cycle's work within the budget (track, scan, continue, certify).
 //!
 //! The tuning constants below decide only the cost: every warm answer is certified.
@@ -19,14 +19,14 @@ mod follow;
 mod member;
 mod phases;
 mod scan;
-mod search;
+mod track;
 
 use super::engine::Condensed;
 use super::first_mode::RootFinder;
 use super::{ModalError, Root};
 use member::{predict, Member};
 use scan::{ScanState, ScanStep};
-use search::track_root;
+use track::track_root;
 
 /// Largest number of watched modes (a fixed array, no allocation; when full, the weakest
 /// gives way to a stronger one).

@@ -3,8 +3,8 @@
 //! that certifies what a scan found over several cycles.
 
 use super::member::Member;
-use super::search::track_root;
 use super::scan::{self, ScanState, ScanStep};
+use super::track::track_root;
 use super::{
     EeTracker, RescanReason, CERT_MARGIN, PHASES_PER_CYCLE, P_ADD, RESCAN_WINDOW,
     WEAK_RESCAN_CYCLES,
@@ -120,7 +120,10 @@ impl EeTracker {
         };
         if r.ee_participation < thr {
             // Weak: watch only this mode until the next full scan.
-            let (a, b) = f.view.pole_interval(r.lambda).unwrap_or((0.0, f64::INFINITY));
+            let (a, b) = f
+                .view
+                .pole_interval(r.lambda)
+                .unwrap_or((0.0, f64::INFINITY));
             self.members[0] = Member::new(r.lambda, r.ee_participation, 0, 0, a, b);
             self.n_members = 1;
             self.ee_skip = WEAK_RESCAN_CYCLES;
@@ -131,7 +134,12 @@ impl EeTracker {
     /// Start a scan for `reason`: from 10 % below the lowest watched mode after a failed
     /// warm cycle (the watched modes are those the participation moves among; the modes
     /// below stay unwatched and covered by the bound), from zero otherwise.
-    fn start_scan<P: Condensed>(&mut self, f: &RootFinder<'_, P>, first: &Root, reason: RescanReason) {
+    fn start_scan<P: Condensed>(
+        &mut self,
+        f: &RootFinder<'_, P>,
+        first: &Root,
+        reason: RescanReason,
+    ) {
         // Where the count alone shows the poles a window scan costs what a scan from zero
         // does below the answer's neighbours, and its answer would need a certificate the
         // watched modes do not give: scan from zero.

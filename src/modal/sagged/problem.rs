@@ -399,14 +399,18 @@ impl Condensed for SagView<'_> {
         let dim = self.p.dim;
         let d0 = self.p.static_eval().d;
         let k = d0.abs().max();
-        let m = (0..dim).map(|j| self.p.m6[(j, j)]).fold(f64::INFINITY, f64::min);
+        let m = (0..dim)
+            .map(|j| self.p.m6[(j, j)])
+            .fold(f64::INFINITY, f64::min);
         let sigma = -FAR_BELOW * k / m;
         if !(sigma.is_finite() && sigma < 0.0) {
             return f64::INFINITY;
         }
         let d = self.eval(sigma).d * (-1.0 / sigma);
         let mut m_inf = Matrix6::identity();
-        m_inf.view_mut((0, 0), (dim, dim)).copy_from(&d.view((0, 0), (dim, dim)));
+        m_inf
+            .view_mut((0, 0), (dim, dim))
+            .copy_from(&d.view((0, 0), (dim, dim)));
         match m_inf.try_inverse() {
             Some(inv) => (self.p.m6 * inv).trace(),
             None => f64::INFINITY,

@@ -21,7 +21,7 @@
 //! recurrences side by side (bit-identical to one chain after the other,
 //! [`SagModalSolver::eval_reference`]); count-only evaluations skip S'.
 //!
-//! **First root** ([`SagModalSolver::first_root_from`]): the taut solver's first root
+//! **First root** ([`SagModalSolver::first_root`]): the taut solver's first root
 //! (`modal::first_mode`, written once over the condensed problem). The chains are not
 //! uniform, so their blocked eigenvalues (the poles of D) are not known in closed form; the
 //! count shows where they are. The first natural frequency lies at or below the lowest
@@ -54,9 +54,9 @@ mod problem;
 
 pub use dense::{assemble_sagged, SagDenseCable};
 
-use super::first_mode::{FirstRootState, RootFinder};
 use super::ee_tracker::{EeTracker, RescanCounts, SumRules};
 use super::engine::Condensed;
+use super::first_mode::{FirstRootState, RootFinder};
 use super::{ModalError, ModalParams, Root};
 use crate::cable::sagged::{
     SagChain, SagChainError, SagContError, SagContMesh, SagContinuousParams,
@@ -80,7 +80,7 @@ pub struct SagCableFrame {
 
 /// One sagging cable of a pose, for [`SagModalSolver::load_catenaries`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SagCable {
+pub struct HangingCable {
     /// The static profile.
     pub catenary: Catenary,
     /// Mass per unstretched length, kg/m.
@@ -261,7 +261,7 @@ impl SagModalSolver {
     /// (the end force of cable i is −(H h_i + V_e up)). No allocation.
     pub fn load_catenaries(
         &mut self,
-        cables: &[SagCable],
+        cables: &[HangingCable],
         n_el: usize,
         up: &Vector3<f64>,
         ee: &SagEndEffector,
@@ -348,9 +348,9 @@ impl SagModalSolver {
     }
 
     /// The first natural frequency, warm-started from the last one found (cold when none).
-    pub fn first_root(&mut self) -> Result<Root, ModalError> {
+    pub fn first_root_warm(&mut self) -> Result<Root, ModalError> {
         let warm = self.last_lambda1;
-        self.first_root_from(warm.is_finite().then_some(warm))
+        self.first_root(warm.is_finite().then_some(warm))
     }
 
     /// Forget a first-root search the cycle's budget cut (the next call starts afresh).
@@ -360,7 +360,7 @@ impl SagModalSolver {
 
     /// The first natural frequency from the Rayleigh guess (ignores the last root).
     pub fn first_root_cold(&mut self) -> Result<Root, ModalError> {
-        self.first_root_from(None)
+        self.first_root(None)
     }
 
     /// The first natural frequency, Newton started from `warm` (a predicted λ, rad²/s², e.g.
@@ -373,7 +373,7 @@ impl SagModalSolver {
     /// by the next call: from where it stopped on the same loaded problem (a static pose),
     /// from its last iterate (when `warm` is None) on another one, until a root is found or
     /// [`ModalParams::max_evaluations`] are spent on it over the calls.
-    pub fn first_root_from(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
+    pub fn first_root(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
         self.require_loaded()?;
         self.cycle_base = self.evaluations;
         let mut f = RootFinder {
@@ -391,7 +391,7 @@ impl SagModalSolver {
     }
 
     /// The root finder on the loaded problem with this cycle's budget (counted from the
-    /// start of this cycle's [`Self::first_root_from`]), and beside it the tracker and the
+    /// start of this cycle's [`Self::first_root`]), and beside it the tracker and the
     /// sum rules (the plain one from one evaluation far below zero).
     fn tracker_parts(&mut self, budget: u32) -> (RootFinder<'_, SagView<'_>>, &mut EeTracker) {
         let f = RootFinder {
@@ -434,14 +434,18 @@ impl SagModalSolver {
 
     /// The end-effector mode, tracked from the last cycle when `warm`, within what is left
     /// of this cycle's budget ([`ModalParams::cycle_evaluations`], counted from the start of
-    /// this cycle's [`Self::first_root_from`]): the method of
+    /// this cycle's [`Self::first_root`]): the method of
     /// [`crate::modal::ModalSolver::ee_mode_tracked`] (watched modes followed by Newton on
     /// their branch of D, certified by the sum rules; scans spread over the cycles), where
     /// the poles are seen only through the count: a followed mode that crosses a pole is
     /// lost (the next scan finds it again), and there are no partner or neighbour searches
     /// (they walk closed-form poles). Ok(None) while the work goes on over the cycles
     /// (`first`: this cycle's first root). No allocation.
-    pub fn ee_mode_tracked(&mut self, first: &Root, warm: bool) -> Result<Option<Root>, ModalError> {
+    pub fn ee_mode_tracked(
+        &mut self,
+        first: &Root,
+        warm: bool,
+    ) -> Result<Option<Root>, ModalError> {
         self.require_loaded()?;
         let budget = self.params.cycle_evaluations;
         let thr = self.params.ee_participation_min;

@@ -137,7 +137,12 @@ pub(super) fn neighbour(f: &mut TautFinder<'_>, m: &Member, up: bool) -> Option<
 /// (rad²/s²; above it when `up`) nearest `pred` (the two-level model's estimate), by
 /// [`track_root`] from `pred` (or from just across the pole when `pred` is on the
 /// wrong side). Whatever mode it converges to is a root with its index counted afresh.
-pub(super) fn partner<P: Condensed>(f: &mut RootFinder<'_, P>, pole: f64, up: bool, pred: f64) -> Option<Tracked> {
+pub(super) fn partner<P: Condensed>(
+    f: &mut RootFinder<'_, P>,
+    pole: f64,
+    up: bool,
+    pred: f64,
+) -> Option<Tracked> {
     let x = if up {
         pred.max(pole * (1.0 + ACROSS_POLE))
     } else {
@@ -152,7 +157,11 @@ pub(super) fn partner<P: Condensed>(f: &mut RootFinder<'_, P>, pole: f64, up: bo
 /// within ~step² of the root). Returns the root, its branch, its pole interval, its index
 /// in the spectrum (the interval's blocked count plus the branch) and, for a mode with
 /// participation ≥ [`P_STRONG`], the chain it shares most energy with.
-pub(super) fn track_root<P: Condensed>(f: &mut RootFinder<'_, P>, l0: f64, accept: f64) -> Option<Tracked> {
+pub(super) fn track_root<P: Condensed>(
+    f: &mut RootFinder<'_, P>,
+    l0: f64,
+    accept: f64,
+) -> Option<Tracked> {
     if f.exhausted() {
         return None;
     }
