@@ -378,7 +378,16 @@ impl<P: Condensed> RootFinder<'_, P> {
         state.roots += 1;
         if self.params.certify && (!fast || state.roots.is_multiple_of(CERTIFY_EVERY)) {
             if self.left() < 2 {
-                // The certificate's two counts do not fit in the cycle's budget.
+                // The certificate's two counts do not fit in the cycle's budget: the next
+                // call goes on from this root (a restart would be cut here again).
+                s.x = r.lambda;
+                let st = self.view.static_eval();
+                state.pending = Some(Pending {
+                    search: s,
+                    fast,
+                    d0: st.d,
+                    dd0: st.dd,
+                });
                 return Err(ModalError::NoConvergence {
                     evaluations: self.evaluations() - start,
                     lo: 0.0,
