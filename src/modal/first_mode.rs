@@ -364,13 +364,7 @@ impl<P: Condensed> RootFinder<'_, P> {
         let r = self.branch_root_in(0, &mut s, 0.0, lp, fast);
         if let Err(ModalError::NoConvergence { .. }) = r {
             if self.exhausted() && s.spent < self.params.max_evaluations {
-                let st = self.view.static_eval();
-                state.pending = Some(Pending {
-                    search: s,
-                    fast,
-                    d0: st.d,
-                    dd0: st.dd,
-                });
+                state.pending = Some(self.pending(s, fast));
             }
         }
         let mut r = r?;
@@ -381,13 +375,7 @@ impl<P: Condensed> RootFinder<'_, P> {
                 // The certificate's two counts do not fit in the cycle's budget: the next
                 // call goes on from this root (a restart would be cut here again).
                 s.x = r.lambda;
-                let st = self.view.static_eval();
-                state.pending = Some(Pending {
-                    search: s,
-                    fast,
-                    d0: st.d,
-                    dd0: st.dd,
-                });
+                state.pending = Some(self.pending(s, fast));
                 return Err(ModalError::NoConvergence {
                     evaluations: self.evaluations() - start,
                     lo: 0.0,
@@ -407,6 +395,17 @@ impl<P: Condensed> RootFinder<'_, P> {
         }
         r.evaluations = self.evaluations() - start;
         Ok(r)
+    }
+
+    /// Search `s` kept for the next call, with the loaded problem it belongs to.
+    fn pending(&self, s: Bracket, fast: bool) -> Pending {
+        let st = self.view.static_eval();
+        Pending {
+            search: s,
+            fast,
+            d0: st.d,
+            dd0: st.dd,
+        }
     }
 
     /// No poles: D = K − λ M_d is linear, μ₁ crosses zero; find an upper bracket above

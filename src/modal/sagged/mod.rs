@@ -155,9 +155,14 @@ pub struct SagModalSolver {
 impl SagModalSolver {
     /// Room for `n_cables` cables of up to `n_el_max` elements each (the only allocation).
     pub fn new(params: ModalParams, n_cables: usize, n_el_max: usize) -> SagModalSolver {
+        Self::with_problem(params, SagProblem::new(n_cables, n_el_max, None))
+    }
+
+    /// A solver on `problem`, nothing loaded.
+    fn with_problem(params: ModalParams, problem: SagProblem) -> SagModalSolver {
         SagModalSolver {
             params,
-            problem: SagProblem::new(n_cables, n_el_max, None),
+            problem,
             evaluations: 0,
             last_lambda1: f64::NAN,
             first: FirstRootState::new(),
@@ -174,16 +179,7 @@ impl SagModalSolver {
         n_cables: usize,
         cont: SagContinuousParams,
     ) -> SagModalSolver {
-        SagModalSolver {
-            params,
-            problem: SagProblem::new(n_cables, 1, Some(cont)),
-            evaluations: 0,
-            last_lambda1: f64::NAN,
-            first: FirstRootState::new(),
-            cycle_base: 0,
-            tracker: EeTracker::new(),
-            loaded: false,
-        }
+        Self::with_problem(params, SagProblem::new(n_cables, 1, Some(cont)))
     }
 
     /// Cable i's chain, to be set (e.g. [`SagChain::set_fem`]) before [`Self::load`].
