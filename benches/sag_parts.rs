@@ -18,7 +18,7 @@
 use cablevib::cable::sagged::SagContinuousParams;
 use cablevib::estimator::{Estimator, EstimatorParams, Tmin};
 use cablevib::kinematics::Geometry;
-use cablevib::modal::sag::{SagCableFrame, SagEndEffector, SagModalSolver};
+use cablevib::modal::sagged::{SagCableFrame, SagEndEffector, SagModalSolver};
 use cablevib::modal::{ModalParams, CYCLE_EVALUATIONS};
 use cablevib::sag::{CableChord, Catenary, SagParams, SagTrack};
 use cablevib::scene::{ElementKind, Scene};
@@ -215,7 +215,7 @@ fn chains(c: &mut Criterion, case: &Case, poses: &[PoseCables]) {
             })
         });
         set(&mut m, &poses[0]);
-        let lambda = m.first_root_from(None).unwrap().lambda;
+        let lambda = m.first_root(None).unwrap().lambda;
         c.bench_function(&format!("sag_parts/{}/eval_{name}", s.name), |b| {
             b.iter(|| black_box(m.eval(black_box(lambda)).below))
         });

@@ -5,7 +5,7 @@ use super::Status;
 use crate::cable::CableError;
 use crate::input_file::{message_fixed, message_number};
 use crate::kinematics::KinematicsError;
-use crate::modal::sag::SagLoadError;
+use crate::modal::sagged::SagLoadError;
 use crate::modal::ModalError;
 use crate::tension::{SagTensionError, TensionError};
 

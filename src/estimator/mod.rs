@@ -34,7 +34,7 @@
 //! distribution on the cables' elastic catenaries (the least Σ T² on the exact sagged
 //! equilibrium, a bounded SQP; the bounds apply to the end-effector-end tension), steps 3-4 the
 //! chains about each sagged profile (fem: N elements on the catenary; continuous: the exact
-//! N → ∞ limit) and the structured solver of `modal::sag`; step 5 is D(0) of those chains.
+//! N → ∞ limit) and the structured solver of `modal::sagged`; step 5 is D(0) of those chains.
 //! A pose where a cable would go slack is the status `CableSlack`. The end-effector mode is
 //! found with sag by an ascending sweep of the sagged spectrum (the chains' poles are not
 //! known in closed form), spread over the cycles by the cycle's evaluation budget, the
@@ -221,8 +221,7 @@ impl Estimator {
             .unwrap_or_else(|| UNLOADED.get_or_init(|| ModalSolver::new(ModalParams::default())))
     }
 
-    /// End-effector bookkeeping counters (see [`ModalSolver::rescan_counts`]; zero when the
-    /// cables sag).
+    /// End-effector bookkeeping counters (see [`ModalSolver::rescan_counts`]).
     pub fn rescan_counts(&self) -> crate::modal::RescanCounts {
         self.cycle.rescan_counts()
     }

@@ -416,18 +416,6 @@ impl LoadedChains {
         d
     }
 
-    /// Participation of the mode at root λ with null vector v (unit): the end-effector's
-    /// share vᵀ M_ee v / vᵀ(−D'(λ))v of the mode's kinetic-energy norm.
-    #[inline]
-    pub(super) fn participation(&self, dd: &Matrix6<f64>, v: &Vector6<f64>) -> f64 {
-        let kin = -quad(dd, v, self.dim);
-        let own = quad(&self.m6, v, self.dim);
-        if kin > 0.0 {
-            (own / kin).min(1.0)
-        } else {
-            0.0
-        }
-    }
 }
 
 /// What one evaluation of D(λ) writes: the chains' values at the last λ (and the batched

@@ -4,13 +4,14 @@
 //! Both structured solvers reduce the free vibration problem to the end-effector's dynamic
 //! stiffness D(λ) (3 × 3 or 6 × 6), its derivative D'(λ) = −(a mass matrix) and the blocked
 //! count of the chains (Wittrick–Williams). The taut chains ([`TautView`]: uniform chains,
-//! their blocked eigenvalues known in closed form) and the sagged ones (`sag::problem::SagView`:
+//! their blocked eigenvalues known in closed form) and the sagged ones (`sagged::problem::SagView`:
 //! non-uniform chains, their poles only seen through the count) implement [`Condensed`];
-//! the spectrum search (`spectrum`) and the end-effector sweep are written once over it and
-//! monomorphised for each (no dynamic dispatch, no allocation).
+//! the first root (`first_mode`), the end-effector tracker (`ee_tracker`) and the spectrum
+//! search (`spectrum`) are written once over it and monomorphised for each (no dynamic
+//! dispatch, no allocation).
 
-use super::dynamic_stiffness::{DynEval, EvalScratch, LoadedChains};
-use nalgebra::Matrix6;
+use super::dynamic_stiffness::{quad, DynEval, EvalScratch, LoadedChains};
+use nalgebra::{Matrix6, Vector6};
 
 /// The first upper bracket of a search starts here when no better scale is known,
 /// rad²/s² (and a cold first root's Rayleigh guess is at least this).
@@ -81,6 +82,46 @@ pub(in crate::modal) trait Condensed {
     /// above), when the chains' blocked eigenvalues are known in closed form; None when
     /// only the count shows them (the searches then bisect on the blocked count).
     fn pole_interval(&self, lambda: f64) -> Option<(f64, f64)>;
+    /// Whether [`Self::pole_interval`] knows the poles (else the count alone shows them).
+    fn poles_known(&self) -> bool;
+    /// The lowest pole of D, rad²/s² (∞: none), when the poles are known.
+    fn lowest_pole(&self) -> Option<f64>;
+    /// D(0) without a counted evaluation: from the chains' static end stiffness (D'(0) is
+    /// left zero where that needs an evaluation of the chains).
+    fn static_eval(&self) -> DynEval;
+
+    /// The pole-free interval around the λ of the last evaluation (the chains' blocked
+    /// counts there), when the poles are known.
+    fn last_pole_interval(&self) -> Option<(f64, f64)>;
+    /// Σ_k p_k over all modes, tr(M_ee M_∞⁻¹) (the plain sum rule; see the module docs of
+    /// `modal`): from `load` where it is known in closed form, else from one evaluation far
+    /// below zero.
+    fn participation_total(&mut self) -> f64;
+    /// The taut problem itself, for what walks its closed-form poles (the end-effector
+    /// tracker's pole-interval scan and neighbour search); None for the others.
+    fn taut(&mut self) -> Option<TautView<'_>>;
+    /// The chain holding the largest share of the kinetic-energy norm of mode shape v at
+    /// the last evaluation (at x, D' = `dd`): (share, its pole nearest x, whether above,
+    /// the pole's key); (0, NaN, false, `u32::MAX`) where the poles are not known.
+    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
+        let _ = (x, dd, v);
+        (0.0, f64::NAN, false, u32::MAX)
+    }
+
+    /// The end-effector participation of the mode with unit null vector v at a root where
+    /// D' = `dd`: the end-effector's share vᵀ M_ee v / vᵀ(−D')v of the mode's kinetic-energy
+    /// norm (0 when that norm is not positive).
+    #[inline]
+    fn participation(&self, dd: &Matrix6<f64>, v: &Vector6<f64>) -> f64 {
+        let dim = self.dim();
+        let kin = -quad(dd, v, dim);
+        let own = quad(self.ee_mass(), v, dim);
+        if kin > 0.0 {
+            (own / kin).min(1.0)
+        } else {
+            0.0
+        }
+    }
 
     /// Number of natural frequencies strictly below λ (Wittrick–Williams), with the
     /// blocked count: (J(λ), blocked).
@@ -90,6 +131,26 @@ pub(in crate::modal) trait Condensed {
         (e.below + e.eig().negatives() as u32, e.below)
     }
 }
+
+/// The [`Condensed`] methods read from the loaded problem `self.p` (its `dim`, `m6` and
+/// `total_modes()`), the same for the taut and the sagged view.
+macro_rules! ee_from_problem {
+    () => {
+        #[inline]
+        fn dim(&self) -> usize {
+            self.p.dim
+        }
+        #[inline]
+        fn ee_mass(&self) -> &nalgebra::Matrix6<f64> {
+            &self.p.m6
+        }
+        #[inline]
+        fn total_modes(&self) -> usize {
+            self.p.total_modes()
+        }
+    };
+}
+pub(in crate::modal) use ee_from_problem;
 
 /// The taut problem: the loaded chains (read) and the evaluation scratch (written).
 pub(in crate::modal) struct TautView<'a> {
@@ -114,20 +175,104 @@ impl Condensed for TautView<'_> {
     fn evaluations(&self) -> u32 {
         self.s.evaluations
     }
-    #[inline]
-    fn dim(&self) -> usize {
-        self.p.dim
-    }
-    #[inline]
-    fn ee_mass(&self) -> &Matrix6<f64> {
-        &self.p.m6
-    }
-    #[inline]
-    fn total_modes(&self) -> usize {
-        self.p.total_modes()
-    }
+    ee_from_problem!();
     #[inline]
     fn pole_interval(&self, lambda: f64) -> Option<(f64, f64)> {
         Some(self.p.pole_interval(lambda))
+    }
+    #[inline]
+    fn poles_known(&self) -> bool {
+        true
+    }
+    #[inline]
+    fn lowest_pole(&self) -> Option<f64> {
+        Some(self.p.lowest_pole())
+    }
+    #[inline]
+    fn static_eval(&self) -> DynEval {
+        self.p.static_eval()
+    }
+    #[inline]
+    fn last_pole_interval(&self) -> Option<(f64, f64)> {
+        Some(self.s.last_pole_interval(self.p))
+    }
+    #[inline]
+    fn participation_total(&mut self) -> f64 {
+        self.p.p_total
+    }
+    #[inline]
+    fn taut(&mut self) -> Option<TautView<'_>> {
+        Some(TautView {
+            p: self.p,
+            s: &mut *self.s,
+        })
+    }
+    #[inline]
+    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
+        self.s.coupling(self.p, x, dd, v)
+    }
+}
+
+/// A borrowed problem is the problem (a search may run on a view it does not own).
+impl<C: Condensed> Condensed for &mut C {
+    #[inline]
+    fn eval(&mut self, lambda: f64) -> DynEval {
+        (**self).eval(lambda)
+    }
+    #[inline]
+    fn count_eval(&mut self, lambda: f64) -> DynEval {
+        (**self).count_eval(lambda)
+    }
+    #[inline]
+    fn zero_eval(&mut self) -> DynEval {
+        (**self).zero_eval()
+    }
+    #[inline]
+    fn evaluations(&self) -> u32 {
+        (**self).evaluations()
+    }
+    #[inline]
+    fn dim(&self) -> usize {
+        (**self).dim()
+    }
+    #[inline]
+    fn ee_mass(&self) -> &Matrix6<f64> {
+        (**self).ee_mass()
+    }
+    #[inline]
+    fn total_modes(&self) -> usize {
+        (**self).total_modes()
+    }
+    #[inline]
+    fn pole_interval(&self, lambda: f64) -> Option<(f64, f64)> {
+        (**self).pole_interval(lambda)
+    }
+    #[inline]
+    fn poles_known(&self) -> bool {
+        (**self).poles_known()
+    }
+    #[inline]
+    fn lowest_pole(&self) -> Option<f64> {
+        (**self).lowest_pole()
+    }
+    #[inline]
+    fn static_eval(&self) -> DynEval {
+        (**self).static_eval()
+    }
+    #[inline]
+    fn last_pole_interval(&self) -> Option<(f64, f64)> {
+        (**self).last_pole_interval()
+    }
+    #[inline]
+    fn participation_total(&mut self) -> f64 {
+        (**self).participation_total()
+    }
+    #[inline]
+    fn taut(&mut self) -> Option<TautView<'_>> {
+        (**self).taut()
+    }
+    #[inline]
+    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
+        (**self).coupling(x, dd, v)
     }
 }

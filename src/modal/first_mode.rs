@@ -1,12 +1,21 @@
 //! The first natural frequency: the root of μ₁(D(λ)) below the lowest pole by safeguarded
-//! Newton, and its Wittrick-Williams certificate.
+//! Newton, and its Wittrick-Williams certificate, written once over the condensed problem
+//! ([`Condensed`]) for taut and sagged chains.
 //!
-//! One evaluation of D(λ) reads only the [`LoadedChains`] and writes only the
-//! [`EvalScratch`]; a [`RootFinder`] bundles exactly these (and the [`ModalParams`], read
-//! only). The first root's own state between cycles is [`FirstRootState`].
+//! Where the chains' poles are known in closed form (taut) the bracket's upper end is the
+//! lowest pole and Newton runs on μ₁(λ)(λ_p − λ) with the pole removed. Where only the
+//! count shows them (sagged) the bracket starts open above and an iterate with a pole
+//! below it (blocked count > 0) is an upper bound: the step from there is a bisection (or
+//! a doubling while no upper end is known), and a bracket that collapses onto a pole (a
+//! mode with the end-effector still) is reported there with participation 0.
+//!
+//! A [`RootFinder`] bundles what one search reads (the [`ModalParams`]) and the problem's
+//! view (evaluations written), with the cycle's budget. The first root's own state between
+//! cycles is [`FirstRootState`]: the certificate's schedule, the weighted sum rule, and a
+//! search the cycle's budget cut ([`Pending`]), continued by the next call.
 
-use super::dynamic_stiffness::{quad, DynEval, EvalScratch, LoadedChains};
-use super::engine::{BRACKET_MIN, COLLAPSE_ULPS};
+use super::dynamic_stiffness::{quad, DynEval};
+use super::engine::{Condensed, TautView, BRACKET_GROWTH, BRACKET_MIN, COLLAPSE_ULPS};
 use super::{ModalError, ModalParams, Root};
 use nalgebra::{Matrix6, Vector6};
 
@@ -35,16 +44,39 @@ pub(super) fn relative_residual(mu: f64, lambda: f64, dd: &Matrix6<f64>) -> f64 
     mu.abs() / (lambda.abs() * dd.abs().max()).max(f64::MIN_POSITIVE)
 }
 
-/// What the root finders work on: the parameters and the loaded problem (read only) and
-/// the evaluation scratch (the only thing an evaluation of D(λ) writes).
-pub(super) struct RootFinder<'a> {
+/// What the root finders work on: the parameters (read only) and the problem's view (its
+/// evaluations counted), with the cycle's budget.
+pub(super) struct RootFinder<'a, P: Condensed> {
     pub(super) params: &'a ModalParams,
-    pub(super) problem: &'a LoadedChains,
-    pub(super) scratch: &'a mut EvalScratch,
+    pub(super) view: P,
     /// The cycle's budget: evaluations allowed from the counter value `budget_base`
     /// (`u32::MAX`: unlimited). Every loop that evaluates D(λ) checks [`Self::left`] first.
     pub(super) budget_base: u32,
     pub(super) budget: u32,
+}
+
+/// The root finder of the taut problem (what the end-effector tracker works on).
+pub(super) type TautFinder<'a> = RootFinder<'a, TautView<'a>>;
+
+/// A root search in progress: its bracket [lo, hi] (hi = ∞: no upper end known yet), the
+/// next iterate, and the evaluations spent on it over all the calls it ran in.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Bracket {
+    pub(super) lo: f64,
+    pub(super) hi: f64,
+    pub(super) x: f64,
+    pub(super) spent: u32,
+}
+
+/// A first-root search the cycle's budget cut, with the loaded problem it belongs to: D(0)
+/// and D'(0) of the uncounted static evaluation, bit for bit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Pending {
+    search: Bracket,
+    /// Started from a predicted λ (the warm acceptance rule).
+    fast: bool,
+    d0: Matrix6<f64>,
+    dd0: Matrix6<f64>,
 }
 
 /// State of the first-root solver between calls.
@@ -54,6 +86,8 @@ pub(super) struct FirstRootState {
     pub(super) roots: u64,
     /// tr(M_ee D(0)⁻¹) = Σ_k p_k/λ_k (s²/rad², the weighted sum rule), from `first_root`.
     pub(super) flex0: f64,
+    /// A search the last call's budget cut (continued by the next call).
+    pub(super) pending: Option<Pending>,
 }
 
 impl FirstRootState {
@@ -62,21 +96,22 @@ impl FirstRootState {
         FirstRootState {
             roots: 0,
             flex0: f64::NAN,
+            pending: None,
         }
     }
 }
 
-impl RootFinder<'_> {
+impl<P: Condensed> RootFinder<'_, P> {
     /// D(λ), D'(λ) and the blocked count (one evaluation).
     #[inline]
     pub(super) fn eval(&mut self, lambda: f64) -> DynEval {
-        self.scratch.eval(self.problem, lambda)
+        self.view.eval(lambda)
     }
 
     /// Evaluations so far (a counter; differences give a search's cost).
     #[inline]
     pub(super) fn evaluations(&self) -> u32 {
-        self.scratch.evaluations
+        self.view.evaluations()
     }
 
     /// Evaluations left in the cycle's budget (`u32::MAX` when unlimited).
@@ -85,7 +120,7 @@ impl RootFinder<'_> {
         if self.budget == u32::MAX {
             return u32::MAX;
         }
-        let spent = self.scratch.evaluations.wrapping_sub(self.budget_base);
+        let spent = self.evaluations().wrapping_sub(self.budget_base);
         self.budget.saturating_sub(spent)
     }
 
@@ -95,16 +130,22 @@ impl RootFinder<'_> {
         self.left() == 0
     }
 
-    /// The pole-free interval (a, b) around the λ of the last evaluation.
-    #[inline]
-    pub(super) fn last_pole_interval(&self) -> (f64, f64) {
-        self.scratch.last_pole_interval(self.problem)
+    /// The taut finder on the same problem and budget (None where the poles are not known
+    /// in closed form).
+    pub(super) fn as_taut(&mut self) -> Option<TautFinder<'_>> {
+        let (params, budget_base, budget) = (self.params, self.budget_base, self.budget);
+        self.view.taut().map(|view| RootFinder {
+            params,
+            view,
+            budget_base,
+            budget,
+        })
     }
 
     /// The end-effector participation of the mode with null vector v, D' = `dd`.
     #[inline]
     pub(super) fn participation(&self, dd: &Matrix6<f64>, v: &Vector6<f64>) -> f64 {
-        self.problem.participation(dd, v)
+        self.view.participation(dd, v)
     }
 
     /// Number of natural frequencies strictly below λ (Wittrick-Williams).
@@ -122,42 +163,73 @@ impl RootFinder<'_> {
     pub(super) fn branch_root_with(
         &mut self,
         branch: usize,
-        mut lo: f64,
-        mut hi: f64,
+        lo: f64,
+        hi: f64,
         pole_lo: f64,
         pole_hi: f64,
         guess: f64,
         fast: bool,
     ) -> Result<Root, ModalError> {
+        let mut s = Bracket::from_guess(lo, hi, guess);
+        self.branch_root_in(branch, &mut s, pole_lo, pole_hi, fast)
+    }
+
+    /// [`Self::branch_root_with`] on the search `s`, left where it stopped (bracket and
+    /// next iterate) when the budget or [`ModalParams::max_evaluations`] (counted over all
+    /// the calls on `s`) ends it. Where the problem's poles are seen only through the count
+    /// (`pole_hi` then ∞), an iterate with a pole below it is an upper bound of the root
+    /// (the first pole interval's branches only), and a bracket collapsed onto such a pole
+    /// is a mode there with the end-effector still (participation 0).
+    pub(super) fn branch_root_in(
+        &mut self,
+        branch: usize,
+        s: &mut Bracket,
+        pole_lo: f64,
+        pole_hi: f64,
+        fast: bool,
+    ) -> Result<Root, ModalError> {
         let start = self.evaluations();
-        let mut x = if guess > lo && guess < hi {
-            guess
-        } else if hi.is_finite() {
-            0.5 * (lo + hi)
-        } else {
-            2.0 * lo.max(1.0)
-        };
+        let count_only = !self.view.poles_known();
         let tol = self.params.rel_tol;
         // The one probe next to a bounding pole has been spent.
         let mut probed = false;
         loop {
-            if self.evaluations() - start >= self.params.max_evaluations || self.exhausted() {
+            let (lo, hi, x) = (s.lo, s.hi, s.x);
+            if s.spent >= self.params.max_evaluations || self.exhausted() {
                 return Err(ModalError::NoConvergence {
                     evaluations: self.evaluations() - start,
                     lo,
                     hi,
                 });
             }
+            s.spent += 1;
             let e = self.eval(x);
+            if count_only && e.below > 0 {
+                // A pole below x: the root is below it.
+                s.hi = hi.min(x);
+                if s.hi - lo <= tol * s.hi {
+                    // Collapsed onto the pole (the count steps there, μ does not cross
+                    // zero): a mode with the end-effector still.
+                    return Ok(Root {
+                        lambda: s.hi,
+                        ee_participation: 0.0,
+                        evaluations: self.evaluations() - start,
+                        residual: 0.0,
+                    });
+                }
+                s.x = 0.5 * (lo + s.hi);
+                continue;
+            }
             let eg = e.eig();
             let mu = eg.values[branch];
             let v = eg.vectors[branch];
             let dmu = quad(&e.dd, &v, e.dim);
             if mu > 0.0 {
-                lo = lo.max(x);
+                s.lo = lo.max(x);
             } else if mu < 0.0 {
-                hi = hi.min(x);
+                s.hi = hi.min(x);
             }
+            let (lo, hi) = (s.lo, s.hi);
             // Newton on μ(λ)(λ − pole_lo)(pole_hi − λ): the poles bounding the interval
             // removed (pole_lo = 0 and pole_hi = ∞ add nothing).
             let (mut g, mut dg) = (mu, dmu);
@@ -215,27 +287,35 @@ impl RootFinder<'_> {
                 } else if hi.is_finite() {
                     0.5 * (lo + hi)
                 } else {
-                    2.0 * x
+                    BRACKET_GROWTH * x
                 };
             }
-            x = xn;
+            s.x = xn;
         }
     }
 
     /// The first natural frequency's λ (rad²/s²), warm-started from `warm` when given;
     /// records the weighted sum rule and the root count in `state`.
+    ///
+    /// A search the cycle's budget cut is kept in `state.pending`. On the same problem
+    /// (D(0) and D'(0) bit for bit: a static pose) the next call continues it where it
+    /// stopped, bracket and all; on another problem (the pose moved) its iterate is the
+    /// starting guess when there is no `warm` prediction (it is closer than the Rayleigh
+    /// guess of a nearby pose). [`ModalParams::max_evaluations`] bounds a search over all
+    /// the calls it runs in.
     pub(super) fn first_root(
         &mut self,
         state: &mut FirstRootState,
         warm: Option<f64>,
     ) -> Result<Root, ModalError> {
         let start = self.evaluations();
-        // D(0) in closed form on warm starts (each chain's static end stiffness); the full
-        // evaluation, with D'(0), only for the cold start's Rayleigh guess.
-        let e0 = if warm.is_some() {
-            self.problem.static_eval()
+        let carried = state.pending.take();
+        // D(0) without evaluating the chains on warm starts (each chain's static end
+        // stiffness); the full evaluation, with D'(0), for the cold start's Rayleigh guess.
+        let e0 = if warm.is_some() || carried.is_some() {
+            self.view.static_eval()
         } else {
-            self.eval(0.0)
+            self.view.zero_eval()
         };
         let eg0 = e0.eig();
         if !(eg0.values[0] > 0.0) {
@@ -243,39 +323,59 @@ impl RootFinder<'_> {
             return Err(ModalError::NotPositiveDefinite(eg0.values[0]));
         }
         // Weighted sum rule: Σ_k p_k/λ_k = tr(M_ee D(0)⁻¹).
-        let (m6, dim) = (&self.problem.m6, self.problem.dim);
+        let (m6, dim) = (self.view.ee_mass(), self.view.dim());
         state.flex0 = (0..dim)
             .map(|j| {
                 let v = eg0.vectors[j];
                 quad(m6, &v, dim) / eg0.values[j]
             })
             .sum();
-        let lp = self.problem.lowest_pole();
-        let guess = match warm {
-            Some(w) if w > 0.0 && w < lp => w,
-            _ => {
-                // Rayleigh estimate from λ = 0: μ(0)/(−μ'(0)).
-                let v = eg0.vectors[0];
-                let dmu = -quad(&e0.dd, &v, e0.dim);
-                let g = eg0.values[0] / dmu.max(f64::MIN_POSITIVE);
-                if lp.is_finite() {
-                    g.min(RAYLEIGH_CAP * lp)
-                } else {
-                    g
-                }
-            }
-        };
-        let hi = if lp.is_finite() {
-            lp
+        // The lowest pole (∞: none; None: seen only through the count).
+        let lowest = self.view.lowest_pole();
+        let lp = lowest.unwrap_or(f64::INFINITY);
+        let same = carried.filter(|c| c.d0 == e0.d && c.dd0 == e0.dd);
+        let (mut s, fast) = if let Some(c) = same {
+            (c.search, c.fast)
         } else {
-            self.upper_bracket(guess, start)?
+            let guess = match (warm, carried) {
+                (Some(w), _) if w > 0.0 && w < lp => w,
+                (None, Some(c)) if c.search.x > 0.0 && c.search.x < lp => c.search.x,
+                _ => {
+                    // Rayleigh estimate from λ = 0: μ(0)/(−μ'(0)).
+                    let v = eg0.vectors[0];
+                    let dmu = -quad(&e0.dd, &v, e0.dim);
+                    let g = eg0.values[0] / dmu.max(f64::MIN_POSITIVE);
+                    if lp.is_finite() {
+                        g.min(RAYLEIGH_CAP * lp)
+                    } else if lowest.is_none() {
+                        g.max(BRACKET_MIN)
+                    } else {
+                        g
+                    }
+                }
+            };
+            let hi = if lp.is_finite() || lowest.is_none() {
+                lp
+            } else {
+                self.upper_bracket(guess, start)?
+            };
+            (Bracket::from_guess(0.0, hi, guess), warm.is_some())
         };
-        let fast = warm.is_some();
-        let mut r = self.branch_root_with(0, 0.0, hi, 0.0, lp, guess, fast)?;
+        let r = self.branch_root_in(0, &mut s, 0.0, lp, fast);
+        if let Err(ModalError::NoConvergence { .. }) = r {
+            if self.exhausted() && s.spent < self.params.max_evaluations {
+                state.pending = Some(self.pending(s, fast));
+            }
+        }
+        let mut r = r?;
+        let hi = s.hi;
         state.roots += 1;
         if self.params.certify && (!fast || state.roots.is_multiple_of(CERTIFY_EVERY)) {
             if self.left() < 2 {
-                // The certificate's two counts do not fit in the cycle's budget.
+                // The certificate's two counts do not fit in the cycle's budget: the next
+                // call goes on from this root (a restart would be cut here again).
+                s.x = r.lambda;
+                state.pending = Some(self.pending(s, fast));
                 return Err(ModalError::NoConvergence {
                     evaluations: self.evaluations() - start,
                     lo: 0.0,
@@ -295,6 +395,17 @@ impl RootFinder<'_> {
         }
         r.evaluations = self.evaluations() - start;
         Ok(r)
+    }
+
+    /// Search `s` kept for the next call, with the loaded problem it belongs to.
+    fn pending(&self, s: Bracket, fast: bool) -> Pending {
+        let st = self.view.static_eval();
+        Pending {
+            search: s,
+            fast,
+            d0: st.d,
+            dd0: st.dd,
+        }
     }
 
     /// No poles: D = K − λ M_d is linear, μ₁ crosses zero; find an upper bracket above
@@ -323,5 +434,33 @@ impl RootFinder<'_> {
     fn certify_first(&mut self, lambda: f64) -> bool {
         self.count_below(lambda * (1.0 - CERT_PROBE)) == 0
             && self.count_below(lambda * (1.0 + CERT_PROBE)) > 0
+    }
+}
+
+impl Bracket {
+    /// A search of [lo, hi] from `guess` (the middle when the guess is outside; twice lo,
+    /// at least 1, when hi is ∞).
+    pub(super) fn from_guess(lo: f64, hi: f64, guess: f64) -> Bracket {
+        let x = if guess > lo && guess < hi {
+            guess
+        } else if hi.is_finite() {
+            0.5 * (lo + hi)
+        } else {
+            2.0 * lo.max(1.0)
+        };
+        Bracket {
+            lo,
+            hi,
+            x,
+            spent: 0,
+        }
+    }
+}
+
+impl TautFinder<'_> {
+    /// The pole-free interval (a, b) around the λ of the last evaluation.
+    #[inline]
+    pub(super) fn last_pole_interval(&self) -> (f64, f64) {
+        self.view.s.last_pole_interval(self.view.p)
     }
 }

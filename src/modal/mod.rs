@@ -68,9 +68,10 @@
 //! end-effector mode, scanned and tracked. `spectrum`: the first K modes
 //! ([`ModalSolver::modes`], [`Mode`], [`SpectrumParams`]). `solver`: [`ModalSolver`], which
 //! composes them. `eig3` and `rigid`: small kernels both solvers use. `mechanism`: a
-//! direction the static stiffness does not hold ([`free_direction`]). `sag`: the same
-//! structured solver (and its dense reference) for cables sagging on their catenaries,
-//! whose chains are not uniform ([`sag::SagModalSolver`]).
+//! direction the static stiffness does not hold ([`free_direction`]). `sagged`: the sagged
+//! problem (chains on their catenaries, not uniform: poles seen only through the count) as
+//! a [`Condensed`](engine) view for the same first root, tracker and spectrum search, and its
+//! dense reference ([`sagged::SagModalSolver`]).
 
 mod dense;
 mod dynamic_stiffness;
@@ -82,7 +83,7 @@ mod first_mode;
 mod frf;
 mod mechanism;
 mod rigid;
-pub mod sag;
+pub mod sagged;
 mod shapes;
 mod solver;
 mod spectrum;

@@ -4,7 +4,8 @@
 
 use super::dynamic_stiffness::{DynEval, EvalScratch, LoadedChains};
 use super::ee_tracker::{EeTracker, RescanCounts, SumRules};
-use super::first_mode::{FirstRootState, RootFinder};
+use super::engine::TautView;
+use super::first_mode::{FirstRootState, RootFinder, TautFinder};
 use super::{ModalError, ModalParams, Root};
 use crate::cable::CableModel;
 use nalgebra::{Matrix3, Matrix6, Vector3};
@@ -72,11 +73,13 @@ impl ModalSolver {
 
     /// The root finders' view (parameters and problem read, scratch written), and beside
     /// it the first root's state and the tracker (disjoint borrows).
-    fn parts(&mut self) -> (RootFinder<'_>, &mut FirstRootState, &mut EeTracker) {
+    fn parts(&mut self) -> (TautFinder<'_>, &mut FirstRootState, &mut EeTracker) {
         let finder = RootFinder {
             params: &self.params,
-            problem: &self.problem,
-            scratch: &mut self.scratch,
+            view: TautView {
+                p: &self.problem,
+                s: &mut self.scratch,
+            },
             budget_base: self.budget_base,
             budget: self.budget,
         };

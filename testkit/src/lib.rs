@@ -7,7 +7,7 @@
 //! | [`hard_cases`] | the real-time-against-dense checks of the hard-case tests |
 //! | [`sag_cases`] | the sagged scenes and poses the sag tests share |
 //! | [`sag_reference_py`] | the independent sagged-cable reference, tests/py/sag_reference.py |
-//! | [`sag_robot`] | sagged chains (`modal::sag`) of a small robot, for the sagged FEM tests |
+//! | [`sag_robot`] | sagged chains (`modal::sagged`) of a small robot, for the sagged FEM tests |
 //! | [`pinned_venv`] | a Python venv under target/ with pinned packages |
 pub mod hard_cases;
 pub mod pinned_venv;

@@ -2,7 +2,7 @@
 //! own (L0, EA, w, H, V_a) and its plane by its horizontal unit h, so the tests need no
 //! statics solver (the vibration problem only needs each cable's profile and frame; the
 //! end points need not meet for the dense/structured comparison).
-use cablevib::modal::sag::{SagCable, SagEndEffector};
+use cablevib::modal::sagged::{HangingCable, SagEndEffector};
 use cablevib::sag::Catenary;
 use nalgebra::{Matrix3, Vector3};
 
@@ -19,7 +19,7 @@ pub fn up() -> Vector3<f64> {
 /// the span (V_a < 0 < V_e); `mu` the mass per length, `ea` the
 /// axial rigidity. `heavy` raises the weight and lowers H (sag/span ~ 1/6 on the lower
 /// cables, Irvine's λ² ~ 10² ... 10³).
-pub fn robot(n: usize, mu: f64, ea: f64, heavy: bool) -> Vec<SagCable> {
+pub fn robot(n: usize, mu: f64, ea: f64, heavy: bool) -> Vec<HangingCable> {
     (0..n)
         .map(|i| {
             let phi = 2.0 * std::f64::consts::PI * (i as f64 + 0.3) / n as f64;
@@ -41,7 +41,7 @@ pub fn robot(n: usize, mu: f64, ea: f64, heavy: bool) -> Vec<SagCable> {
             // Attachment on the body's side toward the anchor, at its top for the cables
             // from above: (f·r) > 0, a stabilising rotational geometric stiffness.
             let z = if i % 2 == 0 { 0.2 } else { -0.2 };
-            SagCable {
+            HangingCable {
                 catenary: Catenary {
                     l0_m: l0,
                     ea_n: ea,
@@ -71,7 +71,7 @@ pub fn rigid() -> SagEndEffector {
 }
 
 /// Pose k: every cable's H and V_a moved by a few per cent (a smooth path).
-pub fn pose(base: &[SagCable], k: usize, out: &mut [SagCable]) {
+pub fn pose(base: &[HangingCable], k: usize, out: &mut [HangingCable]) {
     let t = k as f64 * 1e-3;
     for (i, (o, b)) in out.iter_mut().zip(base).enumerate() {
         *o = *b;

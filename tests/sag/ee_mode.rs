@@ -29,6 +29,11 @@ const LAMBDA_TOL: f64 = 1e-9;
 const NOISY_TOL: f64 = 5e-9;
 /// Participation agreement (module docs).
 const P_TOL: f64 = 1e-8;
+/// Participation agreement of a tracked answer: the tracker reads it at its last Newton
+/// iterate, within 1e-7 (relative, its answer step) of the root, so it is off by up to
+/// 1e-7·|dp/d ln λ| (≲ 10 here; measured 2.2e-8 on suspended-8): 1e-6, the taut tracker's
+/// tolerance against the dense reference (tests/model/ee_budget.rs).
+const TRACKED_P_TOL: f64 = 1e-6;
 
 /// The three sagging robots: suspended-8, fast-like, and the paper's spatial robot with
 /// `[effects] sag = true`, with `n` FEM elements per cable.
@@ -122,7 +127,8 @@ fn sagged_modes_next_to_a_noisy_pole_are_found() {
 
 /// Along the bench's circle (real-time estimator: the cycle's budget of
 /// CYCLE_EVALUATIONS evaluations), the sagged end-effector mode is found over the cycles
-/// and reported with its age; no cycle allocates or exceeds its budget; each fresh answer
+/// (the end-effector tracker: scans spread over the cycles, then followed and certified by
+/// the sum rules where they hold) and reported with its age; no cycle allocates or exceeds its budget; each fresh answer
 /// (age 0) is the dense reference's end-effector mode of that cycle's pose.
 #[test]
 fn tracked_along_the_circle_without_allocation() {
@@ -180,7 +186,7 @@ fn tracked_along_the_circle_without_allocation() {
             let err = (hz_to_lambda(hz) - dl).abs() / dl;
             assert!(err <= LAMBDA_TOL, "{} cycle {k}: λ err {err:.1e}", s.name);
             assert!(
-                (p - dp).abs() <= P_TOL,
+                (p - dp).abs() <= TRACKED_P_TOL,
                 "{} cycle {k}: p {p} vs {dp}",
                 s.name
             );

@@ -4,7 +4,7 @@
 //! body. Plus an ignored measurement of the evaluation and solve times.
 
 use cablevib::alloc_count::thread_allocations;
-use cablevib::modal::sag::{SagEndEffector, SagModalSolver};
+use cablevib::modal::sagged::{SagEndEffector, SagModalSolver};
 use cablevib::modal::{ModalParams, Mode};
 use cablevib_testkit::sag_robot::*;
 use std::time::Instant;
@@ -17,7 +17,7 @@ fn a_thousand_poses_allocate_nothing() {
         let mut s = SagModalSolver::new(ModalParams::default(), 8, 40);
         let mut modes = [Mode::default(); 10];
         s.load_catenaries(&base, 40, &up(), &ee).unwrap();
-        s.first_root().unwrap();
+        s.first_root_warm().unwrap();
         let before = thread_allocations();
         let mut ok = 0;
         for k in 1..=1000 {
@@ -33,7 +33,7 @@ fn a_thousand_poses_allocate_nothing() {
             let d = s.eval(1.0);
             let _ = s.count_below(d.d[(0, 0)].abs());
             let _ = s.static_stiffness();
-            let r = s.first_root();
+            let r = s.first_root_warm();
             let m = s.modes(10, &mut modes);
             ok += (r.is_ok() && m.is_ok()) as usize;
         }
@@ -56,7 +56,7 @@ fn measure_evaluation_and_first_root_times() {
         let mut cur = base.clone();
         let mut s = SagModalSolver::new(ModalParams::default(), 8, n_el);
         s.load_catenaries(&base, n_el, &up(), &point()).unwrap();
-        let lam = s.first_root().unwrap().lambda;
+        let lam = s.first_root_warm().unwrap().lambda;
         let reps = 20_000;
         let t0 = Instant::now();
         let mut acc = 0.0;
@@ -75,7 +75,7 @@ fn measure_evaluation_and_first_root_times() {
             s.load_catenaries(&cur, n_el, &up(), &point()).unwrap();
             load_t += t.elapsed().as_secs_f64();
             let t = Instant::now();
-            let r = s.first_root().unwrap();
+            let r = s.first_root_warm().unwrap();
             warm_t += t.elapsed().as_secs_f64();
             warm_e += r.evaluations as u64;
             let t = Instant::now();

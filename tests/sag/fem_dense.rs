@@ -15,8 +15,8 @@
 //! closed-form uniform chains) fed with EA' = EA(1 + T/EA), μ' = μ/(1 + T/EA).
 
 use cablevib::cable::{up_frame, CableModel};
-use cablevib::modal::sag::{
-    assemble_sagged, SagCable, SagDenseCable, SagEndEffector, SagModalSolver,
+use cablevib::modal::sagged::{
+    assemble_sagged, HangingCable, SagDenseCable, SagEndEffector, SagModalSolver,
 };
 use cablevib::modal::{dense_modes_ee, rigid_geometric_stiffness, ModalParams, ModalSolver, Mode};
 use cablevib::scene::ElementKind;
@@ -28,14 +28,14 @@ const DENSE_FACTOR: f64 = 64.0;
 /// The structured solver's own Newton tolerance (relative).
 const STRUCTURED_TOL: f64 = 1e-12;
 
-fn solver_for(cables: &[SagCable], n_el: usize, ee: &SagEndEffector) -> SagModalSolver {
+fn solver_for(cables: &[HangingCable], n_el: usize, ee: &SagEndEffector) -> SagModalSolver {
     let mut s = SagModalSolver::new(ModalParams::default(), cables.len(), n_el);
     s.load_catenaries(cables, n_el, &up(), ee).unwrap();
     s
 }
 
 /// (dense λ ascending, λ_max, dense participations).
-fn dense_of(s: &SagModalSolver, cables: &[SagCable]) -> (Vec<f64>, f64, Vec<f64>) {
+fn dense_of(s: &SagModalSolver, cables: &[HangingCable]) -> (Vec<f64>, f64, Vec<f64>) {
     let dc: Vec<SagDenseCable> = cables
         .iter()
         .enumerate()
@@ -54,7 +54,7 @@ fn dense_of(s: &SagModalSolver, cables: &[SagCable]) -> (Vec<f64>, f64, Vec<f64>
 /// Compare every structured mode (up to `k`) with the dense ones; the count at the
 /// geometric means of well-separated neighbours; the first root. Returns the worst
 /// error in units of the dense bound.
-fn compare(cables: &[SagCable], n_el: usize, ee: &SagEndEffector, k: usize) -> f64 {
+fn compare(cables: &[HangingCable], n_el: usize, ee: &SagEndEffector, k: usize) -> f64 {
     let mut s = solver_for(cables, n_el, ee);
     let (dl, lmax, dp) = dense_of(&s, cables);
     assert_eq!(dl.len(), s.total_modes());
@@ -129,7 +129,7 @@ fn robots_equal_dense() {
 
 /// The chord FEM of a weightless catenary: EA' = EA(1 + T/EA), μ' = μ/(1 + T/EA) on the
 /// stretched chord L = L0(1 + T/EA), direction (H h + V up)/T.
-fn chord_model(c: &SagCable, n_el: usize) -> (CableModel, Vector3<f64>, f64) {
+fn chord_model(c: &HangingCable, n_el: usize) -> (CableModel, Vector3<f64>, f64) {
     let cat = &c.catenary;
     let t = cat.h_n.hypot(cat.v_anchor_n);
     let st = 1.0 + t / cat.ea_n;
@@ -151,7 +151,7 @@ fn chord_model(c: &SagCable, n_el: usize) -> (CableModel, Vector3<f64>, f64) {
 }
 
 /// Weightless cables: the robot's cables with w = 0 (μ kept for the mass).
-fn weightless(n: usize) -> Vec<SagCable> {
+fn weightless(n: usize) -> Vec<HangingCable> {
     robot(n, 0.6, 2.0e5, false)
         .into_iter()
         .map(|mut c| {
@@ -294,10 +294,10 @@ fn symmetric_robot_clusters_equal_dense() {
     // end-effector absorbs at most 3 directions, so modes sit exactly on the chains' poles
     // (end-effector still) and degenerate end-effector modes appear.
     let one = robot(2, 0.6, 2.0e5, true)[1];
-    let cables: Vec<SagCable> = (0..4)
+    let cables: Vec<HangingCable> = (0..4)
         .map(|i| {
             let phi = std::f64::consts::FRAC_PI_2 * i as f64;
-            SagCable {
+            HangingCable {
                 h: Vector3::new(phi.cos(), phi.sin(), 0.0),
                 ..one
             }

@@ -6,7 +6,7 @@
 //! Wittrick–Williams count `below` steps, found here by bisection on the count.
 
 use cablevib::cable::sagged::SagChain;
-use cablevib::modal::sag::{SagCable, SagModalSolver};
+use cablevib::modal::sagged::{HangingCable, SagModalSolver};
 use cablevib::modal::{ModalParams, Mode};
 use cablevib::sag::Catenary;
 use cablevib_testkit::sag_robot::*;
@@ -160,13 +160,13 @@ fn heavy_sag_converges_as_one_over_n_squared() {
         ..cat
     };
     let cables = [
-        SagCable {
+        HangingCable {
             catenary: cat,
             mu_kg_m: 1.0,
             h: Vector3::x(),
             arm_m: Vector3::zeros(),
         },
-        SagCable {
+        HangingCable {
             catenary: mirrored,
             mu_kg_m: 1.0,
             h: Vector3::new(-0.6, 0.8, 0.0),

@@ -3,7 +3,7 @@
 //! predicted λ against the cold one, and the cycle's evaluation budget. Plus an ignored
 //! measurement of ns per element.
 
-use cablevib::modal::sag::SagModalSolver;
+use cablevib::modal::sagged::SagModalSolver;
 use cablevib::modal::{ModalError, ModalParams};
 use cablevib::sag::{CableChord, SagParams};
 use cablevib_testkit::sag_robot::*;
@@ -45,7 +45,7 @@ fn lockstep_d_equals_one_by_one_bit_for_bit() {
 /// remaining error (step²/previous step) is below rel_tol; 1e-11 leaves 10× for the two
 /// stopping errors and rounding. The warm one never needs more evaluations than the cold.
 #[test]
-fn warm_first_root_from_prediction_equals_cold() {
+fn warm_first_root_prediction_equals_cold() {
     for ee in [point(), rigid()] {
         let base = robot(8, 0.6, 2.0e5, true);
         let mut cur = base.clone();
@@ -61,7 +61,7 @@ fn warm_first_root_from_prediction_equals_cold() {
                 last
             };
             let cold = s.first_root_cold().unwrap();
-            let warm = s.first_root_from(pred.is_finite().then_some(pred)).unwrap();
+            let warm = s.first_root(pred.is_finite().then_some(pred)).unwrap();
             let rel = (warm.lambda - cold.lambda).abs() / cold.lambda;
             assert!(
                 rel < 1e-11,

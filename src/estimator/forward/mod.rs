@@ -5,7 +5,7 @@
 //! - [`Model::Taut`]: straight chords — the active-set tension distribution, the scene's
 //!   element on each chord, the structured solver of `modal` (`taut.rs`);
 //! - [`Model::Sagged`]: the cables' elastic catenaries — the sagged tension distribution,
-//!   chains about the sagged profiles, the structured solver of `modal::sag` (`sagged.rs`).
+//!   chains about the sagged profiles, the structured solver of `modal::sagged` (`sagged.rs`).
 //!
 //! The cycle ([`Estimator::update`]) and the inverse T_min query
 //! ([`Estimator::t_min_for_f1`]) each own one, so the query leaves the cycle's warm state
@@ -180,15 +180,18 @@ impl Forward {
         }
     }
 
-    /// A cold start of the cycle: forget the tension solver's warm start (and, taut, the
-    /// end-effector mode's tracking).
+    /// A cold start of the cycle: forget the tension solver's warm start and the
+    /// end-effector mode's tracking.
     pub(super) fn start_cold(&mut self) {
         match &mut self.model {
             Model::Taut(t) => {
                 t.tension.reset_warm_start();
                 t.modal.reset_tracking();
             }
-            Model::Sagged(s) => s.reset_warm_start(),
+            Model::Sagged(s) => {
+                s.reset_warm_start();
+                s.modal.reset_tracking();
+            }
         }
     }
 
@@ -215,9 +218,8 @@ impl Forward {
 
     /// The end-effector mode of the loaded pose (λ in rad²/s², participation) within what
     /// is left of the cycle's budget: taut cables track it from the last cycle's
-    /// ([`ModalSolver::ee_mode_tracked`]; `r1` this cycle's first root), sagging cables
-    /// sweep their spectrum upwards over the cycles ([`SagModel::ee_mode`]); `warm` whether
-    /// the cycle is warm. Ok(None) while the work goes on over the cycles.
+    /// ([`ModalSolver::ee_mode_tracked`]; `r1` this cycle's first root), and so do sagging
+    /// cables ([`SagModel::ee_mode`]); `warm` whether the cycle is warm. Ok(None) while the work goes on over the cycles.
     pub(super) fn ee_mode_tracked(
         &mut self,
         r1: &Root,
@@ -228,7 +230,7 @@ impl Forward {
                 .modal
                 .ee_mode_tracked(r1, warm)?
                 .map(|r| (r.lambda, r.ee_participation))),
-            Model::Sagged(s) => s.ee_mode(warm),
+            Model::Sagged(s) => s.ee_mode(r1, warm),
         }
     }
 
@@ -293,11 +295,11 @@ impl Forward {
         }
     }
 
-    /// End-effector bookkeeping counters (zero when the cables sag: no end-effector mode).
+    /// End-effector bookkeeping counters.
     pub(super) fn rescan_counts(&self) -> RescanCounts {
         match &self.model {
             Model::Taut(t) => t.modal.rescan_counts(),
-            Model::Sagged(_) => RescanCounts::default(),
+            Model::Sagged(s) => s.modal.rescan_counts(),
         }
     }
 

@@ -9,7 +9,7 @@
 use super::{EndEffector, ForwardParams, TensionReport};
 use crate::estimator::EstimatorError;
 use crate::kinematics::{Geometry, Pose};
-use crate::modal::sag::{
+use crate::modal::sagged::{
     assemble_sagged, SagCableFrame, SagDenseCable, SagEndEffector, SagLoadError, SagModalSolver,
 };
 use crate::modal::{ModalError, Root};
@@ -109,7 +109,7 @@ impl SagModel {
         res?;
         self.load(scene, pose, g)?;
         self.loaded_at = self.modal.evaluations();
-        Ok(self.modal.first_root_from(warm)?)
+        Ok(self.modal.first_root(warm)?)
     }
 
     /// Set each cable's chain on its catenary and load the end-effector.
@@ -143,17 +143,22 @@ impl SagModel {
     }
 
     /// The end-effector mode (λ in rad²/s², participation) within what is left of this
-    /// cycle's budget: Ok(None) while the sweep goes on over the cycles (`warm` false
-    /// restarts it). Continuous cables: unknown (NaN), since their mesh rule
+    /// cycle's budget, tracked from the last cycle ([`SagModalSolver::ee_mode_tracked`];
+    /// `r1` this cycle's first root): Ok(None) while the work goes on over the cycles
+    /// (`warm` false restarts it). Continuous cables: unknown (NaN), since their mesh rule
     /// ([`SagContinuousParams`]) holds its accuracy only up to the cables' first few
     /// half-waves, and the end-effector mode of a sagging robot lies above tens of them.
-    pub(super) fn ee_mode(&mut self, warm: bool) -> Result<Option<(f64, f64)>, ModalError> {
+    pub(super) fn ee_mode(
+        &mut self,
+        r1: &Root,
+        warm: bool,
+    ) -> Result<Option<(f64, f64)>, ModalError> {
         if self.modal.is_continuous() {
             return Ok(Some((f64::NAN, f64::NAN)));
         }
         Ok(self
             .modal
-            .ee_mode_tracked(warm)?
+            .ee_mode_tracked(r1, warm)?
             .map(|m| (m.lambda, m.ee_participation)))
     }
 

@@ -3,12 +3,13 @@
 //! with the sum-rule bound.
 
 use super::member::{predict, SearchSide};
-use super::search::{neighbour, partner, track_root};
+use super::track::{neighbour, partner, track_root};
 use super::{
     EeTracker, RescanReason, ANSWER_ACCEPT, CERT_MARGIN, CHEAP_ACCEPT, NEIGHBOUR_WALK,
     PARTNER_SEARCHES, P_ADD, P_DROP, P_LAZY, P_MARGIN, P_PARTNER, P_STRONG, SEARCH_BOUND,
     SEARCH_LOSS,
 };
+use crate::modal::engine::Condensed;
 use crate::modal::first_mode::RootFinder;
 use crate::modal::Root;
 
@@ -31,9 +32,9 @@ const PARTNER_REGROWTH: f64 = 2.0;
 
 impl EeTracker {
     /// One warm cycle of the watched modes; Err(reason) when a full scan is needed.
-    pub(super) fn track_watched(
+    pub(super) fn track_watched<P: Condensed>(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut RootFinder<'_, P>,
         thr: f64,
     ) -> Result<Root, RescanReason> {
         self.follow_members(f, false);
@@ -43,7 +44,7 @@ impl EeTracker {
     /// Follow the watched modes one step: every one with participation ≥ [`P_LAZY`] and
     /// the weak one followed longest ago (`stale_only`: those not followed this cycle).
     /// Then keep them in index order, distinct, and drop the weak ones.
-    fn follow_members(&mut self, f: &mut RootFinder<'_>, stale_only: bool) {
+    fn follow_members<P: Condensed>(&mut self, f: &mut RootFinder<'_, P>, stale_only: bool) {
         let mut rr = usize::MAX;
         if !stale_only {
             let mut oldest = 0;
@@ -136,9 +137,9 @@ impl EeTracker {
 
     /// The rest of a warm cycle after [`Self::follow_members`]: partners of strong modes,
     /// the answer, neighbour searches, the certificate.
-    fn partners_and_answer(
+    fn partners_and_answer<P: Condensed>(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut RootFinder<'_, P>,
         thr: f64,
     ) -> Result<Root, RescanReason> {
         self.search_partners(f);
@@ -165,7 +166,7 @@ impl EeTracker {
     /// energy with one chain is mixing with that chain's string mode, which sits just
     /// across the chain's nearest pole; watch it before the participation moves there (at
     /// most [`PARTNER_SEARCHES`] searches).
-    fn search_partners(&mut self, f: &mut RootFinder<'_>) {
+    fn search_partners<P: Condensed>(&mut self, f: &mut RootFinder<'_, P>) {
         let mut searches = 0;
         let mut i = 0;
         while i < self.n_members && searches < PARTNER_SEARCHES {
@@ -211,7 +212,7 @@ impl EeTracker {
     /// Search the neighbours of the watched mode whose participation changed most since
     /// its neighbours were last searched (first those never searched): a flood fill towards
     /// the participation the watched modes miss.
-    fn search_neighbours(&mut self, f: &mut RootFinder<'_>) {
+    fn search_neighbours<P: Condensed>(&mut self, f: &mut RootFinder<'_, P>) {
         let mut pick = None;
         let mut change = SEARCH_LOSS;
         let mut oldest = (u64::MAX, 0);
@@ -267,7 +268,7 @@ impl EeTracker {
             {
                 break;
             }
-            let Some(t) = neighbour(f, &from, up) else {
+            let Some(t) = f.as_taut().and_then(|mut t| neighbour(&mut t, &from, up)) else {
                 break;
             };
             let mut n = t.member(f64::NAN);
@@ -283,7 +284,11 @@ impl EeTracker {
     /// The lowest watched mode with participation ≥ the threshold, solved to full accuracy
     /// (and so is any watched mode below it within [`P_MARGIN`] of the threshold);
     /// Err(NoneReached) when there is none, Err(Lost) when an exact solve fails.
-    fn select_answer(&mut self, f: &mut RootFinder<'_>, thr: f64) -> Result<Root, RescanReason> {
+    fn select_answer<P: Condensed>(
+        &mut self,
+        f: &mut RootFinder<'_, P>,
+        thr: f64,
+    ) -> Result<Root, RescanReason> {
         let exact = f.params.newton_accept;
         for i in 0..self.n_members {
             let m = self.members[i];

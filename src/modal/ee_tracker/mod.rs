@@ -6,7 +6,7 @@
 //! - [`member`]: one watched mode, its predictor, the watch list;
 //! - [`scan`]: the scan over the pole intervals (cold start and rescans);
 //! - [`follow`]: one warm cycle (follow, partner and neighbour searches, certificate);
-//! - [`search`]: the Newton searches it uses (follow a root, a neighbour, a partner);
+//! - [`track`]: the Newton searches it uses (follow a root, a neighbour, a partner);
 //! - [`phases`]: one cycle's work within the budget (track, scan, continue, certify).
 //!
 //! The tuning constants below decide only the cost: every warm answer is certified.
@@ -19,13 +19,14 @@ mod follow;
 mod member;
 mod phases;
 mod scan;
-mod search;
+mod track;
 
+use super::engine::Condensed;
 use super::first_mode::RootFinder;
 use super::{ModalError, Root};
 use member::{predict, Member};
 use scan::{ScanState, ScanStep};
-use search::track_root;
+use track::track_root;
 
 /// Largest number of watched modes (a fixed array, no allocation; when full, the weakest
 /// gives way to a stronger one).
@@ -211,9 +212,9 @@ impl EeTracker {
 
     /// The lowest mode whose participation reaches the threshold, by a scan from zero
     /// (`first` is the known first root, not solved again).
-    pub(super) fn ee_mode(
+    pub(super) fn ee_mode<P: Condensed>(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut RootFinder<'_, P>,
         sums: SumRules,
         first: &Root,
     ) -> Result<Root, ModalError> {
@@ -222,13 +223,7 @@ impl EeTracker {
             return Ok(*first);
         }
         let start = f.evaluations();
-        self.scan = Some(ScanState::new(
-            f.problem,
-            0.0,
-            first.lambda,
-            f64::INFINITY,
-            false,
-        ));
+        self.scan = Some(ScanState::from_zero(&f.view, first.lambda));
         let r = match self.scan_step(f) {
             ScanStep::Done(r) => r,
             ScanStep::Paused => {
@@ -250,9 +245,9 @@ impl EeTracker {
     /// [`ModalSolver::ee_mode_tracked`](super::ModalSolver::ee_mode_tracked)), within the
     /// evaluations left in the cycle's budget. Ok(None): the work did not fit and goes on
     /// in the next cycle (a scan in progress, or a warm cycle cut short).
-    pub(super) fn ee_mode_tracked(
+    pub(super) fn ee_mode_tracked<P: Condensed>(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut RootFinder<'_, P>,
         sums: SumRules,
         first: &Root,
         warm: bool,
@@ -298,7 +293,7 @@ impl EeTracker {
     /// Weak episode: no mode reached the threshold at the last full scan; follow the most
     /// end-effector-like mode and rescan fully every [`WEAK_RESCAN_CYCLES`] cycles. Some(its
     /// root) while it stays below the threshold; None (nothing watched) when a scan is due.
-    fn follow_weak(&mut self, f: &mut RootFinder<'_>, thr: f64) -> Option<Root> {
+    fn follow_weak<P: Condensed>(&mut self, f: &mut RootFinder<'_, P>, thr: f64) -> Option<Root> {
         self.ee_skip -= 1;
         if self.n_members == 1 {
             let m = self.members[0];
@@ -319,8 +314,8 @@ impl EeTracker {
     }
 
     /// Watch the first root: branch 0 below the lowest pole, index 0.
-    fn watch_first(&mut self, f: &RootFinder<'_>, first: &Root) {
-        let lp = f.problem.lowest_pole();
+    fn watch_first<P: Condensed>(&mut self, f: &RootFinder<'_, P>, first: &Root) {
+        let lp = f.view.lowest_pole().unwrap_or(f64::INFINITY);
         self.insert_member(Member::new(
             first.lambda,
             first.ee_participation,

@@ -4,18 +4,20 @@
 
 use super::member::Member;
 use super::scan::{self, ScanState, ScanStep};
+use super::track::track_root;
 use super::{
     EeTracker, RescanReason, CERT_MARGIN, PHASES_PER_CYCLE, P_ADD, RESCAN_WINDOW,
     WEAK_RESCAN_CYCLES,
 };
+use crate::modal::engine::Condensed;
 use crate::modal::first_mode::RootFinder;
 use crate::modal::{ModalError, Root};
 
 impl EeTracker {
     /// Track, scan, or continue a scan, until an answer or the budget's end.
-    pub(super) fn ee_phases(
+    pub(super) fn ee_phases<P: Condensed>(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut RootFinder<'_, P>,
         first: &Root,
         thr: f64,
     ) -> Result<Option<Root>, ModalError> {
@@ -46,9 +48,9 @@ impl EeTracker {
     /// Continue the scan in progress, recording what it finds; None when the budget ran out
     /// (it goes on next cycle), else its result, whether it ran over earlier cycles, and
     /// whether it started from a window.
-    fn run_scan(
+    fn run_scan<P: Condensed>(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut RootFinder<'_, P>,
     ) -> Option<(Result<Root, ModalError>, bool, bool)> {
         let resumed = self.scan.is_some_and(|s| s.resumed > 0);
         let window = self.scan.is_some_and(|s| s.window);
@@ -72,19 +74,30 @@ impl EeTracker {
     /// What a finished scan's result `r` comes to: Some(the cycle's outcome), or None for
     /// another phase (certify what a scan found over several cycles; scan from zero after a
     /// window that did not certify).
-    fn scan_done(
+    fn scan_done<P: Condensed>(
         &mut self,
-        f: &RootFinder<'_>,
+        f: &mut RootFinder<'_, P>,
         r: Result<Root, ModalError>,
         resumed: bool,
         window: bool,
         thr: f64,
     ) -> Option<Result<Option<Root>, ModalError>> {
         let reached = matches!(r, Ok(ref x) if x.ee_participation >= thr);
-        if resumed && reached {
+        if resumed && reached && f.view.poles_known() {
             // Found over several cycles: certify at this cycle's pose (a warm cycle of the
             // watched modes) before anything is reported.
             return None;
+        }
+        if let (true, true, Ok(ans)) = (resumed, reached, &r) {
+            // Where the count alone shows the poles, the scan read every mode below the
+            // answer (at the poses of the cycles it passed them in): the answer certified
+            // at this cycle's pose by a warm cycle, or else followed to this pose.
+            if let Ok(a) = self.track_watched(f, thr) {
+                return Some(Ok(Some(a)));
+            }
+            return Some(Ok(track_root(f, ans.lambda, f.params.newton_accept)
+                .filter(|t| t.root.ee_participation >= thr)
+                .map(|t| t.root)));
         }
         if window {
             // Certified, this is the answer; else scan from zero.
@@ -107,7 +120,10 @@ impl EeTracker {
         };
         if r.ee_participation < thr {
             // Weak: watch only this mode until the next full scan.
-            let (a, b) = f.problem.pole_interval(r.lambda);
+            let (a, b) = f
+                .view
+                .pole_interval(r.lambda)
+                .unwrap_or((0.0, f64::INFINITY));
             self.members[0] = Member::new(r.lambda, r.ee_participation, 0, 0, a, b);
             self.n_members = 1;
             self.ee_skip = WEAK_RESCAN_CYCLES;
@@ -118,8 +134,16 @@ impl EeTracker {
     /// Start a scan for `reason`: from 10 % below the lowest watched mode after a failed
     /// warm cycle (the watched modes are those the participation moves among; the modes
     /// below stay unwatched and covered by the bound), from zero otherwise.
-    fn start_scan(&mut self, f: &RootFinder<'_>, first: &Root, reason: RescanReason) {
-        let window = if reason != RescanReason::Cold && self.n_members > 0 {
+    fn start_scan<P: Condensed>(
+        &mut self,
+        f: &RootFinder<'_, P>,
+        first: &Root,
+        reason: RescanReason,
+    ) {
+        // Where the count alone shows the poles a window scan costs what a scan from zero
+        // does below the answer's neighbours, and its answer would need a certificate the
+        // watched modes do not give: scan from zero.
+        let window = if reason != RescanReason::Cold && self.n_members > 0 && f.view.poles_known() {
             RESCAN_WINDOW * self.members[0].lambda
         } else {
             0.0
@@ -130,18 +154,12 @@ impl EeTracker {
                 self.watch_first(f, first);
             }
             let skip = window * (1.0 - scan::WINDOW_EDGE);
-            self.scan = Some(ScanState::new(f.problem, window, skip, f64::INFINITY, true));
+            self.scan = Some(ScanState::new(&f.view, window, skip, f64::INFINITY, true));
         } else {
             if first.ee_participation >= P_ADD {
                 self.watch_first(f, first);
             }
-            self.scan = Some(ScanState::new(
-                f.problem,
-                0.0,
-                first.lambda,
-                f64::INFINITY,
-                false,
-            ));
+            self.scan = Some(ScanState::from_zero(&f.view, first.lambda));
         }
     }
 

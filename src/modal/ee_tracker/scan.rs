@@ -5,8 +5,10 @@
 use super::member::Member;
 use super::{EeTracker, MAX_MEMBERS, P_ADD, SCAN_BOUND};
 use crate::modal::dynamic_stiffness::{LoadedChains, MAX_CHAINS};
-use crate::modal::first_mode::RootFinder;
-use crate::modal::{ModalError, Root};
+use crate::modal::engine::Condensed;
+use crate::modal::first_mode::{RootFinder, TautFinder};
+use crate::modal::spectrum::{SpectrumSearch, SweepState};
+use crate::modal::{ModalError, Root, SpectrumParams};
 
 /// Poles of different chains closer than this (relative) are one pole of the scan.
 const POLE_MERGE: f64 = 1e-12;
@@ -57,7 +59,7 @@ fn next_distinct_pole(
 /// blocked count there and the branches [na, nb) that have a root in it (two evaluations
 /// at most).
 fn interval_branches(
-    f: &mut RootFinder<'_>,
+    f: &mut TautFinder<'_>,
     a: f64,
     b: f64,
     lo: f64,
@@ -76,7 +78,7 @@ fn interval_branches(
         below = e.below;
         e.eig().negatives()
     } else {
-        f.problem.dim
+        f.view.p.dim
     };
     (below, na, nb)
 }
@@ -111,23 +113,30 @@ pub(super) struct ScanState {
     intervals: u32,
     /// Cycles it was continued in after the one it started in.
     pub(super) resumed: u32,
+    /// Where the poles are seen only through the count, the scan is an ascending sweep of
+    /// the spectrum from `start`: the sweep's state, whether it started, the next mode's
+    /// index, and the bracket of that mode a cycle's budget cut (NaN: none).
+    modes: SweepState,
+    /// Evaluations the sweep had spent when it found the answer (it goes on past the
+    /// answer, recording, for as many more at most).
+    to_answer: u32,
+    started: bool,
+    start: f64,
+    next: usize,
+    cut: (f64, f64),
 }
 
 impl ScanState {
     /// A scan upward from the pole interval containing `start` (rad²/s²), skipping roots at
     /// or below `skip_to`, giving up above `limit`.
-    pub(super) fn new(
-        p: &LoadedChains,
+    pub(super) fn new<P: Condensed>(
+        p: &P,
         start: f64,
         skip_to: f64,
         limit: f64,
         window: bool,
     ) -> Self {
-        let mut a = 0.0f64;
-        for i in 0..p.n_chains {
-            let (lo, _) = p.chains[i].poles_around(start);
-            a = a.max(lo);
-        }
+        let a = p.pole_interval(start).map_or(0.0, |(a, _)| a);
         ScanState {
             a_fixed: a,
             a_key: None,
@@ -142,7 +151,18 @@ impl ScanState {
             spent: 0,
             intervals: 0,
             resumed: 0,
+            modes: SweepState::new(),
+            to_answer: 0,
+            started: false,
+            start,
+            next: 0,
+            cut: (f64::NAN, f64::NAN),
         }
+    }
+
+    /// A scan from zero, skipping the known first root at `first` (rad²/s²).
+    pub(super) fn from_zero<P: Condensed>(p: &P, first: f64) -> Self {
+        Self::new(p, 0.0, first, f64::INFINITY, false)
     }
 
     /// The lower end of the current interval on the loaded problem, rad²/s².
@@ -173,12 +193,25 @@ impl EeTracker {
     ///
     /// [`ModalParams::max_scan_intervals`]: crate::modal::ModalParams::max_scan_intervals
     /// [`ModalParams::max_scan_evaluations`]: crate::modal::ModalParams::max_scan_evaluations
-    pub(super) fn scan_step(&mut self, f: &mut RootFinder<'_>) -> ScanStep {
+    pub(super) fn scan_step<P: Condensed>(&mut self, f: &mut RootFinder<'_, P>) -> ScanStep {
         let Some(mut st) = self.scan else {
             return ScanStep::Done(Err(ModalError::NoEeMode(0)));
         };
         let begin = f.evaluations();
-        let done = self.scan_intervals(f, &mut st, begin);
+        let params = f.params;
+        let (budget_base, budget) = (f.budget_base, f.budget);
+        let done = match f.view.taut() {
+            Some(view) => {
+                let mut t = RootFinder {
+                    params,
+                    view,
+                    budget_base,
+                    budget,
+                };
+                self.scan_intervals(&mut t, &mut st, begin)
+            }
+            None => self.scan_modes(f, &mut st, begin),
+        };
         st.spent = st.spent.saturating_add(f.evaluations() - begin);
         match done {
             None => {
@@ -195,7 +228,7 @@ impl EeTracker {
     /// The scan's loop over the intervals; None when the budget ran out (state in `st`).
     fn scan_intervals(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut TautFinder<'_>,
         st: &mut ScanState,
         begin: u32,
     ) -> Option<Result<Root, ModalError>> {
@@ -203,8 +236,8 @@ impl EeTracker {
         while st.intervals < f.params.max_scan_intervals
             && st.spent + (f.evaluations() - begin) <= f.params.max_scan_evaluations
         {
-            let a = st.a(f.problem);
-            let (b, bc, bj) = next_distinct_pole(f.problem, &mut st.next_pole, a);
+            let a = st.a(f.view.p);
+            let (b, bc, bj) = next_distinct_pole(f.view.p, &mut st.next_pole, a);
             if a > st.limit {
                 break;
             }
@@ -235,7 +268,7 @@ impl EeTracker {
     /// The roots of one pole interval (a, b) from branch `st.branch` on.
     fn scan_interval(
         &mut self,
-        f: &mut RootFinder<'_>,
+        f: &mut TautFinder<'_>,
         st: &mut ScanState,
         a: f64,
         b: f64,
@@ -298,29 +331,137 @@ impl EeTracker {
                     b,
                 ));
             }
-            if st.answer.is_none() && r.ee_participation >= thr {
-                st.answer = Some(r);
-                if !self.recording {
-                    return IntervalEnd::Stop;
-                }
-            }
-            if let Some(ans) = st.answer {
-                // Modes watched in earlier cycles of a continued scan count with their
-                // participation then (the certificate comes later, at one pose).
-                if self.unwatched_bound_with(ans.lambda, true) < SCAN_BOUND
-                    || self.n_members == MAX_MEMBERS
-                {
-                    return IntervalEnd::Stop;
-                }
-            }
-            if st
-                .best
-                .is_none_or(|x| r.ee_participation > x.ee_participation)
-            {
-                st.best = Some(r);
+            if self.take_root(st, r, thr) {
+                return IntervalEnd::Stop;
             }
         }
         IntervalEnd::Next
+    }
+
+    /// A root the scan found (recorded already): the answer when it is the first to reach
+    /// the threshold, else the best so far. True when the scan is done: the answer found and
+    /// (recording) the sum-rule bound low enough or the watch list full.
+    fn take_root(&mut self, st: &mut ScanState, r: Root, thr: f64) -> bool {
+        if st.answer.is_none() && r.ee_participation >= thr {
+            st.answer = Some(r);
+            if !self.recording {
+                return true;
+            }
+        }
+        if let Some(ans) = st.answer {
+            // Modes watched in earlier cycles of a continued scan count with their
+            // participation then (the certificate comes later, at one pose).
+            if self.unwatched_bound_with(ans.lambda, true) < SCAN_BOUND
+                || self.n_members == MAX_MEMBERS
+            {
+                return true;
+            }
+        }
+        if st
+            .best
+            .is_none_or(|x| r.ee_participation > x.ee_participation)
+        {
+            st.best = Some(r);
+        }
+        false
+    }
+
+    /// The scan where the poles are seen only through the count: an ascending sweep of the
+    /// spectrum by the spectrum search (modes solved in order from the first at or above
+    /// the scan's start, each read for its participation; past the answer, recording, for
+    /// at most as many evaluations as the answer took), at most
+    /// [`ModalParams::max_scan_intervals`] modes, each within the spectrum search's own
+    /// bound ([`SpectrumParams::max_evaluations_per_mode`]: the modes below a sagged robot's
+    /// end-effector mode cost ~30 evaluations each, so the pole-interval scan's total bound
+    /// would stop a sweep far short of it); None when the budget ran out (the mode it cut
+    /// keeps its narrowed bracket, re-probed on the next cycle's problem).
+    ///
+    /// [`ModalParams::max_scan_intervals`]: crate::modal::ModalParams::max_scan_intervals
+    fn scan_modes<P: Condensed>(
+        &mut self,
+        f: &mut RootFinder<'_, P>,
+        st: &mut ScanState,
+        begin: u32,
+    ) -> Option<Result<Root, ModalError>> {
+        let thr = f.params.ee_participation_min;
+        let max_modes = f.params.max_scan_intervals as usize;
+        let budget = f.left();
+        let params = SpectrumParams::default();
+        let mut s = SpectrumSearch::resume(&mut f.view, &params, st.modes);
+        s.set_cycle_budget(budget);
+        if !st.started {
+            if let Err(e) = s.start() {
+                return Some(Err(e));
+            }
+            if st.start > 0.0 {
+                st.next = s.skip_to(st.start);
+            }
+            st.started = true;
+        }
+        let total = s.problem().total_modes();
+        while st.next < total && (st.intervals as usize) < max_modes {
+            let spent = st.spent + (s.problem().evaluations() - begin);
+            if st.answer.is_some() && spent - st.to_answer > st.to_answer {
+                // Past the answer a mode costs tens of evaluations here, not two as between
+                // known poles: the recording stops once it has cost what finding the answer
+                // did.
+                break;
+            }
+            let i = st.next;
+            let r = if st.cut.0.is_finite() {
+                s.mode_within(i, st.cut.0, st.cut.1)
+            } else {
+                s.mode(i)
+            };
+            let m = match r {
+                Ok(m) => m,
+                Err(ModalError::NoConvergence { lo, hi, .. }) if s.cut => {
+                    st.modes = s.state();
+                    st.cut = if lo > 0.0 && hi.is_finite() && lo < hi {
+                        (lo, hi)
+                    } else {
+                        (f64::NAN, f64::NAN)
+                    };
+                    return None;
+                }
+                // Collecting past the answer: keep what was found.
+                Err(_) if st.answer.is_some() => break,
+                Err(e) => return Some(Err(e)),
+            };
+            st.cut = (f64::NAN, f64::NAN);
+            st.next += 1;
+            st.intervals += 1;
+            if m.lambda <= st.skip_to * (1.0 + SKIP_TOL) {
+                continue;
+            }
+            let r = Root {
+                lambda: m.lambda,
+                ee_participation: m.ee_participation,
+                evaluations: 0,
+                residual: f64::NAN,
+            };
+            if self.recording && r.ee_participation >= P_ADD {
+                self.insert_member(Member::new(
+                    r.lambda,
+                    r.ee_participation,
+                    i as u32,
+                    0,
+                    0.0,
+                    f64::INFINITY,
+                ));
+            }
+            let had = st.answer.is_some();
+            if self.take_root(st, r, thr) {
+                break;
+            }
+            if !had && st.answer.is_some() {
+                st.to_answer = st.spent + (s.problem().evaluations() - begin);
+            }
+        }
+        if let Some(r) = st.answer {
+            return Some(Ok(r));
+        }
+        Some(st.best.ok_or(ModalError::NoEeMode(max_modes as u32)))
     }
 }
 

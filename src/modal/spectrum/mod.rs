@@ -50,17 +50,15 @@
 //! (closed-form chains), so K modes cost the same at N = 10 and N = 10⁶.
 
 mod cluster;
-mod ee_sweep;
 mod search;
 
 use super::dynamic_stiffness::LoadedChains;
 use super::dynamic_stiffness::{DynEval, EigD};
-use super::engine::TautView;
+use super::engine::{Condensed, TautView};
 use super::solver::ModalSolver;
 use super::ModalError;
 use crate::cable::ChainKind;
-pub(in crate::modal) use ee_sweep::{ee_sweep, EeSweep, SweepStep};
-pub(in crate::modal) use search::SpectrumSearch;
+pub(in crate::modal) use search::{SpectrumSearch, SweepState};
 
 /// One solved member of a pole-free cluster: its root, the evaluation there, its branch.
 type Member = (f64, DynEval, EigD, usize);
@@ -111,6 +109,23 @@ impl Default for SpectrumParams {
     }
 }
 
+/// The first `k` natural frequencies of problem `p` (ascending) into `out`: min(k,
+/// out.len(), the number of modes) of them, that number returned.
+pub(in crate::modal) fn modes_into<P: Condensed>(
+    p: P,
+    k: usize,
+    params: &SpectrumParams,
+    out: &mut [Mode],
+) -> Result<usize, ModalError> {
+    let n = k.min(out.len()).min(p.total_modes());
+    let mut s = SpectrumSearch::new(p, params);
+    s.start()?;
+    for (i, slot) in out[..n].iter_mut().enumerate() {
+        *slot = s.mode(i)?;
+    }
+    Ok(n)
+}
+
 impl ModalSolver {
     /// The first `k` natural frequencies of the loaded problem (ascending) into `out`, with
     /// [`SpectrumParams::default`]. Returns how many were written: min(k, out.len(), the
@@ -126,17 +141,11 @@ impl ModalSolver {
         params: &SpectrumParams,
         out: &mut [Mode],
     ) -> Result<usize, ModalError> {
-        let n = k.min(out.len()).min(self.problem.total_modes());
         let view = TautView {
             p: &self.problem,
             s: &mut self.scratch,
         };
-        let mut s = SpectrumSearch::new(view, params);
-        s.start()?;
-        for (i, slot) in out[..n].iter_mut().enumerate() {
-            *slot = s.mode(i)?;
-        }
-        Ok(n)
+        modes_into(view, k, params, out)
     }
 
     /// Total number of natural frequencies of the loaded model (`usize::MAX` when it has

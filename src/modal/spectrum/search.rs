@@ -173,6 +173,15 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
         Ok(())
     }
 
+    /// Go on from λ = `x` (rad²/s², after [`Self::start`], before any mode): returns J(x),
+    /// the index of the first mode at or above x, from which [`Self::mode`] then goes on
+    /// in order (one count probe).
+    pub(in crate::modal) fn skip_to(&mut self, x: f64) -> usize {
+        let pr = self.probe(x);
+        self.st.cl.lo = pr;
+        pr.count as usize
+    }
+
     /// Mode `i` (0-based); modes must be asked for in order 0, 1, 2, ...
     pub(in crate::modal) fn mode(&mut self, i: usize) -> Result<Mode, ModalError> {
         self.mode_start = self.p.evaluations();

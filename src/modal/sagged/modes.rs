@@ -5,7 +5,7 @@
 
 use super::problem::SagView;
 use super::SagModalSolver;
-use crate::modal::spectrum::SpectrumSearch;
+use crate::modal::spectrum::modes_into;
 use crate::modal::{ModalError, Mode, SpectrumParams};
 
 impl SagModalSolver {
@@ -24,16 +24,10 @@ impl SagModalSolver {
         out: &mut [Mode],
     ) -> Result<usize, ModalError> {
         self.require_loaded()?;
-        let n = k.min(out.len()).min(self.problem.total_modes());
         let view = SagView {
             p: &self.problem,
             evals: &mut self.evaluations,
         };
-        let mut s = SpectrumSearch::new(view, params);
-        s.start()?;
-        for (i, slot) in out[..n].iter_mut().enumerate() {
-            *slot = s.mode(i)?;
-        }
-        Ok(n)
+        modes_into(view, k, params, out)
     }
 }

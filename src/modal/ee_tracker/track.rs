@@ -6,7 +6,8 @@ use super::member::{Member, Tracked};
 use super::scan::inset;
 use super::{CHEAP_ACCEPT, NEIGHBOUR_INTERVALS, P_STRONG};
 use crate::modal::dynamic_stiffness::{quad, DynEval, EigD};
-use crate::modal::first_mode::{relative_residual, RootFinder};
+use crate::modal::engine::Condensed;
+use crate::modal::first_mode::{relative_residual, RootFinder, TautFinder};
 use crate::modal::Root;
 
 /// Newton steps (evaluations) a followed root may take, at most.
@@ -36,7 +37,7 @@ fn nearest_branch(e: &DynEval, eg: &EigD) -> usize {
 /// it is not found there. In a pole interval (a, b) with blocked count B the roots are
 /// those of branches j with D's j-th eigenvalue positive at a⁺ and negative at b⁻, in
 /// order, and the root of branch j has index B + j.
-pub(super) fn neighbour(f: &mut RootFinder<'_>, m: &Member, up: bool) -> Option<Tracked> {
+pub(super) fn neighbour(f: &mut TautFinder<'_>, m: &Member, up: bool) -> Option<Tracked> {
     let mut target = if up {
         m.index + 1
     } else {
@@ -48,7 +49,7 @@ pub(super) fn neighbour(f: &mut RootFinder<'_>, m: &Member, up: bool) -> Option<
     // (≥ 0 below the root when going up, ≤ 0 above it when going down).
     let mut known = m.lambda;
     for _ in 0..NEIGHBOUR_INTERVALS {
-        if target >= below && ((target - below) as usize) < f.problem.dim {
+        if target >= below && ((target - below) as usize) < f.view.p.dim {
             let j = (target - below) as usize;
             // The other end: b⁻ (∞ when there is no pole above: D → −λ M_∞ there) or
             // a⁺ (0 when a = 0: D(0) is positive definite).
@@ -136,7 +137,12 @@ pub(super) fn neighbour(f: &mut RootFinder<'_>, m: &Member, up: bool) -> Option<
 /// (rad²/s²; above it when `up`) nearest `pred` (the two-level model's estimate), by
 /// [`track_root`] from `pred` (or from just across the pole when `pred` is on the
 /// wrong side). Whatever mode it converges to is a root with its index counted afresh.
-pub(super) fn partner(f: &mut RootFinder<'_>, pole: f64, up: bool, pred: f64) -> Option<Tracked> {
+pub(super) fn partner<P: Condensed>(
+    f: &mut RootFinder<'_, P>,
+    pole: f64,
+    up: bool,
+    pred: f64,
+) -> Option<Tracked> {
     let x = if up {
         pred.max(pole * (1.0 + ACROSS_POLE))
     } else {
@@ -151,13 +157,20 @@ pub(super) fn partner(f: &mut RootFinder<'_>, pole: f64, up: bool, pred: f64) ->
 /// within ~step² of the root). Returns the root, its branch, its pole interval, its index
 /// in the spectrum (the interval's blocked count plus the branch) and, for a mode with
 /// participation ≥ [`P_STRONG`], the chain it shares most energy with.
-pub(super) fn track_root(f: &mut RootFinder<'_>, l0: f64, accept: f64) -> Option<Tracked> {
+pub(super) fn track_root<P: Condensed>(
+    f: &mut RootFinder<'_, P>,
+    l0: f64,
+    accept: f64,
+) -> Option<Tracked> {
     if f.exhausted() {
         return None;
     }
     let mut x = l0;
     let mut e = f.eval(x);
-    let (mut a, mut b) = f.last_pole_interval();
+    // Where the poles are seen only through the count, the interval is (0, ∞) for Newton
+    // and the blocked count tells when an iterate left it.
+    let (mut a, mut b) = f.view.last_pole_interval().unwrap_or((0.0, f64::INFINITY));
+    let below = e.below;
     if !(x > a && x < b) {
         return None;
     }
@@ -195,7 +208,7 @@ pub(super) fn track_root(f: &mut RootFinder<'_>, l0: f64, accept: f64) -> Option
                 return None;
             }
             e = f.eval(x);
-            (a, b) = f.last_pole_interval();
+            (a, b) = f.view.last_pole_interval().unwrap_or((0.0, f64::INFINITY));
             if !(x > a && x < b) {
                 return None;
             }
@@ -207,7 +220,7 @@ pub(super) fn track_root(f: &mut RootFinder<'_>, l0: f64, accept: f64) -> Option
         if mu == 0.0 || (xn - x).abs() <= accept.max(f.params.rel_tol) * x {
             let p = f.participation(&e.dd, &v);
             let (share, pole, pole_up, pole_key) = if p >= P_STRONG {
-                f.scratch.coupling(f.problem, x, &e.dd, &v)
+                f.view.coupling(x, &e.dd, &v)
             } else {
                 (0.0, f64::NAN, false, u32::MAX)
             };
@@ -234,6 +247,10 @@ pub(super) fn track_root(f: &mut RootFinder<'_>, l0: f64, accept: f64) -> Option
         }
         x = xn;
         e = f.eval(x);
+        if e.below != below && !f.view.poles_known() {
+            // A pole crossed: the mode is not in the interval it was followed in.
+            return None;
+        }
         eg = e.eig();
         it += 1;
     }

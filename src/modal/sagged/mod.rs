@@ -21,23 +21,19 @@
 //! recurrences side by side (bit-identical to one chain after the other,
 //! [`SagModalSolver::eval_reference`]); count-only evaluations skip S'.
 //!
-//! **First root** ([`SagModalSolver::first_root_from`]). The chains are not uniform, so their
-//! blocked eigenvalues (the poles of D) are not known in closed form; the count shows
-//! where they are. The first natural frequency lies at or below the lowest pole (blocking
-//! the end adds a constraint), where μ₁(D(λ)) falls monotonically from μ₁(D(0)) > 0; it is
-//! the zero of μ₁ with no pole below it. Newton's method on μ₁ (μ₁' = vᵀD'v) runs from the
-//! last root (warm) or from the Rayleigh guess μ₁(0)/(−μ₁'(0)) (cold), inside a bracket
-//! [lo, hi] kept by the signs of μ₁ and by the blocked count: an iterate with a pole below
-//! it (below > 0) is an upper bound, and a step that leaves the bracket is replaced by
-//! bisection. A root whose evaluation has no pole below it is the first eigenvalue by
-//! monotonicity (no certificate needed); a bracket that collapses onto a pole (a mode with
-//! the end-effector still) is reported there with participation 0. Warm (from a predicted
-//! λ) an iterate is accepted once its step is below `newton_accept` with a rate that leaves
-//! less than `rel_tol`, or at the 1e-10 noise floor; where Newton from below overshoots the
-//! bracket, the step from its upper end is taken. At most min(`max_evaluations`,
-//! `cycle_evaluations`) evaluations per call, else `NoConvergence`; a search cut by the
-//! cycle's budget is continued by the next call (bracket and all on the same loaded problem,
-//! from its last iterate on another), up to `max_evaluations` over the calls.
+//! **First root** ([`SagModalSolver::first_root`]): the taut solver's first root
+//! (`modal::first_mode`, written once over the condensed problem). The chains are not
+//! uniform, so their blocked eigenvalues (the poles of D) are not known in closed form; the
+//! count shows where they are. The first natural frequency lies at or below the lowest
+//! pole, where μ₁(D(λ)) falls monotonically from μ₁(D(0)) > 0: safeguarded Newton on μ₁
+//! from the last root (warm) or the Rayleigh guess (cold), inside a bracket kept by the
+//! signs of μ₁ and by the blocked count (an iterate with a pole below it is an upper
+//! bound); a bracket that collapses onto a pole (a mode with the end-effector still) is
+//! reported there with participation 0. The count certifies the root on cold starts and
+//! every 256th warm one. At most min(`max_evaluations`, `cycle_evaluations`) evaluations
+//! per call, else `NoConvergence`; a search cut by the cycle's budget is continued by the
+//! next call (bracket and all on the same loaded problem, from its last iterate on
+//! another), up to `max_evaluations` over the calls.
 //!
 //! **First K modes** ([`SagModalSolver::modes`]): the count brackets mode k; bisection on
 //! the count while the blocked count differs at the bracket's ends (a pole inside), then,
@@ -49,18 +45,19 @@
 //! **Static stiffness** ([`SagModalSolver::static_stiffness`]): D(0), N/m (N·m/rad in the
 //! rotational block), from each chain's cached S(0).
 //!
-//! Files: `problem` (the loaded pose, D(λ)), `first` (first root), `modes` (first K),
+//! Files: `problem` (the loaded pose, D(λ)), `modes` (first K),
 //! `dense` (the assembled reference).
 
 mod dense;
-mod first;
 mod modes;
 mod problem;
 
 pub use dense::{assemble_sagged, SagDenseCable};
 
-use super::spectrum::{ee_sweep, EeSweep, SweepStep};
-use super::{ModalError, ModalParams, Mode, Root, SpectrumParams};
+use super::ee_tracker::{EeTracker, RescanCounts, SumRules};
+use super::engine::Condensed;
+use super::first_mode::{FirstRootState, RootFinder};
+use super::{ModalError, ModalParams, Root};
 use crate::cable::sagged::{
     SagChain, SagChainError, SagContError, SagContMesh, SagContinuousParams,
 };
@@ -83,7 +80,7 @@ pub struct SagCableFrame {
 
 /// One sagging cable of a pose, for [`SagModalSolver::load_catenaries`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SagCable {
+pub struct HangingCable {
     /// The static profile.
     pub catenary: Catenary,
     /// Mass per unstretched length, kg/m.
@@ -144,27 +141,33 @@ pub struct SagModalSolver {
     evaluations: u32,
     /// The last first root, rad²/s² (NaN: none; the warm start).
     last_lambda1: f64,
-    /// A first-root search the last cycle's budget cut, continued by the next call.
-    pending: Option<first::Pending>,
+    /// The first root's state between calls (certificate schedule, weighted sum rule, a
+    /// search the last cycle's budget cut).
+    first: FirstRootState,
     /// The evaluation counter when this cycle's first root began (the cycle's budget
     /// counts from there).
     cycle_base: u32,
-    /// An end-effector sweep the budget cut, continued by the next cycle.
-    sweep: Option<EeSweep>,
+    /// The end-effector mode tracker's state between cycles.
+    tracker: EeTracker,
     loaded: bool,
 }
 
 impl SagModalSolver {
     /// Room for `n_cables` cables of up to `n_el_max` elements each (the only allocation).
     pub fn new(params: ModalParams, n_cables: usize, n_el_max: usize) -> SagModalSolver {
+        Self::with_problem(params, SagProblem::new(n_cables, n_el_max, None))
+    }
+
+    /// A solver on `problem`, nothing loaded.
+    fn with_problem(params: ModalParams, problem: SagProblem) -> SagModalSolver {
         SagModalSolver {
             params,
-            problem: SagProblem::new(n_cables, n_el_max, None),
+            problem,
             evaluations: 0,
             last_lambda1: f64::NAN,
-            pending: None,
+            first: FirstRootState::new(),
             cycle_base: 0,
-            sweep: None,
+            tracker: EeTracker::new(),
             loaded: false,
         }
     }
@@ -176,16 +179,7 @@ impl SagModalSolver {
         n_cables: usize,
         cont: SagContinuousParams,
     ) -> SagModalSolver {
-        SagModalSolver {
-            params,
-            problem: SagProblem::new(n_cables, 1, Some(cont)),
-            evaluations: 0,
-            last_lambda1: f64::NAN,
-            pending: None,
-            cycle_base: 0,
-            sweep: None,
-            loaded: false,
-        }
+        Self::with_problem(params, SagProblem::new(n_cables, 1, Some(cont)))
     }
 
     /// Cable i's chain, to be set (e.g. [`SagChain::set_fem`]) before [`Self::load`].
@@ -235,13 +229,25 @@ impl SagModalSolver {
         up: &Vector3<f64>,
         ee: &SagEndEffector,
     ) -> Result<(), SagLoadError> {
+        self.load_with(frames.len(), up, ee, |_, i| Ok(frames[i]))
+    }
+
+    /// Load `n` cables, cable i's chain set and its frame given by `cable(problem, i)`.
+    fn load_with(
+        &mut self,
+        n: usize,
+        up: &Vector3<f64>,
+        ee: &SagEndEffector,
+        mut cable: impl FnMut(&mut SagProblem, usize) -> Result<SagCableFrame, SagLoadError>,
+    ) -> Result<(), SagLoadError> {
         self.loaded = false;
-        self.check_count(frames.len())?;
+        self.check_count(n)?;
         self.problem.set_end_effector(ee)?;
-        for (i, f) in frames.iter().enumerate() {
-            self.problem.set_cable(i, f, up)?;
+        for i in 0..n {
+            let frame = cable(&mut self.problem, i)?;
+            self.problem.set_cable(i, &frame, up)?;
         }
-        self.problem.n = frames.len();
+        self.problem.n = n;
         self.problem.pack();
         self.loaded = true;
         Ok(())
@@ -251,30 +257,22 @@ impl SagModalSolver {
     /// (the end force of cable i is −(H h_i + V_e up)). No allocation.
     pub fn load_catenaries(
         &mut self,
-        cables: &[SagCable],
+        cables: &[HangingCable],
         n_el: usize,
         up: &Vector3<f64>,
         ee: &SagEndEffector,
     ) -> Result<(), SagLoadError> {
-        self.loaded = false;
-        self.check_count(cables.len())?;
-        self.problem.set_end_effector(ee)?;
-        for (i, c) in cables.iter().enumerate() {
-            self.problem.chains[i]
+        self.load_with(cables.len(), up, ee, |p, i| {
+            let c = &cables[i];
+            p.chains[i]
                 .set_fem(&c.catenary, c.mu_kg_m, n_el)
                 .map_err(|e| SagLoadError::Chain(i, e))?;
-            let cat = &c.catenary;
-            let frame = SagCableFrame {
+            Ok(SagCableFrame {
                 h: c.h,
                 arm_m: c.arm_m,
-                end_force_n: -(c.h * cat.h_n + up * cat.v_end_n()),
-            };
-            self.problem.set_cable(i, &frame, up)?;
-        }
-        self.problem.n = cables.len();
-        self.problem.pack();
-        self.loaded = true;
-        Ok(())
+                end_force_n: -(c.h * c.catenary.h_n + up * c.catenary.v_end_n()),
+            })
+        })
     }
 
     fn check_count(&self, given: usize) -> Result<(), SagLoadError> {
@@ -346,19 +344,19 @@ impl SagModalSolver {
     }
 
     /// The first natural frequency, warm-started from the last one found (cold when none).
-    pub fn first_root(&mut self) -> Result<Root, ModalError> {
+    pub fn first_root_warm(&mut self) -> Result<Root, ModalError> {
         let warm = self.last_lambda1;
-        self.first_root_from(warm.is_finite().then_some(warm))
+        self.first_root(warm.is_finite().then_some(warm))
     }
 
     /// Forget a first-root search the cycle's budget cut (the next call starts afresh).
     pub fn forget_pending(&mut self) {
-        self.pending = None;
+        self.first.pending = None;
     }
 
     /// The first natural frequency from the Rayleigh guess (ignores the last root).
     pub fn first_root_cold(&mut self) -> Result<Root, ModalError> {
-        self.first_root_from(None)
+        self.first_root(None)
     }
 
     /// The first natural frequency, Newton started from `warm` (a predicted λ, rad²/s², e.g.
@@ -371,73 +369,101 @@ impl SagModalSolver {
     /// by the next call: from where it stopped on the same loaded problem (a static pose),
     /// from its last iterate (when `warm` is None) on another one, until a root is found or
     /// [`ModalParams::max_evaluations`] are spent on it over the calls.
-    pub fn first_root_from(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
+    pub fn first_root(&mut self, warm: Option<f64>) -> Result<Root, ModalError> {
         self.require_loaded()?;
         self.cycle_base = self.evaluations;
-        let r = first::first_root(
-            &self.problem,
-            &self.params,
-            &mut self.evaluations,
-            warm,
-            &mut self.pending,
-        );
+        let mut f = RootFinder {
+            params: &self.params,
+            view: SagView {
+                p: &self.problem,
+                evals: &mut self.evaluations,
+            },
+            budget_base: self.cycle_base,
+            budget: self.params.cycle_evaluations,
+        };
+        let r = f.first_root(&mut self.first, warm);
         self.last_lambda1 = r.as_ref().map_or(f64::NAN, |r| r.lambda);
         r
     }
 
-    /// The end-effector mode of the loaded pose: the lowest mode whose participation is at
-    /// least [`ModalParams::ee_participation_min`], by an ascending sweep of the spectrum
-    /// (every mode below it solved and read; at most [`ModalParams::max_scan_intervals`]
-    /// modes). Offline use; forgets a sweep in progress.
-    pub fn ee_mode(&mut self) -> Result<Mode, ModalError> {
-        self.require_loaded()?;
-        self.sweep = None;
-        match self.ee_step(u32::MAX)? {
-            Some(m) => Ok(m),
-            None => Err(ModalError::NoEeMode(0)),
-        }
-    }
-
-    /// The end-effector mode within what is left of this cycle's budget
-    /// ([`ModalParams::cycle_evaluations`], counted from the start of this cycle's
-    /// [`Self::first_root_from`]): Ok(Some) when the sweep ends in this call, Ok(None) when
-    /// the budget cut it (it goes on in the next call, on that call's pose). `warm` false
-    /// (a jump) forgets a sweep in progress. No allocation.
-    pub fn ee_mode_tracked(&mut self, warm: bool) -> Result<Option<Mode>, ModalError> {
-        self.require_loaded()?;
-        if !warm {
-            self.sweep = None;
-        }
-        let budget = match self.params.cycle_evaluations {
-            u32::MAX => u32::MAX,
-            b => b.saturating_sub(self.evaluations.wrapping_sub(self.cycle_base)),
-        };
-        self.ee_step(budget)
-    }
-
-    /// Forget an end-effector sweep in progress.
-    pub fn reset_tracking(&mut self) {
-        self.sweep = None;
-    }
-
-    /// One step of the end-effector sweep with `budget` evaluations.
-    fn ee_step(&mut self, budget: u32) -> Result<Option<Mode>, ModalError> {
-        let view = SagView {
-            p: &self.problem,
-            evals: &mut self.evaluations,
-        };
-        let params = SpectrumParams::default();
-        let r = ee_sweep(
-            view,
-            &params,
-            self.params.ee_participation_min,
+    /// The root finder on the loaded problem with this cycle's budget (counted from the
+    /// start of this cycle's [`Self::first_root`]), and beside it the tracker and the
+    /// sum rules (the plain one from one evaluation far below zero).
+    fn tracker_parts(&mut self, budget: u32) -> (RootFinder<'_, SagView<'_>>, &mut EeTracker) {
+        let f = RootFinder {
+            params: &self.params,
+            view: SagView {
+                p: &self.problem,
+                evals: &mut self.evaluations,
+            },
+            budget_base: self.cycle_base,
             budget,
-            self.params.max_scan_intervals,
-            &mut self.sweep,
-        )?;
-        Ok(match r {
-            SweepStep::Done(m) => Some(m),
-            SweepStep::Paused => None,
-        })
+        };
+        (f, &mut self.tracker)
+    }
+
+    /// The sum rules of the loaded pose (one evaluation for the plain one; the weighted one
+    /// from the last first root).
+    fn sums(&mut self, budget: u32) -> SumRules {
+        let over_lambda = self.first.flex0;
+        let (mut f, _) = self.tracker_parts(budget);
+        let total = if f.left() > 0 {
+            f.view.participation_total()
+        } else {
+            f64::INFINITY
+        };
+        SumRules { total, over_lambda }
+    }
+
+    /// The end-effector mode of the loaded pose: the lowest mode whose participation is at
+    /// least [`ModalParams::ee_participation_min`], by the taut solver's tracker
+    /// ([`crate::modal::ModalSolver::ee_mode_tracked`]) on the sagged problem: its scan is
+    /// an ascending sweep of the spectrum (every mode below the answer solved and read; at
+    /// most [`ModalParams::max_scan_intervals`] modes). `first` is this pose's first root
+    /// (not solved again). Offline use: not bounded by the cycle's budget.
+    pub fn ee_mode(&mut self, first: &Root) -> Result<Root, ModalError> {
+        self.require_loaded()?;
+        let sums = self.sums(u32::MAX);
+        let (mut f, tracker) = self.tracker_parts(u32::MAX);
+        tracker.ee_mode(&mut f, sums, first)
+    }
+
+    /// The end-effector mode, tracked from the last cycle when `warm`, within what is left
+    /// of this cycle's budget ([`ModalParams::cycle_evaluations`], counted from the start of
+    /// this cycle's [`Self::first_root`]): the method of
+    /// [`crate::modal::ModalSolver::ee_mode_tracked`] (watched modes followed by Newton on
+    /// their branch of D, certified by the sum rules; scans spread over the cycles), where
+    /// the poles are seen only through the count: a followed mode that crosses a pole is
+    /// lost (the next scan finds it again), and there are no partner or neighbour searches
+    /// (they walk closed-form poles). Ok(None) while the work goes on over the cycles
+    /// (`first`: this cycle's first root). No allocation.
+    pub fn ee_mode_tracked(
+        &mut self,
+        first: &Root,
+        warm: bool,
+    ) -> Result<Option<Root>, ModalError> {
+        self.require_loaded()?;
+        let budget = self.params.cycle_evaluations;
+        let thr = self.params.ee_participation_min;
+        let sums = if first.ee_participation >= thr {
+            SumRules {
+                total: f64::INFINITY,
+                over_lambda: self.first.flex0,
+            }
+        } else {
+            self.sums(budget)
+        };
+        let (mut f, tracker) = self.tracker_parts(budget);
+        tracker.ee_mode_tracked(&mut f, sums, first, warm)
+    }
+
+    /// Forget the tracked end-effector mode (the next [`Self::ee_mode_tracked`] scans).
+    pub fn reset_tracking(&mut self) {
+        self.tracker.reset();
+    }
+
+    /// Counters of the end-effector bookkeeping (scans by reason, modes lost and dropped).
+    pub fn rescan_counts(&self) -> RescanCounts {
+        self.tracker.counts()
     }
 }
