@@ -21,6 +21,7 @@ use std::path::Path;
 mod bounds;
 use crate::input_file::{InputError, MAX_SCENE_BYTES};
 
+mod hidden;
 mod load;
 mod parse;
 mod validate;
@@ -156,9 +157,36 @@ pub struct Cable {
     /// This cable's own upper tension bound, N (`cables[i].t_max`); None: the scene's
     /// [`Scene::t_max_n`]. See [`Scene::cable_t_max_n`].
     pub t_max_n: Option<f64>,
+    /// The cable hidden between the guiding pulley and the winch drum (`hidden_length`):
+    /// an axial spring, with its mass, in series with the free cable. None: the cable
+    /// starts at a fixed anchor (every scene without `hidden_length`).
+    pub hidden: Option<HiddenCable>,
 }
 
 impl Cable {
+    /// Axial rigidity EA, N.
+    pub fn ea_n(&self) -> f64 {
+        self.youngs_modulus_pa * self.area_m2
+    }
+}
+
+/// The cable between the pulley entry and the winch drum, SI units. It carries the free
+/// cable's tension; the pulley holds it transversely, so only its axial stretch (and axial
+/// inertia) acts on the free cable, as a spring at the free cable's anchor end.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HiddenCable {
+    /// Length from the pulley entry to the drum, m (> 0).
+    pub length_m: f64,
+    /// Young's modulus, Pa (`hidden_youngs_modulus`; default the free cable's).
+    pub youngs_modulus_pa: f64,
+    /// Cross-section, m² (`hidden_area`; default the free cable's).
+    pub area_m2: f64,
+    /// Mass per length, kg/m (`hidden_mass_per_length` or `hidden_weight_per_length`;
+    /// default the free cable's).
+    pub mass_per_length_kg_m: f64,
+}
+
+impl HiddenCable {
     /// Axial rigidity EA, N.
     pub fn ea_n(&self) -> f64 {
         self.youngs_modulus_pa * self.area_m2
@@ -320,6 +348,11 @@ impl Scene {
     pub fn wrench6_n(&self) -> [f64; 6] {
         let f = self.wrench_n();
         [f.x, f.y, f.z, 0.0, 0.0, 0.0]
+    }
+
+    /// Whether some cable has a hidden part ([`Cable::hidden`]).
+    pub fn has_hidden_cable(&self) -> bool {
+        self.cables.iter().any(|c| c.hidden.is_some())
     }
 
     /// Axis-aligned bounding box of the anchors, m (the frame).
