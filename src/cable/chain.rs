@@ -2,6 +2,9 @@
 //! closed form for N discrete elements (Chebyshev polynomials, O(1) in N), the pivot
 //! recurrence it is checked against, and the continuous string or bar (N → ∞).
 
+use super::supported::{
+    eval_supported, supported_end_mass, supported_n_poles, supported_pole, Segment,
+};
 use nalgebra::Matrix3;
 
 /// Below this (2N − 1)θ, sin((2N−1)θ)/sin θ − (2N − 1) is taken from its θ-series (two
@@ -30,6 +33,15 @@ pub enum ChainKind {
         k_total: f64,
         /// μ L, kg.
         m_total: f64,
+    },
+    /// A uniform segment whose anchor end is held by another uniform segment fixed at its
+    /// far end (the free cable's axial chain on the hidden cable behind its pulley; see
+    /// `cable::supported`).
+    Supported {
+        /// The segment from the junction to the end-effector.
+        free: Segment,
+        /// The segment from the fixed end (the drum) to the junction.
+        hidden: Segment,
     },
 }
 
@@ -80,6 +92,7 @@ impl Chain {
         match self.kind {
             ChainKind::Discrete { k, m, n_el } => eval_discrete(k, m, n_el, lambda),
             ChainKind::Continuous { k_total, m_total } => eval_continuous(k_total, m_total, lambda),
+            ChainKind::Supported { free, hidden } => eval_supported(&free, &hidden, lambda),
         }
     }
 
@@ -101,6 +114,7 @@ impl Chain {
                 m / 3.0 + m / 6.0 * end_mass_q(n_el)
             }
             ChainKind::Continuous { .. } => 0.0,
+            ChainKind::Supported { free, hidden } => supported_end_mass(&free, &hidden),
         }
     }
 
@@ -142,6 +156,19 @@ impl Chain {
                 ((lambda * m_total / k_total).max(0.0).sqrt() / std::f64::consts::PI).floor()
                     as usize
             }
+            ChainKind::Supported { free, hidden } => {
+                if supported_n_poles(&free, &hidden) == 0 {
+                    return (0.0, f64::INFINITY);
+                }
+                // Blocked eigenvalues ≤ λ: the count strictly below, plus one when λ is
+                // itself one (the next one up equals λ).
+                let j = eval_supported(&free, &hidden, lambda).below as usize;
+                if supported_pole(&free, &hidden, j + 1) <= lambda {
+                    j + 1
+                } else {
+                    j
+                }
+            }
         };
         let lo = if j == 0 { 0.0 } else { self.pole(j) };
         (lo, self.pole(j + 1))
@@ -166,6 +193,7 @@ impl Chain {
                 let pj = j as f64 * std::f64::consts::PI;
                 pj * pj * k_total / m_total
             }
+            ChainKind::Supported { free, hidden } => supported_pole(&free, &hidden, j),
         }
     }
 }

@@ -9,6 +9,7 @@ cablevib_testkit::count_allocations!();
 mod budget_continuation;
 mod ee_budget;
 mod effects_rigid;
+mod hidden_cable;
 mod inverse_query;
 mod paper_tables;
 mod proptest_model;
