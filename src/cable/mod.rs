@@ -262,9 +262,13 @@ impl CableModel {
             ea_n,
             mu_kg_m,
         } = *hidden;
-        if !(length_m.is_finite() && length_m > 0.0 && ea_n.is_finite() && ea_n > 0.0)
-            || !(mu_kg_m.is_finite() && mu_kg_m >= 0.0)
-        {
+        let usable = length_m.is_finite()
+            && length_m > 0.0
+            && ea_n.is_finite()
+            && ea_n > 0.0
+            && mu_kg_m.is_finite()
+            && mu_kg_m >= 0.0;
+        if !usable {
             return Err(CableError::BadHidden {
                 length_m,
                 ea_n,

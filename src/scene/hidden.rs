@@ -35,7 +35,7 @@ pub(super) fn validate_hidden(
             }
             return Ok(None);
         }
-        Some(l) if l == 0.0 => return Ok(None),
+        Some(0.0) => return Ok(None),
         Some(l) => ck.positive(&key("hidden_length"), l)?,
     };
     let e = match e {

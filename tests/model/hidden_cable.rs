@@ -289,13 +289,71 @@ fn continuous_hidden_cable_is_the_fem_limit() {
 
 #[test]
 fn hidden_cable_refusals_are_clear() {
-    let e = Estimator::new(&paper_with_hidden("catenary", 10, 2.5))
-        .err()
-        .expect("catenary refused")
-        .to_string();
+    let Err(e) = Estimator::new(&paper_with_hidden("catenary", 10, 2.5)) else {
+        panic!("catenary with a hidden cable was accepted");
+    };
+    let e = e.to_string();
     assert!(e.contains("hidden cable") && e.contains("catenary"), "{e}");
     let mut s = paper_with_hidden("fem", 10, 2.5);
     s.set_sag(true).unwrap();
-    let e = Estimator::new(&s).err().expect("sag refused").to_string();
+    let Err(e) = Estimator::new(&s) else {
+        panic!("sag with a hidden cable was accepted");
+    };
+    let e = e.to_string();
     assert!(e.contains("hidden cable") && e.contains("sag"), "{e}");
+}
+
+/// The numbers of docs/hidden-cable.md (printed with --nocapture): the paper robot at its
+/// default pose, fem × 10, every cable with a hidden cable of its own material and length
+/// L_h (ratio r = L_h / mean free length), and
+/// each number's change against r = 0. The hidden cable only lowers them.
+#[test]
+fn paper_robot_with_hidden_cables_table() {
+    let p = Scene::default_scene().ee_position_m;
+    let mean_free: f64 = Scene::default_scene()
+        .cables
+        .iter()
+        .map(|c| (p - c.anchor_m).norm())
+        .sum::<f64>()
+        / 8.0;
+    let run = |lh: f64| {
+        let mut s = Scene::default_scene().with_model(ElementKind::Fem, 10);
+        for c in &mut s.cables {
+            c.hidden = (lh > 0.0).then_some(cablevib::scene::HiddenCable {
+                length_m: lh,
+                youngs_modulus_pa: c.youngs_modulus_pa,
+                area_m2: c.area_m2,
+                mass_per_length_kg_m: c.mass_per_length_kg_m,
+            });
+        }
+        let mut est = Estimator::new(&s).unwrap();
+        let e = *est.update(&Pose::at(p), Tmin::Scene);
+        assert!(e.is_ok(), "{:?}", e.error);
+        (
+            e.stiffness_n_m.symmetric_eigenvalues().min(),
+            e.f1_hz,
+            e.ee_mode_hz,
+        )
+    };
+    let base = run(0.0);
+    eprintln!(
+        "mean free length {mean_free:.4} m; base k_min {:.1} N/m f1 {:.3} Hz ee {:.3} Hz",
+        base.0, base.1, base.2
+    );
+    let mut last = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
+    for lh in [0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5] {
+        let r = run(lh);
+        assert!(r.0 <= last.0 && r.0 < base.0);
+        last = r;
+        eprintln!(
+            "L_h {lh} m (ratio {:.3}): k_min {:.1} ({:+.2} %), f1 {:.3} ({:+.2} %), ee {:.3} ({:+.2} %)",
+            lh / mean_free,
+            r.0,
+            100.0 * (r.0 / base.0 - 1.0),
+            r.1,
+            100.0 * (r.1 / base.1 - 1.0),
+            r.2,
+            100.0 * (r.2 / base.2 - 1.0)
+        );
+    }
 }
