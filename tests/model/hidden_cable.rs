@@ -357,3 +357,46 @@ fn paper_robot_with_hidden_cables_table() {
         );
     }
 }
+
+/// The real-time cycle's cost with and without hidden cables on the paper robot, measured
+/// side by side (interleaved, 20 000 cycles each along a circle; printed with --nocapture,
+/// no timed assert).
+#[test]
+fn realtime_cycle_cost_with_and_without_hidden_cables() {
+    for (el, n) in [(ElementKind::Fem, 40), (ElementKind::Continuous, 1)] {
+        let plain = Scene::default_scene().with_model(el, n);
+        let mut hidden = plain.clone();
+        for c in &mut hidden.cables {
+            c.hidden = Some(cablevib::scene::HiddenCable {
+                length_m: 2.5,
+                youngs_modulus_pa: c.youngs_modulus_pa,
+                area_m2: c.area_m2,
+                mass_per_length_kg_m: c.mass_per_length_kg_m,
+            });
+        }
+        let mut ests = [
+            Estimator::realtime(&plain).unwrap(),
+            Estimator::realtime(&hidden).unwrap(),
+        ];
+        let mut times = [Vec::new(), Vec::new()];
+        let cycles = 20_000;
+        for k in 0..cycles {
+            let a = 2.0 * std::f64::consts::PI * k as f64 / 4000.0;
+            let pose = Pose::at(Vector3::new(0.3 * a.cos(), 0.3 * a.sin(), 1.0));
+            for (est, t) in ests.iter_mut().zip(times.iter_mut()) {
+                let t0 = std::time::Instant::now();
+                let e = *est.update(&pose, Tmin::Scene);
+                t.push(t0.elapsed().as_secs_f64() * 1e6);
+                assert!(e.f1_hz.is_finite());
+            }
+        }
+        for (name, t) in ["without", "with 2.5 m hidden"].iter().zip(times.iter_mut()) {
+            t.sort_by(f64::total_cmp);
+            eprintln!(
+                "{el:?} × {n} {name}: p50 {:.2} µs, p99 {:.2} µs",
+                t[cycles / 2],
+                t[cycles * 99 / 100]
+            );
+        }
+    }
+}
