@@ -390,7 +390,10 @@ fn realtime_cycle_cost_with_and_without_hidden_cables() {
                 assert!(e.f1_hz.is_finite());
             }
         }
-        for (name, t) in ["without", "with 2.5 m hidden"].iter().zip(times.iter_mut()) {
+        for (name, t) in ["without", "with 2.5 m hidden"]
+            .iter()
+            .zip(times.iter_mut())
+        {
             t.sort_by(f64::total_cmp);
             eprintln!(
                 "{el:?} × {n} {name}: p50 {:.2} µs, p99 {:.2} µs",
