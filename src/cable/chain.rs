@@ -3,6 +3,10 @@
 //! recurrence it is checked against, and the continuous string or bar (N → ∞).
 
 use super::scalar::ChainScalar;
+use super::supported::{
+    eval_supported, eval_supported_at, supported_end_mass, supported_n_poles, supported_pole,
+    Segment,
+};
 use nalgebra::Matrix3;
 use num_complex::Complex64;
 
@@ -32,6 +36,15 @@ pub enum ChainKind {
         k_total: f64,
         /// μ L, kg.
         m_total: f64,
+    },
+    /// A uniform segment whose anchor end is held by another uniform segment fixed at its
+    /// far end (the free cable's axial chain on the hidden cable behind its pulley; see
+    /// `cable::supported`).
+    Supported {
+        /// The segment from the junction to the end-effector.
+        free: Segment,
+        /// The segment from the fixed end (the drum) to the junction.
+        hidden: Segment,
     },
 }
 
@@ -83,6 +96,7 @@ impl Chain {
         match self.kind {
             ChainKind::Discrete { k, m, n_el } => eval_discrete(k, m, n_el, lambda),
             ChainKind::Continuous { k_total, m_total } => eval_continuous(k_total, m_total, lambda),
+            ChainKind::Supported { free, hidden } => eval_supported(&free, &hidden, lambda),
         }
     }
 
@@ -106,6 +120,7 @@ impl Chain {
             ChainKind::Continuous { k_total, m_total } => {
                 continuous_string(k_total, m_total, lambda)
             }
+            ChainKind::Supported { free, hidden } => eval_supported_at(&free, &hidden, lambda),
         }
     }
 
@@ -127,6 +142,7 @@ impl Chain {
                 m / 3.0 + m / 6.0 * end_mass_q(n_el)
             }
             ChainKind::Continuous { .. } => 0.0,
+            ChainKind::Supported { free, hidden } => supported_end_mass(&free, &hidden),
         }
     }
 
@@ -168,6 +184,19 @@ impl Chain {
                 ((lambda * m_total / k_total).max(0.0).sqrt() / std::f64::consts::PI).floor()
                     as usize
             }
+            ChainKind::Supported { free, hidden } => {
+                if supported_n_poles(&free, &hidden) == 0 {
+                    return (0.0, f64::INFINITY);
+                }
+                // Blocked eigenvalues ≤ λ: the count strictly below, plus one when λ is
+                // itself one (the next one up equals λ).
+                let j = eval_supported(&free, &hidden, lambda).below as usize;
+                if supported_pole(&free, &hidden, j + 1) <= lambda {
+                    j + 1
+                } else {
+                    j
+                }
+            }
         };
         let lo = if j == 0 { 0.0 } else { self.pole(j) };
         (lo, self.pole(j + 1))
@@ -192,6 +221,7 @@ impl Chain {
                 let pj = j as f64 * std::f64::consts::PI;
                 pj * pj * k_total / m_total
             }
+            ChainKind::Supported { free, hidden } => supported_pole(&free, &hidden, j),
         }
     }
 }
@@ -355,7 +385,7 @@ pub(super) fn eval_continuous(k: f64, m: f64, lambda: f64) -> ChainEval {
 /// [`eval_continuous`] over the scalar `T` (f64 or complex λ; φ cot φ is even in φ, so
 /// the branch of the square root does not matter off the real axis).
 #[inline]
-fn continuous_string<T: ChainScalar>(k: f64, m: f64, lambda: T) -> ChainEval<T> {
+pub(super) fn continuous_string<T: ChainScalar>(k: f64, m: f64, lambda: T) -> ChainEval<T> {
     if m <= 0.0 || lambda.is_nonpositive() {
         return ChainEval {
             s: T::re(k) - lambda * m / 3.0,

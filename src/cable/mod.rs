@@ -35,6 +35,7 @@ mod chain;
 mod element;
 pub mod sagged;
 mod scalar;
+mod supported;
 
 pub use crate::kinematics::up_frame;
 pub use batch::{eval_continuous_batch, eval_discrete_batch, BATCH_MAX_ELEMENTS};
@@ -43,6 +44,10 @@ pub use chain::{
 };
 pub use element::{catenary_block, catenary_flexibility, catenary_modes, fem_block};
 pub use scalar::ChainScalar;
+pub use supported::{
+    eval_supported, supported_end_mass, supported_n_poles, supported_pole, supported_static,
+    Segment,
+};
 
 /// Errors of the element models.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
@@ -65,6 +70,43 @@ pub enum CableError {
     /// The `auto` model must be resolved (estimator::resolve_auto) before use.
     #[error("the auto model is not resolved")]
     Unresolved,
+    /// The element model has no hidden cable (the catenary element's chains are not axial).
+    #[error("a hidden cable (hidden_length) needs the fem, continuous or massless element, not catenary")]
+    HiddenNotModelled,
+    /// The hidden cable's data are not positive and finite.
+    #[error("hidden cable: length {length_m:?} m, EA {ea_n:?} N, mass per length {mu_kg_m:?} kg/m (length and EA must be finite and > 0, mass ≥ 0)")]
+    BadHidden {
+        /// Axial length behind the exit point, m.
+        length_m: f64,
+        /// EA, N.
+        ea_n: f64,
+        /// μ, kg/m.
+        mu_kg_m: f64,
+    },
+}
+
+/// The cable behind a cable's exit point (the pulley), as the element models take it: its
+/// axial length (the hidden cable, plus the wrap on the pulley), EA and mass per length.
+/// Only its axial stretch and axial inertia act on the free cable.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HiddenAxial {
+    /// Axial length behind the exit point, m.
+    pub length_m: f64,
+    /// Axial rigidity EA, N.
+    pub ea_n: f64,
+    /// Mass per length μ, kg/m.
+    pub mu_kg_m: f64,
+}
+
+/// A cable model's hidden part, for the dense assembly: the segment (drum fixed, junction
+/// at the free cable's anchor node) and the direction the junction moves along (the free
+/// cable's, anchor → end-effector).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HiddenPart {
+    /// The hidden segment (the same element count as the free cable; 0: a continuous bar).
+    pub segment: Segment,
+    /// Unit direction of the junction's motion.
+    pub direction: Vector3<f64>,
 }
 
 /// The model of one cable at one pose.
@@ -83,6 +125,8 @@ pub struct CableModel {
     pub n_chains: usize,
     /// Static end stiffness of this cable on the end-effector, N/m.
     pub static_stiffness: Matrix3<f64>,
+    /// The cable behind the exit point, when it has one ([`Self::support_on_hidden`]).
+    pub hidden: Option<HiddenPart>,
 }
 
 impl CableModel {
@@ -189,12 +233,107 @@ impl CableModel {
             chains,
             n_chains: nch,
             static_stiffness: Matrix3::zeros(),
+            hidden: None,
         };
+        model.static_stiffness = model.sum_static();
+        Ok(model)
+    }
+
+    /// Σ_chains P_c s_c(0), N/m.
+    fn sum_static(&self) -> Matrix3<f64> {
         let mut ks = Matrix3::zeros();
-        for c in &model.chains[..nch] {
+        for c in &self.chains[..self.n_chains] {
             ks += c.proj * c.eval(0.0).s;
         }
-        model.static_stiffness = ks;
-        Ok(model)
+        ks
+    }
+
+    /// Put the anchor end of this model (built by [`Self::build`] with `kind`, unit vector
+    /// `e`) on the cable behind its exit point: the axial chain becomes the free cable in
+    /// series with `hidden` (the pulley holds the junction transversely, so the transverse
+    /// chains are unchanged). FEM: the hidden cable as the free cable's number of equal
+    /// consistent-mass axial elements (one spring when it is massless); continuous: the
+    /// exact axial bar; massless: the
+    /// series spring EA/L_free ⊕ EA_h/L_h. No allocation.
+    pub fn support_on_hidden(
+        &mut self,
+        kind: ElementKind,
+        e: &Vector3<f64>,
+        hidden: &HiddenAxial,
+    ) -> Result<(), CableError> {
+        let HiddenAxial {
+            length_m,
+            ea_n,
+            mu_kg_m,
+        } = *hidden;
+        let usable = length_m.is_finite()
+            && length_m > 0.0
+            && ea_n.is_finite()
+            && ea_n > 0.0
+            && mu_kg_m.is_finite()
+            && mu_kg_m >= 0.0;
+        if !usable {
+            return Err(CableError::BadHidden {
+                length_m,
+                ea_n,
+                mu_kg_m,
+            });
+        }
+        let axial = &mut self.chains[0];
+        let segment = match (kind, axial.kind) {
+            (ElementKind::Massless, ChainKind::Discrete { k, .. }) => {
+                let kh = ea_n / length_m;
+                let ks = k * kh / (k + kh);
+                axial.kind = ChainKind::Discrete {
+                    k: ks,
+                    m: 0.0,
+                    n_el: 1,
+                };
+                self.kc += (e * e.transpose()) * (ks - k);
+                Segment {
+                    k: kh,
+                    m: 0.0,
+                    n_el: 1,
+                }
+            }
+            (ElementKind::Fem, ChainKind::Discrete { k, m, n_el }) => {
+                // A massless hidden cable is one spring (a massless discrete chain is
+                // evaluated as a single element).
+                let nh = if mu_kg_m > 0.0 { n_el } else { 1 };
+                let hidden = Segment {
+                    k: ea_n * nh as f64 / length_m,
+                    m: mu_kg_m * length_m / nh as f64,
+                    n_el: nh,
+                };
+                axial.kind = ChainKind::Supported {
+                    free: Segment { k, m, n_el },
+                    hidden,
+                };
+                hidden
+            }
+            (ElementKind::Continuous, ChainKind::Continuous { k_total, m_total }) => {
+                let hidden = Segment {
+                    k: ea_n / length_m,
+                    m: mu_kg_m * length_m,
+                    n_el: 0,
+                };
+                axial.kind = ChainKind::Supported {
+                    free: Segment {
+                        k: k_total,
+                        m: m_total,
+                        n_el: 0,
+                    },
+                    hidden,
+                };
+                hidden
+            }
+            _ => return Err(CableError::HiddenNotModelled),
+        };
+        self.hidden = Some(HiddenPart {
+            segment,
+            direction: *e,
+        });
+        self.static_stiffness = self.sum_static();
+        Ok(())
     }
 }

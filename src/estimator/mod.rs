@@ -130,6 +130,18 @@ impl Estimator {
             est.auto = Some(choice);
             return Ok(est);
         }
+        if scene.has_hidden_cable()
+            && (scene.model.sag || scene.model.element == ElementKind::Catenary)
+        {
+            return Err(BuildError::HiddenNotModelled {
+                scene: scene.name.clone(),
+                model: if scene.model.sag {
+                    "sag (set [effects] sag = false)"
+                } else {
+                    "the catenary element (use fem, continuous or massless)"
+                },
+            });
+        }
         let n = scene.n_cables();
         let mut est = Estimator {
             scene: scene.clone(),

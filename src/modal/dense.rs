@@ -8,7 +8,9 @@ use nalgebra::{DMatrix, Matrix3, Matrix6, SymmetricEigen, Vector3};
 
 /// Assemble the global K (N/m) and M (kg) of the cable models and the end-effector point
 /// mass. DOF order: end-effector (0..3), then for each cable its interior nodes from the
-/// anchor side. Anchors are fixed and carry no DOF.
+/// anchor side, then (a cable with a hidden part behind its pulley) the hidden cable's
+/// interior nodes from the drum and the junction at the pulley, one axial DOF each (the
+/// pulley holds the junction transversely). Anchors and drums are fixed and carry no DOF.
 pub fn assemble(
     models: &[CableModel],
     ee_mass_kg: f64,
@@ -65,15 +67,21 @@ fn assemble_general(
     rigid: Option<RigidParts<'_>>,
 ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
     if models.iter().any(|m| {
-        m.chains[..m.n_chains]
-            .iter()
-            .any(|c| matches!(c.kind, ChainKind::Continuous { .. }))
+        m.chains[..m.n_chains].iter().any(|c| match c.kind {
+            ChainKind::Continuous { .. } => true,
+            ChainKind::Supported { free, hidden } => free.n_el == 0 || hidden.n_el == 0,
+            ChainKind::Discrete { .. } => false,
+        })
     }) {
         return Err(ModalError::NotAssemblable);
     }
     let ee_dim = if rigid.is_some() { 6 } else { 3 };
     let interior: usize = models.iter().map(|m| m.n_el - 1).sum();
-    let ndof = ee_dim + 3 * interior;
+    let hidden_dofs: usize = models
+        .iter()
+        .map(|m| hidden_of(m).map_or(0, |h| h.0.n_el))
+        .sum();
+    let ndof = ee_dim + 3 * interior + hidden_dofs;
     check_dense_budget(ndof)?;
     let mut k = DMatrix::<f64>::zeros(ndof, ndof);
     let mut mm = DMatrix::<f64>::zeros(ndof, ndof);
@@ -102,25 +110,29 @@ fn assemble_general(
         };
         let me = cm.element_mass_kg;
         let kc = DMatrix::from_fn(3, 3, |r, c| cm.kc[(r, c)]);
-        // Node j: 0 = anchor (fixed), 1..n−1 interior, n = end-effector.
-        let place = |j: usize| -> (usize, &DMatrix<f64>) {
+        let hidden = hidden_of(cm);
+        // The junction's axial DOF, after the cable's interior nodes and the hidden ones.
+        let junction = base + 3 * (n - 1) + hidden.map_or(0, |h| h.0.n_el - 1);
+        let axial = hidden.map(|h| DMatrix::from_fn(3, 1, |r, _| h.1[r]));
+        // Node j: 0 = anchor (fixed, or the junction), 1..n−1 interior, n = end-effector.
+        let place = |j: usize| -> Option<(usize, &DMatrix<f64>)> {
             if j == n {
-                (0, &g)
+                Some((0, &g))
+            } else if j == 0 {
+                axial.as_ref().map(|a| (junction, a))
             } else {
-                (base + 3 * (j - 1), &i3)
+                Some((base + 3 * (j - 1), &i3))
             }
         };
         for el in 0..n {
             let nodes = [el, el + 1];
             for (ia, &na) in nodes.iter().enumerate() {
                 for (ib, &nb) in nodes.iter().enumerate() {
-                    if na == 0 || nb == 0 {
+                    let (Some((ra, la)), Some((rb, lb))) = (place(na), place(nb)) else {
                         continue;
-                    }
+                    };
                     let sign = if ia == ib { 1.0 } else { -1.0 };
                     let mcoef = if ia == ib { me / 3.0 } else { me / 6.0 };
-                    let (ra, la) = place(na);
-                    let (rb, lb) = place(nb);
                     let kk = la.transpose() * (&kc * sign) * lb;
                     let mk = la.transpose() * lb * mcoef;
                     for r in 0..kk.nrows() {
@@ -132,9 +144,39 @@ fn assemble_general(
                 }
             }
         }
+        if let Some((seg, _)) = hidden {
+            // Scalar axial elements from the drum (node 0, fixed) to the junction (node nh).
+            let nh = seg.n_el;
+            let at = |j: usize| base + 3 * (n - 1) + j - 1;
+            for el in 0..nh {
+                for (ia, na) in [el, el + 1].into_iter().enumerate() {
+                    for (ib, nb) in [el, el + 1].into_iter().enumerate() {
+                        if na == 0 || nb == 0 {
+                            continue;
+                        }
+                        let same = ia == ib;
+                        k[(at(na), at(nb))] += if same { seg.k } else { -seg.k };
+                        mm[(at(na), at(nb))] += seg.m / if same { 3.0 } else { 6.0 };
+                    }
+                }
+            }
+            base += nh;
+        }
         base += 3 * (n - 1);
     }
     Ok((k, mm))
+}
+
+/// A model's hidden segment and junction direction when its axial chain is supported
+/// (the massless model folds its hidden spring into the chain's own spring).
+fn hidden_of(m: &CableModel) -> Option<(crate::cable::Segment, Vector3<f64>)> {
+    let supported = m.chains[..m.n_chains]
+        .iter()
+        .any(|c| matches!(c.kind, ChainKind::Supported { .. }));
+    match m.hidden {
+        Some(h) if supported => Some((h.segment, h.direction)),
+        _ => None,
+    }
 }
 
 /// Static condensation of K onto its first `dim` DOFs: K_ee − K_ei K_ii⁻¹ K_ie.

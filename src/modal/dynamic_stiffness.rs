@@ -382,6 +382,9 @@ impl LoadedChains {
             let s0 = match c.kind {
                 ChainKind::Discrete { k, n_el, .. } => k / n_el.max(1) as f64,
                 ChainKind::Continuous { k_total, .. } => k_total,
+                ChainKind::Supported { free, hidden } => {
+                    crate::cable::supported_static(&free, &hidden)
+                }
             };
             if self.dim == 6 {
                 d += self.q6[i] * s0;
@@ -415,7 +418,6 @@ impl LoadedChains {
         }
         d
     }
-
 }
 
 /// What one evaluation of D(λ) writes: the chains' values at the last λ (and the batched

@@ -22,6 +22,7 @@ mod bounds;
 mod damping;
 use crate::input_file::{InputError, MAX_SCENE_BYTES};
 
+mod hidden;
 mod load;
 mod parse;
 mod validate;
@@ -163,6 +164,10 @@ pub struct Cable {
     /// A swivel pulley at the anchor (`cables[i].pulley`, else `[cable.pulley]`); None: the
     /// cable leaves from the anchor point itself. See [`Pulley`].
     pub pulley: Option<Pulley>,
+    /// The cable hidden between the guiding pulley and the winch drum (`hidden_length`):
+    /// an axial spring, with its mass, in series with the free cable. None: the cable
+    /// starts at a fixed anchor (every scene without `hidden_length`).
+    pub hidden: Option<HiddenCable>,
 }
 
 /// A swivel pulley at a cable's anchor (the standard model of CASPR's
@@ -182,6 +187,29 @@ pub struct Pulley {
 }
 
 impl Cable {
+    /// Axial rigidity EA, N.
+    pub fn ea_n(&self) -> f64 {
+        self.youngs_modulus_pa * self.area_m2
+    }
+}
+
+/// The cable between the pulley entry and the winch drum, SI units. It carries the free
+/// cable's tension; the pulley holds it transversely, so only its axial stretch (and axial
+/// inertia) acts on the free cable, as a spring at the free cable's anchor end.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HiddenCable {
+    /// Length from the pulley entry to the drum, m (> 0).
+    pub length_m: f64,
+    /// Young's modulus, Pa (`hidden_youngs_modulus`; default the free cable's).
+    pub youngs_modulus_pa: f64,
+    /// Cross-section, m² (`hidden_area`; default the free cable's).
+    pub area_m2: f64,
+    /// Mass per length, kg/m (`hidden_mass_per_length` or `hidden_weight_per_length`;
+    /// default the free cable's).
+    pub mass_per_length_kg_m: f64,
+}
+
+impl HiddenCable {
     /// Axial rigidity EA, N.
     pub fn ea_n(&self) -> f64 {
         self.youngs_modulus_pa * self.area_m2
@@ -345,6 +373,11 @@ impl Scene {
     pub fn wrench6_n(&self) -> [f64; 6] {
         let f = self.wrench_n();
         [f.x, f.y, f.z, 0.0, 0.0, 0.0]
+    }
+
+    /// Whether some cable has a hidden part ([`Cable::hidden`]).
+    pub fn has_hidden_cable(&self) -> bool {
+        self.cables.iter().any(|c| c.hidden.is_some())
     }
 
     /// Axis-aligned bounding box of the anchors, m (the frame).

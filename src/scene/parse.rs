@@ -71,6 +71,16 @@ pub(super) struct RawCableDefaults {
     pub(super) weight_per_length: Option<f64>,
     pub(super) mass_per_length: Option<f64>,
     pub(super) pulley: Option<RawPulley>,
+    /// Hidden cable (pulley entry to winch drum): length, m.
+    pub(super) hidden_length: Option<f64>,
+    /// Hidden cable: Young's modulus, Pa (default: the free cable's).
+    pub(super) hidden_youngs_modulus: Option<f64>,
+    /// Hidden cable: cross-section, m² (default: the free cable's).
+    pub(super) hidden_area: Option<f64>,
+    /// Hidden cable: weight per length, N/m (default: the free cable's).
+    pub(super) hidden_weight_per_length: Option<f64>,
+    /// Hidden cable: mass per length, kg/m (default: the free cable's).
+    pub(super) hidden_mass_per_length: Option<f64>,
 }
 
 /// `[cable.pulley]` / `[cables.pulley]`: a swivel pulley at the anchor.
@@ -123,4 +133,14 @@ pub(super) struct RawCable {
     pub(super) t_min: Option<f64>,
     pub(super) t_max: Option<f64>,
     pub(super) pulley: Option<RawPulley>,
+    /// Hidden cable (pulley entry to winch drum): length, m.
+    pub(super) hidden_length: Option<f64>,
+    /// Hidden cable: Young's modulus, Pa (default: the free cable's).
+    pub(super) hidden_youngs_modulus: Option<f64>,
+    /// Hidden cable: cross-section, m² (default: the free cable's).
+    pub(super) hidden_area: Option<f64>,
+    /// Hidden cable: weight per length, N/m (default: the free cable's).
+    pub(super) hidden_weight_per_length: Option<f64>,
+    /// Hidden cable: mass per length, kg/m (default: the free cable's).
+    pub(super) hidden_mass_per_length: Option<f64>,
 }

@@ -30,13 +30,13 @@ const MIN_ANCHOR_DISTANCE_M: f64 = 1e-6;
 const MAX_AXIAL_RIGIDITY_N: f64 = 1e15;
 
 /// Builds errors that name the file, and the checks shared by several keys.
-struct Checker<'a> {
-    file: &'a str,
+pub(super) struct Checker<'a> {
+    pub(super) file: &'a str,
 }
 
 impl Checker<'_> {
     /// An [`SceneError::Invalid`] for `key`.
-    fn inv(&self, key: &str, message: String) -> SceneError {
+    pub(super) fn inv(&self, key: &str, message: String) -> SceneError {
         SceneError::Invalid {
             file: self.file.to_string(),
             key: key.to_string(),
@@ -99,7 +99,7 @@ impl Checker<'_> {
     }
 
     /// A finite value > 0.
-    fn positive(&self, key: &str, x: f64) -> Result<f64, SceneError> {
+    pub(super) fn positive(&self, key: &str, x: f64) -> Result<f64, SceneError> {
         if x.is_finite() && x > 0.0 {
             Ok(x)
         } else {
@@ -120,7 +120,7 @@ fn a_type(v: &toml::Value) -> String {
 }
 
 /// The key of field `k` of cable `i`, as users write it.
-fn cable_key(i: usize, k: &str) -> String {
+pub(super) fn cable_key(i: usize, k: &str) -> String {
     format!("cables[{i}].{k}")
 }
 
@@ -534,6 +534,7 @@ fn validate_cable(
         (None, Some(p)) => Some(validate_pulley(ck, "cable.pulley", p)?),
         (None, None) => None,
     };
+    let hidden = super::hidden::validate_hidden(ck, i, c, d, (e, a, mu), at.g)?;
     Ok(Cable {
         anchor_m: anchor,
         youngs_modulus_pa: e,
@@ -543,6 +544,7 @@ fn validate_cable(
         t_min_n: c.t_min,
         t_max_n: c.t_max,
         pulley,
+        hidden,
     })
 }
 
@@ -678,7 +680,7 @@ fn validate_mass_per_length(
 
 /// EA = youngs_modulus × area of cable `i` must be a usable number (an overflowing E·A
 /// gives ∞).
-fn validate_axial_rigidity(ck: &Checker, i: usize, ea: f64) -> Result<(), SceneError> {
+pub(super) fn validate_axial_rigidity(ck: &Checker, i: usize, ea: f64) -> Result<(), SceneError> {
     if !(ea.is_normal() && ea > 0.0 && ea < MAX_AXIAL_RIGIDITY_N) {
         return Err(ck.inv(
             &cable_key(i, "area"),

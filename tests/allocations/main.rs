@@ -34,6 +34,19 @@ fn circle(s: &Scene) -> Circle {
     Circle::new(s, r, 4.0).unwrap()
 }
 
+/// The scene with 2.5 m of cable hidden behind every anchor (winches on the floor).
+fn hidden(mut s: Scene) -> Scene {
+    for c in &mut s.cables {
+        c.hidden = Some(cablevib::scene::HiddenCable {
+            length_m: 2.5,
+            youngs_modulus_pa: c.youngs_modulus_pa,
+            area_m2: c.area_m2,
+            mass_per_length_kg_m: c.mass_per_length_kg_m,
+        });
+    }
+    s
+}
+
 /// Pose k of the circle (one pose per 1 ms), at the scene's default orientation.
 fn circle_pose(s: &Scene, c: &Circle, k: usize) -> Pose {
     Pose {
@@ -63,6 +76,10 @@ fn ten_thousand_cycles_allocate_nothing() {
             ElementKind::Fem,
             10,
         ),
+        (hidden(Scene::default_scene()), ElementKind::Fem, 40),
+        (hidden(Scene::default_scene()), ElementKind::Continuous, 1),
+        (hidden(Scene::default_scene()), ElementKind::Massless, 1),
+        (hidden(Scene::box_6dof()), ElementKind::Fem, 10),
     ] {
         let s = scene.with_model(el, n);
         let c = circle(&s);

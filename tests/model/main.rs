@@ -10,6 +10,7 @@ mod budget_continuation;
 mod ee_budget;
 mod effects_rigid;
 mod frf;
+mod hidden_cable;
 mod inverse_query;
 mod paper_tables;
 mod proptest_model;

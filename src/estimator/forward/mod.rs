@@ -375,8 +375,31 @@ pub(super) fn fill_models(
             frame,
             scene.model.geometric_stiffness,
         )?;
+        if let Some(h) = axial_behind_exit(c, g, i) {
+            m.support_on_hidden(scene.model.element, &g.unit[i], &h)?;
+        }
     }
     Ok(())
+}
+
+/// The cable behind cable `i`'s exit point at the pose of `g`: its axial length (the
+/// hidden cable from the pulley entry to the drum, plus the arc wrapped on the pulley at
+/// this pose, 0 without a pulley), EA and mass per length; None without a hidden cable (a
+/// pulley alone leaves the cable held at its entry point: the wrap arc is then not in
+/// series). The one place every model (taut and sagged, statics and vibration) takes this
+/// length from.
+pub(in crate::estimator) fn axial_behind_exit(
+    c: &crate::scene::Cable,
+    g: &Geometry,
+    i: usize,
+) -> Option<crate::cable::HiddenAxial> {
+    let h = c.hidden?;
+    let wrap_m = g.wrap_arc_m(i);
+    Some(crate::cable::HiddenAxial {
+        length_m: h.length_m + wrap_m,
+        ea_n: h.ea_n(),
+        mu_kg_m: h.mass_per_length_kg_m,
+    })
 }
 
 /// A valid stand-in cable model (a 1 N/m massless spring) for preallocated model buffers.

@@ -47,6 +47,11 @@ impl ChainShape {
             ChainKind::Continuous { k_total, m_total } => {
                 self.fill_continuous(k_total, m_total, lambda)
             }
+            // Refused before any fill (`mode_shapes`: ShapeError::HiddenCable).
+            ChainKind::Supported { .. } => {
+                self.continuous = false;
+                self.w.clear();
+            }
         }
     }
 

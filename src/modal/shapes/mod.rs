@@ -190,6 +190,9 @@ pub enum ShapeError {
         /// σ_{m+1}/σ_max (∞ when m is the whole system).
         sigma_next: f64,
     },
+    /// Mode shapes of cables with a hidden part behind their pulley are not drawn.
+    #[error("mode shapes of cables with a hidden part (hidden_length) are not computed")]
+    HiddenCable,
     /// The singular value decomposition did not converge in its bound.
     #[error("singular value decomposition did not converge at λ = {0:e} rad²/s²")]
     Svd(f64),

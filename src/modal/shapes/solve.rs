@@ -122,6 +122,13 @@ impl ModalSolver {
                 cables: models.len(),
             });
         }
+        if models.iter().any(|m| {
+            m.chains[..m.n_chains]
+                .iter()
+                .any(|c| matches!(c.kind, ChainKind::Supported { .. }))
+        }) {
+            return Err(ShapeError::HiddenCable);
+        }
         let arms = (dim == 6).then_some(arms_m);
         let layout = Layout::new(models, arms, params.continuous_samples);
         if layout.kinds.len() != self.problem.n_chains {

@@ -176,6 +176,13 @@ impl LoadedChains {
                 ChainKind::Discrete { m, n_el, .. } if m > 0.0 => {
                     n += c.mult as usize * (n_el.max(1) - 1);
                 }
+                ChainKind::Supported { free, hidden } => {
+                    let p = crate::cable::supported_n_poles(&free, &hidden);
+                    if p >= usize::MAX / 4 {
+                        return usize::MAX;
+                    }
+                    n += c.mult as usize * p;
+                }
                 _ => {}
             }
         }
