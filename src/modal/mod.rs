@@ -69,7 +69,9 @@
 //! composes them. `eig3` and `rigid`: small kernels both solvers use. `mechanism`: a
 //! direction the static stiffness does not hold ([`free_direction`]). `sag`: the same
 //! structured solver (and its dense reference) for cables sagging on their catenaries,
-//! whose chains are not uniform ([`sag::SagModalSolver`]).
+//! whose chains are not uniform ([`sag::SagModalSolver`]). `response`: the end-effector's
+//! time response by modal superposition with the static correction
+//! ([`response::ModalResponse`]).
 
 mod dense;
 mod dynamic_stiffness;
@@ -79,6 +81,7 @@ mod engine;
 mod error;
 mod first_mode;
 mod mechanism;
+pub mod response;
 mod rigid;
 pub mod sag;
 mod shapes;

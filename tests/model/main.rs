@@ -17,3 +17,4 @@ mod realtime_vs_dense;
 mod scene_fuzz;
 mod sum_rules;
 mod tiny_t_min;
+mod vibration;

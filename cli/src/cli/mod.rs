@@ -12,6 +12,8 @@
 //! | `map` | [`map`](mod@map) | f1 over a workspace grid |
 //! | `trajectory` | [`trajectory`](mod@trajectory) | f1 along the circle or a CSV path |
 //! | `modes` | [`modes`](mod@modes) | the lowest modes with their shapes: table, CSV, SVG |
+//! | `simulate` | [`simulate`](mod@simulate) | the end-effector's vibration along a path, unshaped and shaped |
+//! | `shape` | [`simulate`](mod@simulate) | a trajectory shaped by ZV / ZVD / EI from the estimated mode |
 //! | `sweep-tmin` | [`sweep_tmin`] | f1 against T_min with the √T_min fit |
 //! | `sag-compare` | [`sag_compare`](mod@sag_compare) | chord vs sagged cables along a line: f1, k_min, tensions, λ² |
 //! | `completions`, `man` | [`completions`](mod@completions) | shell completions and the man page |
@@ -32,6 +34,7 @@ pub mod map;
 pub mod modes;
 pub mod sag_compare;
 pub mod serve;
+pub mod simulate;
 pub mod sweep_tmin;
 pub mod trajectory;
 
@@ -86,6 +89,13 @@ pub enum Command {
     Import(import::ImportArgs),
     /// The lowest modes of one pose with their shapes: table, CSV and SVG.
     Modes(modes::ModesArgs),
+    /// The end-effector's dynamic deviation along a trajectory (circle, CSV or a
+    /// point-to-point move) by modal superposition, unshaped and shaped: residual vibration
+    /// after each stop, CSV and figure.
+    Simulate(simulate::SimulateArgs),
+    /// Shape a trajectory with a time-varying ZV / ZVD / EI shaper that follows the
+    /// estimated end-effector (or first) mode at each pose.
+    Shape(simulate::ShapeArgs),
 }
 
 /// Heap allocation counter supplied by the binary's global allocator (0 when none).
@@ -108,6 +118,8 @@ pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
         Command::Man(a) => completions::man(&a),
         Command::Import(a) => import::run(&a),
         Command::Modes(a) => modes::run(&a),
+        Command::Simulate(a) => simulate::run(&a),
+        Command::Shape(a) => simulate::shape(&a),
     }
 }
 
