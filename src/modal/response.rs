@@ -17,8 +17,8 @@
 //! samples (first-order hold: the particular solution of a ramp plus the damped free
 //! response), so a step or ramp load is reproduced to rounding whatever the step. A mode
 //! must be underdamped (ζ < 1). [`ModalResponse::set_basis`] changes the modes (the pose
-//! moved): the modal state is carried by index, each new shape's sign chosen to agree with
-//! the old one's end-effector part. Nothing allocates after [`ModalResponse::new`].
+//! moved): the end-effector's dynamic displacement and velocity are carried across,
+//! projected on the new modes. Nothing allocates after [`ModalResponse::new`].
 
 use crate::scene::Damping;
 use nalgebra::{Matrix6, Vector6};
@@ -75,6 +75,8 @@ pub struct ModalResponse {
     v: Vec<f64>,
     /// F − Σ φφᵀ/λ over the modes kept.
     residual_flexibility: Matrix6<f64>,
+    /// The force at the end of the last step (N, N·m).
+    force: Vector6<f64>,
 }
 
 impl ModalResponse {
@@ -87,6 +89,7 @@ impl ModalResponse {
             q: vec![0.0; MAX_RESPONSE_MODES],
             v: vec![0.0; MAX_RESPONSE_MODES],
             residual_flexibility: Matrix6::zeros(),
+            force: Vector6::zeros(),
         }
     }
 
@@ -97,15 +100,24 @@ impl ModalResponse {
 
     /// Set the basis: `lambda[j]` (rad²/s²) and `phi_ee[j]` (the mass-normalised shape's
     /// end-effector part, first `dim` entries), the ratio of each from `damping`, and the
-    /// end-effector's static flexibility `flexibility` (D(0)⁻¹, its `dim` block). The modal
-    /// state is kept by index (a mode added starts at rest); each new shape whose
-    /// end-effector part points against the old one's is negated (with its state).
+    /// end-effector's static flexibility `flexibility` (D(0)⁻¹, its `dim` block).
+    ///
+    /// The state carried across is the end-effector's: its dynamic displacement
+    /// u_d = Σ φ_i (q_i − φ_iᵀf/λ_i) (the departure from the quasi-static answer to the
+    /// force f of the last step) and its velocity Σ φ_i q̇_i are projected on the new modes
+    /// with the end-effector's mass `ee_mass` (q_j = φ_jᵀf/λ_j + φ_jᵀ M_ee u_d, exact for
+    /// a mode whose participation is 1, close for the end-effector modes, whose
+    /// participation is near it). So a change of frequencies, an exchange of order (modes
+    /// crossing) or a rotation inside a near-degenerate cluster does not excite the modes;
+    /// what is lost is the motion of the cables' own modes that the end-effector does not
+    /// see. Allocation-free.
     pub fn set_basis(
         &mut self,
         lambda: &[f64],
         phi_ee: &[Vector6<f64>],
         damping: &Damping,
         flexibility: &Matrix6<f64>,
+        ee_mass: &Matrix6<f64>,
     ) -> Result<(), ResponseError> {
         if lambda.len() != phi_ee.len() {
             return Err(ResponseError::Size("as many shapes as eigenvalues"));
@@ -130,20 +142,30 @@ impl ModalResponse {
                 });
             }
         }
+        let f = self.force;
+        // The end-effector's dynamic displacement and velocity of the old basis.
+        let mut u_dyn = Vector6::zeros();
+        let mut v_ee = Vector6::zeros();
+        for i in 0..self.n {
+            let m = &self.modes[i];
+            u_dyn += m.phi * (self.q[i] - m.phi.dot(&f) / m.lambda);
+            v_ee += m.phi * self.v[i];
+        }
+        let mu = ee_mass * u_dyn;
+        let mv = ee_mass * v_ee;
         let mut rf = *flexibility;
-        for (j, (&l, phi)) in lambda.iter().zip(phi_ee).enumerate() {
-            let mut phi = *phi;
+        for j in 0..lambda.len() {
+            let mut phi = phi_ee[j];
             for r in self.dim..6 {
                 phi[r] = 0.0;
             }
-            if j < self.n {
-                if phi.dot(&self.modes[j].phi) < 0.0 {
-                    phi = -phi;
-                }
-            } else {
-                self.q[j] = 0.0;
-                self.v[j] = 0.0;
+            if j < self.n && phi.dot(&self.modes[j].phi) < 0.0 {
+                phi = -phi; // the sign of the same index kept, for continuity of output
             }
+            let (dynamic, vel) = (phi.dot(&mu), phi.dot(&mv));
+            let l = lambda[j];
+            self.q[j] = phi.dot(&f) / l + dynamic;
+            self.v[j] = vel;
             let omega = l.sqrt();
             self.modes[j] = ModeCoef {
                 lambda: l,
@@ -170,6 +192,7 @@ impl ModalResponse {
     /// Advance by `h_s` (s, > 0) under a force going linearly from `f0` to `f1` (N, and
     /// N·m for a rigid body's moment). Exact for that force.
     pub fn step(&mut self, f0: &Vector6<f64>, f1: &Vector6<f64>, h_s: f64) {
+        self.force = *f1;
         for j in 0..self.n {
             let m = &mut self.modes[j];
             if m.h != h_s {
@@ -209,8 +232,9 @@ impl ModalResponse {
         u
     }
 
-    /// Back to rest.
+    /// Back to rest (no force).
     pub fn reset(&mut self) {
+        self.force = Vector6::zeros();
         for j in 0..self.n {
             self.q[j] = 0.0;
             self.v[j] = 0.0;
@@ -234,6 +258,7 @@ mod tests {
             &[phi],
             &Damping::ModalRatio { zeta },
             &flex,
+            &Matrix6::identity(),
         )
         .unwrap();
         r
@@ -295,11 +320,12 @@ mod tests {
                     beta_s: 0.0,
                 },
                 &flex,
+                &flex,
             )
             .unwrap_err();
         assert!(matches!(err, ResponseError::NotUnderdamped { .. }), "{err}");
         assert!(r
-            .set_basis(&[f64::NAN], &phi, &Damping::None, &flex)
+            .set_basis(&[f64::NAN], &phi, &Damping::None, &flex, &flex)
             .is_err());
     }
 }

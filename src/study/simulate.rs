@@ -18,7 +18,8 @@
 //! in the quasi-static pose), and the winches' dynamics.
 //!
 //! **Along the path.** Every `update_every` samples the estimator solves the pose and the
-//! basis is replaced (the modal state carried across, [`ModalResponse::set_basis`]);
+//! basis is replaced (the end-effector's dynamic state carried across,
+//! [`ModalResponse::set_basis`]);
 //! between updates the last basis holds.
 //!
 //! **Residual vibration.** After each stop (the commanded path at rest from one sample to
@@ -316,8 +317,14 @@ pub fn simulate(
             let basis = est
                 .ee_modal_basis(cfg.modes)
                 .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))?;
-            resp.set_basis(&basis.lambda, &basis.phi_ee, &damping, &basis.flexibility)
-                .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))?;
+            resp.set_basis(
+                &basis.lambda,
+                &basis.phi_ee,
+                &damping,
+                &basis.flexibility,
+                &basis.ee_mass,
+            )
+            .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))?;
             ee_mass = basis.ee_mass;
             out.structured = basis.structured;
             out.modes = basis.lambda.len();

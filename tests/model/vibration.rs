@@ -133,7 +133,7 @@ fn modal_superposition_matches_dense_newmark_at_a_frozen_pose() {
         let b = est.ee_modal_basis(kk).unwrap();
         assert!(b.structured);
         let mut r = ModalResponse::new(3);
-        r.set_basis(&b.lambda, &b.phi_ee, &damping, &b.flexibility)
+        r.set_basis(&b.lambda, &b.phi_ee, &damping, &b.flexibility, &b.ee_mass)
             .unwrap();
         let mut x = vec![0.0];
         for s in 1..f.len() {
