@@ -40,10 +40,11 @@ pub const DEFAULT_MIN_FREQUENCY_HZ: f64 = 0.5;
 /// design frequency follows the one given, s. The estimate's frequency may jump (the
 /// end-effector mode passing an avoided crossing moves its character to the neighbouring
 /// mode); the impulse times follow it smoothly (the delays' rate continuous), since a
-/// jump of a delay is a jump of the path, and a jump of its rate a jump of the velocity
-/// (|v|·Δτ': ~6 mm/s at 2 m/s, enough to excite a 30 Hz mode by tens of µm). A ramp is
-/// followed with a lag of twice this (40 ms; the paper robot's end-effector mode drifts
-/// ~10 %/s on a 0.5 m move in 0.5 s, so the design lags by < 0.5 %).
+/// jump of a delay is a jump of the path, a jump of its rate a jump of the velocity, and
+/// a change of the rate over a time near the mode's period (20 ms on the paper robot's
+/// 31 Hz mode) an acceleration bump that excites it by tens of µm. A ramp is followed
+/// with a lag of twice this (0.2 s; the paper robot's end-effector mode drifts ~10 %/s on
+/// a 0.5 m move in 0.5 s, so the design lags by ~2 %, which ZVD and EI hardly feel).
 pub const DESIGN_FILTER_S: f64 = 0.1;
 /// Most samples an [`OnlineShaper`]'s ring buffer may hold (the ratio of the sample rate to
 /// the lowest design frequency, plus 2).

@@ -131,6 +131,12 @@ impl PathArgs {
             return Ok((p, format!("{} ({})", csv.display(), samples.t_s.len())));
         }
         if let Some(d) = self.displacement {
+            if !(self.duration.is_finite() && self.duration > 0.0) {
+                return Err(CliError::Usage(format!(
+                    "--duration {}: a move takes a finite time > 0 s",
+                    self.duration
+                )));
+            }
             let profile = match self.profile {
                 ProfileArg::SCurve => Profile::SCurve,
                 ProfileArg::Trapezoid => Profile::Trapezoid,
