@@ -64,6 +64,7 @@ pub use error::{BuildError, EstimatorError, InputError, ReferenceError, TminQuer
 pub use estimate::{Estimate, Status};
 pub use forward::EndEffector;
 pub use inverse::{TminAnswer, MAX_EVALUATIONS as TMIN_QUERY_MAX_EVALUATIONS};
+pub use modes::{BasisError, EeModalBasis};
 pub use params::{EstimatorParams, ParamsError, SagModelParams};
 pub use pose_model::{build_models, PoseModel};
 pub use reference::{

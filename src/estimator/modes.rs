@@ -4,8 +4,8 @@
 //! keeps its loaded problem; only its evaluation counter moves).
 
 use super::{Estimator, EstimatorError, Status};
-use crate::modal::{self, DenseModes, Mode};
-use nalgebra::DMatrix;
+use crate::modal::{self, DenseModes, Mode, ShapeParams};
+use nalgebra::{DMatrix, Matrix6, Vector6};
 
 impl Estimator {
     /// The first `k` natural frequencies (ascending) of the pose of the last successful
@@ -46,4 +46,135 @@ impl Estimator {
         }
         Ok(self.cycle.dense_matrices(&self.scene)?)
     }
+}
+
+/// Why [`Estimator::ee_modal_basis`] has no basis.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum BasisError {
+    /// The last cycle was not ok, or the eigen solve failed.
+    #[error(transparent)]
+    Estimator(#[from] EstimatorError),
+    /// The mode shapes could not be recovered.
+    #[error(transparent)]
+    Shapes(#[from] modal::ShapeError),
+}
+
+/// The end-effector's view of the first modes of one pose: what a time response needs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EeModalBasis {
+    /// 3 (point mass) or 6 (rigid body).
+    pub dim: usize,
+    /// λ = ω² of each mode, ascending, rad²/s².
+    pub lambda: Vec<f64>,
+    /// The end-effector part of each mass-normalised shape (translation 1/√kg, then
+    /// rotation rad/(m·√kg); zeros beyond `dim`).
+    pub phi_ee: Vec<Vector6<f64>>,
+    /// The end-effector's static flexibility D(0)⁻¹ (its `dim` block; m/N, rad/(N·m)).
+    pub flexibility: Matrix6<f64>,
+    /// The end-effector's own mass matrix (kg, kg·m²).
+    pub ee_mass: Matrix6<f64>,
+    /// Whether the shapes came from the structured engine (taut cables) or the dense
+    /// model (sagging cables).
+    pub structured: bool,
+}
+
+impl Estimator {
+    /// The first `k` modes (a cluster cut by `k` completed) of the pose of the last
+    /// successful [`Estimator::update`], end-effector parts of their mass-normalised shapes,
+    /// and the static flexibility. Taut cables: the structured engine's eigenvalues
+    /// ([`crate::modal::ModalSolver::modes`]) and shapes
+    /// ([`crate::modal::ModalSolver::mode_shapes`]); sagging cables: the dense model of the
+    /// sagged chains (the structured engine gives no shapes for them). Offline: allocates.
+    pub fn ee_modal_basis(&mut self, k: usize) -> Result<EeModalBasis, BasisError> {
+        if self.estimate.status != Status::Ok {
+            return Err(BasisError::Estimator(
+                self.estimate
+                    .error
+                    .unwrap_or(EstimatorError::Modal(modal::ModalError::NotLoaded)),
+            ));
+        }
+        let (ee_mass, dim) = self.cycle.ee_mass();
+        let s = self.estimate.stiffness6;
+        let block = s.view((0, 0), (dim, dim)).into_owned();
+        let mut flexibility = Matrix6::repeat(f64::NAN);
+        if let Some(inv) = block.try_inverse() {
+            flexibility = Matrix6::zeros();
+            flexibility.view_mut((0, 0), (dim, dim)).copy_from(&inv);
+        }
+        let k = k.max(1);
+        if let Some((solver, models, geometry)) = self.cycle.taut_shapes_input() {
+            let mut modes = vec![Mode::default(); k + modal::MAX_MULTIPLICITY as usize];
+            let n = solver
+                .modes(modes.len(), &mut modes)
+                .map_err(|e| BasisError::Estimator(e.into()))?;
+            let mut clusters = Vec::new();
+            let mut covered = 0usize;
+            for (i, m) in modes[..n].iter().enumerate() {
+                if covered >= k {
+                    break;
+                }
+                if m.cluster_start == i {
+                    clusters.push((m.lambda, m.multiplicity));
+                    covered += m.multiplicity as usize;
+                }
+            }
+            let shapes = solver
+                .mode_shapes(models, &geometry.arm_m, &clusters, &ShapeParams::default())
+                .map_err(BasisError::Shapes)?;
+            return Ok(EeModalBasis {
+                dim,
+                lambda: shapes.modes.iter().map(|m| m.lambda).collect(),
+                phi_ee: shapes.modes.iter().map(|m| m.ee).collect(),
+                flexibility,
+                ee_mass,
+                structured: true,
+            });
+        }
+        let (kk, mm) = self.dense_matrices()?;
+        let (lambda, phi_ee) = dense_ee_shapes(&kk, &mm, dim, k)?;
+        Ok(EeModalBasis {
+            dim,
+            lambda,
+            phi_ee,
+            flexibility,
+            ee_mass,
+            structured: false,
+        })
+    }
+}
+
+/// The lowest `k` eigenpairs of K u = λ M u (dense), the first `dim` entries of each
+/// mass-normalised u.
+fn dense_ee_shapes(
+    k: &DMatrix<f64>,
+    m: &DMatrix<f64>,
+    dim: usize,
+    count: usize,
+) -> Result<(Vec<f64>, Vec<Vector6<f64>>), EstimatorError> {
+    let not_definite = EstimatorError::Modal(modal::ModalError::MassNotDefinite);
+    let chol = m.clone().cholesky().ok_or(not_definite)?;
+    let l = chol.l();
+    let linv_k = l.solve_lower_triangular(k).ok_or(not_definite)?;
+    let c = l
+        .solve_lower_triangular(&linv_k.transpose())
+        .ok_or(not_definite)?;
+    let c = (&c + c.transpose()) * 0.5;
+    let eig = nalgebra::SymmetricEigen::new(c);
+    let mut idx: Vec<usize> = (0..eig.eigenvalues.len()).collect();
+    idx.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let u = l
+        .transpose()
+        .solve_upper_triangular(&eig.eigenvectors)
+        .ok_or(not_definite)?;
+    let mut lambda = Vec::new();
+    let mut phi = Vec::new();
+    for &i in idx.iter().take(count) {
+        lambda.push(eig.eigenvalues[i]);
+        let mut p = Vector6::zeros();
+        for r in 0..dim {
+            p[r] = u[(r, i)];
+        }
+        phi.push(p);
+    }
+    Ok((lambda, phi))
 }

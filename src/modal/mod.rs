@@ -71,7 +71,8 @@
 //! direction the static stiffness does not hold ([`free_direction`]). `sagged`: the sagged
 //! problem (chains on their catenaries, not uniform: poles seen only through the count) as
 //! a [`Condensed`](engine) view for the same first root, tracker and spectrum search, and its
-//! dense reference ([`sagged::SagModalSolver`]).
+//! dense reference ([`sagged::SagModalSolver`]). `response`: the end-effector's time response by
+//! modal superposition with the static correction ([`response::ModalResponse`]).
 
 mod dense;
 mod dynamic_stiffness;
@@ -82,6 +83,7 @@ mod error;
 mod first_mode;
 mod frf;
 mod mechanism;
+pub mod response;
 mod rigid;
 pub mod sagged;
 mod shapes;

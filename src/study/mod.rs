@@ -3,7 +3,8 @@
 //! frequency maps over a workspace grid
 //! ([`map`]), frequencies along a trajectory ([`trajectory`]) and against the minimum tension
 //! ([`tmin`]), the chord and the sagged cable model side by side along a line
-//! ([`sag_compare`]), and what accuracy costs in time ([`accuracy`], with the dense mode-3
+//! ([`sag_compare`]), the end-effector's vibration along a path and input shaping from
+//! the estimated modes ([`simulate`]), and what accuracy costs in time ([`accuracy`], with the dense mode-3
 //! convergence study of the paper's Figs. 5 and 10).
 //!
 //! Every study drives [`Estimator::update`] (the per-cycle path, exact to ~1e-12 against
@@ -22,6 +23,7 @@ pub mod map;
 pub mod points;
 pub mod progress;
 pub mod sag_compare;
+pub mod simulate;
 pub mod tmin;
 pub mod trajectory;
 

@@ -8,9 +8,13 @@
 //!
 //! Trajectory CSV files (`t,x,y,z` or `t,x,y,z,qw,qx,qy,qz`: time, position and optionally
 //! the orientation as a unit quaternion) are read by [`Samples`]; the rules are in
-//! [`samples`]'s docs.
+//! [`samples`]'s docs. Point-to-point moves with a stop (trapezoidal and S-curve velocity)
+//! are [`moves`]; input shaping of a path (ZV, ZVD, EI, time-varying, online) is
+//! [`shaping`].
 
+pub mod moves;
 pub mod samples;
+pub mod shaping;
 
 pub use samples::Samples;
 

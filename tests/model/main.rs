@@ -20,3 +20,4 @@ mod realtime_vs_dense;
 mod scene_fuzz;
 mod sum_rules;
 mod tiny_t_min;
+mod vibration;

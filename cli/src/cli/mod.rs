@@ -14,6 +14,8 @@
 //! | `trajectory` | [`trajectory`](mod@trajectory) | f1 along the circle or a CSV path |
 //! | `modes` | [`modes`](mod@modes) | the lowest modes with their shapes: table, CSV, SVG |
 //! | `frf` | [`frf`](mod@frf) | the end-effector receptance over a band: CSV, Bode figure, JSON |
+//! | `simulate` | [`simulate`](mod@simulate) | the end-effector's vibration along a path, unshaped and shaped |
+//! | `shape` | [`simulate`](mod@simulate) | a trajectory shaped by ZV / ZVD / EI from the estimated mode |
 //! | `sweep-tmin` | [`sweep_tmin`] | f1 against T_min with the √T_min fit |
 //! | `sag-compare` | [`sag_compare`](mod@sag_compare) | chord vs sagged cables along a line: f1, k_min, tensions, λ² |
 //! | `completions`, `man` | [`completions`](mod@completions) | shell completions and the man page |
@@ -36,6 +38,7 @@ pub mod modes;
 pub mod monitor;
 pub mod sag_compare;
 pub mod serve;
+pub mod simulate;
 pub mod sweep_tmin;
 pub mod trajectory;
 
@@ -97,6 +100,13 @@ pub enum Command {
     /// The end-effector receptance H(ω) over a frequency band (the scene's damping): table,
     /// CSV, Bode figure, JSON.
     Frf(frf::FrfArgs),
+    /// The end-effector's dynamic deviation along a trajectory (circle, CSV or a
+    /// point-to-point move) by modal superposition, unshaped and shaped: residual vibration
+    /// after each stop, CSV and figure.
+    Simulate(simulate::SimulateArgs),
+    /// Shape a trajectory with a time-varying ZV / ZVD / EI shaper that follows the
+    /// estimated end-effector (or first) mode at each pose.
+    Shape(simulate::ShapeArgs),
 }
 
 /// Heap allocation counter supplied by the binary's global allocator (0 when none).
@@ -122,6 +132,8 @@ pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
         Command::Import(a) => import::run(&a),
         Command::Modes(a) => modes::run(&a),
         Command::Frf(a) => frf::run(&a),
+        Command::Simulate(a) => simulate::run(&a),
+        Command::Shape(a) => simulate::shape(&a),
     }
 }
 

@@ -287,6 +287,17 @@ impl Forward {
         }
     }
 
+    /// The taut structured solver (mutable), its cable models and the geometry of the
+    /// loaded pose (None when the cables sag): the mode shapes' inputs.
+    pub(super) fn taut_shapes_input(
+        &mut self,
+    ) -> Option<(&mut ModalSolver, &[CableModel], &Geometry)> {
+        match &mut self.model {
+            Model::Taut(t) => Some((&mut t.modal, &t.models, &self.geometry)),
+            Model::Sagged(_) => None,
+        }
+    }
+
     /// The taut structured solver (None when the cables sag).
     pub(super) fn taut_modal(&self) -> Option<&ModalSolver> {
         match &self.model {

@@ -1,0 +1,470 @@
+//! The end-effector's dynamic deviation from its quasi-static pose along a trajectory
+//! (`cablevib simulate`), and input shaping of a path from the estimated modes
+//! (`cablevib shape`).
+//!
+//! **Model.** The robot follows the commanded path quasi-statically (each sample's pose is
+//! the equilibrium the estimator solves); what vibrates is the deviation u from it. About
+//! each pose the structure is linear (the estimator's model: stiffness, mass, tensions of
+//! that pose), so M ü + C u̇ + K u = f with the inertial load of the quasi-static motion on
+//! the end-effector, f = −M_ee [a; 0] (the end-effector's mass times the path's
+//! acceleration a, by central differences of the samples). Included: that load on every
+//! mode, through the first K modes of the pose (the structured engine's frequencies and
+//! mass-normalised shapes; for sagging cables the dense model's), the damping of the
+//! scene (each mode's ratio [`Damping::modal_ratio`]), the static correction of the modes
+//! left out (mode-acceleration method, [`ModalResponse`]). Left out: the cables' own
+//! share of the quasi-static motion's inertia (their nodes following the end-effector:
+//! about a third of each cable's mass), the rotational load −I·α − ω×Iω (the paths here
+//! keep the orientation fixed: it is zero for them), gravity's change with the pose (it is
+//! in the quasi-static pose), and the winches' dynamics.
+//!
+//! **Along the path.** Every `update_every` samples the estimator solves the pose and the
+//! basis is replaced (the end-effector's dynamic state carried across,
+//! [`ModalResponse::set_basis`]);
+//! between updates the last basis holds.
+//!
+//! **Residual vibration.** After each stop (the commanded path at rest from one sample to
+//! the next, after motion), peak-to-peak per axis and RMS of |u| until the path moves
+//! again or ends.
+
+use super::StudyError;
+use crate::estimator::{Estimator, EstimatorParams, Status, Tmin};
+use crate::kinematics::Pose;
+use crate::modal::response::{ModalResponse, MAX_RESPONSE_MODES};
+use crate::scene::{Damping, Scene};
+use crate::trajectory::shaping::{OnlineShaper, ShaperKind, DEFAULT_MIN_FREQUENCY_HZ};
+use crate::trajectory::{Samples, Trajectory};
+use nalgebra::{Vector3, Vector6};
+
+/// Default largest path acceleration accepted, m/s² (20 g: a path sampled from a jump
+/// exceeds it).
+pub const DEFAULT_MAX_ACCELERATION_M_S2: f64 = 200.0;
+/// Most samples a simulated path may have.
+pub const MAX_SAMPLES: usize = 10_000_000;
+/// A sample is at rest when it moved less than this from the previous one, m.
+const REST_EPS_M: f64 = 1e-12;
+
+/// A path sampled every `dt_s`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampledPath {
+    /// Sample period, s.
+    pub dt_s: f64,
+    /// Positions, m.
+    pub positions_m: Vec<Vector3<f64>>,
+    /// Whether the path is at rest before its first sample and after its last (a move, a
+    /// file); false for a path already moving at both ends (the circle: its acceleration
+    /// at the ends is its neighbours').
+    pub at_rest_ends: bool,
+}
+
+impl SampledPath {
+    /// Samples of a file, resampled every `dt_s` from its first to its last time
+    /// (linear interpolation).
+    pub fn from_samples(s: &Samples, dt_s: f64) -> Result<SampledPath, StudyError> {
+        check_dt(dt_s)?;
+        let t0 = s.t_s[0];
+        let dur = s.duration_s();
+        let n = (dur / dt_s).round();
+        if !(n < MAX_SAMPLES as f64) {
+            return Err(StudyError::Usage(format!(
+                "the path would have {n} samples at {dt_s} s (at most {MAX_SAMPLES})"
+            )));
+        }
+        let positions_m = (0..=n as usize)
+            .map(|k| {
+                let t = (t0 + k as f64 * dt_s).min(t0 + dur);
+                s.position_at(t - t0)
+                    .unwrap_or(s.position_m[s.position_m.len() - 1])
+            })
+            .collect();
+        Ok(SampledPath {
+            dt_s,
+            positions_m,
+            at_rest_ends: true,
+        })
+    }
+
+    /// The paper's circle of `trajectory` for `duration_s`, every `dt_s`.
+    pub fn from_trajectory(
+        trajectory: &Trajectory,
+        duration_s: f64,
+        dt_s: f64,
+        at_rest_ends: bool,
+    ) -> Result<SampledPath, StudyError> {
+        check_dt(dt_s)?;
+        if !(duration_s.is_finite() && duration_s > 0.0) {
+            return Err(StudyError::Usage(format!(
+                "duration {duration_s} s must be finite and > 0"
+            )));
+        }
+        let n = (duration_s / dt_s).round();
+        if !(n < MAX_SAMPLES as f64) {
+            return Err(StudyError::Usage(format!(
+                "the path would have {n} samples (at most {MAX_SAMPLES})"
+            )));
+        }
+        let last = trajectory.position_at(0.0).unwrap_or_default();
+        let positions_m = (0..=n as usize)
+            .map(|k| trajectory.position_at(k as f64 * dt_s).unwrap_or(last))
+            .collect();
+        Ok(SampledPath {
+            dt_s,
+            positions_m,
+            at_rest_ends,
+        })
+    }
+
+    /// The acceleration of sample k (central second difference; at rest beyond the ends
+    /// when `at_rest_ends`, else the neighbour's value).
+    fn acceleration(&self, k: usize) -> Vector3<f64> {
+        let n = self.positions_m.len();
+        let p = &self.positions_m;
+        let h2 = self.dt_s * self.dt_s;
+        if n < 3 && !self.at_rest_ends {
+            return Vector3::zeros();
+        }
+        if self.at_rest_ends {
+            let prev = if k == 0 { p[0] } else { p[k - 1] };
+            let next = if k + 1 >= n { p[n - 1] } else { p[k + 1] };
+            (next - 2.0 * p[k] + prev) / h2
+        } else {
+            let k = k.clamp(1, n - 2);
+            (p[k + 1] - 2.0 * p[k] + p[k - 1]) / h2
+        }
+    }
+
+    /// Refuses non-finite positions and accelerations above `max_m_s2` (a jump).
+    pub fn check(&self, max_m_s2: f64) -> Result<(), StudyError> {
+        if self.positions_m.is_empty() {
+            return Err(StudyError::Usage("the path has no samples".into()));
+        }
+        for (k, p) in self.positions_m.iter().enumerate() {
+            if !p.iter().all(|v| v.is_finite()) {
+                return Err(StudyError::Usage(format!(
+                    "sample {k} (t = {:.6} s) is not finite",
+                    k as f64 * self.dt_s
+                )));
+            }
+        }
+        for k in 0..self.positions_m.len() {
+            let a = self.acceleration(k).norm();
+            if a > max_m_s2 {
+                return Err(StudyError::Usage(format!(
+                    "the path jumps at t = {:.6} s: acceleration {:.4e} m/s² over {} m/s² (--max-acceleration)",
+                    k as f64 * self.dt_s,
+                    a,
+                    max_m_s2
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn check_dt(dt_s: f64) -> Result<(), StudyError> {
+    if !(dt_s.is_finite() && dt_s > 0.0 && dt_s <= 0.1) {
+        return Err(StudyError::Usage(format!(
+            "sample period {dt_s} s must be in (0, 0.1]"
+        )));
+    }
+    Ok(())
+}
+
+/// Configuration of [`simulate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SimulateConfig {
+    /// Modes K in the superposition (1 ..= [`MAX_RESPONSE_MODES`]; a cluster cut by K is
+    /// completed).
+    pub modes: usize,
+    /// Samples between two updates of the modal basis (≥ 1).
+    pub update_every: usize,
+    /// Time simulated at rest after a path that ends at rest, s (≥ 0).
+    pub settle_s: f64,
+    /// Largest path acceleration accepted, m/s².
+    pub max_acceleration_m_s2: f64,
+}
+
+impl Default for SimulateConfig {
+    fn default() -> Self {
+        SimulateConfig {
+            modes: 12,
+            update_every: 10,
+            settle_s: 2.0,
+            max_acceleration_m_s2: DEFAULT_MAX_ACCELERATION_M_S2,
+        }
+    }
+}
+
+/// Residual vibration after one stop.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StopResidual {
+    /// When the path came to rest, s.
+    pub t_start_s: f64,
+    /// When it moved again or the simulation ended, s.
+    pub t_end_s: f64,
+    /// Peak-to-peak deviation per axis, m.
+    pub peak_to_peak_m: Vector3<f64>,
+    /// RMS of |u| over the window, m.
+    pub rms_m: f64,
+}
+
+impl StopResidual {
+    /// The largest per-axis peak-to-peak, m.
+    pub fn peak_to_peak_max_m(&self) -> f64 {
+        self.peak_to_peak_m.max()
+    }
+}
+
+/// What [`simulate`] computed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimulateResult {
+    /// Times, s.
+    pub t_s: Vec<f64>,
+    /// Commanded positions, m.
+    pub command_m: Vec<Vector3<f64>>,
+    /// Deviation of the end-effector from its quasi-static pose (translation), m.
+    pub deviation_m: Vec<Vector3<f64>>,
+    /// Residual vibration after each stop.
+    pub stops: Vec<StopResidual>,
+    /// Updates of the modal basis.
+    pub updates: usize,
+    /// Modes in the last basis (K, clusters completed).
+    pub modes: usize,
+    /// Lowest and highest first frequency met along the path, Hz.
+    pub f1_range_hz: (f64, f64),
+    /// Whether the shapes came from the structured engine (taut cables).
+    pub structured: bool,
+}
+
+/// The estimator a simulation or shaping drives (the scene's participation threshold).
+fn estimator(scene: &Scene) -> Result<Estimator, StudyError> {
+    let mut p = EstimatorParams::default();
+    p.modal.ee_participation_min = scene.model.ee_participation_min;
+    Estimator::with_params(scene, p).map_err(|e| StudyError::Build(e.to_string()))
+}
+
+fn solve_pose(
+    est: &mut Estimator,
+    scene: &Scene,
+    p: &Vector3<f64>,
+    t: f64,
+) -> Result<(), StudyError> {
+    let e = est.update(&Pose::in_scene(scene, *p), Tmin::Scene);
+    if e.status != Status::Ok {
+        let why = e.error.map(|e| e.to_string()).unwrap_or_default();
+        return Err(StudyError::Build(format!(
+            "t = {t:.4} s, position ({:.4}, {:.4}, {:.4}) m: {} {why}",
+            p.x,
+            p.y,
+            p.z,
+            e.status.as_str()
+        )));
+    }
+    Ok(())
+}
+
+/// The dynamic deviation along `path` (module docs).
+pub fn simulate(
+    scene: &Scene,
+    path: &SampledPath,
+    cfg: &SimulateConfig,
+) -> Result<SimulateResult, StudyError> {
+    if !(1..=MAX_RESPONSE_MODES).contains(&cfg.modes) {
+        return Err(StudyError::Usage(format!(
+            "--modes {}: must be in 1..={MAX_RESPONSE_MODES}",
+            cfg.modes
+        )));
+    }
+    if cfg.update_every == 0 {
+        return Err(StudyError::Usage("--update-every must be ≥ 1".into()));
+    }
+    if !(cfg.settle_s.is_finite() && cfg.settle_s >= 0.0 && cfg.settle_s <= 3600.0) {
+        return Err(StudyError::Usage(format!(
+            "--settle {} s must be in [0, 3600]",
+            cfg.settle_s
+        )));
+    }
+    path.check(cfg.max_acceleration_m_s2)?;
+    let mut path = path.clone();
+    if path.at_rest_ends {
+        let last = path.positions_m[path.positions_m.len() - 1];
+        let extra = (cfg.settle_s / path.dt_s).round() as usize;
+        path.positions_m.extend(std::iter::repeat_n(last, extra));
+    }
+    let n = path.positions_m.len();
+    let mut est = estimator(scene)?;
+    let damping = scene.damping;
+    let dim = if scene.rigid { 6 } else { 3 };
+    let mut resp = ModalResponse::new(dim);
+    let mut out = SimulateResult {
+        t_s: Vec::with_capacity(n),
+        command_m: Vec::with_capacity(n),
+        deviation_m: Vec::with_capacity(n),
+        stops: Vec::new(),
+        updates: 0,
+        modes: 0,
+        f1_range_hz: (f64::INFINITY, f64::NEG_INFINITY),
+        structured: true,
+    };
+    let mut ee_mass = nalgebra::Matrix6::zeros();
+    let mut f_prev = Vector6::zeros();
+    for k in 0..n {
+        let t = k as f64 * path.dt_s;
+        let p = path.positions_m[k];
+        if k % cfg.update_every == 0 {
+            solve_pose(&mut est, scene, &p, t)?;
+            let f1 = est.estimate().f1_hz;
+            out.f1_range_hz = (out.f1_range_hz.0.min(f1), out.f1_range_hz.1.max(f1));
+            let basis = est
+                .ee_modal_basis(cfg.modes)
+                .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))?;
+            resp.set_basis(
+                &basis.lambda,
+                &basis.phi_ee,
+                &damping,
+                &basis.flexibility,
+                &basis.ee_mass,
+            )
+            .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))?;
+            ee_mass = basis.ee_mass;
+            out.structured = basis.structured;
+            out.modes = basis.lambda.len();
+            out.updates += 1;
+        }
+        let a = path.acceleration(k);
+        let mut a6 = Vector6::zeros();
+        a6.fixed_rows_mut::<3>(0).copy_from(&a);
+        let f = -(ee_mass * a6);
+        if k == 0 {
+            f_prev = f;
+        } else {
+            resp.step(&f_prev, &f, path.dt_s);
+            f_prev = f;
+        }
+        let u = resp.displacement(&f);
+        out.t_s.push(t);
+        out.command_m.push(p);
+        out.deviation_m.push(u.fixed_rows::<3>(0).into_owned());
+    }
+    out.stops = stop_residuals(&out.t_s, &out.command_m, &out.deviation_m);
+    Ok(out)
+}
+
+/// Residual vibration after each stop of `command` (module docs).
+pub fn stop_residuals(
+    t_s: &[f64],
+    command_m: &[Vector3<f64>],
+    deviation_m: &[Vector3<f64>],
+) -> Vec<StopResidual> {
+    let n = command_m.len();
+    let moving = |k: usize| k > 0 && (command_m[k] - command_m[k - 1]).norm() > REST_EPS_M;
+    let mut stops = Vec::new();
+    let mut k = 1;
+    while k < n {
+        if !moving(k) && moving(k - 1) {
+            let start = k;
+            let mut end = k;
+            while end + 1 < n && !moving(end + 1) {
+                end += 1;
+            }
+            let mut lo = Vector3::repeat(f64::INFINITY);
+            let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+            let mut sq = 0.0;
+            for u in &deviation_m[start..=end] {
+                lo = lo.inf(u);
+                hi = hi.sup(u);
+                sq += u.norm_squared();
+            }
+            stops.push(StopResidual {
+                t_start_s: t_s[start],
+                t_end_s: t_s[end],
+                peak_to_peak_m: hi - lo,
+                rms_m: (sq / (end - start + 1) as f64).sqrt(),
+            });
+            k = end + 1;
+        } else {
+            k += 1;
+        }
+    }
+    stops
+}
+
+/// Which mode a shaper follows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShapeMode {
+    /// The end-effector mode (the lowest with the scene's participation), the estimator's
+    /// `ee_mode_hz`.
+    EndEffector,
+    /// The first mode, `f1_hz`.
+    First,
+}
+
+/// What [`shape`] produced.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShapeResult {
+    /// The shaped path (same sample period; longer by the last impulse time at the end).
+    pub path: SampledPath,
+    /// The design frequency at each output sample, Hz.
+    pub design_hz: Vec<f64>,
+    /// Time added to the move, s.
+    pub added_s: f64,
+}
+
+/// Shape `path` with a time-varying shaper of `kind` following `mode` at the pose of each
+/// output sample (the estimator at the previous output pose, as online), damping ratio
+/// from the scene at that frequency. The path is continued at its last sample until the
+/// output has settled there.
+pub fn shape(
+    scene: &Scene,
+    path: &SampledPath,
+    kind: ShaperKind,
+    mode: ShapeMode,
+) -> Result<ShapeResult, StudyError> {
+    path.check(f64::INFINITY)?;
+    let mut est = estimator(scene)?;
+    let mut shaper = OnlineShaper::new(kind, path.dt_s, DEFAULT_MIN_FREQUENCY_HZ)
+        .map_err(|e| StudyError::Usage(e.to_string()))?;
+    let damping: Damping = scene.damping;
+    let last = path.positions_m[path.positions_m.len() - 1];
+    let mut out = Vec::with_capacity(path.positions_m.len());
+    let mut design = Vec::with_capacity(path.positions_m.len());
+    let mut y = path.positions_m[0];
+    let tol = 1e-9;
+    let mut k = 0usize;
+    let max = path.positions_m.len() + (1.0 / (DEFAULT_MIN_FREQUENCY_HZ * path.dt_s)) as usize * 2;
+    loop {
+        let t = k as f64 * path.dt_s;
+        solve_pose(&mut est, scene, &y, t)?;
+        let e = est.estimate();
+        let f = match mode {
+            ShapeMode::EndEffector => e.ee_mode_hz,
+            ShapeMode::First => e.f1_hz,
+        };
+        let zeta = damping.modal_ratio(2.0 * std::f64::consts::PI * f);
+        let x = path.positions_m.get(k).copied().unwrap_or(last);
+        y = shaper.push(x, f, zeta);
+        out.push(y);
+        design.push(shaper.design().map(|d| d.0).unwrap_or(f64::NAN));
+        k += 1;
+        if k >= path.positions_m.len() && (y - last).norm() <= tol {
+            // settled: the output holds the last sample exactly from here on
+            out.push(last);
+            design.push(*design.last().unwrap_or(&f64::NAN));
+            break;
+        }
+        if k > max {
+            return Err(StudyError::Build(
+                "the shaped path did not settle at the path's end (no valid mode estimate?)".into(),
+            ));
+        }
+    }
+    let added_s = (out.len() as f64 - path.positions_m.len() as f64) * path.dt_s;
+    Ok(ShapeResult {
+        path: SampledPath {
+            dt_s: path.dt_s,
+            positions_m: out,
+            at_rest_ends: path.at_rest_ends,
+        },
+        design_hz: design,
+        added_s: added_s.max(0.0),
+    })
+}
