@@ -35,19 +35,18 @@ mod chain;
 mod element;
 pub mod sagged;
 mod scalar;
-mod supported;
 
 pub use crate::kinematics::up_frame;
 pub use batch::{eval_continuous_batch, eval_discrete_batch, BATCH_MAX_ELEMENTS};
+pub use chain::supported::{
+    eval_supported, supported_end_mass, supported_n_poles, supported_pole, supported_static,
+    Segment,
+};
 pub use chain::{
     chain_recurrence, end_mass_q, eval_discrete_recurrence, Chain, ChainEval, ChainKind,
 };
 pub use element::{catenary_block, catenary_flexibility, catenary_modes, fem_block};
 pub use scalar::ChainScalar;
-pub use supported::{
-    eval_supported, supported_end_mass, supported_n_poles, supported_pole, supported_static,
-    Segment,
-};
 
 /// Errors of the element models.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]

@@ -22,7 +22,6 @@ mod bounds;
 mod damping;
 use crate::input_file::{InputError, MAX_SCENE_BYTES};
 
-mod hidden;
 mod load;
 mod parse;
 mod validate;

@@ -3,12 +3,14 @@
 //! recurrence it is checked against, and the continuous string or bar (N → ∞).
 
 use super::scalar::ChainScalar;
-use super::supported::{
+pub(super) mod supported;
+
+use nalgebra::Matrix3;
+use num_complex::Complex64;
+use supported::{
     eval_supported, eval_supported_at, supported_end_mass, supported_n_poles, supported_pole,
     Segment,
 };
-use nalgebra::Matrix3;
-use num_complex::Complex64;
 
 /// Below this (2N − 1)θ, sin((2N−1)θ)/sin θ − (2N − 1) is taken from its θ-series (two
 /// terms, exact to rounding there): the direct difference cancels.

@@ -15,6 +15,8 @@ use super::{
 use crate::input_file::message_number;
 use nalgebra::{Matrix3, Vector3};
 
+mod hidden;
+
 /// Largest accepted |g|, m/s²: far above any planet's, so only a unit mistake exceeds it.
 const MAX_GRAVITY_M_S2: f64 = 1e3;
 /// Asymmetry of the inertia tensor tolerated, relative to its largest entry (rounding of
@@ -534,7 +536,7 @@ fn validate_cable(
         (None, Some(p)) => Some(validate_pulley(ck, "cable.pulley", p)?),
         (None, None) => None,
     };
-    let hidden = super::hidden::validate_hidden(ck, i, c, d, (e, a, mu), at.g)?;
+    let hidden = hidden::validate_hidden(ck, i, c, d, (e, a, mu), at.g)?;
     Ok(Cable {
         anchor_m: anchor,
         youngs_modulus_pa: e,

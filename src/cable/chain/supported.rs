@@ -28,8 +28,8 @@
 //! blocked eigenvalue is the one root of s + h between the (j−1)-th and j-th members of the
 //! union, found by safeguarded Newton ([`supported_pole`]).
 
-use super::chain::{chain_recurrence, continuous_string, eval_continuous, eval_discrete};
-use super::{ChainEval, ChainScalar};
+use super::{chain_recurrence, continuous_string, eval_continuous, eval_discrete, ChainEval};
+use crate::cable::ChainScalar;
 use num_complex::Complex64;
 
 /// Largest number of iterations of the pole search (bisection steps included): 1100

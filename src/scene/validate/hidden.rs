@@ -2,9 +2,9 @@
 //! `hidden_weight_per_length`, `hidden_mass_per_length`) of one cable: each from the cable's
 //! own table, else from `[cable]`; the material defaults to the free cable's.
 
-use super::parse::{RawCable, RawCableDefaults};
-use super::validate::{cable_key, validate_axial_rigidity, Checker};
-use super::{HiddenCable, SceneError};
+use super::{cable_key, validate_axial_rigidity, Checker};
+use crate::scene::parse::{RawCable, RawCableDefaults};
+use crate::scene::{HiddenCable, SceneError};
 
 /// Cable `i`'s hidden part, or None when no `hidden_length` is given (or it is 0). `free`:
 /// the free cable's (E Pa, A m², μ kg/m); `g`: |g|, m/s² (weight → mass per length).
