@@ -2,16 +2,19 @@
 //! rigid body's constant geometric stiffness), its λ-derivative and the chains' blocked
 //! count.
 //!
-//! [`LoadedChains`] is what `load` computes at one pose and nothing on the hot path writes;
+//! [`LoadedChains`] is what `load` computes at one pose and nothing on the hot path writes
+//! (but for its memo of the supported chains' poles, filled on first use, see `PoleMemo`);
 //! [`EvalScratch`] holds the buffers one evaluation writes (and the evaluation counter).
 
 use super::eig3::eig3;
 use super::rigid::{attach_map, RigidParts};
+use crate::cable::supported_pole;
 use crate::cable::{
     eval_continuous_batch, eval_discrete_batch, CableModel, Chain, ChainEval, ChainKind,
     BATCH_MAX_ELEMENTS,
 };
 use crate::scene::MAX_CABLES;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Discrete chains up to this many elements have their blocked eigenvalues tabulated (16
 /// bytes each, reserved once per solver); longer chains (up to
@@ -28,6 +31,56 @@ use num_complex::Complex64;
 /// solvers must agree on the order to share the assembly's conventions.
 pub(in crate::modal) const SYM3: [(usize, usize); 6] =
     [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+
+/// A supported chain's blocked eigenvalues 1 ..= this many are memoized per load (the
+/// engine asks for the lowest few, many times a cycle); higher ones are searched each time.
+const SUPPORTED_POLE_MEMO: usize = 16;
+
+/// The loaded supported chains' blocked eigenvalues ([`Chain::pole`], a safeguarded Newton
+/// search each), each computed on its first use after `load` and kept until the next:
+/// f64 bits, NaN for not yet computed. Atomic (relaxed) so that the loaded problem stays
+/// read-only and shareable; fixed size, no allocation.
+#[derive(Debug)]
+struct PoleMemo([[AtomicU64; SUPPORTED_POLE_MEMO]; MAX_CHAINS]);
+
+/// The bits of a memo entry not computed yet.
+const MEMO_EMPTY: u64 = 0x7ff8_0000_0000_0000; // f64::NAN
+
+impl PoleMemo {
+    fn new() -> PoleMemo {
+        PoleMemo(std::array::from_fn(|_| {
+            std::array::from_fn(|_| AtomicU64::new(MEMO_EMPTY))
+        }))
+    }
+
+    /// Forget chain i's poles.
+    fn clear(&mut self, i: usize) {
+        for e in &mut self.0[i] {
+            *e.get_mut() = MEMO_EMPTY;
+        }
+    }
+
+    /// Pole j (1 ..= [`SUPPORTED_POLE_MEMO`]) of chain i, from `compute` on first use.
+    #[inline]
+    fn get(&self, i: usize, j: usize, compute: impl FnOnce() -> f64) -> f64 {
+        let e = &self.0[i][j - 1];
+        let bits = e.load(Ordering::Relaxed);
+        if bits != MEMO_EMPTY {
+            return f64::from_bits(bits);
+        }
+        let v = compute();
+        e.store(v.to_bits(), Ordering::Relaxed);
+        v
+    }
+}
+
+impl Clone for PoleMemo {
+    fn clone(&self) -> PoleMemo {
+        PoleMemo(std::array::from_fn(|i| {
+            std::array::from_fn(|j| AtomicU64::new(self.0[i][j].load(Ordering::Relaxed)))
+        }))
+    }
+}
 
 /// Largest number of chains (a [`CableModel`] has up to three).
 pub(super) const MAX_CHAINS: usize = 3 * MAX_CABLES;
@@ -115,7 +168,7 @@ pub(super) fn quad(a: &Matrix6<f64>, v: &Vector6<f64>, dim: usize) -> f64 {
 
 /// The problem of one pose, as `load` leaves it: the chains, how they attach to the
 /// end-effector, its mass, the evaluation plan (batches) and the tabulated poles. Read-only
-/// on the hot path.
+/// on the hot path but for the supported chains' pole memo.
 #[derive(Debug, Clone)]
 pub(super) struct LoadedChains {
     pub(super) chains: [Chain; MAX_CHAINS],
@@ -148,6 +201,8 @@ pub(super) struct LoadedChains {
     /// common element count N = `pole_tab_n` (the blocked eigenvalues without trigonometry).
     pole_tab: Vec<(f64, f64)>,
     pole_tab_n: usize,
+    /// The supported chains' lowest blocked eigenvalues, memoized for this load.
+    pole_memo: PoleMemo,
     /// Σ of the end-effector participation over all modes (sum rule), from `load`.
     pub(super) p_total: f64,
 }
@@ -176,6 +231,7 @@ impl LoadedChains {
             n_cont: 0,
             pole_tab: Vec::with_capacity(POLE_TABLE_MAX_ELEMENTS + 1),
             pole_tab_n: 0,
+            pole_memo: PoleMemo::new(),
             p_total: f64::NAN,
         }
     }
@@ -225,6 +281,9 @@ impl LoadedChains {
                     continue;
                 }
                 self.chains[self.n_chains] = *c;
+                if let ChainKind::Supported { .. } = c.kind {
+                    self.pole_memo.clear(self.n_chains);
+                }
                 for (j, &(r, col)) in SYM3.iter().enumerate() {
                     self.proj_sym[self.n_chains][j] = c.proj[(r, col)];
                 }
@@ -335,7 +394,8 @@ impl LoadedChains {
     }
 
     /// Blocked eigenvalue j (1-based; 0 gives 0) of chain i, rad²/s², equal to
-    /// [`Chain::pole`] bit for bit (same formula, tabulated cosines).
+    /// [`Chain::pole`] bit for bit (same formula, tabulated cosines; a supported chain's
+    /// lowest ones memoized for the load).
     #[inline]
     pub(super) fn chain_pole(&self, i: usize, j: usize) -> f64 {
         if j == 0 {
@@ -348,6 +408,13 @@ impl LoadedChains {
                 return 6.0 * k * omc / (m * (2.0 + cth));
             }
         }
+        if let ChainKind::Supported { free, hidden } = c.kind {
+            if j <= SUPPORTED_POLE_MEMO {
+                return self
+                    .pole_memo
+                    .get(i, j, || supported_pole(&free, &hidden, j));
+            }
+        }
         c.pole(j)
     }
 
@@ -356,8 +423,8 @@ impl LoadedChains {
     pub(super) fn pole_interval(&self, lambda: f64) -> (f64, f64) {
         let mut a = 0.0f64;
         let mut b = f64::INFINITY;
-        for c in &self.chains[..self.n_chains] {
-            let (lo, hi) = c.poles_around(lambda);
+        for (i, c) in self.chains[..self.n_chains].iter().enumerate() {
+            let (lo, hi) = c.poles_around_with(lambda, |j| self.chain_pole(i, j));
             a = a.max(lo);
             b = b.min(hi);
         }
@@ -600,5 +667,73 @@ impl EvalScratch {
             up,
             (i as u32) << 16 | jp as u32,
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cable::Segment;
+
+    /// A cable model with one supported axial chain (free segment of spring `k`).
+    fn supported_model(k: f64) -> CableModel {
+        let chain = Chain {
+            kind: ChainKind::Supported {
+                free: Segment {
+                    k,
+                    m: 0.01,
+                    n_el: 40,
+                },
+                hidden: Segment {
+                    k: 3.0e5,
+                    m: 0.02,
+                    n_el: 25,
+                },
+            },
+            mult: 1,
+            proj: Matrix3::identity(),
+        };
+        CableModel {
+            kc: Matrix3::zeros(),
+            element_mass_kg: 0.01,
+            n_el: 40,
+            chains: [chain, Chain::idle(), Chain::idle()],
+            n_chains: 1,
+            static_stiffness: Matrix3::zeros(),
+            hidden: None,
+        }
+    }
+
+    /// The memoized poles of a supported chain are [`Chain::pole`]'s search bit for bit,
+    /// on first use and from the memo, below and past the memo's size, and a new load
+    /// (another pose) forgets the previous load's poles. The pole intervals equal
+    /// [`Chain::poles_around`] (no memo) at λ on, between and past the poles.
+    #[test]
+    fn supported_pole_memo_is_the_search_bit_for_bit_per_load() {
+        let mut p = LoadedChains::new();
+        for k in [2.0e5, 3.5e5] {
+            let model = supported_model(k);
+            p.load(&[model], 1.0, None);
+            let c = model.chains[0];
+            for _ in 0..2 {
+                for j in 1..=SUPPORTED_POLE_MEMO + 3 {
+                    assert_eq!(
+                        p.chain_pole(0, j).to_bits(),
+                        c.pole(j).to_bits(),
+                        "k {k} j {j}"
+                    );
+                }
+            }
+            for j in 1..=SUPPORTED_POLE_MEMO + 2 {
+                let pj = c.pole(j);
+                for lambda in [pj, pj * (1.0 + 1e-6), 0.5 * (pj + c.pole(j + 1))] {
+                    assert_eq!(
+                        p.pole_interval(lambda),
+                        c.poles_around(lambda),
+                        "k {k} λ {lambda}"
+                    );
+                }
+            }
+        }
     }
 }

@@ -160,6 +160,14 @@ impl Chain {
     /// The blocked eigenvalues just below and just above λ: (λ_j, λ_{j+1}) with j the number
     /// of blocked eigenvalues ≤ λ (λ_0 = 0; ∞ when there is none above).
     pub fn poles_around(&self, lambda: f64) -> (f64, f64) {
+        self.poles_around_with(lambda, |j| self.pole(j))
+    }
+
+    /// [`Chain::poles_around`] with the blocked eigenvalues taken from `pole`, which must
+    /// equal [`Chain::pole`] (a table or memo of them: a supported chain's are found by a
+    /// root search).
+    #[inline]
+    pub fn poles_around_with(&self, lambda: f64, pole: impl Fn(usize) -> f64) -> (f64, f64) {
         let j = match self.kind {
             ChainKind::Discrete { k, m, n_el } => {
                 if n_el < 2 || m <= 0.0 || k <= 0.0 {
@@ -193,15 +201,15 @@ impl Chain {
                 // Blocked eigenvalues ≤ λ: the count strictly below, plus one when λ is
                 // itself one (the next one up equals λ).
                 let j = eval_supported(&free, &hidden, lambda).below as usize;
-                if supported_pole(&free, &hidden, j + 1) <= lambda {
+                if pole(j + 1) <= lambda {
                     j + 1
                 } else {
                     j
                 }
             }
         };
-        let lo = if j == 0 { 0.0 } else { self.pole(j) };
-        (lo, self.pole(j + 1))
+        let lo = if j == 0 { 0.0 } else { pole(j) };
+        (lo, pole(j + 1))
     }
 
     /// The j-th (1-based) blocked eigenvalue λ_j, rad²/s²; ∞ when it does not exist.

@@ -39,13 +39,13 @@ fn next_distinct_pole(
     let mut b = (f64::INFINITY, 0, 0);
     for i in 0..p.n_chains {
         let mut j = next_pole[i].max(1);
-        while j > 1 && p.chains[i].pole(j - 1) > a * (1.0 + POLE_MERGE) {
+        while j > 1 && p.chain_pole(i, j - 1) > a * (1.0 + POLE_MERGE) {
             j -= 1;
         }
-        let mut pole = p.chains[i].pole(j);
+        let mut pole = p.chain_pole(i, j);
         while pole <= a * (1.0 + POLE_MERGE) && pole.is_finite() {
             j += 1;
-            pole = p.chains[i].pole(j);
+            pole = p.chain_pole(i, j);
         }
         next_pole[i] = j;
         if pole < b.0 {
@@ -168,7 +168,7 @@ impl ScanState {
     /// The lower end of the current interval on the loaded problem, rad²/s².
     fn a(&self, p: &LoadedChains) -> f64 {
         match self.a_key {
-            Some((c, j)) if c < p.n_chains => p.chains[c].pole(j),
+            Some((c, j)) if c < p.n_chains => p.chain_pole(c, j),
             _ => self.a_fixed,
         }
     }
