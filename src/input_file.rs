@@ -26,14 +26,15 @@ pub const MAX_TRAJECTORY_BYTES: u64 = 256 * 1024 * 1024;
 #[derive(Debug, thiserror::Error)]
 pub enum InputError {
     /// The OS refused to stat, open or read the file.
-    #[error("{file}: cannot read {what}: {source}")]
+    #[error("{file}: cannot read {what}: {cause}")]
     Io {
         /// The file.
         file: String,
         /// What the file was meant to be, e.g. `scene file`.
         what: &'static str,
-        /// The cause.
-        source: std::io::Error,
+        /// The cause, in the message (not a `source()`: the command line prints the chain of
+        /// sources, which would repeat it).
+        cause: std::io::Error,
     },
     /// A directory, FIFO, socket or device.
     #[error("{file}: is a {kind}, not a regular file; a {what} must be a regular file")]
@@ -73,10 +74,10 @@ pub enum InputError {
 /// (e.g. `scene file`) says in errors what the file was meant to be.
 pub fn read_text(path: &Path, what: &'static str, limit_bytes: u64) -> Result<String, InputError> {
     let file = path.display().to_string();
-    let io = |source| InputError::Io {
+    let io = |cause| InputError::Io {
         file: file.clone(),
         what,
-        source,
+        cause,
     };
     let mut f = open_checked(path, what, limit_bytes)?;
     let bytes = read_at_most(&mut f, limit_bytes).map_err(io)?;
@@ -101,10 +102,10 @@ pub fn read_text(path: &Path, what: &'static str, limit_bytes: u64) -> Result<St
 /// `limit_bytes`, since the file can grow after the check).
 pub fn open_checked(path: &Path, what: &'static str, limit_bytes: u64) -> Result<File, InputError> {
     let file = path.display().to_string();
-    let io = |source| InputError::Io {
+    let io = |cause| InputError::Io {
         file: file.clone(),
         what,
-        source,
+        cause,
     };
     // Checked twice. `std::fs::metadata` (follows symlinks) refuses a FIFO or device before
     // anything is opened: opening a FIFO blocks until a writer appears and opening some

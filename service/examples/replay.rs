@@ -1,6 +1,7 @@
 //! Replay publisher: sends end-effector poses to a running `cablevib serve` at a fixed rate —
 //! the paper's circle (radius 0.75 m) by default, or a CSV file of `t,x,y,z` rows (s, m) — and
-//! optionally a T_min schedule.
+//! optionally a T_min schedule. With `--shape zv|zvd|ei` it shapes the poses online at the
+//! end-effector mode of the latest ok estimate it receives (unshaped until the first one).
 //!
 //! ```text
 //! cargo run --release -- serve --instance demo &
@@ -15,9 +16,11 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
+use cablevib::trajectory::shaping::ShaperKind;
 use cablevib::trajectory::Trajectory;
 use cablevib_ipc::{monotonic_now_ns, PoseSample, ServiceNames, TminSetpoint, IDENTITY_QUATERNION};
-use cablevib_service::ports::{create_node, PoseInput};
+use cablevib_service::demo_shape::DemoShape;
+use cablevib_service::ports::{create_node, EstimateOutput, PoseInput};
 use cablevib_service::TminSchedule;
 use clap::Parser;
 
@@ -48,6 +51,16 @@ struct Args {
     /// Wait up to this long for a service to subscribe before publishing, s (0: do not wait).
     #[arg(long, default_value_t = 5.0)]
     wait_for_service_s: f64,
+    /// Shape the poses online (zv, zvd or ei) at the end-effector mode frequency of the latest
+    /// ok estimate the service publishes, with the scene's damping there; until the first
+    /// estimate with an end-effector mode the poses pass unshaped.
+    #[arg(long, value_name = "zv|zvd|ei", value_parser = parse_shaper)]
+    shape: Option<ShaperKind>,
+}
+
+/// The shaper named by `--shape`.
+fn parse_shaper(s: &str) -> Result<ShaperKind, String> {
+    ShaperKind::from_name(s).ok_or_else(|| format!("unknown shaper {s:?}: zv, zvd or ei"))
 }
 
 /// Longest `--seconds`, s: a day of poses, far beyond any replay, keeps the pose count
@@ -107,6 +120,14 @@ fn main() -> anyhow::Result<()> {
     let names = ServiceNames::new(&a.instance);
     let node = create_node("cablevib-replay")?;
     let input = PoseInput::open(&node, &names)?;
+    let mut shape = match a.shape {
+        Some(kind) => Some((
+            DemoShape::new(kind, a.rate_hz, &scene)?,
+            EstimateOutput::open(&node, &names)?,
+        )),
+        None => None,
+    };
+    let mut ee_mode_hz = f64::NAN;
     let wait_until = Instant::now() + wait_for_service;
     while !input.service_connected() && Instant::now() < wait_until {
         if node.wait(Duration::from_millis(10)).is_err() {
@@ -157,9 +178,21 @@ fn main() -> anyhow::Result<()> {
             }
             step = current;
         }
-        let Some(p) = trajectory.position_at(t_s) else {
+        let Some(mut p) = trajectory.position_at(t_s) else {
             break;
         };
+        if let Some((shaper, estimates)) = &mut shape {
+            // The latest ok estimate's end-effector mode (bounded: at most a queue's worth).
+            for _ in 0..1024 {
+                let Some(e) = estimates.try_receive()? else {
+                    break;
+                };
+                if e.is_ok() && e.ee_mode_hz.is_finite() && e.ee_mode_hz > 0.0 {
+                    ee_mode_hz = e.ee_mode_hz;
+                }
+            }
+            p = shaper.push(p, ee_mode_hz);
+        }
         let pose = PoseSample::new(
             k + 1,
             monotonic_now_ns(),
@@ -179,6 +212,9 @@ fn main() -> anyhow::Result<()> {
          {late} ticks more than one period late",
         sent as f64 / elapsed.max(1e-9)
     );
+    if let Some((shaper, _)) = &shape {
+        println!("replay: {}", shaper.summary_line().trim_start());
+    }
     Ok(())
 }
 

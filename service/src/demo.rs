@@ -71,6 +71,9 @@ struct Progress {
     last_margin_bits: AtomicU64,
     max_latency_ns: AtomicU64,
     not_ok: AtomicU64,
+    /// The end-effector mode frequency of the latest ok estimate that had one (f64 bits; 0.0,
+    /// none yet), for `--shape`.
+    last_ee_mode_bits: AtomicU64,
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -146,6 +149,10 @@ fn controller(
             .fetch_max(latency, Ordering::Relaxed);
         if !e.is_ok() {
             progress.not_ok.fetch_add(1, Ordering::Relaxed);
+        } else if e.ee_mode_hz.is_finite() && e.ee_mode_hz > 0.0 {
+            progress
+                .last_ee_mode_bits
+                .store(e.ee_mode_hz.to_bits(), Ordering::Relaxed);
         }
     }
     log.hold = hold.map(super::demo_hold::DemoHold::finish);
@@ -280,6 +287,10 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
             .map_err(|e| ServiceError::Usage(format!("cannot start the controller thread: {e}")))?
     };
 
+    let mut shape = a
+        .shape
+        .map(|kind| super::demo_shape::DemoShape::new(kind, a.rate_hz, scene))
+        .transpose()?;
     let replay = replay(
         a,
         &names,
@@ -289,6 +300,7 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
         &stop,
         &controller_ready,
         &progress,
+        shape.as_mut(),
     );
     // Let the last estimates arrive, then stop the others.
     std::thread::sleep(DRAIN_TIME);
@@ -303,6 +315,9 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
     let server_report = server_report?;
     let log = log?;
     summary(a, &trajectory, sent, &server_report, &log);
+    if let Some(s) = &shape {
+        println!("{}", s.summary_line());
+    }
     if let Some(h) = &log.hold {
         super::demo_hold::summary(scene, a, &trajectory, h)?;
     }
@@ -320,6 +335,7 @@ fn replay(
     stop: &AtomicBool,
     controller_ready: &AtomicBool,
     progress: &Progress,
+    mut shape: Option<&mut super::demo_shape::DemoShape>,
 ) -> Result<u64, ServiceError> {
     let node = create_node("cablevib-demo-replay")?;
     let input = PoseInput::open(&node, names)?;
@@ -355,9 +371,13 @@ fn replay(
             }
             step = current;
         }
-        let Some(p) = trajectory.position_at(t_s) else {
+        let Some(mut p) = trajectory.position_at(t_s) else {
             break;
         };
+        if let Some(s) = shape.as_deref_mut() {
+            let ee_hz = f64::from_bits(progress.last_ee_mode_bits.load(Ordering::Relaxed));
+            p = s.push(p, ee_hz);
+        }
         // A CSV's quaternion columns, else the identity.
         let q = trajectory
             .orientation_at(t_s)

@@ -34,6 +34,7 @@
 pub mod bench;
 pub mod demo;
 mod demo_hold;
+pub mod demo_shape;
 pub mod hold;
 pub mod ports;
 pub mod rt;
@@ -167,6 +168,9 @@ pub struct DemoConfig {
     pub hold_f1_hz: Option<f64>,
     /// With `hold_f1_hz`: write one CSV row per ok estimate after the hold's first answer.
     pub hold_csv: Option<std::path::PathBuf>,
+    /// Shape the replay's poses online with this shaper at the live end-effector mode
+    /// (None: the poses as the trajectory gives them).
+    pub shape: Option<crate::trajectory::shaping::ShaperKind>,
 }
 
 /// What `cablevib bench-ipc` measures (the scene is passed beside it).

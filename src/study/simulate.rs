@@ -63,6 +63,13 @@ impl SampledPath {
         check_dt(dt_s)?;
         let t0 = s.t_s[0];
         let dur = s.duration_s();
+        if !(dur.is_finite() && dur > 0.0) {
+            // One row: nothing to simulate (a circle or move of duration 0 is refused alike).
+            return Err(StudyError::Usage(format!(
+                "the path lasts {dur} s ({} row(s)): it needs at least two rows, over a time > 0",
+                s.t_s.len()
+            )));
+        }
         let n = (dur / dt_s).round();
         if !(n < MAX_SAMPLES as f64) {
             return Err(StudyError::Usage(format!(

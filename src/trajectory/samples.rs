@@ -318,11 +318,11 @@ where
     use std::io::{BufReader, Read};
     const WHAT: &str = "trajectory CSV";
     let file = path.display().to_string();
-    let io = |source| {
+    let io = |cause| {
         TrajectoryError::Input(InputError::Io {
             file: file.clone(),
             what: WHAT,
-            source,
+            cause,
         })
     };
     let handle = open_checked(path, WHAT, MAX_TRAJECTORY_BYTES).map_err(TrajectoryError::from)?;

@@ -105,9 +105,22 @@ pub struct DemoArgs {
     /// (PATH without its extension + -f1.svg and -tmin.svg).
     #[arg(long, value_name = "PATH", requires = "hold_f1")]
     pub hold_csv: Option<std::path::PathBuf>,
+    /// Shape the replay's poses online (zv, zvd or ei) at the end-effector mode frequency of
+    /// the latest estimate, with the scene's damping there; until the first estimate with an
+    /// end-effector mode the poses pass unshaped. The summary adds a line: the shaper, its
+    /// mean design frequency, the delay it adds, and the shaped path's peak deviation from the
+    /// unshaped one (docs/vibration.md, "Input shaping").
+    #[arg(long, value_name = "zv|zvd|ei", value_parser = parse_shaper)]
+    pub shape: Option<crate::trajectory::shaping::ShaperKind>,
     /// A monitor beside the demo (Foxglove, MCAP).
     #[command(flatten)]
     pub monitor: super::monitor::DemoMonitorArgs,
+}
+
+/// The shaper named on the command line (`--shape`).
+fn parse_shaper(s: &str) -> Result<crate::trajectory::shaping::ShaperKind, String> {
+    crate::trajectory::shaping::ShaperKind::from_name(s)
+        .ok_or_else(|| format!("unknown shaper {s:?}: zv, zvd or ei"))
 }
 
 /// `cablevib bench-ipc` options.
@@ -208,6 +221,7 @@ pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
         t_min_schedule,
         hold_f1_hz: a.hold_f1,
         hold_csv: a.hold_csv.clone(),
+        shape: a.shape,
     };
     let monitor = super::monitor::start_beside_demo(&a.monitor, &scene, &a.scene, a.required_hz)?;
     crate::service::demo(&scene, &cfg)?;

@@ -11,5 +11,6 @@ mod frf;
 mod map_shard;
 mod mode_shapes;
 mod sag_compare;
+mod simulate_hostile;
 mod sweep;
 mod sweep_cli;

@@ -3,5 +3,6 @@
 //! Area binary of the command-line crate (see tests/README.md at the repository root).
 
 mod demo_hold;
+mod demo_shape;
 mod ipc_service;
 mod python_controller;

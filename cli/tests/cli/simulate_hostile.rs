@@ -1,0 +1,109 @@
+//! `cablevib simulate` on hostile inputs: a trajectory CSV with a jump, with no data rows,
+//! with a single row (a path of zero duration), with a NaN or an infinity, a CSV that does not
+//! exist, `--duration 0` and `--modal-ratio 1` (and NaN). Each is a one-line error naming the
+//! cause, exit code 1, no panic.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_cablevib");
+
+fn run(args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .env("RUST_BACKTRACE", "0")
+        .output()
+        .expect("the binary runs")
+}
+
+fn dir() -> PathBuf {
+    let d = std::env::temp_dir().join(format!("cablevib-simulate-hostile-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Exit code 1, one line on stderr containing `needle`, no panic.
+fn assert_one_line_error(what: &str, o: &Output, needle: &str) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("panicked"), "{what}: {err}");
+    assert_eq!(o.status.code(), Some(1), "{what}: {err}");
+    assert!(err.contains(needle), "{what}: `{needle}` not in {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{what}: {err}");
+}
+
+#[test]
+fn simulate_refuses_hostile_inputs_in_one_line() {
+    let d = dir();
+    let out = d.join("out");
+    let out = out.to_str().unwrap();
+    let files = [
+        (
+            "jump.csv",
+            "t,x,y,z\n0,0.1,0,1.25\n0.001,0.5,0,1.25\n0.002,0.5,0,1.25\n",
+            "the path jumps",
+        ),
+        ("empty.csv", "t,x,y,z\n", "no data rows"),
+        // one row: a path of zero duration (refused like a move of --duration 0)
+        (
+            "one.csv",
+            "t,x,y,z\n0,0.1,0,1.25\n",
+            "needs at least two rows",
+        ),
+        (
+            "nan.csv",
+            "t,x,y,z\n0,0.1,0,1.25\n0.001,NaN,0,1.25\n0.002,0.1,0,1.25\n",
+            "finite numbers",
+        ),
+        (
+            "inf.csv",
+            "t,x,y,z\n0,0.1,0,1.25\n0.001,0.1,inf,1.25\n",
+            "finite numbers",
+        ),
+    ];
+    for (name, text, needle) in files {
+        let p = d.join(name);
+        std::fs::write(&p, text).unwrap();
+        let o = run(&[
+            "simulate",
+            "spatial-paper",
+            "--csv",
+            p.to_str().unwrap(),
+            "--out",
+            out,
+        ]);
+        assert_one_line_error(name, &o, needle);
+    }
+    // a missing file: the OS's reason once (it used to be printed twice, as the message's
+    // end and again as its source)
+    let missing = d.join("missing.csv");
+    let o = run(&[
+        "simulate",
+        "spatial-paper",
+        "--csv",
+        missing.to_str().unwrap(),
+    ]);
+    assert_one_line_error("missing", &o, "cannot read trajectory CSV");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.matches("os error").count(), 1, "{err}");
+
+    for (args, needle) in [
+        (
+            &["--move", "0.1,0,0", "--duration", "0"][..],
+            "--duration 0",
+        ),
+        (
+            &["--move", "0.1,0,0", "--modal-ratio", "1"][..],
+            "--modal-ratio 1",
+        ),
+        (
+            &["--move", "0.1,0,0", "--modal-ratio", "NaN"][..],
+            "--modal-ratio NaN",
+        ),
+    ] {
+        let mut all = vec!["simulate", "spatial-paper", "--out", out];
+        all.extend_from_slice(args);
+        let o = run(&all);
+        assert_one_line_error(&format!("{args:?}"), &o, needle);
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
