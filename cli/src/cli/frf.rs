@@ -436,10 +436,21 @@ fn sagged(a: &FrfArgs, s: &Scene, damping: &Damping, freqs: &[f64]) -> Result<Co
         let why = e.error.map(|x| x.to_string()).unwrap_or_default();
         return Err(CliError::Analysis(format!("sagged pose: {why}")));
     }
-    let mut modes = vec![crate::modal::Mode::default(); SAG_MARK_MODES];
-    let nm = est
-        .modes(modes.len(), &mut modes)
-        .map_err(|e| CliError::Analysis(e.to_string()))?;
+    // The lowest modes, doubling the count until one lies above the band (the sagged
+    // solver has no count query here; the top of its spectrum is not needed).
+    let total = s.n_cables() * 3 * s.model.elements_per_cable.saturating_sub(1) + 6;
+    let mut k = 16usize;
+    let (modes, nm) = loop {
+        let mut modes = vec![crate::modal::Mode::default(); k.min(total)];
+        let nm = est
+            .modes(modes.len(), &mut modes)
+            .map_err(|e| CliError::Analysis(e.to_string()))?;
+        let top = modes[..nm].last().map_or(0.0, |m| lambda_to_hz(m.lambda));
+        if top > a.to_hz || k >= SAG_MARK_MODES.min(total) {
+            break (modes, nm);
+        }
+        k *= 2;
+    };
     let mut natural_hz = marked(a, &modes[..nm]);
     natural_hz.retain(|&f| f <= a.to_hz);
     let sag = est
