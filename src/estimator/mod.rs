@@ -234,6 +234,16 @@ impl Estimator {
             .unwrap_or_else(|| UNLOADED.get_or_init(|| ModalSolver::new(ModalParams::default())))
     }
 
+    /// With `[effects] sag`: the sagged structured solver as loaded at the pose of the last
+    /// successful cycle (its complex D for the frequency response); None for the chord
+    /// models or when the last cycle was not ok.
+    pub fn sag_modal(&self) -> Option<&crate::modal::sagged::SagModalSolver> {
+        if self.estimate.status != Status::Ok {
+            return None;
+        }
+        self.cycle.sag_modal()
+    }
+
     /// End-effector bookkeeping counters (see [`ModalSolver::rescan_counts`]).
     pub fn rescan_counts(&self) -> crate::modal::RescanCounts {
         self.cycle.rescan_counts()

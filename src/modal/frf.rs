@@ -23,6 +23,7 @@
 //!
 //! Offline: allocates (the modal basis, the dense reference), never on the real-time path.
 
+use super::sagged::SagModalSolver;
 use super::{ModalError, ModalSolver, ShapeParams};
 use crate::cable::CableModel;
 use crate::scene::Damping;
@@ -60,6 +61,12 @@ pub enum FrfError {
     /// A modal problem error.
     #[error("{0}")]
     Modal(#[from] ModalError),
+    /// The sagged continuous (Magnus) model has no complex form.
+    #[error("the sagged continuous model has no damped (complex) form: use --element fem for the frequency response with sag")]
+    SagContinuous,
+    /// Modal damping with sag: the sagged solver gives no mode shapes.
+    #[error("modal damping with sag: the sagged solver gives no mode shapes; use loss_factor or rayleigh damping (exact), or --sag false")]
+    SagModalDamping,
 }
 
 /// The frequencies of a response: `points` values from `from_hz` to `to_hz` (both
@@ -184,6 +191,40 @@ pub fn receptance_over(
         .iter()
         .map(|&f| solver.receptance(damping, w(f)))
         .collect()
+}
+
+impl SagModalSolver {
+    /// The receptance H(ω) of the loaded sagged problem (FEM chains) at ω (rad/s) with
+    /// loss-factor, Rayleigh or no damping: D(λ)⁻¹/c at the complex λ of [`complex_shift`]
+    /// (exact, as for taut cables: the sagged FEM's K and M are condensed by the same
+    /// recurrences), m/N, the leading `dim` × `dim` block. Modal damping:
+    /// [`FrfError::SagModalDamping`]; continuous cables: [`FrfError::SagContinuous`].
+    pub fn receptance(
+        &self,
+        damping: &Damping,
+        omega_rad_s: f64,
+    ) -> Result<Matrix6<Complex64>, FrfError> {
+        let (c, lambda) = complex_shift(damping, omega_rad_s).ok_or(FrfError::SagModalDamping)?;
+        if self.is_continuous() {
+            return Err(FrfError::SagContinuous);
+        }
+        let d = self
+            .dynamic_stiffness_at(lambda)
+            .ok_or(FrfError::Modal(ModalError::NotLoaded))?;
+        Ok(inverse_block(&d, self.dim()) / c)
+    }
+
+    /// [`Self::receptance`] at each frequency of `freqs_hz` (Hz).
+    pub fn receptance_over(
+        &self,
+        damping: &Damping,
+        freqs_hz: &[f64],
+    ) -> Result<Vec<Matrix6<Complex64>>, FrfError> {
+        freqs_hz
+            .iter()
+            .map(|&f| self.receptance(damping, 2.0 * std::f64::consts::PI * f))
+            .collect()
+    }
 }
 
 /// The end-effector part of a pose's lowest modes, for modal damping: natural frequencies,

@@ -12,6 +12,7 @@ mod ee_mode;
 mod fem_alloc;
 mod fem_dense;
 mod fem_physics;
+mod frf;
 mod realtime;
 mod speed;
 mod statics;

@@ -1,6 +1,7 @@
 //! `cablevib frf`: the receptance H(ω) at the end-effector of one pose over a frequency
 //! band ([`crate::modal::frf`]: exact at a complex λ for loss-factor and Rayleigh damping,
-//! modal superposition with static correction for modal damping), as a table, a CSV
+//! modal superposition with static correction for modal damping; with sag, the sagged FEM
+//! chains at the complex λ, loss factor and Rayleigh only), as a table, a CSV
 //! ([`crate::report::frf`]), a Bode figure and JSON; `--dense` also solves the assembled
 //! complex problem at every frequency and prints the difference and both times.
 
@@ -8,17 +9,21 @@ use super::args::{resolve_scene, SceneArgs};
 use super::figure::{self, parse_format};
 use super::modes::pose_model;
 use super::{json_f64, CliError};
+use crate::estimator::{Estimator, Tmin};
+use crate::kinematics::Pose;
 use crate::modal::{
-    dense_receptance, frequency_grid, lambda_to_hz, receptance_over, ModalParams, ModalSolver,
+    dense_receptance, frequency_grid, lambda_to_hz, receptance_over, FrfError, ModalParams,
+    ModalSolver,
 };
 use crate::report::csv::{process_command_line, write_csv};
 use crate::report::figure::FigureFormat;
 use crate::report::frf::{bode_svg, frf_csv, frf_meta, FrfData, COORDS};
 use crate::scene::{
-    Damping, MAX_LOSS_FACTOR, MAX_MODAL_RATIO, MAX_RAYLEIGH_ALPHA_PER_S, MAX_RAYLEIGH_BETA_S,
+    Damping, ElementKind, Scene, MAX_LOSS_FACTOR, MAX_MODAL_RATIO, MAX_RAYLEIGH_ALPHA_PER_S,
+    MAX_RAYLEIGH_BETA_S,
 };
 use clap::Args;
-use nalgebra::Matrix6;
+use nalgebra::{DMatrix, Matrix6};
 use num_complex::Complex64;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -188,50 +193,16 @@ pub fn run(a: &FrfArgs) -> Result<(), CliError> {
         return Err(CliError::Usage(msg.into()));
     }
     let s = resolve_scene(&a.scene)?;
-    if s.model.sag {
-        let msg = format!(
-            "scene `{}` has sag on: the frequency response covers taut (chord) cables; --sag false for them",
-            s.name
-        );
-        return Err(CliError::Usage(msg));
-    }
     let damping = damping(a, s.damping)?;
-    let pose = pose_model(&s)?;
-    let dim = pose.dim();
+    let c = if s.model.sag {
+        sagged(a, &s, &damping, &freqs)?
+    } else {
+        taut(a, &s, &damping, &freqs)?
+    };
+    let dim = c.dim;
     let outputs = coords(&a.output, dim, "--output")?;
     let inputs = coords(&a.input, dim, "--input")?;
-    let mut solver = ModalSolver::new(ModalParams::default());
-    pose.load(&mut solver);
-    // The natural frequencies in the band whose modes move the end-effector (marked on the
-    // figure; the string modes the end-effector hardly feels are left out).
-    let n_band = solver.count_below(crate::modal::hz_to_lambda(a.to_hz)) as usize;
-    let mut modes = vec![crate::modal::Mode::default(); n_band.min(1000)];
-    let nm = solver
-        .modes(modes.len(), &mut modes)
-        .map_err(|e| CliError::Analysis(e.to_string()))?;
-    let natural_hz: Vec<f64> = modes[..nm]
-        .iter()
-        .enumerate()
-        .filter(|(i, m)| m.cluster_start == *i && m.ee_participation >= MARK_PARTICIPATION)
-        .map(|(_, m)| lambda_to_hz(m.lambda))
-        .filter(|&f| f >= a.from_hz)
-        .collect();
-    let t0 = Instant::now();
-    let h = receptance_over(
-        &mut solver,
-        &pose.models,
-        &pose.geometry.arm_m,
-        &damping,
-        &freqs,
-        MODAL_CUTOFF_RATIO * a.to_hz,
-    )
-    .map_err(|e| CliError::Analysis(e.to_string()))?;
-    let structured_s = t0.elapsed().as_secs_f64();
-    let dense = if a.dense {
-        Some(dense_compare(&pose, &damping, &freqs, &h)?)
-    } else {
-        None
-    };
+    let (h, natural_hz, structured_s, dense) = (c.h, c.natural_hz, c.structured_s, c.dense);
     let pairs: Vec<(usize, usize)> = outputs
         .iter()
         .flat_map(|&o| inputs.iter().map(move |&i| (o, i)))
@@ -242,7 +213,7 @@ pub fn run(a: &FrfArgs) -> Result<(), CliError> {
         pairs,
         natural_hz,
     };
-    let sc = &pose.scene;
+    let sc = &c.scene;
     let p = sc.ee_position_m;
     if a.json {
         let cube = |part: fn(&Complex64) -> f64| -> Vec<Vec<Vec<serde_json::Value>>> {
@@ -271,7 +242,7 @@ pub fn run(a: &FrfArgs) -> Result<(), CliError> {
             "natural_frequencies_min_participation": MARK_PARTICIPATION,
             "structured_s": structured_s,
         });
-        if let Some((err, dense_s)) = dense {
+        if let Some((err, dense_s, _)) = dense {
             o["dense_max_rel_diff"] = json_f64(err);
             o["dense_s"] = json_f64(dense_s);
         }
@@ -314,10 +285,10 @@ pub fn run(a: &FrfArgs) -> Result<(), CliError> {
                 COORDS[o], COORDS[i], peak, data.frequencies_hz[k]
             );
         }
-        if let Some((err, dense_s)) = dense {
+        if let Some((err, dense_s, dof)) = dense {
             println!(
                 "dense complex solve ({} DOF) at every frequency: {:.3} s; largest relative difference {:.2e}; structured {:.0}× faster",
-                pose.dense().map(|(k, _)| k.nrows()).unwrap_or(0),
+                dof,
                 dense_s,
                 err,
                 dense_s / structured_s.max(1e-12)
@@ -354,19 +325,17 @@ pub fn run(a: &FrfArgs) -> Result<(), CliError> {
 /// The dense complex solve at every frequency: (largest relative Frobenius difference from
 /// `h`, seconds).
 fn dense_compare(
-    pose: &crate::estimator::PoseModel,
+    dense: impl FnOnce() -> Result<(DMatrix<f64>, DMatrix<f64>), String>,
+    dim: usize,
     damping: &Damping,
     freqs: &[f64],
     h: &[Matrix6<Complex64>],
-) -> Result<(f64, f64), CliError> {
+) -> Result<(f64, f64, usize), CliError> {
     if let Damping::ModalRatio { .. } = damping {
         let msg = "--dense: modal damping has no damping matrix to assemble (loss factor, Rayleigh or none)";
         return Err(CliError::Usage(msg.into()));
     }
-    let (k, m) = pose
-        .dense()
-        .map_err(|e| CliError::Analysis(format!("--dense: {e}")))?;
-    let dim = pose.dim();
+    let (k, m) = dense().map_err(|e| CliError::Analysis(format!("--dense: {e}")))?;
     let t0 = Instant::now();
     let mut worst = 0.0f64;
     for (&f, hs) in freqs.iter().zip(h) {
@@ -381,5 +350,130 @@ fn dense_compare(
         }
         worst = worst.max((num / den).sqrt());
     }
-    Ok((worst, t0.elapsed().as_secs_f64()))
+    Ok((worst, t0.elapsed().as_secs_f64(), k.nrows()))
+}
+
+/// What one pose's response computation gives the output.
+struct Computed {
+    scene: Scene,
+    dim: usize,
+    h: Vec<Matrix6<Complex64>>,
+    natural_hz: Vec<f64>,
+    structured_s: f64,
+    /// --dense: (largest relative difference, seconds, DOF).
+    dense: Option<(f64, f64, usize)>,
+}
+
+/// Taut (chord) cables: the structured solver of the pose model.
+fn taut(a: &FrfArgs, s: &Scene, damping: &Damping, freqs: &[f64]) -> Result<Computed, CliError> {
+    let pose = pose_model(s)?;
+    let dim = pose.dim();
+    let mut solver = ModalSolver::new(ModalParams::default());
+    pose.load(&mut solver);
+    // The natural frequencies in the band whose modes move the end-effector (marked on the
+    // figure; the string modes the end-effector hardly feels are left out).
+    let n_band = solver.count_below(crate::modal::hz_to_lambda(a.to_hz)) as usize;
+    let mut modes = vec![crate::modal::Mode::default(); n_band.min(1000)];
+    let nm = solver
+        .modes(modes.len(), &mut modes)
+        .map_err(|e| CliError::Analysis(e.to_string()))?;
+    let natural_hz = marked(a, &modes[..nm]);
+    let t0 = Instant::now();
+    let h = receptance_over(
+        &mut solver,
+        &pose.models,
+        &pose.geometry.arm_m,
+        damping,
+        freqs,
+        MODAL_CUTOFF_RATIO * a.to_hz,
+    )
+    .map_err(|e| CliError::Analysis(e.to_string()))?;
+    let structured_s = t0.elapsed().as_secs_f64();
+    let dense = if a.dense {
+        let get = || pose.dense().map_err(|e| e.to_string());
+        Some(dense_compare(get, dim, damping, freqs, &h)?)
+    } else {
+        None
+    };
+    Ok(Computed {
+        scene: pose.scene.clone(),
+        dim,
+        h,
+        natural_hz,
+        structured_s,
+        dense,
+    })
+}
+
+/// The natural frequencies to mark: first of each cluster, end-effector participation at
+/// least [`MARK_PARTICIPATION`], within the band.
+fn marked(a: &FrfArgs, modes: &[crate::modal::Mode]) -> Vec<f64> {
+    modes
+        .iter()
+        .enumerate()
+        .filter(|(i, m)| m.cluster_start == *i && m.ee_participation >= MARK_PARTICIPATION)
+        .map(|(_, m)| lambda_to_hz(m.lambda))
+        .filter(|&f| f >= a.from_hz)
+        .collect()
+}
+
+/// Most modes searched for the marks with sag (the sagged solver's lowest ones).
+const SAG_MARK_MODES: usize = 400;
+
+/// Sagging cables (FEM chains on the catenary): the sagged tension solve at the scene's
+/// pose, then the sagged structured solver's D at the complex λ of each frequency.
+fn sagged(a: &FrfArgs, s: &Scene, damping: &Damping, freqs: &[f64]) -> Result<Computed, CliError> {
+    if s.model.element == ElementKind::Continuous {
+        return Err(CliError::Usage(FrfError::SagContinuous.to_string()));
+    }
+    if let Damping::ModalRatio { .. } = damping {
+        return Err(CliError::Usage(FrfError::SagModalDamping.to_string()));
+    }
+    let mut est = Estimator::new(s).map_err(|e| CliError::Analysis(e.to_string()))?;
+    let pose = Pose::in_scene(s, s.ee_position_m);
+    let e = *est.update(&pose, Tmin::Scene);
+    if !e.status.is_ok() {
+        let why = e.error.map(|x| x.to_string()).unwrap_or_default();
+        return Err(CliError::Analysis(format!("sagged pose: {why}")));
+    }
+    // The lowest modes, doubling the count until one lies above the band (the sagged
+    // solver has no count query here; the top of its spectrum is not needed).
+    let total = s.n_cables() * 3 * s.model.elements_per_cable.saturating_sub(1) + 6;
+    let mut k = 16usize;
+    let (modes, nm) = loop {
+        let mut modes = vec![crate::modal::Mode::default(); k.min(total)];
+        let nm = est
+            .modes(modes.len(), &mut modes)
+            .map_err(|e| CliError::Analysis(e.to_string()))?;
+        let top = modes[..nm].last().map_or(0.0, |m| lambda_to_hz(m.lambda));
+        if top > a.to_hz || k >= SAG_MARK_MODES.min(total) {
+            break (modes, nm);
+        }
+        k *= 2;
+    };
+    let mut natural_hz = marked(a, &modes[..nm]);
+    natural_hz.retain(|&f| f <= a.to_hz);
+    let sag = est
+        .sag_modal()
+        .ok_or_else(|| CliError::Analysis("no sagged pose loaded".into()))?;
+    let dim = sag.dim();
+    let t0 = Instant::now();
+    let h = sag
+        .receptance_over(damping, freqs)
+        .map_err(|e| CliError::Analysis(e.to_string()))?;
+    let structured_s = t0.elapsed().as_secs_f64();
+    let dense = if a.dense {
+        let get = || est.dense_matrices().map_err(|e| e.to_string());
+        Some(dense_compare(get, dim, damping, freqs, &h)?)
+    } else {
+        None
+    };
+    Ok(Computed {
+        scene: est.scene().clone(),
+        dim,
+        h,
+        natural_hz,
+        structured_s,
+        dense,
+    })
 }

@@ -298,6 +298,14 @@ impl Forward {
         }
     }
 
+    /// The sagged structured solver as loaded at the last pose (None for taut cables).
+    pub(super) fn sag_modal(&self) -> Option<&crate::modal::sagged::SagModalSolver> {
+        match &self.model {
+            Model::Taut(_) => None,
+            Model::Sagged(s) => Some(&s.modal),
+        }
+    }
+
     /// The taut structured solver (None when the cables sag).
     pub(super) fn taut_modal(&self) -> Option<&ModalSolver> {
         match &self.model {

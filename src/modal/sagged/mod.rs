@@ -193,6 +193,20 @@ impl SagModalSolver {
         &self.problem.chains[i]
     }
 
+    /// The loaded problem's dynamic stiffness D(λ) at a complex λ, N/m (N·m/rad in the
+    /// rotational block): each FEM chain's recurrences at complex λ (O(N) per cable). None
+    /// for continuous cables (no complex form) or before a load. Point mass: the leading
+    /// 3 × 3 block. Does not count as an evaluation.
+    pub fn dynamic_stiffness_at(
+        &self,
+        lambda: num_complex::Complex64,
+    ) -> Option<Matrix6<num_complex::Complex64>> {
+        if !self.loaded {
+            return None;
+        }
+        self.problem.d_complex(lambda)
+    }
+
     /// Whether the solver holds continuous cables ([`Self::new_continuous`]).
     pub fn is_continuous(&self) -> bool {
         self.problem.continuous

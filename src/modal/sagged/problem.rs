@@ -8,6 +8,7 @@ use crate::modal::dynamic_stiffness::SYM3;
 use crate::modal::engine::{ee_from_problem, Condensed, TautView};
 use crate::modal::DynEval;
 use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector3};
+use num_complex::Complex64;
 
 /// The mode count reported for continuous cables (infinitely many modes): large enough
 /// for any request, small enough that sums of counts do not overflow.
@@ -271,6 +272,45 @@ impl SagProblem {
             return self.eval(lambda);
         }
         self.assemble(lambda, |i| self.chains[i].eval(lambda))
+    }
+
+    /// D(λ) at a complex λ (the damped frequency response, `frf`), the FEM chains only:
+    /// the same assembly as [`Self::eval`] with each chain's in-plane and out-of-plane
+    /// recurrences at complex λ ([`SagChain::eval_at`]). None for continuous cables (their
+    /// Magnus propagator is real). Point mass: the leading 3 × 3 block.
+    pub(super) fn d_complex(&self, lambda: Complex64) -> Option<Matrix6<Complex64>> {
+        if self.continuous {
+            return None;
+        }
+        let re = |x: f64| Complex64::new(x, 0.0);
+        let mut d = if self.dim == 3 {
+            let mut d = Matrix6::from_element(re(0.0));
+            for r in 0..3 {
+                d[(r, r)] = -lambda * self.ee_mass_kg;
+            }
+            d
+        } else {
+            self.k6.map(re) - self.m6.map(re) * lambda
+        };
+        for (i, chain) in self.chains[..self.n].iter().enumerate() {
+            let (s_in, s_out) = chain.eval_at(lambda);
+            let s = [s_in[0], s_in[1], s_in[2], s_out];
+            let pr = &self.proj[i];
+            for (q, &sq) in s.iter().enumerate() {
+                if self.dim == 6 {
+                    d += pr.p6[q].map(|x| re(x) * sq);
+                } else {
+                    for (j, &(r, c)) in SYM3.iter().enumerate() {
+                        let v = re(pr.p3[q][j]) * sq;
+                        d[(r, c)] += v;
+                        if r != c {
+                            d[(c, r)] += v;
+                        }
+                    }
+                }
+            }
+        }
+        Some(d)
     }
 
     /// D(0) and D'(0) from the chains' cached static evaluations (no recurrence).
