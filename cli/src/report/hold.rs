@@ -69,7 +69,15 @@ mod tests {
                    0.0,1,9.6,70,1,72.95,9.7,1\n0.001,2,9.61,70.5,1,72.95,9.69,1\n";
         let (a, b) = hold_svgs(csv, 9.5).unwrap();
         assert!(a.starts_with("<svg") || a.starts_with("<?xml"));
-        assert!(a.contains("requirement 9.5 Hz") && b.contains("fixed T_min 72.95 N"));
+        assert!(
+            a.contains("requirement 9.5 Hz"),
+            "the requirement in the f1 figure"
+        );
+        // T_min is drawn with a subscript (rich text), so look for its value.
+        assert!(
+            b.contains("fixed T") && b.contains("72.95 N"),
+            "the fixed T_min in the T_min figure"
+        );
         assert!(hold_svgs("t_s,f1_hz\n0,1\n", 9.5).is_none());
         assert!(hold_svgs(&csv.replace("9.61", "x"), 9.5).is_none());
     }
