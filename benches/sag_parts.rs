@@ -16,11 +16,11 @@
 //! docs/sag.md (section 3) reads them: the parts a sagged cycle cannot skip already add up
 //! to more than twice the chord cycle.
 use cablevib::cable::sagged::SagContinuousParams;
+use cablevib::elastic_catenary::{CableChord, Catenary, SagParams, SagTrack};
 use cablevib::estimator::{Estimator, EstimatorParams, Tmin};
 use cablevib::kinematics::Geometry;
 use cablevib::modal::sagged::{SagCableFrame, SagEndEffector, SagModalSolver};
 use cablevib::modal::{ModalParams, CYCLE_EVALUATIONS};
-use cablevib::sag::{CableChord, Catenary, SagParams, SagTrack};
 use cablevib::scene::{ElementKind, Scene};
 use cablevib::tension::{
     SagCable, SagTensionParams, SagTensionSolver, TensionParams, TensionSolver,

@@ -78,8 +78,8 @@ pub mod scene;
 pub mod stats;
 // Layer 2
 pub mod caspr;
+pub mod elastic_catenary;
 pub mod kinematics;
-pub mod sag;
 // Layer 3
 pub mod cable;
 pub mod tension;

@@ -14,8 +14,8 @@
 //!   scenes), else a sphere at the position; its metadata names the `pose_sequence`;
 //! - `label`: the text "f1 … Hz · margin … Hz" above the end-effector.
 
+use cablevib::elastic_catenary::{CableChord, SagParams};
 use cablevib::kinematics::rotation_of;
-use cablevib::sag::{CableChord, SagParams};
 use cablevib::scene::Scene;
 use cablevib_ipc::{EstimateSample, PoseSample, TminSetpoint};
 use foxglove::messages::{

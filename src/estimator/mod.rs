@@ -252,7 +252,7 @@ impl Estimator {
     /// With `[effects] sag`: each cable's elastic catenary of the last cycle's tension
     /// solve (unstretched length, H, V, tensions along it, sag, Irvine's λ²); None for the
     /// chord models.
-    pub fn sag_catenaries(&self) -> Option<&[crate::sag::Catenary]> {
+    pub fn sag_catenaries(&self) -> Option<&[crate::elastic_catenary::Catenary]> {
         self.cycle.catenaries()
     }
 

@@ -399,7 +399,7 @@ mod tests {
         let p = EstimatorParams {
             sag: SagModelParams {
                 tension: SagTensionParams {
-                    sag: crate::sag::SagParams {
+                    sag: crate::elastic_catenary::SagParams {
                         tolerance: -1e-12,
                         ..Default::default()
                     },

@@ -269,7 +269,9 @@ pub fn evaluate_at(model: &Scene, cold: &Estimator, p: Vector3<f64>) -> ModelPoi
     }
     r.tension_min_n = r.tensions_n.iter().copied().fold(f64::NAN, f64::min);
     if let Some(cats) = est.sag_catenaries() {
-        let max = |f: fn(&crate::sag::Catenary) -> f64| cats.iter().map(f).fold(f64::NAN, f64::max);
+        let max = |f: fn(&crate::elastic_catenary::Catenary) -> f64| {
+            cats.iter().map(f).fold(f64::NAN, f64::max)
+        };
         r.tension_min_n = cats
             .iter()
             .map(|c| c.tension_min_n())

@@ -2,8 +2,8 @@
 //! own (L0, EA, w, H, V_a) and its plane by its horizontal unit h, so the tests need no
 //! statics solver (the vibration problem only needs each cable's profile and frame; the
 //! end points need not meet for the dense/structured comparison).
+use cablevib::elastic_catenary::Catenary;
 use cablevib::modal::sagged::{HangingCable, SagEndEffector};
-use cablevib::sag::Catenary;
 use nalgebra::{Matrix3, Vector3};
 
 /// Gravity's magnitude, m/s².

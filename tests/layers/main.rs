@@ -28,7 +28,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("stats", 1),
     ("kinematics", 2),
     ("caspr", 2),
-    ("sag", 2),
+    ("elastic_catenary", 2),
     ("trajectory", 3),
     ("tension", 3),
     ("cable", 3),

@@ -11,7 +11,7 @@ mod timing;
 
 use cablevib::alloc_count::thread_allocations;
 use cablevib::cable::sagged::{SagContinuous, SagContinuousParams};
-use cablevib::sag::Catenary;
+use cablevib::elastic_catenary::Catenary;
 
 pub const G: f64 = 9.81;
 

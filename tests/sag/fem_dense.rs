@@ -162,7 +162,7 @@ fn weightless(n: usize) -> Vec<HangingCable> {
 }
 
 /// 1 + T/EA of a weightless catenary.
-fn st_of(cat: &cablevib::sag::Catenary) -> f64 {
+fn st_of(cat: &cablevib::elastic_catenary::Catenary) -> f64 {
     1.0 + cat.h_n.hypot(cat.v_anchor_n) / cat.ea_n
 }
 

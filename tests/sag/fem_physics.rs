@@ -6,9 +6,9 @@
 //! Wittrick–Williams count `below` steps, found here by bisection on the count.
 
 use cablevib::cable::sagged::SagChain;
+use cablevib::elastic_catenary::Catenary;
 use cablevib::modal::sagged::{HangingCable, SagModalSolver};
 use cablevib::modal::{ModalParams, Mode};
-use cablevib::sag::Catenary;
 use cablevib_testkit::sag_robot::*;
 use nalgebra::Vector3;
 

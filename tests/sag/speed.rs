@@ -3,9 +3,9 @@
 //! predicted λ against the cold one, and the cycle's evaluation budget. Plus an ignored
 //! measurement of ns per element.
 
+use cablevib::elastic_catenary::{CableChord, SagParams};
 use cablevib::modal::sagged::SagModalSolver;
 use cablevib::modal::{ModalError, ModalParams};
-use cablevib::sag::{CableChord, SagParams};
 use cablevib_testkit::sag_robot::*;
 use std::time::Instant;
 

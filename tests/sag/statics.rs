@@ -1,8 +1,8 @@
-//! The sagging cable's statics (`cablevib::sag`) against references that share no code
+//! The sagging cable's statics (`cablevib::elastic_catenary`) against references that share no code
 //! with it: the straight stretched cable, the inextensible catenary y = a cosh(x/a), the
 //! shallow parabola, Irvine's equivalent modulus, the hanging vertical rope, and the
 //! closed-form fold of a level span.
-use cablevib::sag::{CableChord, Catenary, SagError, SagParams};
+use cablevib::elastic_catenary::{CableChord, Catenary, SagError, SagParams};
 
 fn chord(span: f64, rise: f64, ea: f64, w: f64) -> CableChord {
     CableChord {

@@ -6,10 +6,10 @@
 //! one answer whatever the path, and a timing print (ignored test).
 #![allow(clippy::needless_range_loop)] // index loops mirror the per-cable maths
 use cablevib::alloc_count::thread_allocations;
+use cablevib::elastic_catenary::{CableChord, SagParams};
 use cablevib::estimator::{Estimator, Tmin};
 use cablevib::kinematics::Pose;
 use cablevib::kinematics::{rotation_of, Geometry};
-use cablevib::sag::{CableChord, SagParams};
 use cablevib::scene::Scene;
 use cablevib::tension::{
     clarabel_reference_bounds, SagCable, SagTensionError, SagTensionParams, SagTensionSolver,

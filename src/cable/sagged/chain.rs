@@ -2,7 +2,7 @@
 //! buffers sized once, filled from a profile without allocating.
 
 use super::{SagChainError, SagChainEval};
-use crate::sag::{Catenary, CatenaryElements};
+use crate::elastic_catenary::{Catenary, CatenaryElements};
 
 /// One element of a sagged chain (element j runs from node j to node j + 1; node 0 is the
 /// anchor), as the dense reference assembles it.
@@ -121,7 +121,7 @@ impl SagChain {
         let mut k_max = 0.0f64;
         for j in 0..n_el {
             let ([dx, dz], axial) = element(j);
-            let len = crate::sag::hypot_fast(dx, dz);
+            let len = crate::elastic_catenary::hypot_fast(dx, dz);
             if !(len > 0.0 && len.is_finite() && axial > 0.0 && axial.is_finite()) {
                 self.clear();
                 return Err(SagChainError::BadElement {

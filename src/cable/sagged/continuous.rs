@@ -3,7 +3,7 @@
 //!
 //! ## The problem
 //!
-//! About the elastic catenary (`crate::sag::Catenary`: H, V(s) = V_a + w s,
+//! About the elastic catenary (`crate::elastic_catenary::Catenary`: H, V(s) = V_a + w s,
 //! T = √(H² + V²), tangent t = (H, V)/T), with s the unstretched arclength and μ the mass per
 //! unstretched length,
 //!
@@ -106,7 +106,7 @@ mod statics;
 mod transfer;
 
 use super::SagChainEval;
-use crate::sag::Catenary;
+use crate::elastic_catenary::Catenary;
 use profile::Profile;
 
 /// Most Magnus steps of one cable (2 sub-segments each): the fixed capacity of the solver.

@@ -4,7 +4,7 @@
 //! **Coordinates.** The cable hangs in the vertical plane through its anchor A and its end
 //! P: h the horizontal unit from A toward P, up = −g/|g|, n = h × up out of the plane. The
 //! profile (x(s), z(s)) in (h, up) and the tension T(s) come from
-//! [`crate::sag::Catenary`]; s ∈ [0, L0] is the unstretched arclength from the anchor.
+//! [`crate::elastic_catenary::Catenary`]; s ∈ [0, L0] is the unstretched arclength from the anchor.
 //!
 //! **The FEM chain** ([`SagChain`]). N equal elements of unstretched length l0 = L0/N,
 //! nodes at s_j = j·l0 on the exact profile. Element j (from node j − 1 to node j) has the

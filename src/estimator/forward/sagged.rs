@@ -7,13 +7,13 @@
 //! allocates after [`SagModel::new`].
 
 use super::{EndEffector, ForwardParams, TensionReport};
+use crate::elastic_catenary::Catenary;
 use crate::estimator::EstimatorError;
 use crate::kinematics::{Geometry, Pose};
 use crate::modal::sagged::{
     assemble_sagged, SagCableFrame, SagDenseCable, SagEndEffector, SagLoadError, SagModalSolver,
 };
 use crate::modal::{ModalError, Root};
-use crate::sag::Catenary;
 use crate::scene::{ElementKind, Scene};
 use crate::tension::{SagCable, SagTensionSolver};
 use nalgebra::{DMatrix, Matrix6, Vector3};

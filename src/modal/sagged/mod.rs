@@ -61,8 +61,8 @@ use super::{ModalError, ModalParams, Root};
 use crate::cable::sagged::{
     SagChain, SagChainError, SagContError, SagContMesh, SagContinuousParams,
 };
+use crate::elastic_catenary::Catenary;
 use crate::modal::DynEval;
-use crate::sag::Catenary;
 use nalgebra::{Matrix3, Matrix6, Vector3};
 use problem::{SagProblem, SagView};
 

@@ -242,7 +242,8 @@ fn report_frame(s: &Scene, solver: SolverChoice) -> AnalysisReport {
 /// the chord models).
 fn fill_sag(r: &mut AnalysisReport, est: &Estimator) {
     if let Some(cats) = est.sag_catenaries() {
-        let of = |f: fn(&crate::sag::Catenary) -> f64| Some(cats.iter().map(f).collect());
+        let of =
+            |f: fn(&crate::elastic_catenary::Catenary) -> f64| Some(cats.iter().map(f).collect());
         r.tensions_anchor_n = of(|c| c.tension_anchor_n());
         r.tensions_min_n = of(|c| c.tension_min_n());
         r.sag_m = of(|c| c.sag_m());

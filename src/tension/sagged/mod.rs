@@ -1,7 +1,7 @@
 //! Tension distribution with sagging cables: the least Σ T² over the exact sagged
 //! equilibrium, each cable pulling along its catenary's end tangent.
 //!
-//! Cable i hangs as an elastic catenary (`crate::sag`) through its chord, anchor a_i →
+//! Cable i hangs as an elastic catenary (`crate::elastic_catenary`) through its chord, anchor a_i →
 //! attachment point, with end-effector-end tension T_e,i; it pulls the end-effector with
 //! −T_e,i t_i, t_i the world unit end tangent (toward increasing unstretched arclength,
 //! i.e. away from the anchor), exactly as the chord model's −T_i s_i. Equilibrium is then
@@ -45,8 +45,8 @@ mod kkt;
 mod solve;
 
 use super::{TensionError, TensionParams, TensionSolver};
+use crate::elastic_catenary::{CableChord, Catenary, SagError, SagParams, SagTrack};
 use crate::kinematics::Geometry;
-use crate::sag::{CableChord, Catenary, SagError, SagParams, SagTrack};
 use nalgebra::{Vector3, Vector6};
 
 /// Parameters of the sagged tension distribution.

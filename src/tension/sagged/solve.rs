@@ -3,8 +3,8 @@
 
 use super::kkt::{kkt_step, multiplier_of, KktCable};
 use super::{SagCable, SagTensionError, SagTensionInfo, SagTensionParams, SagTensionSolver};
+use crate::elastic_catenary::{CableChord, Catenary, SagError};
 use crate::kinematics::{up_frame, Geometry};
-use crate::sag::{CableChord, Catenary, SagError};
 use crate::tension::TensionSolver;
 use nalgebra::{Vector3, Vector6};
 

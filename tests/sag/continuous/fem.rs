@@ -7,7 +7,7 @@
 
 use super::kth;
 use cablevib::cable::sagged::{SagChain, SagChainEval, SagContinuous, SagContinuousParams};
-use cablevib::sag::Catenary;
+use cablevib::elastic_catenary::Catenary;
 
 /// Element counts N, 2N, 4N.
 const NS: [usize; 3] = [40, 80, 160];

@@ -14,7 +14,7 @@
 
 use super::{kth, G};
 use cablevib::cable::sagged::{SagContinuous, SagContinuousParams};
-use cablevib::sag::Catenary;
+use cablevib::elastic_catenary::Catenary;
 use std::f64::consts::PI;
 
 /// EA/H of the test cables (stretch 5e-5): λ² then sets the sag, λ² ≈ 64 (d/L)² EA/H.

@@ -5,7 +5,7 @@
 //! (RK4's error is O(h⁴): (16 x₂ₙ − xₙ)/15) with |x₂ₙ − xₙ| as the error estimate. It shares
 //! no code with the solver (no Magnus, no sub-segments, no Riccati).
 
-use cablevib::sag::Catenary;
+use cablevib::elastic_catenary::Catenary;
 
 /// U(L0) and P(L0) of the in-plane (2 × 2 each) and out-of-plane (scalar) systems.
 #[derive(Clone, Copy)]

@@ -3,7 +3,7 @@
 
 use super::{solver_eigenvalue, G};
 use cablevib::cable::sagged::{SagContinuous, SagContinuousParams};
-use cablevib::sag::Catenary;
+use cablevib::elastic_catenary::Catenary;
 
 /// ns per eval (in plane + out of plane) at Irvine's λ² ≈ 1, 100, 1e4, for rel_tol 1e-7
 /// (max_halfwaves 1 and 4) and 1e-9 (4), next to the taut continuous chain's eval (axial + transverse) and the sagged

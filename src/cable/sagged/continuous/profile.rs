@@ -2,7 +2,7 @@
 //! compliance of the Magnus sub-segments (see the parent module's docs).
 
 use super::{SagContError, Segment, NU_STRAIGHT, VERTICAL_H_RATIO};
-use crate::sag::Catenary;
+use crate::elastic_catenary::Catenary;
 
 /// The catenary's data the mesh needs, validated.
 pub(super) struct Profile {

@@ -188,7 +188,7 @@ fn run(
 mod tests {
     use super::*;
     use crate::cable::sagged::{SagContinuous, SagContinuousParams};
-    use crate::sag::Catenary;
+    use crate::elastic_catenary::Catenary;
 
     /// The symmetric form with every kernel valid at λ agrees with the transfer form (an
     /// independent algebra of the same sub-segments): S to 1e-11 of the stiffness scale plus

@@ -93,7 +93,7 @@ pub(super) fn static_eval(segs: &[Segment], final_rot: [f64; 2]) -> Option<SagCh
 #[cfg(test)]
 mod tests {
     use crate::cable::sagged::{SagChainEval, SagContinuous, SagContinuousParams};
-    use crate::sag::Catenary;
+    use crate::elastic_catenary::Catenary;
 
     fn close(a: f64, b: f64, scale: f64) -> bool {
         (a - b).abs() <= 1e-12 * scale

@@ -9,7 +9,7 @@
 //! rises first, the minimum is refined by golden section and the target is TooSlack.
 
 use super::{CableChord, SagError, SagInfo, SagParams};
-use crate::sag::Catenary;
+use crate::elastic_catenary::Catenary;
 
 /// Ratio of successive lengths of the march along the family.
 const MARCH_FACTOR: f64 = 1.03;
