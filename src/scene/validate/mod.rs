@@ -2,20 +2,22 @@
 //! check is the error reported, so [`scene_from_raw`] keeps one fixed order: name, gravity,
 //! end-effector, tension bounds, model, effects, inertia, orientation, rigid-body cable
 //! count, geometric stiffness, cable count, then each cable in turn.
+//!
+//! `cable`: the checks of one cable (`hidden`: its hidden part behind the pulley);
+//! `damping`: `[damping]`; the checks shared by several keys stay here ([`Checker`]).
 
 use super::bounds::{check_t_min, TminRangeError};
-use super::parse::{
-    RawArray, RawCable, RawCableDefaults, RawDamping, RawEffects, RawEndEffector, RawModel,
-    RawPulley, RawScene, RawTension,
-};
-use super::{
-    Cable, Damping, ElementKind, ModelSettings, Pulley, Scene, SceneError, MAX_CABLES,
-    MAX_ELEMENTS_PER_CABLE,
-};
+use super::parse::{RawArray, RawEffects, RawEndEffector, RawModel, RawScene, RawTension};
+use super::{ElementKind, ModelSettings, Scene, SceneError, MAX_CABLES, MAX_ELEMENTS_PER_CABLE};
 use crate::input_file::message_number;
 use nalgebra::{Matrix3, Vector3};
 
+mod cable;
+mod damping;
 mod hidden;
+
+use cable::{validate_cable, CableContext};
+use damping::validate_damping;
 
 /// Largest accepted |g|, m/s²: far above any planet's, so only a unit mistake exceeds it.
 const MAX_GRAVITY_M_S2: f64 = 1e3;
@@ -24,9 +26,6 @@ const MAX_GRAVITY_M_S2: f64 = 1e3;
 const INERTIA_SYMMETRY_REL_TOL: f64 = 1e-9;
 /// Deviation of the orientation quaternion's norm from 1 tolerated (printed digits).
 const QUATERNION_NORM_TOL: f64 = 1e-6;
-/// Closest an anchor may be to the end-effector position, m: a cable of zero length has no
-/// direction.
-const MIN_ANCHOR_DISTANCE_M: f64 = 1e-6;
 /// Largest accepted axial rigidity EA, N: well above any real cable, and small enough that
 /// EA/l stays a usable stiffness.
 const MAX_AXIAL_RIGIDITY_N: f64 = 1e15;
@@ -181,79 +180,6 @@ pub(super) fn scene_from_raw(raw: RawScene, file: &str) -> Result<Scene, SceneEr
     })
 }
 
-/// `[damping]`: at most one kind; each value finite, ≥ 0 and below its bound (ζ < 1 and
-/// η < 2: critical damping is not a structure's; Rayleigh α, β bounded against unit slips).
-fn validate_damping(ck: &Checker, raw: Option<RawDamping>) -> Result<Damping, SceneError> {
-    let Some(d) = raw else {
-        return Ok(Damping::None);
-    };
-    let rayleigh = d.rayleigh_alpha.is_some() || d.rayleigh_beta.is_some();
-    let kinds = [d.loss_factor.is_some(), rayleigh, d.modal_ratio.is_some()];
-    match kinds.iter().filter(|&&k| k).count() {
-        0 => {
-            return Err(ck.inv(
-                "damping",
-                "an empty [damping] table: give loss_factor, rayleigh_alpha/rayleigh_beta or modal_ratio (or drop the table for no damping)".into(),
-            ))
-        }
-        1 => {}
-        _ => {
-            return Err(ck.inv(
-                "damping",
-                "give one kind of damping: loss_factor, rayleigh_alpha/rayleigh_beta or modal_ratio, not several".into(),
-            ))
-        }
-    }
-    let bounded = |key: &str, x: f64, max: f64, what: &str| -> Result<f64, SceneError> {
-        if x.is_finite() && (0.0..max).contains(&x) {
-            Ok(x)
-        } else {
-            Err(ck.inv(
-                key,
-                format!(
-                    "{} must be finite, ≥ 0 and < {} ({what})",
-                    message_number(x),
-                    message_number(max)
-                ),
-            ))
-        }
-    };
-    if let Some(eta) = d.loss_factor {
-        let eta = bounded(
-            "damping.loss_factor",
-            eta,
-            super::MAX_LOSS_FACTOR,
-            "η/2 = 1 is critical damping",
-        )?;
-        return Ok(Damping::LossFactor { eta });
-    }
-    if let Some(zeta) = d.modal_ratio {
-        let zeta = bounded(
-            "damping.modal_ratio",
-            zeta,
-            super::MAX_MODAL_RATIO,
-            "a fraction of critical damping; 1 is critical",
-        )?;
-        return Ok(Damping::ModalRatio { zeta });
-    }
-    let alpha_per_s = bounded(
-        "damping.rayleigh_alpha",
-        d.rayleigh_alpha.unwrap_or(0.0),
-        super::MAX_RAYLEIGH_ALPHA_PER_S,
-        "1/s",
-    )?;
-    let beta_s = bounded(
-        "damping.rayleigh_beta",
-        d.rayleigh_beta.unwrap_or(0.0),
-        super::MAX_RAYLEIGH_BETA_S,
-        "s",
-    )?;
-    Ok(Damping::Rayleigh {
-        alpha_per_s,
-        beta_s,
-    })
-}
-
 /// `name`: not blank.
 fn validate_name(ck: &Checker, name: &str) -> Result<(), SceneError> {
     if name.trim().is_empty() {
@@ -308,7 +234,7 @@ fn validate_tension_bounds(ck: &Checker, raw: &RawTension) -> Result<(f64, f64),
 /// A pair of tension bounds (N): t_max finite and > 0, t_min by the crate's one T_min rule
 /// ([`check_t_min`]: finite, > 0 and not subnormal, ≤ t_max). Errors name `min_key` or
 /// `max_key`.
-fn check_bound_pair(
+pub(super) fn check_bound_pair(
     ck: &Checker,
     min_key: &str,
     max_key: &str,
@@ -483,203 +409,6 @@ fn validate_cable_count(ck: &Checker, n: usize) -> Result<(), SceneError> {
     Ok(())
 }
 
-/// What every cable's checks need from the rest of the scene.
-struct CableContext {
-    /// `[cable]`: values for keys a cable does not give.
-    defaults: RawCableDefaults,
-    /// End-effector position, m.
-    ee_pos: Vector3<f64>,
-    /// The same as written in the file (for the message).
-    ee_position: [f64; 3],
-    /// Rigid end-effector (attachment points allowed).
-    rigid: bool,
-    /// |g|, m/s² (weight per length → mass per length).
-    g: f64,
-    /// `tension.t_min`, N: the lower bound of a cable without its own.
-    t_min_n: f64,
-    /// `tension.t_max`, N: the upper bound of a cable without its own.
-    t_max_n: f64,
-}
-
-/// `cables[i]`: anchor, attachment and material.
-fn validate_cable(
-    ck: &Checker,
-    at: &CableContext,
-    i: usize,
-    c: &RawCable,
-) -> Result<Cable, SceneError> {
-    let d = &at.defaults;
-    let anchor = ck.finite3(&cable_key(i, "anchor"), &c.anchor)?;
-    let attachment = validate_attachment(ck, i, c.attachment.as_ref(), at.rigid)?;
-    if (anchor - at.ee_pos).norm() < MIN_ANCHOR_DISTANCE_M {
-        return Err(ck.inv(
-            &cable_key(i, "anchor"),
-            format!("coincides with end_effector.position {:?}", at.ee_position),
-        ));
-    }
-    let pick = |own: Option<f64>, def: Option<f64>, name: &str| -> Result<f64, SceneError> {
-        match own.or(def) {
-            Some(v) => ck.positive(&cable_key(i, name), v),
-            None => Err(ck.inv(
-                &cable_key(i, name),
-                format!("missing: give cable.{name} or cables[{i}].{name}"),
-            )),
-        }
-    };
-    let e = pick(c.youngs_modulus, d.youngs_modulus, "youngs_modulus")?;
-    let a = pick(c.area, d.area, "area")?;
-    let mu = validate_mass_per_length(ck, i, c, d, at.g)?;
-    validate_axial_rigidity(ck, i, e * a)?;
-    validate_cable_bounds(ck, at, i, c)?;
-    let pulley = match (&c.pulley, &d.pulley) {
-        (Some(p), _) => Some(validate_pulley(ck, &cable_key(i, "pulley"), p)?),
-        (None, Some(p)) => Some(validate_pulley(ck, "cable.pulley", p)?),
-        (None, None) => None,
-    };
-    let hidden = hidden::validate_hidden(ck, i, c, d, (e, a, mu), at.g)?;
-    Ok(Cable {
-        anchor_m: anchor,
-        youngs_modulus_pa: e,
-        area_m2: a,
-        mass_per_length_kg_m: mu,
-        attachment_m: attachment,
-        t_min_n: c.t_min,
-        t_max_n: c.t_max,
-        pulley,
-        hidden,
-    })
-}
-
-/// A pulley table (`key`: `cables[i].pulley` or `cable.pulley`): radius finite and ≥ 0,
-/// entry direction three finite numbers, not all zero (normalised here).
-fn validate_pulley(ck: &Checker, key: &str, p: &RawPulley) -> Result<Pulley, SceneError> {
-    if !(p.radius.is_finite() && p.radius >= 0.0) {
-        return Err(ck.inv(
-            &format!("{key}.radius"),
-            format!("must be finite and >= 0 m, got {:?}", p.radius),
-        ));
-    }
-    let dkey = format!("{key}.entry_direction");
-    let d = ck.finite3(&dkey, &p.entry_direction)?;
-    let norm = d.norm();
-    if !(norm > 0.0 && norm.is_finite()) {
-        return Err(ck.inv(
-            &dkey,
-            format!(
-                "must be a non-zero direction (the swivel axis), got {:?}",
-                [d.x, d.y, d.z]
-            ),
-        ));
-    }
-    Ok(Pulley {
-        entry_unit: d / norm,
-        radius_m: p.radius,
-    })
-}
-
-/// `cables[i].t_min`, `cables[i].t_max` (N, optional): with the scene's bounds for the one
-/// not given, a pair by [`check_bound_pair`]; t_min above t_max names the key the cable gave.
-fn validate_cable_bounds(
-    ck: &Checker,
-    at: &CableContext,
-    i: usize,
-    c: &RawCable,
-) -> Result<(), SceneError> {
-    if c.t_min.is_none() && c.t_max.is_none() {
-        return Ok(());
-    }
-    let max_key = cable_key(i, "t_max");
-    let min_key = if c.t_min.is_some() {
-        cable_key(i, "t_min")
-    } else {
-        max_key.clone()
-    };
-    check_bound_pair(
-        ck,
-        &min_key,
-        &max_key,
-        c.t_min.unwrap_or(at.t_min_n),
-        c.t_max.unwrap_or(at.t_max_n),
-    )
-}
-
-/// `cables[i].attachment`: finite; non-zero only on a rigid end-effector.
-fn validate_attachment(
-    ck: &Checker,
-    i: usize,
-    raw: Option<&RawArray>,
-    rigid: bool,
-) -> Result<Vector3<f64>, SceneError> {
-    match raw {
-        Some(b) => {
-            let b = ck.finite3(&cable_key(i, "attachment"), b)?;
-            if !rigid && b.norm() > 0.0 {
-                return Err(ck.inv(
-                    &cable_key(i, "attachment"),
-                    "attachment points need the rigid end-effector: set effects.rotation = true"
-                        .into(),
-                ));
-            }
-            Ok(b)
-        }
-        None => Ok(Vector3::zeros()),
-    }
-}
-
-/// Mass per length μ (kg/m) of cable `i` from weight or mass per length: the cable's own
-/// keys win over the defaults; within one level, both is an error.
-fn validate_mass_per_length(
-    ck: &Checker,
-    i: usize,
-    c: &RawCable,
-    d: &RawCableDefaults,
-    g: f64,
-) -> Result<f64, SceneError> {
-    let key = |k: &str| cable_key(i, k);
-    let (w, m) = if c.weight_per_length.is_some() || c.mass_per_length.is_some() {
-        (c.weight_per_length, c.mass_per_length)
-    } else {
-        (d.weight_per_length, d.mass_per_length)
-    };
-    let mu = match (w, m) {
-        (Some(_), Some(_)) => {
-            return Err(ck.inv(
-                &key("weight_per_length"),
-                "give weight_per_length or mass_per_length, not both".into(),
-            ))
-        }
-        (Some(w), None) => {
-            let w = ck.positive(&key("weight_per_length"), w)?;
-            if g <= 0.0 {
-                return Err(ck.inv(
-                    &key("weight_per_length"),
-                    "needs non-zero gravity to convert to mass; give mass_per_length".into(),
-                ));
-            }
-            w / g
-        }
-        (None, Some(m)) => ck.positive(&key("mass_per_length"), m)?,
-        (None, None) => {
-            return Err(ck.inv(
-                &key("weight_per_length"),
-                "missing: give weight_per_length or mass_per_length".into(),
-            ))
-        }
-    };
-    // Derived values must be usable numbers too (a denormal weight gives μ = 0).
-    if !(mu.is_normal() && mu > 0.0) {
-        return Err(ck.inv(
-            &key(if w.is_some() {
-                "weight_per_length"
-            } else {
-                "mass_per_length"
-            }),
-            format!("gives a mass per length of {mu:e} kg/m, not a usable positive number"),
-        ));
-    }
-    Ok(mu)
-}
-
 /// EA = youngs_modulus × area of cable `i` must be a usable number (an overflowing E·A
 /// gives ∞).
 pub(super) fn validate_axial_rigidity(ck: &Checker, i: usize, ea: f64) -> Result<(), SceneError> {
@@ -696,7 +425,7 @@ pub(super) fn validate_axial_rigidity(ck: &Checker, i: usize, ea: f64) -> Result
 
 #[cfg(test)]
 mod tests {
-    use super::super::DEFAULT_SCENE_TOML;
+    use super::super::{Damping, DEFAULT_SCENE_TOML};
     use super::*;
 
     /// A paper scene's text without its `[effects]` table (`sag = false`), so that a test can
