@@ -70,22 +70,12 @@ impl StatusCode {
 
     /// The code of a wire value; `None` for a value this build does not know.
     pub const fn from_u32(value: u32) -> Option<StatusCode> {
-        Some(match value {
-            0 => StatusCode::Ok,
-            1 => StatusCode::TensionInfeasible,
-            2 => StatusCode::InvalidInput,
-            3 => StatusCode::NotConverged,
-            4 => StatusCode::RankDeficient,
-            5 => StatusCode::OutsideWorkspace,
-            6 => StatusCode::NoPoseYet,
-            7 => StatusCode::NonUnitQuaternion,
-            8 => StatusCode::TminOutOfRange,
-            9 => StatusCode::InvalidRequest,
-            10 => StatusCode::InternalError,
-            11 => StatusCode::CableSlack,
-            12 => StatusCode::Mechanism,
-            _ => return None,
-        })
+        // `ALL` is in numeric order without gaps (tested below): the value is the index.
+        if (value as usize) < Self::ALL.len() {
+            Some(Self::ALL[value as usize])
+        } else {
+            None
+        }
     }
 
     /// A stable snake_case identifier (for logs and CSV output).

@@ -361,24 +361,20 @@ pub fn chain_recurrence<T: ChainScalar>(k: f64, m: f64, n_el: usize, lambda: T) 
     let mut p = alpha * 2.0;
     let mut dp = T::re(2.0 * dalpha);
     let mut below = 0u32;
-    for _ in 1..n_el - 1 {
-        if p.is_zero() {
-            p = T::re(tiny);
-        }
+    // One pivot: count it (a zero pivot nudged to `tiny`), then β²/p and its λ-derivative.
+    let mut eliminate = |p: T, dp: T| {
+        let p = if p.is_zero() { T::re(tiny) } else { p };
         below += p.is_negative() as u32;
         let inv = p.recip();
         let t = b2 * inv;
-        let dt = (db2 - t * dp) * inv;
+        (t, (db2 - t * dp) * inv)
+    };
+    for _ in 1..n_el - 1 {
+        let (t, dt) = eliminate(p, dp);
         p = alpha * 2.0 - t;
         dp = T::re(2.0 * dalpha) - dt;
     }
-    if p.is_zero() {
-        p = T::re(tiny);
-    }
-    below += p.is_negative() as u32;
-    let inv = p.recip();
-    let t = b2 * inv;
-    let dt = (db2 - t * dp) * inv;
+    let (t, dt) = eliminate(p, dp);
     ChainEval {
         s: alpha - t,
         ds: T::re(dalpha) - dt,

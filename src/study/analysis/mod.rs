@@ -12,7 +12,9 @@
 
 mod compare;
 
-use crate::estimator::{check_mechanism, reference_analysis_at, resolve_auto, Estimator, Tmin};
+use crate::estimator::{
+    check_mechanism, reference_analysis_at, resolve_auto, Estimate, Estimator, Tmin,
+};
 use crate::kinematics::Pose;
 use crate::modal::{dense_relative_accuracy, lambda_to_hz, Mode};
 use crate::scene::{ElementKind, Scene};
@@ -266,8 +268,9 @@ fn model_dof(s: &Scene) -> Option<usize> {
     Some(dim + 3 * s.n_cables() * (n_el - 1))
 }
 
-/// The structured path: the estimator's cycle at the pose, then its K modes.
-fn structured(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, AnalyzeError> {
+/// The estimator built for `scene` and its estimate at the scene's own pose and T_min; a
+/// failed build or an estimate that is not ok is the error.
+fn estimate_at_scene_pose(scene: &Scene) -> Result<(Estimator, Estimate), AnalyzeError> {
     let mut est = Estimator::new(scene).map_err(|e| AnalyzeError::Build(e.to_string()))?;
     let e = *est.update(&pose_of(scene), Tmin::Scene);
     if let Some(err) = e.error {
@@ -276,6 +279,12 @@ fn structured(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, An
             reason: err.to_string(),
         });
     }
+    Ok((est, e))
+}
+
+/// The structured path: the estimator's cycle at the pose, then its K modes.
+fn structured(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, AnalyzeError> {
+    let (mut est, e) = estimate_at_scene_pose(scene)?;
     let s = est.scene().clone();
     let mut modes = vec![Mode::default(); opts.modes];
     let t0 = Instant::now();
@@ -347,14 +356,7 @@ fn dense(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, Analyze
 /// the whole robot assembled (straight elements between nodes on each catenary) and a
 /// dense generalised eigensolver.
 fn dense_sagged(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, AnalyzeError> {
-    let mut est = Estimator::new(scene).map_err(|e| AnalyzeError::Build(e.to_string()))?;
-    let e = *est.update(&pose_of(scene), Tmin::Scene);
-    if let Some(err) = e.error {
-        return Err(AnalyzeError::Status {
-            status: e.status.as_str(),
-            reason: err.to_string(),
-        });
-    }
+    let (est, e) = estimate_at_scene_pose(scene)?;
     let t0 = Instant::now();
     let d = est
         .dense_modes(true)
@@ -385,14 +387,7 @@ pub(super) fn dense_bound(lambda: f64, lambda_max: f64) -> f64 {
 pub fn assembled_matrices(
     scene: &Scene,
 ) -> Result<(nalgebra::DMatrix<f64>, nalgebra::DMatrix<f64>), AnalyzeError> {
-    let mut est = Estimator::new(scene).map_err(|e| AnalyzeError::Build(e.to_string()))?;
-    let e = *est.update(&pose_of(scene), Tmin::Scene);
-    if let Some(err) = e.error {
-        return Err(AnalyzeError::Status {
-            status: e.status.as_str(),
-            reason: err.to_string(),
-        });
-    }
+    let (est, _) = estimate_at_scene_pose(scene)?;
     est.dense_matrices()
         .map_err(|e| AnalyzeError::Solve(e.to_string()))
 }
