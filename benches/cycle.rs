@@ -2,9 +2,10 @@
 //! `cargo bench --bench cycle`; the per-cycle latency distribution along the trajectory is
 //! measured by `cablevib bench` (percentiles, allocations, dense ratio in one run).
 use cablevib::cable::{catenary_block, up_frame, ChainKind};
+use cablevib::eig3::eig3;
 use cablevib::estimator::{build_models, reference_analysis, Estimator, Tmin};
 use cablevib::kinematics::Geometry;
-use cablevib::modal::{eig3, ModalParams, ModalSolver};
+use cablevib::modal::{ModalParams, ModalSolver};
 use cablevib::scene::{ElementKind, Scene};
 use cablevib::tension::{clarabel_reference, TensionParams, TensionSolver};
 use cablevib::trajectory::circle_pose;

@@ -24,7 +24,7 @@ pub const MAX_TRAJECTORY_BYTES: u64 = 256 * 1024 * 1024;
 
 /// Why an input file was not read.
 #[derive(Debug, thiserror::Error)]
-pub enum InputError {
+pub enum InputFileError {
     /// The OS refused to stat, open or read the file.
     #[error("{file}: cannot read {what}: {cause}")]
     Io {
@@ -72,9 +72,13 @@ pub enum InputError {
 
 /// Reads the regular file `path` as UTF-8 text of at most `limit_bytes` bytes; `what`
 /// (e.g. `scene file`) says in errors what the file was meant to be.
-pub fn read_text(path: &Path, what: &'static str, limit_bytes: u64) -> Result<String, InputError> {
+pub fn read_text(
+    path: &Path,
+    what: &'static str,
+    limit_bytes: u64,
+) -> Result<String, InputFileError> {
     let file = path.display().to_string();
-    let io = |cause| InputError::Io {
+    let io = |cause| InputFileError::Io {
         file: file.clone(),
         what,
         cause,
@@ -83,14 +87,14 @@ pub fn read_text(path: &Path, what: &'static str, limit_bytes: u64) -> Result<St
     let bytes = read_at_most(&mut f, limit_bytes).map_err(io)?;
     if bytes.len() as u64 > limit_bytes {
         // The file grew after the size check (or its size is not known, as in /proc).
-        return Err(InputError::TooLarge {
+        return Err(InputFileError::TooLarge {
             file,
             what,
             size_bytes: bytes.len() as u64,
             limit_bytes,
         });
     }
-    String::from_utf8(bytes).map_err(|e| InputError::NotUtf8 {
+    String::from_utf8(bytes).map_err(|e| InputFileError::NotUtf8 {
         file,
         what,
         offset: e.utf8_error().valid_up_to(),
@@ -100,9 +104,13 @@ pub fn read_text(path: &Path, what: &'static str, limit_bytes: u64) -> Result<St
 /// Opens `path` for reading when it is a regular file of at most `limit_bytes` bytes (the
 /// checks of [`read_text`], for a reader that streams the file: it must still stop at
 /// `limit_bytes`, since the file can grow after the check).
-pub fn open_checked(path: &Path, what: &'static str, limit_bytes: u64) -> Result<File, InputError> {
+pub fn open_checked(
+    path: &Path,
+    what: &'static str,
+    limit_bytes: u64,
+) -> Result<File, InputFileError> {
     let file = path.display().to_string();
-    let io = |cause| InputError::Io {
+    let io = |cause| InputFileError::Io {
         file: file.clone(),
         what,
         cause,
@@ -133,16 +141,16 @@ fn check_kind_and_size(
     file: &str,
     what: &'static str,
     limit_bytes: u64,
-) -> Result<(), InputError> {
+) -> Result<(), InputFileError> {
     if let Some(kind) = irregular_kind(meta.file_type()) {
-        return Err(InputError::NotRegular {
+        return Err(InputFileError::NotRegular {
             file: file.to_string(),
             what,
             kind,
         });
     }
     if meta.len() > limit_bytes {
-        return Err(InputError::TooLarge {
+        return Err(InputFileError::TooLarge {
             file: file.to_string(),
             what,
             size_bytes: meta.len(),
@@ -314,7 +322,7 @@ mod tests {
     }
 
     /// `read_text` of a test file, failing the test if it blocks.
-    fn read_with_timeout(path: &Path, limit: u64) -> Result<String, InputError> {
+    fn read_with_timeout(path: &Path, limit: u64) -> Result<String, InputFileError> {
         let p = path.to_path_buf();
         within_timeout(move || read_text(&p, "test file", limit))
     }
@@ -339,7 +347,7 @@ mod tests {
             (d.as_path(), "directory"),
         ] {
             let e = read_with_timeout(p, MAX_SCENE_BYTES).unwrap_err();
-            assert!(matches!(e, InputError::NotRegular { .. }), "{e:?}");
+            assert!(matches!(e, InputFileError::NotRegular { .. }), "{e:?}");
             let msg = e.to_string();
             assert!(
                 msg.starts_with(&p.display().to_string()) && msg.contains(kind),
@@ -367,7 +375,7 @@ mod tests {
         assert_eq!(read_with_timeout(&p, 4).unwrap(), "abcd");
         assert!(matches!(
             read_with_timeout(&p, 3),
-            Err(InputError::TooLarge { size_bytes: 4, .. })
+            Err(InputFileError::TooLarge { size_bytes: 4, .. })
         ));
         std::fs::remove_dir_all(&d).unwrap();
     }
@@ -379,7 +387,7 @@ mod tests {
         assert!(
             matches!(
                 e,
-                InputError::TooLarge {
+                InputFileError::TooLarge {
                     size_bytes: 9,
                     limit_bytes: 8,
                     ..

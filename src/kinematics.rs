@@ -22,10 +22,12 @@
 //! [`Geometry::new`] has none.
 
 pub mod pulley;
+pub mod rigid;
 
 use crate::scene::Pulley;
 use nalgebra::{Matrix3, Matrix6, Vector3};
 pub use pulley::{pulley_exit, PulleyExit};
+pub use rigid::{attach_map, rigid_geometric_stiffness};
 
 /// End-effector pose: position (m) and orientation (unit quaternion w, x, y, z).
 #[derive(Debug, Clone, Copy, PartialEq)]

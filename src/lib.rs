@@ -70,6 +70,7 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 // Layer 0
 pub mod alloc_count;
+pub mod eig3;
 pub mod input_file;
 mod simd;
 pub mod status;

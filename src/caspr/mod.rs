@@ -48,7 +48,7 @@ pub use crate::input_file::message_number;
 pub use bodies::Link;
 pub use cables::{AttachmentReference, CasprCable, CasprPulley};
 
-use crate::input_file::{read_text, InputError};
+use crate::input_file::{read_text, InputFileError};
 use crate::scene::{ElementKind, Scene, SceneError};
 use nalgebra::Vector3;
 use std::path::Path;
@@ -62,7 +62,7 @@ pub const MAX_CASPR_FILE_BYTES: u64 = 16 * 1024 * 1024;
 pub enum CasprError {
     /// A file could not be read (missing, not a regular file, too large, not UTF-8).
     #[error(transparent)]
-    Input(#[from] InputError),
+    Input(#[from] InputFileError),
     /// A DOCTYPE with an internal subset, where a file can declare its own entities, whose
     /// expansion is unbounded: refused before parsing.
     #[error(

@@ -2,7 +2,7 @@
 //! within the scene's tolerance. Offline: runs at build time and allocates.
 
 use super::sag_check::{cables_can_sag, sagged_reference};
-use super::{BuildError, Estimator, EstimatorError, EstimatorParams, InputError, Tmin};
+use super::{BuildError, Estimator, EstimatorError, EstimatorParams, RejectedInput, Tmin};
 use crate::kinematics::{Geometry, Pose};
 use crate::scene::{ElementKind, Scene};
 use crate::trajectory::{Circle, CIRCLE_RADIUS_M};
@@ -130,7 +130,7 @@ pub fn resolve_auto(scene: &Scene) -> Result<(Scene, AutoChoice), BuildError> {
         return Err(BuildError::DefaultPose {
             scene: scene.name.clone(),
             position_m: scene.ee_position_m.into(),
-            reason: Box::new(EstimatorError::Input(InputError::NoFeasiblePose)),
+            reason: Box::new(EstimatorError::Input(RejectedInput::NoFeasiblePose)),
         });
     }
     let mut massless = scene.with_model(ElementKind::Massless, 1);

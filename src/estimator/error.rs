@@ -12,7 +12,7 @@ use crate::tension::{SagTensionError, TensionError};
 /// Input rejected before any computation. Copy, no allocation; the Display text is what
 /// the CLI and the service log print after "invalid input: ".
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, thiserror::Error)]
-pub enum InputError {
+pub enum RejectedInput {
     /// A pose component is NaN or infinite.
     #[error("non-finite pose")]
     NonFinitePose,
@@ -33,15 +33,15 @@ pub enum InputError {
     OrientationOnPointMass,
 }
 
-impl InputError {
+impl RejectedInput {
     /// The status code this input error is reported with.
     pub fn status(&self) -> Status {
         match self {
-            InputError::NonFinitePose => Status::InvalidInput,
-            InputError::NonUnitQuaternion => Status::NonUnitQuaternion,
-            InputError::TminOutOfRange => Status::TminOutOfRange,
-            InputError::NoFeasiblePose => Status::InvalidInput,
-            InputError::OrientationOnPointMass => Status::InvalidInput,
+            RejectedInput::NonFinitePose => Status::InvalidInput,
+            RejectedInput::NonUnitQuaternion => Status::NonUnitQuaternion,
+            RejectedInput::TminOutOfRange => Status::TminOutOfRange,
+            RejectedInput::NoFeasiblePose => Status::InvalidInput,
+            RejectedInput::OrientationOnPointMass => Status::InvalidInput,
         }
     }
 }
@@ -51,7 +51,7 @@ impl InputError {
 pub enum EstimatorError {
     /// Input rejected before any computation.
     #[error("invalid input: {0}")]
-    Input(#[from] InputError),
+    Input(#[from] RejectedInput),
     /// Kinematics failed.
     #[error(transparent)]
     Kinematics(#[from] KinematicsError),
@@ -188,8 +188,8 @@ pub enum TminQueryError {
     Pose(#[from] EstimatorError),
 }
 
-impl From<InputError> for TminQueryError {
-    fn from(e: InputError) -> Self {
+impl From<RejectedInput> for TminQueryError {
+    fn from(e: RejectedInput) -> Self {
         TminQueryError::Pose(e.into())
     }
 }
@@ -254,33 +254,33 @@ mod tests {
     use super::*;
 
     /// The wire status each input error is meant to carry.
-    const STATUS_TABLE: [(InputError, Status); 5] = [
-        (InputError::NonFinitePose, Status::InvalidInput),
-        (InputError::NonUnitQuaternion, Status::NonUnitQuaternion),
-        (InputError::TminOutOfRange, Status::TminOutOfRange),
-        (InputError::NoFeasiblePose, Status::InvalidInput),
-        (InputError::OrientationOnPointMass, Status::InvalidInput),
+    const STATUS_TABLE: [(RejectedInput, Status); 5] = [
+        (RejectedInput::NonFinitePose, Status::InvalidInput),
+        (RejectedInput::NonUnitQuaternion, Status::NonUnitQuaternion),
+        (RejectedInput::TminOutOfRange, Status::TminOutOfRange),
+        (RejectedInput::NoFeasiblePose, Status::InvalidInput),
+        (RejectedInput::OrientationOnPointMass, Status::InvalidInput),
     ];
 
     /// The Display text of `EstimatorError::Input` before the enum existed (the message was
     /// a `&'static str`), one per variant.
-    const OLD_TEXTS: [(InputError, &str); 5] = [
-        (InputError::NonFinitePose, "invalid input: non-finite pose"),
+    const OLD_TEXTS: [(RejectedInput, &str); 5] = [
+        (RejectedInput::NonFinitePose, "invalid input: non-finite pose"),
         (
-            InputError::NonUnitQuaternion,
+            RejectedInput::NonUnitQuaternion,
             "invalid input: quaternion is not of unit norm",
         ),
         (
-            InputError::TminOutOfRange,
+            RejectedInput::TminOutOfRange,
             "invalid input: t_min not finite, ≤ 0, subnormal or above t_max",
         ),
         (
-            InputError::NoFeasiblePose,
+            RejectedInput::NoFeasiblePose,
             "invalid input: no feasible pose to choose the auto model",
         ),
         // Added after the enum (no old text): its own.
         (
-            InputError::OrientationOnPointMass,
+            RejectedInput::OrientationOnPointMass,
             "invalid input: an orientation other than the identity on a point-mass end-effector, which has none",
         ),
     ];
@@ -299,13 +299,13 @@ mod tests {
     }
 
     /// Fails to compile when a variant is added, until it is added here and to the tables.
-    fn table_index(e: InputError) -> usize {
+    fn table_index(e: RejectedInput) -> usize {
         match e {
-            InputError::NonFinitePose => 0,
-            InputError::NonUnitQuaternion => 1,
-            InputError::TminOutOfRange => 2,
-            InputError::NoFeasiblePose => 3,
-            InputError::OrientationOnPointMass => 4,
+            RejectedInput::NonFinitePose => 0,
+            RejectedInput::NonUnitQuaternion => 1,
+            RejectedInput::TminOutOfRange => 2,
+            RejectedInput::NoFeasiblePose => 3,
+            RejectedInput::OrientationOnPointMass => 4,
         }
     }
 
@@ -346,7 +346,7 @@ mod tests {
         let build = BuildError::DefaultPose {
             scene: "s".into(),
             position_m: [0.5, 0.0, 1.25],
-            reason: Box::new(InputError::NoFeasiblePose.into()),
+            reason: Box::new(RejectedInput::NoFeasiblePose.into()),
         };
         assert_eq!(
             build.to_string(),

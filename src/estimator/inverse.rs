@@ -76,7 +76,7 @@
 //! requirement, the top (no ceiling search), leaving ≤ 64 scan points and ~5-10 crossing
 //! steps (56-60 evaluations at the median on the shipped scenes, docs/inverse.md).
 
-use super::{Estimator, EstimatorError, InputError, Status, TminQueryError};
+use super::{Estimator, EstimatorError, RejectedInput, Status, TminQueryError};
 use crate::kinematics::Pose;
 use crate::modal::lambda_to_hz;
 use crate::scene::MAX_CABLES;
@@ -195,13 +195,13 @@ impl Estimator {
             return Err(TminQueryError::BadRequirement(f_required_hz));
         }
         if !pose.is_finite() {
-            return Err(InputError::NonFinitePose.into());
+            return Err(RejectedInput::NonFinitePose.into());
         }
         if !pose.has_unit_quaternion(self.params.quaternion_tol) {
-            return Err(InputError::NonUnitQuaternion.into());
+            return Err(RejectedInput::NonUnitQuaternion.into());
         }
         if !self.scene.rigid && !pose.has_identity_orientation() {
-            return Err(InputError::OrientationOnPointMass.into());
+            return Err(RejectedInput::OrientationOnPointMass.into());
         }
         self.inverse
             .set_pose(&self.scene, pose)
@@ -245,7 +245,7 @@ impl Estimator {
         let Some(&lowest_ok) = probes.iter().filter(ok).min_by(|a, b| a.t.total_cmp(&b.t)) else {
             // Not ok at any probe (10⁻⁶ T_max and T_max are always among them).
             return Err(first_err
-                .unwrap_or(InputError::TminOutOfRange.into())
+                .unwrap_or(RejectedInput::TminOutOfRange.into())
                 .into());
         };
 

@@ -60,7 +60,7 @@ mod sag_check;
 mod t_min;
 
 pub use auto::{resolve_auto, AutoChoice};
-pub use error::{BuildError, EstimatorError, InputError, ReferenceError, TminQueryError};
+pub use error::{BuildError, EstimatorError, ReferenceError, RejectedInput, TminQueryError};
 pub use estimate::{Estimate, Status};
 pub use forward::EndEffector;
 pub use inverse::{TminAnswer, MAX_EVALUATIONS as TMIN_QUERY_MAX_EVALUATIONS};
@@ -325,20 +325,20 @@ impl Estimator {
     /// Reject a pose or T_min before any computation. There is no geometric pre-test of
     /// the position: whether the robot can hold a pose is the tension distribution's answer
     /// (`TensionInfeasible`), and a pose at an anchor is the kinematics' (`CableTooShort`).
-    fn check_input(&self, pose: &Pose) -> Result<(), InputError> {
+    fn check_input(&self, pose: &Pose) -> Result<(), RejectedInput> {
         if !pose.is_finite() {
-            return Err(InputError::NonFinitePose);
+            return Err(RejectedInput::NonFinitePose);
         }
         if !pose.has_unit_quaternion(self.params.quaternion_tol) {
-            return Err(InputError::NonUnitQuaternion);
+            return Err(RejectedInput::NonUnitQuaternion);
         }
         if !self.scene.rigid && !pose.has_identity_orientation() {
-            return Err(InputError::OrientationOnPointMass);
+            return Err(RejectedInput::OrientationOnPointMass);
         }
         let n = self.scene.n_cables();
         let bounds = self.t_min_n[..n].iter().zip(&self.t_max_n[..n]);
         if !bounds.into_iter().all(|(&lo, &hi)| is_valid_t_min(lo, hi)) {
-            return Err(InputError::TminOutOfRange);
+            return Err(RejectedInput::TminOutOfRange);
         }
         Ok(())
     }

@@ -1,11 +1,8 @@
-//! Rigid end-effector kinematics shared by the dense and the structured solvers: the
-//! attachment map of a cable's end and the tensions' rotational geometric stiffness.
+//! A rigid end-effector's small motions: the attachment map of a cable's end and the
+//! rotational geometric stiffness of the cable tensions (used by the estimator's forward
+//! model and by the dense and the structured modal solvers).
 
 use nalgebra::{Matrix3, Vector3};
-
-/// A rigid end-effector's parts: world-frame inertia about the centroid (kg·m²), the
-/// attachment arms (m) and the rotational geometric stiffness (N·m/rad).
-pub(super) type RigidParts<'a> = (&'a Matrix3<f64>, &'a [Vector3<f64>], &'a Matrix3<f64>);
 
 /// G = [I, −\[r\]×] (3 × 6): displacement of an attachment point at arm r (m) for an
 /// end-effector translation u and small rotation θ: δx = u + θ × r.

@@ -1,9 +1,10 @@
 //! The offline dense reference: assembled K and M, static condensation, and a dense
 //! generalized symmetric eigen-solve. Never on the real-time path.
 
-use super::rigid::{attach_map, RigidParts};
+use super::RigidParts;
 use super::{lambda_to_hz, ModalError};
 use crate::cable::{CableModel, ChainKind};
+use crate::kinematics::attach_map;
 use nalgebra::{DMatrix, Matrix3, Matrix6, SymmetricEigen, Vector3};
 
 /// Assemble the global K (N/m) and M (kg) of the cable models and the end-effector point
@@ -21,7 +22,7 @@ pub fn assemble(
 /// Assemble for a rigid end-effector (6 DOF: translation, rotation): cable i's last node is
 /// tied to it by G_i = [I, −\[r_i\]×] (arm r_i, m, world frame); `inertia_kg_m2` is the
 /// world-frame inertia about the centroid, `k_geo_rot` the tensions' rotational geometric
-/// stiffness (N·m/rad, see [`rigid_geometric_stiffness`](super::rigid_geometric_stiffness)).
+/// stiffness (N·m/rad, see [`rigid_geometric_stiffness`](crate::kinematics::rigid_geometric_stiffness)).
 pub fn assemble_rigid(
     models: &[CableModel],
     ee_mass_kg: f64,

@@ -6,13 +6,14 @@
 //! (but for its memo of the supported chains' poles, filled on first use, see `PoleMemo`);
 //! [`EvalScratch`] holds the buffers one evaluation writes (and the evaluation counter).
 
-use super::eig3::eig3;
-use super::rigid::{attach_map, RigidParts};
+use super::RigidParts;
 use crate::cable::supported_pole;
 use crate::cable::{
     eval_continuous_batch, eval_discrete_batch, CableModel, Chain, ChainEval, ChainKind,
     BATCH_MAX_ELEMENTS,
 };
+use crate::eig3::eig3;
+use crate::kinematics::attach_map;
 use crate::scene::MAX_CABLES;
 use std::sync::atomic::{AtomicU64, Ordering};
 

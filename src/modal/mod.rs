@@ -67,7 +67,7 @@
 //! evaluation of D(λ). `first_mode`: the first root and its certificate. `ee_tracker`: the
 //! end-effector mode, scanned and tracked. `spectrum`: the first K modes
 //! ([`ModalSolver::modes`], [`Mode`], [`SpectrumParams`]). `solver`: [`ModalSolver`], which
-//! composes them. `eig3` and `rigid`: small kernels both solvers use. `mechanism`: a
+//! composes them. `mechanism`: a
 //! direction the static stiffness does not hold ([`free_direction`]). `sagged`: the sagged
 //! problem (chains on their catenaries, not uniform: poles seen only through the count) as
 //! a [`Condensed`](engine) view for the same first root, tracker and spectrum search, and its
@@ -77,14 +77,12 @@
 mod dense;
 mod dynamic_stiffness;
 mod ee_tracker;
-mod eig3;
 mod engine;
 mod error;
 mod first_mode;
 mod frf;
 mod mechanism;
 pub mod response;
-mod rigid;
 pub mod sagged;
 mod shapes;
 mod solver;
@@ -96,19 +94,25 @@ pub use dense::{
 };
 pub use dynamic_stiffness::{DynEval, EigD};
 pub use ee_tracker::RescanCounts;
-pub use eig3::{eig3, eig3_jacobi, Eig3};
 pub use error::ModalError;
 pub use frf::{
     complex_shift, dense_receptance, frequency_grid, receptance_over, FrfError, ModalBasis,
     MAX_FRF_MODES, MAX_FRF_POINTS,
 };
 pub use mechanism::{free_direction, may_be_mechanism, MECHANISM_REL};
-pub use rigid::{attach_map, rigid_geometric_stiffness};
 pub use shapes::{
     ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_CONTINUOUS_SAMPLES, MAX_MULTIPLICITY,
 };
 pub use solver::ModalSolver;
 pub use spectrum::{Mode, SpectrumParams};
+
+/// A rigid end-effector's parts: world-frame inertia about the centroid (kg·m²), the
+/// attachment arms (m) and the rotational geometric stiffness (N·m/rad).
+type RigidParts<'a> = (
+    &'a nalgebra::Matrix3<f64>,
+    &'a [nalgebra::Vector3<f64>],
+    &'a nalgebra::Matrix3<f64>,
+);
 
 /// Convert λ = ω² (rad²/s²) to Hz.
 #[inline]

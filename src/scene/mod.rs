@@ -20,7 +20,7 @@ use std::path::Path;
 
 mod bounds;
 mod damping;
-use crate::input_file::{InputError, MAX_SCENE_BYTES};
+use crate::input_file::{InputFileError, MAX_SCENE_BYTES};
 
 mod load;
 mod parse;
@@ -53,7 +53,7 @@ pub enum SceneError {
     /// The file could not be read: missing, not a regular file, over
     /// [`MAX_SCENE_BYTES`] or not UTF-8.
     #[error(transparent)]
-    Input(#[from] InputError),
+    Input(#[from] InputFileError),
     /// TOML syntax error, wrong type, missing or unknown key: the toml crate's own report
     /// (several lines: line and column, the offending line with a caret, what is wrong).
     #[error("{file}: {message}")]

@@ -22,7 +22,7 @@ use std::path::Path;
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::input_file::InputError;
+use crate::input_file::InputFileError;
 use crate::kinematics::{up_frame, Pose};
 use crate::scene::Scene;
 
@@ -51,7 +51,7 @@ pub enum TrajectoryError {
     /// The file could not be read: missing, not a regular file, over
     /// [`MAX_TRAJECTORY_BYTES`](crate::input_file::MAX_TRAJECTORY_BYTES) or not UTF-8.
     #[error(transparent)]
-    Input(#[from] InputError),
+    Input(#[from] InputFileError),
     /// A row breaks the CSV rules (see the module docs).
     #[error("{origin}:{line}: {msg}")]
     Row {

@@ -28,7 +28,7 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use super::TrajectoryError;
 use crate::input_file::{
-    message_excerpt, message_number, open_checked, InputError, MAX_TRAJECTORY_BYTES,
+    message_excerpt, message_number, open_checked, InputFileError, MAX_TRAJECTORY_BYTES,
 };
 use crate::kinematics::{unit_quaternion, Pose};
 use crate::scene::Scene;
@@ -319,7 +319,7 @@ where
     const WHAT: &str = "trajectory CSV";
     let file = path.display().to_string();
     let io = |cause| {
-        TrajectoryError::Input(InputError::Io {
+        TrajectoryError::Input(InputFileError::Io {
             file: file.clone(),
             what: WHAT,
             cause,
@@ -341,7 +341,7 @@ where
         offset += read as u64;
         if offset > MAX_TRAJECTORY_BYTES {
             // The file grew after the size check.
-            return Err(TrajectoryError::Input(InputError::TooLarge {
+            return Err(TrajectoryError::Input(InputFileError::TooLarge {
                 file,
                 what: WHAT,
                 size_bytes: offset,
@@ -365,7 +365,7 @@ where
             .into());
         }
         let text = std::str::from_utf8(&buf).map_err(|e| {
-            TrajectoryError::Input(InputError::NotUtf8 {
+            TrajectoryError::Input(InputFileError::NotUtf8 {
                 file: file.clone(),
                 what: WHAT,
                 offset: (start as usize) + e.valid_up_to(),

@@ -15,10 +15,11 @@
 //! closed-form uniform chains) fed with EA' = EA(1 + T/EA), μ' = μ/(1 + T/EA).
 
 use cablevib::cable::{up_frame, CableModel};
+use cablevib::kinematics::rigid_geometric_stiffness;
 use cablevib::modal::sagged::{
     assemble_sagged, HangingCable, SagDenseCable, SagEndEffector, SagModalSolver,
 };
-use cablevib::modal::{dense_modes_ee, rigid_geometric_stiffness, ModalParams, ModalSolver, Mode};
+use cablevib::modal::{dense_modes_ee, ModalParams, ModalSolver, Mode};
 use cablevib::scene::ElementKind;
 use cablevib_testkit::sag_robot::*;
 use nalgebra::{Matrix3, Vector3};

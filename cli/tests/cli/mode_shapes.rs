@@ -432,7 +432,7 @@ fn csv_and_svg_of_the_rigid_box() {
             assert!((nalgebra::Vector3::new(r[4], r[5], r[6]) - a).norm() < 1e-8);
         }
         if node == 6 {
-            let g = cablevib::modal::attach_map(&pm.geometry.arm_m[i]);
+            let g = cablevib::kinematics::attach_map(&pm.geometry.arm_m[i]);
             let want = g * m.ee;
             assert!(
                 (u - want).norm() <= 1e-8 * want.norm().max(1e-12),

@@ -150,7 +150,7 @@ fn margin_answers() {
 
 #[test]
 fn the_inverse_answer_carries_failures_as_statuses() {
-    use crate::estimator::{EstimatorError, InputError, TminAnswer, TminQueryError};
+    use crate::estimator::{EstimatorError, RejectedInput, TminAnswer, TminQueryError};
     use inverse_worker::carried;
     let a = TminAnswer {
         t_min_n: 12.5,
@@ -165,7 +165,7 @@ fn the_inverse_answer_carries_failures_as_statuses() {
         t_min_n: 88.0,
     };
     assert_eq!(carried(Err(unreachable)), Ok(f64::INFINITY));
-    let bad_pose = EstimatorError::Input(InputError::NonFinitePose);
+    let bad_pose = EstimatorError::Input(RejectedInput::NonFinitePose);
     assert_eq!(
         carried(Err(TminQueryError::Pose(bad_pose))),
         Err(StatusCode::InvalidInput)

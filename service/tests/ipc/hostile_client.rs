@@ -16,7 +16,7 @@
 //!   all refused when the count exceeds `MAX_CABLES`); a refused one (not finite, below the
 //!   smallest normal, above the cable's T_max) is reported on that one estimate and the
 //!   previous bounds stay in force;
-//! - the status of every bad input, in the estimator's order of checks (`InputError`):
+//! - the status of every bad input, in the estimator's order of checks (`RejectedInput`):
 //!   non-finite pose → `InvalidInput`, non-unit quaternion (tolerance 1e-6) →
 //!   `NonUnitQuaternion`, a rotation on the point-mass scene (vector part > 1e-3 of the norm:
 //!   the valid poses are identity-oriented, the rotated ones refused) → `InvalidInput`,

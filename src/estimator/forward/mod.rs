@@ -473,7 +473,7 @@ impl EndEffector {
 
     /// The end-effector of `scene` at `pose` holding cables of geometry `g` (at that pose)
     /// with tensions `tensions_n` (N): a rigid body carries their rotational geometric
-    /// stiffness ([`modal::rigid_geometric_stiffness`]).
+    /// stiffness ([`crate::kinematics::rigid_geometric_stiffness`]).
     pub fn with_tensions(
         scene: &Scene,
         pose: &Pose,
@@ -482,7 +482,8 @@ impl EndEffector {
     ) -> EndEffector {
         let mut ee = Self::of_body(scene, pose);
         if ee.rigid {
-            ee.k_geo_rot = modal::rigid_geometric_stiffness(&g.unit, &g.arm_m, tensions_n);
+            ee.k_geo_rot =
+                crate::kinematics::rigid_geometric_stiffness(&g.unit, &g.arm_m, tensions_n);
         }
         ee
     }

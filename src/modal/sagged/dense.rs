@@ -3,7 +3,8 @@
 //! world chord (not from the in-plane/out-of-plane split the structured solver uses).
 
 use crate::cable::sagged::SagChain;
-use crate::modal::{attach_map, check_dense_budget, ModalError};
+use crate::kinematics::attach_map;
+use crate::modal::{check_dense_budget, ModalError};
 use nalgebra::{DMatrix, Matrix3, Matrix3x6, Matrix6, Vector3};
 
 /// One cable for the dense assembly.

@@ -3,7 +3,7 @@
 
 use super::{SagCableFrame, SagEndEffector, SagLoadError};
 use crate::cable::sagged::{SagBatch, SagChain, SagChainEval, SagContinuous, SagContinuousParams};
-use crate::modal::attach_map;
+use crate::kinematics::attach_map;
 use crate::modal::dynamic_stiffness::SYM3;
 use crate::modal::engine::{ee_from_problem, Condensed, TautView};
 use crate::modal::DynEval;

@@ -4,8 +4,8 @@
 use super::chain_shape::ChainShape;
 use super::{ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_MULTIPLICITY};
 use crate::cable::{CableModel, ChainKind};
-use crate::modal::eig3::eig3_jacobi;
-use crate::modal::rigid::attach_map;
+use crate::eig3::eig3_jacobi;
+use crate::kinematics::attach_map;
 use crate::modal::{lambda_to_hz, ModalSolver};
 use nalgebra::{DMatrix, DVector, Matrix3x6, SymmetricEigen, Vector3, Vector6};
 
