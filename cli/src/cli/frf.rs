@@ -5,7 +5,7 @@
 //! ([`crate::report::frf`]), a Bode figure and JSON; `--dense` also solves the assembled
 //! complex problem at every frequency and prints the difference and both times.
 
-use super::args::{resolve_scene, SceneArgs};
+use super::args::{damping_label, resolve_scene, SceneArgs};
 use super::figure::{self, parse_format};
 use super::modes::pose_model;
 use super::{json_f64, CliError};
@@ -170,18 +170,6 @@ fn coords(names: &[String], dim: usize, opt: &str) -> Result<Vec<usize>, CliErro
         }
     }
     Ok(out)
-}
-
-fn damping_label(d: &Damping) -> String {
-    match *d {
-        Damping::None => "none".into(),
-        Damping::LossFactor { eta } => format!("loss factor η = {eta}"),
-        Damping::Rayleigh {
-            alpha_per_s,
-            beta_s,
-        } => format!("Rayleigh α = {alpha_per_s} 1/s, β = {beta_s} s"),
-        Damping::ModalRatio { zeta } => format!("modal ratio ζ = {zeta}"),
-    }
 }
 
 /// `cablevib frf`.
