@@ -151,14 +151,13 @@ pub fn frf<'py>(
     json_to_py(py, &value)
 }
 
+/// The receptance at one frequency, m/N (the leading `dim` × `dim` block).
+type Receptance = Matrix6<Complex<f64>>;
+
 /// Sagging cables, as ``cablevib frf`` does them: the sagged tension solve at the scene's
 /// pose, then the sagged solver's condensed D at the complex λ of each frequency (FEM
 /// chains; loss factor, Rayleigh or no damping).
-fn sagged(
-    s: &Scene,
-    damping: &Damping,
-    freqs: &[f64],
-) -> Result<(Vec<Matrix6<Complex<f64>>>, usize), String> {
+fn sagged(s: &Scene, damping: &Damping, freqs: &[f64]) -> Result<(Vec<Receptance>, usize), String> {
     if s.model.element == ElementKind::Continuous {
         return Err(FrfError::SagContinuous.to_string());
     }
