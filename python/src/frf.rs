@@ -5,11 +5,14 @@ use crate::analysis::{finite_position, with_overrides};
 use crate::convert::json_to_py;
 use crate::error::CablevibError;
 use crate::scene::PyScene;
-use cablevib::estimator::PoseModel;
-use cablevib::modal::{frequency_grid, receptance_over, ModalParams, ModalSolver};
+use cablevib::estimator::{Estimator, PoseModel, Tmin};
+use cablevib::kinematics::Pose;
+use cablevib::modal::{frequency_grid, receptance_over, FrfError, ModalParams, ModalSolver};
 use cablevib::scene::{
-    Damping, MAX_LOSS_FACTOR, MAX_MODAL_RATIO, MAX_RAYLEIGH_ALPHA_PER_S, MAX_RAYLEIGH_BETA_S,
+    Damping, ElementKind, Scene, MAX_LOSS_FACTOR, MAX_MODAL_RATIO, MAX_RAYLEIGH_ALPHA_PER_S,
+    MAX_RAYLEIGH_BETA_S,
 };
+use nalgebra::{Complex, Matrix6};
 use pyo3::prelude::*;
 
 /// The modal-damping basis's cut-off over the band's top (the command line's).
@@ -22,6 +25,10 @@ const MODAL_CUTOFF_RATIO: f64 = 4.0;
 /// ``--log``; ``position``, ``t_min``, ``element``, ``elements`` as in ``analyze``. Damping:
 /// the scene's ``[damping]``, or one of ``loss_factor`` (η), ``rayleigh`` ((α 1/s, β s)),
 /// ``modal_ratio`` (ζ), ``undamped=True``.
+///
+/// With sag (``[effects] sag = true``) the response is the sagged FEM chains' at the sagged
+/// tensions of the pose, as on the command line: ``element="continuous"`` and modal damping
+/// are refused there.
 ///
 /// Keys: ``frequencies_hz`` (N), ``receptance_re``, ``receptance_im`` (N × d × d, m/N;
 /// d = 3, or 6 for a rigid end-effector, translations first), ``damping``, ``dim``.
@@ -54,12 +61,6 @@ pub fn frf<'py>(
         s.ee_position_m = finite_position(p)?;
     }
     let s = with_overrides(s, t_min, element, elements)?;
-    if s.model.sag {
-        return Err(CablevibError::new_err(format!(
-            "scene `{}` has sag on: the frequency response covers taut (chord) cables",
-            s.name
-        )));
-    }
     let given = [
         loss_factor.is_some(),
         rayleigh.is_some(),
@@ -100,6 +101,9 @@ pub fn frf<'py>(
     };
     let h = py
         .detach(|| -> Result<_, String> {
+            if s.model.sag {
+                return sagged(&s, &damping, &freqs);
+            }
             let pose = PoseModel::new(&s).map_err(|e| e.to_string())?;
             let mut solver = ModalSolver::new(ModalParams::default());
             pose.load(&mut solver);
@@ -145,4 +149,31 @@ pub fn frf<'py>(
         "dim": dim,
     });
     json_to_py(py, &value)
+}
+
+/// The receptance at one frequency, m/N (the leading `dim` × `dim` block).
+type Receptance = Matrix6<Complex<f64>>;
+
+/// Sagging cables, as ``cablevib frf`` does them: the sagged tension solve at the scene's
+/// pose, then the sagged solver's condensed D at the complex λ of each frequency (FEM
+/// chains; loss factor, Rayleigh or no damping).
+fn sagged(s: &Scene, damping: &Damping, freqs: &[f64]) -> Result<(Vec<Receptance>, usize), String> {
+    if s.model.element == ElementKind::Continuous {
+        return Err(FrfError::SagContinuous.to_string());
+    }
+    if let Damping::ModalRatio { .. } = damping {
+        return Err(FrfError::SagModalDamping.to_string());
+    }
+    let mut est = Estimator::new(s).map_err(|e| e.to_string())?;
+    let pose = Pose::in_scene(s, s.ee_position_m);
+    let e = *est.update(&pose, Tmin::Scene);
+    if !e.status.is_ok() {
+        let why = e.error.map(|x| x.to_string()).unwrap_or_default();
+        return Err(format!("sagged pose: {why}"));
+    }
+    let sag = est.sag_modal().ok_or("no sagged pose loaded")?;
+    let h = sag
+        .receptance_over(damping, freqs)
+        .map_err(|e| e.to_string())?;
+    Ok((h, sag.dim()))
 }

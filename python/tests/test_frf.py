@@ -1,11 +1,14 @@
 """cablevib.frf against `cablevib frf --json`: the same library function
-(modal::receptance_over) behind two front ends, so every receptance entry must be equal to the
-last bit; and the modal-damping response against its single-mode closed form at resonance."""
+(modal::receptance_over; with sag, the sagged solver's receptance_over) behind two front ends,
+so every receptance entry must be equal to the last bit; with sag the command line's own
+`--dense` comparison (the assembled sagged complex problem solved by LU at every frequency)
+is checked too."""
 
 import numpy as np
 import pytest
 
 import cablevib
+from conftest import SCENES
 
 
 @pytest.mark.parametrize(
@@ -26,6 +29,47 @@ def test_frf_equals_the_command_line(cli_json, kwargs, flags):
     np.testing.assert_array_equal(np.asarray(py["receptance_re"]), np.array(cli["receptance_re"]))
     np.testing.assert_array_equal(np.asarray(py["receptance_im"]), np.array(cli["receptance_im"]))
     assert np.asarray(py["receptance_re"]).shape == (len(py["frequencies_hz"]), 3, 3)
+
+
+# suspended-8 has sag on: FEM chains on the catenary, N = 6 (small, so the dense solve is quick).
+SAG = {"element": "fem", "elements": 6, "to_hz": 20.0, "points": 40}
+SAG_FLAGS = ["--element", "fem", "--elements", "6", "--to-hz", "20", "--points", "40"]
+
+
+# The bound on the command line's own dense comparison: 1e-8 on the even grid (it passes
+# near resonances; η = 0.02 keeps the conditioning ≲ 1e2/η, as cli/tests/cli/frf.rs holds);
+# the log grid packs its points at the low resonances, where the Rayleigh damping is near its
+# least (ζ ≈ √(αβ) = 1 %): the on-resonance bound of tests/sag/frf.rs, 1e-7 (1.3e-8 measured).
+@pytest.mark.parametrize(
+    "kwargs,flags,dense_bound",
+    [
+        ({"loss_factor": 0.02}, ["--loss-factor", "0.02"], 1e-8),
+        ({"rayleigh": (0.5, 2e-4), "log": True, "from_hz": 1.0},
+         ["--rayleigh", "0.5,2e-4", "--log", "--from-hz", "1"], 1e-7),
+    ],
+)
+def test_sagged_frf_equals_the_command_line(cli_json, kwargs, flags, dense_bound):
+    scene = str(SCENES / "suspended_8.toml")
+    py = cablevib.frf(cablevib.Scene.load(scene), **{**SAG, **kwargs})
+    cli = cli_json("frf", scene, *SAG_FLAGS, *flags, "--dense")
+    np.testing.assert_array_equal(np.asarray(py["frequencies_hz"]), np.array(cli["frequencies_hz"]))
+    np.testing.assert_array_equal(np.asarray(py["receptance_re"]), np.array(cli["receptance_re"]))
+    np.testing.assert_array_equal(np.asarray(py["receptance_im"]), np.array(cli["receptance_im"]))
+    assert np.asarray(py["receptance_re"]).shape == (40, 3, 3)
+    # The independent check: the command line's dense complex LU of the assembled sagged
+    # c(K - λM) at every frequency.
+    assert cli["dense_max_rel_diff"] <= dense_bound, cli["dense_max_rel_diff"]
+
+
+@pytest.mark.parametrize(
+    "kwargs,needle",
+    [({"element": "continuous", "loss_factor": 0.02}, "use --element fem"),
+     ({"element": "fem", "modal_ratio": 0.01}, "modal damping with sag")],
+)
+def test_sagged_frf_refuses_what_the_command_line_refuses(kwargs, needle):
+    scene = cablevib.Scene.load(str(SCENES / "suspended_8.toml"))
+    with pytest.raises(cablevib.CablevibError, match=needle):
+        cablevib.frf(scene, **kwargs)
 
 
 @pytest.mark.parametrize(

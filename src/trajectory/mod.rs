@@ -48,6 +48,9 @@ pub enum TrajectoryError {
         /// The range it must be in.
         bound: &'static str,
     },
+    /// A point-to-point move whose displacement is zero: it would go nowhere.
+    #[error("a point-to-point move of zero length goes nowhere: the displacement must not be (0, 0, 0) m")]
+    ZeroMove,
     /// The file could not be read: missing, not a regular file, over
     /// [`MAX_TRAJECTORY_BYTES`](crate::input_file::MAX_TRAJECTORY_BYTES) or not UTF-8.
     #[error(transparent)]

@@ -48,7 +48,8 @@ pub struct Move {
 }
 
 impl Move {
-    /// A move; refused when a number is not finite or the duration is not > 0.
+    /// A move; refused when a number is not finite, the duration is not > 0 or the
+    /// displacement is zero ([`TrajectoryError::ZeroMove`]).
     pub fn new(
         start_m: Vector3<f64>,
         displacement_m: Vector3<f64>,
@@ -65,6 +66,9 @@ impl Move {
             if !v.is_finite() {
                 return bad("move coordinate", *v, "finite");
             }
+        }
+        if displacement_m == Vector3::zeros() {
+            return Err(TrajectoryError::ZeroMove);
         }
         Ok(Move {
             start_m,
@@ -190,6 +194,10 @@ mod tests {
             assert!((a - want).abs() < 1e-3, "{profile:?}: a {a}");
         }
         assert!(Move::new(Vector3::zeros(), Vector3::x(), 0.0, Profile::SCurve).is_err());
+        assert!(matches!(
+            Move::new(Vector3::zeros(), Vector3::zeros(), 1.0, Profile::SCurve),
+            Err(TrajectoryError::ZeroMove)
+        ));
         assert!(Move::new(
             Vector3::zeros(),
             Vector3::x() * f64::NAN,

@@ -3,7 +3,7 @@
 
 use super::CliError;
 use crate::kinematics::unit_quaternion;
-use crate::scene::{ElementKind, Scene, MAX_ELEMENTS_PER_CABLE};
+use crate::scene::{Damping, ElementKind, Scene, MAX_ELEMENTS_PER_CABLE};
 use crate::study::map::Interval;
 use clap::{Args, ValueEnum};
 use nalgebra::Vector3;
@@ -208,6 +208,20 @@ pub fn warn_if_sag_matters(scene: &Scene, position_m: Option<Vector3<f64>>) {
     };
     if let Some(w) = crate::estimator::sag_warning(scene, &pose) {
         eprintln!("{w}");
+    }
+}
+
+/// A damping in words, SI units (`frf`'s and `simulate`'s headers, figure subtitles and
+/// JSON).
+pub fn damping_label(d: &Damping) -> String {
+    match *d {
+        Damping::None => "none".into(),
+        Damping::LossFactor { eta } => format!("loss factor η = {eta}"),
+        Damping::Rayleigh {
+            alpha_per_s,
+            beta_s,
+        } => format!("Rayleigh α = {alpha_per_s} 1/s, β = {beta_s} s"),
+        Damping::ModalRatio { zeta } => format!("modal ratio ζ = {zeta}"),
     }
 }
 

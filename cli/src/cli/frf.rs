@@ -3,17 +3,18 @@
 //! modal superposition with static correction for modal damping; with sag, the sagged FEM
 //! chains at the complex λ, loss factor and Rayleigh only), as a table, a CSV
 //! ([`crate::report::frf`]), a Bode figure and JSON; `--dense` also solves the assembled
-//! complex problem at every frequency and prints the difference and both times.
+//! complex problem at every frequency, `--dense-modal` sums over every mode of the
+//! assembled problem ([`super::frf_dense`]), and both print the difference and both times.
 
-use super::args::{resolve_scene, SceneArgs};
+use super::args::{damping_label, resolve_scene, SceneArgs};
 use super::figure::{self, parse_format};
+use super::frf_dense::{self, DenseCheck};
 use super::modes::pose_model;
 use super::{json_f64, CliError};
 use crate::estimator::{Estimator, Tmin};
 use crate::kinematics::Pose;
 use crate::modal::{
-    dense_receptance, frequency_grid, lambda_to_hz, receptance_over, FrfError, ModalParams,
-    ModalSolver,
+    frequency_grid, lambda_to_hz, receptance_over, FrfError, ModalParams, ModalSolver,
 };
 use crate::report::csv::{process_command_line, write_csv};
 use crate::report::figure::FigureFormat;
@@ -76,6 +77,16 @@ pub struct FrfArgs {
     /// loss factor, Rayleigh or none): print the largest relative difference and both times.
     #[arg(long)]
     pub dense: bool,
+    /// Also the dense reference at every frequency by summation over every mode of the
+    /// assembled (K, M) (one dense eigendecomposition; fem and catenary; any damping),
+    /// checked by the dense complex LU at --dense-lu-points of the frequencies: print the
+    /// largest relative differences and the times.
+    #[arg(long, conflicts_with = "dense")]
+    pub dense_modal: bool,
+    /// With --dense-modal: how many frequencies (evenly spread, both ends included) are
+    /// also solved by the dense complex LU; 0 for none.
+    #[arg(long, default_value_t = 3, requires = "dense_modal")]
+    pub dense_lu_points: usize,
     /// Write the response as CSV (and its .json sidecar).
     #[arg(long)]
     pub csv: Option<PathBuf>,
@@ -172,18 +183,6 @@ fn coords(names: &[String], dim: usize, opt: &str) -> Result<Vec<usize>, CliErro
     Ok(out)
 }
 
-fn damping_label(d: &Damping) -> String {
-    match *d {
-        Damping::None => "none".into(),
-        Damping::LossFactor { eta } => format!("loss factor η = {eta}"),
-        Damping::Rayleigh {
-            alpha_per_s,
-            beta_s,
-        } => format!("Rayleigh α = {alpha_per_s} 1/s, β = {beta_s} s"),
-        Damping::ModalRatio { zeta } => format!("modal ratio ζ = {zeta}"),
-    }
-}
-
 /// `cablevib frf`.
 pub fn run(a: &FrfArgs) -> Result<(), CliError> {
     let freqs = frequency_grid(a.from_hz, a.to_hz, a.points, a.log)
@@ -242,9 +241,21 @@ pub fn run(a: &FrfArgs) -> Result<(), CliError> {
             "natural_frequencies_min_participation": MARK_PARTICIPATION,
             "structured_s": structured_s,
         });
-        if let Some((err, dense_s, _)) = dense {
-            o["dense_max_rel_diff"] = json_f64(err);
-            o["dense_s"] = json_f64(dense_s);
+        if let Some(d) = &dense {
+            o["dense_method"] = d.method.into();
+            o["dense_dof"] = d.dof.into();
+            o["dense_max_rel_diff"] = json_f64(d.max_rel_diff);
+            o["dense_rel_diff"] = d.rel_diff.iter().map(|&x| json_f64(x)).collect();
+            o["dense_s"] = json_f64(d.seconds);
+            if let Some(e) = d.eig_seconds {
+                o["dense_eig_s"] = json_f64(e);
+            }
+            if let Some(lu) = &d.lu {
+                o["dense_lu_frequencies_hz"] = serde_json::json!(lu.frequencies_hz);
+                o["dense_lu_modal_max_rel_diff"] = json_f64(lu.modal_rel_diff);
+                o["dense_lu_structured_max_rel_diff"] = json_f64(lu.structured_rel_diff);
+                o["dense_lu_s"] = json_f64(lu.seconds);
+            }
         }
         println!("{o}");
     } else {
@@ -285,14 +296,8 @@ pub fn run(a: &FrfArgs) -> Result<(), CliError> {
                 COORDS[o], COORDS[i], peak, data.frequencies_hz[k]
             );
         }
-        if let Some((err, dense_s, dof)) = dense {
-            println!(
-                "dense complex solve ({} DOF) at every frequency: {:.3} s; largest relative difference {:.2e}; structured {:.0}× faster",
-                dof,
-                dense_s,
-                err,
-                dense_s / structured_s.max(1e-12)
-            );
+        if let Some(d) = &dense {
+            print_dense(d, structured_s, data.frequencies_hz.len());
         }
     }
     let meta = frf_meta(&sc.name, &damping_label(&damping), &data.natural_hz);
@@ -322,35 +327,64 @@ pub fn run(a: &FrfArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// The dense complex solve at every frequency: (largest relative Frobenius difference from
-/// `h`, seconds).
-fn dense_compare(
+/// The dense check asked for (`--dense`, `--dense-modal`), or none.
+fn dense_check(
+    a: &FrfArgs,
     dense: impl FnOnce() -> Result<(DMatrix<f64>, DMatrix<f64>), String>,
     dim: usize,
     damping: &Damping,
     freqs: &[f64],
     h: &[Matrix6<Complex64>],
-) -> Result<(f64, f64, usize), CliError> {
-    if let Damping::ModalRatio { .. } = damping {
-        let msg = "--dense: modal damping has no damping matrix to assemble (loss factor, Rayleigh or none)";
-        return Err(CliError::Usage(msg.into()));
+) -> Result<Option<DenseCheck>, CliError> {
+    if !(a.dense || a.dense_modal) {
+        return Ok(None);
     }
-    let (k, m) = dense().map_err(|e| CliError::Analysis(format!("--dense: {e}")))?;
-    let t0 = Instant::now();
-    let mut worst = 0.0f64;
-    for (&f, hs) in freqs.iter().zip(h) {
-        let r = dense_receptance(&k, &m, dim, damping, 2.0 * std::f64::consts::PI * f)
-            .map_err(|e| CliError::Analysis(e.to_string()))?;
-        let (mut num, mut den) = (0.0, 0.0);
-        for i in 0..dim {
-            for j in 0..dim {
-                num += (hs[(i, j)] - r[(i, j)]).norm_sqr();
-                den += r[(i, j)].norm_sqr();
+    if a.dense {
+        if let Damping::ModalRatio { .. } = damping {
+            let msg = "--dense: modal damping has no damping matrix to assemble (loss factor, Rayleigh or none; --dense-modal covers modal damping)";
+            return Err(CliError::Usage(msg.into()));
+        }
+    }
+    let opt = if a.dense { "--dense" } else { "--dense-modal" };
+    let (k, m) = dense().map_err(|e| CliError::Analysis(format!("{opt}: {e}")))?;
+    if a.dense {
+        frf_dense::lu_every(&k, &m, dim, damping, freqs, h).map(Some)
+    } else {
+        frf_dense::modal_every(&k, &m, dim, damping, freqs, h, a.dense_lu_points).map(Some)
+    }
+}
+
+/// The dense check's lines of the text output.
+fn print_dense(d: &DenseCheck, structured_s: f64, n: usize) {
+    let ratio = d.seconds / structured_s.max(1e-12);
+    match d.method {
+        "lu" => println!(
+            "dense complex LU ({} DOF) at every frequency: {:.3} s; largest relative difference {:.2e}; structured {ratio:.0}× faster",
+            d.dof, d.seconds, d.max_rel_diff
+        ),
+        _ => {
+            println!(
+                "dense modal summation ({} DOF, every mode) at every frequency: {:.3} s ({:.3} s eigendecomposition); largest relative difference {:.2e}; structured {ratio:.0}× faster",
+                d.dof,
+                d.seconds,
+                d.eig_seconds.unwrap_or(f64::NAN),
+                d.max_rel_diff
+            );
+            if let Some(lu) = &d.lu {
+                let k = lu.frequencies_hz.len();
+                let per = lu.seconds / k.max(1) as f64;
+                println!(
+                    "dense complex LU at {k} of them ({:.3} s, {:.3} s each): modal summation within {:.2e}, structured within {:.2e}; {n} frequencies by LU would take ≈ {:.0} s, {:.0}× the structured run",
+                    lu.seconds,
+                    per,
+                    lu.modal_rel_diff,
+                    lu.structured_rel_diff,
+                    per * n as f64,
+                    per * n as f64 / structured_s.max(1e-12)
+                );
             }
         }
-        worst = worst.max((num / den).sqrt());
     }
-    Ok((worst, t0.elapsed().as_secs_f64(), k.nrows()))
 }
 
 /// What one pose's response computation gives the output.
@@ -360,8 +394,8 @@ struct Computed {
     h: Vec<Matrix6<Complex64>>,
     natural_hz: Vec<f64>,
     structured_s: f64,
-    /// --dense: (largest relative difference, seconds, DOF).
-    dense: Option<(f64, f64, usize)>,
+    /// --dense / --dense-modal.
+    dense: Option<DenseCheck>,
 }
 
 /// Taut (chord) cables: the structured solver of the pose model.
@@ -389,12 +423,8 @@ fn taut(a: &FrfArgs, s: &Scene, damping: &Damping, freqs: &[f64]) -> Result<Comp
     )
     .map_err(|e| CliError::Analysis(e.to_string()))?;
     let structured_s = t0.elapsed().as_secs_f64();
-    let dense = if a.dense {
-        let get = || pose.dense().map_err(|e| e.to_string());
-        Some(dense_compare(get, dim, damping, freqs, &h)?)
-    } else {
-        None
-    };
+    let get = || pose.dense().map_err(|e| e.to_string());
+    let dense = dense_check(a, get, dim, damping, freqs, &h)?;
     Ok(Computed {
         scene: pose.scene.clone(),
         dim,
@@ -462,12 +492,8 @@ fn sagged(a: &FrfArgs, s: &Scene, damping: &Damping, freqs: &[f64]) -> Result<Co
         .receptance_over(damping, freqs)
         .map_err(|e| CliError::Analysis(e.to_string()))?;
     let structured_s = t0.elapsed().as_secs_f64();
-    let dense = if a.dense {
-        let get = || est.dense_matrices().map_err(|e| e.to_string());
-        Some(dense_compare(get, dim, damping, freqs, &h)?)
-    } else {
-        None
-    };
+    let get = || est.dense_matrices().map_err(|e| e.to_string());
+    let dense = dense_check(a, get, dim, damping, freqs, &h)?;
     Ok(Computed {
         scene: est.scene().clone(),
         dim,

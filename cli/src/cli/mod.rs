@@ -32,6 +32,7 @@ pub mod completions;
 pub mod error;
 pub mod figure;
 pub mod frf;
+pub mod frf_dense;
 pub mod import;
 pub mod map;
 pub mod modes;

@@ -4,7 +4,7 @@
 //! `cablevib shape`: a trajectory CSV shaped by a time-varying ZV / ZVD / EI shaper that
 //! follows the estimated mode ([`crate::study::simulate`]).
 
-use super::args::{parse_vec3, resolve_scene, SceneArgs};
+use super::args::{damping_label, parse_vec3, resolve_scene, SceneArgs};
 use super::figure::{self, parse_format};
 use super::CliError;
 use crate::report::csv::{num, process_command_line, scene_meta, write_csv, Column, Csv};
@@ -24,6 +24,9 @@ use clap::{Args, ValueEnum};
 use nalgebra::Vector3;
 use std::path::PathBuf;
 use std::time::Instant;
+
+/// Largest sample period `--dt`, s (the study's own bound on a sampled path).
+const MAX_DT_S: f64 = 0.1;
 
 /// Velocity profile of `--move`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -89,24 +92,27 @@ pub struct PathArgs {
     #[arg(long = "move", value_parser = parse_vec3, allow_hyphen_values = true, value_name = "DX,DY,DZ")]
     pub displacement: Option<Vector3<f64>>,
     /// Time of the --move, s.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
     pub duration: f64,
     /// Velocity profile of the --move.
     #[arg(long, value_enum, default_value_t = ProfileArg::SCurve)]
     pub profile: ProfileArg,
     /// Without --csv or --move: seconds of the paper's circle (one revolution per
     /// --period-s).
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
     pub circle_s: f64,
     /// Period of one revolution of the circle, s.
-    #[arg(long, default_value_t = CIRCLE_PERIOD_S)]
+    #[arg(long, default_value_t = CIRCLE_PERIOD_S, allow_hyphen_values = true)]
     pub period_s: f64,
-    /// Sample period, s.
-    #[arg(long, default_value_t = 1e-3)]
+    /// Sample period, s, in (0, 0.1].
+    #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true)]
     pub dt: f64,
     /// Damping: every mode's viscous ratio ζ (replaces the scene's [damping]), in [0, 1).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub modal_ratio: Option<f64>,
+    /// Largest path acceleration accepted, m/s² (a jump in the path exceeds it).
+    #[arg(long, default_value_t = DEFAULT_MAX_ACCELERATION_M_S2, allow_hyphen_values = true)]
+    pub max_acceleration: f64,
 }
 
 impl PathArgs {
@@ -123,8 +129,28 @@ impl PathArgs {
         Ok(())
     }
 
+    /// `path` within --max-acceleration (a jump exceeds it), every sample finite.
+    fn check(&self, path: &SampledPath) -> Result<(), CliError> {
+        if !(self.max_acceleration.is_finite() && self.max_acceleration > 0.0) {
+            return Err(CliError::Usage(format!(
+                "--max-acceleration {}: must be finite and > 0",
+                self.max_acceleration
+            )));
+        }
+        path.check(self.max_acceleration)?;
+        Ok(())
+    }
+
     /// The sampled path and a one-line description.
     fn path(&self, s: &Scene) -> Result<(SampledPath, String), CliError> {
+        // Checked here, for every path, so that the message names the option (a move's own
+        // sampling would report it as a sample period).
+        if !(self.dt.is_finite() && self.dt > 0.0 && self.dt <= MAX_DT_S) {
+            return Err(CliError::Usage(format!(
+                "--dt {}: the sample period must be in (0, {MAX_DT_S}] s",
+                self.dt
+            )));
+        }
         if let Some(csv) = &self.csv {
             let samples = Samples::read_csv(csv).map_err(StudyError::from)?;
             let p = SampledPath::from_samples(&samples, self.dt)?;
@@ -181,11 +207,8 @@ pub struct SimulateArgs {
     #[arg(long, default_value_t = 10)]
     pub update_every: usize,
     /// Time simulated at rest after a path that ends at rest, s.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, allow_hyphen_values = true)]
     pub settle: f64,
-    /// Largest path acceleration accepted, m/s² (a jump in the path exceeds it).
-    #[arg(long, default_value_t = DEFAULT_MAX_ACCELERATION_M_S2)]
-    pub max_acceleration: f64,
     /// Shapers to compare, comma-separated (none, zv, zvd, ei), each following --mode.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "none")]
     pub shaper: Vec<ShaperArg>,
@@ -217,15 +240,9 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
         modes: a.modes,
         update_every: a.update_every,
         settle_s: a.settle,
-        max_acceleration_m_s2: a.max_acceleration,
+        max_acceleration_m_s2: a.path.max_acceleration,
     };
-    if !(a.max_acceleration.is_finite() && a.max_acceleration > 0.0) {
-        return Err(CliError::Usage(format!(
-            "--max-acceleration {}: must be finite and > 0",
-            a.max_acceleration
-        )));
-    }
-    path.check(a.max_acceleration)?;
+    a.path.check(&path)?;
     println!(
         "scene {}  damping {}  path {desc}  dt {} s  K = {}  modes updated every {} samples",
         s.name,
@@ -302,18 +319,6 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
     }
     write_outputs(a, &s, &runs)?;
     Ok(())
-}
-
-fn damping_label(d: &Damping) -> String {
-    match *d {
-        Damping::None => "none".into(),
-        Damping::LossFactor { eta } => format!("loss factor η = {eta}"),
-        Damping::Rayleigh {
-            alpha_per_s,
-            beta_s,
-        } => format!("Rayleigh α = {alpha_per_s} /s, β = {beta_s} s"),
-        Damping::ModalRatio { zeta } => format!("modal ζ = {zeta}"),
-    }
 }
 
 fn write_outputs(a: &SimulateArgs, s: &Scene, runs: &[Run]) -> Result<(), CliError> {
@@ -440,6 +445,9 @@ pub fn shape(a: &ShapeArgs) -> Result<(), CliError> {
         return Err(CliError::Usage("-o SHAPED.csv is required".into()));
     };
     let (path, desc) = pa.path(&s)?;
+    // A jump stays a jump when shaped (ZV splits it in two), which no robot follows and
+    // `simulate` refuses: refused here too.
+    pa.check(&path)?;
     let r = study::shape(&s, &path, kind, a.mode.into())?;
     let (lo, hi) = r
         .design_hz

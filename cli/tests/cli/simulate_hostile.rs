@@ -1,7 +1,8 @@
-//! `cablevib simulate` on hostile inputs: a trajectory CSV with a jump, with no data rows,
-//! with a single row (a path of zero duration), with a NaN or an infinity, a CSV that does not
-//! exist, `--duration 0` and `--modal-ratio 1` (and NaN). Each is a one-line error naming the
-//! cause, exit code 1, no panic.
+//! `cablevib simulate` and `cablevib shape` on hostile inputs: a trajectory CSV with a jump,
+//! with no data rows, with a single row or two rows at the same time (a path of zero
+//! duration), with a NaN or an infinity, a CSV that does not exist, a `--move 0,0,0` (a move
+//! of zero length), `--duration 0` (and negative), `--dt 0` (and NaN), `--modal-ratio 1`
+//! (and NaN, and negative). Each is a one-line error naming the cause, exit code 1, no panic.
 
 use std::path::PathBuf;
 use std::process::{Command, Output};
@@ -43,6 +44,12 @@ fn simulate_refuses_hostile_inputs_in_one_line() {
             "the path jumps",
         ),
         ("empty.csv", "t,x,y,z\n", "no data rows"),
+        // two rows at the same time: zero duration
+        (
+            "same_t.csv",
+            "t,x,y,z\n0,0.1,0,1.25\n0,0.1,0,1.25\n",
+            "does not increase",
+        ),
         // one row: a path of zero duration (refused like a move of --duration 0)
         (
             "one.csv",
@@ -87,9 +94,20 @@ fn simulate_refuses_hostile_inputs_in_one_line() {
     assert_eq!(err.matches("os error").count(), 1, "{err}");
 
     for (args, needle) in [
+        (&["--move", "0,0,0"][..], "move of zero length"),
         (
             &["--move", "0.1,0,0", "--duration", "0"][..],
             "--duration 0",
+        ),
+        (
+            &["--move", "0.1,0,0", "--duration", "-1"][..],
+            "--duration -1",
+        ),
+        (&["--move", "0.1,0,0", "--dt", "0"][..], "--dt 0"),
+        (&["--move", "0.1,0,0", "--dt", "NaN"][..], "--dt NaN"),
+        (
+            &["--move", "0.1,0,0", "--modal-ratio", "-0.01"][..],
+            "--modal-ratio -0.01",
         ),
         (
             &["--move", "0.1,0,0", "--modal-ratio", "1"][..],
@@ -105,5 +123,70 @@ fn simulate_refuses_hostile_inputs_in_one_line() {
         let o = run(&all);
         assert_one_line_error(&format!("{args:?}"), &o, needle);
     }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `shape` refuses what `simulate` refuses, before it shapes anything: a jump (a shaped jump
+/// is still a jump, half of it at a time with ZV), zero duration, NaN, a move of zero length,
+/// a bad damping ratio.
+#[test]
+fn shape_refuses_hostile_inputs_in_one_line() {
+    let d = std::env::temp_dir().join(format!("cablevib-shape-hostile-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let out = d.join("shaped.csv");
+    let out = out.to_str().unwrap();
+    for (name, text, needle) in [
+        (
+            "jump.csv",
+            "t,x,y,z\n0,0.1,0,1.25\n0.001,0.5,0,1.25\n0.002,0.5,0,1.25\n",
+            "the path jumps",
+        ),
+        (
+            "one.csv",
+            "t,x,y,z\n0,0.1,0,1.25\n",
+            "needs at least two rows",
+        ),
+        (
+            "same_t.csv",
+            "t,x,y,z\n0,0.1,0,1.25\n0,0.1,0,1.25\n",
+            "does not increase",
+        ),
+        (
+            "nan.csv",
+            "t,x,y,z\n0,0.1,0,1.25\n0.001,NaN,0,1.25\n0.002,0.1,0,1.25\n",
+            "finite numbers",
+        ),
+    ] {
+        let p = d.join(name);
+        std::fs::write(&p, text).unwrap();
+        let o = run(&["shape", p.to_str().unwrap(), "-o", out]);
+        assert_one_line_error(name, &o, needle);
+    }
+    for (args, needle) in [
+        (&["--move", "0,0,0"][..], "move of zero length"),
+        (
+            &["--move", "0.1,0,0", "--duration", "0"][..],
+            "--duration 0",
+        ),
+        (&["--move", "0.1,0,0", "--dt", "0"][..], "--dt 0"),
+        (
+            &["--move", "0.1,0,0", "--modal-ratio", "1"][..],
+            "--modal-ratio 1",
+        ),
+        (
+            &["--move", "0.1,0,0", "--modal-ratio", "-0.01"][..],
+            "--modal-ratio -0.01",
+        ),
+        (
+            &["--move", "0.1,0,0", "--modal-ratio", "NaN"][..],
+            "--modal-ratio NaN",
+        ),
+    ] {
+        let mut all = vec!["shape", "-o", out];
+        all.extend_from_slice(args);
+        let o = run(&all);
+        assert_one_line_error(&format!("shape {args:?}"), &o, needle);
+    }
+    assert!(!std::path::Path::new(out).exists(), "nothing shaped");
     let _ = std::fs::remove_dir_all(&d);
 }

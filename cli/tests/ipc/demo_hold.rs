@@ -15,41 +15,19 @@
 //! The demo is a child process with a bounded wait (killed after it).
 
 use std::path::PathBuf;
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
 
 use cablevib::estimator::{Estimator, Tmin};
 use cablevib::kinematics::Pose;
 use cablevib::scene::Scene;
 use cablevib::trajectory::Trajectory;
 
-const BIN: &str = env!("CARGO_BIN_EXE_cablevib");
-/// The longest the demo may take (3 s of poses, start-up, the fixed T_min's search).
-const TIMEOUT: Duration = Duration::from_secs(120);
+use crate::child::run;
+
 /// The requirement: above f1 at the scene's T_min everywhere on the circle.
 const HOLD_HZ: f64 = 9.5;
 /// f1 of the record against the library's at the same pose and T_min: the service's warm
 /// start and a cold one agree to the eigen solver's tolerance.
 const F1_TOL: f64 = 1e-9;
-
-fn run(args: &[&str]) -> Output {
-    let mut child = Command::new(BIN)
-        .args(args)
-        .env("RUST_BACKTRACE", "0")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn cablevib");
-    let deadline = Instant::now() + TIMEOUT;
-    while child.try_wait().expect("try_wait").is_none() {
-        if Instant::now() > deadline {
-            let _ = child.kill();
-            panic!("cablevib {args:?} did not finish within {TIMEOUT:?}");
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    child.wait_with_output().expect("output")
-}
 
 fn temp_path(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("cablevib-{name}-{}", std::process::id()))

@@ -14,30 +14,7 @@
 //! the first estimate, is the service crate's unit test (`demo_shape`), on the same type the
 //! replay calls. The demo is a child process with a bounded wait (killed after it).
 
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
-
-const BIN: &str = env!("CARGO_BIN_EXE_cablevib");
-const TIMEOUT: Duration = Duration::from_secs(120);
-
-fn run(args: &[&str]) -> Output {
-    let mut child = Command::new(BIN)
-        .args(args)
-        .env("RUST_BACKTRACE", "0")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn cablevib");
-    let deadline = Instant::now() + TIMEOUT;
-    while child.try_wait().expect("try_wait").is_none() {
-        if Instant::now() > deadline {
-            let _ = child.kill();
-            panic!("cablevib {args:?} did not finish within {TIMEOUT:?}");
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    child.wait_with_output().expect("output")
-}
+use crate::child::run;
 
 /// The number that follows `key` in `line`.
 fn number_after(line: &str, key: &str) -> f64 {

@@ -2,6 +2,7 @@
 //! the Python controller example.
 //! Area binary of the command-line crate (see tests/README.md at the repository root).
 
+mod child;
 mod demo_hold;
 mod demo_shape;
 mod ipc_service;

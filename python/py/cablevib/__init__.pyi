@@ -150,7 +150,9 @@ def frf(
     """What ``cablevib frf SCENE --json`` prints: ``frequencies_hz`` (N), ``receptance_re``,
     ``receptance_im`` (N × d × d numpy arrays, m/N; d = 3, or 6 for a rigid end-effector,
     translations first), ``damping``, ``dim``. Damping: the scene's, or one of
-    ``loss_factor`` (η), ``rayleigh`` ((α 1/s, β s)), ``modal_ratio`` (ζ), ``undamped``."""
+    ``loss_factor`` (η), ``rayleigh`` ((α 1/s, β s)), ``modal_ratio`` (ζ), ``undamped``.
+    With sag on, the sagged FEM chains at the pose's sagged tensions (``element="continuous"``
+    and ``modal_ratio`` refused), as on the command line."""
 
 def sweep(
     scene: Scene,
