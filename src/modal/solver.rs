@@ -89,10 +89,7 @@ impl ModalSolver {
     /// The sum rules of the loaded pose as known now (the weighted one from the last
     /// [`Self::first_root`]).
     fn sums(&self) -> SumRules {
-        SumRules {
-            total: self.problem.p_total,
-            over_lambda: self.first.flex0,
-        }
+        SumRules::traces(self.problem.p_total, self.first.flex0)
     }
 
     /// Load the chains of the cable models at one pose and the end-effector mass (kg).
