@@ -93,10 +93,6 @@ pub(in crate::modal) trait Condensed {
     /// The pole-free interval around the λ of the last evaluation (the chains' blocked
     /// counts there), when the poles are known.
     fn last_pole_interval(&self) -> Option<(f64, f64)>;
-    /// Σ_k p_k over all modes, tr(M_ee M_∞⁻¹) (the plain sum rule; see the module docs of
-    /// `modal`): from `load` where it is known in closed form, else from one evaluation far
-    /// below zero.
-    fn participation_total(&mut self) -> f64;
     /// The taut problem itself, for what walks its closed-form poles (the end-effector
     /// tracker's pole-interval scan and neighbour search); None for the others.
     fn taut(&mut self) -> Option<TautView<'_>>;
@@ -197,10 +193,6 @@ impl Condensed for TautView<'_> {
         Some(self.s.last_pole_interval(self.p))
     }
     #[inline]
-    fn participation_total(&mut self) -> f64 {
-        self.p.p_total
-    }
-    #[inline]
     fn taut(&mut self) -> Option<TautView<'_>> {
         Some(TautView {
             p: self.p,
@@ -262,10 +254,6 @@ impl<C: Condensed> Condensed for &mut C {
     #[inline]
     fn last_pole_interval(&self) -> Option<(f64, f64)> {
         (**self).last_pole_interval()
-    }
-    #[inline]
-    fn participation_total(&mut self) -> f64 {
-        (**self).participation_total()
     }
     #[inline]
     fn taut(&mut self) -> Option<TautView<'_>> {

@@ -89,10 +89,7 @@ impl ModalSolver {
     /// The sum rules of the loaded pose as known now (the weighted one from the last
     /// [`Self::first_root`]).
     fn sums(&self) -> SumRules {
-        SumRules {
-            total: self.problem.p_total,
-            over_lambda: self.first.flex0,
-        }
+        SumRules::traces(self.problem.p_total, self.first.flex0)
     }
 
     /// Load the chains of the cable models at one pose and the end-effector mass (kg).
@@ -222,6 +219,11 @@ impl ModalSolver {
     /// Σ_all p − Σ_W p, and every other mode below λ_A at most λ_A (tr(M_ee D(0)⁻¹) −
     /// Σ_W p_k/λ_k). When the smaller bound is below the threshold, the lowest watched mode
     /// that reaches the threshold is the end-effector mode: no unwatched mode can be.
+    /// These are the traces of matrix sum rules (Σ φ_k φ_kᵀ = M_∞⁻¹, Σ φ_k φ_kᵀ/λ_k =
+    /// D(0)⁻¹, φ_k the end-effector part of the mass-normalised mode): the sagged solver
+    /// also bounds one mode by the largest eigenvalue of the residual matrices, which counts
+    /// only the most-loaded end-effector direction (`ee_tracker::bound`); here the traces
+    /// alone certify.
     ///
     /// **Tracking.** A scan from cold watches every mode it meets with participation ≥ 0.05
     /// and goes on past the answer until the bound is below 0.15. A warm cycle follows the

@@ -144,7 +144,8 @@ impl EeTracker {
     ) -> Result<Root, RescanReason> {
         self.search_partners(f);
         let mut answer = self.select_answer(f, thr)?;
-        if self.unwatched_bound_with(answer.lambda, true) > SEARCH_BOUND {
+        // The neighbour search walks the closed-form poles: only where they are known.
+        if f.view.poles_known() && self.unwatched_bound_with(answer.lambda, true) > SEARCH_BOUND {
             self.search_neighbours(f);
             answer = self.select_answer(f, thr)?;
         }
@@ -316,6 +317,7 @@ impl EeTracker {
             self.members[i].p = t.root.ee_participation;
             self.members[i].step = t.step;
             self.members[i].residual = t.root.residual;
+            self.members[i].phi = t.phi;
             if t.root.ee_participation >= thr {
                 return Ok(t.root);
             }

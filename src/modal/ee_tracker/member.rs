@@ -3,6 +3,7 @@
 
 use super::{EeTracker, MAX_MEMBERS};
 use crate::modal::Root;
+use nalgebra::Vector6;
 
 /// The predictor of a watched mode: quadratic through its last three λ (linear with two).
 pub(super) fn predict(m: &Member) -> f64 {
@@ -81,6 +82,10 @@ pub(super) struct Member {
     /// Cycles since it was last followed (0: this cycle). Only members followed this cycle
     /// count in the certificate.
     pub(super) age: u32,
+    /// The end-effector part of the mass-normalised mode shape where it was last followed
+    /// (the sum rules' matrix form, `bound`); None where the search that found it gave no
+    /// shape (a scan).
+    pub(super) phi: Option<Vector6<f64>>,
 }
 
 impl Member {
@@ -107,6 +112,7 @@ impl Member {
             step: f64::INFINITY,
             residual: f64::NAN,
             age: 0,
+            phi: None,
         }
     }
 }
@@ -126,6 +132,8 @@ pub(super) struct Tracked {
     pub(super) pole_key: u32,
     /// Relative size of the last Newton step (the root's error is of its square).
     pub(super) step: f64,
+    /// [`Member::phi`].
+    pub(super) phi: Option<Vector6<f64>>,
 }
 
 impl Tracked {
@@ -147,6 +155,7 @@ impl Tracked {
         m.pole_key = self.pole_key;
         m.step = self.step;
         m.residual = r.residual;
+        m.phi = self.phi;
         m
     }
 }

@@ -3,6 +3,7 @@
 //! from cycle to cycle and certified by the participation sum rules (see
 //! [`ModalSolver::ee_mode_tracked`](super::ModalSolver::ee_mode_tracked) for the method).
 //!
+//! - [`bound`]: the sum-rule bound on the unwatched modes (the certificate);
 //! - [`member`]: one watched mode, its predictor, the watch list;
 //! - [`scan`]: the scan over the pole intervals (cold start and rescans);
 //! - [`follow`]: one warm cycle (follow, partner and neighbour searches, certificate);
@@ -15,11 +16,14 @@
 //! again in the next one (`RescanReason::Starved`, not a rescan), a scan cut short is kept
 //! in `EeTracker::scan` and continued (`scan::ScanState`).
 
+mod bound;
 mod follow;
 mod member;
 mod phases;
 mod scan;
 mod track;
+
+pub(super) use bound::{SumMatrices, SumRules};
 
 use super::engine::Condensed;
 use super::first_mode::RootFinder;
@@ -147,15 +151,6 @@ impl RescanCounts {
     }
 }
 
-/// The sum rules of the loaded pose that bound the unwatched modes' participation.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct SumRules {
-    /// Σ_k p_k over all modes (from `load`).
-    pub(super) total: f64,
-    /// Σ_k p_k/λ_k over all modes, s²/rad² (from the first root; NaN when unknown).
-    pub(super) over_lambda: f64,
-}
-
 /// The tracker's state between cycles: the watched modes and the bookkeeping.
 #[derive(Debug, Clone)]
 pub(super) struct EeTracker {
@@ -185,10 +180,7 @@ impl EeTracker {
             counts: RescanCounts::default(),
             ee_skip: 0,
             search_count: 0,
-            sums: SumRules {
-                total: f64::NAN,
-                over_lambda: f64::NAN,
-            },
+            sums: SumRules::traces(f64::NAN, f64::NAN),
             scan: None,
         }
     }
@@ -324,32 +316,5 @@ impl EeTracker {
             0.0,
             lp,
         ));
-    }
-
-    /// Bound on the participation of any unwatched mode below `l_ans` (rad²/s²): the smaller
-    /// of the plain and the 1/λ-weighted sum rules less what the watched modes hold.
-    fn unwatched_bound(&self, l_ans: f64) -> f64 {
-        self.unwatched_bound_with(l_ans, false)
-    }
-
-    /// [`Self::unwatched_bound`]; with `stale`, the members not followed this cycle count
-    /// too, with their last participation (an estimate for the search heuristics only).
-    fn unwatched_bound_with(&self, l_ans: f64, stale: bool) -> f64 {
-        let mut sum = 0.0;
-        let mut weighted = 0.0;
-        for m in &self.members[..self.n_members] {
-            if m.age > 0 && !stale {
-                continue;
-            }
-            sum += m.p;
-            weighted += m.p / m.lambda;
-        }
-        let plain = self.sums.total - sum;
-        let w = if self.sums.over_lambda.is_finite() && l_ans.is_finite() {
-            l_ans * (self.sums.over_lambda - weighted)
-        } else {
-            f64::INFINITY
-        };
-        plain.min(w).max(0.0)
     }
 }

@@ -95,6 +95,7 @@ pub(super) fn neighbour(f: &mut TautFinder<'_>, m: &Member, up: bool) -> Option<
                     pole_up: false,
                     pole_key: u32::MAX,
                     step: 0.0,
+                    phi: None,
                 });
             }
         }
@@ -219,6 +220,9 @@ pub(super) fn track_root<P: Condensed>(
         }
         if mu == 0.0 || (xn - x).abs() <= accept.max(f.params.rel_tol) * x {
             let p = f.participation(&e.dd, &v);
+            // φ = v/√(vᵀ(−D')v): the end-effector part of the mass-normalised shape.
+            let kin = -quad(&e.dd, &v, e.dim);
+            let phi = (kin > 0.0).then(|| v / kin.sqrt());
             let (share, pole, pole_up, pole_key) = if p >= P_STRONG {
                 f.view.coupling(x, &e.dd, &v)
             } else {
@@ -240,6 +244,7 @@ pub(super) fn track_root<P: Condensed>(
                 pole_up,
                 pole_key,
                 step: (xn - x).abs() / x,
+                phi,
             });
         }
         if f.exhausted() {

@@ -54,8 +54,7 @@ mod problem;
 
 pub use dense::{assemble_sagged, SagDenseCable};
 
-use super::ee_tracker::{EeTracker, RescanCounts, SumRules};
-use super::engine::Condensed;
+use super::ee_tracker::{EeTracker, RescanCounts, SumMatrices, SumRules};
 use super::first_mode::{FirstRootState, RootFinder};
 use super::{ModalError, ModalParams, Root};
 use crate::cable::sagged::{
@@ -416,17 +415,47 @@ impl SagModalSolver {
         (f, &mut self.tracker)
     }
 
-    /// The sum rules of the loaded pose (one evaluation for the plain one; the weighted one
-    /// from the last first root).
+    /// The sum rules of the loaded pose, traces and matrices (`modal::ee_tracker`'s bound):
+    /// the plain one from one evaluation far below zero, the weighted one from the last
+    /// first root (its trace) and the chains' cached static evaluations (its matrix, D(0)⁻¹).
     fn sums(&mut self, budget: u32) -> SumRules {
         let over_lambda = self.first.flex0;
+        let flex = self.static_flexibility();
+        let (m6, m_sqrt, dim) = (self.problem.m6, self.problem.m6_sqrt, self.problem.dim);
         let (mut f, _) = self.tracker_parts(budget);
-        let total = if f.left() > 0 {
-            f.view.participation_total()
+        let m_inf_inv = if f.left() > 0 {
+            f.view.mass_limit_inverse()
         } else {
-            f64::INFINITY
+            None
         };
-        SumRules { total, over_lambda }
+        let Some(m_inf_inv) = m_inf_inv else {
+            return SumRules::traces(f64::INFINITY, over_lambda);
+        };
+        SumRules {
+            total: (m6 * m_inf_inv).trace(),
+            over_lambda,
+            matrices: Some(SumMatrices {
+                m_inf_inv,
+                flex,
+                m_sqrt,
+                dim,
+            }),
+        }
+    }
+
+    /// D(0)⁻¹ (its leading `dim` block, zeros elsewhere) from the chains' cached static
+    /// evaluations; NaN when D(0) is not positive definite.
+    fn static_flexibility(&self) -> Matrix6<f64> {
+        let eg = self.problem.static_eval().eig();
+        if !(eg.values[0] > 0.0) {
+            return Matrix6::repeat(f64::NAN);
+        }
+        let mut flex = Matrix6::zeros();
+        for j in 0..eg.n {
+            let v = eg.vectors[j];
+            flex += v * v.transpose() / eg.values[j];
+        }
+        flex
     }
 
     /// The end-effector mode of the loaded pose: the lowest mode whose participation is at
@@ -460,10 +489,7 @@ impl SagModalSolver {
         let budget = self.params.cycle_evaluations;
         let thr = self.params.ee_participation_min;
         let sums = if first.ee_participation >= thr {
-            SumRules {
-                total: f64::INFINITY,
-                over_lambda: self.first.flex0,
-            }
+            SumRules::traces(f64::INFINITY, self.first.flex0)
         } else {
             self.sums(budget)
         };

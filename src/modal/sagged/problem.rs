@@ -430,12 +430,21 @@ impl Condensed for SagView<'_> {
     fn last_pole_interval(&self) -> Option<(f64, f64)> {
         None
     }
-    /// From one evaluation at σ = −[`FAR_BELOW`]·max|D(0)|/m_min (m_min the end-effector's
-    /// smallest mass entry): −D(σ)/σ = M_∞ + (a stiffness)/|σ|, so the total it gives is
-    /// below the true one by a relative ~(the chains' highest pole)/|σ| (≤ 1e-5 for a
-    /// thousand elements and a cable a ten-thousandth of the end-effector's mass), and
-    /// never above it: the sum-rule bound stays a bound.
-    fn participation_total(&mut self) -> f64 {
+    #[inline]
+    fn taut(&mut self) -> Option<TautView<'_>> {
+        None
+    }
+}
+
+impl SagView<'_> {
+    /// M_∞⁻¹ = Σ_k φ_k φ_kᵀ (the plain sum rule's matrix form; the identity outside the
+    /// leading `dim` block), from one evaluation at σ = −[`FAR_BELOW`]·max|D(0)|/m_min
+    /// (m_min the end-effector's smallest mass entry): −D(σ)/σ = M_∞ + (a stiffness)/|σ|,
+    /// so the M_∞ it gives is above the true one by a relative ~(the chains' highest
+    /// pole)/|σ| (≤ 1e-5 for a thousand elements and a cable a ten-thousandth of the
+    /// end-effector's mass), and its inverse below by as much: far inside the tracker's
+    /// certificate margin. None when σ or the inverse is not finite.
+    pub(super) fn mass_limit_inverse(&mut self) -> Option<Matrix6<f64>> {
         let dim = self.p.dim;
         let d0 = self.p.static_eval().d;
         let k = d0.abs().max();
@@ -444,21 +453,14 @@ impl Condensed for SagView<'_> {
             .fold(f64::INFINITY, f64::min);
         let sigma = -FAR_BELOW * k / m;
         if !(sigma.is_finite() && sigma < 0.0) {
-            return f64::INFINITY;
+            return None;
         }
         let d = self.eval(sigma).d * (-1.0 / sigma);
         let mut m_inf = Matrix6::identity();
         m_inf
             .view_mut((0, 0), (dim, dim))
             .copy_from(&d.view((0, 0), (dim, dim)));
-        match m_inf.try_inverse() {
-            Some(inv) => (self.p.m6 * inv).trace(),
-            None => f64::INFINITY,
-        }
-    }
-    #[inline]
-    fn taut(&mut self) -> Option<TautView<'_>> {
-        None
+        m_inf.try_inverse()
     }
 }
 

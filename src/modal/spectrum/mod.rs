@@ -126,27 +126,46 @@ pub(in crate::modal) fn modes_into<P: Condensed>(
     Ok(n)
 }
 
-impl ModalSolver {
-    /// The first `k` natural frequencies of the loaded problem (ascending) into `out`, with
-    /// [`SpectrumParams::default`]. Returns how many were written: min(k, out.len(), the
-    /// number of modes the model has).
-    pub fn modes(&mut self, k: usize, out: &mut [Mode]) -> Result<usize, ModalError> {
-        self.modes_with(k, &SpectrumParams::default(), out)
-    }
+/// The solvers' `modes` and `modes_with`, written once: the `impl` block they are
+/// expanded in provides `fn condensed(&mut self) -> Result<impl Condensed + '_,
+/// ModalError>` (the loaded problem as the searches see it).
+macro_rules! spectrum_modes {
+    () => {
+        /// The first `k` natural frequencies of the loaded problem (ascending) into `out`,
+        /// with [`SpectrumParams::default`](crate::modal::SpectrumParams::default). Returns
+        /// how many were written: min(k, out.len(), the number of modes the model has).
+        pub fn modes(
+            &mut self,
+            k: usize,
+            out: &mut [crate::modal::Mode],
+        ) -> Result<usize, crate::modal::ModalError> {
+            self.modes_with(k, &crate::modal::SpectrumParams::default(), out)
+        }
 
-    /// [`Self::modes`] with explicit parameters.
-    pub fn modes_with(
-        &mut self,
-        k: usize,
-        params: &SpectrumParams,
-        out: &mut [Mode],
-    ) -> Result<usize, ModalError> {
-        let view = TautView {
+        /// [`Self::modes`] with explicit parameters (`pole_probe` is the relative width at
+        /// which a bisection across a pole stops and reports the mode at the pole).
+        pub fn modes_with(
+            &mut self,
+            k: usize,
+            params: &crate::modal::SpectrumParams,
+            out: &mut [crate::modal::Mode],
+        ) -> Result<usize, crate::modal::ModalError> {
+            crate::modal::spectrum::modes_into(self.condensed()?, k, params, out)
+        }
+    };
+}
+pub(in crate::modal) use spectrum_modes;
+
+impl ModalSolver {
+    /// The loaded taut problem (the spectrum search's view).
+    fn condensed(&mut self) -> Result<TautView<'_>, ModalError> {
+        Ok(TautView {
             p: &self.problem,
             s: &mut self.scratch,
-        };
-        modes_into(view, k, params, out)
+        })
     }
+
+    spectrum_modes!();
 
     /// Total number of natural frequencies of the loaded model (`usize::MAX` when it has
     /// continuous chains).
