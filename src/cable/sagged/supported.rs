@@ -273,6 +273,50 @@ mod tests {
         }
     }
 
+    /// At a complex λ (the damped frequency response): S_in against the dense complex
+    /// condensation of the same chain, to 1e-9 of the largest spring.
+    #[test]
+    fn supported_chain_at_complex_lambda_equals_dense_condensation() {
+        for (n_el, nh) in [(1usize, 1usize), (12, 12)] {
+            let mut c = test_chain(n_el, 2.0e5, 0.3);
+            let sup = SagSupport {
+                hidden: Segment {
+                    k: 3.0e5 * nh as f64 / 4.0,
+                    m: 0.3 * 4.0 / nh as f64,
+                    n_el: nh,
+                },
+                direction: [0.4f64.cos(), 0.4f64.sin()],
+            };
+            c.set_support(Some(sup)).unwrap();
+            let (k, m) = dense(&c, &sup);
+            let nd = k.nrows();
+            let ni = nd - 2;
+            let k_scale = 2.0e5 / c.element_length_m() + sup.hidden.k;
+            for lambda in [
+                Complex64::new(3.0e3, 60.0),
+                Complex64::new(4.0e5, -2.0e4),
+                Complex64::new(2.0e6, 1.0e5),
+            ] {
+                let z =
+                    k.map(|x| Complex64::new(x, 0.0)) - m.map(|x| Complex64::new(x, 0.0)) * lambda;
+                let zii = z.view((0, 0), (ni, ni)).into_owned();
+                let zie = z.view((0, ni), (ni, 2)).into_owned();
+                let x = zii.lu().solve(&zie).unwrap();
+                let sd = z.view((ni, ni), (2, 2)).into_owned() - zie.transpose() * &x;
+                let (s_in, _) = c.eval_at(lambda);
+                let den = [sd[(0, 0)], sd[(0, 1)], sd[(1, 1)]];
+                for q in 0..3 {
+                    assert!(
+                        (s_in[q] - den[q]).norm() <= 1e-9 * (k_scale + den[q].norm()),
+                        "N {n_el} λ {lambda} q {q}: {} vs {}",
+                        s_in[q],
+                        den[q]
+                    );
+                }
+            }
+        }
+    }
+
     /// The fixed-anchor chain's in-plane count at λ (its total minus the out-of-plane
     /// chain's, which the support leaves alone).
     fn plain_in_count(plain: &SagChain, lambda: f64) -> usize {
