@@ -69,8 +69,9 @@ pub enum CableError {
     /// The `auto` model must be resolved (estimator::resolve_auto) before use.
     #[error("the auto model is not resolved")]
     Unresolved,
-    /// The element model has no hidden cable (the catenary element's chains are not axial).
-    #[error("a hidden cable (hidden_length) needs the fem, continuous or massless element, not catenary")]
+    /// The model and the hidden cable do not match (the auto model, or a chain that is not
+    /// the element's own).
+    #[error("a hidden cable (hidden_length) needs a resolved element model (fem, continuous, massless or catenary)")]
     HiddenNotModelled,
     /// The hidden cable's data are not positive and finite.
     #[error("hidden cable: length {length_m:?} m, EA {ea_n:?} N, mass per length {mu_kg_m:?} kg/m (length and EA must be finite and > 0, mass ≥ 0)")]
@@ -252,8 +253,11 @@ impl CableModel {
     /// series with `hidden` (the pulley holds the junction transversely, so the transverse
     /// chains are unchanged). FEM: the hidden cable as the free cable's number of equal
     /// consistent-mass axial elements (one spring when it is massless); continuous: the
-    /// exact axial bar; massless: the
-    /// series spring EA/L_free ⊕ EA_h/L_h. No allocation.
+    /// exact axial bar; massless: the series spring EA/L_free ⊕ EA_h/L_h; catenary: the
+    /// chain along K_c's stiffest eigenvector (the element's axial one, tilted from the
+    /// chord by the element's sag) is supported, the hidden cable as for `fem` (a straight
+    /// cable's catenary element is the FEM element: its axial chain is EA/l with the
+    /// consistent mass), the junction moving along that eigenvector. No allocation.
     pub fn support_on_hidden(
         &mut self,
         kind: ElementKind,
@@ -326,6 +330,50 @@ impl CableModel {
                 };
                 hidden
             }
+            (ElementKind::Catenary, _) => {
+                // The catenary element's chains lie along the eigenvectors of K_c, which a
+                // sagging element tilts from the chord: the junction moves along the
+                // stiffest (axial) one, the other two stay held by the pulley.
+                let r = (0..self.n_chains)
+                    .max_by(|&a, &b| {
+                        let (ka, kb) = (chain_k(&self.chains[a]), chain_k(&self.chains[b]));
+                        ka.total_cmp(&kb)
+                    })
+                    .unwrap_or(0);
+                let ChainKind::Discrete { k, m, n_el } = self.chains[r].kind else {
+                    return Err(CableError::BadHidden {
+                        length_m,
+                        ea_n,
+                        mu_kg_m,
+                    });
+                };
+                // The chain's direction: the projector's column of largest norm, signed
+                // along the cable (anchor → end-effector).
+                let proj = self.chains[r].proj;
+                let col = (0..3)
+                    .max_by(|&a, &b| proj.column(a).norm().total_cmp(&proj.column(b).norm()))
+                    .unwrap_or(0);
+                let mut v: Vector3<f64> = proj.column(col).normalize();
+                if v.dot(e) < 0.0 {
+                    v = -v;
+                }
+                let nh = if mu_kg_m > 0.0 { n_el } else { 1 };
+                let hidden = Segment {
+                    k: ea_n * nh as f64 / length_m,
+                    m: mu_kg_m * length_m / nh as f64,
+                    n_el: nh,
+                };
+                self.chains[r].kind = ChainKind::Supported {
+                    free: Segment { k, m, n_el },
+                    hidden,
+                };
+                self.hidden = Some(HiddenPart {
+                    segment: hidden,
+                    direction: v,
+                });
+                self.static_stiffness = self.sum_static();
+                return Ok(());
+            }
             _ => return Err(CableError::HiddenNotModelled),
         };
         self.hidden = Some(HiddenPart {
@@ -334,5 +382,13 @@ impl CableModel {
         });
         self.static_stiffness = self.sum_static();
         Ok(())
+    }
+}
+
+/// A discrete chain's element spring, N/m (−∞ for other kinds).
+fn chain_k(c: &Chain) -> f64 {
+    match c.kind {
+        ChainKind::Discrete { k, .. } => k,
+        _ => f64::NEG_INFINITY,
     }
 }

@@ -217,8 +217,8 @@ pub enum BuildError {
     /// A parameter is out of its bounds ([`super::EstimatorParams::check`]).
     #[error(transparent)]
     Params(#[from] super::ParamsError),
-    /// A hidden cable with a model that does not take it (`sag = true`, the catenary
-    /// element).
+    /// A hidden cable with a model that does not take it (`sag = true` with the
+    /// continuous element).
     #[error("scene `{scene}`: a hidden cable (hidden_length) is not modelled with {model}")]
     HiddenNotModelled {
         /// Scene name.

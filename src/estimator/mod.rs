@@ -132,15 +132,12 @@ impl Estimator {
             return Ok(est);
         }
         if scene.has_hidden_cable()
-            && (scene.model.sag || scene.model.element == ElementKind::Catenary)
+            && scene.model.sag
+            && scene.model.element == ElementKind::Continuous
         {
             return Err(BuildError::HiddenNotModelled {
                 scene: scene.name.clone(),
-                model: if scene.model.sag {
-                    "sag (set [effects] sag = false)"
-                } else {
-                    "the catenary element (use fem, continuous or massless)"
-                },
+                model: "sag and the continuous element (use fem with sag)",
             });
         }
         let n = scene.n_cables();

@@ -79,6 +79,7 @@ fn ten_thousand_cycles_allocate_nothing() {
         (hidden(Scene::default_scene()), ElementKind::Fem, 40),
         (hidden(Scene::default_scene()), ElementKind::Continuous, 1),
         (hidden(Scene::default_scene()), ElementKind::Massless, 1),
+        (hidden(Scene::default_scene()), ElementKind::Catenary, 10),
         (hidden(Scene::box_6dof()), ElementKind::Fem, 10),
     ] {
         let s = scene.with_model(el, n);
@@ -118,6 +119,38 @@ fn ten_thousand_cycles_allocate_nothing() {
             after - before
         );
         assert!(ok >= 9_950, "{ok}");
+    }
+}
+
+/// Sagging cables on hidden cables (the sagged chains start at the junction, evaluated one
+/// by one): 2,000 cycles along the circle, bad inputs mixed in, allocate nothing; the
+/// estimates are answers (ok) on the circle.
+#[test]
+fn hidden_cables_with_sag_allocate_nothing() {
+    for (scene, n) in [(Scene::default_scene(), 10), (Scene::default_scene(), 40)] {
+        let mut s = hidden(scene).with_model(ElementKind::Fem, n);
+        s.set_sag(true).unwrap();
+        let c = circle(&s);
+        let mut est = Estimator::new(&s).unwrap();
+        est.update(&circle_pose(&s, &c, 0), Tmin::Scene);
+        let before = thread_allocations();
+        let mut ok = 0;
+        for k in 1..=2_000 {
+            let e = match k % 1000 {
+                17 => est.update(&Pose::at(Vector3::new(f64::NAN, 0.0, 1.0)), Tmin::Scene),
+                19 => est.update(&Pose::at(Vector3::new(9.0, 9.0, 9.0)), Tmin::Scene),
+                _ => est.update(&circle_pose(&s, &c, k), Tmin::Scene),
+            };
+            ok += e.is_ok() as usize;
+        }
+        let after = thread_allocations();
+        assert_eq!(
+            after - before,
+            0,
+            "sag, hidden, fem × {n}: {} heap allocations in 2,000 cycles",
+            after - before
+        );
+        assert!(ok >= 1_990, "{ok}");
     }
 }
 

@@ -11,6 +11,7 @@ mod ee_budget;
 mod effects_rigid;
 mod frf;
 mod hidden_cable;
+mod hidden_models;
 mod inverse_query;
 mod paper_tables;
 mod proptest_model;

@@ -8,6 +8,7 @@ mod cli_tool;
 mod csv_pandas;
 mod figures;
 mod frf;
+mod hidden_sag;
 mod map_shard;
 mod mode_shapes;
 mod sag_compare;

@@ -75,8 +75,9 @@ impl SagBatch {
     }
 
     /// Copy `chains` in (no allocation). Returns false, and holds nothing, when they do not
-    /// fit the batch: more chains or elements than its capacity, an empty chain, or
-    /// element counts that differ (the caller then evaluates them one by one).
+    /// fit the batch: more chains or elements than its capacity, an empty chain, element
+    /// counts that differ, or a chain on a hidden cable ([`SagChain::set_support`]) (the
+    /// caller then evaluates them one by one).
     pub fn pack(&mut self, chains: &[SagChain]) -> bool {
         self.n_chains = 0;
         self.n_el = 0;
@@ -84,7 +85,9 @@ impl SagBatch {
         if chains.len() > self.cap_chains
             || n_el == 0
             || n_el > self.cap_el
-            || chains.iter().any(|c| c.n_el() != n_el)
+            || chains
+                .iter()
+                .any(|c| c.n_el() != n_el || c.support.is_some())
         {
             return false;
         }

@@ -46,6 +46,8 @@ pub struct SagChain {
     pub(super) nudge: f64,
     /// Scratch of `set_fem`: the elements' chords and tensions on the catenary.
     elements: CatenaryElements,
+    /// The cable behind the anchor (its pulley), when the anchor node is not fixed.
+    pub(super) support: Option<super::SagSupport>,
 }
 
 impl SagChain {
@@ -64,6 +66,7 @@ impl SagChain {
             k_axial: 0.0,
             nudge: 0.0,
             elements: CatenaryElements::new(cap),
+            support: None,
         }
     }
 
@@ -181,6 +184,7 @@ impl SagChain {
         self.axial_n.clear();
         self.mass_kg = 0.0;
         self.l0_m = 0.0;
+        self.support = None;
     }
 
     /// Number of elements N (0 when nothing is set).
@@ -203,13 +207,15 @@ impl SagChain {
         self.l0_m
     }
 
-    /// Number of blocked (end held) eigenvalues: 3(N − 1) when the cable has mass.
+    /// Number of blocked (end held) eigenvalues: 3(N − 1) when the cable has mass, plus
+    /// the hidden cable's and the junction's when the anchor is supported.
     pub fn blocked_modes(&self) -> usize {
-        if self.mass_kg > 0.0 {
+        let own = if self.mass_kg > 0.0 {
             3 * self.n_el().saturating_sub(1)
         } else {
             0
-        }
+        };
+        own + self.support_modes()
     }
 
     /// The static end stiffness S(0): s_in (N/m, (h, up)) and s_out (N/m); the

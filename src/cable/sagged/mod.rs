@@ -48,6 +48,11 @@
 //! element stiffness), as in the uniform chain's recurrence: the count then takes the
 //! eigenvalue as not below λ, and S stays finite.
 //!
+//! **On a hidden cable** ([`SagSupport`], `supported`): the anchor node is the junction at
+//! the pulley, moving along the cable's tangent there and held by the hidden cable's axial
+//! segment; it is condensed onto node 1 in closed form, then the recurrence above runs
+//! unchanged.
+//!
 //! **The continuous cable** ([`SagContinuous`]): the N → ∞ limit, by a 4th-order Magnus
 //! chain of exact straight sub-segments (see its module docs).
 //!
@@ -58,10 +63,12 @@ mod batch;
 mod chain;
 mod continuous;
 mod recurrence;
+mod supported;
 
 pub use batch::{SagBatch, SAG_LANES};
 pub use chain::{SagChain, SagElement};
 pub use continuous::*;
+pub use supported::SagSupport;
 
 /// A sagged cable's end dynamic stiffness at λ = ω² (rad²/s²), seen from the end-effector,
 /// in the cable's basis: (h, up) in plane, n out of plane. S(λ) = end force / end displacement

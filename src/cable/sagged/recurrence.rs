@@ -70,7 +70,14 @@ impl SagChain {
         if n == 0 {
             return SagChainEval::default();
         }
-        let (s_in, ds_in, below_in) = self.eval_in_plane(lambda);
+        let (s_in, ds_in, below_in) = match &self.support {
+            None => self.eval_in_plane(lambda),
+            Some(sup) => {
+                let (h, dh, hb) = Self::hidden_at_real(sup, lambda);
+                let (s, ds, below) = self.junction_start(sup, lambda, h, dh, hb);
+                self.in_plane_from(lambda, s, ds, below)
+            }
+        };
         let (s_out, ds_out, below_out) = self.eval_out_of_plane(lambda);
         SagChainEval {
             s_in,
@@ -88,21 +95,41 @@ impl SagChain {
             let z = Complex64::new(0.0, 0.0);
             return ([z; 3], z);
         }
-        (
-            self.eval_in_plane(lambda).0,
-            self.eval_out_of_plane(lambda).0,
-        )
+        let s_in = match &self.support {
+            None => self.eval_in_plane(lambda).0,
+            Some(sup) => {
+                let (h, dh, hb) = Self::hidden_at_complex(sup, lambda);
+                let (s, ds, below) = self.junction_start(sup, lambda, h, dh, hb);
+                self.in_plane_from(lambda, s, ds, below).0
+            }
+        };
+        (s_in, self.eval_out_of_plane(lambda).0)
     }
 
     /// The in-plane 2 × 2 recurrence: (S_N, S'_N, negative pivot eigenvalues).
-    fn eval_in_plane<T: ChainScalar>(&self, lambda: T) -> (Sym2<T>, Sym2<T>, u32) {
+    pub(super) fn eval_in_plane<T: ChainScalar>(&self, lambda: T) -> (Sym2<T>, Sym2<T>, u32) {
+        let m = self.mass_kg;
+        let d3 = lambda * m / 3.0;
+        let k = &self.k_in;
+        let re = T::re;
+        let s = [re(k[0][0]) - d3, re(k[0][1]), re(k[0][2]) - d3];
+        let ds = [re(-m / 3.0), re(0.0), re(-m / 3.0)];
+        self.in_plane_from(lambda, s, ds, 0)
+    }
+
+    /// The in-plane recurrence from node 1's S₁, S₁′ and count `below` (the fixed anchor's
+    /// or the junction's, `supported`): (S_N, S'_N, count).
+    pub(super) fn in_plane_from<T: ChainScalar>(
+        &self,
+        lambda: T,
+        mut s: Sym2<T>,
+        mut ds: Sym2<T>,
+        mut below: u32,
+    ) -> (Sym2<T>, Sym2<T>, u32) {
         let m = self.mass_kg;
         let (d3, d2) = (lambda * m / 3.0, lambda * m / 2.0);
         let k = &self.k_in;
         let re = T::re;
-        let mut s = [re(k[0][0]) - d3, re(k[0][1]), re(k[0][2]) - d3];
-        let mut ds = [re(-m / 3.0), re(0.0), re(-m / 3.0)];
-        let mut below = 0u32;
         for kj in &k[1..] {
             let mut q = [
                 s[0] + re(kj[0]) - d3,

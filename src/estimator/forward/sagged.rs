@@ -124,6 +124,9 @@ impl SagModel {
                 end_force_n: -(h * cat.h_n + up * cat.v_end_n()),
             };
             set_chain(&mut self.modal, i, scene, &cat, self.mu_kg_m[i])?;
+            if let Some(hidden) = super::axial_behind_exit(&scene.cables[i], g, i) {
+                support_chain(&mut self.modal, i, scene, &cat, &hidden)?;
+            }
         }
         let up = self.tension.basis(0)[1];
         let body = EndEffector::of_body(scene, pose);
@@ -223,3 +226,33 @@ fn set_chain(
 
 /// Largest element count per cable (the scene's limit).
 const MAX_ELEMENTS: usize = crate::scene::MAX_ELEMENTS_PER_CABLE;
+
+/// Put cable `i`'s FEM chain (set on `cat`) on the cable behind its exit point: the
+/// junction moves along the catenary's tangent at the anchor, (H, V_a)/T_a in (h, up); the
+/// hidden cable runs straight from the pulley to the drum, as the free cable's number of
+/// equal consistent-mass axial elements (one spring when it is massless), as the taut
+/// `fem` model has it.
+fn support_chain(
+    modal: &mut SagModalSolver,
+    i: usize,
+    scene: &Scene,
+    cat: &Catenary,
+    hidden: &crate::cable::HiddenAxial,
+) -> Result<(), EstimatorError> {
+    let n_el = scene.model.elements_per_cable.clamp(1, MAX_ELEMENTS);
+    let nh = if hidden.mu_kg_m > 0.0 { n_el } else { 1 };
+    let segment = crate::cable::Segment {
+        k: hidden.ea_n * nh as f64 / hidden.length_m,
+        m: hidden.mu_kg_m * hidden.length_m / nh as f64,
+        n_el: nh,
+    };
+    let ta = cat.h_n.hypot(cat.v_anchor_n);
+    let support = crate::cable::sagged::SagSupport {
+        hidden: segment,
+        direction: [cat.h_n / ta, cat.v_anchor_n / ta],
+    };
+    modal
+        .chain_mut(i)
+        .set_support(Some(support))
+        .map_err(|e| EstimatorError::SagModel(SagLoadError::Chain(i, e)))
+}

@@ -22,8 +22,10 @@ pub struct SagDenseCable<'a> {
 /// mass matrix and geometric stiffness ([`super::SagModalSolver::ee_matrices`]), `dim` 3
 /// (point mass: node N of each cable is the end-effector's translation) or 6 (rigid: tied
 /// by G_i = [I, −\[r_i\]×]). DOF order: the end-effector (0..dim), then each cable's interior
-/// nodes from the anchor. Element j: K = (EA/l0) c cᵀ + (N_j/l_j)(I − c cᵀ) with the world
-/// chord c = h cos + up sin, on [1 −1; −1 1]; M = (m/6)[2I I; I 2I].
+/// nodes from the anchor, then (a chain on a hidden cable, [`SagChain::set_support`]) the
+/// hidden cable's interior nodes from the drum and the junction, one axial DOF each.
+/// Element j: K = (EA/l0) c cᵀ + (N_j/l_j)(I − c cᵀ) with the world chord
+/// c = h cos + up sin, on [1 −1; −1 1]; M = (m/6)[2I I; I 2I].
 pub fn assemble_sagged(
     cables: &[SagDenseCable<'_>],
     up: &Vector3<f64>,
@@ -33,9 +35,9 @@ pub fn assemble_sagged(
 ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
     let interior: usize = cables
         .iter()
-        .map(|c| c.chain.n_el().saturating_sub(1))
+        .map(|c| 3 * c.chain.n_el().saturating_sub(1) + hidden_dofs(c.chain))
         .sum();
-    let ndof = dim + 3 * interior;
+    let ndof = dim + interior;
     check_dense_budget(ndof)?;
     let mut k = DMatrix::<f64>::zeros(ndof, ndof);
     let mut m = DMatrix::<f64>::zeros(ndof, ndof);
@@ -63,10 +65,20 @@ pub fn assemble_sagged(
                 .copy_from(&Matrix3::identity());
             g
         };
-        // Node j: 0 anchor (no DOF), 1..n−1 interior, n the end (through G).
+        // The junction at the pulley (a supported chain): one DOF along the anchor
+        // tangent, after the cable's interior nodes and the hidden cable's.
+        let support = cab.chain.support();
+        let junction = support.map(|sp| {
+            let d = cab.h * sp.direction[0] + up * sp.direction[1];
+            let mut g = Matrix3x6::zeros();
+            g.set_column(0, &d);
+            let row = base + 3 * n.saturating_sub(1) + sp.hidden.n_el - 1;
+            (row, g, 1usize)
+        });
+        // Node j: 0 anchor (no DOF, or the junction), 1..n−1 interior, n the end (through G).
         let place = |j: usize| -> Option<(usize, Matrix3x6<f64>, usize)> {
             match j {
-                0 => None,
+                0 => junction,
                 j if j == n => Some((0, g, dim)),
                 j => Some((base + 3 * (j - 1), id, 3)),
             }
@@ -93,7 +105,30 @@ pub fn assemble_sagged(
                 }
             }
         }
-        base += 3 * n.saturating_sub(1);
+        if let Some(sp) = support {
+            // Axial elements from the drum (node 0, fixed) to the junction (node nh).
+            let seg = sp.hidden;
+            let at = |j: usize| base + 3 * n.saturating_sub(1) + j - 1;
+            for el in 0..seg.n_el {
+                for (ia, na) in [el, el + 1].into_iter().enumerate() {
+                    for (ib, nb) in [el, el + 1].into_iter().enumerate() {
+                        if na == 0 || nb == 0 {
+                            continue;
+                        }
+                        let same = ia == ib;
+                        k[(at(na), at(nb))] += if same { seg.k } else { -seg.k };
+                        m[(at(na), at(nb))] += seg.m / if same { 3.0 } else { 6.0 };
+                    }
+                }
+            }
+        }
+        base += 3 * n.saturating_sub(1) + hidden_dofs(cab.chain);
     }
     Ok((k, m))
+}
+
+/// DOFs of a chain's hidden cable: its interior nodes and the junction (0 when the anchor
+/// is fixed).
+fn hidden_dofs(chain: &SagChain) -> usize {
+    chain.support().map_or(0, |s| s.hidden.n_el)
 }

@@ -37,6 +37,9 @@ pub(super) struct ChainShape {
     norm: f64,
     /// Whether the chain is continuous.
     continuous: bool,
+    /// Continuous, a supported chain only (`supported_shape`): w(x) = norm·sin(φx) +
+    /// cos_coef·cos(φx) (norm·x + cos_coef when φ = 0); 0 otherwise.
+    cos_coef: f64,
 }
 
 impl ChainShape {
@@ -47,16 +50,32 @@ impl ChainShape {
             ChainKind::Continuous { k_total, m_total } => {
                 self.fill_continuous(k_total, m_total, lambda)
             }
-            // Refused before any fill (`mode_shapes`: ShapeError::HiddenCable).
-            ChainKind::Supported { .. } => {
-                self.continuous = false;
-                self.w.clear();
+            ChainKind::Supported { free, hidden } => {
+                // A mixed pair is refused before any fill (`mode_shapes`).
+                if !self.fill_supported(&free, &hidden, lambda) {
+                    self.continuous = false;
+                    self.w.clear();
+                }
             }
         }
     }
 
+    /// Mark the shape discrete or continuous (`supported_shape`).
+    pub(super) fn set_continuous(&mut self, continuous: bool) {
+        self.continuous = continuous;
+        self.cos_coef = 0.0;
+    }
+
+    /// A continuous supported chain's free part: w(x) = sin_coef·sin(φx) + cos_coef·cos(φx).
+    pub(super) fn set_bar(&mut self, phi: f64, sin_coef: f64, cos_coef: f64) {
+        self.phi = phi;
+        self.norm = sin_coef;
+        self.cos_coef = cos_coef;
+    }
+
     fn fill_discrete(&mut self, k: f64, m: f64, n: usize, lambda: f64) {
         self.continuous = false;
+        self.cos_coef = 0.0;
         let alpha = k - lambda * m / 3.0;
         let beta = -k - lambda * m / 6.0;
         self.w.clear();
@@ -124,6 +143,7 @@ impl ChainShape {
 
     fn fill_continuous(&mut self, k: f64, m: f64, lambda: f64) {
         self.continuous = true;
+        self.cos_coef = 0.0;
         self.w.clear();
         if m <= 0.0 || lambda <= 0.0 || k <= 0.0 {
             // Static (linear) shape.
@@ -154,7 +174,14 @@ impl ChainShape {
         if !self.continuous {
             return f64::NAN;
         }
-        if self.phi == 0.0 {
+        if self.cos_coef != 0.0 {
+            if self.phi == 0.0 {
+                self.norm * x + self.cos_coef
+            } else {
+                let (s, c) = (self.phi * x).sin_cos();
+                self.norm * s + self.cos_coef * c
+            }
+        } else if self.phi == 0.0 {
             x
         } else {
             (self.phi * x).sin() * self.norm

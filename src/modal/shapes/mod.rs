@@ -64,7 +64,13 @@
 //! **Units.** λ in rad²/s²; shapes mass-normalised (φᵀMφ = 1): translations in m/√(kg·m²)
 //! = 1/√kg, rotations in rad/(m·√kg); participations dimensionless.
 //!
-//! **Layout.** `chain_shape`: one chain's w, f, g and mass moments. `solve`:
+//! **Hidden cables.** A supported chain (the free cable's axial chain on the cable hidden
+//! behind its pulley) is one non-uniform chain held at the drum: again a one-parameter
+//! family, w from the drum through the junction to the end (`supported_shape`); its hidden
+//! part enters m_ii.
+//!
+//! **Layout.** `chain_shape`: one chain's w, f, g and mass moments; `supported_shape`: a
+//! supported chain's. `solve`:
 //! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes). `count`:
 //! [`ModalSolver::eigen_clusters`](crate::modal::ModalSolver::eigen_clusters), the lowest
 //! eigenvalues and their multiplicities by count bisection.
@@ -72,6 +78,7 @@
 mod chain_shape;
 mod count;
 mod solve;
+mod supported_shape;
 
 use super::ModalError;
 use nalgebra::{Vector3, Vector6};
@@ -126,8 +133,9 @@ pub struct ModeShape {
     /// End-effector displacement: translation (1/√kg), then rotation (rad/(m·√kg)) for a
     /// rigid body (zeros for a point mass).
     pub ee: Vector6<f64>,
-    /// Node displacements of each cable (1/√kg), anchor (node 0, zero) to end-effector; at
-    /// the fractions [`ModeShapes::fractions`] of the chord.
+    /// Node displacements of each cable (1/√kg), anchor (node 0: zero, or the junction's
+    /// motion along the cable on a hidden cable) to end-effector; at the fractions
+    /// [`ModeShapes::fractions`] of the chord (the hidden cable's own nodes are not drawn).
     pub cables: Vec<Vec<Vector3<f64>>>,
     /// End-effector participation φ_eeᵀ M_ee φ_ee (0 ..= 1).
     pub ee_participation: f64,
@@ -190,8 +198,9 @@ pub enum ShapeError {
         /// σ_{m+1}/σ_max (∞ when m is the whole system).
         sigma_next: f64,
     },
-    /// Mode shapes of cables with a hidden part behind their pulley are not drawn.
-    #[error("mode shapes of cables with a hidden part (hidden_length) are not computed")]
+    /// A hidden cable whose model mixes a discrete and a continuous segment (no element
+    /// model builds one).
+    #[error("mode shapes of a hidden cable need its free and hidden parts both discrete or both continuous")]
     HiddenCable,
     /// The singular value decomposition did not converge in its bound.
     #[error("singular value decomposition did not converge at λ = {0:e} rad²/s²")]

@@ -63,7 +63,8 @@ impl Layout {
                 if matches!(c.kind, ChainKind::Discrete { k, m, .. } if k == 0.0 && m == 0.0) {
                     continue; // no stiffness, no mass: loads nothing (as `load` skips it)
                 }
-                continuous |= matches!(c.kind, ChainKind::Continuous { .. });
+                continuous |= matches!(c.kind, ChainKind::Continuous { .. })
+                    || matches!(c.kind, ChainKind::Supported { free, .. } if free.n_el == 0);
                 let e = eig3_jacobi(&c.proj);
                 for r in 0..3 {
                     if e.values[r] > PROJ_RANGE_MIN {
@@ -123,9 +124,10 @@ impl ModalSolver {
             });
         }
         if models.iter().any(|m| {
-            m.chains[..m.n_chains]
-                .iter()
-                .any(|c| matches!(c.kind, ChainKind::Supported { .. }))
+            m.chains[..m.n_chains].iter().any(|c| {
+                matches!(c.kind, ChainKind::Supported { free, hidden }
+                    if (free.n_el == 0) != (hidden.n_el == 0))
+            })
         }) {
             return Err(ShapeError::HiddenCable);
         }
@@ -387,7 +389,8 @@ fn nodes(
                 let cp = &layout.copies[q];
                 let sh = &shapes[cp.chain];
                 let amp = col[dim + q];
-                for (j, uj) in u.iter_mut().enumerate().take(last).skip(1) {
+                // Node 0 moves only on a hidden cable (the junction at its pulley).
+                for (j, uj) in u.iter_mut().enumerate().take(last) {
                     let w = if sh.w.is_empty() {
                         sh.at(fr[j])
                     } else {

@@ -254,7 +254,8 @@ fn fill_sag(r: &mut AnalysisReport, est: &Estimator) {
     }
 }
 
-/// Degrees of freedom of the assembled model of `s` (None for continuous cables).
+/// Degrees of freedom of the assembled model of `s` (None for continuous cables), hidden
+/// cables' included.
 fn model_dof(s: &Scene) -> Option<usize> {
     if s.model.element == ElementKind::Continuous {
         return None;
@@ -265,7 +266,25 @@ fn model_dof(s: &Scene) -> Option<usize> {
     } else {
         s.model.elements_per_cable
     };
-    Some(dim + 3 * s.n_cables() * (n_el - 1))
+    // A hidden cable adds its interior nodes and the junction, one axial DOF each: as many
+    // as the free cable's elements (one spring when massless); the massless model folds it
+    // into the cable's spring.
+    let hidden: usize = match s.model.element {
+        ElementKind::Massless => 0,
+        _ => s
+            .cables
+            .iter()
+            .filter_map(|c| c.hidden)
+            .map(|h| {
+                if h.mass_per_length_kg_m > 0.0 {
+                    n_el
+                } else {
+                    1
+                }
+            })
+            .sum(),
+    };
+    Some(dim + 3 * s.n_cables() * (n_el - 1) + hidden)
 }
 
 /// The estimator built for `scene` and its estimate at the scene's own pose and T_min; a

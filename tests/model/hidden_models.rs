@@ -1,0 +1,258 @@
+//! The hidden cable with sagging cables and in the mode shapes.
+//!
+//! References, built here (not from the crate's chains or its dense assemblies):
+//! - sag: an independent dense FEM of the sagged robot: each free cable as N straight
+//!   elements between nodes on its elastic catenary (chords `Catenary::chord_between_m`,
+//!   axial force the catenary's tension at each element's middle: the statics' profile,
+//!   no chain code), its anchor node the junction at the pulley moving along the
+//!   catenary's tangent there, (H, V_a)/T_a, held by the hidden cable's N axial elements
+//!   from the drum. Frequencies against the structured sagged solver to 1e-9 relative, or
+//!   the dense solver's own accuracy 8ε·λ_max/λ when larger (stated per mode); the static
+//!   stiffness against the dense static condensation to 1e-9;
+//! - mode shapes: the dense FEM's mass-normalised eigenvectors (`dense_ref` of
+//!   `hidden_cable`, fem and catenary elements) against the structured shapes, entry by
+//!   entry, for every simple mode among the first 80.
+use super::hidden_cable::{add_hidden, dense_ref, paper_with_hidden};
+use cablevib::estimator::{Estimator, PoseModel, Tmin};
+use cablevib::kinematics::Pose;
+use cablevib::modal::{
+    condense_static, dense_modes, dense_relative_accuracy, ModalParams, ModalSolver, Mode,
+    ShapeParams,
+};
+use cablevib::scene::Scene;
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+
+/// The independent dense sagged FEM with hidden cables (module docs) of the estimator's
+/// last pose: (K, M), DOF 0..3 the end-effector (a point mass at `p`).
+fn dense_sagged(est: &Estimator, p: &Vector3<f64>, n: usize) -> (DMatrix<f64>, DMatrix<f64>) {
+    let scene = est.scene();
+    assert!(!scene.rigid);
+    let cats = est.sag_catenaries().expect("sagged");
+    let up = -scene.gravity_m_s2 / scene.gravity_m_s2.norm();
+    let per_cable = |c: &cablevib::scene::Cable| 3 * (n - 1) + c.hidden.map_or(0, |_| n);
+    let ndof = 3 + scene.cables.iter().map(per_cable).sum::<usize>();
+    let mut k = DMatrix::zeros(ndof, ndof);
+    let mut m = DMatrix::zeros(ndof, ndof);
+    for i in 0..3 {
+        m[(i, i)] = scene.ee_mass_kg;
+    }
+    let mut base = 3;
+    for (ci, c) in scene.cables.iter().enumerate() {
+        let cat = &cats[ci];
+        let d = p - c.anchor_m;
+        let h = (d - up * d.dot(&up)).normalize();
+        let l0 = cat.l0_m / n as f64;
+        let ta = cat.h_n.hypot(cat.v_anchor_n);
+        let dir = h * (cat.h_n / ta) + up * (cat.v_anchor_n / ta);
+        let me = c.mass_per_length_kg_m * l0;
+        let junction = c.hidden.map(|_| base + 3 * (n - 1) + n - 1);
+        let map = |j: usize| -> Option<(usize, DMatrix<f64>)> {
+            if j == n {
+                Some((0, DMatrix::identity(3, 3)))
+            } else if j == 0 {
+                junction.map(|r| (r, DMatrix::from_column_slice(3, 1, dir.as_slice())))
+            } else {
+                Some((base + 3 * (j - 1), DMatrix::identity(3, 3)))
+            }
+        };
+        for el in 0..n {
+            let (s0, s1) = (el as f64 * l0, (el + 1) as f64 * l0);
+            let ch = cat.chord_between_m(s0, s1);
+            let cw = h * ch[0] + up * ch[1];
+            let len = cw.norm();
+            let cu = cw / len;
+            let cc = cu * cu.transpose();
+            let axial = cat.tension_at_n(0.5 * (s0 + s1));
+            let ke = cc * (cat.ea_n / l0) + (Matrix3::identity() - cc) * (axial / len);
+            let ke = DMatrix::from_fn(3, 3, |r, q| ke[(r, q)]);
+            for (a, na) in [el, el + 1].into_iter().enumerate() {
+                for (b, nb) in [el, el + 1].into_iter().enumerate() {
+                    let (Some((ra, ga)), Some((rb, gb))) = (map(na), map(nb)) else {
+                        continue;
+                    };
+                    let sign = if a == b { 1.0 } else { -1.0 };
+                    let mc = if a == b { me / 3.0 } else { me / 6.0 };
+                    let kk = ga.transpose() * &ke * &gb * sign;
+                    let mm = ga.transpose() * &gb * mc;
+                    for r in 0..kk.nrows() {
+                        for q in 0..kk.ncols() {
+                            k[(ra + r, rb + q)] += kk[(r, q)];
+                            m[(ra + r, rb + q)] += mm[(r, q)];
+                        }
+                    }
+                }
+            }
+        }
+        if let Some(hc) = c.hidden {
+            add_hidden(&mut k, &mut m, base + 3 * (n - 1), n, &hc);
+        }
+        base += per_cable(c);
+    }
+    (k, m)
+}
+
+/// The paper robot sagging (fem × n) with 2.5 m of hidden cable behind every anchor.
+fn sagged_with_hidden(n: usize) -> Scene {
+    let mut s = paper_with_hidden("fem", n, 2.5);
+    s.set_sag(true).unwrap();
+    s
+}
+
+#[test]
+fn sagged_hidden_cable_frequencies_equal_an_independent_dense_fem() {
+    for n in [10, 40] {
+        let scene = sagged_with_hidden(n);
+        for p in [Vector3::new(0.0, 0.0, 1.0), Vector3::new(0.3, 0.2, 1.0)] {
+            let mut est = Estimator::new(&scene).unwrap();
+            let e = *est.update(&Pose::at(p), Tmin::Scene);
+            assert!(e.is_ok(), "N {n} {p:?}: {:?}", e.error);
+            let (k, m) = dense_sagged(&est, &p, n);
+            let dense = dense_modes(&k, &m, scene.ee_mass_kg, false).unwrap();
+            let mut solver = est.sag_modal().expect("sagged").clone();
+            let count = 12;
+            let mut modes = vec![Mode::default(); count];
+            let got = solver.modes(count, &mut modes).unwrap();
+            assert_eq!(got, count);
+            let mut worst = 0.0f64;
+            for (j, mode) in modes.iter().enumerate() {
+                let ld = dense.lambda[j];
+                let tol = 1e-9f64.max(8.0 * dense_relative_accuracy(ld, dense.lambda_max));
+                let err = (mode.lambda - ld).abs() / ld;
+                assert!(
+                    err <= tol,
+                    "N {n} {p:?} mode {j}: {} vs dense {ld}: {err:.2e} > {tol:.2e}",
+                    mode.lambda
+                );
+                worst = worst.max(err);
+            }
+            // f1 of the estimate is the first mode (dense, to the tolerance above).
+            let l1 = (2.0 * std::f64::consts::PI * e.f1_hz).powi(2);
+            let tol1 =
+                1e-9f64.max(8.0 * dense_relative_accuracy(dense.lambda[0], dense.lambda_max));
+            assert!(
+                (l1 - dense.lambda[0]).abs() <= tol1 * dense.lambda[0],
+                "N {n} {p:?}: f1 λ {l1} vs dense {}",
+                dense.lambda[0]
+            );
+            // The static stiffness: the dense static condensation.
+            let kd = condense_static(&k, 3);
+            let kd = Matrix3::from_fn(|r, c| kd[(r, c)]);
+            let rel = (e.stiffness_n_m - kd).norm() / kd.norm();
+            assert!(rel <= 1e-9, "N {n} {p:?}: stiffness {rel:.2e}");
+            eprintln!(
+                "sag N {n} at {p:?}: worst relative λ error over {count} modes {worst:.1e}, stiffness {rel:.1e}"
+            );
+        }
+    }
+}
+
+/// With sag, the hidden cable lowers the static stiffness and f1 moves as the taut model's:
+/// the same robot with hidden cables of a thousandth of a millimetre is the robot without
+/// (within 1e-6), and 2.5 m lowers k_min.
+#[test]
+fn sagged_hidden_cable_tends_to_none() {
+    let p = Pose::at(Vector3::new(0.3, 0.2, 1.0));
+    let run = |lh: f64| {
+        let mut s = paper_with_hidden("fem", 10, lh);
+        s.set_sag(true).unwrap();
+        let mut est = Estimator::new(&s).unwrap();
+        let e = *est.update(&p, Tmin::Scene);
+        assert!(e.is_ok(), "{lh}: {:?}", e.error);
+        (e.stiffness_n_m.symmetric_eigenvalues().min(), e.f1_hz)
+    };
+    let (k0, f0) = run(0.0);
+    let (ks, fs) = run(1e-6);
+    let (kl, _) = run(2.5);
+    assert!((ks - k0).abs() <= 1e-6 * k0 && (fs - f0).abs() <= 1e-6 * f0);
+    assert!(kl < 0.9 * k0, "{kl} vs {k0}");
+}
+
+/// The lowest `count` eigenpairs of K u = λ M u, u mass-normalised (dense, independent).
+fn dense_pairs(k: &DMatrix<f64>, m: &DMatrix<f64>, count: usize) -> Vec<(f64, DVector<f64>)> {
+    let l = m.clone().cholesky().unwrap().l();
+    let a = l.solve_lower_triangular(k).unwrap();
+    let c = l.solve_lower_triangular(&a.transpose()).unwrap();
+    let c = (&c + c.transpose()) * 0.5;
+    let eig = c.symmetric_eigen();
+    let mut idx: Vec<usize> = (0..eig.eigenvalues.len()).collect();
+    idx.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let u = l
+        .transpose()
+        .solve_upper_triangular(&eig.eigenvectors)
+        .unwrap();
+    idx[..count]
+        .iter()
+        .map(|&i| (eig.eigenvalues[i], u.column(i).into_owned()))
+        .collect()
+}
+
+/// Structured shapes of a model with hidden cables against the dense eigenvectors: the
+/// end-effector, every free cable node and the junction (its displacement along the
+/// junction's direction), to 1e-7 of the shape's largest entry (λ to ~1e-12 and
+/// separations ≥ 1e-4 relative give ~1e-8), for every simple mode among the first 80.
+#[test]
+fn hidden_cable_mode_shapes_equal_the_dense_eigenvectors() {
+    let n = 10;
+    for element in ["fem", "catenary"] {
+        let scene = paper_with_hidden(element, n, 2.5);
+        let p = Vector3::new(0.3, 0.2, 1.0);
+        let pm = PoseModel::at(&scene, &Pose::at(p), Tmin::Scene).unwrap();
+        let (k, m) = dense_ref(&scene, &p, &pm.tensions_n, n, element == "catenary");
+        // The transverse chains come in pairs (double modes): the simple ones are further up.
+        let count = 80;
+        let dense = dense_pairs(&k, &m, count + 1);
+        let mut solver = ModalSolver::new(ModalParams::default());
+        pm.load(&mut solver);
+        let mut modes = vec![Mode::default(); count];
+        assert_eq!(solver.modes(count, &mut modes).unwrap(), count);
+        let mut checked = 0;
+        for (j, mode) in modes.iter().enumerate() {
+            let sep = |i: usize| (dense[i].0 - dense[j].0).abs() > 1e-4 * dense[j].0;
+            if mode.multiplicity != 1 || (j > 0 && !sep(j - 1)) || !sep(j + 1) {
+                continue;
+            }
+            let shapes = solver
+                .mode_shapes(
+                    &pm.models,
+                    &[],
+                    &[(mode.lambda, 1)],
+                    &ShapeParams::default(),
+                )
+                .unwrap();
+            let sh = &shapes.modes[0];
+            // The structured shape as the dense DOF vector (hidden interior nodes skipped).
+            let u = &dense[j].1;
+            let mut pairs: Vec<(f64, f64)> = (0..3).map(|r| (sh.ee[r], u[r])).collect();
+            let mut base = 3;
+            for (ci, c) in scene.cables.iter().enumerate() {
+                let nodes = &sh.cables[ci];
+                for jn in 1..n {
+                    for r in 0..3 {
+                        pairs.push((nodes[jn][r], u[base + 3 * (jn - 1) + r]));
+                    }
+                }
+                if c.hidden.is_some() {
+                    let dir = pm.models[ci].hidden.unwrap().direction;
+                    let junction = base + 3 * (n - 1) + n - 1;
+                    pairs.push((nodes[0].dot(&dir), u[junction]));
+                    // Node 0 moves along the junction's direction only.
+                    assert!((nodes[0] - dir * nodes[0].dot(&dir)).norm() <= 1e-12);
+                }
+                base += 3 * (n - 1) + c.hidden.map_or(0, |_| n);
+            }
+            let dot: f64 = pairs.iter().map(|(a, b)| a * b).sum();
+            let sign = dot.signum();
+            let scale = pairs.iter().fold(0.0f64, |a, (_, b)| a.max(b.abs()));
+            let worst = pairs
+                .iter()
+                .fold(0.0f64, |a, (x, y)| a.max((x - sign * y).abs()))
+                / scale;
+            assert!(worst <= 1e-7, "{element} mode {j}: shape error {worst:.2e}");
+            checked += 1;
+        }
+        assert!(
+            checked >= 3,
+            "{element}: only {checked} simple modes checked"
+        );
+    }
+}
