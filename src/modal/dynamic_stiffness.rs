@@ -934,7 +934,7 @@ mod tests {
     /// computation answers, bit for bit.
     #[test]
     fn first_pole_lower_bound_holds_and_skipping_changes_nothing() {
-        let mut rng = crate::simd::TestRng::new(0x10b0_0d);
+        let mut rng = crate::simd::TestRng::new(0x0010_b00d);
         for trial in 0..400 {
             let n_f = [0, 1, 2, 10, 40][trial % 5];
             let n_h = if n_f == 0 { 0 } else { [1, 3, 40][trial % 3] };
