@@ -190,8 +190,11 @@ pub enum ShapeError {
         /// σ_{m+1}/σ_max (∞ when m is the whole system).
         sigma_next: f64,
     },
-    /// Mode shapes of cables with a hidden part behind their pulley are not drawn.
-    #[error("mode shapes of cables with a hidden part (hidden_length) are not computed")]
+    /// Mode shapes of cables with a part behind their exit point (a hidden cable, or a
+    /// pulley's wrapped arc) are not drawn.
+    #[error(
+        "mode shapes of cables with a part behind their exit point (hidden_length, or a pulley's wrapped arc) are not computed"
+    )]
     HiddenCable,
     /// The singular value decomposition did not converge in its bound.
     #[error("singular value decomposition did not converge at λ = {0:e} rad²/s²")]
