@@ -39,8 +39,8 @@ mod scalar;
 pub use crate::kinematics::up_frame;
 pub use batch::{eval_continuous_batch, eval_discrete_batch, BATCH_MAX_ELEMENTS};
 pub use chain::supported::{
-    eval_supported, supported_end_mass, supported_n_poles, supported_pole, supported_static,
-    Segment,
+    eval_supported, supported_end_mass, supported_from_parts, supported_n_poles, supported_pole,
+    supported_pole_near, supported_static, Segment,
 };
 pub use chain::{
     chain_recurrence, end_mass_q, eval_discrete_recurrence, Chain, ChainEval, ChainKind,

@@ -63,10 +63,10 @@ pub fn reference_analysis_at(
         );
         k6
     };
-    // The pulleys' own term (zero without pulleys; the dense K holds the chains pinned at
-    // the exit points).
-    let stiffness6 = if pm.geometry.has_pulleys() {
-        stiffness6 + pm.geometry.pulley_stiffness(&pm.tensions_n, dim)
+    // The pulleys' own term (zero without pulleys): a rigid body's condensed dense K holds
+    // it already, a point mass's sum of the models does not.
+    let stiffness6 = if pm.geometry.has_pulleys() && !pm.end_effector.rigid {
+        stiffness6 + pm.end_effector.k_pulley
     } else {
         stiffness6
     };

@@ -114,6 +114,14 @@ impl ModalSolver {
             .load(models, ee_mass_kg, Some((inertia_kg_m2, arms_m, k_geo_rot)));
     }
 
+    /// Add a constant stiffness at the end-effector's DOFs (the leading 3 × 3 or 6 × 6
+    /// block of `k`: N/m, N/rad, N·m/rad) to the loaded pose, until the next load: the
+    /// swivel pulleys' own term ([`crate::kinematics::Geometry::pulley_stiffness`]), which
+    /// holds at every λ since the pulleys' geometry carries no mass.
+    pub fn add_ee_stiffness(&mut self, k: &Matrix6<f64>) {
+        self.problem.add_ee_stiffness(k);
+    }
+
     /// D(λ), D'(λ) and the blocked count.
     #[inline]
     pub fn eval(&mut self, lambda: f64) -> DynEval {

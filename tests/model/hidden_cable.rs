@@ -5,8 +5,10 @@
 //! - an independent dense FEM: the free cables as N straight FEM elements (3 DOF per node),
 //!   each hidden cable as N axial elements from the drum (fixed) to the junction at the
 //!   pulley (one axial DOF: the pulley holds it transversely). Frequencies against the
-//!   structured engine to 1e-9 relative, or the dense solver's own accuracy ε·λ_max/λ
-//!   when that is larger (stated per mode);
+//!   structured engine to 1e-9 relative, certified on that matrix pair by the inertia of
+//!   K − σM in 40-digit arithmetic at σ = λ(1 ± 1e-9) (tests/py/inertia_certificate.py,
+//!   mpmath in a venv under target/): the dense f64 eigen-solve alone is only as accurate
+//!   as ε·λ_max/λ (~5e-9 at N = 40);
 //! - the closed-form series spring EA/(L_free + L_hidden) for the axial mode of one vertical
 //!   massless cable;
 //! - the static stiffness against the dense FEM's static condensation (1e-9) and a central
@@ -191,8 +193,92 @@ fn hidden_cable_frequencies_equal_an_independent_dense_fem() {
             eprintln!(
                 "{element} N {n} at {p:?}: worst relative λ error over {count} modes {worst:.1e}"
             );
+            // The certificate: the j-th eigenvalue of (K, M) lies in λ_j(1 ± CERT_REL).
+            let sigmas: Vec<(f64, f64)> = modes
+                .iter()
+                .flat_map(|md| [(md.lambda, -CERT_REL), (md.lambda, CERT_REL)])
+                .collect();
+            let counts = certified_counts(&k, &m, 3, &sigmas);
+            for (j, pair) in counts.chunks(2).enumerate() {
+                assert!(
+                    pair[0] <= j as u64 && pair[1] > j as u64,
+                    "N {n} {p:?} mode {j}: λ {} not certified to {CERT_REL:e}: {} below \
+                     λ(1 − r), {} below λ(1 + r)",
+                    modes[j].lambda,
+                    pair[0],
+                    pair[1]
+                );
+            }
+            eprintln!("N {n} at {p:?}: {count} modes certified to {CERT_REL:e} (40 digits)");
         }
     }
+}
+
+/// The relative half-width of the certificate's interval around each structured λ.
+const CERT_REL: f64 = 1e-9;
+
+/// Number of eigenvalues of the f64 matrix pair (K, M) below λ(1 + rel) for each (λ, rel),
+/// from the inertia of K − σM in 40-digit arithmetic (Sylvester; tests/py/
+/// inertia_certificate.py, mpmath 1.3.0 in a venv under target/). The elimination order:
+/// every DOF but the end-effector's `dim` first, in their order (chain by chain: little
+/// fill), the end-effector last.
+fn certified_counts(
+    k: &DMatrix<f64>,
+    m: &DMatrix<f64>,
+    dim: usize,
+    sigmas: &[(f64, f64)],
+) -> Vec<u64> {
+    let triplets = |a: &DMatrix<f64>| {
+        let mut out = Vec::new();
+        for j in 0..a.ncols() {
+            for i in 0..=j {
+                let v = a[(i, j)];
+                if v != 0.0 {
+                    out.push(serde_json::json!([i, j, format!("{v:?}")]));
+                }
+            }
+        }
+        out
+    };
+    let n = k.nrows();
+    let order: Vec<usize> = (dim..n).chain(0..dim).collect();
+    let input = serde_json::json!({
+        "n": n,
+        "order": order,
+        "k": triplets(k),
+        "m": triplets(m),
+        "sigmas": sigmas.iter().map(|&(l, r)| [format!("{l:?}"), format!("{r:e}")]).collect::<Vec<_>>(),
+    });
+    let python = cablevib_testkit::pinned_venv::pinned_venv_python(
+        "py-mpmath-1.3.0",
+        &[("mpmath", "mpmath", "1.3.0")],
+    );
+    let script = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/py/inertia_certificate.py"
+    );
+    let mut child = std::process::Command::new(python)
+        .arg(script)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("python");
+    use std::io::Write;
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(input.to_string().as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "inertia_certificate.py failed");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    v["negatives"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap())
+        .collect()
 }
 
 #[test]

@@ -2,9 +2,10 @@
 //!
 //! - **Static stiffness** against central finite differences of the static equilibrium
 //!   with the pulley geometry: the cables' resultant Σ T_i(q) s_i(q) with s_i from each
-//!   pulley's exit point and T_i(q) = T_i + EA_i/L_i (ℓ_i(q) − ℓ_i) (ℓ_i: the path length
-//!   from the anchor, wrap arc plus free length, whose gradient is s_i; the axial spring is
-//!   the free cable's, EA/L), h = 1e-6 m: truncation ~h²·EA/L³ and rounding ~ε·EA·ℓ/(L·h)
+//!   pulley's exit point and T_i(q) = T_i + EA_i/ℓ_i (ℓ_i(q) − ℓ_i) (ℓ_i: the path length
+//!   from the anchor, wrap arc plus free length, whose gradient is s_i; the whole path
+//!   stretches with the tension, so the axial spring is EA/ℓ: the free cable in series
+//!   with the wrapped arc), h = 1e-6 m: truncation ~h²·EA/L³ and rounding ~ε·EA·ℓ/(L·h)
 //!   are both below 1e-9 of ‖K‖, so 1e-6 relative. The pulleys' own term (the exit point
 //!   moves with the pose) is checked on its own too: K_fd minus the stiffness of cables
 //!   pinned at their exit points, 1e-3 relative to that term (it is ~1e-5 of ‖K‖).
@@ -31,7 +32,7 @@ fn resultant(s: &Scene, g0: &Geometry, t0: &[f64], p: &Vector3<f64>) -> Vector3<
     let mut f = Vector3::zeros();
     for (i, c) in s.cables.iter().enumerate() {
         let path = |g: &Geometry| g.wrap_arc_m(i) + g.free_length_m(i);
-        let t = t0[i] + c.ea_n() / g0.free_length_m(i) * (path(&g) - path(g0));
+        let t = t0[i] + c.ea_n() / path(g0) * (path(&g) - path(g0));
         f += g.unit[i] * t;
     }
     f
@@ -67,7 +68,8 @@ fn static_stiffness_equals_finite_differences_of_the_equilibrium_with_pulleys() 
         for (i, (c, &ti)) in s.cables.iter().zip(t0).enumerate() {
             let u = g0.unit[i];
             let l = g0.free_length_m(i);
-            pinned += u * u.transpose() * (c.ea_n() / l)
+            let path = l + g0.wrap_arc_m(i);
+            pinned += u * u.transpose() * (c.ea_n() / path)
                 + (Matrix3::identity() - u * u.transpose()) * (ti / l);
         }
         let own = g0
@@ -166,4 +168,132 @@ fn the_rigid_pulley_term_equals_finite_differences() {
     let rel = ((fd - pinned) - own).norm() / own.norm();
     assert!(own.norm() > 1.0, "{own}");
     assert!(rel <= 1e-5, "{rel:e}\n{own}\n{}", fd - pinned);
+}
+
+/// The scene at `rel` (from the repository root) with `n` fem elements per cable.
+fn scene_fem(rel: &str, n: usize) -> Scene {
+    let path = format!("{}/{rel}", env!("CARGO_MANIFEST_DIR"));
+    Scene::from_path(std::path::Path::new(&path))
+        .unwrap()
+        .with_model(cablevib::scene::ElementKind::Fem, n)
+}
+
+/// The structured engine's D(0) with pulleys equals the static stiffness (the cables'
+/// static condensation plus the pulleys' own term): the point mass against the estimate's
+/// stiffness (sum of the models plus the term, 1e-12 relative: the chains' static
+/// stiffness by the recurrence at λ = 0 against k/N), the rigid body against the dense
+/// reference's condensation of K with the term; both 1e-12 relative (rounding: 2e-16 and
+/// 2e-15 measured). Without the term in D(λ) they differ by it (~7e-6 of ‖K‖ on both).
+#[test]
+fn d_of_zero_is_the_static_stiffness_with_pulleys() {
+    use cablevib::estimator::{reference_analysis_at, PoseModel};
+    use cablevib::modal::{ModalParams, ModalSolver};
+    let tol = 1e-12;
+    for rel in [
+        "scenes/spatial_paper_pulleys.toml",
+        "scenes/caroca_with_rotating_pulleys.toml",
+    ] {
+        let s = scene_fem(rel, 10);
+        let pose = Pose {
+            position_m: s.ee_position_m,
+            orientation_wxyz: s.ee_orientation_wxyz,
+        };
+        let pm = PoseModel::at(&s, &pose, Tmin::Scene).unwrap();
+        let dim = pm.dim();
+        let mut solver = ModalSolver::new(ModalParams::default());
+        pm.load(&mut solver);
+        let d0 = solver.eval(0.0).d;
+        let d0 = d0.view((0, 0), (dim, dim)).into_owned();
+        let k_static = if dim == 3 {
+            let mut est = Estimator::new(&s).unwrap();
+            let e = *est.update(&pose, Tmin::Scene);
+            assert!(e.is_ok(), "{rel}: {:?}", e.status);
+            e.stiffness6.view((0, 0), (3, 3)).into_owned()
+        } else {
+            let r = reference_analysis_at(&s, &pose, Tmin::Scene, false).unwrap();
+            r.stiffness6.view((0, 0), (6, 6)).into_owned()
+        };
+        let term = pm.end_effector.k_pulley.view((0, 0), (dim, dim)).norm();
+        let rel_err = (&d0 - &k_static).norm() / k_static.norm();
+        eprintln!(
+            "{rel}: D(0) vs static {rel_err:.1e}; pulley term / ‖K‖ {:.1e}",
+            term / k_static.norm()
+        );
+        assert!(term > 1e3 * tol * k_static.norm(), "{rel}: term {term}");
+        assert!(rel_err <= tol, "{rel}: {rel_err:e}\n{d0}\n{k_static}");
+    }
+}
+
+/// The structured modes with pulleys against an independent dense eigen-solve of the
+/// assembled K, M (the chains pinned at the exit points, the wrapped arcs' axial elements)
+/// with the pulleys' own term added at the end-effector's DOFs
+/// ([`Geometry::pulley_stiffness`], checked against finite differences above): the paper
+/// robot (point mass, first 64 modes: its end-effector modes lie among the strings' third
+/// harmonics, ~32 Hz) and CAROCA (rigid, first 12: six platform modes), relative 4 × the
+/// dense solver's accuracy + 1e-10. The test shows it can see the term: some dense mode
+/// without it differs from the one with it by more than twice that tolerance (107 × on the
+/// paper robot, 3 × on CAROCA, whose stiff short cables make the dense solve's own
+/// accuracy ε·λ_max/λ coarser).
+#[test]
+fn modes_with_pulleys_equal_a_dense_solve_with_the_pulley_term() {
+    use cablevib::estimator::PoseModel;
+    use cablevib::modal::{assemble, assemble_rigid, dense_modes_ee, ModalParams, ModalSolver};
+    for (rel, count) in [
+        ("scenes/spatial_paper_pulleys.toml", 64),
+        ("scenes/caroca_with_rotating_pulleys.toml", 12),
+    ] {
+        let s = scene_fem(rel, 10);
+        let pose = Pose {
+            position_m: s.ee_position_m + Vector3::new(0.05, -0.03, 0.02),
+            orientation_wxyz: s.ee_orientation_wxyz,
+        };
+        let pm = PoseModel::at(&s, &pose, Tmin::Scene).unwrap();
+        let ee = &pm.end_effector;
+        let dim = pm.dim();
+        let (mut k, m) = if ee.rigid {
+            assemble_rigid(
+                &pm.models,
+                ee.mass_kg,
+                &ee.inertia_kg_m2,
+                &pm.geometry.arm_m,
+                &ee.k_geo_rot,
+            )
+            .unwrap()
+        } else {
+            assemble(&pm.models, ee.mass_kg).unwrap()
+        };
+        let without = dense_modes_ee(&k, &m, &pm.ee_mass(), dim, false).unwrap();
+        let term = pm.geometry.pulley_stiffness(&pm.tensions_n, dim);
+        for r in 0..dim {
+            for c in 0..dim {
+                k[(r, c)] += term[(r, c)];
+            }
+        }
+        let dense = dense_modes_ee(&k, &m, &pm.ee_mass(), dim, false).unwrap();
+        let mut solver = ModalSolver::new(ModalParams::default());
+        pm.load(&mut solver);
+        let mut out = vec![cablevib::modal::Mode::default(); count];
+        let n = solver.modes(count, &mut out).unwrap();
+        assert_eq!(n, count);
+        let mut worst: f64 = 0.0;
+        let mut shift_over_tol: f64 = 0.0;
+        for (j, md) in out.iter().enumerate() {
+            let ld = dense.lambda[j];
+            let tol = 4.0 * cablevib::modal::dense_relative_accuracy(ld, dense.lambda_max) + 1e-10;
+            let e = (md.lambda - ld).abs() / ld;
+            worst = worst.max(e / tol);
+            shift_over_tol = shift_over_tol.max((without.lambda[j] - ld).abs() / ld / tol);
+            assert!(
+                e <= tol,
+                "{rel} mode {}: {} vs {ld} ({e:.1e})",
+                j + 1,
+                md.lambda
+            );
+        }
+        eprintln!(
+            "{rel}: worst error / tolerance {worst:.2} over {count} modes; the term moves \
+             a mode by {shift_over_tol:.0} × the tolerance"
+        );
+        assert!(shift_over_tol > 2.0, "{rel}: {shift_over_tol}");
+    }
 }

@@ -1,4 +1,5 @@
-"""Matrix inertia of K - sigma*M in 40-digit arithmetic (mpmath), for cli/tests/models/modes_structured.rs.
+"""Matrix inertia of K - sigma*M in 40-digit arithmetic (mpmath), for cli/tests/models/modes_structured.rs
+and tests/model/hidden_cable.rs.
 
 Sylvester's law of inertia: for symmetric A = K - sigma*M with M positive definite, the
 number of negative pivots of A = L D L^T equals the number of generalised eigenvalues of

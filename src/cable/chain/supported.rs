@@ -139,8 +139,20 @@ impl Segment {
 /// The free segment supported by the hidden one at λ: s_eff, s_eff' and the count.
 #[inline]
 pub fn eval_supported(free: &Segment, hidden: &Segment, lambda: f64) -> ChainEval {
-    let f = free.eval(lambda);
-    let h = hidden.eval(lambda);
+    supported_from_parts(free, hidden, free.eval(lambda), hidden.eval(lambda), lambda)
+}
+
+/// [`eval_supported`] from the two segments' own evaluations at λ (`f` of `free`, `h` of
+/// `hidden`, each with its far end fixed), however they were computed: the solver's batched
+/// evaluations pass theirs here.
+#[inline]
+pub fn supported_from_parts(
+    free: &Segment,
+    hidden: &Segment,
+    f: ChainEval,
+    h: ChainEval,
+    lambda: f64,
+) -> ChainEval {
     let (dl, ddl) = free.det(lambda);
     let mut q = f.s + h.s;
     if q == 0.0 {
@@ -239,6 +251,15 @@ fn union_kth(free: &Segment, hidden: &Segment, j: usize) -> f64 {
 /// segments' blocked eigenvalues, by Newton's method kept inside the sign bracket (bounded:
 /// [`POLE_SEARCH_MAX_ITERATIONS`]).
 pub fn supported_pole(free: &Segment, hidden: &Segment, j: usize) -> f64 {
+    supported_pole_near(free, hidden, j, f64::NAN)
+}
+
+/// [`supported_pole`] with the search started at `hint` (rad²/s²) when it lies inside the
+/// pole's bracket (a nearby pose's value: Newton then needs two or three steps instead of
+/// the search from the bracket's middle); any other `hint` (NaN) starts in the middle. The
+/// search and its stopping test are the same, so the result is the same root to the
+/// search's tolerance (4ε relative), whatever the hint.
+pub fn supported_pole_near(free: &Segment, hidden: &Segment, j: usize, hint: f64) -> f64 {
     if j == 0 {
         return 0.0;
     }
@@ -265,7 +286,11 @@ pub fn supported_pole(free: &Segment, hidden: &Segment, j: usize) -> f64 {
             it += 1;
         }
     }
-    let mut x = 0.5 * (lo + hi);
+    let mut x = if hint > lo && hint < hi {
+        hint
+    } else {
+        0.5 * (lo + hi)
+    };
     while it < POLE_SEARCH_MAX_ITERATIONS {
         it += 1;
         let (g, dg) = junction(x);

@@ -240,9 +240,9 @@ impl Forward {
         match &self.model {
             Model::Taut(t) => {
                 let k = t.static_stiffness(scene);
-                if self.geometry.has_pulleys() {
-                    let dim = if scene.rigid { 6 } else { 3 };
-                    k + self.geometry.pulley_stiffness(t.tension.tensions_n(), dim)
+                // A rigid body's closed form is D(0), which holds the pulleys' term already.
+                if self.geometry.has_pulleys() && !scene.rigid {
+                    k + self.geometry.pulley_stiffness(t.tension.tensions_n(), 3)
                 } else {
                     k
                 }
@@ -395,7 +395,12 @@ pub(super) fn fill_models(
             scene.model.geometric_stiffness,
         )?;
         if let Some(h) = axial_behind_exit(c, g, i) {
-            m.support_on_hidden(scene.model.element, &g.unit[i], &h)?;
+            match m.support_on_hidden(scene.model.element, &g.unit[i], &h) {
+                // A pulley's wrap arc alone, on a model that takes no cable behind the exit
+                // point (the catenary element): the cable stays held at its exit point.
+                Err(CableError::HiddenNotModelled) if c.hidden.is_none() => {}
+                r => r?,
+            }
         }
     }
     Ok(())
@@ -403,22 +408,30 @@ pub(super) fn fill_models(
 
 /// The cable behind cable `i`'s exit point at the pose of `g`: its axial length (the
 /// hidden cable from the pulley entry to the drum, plus the arc wrapped on the pulley at
-/// this pose, 0 without a pulley), EA and mass per length; None without a hidden cable (a
-/// pulley alone leaves the cable held at its entry point: the wrap arc is then not in
-/// series). The one place every model (taut and sagged, statics and vibration) takes this
-/// length from.
+/// this pose), EA and mass per length (the hidden cable's; the free cable's for a pulley
+/// without a hidden cable: the wrapped arc is the same cable, stretching with the same
+/// tension); None when there is neither a hidden cable nor a wrapped arc (no pulley, a
+/// pulley of radius 0, or a pose that wraps nothing). The one place every model (taut and
+/// sagged, statics and vibration) takes this length from.
 pub(in crate::estimator) fn axial_behind_exit(
     c: &crate::scene::Cable,
     g: &Geometry,
     i: usize,
 ) -> Option<crate::cable::HiddenAxial> {
-    let h = c.hidden?;
     let wrap_m = g.wrap_arc_m(i);
-    Some(crate::cable::HiddenAxial {
-        length_m: h.length_m + wrap_m,
-        ea_n: h.ea_n(),
-        mu_kg_m: h.mass_per_length_kg_m,
-    })
+    match c.hidden {
+        Some(h) => Some(crate::cable::HiddenAxial {
+            length_m: h.length_m + wrap_m,
+            ea_n: h.ea_n(),
+            mu_kg_m: h.mass_per_length_kg_m,
+        }),
+        None if wrap_m > 0.0 => Some(crate::cable::HiddenAxial {
+            length_m: wrap_m,
+            ea_n: c.ea_n(),
+            mu_kg_m: c.mass_per_length_kg_m,
+        }),
+        None => None,
+    }
 }
 
 /// A valid stand-in cable model (a 1 N/m massless spring) for preallocated model buffers.
@@ -440,7 +453,8 @@ pub(super) fn placeholder_model() -> CableModel {
 
 /// The end-effector of one pose as the modal solvers and the dense assembly take it: a
 /// point mass, or a rigid body with its world inertia R I Rᵀ and the tensions' rotational
-/// geometric stiffness. Fixed size: no allocation.
+/// geometric stiffness, and the swivel pulleys' own stiffness term. Fixed size: no
+/// allocation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EndEffector {
     /// A rigid body (else a point mass).
@@ -452,6 +466,11 @@ pub struct EndEffector {
     /// Rotational geometric stiffness of the tensions, N·m/rad (rigid body, after
     /// [`Self::with_tensions`]; zero otherwise).
     pub k_geo_rot: Matrix3<f64>,
+    /// The swivel pulleys' own stiffness term at the end-effector's DOFs (leading 3 × 3 or
+    /// 6 × 6 block; N/m, N/rad, N·m/rad; [`Geometry::pulley_stiffness`] of the tensions,
+    /// after [`Self::with_tensions`]; zero without pulleys): the exit points move with the
+    /// pose. It carries no mass, so D(λ) takes it at every λ.
+    pub k_pulley: Matrix6<f64>,
 }
 
 impl EndEffector {
@@ -468,6 +487,7 @@ impl EndEffector {
             mass_kg: scene.ee_mass_kg,
             inertia_kg_m2,
             k_geo_rot: Matrix3::zeros(),
+            k_pulley: Matrix6::zeros(),
         }
     }
 
@@ -484,6 +504,9 @@ impl EndEffector {
         if ee.rigid {
             ee.k_geo_rot =
                 crate::kinematics::rigid_geometric_stiffness(&g.unit, &g.arm_m, tensions_n);
+        }
+        if g.has_pulleys() {
+            ee.k_pulley = g.pulley_stiffness(tensions_n, ee.dim());
         }
         ee
     }
@@ -523,6 +546,9 @@ impl EndEffector {
         } else {
             solver.load(models, self.mass_kg);
         }
+        if self.k_pulley != Matrix6::zeros() {
+            solver.add_ee_stiffness(&self.k_pulley);
+        }
     }
 
     /// The dense K (N/m) and M (kg) of the cable models with this end-effector
@@ -532,16 +558,26 @@ impl EndEffector {
         models: &[CableModel],
         arms_m: &[Vector3<f64>],
     ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
-        if self.rigid {
+        let (mut k, m) = if self.rigid {
             modal::assemble_rigid(
                 models,
                 self.mass_kg,
                 &self.inertia_kg_m2,
                 arms_m,
                 &self.k_geo_rot,
-            )
+            )?
         } else {
-            modal::assemble(models, self.mass_kg)
+            modal::assemble(models, self.mass_kg)?
+        };
+        // The pulleys' term at the end-effector's DOFs, the first `dim` of the assembly.
+        if self.k_pulley != Matrix6::zeros() {
+            let d = self.dim();
+            for r in 0..d {
+                for c in 0..d {
+                    k[(r, c)] += self.k_pulley[(r, c)];
+                }
+            }
         }
+        Ok((k, m))
     }
 }

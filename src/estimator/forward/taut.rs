@@ -108,12 +108,14 @@ impl TautModel {
         scene: &Scene,
         g: &Geometry,
     ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
+        // The loaded constant stiffness (geometric and pulleys' terms) as it is.
         let (m6, k6) = self.modal.ee_matrices();
         let ee = EndEffector {
             rigid: scene.rigid,
             mass_kg: scene.ee_mass_kg,
             inertia_kg_m2: m6.fixed_view::<3, 3>(3, 3).into_owned(),
-            k_geo_rot: k6.fixed_view::<3, 3>(3, 3).into_owned(),
+            k_geo_rot: Matrix3::zeros(),
+            k_pulley: k6,
         };
         ee.assemble(&self.models, &g.arm_m)
     }
