@@ -9,7 +9,7 @@
 //! the end-effector, f = −M_ee [a; 0] (the end-effector's mass times the path's
 //! acceleration a, by central differences of the samples). Included: that load on every
 //! mode, through the first K modes of the pose (the structured engine's frequencies and
-//! mass-normalised shapes; for sagging cables the dense model's), the damping of the
+//! mass-normalised shapes, taut or sagging), the damping of the
 //! scene (each mode's ratio [`Damping::modal_ratio`]), the static correction of the modes
 //! left out (mode-acceleration method, [`ModalResponse`]). Left out: the cables' own
 //! share of the quasi-static motion's inertia (their nodes following the end-effector:
@@ -238,7 +238,8 @@ pub struct SimulateResult {
     pub modes: usize,
     /// Lowest and highest first frequency met along the path, Hz.
     pub f1_range_hz: (f64, f64),
-    /// Whether the shapes came from the structured engine (taut cables).
+    /// Whether the shapes came from the structured engine (taut cables, or sagging FEM
+    /// cables); false: the dense model.
     pub structured: bool,
 }
 

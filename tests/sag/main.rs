@@ -14,6 +14,7 @@ mod fem_dense;
 mod fem_physics;
 mod frf;
 mod realtime;
+mod shapes;
 mod speed;
 mod statics;
 mod tension;

@@ -64,13 +64,16 @@
 //! **Units.** λ in rad²/s²; shapes mass-normalised (φᵀMφ = 1): translations in m/√(kg·m²)
 //! = 1/√kg, rotations in rad/(m·√kg); participations dimensionless.
 //!
-//! **Layout.** `chain_shape`: one chain's w, f, g and mass moments. `solve`:
+//! **Layout.** `chain_shape`: one chain's w, f, g and mass moments. `sagged`: the same
+//! bordered system on sagging cables' FEM chains
+//! ([`SagModalSolver::mode_shapes`](crate::modal::sagged::SagModalSolver::mode_shapes)). `solve`:
 //! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes). `count`:
 //! [`ModalSolver::eigen_clusters`](crate::modal::ModalSolver::eigen_clusters), the lowest
 //! eigenvalues and their multiplicities by count bisection.
 
 mod chain_shape;
 mod count;
+mod sagged;
 mod solve;
 
 use super::ModalError;
@@ -193,6 +196,9 @@ pub enum ShapeError {
     /// Mode shapes of cables with a hidden part behind their pulley are not drawn.
     #[error("mode shapes of cables with a hidden part (hidden_length) are not computed")]
     HiddenCable,
+    /// Mode shapes of sagging cables are computed for the FEM chains only.
+    #[error("mode shapes of sagging continuous cables are not computed: use the fem element")]
+    SagContinuous,
     /// The singular value decomposition did not converge in its bound.
     #[error("singular value decomposition did not converge at λ = {0:e} rad²/s²")]
     Svd(f64),
