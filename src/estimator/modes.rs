@@ -76,6 +76,10 @@ pub struct EeModalBasis {
     /// Whether the shapes came from the structured engine (taut or sagging FEM cables) or
     /// the dense model.
     pub structured: bool,
+    /// The whole shapes (every cable's nodes) when they came from the structured engine:
+    /// what carries a time response's state across poses
+    /// ([`modal::ModeShapes::mass_overlap`]).
+    pub shapes: Option<modal::ModeShapes>,
 }
 
 impl Estimator {
@@ -130,13 +134,17 @@ impl Estimator {
                 flexibility,
                 ee_mass,
                 structured: true,
+                shapes: Some(shapes),
             });
         }
         if let Some((solver, h, up, geometry)) = self.cycle.sag_shapes_input() {
             if !solver.is_continuous() {
-                let clusters = solver.lowest_clusters(k).map_err(BasisError::Shapes)?;
+                let params = ShapeParams::default();
+                let clusters = solver
+                    .lowest_clusters(k, &params)
+                    .map_err(BasisError::Shapes)?;
                 let shapes = solver
-                    .mode_shapes(&h, &up, &geometry.arm_m, &clusters, &ShapeParams::default())
+                    .mode_shapes(&h, &up, &geometry.arm_m, &clusters, &params)
                     .map_err(BasisError::Shapes)?;
                 return Ok(EeModalBasis {
                     dim,
@@ -145,6 +153,7 @@ impl Estimator {
                     flexibility,
                     ee_mass,
                     structured: true,
+                    shapes: Some(shapes),
                 });
             }
         }
@@ -157,6 +166,7 @@ impl Estimator {
             flexibility,
             ee_mass,
             structured: false,
+            shapes: None,
         })
     }
 }

@@ -15,6 +15,7 @@ mod fem_physics;
 mod frf;
 mod realtime;
 mod shapes;
+mod simulate;
 mod speed;
 mod statics;
 mod tension;

@@ -189,7 +189,7 @@ fn sagged_shapes_equal_dense_eigenvectors() {
             for n_el in [10usize, 40] {
                 let mut s = SagModalSolver::new(ModalParams::default(), cables.len(), n_el);
                 s.load_catenaries(&cables, n_el, &up(), &ee).unwrap();
-                let clusters = s.lowest_clusters(12).unwrap();
+                let clusters = s.lowest_clusters(12, &ShapeParams::default()).unwrap();
                 let h: Vec<_> = cables.iter().map(|c| c.h).collect();
                 let arms: Vec<_> = cables.iter().map(|c| c.arm_m).collect();
                 let shapes = s
@@ -230,7 +230,7 @@ fn sagged_shapes_refuse_bad_input() {
     );
     s.load_catenaries(&cables, 10, &up(), &point()).unwrap();
     assert!(s.mode_shapes(&h[..3], &up(), &[], &[(1.0, 1)], &p).is_err());
-    let c = s.lowest_clusters(1).unwrap();
+    let c = s.lowest_clusters(1, &p).unwrap();
     assert!(s.mode_shapes(&h, &up(), &[], &c, &p).is_ok());
     let off = c[0].0 * 1.3;
     assert!(s.mode_shapes(&h, &up(), &[], &[(off, 1)], &p).is_err());

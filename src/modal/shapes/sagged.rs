@@ -43,11 +43,12 @@
 //! solution grows like sinh(jφ) and is still the dominant, accurately computed one). The
 //! dense eigenvectors are the check (`tests/sag/shapes.rs`). Offline: allocates.
 
+use super::count::clusters_by_count;
 use super::solve::{null_of, orthonormalise};
 use super::{ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_MULTIPLICITY};
 use crate::cable::sagged::SagChain;
 use crate::modal::sagged::SagModalSolver;
-use crate::modal::{attach_map, lambda_to_hz, Mode};
+use crate::modal::{attach_map, lambda_to_hz};
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x6, Matrix6, Vector3, Vector6};
 
 /// One cable's interior solutions at one λ, in the cable's frame (h, up, n).
@@ -116,30 +117,21 @@ struct Attach {
 
 impl SagModalSolver {
     /// The lowest clusters of the loaded pose, (λ in rad²/s², multiplicity), ascending,
-    /// until at least `k` modes are covered (a cluster cut by `k` completed), by
-    /// [`Self::modes`]: the input of [`Self::mode_shapes`].
-    pub fn lowest_clusters(&mut self, k: usize) -> Result<Vec<(f64, u32)>, ShapeError> {
-        // k modes first; more only when the last cluster is cut by k (each mode above k
-        // costs tens of evaluations).
-        let mut want = k.max(1);
-        let mut modes = Vec::new();
-        let n = loop {
-            modes.resize(want, Mode::default());
-            let n = self.modes(want, &mut modes)?;
-            let last = &modes[n.saturating_sub(1)];
-            let end = last.cluster_start + last.multiplicity as usize;
-            if n < want || end <= n || want >= k.max(1) + MAX_MULTIPLICITY as usize {
-                break n;
-            }
-            want = end;
-        };
-        let mut clusters = Vec::new();
-        for (i, m) in modes[..n].iter().enumerate() {
-            if m.cluster_start == i {
-                clusters.push((m.lambda, m.multiplicity.min((n - i) as u32)));
-            }
+    /// until at least `k` modes are covered (a cluster cut by `k` completed): bisection on
+    /// the Wittrick–Williams count ([`Self::count_below`]) to a relative width of 4ε, modes
+    /// within [`ShapeParams::cluster_rel`] of each other grouped (as
+    /// [`crate::modal::ModalSolver::eigen_clusters`]). The count is exact at and next to
+    /// the chains' poles, where modes with the end-effector still sit; the input of
+    /// [`Self::mode_shapes`]. About 55 count evaluations per cluster.
+    pub fn lowest_clusters(
+        &mut self,
+        k: usize,
+        params: &ShapeParams,
+    ) -> Result<Vec<(f64, u32)>, ShapeError> {
+        if self.loaded_cables() == 0 {
+            return Err(crate::modal::ModalError::NotLoaded.into());
         }
-        Ok(clusters)
+        clusters_by_count(|x| self.count_below(x), k.max(1), params)
     }
 
     /// The mass-normalised mode shapes of the loaded pose (FEM chains) at the eigenvalues
@@ -201,6 +193,9 @@ impl SagModalSolver {
             dim,
             fractions,
             modes: Vec::new(),
+            element_mass_kg: (0..n_cables)
+                .map(|i| self.chain(i).element_mass_kg())
+                .collect(),
         };
         let (m6, k6) = self.ee_matrices();
         for &(lambda, m) in modes {

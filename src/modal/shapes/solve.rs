@@ -92,6 +92,26 @@ impl Layout {
     }
 }
 
+impl Layout {
+    /// Each cable's element mass between its node list's nodes, kg (its first chain's: all
+    /// chains of a cable share the element mass; 0 without chains).
+    fn element_mass_kg(&self) -> Vec<f64> {
+        self.cable_copies
+            .iter()
+            .zip(&self.fractions)
+            .map(
+                |(copies, fr)| match copies.first().map(|&q| self.kinds[self.copies[q].chain]) {
+                    Some(ChainKind::Discrete { m, .. }) => m,
+                    Some(ChainKind::Continuous { m_total, .. }) => {
+                        m_total / (fr.len().saturating_sub(1)).max(1) as f64
+                    }
+                    _ => 0.0,
+                },
+            )
+            .collect()
+    }
+}
+
 /// The null space of one cluster before normalisation: columns (φ, C_1 … C_n).
 pub(super) struct NullSpace {
     pub(super) vectors: DMatrix<f64>,
@@ -142,6 +162,7 @@ impl ModalSolver {
             dim,
             fractions: layout.fractions.clone(),
             modes: Vec::new(),
+            element_mass_kg: layout.element_mass_kg(),
         };
         for &(lambda, m) in modes {
             if !(lambda.is_finite() && lambda > 0.0) || m == 0 || m > MAX_MULTIPLICITY {
