@@ -13,6 +13,7 @@ mod fem_alloc;
 mod fem_dense;
 mod fem_physics;
 mod frf;
+mod frf_modal;
 mod realtime;
 mod shapes;
 mod simulate;
