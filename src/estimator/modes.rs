@@ -73,9 +73,13 @@ pub struct EeModalBasis {
     pub flexibility: Matrix6<f64>,
     /// The end-effector's own mass matrix (kg, kg·m²).
     pub ee_mass: Matrix6<f64>,
-    /// Whether the shapes came from the structured engine (taut cables) or the dense
-    /// model (sagging cables).
+    /// Whether the shapes came from the structured engine (taut or sagging FEM cables) or
+    /// the dense model.
     pub structured: bool,
+    /// The whole shapes (every cable's nodes) when they came from the structured engine:
+    /// what carries a time response's state across poses
+    /// ([`modal::ModeShapes::mass_overlap`]).
+    pub shapes: Option<modal::ModeShapes>,
 }
 
 impl Estimator {
@@ -83,8 +87,10 @@ impl Estimator {
     /// successful [`Estimator::update`], end-effector parts of their mass-normalised shapes,
     /// and the static flexibility. Taut cables: the structured engine's eigenvalues
     /// ([`crate::modal::ModalSolver::modes`]) and shapes
-    /// ([`crate::modal::ModalSolver::mode_shapes`]); sagging cables: the dense model of the
-    /// sagged chains (the structured engine gives no shapes for them). Offline: allocates.
+    /// ([`crate::modal::ModalSolver::mode_shapes`]); sagging cables (FEM chains): the
+    /// sagged engine's clusters and shapes
+    /// ([`crate::modal::sagged::SagModalSolver::mode_shapes`]); otherwise the dense model.
+    /// Offline: allocates.
     pub fn ee_modal_basis(&mut self, k: usize) -> Result<EeModalBasis, BasisError> {
         if self.estimate.status != Status::Ok {
             return Err(BasisError::Estimator(
@@ -128,7 +134,28 @@ impl Estimator {
                 flexibility,
                 ee_mass,
                 structured: true,
+                shapes: Some(shapes),
             });
+        }
+        if let Some((solver, h, up, geometry)) = self.cycle.sag_shapes_input() {
+            if !solver.is_continuous() {
+                let params = ShapeParams::default();
+                let clusters = solver
+                    .lowest_clusters(k, &params)
+                    .map_err(BasisError::Shapes)?;
+                let shapes = solver
+                    .mode_shapes(&h, &up, &geometry.arm_m, &clusters, &params)
+                    .map_err(BasisError::Shapes)?;
+                return Ok(EeModalBasis {
+                    dim,
+                    lambda: shapes.modes.iter().map(|m| m.lambda).collect(),
+                    phi_ee: shapes.modes.iter().map(|m| m.ee).collect(),
+                    flexibility,
+                    ee_mass,
+                    structured: true,
+                    shapes: Some(shapes),
+                });
+            }
         }
         let (kk, mm) = self.dense_matrices()?;
         let (lambda, phi_ee) = dense_ee_shapes(&kk, &mm, dim, k)?;
@@ -139,6 +166,7 @@ impl Estimator {
             flexibility,
             ee_mass,
             structured: false,
+            shapes: None,
         })
     }
 }

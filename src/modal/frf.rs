@@ -64,8 +64,9 @@ pub enum FrfError {
     /// The sagged continuous (Magnus) model has no complex form.
     #[error("the sagged continuous model has no damped (complex) form: use --element fem for the frequency response with sag")]
     SagContinuous,
-    /// Modal damping with sag: the sagged solver gives no mode shapes.
-    #[error("modal damping with sag: the sagged solver gives no mode shapes; use loss_factor or rayleigh damping (exact), or --sag false")]
+    /// Modal damping with sag has no complex-λ form: it goes by the modal basis of the
+    /// sagged shapes ([`ModalBasis::from_modes`]).
+    #[error("modal damping with sag goes by modal superposition (ModalBasis::from_modes), not the complex-λ receptance")]
     SagModalDamping,
 }
 
@@ -271,6 +272,43 @@ impl ModalBasis {
             }
             lambda.push(m.lambda);
             ee.push(m.ee);
+        }
+        Ok(ModalBasis {
+            lambda,
+            ee,
+            residual,
+            dim,
+        })
+    }
+
+    /// A basis from given modes: λ_r (rad²/s², > 0), the end-effector parts φ_r of their
+    /// mass-normalised shapes and the static flexibility D(0)⁻¹ (its `dim` block, m/N), the
+    /// residual D(0)⁻¹ − Σ_r φ_r φ_rᵀ/λ_r. For any engine's shapes: e.g. sagging cables'
+    /// ([`crate::modal::sagged::SagModalSolver::mode_shapes`]), whose damped response with
+    /// modal damping has no complex-λ form.
+    pub fn from_modes(
+        lambda: Vec<f64>,
+        ee: Vec<Vector6<f64>>,
+        flexibility: &Matrix6<f64>,
+        dim: usize,
+    ) -> Result<ModalBasis, FrfError> {
+        if lambda.len() != ee.len() || lambda.len() > MAX_FRF_MODES {
+            return Err(FrfError::Modes(format!(
+                "{} eigenvalues and {} shapes (at most {MAX_FRF_MODES})",
+                lambda.len(),
+                ee.len()
+            )));
+        }
+        if !(flexibility.iter().all(|x| x.is_finite())
+            && lambda.iter().all(|l| l.is_finite() && *l > 0.0))
+        {
+            return Err(FrfError::Modes(
+                "eigenvalues must be finite and > 0, the flexibility finite".into(),
+            ));
+        }
+        let mut residual = *flexibility;
+        for (l, phi) in lambda.iter().zip(&ee) {
+            residual -= phi * phi.transpose() / *l;
         }
         Ok(ModalBasis {
             lambda,

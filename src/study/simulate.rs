@@ -9,7 +9,7 @@
 //! the end-effector, f = −M_ee [a; 0] (the end-effector's mass times the path's
 //! acceleration a, by central differences of the samples). Included: that load on every
 //! mode, through the first K modes of the pose (the structured engine's frequencies and
-//! mass-normalised shapes; for sagging cables the dense model's), the damping of the
+//! mass-normalised shapes, taut or sagging), the damping of the
 //! scene (each mode's ratio [`Damping::modal_ratio`]), the static correction of the modes
 //! left out (mode-acceleration method, [`ModalResponse`]). Left out: the cables' own
 //! share of the quasi-static motion's inertia (their nodes following the end-effector:
@@ -18,8 +18,10 @@
 //! in the quasi-static pose), and the winches' dynamics.
 //!
 //! **Along the path.** Every `update_every` samples the estimator solves the pose and the
-//! basis is replaced (the end-effector's dynamic state carried across,
-//! [`ModalResponse::set_basis`]);
+//! basis is replaced, the modal state carried across by the mass overlap of the old and
+//! new whole shapes ([`ModalResponse::set_basis_projected`]: the motion of every mode the
+//! new basis holds is kept, the cable-borne ones too); the end-effector's state alone
+//! ([`ModalResponse::set_basis`]) where the shapes are the dense model's;
 //! between updates the last basis holds.
 //!
 //! **Residual vibration.** After each stop (the commanded path at rest from one sample to
@@ -238,7 +240,8 @@ pub struct SimulateResult {
     pub modes: usize,
     /// Lowest and highest first frequency met along the path, Hz.
     pub f1_range_hz: (f64, f64),
-    /// Whether the shapes came from the structured engine (taut cables).
+    /// Whether the shapes came from the structured engine (taut cables, or sagging FEM
+    /// cables); false: the dense model.
     pub structured: bool,
 }
 
@@ -314,6 +317,7 @@ pub fn simulate(
     };
     let mut ee_mass = nalgebra::Matrix6::zeros();
     let mut f_prev = Vector6::zeros();
+    let mut prev_shapes = None;
     for k in 0..n {
         let t = k as f64 * path.dt_s;
         let p = path.positions_m[k];
@@ -324,14 +328,30 @@ pub fn simulate(
             let basis = est
                 .ee_modal_basis(cfg.modes)
                 .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))?;
-            resp.set_basis(
-                &basis.lambda,
-                &basis.phi_ee,
-                &damping,
-                &basis.flexibility,
-                &basis.ee_mass,
-            )
+            // The whole state carried by the mass overlap of the whole shapes when both
+            // bases have them; else the end-effector's (module docs).
+            let overlap = match (&basis.shapes, &prev_shapes) {
+                (Some(new), Some(old)) => new.mass_overlap(old, &basis.ee_mass),
+                _ => None,
+            };
+            match overlap {
+                Some(o) => resp.set_basis_projected(
+                    &basis.lambda,
+                    &basis.phi_ee,
+                    &damping,
+                    &basis.flexibility,
+                    &o,
+                ),
+                None => resp.set_basis(
+                    &basis.lambda,
+                    &basis.phi_ee,
+                    &damping,
+                    &basis.flexibility,
+                    &basis.ee_mass,
+                ),
+            }
             .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))?;
+            prev_shapes = basis.shapes;
             ee_mass = basis.ee_mass;
             out.structured = basis.structured;
             out.modes = basis.lambda.len();

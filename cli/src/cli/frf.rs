@@ -1,7 +1,7 @@
 //! `cablevib frf`: the receptance H(ω) at the end-effector of one pose over a frequency
 //! band ([`crate::modal::frf`]: exact at a complex λ for loss-factor and Rayleigh damping,
 //! modal superposition with static correction for modal damping; with sag, the sagged FEM
-//! chains at the complex λ, loss factor and Rayleigh only), as a table, a CSV
+//! chains at the complex λ, or their structured shapes' modal superposition), as a table, a CSV
 //! ([`crate::report::frf`]), a Bode figure and JSON; `--dense` also solves the assembled
 //! complex problem at every frequency, `--dense-modal` sums over every mode of the
 //! assembled problem ([`super::frf_dense`]), and both print the difference and both times.
@@ -14,7 +14,8 @@ use super::{json_f64, CliError};
 use crate::estimator::{Estimator, Tmin};
 use crate::kinematics::Pose;
 use crate::modal::{
-    frequency_grid, lambda_to_hz, receptance_over, FrfError, ModalParams, ModalSolver,
+    frequency_grid, lambda_to_hz, receptance_over, FrfError, ModalBasis,
+    ModalParams, ModalSolver,
 };
 use crate::report::csv::{process_command_line, write_csv};
 use crate::report::figure::FigureFormat;
@@ -447,6 +448,37 @@ fn marked(a: &FrfArgs, modes: &[crate::modal::Mode]) -> Vec<f64> {
         .collect()
 }
 
+/// Modal damping with sag: modal superposition of the sagged structured shapes below
+/// `cutoff_hz` (the estimator's basis, doubling its size from 16 until a mode lies above
+/// the cut-off, at most [`crate::modal::MAX_FRF_MODES`] or the model's `total`) with the
+/// residual flexibility of the rest ([`ModalBasis::from_modes`]).
+fn sagged_modal(
+    est: &mut Estimator,
+    zeta: f64,
+    cutoff_hz: f64,
+    total: usize,
+    freqs: &[f64],
+) -> Result<Vec<nalgebra::Matrix6<num_complex::Complex64>>, CliError> {
+    let cap = crate::modal::MAX_FRF_MODES.min(total).max(1);
+    let mut k = 16usize.min(cap);
+    let basis = loop {
+        let b = est
+            .ee_modal_basis(k)
+            .map_err(|e| CliError::Analysis(format!("modal basis with sag: {e}")))?;
+        let top = b.lambda.last().map_or(0.0, |&l| lambda_to_hz(l));
+        if top > cutoff_hz || k >= cap {
+            break b;
+        }
+        k = (2 * k).min(cap);
+    };
+    let mb = ModalBasis::from_modes(basis.lambda, basis.phi_ee, &basis.flexibility, basis.dim)
+        .map_err(|e| CliError::Analysis(e.to_string()))?;
+    Ok(freqs
+        .iter()
+        .map(|&f| mb.receptance(zeta, 2.0 * std::f64::consts::PI * f))
+        .collect())
+}
+
 /// Most modes searched for the marks with sag (the sagged solver's lowest ones).
 const SAG_MARK_MODES: usize = 400;
 
@@ -455,9 +487,6 @@ const SAG_MARK_MODES: usize = 400;
 fn sagged(a: &FrfArgs, s: &Scene, damping: &Damping, freqs: &[f64]) -> Result<Computed, CliError> {
     if s.model.element == ElementKind::Continuous {
         return Err(CliError::Usage(FrfError::SagContinuous.to_string()));
-    }
-    if let Damping::ModalRatio { .. } = damping {
-        return Err(CliError::Usage(FrfError::SagModalDamping.to_string()));
     }
     let mut est = Estimator::new(s).map_err(|e| CliError::Analysis(e.to_string()))?;
     let pose = Pose::in_scene(s, s.ee_position_m);
@@ -488,9 +517,12 @@ fn sagged(a: &FrfArgs, s: &Scene, damping: &Damping, freqs: &[f64]) -> Result<Co
         .ok_or_else(|| CliError::Analysis("no sagged pose loaded".into()))?;
     let dim = sag.dim();
     let t0 = Instant::now();
-    let h = sag
-        .receptance_over(damping, freqs)
-        .map_err(|e| CliError::Analysis(e.to_string()))?;
+    let h = if let Damping::ModalRatio { zeta } = *damping {
+        sagged_modal(&mut est, zeta, MODAL_CUTOFF_RATIO * a.to_hz, total, freqs)?
+    } else {
+        sag.receptance_over(damping, freqs)
+            .map_err(|e| CliError::Analysis(e.to_string()))?
+    };
     let structured_s = t0.elapsed().as_secs_f64();
     let get = || est.dense_matrices().map_err(|e| e.to_string());
     let dense = dense_check(a, get, dim, damping, freqs, &h)?;

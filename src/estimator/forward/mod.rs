@@ -298,6 +298,27 @@ impl Forward {
         }
     }
 
+    /// The sagged structured solver (mutable), each cable's unit horizontal, the unit
+    /// vertical and the geometry of the loaded pose (None for taut cables): the sagged
+    /// mode shapes' inputs.
+    #[allow(clippy::type_complexity)]
+    pub(super) fn sag_shapes_input(
+        &mut self,
+    ) -> Option<(
+        &mut crate::modal::sagged::SagModalSolver,
+        Vec<nalgebra::Vector3<f64>>,
+        nalgebra::Vector3<f64>,
+        &Geometry,
+    )> {
+        match &mut self.model {
+            Model::Taut(_) => None,
+            Model::Sagged(s) => {
+                let (h, up) = s.shape_frames();
+                Some((&mut s.modal, h, up, &self.geometry))
+            }
+        }
+    }
+
     /// The sagged structured solver as loaded at the last pose (None for taut cables).
     pub(super) fn sag_modal(&self) -> Option<&crate::modal::sagged::SagModalSolver> {
         match &self.model {

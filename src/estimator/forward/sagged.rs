@@ -197,6 +197,13 @@ impl SagModel {
         assemble_sagged(&cables, &up, &m6, &k6, self.modal.dim())
     }
 
+    /// Each cable's unit horizontal h of the last load and the unit vertical up (world
+    /// frame): the frames [`SagModalSolver::mode_shapes`] needs.
+    pub(super) fn shape_frames(&self) -> (Vec<Vector3<f64>>, Vector3<f64>) {
+        let up = self.tension.basis(0)[1];
+        (self.frames.iter().map(|f| f.h).collect(), up)
+    }
+
     /// Each cable's catenary of the last tension solve.
     pub(super) fn catenaries(&self) -> &[Catenary] {
         self.tension.catenaries_of()

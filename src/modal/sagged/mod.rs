@@ -333,6 +333,15 @@ impl SagModalSolver {
         Ok(self.problem.static_eval().d)
     }
 
+    /// Number of cables of the loaded pose (0 before any load).
+    pub fn loaded_cables(&self) -> usize {
+        if self.loaded {
+            self.problem.n
+        } else {
+            0
+        }
+    }
+
     /// 3 (point mass) or 6 (rigid body).
     pub fn dim(&self) -> usize {
         self.problem.dim

@@ -28,60 +28,18 @@ impl ModalSolver {
         k: usize,
         params: &ShapeParams,
     ) -> Result<Vec<(f64, u32)>, ShapeError> {
-        params.check()?;
-        let mut out = Vec::new();
-        if k == 0 {
-            return Ok(out);
-        }
-        let mut hi = START_HI;
-        let mut steps = 0;
-        while (self.count_below(hi) as usize) < k {
-            hi *= GROWTH;
-            steps += 1;
-            if steps > GROWTH_STEPS || !hi.is_finite() {
-                return Err(ShapeError::BadParams("no finite bound holds k eigenvalues"));
-            }
-        }
-        let mut found = 0usize;
-        let mut lo = 0.0f64;
-        while found < k {
-            let lambda = self.bisect_next(lo, hi, found, params)?;
-            let above = lambda * (1.0 + params.cluster_rel);
-            let m = (self.count_below(above) as usize)
-                .saturating_sub(found)
-                .max(1);
-            out.push((lambda, m as u32));
-            found += m;
-            lo = above;
-        }
-        Ok(out)
+        clusters_by_count(|x| self.count_below(x), k, params)
     }
 
     /// The smallest λ in (lo, hi] with more than `found` modes at or below it, by bisection.
     pub(super) fn bisect_next(
         &mut self,
-        mut lo: f64,
-        mut hi: f64,
+        lo: f64,
+        hi: f64,
         found: usize,
         params: &ShapeParams,
     ) -> Result<f64, ShapeError> {
-        for _ in 0..params.max_bisections {
-            if hi - lo <= 4.0 * f64::EPSILON * hi {
-                return Ok(0.5 * (lo + hi));
-            }
-            let mid = 0.5 * (lo + hi);
-            if (self.count_below(mid) as usize) > found {
-                hi = mid;
-            } else {
-                lo = mid;
-            }
-        }
-        Err(crate::modal::ModalError::NoConvergence {
-            evaluations: params.max_bisections,
-            lo,
-            hi,
-        }
-        .into())
+        bisect_next(&mut |x| self.count_below(x), lo, hi, found, params)
     }
 
     /// The eigenvalues (λ, multiplicity) by the count from `lambda` (its cluster's lowest
@@ -112,4 +70,67 @@ impl ModalSolver {
         }
         Some(out)
     }
+}
+
+/// The lowest eigenvalues of the problem whose count of eigenvalues strictly below λ is
+/// `count(λ)`, as clusters (λ in rad²/s², multiplicity), ascending, until at least `k`
+/// modes are covered ([`ModalSolver::eigen_clusters`]).
+pub(super) fn clusters_by_count(
+    mut count: impl FnMut(f64) -> u32,
+    k: usize,
+    params: &ShapeParams,
+) -> Result<Vec<(f64, u32)>, ShapeError> {
+    params.check()?;
+    let mut out = Vec::new();
+    if k == 0 {
+        return Ok(out);
+    }
+    let mut hi = START_HI;
+    let mut steps = 0;
+    while (count(hi) as usize) < k {
+        hi *= GROWTH;
+        steps += 1;
+        if steps > GROWTH_STEPS || !hi.is_finite() {
+            return Err(ShapeError::BadParams("no finite bound holds k eigenvalues"));
+        }
+    }
+    let mut found = 0usize;
+    let mut lo = 0.0f64;
+    while found < k {
+        let lambda = bisect_next(&mut count, lo, hi, found, params)?;
+        let above = lambda * (1.0 + params.cluster_rel);
+        let m = (count(above) as usize).saturating_sub(found).max(1);
+        out.push((lambda, m as u32));
+        found += m;
+        lo = above;
+    }
+    Ok(out)
+}
+
+/// The smallest λ in (lo, hi] with more than `found` modes at or below it, by bisection on
+/// `count`.
+fn bisect_next(
+    count: &mut impl FnMut(f64) -> u32,
+    mut lo: f64,
+    mut hi: f64,
+    found: usize,
+    params: &ShapeParams,
+) -> Result<f64, ShapeError> {
+    for _ in 0..params.max_bisections {
+        if hi - lo <= 4.0 * f64::EPSILON * hi {
+            return Ok(0.5 * (lo + hi));
+        }
+        let mid = 0.5 * (lo + hi);
+        if (count(mid) as usize) > found {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    Err(crate::modal::ModalError::NoConvergence {
+        evaluations: params.max_bisections,
+        lo,
+        hi,
+    }
+    .into())
 }

@@ -70,13 +70,16 @@
 //! part enters m_ii.
 //!
 //! **Layout.** `chain_shape`: one chain's w, f, g and mass moments; `supported_shape`: a
-//! supported chain's. `solve`:
+//! supported chain's. `sagged`: the same
+//! bordered system on sagging cables' FEM chains
+//! ([`SagModalSolver::mode_shapes`](crate::modal::sagged::SagModalSolver::mode_shapes)). `solve`:
 //! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes). `count`:
 //! [`ModalSolver::eigen_clusters`](crate::modal::ModalSolver::eigen_clusters), the lowest
 //! eigenvalues and their multiplicities by count bisection.
 
 mod chain_shape;
 mod count;
+mod sagged;
 mod solve;
 mod supported_shape;
 
@@ -157,6 +160,47 @@ pub struct ModeShapes {
     pub fractions: Vec<Vec<f64>>,
     /// The shapes, ascending in λ; a cluster's shapes by descending participation.
     pub modes: Vec<ModeShape>,
+    /// Each cable's element mass between its nodes, kg: the consistent mass
+    /// (m/6)[2I I; I 2I] of each element of the node lists (a continuous cable's total
+    /// mass over its sample intervals, an approximation of its mass there).
+    pub element_mass_kg: Vec<f64>,
+}
+
+impl ModeShapes {
+    /// The mass overlaps O_ji = φ_jᵀ M φ'_i of these shapes (j, rows) with `old` (i,
+    /// columns), row-major, the mass M of these shapes' cables and `ee_mass` (the
+    /// end-effector's, kg and kg·m²) on node lists of the same sizes: at one pose, the
+    /// identity for M-orthonormal shapes; across a small change of pose, how each old mode
+    /// projects on the new ones. None when the two have different node lists.
+    pub fn mass_overlap(
+        &self,
+        old: &ModeShapes,
+        ee_mass: &nalgebra::Matrix6<f64>,
+    ) -> Option<Vec<f64>> {
+        let sizes = |s: &ModeShapes| s.fractions.iter().map(|f| f.len()).collect::<Vec<_>>();
+        if self.dim != old.dim || sizes(self) != sizes(old) {
+            return None;
+        }
+        let mut out = Vec::with_capacity(self.modes.len() * old.modes.len());
+        for a in &self.modes {
+            for b in &old.modes {
+                let mut s = (a.ee.transpose() * ee_mass * b.ee)[(0, 0)];
+                for (i, (ua, ub)) in a.cables.iter().zip(&b.cables).enumerate() {
+                    let m = self.element_mass_kg.get(i).copied().unwrap_or(0.0);
+                    let mut e = 0.0;
+                    for j in 0..ua.len().saturating_sub(1) {
+                        e += 2.0 * ua[j].dot(&ub[j])
+                            + ua[j].dot(&ub[j + 1])
+                            + ua[j + 1].dot(&ub[j])
+                            + 2.0 * ua[j + 1].dot(&ub[j + 1]);
+                    }
+                    s += m / 6.0 * e;
+                }
+                out.push(s);
+            }
+        }
+        Some(out)
+    }
 }
 
 /// Errors of the mode-shape recovery.
@@ -202,6 +246,9 @@ pub enum ShapeError {
     /// model builds one).
     #[error("mode shapes of a hidden cable need its free and hidden parts both discrete or both continuous")]
     HiddenCable,
+    /// Mode shapes of sagging cables are computed for the FEM chains only.
+    #[error("mode shapes of sagging continuous cables are not computed: use the fem element")]
+    SagContinuous,
     /// The singular value decomposition did not converge in its bound.
     #[error("singular value decomposition did not converge at λ = {0:e} rad²/s²")]
     Svd(f64),

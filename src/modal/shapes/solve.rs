@@ -93,10 +93,30 @@ impl Layout {
     }
 }
 
+impl Layout {
+    /// Each cable's element mass between its node list's nodes, kg (its first chain's: all
+    /// chains of a cable share the element mass; 0 without chains).
+    fn element_mass_kg(&self) -> Vec<f64> {
+        self.cable_copies
+            .iter()
+            .zip(&self.fractions)
+            .map(
+                |(copies, fr)| match copies.first().map(|&q| self.kinds[self.copies[q].chain]) {
+                    Some(ChainKind::Discrete { m, .. }) => m,
+                    Some(ChainKind::Continuous { m_total, .. }) => {
+                        m_total / (fr.len().saturating_sub(1)).max(1) as f64
+                    }
+                    _ => 0.0,
+                },
+            )
+            .collect()
+    }
+}
+
 /// The null space of one cluster before normalisation: columns (φ, C_1 … C_n).
-struct NullSpace {
-    vectors: DMatrix<f64>,
-    residual: f64,
+pub(super) struct NullSpace {
+    pub(super) vectors: DMatrix<f64>,
+    pub(super) residual: f64,
 }
 
 impl ModalSolver {
@@ -144,6 +164,7 @@ impl ModalSolver {
             dim,
             fractions: layout.fractions.clone(),
             modes: Vec::new(),
+            element_mass_kg: layout.element_mass_kg(),
         };
         for &(lambda, m) in modes {
             if !(lambda.is_finite() && lambda > 0.0) || m == 0 || m > MAX_MULTIPLICITY {
@@ -223,44 +244,7 @@ impl ModalSolver {
             }
             a[(d + q, d + q)] = -sh.scale * sh.g;
         }
-        let bad = |sigma_m, sigma_next| ShapeError::NotAnEigenvalue {
-            lambda,
-            multiplicity: m as u32,
-            sigma_m,
-            sigma_next,
-        };
-        if m > n {
-            return Err(bad(f64::NAN, f64::NAN));
-        }
-        let col_scale = equilibrate(&mut a);
-        let svd =
-            nalgebra::linalg::SVD::try_new(a, false, true, f64::EPSILON, params.svd_max_iterations)
-                .ok_or(ShapeError::Svd(lambda))?;
-        let vt = svd.v_t.ok_or(ShapeError::Svd(lambda))?;
-        let s = &svd.singular_values;
-        let smax = s.max();
-        let mut idx: Vec<usize> = (0..n).collect();
-        idx.sort_by(|&i, &j| s[i].total_cmp(&s[j]));
-        let sigma_m = s[idx[m - 1]] / smax;
-        let sigma_next = if m < n {
-            s[idx[m]] / smax
-        } else {
-            f64::INFINITY
-        };
-        // The null space is the m-dimensional one only if σ_m is clearly below σ_{m+1}.
-        let separation = sigma_m / sigma_next;
-        if !(separation <= params.null_tol) {
-            return Err(bad(sigma_m, sigma_next));
-        }
-        let mut vectors = DMatrix::zeros(n, m);
-        for (c, &i) in idx[..m].iter().enumerate() {
-            let v = vt.row(i).transpose().component_mul(&col_scale);
-            vectors.set_column(c, &(&v / v.norm()));
-        }
-        Ok(NullSpace {
-            vectors,
-            residual: separation,
-        })
+        null_of(a, m, lambda, params)
     }
 
     /// M-orthonormalise the null vectors (columns) and rotate them to diagonalise the
@@ -306,31 +290,93 @@ impl ModalSolver {
                 ee[(b, a)] = own;
             }
         }
-        // Symmetric orthonormalisation T1 = Q Λ^{-1/2}, then the end-effector's mass in
-        // that basis diagonalised (descending).
-        let g = SymmetricEigen::new(gram);
-        let mut t1 = g.eigenvectors.clone();
-        for (c, &l) in g.eigenvalues.iter().enumerate() {
-            let s = 1.0 / l.max(f64::MIN_POSITIVE).sqrt();
-            t1.column_mut(c).scale_mut(s);
-        }
-        let e = SymmetricEigen::new(t1.transpose() * &ee * &t1);
-        let mut order: Vec<usize> = (0..m).collect();
-        order.sort_by(|&i, &j| e.eigenvalues[j].total_cmp(&e.eigenvalues[i]));
-        let t = &t1 * &e.eigenvectors;
-        order
-            .iter()
-            .map(|&c| {
-                let mut col = v * t.column(c);
-                // Sign: the largest entry positive (a convention; shapes are ± anyway).
-                let imax = col.iamax();
-                if col[imax] < 0.0 {
-                    col.neg_mut();
-                }
-                (col, e.eigenvalues[c].clamp(0.0, 1.0))
-            })
-            .collect()
+        orthonormalise(v, gram, &ee)
     }
+}
+
+/// M-orthonormalise the null vectors `v` (columns) from their mass Gram matrix `gram`
+/// (vᵀMv) and rotate them to diagonalise the end-effector's mass `ee` (φᵀM_eeφ);
+/// returns the columns with their participations, descending.
+pub(super) fn orthonormalise(
+    v: &DMatrix<f64>,
+    gram: DMatrix<f64>,
+    ee: &DMatrix<f64>,
+) -> Vec<(DVector<f64>, f64)> {
+    let m = v.ncols();
+    // Symmetric orthonormalisation T1 = Q Λ^{-1/2}, then the end-effector's mass in
+    // that basis diagonalised (descending).
+    let g = SymmetricEigen::new(gram);
+    let mut t1 = g.eigenvectors.clone();
+    for (c, &l) in g.eigenvalues.iter().enumerate() {
+        let s = 1.0 / l.max(f64::MIN_POSITIVE).sqrt();
+        t1.column_mut(c).scale_mut(s);
+    }
+    let e = SymmetricEigen::new(t1.transpose() * ee * &t1);
+    let mut order: Vec<usize> = (0..m).collect();
+    order.sort_by(|&i, &j| e.eigenvalues[j].total_cmp(&e.eigenvalues[i]));
+    let t = &t1 * &e.eigenvectors;
+    order
+        .iter()
+        .map(|&c| {
+            let mut col = v * t.column(c);
+            // Sign: the largest entry positive (a convention; shapes are ± anyway).
+            let imax = col.iamax();
+            if col[imax] < 0.0 {
+                col.neg_mut();
+            }
+            (col, e.eigenvalues[c].clamp(0.0, 1.0))
+        })
+        .collect()
+}
+
+/// The m-dimensional null space of the bordered matrix `a` at λ (see the module docs):
+/// equilibrated, then the right singular vectors of its m smallest singular values,
+/// refused unless σ_m/σ_{m+1} ≤ [`ShapeParams::null_tol`].
+pub(super) fn null_of(
+    mut a: DMatrix<f64>,
+    m: usize,
+    lambda: f64,
+    params: &ShapeParams,
+) -> Result<NullSpace, ShapeError> {
+    let n = a.ncols();
+    let bad = |sigma_m, sigma_next| ShapeError::NotAnEigenvalue {
+        lambda,
+        multiplicity: m as u32,
+        sigma_m,
+        sigma_next,
+    };
+    if m > n {
+        return Err(bad(f64::NAN, f64::NAN));
+    }
+    let col_scale = equilibrate(&mut a);
+    let svd =
+        nalgebra::linalg::SVD::try_new(a, false, true, f64::EPSILON, params.svd_max_iterations)
+            .ok_or(ShapeError::Svd(lambda))?;
+    let vt = svd.v_t.ok_or(ShapeError::Svd(lambda))?;
+    let s = &svd.singular_values;
+    let smax = s.max();
+    let mut idx: Vec<usize> = (0..n).collect();
+    idx.sort_by(|&i, &j| s[i].total_cmp(&s[j]));
+    let sigma_m = s[idx[m - 1]] / smax;
+    let sigma_next = if m < n {
+        s[idx[m]] / smax
+    } else {
+        f64::INFINITY
+    };
+    // The null space is the m-dimensional one only if σ_m is clearly below σ_{m+1}.
+    let separation = sigma_m / sigma_next;
+    if !(separation <= params.null_tol) {
+        return Err(bad(sigma_m, sigma_next));
+    }
+    let mut vectors = DMatrix::zeros(n, m);
+    for (c, &i) in idx[..m].iter().enumerate() {
+        let v = vt.row(i).transpose().component_mul(&col_scale);
+        vectors.set_column(c, &(&v / v.norm()));
+    }
+    Ok(NullSpace {
+        vectors,
+        residual: separation,
+    })
 }
 
 /// Ruiz equilibration: scale rows and columns of `a` in place until every row and column

@@ -1,0 +1,311 @@
+//! The sagged mode shapes of the structured engine
+//! ([`cablevib::modal::sagged::SagModalSolver::mode_shapes`]: each chain's interior
+//! solutions by forward substitution, the bordered system's null space, the consistent
+//! mass's quadratic form) against the dense eigenvectors of the independently assembled
+//! sagged K and M ([`cablevib::modal::sagged::assemble_sagged`]: world-frame element
+//! matrices, sharing only the element data; a Cholesky reduction and a symmetric
+//! eigensolver written here), at N = 10 and 40, point mass and rigid body, light and heavy
+//! sag; and the estimator's modal basis on `suspended_8` with sag against the same dense
+//! solve.
+//!
+//! Checked per mode: the mass normalisation uᵀMu = 1 with the dense M (1e-9: the element
+//! sums and the assembly differ only in rounding, ~N·ε, and the cluster's Gram inverse
+//! square root); the residual ‖(K − λM)u‖/(‖K‖·‖u‖) (1e-10: the forward substitution's
+//! rounding, which grows at most linearly along a chain below its cut-off, and λ's own
+//! ~1e-12); the eigenspace against the dense eigenvectors: the part of each dense vector
+//! of the cluster outside the structured span, M-norm, ≤ 64·ε·λ_max/gap + 1e-9 (the dense
+//! solver's eigenvector error is ε·‖K‖/gap in the M-norm, λ_max its scale; 64 the same
+//! unknown constant as in `fem_dense.rs`; gap the relative distance to the nearest other
+//! eigenvalue); the end-effector participation against the dense vector's (1e-8).
+//! Measured worst values are printed (`--nocapture`).
+
+use cablevib::estimator::{Estimator, Tmin};
+use cablevib::kinematics::Pose;
+use cablevib::modal::sagged::{
+    assemble_sagged, HangingCable, SagDenseCable, SagEndEffector, SagModalSolver,
+};
+use cablevib::modal::{ModalParams, ModeShapes, ShapeParams};
+use cablevib::scene::{ElementKind, Scene};
+use cablevib_testkit::sag_robot::*;
+use nalgebra::{DMatrix, DVector, Matrix6};
+
+/// Mass normalisation (module docs).
+const MASS_TOL: f64 = 1e-9;
+/// Relative residual of K u = λ M u (module docs).
+const RESIDUAL_TOL: f64 = 1e-10;
+/// Factor on the dense eigenvector bound ε·λ_max/gap (module docs).
+const DENSE_FACTOR: f64 = 64.0;
+/// Floor of the subspace comparison.
+const SUBSPACE_FLOOR: f64 = 1e-9;
+/// Participation against the dense vector's.
+const PART_TOL: f64 = 1e-8;
+
+/// Every eigenpair of K u = λ M u, ascending, u M-orthonormal (columns).
+fn dense_eig(k: &DMatrix<f64>, m: &DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
+    let l = m.clone().cholesky().expect("M positive definite").l();
+    let a = l.solve_lower_triangular(k).unwrap();
+    let c = l.solve_lower_triangular(&a.transpose()).unwrap();
+    let c = (&c + c.transpose()) * 0.5;
+    let e = nalgebra::SymmetricEigen::new(c);
+    let mut idx: Vec<usize> = (0..e.eigenvalues.len()).collect();
+    idx.sort_by(|&i, &j| e.eigenvalues[i].total_cmp(&e.eigenvalues[j]));
+    let u = l
+        .transpose()
+        .solve_upper_triangular(&e.eigenvectors)
+        .unwrap();
+    let lam = idx.iter().map(|&i| e.eigenvalues[i]).collect();
+    let mut v = DMatrix::zeros(u.nrows(), idx.len());
+    for (c, &i) in idx.iter().enumerate() {
+        v.set_column(c, &u.column(i));
+    }
+    (lam, v)
+}
+
+/// A structured shape in the dense DOF order: the end-effector's `dim`, then each cable's
+/// interior nodes (world frame).
+fn dense_order(shapes: &ModeShapes, i: usize) -> DVector<f64> {
+    let s = &shapes.modes[i];
+    let mut out = Vec::new();
+    out.extend((0..shapes.dim).map(|r| s.ee[r]));
+    for cable in &s.cables {
+        for node in &cable[1..cable.len() - 1] {
+            out.extend(node.iter().copied());
+        }
+    }
+    DVector::from_vec(out)
+}
+
+/// Worst values of one comparison.
+#[derive(Default, Debug)]
+struct Worst {
+    mass: f64,
+    residual: f64,
+    subspace: f64,
+    part: f64,
+}
+
+/// Compare the structured shapes of the lowest `k` modes with the dense eigenvectors.
+fn compare(
+    k: &DMatrix<f64>,
+    m: &DMatrix<f64>,
+    shapes: &ModeShapes,
+    m_ee: &Matrix6<f64>,
+    what: &str,
+) -> Worst {
+    let (dl, dv) = dense_eig(k, m);
+    let lmax = dl.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+    let knorm = k.norm();
+    let dim = shapes.dim;
+    let mut w = Worst::default();
+    let mut i = 0;
+    while i < shapes.modes.len() {
+        let mult = shapes.modes[i].multiplicity as usize;
+        let lambda = shapes.modes[i].lambda;
+        let us: Vec<DVector<f64>> = (i..i + mult).map(|j| dense_order(shapes, j)).collect();
+        for (q, u) in us.iter().enumerate() {
+            assert_eq!(u.len(), k.nrows(), "{what}: DOF");
+            let mass = (u.transpose() * m * u)[(0, 0)];
+            let res = (k * u - m * u * lambda).norm() / (knorm * u.norm());
+            assert!(
+                (mass - 1.0).abs() < MASS_TOL,
+                "{what} mode {}: uᵀMu = {mass}",
+                i + q
+            );
+            assert!(
+                res < RESIDUAL_TOL,
+                "{what} mode {}: residual {res:.2e}",
+                i + q
+            );
+            w.mass = w.mass.max((mass - 1.0).abs());
+            w.residual = w.residual.max(res);
+        }
+        // The dense cluster: modes i .. i + mult; its gap to the neighbours.
+        assert!(
+            (dl[i] - lambda).abs() < (DENSE_FACTOR * f64::EPSILON * lmax / lambda + 1e-12) * lambda,
+            "{what}: λ {lambda} vs dense {}",
+            dl[i]
+        );
+        let mut gap = f64::INFINITY;
+        if i > 0 {
+            gap = gap.min((lambda - dl[i - 1]) / lambda);
+        }
+        if i + mult < dl.len() {
+            gap = gap.min((dl[i + mult] - lambda) / lambda);
+        }
+        let tol = DENSE_FACTOR * f64::EPSILON * lmax / lambda / gap + SUBSPACE_FLOOR;
+        for q in 0..mult {
+            let d = dv.column(i + q).into_owned();
+            // M-orthogonal projection onto the structured span (the us are M-orthonormal).
+            let mut r = d.clone();
+            for u in &us {
+                let c = (u.transpose() * m * &d)[(0, 0)];
+                r -= u * c;
+            }
+            let out = (r.transpose() * m * &r)[(0, 0)].max(0.0).sqrt();
+            assert!(
+                out < tol,
+                "{what} mode {}: dense vector {out:.2e} outside the structured span (tol {tol:.2e})",
+                i + q
+            );
+            w.subspace = w.subspace.max(out);
+        }
+        if mult == 1 {
+            let d = dv.column(i);
+            let mut p = 0.0;
+            for r in 0..dim {
+                for c in 0..dim {
+                    p += d[r] * m_ee[(r, c)] * d[c];
+                }
+            }
+            let e = (p - shapes.modes[i].ee_participation).abs();
+            assert!(e < PART_TOL, "{what} mode {i}: participation {e:.2e}");
+            w.part = w.part.max(e);
+        }
+        i += mult;
+    }
+    w
+}
+
+fn dense_of(s: &SagModalSolver, cables: &[HangingCable]) -> (DMatrix<f64>, DMatrix<f64>) {
+    let dc: Vec<SagDenseCable> = cables
+        .iter()
+        .enumerate()
+        .map(|(i, c)| SagDenseCable {
+            chain: s.chain(i),
+            h: c.h,
+            arm_m: c.arm_m,
+        })
+        .collect();
+    let (m6, k6) = s.ee_matrices();
+    assemble_sagged(&dc, &up(), &m6, &k6, s.dim()).unwrap()
+}
+
+#[test]
+fn sagged_shapes_equal_dense_eigenvectors() {
+    let mut worst = Worst::default();
+    for heavy in [false, true] {
+        let cables = robot(8, 0.6, 2.0e5, heavy);
+        for ee in [point(), rigid()] {
+            for n_el in [10usize, 40] {
+                let mut s = SagModalSolver::new(ModalParams::default(), cables.len(), n_el);
+                s.load_catenaries(&cables, n_el, &up(), &ee).unwrap();
+                let clusters = s.lowest_clusters(12, &ShapeParams::default()).unwrap();
+                let h: Vec<_> = cables.iter().map(|c| c.h).collect();
+                let arms: Vec<_> = cables.iter().map(|c| c.arm_m).collect();
+                let shapes = s
+                    .mode_shapes(&h, &up(), &arms, &clusters, &ShapeParams::default())
+                    .unwrap();
+                assert!(shapes.modes.len() >= 12);
+                let (k, m) = dense_of(&s, &cables);
+                let what = format!(
+                    "heavy {heavy} {} N {n_el}",
+                    if matches!(ee, SagEndEffector::Point { .. }) {
+                        "point"
+                    } else {
+                        "rigid"
+                    }
+                );
+                let w = compare(&k, &m, &shapes, &s.ee_matrices().0, &what);
+                worst.mass = worst.mass.max(w.mass);
+                worst.residual = worst.residual.max(w.residual);
+                worst.subspace = worst.subspace.max(w.subspace);
+                worst.part = worst.part.max(w.part);
+            }
+        }
+    }
+    eprintln!("sagged shapes vs dense: {worst:?}");
+}
+
+/// Bad input: continuous cables, cable counts that do not match, a λ that is not an
+/// eigenvalue: errors, no panic.
+#[test]
+fn sagged_shapes_refuse_bad_input() {
+    let cables = robot(4, 0.6, 2.0e5, false);
+    let mut s = SagModalSolver::new(ModalParams::default(), cables.len(), 10);
+    let h: Vec<_> = cables.iter().map(|c| c.h).collect();
+    let p = ShapeParams::default();
+    assert!(
+        s.mode_shapes(&h, &up(), &[], &[(1.0, 1)], &p).is_err(),
+        "not loaded"
+    );
+    s.load_catenaries(&cables, 10, &up(), &point()).unwrap();
+    assert!(s.mode_shapes(&h[..3], &up(), &[], &[(1.0, 1)], &p).is_err());
+    let c = s.lowest_clusters(1, &p).unwrap();
+    assert!(s.mode_shapes(&h, &up(), &[], &c, &p).is_ok());
+    let off = c[0].0 * 1.3;
+    assert!(s.mode_shapes(&h, &up(), &[], &[(off, 1)], &p).is_err());
+    assert!(s.mode_shapes(&h, &up(), &[], &[(f64::NAN, 1)], &p).is_err());
+}
+
+/// The estimator's basis on `suspended_8` with sag (FEM, N = 10 and 40) comes from the
+/// structured engine and equals the dense model's: λ to the dense bound 64·ε·λ_max/λ (as in
+/// `fem_dense.rs`) + 1e-12, and the end-effector block Σ φ φᵀ of each group of modes
+/// within 1e-6 of each other (basis-independent), times the end-effector's mass, to the
+/// dense eigenvector bound 64·ε·λ_max/(λ·gap) + 1e-9 (module docs).
+#[test]
+fn estimator_basis_with_sag_is_structured_and_equals_dense() {
+    for (n_el, offset) in [(10usize, [0.0, 0.0]), (10, [0.2, 0.1]), (40, [0.2, 0.1])] {
+        let mut scene = Scene::load("scenes/suspended_8.toml").unwrap();
+        scene.model.sag = true;
+        scene.model.element = ElementKind::Fem;
+        scene.model.elements_per_cable = n_el;
+        let mut est = Estimator::new(&scene).unwrap();
+        let pose = Pose {
+            position_m: scene.ee_position_m + nalgebra::Vector3::new(offset[0], offset[1], 0.0),
+            orientation_wxyz: scene.ee_orientation_wxyz,
+        };
+        let e = *est.update(&pose, Tmin::Scene);
+        assert!(e.status.is_ok(), "{:?}", e.error);
+        let basis = est.ee_modal_basis(8).unwrap();
+        assert!(basis.structured, "N {n_el}: the basis is structured");
+        let (k, m) = est.dense_matrices().unwrap();
+        let (dl, dv) = dense_eig(&k, &m);
+        let lmax = dl.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+        let dim = basis.dim;
+        let mut i = 0;
+        let mut worst = 0.0f64;
+        while i < basis.lambda.len() {
+            let l = basis.lambda[i];
+            let bound = DENSE_FACTOR * f64::EPSILON * lmax / l + 1e-12;
+            assert!(
+                (l - dl[i]).abs() < bound * l,
+                "N {n_el} mode {i}: {l} vs {} (bound {bound:.1e})",
+                dl[i]
+            );
+            let mut j = i + 1;
+            // Modes within 1e-6 of each other form one group: the dense solver's vectors of
+            // near-equal modes are only defined as a subspace.
+            while j < basis.lambda.len() && basis.lambda[j] < l * (1.0 + 1e-6) {
+                j += 1;
+            }
+            let mut a = Matrix6::<f64>::zeros();
+            let mut b = Matrix6::<f64>::zeros();
+            for q in i..j {
+                a += basis.phi_ee[q] * basis.phi_ee[q].transpose();
+                let mut d = nalgebra::Vector6::zeros();
+                for r in 0..dim {
+                    d[r] = dv[(r, q)];
+                }
+                b += d * d.transpose();
+            }
+            // Relative to the block of a mode carried by the end-effector alone (‖φφᵀ‖ ~ 1/m):
+            // the error is ε·λ_max/gap in the M-norm, not relative to a small mode's block.
+            let err = (a - b).norm() * basis.ee_mass[(0, 0)];
+            let mut gap = f64::INFINITY;
+            if i > 0 {
+                gap = gap.min((l - dl[i - 1]) / l);
+            }
+            if j < dl.len() {
+                gap = gap.min((dl[j] - l) / l);
+            }
+            let tol = DENSE_FACTOR * f64::EPSILON * lmax / l / gap + SUBSPACE_FLOOR;
+            assert!(
+                err < tol,
+                "N {n_el} cluster at mode {i}: {err:.2e} (tol {tol:.1e})"
+            );
+            worst = worst.max(err);
+            i = j;
+        }
+        eprintln!("suspended-8 sag N {n_el}: end-effector blocks within {worst:.2e}");
+    }
+}
