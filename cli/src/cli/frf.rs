@@ -14,8 +14,7 @@ use super::{json_f64, CliError};
 use crate::estimator::{Estimator, Tmin};
 use crate::kinematics::Pose;
 use crate::modal::{
-    frequency_grid, lambda_to_hz, receptance_over, FrfError, ModalBasis,
-    ModalParams, ModalSolver,
+    frequency_grid, lambda_to_hz, receptance_over, FrfError, ModalBasis, ModalParams, ModalSolver,
 };
 use crate::report::csv::{process_command_line, write_csv};
 use crate::report::figure::FigureFormat;

@@ -74,3 +74,40 @@ fn analyze_with_sag_and_hidden_cables_answers_as_the_library() {
     let dof = json_number(&printed, "dof");
     assert_eq!(dof, (3 + 8 * (3 * 39 + 40)) as f64);
 }
+
+/// `simulate --sag true` with hidden cables: the sagged mode shapes start every chain at a
+/// fixed anchor, so on a hidden cable (a moving junction) they are refused in one line, not
+/// drawn wrong.
+#[test]
+fn simulate_with_sag_and_hidden_cables_is_refused_in_one_line() {
+    let text = DEFAULT_SCENE_TOML.replacen(
+        "area = 50.265e-6",
+        "area = 50.265e-6\nhidden_length = 2.5",
+        1,
+    );
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("hidden-sag-simulate");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("paper_hidden.toml");
+    std::fs::write(&file, &text).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_cablevib"))
+        .args([
+            "simulate",
+            file.to_str().unwrap(),
+            "--sag",
+            "true",
+            "--move",
+            "0.1,0,0",
+            "--duration",
+            "0.2",
+            "--modes",
+            "4",
+            "--out",
+            dir.join("sim").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "simulate answered: {err}");
+    assert!(err.contains("hidden cable"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+}

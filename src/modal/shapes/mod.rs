@@ -249,6 +249,10 @@ pub enum ShapeError {
     /// Mode shapes of sagging cables are computed for the FEM chains only.
     #[error("mode shapes of sagging continuous cables are not computed: use the fem element")]
     SagContinuous,
+    /// Mode shapes of sagging cables on a hidden cable (the junction at the pulley moves)
+    /// are not computed.
+    #[error("mode shapes of sagging cables on a hidden cable (hidden_length, or a pulley's wrapped arc) are not computed")]
+    SagHidden,
     /// The singular value decomposition did not converge in its bound.
     #[error("singular value decomposition did not converge at λ = {0:e} rad²/s²")]
     Svd(f64),

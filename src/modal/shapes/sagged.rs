@@ -47,8 +47,9 @@ use super::count::clusters_by_count;
 use super::solve::{null_of, orthonormalise};
 use super::{ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_MULTIPLICITY};
 use crate::cable::sagged::SagChain;
+use crate::kinematics::attach_map;
+use crate::modal::lambda_to_hz;
 use crate::modal::sagged::SagModalSolver;
-use crate::modal::{attach_map, lambda_to_hz};
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x6, Matrix6, Vector3, Vector6};
 
 /// One cable's interior solutions at one λ, in the cable's frame (h, up, n).
@@ -154,6 +155,11 @@ impl SagModalSolver {
         params.check()?;
         if self.is_continuous() {
             return Err(ShapeError::SagContinuous);
+        }
+        // The recovery below starts every chain at a fixed anchor (y_0 = 0); a chain on a
+        // hidden cable starts at a moving junction, so its shapes would be wrong.
+        if (0..self.loaded_cables()).any(|i| self.chain(i).support().is_some()) {
+            return Err(ShapeError::SagHidden);
         }
         let dim = self.dim();
         let n_cables = self.loaded_cables();
