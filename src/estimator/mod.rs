@@ -131,15 +131,6 @@ impl Estimator {
             est.auto = Some(choice);
             return Ok(est);
         }
-        if scene.has_hidden_cable()
-            && scene.model.sag
-            && scene.model.element == ElementKind::Continuous
-        {
-            return Err(BuildError::HiddenNotModelled {
-                scene: scene.name.clone(),
-                model: "sag and the continuous element (use fem with sag)",
-            });
-        }
         let n = scene.n_cables();
         let mut est = Estimator {
             scene: scene.clone(),

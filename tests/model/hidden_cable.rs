@@ -415,22 +415,6 @@ fn continuous_hidden_cable_is_the_fem_limit() {
     );
 }
 
-/// Sag with the continuous element is the one model that refuses a hidden cable (its
-/// Magnus chain starts at a fixed anchor), in one line naming both.
-#[test]
-fn sagged_continuous_hidden_cable_is_refused_clearly() {
-    let mut s = paper_with_hidden("continuous", 1, 2.5);
-    s.set_sag(true).unwrap();
-    let Err(e) = Estimator::new(&s) else {
-        panic!("sag, continuous, with a hidden cable was accepted");
-    };
-    let e = e.to_string();
-    assert!(
-        e.contains("hidden cable") && e.contains("sag") && e.contains("continuous"),
-        "{e}"
-    );
-}
-
 /// The numbers of docs/hidden-cable.md (printed with --nocapture): the paper robot at its
 /// default pose, fem × 10, every cable with a hidden cable of its own material and length
 /// L_h (ratio r = L_h / mean free length), and

@@ -146,6 +146,60 @@ fn sagged_hidden_cable_frequencies_equal_an_independent_dense_fem() {
     }
 }
 
+/// Sag, the continuous element and hidden cables: the sagged FEM's limit. The independent
+/// dense sagged FEM (`dense_sagged`, N elements per free and per hidden cable) at N = 20
+/// and 40 against the continuous model (Magnus chain from the junction, exact hidden bar):
+/// the FEM's error falls as O(N⁻²) (the ratio of the two errors is 4 within 10 %), and the
+/// Richardson extrapolation (4 λ₄₀ − λ₂₀)/3 removes it: what remains is the O(N⁻⁴) term
+/// and the continuous mesh's error (offline rule, 1e-9), measured 4.2e-7 at most on the
+/// first 6 modes (N = 40 alone: 5.1e-4), so TOL = 2e-6; the static stiffness likewise,
+/// measured 1.1e-9 (N = 40 alone: 1.2e-5), so 1e-8.
+#[test]
+fn sagged_continuous_hidden_cable_is_the_dense_fem_limit() {
+    const TOL: f64 = 2e-6;
+    let count = 6;
+    for p in [Vector3::new(0.0, 0.0, 1.0), Vector3::new(0.3, 0.2, 1.0)] {
+        let mut sc = paper_with_hidden("continuous", 1, 2.5);
+        sc.set_sag(true).unwrap();
+        let mut est = Estimator::new(&sc).unwrap();
+        let e = *est.update(&Pose::at(p), Tmin::Scene);
+        assert!(e.is_ok(), "{p:?}: {:?}", e.error);
+        let mut solver = est.sag_modal().expect("sagged").clone();
+        let mut modes = vec![Mode::default(); count];
+        assert_eq!(solver.modes(count, &mut modes).unwrap(), count);
+        let mut lam = Vec::new();
+        let mut kst = Vec::new();
+        for n in [20, 40] {
+            let s = sagged_with_hidden(n);
+            let mut est = Estimator::new(&s).unwrap();
+            assert!(est.update(&Pose::at(p), Tmin::Scene).is_ok());
+            let (k, m) = dense_sagged(&est, &p, n);
+            let dense = dense_modes(&k, &m, s.ee_mass_kg, false).unwrap();
+            lam.push(dense.lambda[..count].to_vec());
+            let kd = condense_static(&k, 3);
+            kst.push(Matrix3::from_fn(|r, c| kd[(r, c)]));
+        }
+        for (j, mode) in modes.iter().enumerate() {
+            let (l20, l40, lc) = (lam[0][j], lam[1][j], mode.lambda);
+            let ratio = (l20 - lc) / (l40 - lc);
+            let rich = (4.0 * l40 - l20) / 3.0;
+            let err = (rich - lc).abs() / lc;
+            eprintln!(
+                "{p:?} mode {j}: cont {lc:.9e} N20 {:.2e} N40 {:.2e} ratio {ratio:.3} richardson {err:.1e}",
+                (l20 - lc) / lc,
+                (l40 - lc) / lc
+            );
+            assert!((ratio - 4.0).abs() <= 0.4, "{p:?} mode {j}: ratio {ratio}");
+            assert!(err <= TOL, "{p:?} mode {j}: {err:.2e}");
+        }
+        let rich = (kst[1] * 4.0 - kst[0]) / 3.0;
+        let rel = (e.stiffness_n_m - rich).norm() / rich.norm();
+        let rel40 = (e.stiffness_n_m - kst[1]).norm() / rich.norm();
+        eprintln!("{p:?} stiffness: N40 {rel40:.1e} richardson {rel:.1e}");
+        assert!(rel <= 1e-8, "{p:?}: stiffness {rel:.2e}");
+    }
+}
+
 /// With sag, the hidden cable lowers the static stiffness and f1 moves as the taut model's:
 /// the same robot with hidden cables of a thousandth of a millimetre is the robot without
 /// (within 1e-6), and 2.5 m lowers k_min.

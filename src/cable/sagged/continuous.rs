@@ -99,13 +99,14 @@
 //! evaluation stays exact for the discrete model (count and poles consistent), with an error
 //! that grows with λ.
 
+mod junction;
 mod kernel;
 mod profile;
 mod propagate;
 mod statics;
 mod transfer;
 
-use super::SagChainEval;
+use super::{SagChainError, SagChainEval, SagSupport};
 use crate::elastic_catenary::Catenary;
 use profile::Profile;
 
@@ -230,6 +231,8 @@ pub struct SagContinuous {
     q_max: [f64; 2],
     mesh: SagContMesh,
     static_eval: SagChainEval,
+    /// The anchor node on the hidden cable (`set_support`), None: fixed.
+    support: Option<SagSupport>,
 }
 
 impl SagContinuous {
@@ -242,6 +245,7 @@ impl SagContinuous {
             final_rot: [1.0, 0.0],
             q_max: [0.0; 2],
             static_eval: SagChainEval::default(),
+            support: None,
             mesh: SagContMesh {
                 steps: 0,
                 lambda_max_rad2_s2: 0.0,
@@ -281,7 +285,53 @@ impl SagContinuous {
 
     /// S(λ), dS/dλ and the blocked count at λ = ω² (rad²/s²). No allocation; O(M).
     pub fn eval(&self, lambda: f64) -> SagChainEval {
-        propagate::eval(&self.segs[..self.n_seg], self.final_rot, self.q_max, lambda)
+        let segs = &self.segs[..self.n_seg];
+        let junction = match (&self.support, segs.first()) {
+            (Some(sup), Some(first)) => {
+                let e = sup.hidden.eval(lambda);
+                let ([dc, ds], [c0, s0]) = (sup.direction, first.rot);
+                Some(junction::Junction {
+                    dir: [dc * c0 + ds * s0, ds * c0 - dc * s0],
+                    h: e.s,
+                    dh: e.ds,
+                    below: e.below,
+                })
+            }
+            _ => None,
+        };
+        propagate::eval(segs, self.final_rot, self.q_max, lambda, junction.as_ref())
+    }
+
+    /// Put the cable's anchor node on the hidden cable `support` (None: the anchor fixed),
+    /// as [`SagChain::set_support`](super::SagChain::set_support) does for the FEM chain:
+    /// the first sub-segment's start moves along `support.direction` held by the hidden
+    /// segment (an exact axial bar when its `n_el` is 0). Call after `set` (which clears
+    /// the support); refreshes the static evaluation. No allocation.
+    pub fn set_support(&mut self, support: Option<SagSupport>) -> Result<(), SagChainError> {
+        if let Some(s) = support {
+            let [c, sn] = s.direction;
+            let h = s.hidden;
+            let unit = (c * c + sn * sn - 1.0).abs() <= 1e-9;
+            if !(unit && h.k > 0.0 && h.k.is_finite() && h.m >= 0.0 && h.m.is_finite()) {
+                return Err(SagChainError::BadInput {
+                    name: "hidden cable",
+                    value: h.k,
+                });
+            }
+        }
+        self.support = support;
+        self.static_eval = if support.is_some() {
+            self.eval(0.0)
+        } else {
+            let segs = &self.segs[..self.n_seg];
+            statics::static_eval(segs, self.final_rot).unwrap_or_else(|| self.eval(0.0))
+        };
+        Ok(())
+    }
+
+    /// The cable's support (None: the anchor is fixed).
+    pub fn support(&self) -> Option<SagSupport> {
+        self.support
     }
 
     /// The static end stiffness S(0) (computed by `set`, `statics`): s_in (N/m, (h, up))
@@ -328,6 +378,7 @@ impl SagContinuous {
             [m[0].max(g.q[0]), m[1].max(g.q[1]).max(g.q[2])]
         });
         let segs = &self.segs[..self.n_seg];
+        self.support = None;
         self.static_eval =
             statics::static_eval(segs, self.final_rot).unwrap_or_else(|| self.eval(0.0));
         self.mesh = SagContMesh {

@@ -234,11 +234,11 @@ fn set_chain(
 /// Largest element count per cable (the scene's limit).
 const MAX_ELEMENTS: usize = crate::scene::MAX_ELEMENTS_PER_CABLE;
 
-/// Put cable `i`'s FEM chain (set on `cat`) on the cable behind its exit point: the
-/// junction moves along the catenary's tangent at the anchor, (H, V_a)/T_a in (h, up); the
-/// hidden cable runs straight from the pulley to the drum, as the free cable's number of
-/// equal consistent-mass axial elements (one spring when it is massless), as the taut
-/// `fem` model has it.
+/// Put cable `i`'s chain (set on `cat`) on the cable behind its exit point: the junction
+/// moves along the catenary's tangent at the anchor, (H, V_a)/T_a in (h, up); the hidden
+/// cable runs straight from the pulley to the drum, for a FEM chain as the free cable's
+/// number of equal consistent-mass axial elements, for a continuous cable as the exact
+/// axial bar (one spring when it is massless), as the taut models have it.
 fn support_chain(
     modal: &mut SagModalSolver,
     i: usize,
@@ -247,10 +247,15 @@ fn support_chain(
     hidden: &crate::cable::HiddenAxial,
 ) -> Result<(), EstimatorError> {
     let n_el = scene.model.elements_per_cable.clamp(1, MAX_ELEMENTS);
-    let nh = if hidden.mu_kg_m > 0.0 { n_el } else { 1 };
+    // Continuous cables: the exact axial bar (n_el 0); massless: one spring.
+    let nh = match (hidden.mu_kg_m > 0.0, modal.is_continuous()) {
+        (true, true) => 0,
+        (true, false) => n_el,
+        (false, _) => 1,
+    };
     let segment = crate::cable::Segment {
-        k: hidden.ea_n * nh as f64 / hidden.length_m,
-        m: hidden.mu_kg_m * hidden.length_m / nh as f64,
+        k: hidden.ea_n * nh.max(1) as f64 / hidden.length_m,
+        m: hidden.mu_kg_m * hidden.length_m / nh.max(1) as f64,
         n_el: nh,
     };
     let ta = cat.h_n.hypot(cat.v_anchor_n);
@@ -258,6 +263,11 @@ fn support_chain(
         hidden: segment,
         direction: [cat.h_n / ta, cat.v_anchor_n / ta],
     };
+    if modal.is_continuous() {
+        return modal
+            .support_continuous(i, Some(support))
+            .map_err(EstimatorError::SagModel);
+    }
     modal
         .chain_mut(i)
         .set_support(Some(support))

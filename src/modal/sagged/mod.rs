@@ -234,6 +234,28 @@ impl SagModalSolver {
         Ok(mesh)
     }
 
+    /// Put cable i's continuous chain (set by [`Self::set_continuous`]) on the hidden cable
+    /// `support` ([`SagContinuous::set_support`]). No allocation.
+    pub fn support_continuous(
+        &mut self,
+        i: usize,
+        support: Option<crate::cable::sagged::SagSupport>,
+    ) -> Result<(), SagLoadError> {
+        self.loaded = false;
+        let p = &mut self.problem;
+        if !p.continuous || i >= p.cont.len() {
+            return Err(SagLoadError::CableCount {
+                given: i + 1,
+                capacity: p.cont.len(),
+            });
+        }
+        p.cont[i]
+            .set_support(support)
+            .map_err(|e| SagLoadError::Chain(i, e))?;
+        p.cont_static[i] = p.cont[i].static_eval();
+        Ok(())
+    }
+
     /// Load a pose whose chains 0 .. frames.len() are set: each cable's frame, the unit
     /// `up` (−g/|g|) and the end-effector. No allocation.
     pub fn load(

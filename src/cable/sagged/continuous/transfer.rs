@@ -14,6 +14,7 @@
 //! symmetric form (Σ own + the pivots b⁻¹ a + S, whose inertia is that of a + b S when
 //! b > 0).
 
+use super::junction::{junction_start, De, Junction};
 use super::kernel;
 use super::kernel::{neg2, nonzero, rotate};
 use super::Segment;
@@ -46,11 +47,27 @@ fn dir(q: f64, k: f64, mul: f64, lambda: f64) -> Dir {
     }
 }
 
-/// In-plane condensation: (S, dS/dλ) in the (h, up) basis and the blocked count.
+/// A direction's D = a/b, e = 1/b, x = (a − 1)/b and their λ-derivatives (the fixed–fixed
+/// dynamic stiffness from the transfer coefficients; `b` nonzero; this form runs at large
+/// λ only, where a − 1 has no cancellation).
+fn de_of(d: &Dir, b: f64) -> De {
+    let r = 1.0 / b;
+    De {
+        d: d.a * r,
+        e: r,
+        x: (d.a - 1.0) * r,
+        dd: (d.da * b - d.a * d.db) * r * r,
+        de: -d.db * r * r,
+    }
+}
+
+/// In-plane condensation: (S, dS/dλ) in the (h, up) basis and the blocked count;
+/// `junction`: the anchor node on the hidden cable (None: fixed).
 pub(super) fn eval_in(
     segs: &[Segment],
     final_rot: [f64; 2],
     lambda: f64,
+    junction: Option<&Junction>,
 ) -> ([f64; 3], [f64; 3], u32) {
     let mut s = [0.0; 3];
     let mut ds = [0.0; 3];
@@ -63,6 +80,12 @@ pub(super) fn eval_in(
             // From the fixed anchor: S = a b⁻¹ per direction.
             let b1 = nonzero(d1.b, 1.0 / g.k[0]);
             let b2 = nonzero(d2.b, 1.0 / g.k[1]);
+            if let Some(j) = junction {
+                let (s1, ds1, b) = junction_start(de_of(&d1, b1), de_of(&d2, b2), j);
+                (s, ds) = (s1, ds1);
+                below += b;
+                continue;
+            }
             s = [d1.a / b1, 0.0, d2.a / b2];
             ds = [
                 (d1.da * b1 - d1.a * d1.db) / (b1 * b1),
