@@ -217,15 +217,6 @@ pub enum BuildError {
     /// A parameter is out of its bounds ([`super::EstimatorParams::check`]).
     #[error(transparent)]
     Params(#[from] super::ParamsError),
-    /// A hidden cable with a model that does not take it (`sag = true` with the
-    /// continuous element).
-    #[error("scene `{scene}`: a hidden cable (hidden_length) is not modelled with {model}")]
-    HiddenNotModelled {
-        /// Scene name.
-        scene: String,
-        /// The model that does not take it.
-        model: &'static str,
-    },
 }
 
 /// Errors of the offline reference pipeline ([`reference_analysis`](super::reference_analysis)

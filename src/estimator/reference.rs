@@ -97,9 +97,8 @@ pub fn structured_analysis(scene: &Scene, position_m: &Vector3<f64>, t_min: Tmin
             e.error = Some(*reason);
             e
         }
-        // The default parameters are within their bounds (params.rs tests it); a hidden
-        // cable with sag and the continuous element is a scene the structured solvers refuse.
-        Err(BuildError::Params(_) | BuildError::HiddenNotModelled { .. }) => {
+        // The default parameters are within their bounds (params.rs tests it).
+        Err(BuildError::Params(_)) => {
             let mut e = Estimate::empty(scene.n_cables());
             e.status = Status::InvalidInput;
             e

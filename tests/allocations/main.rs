@@ -122,13 +122,17 @@ fn ten_thousand_cycles_allocate_nothing() {
     }
 }
 
-/// Sagging cables on hidden cables (the sagged chains start at the junction, evaluated one
-/// by one): 2,000 cycles along the circle, bad inputs mixed in, allocate nothing; the
+/// Sagging cables on hidden cables, fem and continuous (the sagged chains start at the
+/// junction, evaluated one by one): 2,000 cycles along the circle, bad inputs mixed in, allocate nothing; the
 /// estimates are answers (ok) on the circle.
 #[test]
 fn hidden_cables_with_sag_allocate_nothing() {
-    for (scene, n) in [(Scene::default_scene(), 10), (Scene::default_scene(), 40)] {
-        let mut s = hidden(scene).with_model(ElementKind::Fem, n);
+    for (kind, n) in [
+        (ElementKind::Fem, 10),
+        (ElementKind::Fem, 40),
+        (ElementKind::Continuous, 1),
+    ] {
+        let mut s = hidden(Scene::default_scene()).with_model(kind, n);
         s.set_sag(true).unwrap();
         let c = circle(&s);
         let mut est = Estimator::new(&s).unwrap();
@@ -147,7 +151,7 @@ fn hidden_cables_with_sag_allocate_nothing() {
         assert_eq!(
             after - before,
             0,
-            "sag, hidden, fem × {n}: {} heap allocations in 2,000 cycles",
+            "sag, hidden, {kind:?} × {n}: {} heap allocations in 2,000 cycles",
             after - before
         );
         assert!(ok >= 1_990, "{ok}");

@@ -416,12 +416,9 @@ pub(super) fn fill_models(
             scene.model.geometric_stiffness,
         )?;
         if let Some(h) = axial_behind_exit(c, g, i) {
-            match m.support_on_hidden(scene.model.element, &g.unit[i], &h) {
-                // A pulley's wrap arc alone, on a model that takes no cable behind the exit
-                // point (the catenary element): the cable stays held at its exit point.
-                Err(CableError::HiddenNotModelled) if c.hidden.is_none() => {}
-                r => r?,
-            }
+            // Every element model takes the cable behind the exit point (hidden length plus
+            // the pulley's wrapped arc); an error here is an error of the scene.
+            m.support_on_hidden(scene.model.element, &g.unit[i], &h)?;
         }
     }
     Ok(())
