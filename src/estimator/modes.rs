@@ -7,6 +7,26 @@ use super::{Estimator, EstimatorError, Status};
 use crate::modal::{self, DenseModes, Mode, ShapeParams};
 use nalgebra::{DMatrix, Matrix6, Vector6};
 
+impl EeModalBasis {
+    /// The basis of the structured engine's mode shapes (taut or sagging FEM cables).
+    fn structured(
+        dim: usize,
+        shapes: modal::ModeShapes,
+        flexibility: Matrix6<f64>,
+        ee_mass: Matrix6<f64>,
+    ) -> EeModalBasis {
+        EeModalBasis {
+            dim,
+            lambda: shapes.modes.iter().map(|m| m.lambda).collect(),
+            phi_ee: shapes.modes.iter().map(|m| m.ee).collect(),
+            flexibility,
+            ee_mass,
+            structured: true,
+            shapes: Some(shapes),
+        }
+    }
+}
+
 impl Estimator {
     /// The first `k` natural frequencies (ascending) of the pose of the last successful
     /// [`Estimator::update`] into `out`; returns how many were written (min(k, out.len(),
@@ -127,15 +147,7 @@ impl Estimator {
             let shapes = solver
                 .mode_shapes(models, &geometry.arm_m, &clusters, &ShapeParams::default())
                 .map_err(BasisError::Shapes)?;
-            return Ok(EeModalBasis {
-                dim,
-                lambda: shapes.modes.iter().map(|m| m.lambda).collect(),
-                phi_ee: shapes.modes.iter().map(|m| m.ee).collect(),
-                flexibility,
-                ee_mass,
-                structured: true,
-                shapes: Some(shapes),
-            });
+            return Ok(EeModalBasis::structured(dim, shapes, flexibility, ee_mass));
         }
         if let Some((solver, h, up, geometry)) = self.cycle.sag_shapes_input() {
             if !solver.is_continuous() {
@@ -146,15 +158,7 @@ impl Estimator {
                 let shapes = solver
                     .mode_shapes(&h, &up, &geometry.arm_m, &clusters, &params)
                     .map_err(BasisError::Shapes)?;
-                return Ok(EeModalBasis {
-                    dim,
-                    lambda: shapes.modes.iter().map(|m| m.lambda).collect(),
-                    phi_ee: shapes.modes.iter().map(|m| m.ee).collect(),
-                    flexibility,
-                    ee_mass,
-                    structured: true,
-                    shapes: Some(shapes),
-                });
+                return Ok(EeModalBasis::structured(dim, shapes, flexibility, ee_mass));
             }
         }
         let (kk, mm) = self.dense_matrices()?;

@@ -308,17 +308,7 @@ impl SagContinuous {
     /// segment (an exact axial bar when its `n_el` is 0). Call after `set` (which clears
     /// the support); refreshes the static evaluation. No allocation.
     pub fn set_support(&mut self, support: Option<SagSupport>) -> Result<(), SagChainError> {
-        if let Some(s) = support {
-            let [c, sn] = s.direction;
-            let h = s.hidden;
-            let unit = (c * c + sn * sn - 1.0).abs() <= 1e-9;
-            if !(unit && h.k > 0.0 && h.k.is_finite() && h.m >= 0.0 && h.m.is_finite()) {
-                return Err(SagChainError::BadInput {
-                    name: "hidden cable",
-                    value: h.k,
-                });
-            }
-        }
+        SagSupport::check(support.as_ref())?;
         self.support = support;
         self.static_eval = if support.is_some() {
             self.eval(0.0)

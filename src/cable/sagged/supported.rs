@@ -38,11 +38,10 @@ pub struct SagSupport {
     pub direction: [f64; 2],
 }
 
-impl SagChain {
-    /// Put the chain's anchor node on the hidden cable `support` (None: the anchor fixed,
-    /// as [`Self::set_fem`] leaves it). Call after the chain is set: setting the chain
-    /// clears its support. No allocation.
-    pub fn set_support(&mut self, support: Option<SagSupport>) -> Result<(), SagChainError> {
+impl SagSupport {
+    /// A unit direction (to 1e-9) and a hidden segment with finite k > 0 and m ≥ 0; the
+    /// check of both chains' `set_support`.
+    pub(super) fn check(support: Option<&SagSupport>) -> Result<(), SagChainError> {
         if let Some(s) = support {
             let [c, sn] = s.direction;
             let h = s.hidden;
@@ -54,6 +53,16 @@ impl SagChain {
                 });
             }
         }
+        Ok(())
+    }
+}
+
+impl SagChain {
+    /// Put the chain's anchor node on the hidden cable `support` (None: the anchor fixed,
+    /// as [`Self::set_fem`] leaves it). Call after the chain is set: setting the chain
+    /// clears its support. No allocation.
+    pub fn set_support(&mut self, support: Option<SagSupport>) -> Result<(), SagChainError> {
+        SagSupport::check(support.as_ref())?;
         self.support = support;
         Ok(())
     }

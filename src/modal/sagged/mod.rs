@@ -221,12 +221,7 @@ impl SagModalSolver {
     ) -> Result<SagContMesh, SagLoadError> {
         self.loaded = false;
         let p = &mut self.problem;
-        if !p.continuous || i >= p.cont.len() {
-            return Err(SagLoadError::CableCount {
-                given: i + 1,
-                capacity: p.cont.len(),
-            });
-        }
+        p.check_continuous_index(i)?;
         let mesh = p.cont[i]
             .set(cat, mu_kg_m)
             .map_err(|e| SagLoadError::Continuous(i, e))?;
@@ -243,12 +238,7 @@ impl SagModalSolver {
     ) -> Result<(), SagLoadError> {
         self.loaded = false;
         let p = &mut self.problem;
-        if !p.continuous || i >= p.cont.len() {
-            return Err(SagLoadError::CableCount {
-                given: i + 1,
-                capacity: p.cont.len(),
-            });
-        }
+        p.check_continuous_index(i)?;
         p.cont[i]
             .set_support(support)
             .map_err(|e| SagLoadError::Chain(i, e))?;

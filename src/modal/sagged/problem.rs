@@ -57,6 +57,17 @@ pub(super) struct SagProblem {
 }
 
 impl SagProblem {
+    /// Cable `i` has a continuous chain (the solver was built for them and i is in range).
+    pub(super) fn check_continuous_index(&self, i: usize) -> Result<(), SagLoadError> {
+        if !self.continuous || i >= self.cont.len() {
+            return Err(SagLoadError::CableCount {
+                given: i + 1,
+                capacity: self.cont.len(),
+            });
+        }
+        Ok(())
+    }
+
     /// Room for `n_cables` chains of up to `n_el_max` elements each (the only allocation).
     pub(super) fn new(
         n_cables: usize,
