@@ -338,6 +338,7 @@ fn assert_same(got: &EstimateSample, want: &Estimate, what: &dyn Fn() -> String)
 
 #[test]
 fn hostile_client_gets_exact_answers_and_the_service_stays_flat() {
+    let _serial = crate::one_server_at_a_time();
     let total: usize = std::env::var("CABLEVIB_HOSTILE_MESSAGES")
         .ok()
         .and_then(|s| s.parse().ok())

@@ -38,6 +38,7 @@ fn wait_until<T>(what: &str, mut f: impl FnMut() -> Option<T>) -> T {
 
 #[test]
 fn flooded_poses_are_estimated_skipped_or_overwritten_exactly_once() {
+    let _serial = crate::one_server_at_a_time();
     let instance = format!("cvtest_{}_flood_counters", std::process::id());
     let names = ServiceNames::new(&instance);
     let scene = Scene::default_scene();
@@ -124,6 +125,7 @@ const HOSTILE_POSES: u64 = 100_000;
 ///   resets = the publishers' sums.
 #[test]
 fn a_hostile_publisher_leaves_another_publishers_counts_exact() {
+    let _serial = crate::one_server_at_a_time();
     use cablevib::stats::{SEQUENCE_GAP_WINDOW, SEQUENCE_MAX_RATE_PER_S, SEQUENCE_QUEUE_SLACK};
     let instance = format!("cvtest_{}_two_publishers", std::process::id());
     let names = ServiceNames::new(&instance);

@@ -29,6 +29,7 @@ const CYCLES: u64 = 100_000;
 
 /// Serves `cycles` poses (a margin request every 10th) with the pool on or off; the report.
 fn serve(cycles: u64, alloc_pool: bool) -> cablevib_service::server::ServerReport {
+    let _serial = crate::one_server_at_a_time();
     let instance = format!("cvtest_{}_serve_alloc_{alloc_pool}", std::process::id());
     let names = ServiceNames::new(&instance);
     let scene = Scene::default_scene();
