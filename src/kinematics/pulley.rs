@@ -58,6 +58,20 @@ pub struct PulleyExit {
     pub softening_per_m: f64,
 }
 
+impl PulleyExit {
+    /// ∂A/∂B, the exit point's motion with the attachment point (3 × 3, dimensionless):
+    /// −s (A − C)ᵀ/L + (R (1 − cos φ)/a) n nᵀ. In the plane the exit point slides along the
+    /// circle's tangent s as the wrap angle turns (δφ = −ρ(φ)·δB/L, δA = R s δφ); across
+    /// it the plane swings about the axis by n·δB/a, carrying A, at R (1 − cos φ) from the
+    /// axis, with it. R (1 − cos φ)/a = −L · [`Self::softening_per_m`] (a = R (1 − cos φ)
+    /// + L sin φ). Zero for R = 0.
+    pub fn exit_jacobian(&self) -> nalgebra::Matrix3<f64> {
+        let l = self.free_length_m;
+        -self.unit * (self.exit_m - self.centre_m).transpose() / l
+            - self.normal * self.normal.transpose() * (l * self.softening_per_m)
+    }
+}
+
 /// The reference direction of the swivel angle: the unit vector perpendicular to `w` built
 /// from the coordinate axis least aligned with it (x first), and the third axis w × e1.
 pub fn swivel_reference(w: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
@@ -311,6 +325,39 @@ mod tests {
             assert!((fd - k).norm() < 1e-8 / e.free_length_m, "{fd} vs {k}");
             assert!(e.softening_per_m <= 0.0);
         }
+    }
+
+    #[test]
+    fn the_exit_jacobian_is_the_derivative_of_the_exit_point() {
+        // ∂A/∂B in closed form against central differences of the closed-form exit point
+        // (h = 1e-6 m: truncation ~h²·R/L² ~ 1e-13, rounding ~1e-16·|A|/h ~ 1e-10; 1e-8).
+        let mut rng = Rng(4242);
+        let mut seen = 0;
+        for _ in 0..200 {
+            let w = rng.unit();
+            let f = rng.unit();
+            let r = 0.02 + 0.2 * rng.next();
+            let b = f + rng.unit() * (0.5 + 2.0 * rng.next());
+            let p = Pulley {
+                entry_unit: w,
+                radius_m: r,
+            };
+            let Ok(e) = pulley_exit(0, &f, &p, &b) else {
+                continue;
+            };
+            let h = 1e-6;
+            let mut fd = Matrix3::zeros();
+            for j in 0..3 {
+                let d = Vector3::ith(j, h);
+                let ap = pulley_exit(0, &f, &p, &(b + d)).unwrap().exit_m;
+                let am = pulley_exit(0, &f, &p, &(b - d)).unwrap().exit_m;
+                fd.set_column(j, &((ap - am) / (2.0 * h)));
+            }
+            let k = e.exit_jacobian();
+            assert!((fd - k).norm() < 1e-8, "{fd} vs {k}");
+            seen += 1;
+        }
+        assert!(seen > 150, "{seen}");
     }
 
     #[test]

@@ -158,6 +158,42 @@ fn hidden_cables_with_sag_allocate_nothing() {
     }
 }
 
+/// Sagging cables on swivel pulleys (the exit point's motion adds its term to the sagged
+/// D(λ) at each load): the paper robot (fem × 10, continuous) and CAROCA (rigid, fem × 10),
+/// 2,000 cycles along the circle with bad inputs mixed in, allocate nothing.
+#[test]
+fn pulleys_with_sag_allocate_nothing() {
+    for (name, kind, n) in [
+        ("spatial_paper_pulleys", ElementKind::Fem, 10),
+        ("spatial_paper_pulleys", ElementKind::Continuous, 1),
+        ("caroca_with_rotating_pulleys", ElementKind::Fem, 10),
+    ] {
+        let mut s = scene_file(name).with_model(kind, n);
+        s.set_sag(true).unwrap();
+        let c = circle(&s);
+        let mut est = Estimator::new(&s).unwrap();
+        est.update(&circle_pose(&s, &c, 0), Tmin::Scene);
+        let before = thread_allocations();
+        let mut ok = 0;
+        for k in 1..=2_000 {
+            let e = match k % 1000 {
+                17 => est.update(&Pose::at(Vector3::new(f64::NAN, 0.0, 1.0)), Tmin::Scene),
+                19 => est.update(&Pose::at(Vector3::new(9.0, 9.0, 9.0)), Tmin::Scene),
+                _ => est.update(&circle_pose(&s, &c, k), Tmin::Scene),
+            };
+            ok += e.is_ok() as usize;
+        }
+        let after = thread_allocations();
+        assert_eq!(
+            after - before,
+            0,
+            "{name} sag {kind:?} × {n}: {} heap allocations in 2,000 cycles",
+            after - before
+        );
+        assert!(ok >= 1_990, "{name} {kind:?}: {ok}");
+    }
+}
+
 /// The continuation paths: with a budget of 12 evaluations per cycle, every rescan and the
 /// cold scans are spread over several cycles and warm cycles are cut short now and then; the
 /// heavy-cable scene's cold scan (~250 string modes below the end-effector mode) runs over

@@ -16,7 +16,7 @@ use crate::modal::sagged::{
 use crate::modal::{ModalError, Root};
 use crate::scene::{ElementKind, Scene};
 use crate::tension::{SagCable, SagTensionSolver};
-use nalgebra::{DMatrix, Matrix6, Vector3};
+use nalgebra::{DMatrix, Matrix3, Matrix6, Vector3};
 
 /// Every buffer of the sagged forward model, sized once.
 #[derive(Debug, Clone)]
@@ -127,6 +127,10 @@ impl SagModel {
             if let Some(hidden) = super::axial_behind_exit(&scene.cables[i], g, i) {
                 support_chain(&mut self.modal, i, scene, &cat, &hidden)?;
             }
+            let exit = g.pulley_exit(i).map(|e| exit_motion(e, &cat, &h, &up));
+            self.modal
+                .set_exit_motion(i, exit)
+                .map_err(EstimatorError::SagModel)?;
         }
         let up = self.tension.basis(0)[1];
         let body = EndEffector::of_body(scene, pose);
@@ -229,6 +233,24 @@ fn set_chain(
         .chain_mut(i)
         .set_fem(cat, mu_kg_m, n_el)
         .map_err(|e| EstimatorError::SagModel(SagLoadError::Chain(i, e)))
+}
+
+/// The base translation of a chain whose exit point moves (cable on swivel pulley `e`,
+/// catenary `cat` in the plane (h, up)), per displacement of its end:
+/// X = (I − τ_a sᵀ) ∂A/∂B ([`SagModalSolver::set_exit_motion`]). The statics place the exit
+/// point A by the chord (the straight line from the pulley to the attachment point, the
+/// sagged tension distribution's simplification), so ∂A/∂B is the chord geometry's; the
+/// cable leaves A along its catenary tangent τ_a = (H h + V_a up)/T_a, and slides over the
+/// pulley by the wrap arc's change s·δA.
+fn exit_motion(
+    e: &crate::kinematics::PulleyExit,
+    cat: &Catenary,
+    h: &Vector3<f64>,
+    up: &Vector3<f64>,
+) -> Matrix3<f64> {
+    let ta = cat.h_n.hypot(cat.v_anchor_n);
+    let tau = (h * cat.h_n + up * cat.v_anchor_n) / ta;
+    (Matrix3::identity() - tau * e.unit.transpose()) * e.exit_jacobian()
 }
 
 /// Largest element count per cable (the scene's limit).

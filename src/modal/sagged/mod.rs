@@ -12,7 +12,10 @@
 //!
 //! with G_i = [I, −\[r_i\]×] the attachment map of arm r_i and K_geo = Σ_i (f_i·r_i) I −
 //! sym(f_i r_iᵀ) the rotational geometric stiffness of the end forces
-//! f_i = −(H_i h_i + V_e,i up) (along the end tangent, not the chord). One evaluation is one O(N)
+//! f_i = −(H_i h_i + V_e,i up) (along the end tangent, not the chord). A cable on a swivel
+//! pulley adds the pulleys' own term to both, the symmetric part of −S_i(0) X_i (mapped
+//! through G_i on a rigid body; X_i its exit point's motion,
+//! [`SagModalSolver::set_exit_motion`]), the same at every λ. One evaluation is one O(N)
 //! recurrence per cable. The Wittrick–Williams count J(λ) = Σ_i below_i(λ) + (negative
 //! eigenvalues of D(λ)) is the exact number of natural frequencies below λ.
 //!
@@ -246,6 +249,30 @@ impl SagModalSolver {
         Ok(())
     }
 
+    /// Cable i's exit point moves with the end-effector (a swivel pulley): `map` is
+    /// X = (I − τ_a sᵀ) ∂A/∂B (3 × 3; τ_a the catenary's unit tangent at the exit point, s
+    /// the chord's unit direction, ∂A/∂B [`crate::kinematics::PulleyExit::exit_jacobian`]),
+    /// None for a fixed anchor. The next [`Self::load`] adds the term it makes to D(λ)
+    /// (`problem::add_exit_term`). Kept until changed. No allocation.
+    pub fn set_exit_motion(
+        &mut self,
+        i: usize,
+        map: Option<Matrix3<f64>>,
+    ) -> Result<(), SagLoadError> {
+        self.loaded = false;
+        let capacity = self.problem.exit_map.len();
+        let slot = self
+            .problem
+            .exit_map
+            .get_mut(i)
+            .ok_or(SagLoadError::CableCount {
+                given: i + 1,
+                capacity,
+            })?;
+        *slot = map;
+        Ok(())
+    }
+
     /// Load a pose whose chains 0 .. frames.len() are set: each cable's frame, the unit
     /// `up` (−g/|g|) and the end-effector. No allocation.
     pub fn load(
@@ -274,6 +301,7 @@ impl SagModalSolver {
         }
         self.problem.n = n;
         self.problem.pack();
+        self.problem.add_exit_term();
         self.loaded = true;
         Ok(())
     }

@@ -52,8 +52,16 @@ pub(super) struct SagProblem {
     pub(super) m6: Matrix6<f64>,
     /// M6^{1/2} (the cluster participations' congruence).
     pub(super) m6_sqrt: Matrix6<f64>,
-    /// The tensions' rotational geometric stiffness (rigid body), N·m/rad.
+    /// The tensions' rotational geometric stiffness (rigid body), N·m/rad, plus the
+    /// swivel pulleys' own term ([`Self::add_exit_term`]; N/m in the translational block).
     pub(super) k6: Matrix6<f64>,
+    /// Each cable's map from the end's displacement to its chain's base translation,
+    /// (I − τ_a sᵀ) ∂A/∂B (None: the base stays put; [`super::SagModalSolver::set_exit_motion`]).
+    pub(super) exit_map: Vec<Option<Matrix3<f64>>>,
+    /// Each loaded cable's attachment arm, m (rigid body: the term's map G).
+    arm: Vec<Vector3<f64>>,
+    /// Whether `k6` holds a pulley term (a point mass's D then adds its translational block).
+    pub(super) has_exit: bool,
 }
 
 impl SagProblem {
@@ -97,6 +105,9 @@ impl SagProblem {
             m6: Matrix6::zeros(),
             m6_sqrt: Matrix6::zeros(),
             k6: Matrix6::zeros(),
+            exit_map: vec![None; n_cables],
+            arm: vec![Vector3::zeros(); n_cables],
+            has_exit: false,
         }
     }
 
@@ -116,6 +127,7 @@ impl SagProblem {
         self.m6 = Matrix6::zeros();
         self.m6_sqrt = Matrix6::zeros();
         self.k6 = Matrix6::zeros();
+        self.has_exit = false;
         for i in 0..3 {
             self.m6[(i, i)] = mass;
             self.m6_sqrt[(i, i)] = mass.sqrt();
@@ -160,6 +172,7 @@ impl SagProblem {
             up * up.transpose(),
             n * n.transpose(),
         ];
+        self.arm[i] = frame.arm_m;
         let pr = &mut self.proj[i];
         for (q, m) in mats.iter().enumerate() {
             for (j, &(r, c)) in SYM3.iter().enumerate() {
@@ -188,8 +201,14 @@ impl SagProblem {
     fn start(&self, lambda: f64) -> Acc {
         if self.dim == 3 {
             let m = self.ee_mass_kg;
+            let mut d = [-lambda * m, -lambda * m, -lambda * m, 0.0, 0.0, 0.0];
+            if self.has_exit {
+                for (j, &(r, c)) in SYM3.iter().enumerate() {
+                    d[j] += self.k6[(r, c)];
+                }
+            }
             Acc::Point {
-                d: [-lambda * m, -lambda * m, -lambda * m, 0.0, 0.0, 0.0],
+                d,
                 dd: [-m, -m, -m, 0.0, 0.0, 0.0],
                 below: 0,
             }
@@ -299,6 +318,13 @@ impl SagProblem {
             for r in 0..3 {
                 d[(r, r)] = -lambda * self.ee_mass_kg;
             }
+            if self.has_exit {
+                for r in 0..3 {
+                    for c in 0..3 {
+                        d[(r, c)] += re(self.k6[(r, c)]);
+                    }
+                }
+            }
             d
         } else {
             self.k6.map(re) - self.m6.map(re) * lambda
@@ -322,6 +348,45 @@ impl SagProblem {
             }
         }
         Some(d)
+    }
+
+    /// Add the swivel pulleys' own term to `k6` (after [`Self::pack`]: it reads the chains'
+    /// static evaluations). A chain whose exit point moves, δA = ∂A/∂B δB, with the cable
+    /// sliding over the pulley (the junction moves along the anchor tangent τ_a with the
+    /// hidden cable stretched by the wrap arc's change s·δA), is the loaded chain with its
+    /// base translated by (I − τ_a sᵀ) ∂A/∂B δB = X δB; the chain is translation-invariant
+    /// statically, so its end force changes by −S(0)(δB − X δB): the term is −S(0) X, the
+    /// chain's static stiffness S(0) in world coordinates. Its symmetric part is added
+    /// (D must be symmetric; the chord-geometry statics leave a skew part, measured in
+    /// docs/pulleys.md), through G = [I, −[r]×] on a rigid body. Massless, so the same at
+    /// every λ, as the taut term. No allocation.
+    pub(super) fn add_exit_term(&mut self) {
+        for i in 0..self.n {
+            let Some(x) = self.exit_map[i] else { continue };
+            let e = if self.continuous {
+                self.cont_static[i]
+            } else {
+                self.static_fem[i]
+            };
+            let s = [e.s_in[0], e.s_in[1], e.s_in[2], e.s_out];
+            let p = &self.proj[i].p3;
+            let mut k = Matrix3::zeros();
+            for (j, &(r, c)) in SYM3.iter().enumerate() {
+                let v = s[0] * p[0][j] + s[1] * p[1][j] + s[2] * p[2][j] + s[3] * p[3][j];
+                k[(r, c)] = v;
+                k[(c, r)] = v;
+            }
+            let t = -(k * x);
+            let t = (t + t.transpose()) * 0.5;
+            if self.dim == 6 {
+                let g = attach_map(&self.arm[i]);
+                self.k6 += g.transpose() * t * g;
+            } else {
+                let mut b = self.k6.fixed_view_mut::<3, 3>(0, 0);
+                b += t;
+            }
+            self.has_exit = true;
+        }
     }
 
     /// D(0) and D'(0) from the chains' cached static evaluations (no recurrence).
