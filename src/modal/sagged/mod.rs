@@ -253,7 +253,8 @@ impl SagModalSolver {
     /// X = (I − τ_a sᵀ) ∂A/∂B (3 × 3; τ_a the catenary's unit tangent at the exit point, s
     /// the chord's unit direction, ∂A/∂B [`crate::kinematics::PulleyExit::exit_jacobian`]),
     /// None for a fixed anchor. The next [`Self::load`] adds the term it makes to D(λ)
-    /// (`problem::add_exit_term`). Kept until changed. No allocation.
+    /// (`problem::add_exit_term`). Kept until changed. A map with a non-finite entry is
+    /// refused (`BadFrame`), a cable index beyond the solver's (`CableCount`). No allocation.
     pub fn set_exit_motion(
         &mut self,
         i: usize,
@@ -269,6 +270,9 @@ impl SagModalSolver {
                 given: i + 1,
                 capacity,
             })?;
+        if map.is_some_and(|x| !x.iter().all(|v| v.is_finite())) {
+            return Err(SagLoadError::BadFrame(i));
+        }
         *slot = map;
         Ok(())
     }
@@ -399,8 +403,9 @@ impl SagModalSolver {
         self.problem.total_modes()
     }
 
-    /// The end-effector's mass matrix diag(m I, I) and the rigid body's rotational
-    /// geometric stiffness (zero for a point mass): what the dense reference also needs.
+    /// The end-effector's mass matrix diag(m I, I) and its stiffness: the rigid body's
+    /// rotational geometric stiffness plus the swivel pulleys' term (zero for a point mass
+    /// without pulleys): what the dense reference also needs.
     pub fn ee_matrices(&self) -> (Matrix6<f64>, Matrix6<f64>) {
         (self.problem.m6, self.problem.k6)
     }
