@@ -3,8 +3,10 @@
 //! predicted λ against the cold one, and the cycle's evaluation budget. Plus an ignored
 //! measurement of ns per element.
 
+use cablevib::cable::sagged::SagSupport;
+use cablevib::cable::Segment;
 use cablevib::elastic_catenary::{CableChord, SagParams};
-use cablevib::modal::sagged::SagModalSolver;
+use cablevib::modal::sagged::{SagCableFrame, SagModalSolver};
 use cablevib::modal::{ModalError, ModalParams};
 use cablevib_testkit::sag_robot::*;
 use std::time::Instant;
@@ -34,6 +36,58 @@ fn lockstep_d_equals_one_by_one_bit_for_bit() {
                 }
                 let c = s.count_below(lambda);
                 assert_eq!(c, b.below + b.eig().negatives() as u32, "count, λ {lambda}");
+            }
+        }
+    }
+}
+
+/// As above with every other cable on a hidden cable (the chain's anchor node held by an
+/// axial segment of 40 elements, or the continuous bar, along the cable's first chord):
+/// the supported chains run in the lockstep batch from their junction step, so D, D' and
+/// the count equal the one-by-one recurrence bit for bit (tolerance 0), λ from 0 to far
+/// above the lowest poles.
+#[test]
+fn lockstep_d_with_hidden_cables_equals_one_by_one_bit_for_bit() {
+    for n in [5usize, 11] {
+        for ee in [point(), rigid()] {
+            let cables = robot(n, 0.6, 2.0e5, true);
+            let mut s = SagModalSolver::new(ModalParams::default(), n, 40);
+            let mut frames = Vec::new();
+            for (i, c) in cables.iter().enumerate() {
+                let chain = s.chain_mut(i);
+                chain.set_fem(&c.catenary, c.mu_kg_m, 40).unwrap();
+                if i % 2 == 0 {
+                    let nh = if i % 4 == 0 { 40 } else { 0 };
+                    let per = if nh == 0 { 1.0 } else { nh as f64 };
+                    let support = SagSupport {
+                        hidden: Segment {
+                            k: 2.0e5 / 2.5 * per,
+                            m: c.mu_kg_m * 2.5 / per,
+                            n_el: nh,
+                        },
+                        direction: chain.element(0).chord,
+                    };
+                    chain.set_support(Some(support)).unwrap();
+                }
+                frames.push(SagCableFrame {
+                    h: c.h,
+                    arm_m: c.arm_m,
+                    end_force_n: -(c.h * c.catenary.h_n + up() * c.catenary.v_end_n()),
+                });
+            }
+            s.load(&frames, &up(), &ee).unwrap();
+            let l1 = s.first_root_cold().unwrap().lambda;
+            for i in 0..200 {
+                let lambda = l1 * 1e3 * (i as f64 / 200.0).powi(3);
+                let (a, b) = (s.eval(lambda), s.eval_reference(lambda));
+                assert_eq!(a.below, b.below, "n {n} λ {lambda}");
+                for (x, y) in
+                    a.d.iter()
+                        .zip(b.d.iter())
+                        .chain(a.dd.iter().zip(b.dd.iter()))
+                {
+                    assert_eq!(x.to_bits(), y.to_bits(), "n {n} λ {lambda}: {x} vs {y}");
+                }
             }
         }
     }

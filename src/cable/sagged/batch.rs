@@ -4,14 +4,22 @@
 //! the chains' independent dependency chains fill the pipeline and the SIMD lanes, with
 //! AVX-512 / AVX2 builds of the same operations chosen at run time.
 //!
+//! A chain on a hidden cable ([`SagChain::set_support`]) joins the batch: its lane starts
+//! the in-plane recurrence at node 1 from the junction step (`supported`: the hidden
+//! segment's end stiffness at λ and the junction's condensation, per lane before the
+//! block runs, by the scalar path's own function), where a fixed-anchor lane starts from
+//! its first element; elements 2 … N then run in lockstep for every lane.
+//!
 //! Every lane does exactly the IEEE operations of the scalar recurrence, in the same order
 //! (Rust never fuses or reassociates floating-point operations), and the singular-pivot
 //! nudge is a select instead of a branch: the results are bit-identical to
-//! [`SagChain::eval`] (a test checks it). The λ-derivative recurrence is skipped when the
-//! caller does not need S' (count-only evaluations): then `ds_in`, `ds_out` are 0.
+//! [`SagChain::eval`], with or without a hidden cable (tests check it). The λ-derivative
+//! recurrence is skipped when the caller does not need S' (count-only evaluations): then
+//! `ds_in`, `ds_out` are 0.
 
 use super::chain::SagChain;
-use super::SagChainEval;
+use super::supported::junction_start;
+use super::{SagChainEval, SagSupport};
 
 /// Chains per block: one AVX-512 register, two AVX2 ones (independent chains per core).
 pub const SAG_LANES: usize = 8;
@@ -40,6 +48,15 @@ struct LaneConsts {
     nudge: [f64; SAG_LANES],
 }
 
+/// Each lane's in-plane state at node 1 (S₁ as [a, b, c] in (h, up), S₁′) and its count
+/// so far: the first element's, or the junction step's on a hidden cable.
+#[derive(Debug, Clone, Copy)]
+struct LaneStart {
+    s: [[f64; SAG_LANES]; 3],
+    ds: [[f64; SAG_LANES]; 3],
+    below: [u64; SAG_LANES],
+}
+
 /// The chains of one pose packed for lockstep evaluation: `new` allocates, [`Self::pack`]
 /// copies without allocating, [`Self::eval_with`] reads.
 #[derive(Debug, Clone)]
@@ -47,6 +64,8 @@ pub struct SagBatch {
     /// Block-major: block b's element j at `b * n_el + j`.
     elems: Vec<ElemBlock>,
     consts: Vec<LaneConsts>,
+    /// Chain i's hidden cable (None: a fixed anchor).
+    supports: Vec<Option<SagSupport>>,
     n_chains: usize,
     n_el: usize,
     cap_chains: usize,
@@ -67,6 +86,7 @@ impl SagBatch {
                 };
                 blocks
             ],
+            supports: vec![None; n_chains],
             n_chains: 0,
             n_el: 0,
             cap_chains: n_chains,
@@ -74,10 +94,10 @@ impl SagBatch {
         }
     }
 
-    /// Copy `chains` in (no allocation). Returns false, and holds nothing, when they do not
-    /// fit the batch: more chains or elements than its capacity, an empty chain, element
-    /// counts that differ, or a chain on a hidden cable ([`SagChain::set_support`]) (the
-    /// caller then evaluates them one by one).
+    /// Copy `chains` in (no allocation), with their hidden cables
+    /// ([`SagChain::set_support`]). Returns false, and holds nothing, when they do not fit
+    /// the batch: more chains or elements than its capacity, an empty chain, or element
+    /// counts that differ (the caller then evaluates them one by one).
     pub fn pack(&mut self, chains: &[SagChain]) -> bool {
         self.n_chains = 0;
         self.n_el = 0;
@@ -85,9 +105,7 @@ impl SagBatch {
         if chains.len() > self.cap_chains
             || n_el == 0
             || n_el > self.cap_el
-            || chains
-                .iter()
-                .any(|c| c.n_el() != n_el || c.support.is_some())
+            || chains.iter().any(|c| c.n_el() != n_el)
         {
             return false;
         }
@@ -98,6 +116,7 @@ impl SagBatch {
             consts.mass = [0.0; SAG_LANES];
             consts.nudge = [0.0; SAG_LANES];
             for (l, chain) in block.iter().enumerate() {
+                self.supports[b * SAG_LANES + l] = chain.support;
                 consts.mass[l] = chain.mass_kg;
                 consts.nudge[l] = chain.nudge;
                 for (e, (k, &ko)) in els.iter_mut().zip(chain.k_in.iter().zip(&chain.k_out)) {
@@ -124,18 +143,61 @@ impl SagBatch {
         mut sink: impl FnMut(usize, &SagChainEval),
     ) {
         let mut out = [SagChainEval::default(); SAG_LANES];
+        let mut init = LaneStart {
+            s: [[0.0; SAG_LANES]; 3],
+            ds: [[0.0; SAG_LANES]; 3],
+            below: [0; SAG_LANES],
+        };
         for (b, consts) in self.consts.iter().enumerate() {
             let start = b * SAG_LANES;
             if start >= self.n_chains {
                 break;
             }
             let els = &self.elems[b * self.n_el..(b + 1) * self.n_el];
-            eval_block(els, consts, lambda, derivative, &mut out);
+            let supports = &self.supports[start..(start + SAG_LANES).min(self.n_chains)];
+            lane_start(&els[0], consts, supports, lambda, derivative, &mut init);
+            eval_block(els, consts, &init, lambda, derivative, &mut out);
             let len = (self.n_chains - start).min(SAG_LANES);
             for (l, e) in out[..len].iter().enumerate() {
                 sink(start + l, e);
             }
         }
+    }
+}
+
+/// Every lane's state at node 1 at λ: the first element's A₁ = k₁ − (λm/3) I (the
+/// recurrence's start, module docs of `sagged`), or on a hidden cable the junction step
+/// (`supported`) with the hidden segment's end stiffness at λ; S₁′ is 0 unless `derivative`.
+#[inline]
+fn lane_start(
+    e0: &ElemBlock,
+    k: &LaneConsts,
+    supports: &[Option<SagSupport>],
+    lambda: f64,
+    derivative: bool,
+    init: &mut LaneStart,
+) {
+    for i in 0..SAG_LANES {
+        let m = k.mass[i];
+        let d3 = lambda * m / 3.0;
+        init.s[0][i] = e0.a[i] - d3;
+        init.s[1][i] = e0.b[i];
+        init.s[2][i] = e0.c[i] - d3;
+        init.ds[0][i] = -m / 3.0;
+        init.ds[1][i] = 0.0;
+        init.ds[2][i] = -m / 3.0;
+        init.below[i] = 0;
+    }
+    for (i, sup) in supports.iter().enumerate() {
+        let Some(sup) = sup else { continue };
+        let (h, dh, hb) = SagChain::hidden_at_real(sup, lambda);
+        let k0 = [e0.a[i], e0.b[i], e0.c[i]];
+        let (s, ds, below) = junction_start(k0, k.mass[i], k.nudge[i], sup, lambda, h, dh, hb);
+        for q in 0..3 {
+            init.s[q][i] = s[q];
+            init.ds[q][i] = if derivative { ds[q] } else { 0.0 };
+        }
+        init.below[i] = below as u64;
     }
 }
 
@@ -145,6 +207,7 @@ crate::simd::dispatch! {
     fn eval_block(
         els: &[ElemBlock],
         k: &LaneConsts,
+        init: &LaneStart,
         lambda: f64,
         derivative: bool,
         out: &mut [SagChainEval; SAG_LANES],
@@ -158,22 +221,25 @@ crate::simd::dispatch! {
 fn block_body(
     els: &[ElemBlock],
     k: &LaneConsts,
+    init: &LaneStart,
     lambda: f64,
     derivative: bool,
     out: &mut [SagChainEval; SAG_LANES],
 ) {
     if derivative {
-        block::<true>(els, k, lambda, out);
+        block::<true>(els, k, init, lambda, out);
     } else {
-        block::<false>(els, k, lambda, out);
+        block::<false>(els, k, init, lambda, out);
     }
 }
 
-/// The recurrence of [`SagChain::eval`] on every lane (`D`: with S'), lane-innermost.
+/// The recurrence of [`SagChain::eval`] on every lane from its state at node 1 (`init`;
+/// `D`: with S'), lane-innermost.
 #[inline(always)]
 fn block<const D: bool>(
     els: &[ElemBlock],
     k: &LaneConsts,
+    init: &LaneStart,
     lambda: f64,
     out: &mut [SagChainEval; SAG_LANES],
 ) {
@@ -192,15 +258,13 @@ fn block<const D: bool>(
         m2[i] = m[i] / 2.0;
     }
     let e0 = &els[0];
-    let (mut s0, mut s1, mut s2, mut so) = ([0.0; L], e0.b, [0.0; L], [0.0; L]);
-    let (mut ds0, mut ds1, mut ds2, mut dso) = ([0.0; L], [0.0; L], [0.0; L], [0.0; L]);
-    let (mut neg1, mut neg2, mut nego) = ([0u64; L], [0u64; L], [0u64; L]);
+    let [mut s0, mut s1, mut s2] = init.s;
+    let [mut ds0, mut ds1, mut ds2] = init.ds;
+    let mut so = [0.0; L];
+    let mut dso = [0.0; L];
+    let (mut neg1, mut neg2, mut nego) = (init.below, [0u64; L], [0u64; L]);
     for i in 0..L {
-        s0[i] = e0.a[i] - d3[i];
-        s2[i] = e0.c[i] - d3[i];
         so[i] = e0.out[i] - d3[i];
-        ds0[i] = -m[i] / 3.0;
-        ds2[i] = -m[i] / 3.0;
         dso[i] = -m[i] / 3.0;
     }
     for ej in &els[1..] {
@@ -309,8 +373,9 @@ mod tests {
 
     /// Every tier the CPU has (AVX-512F, AVX2) against the portable body, bit for bit
     /// (tolerance 0: the same IEEE operations in the same order), with and without S', on
-    /// seeded random blocks: packed sagged chains (curved profiles, 1 to 40 elements) and raw
-    /// element blocks whose stiffnesses, masses and nudges range from 1e-150 to 1e150.
+    /// seeded random blocks: packed sagged chains (curved profiles, 1 to 40 elements, every
+    /// other chain of every fourth trial on a hidden cable) and raw element blocks whose
+    /// stiffnesses, masses and nudges range from 1e-150 to 1e150.
     #[test]
     fn dispatched_tiers_equal_the_portable_body_bit_for_bit() {
         let mut rng = TestRng::new(0x5a66_ba7c);
@@ -320,7 +385,22 @@ mod tests {
             let mut batch = SagBatch::new(SAG_LANES, n_el);
             if trial % 2 == 0 {
                 let chains: Vec<SagChain> = (0..1 + trial % SAG_LANES)
-                    .map(|_| test_chain(n_el, rng.decades(3.0, 9.0), rng.decades(-3.0, 1.0)))
+                    .map(|l| {
+                        let mut c = test_chain(n_el, rng.decades(3.0, 9.0), rng.decades(-3.0, 1.0));
+                        if trial % 4 == 0 && l % 2 == 0 {
+                            let angle = rng.unit() * 3.0 - 1.5;
+                            let sup = SagSupport {
+                                hidden: crate::cable::Segment {
+                                    k: rng.decades(3.0, 9.0),
+                                    m: rng.decades(-3.0, 1.0),
+                                    n_el: (rng.next_u64() % 41) as usize,
+                                },
+                                direction: [angle.cos(), angle.sin()],
+                            };
+                            c.set_support(Some(sup)).unwrap();
+                        }
+                        c
+                    })
                     .collect();
                 assert!(batch.pack(&chains));
             } else {
@@ -340,6 +420,7 @@ mod tests {
             }
             let els = &batch.elems[..n_el];
             let consts = &batch.consts[0];
+            let supports = &batch.supports[..batch.n_chains.min(SAG_LANES)];
             for _ in 0..8 {
                 let lambda = if trial % 4 == 1 {
                     rng.decades(-30.0, 30.0)
@@ -347,17 +428,25 @@ mod tests {
                     rng.decades(-1.0, 7.0)
                 };
                 for derivative in [true, false] {
+                    let mut init = LaneStart {
+                        s: [[0.0; SAG_LANES]; 3],
+                        ds: [[0.0; SAG_LANES]; 3],
+                        below: [0; SAG_LANES],
+                    };
+                    lane_start(&els[0], consts, supports, lambda, derivative, &mut init);
+                    let init = &init;
                     let mut want = [SagChainEval::default(); SAG_LANES];
-                    block_tier(0, els, consts, lambda, derivative, &mut want).unwrap();
+                    block_tier(0, els, consts, init, lambda, derivative, &mut want).unwrap();
                     for tier in 1..=2 {
                         let mut got = [SagChainEval::default(); SAG_LANES];
-                        if block_tier(tier, els, consts, lambda, derivative, &mut got).is_some() {
+                        let r = block_tier(tier, els, consts, init, lambda, derivative, &mut got);
+                        if r.is_some() {
                             tiers_run += 1;
                             assert_eq!(bits(&got), bits(&want), "tier {tier} trial {trial}");
                         }
                     }
                     let mut got = [SagChainEval::default(); SAG_LANES];
-                    eval_block(els, consts, lambda, derivative, &mut got);
+                    eval_block(els, consts, init, lambda, derivative, &mut got);
                     assert_eq!(bits(&got), bits(&want), "dispatched, trial {trial}");
                 }
             }

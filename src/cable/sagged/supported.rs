@@ -83,43 +83,16 @@ impl SagChain {
         dh: T,
         h_below: u32,
     ) -> ([T; 3], [T; 3], u32) {
-        let re = T::re;
-        let m = self.mass_kg;
-        let [dc, ds] = support.direction;
-        let k = self.k_in[0];
-        // k in (d, p), p = (−ds, dc).
-        let alpha = dc * dc * k[0] + 2.0 * dc * ds * k[1] + ds * ds * k[2];
-        let beta = -ds * dc * k[0] + (dc * dc - ds * ds) * k[1] + ds * dc * k[2];
-        let gamma = ds * ds * k[0] - 2.0 * dc * ds * k[1] + dc * dc * k[2];
-        let al = re(alpha) - lambda * m / 3.0;
-        let (a2, b2) = (re(2.0 * alpha) - lambda * m / 6.0, lambda * (-0.5 * m));
-        let delta = a2 * b2;
-        let ddelta = b2 * (-m / 6.0) - a2 * (0.5 * m);
-        let mut q = al + h;
-        if q.is_zero() {
-            q = re(self.nudge.max(f64::EPSILON * support.hidden.k));
-        }
-        let dq = dh - re(m / 3.0);
-        let below = h_below + q.is_negative() as u32;
-        let qi = q.recip();
-        let q2 = qi * qi;
-        let num = h * al + delta;
-        let dnum = dh * al + h * (-m / 3.0) + ddelta;
-        let sdd = num * qi;
-        let dsdd = (dnum * q - num * dq) * q2;
-        let g = h - lambda * m / 2.0;
-        let spd = g * qi * beta;
-        let dspd = ((dh - re(m / 2.0)) * q - g * dq) * q2 * beta;
-        let spp = re(gamma) - lambda * m / 3.0 - qi * (beta * beta);
-        let dspp = re(-m / 3.0) + dq * q2 * (beta * beta);
-        let rot = |xdd: T, xpd: T, xpp: T| -> [T; 3] {
-            [
-                xdd * (dc * dc) - xpd * (2.0 * dc * ds) + xpp * (ds * ds),
-                xdd * (dc * ds) + xpd * (dc * dc - ds * ds) - xpp * (ds * dc),
-                xdd * (ds * ds) + xpd * (2.0 * ds * dc) + xpp * (dc * dc),
-            ]
-        };
-        (rot(sdd, spd, spp), rot(dsdd, dspd, dspp), below)
+        junction_start(
+            self.k_in[0],
+            self.mass_kg,
+            self.nudge,
+            support,
+            lambda,
+            h,
+            dh,
+            h_below,
+        )
     }
 
     /// The hidden segment's end stiffness at a real λ (its ChainEval).
@@ -147,6 +120,59 @@ impl SagChain {
             None => 0,
         }
     }
+}
+
+/// [`SagChain::junction_start`] from the chain's first element `k0` ([a, b, c] in (h, up),
+/// N/m), element mass `m` (kg) and singular-pivot nudge (N/m): the one computation of the
+/// scalar recurrence and the lockstep batch's supported lanes (`batch`).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub(super) fn junction_start<T: ChainScalar>(
+    k0: [f64; 3],
+    m: f64,
+    nudge: f64,
+    support: &SagSupport,
+    lambda: T,
+    h: T,
+    dh: T,
+    h_below: u32,
+) -> ([T; 3], [T; 3], u32) {
+    let re = T::re;
+    let [dc, ds] = support.direction;
+    let k = k0;
+    // k in (d, p), p = (−ds, dc).
+    let alpha = dc * dc * k[0] + 2.0 * dc * ds * k[1] + ds * ds * k[2];
+    let beta = -ds * dc * k[0] + (dc * dc - ds * ds) * k[1] + ds * dc * k[2];
+    let gamma = ds * ds * k[0] - 2.0 * dc * ds * k[1] + dc * dc * k[2];
+    let al = re(alpha) - lambda * m / 3.0;
+    let (a2, b2) = (re(2.0 * alpha) - lambda * m / 6.0, lambda * (-0.5 * m));
+    let delta = a2 * b2;
+    let ddelta = b2 * (-m / 6.0) - a2 * (0.5 * m);
+    let mut q = al + h;
+    if q.is_zero() {
+        q = re(nudge.max(f64::EPSILON * support.hidden.k));
+    }
+    let dq = dh - re(m / 3.0);
+    let below = h_below + q.is_negative() as u32;
+    let qi = q.recip();
+    let q2 = qi * qi;
+    let num = h * al + delta;
+    let dnum = dh * al + h * (-m / 3.0) + ddelta;
+    let sdd = num * qi;
+    let dsdd = (dnum * q - num * dq) * q2;
+    let g = h - lambda * m / 2.0;
+    let spd = g * qi * beta;
+    let dspd = ((dh - re(m / 2.0)) * q - g * dq) * q2 * beta;
+    let spp = re(gamma) - lambda * m / 3.0 - qi * (beta * beta);
+    let dspp = re(-m / 3.0) + dq * q2 * (beta * beta);
+    let rot = |xdd: T, xpd: T, xpp: T| -> [T; 3] {
+        [
+            xdd * (dc * dc) - xpd * (2.0 * dc * ds) + xpp * (ds * ds),
+            xdd * (dc * ds) + xpd * (dc * dc - ds * ds) - xpp * (ds * dc),
+            xdd * (ds * ds) + xpd * (2.0 * ds * dc) + xpp * (dc * dc),
+        ]
+    };
+    (rot(sdd, spd, spp), rot(dsdd, dspd, dspp), below)
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 //! the interior's symmetric eigenvalues.
 
 use super::*;
+use crate::cable::Segment;
 use nalgebra::{DMatrix, SymmetricEigen};
 
 /// A non-uniform, curved test profile (not a catenary: the recurrence does not care):
@@ -239,6 +240,106 @@ fn batch_equals_scalar_recurrence_bit_for_bit() {
             }
         }
     }
+}
+
+/// Chains on a hidden cable ([`SagChain::set_support`]) in the lockstep batch, beside
+/// fixed-anchor chains: the junction step runs per lane by the scalar path's function and
+/// the rest in lockstep, so tolerance 0 (bit for bit) on S, S' and the count against
+/// [`SagChain::eval`], with and without S'. Hidden cables of 0 (continuous bar), 1, 3 and
+/// 40 elements; λ on a sweep from 0 to far above the blocked eigenvalues (transverse,
+/// axial, the junction's and the hidden segments'), then at both sides of a count step in
+/// each sweep interval where a chain's count steps (bisected to adjacent doubles: a pivot
+/// there is nearly singular) and exactly on the hidden segments' poles.
+#[test]
+fn batch_with_hidden_cables_equals_scalar_bit_for_bit() {
+    for n_el in [1usize, 2, 7, 40] {
+        let mut chains = varied_chains(n_el);
+        for (i, c) in chains.iter_mut().enumerate() {
+            if i % 4 == 3 {
+                continue; // a fixed anchor beside the supported lanes
+            }
+            let [dc, ds] = c.element(0).chord;
+            let nh = [0usize, 1, 3, 40][i % 4];
+            let per = if nh == 0 { 1.0 } else { nh as f64 };
+            let sup = SagSupport {
+                hidden: Segment {
+                    k: 2.0e5 * (1.0 + 0.3 * i as f64) / 2.5 * per,
+                    m: 0.3 * 2.5 / per,
+                    n_el: nh,
+                },
+                direction: [dc, ds],
+            };
+            c.set_support(Some(sup)).unwrap();
+        }
+        let mut batch = SagBatch::new(chains.len(), 40);
+        assert!(batch.pack(&chains));
+        // Above the stiffest element's or hidden element's k/m, times 100.
+        let lam_hi = chains
+            .iter()
+            .map(|c| {
+                let e = c.element(0);
+                let h = c
+                    .support()
+                    .map_or(0.0, |s| s.hidden.k / s.hidden.m.max(1e-300));
+                100.0 * (e.k_axial_n_m / e.mass_kg).max(h)
+            })
+            .fold(0.0, f64::max);
+        let check = |lambda: f64| {
+            for derivative in [true, false] {
+                let mut seen = 0;
+                batch.eval_with(lambda, derivative, |j, e| {
+                    seen += 1;
+                    let what = format!("N {n_el} chain {j} λ {lambda:e}");
+                    assert_same_bits(e, &chains[j].eval(lambda), derivative, &what);
+                });
+                assert_eq!(seen, chains.len());
+            }
+        };
+        let sweep: Vec<f64> = std::iter::once(0.0)
+            .chain((0..=600).map(|i| lam_hi * 1e-9f64.powf(1.0 - i as f64 / 600.0)))
+            .collect();
+        let mut near_poles = 0;
+        for w in sweep.windows(2) {
+            check(w[0]);
+            for c in &chains {
+                let (mut lo, mut hi) = (w[0], w[1]);
+                let below = |l: f64| c.eval(l).below;
+                if below(lo) == below(hi) {
+                    continue;
+                }
+                while next_up(lo) < hi {
+                    let mid = 0.5 * (lo + hi);
+                    if mid <= lo || mid >= hi {
+                        break;
+                    }
+                    if below(mid) == below(lo) {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                check(lo);
+                check(hi);
+                near_poles += 1;
+            }
+        }
+        for c in &chains {
+            if let Some(sup) = c.support() {
+                for j in 1..4 {
+                    let p = sup.hidden.pole(j);
+                    if p.is_finite() {
+                        check(p);
+                    }
+                }
+            }
+        }
+        assert!(near_poles > 50, "N {n_el}: {near_poles} count steps");
+    }
+}
+
+/// The next double above a positive finite x.
+fn next_up(x: f64) -> f64 {
+    f64::from_bits(x.to_bits() + 1)
 }
 
 /// An exactly singular pivot (λ exactly on a blocked eigenvalue) takes the nudge in the
