@@ -387,7 +387,8 @@ impl EeTracker {
     /// The scan where the poles are seen only through the count: an ascending sweep of the
     /// spectrum by the spectrum search (modes solved in order from the first at or above
     /// the scan's start, each read for its participation; past the answer, recording, for
-    /// at most as many evaluations as the answer took), at most
+    /// at most as many evaluations as the answer took, or up to `ScanState::record_to`; a
+    /// mode cut in [`STUCK_CYCLES`] cycles running is skipped), at most
     /// [`ModalParams::max_scan_intervals`] modes, each within the spectrum search's own
     /// bound ([`SpectrumParams::max_evaluations_per_mode`]: the modes below a sagged robot's
     /// end-effector mode cost ~30 evaluations each, so the pole-interval scan's total bound
