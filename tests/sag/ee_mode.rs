@@ -34,6 +34,10 @@ const P_TOL: f64 = 1e-8;
 /// 1e-7·|dp/d ln λ| (≲ 10 here; measured 2.2e-8 on suspended-8): 1e-6, the taut tracker's
 /// tolerance against the dense reference (tests/model/ee_budget.rs).
 const TRACKED_P_TOL: f64 = 1e-6;
+/// The same next to an avoided crossing, where the participation moves fast with λ: on the
+/// paper's spatial robot with sag |dp/d ln λ| reaches ~20 (measured 1.6e-6 at cycle 700,
+/// N = 10), so 1e-7·20 = 2e-6, bounded by 1e-5.
+const TRACKED_P_TOL_CROSSING: f64 = 1e-5;
 
 /// The three sagging robots: suspended-8, fast-like, and the paper's spatial robot with
 /// `[effects] sag = true`, with `n` FEM elements per cable.
@@ -194,21 +198,93 @@ fn tracked_along_the_circle_without_allocation() {
     }
 }
 
+/// What a run along the circle must show after the first answer (see
+/// [`certified_along_the_circle`]).
+struct Expect {
+    /// Fresh (certified, age 0) answers on at least this many per mille of the warm cycles.
+    fresh_permille: usize,
+    /// Median evaluations of the fresh cycles, at most.
+    max_median: u32,
+    /// Uncertified rescans after the first answer, at most.
+    max_uncertified: u64,
+    /// Participation agreement of the checked answers with the dense reference.
+    p_tol: f64,
+}
+
 /// The sum-rule certificate holds on the sagged path: along suspended-8's circle (N = 10,
 /// real-time budget), once the first scan has found the end-effector mode, the warm cycles
 /// certify it (counted by the tracker's counters and the answers' ages, not by timing):
-/// no uncertified rescan, a fresh answer on at least 95 % of the cycles, at a median of at
-/// most 12 evaluations (the first root's 2-3, the watched modes' Newton steps, the plain
-/// sum rule's one). Before the matrix form of the bound (`modal::ee_tracker`), the trace
-/// form failed here: it counts the two other directions' unwatched participation against
-/// the answer, so a failed certificate started a full sweep that took ~200 cycles each
-/// time (fresh on 374 of 1500 cycles). Certified answers are checked against the dense
-/// sagged reference at a few cycles (λ 1e-9, participation 1e-6: module docs).
+/// a fresh answer on at least 95 % of the cycles, at a median of at most 12 evaluations
+/// (the first root's 2-3, the watched modes' Newton steps, the plain sum rule's one).
+/// Before the matrix form of the bound (`modal::ee_tracker`), the trace form failed here:
+/// it counts the two other directions' unwatched participation against the answer, so a
+/// failed certificate started a full sweep that took ~200 cycles each time (fresh on 374
+/// of 1500 cycles). Since the sweep skips a mode it cannot isolate in three cycles, the
+/// first answer comes at cycle 307, at a pose where the watch list needs two rescans
+/// (cycles 323 and 371); each is a window rescan of 17 and 26 cycles, not a sweep from
+/// zero: at most 2. Certified answers are checked against the dense sagged reference at a
+/// few cycles (λ 1e-9, participation 1e-6: module docs).
 #[test]
 fn certified_along_the_circle_on_suspended_8() {
-    let s = &scenes(10)[0];
+    let expect = Expect {
+        fresh_permille: 950,
+        max_median: 12,
+        max_uncertified: 2,
+        p_tol: TRACKED_P_TOL,
+    };
+    certified_along_the_circle(&scenes(10)[0], &expect);
+}
+
+/// The same on the paper's spatial robot with sag (N = 10 and 40). There the participation
+/// of the watched modes moves in avoided crossings to unwatched neighbours up to ~1.4× the
+/// answer's λ (dense reference), the bound reaches the threshold and the answer is
+/// rescanned every ~40-120 cycles. Before the window rescans (`modal::ee_tracker`), each
+/// rescan was a sweep from zero of ~150 cycles, and a sweep stuck on a mode next to a pole
+/// for hundreds of cycles: fresh answers on 234 of the first 1500 cycles, median 26
+/// evaluations (the whole budget). Now each rescan is a window of 9-26 cycles: measured
+/// fresh on 80 % (N = 10) and 75 % (N = 40) of the warm cycles, median 8-9 evaluations;
+/// required: 70 %, median ≤ 12.
+#[test]
+fn certified_along_the_circle_on_the_paper_robot_with_sag() {
+    let expect = Expect {
+        fresh_permille: 700,
+        max_median: 12,
+        max_uncertified: 40,
+        p_tol: TRACKED_P_TOL_CROSSING,
+    };
+    for n in [10, 40] {
+        certified_along_the_circle(&scenes(n)[2], &expect);
+    }
+}
+
+/// Suspended-8 at N = 40: NOT reached yet. The cold sweep finds the first answer only at
+/// cycle ~1200 (≈ 284 modes below it at ~25 evaluations each, within a budget of 32 a
+/// cycle); the watch list it leaves certifies 5 cycles (bound 0.43-0.49 against 0.5), and
+/// the window rescan's answer is not certified, so the next sweep is from zero again. The
+/// leftover's top direction sits low: its plain-to-weighted ratio uᵀR_p u / uᵀR_w u is
+/// 280-1100 rad²/s² against the answer's 27 180, i.e. in the many weak cable modes far
+/// below the answer (each under the 0.05 a mode needs to be watched), which no window
+/// near the answer reaches.
+#[test]
+#[ignore = "suspended-8 at N = 40 is not certified along the circle yet (see doc)"]
+fn certified_along_the_circle_on_suspended_8_at_40_elements() {
+    let expect = Expect {
+        fresh_permille: 700,
+        max_median: 12,
+        max_uncertified: 40,
+        p_tol: TRACKED_P_TOL,
+    };
+    certified_along_the_circle(&scenes(40)[0], &expect);
+}
+
+/// Along the circle of `s` (1500 cycles, real-time budget): the first answer before cycle
+/// 700; after it, fresh answers and their median cost and the uncertified rescans as
+/// `expect` says; the first fresh answer at or after cycles 700, 1100 and 1400 (within 100
+/// cycles) equal to the dense sagged reference (λ 1e-9, participation 1e-6: module docs).
+fn certified_along_the_circle(s: &Scene, expect: &Expect) {
     let cycles = 1500;
-    let checks = [700usize, 1100, 1500];
+    let checks = [700usize, 1100, 1400];
+    let mut next_check = 0;
     let mut est = Estimator::realtime(s).unwrap();
     let thr = est.params().modal.ee_participation_min;
     est.update(&circle_pose(s, 0, CIRCLE_PERIOD_S), Tmin::Scene);
@@ -218,7 +294,7 @@ fn certified_along_the_circle_on_suspended_8() {
     let mut evals = Vec::new();
     for k in 1..=cycles {
         let e = *est.update(&circle_pose(s, k, CIRCLE_PERIOD_S), Tmin::Scene);
-        assert!(e.is_ok(), "cycle {k}: {:?}", e.error);
+        assert!(e.is_ok(), "{} cycle {k}: {:?}", s.name, e.error);
         if first.is_none() {
             if e.ee_mode_age_cycles == 0 {
                 first = Some(k);
@@ -231,16 +307,25 @@ fn certified_along_the_circle_on_suspended_8() {
             fresh += 1;
             evals.push(e.eigen_evaluations);
         }
-        if checks.contains(&k) {
-            assert_eq!(e.ee_mode_age_cycles, 0, "cycle {k}: not certified");
-            let (dl, dp, _) = dense_ee(&est, thr);
-            let err = (hz_to_lambda(e.ee_mode_hz) - dl).abs() / dl;
-            assert!(err <= LAMBDA_TOL, "cycle {k}: λ err {err:.1e}");
+        if next_check < checks.len() && k >= checks[next_check] {
             assert!(
-                (e.ee_mode_participation - dp).abs() <= TRACKED_P_TOL,
-                "cycle {k}: p {} vs dense {dp}",
-                e.ee_mode_participation
+                k < checks[next_check] + 100,
+                "{}: no fresh answer in cycles {}..{k}",
+                s.name,
+                checks[next_check]
             );
+            if e.ee_mode_age_cycles == 0 {
+                next_check += 1;
+                let (dl, dp, _) = dense_ee(&est, thr);
+                let err = (hz_to_lambda(e.ee_mode_hz) - dl).abs() / dl;
+                assert!(err <= LAMBDA_TOL, "{} cycle {k}: λ err {err:.1e}", s.name);
+                assert!(
+                    (e.ee_mode_participation - dp).abs() <= expect.p_tol,
+                    "{} cycle {k}: p {} vs dense {dp}",
+                    s.name,
+                    e.ee_mode_participation
+                );
+            }
         }
     }
     let first = first.expect("the first scan finds the end-effector mode");
@@ -248,17 +333,29 @@ fn certified_along_the_circle_on_suspended_8() {
     evals.sort_unstable();
     let median = evals.get(evals.len() / 2).copied().unwrap_or(u32::MAX);
     eprintln!(
-        "suspended-8: first answer at cycle {first}, then fresh on {fresh}/{warm} cycles, \
-         median {median} evaluations; {c:?}"
-    );
-    assert!(first < checks[0], "first answer at cycle {first}");
-    assert_eq!(
-        c.uncertified_scans, uncertified_then,
-        "uncertified rescans: {c:?}"
+        "{}: first answer at cycle {first}, then fresh on {fresh}/{warm} cycles, \
+         median {median} evaluations; {c:?}",
+        s.name
     );
     assert!(
-        20 * fresh >= 19 * warm,
-        "fresh on {fresh}/{warm} warm cycles"
+        first < checks[0],
+        "{}: first answer at cycle {first}",
+        s.name
     );
-    assert!(median <= 12, "median {median} evaluations");
+    assert_eq!(next_check, checks.len(), "{}: dense checks", s.name);
+    assert!(
+        c.uncertified_scans - uncertified_then <= expect.max_uncertified,
+        "{}: uncertified rescans: {c:?}",
+        s.name
+    );
+    assert!(
+        1000 * fresh >= expect.fresh_permille * warm,
+        "{}: fresh on {fresh}/{warm} warm cycles",
+        s.name
+    );
+    assert!(
+        median <= expect.max_median,
+        "{}: median {median} evaluations",
+        s.name
+    );
 }

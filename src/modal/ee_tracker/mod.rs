@@ -95,6 +95,11 @@ const PHASES_PER_CYCLE: usize = 4;
 /// A rescan starts at this fraction of the lowest watched mode's λ (the participation
 /// moves among the watched modes; the modes below stay covered by the bound).
 const RESCAN_WINDOW: f64 = 0.9;
+/// Where the count alone shows the poles, a window rescan records the modes (past the
+/// answer) up to this multiple of the highest watched mode's λ: the participation the
+/// watched modes lose goes to their neighbours in avoided crossings (on the paper's
+/// spatial robot with sag, within 1.1× of the highest watched mode; dense reference).
+const RECORD_ABOVE: f64 = 1.1;
 
 /// Why the end-effector mode had to be scanned for instead of tracked.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -168,6 +173,11 @@ pub(super) struct EeTracker {
     sums: SumRules,
     /// A scan in progress (continued over the cycles until done).
     scan: Option<ScanState>,
+    /// Where the count alone shows the poles: a window rescan was started and no warm
+    /// cycle has certified an answer since (the next rescan is then from zero).
+    window_pending: bool,
+    /// The last scan finished skipped a mode (`scan::ScanState::skipped`).
+    skipped: bool,
 }
 
 impl EeTracker {
@@ -182,6 +192,8 @@ impl EeTracker {
             search_count: 0,
             sums: SumRules::traces(f64::NAN, f64::NAN),
             scan: None,
+            window_pending: false,
+            skipped: false,
         }
     }
 
@@ -195,6 +207,7 @@ impl EeTracker {
         self.n_members = 0;
         self.ee_skip = 0;
         self.scan = None;
+        self.window_pending = false;
     }
 
     /// A scan is in progress (the end-effector answer is being worked on over the cycles).

@@ -6,12 +6,16 @@ use super::member::Member;
 use super::scan::{self, ScanState, ScanStep};
 use super::track::track_root;
 use super::{
-    EeTracker, RescanReason, CERT_MARGIN, PHASES_PER_CYCLE, P_ADD, RESCAN_WINDOW,
-    WEAK_RESCAN_CYCLES,
+    EeTracker, RescanReason, CERT_MARGIN, PHASES_PER_CYCLE, P_ADD, P_STRONG, RECORD_ABOVE,
+    RESCAN_WINDOW, WEAK_RESCAN_CYCLES,
 };
 use crate::modal::engine::Condensed;
 use crate::modal::first_mode::RootFinder;
 use crate::modal::{ModalError, Root};
+
+/// Where the count alone shows the poles, a window rescan starts below the watched modes
+/// whose participation changed by at least this since they were found.
+const WINDOW_CHANGE: f64 = 0.05;
 
 impl EeTracker {
     /// Track, scan, or continue a scan, until an answer or the budget's end.
@@ -25,7 +29,10 @@ impl EeTracker {
             if self.scan.is_none() {
                 let reason = if self.n_members > 0 {
                     match self.track_watched(f, thr) {
-                        Ok(r) => return Ok(Some(r)),
+                        Ok(r) => {
+                            self.window_pending = false;
+                            return Ok(Some(r));
+                        }
                         Err(_) if f.exhausted() => return Ok(None),
                         Err(why) => why,
                     }
@@ -54,6 +61,7 @@ impl EeTracker {
     ) -> Option<(Result<Root, ModalError>, bool, bool)> {
         let resumed = self.scan.is_some_and(|s| s.resumed > 0);
         let window = self.scan.is_some_and(|s| s.window);
+        // A sweep that skipped a mode needs the certificate, as a window does.
         self.recording = true;
         let step = self.scan_step(f);
         self.recording = false;
@@ -67,7 +75,7 @@ impl EeTracker {
                 }
                 None
             }
-            ScanStep::Done(r) => Some((r, resumed, window)),
+            ScanStep::Done(r) => Some((r, resumed, window || self.skipped)),
         }
     }
 
@@ -83,6 +91,24 @@ impl EeTracker {
         thr: f64,
     ) -> Option<Result<Option<Root>, ModalError>> {
         let reached = matches!(r, Ok(ref x) if x.ee_participation >= thr);
+        if window && !f.view.poles_known() {
+            // A window rescan where the count alone shows the poles: its answer stands
+            // only once a warm cycle of what it watched certifies it at this cycle's pose
+            // (the modes below the window were not read again); else scan from zero.
+            if reached {
+                match self.track_watched(f, thr) {
+                    Ok(a) => {
+                        self.window_pending = false;
+                        return Some(Ok(Some(a)));
+                    }
+                    // The budget ran out: the warm cycle is tried again next cycle.
+                    Err(_) if f.exhausted() => return Some(Ok(None)),
+                    Err(_) => {}
+                }
+            }
+            self.n_members = 0;
+            return None;
+        }
         if resumed && reached && f.view.poles_known() {
             // Found over several cycles: certify at this cycle's pose (a warm cycle of the
             // watched modes) before anything is reported.
@@ -140,10 +166,10 @@ impl EeTracker {
         first: &Root,
         reason: RescanReason,
     ) {
-        // Where the count alone shows the poles a window scan costs what a scan from zero
-        // does below the answer's neighbours, and its answer would need a certificate the
-        // watched modes do not give: scan from zero.
-        let window = if reason != RescanReason::Cold && self.n_members > 0 && f.view.poles_known() {
+        if !f.view.poles_known() {
+            return self.start_sweep(f, first, reason);
+        }
+        let window = if reason != RescanReason::Cold && self.n_members > 0 {
             RESCAN_WINDOW * self.members[0].lambda
         } else {
             0.0
@@ -156,6 +182,67 @@ impl EeTracker {
             let skip = window * (1.0 - scan::WINDOW_EDGE);
             self.scan = Some(ScanState::new(&f.view, window, skip, f64::INFINITY, true));
         } else {
+            if first.ee_participation >= P_ADD {
+                self.watch_first(f, first);
+            }
+            self.scan = Some(ScanState::from_zero(&f.view, first.lambda));
+        }
+    }
+
+    /// [`Self::start_scan`] where the count alone shows the poles (the scan is a sweep of
+    /// the spectrum, tens of evaluations a mode): after a failed warm cycle, a sweep from
+    /// 10 % below the last answer or the lowest watched mode whose participation changed by
+    /// [`WINDOW_CHANGE`] since it was found, whichever is lower (the participation the
+    /// certificate misses left those modes for their neighbours; without either, the
+    /// lowest watched mode with participation ≥ [`P_STRONG`]) up to at least
+    /// [`RECORD_ABOVE`] times the highest watched one, the watched modes below it kept
+    /// (followed again by the warm cycle that must certify its answer); tried once until a
+    /// warm cycle certifies, then from zero.
+    fn start_sweep<P: Condensed>(
+        &mut self,
+        f: &RootFinder<'_, P>,
+        first: &Root,
+        reason: RescanReason,
+    ) {
+        let n = self.n_members;
+        let window = if reason != RescanReason::Cold && n > 0 && !self.window_pending {
+            let ms = &self.members[..n];
+            let thr = f.params.ee_participation_min;
+            let answer = ms.iter().find(|m| m.p >= thr).map(|m| m.lambda);
+            let changed = ms
+                .iter()
+                .find(|m| (m.p - m.p_ref).abs() >= WINDOW_CHANGE)
+                .map(|m| m.lambda);
+            let low = match (answer, changed) {
+                (Some(a), Some(c)) => a.min(c),
+                (Some(x), None) | (None, Some(x)) => x,
+                (None, None) => ms.iter().find(|m| m.p >= P_STRONG).unwrap_or(&ms[0]).lambda,
+            };
+            RESCAN_WINDOW * low
+        } else {
+            0.0
+        };
+        self.window_pending = window > 0.0;
+        if window > 0.0 {
+            let record_to = RECORD_ABOVE * self.members[n - 1].lambda;
+            // Keep the watched modes below the window.
+            let mut k = 0;
+            for i in 0..n {
+                if self.members[i].lambda < window {
+                    self.members[k] = self.members[i];
+                    k += 1;
+                }
+            }
+            self.n_members = k;
+            if first.ee_participation >= P_ADD && first.lambda < window {
+                self.watch_first(f, first);
+            }
+            let skip = window * (1.0 - scan::WINDOW_EDGE);
+            let mut st = ScanState::new(&f.view, window, skip, f64::INFINITY, true);
+            st.record_to = record_to;
+            self.scan = Some(st);
+        } else {
+            self.n_members = 0;
             if first.ee_participation >= P_ADD {
                 self.watch_first(f, first);
             }

@@ -10,6 +10,9 @@ use crate::modal::first_mode::{RootFinder, TautFinder};
 use crate::modal::spectrum::{SpectrumSearch, SweepState};
 use crate::modal::{ModalError, Root, SpectrumParams};
 
+/// Where the count alone shows the poles, a mode of the sweep that the cycle's budget cut
+/// in this many cycles running is skipped (`ScanState::skipped`).
+const STUCK_CYCLES: u32 = 3;
 /// Poles of different chains closer than this (relative) are one pole of the scan.
 const POLE_MERGE: f64 = 1e-12;
 /// Roots within this (relative) of the scan's `skip_to` count as already known.
@@ -124,6 +127,16 @@ pub(super) struct ScanState {
     start: f64,
     next: usize,
     cut: (f64, f64),
+    /// Where the count alone shows the poles: past the answer, the sweep records at least
+    /// the modes up to this λ (rad²/s²; 0: no such floor), and the λ of the last mode it
+    /// solved.
+    pub(super) record_to: f64,
+    last: f64,
+    /// Cycles the sweep's current mode has been cut in by the budget.
+    cut_cycles: u32,
+    /// The sweep skipped a mode it could not isolate within [`STUCK_CYCLES`] cycles: its
+    /// answer is not known to be the lowest until the sum rules certify it.
+    pub(super) skipped: bool,
 }
 
 impl ScanState {
@@ -157,6 +170,10 @@ impl ScanState {
             start,
             next: 0,
             cut: (f64::NAN, f64::NAN),
+            record_to: 0.0,
+            last: 0.0,
+            cut_cycles: 0,
+            skipped: false,
         }
     }
 
@@ -220,6 +237,7 @@ impl EeTracker {
             }
             Some(r) => {
                 self.scan = None;
+                self.skipped = st.skipped;
                 ScanStep::Done(r)
             }
         }
@@ -369,7 +387,8 @@ impl EeTracker {
     /// The scan where the poles are seen only through the count: an ascending sweep of the
     /// spectrum by the spectrum search (modes solved in order from the first at or above
     /// the scan's start, each read for its participation; past the answer, recording, for
-    /// at most as many evaluations as the answer took), at most
+    /// at most as many evaluations as the answer took, or up to `ScanState::record_to`; a
+    /// mode cut in [`STUCK_CYCLES`] cycles running is skipped), at most
     /// [`ModalParams::max_scan_intervals`] modes, each within the spectrum search's own
     /// bound ([`SpectrumParams::max_evaluations_per_mode`]: the modes below a sagged robot's
     /// end-effector mode cost ~30 evaluations each, so the pole-interval scan's total bound
@@ -401,13 +420,26 @@ impl EeTracker {
         let total = s.problem().total_modes();
         while st.next < total && (st.intervals as usize) < max_modes {
             let spent = st.spent + (s.problem().evaluations() - begin);
-            if st.answer.is_some() && spent - st.to_answer > st.to_answer {
+            if st.answer.is_some() && spent - st.to_answer > st.to_answer && st.last >= st.record_to
+            {
                 // Past the answer a mode costs tens of evaluations here, not two as between
                 // known poles: the recording stops once it has cost what finding the answer
                 // did.
                 break;
             }
             let i = st.next;
+            if st.cut.0.is_finite() && st.cut_cycles >= STUCK_CYCLES {
+                // A mode the budget cut in several cycles running: it sits so close to a
+                // pole that the count's bisection, widened again each cycle by the pose's
+                // motion, does not isolate it within a cycle. Skip it; the answer then
+                // needs the sum rules' certificate (the skipped mode is unwatched).
+                st.cut = (f64::NAN, f64::NAN);
+                st.cut_cycles = 0;
+                st.skipped = true;
+                st.next += 1;
+                st.intervals += 1;
+                continue;
+            }
             let r = if st.cut.0.is_finite() {
                 s.mode_within(i, st.cut.0, st.cut.1)
             } else {
@@ -417,6 +449,7 @@ impl EeTracker {
                 Ok(m) => m,
                 Err(ModalError::NoConvergence { lo, hi, .. }) if s.cut => {
                     st.modes = s.state();
+                    st.cut_cycles += 1;
                     st.cut = if lo > 0.0 && hi.is_finite() && lo < hi {
                         (lo, hi)
                     } else {
@@ -429,6 +462,8 @@ impl EeTracker {
                 Err(e) => return Some(Err(e)),
             };
             st.cut = (f64::NAN, f64::NAN);
+            st.cut_cycles = 0;
+            st.last = m.lambda;
             st.next += 1;
             st.intervals += 1;
             if m.lambda <= st.skip_to * (1.0 + SKIP_TOL) {
