@@ -193,9 +193,11 @@ mod tests {
     /// the count exactly. λ sweeps up to where the largest sub-segment phase is 1.5; the
     /// anchor fixed and on a hidden cable (the junction step through both forms' D, e).
     /// On the hidden cable S is held to 1e-11 times (1 + |S|/scale) (measured 2.5e-11 of
-    /// scale + |S| near a pole) and dS/dλ only to 1e-5 (measured 1.8e-6 at M = 40: which
-    /// form loses those digits is not yet known; the eigenvalues, which dS/dλ only steers,
-    /// are checked against the dense FEM in tests/model/hidden_models.rs).
+    /// scale + |S| near a pole); dS/dλ to 1e-9 (mass + |dS|) + `PEAK_LOSS` · peak (the
+    /// partial chains' peak dS/dλ, `partial_peak`): next to a blocked eigenvalue of a
+    /// partial chain both forms lose digits by rounding, each its own (measured 1.8e-6 of
+    /// mass + |dS| between the forms at M = 40, λ = 1.3294e5, with a partial dS of 1e7 kg;
+    /// `derivative_matches_richardson_differences` checks each form against differences).
     #[test]
     fn symmetric_form_matches_transfer_form() {
         let cat = Catenary {
@@ -219,7 +221,7 @@ mod tests {
                 m: mu * 3.0,
                 n_el: 0,
             };
-            let (mut worst, mut worst_d) = (0.0f64, 0.0f64);
+            let (mut worst, mut worst_d, mut worst_p) = (0.0f64, 0.0f64, 0.0f64);
             for (i, with) in (0..=300).flat_map(|i| [(i, false), (i, true)]) {
                 let lam = top * i as f64 / 300.0;
                 let e = hidden.eval(lam);
@@ -233,6 +235,7 @@ mod tests {
                 let (za, zt) = (lam * sc.q_max[0], lam * sc.q_max[1]);
                 let (s_in, ds_in, b_in) = transfer::eval_in(segs, sc.final_rot, lam, j);
                 let (s_out, ds_out, b_out) = transfer::eval_out(segs, lam);
+                let peak = partial_peak(segs, lam, j);
                 let mut kernels: Vec<SagChainEval> =
                     vec![run(segs, sc.final_rot, lam, j, kernel::mid, kernel::mid)];
                 if zt <= Z_SMALL {
@@ -260,9 +263,10 @@ mod tests {
                         let d = (e.s_in[j] - s_in[j]).abs();
                         worst = worst.max(d / (scale + s_in[j].abs()));
                         assert!(d <= tol, "M {steps} {with} λ {lam} S{j}");
-                        let tol = if with { 1e-5 } else { 1e-9 } * (mass + ds_in[j].abs());
+                        let tol = 1e-9 * (mass + ds_in[j].abs()) + PEAK_LOSS * peak;
                         let d = (e.ds_in[j] - ds_in[j]).abs();
                         worst_d = worst_d.max(d / (mass + ds_in[j].abs()));
+                        worst_p = worst_p.max(d / peak);
                         assert!(d <= tol, "M {steps} {with} λ {lam} dS{j}");
                     }
                     let tol = 1e-11 * (scale + s_out.abs());
@@ -271,7 +275,164 @@ mod tests {
                     assert!((e.ds_out - ds_out).abs() <= tol, "λ {lam} ds_out");
                 }
             }
-            eprintln!("M {steps}: worst S {worst:.1e} of scale + |S|, dS {worst_d:.1e}");
+            eprintln!(
+                "M {steps}: worst S {worst:.1e} of scale + |S|, dS {worst_d:.1e} \
+                 (at most {worst_p:.1e} of the partial chains' peak dS)"
+            );
+        }
+    }
+
+    /// Digits of dS/dλ lost next to a blocked eigenvalue of a partial chain (the chain from
+    /// the anchor to an inner node), per kg of that partial chain's peak dS/dλ: there the
+    /// partial dS/dλ is dominated by a rank-one part (the pole's), whose rounding,
+    /// ε · |dS_n| in every entry, the next condensation steps multiply by up to
+    /// ~(e_a/q_⊥)² in the direction across it. Both forms do this alike, by different
+    /// roundings: measured against the Richardson differences, both within 1e-12 · peak
+    /// (e.g. M = 40, λ = 1.3294e5: a partial S of 1.5e8 and dS of 1e7 kg at node 31; the
+    /// end's dS off by 1.2e-6 (symmetric) and 0.6e-6 (transfer) of mass + |dS|, on either
+    /// side of the reference: 5e-13 and 3e-13 · peak; S itself keeps its digits, and away
+    /// from those λ both forms are within 1e-9 of the reference). Not a missing term: the
+    /// partial chains' own dS/dλ match the differences up to the pole, the loss appears
+    /// at the node past it, and it grows with the partial dS, not with M. The two forms
+    /// differ by at most 3.5e-12 · peak (M = 3, 20, 40, 301 λ each).
+    const PEAK_LOSS: f64 = 1e-11;
+
+    /// The largest entry of dS/dλ of the in-plane partial chains (anchor to node n,
+    /// n = 1..M) at λ, kg: large when λ is close to a blocked eigenvalue of a partial chain.
+    fn partial_peak(segs: &[Segment], lam: f64, j: Option<&Junction>) -> f64 {
+        (1..segs.len())
+            .map(|n| run(&segs[..n], [1.0, 0.0], lam, j, kernel::mid, kernel::mid).ds_in)
+            .fold(0.0f64, |m, d| {
+                m.max(d[0].abs()).max(d[1].abs()).max(d[2].abs())
+            })
+    }
+
+    /// Each form's dS/dλ against an independent reference: Richardson-extrapolated central
+    /// differences of that form's own S(λ), R(h) = (4 D(h/2) − D(h))/3 with
+    /// D(h) = (S(λ + h) − S(λ − h))/(2h), h = 1e-4 λ (truncation O(h⁴); S's rounding,
+    /// ~1e-12 |S| in the X + YᵀP form, gives ~1e-11 of the mass scale at this h). The
+    /// reference's own error is estimated as |R(h) − R(h/2)| and λ where it exceeds 1e-10
+    /// of (mass + |dS|) (next to a pole of S, where the differences do not resolve it) are
+    /// skipped (at most a fifth of the sweep). Anchor fixed and on a hidden cable (an exact
+    /// bar). Tolerance 3e-9 (mass + |dS|) + `PEAK_LOSS` · peak, peak the largest entry of
+    /// the partial chains' dS/dλ (`partial_peak`, see `PEAK_LOSS`); 3e-9 since the
+    /// reference itself is off by up to 1.1e-9 close to a pole (M = 3, λ = 209, where the
+    /// two forms agree to 1.4e-10). A
+    /// derivative with the hidden cable's dh/dλ dropped misses the reference by far more
+    /// than the tolerance (the check can see a wrong junction term).
+    /// One form's (S, dS/dλ) in plane at λ, with the hidden cable's dh/dλ or without.
+    type Form<'a> = &'a dyn Fn(f64, bool) -> ([f64; 3], [f64; 3]);
+
+    #[test]
+    fn derivative_matches_richardson_differences() {
+        let cat = Catenary {
+            l0_m: 4.0,
+            ea_n: 5e4,
+            w_n_m: 0.981,
+            h_n: 40.0,
+            v_anchor_n: -1.2,
+        };
+        let mu = 0.1;
+        let mass = mu * cat.l0_m;
+        let hidden = crate::cable::Segment {
+            k: cat.ea_n / 3.0,
+            m: mu * 3.0,
+            n_el: 0,
+        };
+        let junction = |lam: f64, with_dh: bool| {
+            let e = hidden.eval(lam);
+            Junction {
+                dir: [0.8, -0.6],
+                h: e.s,
+                dh: if with_dh { e.ds } else { 0.0 },
+                below: e.below,
+            }
+        };
+        let mut sc = SagContinuous::new(SagContinuousParams::default());
+        for steps in [3usize, 20, 40] {
+            sc.set_with_steps(&cat, mu, steps).unwrap();
+            let segs = &sc.segs[..sc.n_seg];
+            let top = Z_MID / sc.q_max[1];
+            let (mut worst, mut worst_peak, mut skipped, mut broken) = (0.0f64, 0.0f64, 0, 0.0f64);
+            let n = 300;
+            for i in 1..=n {
+                let lam = top * i as f64 / n as f64;
+                for with in [false, true] {
+                    let j = |l: f64, dh: bool| with.then(|| junction(l, dh));
+                    let sym = |l: f64, dh: bool| {
+                        let e = run(
+                            segs,
+                            sc.final_rot,
+                            l,
+                            j(l, dh).as_ref(),
+                            kernel::mid,
+                            kernel::mid,
+                        );
+                        (e.s_in, e.ds_in)
+                    };
+                    let tra = |l: f64, dh: bool| {
+                        let (s, ds, _) =
+                            transfer::eval_in(segs, sc.final_rot, l, j(l, dh).as_ref());
+                        (s, ds)
+                    };
+                    let forms: [Form; 2] = [&sym, &tra];
+                    let peak = partial_peak(segs, lam, j(lam, true).as_ref());
+                    for (f, form) in forms.iter().zip(["symmetric", "transfer"]) {
+                        let d = |h: f64| {
+                            let (a, b) = (f(lam + h, true).0, f(lam - h, true).0);
+                            [0, 1, 2].map(|c| (a[c] - b[c]) / (2.0 * h))
+                        };
+                        let rich = |h: f64| {
+                            let (a, b) = (d(h), d(0.5 * h));
+                            [0, 1, 2].map(|c| (4.0 * b[c] - a[c]) / 3.0)
+                        };
+                        // Steps h = λ/2^k: the consecutive pair that agrees best.
+                        let (mut r2, mut est) = ([0.0; 3], f64::INFINITY);
+                        let mut prev = rich(0.25 * lam);
+                        for k in 3..30 {
+                            let r = rich(lam / (1u64 << k) as f64);
+                            let e = (0..3)
+                                .map(|c| (r[c] - prev[c]).abs() / (mass + r[c].abs()))
+                                .fold(0.0, f64::max);
+                            if e < est {
+                                (r2, est) = (r, e);
+                            }
+                            prev = r;
+                        }
+                        let ds = f(lam, true).1;
+                        if est > 1e-10 {
+                            skipped += 1;
+                            continue;
+                        }
+                        for c in 0..3 {
+                            let rel = (ds[c] - r2[c]).abs() / (mass + r2[c].abs());
+                            let tol = 3e-9 + PEAK_LOSS * peak / (mass + r2[c].abs());
+                            worst = worst.max(rel);
+                            worst_peak = worst_peak.max((ds[c] - r2[c]).abs() / peak);
+                            assert!(rel <= tol, "M {steps} {form} junction {with} λ {lam} dS{c}: {rel:.2e} > {tol:.2e}");
+                        }
+                        if with {
+                            // The same derivative without the hidden cable's dh/dλ.
+                            let ds0 = f(lam, false).1;
+                            let rel = (0..3)
+                                .map(|c| (ds0[c] - r2[c]).abs() / (mass + r2[c].abs()))
+                                .fold(0.0, f64::max);
+                            broken = broken.max(rel / (3e-9 + PEAK_LOSS * peak / mass));
+                        }
+                    }
+                }
+            }
+            eprintln!(
+                "M {steps}: worst dS against the differences {worst:.1e} of mass + |dS| \
+                 (at most {worst_peak:.1e} of the partial chains' peak dS); {skipped} of {} skipped next to poles; \
+                 dropping dh/dλ misses by {broken:.1e} tolerances",
+                4 * n
+            );
+            assert!(skipped <= 4 * n / 5, "M {steps}: {skipped} skipped");
+            assert!(
+                broken > 100.0,
+                "M {steps}: a dropped dh/dλ not seen ({broken:.1e})"
+            );
         }
     }
 }
