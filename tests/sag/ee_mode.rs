@@ -16,11 +16,9 @@
 //! end-effector modes: the estimator reports their end-effector mode as unknown (NaN).
 use cablevib::alloc_count::thread_allocations;
 use cablevib::estimator::{Estimator, Tmin};
-use cablevib::kinematics::Pose;
 use cablevib::modal::{hz_to_lambda, Mode, CYCLE_EVALUATIONS};
-use cablevib::scene::{ElementKind, Scene, DEFAULT_SCENE_TOML};
 use cablevib::trajectory::{circle_pose, CIRCLE_PERIOD_S};
-use cablevib_testkit::without_effects;
+use cablevib_testkit::sag_cases::{home, sagged_robots};
 
 /// λ agreement with the dense reference (module docs).
 const LAMBDA_TOL: f64 = 1e-9;
@@ -35,33 +33,6 @@ const P_TOL: f64 = 1e-8;
 /// tolerance against the dense reference (tests/model/ee_budget.rs).
 const TRACKED_P_TOL: f64 = 1e-6;
 
-/// The three sagging robots: suspended-8, fast-like, and the paper's spatial robot with
-/// `[effects] sag = true`, with `n` FEM elements per cable.
-fn scenes(n: usize) -> Vec<Scene> {
-    let paper = format!(
-        "{}\n[effects]\nsag = true\n",
-        without_effects(DEFAULT_SCENE_TOML)
-    );
-    let mut out = vec![
-        Scene::load("scenes/suspended_8.toml").unwrap(),
-        Scene::load("scenes/fast_like.toml").unwrap(),
-        Scene::from_toml_str(&paper, "spatial-paper-sag").unwrap(),
-    ];
-    for s in &mut out {
-        s.model.sag = true;
-        s.model.element = ElementKind::Fem;
-        s.model.elements_per_cable = n;
-    }
-    out
-}
-
-fn home(s: &Scene) -> Pose {
-    Pose {
-        position_m: s.ee_position_m,
-        orientation_wxyz: s.ee_orientation_wxyz,
-    }
-}
-
 /// The dense reference's end-effector mode of the estimator's last pose: (λ, p, index).
 fn dense_ee(est: &Estimator, thr: f64) -> (f64, f64, usize) {
     let d = est.dense_modes(true).unwrap();
@@ -74,7 +45,7 @@ fn dense_ee(est: &Estimator, thr: f64) -> (f64, f64, usize) {
 #[test]
 fn sagged_ee_mode_matches_the_dense_reference() {
     for n in [10, 40] {
-        for s in scenes(n) {
+        for s in sagged_robots(n) {
             let mut est = Estimator::new(&s).unwrap();
             let thr = est.params().modal.ee_participation_min;
             let e = *est.update(&home(&s), Tmin::Scene);
@@ -104,7 +75,7 @@ fn sagged_ee_mode_matches_the_dense_reference() {
 /// `CountMismatch` (now probed again 100× wider). Each against the dense reference.
 #[test]
 fn sagged_modes_next_to_a_noisy_pole_are_found() {
-    let s = &scenes(10)[0];
+    let s = &sagged_robots(10)[0];
     let mut est = Estimator::new(s).unwrap();
     assert!(est.update(&home(s), Tmin::Scene).is_ok());
     let d = est.dense_modes(false).unwrap();
@@ -132,7 +103,7 @@ fn sagged_modes_next_to_a_noisy_pole_are_found() {
 /// (age 0) is the dense reference's end-effector mode of that cycle's pose.
 #[test]
 fn tracked_along_the_circle_without_allocation() {
-    for s in scenes(10) {
+    for s in sagged_robots(10) {
         let mut est = Estimator::realtime(&s).unwrap();
         let thr = est.params().modal.ee_participation_min;
         est.update(&circle_pose(&s, 0, CIRCLE_PERIOD_S), Tmin::Scene);
@@ -206,7 +177,7 @@ fn tracked_along_the_circle_without_allocation() {
 /// sagged reference at a few cycles (λ 1e-9, participation 1e-6: module docs).
 #[test]
 fn certified_along_the_circle_on_suspended_8() {
-    let s = &scenes(10)[0];
+    let s = &sagged_robots(10)[0];
     let cycles = 1500;
     let checks = [700usize, 1100, 1500];
     let mut est = Estimator::realtime(s).unwrap();
