@@ -272,6 +272,17 @@ pub(crate) mod test_files {
         p
     }
 
+    /// The files that are not regular, each with its kind as the errors name it: a FIFO
+    /// `fifo_name` made in `dir`, two character devices, and `dir` itself.
+    pub(crate) fn non_regular(dir: &Path, fifo_name: &str) -> [(PathBuf, &'static str); 4] {
+        [
+            (fifo(dir, fifo_name), "FIFO (named pipe)"),
+            (PathBuf::from("/dev/zero"), "character device"),
+            (PathBuf::from("/dev/urandom"), "character device"),
+            (dir.to_path_buf(), "directory"),
+        ]
+    }
+
     /// A sparse file `name` of `len` bytes in `dir` (no disk space used).
     pub(crate) fn sparse(dir: &Path, name: &str, len: u64) -> PathBuf {
         let p = dir.join(name);
@@ -339,14 +350,8 @@ mod tests {
     #[test]
     fn devices_fifos_and_directories_are_refused() {
         let d = temp_dir("input-kinds");
-        let fifo = fifo(&d, "fifo");
-        for (p, kind) in [
-            (fifo.as_path(), "FIFO (named pipe)"),
-            (Path::new("/dev/zero"), "character device"),
-            (Path::new("/dev/urandom"), "character device"),
-            (d.as_path(), "directory"),
-        ] {
-            let e = read_with_timeout(p, MAX_SCENE_BYTES).unwrap_err();
+        for (p, kind) in non_regular(&d, "fifo") {
+            let e = read_with_timeout(&p, MAX_SCENE_BYTES).unwrap_err();
             assert!(matches!(e, InputFileError::NotRegular { .. }), "{e:?}");
             let msg = e.to_string();
             assert!(

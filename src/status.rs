@@ -1,68 +1,83 @@
 //! The outcome of one estimator cycle ([`StatusCode`], also `estimator::Status`), carried
 //! as `u32` in the IPC messages' `status` fields (`cablevib-ipc` re-exports this module).
 
-/// Outcome of one estimator cycle, as carried on the wire (`u32`).
-///
-/// The numeric values are part of the schema: they never change and a retired code is never
-/// reused. A new code may be added within the same schema version (`SCHEMA_VERSION` of `cablevib-ipc`);
-/// a receiver that does not know a code ([`StatusCode::from_u32`] returns `None`) must treat
-/// the sample as "not valid".
-#[repr(u32)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum StatusCode {
-    /// Valid estimate: tensions, f1 and stiffness are those of the echoed pose.
-    Ok = 0,
-    /// No tension distribution satisfies T_min ≤ T ≤ T_max and the wrench balance.
-    TensionInfeasible = 1,
-    /// The input has a non-finite (NaN/Inf) component or is otherwise malformed, e.g. an
-    /// orientation other than the identity (vector part over 1e-3 of the quaternion's norm)
-    /// on a point-mass end-effector, which has none.
-    InvalidInput = 2,
-    /// An iterative solver (tension or eigen) stopped at its iteration limit.
-    NotConverged = 3,
-    /// The structure or stiffness matrix is rank deficient at this pose.
-    RankDeficient = 4,
-    /// The position is at an anchor (a cable shorter than 1e-6 m). A position the robot
-    /// cannot hold is `TensionInfeasible`: there is no geometric pre-test of the workspace.
-    OutsideWorkspace = 5,
-    /// No pose has been received yet (margin queries before the first estimate).
-    NoPoseYet = 6,
-    /// The orientation quaternion is not of unit norm.
-    NonUnitQuaternion = 7,
-    /// A T_min set-point below zero, above T_max or non-finite; the previous one stays in force.
-    TminOutOfRange = 8,
-    /// A margin request with a required frequency outside `REQUIRED_F1_MIN_HZ`,
-    /// `REQUIRED_F1_MAX_HZ` of `cablevib-ipc` (NaN included).
-    InvalidRequest = 9,
-    /// An internal error of the service; see its log.
-    InternalError = 10,
-    /// A sagging cable would go slack: its end tension is below the least any catenary
-    /// through its chord can have (its tension would reach zero along it). No numbers.
-    CableSlack = 11,
-    /// A direction of the end-effector has no stiffness at this pose (a mechanism, e.g. the
-    /// spin of a platform whose attachments lie on one axis): no natural frequency exists.
-    /// The tensions are valid; f1 and the stiffness are NaN.
-    Mechanism = 12,
+/// Defines [`StatusCode`] from one list of `variant = code, "name"` rows (each with its
+/// docs): the enum with those wire values, `ALL` in the list's order, and `as_str`. One list,
+/// so that a new code cannot be added to the enum and missed by `ALL` or by its name (the
+/// tests check the list is in numeric order without gaps and its names are unique).
+macro_rules! status_codes {
+    (
+        $(#[$enum_meta:meta])*
+        pub enum StatusCode {
+            $( $(#[$meta:meta])* $variant:ident = $code:literal, $name:literal; )+
+        }
+    ) => {
+        $(#[$enum_meta])*
+        #[repr(u32)]
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        pub enum StatusCode {
+            $( $(#[$meta])* $variant = $code, )+
+        }
+
+        impl StatusCode {
+            /// Every code, in numeric order.
+            pub const ALL: [StatusCode; [$($code),+].len()] = [$(StatusCode::$variant),+];
+
+            /// A stable snake_case identifier (for logs and CSV output).
+            pub const fn as_str(self) -> &'static str {
+                match self {
+                    $( StatusCode::$variant => $name, )+
+                }
+            }
+        }
+    };
+}
+
+status_codes! {
+    /// Outcome of one estimator cycle, as carried on the wire (`u32`).
+    ///
+    /// The numeric values are part of the schema: they never change and a retired code is never
+    /// reused. A new code may be added within the same schema version (`SCHEMA_VERSION` of `cablevib-ipc`);
+    /// a receiver that does not know a code ([`StatusCode::from_u32`] returns `None`) must treat
+    /// the sample as "not valid".
+    pub enum StatusCode {
+        /// Valid estimate: tensions, f1 and stiffness are those of the echoed pose.
+        Ok = 0, "ok";
+        /// No tension distribution satisfies T_min ≤ T ≤ T_max and the wrench balance.
+        TensionInfeasible = 1, "tension_infeasible";
+        /// The input has a non-finite (NaN/Inf) component or is otherwise malformed, e.g. an
+        /// orientation other than the identity (vector part over 1e-3 of the quaternion's norm)
+        /// on a point-mass end-effector, which has none.
+        InvalidInput = 2, "invalid_input";
+        /// An iterative solver (tension or eigen) stopped at its iteration limit.
+        NotConverged = 3, "not_converged";
+        /// The structure or stiffness matrix is rank deficient at this pose.
+        RankDeficient = 4, "rank_deficient";
+        /// The position is at an anchor (a cable shorter than 1e-6 m). A position the robot
+        /// cannot hold is `TensionInfeasible`: there is no geometric pre-test of the workspace.
+        OutsideWorkspace = 5, "outside_workspace";
+        /// No pose has been received yet (margin queries before the first estimate).
+        NoPoseYet = 6, "no_pose_yet";
+        /// The orientation quaternion is not of unit norm.
+        NonUnitQuaternion = 7, "non_unit_quaternion";
+        /// A T_min set-point below zero, above T_max or non-finite; the previous one stays in force.
+        TminOutOfRange = 8, "t_min_out_of_range";
+        /// A margin request with a required frequency outside `REQUIRED_F1_MIN_HZ`,
+        /// `REQUIRED_F1_MAX_HZ` of `cablevib-ipc` (NaN included).
+        InvalidRequest = 9, "invalid_request";
+        /// An internal error of the service; see its log.
+        InternalError = 10, "internal_error";
+        /// A sagging cable would go slack: its end tension is below the least any catenary
+        /// through its chord can have (its tension would reach zero along it). No numbers.
+        CableSlack = 11, "cable_slack";
+        /// A direction of the end-effector has no stiffness at this pose (a mechanism, e.g. the
+        /// spin of a platform whose attachments lie on one axis): no natural frequency exists.
+        /// The tensions are valid; f1 and the stiffness are NaN.
+        Mechanism = 12, "mechanism";
+    }
 }
 
 impl StatusCode {
-    /// Every code, in numeric order.
-    pub const ALL: [StatusCode; 13] = [
-        StatusCode::Ok,
-        StatusCode::TensionInfeasible,
-        StatusCode::InvalidInput,
-        StatusCode::NotConverged,
-        StatusCode::RankDeficient,
-        StatusCode::OutsideWorkspace,
-        StatusCode::NoPoseYet,
-        StatusCode::NonUnitQuaternion,
-        StatusCode::TminOutOfRange,
-        StatusCode::InvalidRequest,
-        StatusCode::InternalError,
-        StatusCode::CableSlack,
-        StatusCode::Mechanism,
-    ];
-
     /// The wire value.
     pub const fn as_u32(self) -> u32 {
         self as u32
@@ -75,25 +90,6 @@ impl StatusCode {
             Some(Self::ALL[value as usize])
         } else {
             None
-        }
-    }
-
-    /// A stable snake_case identifier (for logs and CSV output).
-    pub const fn as_str(self) -> &'static str {
-        match self {
-            StatusCode::Ok => "ok",
-            StatusCode::TensionInfeasible => "tension_infeasible",
-            StatusCode::InvalidInput => "invalid_input",
-            StatusCode::NotConverged => "not_converged",
-            StatusCode::RankDeficient => "rank_deficient",
-            StatusCode::OutsideWorkspace => "outside_workspace",
-            StatusCode::NoPoseYet => "no_pose_yet",
-            StatusCode::NonUnitQuaternion => "non_unit_quaternion",
-            StatusCode::TminOutOfRange => "t_min_out_of_range",
-            StatusCode::InvalidRequest => "invalid_request",
-            StatusCode::InternalError => "internal_error",
-            StatusCode::CableSlack => "cable_slack",
-            StatusCode::Mechanism => "mechanism",
         }
     }
 
@@ -147,6 +143,15 @@ mod tests {
                 "ALL is in numeric order without gaps"
             );
             assert_eq!(StatusCode::from_u32(code.as_u32()), Some(*code));
+            assert_eq!(u32::from(*code), code.as_u32());
+            // The name round-trips too: it names this code and no other.
+            let by_name: Vec<_> = StatusCode::ALL
+                .iter()
+                .filter(|c| c.as_str() == code.as_str())
+                .collect();
+            assert_eq!(by_name, [code]);
+            assert_eq!(status_str(code.as_u32()).to_string(), code.as_str());
+            assert_eq!(code.to_string(), code.as_str());
         }
         assert_eq!(StatusCode::from_u32(StatusCode::ALL.len() as u32), None);
         assert_eq!(StatusCode::from_u32(u32::MAX), None);
@@ -158,6 +163,13 @@ mod tests {
         assert_eq!(StatusCode::RankDeficient as u32, 4);
         assert_eq!(StatusCode::OutsideWorkspace as u32, 5);
         assert_eq!(StatusCode::NoPoseYet as u32, 6);
+        assert_eq!(StatusCode::NonUnitQuaternion as u32, 7);
+        assert_eq!(StatusCode::TminOutOfRange as u32, 8);
+        assert_eq!(StatusCode::InvalidRequest as u32, 9);
+        assert_eq!(StatusCode::InternalError as u32, 10);
+        assert_eq!(StatusCode::CableSlack as u32, 11);
+        assert_eq!(StatusCode::Mechanism as u32, 12);
+        assert_eq!(StatusCode::ALL.len(), 13);
     }
 
     #[test]

@@ -146,26 +146,37 @@ fn assemble_general(
             }
         }
         if let Some((seg, _)) = hidden {
-            // Scalar axial elements from the drum (node 0, fixed) to the junction (node nh).
-            let nh = seg.n_el;
-            let at = |j: usize| base + 3 * (n - 1) + j - 1;
-            for el in 0..nh {
-                for (ia, na) in [el, el + 1].into_iter().enumerate() {
-                    for (ib, nb) in [el, el + 1].into_iter().enumerate() {
-                        if na == 0 || nb == 0 {
-                            continue;
-                        }
-                        let same = ia == ib;
-                        k[(at(na), at(nb))] += if same { seg.k } else { -seg.k };
-                        mm[(at(na), at(nb))] += seg.m / if same { 3.0 } else { 6.0 };
-                    }
-                }
-            }
-            base += nh;
+            add_hidden_axial(&mut k, &mut mm, base + 3 * (n - 1), &seg);
+            base += seg.n_el;
         }
         base += 3 * (n - 1);
     }
     Ok((k, mm))
+}
+
+/// Add a hidden cable's `seg.n_el` scalar axial elements, from the drum (node 0, fixed) to
+/// the junction (node `seg.n_el`), to K (N/m) and M (kg): node j ≥ 1 at row `first + j − 1`.
+/// Element: seg.k [1 −1; −1 1], (seg.m/6) [2 1; 1 2]. Both dense assemblies (taut and
+/// sagged) place their hidden cables with it.
+pub(super) fn add_hidden_axial(
+    k: &mut DMatrix<f64>,
+    m: &mut DMatrix<f64>,
+    first: usize,
+    seg: &crate::cable::Segment,
+) {
+    let at = |j: usize| first + j - 1;
+    for el in 0..seg.n_el {
+        for (ia, na) in [el, el + 1].into_iter().enumerate() {
+            for (ib, nb) in [el, el + 1].into_iter().enumerate() {
+                if na == 0 || nb == 0 {
+                    continue;
+                }
+                let same = ia == ib;
+                k[(at(na), at(nb))] += if same { seg.k } else { -seg.k };
+                m[(at(na), at(nb))] += seg.m / if same { 3.0 } else { 6.0 };
+            }
+        }
+    }
 }
 
 /// A model's hidden segment and junction direction when its axial chain is supported

@@ -16,6 +16,7 @@
 
 use super::dynamic_stiffness::{quad, DynEval};
 use super::engine::{Condensed, TautView, BRACKET_GROWTH, BRACKET_MIN, COLLAPSE_ULPS};
+use super::spectrum::pole_free;
 use super::{ModalError, ModalParams, Root};
 use nalgebra::{Matrix6, Vector6};
 
@@ -232,15 +233,7 @@ impl<P: Condensed> RootFinder<'_, P> {
             let (lo, hi) = (s.lo, s.hi);
             // Newton on μ(λ)(λ − pole_lo)(pole_hi − λ): the poles bounding the interval
             // removed (pole_lo = 0 and pole_hi = ∞ add nothing).
-            let (mut g, mut dg) = (mu, dmu);
-            if pole_hi.is_finite() {
-                let w = pole_hi - x;
-                (g, dg) = (g * w, dg * w - g);
-            }
-            if pole_lo > 0.0 {
-                let w = x - pole_lo;
-                (g, dg) = (g * w, dg * w + g);
-            }
+            let (g, dg) = pole_free(mu, dmu, x, pole_lo, pole_hi);
             // D' overflows within rounding of a pole (its entries grow as 1/(pole − λ)²): no
             // Newton step from a non-finite slope.
             let mut xn = if dg < 0.0 && dg.is_finite() {

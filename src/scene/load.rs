@@ -129,16 +129,10 @@ mod tests {
 
     #[test]
     fn devices_fifos_and_directories_are_refused_without_blocking() {
-        use crate::input_file::test_files::{fifo, temp_dir};
+        use crate::input_file::test_files::{non_regular, temp_dir};
         let dir = temp_dir("scene-kinds");
-        let fifo = fifo(&dir, "scene.toml");
-        for (p, kind) in [
-            (fifo.as_path(), "FIFO"),
-            (Path::new("/dev/zero"), "character device"),
-            (Path::new("/dev/urandom"), "character device"),
-            (dir.as_path(), "directory"),
-        ] {
-            let msg = load_within_timeout(p).unwrap_err().to_string();
+        for (p, kind) in non_regular(&dir, "scene.toml") {
+            let msg = load_within_timeout(&p).unwrap_err().to_string();
             let name = p.display().to_string();
             assert!(
                 msg.starts_with(&format!("{name}: is a {kind}")) && msg.contains("scene file"),

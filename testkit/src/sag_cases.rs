@@ -1,5 +1,6 @@
-//! The sagging robots of the sag tests (tests/sag/vs_reference.rs, cli/tests/models/hard_cases_sag.rs)
-//! and a short way to analyse one of them at a pose.
+//! The sagging robots of the sag tests (tests/sag/, cli/tests/models/hard_cases_sag.rs), a
+//! short way to analyse one of them at a pose, and the sagged robots with FEM chains
+//! ([`sagged_robots`]) with an estimator loaded at their own pose ([`loaded`]).
 //!
 //! - `fast-like` and `suspended-8`: the shipped scenes (scenes/fast_like.toml,
 //!   scenes/suspended_8.toml) at the centre and off-centre poses their comments suggest.
@@ -9,7 +10,9 @@
 //!   tension) are very slack, with their lowest point between their ends at the centre.
 //!   Its off-centre pose (+0.3, +0.2, 0) m from the centre is feasible; (+0.5, −0.3, +0.2) m
 //!   makes cable 5 slack.
-use cablevib::scene::{ElementKind, Scene};
+use cablevib::estimator::{Estimator, Tmin};
+use cablevib::kinematics::Pose;
+use cablevib::scene::{ElementKind, Scene, DEFAULT_SCENE_TOML};
 use cablevib::study::analysis::{analyze, AnalysisReport, AnalyzeOptions};
 use nalgebra::{Matrix3, Vector3};
 
@@ -110,4 +113,56 @@ pub fn max_rel(a: &[f64], b: &[f64]) -> f64 {
         .zip(b)
         .map(|(x, y)| rel(*x, *y))
         .fold(0.0, f64::max)
+}
+
+/// A scene file of the repository's scenes/ (e.g. `suspended_8.toml`).
+pub fn shipped(file: &str) -> Scene {
+    let path = format!("{}/../scenes/{file}", env!("CARGO_MANIFEST_DIR"));
+    Scene::load(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
+/// The paper's spatial robot (the embedded default scene) with `[effects] sag = true`, its
+/// other effects at their defaults; named `spatial-paper-sag`.
+pub fn paper_with_sag() -> Scene {
+    let text = format!(
+        "{}\n[effects]\nsag = true\n",
+        crate::without_effects(DEFAULT_SCENE_TOML)
+    );
+    Scene::from_toml_str(&text, "spatial-paper-sag").expect("paper robot with sag")
+}
+
+/// `scene` with sag on and `n` FEM elements per cable.
+pub fn sagged_fem(mut scene: Scene, n: usize) -> Scene {
+    scene.model.sag = true;
+    scene.model.element = ElementKind::Fem;
+    scene.model.elements_per_cable = n;
+    scene
+}
+
+/// The three sagging robots, `n` FEM elements per cable: suspended-8, fast-like
+/// (scenes/suspended_8.toml, scenes/fast_like.toml) and the paper's spatial robot with sag
+/// ([`paper_with_sag`]).
+pub fn sagged_robots(n: usize) -> [Scene; 3] {
+    [
+        shipped("suspended_8.toml"),
+        shipped("fast_like.toml"),
+        paper_with_sag(),
+    ]
+    .map(|s| sagged_fem(s, n))
+}
+
+/// The scene's own pose: its end-effector position and orientation.
+pub fn home(scene: &Scene) -> Pose {
+    Pose {
+        position_m: scene.ee_position_m,
+        orientation_wxyz: scene.ee_orientation_wxyz,
+    }
+}
+
+/// An estimator of `scene` after one update at [`home`], its status asserted ok.
+pub fn loaded(scene: &Scene) -> Estimator {
+    let mut est = Estimator::new(scene).unwrap();
+    let e = *est.update(&home(scene), Tmin::Scene);
+    assert!(e.status.is_ok(), "{}: {:?}", scene.name, e.error);
+    est
 }

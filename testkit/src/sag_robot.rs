@@ -1,10 +1,14 @@
 //! Hand-made sagged robots for the sagged-FEM tests: each cable's catenary is given by its
 //! own (L0, EA, w, H, V_a) and its plane by its horizontal unit h, so the tests need no
 //! statics solver (the vibration problem only needs each cable's profile and frame; the
-//! end points need not meet for the dense/structured comparison).
+//! end points need not meet for the dense/structured comparison); the structured solver
+//! loaded with one ([`solver_for`]) and the dense matrices of its chains ([`dense_matrices`]).
 use cablevib::elastic_catenary::Catenary;
-use cablevib::modal::sagged::{HangingCable, SagEndEffector};
-use nalgebra::{Matrix3, Vector3};
+use cablevib::modal::sagged::{
+    assemble_sagged, HangingCable, SagDenseCable, SagEndEffector, SagModalSolver,
+};
+use cablevib::modal::ModalParams;
+use nalgebra::{DMatrix, Matrix3, Vector3};
 
 /// Gravity's magnitude, m/s².
 pub const G: f64 = 9.81;
@@ -79,4 +83,29 @@ pub fn pose(base: &[HangingCable], k: usize, out: &mut [HangingCable]) {
         o.catenary.h_n *= f;
         o.catenary.v_anchor_n *= f;
     }
+}
+
+/// The structured sagged solver loaded with `cables` (`n_el` FEM elements each, up = +z)
+/// and the end-effector `ee`.
+pub fn solver_for(cables: &[HangingCable], n_el: usize, ee: &SagEndEffector) -> SagModalSolver {
+    let mut s = SagModalSolver::new(ModalParams::default(), cables.len(), n_el);
+    s.load_catenaries(cables, n_el, &up(), ee).unwrap();
+    s
+}
+
+/// The dense sagged K (N/m) and M (kg) of the chains loaded in `s` ([`assemble_sagged`]:
+/// world-frame element matrices from the same element data, not D(λ)), with the
+/// end-effector's mass matrix and geometric stiffness.
+pub fn dense_matrices(s: &SagModalSolver, cables: &[HangingCable]) -> (DMatrix<f64>, DMatrix<f64>) {
+    let dc: Vec<SagDenseCable> = cables
+        .iter()
+        .enumerate()
+        .map(|(i, c)| SagDenseCable {
+            chain: s.chain(i),
+            h: c.h,
+            arm_m: c.arm_m,
+        })
+        .collect();
+    let (m6, k6) = s.ee_matrices();
+    assemble_sagged(&dc, &up(), &m6, &k6, s.dim()).unwrap()
 }

@@ -20,6 +20,7 @@ use cablevib::modal::{
     condense_static, dense_modes, dense_relative_accuracy, ModalParams, ModalSolver, Mode,
 };
 use cablevib::scene::{ElementKind, Scene, DEFAULT_SCENE_TOML};
+use cablevib_testkit::dense_fem::{dense_with_hidden, FreeCable};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 /// The paper's spatial robot with 2.5 m of hidden cable behind every anchor (cable 3's
@@ -47,6 +48,7 @@ fn dense_fem(scene: &Scene, p: &Vector3<f64>, t: &[f64], n: usize) -> (DMatrix<f
 /// As [`dense_fem`]; `catenary`: each free element's block is the paper's catenary element
 /// (`catenary_block`, the element alone) and the junction moves along its stiffest
 /// eigenvector (signed along the cable), the eigenvector found here by a dense solve.
+/// Otherwise the FEM element (EA/l) e eᵀ + (T/l)(I − e eᵀ), the junction along e.
 pub(crate) fn dense_ref(
     scene: &Scene,
     p: &Vector3<f64>,
@@ -54,16 +56,8 @@ pub(crate) fn dense_ref(
     n: usize,
     catenary: bool,
 ) -> (DMatrix<f64>, DMatrix<f64>) {
-    let per_cable = |c: &cablevib::scene::Cable| 3 * (n - 1) + c.hidden.map_or(0, |_| n);
-    let ndof = 3 + scene.cables.iter().map(per_cable).sum::<usize>();
-    let mut k = DMatrix::zeros(ndof, ndof);
-    let mut m = DMatrix::zeros(ndof, ndof);
-    for i in 0..3 {
-        m[(i, i)] = scene.ee_mass_kg;
-    }
     let frame = cablevib::cable::up_frame(&scene.gravity_m_s2);
-    let mut base = 3;
-    for (ci, c) in scene.cables.iter().enumerate() {
+    dense_with_hidden(scene, n, |ci, c| {
         let d = p - c.anchor_m;
         let len = d.norm();
         let e = d / len;
@@ -83,71 +77,12 @@ pub(crate) fn dense_ref(
                 e,
             )
         };
-        let me = c.mass_per_length_kg_m * l;
-        let junction = c.hidden.map(|_| base + 3 * (n - 1) + n - 1);
-        // Free node j → (first row, 3 × r map to its DOFs): 0 the anchor (fixed or the
-        // junction, moving along `dir`), n the end-effector.
-        let map = |j: usize| -> Option<(usize, DMatrix<f64>)> {
-            if j == n {
-                Some((0, DMatrix::identity(3, 3)))
-            } else if j == 0 {
-                junction.map(|r| (r, DMatrix::from_column_slice(3, 1, dir.as_slice())))
-            } else {
-                Some((base + 3 * (j - 1), DMatrix::identity(3, 3)))
-            }
-        };
-        let kc = DMatrix::from_fn(3, 3, |r, q| kc[(r, q)]);
-        for el in 0..n {
-            for (a, na) in [el, el + 1].into_iter().enumerate() {
-                for (b, nb) in [el, el + 1].into_iter().enumerate() {
-                    let (Some((ra, ga)), Some((rb, gb))) = (map(na), map(nb)) else {
-                        continue;
-                    };
-                    let sign = if a == b { 1.0 } else { -1.0 };
-                    let mc = if a == b { me / 3.0 } else { me / 6.0 };
-                    let kk = ga.transpose() * &kc * &gb * sign;
-                    let mm = ga.transpose() * &gb * mc;
-                    for r in 0..kk.nrows() {
-                        for q in 0..kk.ncols() {
-                            k[(ra + r, rb + q)] += kk[(r, q)];
-                            m[(ra + r, rb + q)] += mm[(r, q)];
-                        }
-                    }
-                }
-            }
+        FreeCable {
+            blocks: vec![kc; n],
+            element_mass_kg: c.mass_per_length_kg_m * l,
+            junction_dir: dir,
         }
-        if let Some(h) = c.hidden {
-            add_hidden(&mut k, &mut m, base + 3 * (n - 1), n, &h);
-        }
-        base += per_cable(c);
-    }
-    (k, m)
-}
-
-/// The hidden cable `h` as `n` axial elements from the drum (node 0, fixed) to the junction
-/// (node n), its nodes 1 ..= n at rows `first` ..
-pub(crate) fn add_hidden(
-    k: &mut DMatrix<f64>,
-    m: &mut DMatrix<f64>,
-    first: usize,
-    n: usize,
-    h: &cablevib::scene::HiddenCable,
-) {
-    let lh = h.length_m / n as f64;
-    let (kh, mh) = (h.ea_n() / lh, h.mass_per_length_kg_m * lh);
-    let at = |j: usize| first + j - 1;
-    for el in 0..n {
-        for (a, na) in [el, el + 1].into_iter().enumerate() {
-            for (b, nb) in [el, el + 1].into_iter().enumerate() {
-                if na == 0 || nb == 0 {
-                    continue;
-                }
-                let same = a == b;
-                k[(at(na), at(nb))] += if same { kh } else { -kh };
-                m[(at(na), at(nb))] += mh / if same { 3.0 } else { 6.0 };
-            }
-        }
-    }
+    })
 }
 
 /// The structured engine's first `count` modes of a pose model.

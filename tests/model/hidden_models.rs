@@ -12,7 +12,7 @@
 //! - mode shapes: the dense FEM's mass-normalised eigenvectors (`dense_ref` of
 //!   `hidden_cable`, fem and catenary elements) against the structured shapes, entry by
 //!   entry, for every simple mode among the first 80.
-use super::hidden_cable::{add_hidden, dense_ref, paper_with_hidden};
+use super::hidden_cable::{dense_ref, paper_with_hidden};
 use cablevib::estimator::{Estimator, PoseModel, Tmin};
 use cablevib::kinematics::Pose;
 use cablevib::modal::{
@@ -20,6 +20,7 @@ use cablevib::modal::{
     ShapeParams,
 };
 use cablevib::scene::Scene;
+use cablevib_testkit::dense_fem::{dense_eig, dense_with_hidden, FreeCable};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// The independent dense sagged FEM with hidden cables (module docs) of the estimator's
@@ -29,66 +30,30 @@ fn dense_sagged(est: &Estimator, p: &Vector3<f64>, n: usize) -> (DMatrix<f64>, D
     assert!(!scene.rigid);
     let cats = est.sag_catenaries().expect("sagged");
     let up = -scene.gravity_m_s2 / scene.gravity_m_s2.norm();
-    let per_cable = |c: &cablevib::scene::Cable| 3 * (n - 1) + c.hidden.map_or(0, |_| n);
-    let ndof = 3 + scene.cables.iter().map(per_cable).sum::<usize>();
-    let mut k = DMatrix::zeros(ndof, ndof);
-    let mut m = DMatrix::zeros(ndof, ndof);
-    for i in 0..3 {
-        m[(i, i)] = scene.ee_mass_kg;
-    }
-    let mut base = 3;
-    for (ci, c) in scene.cables.iter().enumerate() {
+    dense_with_hidden(scene, n, |ci, c| {
         let cat = &cats[ci];
         let d = p - c.anchor_m;
         let h = (d - up * d.dot(&up)).normalize();
         let l0 = cat.l0_m / n as f64;
         let ta = cat.h_n.hypot(cat.v_anchor_n);
-        let dir = h * (cat.h_n / ta) + up * (cat.v_anchor_n / ta);
-        let me = c.mass_per_length_kg_m * l0;
-        let junction = c.hidden.map(|_| base + 3 * (n - 1) + n - 1);
-        let map = |j: usize| -> Option<(usize, DMatrix<f64>)> {
-            if j == n {
-                Some((0, DMatrix::identity(3, 3)))
-            } else if j == 0 {
-                junction.map(|r| (r, DMatrix::from_column_slice(3, 1, dir.as_slice())))
-            } else {
-                Some((base + 3 * (j - 1), DMatrix::identity(3, 3)))
-            }
-        };
-        for el in 0..n {
-            let (s0, s1) = (el as f64 * l0, (el + 1) as f64 * l0);
-            let ch = cat.chord_between_m(s0, s1);
-            let cw = h * ch[0] + up * ch[1];
-            let len = cw.norm();
-            let cu = cw / len;
-            let cc = cu * cu.transpose();
-            let axial = cat.tension_at_n(0.5 * (s0 + s1));
-            let ke = cc * (cat.ea_n / l0) + (Matrix3::identity() - cc) * (axial / len);
-            let ke = DMatrix::from_fn(3, 3, |r, q| ke[(r, q)]);
-            for (a, na) in [el, el + 1].into_iter().enumerate() {
-                for (b, nb) in [el, el + 1].into_iter().enumerate() {
-                    let (Some((ra, ga)), Some((rb, gb))) = (map(na), map(nb)) else {
-                        continue;
-                    };
-                    let sign = if a == b { 1.0 } else { -1.0 };
-                    let mc = if a == b { me / 3.0 } else { me / 6.0 };
-                    let kk = ga.transpose() * &ke * &gb * sign;
-                    let mm = ga.transpose() * &gb * mc;
-                    for r in 0..kk.nrows() {
-                        for q in 0..kk.ncols() {
-                            k[(ra + r, rb + q)] += kk[(r, q)];
-                            m[(ra + r, rb + q)] += mm[(r, q)];
-                        }
-                    }
-                }
-            }
+        let blocks = (0..n)
+            .map(|el| {
+                let (s0, s1) = (el as f64 * l0, (el + 1) as f64 * l0);
+                let ch = cat.chord_between_m(s0, s1);
+                let cw = h * ch[0] + up * ch[1];
+                let len = cw.norm();
+                let cu = cw / len;
+                let cc = cu * cu.transpose();
+                let axial = cat.tension_at_n(0.5 * (s0 + s1));
+                cc * (cat.ea_n / l0) + (Matrix3::identity() - cc) * (axial / len)
+            })
+            .collect();
+        FreeCable {
+            blocks,
+            element_mass_kg: c.mass_per_length_kg_m * l0,
+            junction_dir: h * (cat.h_n / ta) + up * (cat.v_anchor_n / ta),
         }
-        if let Some(hc) = c.hidden {
-            add_hidden(&mut k, &mut m, base + 3 * (n - 1), n, &hc);
-        }
-        base += per_cable(c);
-    }
-    (k, m)
+    })
 }
 
 /// The paper robot sagging (fem × n) with 2.5 m of hidden cable behind every anchor.
@@ -223,20 +188,9 @@ fn sagged_hidden_cable_tends_to_none() {
 
 /// The lowest `count` eigenpairs of K u = λ M u, u mass-normalised (dense, independent).
 fn dense_pairs(k: &DMatrix<f64>, m: &DMatrix<f64>, count: usize) -> Vec<(f64, DVector<f64>)> {
-    let l = m.clone().cholesky().unwrap().l();
-    let a = l.solve_lower_triangular(k).unwrap();
-    let c = l.solve_lower_triangular(&a.transpose()).unwrap();
-    let c = (&c + c.transpose()) * 0.5;
-    let eig = c.symmetric_eigen();
-    let mut idx: Vec<usize> = (0..eig.eigenvalues.len()).collect();
-    idx.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
-    let u = l
-        .transpose()
-        .solve_upper_triangular(&eig.eigenvectors)
-        .unwrap();
-    idx[..count]
-        .iter()
-        .map(|&i| (eig.eigenvalues[i], u.column(i).into_owned()))
+    let (lambda, u) = dense_eig(k, m);
+    (0..count)
+        .map(|i| (lambda[i], u.column(i).into_owned()))
         .collect()
 }
 

@@ -16,11 +16,10 @@
 //! end-effector modes: the estimator reports their end-effector mode as unknown (NaN).
 use cablevib::alloc_count::thread_allocations;
 use cablevib::estimator::{Estimator, Tmin};
-use cablevib::kinematics::Pose;
 use cablevib::modal::{hz_to_lambda, Mode, CYCLE_EVALUATIONS};
-use cablevib::scene::{ElementKind, Scene, DEFAULT_SCENE_TOML};
+use cablevib::scene::Scene;
 use cablevib::trajectory::{circle_pose, CIRCLE_PERIOD_S};
-use cablevib_testkit::without_effects;
+use cablevib_testkit::sag_cases::{home, sagged_robots};
 
 /// λ agreement with the dense reference (module docs).
 const LAMBDA_TOL: f64 = 1e-9;
@@ -39,33 +38,6 @@ const TRACKED_P_TOL: f64 = 1e-6;
 /// N = 10), so 1e-7·20 = 2e-6, bounded by 1e-5.
 const TRACKED_P_TOL_CROSSING: f64 = 1e-5;
 
-/// The three sagging robots: suspended-8, fast-like, and the paper's spatial robot with
-/// `[effects] sag = true`, with `n` FEM elements per cable.
-fn scenes(n: usize) -> Vec<Scene> {
-    let paper = format!(
-        "{}\n[effects]\nsag = true\n",
-        without_effects(DEFAULT_SCENE_TOML)
-    );
-    let mut out = vec![
-        Scene::load("scenes/suspended_8.toml").unwrap(),
-        Scene::load("scenes/fast_like.toml").unwrap(),
-        Scene::from_toml_str(&paper, "spatial-paper-sag").unwrap(),
-    ];
-    for s in &mut out {
-        s.model.sag = true;
-        s.model.element = ElementKind::Fem;
-        s.model.elements_per_cable = n;
-    }
-    out
-}
-
-fn home(s: &Scene) -> Pose {
-    Pose {
-        position_m: s.ee_position_m,
-        orientation_wxyz: s.ee_orientation_wxyz,
-    }
-}
-
 /// The dense reference's end-effector mode of the estimator's last pose: (λ, p, index).
 fn dense_ee(est: &Estimator, thr: f64) -> (f64, f64, usize) {
     let d = est.dense_modes(true).unwrap();
@@ -78,7 +50,7 @@ fn dense_ee(est: &Estimator, thr: f64) -> (f64, f64, usize) {
 #[test]
 fn sagged_ee_mode_matches_the_dense_reference() {
     for n in [10, 40] {
-        for s in scenes(n) {
+        for s in sagged_robots(n) {
             let mut est = Estimator::new(&s).unwrap();
             let thr = est.params().modal.ee_participation_min;
             let e = *est.update(&home(&s), Tmin::Scene);
@@ -108,7 +80,7 @@ fn sagged_ee_mode_matches_the_dense_reference() {
 /// `CountMismatch` (now probed again 100× wider). Each against the dense reference.
 #[test]
 fn sagged_modes_next_to_a_noisy_pole_are_found() {
-    let s = &scenes(10)[0];
+    let s = &sagged_robots(10)[0];
     let mut est = Estimator::new(s).unwrap();
     assert!(est.update(&home(s), Tmin::Scene).is_ok());
     let d = est.dense_modes(false).unwrap();
@@ -136,7 +108,7 @@ fn sagged_modes_next_to_a_noisy_pole_are_found() {
 /// (age 0) is the dense reference's end-effector mode of that cycle's pose.
 #[test]
 fn tracked_along_the_circle_without_allocation() {
-    for s in scenes(10) {
+    for s in sagged_robots(10) {
         let mut est = Estimator::realtime(&s).unwrap();
         let thr = est.params().modal.ee_participation_min;
         est.update(&circle_pose(&s, 0, CIRCLE_PERIOD_S), Tmin::Scene);
@@ -232,7 +204,7 @@ fn certified_along_the_circle_on_suspended_8() {
         max_uncertified: 2,
         p_tol: TRACKED_P_TOL,
     };
-    certified_along_the_circle(&scenes(10)[0], &expect);
+    certified_along_the_circle(&sagged_robots(10)[0], &expect);
 }
 
 /// The same on the paper's spatial robot with sag (N = 10 and 40). There the participation
@@ -253,7 +225,7 @@ fn certified_along_the_circle_on_the_paper_robot_with_sag() {
         p_tol: TRACKED_P_TOL_CROSSING,
     };
     for n in [10, 40] {
-        certified_along_the_circle(&scenes(n)[2], &expect);
+        certified_along_the_circle(&sagged_robots(n)[2], &expect);
     }
 }
 
@@ -274,7 +246,7 @@ fn certified_along_the_circle_on_suspended_8_at_40_elements() {
         max_uncertified: 40,
         p_tol: TRACKED_P_TOL,
     };
-    certified_along_the_circle(&scenes(40)[0], &expect);
+    certified_along_the_circle(&sagged_robots(40)[0], &expect);
 }
 
 /// Along the circle of `s` (1500 cycles, real-time budget): the first answer before cycle

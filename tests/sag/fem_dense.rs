@@ -16,9 +16,7 @@
 
 use cablevib::cable::{up_frame, CableModel};
 use cablevib::kinematics::rigid_geometric_stiffness;
-use cablevib::modal::sagged::{
-    assemble_sagged, HangingCable, SagDenseCable, SagEndEffector, SagModalSolver,
-};
+use cablevib::modal::sagged::{HangingCable, SagEndEffector, SagModalSolver};
 use cablevib::modal::{dense_modes_ee, ModalParams, ModalSolver, Mode};
 use cablevib::scene::ElementKind;
 use cablevib_testkit::sag_robot::*;
@@ -29,25 +27,10 @@ const DENSE_FACTOR: f64 = 64.0;
 /// The structured solver's own Newton tolerance (relative).
 const STRUCTURED_TOL: f64 = 1e-12;
 
-fn solver_for(cables: &[HangingCable], n_el: usize, ee: &SagEndEffector) -> SagModalSolver {
-    let mut s = SagModalSolver::new(ModalParams::default(), cables.len(), n_el);
-    s.load_catenaries(cables, n_el, &up(), ee).unwrap();
-    s
-}
-
 /// (dense λ ascending, λ_max, dense participations).
 fn dense_of(s: &SagModalSolver, cables: &[HangingCable]) -> (Vec<f64>, f64, Vec<f64>) {
-    let dc: Vec<SagDenseCable> = cables
-        .iter()
-        .enumerate()
-        .map(|(i, c)| SagDenseCable {
-            chain: s.chain(i),
-            h: c.h,
-            arm_m: c.arm_m,
-        })
-        .collect();
-    let (m6, k6) = s.ee_matrices();
-    let (k, m) = assemble_sagged(&dc, &up(), &m6, &k6, s.dim()).unwrap();
+    let (k, m) = dense_matrices(s, cables);
+    let (m6, _) = s.ee_matrices();
     let d = dense_modes_ee(&k, &m, &m6, s.dim(), true).unwrap();
     (d.lambda, d.lambda_max, d.ee_participation)
 }

@@ -12,12 +12,10 @@
 //! On a resonance the bound is 1e-9·κ, κ ~ 1/η: checked at 1e-7. Measured: away 3.8e-10
 //! (suspended-8) and 2.5e-10 (paper robot); on the lowest four resonances 4.1e-9 and 3.4e-10.
 
-use cablevib::estimator::{Estimator, Tmin};
-use cablevib::kinematics::Pose;
 use cablevib::modal::dense_receptance;
 use cablevib::modal::FrfError;
-use cablevib::scene::{Damping, ElementKind, Scene, DEFAULT_SCENE_TOML};
-use cablevib_testkit::without_effects;
+use cablevib::scene::{Damping, ElementKind, Scene};
+use cablevib_testkit::sag_cases::{loaded, sagged_robots};
 use nalgebra::Matrix6;
 use num_complex::Complex64;
 
@@ -35,32 +33,10 @@ const DAMPINGS: [Damping; 3] = [
     Damping::LossFactor { eta: 0.005 },
 ];
 
-fn scenes(n: usize) -> Vec<Scene> {
-    let paper = format!(
-        "{}\n[effects]\nsag = true\n",
-        without_effects(DEFAULT_SCENE_TOML)
-    );
-    let mut out = vec![
-        Scene::load("scenes/suspended_8.toml").unwrap(),
-        Scene::from_toml_str(&paper, "spatial-paper-sag").unwrap(),
-    ];
-    for s in &mut out {
-        s.model.sag = true;
-        s.model.element = ElementKind::Fem;
-        s.model.elements_per_cable = n;
-    }
-    out
-}
-
-fn loaded(s: &Scene) -> Estimator {
-    let mut est = Estimator::new(s).unwrap();
-    let pose = Pose {
-        position_m: s.ee_position_m,
-        orientation_wxyz: s.ee_orientation_wxyz,
-    };
-    let e = *est.update(&pose, Tmin::Scene);
-    assert!(e.status.is_ok(), "{}: {:?}", s.name, e.error);
-    est
+/// suspended-8 (point mass) and the paper's spatial robot with sag (rigid body), FEM × n.
+fn scenes(n: usize) -> [Scene; 2] {
+    let [suspended, _fast_like, paper] = sagged_robots(n);
+    [suspended, paper]
 }
 
 fn rel(a: &Matrix6<Complex64>, b: &Matrix6<Complex64>, dim: usize) -> f64 {

@@ -21,11 +21,10 @@
 
 use cablevib::estimator::{Estimator, Tmin};
 use cablevib::kinematics::Pose;
-use cablevib::modal::sagged::{
-    assemble_sagged, HangingCable, SagDenseCable, SagEndEffector, SagModalSolver,
-};
+use cablevib::modal::sagged::{SagEndEffector, SagModalSolver};
 use cablevib::modal::{ModalParams, ModeShapes, ShapeParams};
-use cablevib::scene::{ElementKind, Scene};
+use cablevib_testkit::dense_fem::dense_eig;
+use cablevib_testkit::sag_cases::{sagged_fem, shipped};
 use cablevib_testkit::sag_robot::*;
 use nalgebra::{DMatrix, DVector, Matrix6};
 
@@ -39,27 +38,6 @@ const DENSE_FACTOR: f64 = 64.0;
 const SUBSPACE_FLOOR: f64 = 1e-9;
 /// Participation against the dense vector's.
 const PART_TOL: f64 = 1e-8;
-
-/// Every eigenpair of K u = λ M u, ascending, u M-orthonormal (columns).
-fn dense_eig(k: &DMatrix<f64>, m: &DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
-    let l = m.clone().cholesky().expect("M positive definite").l();
-    let a = l.solve_lower_triangular(k).unwrap();
-    let c = l.solve_lower_triangular(&a.transpose()).unwrap();
-    let c = (&c + c.transpose()) * 0.5;
-    let e = nalgebra::SymmetricEigen::new(c);
-    let mut idx: Vec<usize> = (0..e.eigenvalues.len()).collect();
-    idx.sort_by(|&i, &j| e.eigenvalues[i].total_cmp(&e.eigenvalues[j]));
-    let u = l
-        .transpose()
-        .solve_upper_triangular(&e.eigenvectors)
-        .unwrap();
-    let lam = idx.iter().map(|&i| e.eigenvalues[i]).collect();
-    let mut v = DMatrix::zeros(u.nrows(), idx.len());
-    for (c, &i) in idx.iter().enumerate() {
-        v.set_column(c, &u.column(i));
-    }
-    (lam, v)
-}
 
 /// A structured shape in the dense DOF order: the end-effector's `dim`, then each cable's
 /// interior nodes (world frame).
@@ -166,20 +144,6 @@ fn compare(
     w
 }
 
-fn dense_of(s: &SagModalSolver, cables: &[HangingCable]) -> (DMatrix<f64>, DMatrix<f64>) {
-    let dc: Vec<SagDenseCable> = cables
-        .iter()
-        .enumerate()
-        .map(|(i, c)| SagDenseCable {
-            chain: s.chain(i),
-            h: c.h,
-            arm_m: c.arm_m,
-        })
-        .collect();
-    let (m6, k6) = s.ee_matrices();
-    assemble_sagged(&dc, &up(), &m6, &k6, s.dim()).unwrap()
-}
-
 #[test]
 fn sagged_shapes_equal_dense_eigenvectors() {
     let mut worst = Worst::default();
@@ -187,8 +151,7 @@ fn sagged_shapes_equal_dense_eigenvectors() {
         let cables = robot(8, 0.6, 2.0e5, heavy);
         for ee in [point(), rigid()] {
             for n_el in [10usize, 40] {
-                let mut s = SagModalSolver::new(ModalParams::default(), cables.len(), n_el);
-                s.load_catenaries(&cables, n_el, &up(), &ee).unwrap();
+                let mut s = solver_for(&cables, n_el, &ee);
                 let clusters = s.lowest_clusters(12, &ShapeParams::default()).unwrap();
                 let h: Vec<_> = cables.iter().map(|c| c.h).collect();
                 let arms: Vec<_> = cables.iter().map(|c| c.arm_m).collect();
@@ -196,7 +159,7 @@ fn sagged_shapes_equal_dense_eigenvectors() {
                     .mode_shapes(&h, &up(), &arms, &clusters, &ShapeParams::default())
                     .unwrap();
                 assert!(shapes.modes.len() >= 12);
-                let (k, m) = dense_of(&s, &cables);
+                let (k, m) = dense_matrices(&s, &cables);
                 let what = format!(
                     "heavy {heavy} {} N {n_el}",
                     if matches!(ee, SagEndEffector::Point { .. }) {
@@ -245,10 +208,7 @@ fn sagged_shapes_refuse_bad_input() {
 #[test]
 fn estimator_basis_with_sag_is_structured_and_equals_dense() {
     for (n_el, offset) in [(10usize, [0.0, 0.0]), (10, [0.2, 0.1]), (40, [0.2, 0.1])] {
-        let mut scene = Scene::load("scenes/suspended_8.toml").unwrap();
-        scene.model.sag = true;
-        scene.model.element = ElementKind::Fem;
-        scene.model.elements_per_cable = n_el;
+        let scene = sagged_fem(shipped("suspended_8.toml"), n_el);
         let mut est = Estimator::new(&scene).unwrap();
         let pose = Pose {
             position_m: scene.ee_position_m + nalgebra::Vector3::new(offset[0], offset[1], 0.0),

@@ -19,6 +19,19 @@ pub fn target(
     figure_path(path, format).map_err(|e| CliError::Usage(e.to_string()))
 }
 
+/// Refuse `--format` without `--svg` in a command whose figure is written only when asked for
+/// (`svg` the figure path given, if any).
+pub fn format_needs_svg(
+    svg: &Option<PathBuf>,
+    format: Option<FigureFormat>,
+) -> Result<(), CliError> {
+    if format.is_some() && svg.is_none() {
+        let msg = "--format needs --svg PATH (the figure is written only there)";
+        return Err(CliError::Usage(msg.into()));
+    }
+    Ok(())
+}
+
 /// Write the figure `svg` to `path` in `format`.
 pub fn write(path: &Path, svg: &str, format: FigureFormat) -> Result<(), CliError> {
     Ok(write_figure(path, svg, format)?)

@@ -187,10 +187,7 @@ fn coords(names: &[String], dim: usize, opt: &str) -> Result<Vec<usize>, CliErro
 pub fn run(a: &FrfArgs) -> Result<(), CliError> {
     let freqs = frequency_grid(a.from_hz, a.to_hz, a.points, a.log)
         .map_err(|e| CliError::Usage(format!("--from-hz/--to-hz/--points: {e}")))?;
-    if a.format.is_some() && a.svg.is_none() {
-        let msg = "--format needs --svg PATH (the figure is written only there)";
-        return Err(CliError::Usage(msg.into()));
-    }
+    figure::format_needs_svg(&a.svg, a.format)?;
     let s = resolve_scene(&a.scene)?;
     let damping = damping(a, s.damping)?;
     let c = if s.model.sag {

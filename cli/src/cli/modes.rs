@@ -135,10 +135,7 @@ pub fn run(a: &ModesArgs) -> Result<(), CliError> {
         )?;
         println!("\nwrote {}", path.display());
     }
-    if a.format.is_some() && a.svg.is_none() {
-        let msg = "--format needs --svg PATH (the figure is written only there)";
-        return Err(CliError::Usage(msg.into()));
-    }
+    figure::format_needs_svg(&a.svg, a.format)?;
     if let Some(path) = &a.svg {
         let (path, fmt) = figure::target(path, a.format)?;
         let k = a.modes.min(shapes.modes.len());

@@ -27,16 +27,15 @@ pub(crate) fn test_chain(n_el: usize, ea_n: f64, mu: f64) -> SagChain {
     c
 }
 
-/// Dense (S, S', count) of one direction set: `dof` DOF per node (2 in plane, 1 out),
-/// element stiffness blocks `k(j)` (dof × dof), element mass m.
-fn dense_condense(
+/// The dense K and M of one direction set of a chain: `dof` DOF per node (2 in plane, 1
+/// out), nodes 1..=N (the anchor, node 0, fixed; the end node N last), element stiffness
+/// blocks `k(j)` (dof × dof) on [1 −1; −1 1], element mass m as (m/6)[2I I; I 2I].
+fn dense_chain(
     n_el: usize,
     dof: usize,
     k: impl Fn(usize) -> DMatrix<f64>,
     m: f64,
-    lambda: f64,
-) -> (DMatrix<f64>, DMatrix<f64>, usize) {
-    // Global DOF: nodes 1..=N, the end node N last.
+) -> (DMatrix<f64>, DMatrix<f64>) {
     let nd = dof * n_el;
     let mut kk = DMatrix::<f64>::zeros(nd, nd);
     let mut mm = DMatrix::<f64>::zeros(nd, nd);
@@ -60,6 +59,20 @@ fn dense_condense(
             }
         }
     }
+    (kk, mm)
+}
+
+/// Dense (S, S', count) of one direction set ([`dense_chain`]) at λ.
+fn dense_condense(
+    n_el: usize,
+    dof: usize,
+    k: impl Fn(usize) -> DMatrix<f64>,
+    m: f64,
+    lambda: f64,
+) -> (DMatrix<f64>, DMatrix<f64>, usize) {
+    let (kk, mm) = dense_chain(n_el, dof, k, m);
+    let nd = dof * n_el;
+    let eye = DMatrix::<f64>::identity(dof, dof);
     let z = &kk - &mm * lambda;
     let ni = nd - dof;
     let zii = z.view((0, 0), (ni, ni)).into_owned();
@@ -382,28 +395,9 @@ fn complex_lambda_matches_dense_condensation() {
     use num_complex::Complex64;
     let dense =
         |n_el: usize, dof: usize, k: &dyn Fn(usize) -> DMatrix<f64>, m: f64, l: Complex64| {
+            let (kk, mm) = dense_chain(n_el, dof, k, m);
             let nd = dof * n_el;
-            let mut z = DMatrix::<Complex64>::zeros(nd, nd);
-            for j in 0..n_el {
-                let ke = k(j);
-                for (a, na) in [(0usize, j), (1, j + 1)] {
-                    for (b, nb) in [(0usize, j), (1, j + 1)] {
-                        if na == 0 || nb == 0 {
-                            continue;
-                        }
-                        let sg = if a == b { 1.0 } else { -1.0 };
-                        let mc = if a == b { m / 3.0 } else { m / 6.0 };
-                        let (ra, rb) = (dof * (na - 1), dof * (nb - 1));
-                        for r in 0..dof {
-                            for c in 0..dof {
-                                let mass = if r == c { mc } else { 0.0 };
-                                z[(ra + r, rb + c)] +=
-                                    Complex64::new(sg * ke[(r, c)], 0.0) - l * mass;
-                            }
-                        }
-                    }
-                }
-            }
+            let z = kk.map(|v| Complex64::new(v, 0.0)) - mm.map(|v| Complex64::new(v, 0.0) * l);
             let ni = nd - dof;
             let zii = z.view((0, 0), (ni, ni)).into_owned();
             let zie = z.view((0, ni), (ni, dof)).into_owned();

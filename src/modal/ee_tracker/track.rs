@@ -184,15 +184,7 @@ pub(super) fn track_root<P: Condensed>(
         let mu = eg.values[branch];
         let dmu = quad(&e.dd, &v, e.dim);
         // Newton on μ(λ)(λ − a)(b − λ): both poles removed (a = 0 and b = ∞ add nothing).
-        let (mut g, mut dg) = (mu, dmu);
-        if b.is_finite() {
-            let w = b - x;
-            (g, dg) = (g * w, dg * w - g);
-        }
-        if a > 0.0 {
-            let w = x - a;
-            (g, dg) = (g * w, dg * w + g);
-        }
+        let (g, dg) = crate::modal::spectrum::pole_free(mu, dmu, x, a, b);
         if !(dg < 0.0) {
             return None;
         }

@@ -4,6 +4,7 @@
 
 use crate::cable::sagged::SagChain;
 use crate::kinematics::attach_map;
+use crate::modal::dense::add_hidden_axial;
 use crate::modal::{check_dense_budget, ModalError};
 use nalgebra::{DMatrix, Matrix3, Matrix3x6, Matrix6, Vector3};
 
@@ -106,21 +107,7 @@ pub fn assemble_sagged(
             }
         }
         if let Some(sp) = support {
-            // Axial elements from the drum (node 0, fixed) to the junction (node nh).
-            let seg = sp.hidden;
-            let at = |j: usize| base + 3 * n.saturating_sub(1) + j - 1;
-            for el in 0..seg.n_el {
-                for (ia, na) in [el, el + 1].into_iter().enumerate() {
-                    for (ib, nb) in [el, el + 1].into_iter().enumerate() {
-                        if na == 0 || nb == 0 {
-                            continue;
-                        }
-                        let same = ia == ib;
-                        k[(at(na), at(nb))] += if same { seg.k } else { -seg.k };
-                        m[(at(na), at(nb))] += seg.m / if same { 3.0 } else { 6.0 };
-                    }
-                }
-            }
+            add_hidden_axial(&mut k, &mut m, base + 3 * n.saturating_sub(1), &sp.hidden);
         }
         base += 3 * n.saturating_sub(1) + hidden_dofs(cab.chain);
     }

@@ -58,7 +58,7 @@ use super::engine::{Condensed, TautView};
 use super::solver::ModalSolver;
 use super::ModalError;
 use crate::cable::ChainKind;
-pub(in crate::modal) use search::{SpectrumSearch, SweepState};
+pub(in crate::modal) use search::{pole_free, SpectrumSearch, SweepState};
 
 /// One solved member of a pole-free cluster: its root, the evaluation there, its branch.
 type Member = (f64, DynEval, EigD, usize);

@@ -500,9 +500,10 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
     }
 }
 
-/// The Newton iterate from x for μ(λ)(λ − pa)(pb − λ) (the poles bounding the interval
-/// removed; pa = 0 and pb = ∞ add nothing), NaN when the derivative is not negative.
-fn pole_free_newton(mu: f64, dmu: f64, x: f64, pa: f64, pb: f64) -> f64 {
+/// g = μ(λ)(λ − pa)(pb − λ) and dg/dλ at x, from μ = μ(x) and dμ/dλ: the branch μ with the
+/// poles bounding its interval removed (pa = 0 and pb = ∞ add nothing), which Newton can
+/// follow across the interval without being thrown by a pole.
+pub(in crate::modal) fn pole_free(mu: f64, dmu: f64, x: f64, pa: f64, pb: f64) -> (f64, f64) {
     let (mut g, mut dg) = (mu, dmu);
     if pb.is_finite() {
         let w = pb - x;
@@ -512,6 +513,12 @@ fn pole_free_newton(mu: f64, dmu: f64, x: f64, pa: f64, pb: f64) -> f64 {
         let w = x - pa;
         (g, dg) = (g * w, dg * w + g);
     }
+    (g, dg)
+}
+
+/// The Newton iterate from x on [`pole_free`], NaN when the derivative is not negative.
+fn pole_free_newton(mu: f64, dmu: f64, x: f64, pa: f64, pb: f64) -> f64 {
+    let (g, dg) = pole_free(mu, dmu, x, pa, pb);
     if dg < 0.0 {
         x - g / dg
     } else {

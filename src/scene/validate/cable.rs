@@ -1,7 +1,9 @@
 //! `cables[i]`: one cable's anchor, attachment, pulley, tension bounds, material and hidden
 //! part, each key from the cable's own table, else from `[cable]`.
 
-use super::{cable_key, check_bound_pair, validate_axial_rigidity, Checker};
+use super::{
+    cable_key, check_bound_pair, validate_axial_rigidity, weight_or_mass_per_length, Checker,
+};
 use crate::scene::parse::{RawArray, RawCable, RawCableDefaults, RawPulley};
 use crate::scene::{Cable, Pulley, SceneError};
 use nalgebra::Vector3;
@@ -168,39 +170,17 @@ fn validate_mass_per_length(
     } else {
         (d.weight_per_length, d.mass_per_length)
     };
-    let mu = match (w, m) {
-        (Some(_), Some(_)) => {
-            return Err(ck.inv(
-                &key("weight_per_length"),
-                "give weight_per_length or mass_per_length, not both".into(),
-            ))
-        }
-        (Some(w), None) => {
-            let w = ck.positive(&key("weight_per_length"), w)?;
-            if g <= 0.0 {
-                return Err(ck.inv(
-                    &key("weight_per_length"),
-                    "needs non-zero gravity to convert to mass; give mass_per_length".into(),
-                ));
-            }
-            w / g
-        }
-        (None, Some(m)) => ck.positive(&key("mass_per_length"), m)?,
-        (None, None) => {
-            return Err(ck.inv(
-                &key("weight_per_length"),
-                "missing: give weight_per_length or mass_per_length".into(),
-            ))
-        }
+    let Some(mu) = weight_or_mass_per_length(ck, i, "", w, m, g)? else {
+        return Err(ck.inv(
+            &key("weight_per_length"),
+            "missing: give weight_per_length or mass_per_length".into(),
+        ));
     };
-    // Derived values must be usable numbers too (a denormal weight gives μ = 0).
+    // A usable number also from a mass (a denormal one is positive but useless; a weight's
+    // μ is checked above).
     if !(mu.is_normal() && mu > 0.0) {
         return Err(ck.inv(
-            &key(if w.is_some() {
-                "weight_per_length"
-            } else {
-                "mass_per_length"
-            }),
+            &key("mass_per_length"),
             format!("gives a mass per length of {mu:e} kg/m, not a usable positive number"),
         ));
     }

@@ -2,7 +2,7 @@
 //! `hidden_weight_per_length`, `hidden_mass_per_length`) of one cable: each from the cable's
 //! own table, else from `[cable]`; the material defaults to the free cable's.
 
-use super::{cable_key, validate_axial_rigidity, Checker};
+use super::{cable_key, validate_axial_rigidity, weight_or_mass_per_length, Checker};
 use crate::scene::parse::{RawCable, RawCableDefaults};
 use crate::scene::{HiddenCable, SceneError};
 
@@ -46,33 +46,7 @@ pub(super) fn validate_hidden(
         Some(a) => ck.positive(&key("hidden_area"), a)?,
         None => free.1,
     };
-    let mu = match (w, m) {
-        (Some(_), Some(_)) => {
-            return Err(ck.inv(
-                &key("hidden_weight_per_length"),
-                "give hidden_weight_per_length or hidden_mass_per_length, not both".into(),
-            ))
-        }
-        (Some(w), None) => {
-            let w = ck.positive(&key("hidden_weight_per_length"), w)?;
-            if g <= 0.0 {
-                return Err(ck.inv(
-                    &key("hidden_weight_per_length"),
-                    "needs non-zero gravity to convert to mass; give hidden_mass_per_length".into(),
-                ));
-            }
-            let mu = w / g;
-            if !(mu.is_normal() && mu > 0.0) {
-                return Err(ck.inv(
-                    &key("hidden_weight_per_length"),
-                    format!("gives a mass per length of {mu:e} kg/m, not a usable positive number"),
-                ));
-            }
-            mu
-        }
-        (None, Some(m)) => ck.positive(&key("hidden_mass_per_length"), m)?,
-        (None, None) => free.2,
-    };
+    let mu = weight_or_mass_per_length(ck, i, "hidden_", w, m, g)?.unwrap_or(free.2);
     validate_axial_rigidity(ck, i, e * a).map_err(|_| {
         ck.inv(
             &key("hidden_area"),
@@ -155,5 +129,75 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("hidden_lenght"), "{e}");
+    }
+
+    /// Weight or mass per length, of the free cable and of its hidden part (one function,
+    /// `weight_or_mass_per_length`, with the keys' prefix): the same refusals, each naming
+    /// its own keys, and a weight's μ = w/|g|.
+    #[test]
+    fn weight_or_mass_per_length_of_free_and_hidden_cables() {
+        let err = |text: &str| {
+            Scene::from_toml_str(text, "t.toml")
+                .unwrap_err()
+                .to_string()
+        };
+        let zero_g = |text: String| {
+            text.replacen(
+                "gravity = [0.0, 0.0, -9.81]",
+                "gravity = [0.0, 0.0, 0.0]",
+                1,
+            )
+        };
+        for (p, pre) in [("", ""), ("hidden_", "hidden_length = 1.0\n")] {
+            let both = err(&with_first_cable(&format!(
+                "{pre}{p}mass_per_length = 0.1\n{p}weight_per_length = 1.0"
+            )));
+            assert!(
+                both.contains(&format!("cables[0].{p}weight_per_length"))
+                    && both.contains(&format!(
+                        "give {p}weight_per_length or {p}mass_per_length, not both"
+                    )),
+                "{both}"
+            );
+            let tiny = err(&with_first_cable(&format!(
+                "{pre}{p}weight_per_length = 1e-310"
+            )));
+            assert!(
+                tiny.contains(&format!("cables[0].{p}weight_per_length"))
+                    && tiny.contains("not a usable positive number"),
+                "{tiny}"
+            );
+            // Without gravity the free cable of a hidden one gives its mass (else its own
+            // weight is refused first).
+            let mass = if p.is_empty() {
+                ""
+            } else {
+                "mass_per_length = 0.0256\n"
+            };
+            let no_g = err(&zero_g(with_first_cable(&format!(
+                "{mass}{pre}{p}weight_per_length = 1.0"
+            ))));
+            assert!(
+                no_g.contains(&format!(
+                    "needs non-zero gravity to convert to mass; give {p}mass_per_length"
+                )),
+                "{no_g}"
+            );
+        }
+        let tiny_mass = err(&with_first_cable("mass_per_length = 1e-310"));
+        assert!(
+            tiny_mass.contains("cables[0].mass_per_length")
+                && tiny_mass.contains("not a usable positive number"),
+            "{tiny_mass}"
+        );
+        let s = Scene::from_toml_str(
+            &with_first_cable("hidden_length = 1.0\nhidden_weight_per_length = 4.905"),
+            "t.toml",
+        )
+        .unwrap();
+        assert_eq!(
+            s.cables[0].hidden.unwrap().mass_per_length_kg_m,
+            4.905 / 9.81
+        );
     }
 }

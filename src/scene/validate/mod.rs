@@ -409,6 +409,48 @@ fn validate_cable_count(ck: &Checker, n: usize) -> Result<(), SceneError> {
     Ok(())
 }
 
+/// Mass per length μ (kg/m) of cable `i` from the one given of `{p}weight_per_length` `w`
+/// (N/m, over the gravity `g`, m/s²) and `{p}mass_per_length` `m` (`p` the keys' prefix:
+/// `""` for the free cable, `"hidden_"` for its hidden part); None when neither is. Both is
+/// an error, a weight needs gravity, and the μ of a weight must be a normal positive number.
+pub(super) fn weight_or_mass_per_length(
+    ck: &Checker,
+    i: usize,
+    p: &str,
+    w: Option<f64>,
+    m: Option<f64>,
+    g: f64,
+) -> Result<Option<f64>, SceneError> {
+    let weight_key = cable_key(i, &format!("{p}weight_per_length"));
+    match (w, m) {
+        (Some(_), Some(_)) => Err(ck.inv(
+            &weight_key,
+            format!("give {p}weight_per_length or {p}mass_per_length, not both"),
+        )),
+        (Some(w), None) => {
+            let w = ck.positive(&weight_key, w)?;
+            if g <= 0.0 {
+                return Err(ck.inv(
+                    &weight_key,
+                    format!("needs non-zero gravity to convert to mass; give {p}mass_per_length"),
+                ));
+            }
+            let mu = w / g;
+            if !(mu.is_normal() && mu > 0.0) {
+                return Err(ck.inv(
+                    &weight_key,
+                    format!("gives a mass per length of {mu:e} kg/m, not a usable positive number"),
+                ));
+            }
+            Ok(Some(mu))
+        }
+        (None, Some(m)) => Ok(Some(
+            ck.positive(&cable_key(i, &format!("{p}mass_per_length")), m)?,
+        )),
+        (None, None) => Ok(None),
+    }
+}
+
 /// EA = youngs_modulus × area of cable `i` must be a usable number (an overflowing E·A
 /// gives ∞).
 pub(super) fn validate_axial_rigidity(ck: &Checker, i: usize, ea: f64) -> Result<(), SceneError> {
