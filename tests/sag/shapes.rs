@@ -270,14 +270,15 @@ const HIDDEN_M: f64 = 2.5;
 /// axial elements of 2.5 m of the same cable) against the dense eigenvectors of
 /// [`assemble_sagged`] with the hidden cables' nodes explicit (module docs' checks and
 /// tolerances, with the whole vector: the junction and the hidden nodes included in uᵀMu),
-/// N = 10 and 40, point mass and rigid body, light and heavy sag.
+/// N = 1, 2 (the junction next to the end, or the only interior node), 10 and 40, point
+/// mass and rigid body, light and heavy sag.
 #[test]
 fn sagged_shapes_on_hidden_cables_equal_dense_eigenvectors() {
     let mut worst = Worst::default();
     for heavy in [false, true] {
         let cables = robot(8, 0.6, 2.0e5, heavy);
         for ee in [point(), rigid()] {
-            for n_el in [10usize, 40] {
+            for n_el in [1usize, 2, 10, 40] {
                 let mut s = SagModalSolver::new(ModalParams::default(), cables.len(), n_el);
                 s.load_catenaries(&cables, n_el, &up(), &ee).unwrap();
                 let mut hidden = Vec::new();
@@ -303,13 +304,14 @@ fn sagged_shapes_on_hidden_cables_equal_dense_eigenvectors() {
                     });
                 }
                 s.load(&frames, &up(), &ee).unwrap();
-                let clusters = s.lowest_clusters(12, &ShapeParams::default()).unwrap();
+                let want = 12.min(s.total_modes());
+                let clusters = s.lowest_clusters(want, &ShapeParams::default()).unwrap();
                 let h: Vec<_> = cables.iter().map(|c| c.h).collect();
                 let arms: Vec<_> = cables.iter().map(|c| c.arm_m).collect();
                 let shapes = s
                     .mode_shapes(&h, &up(), &arms, &clusters, &ShapeParams::default())
                     .unwrap();
-                assert!(shapes.modes.len() >= 12);
+                assert!(shapes.modes.len() >= want);
                 let (k, m) = dense_of(&s, &cables);
                 let hidden_dofs = cables.len() * n_el;
                 let dim = s.dim();
