@@ -270,7 +270,7 @@ const HIDDEN_M: f64 = 2.5;
 /// axial elements of 2.5 m of the same cable) against the dense eigenvectors of
 /// [`assemble_sagged`] with the hidden cables' nodes explicit (module docs' checks and
 /// tolerances, with the whole vector: the junction and the hidden nodes included in uᵀMu),
-/// N = 1, 2 (the junction next to the end, or the only interior node), 10 and 40, point
+/// N = 1, 2 (one element from the junction to the end, or one interior node), 10 and 40, point
 /// mass and rigid body, light and heavy sag.
 #[test]
 fn sagged_shapes_on_hidden_cables_equal_dense_eigenvectors() {
