@@ -69,19 +69,28 @@
 //! cables). Offline: allocates.
 
 use super::count::clusters_by_count;
-use super::solve::{null_of, orthonormalise};
+use super::solve::{null_of, null_within, orthonormalise};
 use super::{ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_MULTIPLICITY};
 use crate::cable::sagged::{SagChain, SagSupport};
 use crate::kinematics::attach_map;
 use crate::modal::lambda_to_hz;
 use crate::modal::sagged::SagModalSolver;
-use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x6, Matrix6, Vector3, Vector6};
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x6, Matrix6, SymmetricEigen, Vector3, Vector6};
 
 /// Largest relative distance of two modes given apart that are taken as one cluster when
 /// neither alone is a clean null space of the bordered system (the count's bisection
 /// resolves λ to ~ε·λ_max/λ; modes this close are one eigenvalue to the f64 model's
 /// accuracy).
 const MERGE_REL: f64 = 1e-9;
+
+/// Largest relative distance of a neighbour taken into a near-cluster (module docs): modes
+/// farther apart are separated by the bordered system's singular values at every pose met
+/// (the near-doubles of the symmetric paper robot with sag are ~5e-6 apart).
+const NEAR_MAX_REL: f64 = 1e-3;
+
+/// Smallest eigenvalue of a near-cluster's normalised mass Gram matrix: below it, two
+/// members' shapes are close to one vector (not two modes) and the cluster is refused.
+const NEAR_GRAM_MIN: f64 = 0.5;
 
 /// One cable's interior solutions at one λ, in the cable's frame (h, up, n).
 #[derive(Debug, Clone, Default)]
@@ -354,8 +363,12 @@ impl SagModalSolver {
             let a = bordered(&attach, &shapes, &hcol, &m6, &k6, dim, lambda);
             null_of(a, m as usize, lambda, params).map(|null| (shapes, null))
         };
+        // The index in `out.modes` where each given mode's shapes start.
+        let mut starts = vec![0; modes.len()];
         let mut next_mode = 0;
         while next_mode < modes.len() {
+            let first_mode = next_mode;
+            starts[next_mode] = out.modes.len();
             let (mut lambda, mut m) = modes[next_mode];
             next_mode += 1;
             let mut got = solve(lambda, m);
@@ -370,13 +383,30 @@ impl SagModalSolver {
                     {
                         lambda = (lambda * m as f64 + ln * mn as f64) / (m + mn) as f64;
                         m += mn;
+                        starts[next_mode] = out.modes.len();
                         next_mode += 1;
                         got = solve(lambda, m);
                     }
                     _ => break,
                 }
             }
-            let (shapes, null) = got?;
+            let (shapes, null) = match got {
+                Err(e @ ShapeError::NotAnEigenvalue { .. }) => {
+                    // Not separated from a neighbour: resolved with it as a near-cluster
+                    // (module docs), the neighbour's shapes given already replaced.
+                    let (lo, hi) = self
+                        .near_cluster(&attach, &hcol, modes, (first_mode, next_mode), params)
+                        .ok_or(e)?;
+                    out.modes.truncate(starts[lo]);
+                    let group = self
+                        .resolve_near(&attach, &hcol, &modes[lo..hi], starts[lo], params)
+                        .ok_or(e)?;
+                    out.modes.extend(group);
+                    next_mode = hi;
+                    continue;
+                }
+                got => got?,
+            };
             let v = &null.vectors;
             let nodes: Vec<Vec<Vec<Vector3<f64>>>> = (0..v.ncols())
                 .map(|c| local_nodes(&attach, &shapes, &hcol, &v.column(c).into_owned(), dim))
@@ -426,6 +456,197 @@ impl SagModalSolver {
         }
         Ok(out)
     }
+}
+
+/// One null vector of a near-cluster's member (at the member's λ): its end-effector part,
+/// each cable's nodes (cable frame) and hidden-cable amplitudes.
+struct NearVector {
+    member: usize,
+    phi: Vector6<f64>,
+    nodes: Vec<Vec<Vector3<f64>>>,
+    hidden: Vec<f64>,
+}
+
+impl SagModalSolver {
+    /// The given modes `lo..hi` (a cluster whose bordered system is not separated) grown by
+    /// their nearest neighbours within [`NEAR_MAX_REL`] until [`Self::resolve_near`]
+    /// resolves them: the range, or `None` when no neighbour is left to take.
+    fn near_cluster(
+        &self,
+        attach: &[Attach],
+        hcol: &[Option<usize>],
+        modes: &[(f64, u32)],
+        (mut lo, mut hi): (usize, usize),
+        params: &ShapeParams,
+    ) -> Option<(usize, usize)> {
+        loop {
+            let below = (lo > 0)
+                .then(|| (modes[lo].0 - modes[lo - 1].0) / modes[lo].0)
+                .filter(|&g| g <= NEAR_MAX_REL);
+            let above = modes
+                .get(hi)
+                .map(|&(l, _)| (l - modes[hi - 1].0) / modes[hi - 1].0)
+                .filter(|&g| g <= NEAR_MAX_REL);
+            match (below, above) {
+                (Some(b), Some(a)) if b <= a => lo -= 1,
+                (Some(_), None) => lo -= 1,
+                (_, Some(_)) => hi += 1,
+                (None, None) => return None,
+            }
+            let total: u32 = modes[lo..hi].iter().map(|x| x.1).sum();
+            if total > MAX_MULTIPLICITY {
+                return None;
+            }
+            if self
+                .resolve_near(attach, hcol, &modes[lo..hi], 0, params)
+                .is_some()
+            {
+                return Some((lo, hi));
+            }
+        }
+    }
+
+    /// The shapes of a near-cluster `group` (module docs), the first at index `start` of
+    /// the output: at each member's λ the smallest singular vectors of its own
+    /// multiplicity, taken only where the cluster's whole multiplicity M is separated
+    /// (σ_M/σ_{M+1} ≤ [`ShapeParams::null_tol`]); then M-orthonormalised together
+    /// (symmetric orthonormalisation, the least change to each), each member keeping its
+    /// λ. `None` when a member's test fails or two members' vectors are close to one
+    /// (normalised Gram eigenvalue below [`NEAR_GRAM_MIN`]).
+    fn resolve_near(
+        &self,
+        attach: &[Attach],
+        hcol: &[Option<usize>],
+        group: &[(f64, u32)],
+        start: usize,
+        params: &ShapeParams,
+    ) -> Option<Vec<ModeShape>> {
+        let dim = self.dim();
+        let n_cables = self.loaded_cables();
+        let (m6, k6) = self.ee_matrices();
+        // Members: the given modes, those within MERGE_REL as one.
+        let mut members: Vec<(f64, u32)> = Vec::new();
+        for &(l, m) in group {
+            match members.last_mut() {
+                Some(last) if (l - last.0).abs() <= MERGE_REL * last.0 => {
+                    last.0 = (last.0 * last.1 as f64 + l * m as f64) / (last.1 + m) as f64;
+                    last.1 += m;
+                }
+                _ => members.push((l, m)),
+            }
+        }
+        let total: u32 = members.iter().map(|x| x.1).sum();
+        let mut all_shapes = Vec::new();
+        let mut raw = Vec::new();
+        let mut separation = 0.0f64;
+        for (p, &(lambda, m)) in members.iter().enumerate() {
+            let shapes: Vec<SagChainShape> = (0..n_cables)
+                .map(|i| SagChainShape::fill(self.chain(i), lambda))
+                .collect();
+            let a = bordered(attach, &shapes, hcol, &m6, &k6, dim, lambda);
+            let null = null_within(a, m as usize, total as usize, lambda, params).ok()?;
+            separation = separation.max(null.residual);
+            for c in 0..m as usize {
+                let col = null.vectors.column(c).into_owned();
+                let mut phi = Vector6::zeros();
+                for r in 0..dim {
+                    phi[r] = col[r];
+                }
+                raw.push(NearVector {
+                    member: p,
+                    phi,
+                    nodes: local_nodes(attach, &shapes, hcol, &col, dim),
+                    hidden: hcol.iter().map(|&hc| hc.map_or(0.0, |r| col[r])).collect(),
+                });
+            }
+            all_shapes.push(shapes);
+        }
+        let k = raw.len();
+        let mut gram = DMatrix::<f64>::zeros(k, k);
+        let mut ee = DMatrix::<f64>::zeros(k, k);
+        for a in 0..k {
+            for b in 0..=a {
+                let (ra, rb) = (&raw[a], &raw[b]);
+                let own = (ra.phi.transpose() * m6 * rb.phi)[(0, 0)];
+                let cab: f64 = (0..n_cables)
+                    .map(|i| {
+                        let (sa, sb) = (&all_shapes[ra.member][i], &all_shapes[rb.member][i]);
+                        element_mass_form(sa.mass_kg, &ra.nodes[i], &rb.nodes[i])
+                            + hidden_cross_form(sa, sb, ra.hidden[i], rb.hidden[i])
+                    })
+                    .sum();
+                gram[(a, b)] = own + cab;
+                gram[(b, a)] = own + cab;
+                ee[(a, b)] = own;
+                ee[(b, a)] = own;
+            }
+        }
+        // Symmetric orthonormalisation of the unit-M-norm vectors: C = D G̃^{-1/2}.
+        let d = DVector::from_iterator(k, (0..k).map(|a| 1.0 / gram[(a, a)].sqrt()));
+        let dm = DMatrix::from_diagonal(&d);
+        let g = SymmetricEigen::new(&dm * &gram * &dm);
+        if !(g.eigenvalues.min() >= NEAR_GRAM_MIN) {
+            return None;
+        }
+        let mut q = g.eigenvectors.clone();
+        for (c, &l) in g.eigenvalues.iter().enumerate() {
+            q.column_mut(c).scale_mut(1.0 / l.sqrt());
+        }
+        let coef = &dm * &q * g.eigenvectors.transpose();
+        let mut out = Vec::with_capacity(k);
+        let mut col0 = 0;
+        for &(lambda, m) in &members {
+            let cp = coef.columns(col0, m as usize).into_owned();
+            col0 += m as usize;
+            let gp = cp.transpose() * &gram * &cp;
+            let ep = cp.transpose() * &ee * &cp;
+            let first = start + out.len();
+            for (c, part) in orthonormalise(&cp, gp, &ep) {
+                let mut phi = Vector6::zeros();
+                let mut cables: Vec<Vec<Vector3<f64>>> = attach
+                    .iter()
+                    .zip(&raw[0].nodes)
+                    .map(|(_, u)| vec![Vector3::zeros(); u.len()])
+                    .collect();
+                for (r, w) in raw.iter().zip(c.iter()) {
+                    phi += r.phi * *w;
+                    for ((dst, src), at) in cables.iter_mut().zip(&r.nodes).zip(attach) {
+                        for (x, y) in dst.iter_mut().zip(src) {
+                            *x += at.frame * y * *w;
+                        }
+                    }
+                }
+                out.push(ModeShape {
+                    lambda,
+                    frequency_hz: lambda_to_hz(lambda),
+                    ee: phi,
+                    cables,
+                    ee_participation: part,
+                    cluster_start: first,
+                    multiplicity: m,
+                    null_residual: separation,
+                });
+            }
+        }
+        Some(out)
+    }
+}
+
+/// The hidden cables' consistent mass form of two vectors at two λ (amplitudes ca, cb of
+/// the fourth solutions of `sa` and `sb`); 0 without a hidden cable.
+fn hidden_cross_form(sa: &SagChainShape, sb: &SagChainShape, ca: f64, cb: f64) -> f64 {
+    let (Some(ha), Some(hb)) = (&sa.hidden, &sb.hidden) else {
+        return 0.0;
+    };
+    let (ta, tb) = (&ha.t, &hb.t);
+    let mut s = 0.0;
+    for j in 0..ta.len().saturating_sub(1) {
+        s += 2.0 * ta[j] * tb[j]
+            + ta[j] * tb[j + 1]
+            + ta[j + 1] * tb[j]
+            + 2.0 * ta[j + 1] * tb[j + 1];
+    }
+    ha.mass_kg / 6.0 * s * ca * cb
 }
 
 /// The bordered matrix at λ (module docs); `hcol` the column of each hidden cable's
