@@ -61,6 +61,17 @@
 //! system at either λ has no clean null space of its own multiplicity are taken as one
 //! cluster (the count's bisection can split an exact double by its rounding).
 //!
+//! **Near-clusters.** A cluster still not separated (its σ_m/σ_{m+1} above the tolerance:
+//! a near-double 2e-6 … 5e-6 apart on the symmetric paper robot with sag) is grown by its
+//! nearest given neighbours within `NEAR_MAX_REL` (1e-3 relative) until, at each member's
+//! λ, the member's own m smallest singular vectors are separated from all but the
+//! cluster's other M − m (σ_m/σ_{M+1} ≤ the tolerance, M the cluster's total). Those
+//! vectors (each a chain solution at its own λ) are M-orthonormalised together by the
+//! symmetric orthonormalisation (the least change to each; refused when the normalised
+//! Gram matrix has an eigenvalue below 0.5, i.e. two members gave nearly one vector), each
+//! member keeping its λ; shapes already given for a member are replaced. Isolated clusters
+//! never take this path.
+//!
 //! **Accuracy.** The forward solution is exact in exact arithmetic; in floating point its
 //! rounding grows with the solution's own growth along the chain, which is at most linear
 //! below the chains' cut-off (the first modes of a robot lie far below it; above it the
