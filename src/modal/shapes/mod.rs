@@ -67,7 +67,8 @@
 //! **Hidden cables.** A supported chain (the free cable's axial chain on the cable hidden
 //! behind its pulley) is one non-uniform chain held at the drum: again a one-parameter
 //! family, w from the drum through the junction to the end (`supported_shape`); its hidden
-//! part enters m_ii.
+//! part enters m_ii. A sagged chain on a hidden cable (`sagged`) has one more amplitude,
+//! the hidden cable's, and the junction's equation one more row.
 //!
 //! **Layout.** `chain_shape`: one chain's w, f, g and mass moments; `supported_shape`: a
 //! supported chain's. `sagged`: the same
@@ -249,10 +250,6 @@ pub enum ShapeError {
     /// Mode shapes of sagging cables are computed for the FEM chains only.
     #[error("mode shapes of sagging continuous cables are not computed: use the fem element")]
     SagContinuous,
-    /// Mode shapes of sagging cables on a hidden cable (the junction at the pulley moves)
-    /// are not computed.
-    #[error("mode shapes of sagging cables on a hidden cable (hidden_length, or a pulley's wrapped arc) are not computed")]
-    SagHidden,
     /// The singular value decomposition did not converge in its bound.
     #[error("singular value decomposition did not converge at λ = {0:e} rad²/s²")]
     Svd(f64),

@@ -32,25 +32,76 @@
 //! by the taut shapes' equilibrated SVD with the same separation test
 //! ([`ShapeParams::null_tol`]).
 //!
+//! **Hidden cable** ([`SagChain::set_support`]). Node 0 is the junction at the pulley: it
+//! moves along the anchor tangent d (in (h, up)) and is held there by the hidden cable's
+//! N_h axial elements (k_h, m_h) from the fixed drum. A fourth solution joins the three:
+//! the hidden cable from the drum, t_0 = 0, t_1 = 1, β_h t_{j−1} + 2α_h t_j + β_h t_{j+1} = 0
+//! (α_h = k_h − λm_h/3, β_h = −k_h − λm_h/6 < 0), puts the junction at z_0 = d t_{N_h}; with
+//! z_1 = 0 the same interior equations give z_2 … z_N (rescaled on the way, then with t to
+//! largest entry 1). Every solution of the chain and its hidden cable is u_j = Y_j a + z_j c
+//! (hidden nodes c t_j): the amplitude c is one more unknown, and the junction's own
+//! equation along d one more row,
+//!
+//! ```text
+//!     σ_J (dᵀ(K_0 − λm/3) u_0 + dᵀ(−K_0 − λm/6) u_1 + α_h c t_{N_h} + β_h c t_{N_h−1}) = 0
+//! ```
+//!
+//! (the free cable's first element and the hidden cable's last). The end force and end
+//! value gain F_z c and z_N c. The columns c and rows of the junctions come after every
+//! a_i and end row, so a robot without hidden cables has the same bordered matrix. The
+//! shapes draw node 0 as the junction's motion d c t_{N_h} (world frame) and not the hidden
+//! cable's nodes (as the taut hidden-cable shapes); those enter the normalisation:
+//! (m_h/6) c_a c_b Σ (2t_j² + 2t_j t_{j+1} + 2t_{j+1}²) over the hidden elements.
+//!
 //! **Normalisation.** The nodes u_j = Y_j a (interior) and E_iᵀ G_i φ (end) of each null
 //! vector give the consistent mass's quadratic form exactly (Σ over the elements of
 //! (m/6)(2u_j·v_j + u_j·v_{j+1} + u_{j+1}·v_j + 2u_{j+1}·v_{j+1}), plus φᵀM_eeφ: the dense
-//! M's); a cluster is M-orthonormalised and rotated as the taut shapes are.
+//! M's, with the hidden cables' term above); a cluster is M-orthonormalised and rotated as
+//! the taut shapes are. Two modes given apart by at most `MERGE_REL` (1e-9 relative) whose bordered
+//! system at either λ has no clean null space of its own multiplicity are taken as one
+//! cluster (the count's bisection can split an exact double by its rounding).
+//!
+//! **Near-clusters.** A cluster still not separated (its σ_m/σ_{m+1} above the tolerance:
+//! a near-double 2e-6 … 5e-6 apart on the symmetric paper robot with sag) is grown by its
+//! nearest given neighbours within `NEAR_MAX_REL` (1e-3 relative) until, at each member's
+//! λ, the member's own m smallest singular vectors are separated from all but the
+//! cluster's other M − m (σ_m/σ_{M+1} ≤ the tolerance, M the cluster's total). Those
+//! vectors (each a chain solution at its own λ) are M-orthonormalised together by the
+//! symmetric orthonormalisation (the least change to each; refused when the normalised
+//! Gram matrix has an eigenvalue below 0.5, i.e. two members gave nearly one vector), each
+//! member keeping its λ; shapes already given for a member are replaced. Isolated clusters
+//! never take this path.
 //!
 //! **Accuracy.** The forward solution is exact in exact arithmetic; in floating point its
 //! rounding grows with the solution's own growth along the chain, which is at most linear
 //! below the chains' cut-off (the first modes of a robot lie far below it; above it the
 //! solution grows like sinh(jφ) and is still the dominant, accurately computed one). The
-//! dense eigenvectors are the check (`tests/sag/shapes.rs`). Offline: allocates.
+//! dense eigenvectors are the check (`tests/sag/shapes.rs`, with and without hidden
+//! cables). Offline: allocates.
 
 use super::count::clusters_by_count;
-use super::solve::{null_of, orthonormalise};
+use super::solve::{null_of, null_within, orthonormalise};
 use super::{ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_MULTIPLICITY};
-use crate::cable::sagged::SagChain;
+use crate::cable::sagged::{SagChain, SagSupport};
 use crate::kinematics::attach_map;
 use crate::modal::lambda_to_hz;
 use crate::modal::sagged::SagModalSolver;
-use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x6, Matrix6, Vector3, Vector6};
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x6, Matrix6, SymmetricEigen, Vector3, Vector6};
+
+/// Largest relative distance of two modes given apart that are taken as one cluster when
+/// neither alone is a clean null space of the bordered system (the count's bisection
+/// resolves λ to ~ε·λ_max/λ; modes this close are one eigenvalue to the f64 model's
+/// accuracy).
+const MERGE_REL: f64 = 1e-9;
+
+/// Largest relative distance of a neighbour taken into a near-cluster (module docs): modes
+/// farther apart are separated by the bordered system's singular values at every pose met
+/// (the near-doubles of the symmetric paper robot with sag are ~5e-6 apart).
+const NEAR_MAX_REL: f64 = 1e-3;
+
+/// Smallest eigenvalue of a near-cluster's normalised mass Gram matrix: below it, two
+/// members' shapes are close to one vector (not two modes) and the cluster is refused.
+const NEAR_GRAM_MIN: f64 = 0.5;
 
 /// One cable's interior solutions at one λ, in the cable's frame (h, up, n).
 #[derive(Debug, Clone, Default)]
@@ -62,6 +113,26 @@ struct SagChainShape {
     /// End force per unit amplitude, F (N/m per unit amplitude).
     force: Matrix3<f64>,
     /// Row scale of the end constraint, N/m.
+    scale: f64,
+    /// On a hidden cable: the fourth solution (module docs).
+    hidden: Option<HiddenShape>,
+}
+
+/// The fourth solution of a chain on a hidden cable: the hidden cable's nodes from the drum
+/// t_0 = 0, t_1 = 1 on (then scaled with the rest), the junction at d t_{N_h}, node 1 at 0.
+#[derive(Debug, Clone, Default)]
+struct HiddenShape {
+    /// The free cable's nodes z_j, j = 0 ..= N, cable frame (z_0 = d t_{N_h}, z_1 = 0).
+    z: Vec<Vector3<f64>>,
+    /// The hidden cable's axial nodes t_j, j = 0 ..= N_h (t_0 = 0 at the drum).
+    t: Vec<f64>,
+    /// The hidden cable's element mass, kg.
+    mass_kg: f64,
+    /// End force of z per unit amplitude, N/m.
+    force: Vector3<f64>,
+    /// The junction's equation along d: its coefficients on the amplitudes (a, c), N/m.
+    row: [f64; 4],
+    /// Row scale of the junction's equation, N/m.
     scale: f64,
 }
 
@@ -101,12 +172,83 @@ impl SagChainShape {
         let force =
             (kl - id * (lambda * m / 3.0)) * y[n] - (kl + id * (lambda * m / 6.0)) * y[n - 1];
         let scale = (kl.amax() + 0.5 * lambda * m).max(f64::MIN_POSITIVE);
+        let hidden = chain
+            .support()
+            .map(|sp| fill_hidden(chain, &sp, &y, lambda));
         SagChainShape {
             y,
             mass_kg: m,
             force,
             scale,
+            hidden,
         }
+    }
+}
+
+/// Rescale the hidden cable's recurrence when a value passes this (far from overflow).
+const RESCALE_ABOVE: f64 = 1e150;
+
+/// The fourth solution of `chain` on the hidden cable `sp` at λ, and the junction's
+/// equation (module docs); `y` the chain's three solutions (already scaled).
+fn fill_hidden(chain: &SagChain, sp: &SagSupport, y: &[Matrix3<f64>], lambda: f64) -> HiddenShape {
+    let n = chain.n_el().max(1);
+    let m = chain.element_mass_kg();
+    let id = Matrix3::identity();
+    let seg = sp.hidden;
+    let nh = seg.n_el.max(1);
+    // The hidden cable from the drum: β t_{j−1} + 2α t_j + β t_{j+1} = 0 (β < 0 for λ ≥ 0).
+    let (ah, bh) = (seg.k - lambda * seg.m / 3.0, -seg.k - lambda * seg.m / 6.0);
+    let mut t = vec![0.0; nh + 1];
+    t[1] = 1.0;
+    for j in 1..nh {
+        t[j + 1] = -(bh * t[j - 1] + 2.0 * ah * t[j]) / bh;
+        if t[j + 1].abs() > RESCALE_ABOVE {
+            let s = 1.0 / t[j + 1].abs();
+            t[..=j + 1].iter_mut().for_each(|x| *x *= s);
+        }
+    }
+    let d = Vector3::new(sp.direction[0], sp.direction[1], 0.0);
+    // The free cable: z_0 = d t_{N_h}, z_1 = 0, then the interior equations.
+    let mut z = vec![Vector3::zeros(); n + 1];
+    z[0] = d * t[nh];
+    for j in 1..n {
+        let (kp, kn) = (element_k(chain, j - 1), element_k(chain, j));
+        let rhs = (kp + kn - id * (2.0 * lambda * m / 3.0)) * z[j]
+            - (kp + id * (lambda * m / 6.0)) * z[j - 1];
+        let lhs = kn + id * (lambda * m / 6.0);
+        z[j + 1] = lhs.lu().solve(&rhs).unwrap_or_else(Vector3::zeros);
+        if z[j + 1].amax() > RESCALE_ABOVE {
+            let s = 1.0 / z[j + 1].amax();
+            z[..=j + 1].iter_mut().for_each(|x| *x *= s);
+            t.iter_mut().for_each(|x| *x *= s);
+        }
+    }
+    // To largest entry 1, the hidden cable's nodes and the free cable's together.
+    let mx = z
+        .iter()
+        .map(|x| x.amax())
+        .chain(t.iter().map(|x| x.abs()))
+        .fold(0.0f64, f64::max);
+    if mx > 0.0 {
+        z.iter_mut().for_each(|x| *x /= mx);
+        t.iter_mut().for_each(|x| *x /= mx);
+    }
+    let kl = element_k(chain, n - 1);
+    let force = (kl - id * (lambda * m / 3.0)) * z[n] - (kl + id * (lambda * m / 6.0)) * z[n - 1];
+    // The junction's equation along d: the free cable's first element (nodes 0 and 1) and
+    // the hidden cable's last (nodes N_h − 1 and N_h).
+    let k0 = element_k(chain, 0);
+    let (a0, b0) = (k0 - id * (lambda * m / 3.0), -k0 - id * (lambda * m / 6.0));
+    let on_a = d.transpose() * b0 * y[1];
+    let on_c = d.dot(&(a0 * z[0] + b0 * z[1])) + ah * t[nh] + bh * t[nh - 1];
+    let scale = (k0.amax() + seg.k + 0.5 * lambda * (m + seg.m)).max(f64::MIN_POSITIVE);
+    HiddenShape {
+        z,
+        t,
+        mass_kg: seg.m,
+        force,
+        row: [on_a[0], on_a[1], on_a[2], on_c],
+        scale,
     }
 }
 
@@ -141,9 +283,10 @@ impl SagModalSolver {
     /// participation (see the module docs). `h` is each cable's unit horizontal (world
     /// frame), `up` the unit vertical, `arms_m` the attachment arms of a rigid end-effector
     /// (ignored for a point mass): the frames the pose was loaded with. A cable's nodes are
-    /// at the fractions j/N of its unstretched length ([`ModeShapes::fractions`]).
-    /// Continuous cables: [`ShapeError::SagContinuous`]. Allocates; never on the real-time
-    /// path.
+    /// at the fractions j/N of its unstretched length ([`ModeShapes::fractions`]); on a
+    /// hidden cable node 0 is the junction's motion and the hidden cable's mass is in the
+    /// normalisation (module docs). Continuous cables: [`ShapeError::SagContinuous`].
+    /// Allocates; never on the real-time path.
     pub fn mode_shapes(
         &self,
         h: &[Vector3<f64>],
@@ -156,10 +299,12 @@ impl SagModalSolver {
         if self.is_continuous() {
             return Err(ShapeError::SagContinuous);
         }
-        // The recovery below starts every chain at a fixed anchor (y_0 = 0); a chain on a
-        // hidden cable starts at a moving junction, so its shapes would be wrong.
-        if (0..self.loaded_cables()).any(|i| self.chain(i).support().is_some()) {
-            return Err(ShapeError::SagHidden);
+        // A FEM chain's hidden cable is discrete (the continuous bar goes with the
+        // continuous chain, refused above).
+        if (0..self.loaded_cables())
+            .any(|i| self.chain(i).support().is_some_and(|s| s.hidden.n_el == 0))
+        {
+            return Err(ShapeError::HiddenCable);
         }
         let dim = self.dim();
         let n_cables = self.loaded_cables();
@@ -203,6 +348,16 @@ impl SagModalSolver {
                 .map(|i| self.chain(i).element_mass_kg())
                 .collect(),
         };
+        // The columns of the hidden cables' amplitudes c_i, after every a_i.
+        let mut next = dim + 3 * n_cables;
+        let hcol: Vec<Option<usize>> = (0..n_cables)
+            .map(|i| {
+                self.chain(i).support().map(|_| {
+                    next += 1;
+                    next - 1
+                })
+            })
+            .collect();
         let (m6, k6) = self.ee_matrices();
         for &(lambda, m) in modes {
             if !(lambda.is_finite() && lambda > 0.0) || m == 0 || m > MAX_MULTIPLICITY {
@@ -211,14 +366,61 @@ impl SagModalSolver {
                     multiplicity: m,
                 });
             }
+        }
+        let solve = |lambda: f64, m: u32| {
             let shapes: Vec<SagChainShape> = (0..n_cables)
                 .map(|i| SagChainShape::fill(self.chain(i), lambda))
                 .collect();
-            let a = bordered(&attach, &shapes, &m6, &k6, dim, lambda);
-            let null = null_of(a, m as usize, lambda, params)?;
+            let a = bordered(&attach, &shapes, &hcol, &m6, &k6, dim, lambda);
+            null_of(a, m as usize, lambda, params).map(|null| (shapes, null))
+        };
+        // The index in `out.modes` where each given mode's shapes start.
+        let mut starts = vec![0; modes.len()];
+        let mut next_mode = 0;
+        while next_mode < modes.len() {
+            let first_mode = next_mode;
+            starts[next_mode] = out.modes.len();
+            let (mut lambda, mut m) = modes[next_mode];
+            next_mode += 1;
+            let mut got = solve(lambda, m);
+            // Two modes given apart that are one (the count splits an exact double by its
+            // rounding, ~1e-12 relative on the symmetric paper robot with hidden cables): the
+            // bordered system has their null vectors at either λ; taken as one cluster.
+            while let Err(ShapeError::NotAnEigenvalue { .. }) = got {
+                match modes.get(next_mode) {
+                    Some(&(ln, mn))
+                        if (ln - lambda).abs() <= MERGE_REL * lambda
+                            && m + mn <= MAX_MULTIPLICITY =>
+                    {
+                        lambda = (lambda * m as f64 + ln * mn as f64) / (m + mn) as f64;
+                        m += mn;
+                        starts[next_mode] = out.modes.len();
+                        next_mode += 1;
+                        got = solve(lambda, m);
+                    }
+                    _ => break,
+                }
+            }
+            let (shapes, null) = match got {
+                Err(e @ ShapeError::NotAnEigenvalue { .. }) => {
+                    // Not separated from a neighbour: resolved with it as a near-cluster
+                    // (module docs), the neighbour's shapes given already replaced.
+                    let (lo, hi) = self
+                        .near_cluster(&attach, &hcol, modes, (first_mode, next_mode), params)
+                        .ok_or(e)?;
+                    out.modes.truncate(starts[lo]);
+                    let group = self
+                        .resolve_near(&attach, &hcol, &modes[lo..hi], starts[lo], params)
+                        .ok_or(e)?;
+                    out.modes.extend(group);
+                    next_mode = hi;
+                    continue;
+                }
+                got => got?,
+            };
             let v = &null.vectors;
             let nodes: Vec<Vec<Vec<Vector3<f64>>>> = (0..v.ncols())
-                .map(|c| local_nodes(&attach, &shapes, &v.column(c).into_owned(), dim))
+                .map(|c| local_nodes(&attach, &shapes, &hcol, &v.column(c).into_owned(), dim))
                 .collect();
             let cols = v.ncols();
             let mut gram = DMatrix::<f64>::zeros(cols, cols);
@@ -229,7 +431,10 @@ impl SagModalSolver {
                     let cab: f64 = shapes
                         .iter()
                         .enumerate()
-                        .map(|(i, sh)| element_mass_form(sh.mass_kg, &nodes[a][i], &nodes[b][i]))
+                        .map(|(i, sh)| {
+                            element_mass_form(sh.mass_kg, &nodes[a][i], &nodes[b][i])
+                                + hidden_mass_form(sh, amp(v, a, hcol[i]), amp(v, b, hcol[i]))
+                        })
                         .sum();
                     gram[(a, b)] = own + cab;
                     gram[(b, a)] = own + cab;
@@ -243,7 +448,7 @@ impl SagModalSolver {
                 for r in 0..dim {
                     phi[r] = col[r];
                 }
-                let cables = local_nodes(&attach, &shapes, &col, dim)
+                let cables = local_nodes(&attach, &shapes, &hcol, &col, dim)
                     .into_iter()
                     .zip(&attach)
                     .map(|(u, at)| u.into_iter().map(|x| at.frame * x).collect())
@@ -264,16 +469,209 @@ impl SagModalSolver {
     }
 }
 
-/// The bordered matrix at λ (module docs).
+/// One null vector of a near-cluster's member (at the member's λ): its end-effector part,
+/// each cable's nodes (cable frame) and hidden-cable amplitudes.
+struct NearVector {
+    member: usize,
+    phi: Vector6<f64>,
+    nodes: Vec<Vec<Vector3<f64>>>,
+    hidden: Vec<f64>,
+}
+
+impl SagModalSolver {
+    /// The given modes `lo..hi` (a cluster whose bordered system is not separated) grown by
+    /// their nearest neighbours within [`NEAR_MAX_REL`] until [`Self::resolve_near`]
+    /// resolves them: the range, or `None` when no neighbour is left to take.
+    fn near_cluster(
+        &self,
+        attach: &[Attach],
+        hcol: &[Option<usize>],
+        modes: &[(f64, u32)],
+        (mut lo, mut hi): (usize, usize),
+        params: &ShapeParams,
+    ) -> Option<(usize, usize)> {
+        loop {
+            let below = (lo > 0)
+                .then(|| (modes[lo].0 - modes[lo - 1].0) / modes[lo].0)
+                .filter(|&g| g <= NEAR_MAX_REL);
+            let above = modes
+                .get(hi)
+                .map(|&(l, _)| (l - modes[hi - 1].0) / modes[hi - 1].0)
+                .filter(|&g| g <= NEAR_MAX_REL);
+            match (below, above) {
+                (Some(b), Some(a)) if b <= a => lo -= 1,
+                (Some(_), None) => lo -= 1,
+                (_, Some(_)) => hi += 1,
+                (None, None) => return None,
+            }
+            let total: u32 = modes[lo..hi].iter().map(|x| x.1).sum();
+            if total > MAX_MULTIPLICITY {
+                return None;
+            }
+            if self
+                .resolve_near(attach, hcol, &modes[lo..hi], 0, params)
+                .is_some()
+            {
+                return Some((lo, hi));
+            }
+        }
+    }
+
+    /// The shapes of a near-cluster `group` (module docs), the first at index `start` of
+    /// the output: at each member's λ the smallest singular vectors of its own
+    /// multiplicity, taken only where the cluster's whole multiplicity M is separated
+    /// (σ_M/σ_{M+1} ≤ [`ShapeParams::null_tol`]); then M-orthonormalised together
+    /// (symmetric orthonormalisation, the least change to each), each member keeping its
+    /// λ. `None` when a member's test fails or two members' vectors are close to one
+    /// (normalised Gram eigenvalue below [`NEAR_GRAM_MIN`]).
+    fn resolve_near(
+        &self,
+        attach: &[Attach],
+        hcol: &[Option<usize>],
+        group: &[(f64, u32)],
+        start: usize,
+        params: &ShapeParams,
+    ) -> Option<Vec<ModeShape>> {
+        let dim = self.dim();
+        let n_cables = self.loaded_cables();
+        let (m6, k6) = self.ee_matrices();
+        // Members: the given modes, those within MERGE_REL as one.
+        let mut members: Vec<(f64, u32)> = Vec::new();
+        for &(l, m) in group {
+            match members.last_mut() {
+                Some(last) if (l - last.0).abs() <= MERGE_REL * last.0 => {
+                    last.0 = (last.0 * last.1 as f64 + l * m as f64) / (last.1 + m) as f64;
+                    last.1 += m;
+                }
+                _ => members.push((l, m)),
+            }
+        }
+        let total: u32 = members.iter().map(|x| x.1).sum();
+        let mut all_shapes = Vec::new();
+        let mut raw = Vec::new();
+        let mut separation = 0.0f64;
+        for (p, &(lambda, m)) in members.iter().enumerate() {
+            let shapes: Vec<SagChainShape> = (0..n_cables)
+                .map(|i| SagChainShape::fill(self.chain(i), lambda))
+                .collect();
+            let a = bordered(attach, &shapes, hcol, &m6, &k6, dim, lambda);
+            let null = null_within(a, m as usize, total as usize, lambda, params).ok()?;
+            separation = separation.max(null.residual);
+            for c in 0..m as usize {
+                let col = null.vectors.column(c).into_owned();
+                let mut phi = Vector6::zeros();
+                for r in 0..dim {
+                    phi[r] = col[r];
+                }
+                raw.push(NearVector {
+                    member: p,
+                    phi,
+                    nodes: local_nodes(attach, &shapes, hcol, &col, dim),
+                    hidden: hcol.iter().map(|&hc| hc.map_or(0.0, |r| col[r])).collect(),
+                });
+            }
+            all_shapes.push(shapes);
+        }
+        let k = raw.len();
+        let mut gram = DMatrix::<f64>::zeros(k, k);
+        let mut ee = DMatrix::<f64>::zeros(k, k);
+        for a in 0..k {
+            for b in 0..=a {
+                let (ra, rb) = (&raw[a], &raw[b]);
+                let own = (ra.phi.transpose() * m6 * rb.phi)[(0, 0)];
+                let cab: f64 = (0..n_cables)
+                    .map(|i| {
+                        let (sa, sb) = (&all_shapes[ra.member][i], &all_shapes[rb.member][i]);
+                        element_mass_form(sa.mass_kg, &ra.nodes[i], &rb.nodes[i])
+                            + hidden_cross_form(sa, sb, ra.hidden[i], rb.hidden[i])
+                    })
+                    .sum();
+                gram[(a, b)] = own + cab;
+                gram[(b, a)] = own + cab;
+                ee[(a, b)] = own;
+                ee[(b, a)] = own;
+            }
+        }
+        // Symmetric orthonormalisation of the unit-M-norm vectors: C = D G̃^{-1/2}.
+        let d = DVector::from_iterator(k, (0..k).map(|a| 1.0 / gram[(a, a)].sqrt()));
+        let dm = DMatrix::from_diagonal(&d);
+        let g = SymmetricEigen::new(&dm * &gram * &dm);
+        if !(g.eigenvalues.min() >= NEAR_GRAM_MIN) {
+            return None;
+        }
+        let mut q = g.eigenvectors.clone();
+        for (c, &l) in g.eigenvalues.iter().enumerate() {
+            q.column_mut(c).scale_mut(1.0 / l.sqrt());
+        }
+        let coef = &dm * &q * g.eigenvectors.transpose();
+        let mut out = Vec::with_capacity(k);
+        let mut col0 = 0;
+        for &(lambda, m) in &members {
+            let cp = coef.columns(col0, m as usize).into_owned();
+            col0 += m as usize;
+            let gp = cp.transpose() * &gram * &cp;
+            let ep = cp.transpose() * &ee * &cp;
+            let first = start + out.len();
+            for (c, part) in orthonormalise(&cp, gp, &ep) {
+                let mut phi = Vector6::zeros();
+                let mut cables: Vec<Vec<Vector3<f64>>> = attach
+                    .iter()
+                    .zip(&raw[0].nodes)
+                    .map(|(_, u)| vec![Vector3::zeros(); u.len()])
+                    .collect();
+                for (r, w) in raw.iter().zip(c.iter()) {
+                    phi += r.phi * *w;
+                    for ((dst, src), at) in cables.iter_mut().zip(&r.nodes).zip(attach) {
+                        for (x, y) in dst.iter_mut().zip(src) {
+                            *x += at.frame * y * *w;
+                        }
+                    }
+                }
+                out.push(ModeShape {
+                    lambda,
+                    frequency_hz: lambda_to_hz(lambda),
+                    ee: phi,
+                    cables,
+                    ee_participation: part,
+                    cluster_start: first,
+                    multiplicity: m,
+                    null_residual: separation,
+                });
+            }
+        }
+        Some(out)
+    }
+}
+
+/// The hidden cables' consistent mass form of two vectors at two λ (amplitudes ca, cb of
+/// the fourth solutions of `sa` and `sb`); 0 without a hidden cable.
+fn hidden_cross_form(sa: &SagChainShape, sb: &SagChainShape, ca: f64, cb: f64) -> f64 {
+    let (Some(ha), Some(hb)) = (&sa.hidden, &sb.hidden) else {
+        return 0.0;
+    };
+    let (ta, tb) = (&ha.t, &hb.t);
+    let mut s = 0.0;
+    for j in 0..ta.len().saturating_sub(1) {
+        s += 2.0 * ta[j] * tb[j]
+            + ta[j] * tb[j + 1]
+            + ta[j + 1] * tb[j]
+            + 2.0 * ta[j + 1] * tb[j + 1];
+    }
+    ha.mass_kg / 6.0 * s * ca * cb
+}
+
+/// The bordered matrix at λ (module docs); `hcol` the column of each hidden cable's
+/// amplitude (its junction's row the same index).
 fn bordered(
     attach: &[Attach],
     shapes: &[SagChainShape],
+    hcol: &[Option<usize>],
     m6: &Matrix6<f64>,
     k6: &Matrix6<f64>,
     dim: usize,
     lambda: f64,
 ) -> DMatrix<f64> {
-    let n = dim + 3 * shapes.len();
+    let n = dim + 3 * shapes.len() + hcol.iter().flatten().count();
     let mut a = DMatrix::<f64>::zeros(n, n);
     for r in 0..dim {
         for c in 0..dim {
@@ -297,6 +695,19 @@ fn bordered(
                 a[(col + r, col + q)] = -sh.scale * yn[(r, q)];
             }
         }
+        if let (Some(hs), Some(hc)) = (&sh.hidden, hcol[i]) {
+            // The fourth solution's end force and end value, and the junction's row.
+            let gez = at.map.transpose() * at.frame * hs.force;
+            let zn = hs.z[hs.z.len() - 1];
+            for r in 0..dim {
+                a[(r, hc)] = gez[r];
+            }
+            for r in 0..3 {
+                a[(col + r, hc)] = -sh.scale * zn[r];
+                a[(hc, col + r)] = hs.scale * hs.row[r];
+            }
+            a[(hc, hc)] = hs.scale * hs.row[3];
+        }
     }
     a
 }
@@ -312,11 +723,17 @@ fn quad(m6: &Matrix6<f64>, v: &DMatrix<f64>, a: usize, b: usize, dim: usize) -> 
     s
 }
 
-/// Each cable's nodes (cable frame) of a bordered vector: Y_j a inside, E_iᵀ G_i φ at the
-/// end, 0 at the anchor.
+/// The hidden cable's amplitude c (row `hc` of column `col` of `v`; 0 without one).
+fn amp(v: &DMatrix<f64>, col: usize, hc: Option<usize>) -> f64 {
+    hc.map_or(0.0, |r| v[(r, col)])
+}
+
+/// Each cable's nodes (cable frame) of a bordered vector: Y_j a (+ z_j c on a hidden
+/// cable) from the anchor or junction on, E_iᵀ G_i φ at the end.
 fn local_nodes(
     attach: &[Attach],
     shapes: &[SagChainShape],
+    hcol: &[Option<usize>],
     col: &DVector<f64>,
     dim: usize,
 ) -> Vec<Vec<Vector3<f64>>> {
@@ -329,9 +746,13 @@ fn local_nodes(
         .zip(attach)
         .enumerate()
         .map(|(i, (sh, at))| {
-            let amp = Vector3::new(col[dim + 3 * i], col[dim + 3 * i + 1], col[dim + 3 * i + 2]);
+            let a = Vector3::new(col[dim + 3 * i], col[dim + 3 * i + 1], col[dim + 3 * i + 2]);
             let last = sh.y.len() - 1;
-            let mut u: Vec<Vector3<f64>> = sh.y.iter().map(|yj| yj * amp).collect();
+            let mut u: Vec<Vector3<f64>> = sh.y.iter().map(|yj| yj * a).collect();
+            if let (Some(hs), Some(hc)) = (&sh.hidden, hcol[i]) {
+                let c = col[hc];
+                u.iter_mut().zip(&hs.z).for_each(|(x, z)| *x += z * c);
+            }
             u[last] = at.frame.transpose() * (at.map * phi);
             u
         })
@@ -348,4 +769,18 @@ fn element_mass_form(m: f64, u: &[Vector3<f64>], v: &[Vector3<f64>]) -> f64 {
             + 2.0 * u[j + 1].dot(&v[j + 1]);
     }
     m / 6.0 * s
+}
+
+/// The hidden cable's consistent mass form of two amplitudes ca, cb of its fourth solution
+/// (nodes ca t_j and cb t_j, drum to junction); 0 without a hidden cable.
+fn hidden_mass_form(sh: &SagChainShape, ca: f64, cb: f64) -> f64 {
+    let Some(hs) = &sh.hidden else {
+        return 0.0;
+    };
+    let t = &hs.t;
+    let mut s = 0.0;
+    for j in 0..t.len().saturating_sub(1) {
+        s += 2.0 * t[j] * t[j] + 2.0 * t[j] * t[j + 1] + 2.0 * t[j + 1] * t[j + 1];
+    }
+    hs.mass_kg / 6.0 * s * ca * cb
 }

@@ -333,8 +333,22 @@ pub(super) fn orthonormalise(
 /// equilibrated, then the right singular vectors of its m smallest singular values,
 /// refused unless σ_m/σ_{m+1} ≤ [`ShapeParams::null_tol`].
 pub(super) fn null_of(
+    a: DMatrix<f64>,
+    m: usize,
+    lambda: f64,
+    params: &ShapeParams,
+) -> Result<NullSpace, ShapeError> {
+    null_within(a, m, m, lambda, params)
+}
+
+/// As [`null_of`], but the m smallest singular vectors need only be separated from those
+/// beyond the `within` smallest (`within ≥ m`): σ_m/σ_{within+1} ≤
+/// [`ShapeParams::null_tol`] (a near-cluster's member: its vectors may mix with the
+/// cluster's other `within − m` directions, resolved by the caller).
+pub(super) fn null_within(
     mut a: DMatrix<f64>,
     m: usize,
+    within: usize,
     lambda: f64,
     params: &ShapeParams,
 ) -> Result<NullSpace, ShapeError> {
@@ -345,7 +359,7 @@ pub(super) fn null_of(
         sigma_m,
         sigma_next,
     };
-    if m > n {
+    if m > n || within < m {
         return Err(bad(f64::NAN, f64::NAN));
     }
     let col_scale = equilibrate(&mut a);
@@ -358,8 +372,8 @@ pub(super) fn null_of(
     let mut idx: Vec<usize> = (0..n).collect();
     idx.sort_by(|&i, &j| s[i].total_cmp(&s[j]));
     let sigma_m = s[idx[m - 1]] / smax;
-    let sigma_next = if m < n {
-        s[idx[m]] / smax
+    let sigma_next = if within < n {
+        s[idx[within]] / smax
     } else {
         f64::INFINITY
     };
