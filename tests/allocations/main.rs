@@ -122,6 +122,32 @@ fn ten_thousand_cycles_allocate_nothing() {
     }
 }
 
+/// 2,000 cycles of `s`'s circle, with a NaN pose and an unreachable one at cycles 17 and 19
+/// of each thousand, allocate nothing, and at least 1,990 are answers (ok).
+fn circle_with_bad_inputs_allocates_nothing(s: &Scene, what: &str) {
+    let c = circle(s);
+    let mut est = Estimator::new(s).unwrap();
+    est.update(&circle_pose(s, &c, 0), Tmin::Scene);
+    let before = thread_allocations();
+    let mut ok = 0;
+    for k in 1..=2_000 {
+        let e = match k % 1000 {
+            17 => est.update(&Pose::at(Vector3::new(f64::NAN, 0.0, 1.0)), Tmin::Scene),
+            19 => est.update(&Pose::at(Vector3::new(9.0, 9.0, 9.0)), Tmin::Scene),
+            _ => est.update(&circle_pose(s, &c, k), Tmin::Scene),
+        };
+        ok += e.is_ok() as usize;
+    }
+    let after = thread_allocations();
+    assert_eq!(
+        after - before,
+        0,
+        "{what}: {} heap allocations in 2,000 cycles",
+        after - before
+    );
+    assert!(ok >= 1_990, "{what}: {ok}");
+}
+
 /// Sagging cables on hidden cables, fem and continuous (the sagged chains start at the
 /// junction, evaluated one by one): 2,000 cycles along the circle, bad inputs mixed in, allocate nothing; the
 /// estimates are answers (ok) on the circle.
@@ -134,27 +160,7 @@ fn hidden_cables_with_sag_allocate_nothing() {
     ] {
         let mut s = hidden(Scene::default_scene()).with_model(kind, n);
         s.set_sag(true).unwrap();
-        let c = circle(&s);
-        let mut est = Estimator::new(&s).unwrap();
-        est.update(&circle_pose(&s, &c, 0), Tmin::Scene);
-        let before = thread_allocations();
-        let mut ok = 0;
-        for k in 1..=2_000 {
-            let e = match k % 1000 {
-                17 => est.update(&Pose::at(Vector3::new(f64::NAN, 0.0, 1.0)), Tmin::Scene),
-                19 => est.update(&Pose::at(Vector3::new(9.0, 9.0, 9.0)), Tmin::Scene),
-                _ => est.update(&circle_pose(&s, &c, k), Tmin::Scene),
-            };
-            ok += e.is_ok() as usize;
-        }
-        let after = thread_allocations();
-        assert_eq!(
-            after - before,
-            0,
-            "sag, hidden, {kind:?} × {n}: {} heap allocations in 2,000 cycles",
-            after - before
-        );
-        assert!(ok >= 1_990, "{ok}");
+        circle_with_bad_inputs_allocates_nothing(&s, &format!("sag, hidden, {kind:?} × {n}"));
     }
 }
 
@@ -170,27 +176,7 @@ fn pulleys_with_sag_allocate_nothing() {
     ] {
         let mut s = scene_file(name).with_model(kind, n);
         s.set_sag(true).unwrap();
-        let c = circle(&s);
-        let mut est = Estimator::new(&s).unwrap();
-        est.update(&circle_pose(&s, &c, 0), Tmin::Scene);
-        let before = thread_allocations();
-        let mut ok = 0;
-        for k in 1..=2_000 {
-            let e = match k % 1000 {
-                17 => est.update(&Pose::at(Vector3::new(f64::NAN, 0.0, 1.0)), Tmin::Scene),
-                19 => est.update(&Pose::at(Vector3::new(9.0, 9.0, 9.0)), Tmin::Scene),
-                _ => est.update(&circle_pose(&s, &c, k), Tmin::Scene),
-            };
-            ok += e.is_ok() as usize;
-        }
-        let after = thread_allocations();
-        assert_eq!(
-            after - before,
-            0,
-            "{name} sag {kind:?} × {n}: {} heap allocations in 2,000 cycles",
-            after - before
-        );
-        assert!(ok >= 1_990, "{name} {kind:?}: {ok}");
+        circle_with_bad_inputs_allocates_nothing(&s, &format!("{name} sag {kind:?} × {n}"));
     }
 }
 

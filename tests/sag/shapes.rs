@@ -315,12 +315,7 @@ fn sagged_shapes_on_hidden_cables_equal_dense_eigenvectors() {
 /// vector; the junction's direction d = h (H/T_a) + up (V_a/T_a) from the catenaries.
 #[test]
 fn estimator_shapes_with_sag_and_hidden_length_equal_dense() {
-    let text = std::fs::read_to_string("scenes/spatial_paper.toml").unwrap();
-    let text = text.replacen(
-        "[cable]",
-        &format!("[cable]\nhidden_length = {HIDDEN_M:?}"),
-        1,
-    );
+    let text = with_hidden(&std::fs::read_to_string("scenes/spatial_paper.toml").unwrap());
     for n_el in [10usize, 40] {
         for offset in [[0.0, 0.0], [0.3, 0.2]] {
             let mut scene = Scene::from_toml_str(&text, "spatial_hidden.toml").unwrap();
@@ -460,11 +455,7 @@ fn estimator_basis_with_sag_is_structured_and_equals_dense() {
 #[test]
 fn paper_robot_sag_shapes_over_the_default_frf_band_equal_dense() {
     let text = std::fs::read_to_string("scenes/spatial_paper.toml").unwrap();
-    let hidden_text = text.replacen(
-        "[cable]",
-        &format!("[cable]\nhidden_length = {HIDDEN_M:?}"),
-        1,
-    );
+    let hidden_text = with_hidden(&text);
     for (name, text, k) in [
         ("plain", &text, 16usize),
         ("plain", &text, 32),
@@ -511,4 +502,13 @@ fn paper_robot_sag_shapes_over_the_default_frf_band_equal_dense() {
         let w = compare(&km, &mm, &shapes, &m_ee, &hidden, &what);
         eprintln!("{what}: {w:?}");
     }
+}
+
+/// A scene file's text with `hidden_length = HIDDEN_M` under its `[cable]` table.
+fn with_hidden(text: &str) -> String {
+    text.replacen(
+        "[cable]",
+        &format!("[cable]\nhidden_length = {HIDDEN_M:?}"),
+        1,
+    )
 }

@@ -131,21 +131,34 @@ fn simulate_with_sag_and_hidden_cables_uses_the_structured_shapes() {
 #[test]
 fn frf_with_modal_damping_sag_and_hidden_cables_is_the_librarys_modal_sum() {
     let (file, text) = hidden_scene("hidden-sag-frf");
+    let mut s = Scene::from_toml_str(&text, "paper_hidden.toml").unwrap();
+    s.set_sag(true).unwrap();
+    let args = ["--sag", "true", "--to-hz", "4", "--points", "5"];
+    frf_is_the_librarys_modal_sum(&file, &args, &s, 5, &[16]);
+}
+
+/// Run `frf FILE --modal-ratio 0.02 --json` with `extra` arguments; it answers with
+/// `points` frequencies whose receptance's real part is the library's modal sum of the
+/// estimator's structured basis for `scene` at its pose, built through the sizes `sizes`
+/// (the last is the command's; each from the state the one before leaves), to 1e-12
+/// relative of the largest diagonal entry (same arithmetic, exact JSON digits).
+fn frf_is_the_librarys_modal_sum(
+    file: &Path,
+    extra: &[&str],
+    scene: &Scene,
+    points: usize,
+    sizes: &[usize],
+) {
     let zeta = 0.02;
     let out = Command::new(env!("CARGO_BIN_EXE_cablevib"))
         .args([
             "frf",
             file.to_str().unwrap(),
-            "--sag",
-            "true",
             "--modal-ratio",
             "0.02",
-            "--to-hz",
-            "4",
-            "--points",
-            "5",
             "--json",
         ])
+        .args(extra)
         .output()
         .unwrap();
     assert!(
@@ -155,7 +168,7 @@ fn frf_with_modal_damping_sag_and_hidden_cables_is_the_librarys_modal_sum() {
     );
     let printed = String::from_utf8(out.stdout).unwrap();
     let freqs = json_numbers(&printed, "frequencies_hz");
-    assert_eq!(freqs.len(), 5);
+    assert_eq!(freqs.len(), points);
     // N × 3 × 3 nested arrays: the numbers up to the closing "]]]".
     let key = "\"receptance_re\":";
     let start = printed.find(key).unwrap() + key.len();
@@ -165,19 +178,21 @@ fn frf_with_modal_damping_sag_and_hidden_cables_is_the_librarys_modal_sum() {
         .filter(|x| !x.is_empty())
         .map(|x| x.parse().unwrap())
         .collect();
-    assert_eq!(re.len(), 5 * 9);
-    let mut s = Scene::from_toml_str(&text, "paper_hidden.toml").unwrap();
-    s.set_sag(true).unwrap();
-    let mut est = Estimator::new(&s).unwrap();
+    assert_eq!(re.len(), points * 9);
+    let mut est = Estimator::new(scene).unwrap();
     let e = *est.update(
         &Pose {
-            position_m: s.ee_position_m,
-            orientation_wxyz: s.ee_orientation_wxyz,
+            position_m: scene.ee_position_m,
+            orientation_wxyz: scene.ee_orientation_wxyz,
         },
         Tmin::Scene,
     );
     assert!(e.is_ok(), "{:?}", e.error);
-    let b = est.ee_modal_basis(16).unwrap();
+    let (last, before) = sizes.split_last().unwrap();
+    for &k in before {
+        est.ee_modal_basis(k).unwrap();
+    }
+    let b = est.ee_modal_basis(*last).unwrap();
     assert!(b.structured);
     let mb =
         cablevib::modal::ModalBasis::from_modes(b.lambda, b.phi_ee, &b.flexibility, b.dim).unwrap();
@@ -236,65 +251,7 @@ fn frf_with_modal_damping_and_sag_over_the_default_band_is_the_librarys_modal_su
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("paper_sag.toml");
     std::fs::write(&file, &text).unwrap();
-    let zeta = 0.02;
-    let out = Command::new(env!("CARGO_BIN_EXE_cablevib"))
-        .args([
-            "frf",
-            file.to_str().unwrap(),
-            "--modal-ratio",
-            "0.02",
-            "--json",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let printed = String::from_utf8(out.stdout).unwrap();
-    let freqs = json_numbers(&printed, "frequencies_hz");
-    assert_eq!(freqs.len(), 1000);
-    let key = "\"receptance_re\":";
-    let start = printed.find(key).unwrap() + key.len();
-    let end = start + printed[start..].find("]]]").unwrap();
-    let re: Vec<f64> = printed[start..end]
-        .split(['[', ']', ','])
-        .filter(|x| !x.is_empty())
-        .map(|x| x.parse().unwrap())
-        .collect();
-    assert_eq!(re.len(), 1000 * 9);
     let s = Scene::from_toml_str(&text, "paper_sag.toml").unwrap();
-    let mut est = Estimator::new(&s).unwrap();
-    let e = *est.update(
-        &Pose {
-            position_m: s.ee_position_m,
-            orientation_wxyz: s.ee_orientation_wxyz,
-        },
-        Tmin::Scene,
-    );
-    assert!(e.is_ok(), "{:?}", e.error);
-    // The sizes the command doubles through (each from the estimator's state the one
-    // before leaves).
-    for k in [16, 32, 64, 128] {
-        est.ee_modal_basis(k).unwrap();
-    }
-    let b = est.ee_modal_basis(256).unwrap();
-    assert!(b.structured);
-    let mb =
-        cablevib::modal::ModalBasis::from_modes(b.lambda, b.phi_ee, &b.flexibility, b.dim).unwrap();
-    for (q, &f) in freqs.iter().enumerate() {
-        let h = mb.receptance(zeta, 2.0 * std::f64::consts::PI * f);
-        let scale = (0..3).fold(0.0f64, |a, r| a.max(h[(r, r)].re.abs()));
-        for r in 0..3 {
-            for c in 0..3 {
-                let got = re[9 * q + 3 * r + c];
-                assert!(
-                    (got - h[(r, c)].re).abs() <= 1e-12 * scale,
-                    "{f} Hz H[{r}{c}]: {got} vs {}",
-                    h[(r, c)].re
-                );
-            }
-        }
-    }
+    // The sizes the command doubles through.
+    frf_is_the_librarys_modal_sum(&file, &[], &s, 1000, &[16, 32, 64, 128, 256]);
 }
