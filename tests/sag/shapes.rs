@@ -330,19 +330,8 @@ fn estimator_shapes_with_sag_and_hidden_length_equal_dense() {
             let basis = est.ee_modal_basis(12).unwrap();
             assert!(basis.structured, "N {n_el}: the basis is structured");
             let shapes = basis.shapes.clone().unwrap();
-            let up = -scene.gravity_m_s2 / scene.gravity_m_s2.norm();
             let cats = est.sag_catenaries().unwrap().to_vec();
-            let hidden: Vec<Hidden> = scene
-                .cables
-                .iter()
-                .zip(&cats)
-                .map(|(c, cat)| {
-                    let d = p - c.anchor_m;
-                    let h = (d - up * d.dot(&up)).normalize();
-                    let ta = cat.h_n.hypot(cat.v_anchor_n);
-                    Some((n_el, h * (cat.h_n / ta) + up * (cat.v_anchor_n / ta)))
-                })
-                .collect();
+            let hidden = junction_directions(&scene, &cats, &p, n_el);
             let (k, m) = est.dense_matrices().unwrap();
             let m_ee = est.sag_modal().unwrap().ee_matrices().0;
             let what = format!("spatial paper hidden N {n_el} at {offset:?}");
@@ -475,21 +464,10 @@ fn paper_robot_sag_shapes_over_the_default_frf_band_equal_dense() {
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(basis.structured, "{name}: the basis is structured");
         let shapes = basis.shapes.clone().unwrap();
-        let up = -scene.gravity_m_s2 / scene.gravity_m_s2.norm();
         let cats = est.sag_catenaries().unwrap().to_vec();
         let n_el = scene.model.elements_per_cable;
         let hidden: Vec<Hidden> = if name == "hidden" {
-            scene
-                .cables
-                .iter()
-                .zip(&cats)
-                .map(|(c, cat)| {
-                    let d = p - c.anchor_m;
-                    let h = (d - up * d.dot(&up)).normalize();
-                    let ta = cat.h_n.hypot(cat.v_anchor_n);
-                    Some((n_el, h * (cat.h_n / ta) + up * (cat.v_anchor_n / ta)))
-                })
-                .collect()
+            junction_directions(&scene, &cats, &p, n_el)
         } else {
             Vec::new()
         };
@@ -511,4 +489,27 @@ fn with_hidden(text: &str) -> String {
         &format!("[cable]\nhidden_length = {HIDDEN_M:?}"),
         1,
     )
+}
+
+/// Each cable's hidden cable of `n_el` elements, its junction moving along the catenary's
+/// anchor tangent d = h (H/T_a) + up (V_a/T_a), with h the unit horizontal from the anchor
+/// towards the attachment point `p` (m).
+fn junction_directions(
+    scene: &Scene,
+    cats: &[cablevib::elastic_catenary::Catenary],
+    p: &Vector3<f64>,
+    n_el: usize,
+) -> Vec<Hidden> {
+    let up = -scene.gravity_m_s2 / scene.gravity_m_s2.norm();
+    scene
+        .cables
+        .iter()
+        .zip(cats)
+        .map(|(c, cat)| {
+            let d = p - c.anchor_m;
+            let h = (d - up * d.dot(&up)).normalize();
+            let ta = cat.h_n.hypot(cat.v_anchor_n);
+            Some((n_el, h * (cat.h_n / ta) + up * (cat.v_anchor_n / ta)))
+        })
+        .collect()
 }
