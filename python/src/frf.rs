@@ -171,7 +171,7 @@ fn sagged(s: &Scene, damping: &Damping, freqs: &[f64]) -> Result<(Vec<Receptance
         let why = e.error.map(|x| x.to_string()).unwrap_or_default();
         return Err(format!("sagged pose: {why}"));
     }
-    let sag = est.sag_modal().ok_or("no sagged pose loaded")?;
+    let mut sag = est.sag_modal().cloned().ok_or("no sagged pose loaded")?;
     let h = sag
         .receptance_over(damping, freqs)
         .map_err(|e| e.to_string())?;

@@ -225,7 +225,7 @@ impl Estimator {
     /// With `[effects] sag`: the sagged structured solver as loaded at the pose of the last
     /// successful cycle (its complex D for the frequency response); None for the chord
     /// models or when the last cycle was not ok.
-    pub fn sag_modal(&self) -> Option<&crate::modal::sagged::SagModalSolver> {
+    pub fn sag_modal(&self) -> Option<&crate::modal::SagModalSolver> {
         if self.estimate.status != Status::Ok {
             return None;
         }

@@ -508,8 +508,9 @@ fn sagged(a: &FrfArgs, s: &Scene, damping: &Damping, freqs: &[f64]) -> Result<Co
     };
     let mut natural_hz = marked(a, &modes[..nm]);
     natural_hz.retain(|&f| f <= a.to_hz);
-    let sag = est
+    let mut sag = est
         .sag_modal()
+        .cloned()
         .ok_or_else(|| CliError::Analysis("no sagged pose loaded".into()))?;
     let dim = sag.dim();
     let t0 = Instant::now();

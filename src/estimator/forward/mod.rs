@@ -305,7 +305,7 @@ impl Forward {
     pub(super) fn sag_shapes_input(
         &mut self,
     ) -> Option<(
-        &mut crate::modal::sagged::SagModalSolver,
+        &mut crate::modal::SagModalSolver,
         Vec<nalgebra::Vector3<f64>>,
         nalgebra::Vector3<f64>,
         &Geometry,
@@ -320,7 +320,7 @@ impl Forward {
     }
 
     /// The sagged structured solver as loaded at the last pose (None for taut cables).
-    pub(super) fn sag_modal(&self) -> Option<&crate::modal::sagged::SagModalSolver> {
+    pub(super) fn sag_modal(&self) -> Option<&crate::modal::SagModalSolver> {
         match &self.model {
             Model::Taut(_) => None,
             Model::Sagged(s) => Some(&s.modal),

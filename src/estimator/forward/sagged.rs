@@ -11,9 +11,9 @@ use crate::elastic_catenary::Catenary;
 use crate::estimator::EstimatorError;
 use crate::kinematics::{Geometry, Pose};
 use crate::modal::sagged::{
-    assemble_sagged, SagCableFrame, SagDenseCable, SagEndEffector, SagLoadError, SagModalSolver,
+    assemble_sagged, SagCableFrame, SagDenseCable, SagEndEffector, SagLoadError,
 };
-use crate::modal::{ModalError, Root};
+use crate::modal::{ModalError, Root, SagModalSolver};
 use crate::scene::{ElementKind, Scene};
 use crate::tension::{SagCable, SagTensionSolver};
 use nalgebra::{DMatrix, Matrix3, Matrix6, Vector3};
@@ -109,6 +109,8 @@ impl SagModel {
         res?;
         self.load(scene, pose, g)?;
         self.loaded_at = self.modal.evaluations();
+        self.modal
+            .begin_cycle(self.modal.params().cycle_evaluations);
         Ok(self.modal.first_root(warm)?)
     }
 

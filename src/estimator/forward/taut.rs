@@ -89,7 +89,9 @@ impl TautModel {
     /// mass (the translational block, zeros elsewhere).
     pub(super) fn static_stiffness(&self, scene: &Scene) -> Matrix6<f64> {
         if scene.rigid {
-            self.modal.static_stiffness6_closed()
+            self.modal
+                .static_stiffness()
+                .unwrap_or(Matrix6::repeat(f64::NAN))
         } else {
             let mut k = Matrix3::zeros();
             for cm in &self.models {

@@ -71,12 +71,12 @@
 //! the hidden cable's, and the junction's equation one more row.
 //!
 //! **Layout.** `chain_shape`: one chain's w, f, g and mass moments; `supported_shape`: a
-//! supported chain's. `sagged`: the same
-//! bordered system on sagging cables' FEM chains
-//! ([`SagModalSolver::mode_shapes`](crate::modal::sagged::SagModalSolver::mode_shapes)). `solve`:
-//! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes). `count`:
-//! [`ModalSolver::eigen_clusters`](crate::modal::ModalSolver::eigen_clusters), the lowest
-//! eigenvalues and their multiplicities by count bisection.
+//! supported chain's; `sag_chain_shape`: a sagged FEM chain's solutions. `sagged`: the same
+//! bordered system on sagging cables' FEM chains (behind
+//! [`SagModalSolver::mode_shapes`](crate::modal::SagModalSolver::mode_shapes)). `solve`:
+//! the taut chains' (behind [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes)).
+//! `count`: the lowest eigenvalues and their multiplicities by count bisection
+//! ([`Solver::eigen_clusters`](crate::modal::Solver::eigen_clusters)).
 
 mod chain_shape;
 mod count;
@@ -84,6 +84,10 @@ mod sag_chain_shape;
 mod sagged;
 mod solve;
 mod supported_shape;
+
+pub(in crate::modal) use count::clusters_by_count;
+pub(in crate::modal) use sagged::SagShapes;
+pub(in crate::modal) use solve::TautShapes;
 
 use super::ModalError;
 use nalgebra::{Vector3, Vector6};

@@ -1,4 +1,5 @@
-//! Mode shapes of sagging cables ([`SagModalSolver::mode_shapes`]): the bordered system of
+//! Mode shapes of sagging cables ([`SagShapes`], behind
+//! [`SagModalSolver::mode_shapes`](crate::modal::SagModalSolver::mode_shapes)): the bordered system of
 //! the module docs with the sagged FEM chains ([`crate::cable::sagged`]) in place of the
 //! uniform scalar ones.
 //!
@@ -81,13 +82,13 @@
 //! without hidden cables; cli/tests/cli/hidden_sag.rs, the frequency response of the large
 //! robots above their cut-off against the dense modal sum). Offline: allocates.
 
-use super::count::clusters_by_count;
 use super::sag_chain_shape::SagChainShape;
 use super::solve::{null_of, null_within, orthonormalise};
 use super::{ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_MULTIPLICITY};
+use crate::cable::sagged::SagChain;
 use crate::kinematics::attach_map;
 use crate::modal::lambda_to_hz;
-use crate::modal::sagged::SagModalSolver;
+use crate::modal::sagged::SagChains;
 use nalgebra::{
     DMatrix, DVector, Matrix3, Matrix3x6, Matrix6, SymmetricEigen, Vector3, Vector4, Vector6,
 };
@@ -113,29 +114,32 @@ struct Attach {
     map: Matrix3x6<f64>,
 }
 
-impl SagModalSolver {
-    /// The lowest clusters of the loaded pose, (λ in rad²/s², multiplicity), ascending,
-    /// until at least `k` modes are covered (a cluster cut by `k` completed): bisection on
-    /// the Wittrick–Williams count ([`Self::count_below`]) to a relative width of 4ε (at most
-    /// every mode of the model: `k` is capped at [`Self::total_modes`]), modes
-    /// within [`ShapeParams::cluster_rel`] of each other grouped (as
-    /// [`crate::modal::ModalSolver::eigen_clusters`]). The count is exact at and next to
-    /// the chains' poles, where modes with the end-effector still sit; the input of
-    /// [`Self::mode_shapes`]. About 55 count evaluations per cluster.
-    pub fn lowest_clusters(
-        &mut self,
-        k: usize,
-        params: &ShapeParams,
-    ) -> Result<Vec<(f64, u32)>, ShapeError> {
-        if self.loaded_cables() == 0 {
-            return Err(crate::modal::ModalError::NotLoaded.into());
-        }
-        let k = k.max(1).min(self.total_modes());
-        clusters_by_count(|x| self.count_below(x), k, params)
+/// The mode shapes of the loaded sagged problem.
+pub(in crate::modal) struct SagShapes<'a>(pub(in crate::modal) &'a SagChains);
+
+impl SagShapes<'_> {
+    fn loaded_cables(&self) -> usize {
+        self.0.loaded_cables()
+    }
+
+    fn chain(&self, i: usize) -> &SagChain {
+        &self.0.chains[i]
+    }
+
+    fn dim(&self) -> usize {
+        self.0.dim
+    }
+
+    fn ee_matrices(&self) -> (Matrix6<f64>, Matrix6<f64>) {
+        (self.0.m6, self.0.k6)
+    }
+
+    fn is_continuous(&self) -> bool {
+        self.0.continuous
     }
 
     /// The mass-normalised mode shapes of the loaded pose (FEM chains) at the eigenvalues
-    /// `modes` = (λ in rad²/s², multiplicity), e.g. from [`Self::lowest_clusters`]: for
+    /// `modes` = (λ in rad²/s², multiplicity), e.g. from the solver's `eigen_clusters`: for
     /// each, `multiplicity` shapes, M-orthonormal, ordered by descending end-effector
     /// participation (see the module docs). `h` is each cable's unit horizontal (world
     /// frame), `up` the unit vertical, `arms_m` the attachment arms of a rigid end-effector
@@ -144,7 +148,7 @@ impl SagModalSolver {
     /// hidden cable node 0 is the junction's motion and the hidden cable's mass is in the
     /// normalisation (module docs). Continuous cables: [`ShapeError::SagContinuous`].
     /// Allocates; never on the real-time path.
-    pub fn mode_shapes(
+    pub(in crate::modal) fn mode_shapes(
         &self,
         h: &[Vector3<f64>],
         up: &Vector3<f64>,
@@ -337,7 +341,7 @@ struct NearVector {
     hidden: Vec<f64>,
 }
 
-impl SagModalSolver {
+impl SagShapes<'_> {
     /// The given modes `lo..hi` (a cluster whose bordered system is not separated) grown by
     /// their nearest neighbours within [`NEAR_MAX_REL`] until [`Self::resolve_near`]
     /// resolves them: the range, or `None` when no neighbour is left to take.

@@ -1,12 +1,16 @@
-//! [`ModalSolver::mode_shapes`]: the bordered system at each eigenvalue, its null space, the
-//! M-orthonormalisation within a cluster and the node displacements (see the module docs).
+//! The taut chains' mode shapes ([`TautShapes`], behind
+//! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes)): the bordered
+//! system at each eigenvalue, its null space, the M-orthonormalisation within a cluster and
+//! the node displacements (see the module docs).
 
 use super::chain_shape::ChainShape;
+use super::count::split_cluster;
 use super::{ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_MULTIPLICITY};
 use crate::cable::{CableModel, ChainKind};
 use crate::eig3::eig3_jacobi;
 use crate::kinematics::attach_map;
-use crate::modal::{lambda_to_hz, ModalSolver};
+use crate::modal::engine::Condensed;
+use crate::modal::{lambda_to_hz, TautChains};
 use nalgebra::{DMatrix, DVector, Matrix3x6, SymmetricEigen, Vector3, Vector6};
 
 /// A projector eigenvalue above this is in its range (they are 0 or 1 to rounding).
@@ -119,16 +123,16 @@ pub(super) struct NullSpace {
     pub(super) residual: f64,
 }
 
-impl ModalSolver {
+/// The mode shapes of the loaded taut problem (its count splits a cluster given that is
+/// not one eigenvalue).
+pub(in crate::modal) struct TautShapes<'a>(pub(in crate::modal) &'a mut TautChains);
+
+impl TautShapes<'_> {
     /// The mass-normalised mode shapes at the eigenvalues `modes` = (λ in rad²/s²,
-    /// multiplicity), e.g. from [`Self::eigen_clusters`] or the dense reference: for each,
-    /// `multiplicity` shapes, M-orthonormal, ordered by descending end-effector participation.
-    ///
-    /// The solver must be loaded ([`Self::load`] or [`Self::load_rigid`]) with the same
-    /// `models`; `arms_m` are the attachment arms (world frame, m) of a rigid end-effector
-    /// (ignored for a point mass). Continuous cables are sampled at
-    /// [`ShapeParams::continuous_samples`] points. Allocates; never on the real-time path.
-    pub fn mode_shapes(
+    /// multiplicity): for each, `multiplicity` shapes, M-orthonormal, ordered by descending
+    /// end-effector participation; see
+    /// [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes).
+    pub(in crate::modal) fn mode_shapes(
         &mut self,
         models: &[CableModel],
         arms_m: &[Vector3<f64>],
@@ -136,7 +140,7 @@ impl ModalSolver {
         params: &ShapeParams,
     ) -> Result<ModeShapes, ShapeError> {
         params.check()?;
-        let dim = self.problem.dim;
+        let dim = self.0.p.dim;
         if dim == 6 && arms_m.len() < models.len() {
             return Err(ShapeError::MissingArms {
                 given: arms_m.len(),
@@ -153,9 +157,9 @@ impl ModalSolver {
         }
         let arms = (dim == 6).then_some(arms_m);
         let layout = Layout::new(models, arms, params.continuous_samples);
-        if layout.kinds.len() != self.problem.n_chains {
+        if layout.kinds.len() != self.0.p.n_chains {
             return Err(ShapeError::NotLoaded {
-                loaded: self.problem.n_chains,
+                loaded: self.0.p.n_chains,
                 given: layout.kinds.len(),
             });
         }
@@ -177,7 +181,9 @@ impl ModalSolver {
             if let Err(e @ ShapeError::NotAnEigenvalue { .. }) = first {
                 // Not one clean cluster (e.g. modes 1e-10 apart given as one): resolve it by
                 // the count and take each part's shapes.
-                for part in self.split_cluster(lambda, m, params).ok_or(e)? {
+                let mut count = |x: f64| self.0.count(x).0;
+                let parts = split_cluster(&mut count, lambda, m, params).ok_or(e)?;
+                for part in parts {
                     self.cluster_shapes(&layout, &mut shapes, part, params, &mut out)?;
                 }
             } else {
@@ -226,7 +232,7 @@ impl ModalSolver {
         m: u32,
         params: &ShapeParams,
     ) -> Result<NullSpace, ShapeError> {
-        let p = &self.problem;
+        let p = &self.0.p;
         let d = p.dim;
         let n = d + layout.copies.len();
         let m = m as usize;
@@ -256,8 +262,8 @@ impl ModalSolver {
         v: &DMatrix<f64>,
     ) -> Vec<(DVector<f64>, f64)> {
         let m = v.ncols();
-        let d = self.problem.dim;
-        let m6 = &self.problem.m6;
+        let d = self.0.p.dim;
+        let m6 = &self.0.p.m6;
         let ends: Vec<Vec<f64>> = (0..m)
             .map(|a| {
                 layout
