@@ -22,7 +22,7 @@
 mod sagged;
 mod taut;
 
-use super::EstimatorError;
+use super::{EstimatorError, EstimatorParams};
 use crate::cable::sagged::SagContinuousParams;
 use crate::cable::{CableError, CableModel};
 use crate::elastic_catenary::Catenary;
@@ -46,6 +46,32 @@ pub(super) struct ForwardParams {
     pub(super) sag_tension: SagTensionParams,
     /// The mesh rule of continuous sagged chains.
     pub(super) sag_continuous: SagContinuousParams,
+}
+
+impl ForwardParams {
+    /// The cycle's forward model.
+    pub(super) fn cycle(p: &EstimatorParams) -> ForwardParams {
+        ForwardParams {
+            tension: p.tension,
+            modal: p.modal,
+            sag_tension: p.sag.tension,
+            sag_continuous: p.sag.continuous,
+        }
+    }
+
+    /// The inverse T_min query's forward model: not a cycle, so no per-cycle budget and no
+    /// certificate; the query's sagged mesh.
+    pub(super) fn t_min_query(p: &EstimatorParams) -> ForwardParams {
+        ForwardParams {
+            modal: ModalParams {
+                certify: false,
+                cycle_evaluations: u32::MAX,
+                ..p.modal
+            },
+            sag_continuous: p.sag.t_min_query_continuous,
+            ..ForwardParams::cycle(p)
+        }
+    }
 }
 
 /// What a cycle's tension solve reports to the estimate.
