@@ -29,15 +29,24 @@
 #![warn(missing_docs)]
 
 pub mod addr;
+pub mod completeness;
 pub mod encode;
+pub mod recording;
 pub mod replay;
 pub mod run;
 pub mod scene3d;
 pub mod signal;
+pub mod viewers;
+mod writer;
 
 pub use addr::{FoxgloveAddr, DEFAULT_FOXGLOVE};
-pub use replay::{Pace, ReplayConfig, ReplayReport};
-pub use run::{run, topic, Attached, MonitorConfig, MonitorReport, CHUNK_BYTES, QUEUE_CAPACITY};
+pub use completeness::ChannelCompleteness;
+pub use replay::{Pace, ReplayConfig, ReplayReport, DEFAULT_MAX_GAP_S};
+pub use run::{
+    run, topic, Attached, MonitorConfig, MonitorReport, SceneSource, CHUNK_BYTES,
+    COMPLETENESS_METADATA, QUEUE_CAPACITY, RECORD_BUFFER,
+};
+pub use viewers::{ViewerReport, DEFAULT_MAX_VIEWERS, LOG_FILTER};
 
 use cablevib_service::ServiceError;
 

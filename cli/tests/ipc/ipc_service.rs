@@ -1059,7 +1059,7 @@ fn a_peer_with_another_layout_gets_a_clear_error() {
         "{log}"
     );
     assert!(
-        log.contains("`cablevib::PoseSample::v2` (80 bytes, align 8)"),
+        log.contains("`cablevib::PoseSample::v3` (80 bytes, align 8)"),
         "{log}"
     );
     assert!(log.contains("rebuild the other peer"), "{log}");
@@ -1075,7 +1075,7 @@ fn a_peer_with_another_layout_gets_a_clear_error() {
     let text = err.to_string();
     assert!(text.contains("incompatible peer"), "{text}");
     assert!(
-        text.contains("carries payload `cablevib::PoseSample::v2`"),
+        text.contains("carries payload `cablevib::PoseSample::v3`"),
         "{text}"
     );
     assert!(node
