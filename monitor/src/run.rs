@@ -349,6 +349,7 @@ pub fn run(
     let admission = Admission::new(cfg.max_viewers);
     let server = match cfg.foxglove {
         Some(a) => {
+            viewers::raise_open_file_limit();
             let info: HashMap<String, String> = meta.clone().into_iter().collect();
             let started = viewer_ctx
                 .websocket_server()
@@ -510,7 +511,9 @@ pub fn run(
             .map_err(|e| MonitorError::Record(format!("closing the MCAP file: {e}")))?;
     }
     if let Some(s) = server {
-        s.stop().wait_blocking();
+        // Not a graceful wait: a viewer that does not read would hold it forever (its close
+        // frame never leaves). Dropping the handle ends every viewer's connection at once.
+        drop(s.stop());
     }
     loop_result?;
     Ok(report)

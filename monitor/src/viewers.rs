@@ -39,6 +39,22 @@ pub const DEFAULT_MAX_VIEWERS: usize = 16;
 /// one error per queued message to a viewer whose socket closed.
 pub const LOG_FILTER: &str = "warn,foxglove::websocket::connected_client::poller=off";
 
+/// Raises this process's soft limit of open files to its hard limit (each viewer holds a
+/// socket; the Foxglove server stops accepting at the limit). Best effort, once.
+pub(crate) fn raise_open_file_limit() {
+    // SAFETY: getrlimit/setrlimit with a valid, initialised struct.
+    unsafe {
+        let mut r = libc::rlimit {
+            rlim_cur: 0,
+            rlim_max: 0,
+        };
+        if libc::getrlimit(libc::RLIMIT_NOFILE, &mut r) == 0 && r.rlim_cur < r.rlim_max {
+            r.rlim_cur = r.rlim_max;
+            libc::setrlimit(libc::RLIMIT_NOFILE, &r);
+        }
+    }
+}
+
 /// What the viewers cost and got.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct ViewerReport {

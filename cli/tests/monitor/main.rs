@@ -4,6 +4,10 @@
 //! protocol client in Python (a venv under target/ with pinned versions).
 //! Area binary of the command-line crate (see tests/README.md at the repository root).
 
+mod completeness;
+mod replay_bounds;
+mod viewers;
+
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -199,6 +203,7 @@ fn expected_json(run: &Run) -> String {
         .iter()
         .map(|e| {
             serde_json::json!({
+                "sequence": e.sequence,
                 "pose_sequence": e.pose_sequence,
                 "pose_timestamp_ns": e.pose_timestamp_ns,
                 "receive_timestamp_ns": e.receive_timestamp_ns,
@@ -353,6 +358,18 @@ fn record_watch_read_back_and_replay() {
         String::from_utf8_lossy(&out.stderr)
     );
     println!("{}", String::from_utf8_lossy(&out.stdout).trim());
+    // The record says it is complete, and is: every estimate the service published.
+    let c = completeness::completeness_of(&py, &file);
+    let m = &c["metadata"]["cablevib.completeness"];
+    assert_eq!(
+        c["counted"]["estimate"]["messages"].as_u64(),
+        Some(service_report.cycles)
+    );
+    assert_eq!(m["complete"].as_str(), Some("true"), "{c}");
+    assert!(
+        lines.iter().any(|l| l.contains("record complete")),
+        "{lines:?}"
+    );
 
     // Replay: the same scene gives the same estimates, bit for bit.
     let recorded = recorded_estimates(&file);
