@@ -17,6 +17,7 @@ use cablevib_service::ports::{
     POSE_SETTINGS, T_MIN_SETTINGS,
 };
 use foxglove::{Context, McapCompression, McapWriteOptions};
+use iceoryx2::identifiers::UniquePublisherId;
 
 use crate::addr::FoxgloveAddr;
 use crate::completeness::{ChannelCompleteness, SequenceCounter};
@@ -431,32 +432,30 @@ pub fn run(
     let loop_result: Result<(), MonitorError> = (|| {
         while !stop.load(Ordering::Acquire) && cfg.duration.is_none_or(|d| start.elapsed() < d) {
             // Set-points and poses first: an estimate comes after the pose it answers.
-            let mut got = 0usize;
-            for _ in 0..DRAIN_LIMIT {
-                let Ok(Some(s)) = t_mins.receive() else { break };
-                let c = &mut counts.t_min;
-                c.received(s.header().publisher_id(), s.sequence, monotonic_now_ns());
-                push(&tx, Record::Tmin(*s), c);
-                got += 1;
+            let mut got = drain(&tx, &mut counts.t_min, || {
+                let s = t_mins.receive().ok().flatten()?;
+                Some((Record::Tmin(*s), s.header().publisher_id(), s.sequence))
+            });
+            got += drain(&tx, &mut counts.pose, || {
+                let s = poses.receive().ok().flatten()?;
+                Some((Record::Pose(*s), s.header().publisher_id(), s.sequence))
+            });
+            let mut failed = None;
+            let estimated = drain(&tx, &mut counts.estimate, || {
+                match estimates.try_receive_from() {
+                    Ok(Some((e, from))) => Some((Record::Estimate(e), from, e.sequence)),
+                    Ok(None) => None,
+                    Err(e) => {
+                        failed = Some(e);
+                        None
+                    }
+                }
+            });
+            if let Some(e) = failed {
+                return Err(e.into());
             }
-            for _ in 0..DRAIN_LIMIT {
-                let Ok(Some(s)) = poses.receive() else { break };
-                let c = &mut counts.pose;
-                c.received(s.header().publisher_id(), s.sequence, monotonic_now_ns());
-                push(&tx, Record::Pose(*s), c);
-                got += 1;
-            }
-            let mut estimated = false;
-            for _ in 0..DRAIN_LIMIT {
-                let Some((e, publisher)) = estimates.try_receive_from()? else {
-                    break;
-                };
-                let c = &mut counts.estimate;
-                c.received(publisher, e.sequence, monotonic_now_ns());
-                push(&tx, Record::Estimate(e), c);
-                estimated = true;
-                got += 1;
-            }
+            got += estimated;
+            let estimated = estimated > 0;
             if let (Some(client), Some(required)) = (&margin, cfg.required_hz) {
                 if let Some((p, sent)) = &pending {
                     match p.receive() {
@@ -540,6 +539,25 @@ impl Counters {
             t_min: SequenceCounter::new(RECORD_BUFFER),
         }
     }
+}
+
+/// Moves up to [`DRAIN_LIMIT`] messages from `next` (the message, its sender, its sequence) to
+/// the writer, counting them on `c`; returns how many.
+fn drain(
+    tx: &SyncSender<Record>,
+    c: &mut SequenceCounter,
+    mut next: impl FnMut() -> Option<(Record, UniquePublisherId, u64)>,
+) -> usize {
+    let mut n = 0;
+    while n < DRAIN_LIMIT {
+        let Some((r, from, sequence)) = next() else {
+            break;
+        };
+        c.received(from, sequence, monotonic_now_ns());
+        push(tx, r, c);
+        n += 1;
+    }
+    n
 }
 
 /// Queues `r` for the writer without waiting; a full queue drops it, counted on `c`.

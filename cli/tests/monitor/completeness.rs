@@ -23,7 +23,7 @@ pub(crate) fn completeness_of(py: &Path, file: &Path) -> serde_json::Value {
     serde_json::from_slice(&out.stdout).unwrap()
 }
 
-fn meta_u64(v: &serde_json::Value, key: &str) -> u64 {
+pub(crate) fn meta_u64(v: &serde_json::Value, key: &str) -> u64 {
     v["metadata"]["cablevib.completeness"][key]
         .as_str()
         .unwrap_or_else(|| panic!("no {key} in {v}"))
@@ -51,10 +51,7 @@ fn a_stalled_monitor_counts_what_it_lost_exactly() {
         "--record",
         file.to_str().unwrap(),
     ]);
-    let controller = {
-        let (instance, scene) = (instance.clone(), scene.clone());
-        std::thread::spawn(move || control(&instance, &scene, 7.0, 1000.0, None))
-    };
+    let controller = control_in_background(&instance, &scene, 7.0, 1000.0);
     std::thread::sleep(Duration::from_millis(1500));
     signal(&monitor, libc::SIGSTOP);
     std::thread::sleep(Duration::from_millis(3500));

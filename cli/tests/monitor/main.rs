@@ -191,6 +191,23 @@ fn control(
     run
 }
 
+/// [`control`] in a thread of its own.
+fn control_in_background(
+    instance: &str,
+    scene: &Scene,
+    seconds: f64,
+    rate_hz: f64,
+) -> std::thread::JoinHandle<Run> {
+    let (instance, scene) = (instance.to_owned(), scene.clone());
+    std::thread::spawn(move || control(&instance, &scene, seconds, rate_hz, None))
+}
+
+/// The child's stderr, read to its end in a thread.
+fn stderr_of(child: &mut Child) -> std::thread::JoinHandle<String> {
+    let mut e = child.stderr.take().unwrap();
+    std::thread::spawn(move || std::io::read_to_string(&mut e).unwrap())
+}
+
 fn hex(v: f64) -> String {
     format!("{:016x}", v.to_bits())
 }

@@ -72,7 +72,9 @@ fn write_recording(path: &Path, n: u64, ts: impl Fn(u64) -> u64) {
 }
 
 /// Runs `cablevib replay ARGS`; returns (exit code, stdout, stderr, peak resident set of the
-/// process in bytes). Fails the test past `limit`.
+/// process in bytes). Fails the test past `limit`. The child is reaped by `wait4` (which gives
+/// its resource usage), not by `Child::wait`.
+#[allow(clippy::zombie_processes)]
 fn replay_process(args: &[&str], limit: Duration) -> (i32, String, String, u64) {
     let child = Command::new(BIN)
         .arg("replay")

@@ -8,7 +8,7 @@
 use std::io::{Read, Write};
 use std::net::TcpStream;
 
-use super::completeness::completeness_of;
+use super::completeness::{completeness_of, meta_u64};
 use super::*;
 
 /// Reads one WebSocket frame from the server (unmasked): (opcode, payload).
@@ -165,16 +165,10 @@ fn a_thousand_idle_viewers_cost_bounded_memory_and_nothing_of_the_record() {
         "--record",
         file.to_str().unwrap(),
     ]);
-    let stderr = {
-        let mut e = monitor.stderr.take().unwrap();
-        std::thread::spawn(move || std::io::read_to_string(&mut e).unwrap())
-    };
+    let stderr = stderr_of(&mut monitor);
     let addr = ws_addr(&attached);
     let rss_before = peak_rss(monitor.id());
-    let controller = {
-        let (instance, scene) = (instance.clone(), scene.clone());
-        std::thread::spawn(move || control(&instance, &scene, 8.0, 1000.0, None))
-    };
+    let controller = control_in_background(&instance, &scene, 8.0, 1000.0);
     let viewers: Vec<TcpStream> = (0..1000)
         .map(|i| idle_viewer(&addr).unwrap_or_else(|e| panic!("viewer {i}: {e}")))
         .collect();
@@ -204,23 +198,13 @@ fn a_thousand_idle_viewers_cost_bounded_memory_and_nothing_of_the_record() {
         "{err}"
     );
     let c = completeness_of(&py, &file);
-    let m = &c["metadata"]["cablevib.completeness"];
     let recorded = c["counted"]["estimate"]["messages"].as_u64().unwrap();
-    let lost: u64 = m["estimate.lost_sequence_gap"]
-        .as_str()
-        .unwrap()
-        .parse()
-        .unwrap();
+    let lost = meta_u64(&c, "estimate.lost_sequence_gap");
     assert_eq!(recorded + lost, service_report.cycles);
-    assert_eq!(m["estimate.dropped_queue"].as_str(), Some("0"));
-    assert_eq!(m["pose.dropped_queue"].as_str(), Some("0"));
+    assert_eq!(meta_u64(&c, "estimate.dropped_queue"), 0);
+    assert_eq!(meta_u64(&c, "pose.dropped_queue"), 0);
     assert_eq!(
-        c["counted"]["pose"]["messages"].as_u64().unwrap()
-            + m["pose.lost_sequence_gap"]
-                .as_str()
-                .unwrap()
-                .parse::<u64>()
-                .unwrap(),
+        c["counted"]["pose"]["messages"].as_u64().unwrap() + meta_u64(&c, "pose.lost_sequence_gap"),
         run.poses.len() as u64
     );
 }
@@ -247,15 +231,9 @@ fn the_services_scene_is_drawn_and_a_vanished_viewer_is_one_line() {
         "--record",
         file.to_str().unwrap(),
     ]);
-    let stderr = {
-        let mut e = monitor.stderr.take().unwrap();
-        std::thread::spawn(move || std::io::read_to_string(&mut e).unwrap())
-    };
+    let stderr = stderr_of(&mut monitor);
     let addr = ws_addr(&attached);
-    let controller = {
-        let (instance, scene) = (instance.clone(), scene.clone());
-        std::thread::spawn(move || control(&instance, &scene, 6.0, 1000.0, None))
-    };
+    let controller = control_in_background(&instance, &scene, 6.0, 1000.0);
     let viewers: Vec<TcpStream> = (0..3).map(|_| idle_viewer(&addr).unwrap()).collect();
     // Unread data piles up in the sockets and the server's queues; then the viewers vanish
     // (a close with unread data is a reset: every queued send fails).
