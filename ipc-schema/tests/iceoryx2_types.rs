@@ -200,7 +200,7 @@ struct PoseWithExtraField {
 /// Same layout as the real pose under the next schema version's name.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::PoseSample::v3")]
+#[type_name("cablevib::PoseSample::v4")]
 struct PoseNextVersion {
     sequence: u64,
     timestamp_ns: u64,
