@@ -14,7 +14,6 @@ use super::StudyError;
 use crate::estimator::{Estimator, Tmin};
 use crate::kinematics::Pose;
 use crate::modal::Mode;
-use crate::scene::Scene;
 
 /// Candidates move the end-effector at least this much (participation, 0 ..= 1).
 pub const MIN_PARTICIPATION: f64 = 0.01;
@@ -62,10 +61,9 @@ impl PairStatus {
 }
 
 /// The model's modes at `pose` up to [`MODEL_TOP_FACTOR`] × `top_hz` (first of each
-/// cluster), with `est` built for the scene.
+/// cluster), with `est` built for the robot's scene.
 pub fn model_modes(
     est: &mut Estimator,
-    scene: &Scene,
     pose: &Pose,
     top_hz: f64,
 ) -> Result<Vec<ModelMode>, StudyError> {

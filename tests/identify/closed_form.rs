@@ -1,9 +1,9 @@
 //! Multi-DOF systems with closed-form modes, 60 s at 1 kHz, 3 channels, sensor noise at
 //! 20 dB SNR: the identified frequencies and damping ratios against the known ones.
 
-use super::sim::{check_modes, simulate, Modal, Output};
 use cablevib::identify::ssi::mac;
 use cablevib::identify::{identify, IdentifyParams, WindowStatus};
+use cablevib_testkit::modal_record::{check_modes, simulate, Modal, Output};
 use std::f64::consts::PI;
 
 /// A fixed–fixed chain of 5 equal masses m and springs k: ω_j = 2√(k/m) sin(jπ/12),

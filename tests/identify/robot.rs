@@ -5,13 +5,13 @@
 //! measured with 20 dB sensor noise. The reference: the dense eigen-solve of the pose's
 //! assembled (K, M) and the modal damping ratio given to the simulation.
 
-use super::sim::{check_modes, gauss};
 use cablevib::estimator::{Estimator, PoseModel, Tmin};
 use cablevib::identify::{identify, IdentifyParams, WindowStatus};
 use cablevib::kinematics::Pose;
 use cablevib::modal::dense_modes_ee;
 use cablevib::modal::response::ModalResponse;
 use cablevib::scene::{Damping, Scene};
+use cablevib_testkit::modal_record::{check_modes, gauss};
 use cablevib_testkit::Rng;
 use nalgebra::{Vector3, Vector6};
 

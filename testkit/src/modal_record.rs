@@ -1,9 +1,9 @@
-//! The tests' simulator of a linear system given by its modes: exact discrete-time
-//! integration of each modal oscillator under white-noise forces held over each step, and
-//! sensor noise at a given signal-to-noise ratio. Written here, independently of the
-//! identifier.
+//! Records of systems with known modes for the identification tests: exact discrete-time
+//! integration of each modal oscillator under white-noise forces held over each step, sensor
+//! noise at a given signal-to-noise ratio, and the check of identified modes against the
+//! known ones. Written independently of the identifier.
 
-use cablevib_testkit::Rng;
+use crate::Rng;
 
 /// A standard normal sample (Box–Muller).
 pub fn gauss(r: &mut Rng) -> f64 {
@@ -15,6 +15,7 @@ pub fn gauss(r: &mut Rng) -> f64 {
 /// A system by its modes: frequencies (Hz), damping ratios and mass-normalised shapes
 /// (`shapes[j][dof]`), of `dofs` degrees of freedom.
 pub struct Modal {
+    /// Hz.
     pub frequencies_hz: Vec<f64>,
     pub zetas: Vec<f64>,
     pub shapes: Vec<Vec<f64>>,
