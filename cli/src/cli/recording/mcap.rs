@@ -97,7 +97,12 @@ pub fn read(
     let mut pose_topic: Option<String> = None;
     let mut picks: Vec<usize> = Vec::new();
     let mut names: Vec<String> = Vec::new();
-    let mut fields: Vec<(String, f64)> = Vec::new();
+    // The field names of each ROS 2 channel (from its first message), of the last JSON
+    // message, and the values of the message at hand.
+    let mut named: HashMap<u16, Vec<String>> = HashMap::new();
+    let mut json_names: Vec<String> = Vec::new();
+    let mut vals: Vec<f64> = Vec::new();
+    let mut flat: Vec<(String, f64)> = Vec::new();
     let mut values: Vec<f64> = Vec::new();
     let mut origin_ns: Option<i128> = None;
     let mut read_messages = 0u64;
@@ -194,10 +199,19 @@ pub fn read(
         if *role == Role::Other {
             continue;
         }
-        match dec {
-            Decoder::Ros(l) => l
-                .decode(&m.data, &mut fields)
-                .map_err(|e| bad(format!("topic {}, message {}: {e}", ch.topic, m.sequence)))?,
+        let fnames: &Vec<String> = match dec {
+            Decoder::Ros(l) => {
+                let e = |e: String| bad(format!("topic {}, message {}: {e}", ch.topic, m.sequence));
+                l.decode_values(&m.data, &mut vals, None).map_err(e)?;
+                // Named once per channel; again when a sequence changed the field count.
+                if named.get(&ch.id).is_none_or(|v| v.len() != vals.len()) {
+                    let mut ns = Vec::new();
+                    l.decode_values(&m.data, &mut vals, Some(&mut ns))
+                        .map_err(e)?;
+                    named.insert(ch.id, ns);
+                }
+                &named[&ch.id]
+            }
             Decoder::Json => {
                 let v: serde_json::Value = serde_json::from_slice(&m.data).map_err(|e| {
                     bad(format!(
@@ -205,11 +219,16 @@ pub fn read(
                         ch.topic
                     ))
                 })?;
-                fields.clear();
-                flatten(&v, "", &mut fields);
+                flat.clear();
+                flatten(&v, "", &mut flat);
+                json_names.clear();
+                json_names.extend(flat.iter().map(|x| x.0.clone()));
+                vals.clear();
+                vals.extend(flat.iter().map(|x| x.1));
+                &json_names
             }
-        }
-        let get = |n: &str| fields.iter().find(|(k, _)| k == n).map(|x| x.1);
+        };
+        let get = |n: &str| fnames.iter().position(|k| k == n).map(|i| vals[i]);
         let stamp_ns: i128 = match (
             get("header.stamp.sec"),
             get("header.stamp.nanosec"),
@@ -227,9 +246,9 @@ pub fn read(
                 let wanted = if opts.channels.is_empty() {
                     let d = default_channels(&schema);
                     if d.is_empty() {
-                        fields
+                        fnames
                             .iter()
-                            .map(|f| f.0.clone())
+                            .cloned()
                             .filter(|n| {
                                 !n.starts_with("header.") && n != "timestamp_ns" && n != "sequence"
                             })
@@ -243,13 +262,13 @@ pub fn read(
                 picks = wanted
                     .iter()
                     .map(|w| {
-                        fields.iter().position(|(k, _)| k == w).ok_or_else(|| {
+                        fnames.iter().position(|k| k == w).ok_or_else(|| {
                             bad(format!(
                                 "topic {}: no field `{w}` (fields: {})",
                                 ch.topic,
-                                fields
+                                fnames
                                     .iter()
-                                    .map(|f| f.0.as_str())
+                                    .map(|f| f.as_str())
                                     .collect::<Vec<_>>()
                                     .join(", ")
                             ))
@@ -280,8 +299,8 @@ pub fn read(
             }
             vib_messages += 1;
             for (v, (&p, n)) in values.iter_mut().zip(picks.iter().zip(&names)) {
-                *v = match fields.get(p) {
-                    Some((k, x)) if k == n => *x,
+                *v = match fnames.get(p) {
+                    Some(k) if k == n => vals[p],
                     _ => get(n).ok_or_else(|| {
                         bad(format!(
                             "topic {}, message {}: no field `{n}`",

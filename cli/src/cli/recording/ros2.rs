@@ -186,7 +186,26 @@ impl Layout {
 
     /// Decode one CDR message: `out` gets (name, value) of every numeric field, in order.
     pub fn decode(&self, data: &[u8], out: &mut Vec<(String, f64)>) -> Result<(), String> {
+        let mut values = Vec::new();
+        let mut names = Vec::new();
+        self.decode_values(data, &mut values, Some(&mut names))?;
         out.clear();
+        out.extend(names.into_iter().zip(values));
+        Ok(())
+    }
+
+    /// Decode one CDR message's numeric values in order into `values` (and their dotted
+    /// names into `names` when given: naming every field costs an allocation each).
+    pub fn decode_values(
+        &self,
+        data: &[u8],
+        values: &mut Vec<f64>,
+        mut names: Option<&mut Vec<String>>,
+    ) -> Result<(), String> {
+        values.clear();
+        if let Some(n) = names.as_deref_mut() {
+            n.clear();
+        }
         if data.len() < 4 {
             return Err("a message shorter than its 4-byte CDR header".into());
         }
@@ -200,7 +219,7 @@ impl Layout {
             pos: 0,
             le,
         };
-        self.walk(&self.root, "", &mut r, out, 0)
+        self.walk(&self.root, "", &mut r, values, &mut names, 0)
     }
 
     fn walk(
@@ -208,15 +227,17 @@ impl Layout {
         t: &str,
         prefix: &str,
         r: &mut Cursor<'_>,
-        out: &mut Vec<(String, f64)>,
+        out: &mut Vec<f64>,
+        names: &mut Option<&mut Vec<String>>,
         depth: usize,
     ) -> Result<(), String> {
         let fields = &self.types[t];
+        let named = names.is_some();
         for f in fields {
-            let name = if prefix.is_empty() {
-                f.name.clone()
-            } else {
-                format!("{prefix}.{}", f.name)
+            let name = match (named, prefix.is_empty()) {
+                (false, _) => String::new(),
+                (true, true) => f.name.clone(),
+                (true, false) => format!("{prefix}.{}", f.name),
             };
             let n = match f.count {
                 Count::One => None,
@@ -228,9 +249,10 @@ impl Layout {
                 return Err(format!("{name}: {items} elements, over {MAX_FIELDS}"));
             }
             for i in 0..items {
-                let nm = match n {
-                    Some(_) => format!("{name}[{i}]"),
-                    None => name.clone(),
+                let nm = match (named, n) {
+                    (false, _) => String::new(),
+                    (true, Some(_)) => format!("{name}[{i}]"),
+                    (true, None) => name.clone(),
                 };
                 match &f.base {
                     Base::Prim(p, size) => {
@@ -238,13 +260,16 @@ impl Layout {
                         if out.len() >= MAX_FIELDS {
                             return Err(format!("more than {MAX_FIELDS} fields"));
                         }
-                        out.push((nm, v));
+                        out.push(v);
+                        if let Some(ns) = names.as_deref_mut() {
+                            ns.push(nm);
+                        }
                     }
                     Base::Str => {
                         let len = r.u32()? as usize;
                         r.skip(len)?;
                     }
-                    Base::Msg(m) => self.walk(m, &nm, r, out, depth + 1)?,
+                    Base::Msg(m) => self.walk(m, &nm, r, out, names, depth + 1)?,
                 }
             }
         }
