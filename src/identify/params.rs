@@ -88,14 +88,14 @@ impl IdentifyParams {
                 self.to_hz, self.from_hz
             ));
         }
-        if self.max_order < 4 || self.max_order > MAX_ORDER || self.max_order % 2 != 0 {
+        if self.max_order < 4 || self.max_order > MAX_ORDER || !self.max_order.is_multiple_of(2) {
             return bad(format!(
                 "max_order {}: must be even, in 4 ..= {MAX_ORDER}",
                 self.max_order
             ));
         }
         let p = self.block_rows(channels);
-        if p < 2 || p > MAX_BLOCK_ROWS || p * channels > MAX_HANKEL_SIDE {
+        if !(2..=MAX_BLOCK_ROWS).contains(&p) || p * channels > MAX_HANKEL_SIDE {
             return bad(format!(
                 "block_rows {p}: must be in 2 ..= {MAX_BLOCK_ROWS} with block rows × channels ≤ {MAX_HANKEL_SIDE}"
             ));

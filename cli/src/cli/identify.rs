@@ -6,7 +6,8 @@
 //!
 //! The recording is streamed ([`super::recording`]); the memory held is the open windows' lag
 //! sums, the finished windows' results and the poses binned every [`POSE_BIN_S`] (72 bytes a
-//! bin: 2.6 MB for an hour).
+//! bin: 2.6 MB for an hour); of the finished windows only the modes are kept (and the
+//! stabilisation diagram of the one drawn).
 
 use super::args::{parse_quaternion, parse_vec3, set_orientation};
 use super::figure::{self, parse_format};
@@ -238,8 +239,11 @@ pub fn run(a: &IdentifyArgs) -> Result<(), CliError> {
     let mut sink = |item: Item<'_>| -> Result<(), CliError> {
         match item {
             Item::Layout(l) => {
-                let i = Identifier::new(l.channels.len(), p)
+                let mut i = Identifier::new(l.channels.len(), p)
                     .map_err(|e| CliError::Usage(format!("{}: {e}", a.recording.display())))?;
+                // Only the drawn window's diagram is kept: memory stays bounded by the
+                // windows' modes on a long record.
+                i.keep_diagram_of(a.svg.as_ref().map(|_| a.diagram_window));
                 id = Some(i);
                 layout = Some(l.clone());
                 Ok(())

@@ -105,17 +105,15 @@ pub fn read(
     let mut flat: Vec<(String, f64)> = Vec::new();
     let mut values: Vec<f64> = Vec::new();
     let mut origin_ns: Option<i128> = None;
-    let mut read_messages = 0u64;
     let mut vib_messages = 0u64;
     let mut topics_seen: Vec<String> = Vec::new();
-    for m in reader {
+    for (read_messages, m) in reader.enumerate() {
         let m = m.map_err(|e| {
             bad(format!(
                 "unreadable or cut short after {read_messages} message(s) ({})",
                 e.to_string().replace('\n', " ")
             ))
         })?;
-        read_messages += 1;
         let ch = &m.channel;
         let (schema_name, schema_enc, schema_text) = match &ch.schema {
             Some(s) => (
@@ -248,10 +246,12 @@ pub fn read(
                     if d.is_empty() {
                         fnames
                             .iter()
-                            .cloned()
                             .filter(|n| {
-                                !n.starts_with("header.") && n != "timestamp_ns" && n != "sequence"
+                                !n.starts_with("header.")
+                                    && *n != "timestamp_ns"
+                                    && *n != "sequence"
                             })
+                            .cloned()
                             .collect()
                     } else {
                         d

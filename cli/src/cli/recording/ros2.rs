@@ -72,7 +72,7 @@ fn full_name(t: &str, pkg: &str) -> String {
     match parts[..] {
         [p, "msg", n] => format!("{p}/{n}"),
         [p, n] => format!("{p}/{n}"),
-        [n] if n == "Header" => "std_msgs/Header".into(),
+        ["Header"] => "std_msgs/Header".into(),
         [n] => format!("{pkg}/{n}"),
         _ => t.to_string(),
     }
@@ -91,10 +91,7 @@ impl Layout {
                 continue;
             }
             if line.chars().all(|c| c == '=') {
-                types.insert(
-                    std::mem::replace(&mut current, String::new()),
-                    std::mem::take(&mut fields),
-                );
+                types.insert(std::mem::take(&mut current), std::mem::take(&mut fields));
                 continue;
             }
             if let Some(t) = line.strip_prefix("MSG:") {
@@ -231,6 +228,9 @@ impl Layout {
         names: &mut Option<&mut Vec<String>>,
         depth: usize,
     ) -> Result<(), String> {
+        if depth > MAX_DEPTH {
+            return Err(format!("{t}: nested deeper than {MAX_DEPTH}"));
+        }
         let fields = &self.types[t];
         let named = names.is_some();
         for f in fields {
