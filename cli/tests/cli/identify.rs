@@ -44,6 +44,52 @@ fn chain() -> Modal {
     }
 }
 
+/// The chain's record: 3 accelerations with 20 dB sensor noise, `duration_s` at 1 kHz.
+fn chain_record(duration_s: f64, seed: u64) -> (Modal, Record) {
+    let sys = chain();
+    let rec = simulate(
+        &sys,
+        &[0, 1, 3],
+        Measured::Acceleration,
+        1000.0,
+        duration_s,
+        20.0,
+        seed,
+    );
+    (sys, rec)
+}
+
+/// The command failed with one line on stderr containing `want`.
+fn one_line(o: &Output, want: &str) {
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(e.trim().lines().count(), 1, "{e}");
+    assert!(e.contains(want), "{e}");
+}
+
+/// The pinned venv with the ROS 2 MCAP writer.
+fn ros2_python() -> PathBuf {
+    cablevib_testkit::pinned_venv::pinned_venv_python(
+        "venv-ros2-mcap",
+        &[
+            ("mcap_ros2", "mcap-ros2-support", "0.5.5"),
+            ("mcap", "mcap", "1.6.0"),
+            ("zstandard", "zstandard", "0.23.0"),
+        ],
+    )
+}
+
+/// The CSV record `csv` as a ROS 2 bag `bag` (tests/py/write_ros2_bag.py), poses at `xyz`.
+fn write_bag(py: &Path, csv: &Path, bag: &Path, xyz: [&str; 3]) {
+    let st = Command::new(py)
+        .arg(PathBuf::from(ROOT).join("tests/py/write_ros2_bag.py"))
+        .args([csv.to_str().unwrap(), bag.to_str().unwrap()])
+        .args(xyz)
+        .status()
+        .unwrap();
+    assert!(st.success());
+}
+
 /// Write `r` as CSV `t,ax,ay,az`; t is written as the MCAP reader computes it from integer
 /// nanoseconds (k·10⁶ ns × 10⁻⁹), so both files hold the same doubles.
 fn write_csv(r: &Record, path: &Path, edit: impl Fn(usize, &mut String)) {
@@ -82,16 +128,7 @@ const COLUMNS: &str = "window,t_start_s,t_end_s,x_m,y_m,z_m,qw,qx,qy,qz,identifi
 #[test]
 fn csv_and_ros2_bag_give_the_known_modes_and_identical_results() {
     let d = dir("csv_mcap");
-    let sys = chain();
-    let rec = simulate(
-        &sys,
-        &[0, 1, 3],
-        Measured::Acceleration,
-        1000.0,
-        60.0,
-        20.0,
-        11,
-    );
+    let (sys, rec) = chain_record(60.0, 11);
     let csv = d.join("rec.csv");
     write_csv(&rec, &csv, |_, _| {});
     // The CSV: JSON, the CSV file and the figure, the model paired at --position.
@@ -141,27 +178,9 @@ fn csv_and_ros2_bag_give_the_known_modes_and_identical_results() {
     assert!(d.join("modes.csv.json").exists());
     assert!(std::fs::read_to_string(&fig).unwrap().contains("<svg"));
     // The same record as a ROS 2 bag.
-    let py = cablevib_testkit::pinned_venv::pinned_venv_python(
-        "venv-ros2-mcap",
-        &[
-            ("mcap_ros2", "mcap-ros2-support", "0.5.5"),
-            ("mcap", "mcap", "1.6.0"),
-            ("zstandard", "zstandard", "0.23.0"),
-        ],
-    );
+    let py = ros2_python();
     let bag = d.join("rec.mcap");
-    let st = Command::new(py)
-        .arg(PathBuf::from(ROOT).join("tests/py/write_ros2_bag.py"))
-        .args([
-            csv.to_str().unwrap(),
-            bag.to_str().unwrap(),
-            "0.3",
-            "0.2",
-            "1.0",
-        ])
-        .status()
-        .unwrap();
-    assert!(st.success());
+    write_bag(&py, &csv, &bag, ["0.3", "0.2", "1.0"]);
     let o = run(&[
         "identify",
         bag.to_str().unwrap(),
@@ -210,22 +229,7 @@ fn csv_and_ros2_bag_give_the_known_modes_and_identical_results() {
 #[test]
 fn hostile_records() {
     let d = dir("hostile");
-    let sys = chain();
-    let rec = simulate(
-        &sys,
-        &[0, 1, 3],
-        Measured::Acceleration,
-        1000.0,
-        30.0,
-        20.0,
-        3,
-    );
-    let one_line = |o: &Output, want: &str| {
-        assert!(!o.status.success());
-        let e = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(e.trim().lines().count(), 1, "{e}");
-        assert!(e.contains(want), "{e}");
-    };
+    let (_, rec) = chain_record(30.0, 3);
     // NaN and inf samples: left out, counted, the window's status says so.
     let p = d.join("nan.csv");
     write_csv(&rec, &p, |k, l| {
@@ -325,39 +329,12 @@ fn hostile_records() {
 #[test]
 fn hostile_bags() {
     let d = dir("hostile_bags");
-    let sys = chain();
-    let rec = simulate(
-        &sys,
-        &[0, 1, 3],
-        Measured::Acceleration,
-        1000.0,
-        5.0,
-        20.0,
-        4,
-    );
+    let (_, rec) = chain_record(5.0, 4);
     let csv = d.join("rec.csv");
     write_csv(&rec, &csv, |_, _| {});
-    let py = cablevib_testkit::pinned_venv::pinned_venv_python(
-        "venv-ros2-mcap",
-        &[
-            ("mcap_ros2", "mcap-ros2-support", "0.5.5"),
-            ("mcap", "mcap", "1.6.0"),
-            ("zstandard", "zstandard", "0.23.0"),
-        ],
-    );
+    let py = ros2_python();
     let bag = d.join("rec.mcap");
-    let st = Command::new(&py)
-        .arg(PathBuf::from(ROOT).join("tests/py/write_ros2_bag.py"))
-        .args([csv.to_str().unwrap(), bag.to_str().unwrap(), "0", "0", "1"])
-        .status()
-        .unwrap();
-    assert!(st.success());
-    let one_line = |o: &Output, want: &str| {
-        assert!(!o.status.success());
-        let e = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(e.trim().lines().count(), 1, "{e}");
-        assert!(e.contains(want), "{e}");
-    };
+    write_bag(&py, &csv, &bag, ["0", "0", "1"]);
     let b = bag.to_str().unwrap();
     one_line(&run(&["identify", b, "--topic", "/accel"]), "no message on topic /accel; topics in the file: /imu (sensor_msgs/msg/Imu), /pose (geometry_msgs/msg/PoseStamped)");
     // The pose topic as vibration: fine (its fields are channels); a field not there: refused.
