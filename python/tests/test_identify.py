@@ -38,7 +38,7 @@ def record(tmp_path):
     with open(path, "w") as f:
         f.write("t,ax,ay\n")
         for k in range(n):
-            f.write(f"{t[k]!r},{y[k, 0]!r},{y[k, 1]!r}\n")
+            f.write(f"{float(t[k])!r},{float(y[k, 0])!r},{float(y[k, 1])!r}\n")
     return t, y, path, [m[0] for m in modes], [m[1] for m in modes]
 
 
