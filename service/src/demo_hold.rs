@@ -313,7 +313,8 @@ fn write_csv(
     fixed: &[(f64, f64)],
     t_fixed: f64,
 ) -> std::io::Result<()> {
-    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    // Whole or not at all: a failed run leaves an older record at `path` as it was.
+    let mut w = crate::output_file::OutputFile::create(path).map_err(std::io::Error::other)?;
     writeln!(
         w,
         "t_s,pose_sequence,f1_hz,setpoint_n,sum_t2_n2,fixed_t_min_n,f1_fixed_hz,sum_t2_fixed_n2"
@@ -338,5 +339,5 @@ fn write_csv(
             t2_fixed
         )?;
     }
-    w.flush()
+    w.commit().map_err(std::io::Error::other)
 }

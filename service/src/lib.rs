@@ -48,7 +48,7 @@ use core::sync::atomic::AtomicBool;
 use clap::ValueEnum;
 
 // The core's modules, under the paths the service's files name (`crate::scene::...`).
-use cablevib::{alloc_count, estimator, kinematics, scene, trajectory};
+use cablevib::{alloc_count, estimator, kinematics, output_file, scene, trajectory};
 
 use crate::estimator::BuildError;
 use crate::scene::{Scene, SceneError};

@@ -112,16 +112,22 @@ fn write_shapes(s: &Scene, modes: usize, path: &std::path::Path) -> Result<(), C
     Ok(write_csv(path, csv, &process_command_line())?)
 }
 
+/// The files of `--export-matrices PREFIX`: PREFIX.K.mtx and PREFIX.M.mtx.
+pub fn matrix_paths(prefix: &std::path::Path) -> [std::path::PathBuf; 2] {
+    ["K", "M"].map(|name| {
+        let mut path = prefix.as_os_str().to_owned();
+        path.push(format!(".{name}.mtx"));
+        path.into()
+    })
+}
+
 /// K and M of the structured path's models as PREFIX.K.mtx and PREFIX.M.mtx.
 fn export_matrices(s: &Scene, prefix: &std::path::Path) -> Result<(), CliError> {
     let (k, m) = assembled_matrices(s).map_err(|e| CliError::Analysis(e.to_string()))?;
-    for (name, a) in [("K", &k), ("M", &m)] {
-        let mut path = prefix.as_os_str().to_owned();
-        path.push(format!(".{name}.mtx"));
+    for (path, a) in matrix_paths(prefix).iter().zip([&k, &m]) {
         let text = matrix_market(a);
-        std::fs::write(&path, text).map_err(|e| {
-            CliError::Analysis(format!("--export-matrices {}: {e}", path.to_string_lossy()))
-        })?;
+        crate::output_file::write_whole(path, text.as_bytes())
+            .map_err(|e| CliError::Analysis(format!("--export-matrices {e}")))?;
     }
     Ok(())
 }

@@ -25,6 +25,9 @@ pub enum CliError {
     /// A study failed or was given bad values.
     #[error(transparent)]
     Study(#[from] StudyError),
+    /// An output was refused (it is an input) or not written whole.
+    #[error(transparent)]
+    Output(#[from] crate::output_file::OutputFileError),
     /// Writing a result file failed.
     #[error(transparent)]
     Report(#[from] ReportError),

@@ -91,12 +91,8 @@ fn caspr(a: &CasprArgs) -> Result<(), CliError> {
     };
     let imported =
         import_files(&a.bodies, &a.cables, &opts).map_err(|e| CliError::Usage(e.to_string()))?;
-    std::fs::write(&a.output, &imported.toml).map_err(|e| {
-        CliError::Usage(format!(
-            "{}: cannot write the scene: {e}",
-            a.output.display()
-        ))
-    })?;
+    crate::output_file::write_whole(&a.output, imported.toml.as_bytes())
+        .map_err(|e| CliError::Usage(format!("cannot write the scene: {e}")))?;
     let s = &imported.scene;
     let p = &s.ee_position_m;
     println!(

@@ -245,7 +245,7 @@ pub fn run(a: &MapArgs) -> Result<(), CliError> {
 
 /// The figure of a `--show` value next to the main figure: `DIR/NAME.EXT` →
 /// `DIR/NAME-PART.EXT` (`map.svg` → `map-k-min.svg`), EXT the format's.
-fn shown_path(main: &Path, part: &str, fmt: FigureFormat) -> PathBuf {
+pub fn shown_path(main: &Path, part: &str, fmt: FigureFormat) -> PathBuf {
     let stem = match main.extension() {
         Some(e) if e == fmt.ext() => main.with_extension(""),
         _ => main.to_path_buf(),

@@ -223,6 +223,14 @@ pub struct SimulateArgs {
     pub format: Option<FigureFormat>,
 }
 
+impl SimulateArgs {
+    /// The CSV (PREFIX.csv) and the figure (PREFIX.svg, or the --format's extension).
+    pub fn output_paths(&self) -> Result<(PathBuf, PathBuf, FigureFormat), CliError> {
+        let (fig, fmt) = figure::target(&self.out.with_extension("svg"), self.format)?;
+        Ok((self.out.with_extension("csv"), fig, fmt))
+    }
+}
+
 /// One run: a shaper, its result, the time it added, its wall time.
 struct Run {
     shaper: ShaperArg,
@@ -362,7 +370,7 @@ fn write_outputs(a: &SimulateArgs, s: &Scene, runs: &[Run]) -> Result<(), CliErr
         }
         csv.row(row);
     }
-    let csv_path = a.out.with_extension("csv");
+    let (csv_path, fig, fmt) = a.output_paths()?;
     write_csv(&csv_path, csv, &process_command_line())?;
     println!("wrote {}", csv_path.display());
     let mut plot = LinePlot::new(
@@ -384,7 +392,6 @@ fn write_outputs(a: &SimulateArgs, s: &Scene, runs: &[Run]) -> Result<(), CliErr
         plot.series
             .push(Series::new(r.shaper.name(), pts, Mark::Line));
     }
-    let (fig, fmt) = figure::target(&a.out.with_extension("svg"), a.format)?;
     figure::write(&fig, &plot.to_svg(), fmt)?;
     println!("wrote {}", fig.display());
     Ok(())
