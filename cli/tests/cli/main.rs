@@ -11,6 +11,7 @@ mod frf;
 mod hidden_sag;
 mod map_shard;
 mod mode_shapes;
+mod outputs;
 mod sag_compare;
 mod simulate_hostile;
 mod sweep;
