@@ -29,6 +29,9 @@
 //! each estimate, so a controller can block too.
 
 #![warn(missing_docs)]
+// Standard output through `cablevib::outln!` (an error, not a panic, when it cannot be
+// written).
+#![warn(clippy::print_stdout)]
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod bench;
@@ -87,6 +90,9 @@ impl core::fmt::Display for WaitMode {
 /// Errors of the service commands.
 #[derive(Debug, thiserror::Error)]
 pub enum ServiceError {
+    /// Standard output could not be written.
+    #[error(transparent)]
+    Stdout(#[from] crate::output_file::StdoutError),
     /// The scene could not be loaded.
     #[error(transparent)]
     Scene(#[from] SceneError),

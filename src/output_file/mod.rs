@@ -15,6 +15,8 @@
 //! - [`write_whole`]: a whole file from bytes in memory, the same way.
 //! - [`ScratchFile`]: a temporary file beside a target that is never renamed (a writer's
 //!   spill space), removed the same way.
+//! - [`crate::outln!`]: standard output, written with an error instead of a panic when it
+//!   cannot be ([`StdoutError`]).
 //!
 //! A target that is a symbolic link is written through it (the link is kept, the file it
 //! points to replaced). A target that exists and is a character device or a FIFO
@@ -23,6 +25,7 @@
 //! other hard links to it keep the old contents (the name gets a new file).
 
 mod cleanup;
+mod stdout;
 
 use std::fs::{File, OpenOptions};
 use std::io::{self, BufWriter, Seek, SeekFrom, Write};
@@ -31,6 +34,7 @@ use std::os::unix::fs::{FileTypeExt, MetadataExt, OpenOptionsExt, PermissionsExt
 use std::path::{Component, Path, PathBuf};
 
 pub use cleanup::SLOTS as MAX_SIGNAL_CLEANED_FILES;
+pub use stdout::{flush_stdout, stdout_bytes, stdout_write, StdoutError};
 
 /// Buffer of an [`OutputFile`], bytes.
 const BUFFER_BYTES: usize = 64 * 1024;

@@ -9,6 +9,7 @@ use crate::report::accuracy_figures::{accuracy_csv, accuracy_svgs, file_stem, mo
 use crate::report::csv::{sidecar_path, write_csv};
 use crate::report::figure::FigureFormat;
 use crate::study::accuracy::{self as study, dense_element_counts, AccuracyConfig};
+use cablevib::outln;
 use clap::Args;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -158,15 +159,15 @@ pub fn run(a: &AccuracyArgs) -> Result<(), CliError> {
     let body = accuracy_markdown(&s, &r, &mode3, &cmd, a.cycles, a.rounds.max(1), &rel);
     let md = a.out_dir.join("accuracy.md");
     update_section(&md, &s.name, &body)?;
-    println!(
+    outln!(
         "accuracy: {}  f1,ref {:.9} Hz  continuous {:.9} Hz  ({:.1} s)",
         s.name,
         r.f1_ref_hz,
         r.f1_continuous_hz,
         t0.elapsed().as_secs_f64()
-    );
+    )?;
     for x in &r.rows {
-        println!(
+        outln!(
             "  {:<34} {:<10} f1 {:>14}  err {:>10}  p50 {:>7} µs  (+EE {:>7} µs)",
             x.label(),
             x.status.as_str(),
@@ -174,8 +175,8 @@ pub fn run(a: &AccuracyArgs) -> Result<(), CliError> {
             sci(x.err_ref),
             us(x.f1_ns.0),
             us(x.ee_ns.0)
-        );
+        )?;
     }
-    println!("  wrote {}", md.display());
+    outln!("  wrote {}", md.display())?;
     Ok(())
 }

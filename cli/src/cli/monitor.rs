@@ -2,6 +2,7 @@
 //! (a recording's poses and T_min set-points into a service) and `demo --monitor`. The work is
 //! the `cablevib-monitor` crate's.
 
+use cablevib::outln;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -116,25 +117,42 @@ pub fn monitor(a: &MonitorArgs) -> Result<(), CliError> {
     cfg.wait_timeout = duration("--wait-s", a.wait_s)?;
     cfg.duration = a.seconds.map(|s| duration("--seconds", s)).transpose()?;
     let scene_named = cfg.scene.is_some();
+    // Standard output that cannot be written stops the monitor (the recording is closed),
+    // and the error is the command's.
+    let mut printed = Ok(());
     let report = cablevib_monitor::run(&cfg, stop, |at| {
-        println!(
-            "cablevib monitor: attached to instance {:?}{}{}",
-            a.instance,
-            at.url
-                .as_ref()
-                .map_or(String::new(), |u| format!(", Foxglove at {u}")),
-            a.record
-                .as_ref()
-                .map_or(String::new(), |p| format!(", recording to {}", p.display()))
-        );
-        if !scene_named {
-            println!(
-                "  no --scene: no 3D view (service attributes: {})",
-                at.attributes
-            );
+        printed = attached_lines(a, at, scene_named);
+        if printed.is_err() {
+            stop.store(true, Ordering::Release);
         }
     })?;
-    println!("cablevib monitor: {report}");
+    printed?;
+    outln!("cablevib monitor: {report}")?;
+    Ok(())
+}
+
+/// The lines `cablevib monitor` prints once attached.
+fn attached_lines(
+    a: &MonitorArgs,
+    at: &cablevib_monitor::Attached,
+    scene_named: bool,
+) -> Result<(), CliError> {
+    outln!(
+        "cablevib monitor: attached to instance {:?}{}{}",
+        a.instance,
+        at.url
+            .as_ref()
+            .map_or(String::new(), |u| format!(", Foxglove at {u}")),
+        a.record
+            .as_ref()
+            .map_or(String::new(), |p| format!(", recording to {}", p.display()))
+    )?;
+    if !scene_named {
+        outln!(
+            "  no --scene: no 3D view (service attributes: {})",
+            at.attributes
+        )?;
+    }
     Ok(())
 }
 
@@ -188,7 +206,7 @@ pub fn replay(a: &ReplayArgs) -> Result<(), CliError> {
     };
     let r = cablevib_monitor::replay::replay(&cfg, stop)?;
     let ok = r.estimates.iter().filter(|e| e.is_ok()).count();
-    println!(
+    outln!(
         "cablevib replay: {} poses and {} T_min set-points sent, {} estimates received ({} ok), \
          {} unanswered",
         r.poses,
@@ -196,7 +214,7 @@ pub fn replay(a: &ReplayArgs) -> Result<(), CliError> {
         r.estimates.len(),
         ok,
         r.timeouts
-    );
+    )?;
     Ok(())
 }
 
@@ -249,8 +267,9 @@ pub fn start_beside_demo(
         std::thread::Builder::new()
             .name("cablevib-monitor".into())
             .spawn(move || {
+                // The demo's own lines report a standard output that cannot be written.
                 let r = cablevib_monitor::run(&cfg, &stop, |at| {
-                    println!(
+                    let _ = outln!(
                         "  monitor: Foxglove at {}{}",
                         at.url.clone().unwrap_or_default(),
                         record
@@ -260,7 +279,9 @@ pub fn start_beside_demo(
                 });
                 if signal.load(Ordering::Acquire) && !done.load(Ordering::Acquire) {
                     match &r {
-                        Ok(report) => println!("  monitor: {report}"),
+                        Ok(report) => {
+                            let _ = outln!("  monitor: {report}");
+                        }
                         Err(e) => eprintln!("cablevib: monitor: {e}"),
                     }
                     std::process::exit(130);
@@ -295,7 +316,7 @@ impl DemoMonitor {
             .thread
             .join()
             .map_err(|_| CliError::Analysis("the monitor thread panicked".into()))??;
-        println!("  monitor: {report}");
+        outln!("  monitor: {report}")?;
         Ok(())
     }
 }

@@ -6,6 +6,7 @@
 use super::{AllocCounter, CliError};
 use crate::scene::Scene;
 use crate::service::{BenchIpcConfig, DemoConfig, ServerConfig, TminSchedule, WaitMode};
+use cablevib::outln;
 use clap::Args;
 use std::time::Duration;
 
@@ -249,7 +250,7 @@ fn hold_figures(csv: &std::path::Path, hold_hz: f64) -> Result<(), CliError> {
     for (path, svg) in hold_figure_paths(csv).into_iter().zip([f1, t_min]) {
         crate::output_file::write_whole(&path, svg.as_bytes())
             .map_err(|e| CliError::Usage(e.to_string()))?;
-        println!("  hold: figure written to {}", path.display());
+        outln!("  hold: figure written to {}", path.display())?;
     }
     Ok(())
 }

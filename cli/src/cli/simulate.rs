@@ -20,6 +20,7 @@ use crate::study::StudyError;
 use crate::trajectory::moves::{Move, Profile};
 use crate::trajectory::shaping::{Impulses, ShaperKind};
 use crate::trajectory::{Samples, Trajectory, CIRCLE_PERIOD_S};
+use cablevib::outln;
 use clap::{Args, ValueEnum};
 use nalgebra::Vector3;
 use std::path::PathBuf;
@@ -251,14 +252,14 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
         max_acceleration_m_s2: a.path.max_acceleration,
     };
     a.path.check(&path)?;
-    println!(
+    outln!(
         "scene {}  damping {}  path {desc}  dt {} s  K = {}  modes updated every {} samples",
         s.name,
         damping_label(&s.damping),
         path.dt_s,
         a.modes,
         a.update_every
-    );
+    )?;
     let mut runs = Vec::new();
     for &sh in &a.shaper {
         let t0 = Instant::now();
@@ -283,16 +284,16 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
         .find(|r| r.shaper == ShaperArg::None)
         .and_then(|r| r.result.stops.last())
         .map(|st| st.peak_to_peak_max_m());
-    println!(
+    outln!(
         "\n shaper     samples   time added (s)   residual p-p (mm)   residual RMS (mm)   reduction   f1 range (Hz)    wall (s)"
-    );
+    )?;
     for r in &runs {
         let res = &r.result;
         let (pp, rms) = res.stops.last().map_or((f64::NAN, f64::NAN), |st| {
             (st.peak_to_peak_max_m(), st.rms_m)
         });
         let red = base.map_or(f64::NAN, |b| 1.0 - pp / b);
-        println!(
+        outln!(
             " {:<9} {:>8}   {:>14.4}   {:>17.5}   {:>17.5}   {:>8.1} %   {:>6.3}-{:<6.3}   {:>8.3}",
             r.shaper.name(),
             res.t_s.len(),
@@ -303,7 +304,7 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
             res.f1_range_hz.0,
             res.f1_range_hz.1,
             r.wall_s
-        );
+        )?;
     }
     if let Some(r) = runs.first() {
         let peak = r
@@ -311,7 +312,7 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
             .deviation_m
             .iter()
             .fold(0.0f64, |m, u| m.max(u.norm()));
-        println!(
+        outln!(
             "\n{}: peak |deviation| {:.5} mm, {} stops, {} mode updates, {} modes ({})",
             r.shaper.name(),
             peak * 1e3,
@@ -323,7 +324,7 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
             } else {
                 "dense model of the sagged cables"
             }
-        );
+        )?;
     }
     write_outputs(a, &s, &runs)?;
     Ok(())
@@ -372,7 +373,7 @@ fn write_outputs(a: &SimulateArgs, s: &Scene, runs: &[Run]) -> Result<(), CliErr
     }
     let (csv_path, fig, fmt) = a.output_paths()?;
     write_csv(&csv_path, csv, &process_command_line())?;
-    println!("wrote {}", csv_path.display());
+    outln!("wrote {}", csv_path.display())?;
     let mut plot = LinePlot::new(
         "End-effector deviation from the quasi-static pose",
         Axis::linear("time (s)"),
@@ -393,7 +394,7 @@ fn write_outputs(a: &SimulateArgs, s: &Scene, runs: &[Run]) -> Result<(), CliErr
             .push(Series::new(r.shaper.name(), pts, Mark::Line));
     }
     figure::write(&fig, &plot.to_svg(), fmt)?;
-    println!("wrote {}", fig.display());
+    outln!("wrote {}", fig.display())?;
     Ok(())
 }
 
@@ -476,7 +477,7 @@ pub fn shape(a: &ShapeArgs) -> Result<(), CliError> {
         csv.row([num(k as f64 * path.dt_s), num(p.x), num(p.y), num(p.z)]);
     }
     write_csv(out, csv, &process_command_line())?;
-    println!(
+    outln!(
         "shaped {desc} with {} following the {} mode ({lo:.4}-{hi:.4} Hz, ζ from {}): {} samples, {:.4} s added; wrote {}",
         kind.as_str(),
         match a.mode {
@@ -487,7 +488,7 @@ pub fn shape(a: &ShapeArgs) -> Result<(), CliError> {
         r.path.positions_m.len(),
         r.added_s,
         out.display()
-    );
+    )?;
     Ok(())
 }
 
@@ -517,6 +518,6 @@ fn sensitivity_figure(
     }
     let (fig, fmt) = figure::target(path, format)?;
     figure::write(&fig, &plot.to_svg(), fmt)?;
-    println!("wrote {}", fig.display());
+    outln!("wrote {}", fig.display())?;
     Ok(())
 }

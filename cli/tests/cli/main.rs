@@ -14,5 +14,6 @@ mod mode_shapes;
 mod outputs;
 mod sag_compare;
 mod simulate_hostile;
+mod stdout_full;
 mod sweep;
 mod sweep_cli;
