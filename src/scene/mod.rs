@@ -10,7 +10,8 @@
 //! [`Scene::from_path`], [`Scene::from_toml_str`] and [`Scene::load`] return a
 //! [`SceneError`] that names the file, the key and what is wrong; they never panic.
 //!
-//! The module is split by stage: `parse` (TOML into serde's raw types), `validate` (raw
+//! The module is split by stage: `parse` (TOML into serde's raw types; [`toml_error`] its
+//! errors as one line naming the line and the key), `validate` (raw
 //! types into a [`Scene`], one check per concern) and `load` (a file path or the name of an
 //! embedded scene).
 
@@ -24,6 +25,7 @@ use crate::input_file::{InputFileError, MAX_SCENE_BYTES};
 
 mod load;
 mod parse;
+pub mod toml_error;
 mod validate;
 
 pub use bounds::{check_t_min, is_valid_t_min, TminRangeError, T_MIN_FLOOR_N};
@@ -54,14 +56,14 @@ pub enum SceneError {
     /// [`MAX_SCENE_BYTES`] or not UTF-8.
     #[error(transparent)]
     Input(#[from] InputFileError),
-    /// TOML syntax error, wrong type, missing or unknown key: the toml crate's own report
-    /// (several lines: line and column, the offending line with a caret, what is wrong).
-    #[error("{file}: {message}")]
+    /// TOML syntax error, wrong type, missing or unknown key, on one line: the line and
+    /// column, the key, the toml crate's message ([`toml_error`]).
+    #[error("{file}: {report}")]
     Parse {
         /// File name.
         file: String,
-        /// The toml crate's report.
-        message: String,
+        /// Where and what.
+        report: toml_error::TomlErrorReport,
     },
     /// A value that parses but is not physically valid.
     #[error("{file}: key `{key}`: {message}")]
@@ -423,7 +425,7 @@ impl Scene {
     pub fn from_toml_str(text: &str, file: &str) -> Result<Scene, SceneError> {
         let raw: parse::RawScene = toml::from_str(text).map_err(|e| SceneError::Parse {
             file: file.to_string(),
-            message: e.to_string().trim_end().to_string(),
+            report: toml_error::report(text, &e),
         })?;
         validate::scene_from_raw(raw, file)
     }
