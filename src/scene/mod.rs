@@ -21,6 +21,7 @@ use std::path::Path;
 
 mod bounds;
 mod damping;
+mod direction;
 use crate::input_file::{InputFileError, MAX_SCENE_BYTES};
 
 mod load;
@@ -32,6 +33,7 @@ pub use bounds::{check_t_min, is_valid_t_min, TminRangeError, T_MIN_FLOOR_N};
 pub use damping::{
     Damping, MAX_LOSS_FACTOR, MAX_MODAL_RATIO, MAX_RAYLEIGH_ALPHA_PER_S, MAX_RAYLEIGH_BETA_S,
 };
+pub use direction::unit_direction;
 
 /// The embedded default scene: the paper's spatial robot (Tables 5-6).
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../../scenes/spatial_paper.toml");

@@ -98,13 +98,6 @@ pub struct PathArgs {
     /// Velocity profile of the --move.
     #[arg(long, value_enum, default_value_t = ProfileArg::SCurve)]
     pub profile: ProfileArg,
-    /// Without --csv or --move: seconds of the paper's circle (one revolution per
-    /// --period-s).
-    #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
-    pub circle_s: f64,
-    /// Period of one revolution of the circle, s.
-    #[arg(long, default_value_t = CIRCLE_PERIOD_S, allow_hyphen_values = true)]
-    pub period_s: f64,
     /// Sample period, s, in (0, 0.1].
     #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true)]
     pub dt: f64,
@@ -114,6 +107,19 @@ pub struct PathArgs {
     /// Largest path acceleration accepted, m/s² (a jump in the path exceeds it).
     #[arg(long, default_value_t = DEFAULT_MAX_ACCELERATION_M_S2, allow_hyphen_values = true)]
     pub max_acceleration: f64,
+}
+
+/// The circle `simulate` follows without --csv or --move (`shape` shapes a CSV or a move
+/// only, so these are not its options).
+#[derive(Debug, Args, Clone)]
+pub struct CircleArgs {
+    /// Without --csv or --move: seconds of the paper's circle (one revolution per
+    /// --period-s).
+    #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
+    pub circle_s: f64,
+    /// Period of one revolution of the circle, s.
+    #[arg(long, default_value_t = CIRCLE_PERIOD_S, allow_hyphen_values = true)]
+    pub period_s: f64,
 }
 
 impl PathArgs {
@@ -142,8 +148,13 @@ impl PathArgs {
         Ok(())
     }
 
-    /// The sampled path and a one-line description.
-    fn path(&self, s: &Scene) -> Result<(SampledPath, String), CliError> {
+    /// The sampled path and a one-line description: the CSV, else the move, else the
+    /// `circle` (without one, a usage error).
+    fn path(
+        &self,
+        s: &Scene,
+        circle: Option<&CircleArgs>,
+    ) -> Result<(SampledPath, String), CliError> {
         // Checked here, for every path, so that the message names the option (a move's own
         // sampling would report it as a sample period).
         if !(self.dt.is_finite() && self.dt > 0.0 && self.dt <= MAX_DT_S) {
@@ -186,9 +197,14 @@ impl PathArgs {
             );
             return Ok((p, desc));
         }
-        let t = Trajectory::circle(s, self.period_s).map_err(StudyError::from)?;
-        let p = SampledPath::from_trajectory(&t, self.circle_s, self.dt, false)?;
-        Ok((p, format!("{} for {} s", t.describe(), self.circle_s)))
+        let Some(c) = circle else {
+            return Err(CliError::Usage(
+                "give a TRAJECTORY CSV (or --move DX,DY,DZ) to shape".into(),
+            ));
+        };
+        let t = Trajectory::circle(s, c.period_s).map_err(StudyError::from)?;
+        let p = SampledPath::from_trajectory(&t, c.circle_s, self.dt, false)?;
+        Ok((p, format!("{} for {} s", t.describe(), c.circle_s)))
     }
 }
 
@@ -201,6 +217,9 @@ pub struct SimulateArgs {
     /// The path.
     #[command(flatten)]
     pub path: PathArgs,
+    /// The circle, when the path is neither a CSV nor a move.
+    #[command(flatten)]
+    pub circle: CircleArgs,
     /// Modes K in the superposition (a cluster cut by K completed), 1..=256.
     #[arg(long, default_value_t = 12)]
     pub modes: usize,
@@ -244,7 +263,7 @@ struct Run {
 pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
     let mut s = resolve_scene(&a.scene)?;
     a.path.apply_damping(&mut s)?;
-    let (path, desc) = a.path.path(&s)?;
+    let (path, desc) = a.path.path(&s, Some(&a.circle))?;
     let cfg = SimulateConfig {
         modes: a.modes,
         update_every: a.update_every,
@@ -452,7 +471,7 @@ pub fn shape(a: &ShapeArgs) -> Result<(), CliError> {
     let Some(out) = &a.output else {
         return Err(CliError::Usage("-o SHAPED.csv is required".into()));
     };
-    let (path, desc) = pa.path(&s)?;
+    let (path, desc) = pa.path(&s, None)?;
     // A jump stays a jump when shaped (ZV splits it in two), which no robot follows and
     // `simulate` refuses: refused here too.
     pa.check(&path)?;

@@ -214,3 +214,26 @@ fn a_move_shorter_than_a_sample_is_refused_as_the_jump_it_is() {
     assert!(!shaped.exists());
     assert!(!d.join("short-sim.csv").exists());
 }
+
+/// `shape --help` lists only what `shape` accepts: the circle's options are `simulate`'s
+/// (they were listed, and `shape --circle-s 5 --move ...` ignored them with exit 0); given
+/// to `shape` they are clap's usage error.
+#[test]
+fn shape_lists_and_takes_no_circle_options() {
+    let help = run(&["shape", "--help"]);
+    let text = String::from_utf8_lossy(&help.stdout);
+    assert!(help.status.success() && text.contains("--move"), "{text}");
+    for opt in ["--circle-s", "--period-s"] {
+        assert!(!text.contains(opt), "{opt} in shape --help: {text}");
+        let o = run(&["shape", opt, "5", "--move", "0.01,0,0", "-o", "x.csv"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{opt}: {err}");
+        assert!(err.contains(opt), "{opt}: {err}");
+    }
+    let help = run(&["simulate", "--help"]);
+    let text = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        text.contains("--circle-s") && text.contains("--period-s"),
+        "{text}"
+    );
+}
