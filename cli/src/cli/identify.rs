@@ -25,7 +25,7 @@ use cablevib::outln;
 use clap::Args;
 use nalgebra::Vector3;
 use serde_json::{json, Map, Value};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// Poses are averaged in bins of this duration, s.
@@ -179,44 +179,9 @@ impl PoseBins {
     }
 }
 
-/// The output paths must not name an input (the recording or the scene file).
-fn check_outputs(a: &IdentifyArgs) -> Result<(), CliError> {
-    let mut inputs = vec![a.recording.clone()];
-    if let Some(s) = &a.scene {
-        inputs.push(PathBuf::from(s));
-    }
-    let same = |x: &Path, y: &Path| match (std::fs::metadata(x), std::fs::metadata(y)) {
-        (Ok(m), Ok(n)) => {
-            use std::os::unix::fs::MetadataExt;
-            m.dev() == n.dev() && m.ino() == n.ino()
-        }
-        _ => false,
-    };
-    let mut outs: Vec<PathBuf> = Vec::new();
-    if let Some(c) = &a.csv {
-        outs.push(c.clone());
-        outs.push(crate::report::csv::sidecar_path(c));
-    }
-    if let Some(s) = &a.svg {
-        outs.push(figure::target(s, a.format)?.0);
-    }
-    for o in &outs {
-        for i in &inputs {
-            if same(o, i) {
-                return Err(CliError::Usage(format!(
-                    "{}: is an input of this command; refusing to write an output over it",
-                    o.display()
-                )));
-            }
-        }
-    }
-    Ok(())
-}
-
 /// `cablevib identify`.
 pub fn run(a: &IdentifyArgs) -> Result<(), CliError> {
     figure::format_needs_svg(&a.svg, a.format)?;
-    check_outputs(a)?;
     let p = params(a);
     let scene = match &a.scene {
         Some(s) => {

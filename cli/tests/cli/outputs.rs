@@ -26,11 +26,13 @@ enum Input {
     Trajectory,
     /// `{bodies}`: CASPR's bodies XML (with `{cables}`).
     Bodies,
+    /// `{rec}`: a measured-acceleration CSV for `identify`.
+    Recording,
 }
 
 /// One run of a command with an output option.
 struct Case {
-    /// The command line: `{scene}`, `{traj}`, `{bodies}`, `{cables}` are the inputs, `{out}`
+    /// The command line: `{scene}`, `{traj}`, `{bodies}`, `{cables}`, `{rec}` are the inputs, `{out}`
     /// a prefix in the case's directory, `{dir}` the directory.
     args: &'static [&'static str],
     /// Every file the run writes; the first is the one the option names, made the input.
@@ -360,6 +362,27 @@ const PATH_OPTIONS: &[(&str, &str, Role)] = &[
             offline: true,
         }]),
     ),
+    ("identify", "recording", Role::Input),
+    (
+        "identify",
+        "csv",
+        Role::Output(&[Case {
+            args: &["identify", "{rec}", "--csv", "{out}.csv"],
+            writes: &["{out}.csv", "{out}.csv.json"],
+            input: Input::Recording,
+            offline: true,
+        }]),
+    ),
+    (
+        "identify",
+        "svg",
+        Role::Output(&[Case {
+            args: &["identify", "{rec}", "--svg", "{out}.svg"],
+            writes: &["{out}.svg"],
+            input: Input::Recording,
+            offline: true,
+        }]),
+    ),
     ("import caspr", "bodies", Role::Input),
     ("import caspr", "cables", Role::Input),
     (
@@ -551,6 +574,23 @@ fn trajectory_text(rows: usize) -> String {
     s
 }
 
+/// A measured-acceleration record for `identify`: 20 s at 1 kHz of two lightly damped
+/// modes (12 and 31 Hz) rung by impulses every 2 s, with a small deterministic dither.
+fn recording_text() -> String {
+    let mut s = String::from("t,ax\n");
+    for i in 0..20_000 {
+        let t = i as f64 * 1e-3;
+        let tau = t % 2.0;
+        let w1 = 2.0 * std::f64::consts::PI * 12.0;
+        let w2 = 2.0 * std::f64::consts::PI * 31.0;
+        let a = (-0.02 * w1 * tau).exp() * (w1 * tau).sin()
+            + 0.5 * (-0.02 * w2 * tau).exp() * (w2 * tau).sin()
+            + 1e-3 * ((i * 7919 % 1000) as f64 / 500.0 - 1.0);
+        s.push_str(&format!("{t},{a}\n"));
+    }
+    s
+}
+
 /// The inputs of a case in `dir`: (placeholder, path).
 fn make_inputs(dir: &Path, rows: usize) -> Vec<(&'static str, PathBuf)> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
@@ -558,7 +598,9 @@ fn make_inputs(dir: &Path, rows: usize) -> Vec<(&'static str, PathBuf)> {
     std::fs::copy(root.join("scenes/spatial_paper.toml"), &scene).unwrap();
     let traj = dir.join("path.csv");
     std::fs::write(&traj, trajectory_text(rows)).unwrap();
-    let mut v = vec![("{scene}", scene), ("{traj}", traj)];
+    let rec = dir.join("record.csv");
+    std::fs::write(&rec, recording_text()).unwrap();
+    let mut v = vec![("{scene}", scene), ("{traj}", traj), ("{rec}", rec)];
     for (key, name) in [("{bodies}", "bodies"), ("{cables}", "cables")] {
         let p = dir.join(format!("{name}.xml"));
         std::fs::copy(
@@ -604,6 +646,7 @@ fn input_path(inputs: &[(&str, PathBuf)], which: Input) -> PathBuf {
         Input::Scene => "{scene}",
         Input::Trajectory => "{traj}",
         Input::Bodies => "{bodies}",
+        Input::Recording => "{rec}",
     };
     inputs.iter().find(|(k, _)| *k == key).unwrap().1.clone()
 }

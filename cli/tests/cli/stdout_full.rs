@@ -10,7 +10,7 @@ use std::process::{Command, Stdio};
 const BIN: &str = env!("CARGO_BIN_EXE_cablevib");
 
 /// Each command (or option) that prints to standard output, with quick arguments; `{data}`
-/// is tests/data.
+/// is tests/data, `{dir}` the test's directory (with `record.csv`, a measured record).
 const PRINTING: &[&[&str]] = &[
     &["analyze", "spatial-paper"],
     &["analyze", "spatial-paper", "--json"],
@@ -58,6 +58,7 @@ const PRINTING: &[&[&str]] = &[
     &["sweep-tmin", "spatial-paper", "--steps", "2"],
     &["sag-compare", "spatial-paper", "--points", "3"],
     &["completions", "bash"],
+    &["identify", "{dir}/record.csv"],
     &["man"],
     &["--help"],
     &["--version"],
@@ -127,10 +128,23 @@ fn a_full_standard_output_is_a_one_line_error_for_every_command() {
     let dir =
         Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("stdout-full-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
+    // A measured record for `identify`: 10 s at 1 kHz of a decaying 12 Hz mode rung every 2 s.
+    let mut rec = String::from("t,ax\n");
+    for i in 0..10_000 {
+        let t = i as f64 * 1e-3;
+        let w = 2.0 * std::f64::consts::PI * 12.0;
+        let a = (-0.02 * w * (t % 2.0)).exp() * (w * (t % 2.0)).sin()
+            + 1e-3 * ((i * 7919 % 1000) as f64 / 500.0 - 1.0);
+        rec.push_str(&format!("{t},{a}\n"));
+    }
+    std::fs::write(dir.join("record.csv"), rec).unwrap();
     for args in PRINTING {
         let args: Vec<String> = args
             .iter()
-            .map(|a| a.replace("{data}", &data.display().to_string()))
+            .map(|a| {
+                a.replace("{data}", &data.display().to_string())
+                    .replace("{dir}", &dir.display().to_string())
+            })
             .collect();
         let full = std::fs::OpenOptions::new()
             .write(true)
