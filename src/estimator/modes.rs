@@ -31,10 +31,25 @@ impl Estimator {
     /// The first `k` natural frequencies (ascending) of the pose of the last successful
     /// [`Estimator::update`] into `out`; returns how many were written (min(k, out.len(),
     /// the model's number of modes)). When the last cycle was not ok, its error; before
-    /// any cycle, `Modal(NotLoaded)`.
+    /// any cycle, `Modal(NotLoaded)`. A mode whose λ is not finite and > 0 or whose
+    /// participation is not finite is [`EstimatorError::Unverified`] (the cycle's own rule,
+    /// [`super::check_answer`]), never a number.
     pub fn modes(&mut self, k: usize, out: &mut [Mode]) -> Result<usize, EstimatorError> {
         match self.estimate.status {
-            Status::Ok => Ok(self.cycle.modes(k, out)?),
+            Status::Ok => {
+                let n = self.cycle.modes(k, out)?;
+                for m in &out[..n] {
+                    if !(m.lambda.is_finite() && m.lambda > 0.0) {
+                        let (what, value) = ("an eigenvalue (rad²/s²)", m.lambda);
+                        return Err(EstimatorError::Unverified { what, value });
+                    }
+                    if !m.ee_participation.is_finite() {
+                        let (what, value) = ("an end-effector participation", m.ee_participation);
+                        return Err(EstimatorError::Unverified { what, value });
+                    }
+                }
+                Ok(n)
+            }
             _ => Err(self
                 .estimate
                 .error
@@ -52,6 +67,16 @@ impl Estimator {
         let (k, m) = self.dense_matrices()?;
         let (ee, dim) = self.cycle.ee_mass();
         Ok(modal::dense_modes_ee(&k, &m, &ee, dim, vectors)?)
+    }
+
+    /// The degrees of freedom of the last successful cycle's model: the size of
+    /// [`Self::dense_matrices`]' K and M (the end-effector's 3 or 6, 3 per interior node,
+    /// one axial DOF per node of a cable behind a pulley), the count every solver reports;
+    /// None for continuous cables or before an ok cycle.
+    pub fn model_dof(&self) -> Option<usize> {
+        (self.estimate.status == Status::Ok)
+            .then(|| self.cycle.assembled_dof())
+            .flatten()
     }
 
     /// The assembled K (N/m) and M (kg) of the last successful cycle's models (DOF order of

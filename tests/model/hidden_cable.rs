@@ -384,7 +384,7 @@ fn paper_robot_with_hidden_cables_table() {
     };
     let base = run(0.0);
     eprintln!(
-        "mean free length {mean_free:.4} m; base k_min {:.1} N/m f1 {:.3} Hz ee {:.3} Hz",
+        "pose {p:?} m, mean free length {mean_free:.4} m; base k_min {:.1} N/m f1 {:.3} Hz ee {:.3} Hz",
         base.0, base.1, base.2
     );
     let mut last = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
