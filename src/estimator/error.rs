@@ -229,6 +229,10 @@ pub enum BuildError {
     /// A parameter is out of its bounds ([`super::EstimatorParams::check`]).
     #[error(transparent)]
     Params(#[from] super::ParamsError),
+    /// The model's preallocated buffers would be over the one memory budget (sagging FEM
+    /// cables hold each element's state: [`super::SAG_BYTES_PER_ELEMENT`]).
+    #[error(transparent)]
+    Memory(#[from] crate::memory_budget::OverBudget),
 }
 
 /// Errors of the offline reference pipeline ([`reference_analysis`](super::reference_analysis)

@@ -64,7 +64,10 @@ pub use error::{BuildError, EstimatorError, ReferenceError, RejectedInput, TminQ
 pub use estimate::{Estimate, Status};
 pub use forward::{EndEffector, BEHIND_EXIT_COMPLIANCE_FLOOR};
 pub use inverse::{TminAnswer, MAX_EVALUATIONS as TMIN_QUERY_MAX_EVALUATIONS};
-pub use modes::{BasisError, EeModalBasis};
+pub use modes::{
+    check_shapes_memory, shape_nodes, shapes_memory_bytes, BasisError, EeModalBasis, SHAPES_REMEDY,
+    SHAPE_BYTES_PER_NODE,
+};
 pub use params::{EstimatorParams, ParamsError, SagModelParams};
 pub use pose_model::{build_models, PoseModel};
 pub use reference::{
@@ -132,6 +135,7 @@ impl Estimator {
             return Ok(est);
         }
         let n = scene.n_cables();
+        check_model_memory(scene)?;
         let mut est = Estimator {
             scene: scene.clone(),
             params,
@@ -462,6 +466,28 @@ impl Estimator {
         e.stiffness_n_m = k6.fixed_view::<3, 3>(0, 0).into_owned();
         e.stiffness_dim = if self.scene.rigid { 6 } else { 3 };
     }
+}
+
+/// Memory a sagging FEM cable's model holds per element, bytes (its chords, tensions and
+/// recurrence state, preallocated when the estimator is built): 180 measured on the paper
+/// robot at N = 10⁵ and 3·10⁵ (154 and 442 MB resident for 8 cables), with margin.
+pub const SAG_BYTES_PER_ELEMENT: u64 = 200;
+
+/// Refuse an estimator whose preallocated model would be over the one memory budget: the
+/// sagging FEM cables' O(N) state (the taut models are O(1) in N).
+fn check_model_memory(scene: &Scene) -> Result<(), crate::memory_budget::OverBudget> {
+    if !scene.model.sag || scene.model.element == ElementKind::Continuous {
+        return Ok(());
+    }
+    let (n, c) = (scene.model.elements_per_cable, scene.n_cables());
+    let bytes = (n as u64)
+        .saturating_mul(c as u64)
+        .saturating_mul(SAG_BYTES_PER_ELEMENT);
+    crate::memory_budget::check(
+        || format!("the sagged model of {c} cables × {n} elements"),
+        bytes,
+        "use fewer elements per cable (the sagged FEM converges as 1/N²: docs/sag.md)",
+    )
 }
 
 /// Largest relative residual of the first eigenvalue an ok estimate may carry

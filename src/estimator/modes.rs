@@ -93,8 +93,66 @@ impl Estimator {
     }
 }
 
+/// Bytes of one node's displacement in a mode shape (a `Vector3<f64>`).
+pub const SHAPE_BYTES_PER_NODE: u64 = 24;
+
+/// Modes beyond the K asked for that a mode-shape computation holds at its peak: a cluster
+/// cut by K is completed, and the recovery's working arrays (each chain's node function)
+/// take about as much again; measured within 10 % on the paper robot at N = 10⁵
+/// (`modes --modes 1, 12, 48`: 89, 333, 934 MB against 134, 346, 1037 MB estimated).
+const SHAPE_EXTRA_MODES: u64 = 6;
+
+/// The nodes of one mode shape of `scene`'s model: each cable's N + 1 nodes (`fem`,
+/// `catenary`, sagging FEM), 2 (`massless`) or `continuous_samples` (`continuous`), and the
+/// end-effector's 2.
+pub fn shape_nodes(scene: &crate::scene::Scene, continuous_samples: usize) -> u64 {
+    use crate::scene::ElementKind;
+    let per_cable = match scene.model.element {
+        ElementKind::Continuous => continuous_samples as u64,
+        ElementKind::Massless => 2,
+        _ => scene.model.elements_per_cable as u64 + 1,
+    };
+    per_cable * scene.n_cables() as u64 + 2
+}
+
+/// The memory a computation holding the shapes of `modes` modes of `scene` needs at its
+/// peak, bytes: ([`SHAPE_EXTRA_MODES`] + `modes`) × [`shape_nodes`] × `bytes_per_node_mode`
+/// ([`SHAPE_BYTES_PER_NODE`] for one set of shapes; more when a caller holds two sets or
+/// their CSV text). Saturating.
+pub fn shapes_memory_bytes(
+    scene: &crate::scene::Scene,
+    modes: usize,
+    continuous_samples: usize,
+    bytes_per_node_mode: u64,
+) -> u64 {
+    (modes as u64)
+        .saturating_add(SHAPE_EXTRA_MODES)
+        .saturating_mul(shape_nodes(scene, continuous_samples))
+        .saturating_mul(bytes_per_node_mode)
+}
+
+/// What to change when mode shapes are over the memory budget.
+pub const SHAPES_REMEDY: &str =
+    "use fewer elements per cable or fewer modes; the frequencies alone (analyze) need no shapes";
+
+/// Refuse holding the shapes of `modes` modes of `scene` when [`shapes_memory_bytes`] is
+/// over the one memory budget ([`crate::memory_budget`]).
+pub fn check_shapes_memory(
+    scene: &crate::scene::Scene,
+    modes: usize,
+    continuous_samples: usize,
+    bytes_per_node_mode: u64,
+) -> Result<(), crate::memory_budget::OverBudget> {
+    let nodes = shape_nodes(scene, continuous_samples);
+    crate::memory_budget::check(
+        || format!("the mode shapes of {modes} modes × {nodes} nodes"),
+        shapes_memory_bytes(scene, modes, continuous_samples, bytes_per_node_mode),
+        SHAPES_REMEDY,
+    )
+}
+
 /// Why [`Estimator::ee_modal_basis`] has no basis.
-#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum BasisError {
     /// The last cycle was not ok, or the eigen solve failed.
     #[error(transparent)]
@@ -102,6 +160,9 @@ pub enum BasisError {
     /// The mode shapes could not be recovered.
     #[error(transparent)]
     Shapes(#[from] modal::ShapeError),
+    /// The shapes would need more memory than the budget (refused before allocating).
+    #[error(transparent)]
+    Memory(#[from] crate::memory_budget::OverBudget),
 }
 
 /// The end-effector's view of the first modes of one pose: what a time response needs.
@@ -153,6 +214,10 @@ impl Estimator {
             flexibility.view_mut((0, 0), (dim, dim)).copy_from(&inv);
         }
         let k = k.max(1);
+        // The whole shapes (structured engines) or the dense model's n × n matrices: each
+        // refused past the one memory budget before it allocates.
+        let samples = ShapeParams::default().continuous_samples;
+        check_shapes_memory(&self.scene, k, samples, SHAPE_BYTES_PER_NODE)?;
         if let Some((solver, models, geometry)) = self.cycle.taut_shapes_input() {
             let mut modes = vec![Mode::default(); k + modal::MAX_MULTIPLICITY as usize];
             let n = solver

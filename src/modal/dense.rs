@@ -33,9 +33,10 @@ pub fn assemble_rigid(
     assemble_general(models, ee_mass_kg, Some((inertia_kg_m2, arms_m, k_geo_rot)))
 }
 
-/// Memory the dense reference may use, bytes (2 GiB): a dense solve at this size already
+/// Memory the dense reference may use, bytes: the one budget of the offline work
+/// ([`crate::memory_budget::MEMORY_BUDGET_BYTES`], 2 GiB); a dense solve at this size already
 /// takes minutes, and beyond it the structured solver is the only sensible path.
-pub const DENSE_MEMORY_BUDGET_BYTES: u64 = 2 << 30;
+pub const DENSE_MEMORY_BUDGET_BYTES: u64 = crate::memory_budget::MEMORY_BUDGET_BYTES;
 
 /// Bytes per DOF² of a dense solve: K and M, the Cholesky factor and its copy, L⁻¹K, C and
 /// its symmetrised copy, the eigenvectors, the eigensolver's workspace and the mode shapes

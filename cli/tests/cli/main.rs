@@ -10,6 +10,7 @@ mod figures;
 mod frf;
 mod hidden_sag;
 mod map_shard;
+mod memory_budget;
 mod mode_shapes;
 mod sag_compare;
 mod simulate_hostile;
