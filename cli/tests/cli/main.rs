@@ -9,6 +9,7 @@ mod csv_pandas;
 mod figures;
 mod frf;
 mod hidden_sag;
+mod long_work;
 mod map_shard;
 mod memory_budget;
 mod mode_shapes;
