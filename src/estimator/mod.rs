@@ -506,7 +506,7 @@ pub const MAX_EIGEN_RESIDUAL: f64 = 1e-6;
 pub const EIGEN_RESIDUAL_ROUNDING: f64 = 1e6;
 
 /// The estimator's check of its own answer before it calls it ok: λ₁ (rad²/s²) finite and
-/// > 0; its relative `residual` at most [`MAX_EIGEN_RESIDUAL`] plus what rounding explains
+/// positive; its relative `residual` at most [`MAX_EIGEN_RESIDUAL`] plus what rounding explains
 /// ([`EIGEN_RESIDUAL_ROUNDING`] · ε·max|K|/(λ₁·max M_ii), `k6` the static stiffness, `m6` the
 /// end-effector's mass matrix); its end-effector `participation` finite; every entry of
 /// `k6` finite. Else [`EstimatorError::Unverified`] naming what failed. The guard behind

@@ -43,6 +43,8 @@ fn run_limited(args: &[&str]) -> (Output, u64) {
             Ok(())
         });
     }
+    // Reaped by wait4 below (which also gives the child's peak RSS), not by `Child::wait`.
+    #[allow(clippy::zombie_processes)]
     let child = cmd.spawn().expect("the binary runs");
     let mut status = 0;
     // SAFETY: an all-zero rusage is valid; wait4 fills it for our own child.
