@@ -133,7 +133,7 @@ pub fn run(a: &ModesArgs) -> Result<(), CliError> {
     if let Some(path) = &a.csv {
         write_csv(
             path,
-            shapes_csv(sc, &pose.geometry, &shapes),
+            shapes_csv(sc, &pose.geometry, &shapes, Some("CSV")),
             &process_command_line(),
         )?;
         println!("\nwrote {}", path.display());

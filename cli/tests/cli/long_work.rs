@@ -3,7 +3,8 @@
 //! progress bar with its ETA when stderr is a terminal (none into a pipe or a file). Each
 //! child is stopped once it has said what the test looks for (the runs take minutes to
 //! hours). Before, `frf --elements 1000000 --points 100000 --loss-factor 0.02` (17 h here)
-//! printed nothing until it ended.
+//! printed nothing until it ended, and `modes --csv` drew no bar while it built the CSV's
+//! text, nearly all of its minute at 10⁵ elements per cable.
 
 use std::io::{BufRead, BufReader, Read};
 use std::os::fd::{FromRawFd, OwnedFd};
@@ -132,9 +133,14 @@ fn long_runs_announce_their_estimate_and_draw_a_progress_bar_on_a_terminal() {
         );
     }
     // On a terminal: the estimate, then the bar with its unit and ETA (drawn once the run
-    // has gone on for a second).
-    for (args, unit) in [(&frf[..], "frequencies"), (&simulate[..], "samples")] {
-        let text = stderr_on_a_terminal(args, Duration::from_secs(6));
+    // has gone on for a second). `modes`' long part is its CSV's text (~3 s per mode at
+    // 10⁵ elements per cable here, after ~1.5 s of shapes): its bar counts modes written.
+    for (args, unit, wait_s) in [
+        (&frf[..], "frequencies", 6),
+        (&simulate[..], "samples", 6),
+        (&modes[..], "modes written", 15),
+    ] {
+        let text = stderr_on_a_terminal(args, Duration::from_secs(wait_s));
         println!("{}: {:?}", args[0], text.lines().last());
         assert!(text.contains("about "), "{args:?}: {text}");
         assert!(
