@@ -21,6 +21,7 @@
 pub mod accuracy;
 pub mod analysis;
 pub mod cost;
+pub mod identify;
 pub mod map;
 pub mod points;
 pub mod progress;

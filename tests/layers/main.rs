@@ -22,10 +22,12 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[(&str, u32)] = &[
     ("input_file", 0),
     ("memory_budget", 0),
+    ("output_file", 0),
     ("alloc_count", 0),
     ("status", 0),
     ("simd", 0),
     ("eig3", 0),
+    ("identify", 0),
     ("scene", 1),
     ("stats", 1),
     ("kinematics", 2),
