@@ -389,12 +389,9 @@ fn paper_robot_with_hidden_cables_table() {
     );
     // The document's pose and first row are this run's (it once named a pose the numbers
     // were not computed at): the pose as written, k_min to 1 N/m, the frequencies to 1 mHz.
-    let doc = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/docs/hidden-cable.md"
-    ))
-    .unwrap()
-    .replace('\n', " ");
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/hidden-cable.md"))
+        .unwrap()
+        .replace('\n', " ");
     let pose = format!("at its default pose ({}, {}, {}) m", p.x, p.y, p.z);
     assert!(doc.contains(&pose), "docs/hidden-cable.md lacks {pose:?}");
     let row = format!(

@@ -110,7 +110,8 @@ fn write_shapes(s: &Scene, modes: usize, path: &std::path::Path) -> Result<(), C
     let pose = super::modes::pose_model(s)?;
     let params = crate::modal::ShapeParams::default();
     let shapes = super::modes::shapes(&pose, modes, &params, true)?;
-    let csv = crate::report::shapes_csv::shapes_csv(&pose.scene, &pose.geometry, &shapes, Some("CSV"));
+    let csv =
+        crate::report::shapes_csv::shapes_csv(&pose.scene, &pose.geometry, &shapes, Some("CSV"));
     Ok(write_csv(path, csv, &process_command_line())?)
 }
 

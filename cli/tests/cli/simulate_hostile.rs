@@ -152,14 +152,11 @@ fn simulate_refuses_hostile_inputs_in_one_line() {
     let err = String::from_utf8_lossy(&o.stderr);
     let start = err.find("mode 0 at").expect("the refusal names the mode");
     let end = err.find(" (the time response").unwrap();
-    let doc = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../docs/vibration.md"
-    ))
-    .unwrap()
-    .split_whitespace()
-    .collect::<Vec<_>>()
-    .join(" ");
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/vibration.md"))
+        .unwrap()
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
     assert!(
         doc.contains(&err[start..end]),
         "docs/vibration.md lacks {:?}",
