@@ -32,8 +32,9 @@ fn spawn_piped(args: &[&str]) -> Child {
         .expect("the binary runs")
 }
 
-/// What `args` write on a pseudo-terminal as stderr within `wait`, then the child is killed.
-fn stderr_on_a_terminal(args: &[&str], wait: Duration) -> String {
+/// What `args` write on a pseudo-terminal as stderr until it holds `unit` and "ETA" (a bar)
+/// or `wait` has passed, then the child is killed.
+fn stderr_on_a_terminal(args: &[&str], unit: &str, wait: Duration) -> String {
     let (mut master, mut slave) = (0, 0);
     // SAFETY: openpty fills two descriptors; null name, termios and window size are allowed.
     let r = unsafe {
@@ -69,6 +70,10 @@ fn stderr_on_a_terminal(args: &[&str], wait: Duration) -> String {
     while start.elapsed() < wait {
         if let Ok(b) = rx.recv_timeout(Duration::from_millis(100)) {
             out.extend(b);
+            let text = String::from_utf8_lossy(&out);
+            if text.contains(unit) && text.contains("ETA") {
+                break;
+            }
         }
     }
     let _ = child.kill();
@@ -133,14 +138,15 @@ fn long_runs_announce_their_estimate_and_draw_a_progress_bar_on_a_terminal() {
         );
     }
     // On a terminal: the estimate, then the bar with its unit and ETA (drawn once the run
-    // has gone on for a second). `modes`' long part is its CSV's text (~3 s per mode at
-    // 10⁵ elements per cable here, after ~1.5 s of shapes): its bar counts modes written.
-    for (args, unit, wait_s) in [
-        (&frf[..], "frequencies", 6),
-        (&simulate[..], "samples", 6),
-        (&modes[..], "modes written", 15),
+    // has gone on for a second; here within ~10 s, 60 s allowed for a loaded machine).
+    // `modes`' long part is its CSV's text (~3.5 s per mode at 10⁵ elements per cable, after
+    // ~1.5 s of shapes): its bar counts modes written.
+    for (args, unit) in [
+        (&frf[..], "frequencies"),
+        (&simulate[..], "samples"),
+        (&modes[..], "modes written"),
     ] {
-        let text = stderr_on_a_terminal(args, Duration::from_secs(wait_s));
+        let text = stderr_on_a_terminal(args, unit, Duration::from_secs(60));
         println!("{}: {:?}", args[0], text.lines().last());
         assert!(text.contains("about "), "{args:?}: {text}");
         assert!(

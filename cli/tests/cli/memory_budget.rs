@@ -229,7 +229,8 @@ fn estimates_bound_the_measured_peak() {
     std::fs::create_dir_all(&dir).unwrap();
     let csv = dir.join("m.csv");
     let out = dir.join("sim");
-    let cases: Vec<(Vec<String>, Work<'static>, usize)> = vec![
+    let (csv, out) = (csv.to_str().unwrap(), out.to_str().unwrap());
+    let cases: Vec<(Vec<&str>, Work<'static>, usize)> = vec![
         (
             vec![
                 "modes",
@@ -238,10 +239,7 @@ fn estimates_bound_the_measured_peak() {
                 "30000",
                 "--modes",
                 "12",
-            ]
-            .into_iter()
-            .map(String::from)
-            .collect(),
+            ],
             Work::Modes {
                 modes: 12,
                 continuous_samples: 41,
@@ -257,10 +255,7 @@ fn estimates_bound_the_measured_peak() {
                 "30000",
                 "--modes",
                 "48",
-            ]
-            .into_iter()
-            .map(String::from)
-            .collect(),
+            ],
             Work::Modes {
                 modes: 48,
                 continuous_samples: 41,
@@ -269,7 +264,7 @@ fn estimates_bound_the_measured_peak() {
             30000,
         ),
         (
-            [
+            vec![
                 "modes",
                 "spatial-paper",
                 "--elements",
@@ -277,11 +272,8 @@ fn estimates_bound_the_measured_peak() {
                 "--modes",
                 "12",
                 "--csv",
-            ]
-            .into_iter()
-            .map(String::from)
-            .chain([csv.to_str().unwrap().to_string()])
-            .collect(),
+                csv,
+            ],
             Work::Modes {
                 modes: 12,
                 continuous_samples: 41,
@@ -290,7 +282,7 @@ fn estimates_bound_the_measured_peak() {
             10000,
         ),
         (
-            [
+            vec![
                 "simulate",
                 "spatial-paper",
                 "--elements",
@@ -304,11 +296,8 @@ fn estimates_bound_the_measured_peak() {
                 "--max-acceleration",
                 "1e4",
                 "--out",
-            ]
-            .into_iter()
-            .map(String::from)
-            .chain([out.to_str().unwrap().to_string()])
-            .collect(),
+                out,
+            ],
             Work::Simulate {
                 samples: 201,
                 update_every: 10,
@@ -317,8 +306,7 @@ fn estimates_bound_the_measured_peak() {
             10000,
         ),
     ];
-    for (args, work, n) in cases {
-        let a: Vec<&str> = args.iter().map(|s| s.as_str()).collect();
+    for (a, work, n) in cases {
         let (o, rss) = run_limited(&a);
         assert!(
             o.status.success(),
