@@ -7,11 +7,14 @@
 //!
 //! ```text
 //!     u(t) = Σ_{j≤K} φ_j q_j(t) + (F − Σ_{j≤K} φ_j φ_jᵀ/λ_j) f(t)
+//!          = F f(t) + Σ_{j≤K} φ_j (q_j(t) − φ_jᵀ f(t)/λ_j)
 //! ```
 //!
 //! F = D(0)⁻¹ the static flexibility of the end-effector: the modes left out answer
 //! quasi-statically (their frequencies far above the load's), so the error falls with K
-//! much faster than plain truncation's.
+//! much faster than plain truncation's. The second form is the quasi-static answer plus the
+//! kept modes' dynamic parts; [`ModalResponse::displacement_with`] takes F from the caller
+//! (a flexibility interpolated between two poses while the modes are held).
 //!
 //! **Every damping regime exactly.** Each step integrates the modal equations exactly for a
 //! force linear between the two samples (first-order hold): with the ramp's particular
@@ -275,6 +278,53 @@ impl ModalResponse {
             u += self.modes[j].phi * self.q[j];
         }
         u
+    }
+
+    /// The end-effector's displacement under the force `f` now with the static flexibility
+    /// `flexibility` in place of the basis's: F f + Σ φ_j (q_j − φ_jᵀf/λ_j) (the quasi-static
+    /// answer of that flexibility plus the kept modes' dynamic parts; equal to
+    /// [`Self::displacement`] when `flexibility` is the basis's F).
+    pub fn displacement_with(&self, f: &Vector6<f64>, flexibility: &Matrix6<f64>) -> Vector6<f64> {
+        let mut u = flexibility * f;
+        for j in 0..self.n {
+            let m = &self.modes[j];
+            u += m.phi * (self.q[j] - m.phi.dot(f) / m.lambda);
+        }
+        for r in self.dim..6 {
+            u[r] = 0.0;
+        }
+        u
+    }
+
+    /// Mode `j`'s dynamic part of the end-effector's displacement under the force `f` now:
+    /// φ_j (q_j − φ_jᵀf/λ_j) (what the mode adds to the quasi-static answer).
+    pub fn dynamic_part(&self, j: usize, f: &Vector6<f64>) -> Vector6<f64> {
+        let m = &self.modes[j];
+        m.phi * (self.q[j] - m.phi.dot(f) / m.lambda)
+    }
+
+    /// The end-effector's dynamic amplitude in each kept mode, m (rad for rotations):
+    /// |φ_j| √(d_j² + (q̇_j/ω_j)²), d_j = q_j − φ_jᵀf/λ_j the departure from the
+    /// quasi-static answer to the force `f` now, into `out` (its first [`Self::modes`]
+    /// entries). What a change of the mode's frequency by δω puts out of phase at a rate
+    /// δω per second.
+    pub fn dynamic_amplitudes(&self, f: &Vector6<f64>, out: &mut [f64]) {
+        for (j, o) in out.iter_mut().enumerate().take(self.n) {
+            let m = &self.modes[j];
+            let d = self.q[j] - m.phi.dot(f) / m.lambda;
+            let w = self.v[j] / m.omega;
+            *o = m.phi.norm() * (d * d + w * w).sqrt();
+        }
+    }
+
+    /// The basis's λ_j, rad²/s² (its first [`Self::modes`] entries are the modes').
+    pub fn lambda(&self, j: usize) -> f64 {
+        self.modes[j].lambda
+    }
+
+    /// The basis's end-effector shape part φ_j.
+    pub fn phi(&self, j: usize) -> &Vector6<f64> {
+        &self.modes[j].phi
     }
 
     /// Back to rest (no force).

@@ -2,7 +2,8 @@
 //! with no data rows, with a single row or two rows at the same time (a path of zero
 //! duration), with a NaN or an infinity, a CSV that does not exist, a `--move 0,0,0` (a move
 //! of zero length), `--duration 0` (and negative), `--dt 0` (and NaN), `--modal-ratio 1`
-//! (and NaN, and negative). Each is a one-line error naming the cause, exit code 1, no panic.
+//! (and NaN, and negative), `--tolerance` 0, 1 or NaN, `--modes` 0 or 257, `--update-every 0`.
+//! Each is a one-line error naming the cause, exit code 1, no panic.
 
 use std::path::PathBuf;
 use std::process::{Command, Output};
@@ -116,6 +117,24 @@ fn simulate_refuses_hostile_inputs_in_one_line() {
         (
             &["--move", "0.1,0,0", "--modal-ratio", "NaN"][..],
             "--modal-ratio NaN",
+        ),
+        (
+            &["--move", "0.1,0,0", "--tolerance", "0"][..],
+            "--tolerance 0",
+        ),
+        (
+            &["--move", "0.1,0,0", "--tolerance", "1"][..],
+            "--tolerance 1",
+        ),
+        (
+            &["--move", "0.1,0,0", "--tolerance", "NaN"][..],
+            "--tolerance NaN",
+        ),
+        (&["--move", "0.1,0,0", "--modes", "0"][..], "--modes 0"),
+        (&["--move", "0.1,0,0", "--modes", "257"][..], "--modes 257"),
+        (
+            &["--move", "0.1,0,0", "--update-every", "0"][..],
+            "--update-every must be",
         ),
     ] {
         let mut all = vec!["simulate", "spatial-paper", "--out", out];
