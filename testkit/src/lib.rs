@@ -13,6 +13,7 @@
 pub mod dense_fem;
 pub mod exact_response;
 pub mod hard_cases;
+pub mod modal_record;
 pub mod pinned_venv;
 pub mod sag_cases;
 pub mod sag_reference_py;
