@@ -65,8 +65,8 @@ pub fn exact_response(
         info.overdamped += usize::from(z > 1.0);
         info.zeta_max = info.zeta_max.max(z);
         let mut phi = Vector6::zeros();
-        for r in 0..dim {
-            phi[r] = u[(r, j)];
+        for (r, v) in phi.iter_mut().enumerate().take(dim) {
+            *v = u[(r, j)];
         }
         #[rustfmt::skip]
         let a = Matrix4::new(
@@ -78,12 +78,12 @@ pub fn exact_response(
         let prop = (a * dt).exp();
         let g = |s: usize| phi.dot(&loads[s]);
         let mut x = Vector4::new(0.0, 0.0, g(0) / w, 0.0);
-        for s in 1..loads.len() {
+        for (s, o) in out.iter_mut().enumerate().skip(1) {
             // The ramp of this interval: ġ/ω set at its start, g/ω carried (continuous).
             x[2] = g(s - 1) / w;
             x[3] = (g(s) - g(s - 1)) / dt / w;
             x = prop * x;
-            out[s] += phi.fixed_rows::<3>(0) * (x[0] / w);
+            *o += phi.fixed_rows::<3>(0) * (x[0] / w);
         }
     }
     (out, info)

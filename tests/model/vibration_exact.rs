@@ -2,7 +2,7 @@
 //! (`cablevib_testkit::exact_response`: every mode of a dense (K, M), each propagated by a
 //! matrix exponential): in every damping regime with every mode kept, and with the modes
 //! `simulate` chooses by default for its tolerance. The paper robot's dense FEM is
-//! assembled here from the scene's numbers (`cablevib_testkit::dense_fem`, none of the
+//! assembled in the tests from the scene's numbers (`hidden_cable::dense_ref`, none of the
 //! crate's chains); the rigid platform's and the pulley scene's are the crate's dense model
 //! (`Estimator::dense_matrices`, an assembly independent of the structured engine whose
 //! modes the response uses).
@@ -11,43 +11,22 @@ use cablevib::estimator::{Estimator, Tmin};
 use cablevib::kinematics::Pose;
 use cablevib::scene::{Damping, ElementKind, Scene};
 use cablevib::study::simulate::pilot::DEFAULT_TOLERANCE;
-use cablevib_testkit::dense_fem::{dense_with_hidden, FreeCable};
 use cablevib_testkit::exact_response::{
     assert_default_within_tolerance, crate_response, exact_response, move_loads, relative_error,
 };
-use nalgebra::{DMatrix, Matrix3, Vector3};
+use nalgebra::{DMatrix, Vector3};
 
-/// The dense FEM of the scene's taut cables at an end-effector point mass at `p` with the
-/// tensions `t` (N): elements (EA/l) e eᵀ + (T/l)(I − e eᵀ), consistent mass; DOF 0..3 the
-/// end-effector.
-fn taut_dense_fem(
-    scene: &Scene,
-    p: &Vector3<f64>,
-    t: &[f64],
-    n: usize,
-) -> (DMatrix<f64>, DMatrix<f64>) {
-    dense_with_hidden(scene, n, |ci, c| {
-        let d = p - c.anchor_m;
-        let len = d.norm();
-        let e = d / len;
-        let l = len / n as f64;
-        let eet = e * e.transpose();
-        FreeCable {
-            blocks: vec![eet * (c.ea_n() / l) + (Matrix3::identity() - eet) * (t[ci] / l); n],
-            element_mass_kg: c.mass_per_length_kg_m * l,
-            junction_dir: e,
-        }
-    })
-}
+use crate::hidden_cable::dense_ref;
 
 /// The paper's spatial robot (fem × 10, 219 DOF) at `p`: its estimator and the test's own
-/// dense (K, M) at the estimator's tensions.
+/// dense FEM (K, M) at the estimator's tensions (`hidden_cable::dense_ref`: elements
+/// (EA/l) e eᵀ + (T/l)(I − e eᵀ), consistent mass, from the scene's numbers).
 fn paper_at(p: Vector3<f64>) -> (Estimator, DMatrix<f64>, DMatrix<f64>) {
     let s = Scene::default_scene().with_model(ElementKind::Fem, 10);
     let mut est = Estimator::new(&s).unwrap();
     let e = *est.update(&Pose::at(p), Tmin::Scene);
     assert!(e.is_ok(), "{p:?}: {:?}", e.error);
-    let (k, m) = taut_dense_fem(&s, &p, e.tensions(), 10);
+    let (k, m) = dense_ref(&s, &p, e.tensions(), 10, false);
     (est, k, m)
 }
 

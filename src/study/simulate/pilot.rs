@@ -189,8 +189,7 @@ pub fn pilot(
     let reference = all
         .iter()
         .copied()
-        .filter(|&k| k <= MAX_RESPONSE_MODES && (whole || k < len))
-        .last()
+        .rfind(|&k| k <= MAX_RESPONSE_MODES && (whole || k < len))
         .unwrap_or(0);
     let ends: Vec<usize> = all.into_iter().filter(|&k| k <= reference).collect();
     let mut differences_m = vec![0.0f64; ends.len()];

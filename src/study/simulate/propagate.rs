@@ -194,9 +194,9 @@ pub(super) fn run(
         // error is within the budget (when the interval is chosen).
         let nm = resp.modes();
         resp.dynamic_amplitudes(&f_prev, &mut amplitude[..nm]);
-        for j in 0..nm {
-            phi2[j] = resp.phi(j).norm_squared();
-            lambda0[j] = resp.lambda(j);
+        for (j, (p, l)) in phi2.iter_mut().zip(lambda0.iter_mut()).enumerate().take(nm) {
+            *p = resp.phi(j).norm_squared();
+            *l = resp.lambda(j);
         }
         let (k1, next, error) = loop {
             let k1 = (k0 + interval).min(n - 1);
