@@ -11,6 +11,7 @@
 //! | [`sag_robot`] | sagged chains (`modal::sagged`) of a small robot, for the sagged FEM tests |
 //! | [`pinned_venv`] | a Python venv under target/ with pinned packages |
 pub mod dense_fem;
+pub mod exact_response;
 pub mod hard_cases;
 pub mod modal_record;
 pub mod pinned_venv;
