@@ -24,6 +24,8 @@
 pub mod cluster;
 pub mod covariance;
 pub mod decimate;
+pub mod fft;
+pub mod frf;
 pub mod params;
 pub mod ssi;
 pub mod stream;

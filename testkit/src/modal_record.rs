@@ -28,11 +28,22 @@ pub enum Output {
     Displacement,
 }
 
-/// A record: times and row-major samples of the sensed DOFs.
+/// A record: times and row-major samples of the sensed DOFs (and of the measured forces).
 pub struct Record {
     pub t_s: Vec<f64>,
     pub y: Vec<f64>,
     pub channels: usize,
+    /// The measured forces, row-major (empty under unmeasured ambient forcing).
+    pub u: Vec<f64>,
+    pub inputs: usize,
+}
+
+impl Record {
+    /// Sample k: the outputs, then the inputs.
+    pub fn sample(&self, k: usize) -> Vec<f64> {
+        let (l, m) = (self.channels, self.inputs);
+        [&self.y[k * l..(k + 1) * l], &self.u[k * m..(k + 1) * m]].concat()
+    }
 }
 
 /// Simulate `duration_s` at `rate_hz` under independent white-noise forces (unit variance,
@@ -41,6 +52,44 @@ pub struct Record {
 pub fn simulate(
     m: &Modal,
     sensors: &[usize],
+    out: Output,
+    rate_hz: f64,
+    duration_s: f64,
+    snr_db: f64,
+    seed: u64,
+) -> Record {
+    simulate_with(m, sensors, None, out, rate_hz, duration_s, snr_db, seed)
+}
+
+/// As [`simulate`], but the white-noise forces (unit variance, held over each step) act on
+/// the DOFs `forced` only and are measured exactly (the record's inputs, in that order).
+pub fn simulate_forced(
+    m: &Modal,
+    sensors: &[usize],
+    forced: &[usize],
+    out: Output,
+    rate_hz: f64,
+    duration_s: f64,
+    snr_db: f64,
+    seed: u64,
+) -> Record {
+    simulate_with(
+        m,
+        sensors,
+        Some(forced),
+        out,
+        rate_hz,
+        duration_s,
+        snr_db,
+        seed,
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn simulate_with(
+    m: &Modal,
+    sensors: &[usize],
+    forced: Option<&[usize]>,
     out: Output,
     rate_hz: f64,
     duration_s: f64,
@@ -72,11 +121,21 @@ pub fn simulate(
     let mut q = vec![[0.0f64; 2]; nm];
     let mut clean = vec![0.0; n * sensors.len()];
     let mut f = vec![0.0; dofs];
+    let nf = forced.map_or(0, |d| d.len());
+    let mut uv = vec![0.0; n * nf];
     // Burn-in of 20 s so the record starts in the stationary state.
     let burn = (20.0 * rate_hz) as usize;
     for k in 0..burn + n {
-        for v in f.iter_mut() {
-            *v = gauss(&mut r);
+        match forced {
+            None => f.iter_mut().for_each(|v| *v = gauss(&mut r)),
+            Some(ds) => {
+                for (i, &d) in ds.iter().enumerate() {
+                    f[d] = gauss(&mut r);
+                    if k >= burn {
+                        uv[(k - burn) * nf + i] = f[d];
+                    }
+                }
+            }
         }
         let mut y = vec![0.0; sensors.len()];
         for j in 0..nm {
@@ -111,6 +170,8 @@ pub fn simulate(
         t_s: (0..n).map(|k| k as f64 * h).collect(),
         y: yv,
         channels: l,
+        u: uv,
+        inputs: nf,
     }
 }
 
