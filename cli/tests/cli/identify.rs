@@ -13,11 +13,11 @@ use std::process::{Command, Output};
 const BIN: &str = env!("CARGO_BIN_EXE_cablevib");
 const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
 
-fn run(args: &[&str]) -> Output {
+pub(super) fn run(args: &[&str]) -> Output {
     Command::new(BIN).args(args).output().expect("run cablevib")
 }
 
-fn dir(name: &str) -> PathBuf {
+pub(super) fn dir(name: &str) -> PathBuf {
     let d = PathBuf::from(ROOT).join("target/tmp/identify").join(name);
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
@@ -25,7 +25,7 @@ fn dir(name: &str) -> PathBuf {
 }
 
 /// The chain of 5 masses (closed-form modes 5 … 18.7 Hz) measured at masses 1, 2, 4.
-fn chain() -> Modal {
+pub(super) fn chain() -> Modal {
     let n = 5usize;
     let m: f64 = 2.0;
     let s1 = (PI / 12.0).sin();
@@ -60,7 +60,7 @@ fn chain_record(duration_s: f64, seed: u64) -> (Modal, Record) {
 }
 
 /// The command failed with one line on stderr containing `want`.
-fn one_line(o: &Output, want: &str) {
+pub(super) fn one_line(o: &Output, want: &str) {
     assert!(!o.status.success());
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(e.trim().lines().count(), 1, "{e}");
@@ -103,12 +103,12 @@ fn write_csv(r: &Record, path: &Path, edit: impl Fn(usize, &mut String)) {
     std::fs::write(path, s).unwrap();
 }
 
-fn json_of(o: &Output) -> Value {
+pub(super) fn json_of(o: &Output) -> Value {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     serde_json::from_slice(&o.stdout).unwrap()
 }
 
-fn modes(v: &Value, w: usize) -> Vec<(f64, f64)> {
+pub(super) fn modes(v: &Value, w: usize) -> Vec<(f64, f64)> {
     v["windows"][w]["modes"]
         .as_array()
         .unwrap()

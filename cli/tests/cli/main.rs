@@ -10,6 +10,7 @@ mod figures;
 mod frf;
 mod hidden_sag;
 mod identify;
+mod identify_input;
 mod map_shard;
 mod mode_shapes;
 mod sag_compare;
