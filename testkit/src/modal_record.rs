@@ -63,6 +63,7 @@ pub fn simulate(
 
 /// As [`simulate`], but the white-noise forces (unit variance, held over each step) act on
 /// the DOFs `forced` only and are measured exactly (the record's inputs, in that order).
+#[allow(clippy::too_many_arguments)]
 pub fn simulate_forced(
     m: &Modal,
     sensors: &[usize],

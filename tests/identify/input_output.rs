@@ -91,7 +91,7 @@ fn chain_forced_at_one_mass() {
     let mut worst: f64 = 0.0;
     for k in 1..frf.lines() {
         let f = k as f64 * df;
-        if f < 1.0 || f > 45.0 {
+        if !(1.0..=45.0).contains(&f) {
             continue;
         }
         let far = sys
