@@ -126,7 +126,7 @@ fn chain_forced_at_one_mass() {
         worst.0, worst.1
     );
     for m in &w[0].modes {
-        // The coherence at a resonance dips where the window's resolution (0.15 Hz here)
+        // The coherence at a resonance dips where the window's resolution (0.16 Hz here)
         // is not fine against the half-power bandwidth (2ζf = 0.1 Hz at 5 Hz): reported,
         // not a criterion.
         println!("{:.4} Hz: coherence {:.3}", m.frequency_hz, m.coherence);
