@@ -4,6 +4,7 @@
 //! known ones. Written independently of the identifier.
 
 use crate::Rng;
+use std::f64::consts::PI;
 
 /// A standard normal sample (Box–Muller).
 pub fn gauss(r: &mut Rng) -> f64 {
@@ -26,6 +27,46 @@ pub struct Modal {
 pub enum Output {
     Acceleration,
     Displacement,
+}
+
+/// A fixed–fixed chain of 5 equal masses m = 2 and springs k: ω_j = 2√(k/m) sin(jπ/12)
+/// (k set by `f1_hz`), mass-normalised φ_j(i) = √(2/(6m)) sin(i j π/6) (i = 1 … 5).
+pub fn chain(f1_hz: f64, zetas: &[f64]) -> Modal {
+    let n = 5;
+    let m: f64 = 2.0;
+    let s1 = (PI / (2.0 * (n + 1) as f64)).sin();
+    Modal {
+        frequencies_hz: (1..=n)
+            .map(|j| f1_hz * (j as f64 * PI / (2.0 * (n + 1) as f64)).sin() / s1)
+            .collect(),
+        zetas: zetas.to_vec(),
+        shapes: (1..=n)
+            .map(|j| {
+                (1..=n)
+                    .map(|i| {
+                        (2.0 / ((n + 1) as f64 * m)).sqrt()
+                            * (i as f64 * j as f64 * PI / (n + 1) as f64).sin()
+                    })
+                    .collect()
+            })
+            .collect(),
+    }
+}
+
+/// Two equal oscillators (m = 1.5) coupled to modes 1 % apart, 10 and 10.1 Hz (in-phase and
+/// anti-phase shapes on DOFs 1, 2), and a third at 6 Hz on DOF 3; ζ 1 %, 0.8 %, 1 %.
+pub fn close_pair() -> Modal {
+    let m: f64 = 1.5;
+    let a = 1.0 / (2.0 * m).sqrt();
+    Modal {
+        frequencies_hz: vec![6.0, 10.0, 10.1],
+        zetas: vec![0.01, 0.008, 0.01],
+        shapes: vec![
+            vec![0.0, 0.0, 1.0 / m.sqrt()],
+            vec![a, a, 0.0],
+            vec![a, -a, 0.0],
+        ],
+    }
 }
 
 /// A record: times and row-major samples of the sensed DOFs (and of the measured forces).

@@ -10,32 +10,11 @@
 
 use cablevib::identify::ssi::mac;
 use cablevib::identify::{Identifier, IdentifyParams, WindowResult, WindowStatus};
-use cablevib_testkit::modal_record::{check_modes, simulate_forced, Modal, Output, Record};
+use cablevib_testkit::modal_record::{
+    chain, check_modes, close_pair, simulate_forced, Modal, Output, Record,
+};
 use num_complex::Complex64;
 use std::f64::consts::PI;
-
-/// The 5-mass chain of `closed_form` (ω_j = 2√(k/m) sin(jπ/12)).
-fn chain(f1_hz: f64, zetas: &[f64]) -> Modal {
-    let n = 5;
-    let m: f64 = 2.0;
-    let s1 = (PI / (2.0 * (n + 1) as f64)).sin();
-    Modal {
-        frequencies_hz: (1..=n)
-            .map(|j| f1_hz * (j as f64 * PI / (2.0 * (n + 1) as f64)).sin() / s1)
-            .collect(),
-        zetas: zetas.to_vec(),
-        shapes: (1..=n)
-            .map(|j| {
-                (1..=n)
-                    .map(|i| {
-                        (2.0 / ((n + 1) as f64 * m)).sqrt()
-                            * (i as f64 * j as f64 * PI / (n + 1) as f64).sin()
-                    })
-                    .collect()
-            })
-            .collect(),
-    }
-}
 
 fn run(rec: &Record, p: IdentifyParams) -> Vec<WindowResult> {
     let mut id = Identifier::with_inputs(rec.channels, rec.inputs, p).unwrap();
@@ -140,17 +119,7 @@ fn chain_forced_at_one_mass() {
 /// anti-phase shapes.
 #[test]
 fn two_inputs_modes_one_percent_apart() {
-    let m: f64 = 1.5;
-    let a = 1.0 / (2.0 * m).sqrt();
-    let sys = Modal {
-        frequencies_hz: vec![6.0, 10.0, 10.1],
-        zetas: vec![0.01, 0.008, 0.01],
-        shapes: vec![
-            vec![0.0, 0.0, 1.0 / m.sqrt()],
-            vec![a, a, 0.0],
-            vec![a, -a, 0.0],
-        ],
-    };
+    let sys = close_pair();
     let rec = simulate_forced(
         &sys,
         &[0, 1, 2],

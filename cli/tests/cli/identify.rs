@@ -4,9 +4,8 @@
 //! both files, the CSV columns `calibrate` reads, the figure, the pairing with the model, and
 //! hostile records.
 
-use cablevib_testkit::modal_record::{simulate, Modal, Output as Measured, Record};
+use cablevib_testkit::modal_record::{self, simulate, Modal, Output as Measured, Record};
 use serde_json::Value;
-use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -26,22 +25,7 @@ pub(super) fn dir(name: &str) -> PathBuf {
 
 /// The chain of 5 masses (closed-form modes 5 … 18.7 Hz) measured at masses 1, 2, 4.
 pub(super) fn chain() -> Modal {
-    let n = 5usize;
-    let m: f64 = 2.0;
-    let s1 = (PI / 12.0).sin();
-    Modal {
-        frequencies_hz: (1..=n)
-            .map(|j| 5.0 * (j as f64 * PI / 12.0).sin() / s1)
-            .collect(),
-        zetas: vec![0.01, 0.005, 0.02, 0.01, 0.008],
-        shapes: (1..=n)
-            .map(|j| {
-                (1..=n)
-                    .map(|i| (2.0 / (6.0 * m)).sqrt() * (i as f64 * j as f64 * PI / 6.0).sin())
-                    .collect()
-            })
-            .collect(),
-    }
+    modal_record::chain(5.0, &[0.01, 0.005, 0.02, 0.01, 0.008])
 }
 
 /// The chain's record: 3 accelerations with 20 dB sensor noise, `duration_s` at 1 kHz.

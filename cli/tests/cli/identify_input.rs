@@ -8,7 +8,9 @@
 //! max(10 %, 3σ_ζ).
 
 use super::identify::{chain, dir, json_of, modes, one_line, run};
-use cablevib_testkit::modal_record::{simulate, simulate_forced, Modal, Output as Measured};
+use cablevib_testkit::modal_record::{
+    close_pair, simulate, simulate_forced, Modal, Output as Measured,
+};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -172,21 +174,10 @@ fn pyoma2(py: &Path, csv: &Path) -> (Vec<(f64, f64)>, f64) {
 #[test]
 fn pyoma2_ssi_cov_beside_identify_on_the_same_records() {
     let d = dir("pyoma2");
-    let m: f64 = 1.5;
-    let a = 1.0 / (2.0 * m).sqrt();
-    let pair = Modal {
-        frequencies_hz: vec![6.0, 10.0, 10.1],
-        zetas: vec![0.01, 0.008, 0.01],
-        shapes: vec![
-            vec![0.0, 0.0, 1.0 / m.sqrt()],
-            vec![a, a, 0.0],
-            vec![a, -a, 0.0],
-        ],
-    };
     let py = pyoma2_python();
     for (name, sys, sensors, seed) in [
         ("chain", chain(), vec![0, 1, 3], 11),
-        ("pair", pair, vec![0, 1, 2], 13),
+        ("pair", close_pair(), vec![0, 1, 2], 13),
     ] {
         let rec = simulate(
             &sys,
