@@ -47,23 +47,30 @@ def record(tmp_path, forced=False):
     return out + (force,) if forced else out
 
 
-def test_identify_equals_the_command_line_and_finds_the_modes(tmp_path, cli_json):
-    t, y, path, f_true, z_true = record(tmp_path)
-    py = cablevib.identify(t, y, to_hz=30.0)
-    cli = cli_json("identify", str(path), "--to-hz", "30")
+def same_and_known(py, cli, f_true, z_true, keys):
+    """Window 0 of the binding and of the command line: the same status and modes (`keys`
+    equal to the last bit), each within the record's statistical limits (docs/identify.md:
+    3σ in frequency and damping) of the known mode."""
     wp, wc = py["windows"][0], cli["windows"][0]
     assert wp["status"] == wc["status"] == "ok"
-    for k in ("t_start_s", "t_end_s", "samples"):
-        assert wp[k] == wc[k]
     assert len(wp["modes"]) == len(wc["modes"]) == 2
     for mp, mc, f, z in zip(wp["modes"], wc["modes"], f_true, z_true):
-        for k in ("frequency_hz", "damping_ratio", "frequency_std_hz", "damping_ratio_std"):
+        for k in keys:
             assert mp[k] == mc[k], k
-        # The record's statistical limits (docs/identify.md): 3σ in frequency and damping.
         w = 2 * math.pi * f
         sf, sz = math.sqrt(z / (w * 60.0)), 1.0 / math.sqrt(z * w * 60.0)
         assert abs(mp["frequency_hz"] - f) / f <= max(3 * sf, 1e-3)
         assert abs(mp["damping_ratio"] - z) / z <= max(3 * sz, 0.1)
+
+
+def test_identify_equals_the_command_line_and_finds_the_modes(tmp_path, cli_json):
+    t, y, path, f_true, z_true = record(tmp_path)
+    py = cablevib.identify(t, y, to_hz=30.0)
+    cli = cli_json("identify", str(path), "--to-hz", "30")
+    for k in ("t_start_s", "t_end_s", "samples"):
+        assert py["windows"][0][k] == cli["windows"][0][k]
+    same_and_known(py, cli, f_true, z_true,
+                   ("frequency_hz", "damping_ratio", "frequency_std_hz", "damping_ratio_std"))
 
 
 def test_identify_refusals():
@@ -85,15 +92,7 @@ def test_identify_with_a_measured_input_equals_the_command_line(tmp_path, cli_js
     py = cablevib.identify(t, y, to_hz=30.0, inputs=force)
     cli = cli_json("identify", str(path), "--to-hz", "30", "--input", "fx")
     assert cli["method"] == "h1-era"
-    wp, wc = py["windows"][0], cli["windows"][0]
-    assert wp["status"] == wc["status"] == "ok"
-    assert len(wp["modes"]) == len(wc["modes"]) == 2
-    for mp, mc, f, z in zip(wp["modes"], wc["modes"], f_true, z_true):
-        for k in ("frequency_hz", "damping_ratio", "frequency_std_hz", "coherence"):
-            assert mp[k] == mc[k], k
-        w = 2 * math.pi * f
-        sf, sz = math.sqrt(z / (w * 60.0)), 1.0 / math.sqrt(z * w * 60.0)
-        assert abs(mp["frequency_hz"] - f) / f <= max(3 * sf, 1e-3)
-        assert abs(mp["damping_ratio"] - z) / z <= max(3 * sz, 0.1)
+    same_and_known(py, cli, f_true, z_true,
+                   ("frequency_hz", "damping_ratio", "frequency_std_hz", "coherence"))
     with pytest.raises(cablevib.CablevibError, match="shape"):
         cablevib.identify(t, y, to_hz=30.0, inputs=force[:-1])
