@@ -7,7 +7,7 @@ use crate::error::CablevibError;
 use crate::scene::PyScene;
 use cablevib::estimator::{Estimator, PoseModel, Tmin};
 use cablevib::kinematics::Pose;
-use cablevib::modal::{frequency_grid, receptance_over, FrfError, ModalParams, ModalSolver};
+use cablevib::modal::{frequency_grid, FrfError, ModalParams, ModalSolver};
 use cablevib::scene::{
     Damping, ElementKind, Scene, MAX_LOSS_FACTOR, MAX_MODAL_RATIO, MAX_RAYLEIGH_ALPHA_PER_S,
     MAX_RAYLEIGH_BETA_S,
@@ -107,13 +107,14 @@ pub fn frf<'py>(
             let pose = PoseModel::new(&s).map_err(|e| e.to_string())?;
             let mut solver = ModalSolver::new(ModalParams::default());
             pose.load(&mut solver);
-            let h = receptance_over(
+            // The command line's computation, its memory checked first (the one budget).
+            let h = cablevib::study::cost::receptance(
+                &pose,
                 &mut solver,
-                &pose.models,
-                &pose.geometry.arm_m,
                 &damping,
                 &freqs,
                 MODAL_CUTOFF_RATIO * to_hz,
+                None,
             )
             .map_err(|e| e.to_string())?;
             Ok((h, pose.dim()))

@@ -190,6 +190,8 @@ pub struct SimulateConfig {
     pub settle_s: f64,
     /// Largest path acceleration accepted, m/s².
     pub max_acceleration_m_s2: f64,
+    /// Label of the progress bar drawn on a terminal (None: no bar).
+    pub progress: Option<&'static str>,
 }
 
 impl Default for SimulateConfig {
@@ -199,6 +201,7 @@ impl Default for SimulateConfig {
             update_every: 10,
             settle_s: 2.0,
             max_acceleration_m_s2: DEFAULT_MAX_ACCELERATION_M_S2,
+            progress: None,
         }
     }
 }
@@ -301,6 +304,9 @@ pub fn simulate(
         path.positions_m.extend(std::iter::repeat_n(last, extra));
     }
     let n = path.positions_m.len();
+    // The memory of the whole run (two bases across an update, the path and its
+    // deviation), refused past the one budget before anything is computed.
+    super::cost::estimate_cost(scene, &simulate_work(n, cfg)).check_memory()?;
     let mut est = estimator(scene)?;
     let damping = scene.damping;
     let dim = if scene.rigid { 6 } else { 3 };
@@ -318,7 +324,11 @@ pub fn simulate(
     let mut ee_mass = nalgebra::Matrix6::zeros();
     let mut f_prev = Vector6::zeros();
     let mut prev_shapes = None;
+    let bar = super::progress::Progress::counting(cfg.progress, n, "samples");
     for k in 0..n {
+        if k % cfg.update_every == 0 && k > 0 {
+            bar.advance(cfg.update_every);
+        }
         let t = k as f64 * path.dt_s;
         let p = path.positions_m[k];
         if k % cfg.update_every == 0 {
@@ -372,8 +382,30 @@ pub fn simulate(
         out.command_m.push(p);
         out.deviation_m.push(u.fixed_rows::<3>(0).into_owned());
     }
+    bar.finish();
     out.stops = stop_residuals(&out.t_s, &out.command_m, &out.deviation_m);
     Ok(out)
+}
+
+/// The work of [`simulate`] on a path of `samples` samples (with its settling time), for
+/// [`super::cost::estimate_cost`].
+pub fn simulate_work(samples: usize, cfg: &SimulateConfig) -> super::cost::Work<'static> {
+    super::cost::Work::Simulate {
+        samples,
+        update_every: cfg.update_every,
+        modes: cfg.modes,
+    }
+}
+
+/// The samples [`simulate`] runs for `path` with `cfg`: the path's, and the settling time
+/// after a path that ends at rest.
+pub fn simulated_samples(path: &SampledPath, cfg: &SimulateConfig) -> usize {
+    let extra = if path.at_rest_ends && cfg.settle_s.is_finite() && cfg.settle_s >= 0.0 {
+        (cfg.settle_s / path.dt_s).round() as usize
+    } else {
+        0
+    };
+    path.positions_m.len() + extra
 }
 
 /// Residual vibration after each stop of `command` (module docs).

@@ -269,6 +269,7 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
         update_every: a.update_every,
         settle_s: a.settle,
         max_acceleration_m_s2: a.path.max_acceleration,
+        progress: Some("simulate"),
     };
     a.path.check(&path)?;
     outln!(
@@ -279,6 +280,11 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
         a.modes,
         a.update_every
     )?;
+    let samples = study::simulated_samples(&path, &cfg);
+    let mut cost = crate::study::cost::estimate_cost(&s, &study::simulate_work(samples, &cfg));
+    // Every shaper is one more run of the same path (longer by the shaper's delay).
+    cost.seconds *= a.shaper.len() as f64;
+    super::modes::announce(&cost)?;
     let mut runs = Vec::new();
     for &sh in &a.shaper {
         let t0 = Instant::now();

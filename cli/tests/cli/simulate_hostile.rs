@@ -2,7 +2,8 @@
 //! with no data rows, with a single row or two rows at the same time (a path of zero
 //! duration), with a NaN or an infinity, a CSV that does not exist, a `--move 0,0,0` (a move
 //! of zero length), `--duration 0` (and negative), `--dt 0` (and NaN), `--modal-ratio 1`
-//! (and NaN, and negative). Each is a one-line error naming the cause, exit code 1, no panic.
+//! (and NaN, and negative), a damping that leaves a mode overdamped (docs/vibration.md lists
+//! it). Each is a one-line error naming the cause, exit code 1, no panic.
 
 use std::path::PathBuf;
 use std::process::{Command, Output};
@@ -123,6 +124,44 @@ fn simulate_refuses_hostile_inputs_in_one_line() {
         let o = run(&all);
         assert_one_line_error(&format!("{args:?}"), &o, needle);
     }
+    // A scene whose damping leaves one of the K modes critically or over-damped (Rayleigh
+    // β = 0.05 s: ζ = βω/2 = 1.76 at 11.2 Hz): the time response takes underdamped modes
+    // only (docs/vibration.md's list).
+    let scene = d.join("overdamped.toml");
+    let text = format!(
+        "{}\n[damping]\nrayleigh_beta = 0.05\n",
+        cablevib::scene::DEFAULT_SCENE_TOML
+    );
+    std::fs::write(&scene, text).unwrap();
+    let o = run(&[
+        "simulate",
+        scene.to_str().unwrap(),
+        "--move",
+        "0.1,0,0",
+        "--elements",
+        "10",
+        "--out",
+        out,
+    ]);
+    assert_one_line_error(
+        "overdamped",
+        &o,
+        "is not in [0, 1) (the time response takes underdamped modes only)",
+    );
+    // docs/vibration.md lists this refusal with the message this scene gives.
+    let err = String::from_utf8_lossy(&o.stderr);
+    let start = err.find("mode 0 at").expect("the refusal names the mode");
+    let end = err.find(" (the time response").unwrap();
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/vibration.md"))
+        .unwrap()
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
+    assert!(
+        doc.contains(&err[start..end]),
+        "docs/vibration.md lacks {:?}",
+        &err[start..end]
+    );
     let _ = std::fs::remove_dir_all(&d);
 }
 
