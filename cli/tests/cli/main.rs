@@ -10,6 +10,7 @@ mod figures;
 mod frf;
 mod hidden_sag;
 mod identify;
+mod identify_input;
 mod long_work;
 mod map_shard;
 mod memory_budget;

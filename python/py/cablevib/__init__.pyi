@@ -167,8 +167,10 @@ def identify(
     max_damping: float = 0.2,
     window: Optional[float] = None,
     overlap: float = 0.5,
+    inputs: Optional[_Arr] = None,
 ) -> Dict[str, Any]:
-    """Modal identification (SSI-cov) of ``t`` (N, s) and ``channels`` (N × l or N): what
+    """Modal identification (SSI-cov; with ``inputs``, measured forces N × m or N, H1 and its
+    modal fit, as ``--input``) of ``t`` (N, s) and ``channels`` (N × l or N): what
     ``cablevib identify --json`` prints per window without the model: ``{"windows":
     [{"t_start_s", "t_end_s", "status", "modes": [{"frequency_hz", "damping_ratio",
     "frequency_std_hz", "damping_ratio_std", "shape_re", "shape_im", ...}]}]}``, modes
