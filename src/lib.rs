@@ -75,6 +75,7 @@ pub mod input_file;
 mod simd;
 pub mod status;
 // Layer 1
+pub mod measured;
 pub mod scene;
 pub mod stats;
 // Layer 2

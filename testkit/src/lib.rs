@@ -16,6 +16,7 @@ pub mod pinned_venv;
 pub mod sag_cases;
 pub mod sag_reference_py;
 pub mod sag_robot;
+pub mod vibration;
 
 /// The allocator every test that counts allocations runs under: `count_allocations!();` at
 /// the root of a test binary (its `main.rs`) sets [`cablevib::alloc_count::CountingAlloc`]

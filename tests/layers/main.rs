@@ -27,6 +27,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("eig3", 0),
     ("scene", 1),
     ("stats", 1),
+    ("measured", 1),
     ("kinematics", 2),
     ("caspr", 2),
     ("elastic_catenary", 2),
