@@ -104,21 +104,20 @@ pub use attributes::{
     schema_version_value, ALL_ATTRIBUTE_KEYS, ATTR_CABLEVIB_VERSION, ATTR_ELEMENTS_PER_CABLE,
     ATTR_ELEMENT_MODEL, ATTR_SCENE, ATTR_SCHEMA_VERSION, ATTR_UNITS, UNITS,
 };
+/// The measured-frequency status codes are the core's (`cablevib::measured`): one definition
+/// for the tracker and the wire.
+pub use cablevib::measured::MeasuredStatus;
 pub use compat::{explain_publish_subscribe_mismatch, explain_request_response_mismatch, TypeInfo};
 pub use messages::{
     EstimateSample, MarginRequest, MarginResponse, Message, PoseSample, SchemaError, TminSetpoint,
     VibrationSample, EE_MODE_AGE_UNKNOWN, IDENTITY_QUATERNION, MEASURED_AGE_UNKNOWN,
     REQUIRED_F1_MAX_HZ, REQUIRED_F1_MIN_HZ, T_MIN_AGE_UNKNOWN, VIBRATION_FLAG_ANGULAR_VELOCITY,
 };
-/// The measured-frequency status codes are the core's (`cablevib::measured`): one definition
-/// for the tracker and the wire.
-pub use cablevib::measured::MeasuredStatus;
 pub use names::{
     check_instance, prefixed, InstanceError, ServiceNames, ALL_SERVICES, EVENT_ID_ESTIMATE,
     EVENT_ID_MARGIN_REQUEST, EVENT_ID_MARGIN_RESPONSE, EVENT_ID_POSE, EVENT_ID_T_MIN,
     EVENT_ID_VIBRATION, INSTANCE_CHARACTERS, MAX_INSTANCE_LEN, SERVICE_ESTIMATE, SERVICE_MARGIN,
-    SERVICE_POSE, SERVICE_T_MIN, SERVICE_VIBRATION, SERVICE_WAKE_CONTROLLER,
-    SERVICE_WAKE_SERVICE,
+    SERVICE_POSE, SERVICE_T_MIN, SERVICE_VIBRATION, SERVICE_WAKE_CONTROLLER, SERVICE_WAKE_SERVICE,
 };
 pub use status::{status_str, StatusCode, StatusText};
 

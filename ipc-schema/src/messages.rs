@@ -8,8 +8,8 @@ use core::fmt::Debug;
 use iceoryx2::prelude::ZeroCopySend;
 
 use crate::status::StatusCode;
-use cablevib::measured::MeasuredStatus;
 use crate::{MAX_CABLES, MAX_STIFFNESS_DIM};
+use cablevib::measured::MeasuredStatus;
 
 /// What every cablevib message type provides besides its fields.
 pub trait Message: ZeroCopySend + Copy + Debug + Default + PartialEq + 'static {

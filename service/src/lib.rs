@@ -33,6 +33,7 @@
 
 pub mod bench;
 pub mod demo;
+pub mod demo_accel;
 mod demo_hold;
 pub mod demo_shape;
 pub mod hold;
@@ -48,7 +49,7 @@ use core::sync::atomic::AtomicBool;
 use clap::ValueEnum;
 
 // The core's modules, under the paths the service's files name (`crate::scene::...`).
-use cablevib::{alloc_count, estimator, kinematics, scene, trajectory};
+use cablevib::{alloc_count, estimator, kinematics, measured, scene, study, trajectory};
 
 use crate::estimator::BuildError;
 use crate::scene::{Scene, SceneError};
@@ -171,6 +172,9 @@ pub struct DemoConfig {
     /// Shape the replay's poses online with this shaper at the live end-effector mode
     /// (None: the poses as the trajectory gives them).
     pub shape: Option<crate::trajectory::shaping::ShaperKind>,
+    /// Publish the synthetic accelerometer's samples ([`demo_accel`]) on the vibration
+    /// service (demos of at most [`demo_accel::MAX_SECONDS`]).
+    pub accelerometer: bool,
 }
 
 /// What `cablevib bench-ipc` measures (the scene is passed beside it).

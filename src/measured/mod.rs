@@ -111,4 +111,3 @@ impl MeasuredStatus {
         matches!(self, MeasuredStatus::Ok)
     }
 }
-

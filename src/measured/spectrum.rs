@@ -60,9 +60,13 @@ impl Track {
 enum Phase {
     Idle,
     /// Summing the window's channels (and its missing places) up to sample `k`.
-    Mean { k: usize },
+    Mean {
+        k: usize,
+    },
     /// Copying the window, mean removed and Hann-weighted, up to sample `k`.
-    Copy { k: usize },
+    Copy {
+        k: usize,
+    },
     /// Power of frequency `j` of track `track`'s grid (or of its refinement), summed up to
     /// sample `k`.
     Bins {

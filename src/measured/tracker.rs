@@ -40,10 +40,7 @@ impl Measured {
 
     /// The window centre of the measurement (either track), ns.
     pub fn window_centre_ns(&self) -> Option<u64> {
-        self.first
-            .or(self.ee_mode)
-            .ok()
-            .map(|m| m.window_centre_ns)
+        self.first.or(self.ee_mode).ok().map(|m| m.window_centre_ns)
     }
 }
 
@@ -137,7 +134,8 @@ impl VibrationTracker {
         if self.eval.is_idle() && !self.start_evaluation() {
             return 0;
         }
-        let (units, finished, overrun) = self.eval.work(&self.input.ring, self.params.work_per_poll);
+        let (units, finished, overrun) =
+            self.eval.work(&self.input.ring, self.params.work_per_poll);
         if overrun {
             self.overruns += 1;
         } else if finished && self.eval.run_id == self.input.run_id {

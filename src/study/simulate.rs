@@ -35,6 +35,7 @@ use crate::modal::response::{ModalResponse, MAX_RESPONSE_MODES};
 use crate::scene::{Damping, Scene};
 use crate::trajectory::shaping::{OnlineShaper, ShaperKind, DEFAULT_MIN_FREQUENCY_HZ};
 use crate::trajectory::{Samples, Trajectory};
+use core::ops::AddAssign;
 use nalgebra::{Vector3, Vector6};
 
 /// Default largest path acceleration accepted, m/s² (20 g: a path sampled from a jump
@@ -122,9 +123,9 @@ impl SampledPath {
         })
     }
 
-    /// The acceleration of sample k (central second difference; at rest beyond the ends
+    /// The acceleration of sample k, m/s² (central second difference; at rest beyond the ends
     /// when `at_rest_ends`, else the neighbour's value).
-    fn acceleration(&self, k: usize) -> Vector3<f64> {
+    pub fn acceleration(&self, k: usize) -> Vector3<f64> {
         let n = self.positions_m.len();
         let p = &self.positions_m;
         let h2 = self.dt_s * self.dt_s;
@@ -278,6 +279,19 @@ pub fn simulate(
     path: &SampledPath,
     cfg: &SimulateConfig,
 ) -> Result<SimulateResult, StudyError> {
+    simulate_forced(scene, path, cfg, |_| Vector3::zeros())
+}
+
+/// [`simulate`] with an external force on the end-effector besides the path's inertial
+/// load: `force_n(k)` (N, base frame) at sample k, held linearly between samples like the
+/// load (e.g. white noise standing for the disturbances a real robot feels, which keep its
+/// modes ringing).
+pub fn simulate_forced(
+    scene: &Scene,
+    path: &SampledPath,
+    cfg: &SimulateConfig,
+    mut force_n: impl FnMut(usize) -> Vector3<f64>,
+) -> Result<SimulateResult, StudyError> {
     if !(1..=MAX_RESPONSE_MODES).contains(&cfg.modes) {
         return Err(StudyError::Usage(format!(
             "--modes {}: must be in 1..={MAX_RESPONSE_MODES}",
@@ -360,7 +374,8 @@ pub fn simulate(
         let a = path.acceleration(k);
         let mut a6 = Vector6::zeros();
         a6.fixed_rows_mut::<3>(0).copy_from(&a);
-        let f = -(ee_mass * a6);
+        let mut f = -(ee_mass * a6);
+        f.fixed_rows_mut::<3>(0).add_assign(&force_n(k));
         if k == 0 {
             f_prev = f;
         } else {

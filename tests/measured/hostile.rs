@@ -53,7 +53,8 @@ fn refused_samples_are_counted_and_the_measurement_survives() {
         let mut x = clean(&mut rng, seq);
         let mut t = seq * DT_NS;
         if seq % 250 == 0 {
-            x[seq as usize % 3] = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY][(seq / 250) as usize % 3];
+            x[seq as usize % 3] =
+                [f64::NAN, f64::INFINITY, f64::NEG_INFINITY][(seq / 250) as usize % 3];
             invalid += 1;
         } else if seq % 997 == 0 {
             t -= 3 * DT_NS; // behind the previous sample's time
@@ -67,13 +68,19 @@ fn refused_samples_are_counted_and_the_measurement_survives() {
         );
         if seq % 500 == 1 && seq > 1 {
             // The same sample again (a resend): refused.
-            assert_eq!(tr.push(seq, t, x), PushOutcome::Refused(Refusal::OutOfOrder));
+            assert_eq!(
+                tr.push(seq, t, x),
+                PushOutcome::Refused(Refusal::OutOfOrder)
+            );
             dup += 1;
         }
         assert!(tr.work() <= tr.params().work_per_poll);
     }
     let c = tr.counters();
-    assert_eq!((c.invalid, c.out_of_order, c.time_not_increasing), (invalid, dup, back));
+    assert_eq!(
+        (c.invalid, c.out_of_order, c.time_not_increasing),
+        (invalid, dup, back)
+    );
     assert_eq!(c.lost, 0, "every missing place was a refusal");
     assert_eq!(c.filled, invalid + back);
     assert_eq!(c.accepted + c.refused(), 5999 + dup);
@@ -97,7 +104,10 @@ fn a_short_gap_is_filled_a_long_one_restarts_the_window() {
     // 500 lost: the window restarts and is filling until 2 s of new samples are in.
     clean_run(&mut tr, &mut rng, 4500, 5000);
     assert_eq!(tr.counters().restarts, 1);
-    assert_eq!(tr.measured(4999 * DT_NS).first, Err(MeasuredStatus::Filling));
+    assert_eq!(
+        tr.measured(4999 * DT_NS).first,
+        Err(MeasuredStatus::Filling)
+    );
     clean_run(&mut tr, &mut rng, 5000, 7000);
     assert!((freq(tr.measured(6999 * DT_NS).first) - 9.3).abs() < 5e-3);
 }
@@ -130,9 +140,15 @@ fn timestamps_that_disagree_with_the_sequence_restart_the_window() {
     assert_eq!(tr.push(0, 5000 * DT_NS, x), PushOutcome::Restarted);
     // The rate changes (1 kHz → 4 kHz).
     tr.push(1, 5000 * DT_NS + DT_NS, x);
-    assert_eq!(tr.push(2, 5000 * DT_NS + DT_NS + DT_NS / 4, x), PushOutcome::Restarted);
+    assert_eq!(
+        tr.push(2, 5000 * DT_NS + DT_NS + DT_NS / 4, x),
+        PushOutcome::Restarted
+    );
     assert_eq!(tr.counters().restarts, 3);
-    assert_eq!(tr.measured(5002 * DT_NS).first, Err(MeasuredStatus::Filling));
+    assert_eq!(
+        tr.measured(5002 * DT_NS).first,
+        Err(MeasuredStatus::Filling)
+    );
 }
 
 #[test]
@@ -144,7 +160,10 @@ fn silence_means_no_input() {
     assert!(tr.measured(3000 * DT_NS).first.is_ok());
     // silence_s = 0.5 s after the last sample.
     assert!(tr.measured(3499 * DT_NS).first.is_ok());
-    assert_eq!(tr.measured(3600 * DT_NS), Measured::none(MeasuredStatus::NoInput));
+    assert_eq!(
+        tr.measured(3600 * DT_NS),
+        Measured::none(MeasuredStatus::NoInput)
+    );
 }
 
 #[test]
@@ -161,7 +180,10 @@ fn bands_the_input_cannot_resolve_are_statuses() {
     let d = TrackerParams::default();
     use MeasuredStatus::*;
     assert_eq!(status(None, Some(f64::NAN), d), (NoModel, NoModel));
-    assert_eq!(status(Some(-3.0), Some(f64::INFINITY), d), (NoModel, NoModel));
+    assert_eq!(
+        status(Some(-3.0), Some(f64::INFINITY), d),
+        (NoModel, NoModel)
+    );
     // 0.4 × 1 kHz = 400 Hz is the top of what 1 kHz resolves; 4/T = 2 Hz the bottom.
     assert_eq!(status(Some(380.0), Some(1.5), d), (BandTooHigh, BandTooLow));
     // A band between the two modes: noise only.
@@ -170,7 +192,10 @@ fn bands_the_input_cannot_resolve_are_statuses() {
         max_sample_rate_hz: 500.0,
         ..d
     };
-    assert_eq!(status(Some(9.0), Some(30.0), slow), (RateTooHigh, RateTooHigh));
+    assert_eq!(
+        status(Some(9.0), Some(30.0), slow),
+        (RateTooHigh, RateTooHigh)
+    );
     let _ = &mut rng;
 }
 
@@ -205,15 +230,34 @@ fn a_flood_is_bounded_work_and_an_overrun_is_counted() {
 fn parameters_outside_their_bounds_are_refused() {
     let d = TrackerParams::default();
     for bad in [
-        TrackerParams { window_s: f64::NAN, ..d },
+        TrackerParams {
+            window_s: f64::NAN,
+            ..d
+        },
         TrackerParams { window_s: 0.1, ..d },
         TrackerParams { band_rel: 0.7, ..d },
-        TrackerParams { min_peak_ratio: 1.0, ..d },
-        TrackerParams { work_per_poll: 1, ..d },
-        TrackerParams { silence_s: f64::INFINITY, ..d },
-        TrackerParams { window_s: 60.0, max_sample_rate_hz: 1e5, ..d },
+        TrackerParams {
+            min_peak_ratio: 1.0,
+            ..d
+        },
+        TrackerParams {
+            work_per_poll: 1,
+            ..d
+        },
+        TrackerParams {
+            silence_s: f64::INFINITY,
+            ..d
+        },
+        TrackerParams {
+            window_s: 60.0,
+            max_sample_rate_hz: 1e5,
+            ..d
+        },
     ] {
         let e = VibrationTracker::new(bad).unwrap_err().to_string();
-        assert!(!e.contains('\n') && e.contains("must be") || e.contains("more than"), "{e}");
+        assert!(
+            !e.contains('\n') && e.contains("must be") || e.contains("more than"),
+            "{e}"
+        );
     }
 }

@@ -61,7 +61,10 @@ fn clean_sinusoids_are_found_to_the_noise_limit() {
     assert!((f1 - 9.3).abs() < 5e-3, "{last:?}");
     assert!((ee - 29.4).abs() < 5e-3, "{last:?}");
     let m = last.first.unwrap();
-    assert!(m.peak_ratio >= 10.0 && (m.window_s - 2.0).abs() < 1e-9, "{m:?}");
+    assert!(
+        m.peak_ratio >= 10.0 && (m.window_s - 2.0).abs() < 1e-9,
+        "{m:?}"
+    );
     assert_eq!(tr.counters().accepted, 6000);
     assert_eq!(tr.counters().refused(), 0);
 }
@@ -159,6 +162,9 @@ fn follows_a_moving_mode_within_the_statistical_limit() {
         seen.len(),
         z[z.len() - 1]
     );
-    assert!(rms <= 4.0 && median <= 2.5, "RMS {rms}, median {median} σ_lim");
+    assert!(
+        rms <= 4.0 && median <= 2.5,
+        "RMS {rms}, median {median} σ_lim"
+    );
     assert!((slope - 1.0).abs() <= 0.1, "slope {slope}");
 }

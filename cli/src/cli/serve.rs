@@ -112,6 +112,11 @@ pub struct DemoArgs {
     /// unshaped one (docs/vibration.md, "Input shaping").
     #[arg(long, value_name = "zv|zvd|ei", value_parser = parse_shaper)]
     pub shape: Option<crate::trajectory::shaping::ShaperKind>,
+    /// Without the synthetic accelerometer (by default the simulated vibration of the
+    /// trajectory is published on the vibration service and the estimates carry the
+    /// measured frequencies; demos over 600 s run without it).
+    #[arg(long)]
+    pub no_accelerometer: bool,
     /// A monitor beside the demo (Foxglove, MCAP).
     #[command(flatten)]
     pub monitor: super::monitor::DemoMonitorArgs,
@@ -222,6 +227,7 @@ pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
         hold_f1_hz: a.hold_f1,
         hold_csv: a.hold_csv.clone(),
         shape: a.shape,
+        accelerometer: !a.no_accelerometer,
     };
     let monitor = super::monitor::start_beside_demo(&a.monitor, &scene, &a.scene, a.required_hz)?;
     crate::service::demo(&scene, &cfg)?;

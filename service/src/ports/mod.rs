@@ -14,6 +14,7 @@
 //! |---|---|---|
 //! | pose | publish-subscribe | [`POSE_BUFFER`] queued poses per subscriber, history 0, [`MAX_PUBLISHERS`] publishers |
 //! | T_min | publish-subscribe | history 1: a (re)started service gets the set-point in force |
+//! | vibration | publish-subscribe | [`VIBRATION_BUFFER`] queued samples, history 0, [`MAX_PUBLISHERS`] publishers |
 //! | estimate | publish-subscribe | [`ESTIMATE_BUFFER`] queued estimates per subscriber, [`ESTIMATE_PUBLISHERS`] publisher |
 //! | margin | request-response | [`MARGIN_SERVERS`] server, [`MAX_CLIENTS`] clients, [`MARGIN_ACTIVE_REQUESTS`] active requests per client |
 //! | wake/service, wake/controller | event | [`EVENT_PORTS`] listeners and notifiers |
@@ -36,8 +37,8 @@ use core::time::Duration;
 use cablevib_ipc::{
     explain_publish_subscribe_mismatch, explain_request_response_mismatch, EstimateSample,
     MarginRequest, MarginResponse, Message, PoseSample, ServiceNames, TminSetpoint,
-    EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST, EVENT_ID_MARGIN_RESPONSE, EVENT_ID_POSE,
-    EVENT_ID_T_MIN,
+    VibrationSample, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST, EVENT_ID_MARGIN_RESPONSE,
+    EVENT_ID_POSE, EVENT_ID_T_MIN, EVENT_ID_VIBRATION,
 };
 use iceoryx2::config::Config as Iceoryx2Config;
 use iceoryx2::node::{NodeState, NodeView};
@@ -76,6 +77,7 @@ pub use node::{
 pub use open::{
     open_event, open_event_with, open_margin, open_margin_with, open_pubsub, open_pubsub_with,
     MarginFactory, PubSubSettings, ESTIMATE_SETTINGS, POSE_SETTINGS, T_MIN_SETTINGS,
+    VIBRATION_SETTINGS,
 };
 
 /// The iceoryx2 service flavour used everywhere: inter-process, shared memory.
@@ -84,6 +86,10 @@ pub type Ipc = ipc::Service;
 /// How many poses a subscriber queues before the oldest is overwritten. The service drains the
 /// queue every cycle and estimates the newest pose only ("latest pose wins").
 pub const POSE_BUFFER: usize = 16;
+/// How many vibration samples the service queues before the oldest is overwritten (counted
+/// from the sequence gaps): 50 ms of a 5 kHz sensor, the longest the service sleeps in
+/// `--wait event` without a wake-up.
+pub const VIBRATION_BUFFER: usize = 256;
 /// How many estimates a subscriber queues before the oldest is overwritten.
 pub const ESTIMATE_BUFFER: usize = 16;
 /// Publishers of the pose and T_min services: one controller or replay at a time; the slack
@@ -119,9 +125,10 @@ const EVENT_ID_LARGEST: usize = max_event_id([
     EVENT_ID_MARGIN_REQUEST,
     EVENT_ID_ESTIMATE,
     EVENT_ID_MARGIN_RESPONSE,
+    EVENT_ID_VIBRATION,
 ]);
 
-const fn max_event_id(ids: [usize; 5]) -> usize {
+const fn max_event_id(ids: [usize; 6]) -> usize {
     let mut max = 0;
     let mut i = 0;
     while i < ids.len() {
@@ -188,6 +195,8 @@ pub struct ServicePorts {
     pub wake_out: Notifier<Ipc>,
     /// T_min set-points, from the controller.
     pub t_min: Subscriber<Ipc, TminSetpoint, ()>,
+    /// Vibration samples, from a sensor on the platform (optional).
+    pub vibration: Subscriber<Ipc, VibrationSample, ()>,
     /// Poses, from the controller.
     pub pose: Subscriber<Ipc, PoseSample, ()>,
 }
@@ -261,6 +270,15 @@ impl ServicePorts {
                 .subscriber_builder()
                 .create()
                 .map_err(|e| ipc_error("create the T_min subscriber", e))?;
+        let vibration = open_pubsub_with::<VibrationSample>(
+            node,
+            &names.vibration,
+            VIBRATION_SETTINGS,
+            attributes,
+        )?
+        .subscriber_builder()
+        .create()
+        .map_err(|e| ipc_error("create the vibration subscriber", e))?;
         let pose = open_pubsub_with::<PoseSample>(node, &names.pose, POSE_SETTINGS, attributes)?
             .subscriber_builder()
             .create()
@@ -271,6 +289,7 @@ impl ServicePorts {
             wake_in,
             wake_out,
             t_min,
+            vibration,
             pose,
         })
     }
