@@ -2,7 +2,7 @@
 //! as `u32` in the IPC messages' `status` fields (`cablevib-ipc` re-exports this module).
 
 /// Defines a wire status enum ([`StatusCode`] here; the measured-vibration codes of
-/// `crate::measured` too) from one list of `variant = code, "name"` rows (each with its
+/// the measured-frequency module's too) from one list of `variant = code, "name"` rows (each with its
 /// docs): the enum with those wire values, `ALL` in the list's order, `as_str`, `as_u32`,
 /// `from_u32` and `Display`. One list, so that a new code cannot be added to the enum and
 /// missed by `ALL` or by its name (the tests check the list is in numeric order without gaps
