@@ -72,6 +72,7 @@
 pub mod alloc_count;
 pub mod eig3;
 pub mod input_file;
+pub mod rng;
 mod simd;
 pub mod status;
 // Layer 1

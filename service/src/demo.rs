@@ -313,6 +313,12 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
         );
             Some(super::demo_accel::spawn(&names, samples, stop.clone())?)
         } else {
+            if a.accelerometer {
+                println!(
+                    "  accelerometer (synthetic): off, the demo is longer than its {} s",
+                    super::demo_accel::MAX_SECONDS
+                );
+            }
             None
         };
     let replay = replay(
@@ -554,6 +560,7 @@ fn measured_summary(ok: &[&Seen]) {
             .iter()
             .filter(|s| s.measured_status[i] == MeasuredStatus::Ok.as_u32())
             .map(|s| model(s) - measured(s))
+            .filter(|r| r.is_finite())
             .collect();
         let mut counts = [0u64; 16];
         for s in ok.iter().filter(|s| s.measured_status[i] != 0) {

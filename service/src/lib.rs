@@ -49,7 +49,9 @@ use core::sync::atomic::AtomicBool;
 use clap::ValueEnum;
 
 // The core's modules, under the paths the service's files name (`crate::scene::...`).
-use cablevib::{alloc_count, estimator, kinematics, measured, scene, study, trajectory};
+use cablevib::{
+    alloc_count, estimator, kinematics, measured, modal, rng, scene, study, trajectory,
+};
 
 use crate::estimator::BuildError;
 use crate::scene::{Scene, SceneError};

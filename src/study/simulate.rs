@@ -279,18 +279,45 @@ pub fn simulate(
     path: &SampledPath,
     cfg: &SimulateConfig,
 ) -> Result<SimulateResult, StudyError> {
-    simulate_forced(scene, path, cfg, |_| Vector3::zeros())
+    run(scene, path, cfg, |_| Vector3::zeros(), None)
+}
+
+/// What [`simulate_forced`] computed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ForcedResult {
+    /// [`simulate`]'s result under the force.
+    pub response: SimulateResult,
+    /// The deviation's acceleration at each sample, m/s², from the modal state
+    /// ([`ModalResponse::acceleration`]: the K modes' q̈, not differences of the deviation).
+    pub acceleration_m_s2: Vec<Vector3<f64>>,
 }
 
 /// [`simulate`] with an external force on the end-effector besides the path's inertial
 /// load: `force_n(k)` (N, base frame) at sample k, held linearly between samples like the
 /// load (e.g. white noise standing for the disturbances a real robot feels, which keep its
-/// modes ringing).
+/// modes ringing); also the deviation's acceleration.
 pub fn simulate_forced(
     scene: &Scene,
     path: &SampledPath,
     cfg: &SimulateConfig,
+    force_n: impl FnMut(usize) -> Vector3<f64>,
+) -> Result<ForcedResult, StudyError> {
+    let mut acceleration_m_s2 = Vec::new();
+    let response = run(scene, path, cfg, force_n, Some(&mut acceleration_m_s2))?;
+    Ok(ForcedResult {
+        response,
+        acceleration_m_s2,
+    })
+}
+
+/// The simulation of [`simulate`] and [`simulate_forced`]: the deviation's acceleration
+/// pushed to `acceleration` when given.
+fn run(
+    scene: &Scene,
+    path: &SampledPath,
+    cfg: &SimulateConfig,
     mut force_n: impl FnMut(usize) -> Vector3<f64>,
+    mut acceleration: Option<&mut Vec<Vector3<f64>>>,
 ) -> Result<SimulateResult, StudyError> {
     if !(1..=MAX_RESPONSE_MODES).contains(&cfg.modes) {
         return Err(StudyError::Usage(format!(
@@ -383,6 +410,9 @@ pub fn simulate_forced(
             f_prev = f;
         }
         let u = resp.displacement(&f);
+        if let Some(acc) = acceleration.as_deref_mut() {
+            acc.push(resp.acceleration(&f).fixed_rows::<3>(0).into_owned());
+        }
         out.t_s.push(t);
         out.command_m.push(p);
         out.deviation_m.push(u.fixed_rows::<3>(0).into_owned());

@@ -4,11 +4,11 @@
 
 use crate::Rng;
 
-/// A standard normal number (Box-Muller on two uniform draws).
+/// A standard normal number (the core's Box-Muller on two uniform draws).
 pub fn gaussian(rng: &mut Rng) -> f64 {
-    let u1 = rng.next().max(1e-300);
+    let u1 = rng.next();
     let u2 = rng.next();
-    (-2.0 * u1.ln()).sqrt() * (2.0 * core::f64::consts::PI * u2).cos()
+    cablevib::rng::box_muller(u1, u2)
 }
 
 /// ẍ + 2ζω ẋ + ω² x = F, F held over each step (unit mass).

@@ -24,6 +24,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("alloc_count", 0),
     ("status", 0),
     ("simd", 0),
+    ("rng", 0),
     ("eig3", 0),
     ("scene", 1),
     ("stats", 1),

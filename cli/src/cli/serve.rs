@@ -114,7 +114,8 @@ pub struct DemoArgs {
     pub shape: Option<crate::trajectory::shaping::ShaperKind>,
     /// Without the synthetic accelerometer (by default the simulated vibration of the
     /// trajectory is published on the vibration service and the estimates carry the
-    /// measured frequencies; demos over 600 s run without it).
+    /// measured frequencies; demos over 60 s run without it, since the record is simulated
+    /// before the demo starts, about 0.35 s per second).
     #[arg(long)]
     pub no_accelerometer: bool,
     /// A monitor beside the demo (Foxglove, MCAP).
