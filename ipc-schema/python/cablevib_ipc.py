@@ -20,7 +20,7 @@ STATUS_OK means the numbers of that message are not valid (frequencies are NaN).
 
 import ctypes
 
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 MAX_CABLES = 16
 MAX_STIFFNESS_DIM = 6
 AGE_UNKNOWN = 4294967295
@@ -122,7 +122,7 @@ class PoseSample(ctypes.Structure):
         ("reserved0", ctypes.c_uint32),
     ]
 
-    TYPE_NAME = "cablevib::PoseSample::v3"
+    TYPE_NAME = "cablevib::PoseSample::v4"
 
     @classmethod
     def type_name(cls):
@@ -142,7 +142,7 @@ class TminSetpoint(ctypes.Structure):
         ("per_cable_t_min_n", ctypes.c_double * 16),
     ]
 
-    TYPE_NAME = "cablevib::TminSetpoint::v3"
+    TYPE_NAME = "cablevib::TminSetpoint::v4"
 
     @classmethod
     def type_name(cls):
@@ -151,7 +151,7 @@ class TminSetpoint(ctypes.Structure):
 
 
 class EstimateSample(ctypes.Structure):
-    """`cablevib_estimate_sample_t` of the C header: 584 bytes, alignment 8."""
+    """`cablevib_estimate_sample_t` of the C header: 592 bytes, alignment 8."""
 
     _fields_ = [
         ("pose_sequence", ctypes.c_uint64),
@@ -171,6 +171,7 @@ class EstimateSample(ctypes.Structure):
         ("tension_iterations", ctypes.c_uint32),
         ("eigen_residual", ctypes.c_double),
         ("skipped_poses", ctypes.c_uint64),
+        ("sequence", ctypes.c_uint64),
         ("measured_f1_hz", ctypes.c_double),
         ("f1_residual_hz", ctypes.c_double),
         ("measured_ee_mode_hz", ctypes.c_double),
@@ -183,7 +184,7 @@ class EstimateSample(ctypes.Structure):
         ("vibration_lost", ctypes.c_uint64),
     ]
 
-    TYPE_NAME = "cablevib::EstimateSample::v3"
+    TYPE_NAME = "cablevib::EstimateSample::v4"
 
     @classmethod
     def type_name(cls):
@@ -200,7 +201,7 @@ class MarginRequest(ctypes.Structure):
         ("required_f1_hz", ctypes.c_double),
     ]
 
-    TYPE_NAME = "cablevib::MarginRequest::v3"
+    TYPE_NAME = "cablevib::MarginRequest::v4"
 
     @classmethod
     def type_name(cls):
@@ -223,7 +224,7 @@ class MarginResponse(ctypes.Structure):
         ("timestamp_ns", ctypes.c_uint64),
     ]
 
-    TYPE_NAME = "cablevib::MarginResponse::v3"
+    TYPE_NAME = "cablevib::MarginResponse::v4"
 
     @classmethod
     def type_name(cls):
@@ -243,7 +244,7 @@ class VibrationSample(ctypes.Structure):
         ("reserved0", ctypes.c_uint32),
     ]
 
-    TYPE_NAME = "cablevib::VibrationSample::v3"
+    TYPE_NAME = "cablevib::VibrationSample::v4"
 
     @classmethod
     def type_name(cls):
@@ -269,7 +270,7 @@ LAYOUT = {
         ("reserved0", 28, 4),
         ("per_cable_t_min_n", 32, 128),
     )),
-    EstimateSample: (584, 8, (
+    EstimateSample: (592, 8, (
         ("pose_sequence", 0, 8),
         ("pose_timestamp_ns", 8, 8),
         ("receive_timestamp_ns", 16, 8),
@@ -287,16 +288,17 @@ LAYOUT = {
         ("tension_iterations", 492, 4),
         ("eigen_residual", 496, 8),
         ("skipped_poses", 504, 8),
-        ("measured_f1_hz", 512, 8),
-        ("f1_residual_hz", 520, 8),
-        ("measured_ee_mode_hz", 528, 8),
-        ("ee_mode_residual_hz", 536, 8),
-        ("measured_age_ns", 544, 8),
-        ("measured_f1_status", 552, 4),
-        ("measured_ee_mode_status", 556, 4),
-        ("vibration_samples", 560, 8),
-        ("vibration_refused", 568, 8),
-        ("vibration_lost", 576, 8),
+        ("sequence", 512, 8),
+        ("measured_f1_hz", 520, 8),
+        ("f1_residual_hz", 528, 8),
+        ("measured_ee_mode_hz", 536, 8),
+        ("ee_mode_residual_hz", 544, 8),
+        ("measured_age_ns", 552, 8),
+        ("measured_f1_status", 560, 4),
+        ("measured_ee_mode_status", 564, 4),
+        ("vibration_samples", 568, 8),
+        ("vibration_refused", 576, 8),
+        ("vibration_lost", 584, 8),
     )),
     MarginRequest: (24, 8, (
         ("sequence", 0, 8),

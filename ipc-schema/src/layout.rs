@@ -151,8 +151,8 @@ frozen_layout! {
 }
 
 frozen_layout! {
-    /// Layout of [`EstimateSample`]: 584 bytes.
-    ESTIMATE_SAMPLE_LAYOUT = EstimateSample { size: 584, align: 8, fields: {
+    /// Layout of [`EstimateSample`]: 592 bytes.
+    ESTIMATE_SAMPLE_LAYOUT = EstimateSample { size: 592, align: 8, fields: {
         pose_sequence: u64 = 0,
         pose_timestamp_ns: u64 = 8,
         receive_timestamp_ns: u64 = 16,
@@ -170,16 +170,17 @@ frozen_layout! {
         tension_iterations: u32 = 492,
         eigen_residual: f64 = 496,
         skipped_poses: u64 = 504,
-        measured_f1_hz: f64 = 512,
-        f1_residual_hz: f64 = 520,
-        measured_ee_mode_hz: f64 = 528,
-        ee_mode_residual_hz: f64 = 536,
-        measured_age_ns: u64 = 544,
-        measured_f1_status: u32 = 552,
-        measured_ee_mode_status: u32 = 556,
-        vibration_samples: u64 = 560,
-        vibration_refused: u64 = 568,
-        vibration_lost: u64 = 576,
+        sequence: u64 = 512,
+        measured_f1_hz: f64 = 520,
+        f1_residual_hz: f64 = 528,
+        measured_ee_mode_hz: f64 = 536,
+        ee_mode_residual_hz: f64 = 544,
+        measured_age_ns: u64 = 552,
+        measured_f1_status: u32 = 560,
+        measured_ee_mode_status: u32 = 564,
+        vibration_samples: u64 = 568,
+        vibration_refused: u64 = 576,
+        vibration_lost: u64 = 584,
     } }
 }
 

@@ -63,7 +63,7 @@ pub const IDENTITY_QUATERNION: [f64; 4] = [1.0, 0.0, 0.0, 0.0];
 /// older ones are skipped (and counted in [`EstimateSample::skipped_poses`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::PoseSample::v3")]
+#[type_name("cablevib::PoseSample::v4")]
 pub struct PoseSample {
     /// Sender's sequence number, incremented by one per pose; echoed by the estimate.
     pub sequence: u64,
@@ -155,7 +155,7 @@ impl Default for PoseSample {
 }
 
 impl Message for PoseSample {
-    const TYPE_NAME: &'static str = "cablevib::PoseSample::v3";
+    const TYPE_NAME: &'static str = "cablevib::PoseSample::v4";
     const C_NAME: &'static str = "cablevib_pose_sample_t";
     const SERVICE: &'static str = crate::SERVICE_POSE;
 }
@@ -171,7 +171,7 @@ impl Message for PoseSample {
 /// cable `i < per_cable_count` uses `per_cable_t_min_n[i]` and the others `t_min_n`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::TminSetpoint::v3")]
+#[type_name("cablevib::TminSetpoint::v4")]
 pub struct TminSetpoint {
     /// Sender's sequence number, incremented by one per set-point.
     pub sequence: u64,
@@ -260,7 +260,7 @@ impl Default for TminSetpoint {
 }
 
 impl Message for TminSetpoint {
-    const TYPE_NAME: &'static str = "cablevib::TminSetpoint::v3";
+    const TYPE_NAME: &'static str = "cablevib::TminSetpoint::v4";
     const C_NAME: &'static str = "cablevib_t_min_setpoint_t";
     const SERVICE: &'static str = crate::SERVICE_T_MIN;
 }
@@ -288,14 +288,14 @@ pub const T_MIN_AGE_UNKNOWN: u32 = u32::MAX;
 /// One estimator cycle's result, cablevib → controller on
 /// [`SERVICE_ESTIMATE`](crate::SERVICE_ESTIMATE).
 ///
-/// 584 bytes, alignment 8. It answers the pose whose `sequence` and `timestamp_ns` it echoes
+/// 592 bytes, alignment 8. It answers the pose whose `sequence` and `timestamp_ns` it echoes
 /// in `pose_sequence` / `pose_timestamp_ns`; the controller compares them with the pose it
 /// last sent to tell a fresh estimate from a stale one. The numeric fields are meaningful only
 /// when `status` is [`StatusCode::Ok`]; otherwise frequencies are NaN and tensions and
 /// stiffness may be zero.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::EstimateSample::v3")]
+#[type_name("cablevib::EstimateSample::v4")]
 pub struct EstimateSample {
     /// `sequence` of the pose this estimate answers.
     pub pose_sequence: u64,
@@ -345,6 +345,10 @@ pub struct EstimateSample {
     pub eigen_residual: f64,
     /// Poses skipped since the service started because a newer one was queued.
     pub skipped_poses: u64,
+    /// The service's estimate count: 1 for the first estimate it publishes, one more for each
+    /// next one. A subscriber that sees a gap (for one publisher) lost that many estimates in
+    /// its queue; a restarted service starts again from 1.
+    pub sequence: u64,
     /// The dominant measured frequency near `f1_hz`, Hz, from the vibration input
     /// ([`VibrationSample`]s on [`SERVICE_VIBRATION`](crate::SERVICE_VIBRATION)); NaN unless
     /// `measured_f1_status` is [`MeasuredStatus::Ok`].
@@ -396,6 +400,7 @@ impl EstimateSample {
             tension_iterations: 0,
             eigen_residual: 0.0,
             skipped_poses: 0,
+            sequence: 0,
             measured_f1_hz: 0.0,
             f1_residual_hz: 0.0,
             measured_ee_mode_hz: 0.0,
@@ -516,7 +521,7 @@ impl Default for EstimateSample {
 }
 
 impl Message for EstimateSample {
-    const TYPE_NAME: &'static str = "cablevib::EstimateSample::v3";
+    const TYPE_NAME: &'static str = "cablevib::EstimateSample::v4";
     const C_NAME: &'static str = "cablevib_estimate_sample_t";
     const SERVICE: &'static str = crate::SERVICE_ESTIMATE;
 }
@@ -529,7 +534,7 @@ impl Message for EstimateSample {
 /// [`SERVICE_MARGIN`](crate::SERVICE_MARGIN). 24 bytes, alignment 8.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::MarginRequest::v3")]
+#[type_name("cablevib::MarginRequest::v4")]
 pub struct MarginRequest {
     /// Requester's sequence number; echoed as [`MarginResponse::request_sequence`].
     pub sequence: u64,
@@ -574,7 +579,7 @@ impl Default for MarginRequest {
 }
 
 impl Message for MarginRequest {
-    const TYPE_NAME: &'static str = "cablevib::MarginRequest::v3";
+    const TYPE_NAME: &'static str = "cablevib::MarginRequest::v4";
     const C_NAME: &'static str = "cablevib_margin_request_t";
     const SERVICE: &'static str = crate::SERVICE_MARGIN;
 }
@@ -584,7 +589,7 @@ impl Message for MarginRequest {
 /// Frequencies and margins are NaN unless `status` is [`StatusCode::Ok`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::MarginResponse::v3")]
+#[type_name("cablevib::MarginResponse::v4")]
 pub struct MarginResponse {
     /// `sequence` of the request answered.
     pub request_sequence: u64,
@@ -698,7 +703,7 @@ impl Default for MarginResponse {
 }
 
 impl Message for MarginResponse {
-    const TYPE_NAME: &'static str = "cablevib::MarginResponse::v3";
+    const TYPE_NAME: &'static str = "cablevib::MarginResponse::v4";
     const C_NAME: &'static str = "cablevib_margin_response_t";
     const SERVICE: &'static str = crate::SERVICE_MARGIN;
 }
@@ -721,7 +726,7 @@ pub const VIBRATION_FLAG_ANGULAR_VELOCITY: u32 = 1;
 /// order.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::VibrationSample::v3")]
+#[type_name("cablevib::VibrationSample::v4")]
 pub struct VibrationSample {
     /// Sender's sequence number, incremented by one per sample.
     pub sequence: u64,
@@ -796,7 +801,7 @@ impl Default for VibrationSample {
 }
 
 impl Message for VibrationSample {
-    const TYPE_NAME: &'static str = "cablevib::VibrationSample::v3";
+    const TYPE_NAME: &'static str = "cablevib::VibrationSample::v4";
     const C_NAME: &'static str = "cablevib_vibration_sample_t";
     const SERVICE: &'static str = crate::SERVICE_VIBRATION;
 }

@@ -21,6 +21,25 @@ const FAST_LIKE_TOML: &str = include_str!("../../scenes/fast_like.toml");
 const SUSPENDED_8_TOML: &str = include_str!("../../scenes/suspended_8.toml");
 
 impl Scene {
+    /// The embedded scene of name `name` (`spatial-paper`, `spatial`, `default`,
+    /// `planar-paper`, `planar`, `fast-like`, `suspended-8`; see [`Scene::load`]), without
+    /// looking at files; `None` for any other name.
+    pub fn builtin(name: &str) -> Option<Result<Scene, SceneError>> {
+        match name {
+            "spatial-paper" | "spatial" | "default" => Some(Ok(Scene::default_scene())),
+            "planar-paper" | "planar" => Some(Ok(Scene::planar_paper())),
+            "fast-like" => Some(Scene::from_toml_str(
+                FAST_LIKE_TOML,
+                "<embedded fast_like.toml>",
+            )),
+            "suspended-8" => Some(Scene::from_toml_str(
+                SUSPENDED_8_TOML,
+                "<embedded suspended_8.toml>",
+            )),
+            _ => None,
+        }
+    }
+
     /// Load a scene by path or by name: `name_or_path` is read as a scene file when it
     /// exists; otherwise `spatial-paper` (also `spatial`, `default`) is the embedded
     /// [`Scene::default_scene`] and `planar-paper` (also `planar`) the embedded
@@ -32,16 +51,8 @@ impl Scene {
         let p = Path::new(name_or_path);
         let exists = p.try_exists();
         if !matches!(exists, Ok(true)) {
-            match name_or_path {
-                "spatial-paper" | "spatial" | "default" => return Ok(Scene::default_scene()),
-                "planar-paper" | "planar" => return Ok(Scene::planar_paper()),
-                "fast-like" => {
-                    return Scene::from_toml_str(FAST_LIKE_TOML, "<embedded fast_like.toml>")
-                }
-                "suspended-8" => {
-                    return Scene::from_toml_str(SUSPENDED_8_TOML, "<embedded suspended_8.toml>")
-                }
-                _ => {}
+            if let Some(scene) = Scene::builtin(name_or_path) {
+                return scene;
             }
             // Known absent (not, e.g., an unreadable directory: that reports its reason).
             if matches!(exists, Ok(false)) {

@@ -26,6 +26,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("simd", 0),
     ("rng", 0),
     ("eig3", 0),
+    ("identify", 0),
     ("scene", 1),
     ("stats", 1),
     ("measured", 1),

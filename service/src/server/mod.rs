@@ -420,6 +420,7 @@ impl Server {
         out.tension_iterations = e.tension_iterations;
         out.eigen_residual = e.eigen_residual;
         out.skipped_poses = self.total.skipped + self.period.skipped;
+        out.sequence = self.cycles() + 1;
         // The measured frequencies: the tracker's latest, beside this estimate's model.
         // The bands follow the latest known model frequencies (an estimate without an
         // end-effector mode leaves the last one in force).
