@@ -22,7 +22,8 @@ pub struct Counters {
     pub out_of_order: u64,
     /// Refused: a timestamp not after the previous sample's (duplicated or backwards time).
     pub time_not_increasing: u64,
-    /// Places of the sample grid never received (sequence gaps not explained by refusals).
+    /// Places of the sample grid never received (sequence gaps not explained by refusals),
+    /// those of a gap that restarted the window included.
     pub lost: u64,
     /// Places of the grid filled with the previous value (refused or lost samples).
     pub filled: u64,
@@ -217,18 +218,19 @@ impl SampleInput {
             return self.refuse(Refusal::TimeNotIncreasing);
         }
         let steps = sequence - run.last_sequence;
+        let gap = steps - 1;
+        // The places skipped and never refused here were never received: counted whether
+        // they are filled or the window restarts (a flood that overflowed the queue).
+        self.counters.lost += gap.saturating_sub(self.refused_pending);
         if let Some(p) = run.period_s() {
             let ratio = (t_ns - run.last_ns) as f64 * 1e-9 / (steps as f64 * p);
             if !(0.5..=2.0).contains(&ratio) {
                 return self.restart(sequence, t_ns, x);
             }
         }
-        let gap = steps - 1;
         if gap > self.max_fill {
             return self.restart(sequence, t_ns, x);
         }
-        let lost = gap.saturating_sub(self.refused_pending);
-        self.counters.lost += lost;
         self.counters.filled += gap;
         self.refused_pending = 0;
         for _ in 0..gap {
