@@ -195,6 +195,21 @@ pub struct BenchIpcConfig {
     /// The service thread serves iceoryx2's per-loan allocations from the block pool
     /// ([`server::ServerConfig::alloc_pool`]).
     pub alloc_pool: bool,
+    /// Without, with, or alternately without and with an accelerometer sample before each
+    /// pose.
+    pub vibration: BenchVibration,
+}
+
+/// `bench-ipc --vibration`: whether the vibration input is fed while measuring.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum BenchVibration {
+    /// No vibration sender (the latency without the input).
+    #[default]
+    Off,
+    /// One accelerometer sample (1 kHz sensor) before each pose.
+    On,
+    /// Both, in alternating blocks of the same run (side by side).
+    Both,
 }
 
 /// Routes `tracing` (and iceoryx2's logs) to stderr, filtered by `RUST_LOG` (default

@@ -5,7 +5,9 @@
 
 use super::{AllocCounter, CliError};
 use crate::scene::Scene;
-use crate::service::{BenchIpcConfig, DemoConfig, ServerConfig, TminSchedule, WaitMode};
+use crate::service::{
+    BenchIpcConfig, BenchVibration, DemoConfig, ServerConfig, TminSchedule, WaitMode,
+};
 use clap::Args;
 use std::time::Duration;
 
@@ -158,6 +160,11 @@ pub struct BenchIpcArgs {
     /// to measure the difference)
     #[arg(long, value_name = "true|false", default_value_t = true, action = clap::ArgAction::Set)]
     pub alloc_pool: bool,
+    /// Feed the service's vibration input while measuring: off, on (a 1 kHz accelerometer
+    /// sample before each pose), or both in alternating blocks of 2000 poses (the latency
+    /// with and without the input, side by side in one run)
+    #[arg(long, value_enum, default_value_t = BenchVibration::Off)]
+    pub vibration: BenchVibration,
 }
 
 /// Longest `--stats-period-s`, s: one line a day is already rarer than anyone watches a log;
@@ -275,6 +282,7 @@ pub fn bench_ipc(a: &BenchIpcArgs) -> Result<(), CliError> {
         cpu: a.cpu,
         json: a.json,
         alloc_pool: a.alloc_pool,
+        vibration: a.vibration,
     };
     Ok(crate::service::bench_ipc(&scene, &cfg)?)
 }
