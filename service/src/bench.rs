@@ -22,6 +22,7 @@
 //! poses of a block are not timed (the tracker finishes the evaluation left from an `on`
 //! block, after which it has nothing to do until samples come again).
 
+use cablevib::outln;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -111,10 +112,10 @@ pub fn run(scene: &Scene, a: &BenchIpcConfig) -> Result<(), ServiceError> {
                 "seconds": r.seconds,
             })).collect::<Vec<_>>(),
         });
-        println!("{o}");
+        outln!("{o}")?;
         return Ok(());
     }
-    println!(
+    outln!(
         "cablevib bench-ipc: pose published → estimate received over iceoryx2, scene `{}`, {} \
          samples per mode (ping-pong{}), {} CPUs",
         scene.name,
@@ -125,11 +126,17 @@ pub fn run(scene: &Scene, a: &BenchIpcConfig) -> Result<(), ServiceError> {
             String::new()
         },
         cpus
-    );
-    println!(
+    )?;
+    outln!(
         "  {:<6} {:<9} {:<38} {:>9} {:>9} {:>9} {:>9}",
-        "wait", "vibration", "µs", "p50", "p99", "p99.9", "max"
-    );
+        "wait",
+        "vibration",
+        "µs",
+        "p50",
+        "p99",
+        "p99.9",
+        "max"
+    )?;
     for r in &results {
         for (name, p) in [
             ("end-to-end", &r.end_to_end),
@@ -138,7 +145,7 @@ pub fn run(scene: &Scene, a: &BenchIpcConfig) -> Result<(), ServiceError> {
             ("  pose → taken by the service", &r.pickup),
             ("  estimate publish → received", &r.delivery),
         ] {
-            println!(
+            outln!(
                 "  {:<6} {:<9} {:<38} {:>9.1} {:>9.1} {:>9.1} {:>9.1}",
                 r.mode.as_str(),
                 if r.vibration { "on" } else { "off" },
@@ -147,16 +154,16 @@ pub fn run(scene: &Scene, a: &BenchIpcConfig) -> Result<(), ServiceError> {
                 p.p99_ns as f64 / 1e3,
                 p.p999_ns as f64 / 1e3,
                 p.max_ns as f64 / 1e3
-            );
+            )?;
         }
-        println!(
+        outln!(
             "  {:<6} {:<9} {} samples in {:.2} s, {} unanswered",
             r.mode.as_str(),
             if r.vibration { "on" } else { "off" },
             r.end_to_end.count,
             r.seconds,
             r.timeouts
-        );
+        )?;
     }
     Ok(())
 }

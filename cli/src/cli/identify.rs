@@ -21,10 +21,11 @@ use crate::report::figure::FigureFormat;
 use crate::report::identify::{identify_csv, stabilisation_svg, Paired, WindowRows};
 use crate::scene::Scene;
 use crate::study::identify::{model_modes, pair, PairStatus};
+use cablevib::outln;
 use clap::Args;
 use nalgebra::Vector3;
 use serde_json::{json, Map, Value};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// Poses are averaged in bins of this duration, s.
@@ -178,44 +179,9 @@ impl PoseBins {
     }
 }
 
-/// The output paths must not name an input (the recording or the scene file).
-fn check_outputs(a: &IdentifyArgs) -> Result<(), CliError> {
-    let mut inputs = vec![a.recording.clone()];
-    if let Some(s) = &a.scene {
-        inputs.push(PathBuf::from(s));
-    }
-    let same = |x: &Path, y: &Path| match (std::fs::metadata(x), std::fs::metadata(y)) {
-        (Ok(m), Ok(n)) => {
-            use std::os::unix::fs::MetadataExt;
-            m.dev() == n.dev() && m.ino() == n.ino()
-        }
-        _ => false,
-    };
-    let mut outs: Vec<PathBuf> = Vec::new();
-    if let Some(c) = &a.csv {
-        outs.push(c.clone());
-        outs.push(crate::report::csv::sidecar_path(c));
-    }
-    if let Some(s) = &a.svg {
-        outs.push(figure::target(s, a.format)?.0);
-    }
-    for o in &outs {
-        for i in &inputs {
-            if same(o, i) {
-                return Err(CliError::Usage(format!(
-                    "{}: is an input of this command; refusing to write an output over it",
-                    o.display()
-                )));
-            }
-        }
-    }
-    Ok(())
-}
-
 /// `cablevib identify`.
 pub fn run(a: &IdentifyArgs) -> Result<(), CliError> {
     figure::format_needs_svg(&a.svg, a.format)?;
-    check_outputs(a)?;
     let p = params(a);
     let scene = match &a.scene {
         Some(s) => {
@@ -424,12 +390,12 @@ fn output(
     poses: &PoseBins,
 ) -> Result<(), CliError> {
     if a.json {
-        println!(
+        outln!(
             "{}",
             json_of(a, layout, rows, scene, rate_hz, (identify_s, total_s))
-        );
+        )?;
     } else {
-        println!(
+        outln!(
             "{}: {} channel(s) ({}) at {:.4} Hz, band {} … {} Hz; {} window(s) identified in {:.3} s",
             layout.source,
             layout.channels.len(),
@@ -439,19 +405,19 @@ fn output(
             a.to_hz,
             rows.len(),
             identify_s
-        );
+        )?;
         if poses.nonfinite > 0 {
-            println!(
+            outln!(
                 "{} pose(s) with non-finite values left out",
                 poses.nonfinite
-            );
+            )?;
         }
         for w in rows {
             let r = w.result;
             let pos = w.position_m.map_or("pose unknown".to_string(), |p| {
                 format!("pose ({:.4}, {:.4}, {:.4}) m", p[0], p[1], p[2])
             });
-            println!(
+            outln!(
                 "window {} [{:.3}, {:.3}] s: {}, {} mode(s), {}{}",
                 r.index,
                 r.t_start_s,
@@ -467,7 +433,7 @@ fn output(
                 } else {
                     String::new()
                 }
-            );
+            )?;
             for (j, m) in r.modes.iter().enumerate() {
                 let model = w.paired[j].map_or(String::new(), |p| {
                     format!(
@@ -478,7 +444,7 @@ fn output(
                         p.frequency_hz - m.frequency_hz
                     )
                 });
-                println!(
+                outln!(
                     "  {:>2}: {:>10.4} ± {:.4} Hz  ζ {:.4} ± {:.4}  [{}]{model}",
                     j + 1,
                     m.frequency_hz,
@@ -486,7 +452,7 @@ fn output(
                     m.damping_ratio,
                     m.damping_ratio_std,
                     w.status[j]
-                );
+                )?;
             }
         }
     }
@@ -500,7 +466,7 @@ fn output(
         let csv = identify_csv(rows, &layout.channels, meta);
         write_csv(path, csv, &process_command_line())?;
         if !a.json {
-            println!("wrote {}", path.display());
+            outln!("wrote {}", path.display())?;
         }
     }
     if let Some(path) = &a.svg {
@@ -528,7 +494,7 @@ fn output(
             fmt,
         )?;
         if !a.json {
-            println!("wrote {}", path.display());
+            outln!("wrote {}", path.display())?;
         }
     }
     Ok(())

@@ -285,7 +285,7 @@ fn hostile_records() {
             "--csv",
             p.to_str().unwrap(),
         ]),
-        "refusing to write an output over it",
+        "an output is never written over an input",
     );
     // Not a number; a missing column.
     let p2 = d.join("text.csv");
