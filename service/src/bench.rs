@@ -293,11 +293,18 @@ fn client(
             (settings.len() - 1, false)
         } else {
             let i = k - warm_up;
-            let in_block = if settings.len() > 1 { i % BLOCK } else { i + BLOCK_SETTLE };
+            let in_block = if settings.len() > 1 {
+                i % BLOCK
+            } else {
+                i + BLOCK_SETTLE
+            };
             ((i / BLOCK) % settings.len(), in_block >= BLOCK_SETTLE)
         };
         if timed && runs[run].logs[0].len() + runs[run].timeouts as usize >= n {
-            if runs.iter().all(|r| r.logs[0].len() + r.timeouts as usize >= n) {
+            if runs
+                .iter()
+                .all(|r| r.logs[0].len() + r.timeouts as usize >= n)
+            {
                 break;
             }
             k += 1;

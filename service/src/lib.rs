@@ -53,8 +53,7 @@ use clap::ValueEnum;
 
 // The core's modules, under the paths the service's files name (`crate::scene::...`).
 use cablevib::{
-    alloc_count, estimator, kinematics, measured, modal, output_file, rng, scene, study,
-    trajectory,
+    alloc_count, estimator, kinematics, measured, modal, output_file, rng, scene, study, trajectory,
 };
 
 use crate::estimator::BuildError;

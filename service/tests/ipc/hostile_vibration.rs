@@ -40,8 +40,8 @@ use cablevib::rng::SplitMix64;
 use cablevib::scene::Scene;
 use cablevib::trajectory::{Circle, CIRCLE_RADIUS_M, SAMPLE_PERIOD_S};
 use cablevib_ipc::{
-    monotonic_now_ns, EstimateSample, MeasuredStatus, PoseSample, ServiceNames,
-    VibrationSample, IDENTITY_QUATERNION, MEASURED_AGE_UNKNOWN,
+    monotonic_now_ns, EstimateSample, MeasuredStatus, PoseSample, ServiceNames, VibrationSample,
+    IDENTITY_QUATERNION, MEASURED_AGE_UNKNOWN,
 };
 use cablevib_service::ports::{
     create_node, open_pubsub, EstimateOutput, Ipc, PoseInput, VIBRATION_BUFFER, VIBRATION_SETTINGS,
@@ -50,7 +50,6 @@ use cablevib_service::server::{spawn_thread, ServerConfig};
 use cablevib_service::WaitMode;
 use iceoryx2::node::Node;
 use iceoryx2::port::publisher::Publisher;
-
 
 /// Longest wait for anything (service start, an answer).
 const TIMEOUT: Duration = Duration::from_secs(20);
@@ -104,7 +103,9 @@ impl Sensor {
     }
 
     fn send(&mut self, s: VibrationSample) {
-        self.publisher.send_copy(s).expect("send a vibration sample");
+        self.publisher
+            .send_copy(s)
+            .expect("send a vibration sample");
         self.last = s;
     }
 
@@ -128,7 +129,7 @@ impl Sensor {
             1 => s.acceleration_m_s2[1] = f64::INFINITY,
             2 => s.acceleration_m_s2[2] = f64::NEG_INFINITY,
             3 => s.acceleration_m_s2[0] = 1e7,
-            4 => s = self.last,                                    // exact duplicate
+            4 => s = self.last, // exact duplicate
             5 => s.timestamp_ns = self.last.timestamp_ns - DT_NS, // time going backwards
             _ => {
                 // three places never sent
@@ -284,7 +285,10 @@ fn assert_measures_the_sine(e: &EstimateSample, what: &str) {
         Some(MeasuredStatus::NoPeak),
         "{what}: {e:?}"
     );
-    assert!(e.measured_f1_hz.is_nan() && e.f1_residual_hz.is_nan(), "{what}");
+    assert!(
+        e.measured_f1_hz.is_nan() && e.f1_residual_hz.is_nan(),
+        "{what}"
+    );
 }
 
 /// The counters on the wire equal the script's (the estimate of a pose sent after the
@@ -434,10 +438,7 @@ fn hostile_script(c: &mut Client, node: &Node<Ipc>, names: &ServiceNames) {
     eprintln!(
         "vibration input: {} samples taken, {} refused, {} lost over {} poses; hostile events \
          (NaN, +inf, -inf, 1e7, duplicate, backwards, gap of 3): {events:?}",
-        total.taken,
-        total.refused,
-        total.lost,
-        c.sequence
+        total.taken, total.refused, total.lost, c.sequence
     );
 }
 
