@@ -370,7 +370,7 @@ fn client(
                 core::hint::spin_loop();
             }
         }
-        let block_end = settings.len() > 1 && (k - warm_up.min(k)) % BLOCK == 0;
+        let block_end = settings.len() > 1 && (k - warm_up.min(k)).is_multiple_of(BLOCK);
         if timed && (block_end || r.logs[0].len() + r.timeouts as usize >= n) {
             r.seconds += block_start.elapsed().as_secs_f64();
             block_start = Instant::now();

@@ -310,21 +310,21 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
     let accelerometer =
         if a.accelerometer && a.seconds <= super::demo_accel::MAX_SECONDS {
             let (samples, zeta) = super::demo_accel::record(scene, &trajectory, a.seconds)?;
-            println!(
+            outln!(
             "  accelerometer (synthetic): {} samples at 1 kHz, simulated vibration of the circle \
              ({}), white force {} N, sensor noise {} m/s²",
             samples.len(),
             zeta.map_or("the scene's damping".to_owned(), |z| format!("ζ = {z} in every mode")),
             super::demo_accel::FORCE_NOISE_N,
             super::demo_accel::SENSOR_NOISE_M_S2
-        );
+        )?;
             Some(super::demo_accel::spawn(&names, samples, stop.clone())?)
         } else {
             if a.accelerometer {
-                println!(
+                outln!(
                     "  accelerometer (synthetic): off, the demo is longer than its {} s",
                     super::demo_accel::MAX_SECONDS
-                );
+                )?;
             }
             None
         };
@@ -508,7 +508,7 @@ fn summary(
             let hi = ee.iter().copied().fold(f64::NEG_INFINITY, f64::max);
             outln!("  end-effector mode frequency: {lo:.4} … {hi:.4} Hz")?;
         }
-        measured_summary(&ok);
+        measured_summary(&ok)?;
     } else {
         outln!("  no valid estimate was received")?;
     }
@@ -559,7 +559,7 @@ fn summary(
 
 /// The measured frequencies of the ok estimates: per track, how often measured, the range,
 /// model − measured (median and largest magnitude), the median age, the other statuses.
-fn measured_summary(ok: &[&Seen]) {
+fn measured_summary(ok: &[&Seen]) -> Result<(), ServiceError> {
     use cablevib_ipc::MeasuredStatus;
     for (i, what) in ["f1", "end-effector mode"].into_iter().enumerate() {
         let model = |s: &Seen| [s.f1_hz, s.ee_mode_hz][i];
@@ -584,7 +584,7 @@ fn measured_summary(ok: &[&Seen]) {
             })
             .collect();
         if res.is_empty() {
-            println!("  measured near {what}: none ({})", others.join(", "));
+            outln!("  measured near {what}: none ({})", others.join(", "))?;
             continue;
         }
         let lo = ok
@@ -606,7 +606,7 @@ fn measured_summary(ok: &[&Seen]) {
             .map(|s| s.measured_age_ns)
             .collect();
         ages.sort_unstable();
-        println!(
+        outln!(
             "  measured near {what}: {} of {} estimates, {lo:.3} … {hi:.3} Hz; model − measured: \
              median |{:.3}| Hz, largest {:+.3} Hz; age median {:.2} s{}",
             res.len(),
@@ -619,6 +619,7 @@ fn measured_summary(ok: &[&Seen]) {
             } else {
                 format!(" (otherwise {})", others.join(", "))
             }
-        );
+        )?;
     }
+    Ok(())
 }
