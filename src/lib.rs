@@ -75,9 +75,11 @@ pub mod identify;
 pub mod input_file;
 pub mod memory_budget;
 pub mod output_file;
+pub mod rng;
 mod simd;
 pub mod status;
 // Layer 1
+pub mod measured;
 pub mod scene;
 pub mod stats;
 // Layer 2

@@ -126,9 +126,9 @@ impl SampledPath {
         })
     }
 
-    /// The acceleration of sample k (central second difference; at rest beyond the ends
+    /// The acceleration of sample k, m/s² (central second difference; at rest beyond the ends
     /// when `at_rest_ends`, else the neighbour's value).
-    fn acceleration(&self, k: usize) -> Vector3<f64> {
+    pub fn acceleration(&self, k: usize) -> Vector3<f64> {
         let n = self.positions_m.len();
         let p = &self.positions_m;
         let h2 = self.dt_s * self.dt_s;
@@ -318,6 +318,50 @@ pub fn simulate(
     path: &SampledPath,
     cfg: &SimulateConfig,
 ) -> Result<SimulateResult, StudyError> {
+    run(scene, path, cfg, None, None)
+}
+
+/// What [`simulate_forced`] computed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ForcedResult {
+    /// [`simulate`]'s result under the force.
+    pub response: SimulateResult,
+    /// The deviation's acceleration at each sample, m/s², from the modal state
+    /// ([`ModalResponse::acceleration`]: the K modes' q̈, not differences of the deviation).
+    pub acceleration_m_s2: Vec<Vector3<f64>>,
+}
+
+/// [`simulate`] with an external force on the end-effector besides the path's inertial
+/// load: `force_n(k)` (N, base frame) at sample k, held linearly between samples like the
+/// load (e.g. white noise standing for the disturbances a real robot feels, which keep its
+/// modes ringing); also the deviation's acceleration.
+pub fn simulate_forced(
+    scene: &Scene,
+    path: &SampledPath,
+    cfg: &SimulateConfig,
+    mut force_n: impl FnMut(usize) -> Vector3<f64>,
+) -> Result<ForcedResult, StudyError> {
+    // Drawn once per sample, in order: the propagation may ask for a sample's force more
+    // than once (the pilot, a basis update), and a random force must be the same each time.
+    let forces: Vec<Vector3<f64>> = (0..simulated_samples(path, cfg)).map(&mut force_n).collect();
+    let mut acceleration_m_s2 = Vec::new();
+    let response = run(scene, path, cfg, Some(&forces), Some(&mut acceleration_m_s2))?;
+    Ok(ForcedResult {
+        response,
+        acceleration_m_s2,
+    })
+}
+
+/// The simulation of [`simulate`] and [`simulate_forced`]: the external force at each
+/// simulated sample when given (N), the deviation's acceleration pushed to `acceleration`
+/// when given.
+fn run(
+    scene: &Scene,
+    path: &SampledPath,
+    cfg: &SimulateConfig,
+    forces_n: Option<&[Vector3<f64>]>,
+    mut acceleration: Option<&mut Vec<Vector3<f64>>>,
+) -> Result<SimulateResult, StudyError> {
     if let Some(k) = cfg.modes {
         if !(1..=MAX_RESPONSE_MODES).contains(&k) {
             return Err(StudyError::Usage(format!(
@@ -373,8 +417,17 @@ pub fn simulate(
         scene,
         &path,
         cfg,
-        |_| Vector6::zeros(),
-        |k, _, _| {
+        |k| {
+            let mut f = Vector6::zeros();
+            if let Some(forces) = forces_n {
+                f.fixed_rows_mut::<3>(0).copy_from(&forces[k.min(forces.len() - 1)]);
+            }
+            f
+        },
+        |k, resp, f| {
+            if let Some(acc) = acceleration.as_deref_mut() {
+                acc.push(resp.acceleration(f).fixed_rows::<3>(0).into_owned());
+            }
             if k % PROGRESS_SAMPLES == 0 && k > 0 {
                 bar.advance(PROGRESS_SAMPLES);
             }
