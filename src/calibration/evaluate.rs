@@ -48,6 +48,9 @@ pub struct PoseTask {
     /// Compute every mode up to this frequency, Hz (0: only what the rules need), for the
     /// pairing by frequency.
     pub band_hz: f64,
+    /// Look for the rules' modes up to this frequency, Hz (a rule without its mode below it
+    /// is unresolved; 0: no limit).
+    pub max_hz: f64,
 }
 
 /// The model mode a rule picked.
@@ -153,8 +156,14 @@ pub fn resolve(modes: &[Mode], rule: Rule, threshold: f64) -> Option<usize> {
 }
 
 /// Whether `modes` (the first `modes.len()` of a model of `total` modes) answer every rule.
-fn enough(modes: &[Mode], total: usize, rules: &[Rule], band_lambda: f64, threshold: f64) -> bool {
-    if modes.len() >= total {
+fn enough(
+    modes: &[Mode],
+    total: usize,
+    rules: &[Rule],
+    (band_lambda, max_lambda): (f64, f64),
+    threshold: f64,
+) -> bool {
+    if modes.len() >= total || modes.last().is_some_and(|m| m.lambda > max_lambda) {
         return true;
     }
     let band = modes.last().is_some_and(|m| m.lambda > band_lambda);
@@ -231,6 +240,11 @@ fn eval_pose(
     } else {
         0.0
     };
+    let max_lambda = if task.max_hz > 0.0 {
+        hz_to_lambda(task.max_hz.max(task.band_hz))
+    } else {
+        f64::INFINITY
+    };
     let orders = task
         .rules
         .iter()
@@ -245,7 +259,13 @@ fn eval_pose(
         let mut buf = vec![Mode::default(); k];
         let got = solver.modes(k, &mut buf).map_err(|e| e.to_string())?;
         buf.truncate(got);
-        if enough(&buf, total, &task.rules, band_lambda, threshold) {
+        if enough(
+            &buf,
+            total,
+            &task.rules,
+            (band_lambda, max_lambda),
+            threshold,
+        ) {
             break buf;
         }
         if k >= MAX_MODES_PER_POSE {

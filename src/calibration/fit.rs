@@ -38,12 +38,22 @@ pub struct FitParams {
     /// sensitivity, as a fraction of the parameter's range (default 1e-5).
     pub difference_step: f64,
     /// A parameter is undetermined when its data-only standard error is at least this
-    /// fraction of its range (default 0.25).
+    /// fraction of its scale, min(|nominal|, range) or the range for a nominal of 0
+    /// (default 0.5).
     pub undetermined_fraction: f64,
     /// The fit is consistent with the stated noise when P(χ² larger) ≥ this (default 0.01).
     pub p_min: f64,
     /// Largest number of rounds of fit and re-pairing by frequency (default 3).
     pub max_pairing_rounds: u32,
+    /// Largest change of a parameter in one step, as a fraction of its scale (default 0.2).
+    pub max_step: f64,
+    /// When a fit fails the χ² test, the most further starts tried (default 6): several
+    /// stiffness distributions can give nearly the same sorted frequencies, so the answer
+    /// from the nominal values can be a local minimum.
+    pub restarts: u32,
+    /// The further starts are drawn uniformly within ± this fraction of each parameter's
+    /// scale about the nominal value (default 0.3).
+    pub restart_spread: f64,
 }
 
 impl Default for FitParams {
@@ -53,9 +63,12 @@ impl Default for FitParams {
             cost_rel_tol: 1e-10,
             step_rel_tol: 1e-10,
             difference_step: 1e-5,
-            undetermined_fraction: 0.25,
+            undetermined_fraction: 0.5,
             p_min: 0.01,
             max_pairing_rounds: 3,
+            max_step: 0.2,
+            restarts: 6,
+            restart_spread: 0.3,
         }
     }
 }
@@ -85,8 +98,7 @@ pub struct FitInfo {
 pub fn levenberg_marquardt(
     p: &mut impl LeastSquares,
     x0: &[f64],
-    lower: &[f64],
-    upper: &[f64],
+    (lower, upper, scale): (&[f64], &[f64], &[f64]),
     params: &FitParams,
 ) -> Result<(Vec<f64>, DVector<f64>, DMatrix<f64>, FitInfo), String> {
     let n = x0.len();
@@ -130,7 +142,17 @@ pub fn levenberg_marquardt(
                 mu *= 10.0;
                 continue;
             };
-            let d = chol.solve(&b);
+            let mut d = chol.solve(&b);
+            // A step is at most `max_step` of each parameter's scale (a box trust region):
+            // far from the answer the Gauss-Newton step along a weak direction is huge.
+            let over = free
+                .iter()
+                .enumerate()
+                .map(|(i, &k)| d[i].abs() / (params.max_step * scale[k]))
+                .fold(0.0f64, f64::max);
+            if over > 1.0 {
+                d /= over;
+            }
             let mut xn = x.clone();
             for (i, &k) in free.iter().enumerate() {
                 xn[k] = (x[k] + d[i]).clamp(lower[k], upper[k]);
@@ -195,8 +217,16 @@ pub struct FitStats {
 }
 
 /// The statistics of the data Jacobian `j` (weighted rows) with the prior precisions
-/// `prior` (1/σ², 0 without a prior) and the parameters' ranges.
-pub fn statistics(j: &DMatrix<f64>, prior: &[f64], range: &[f64], params: &FitParams) -> FitStats {
+/// `prior` (1/σ², 0 without a prior); `range` scales the singular values, `scale` is each
+/// parameter's size against which its standard error is judged (min(|nominal|, range), or
+/// the range for a nominal of 0).
+pub fn statistics(
+    j: &DMatrix<f64>,
+    prior: &[f64],
+    range: &[f64],
+    scale: &[f64],
+    params: &FitParams,
+) -> FitStats {
     let n = range.len();
     let mut js = j.clone();
     for k in 0..n {
@@ -209,13 +239,13 @@ pub fn statistics(j: &DMatrix<f64>, prior: &[f64], range: &[f64], params: &FitPa
         let vt = svd.v_t.expect("v_t asked for");
         let mut sv: Vec<f64> = svd.singular_values.iter().copied().collect();
         let smax = sv.iter().copied().fold(0.0f64, f64::max);
-        let mut std = vec![0.0; n];
+        let mut var = vec![0.0; n];
         for (jx, &s) in sv.iter().enumerate() {
             let s = if s > 1e-14 * smax { s } else { 0.0 };
             for k in 0..n {
                 let v = vt[(jx, k)];
-                if v != 0.0 {
-                    std[k] += if s > 0.0 {
+                if v.abs() > 1e-12 {
+                    var[k] += if s > 0.0 {
                         v * v / (s * s)
                     } else {
                         f64::INFINITY
@@ -227,7 +257,7 @@ pub fn statistics(j: &DMatrix<f64>, prior: &[f64], range: &[f64], params: &FitPa
         for k in 0..n {
             let seen: f64 = (0..sv.len()).map(|jx| vt[(jx, k)] * vt[(jx, k)]).sum();
             if seen < 1.0 - 1e-9 {
-                std[k] = f64::INFINITY;
+                var[k] = f64::INFINITY;
             }
         }
         sv.sort_by(|a, b| b.total_cmp(a));
@@ -235,32 +265,28 @@ pub fn statistics(j: &DMatrix<f64>, prior: &[f64], range: &[f64], params: &FitPa
         (
             sv,
             (0..n)
-                .map(|k| range[k] * std[k].sqrt())
+                .map(|k| range[k] * var[k].sqrt())
                 .collect::<Vec<f64>>(),
         )
     };
     let determined: Vec<bool> = (0..n)
-        .map(|k| data_std[k] < params.undetermined_fraction * range[k])
+        .map(|k| data_std[k] < params.undetermined_fraction * scale[k])
         .collect();
-    let idx: Vec<usize> = (0..n).filter(|&k| determined[k]).collect();
+    // The covariance of every parameter (data and prior), in range-scaled coordinates; its
+    // pseudo-inverse drops only the directions nothing sees.
+    let mut h = js.transpose() * &js;
+    for k in 0..n {
+        h[(k, k)] += prior[k] * range[k] * range[k];
+    }
+    let eps = 1e-14 * h.amax();
     let mut std_error = vec![None; n];
     let mut correlation = vec![vec![None; n]; n];
-    if !idx.is_empty() {
-        let jd = DMatrix::from_fn(j.nrows(), idx.len(), |r, c| j[(r, idx[c])]);
-        let mut h = jd.transpose() * &jd;
-        for (c, &k) in idx.iter().enumerate() {
-            h[(c, c)] += prior[k];
-        }
-        let eps = 1e-14 * h.amax();
-        if let Ok(cov) = h.pseudo_inverse(eps) {
-            for (a, &ka) in idx.iter().enumerate() {
-                std_error[ka] = Some(cov[(a, a)].max(0.0).sqrt());
-            }
-            for (a, &ka) in idx.iter().enumerate() {
-                for (b, &kb) in idx.iter().enumerate() {
-                    let d = (cov[(a, a)] * cov[(b, b)]).sqrt();
-                    correlation[ka][kb] = Some(if d > 0.0 { cov[(a, b)] / d } else { 0.0 });
-                }
+    if let Ok(cov) = h.pseudo_inverse(eps) {
+        for k in (0..n).filter(|&k| determined[k]) {
+            std_error[k] = Some(range[k] * cov[(k, k)].max(0.0).sqrt());
+            for l in (0..n).filter(|&l| determined[l]) {
+                let d = (cov[(k, k)] * cov[(l, l)]).sqrt();
+                correlation[k][l] = Some(if d > 0.0 { cov[(k, l)] / d } else { 0.0 });
             }
         }
     }
@@ -436,10 +462,10 @@ mod tests {
     #[test]
     fn an_unseen_parameter_is_undetermined() {
         let j = DMatrix::from_row_slice(3, 3, &[1.0, 0.0, 0.0, 0.0, 2.0, 0.0, 1.0, 1.0, 0.0]);
-        let s = statistics(&j, &[0.0; 3], &[1.0, 1.0, 1.0], &FitParams::default());
+        let s = statistics(&j, &[0.0; 3], &[1.0; 3], &[1.0; 3], &FitParams::default());
         assert_eq!(s.determined, [true, true, false]);
         assert!(s.std_error[2].is_none());
-        let h = DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 5.0]);
+        let h = DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 5.0]); // JᵀJ of the seen two
         let c = h.try_inverse().unwrap();
         assert!((s.std_error[0].unwrap() - c[(0, 0)].sqrt()).abs() < 1e-12);
         assert!(

@@ -4,11 +4,14 @@
 //! - A row with `mode = K` is the model's K-th mode at its pose; `mode = eeK` the K-th mode
 //!   whose end-effector participation reaches the scene's threshold (the modes a sensor on
 //!   the platform sees), in ascending frequency.
-//! - A row without `mode` is paired by frequency among the model's end-effector modes at
-//!   its pose: the nearest in |ln(f_measured/f_model)|. It is **ambiguous** (reported, left
-//!   out) when the next end-effector mode is not clearly farther — its distance below
-//!   `ambiguity_ratio` × the nearest's plus 3σ/f — or when another row at the pose picks
-//!   the same mode; **unpaired** when no end-effector mode lies within `max_gap_rel`. A
+//! - The rows without `mode` at one pose are paired by frequency with the model's
+//!   end-effector modes there: measured ascending with model ascending, each model mode at
+//!   most once, the order-preserving assignment of least Σ ln²(f_measured/f_model) (so a
+//!   model uniformly off by 20 % still pairs its three end-effector modes with the three
+//!   measured ones). A row is **ambiguous** (reported, left out) when the second-best
+//!   assignment pairs it otherwise and is not clearly worse — its RMS log distance below
+//!   `ambiguity_ratio` × the best's plus 3σ/f; **unpaired** when its mode is more than
+//!   `max_gap_rel` away or the model has fewer end-effector modes than were measured. A
 //!   pair found becomes the rule `eeK` (its rank among the end-effector modes), which the
 //!   fit follows as the parameters move.
 
@@ -19,13 +22,16 @@ use crate::modal::lambda_to_hz;
 /// Settings of the pairing by frequency (finite, > 0).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PairingParams {
-    /// The second-nearest end-effector mode must be farther than this × the nearest's log
-    /// distance (plus 3σ/f) for a pair to be taken (default 2).
+    /// The second-best assignment's RMS log distance must exceed this × the best's (plus
+    /// 3σ/f) for the rows it pairs otherwise to be taken (default 2).
     pub ambiguity_ratio: f64,
     /// Largest relative distance |f_model/f_measured − 1| of a pair (default 0.5).
     pub max_gap_rel: f64,
     /// Modes are computed up to this × the highest unlabelled frequency at a pose (default 1.5).
     pub band_factor: f64,
+    /// A rule's mode is looked for up to this × the highest measured frequency at its pose
+    /// (default 3): beyond, the rule is unresolved (a pairing error, or a failed step).
+    pub search_factor: f64,
 }
 
 impl Default for PairingParams {
@@ -34,6 +40,7 @@ impl Default for PairingParams {
             ambiguity_ratio: 2.0,
             max_gap_rel: 0.5,
             band_factor: 1.5,
+            search_factor: 3.0,
         }
     }
 }
@@ -75,9 +82,7 @@ pub fn pair(
 ) -> (Vec<Option<Rule>>, Vec<Unpaired>) {
     let mut rules: Vec<Option<Rule>> = vec![None; rows.len()];
     let mut unpaired = Vec::new();
-    // Chosen (pose, rank) → row, to find two rows picking one mode.
-    let mut chosen: std::collections::HashMap<(usize, usize), usize> = Default::default();
-    let mut conflicts: Vec<usize> = Vec::new();
+    let mut by_pose: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
     for (r, row) in rows.iter().enumerate() {
         let out = &outs[pose_of[r]];
         match row.label {
@@ -97,69 +102,137 @@ pub fn pair(
                     ),
                 }),
             },
-            ModeLabel::Unlabelled => {
-                let cand = ee_candidates(out, threshold);
-                let f = row.frequency_hz;
-                let mut d: Vec<(f64, usize, f64)> = cand
-                    .iter()
-                    .map(|&(rank, l)| ((f / lambda_to_hz(l)).ln().abs(), rank, lambda_to_hz(l)))
-                    .collect();
-                d.sort_by(|a, b| a.0.total_cmp(&b.0));
-                let Some(&(d1, rank, f1)) = d.first() else {
-                    unpaired.push(Unpaired {
-                        line: row.line,
-                        reason: "no end-effector mode in the model at this pose".into(),
-                    });
-                    continue;
-                };
-                if d1 > (1.0 + params.max_gap_rel).ln() {
-                    unpaired.push(Unpaired {
-                        line: row.line,
-                        reason: format!(
-                            "the nearest end-effector mode ({f1:.4} Hz) is more than {:.0} % away",
-                            100.0 * params.max_gap_rel
-                        ),
-                    });
-                    continue;
-                }
-                if let Some(&(d2, _, f2)) = d.get(1) {
-                    if d2 < params.ambiguity_ratio * d1 + 3.0 * row.sigma_hz / f {
-                        unpaired.push(Unpaired {
-                            line: row.line,
-                            reason: format!(
-                                "ambiguous: end-effector modes at {f1:.4} Hz and {f2:.4} Hz are both near {f:.4} Hz"
-                            ),
-                        });
-                        continue;
-                    }
-                }
-                if let Some(&other) = chosen.get(&(pose_of[r], rank)) {
-                    conflicts.push(other);
-                    conflicts.push(r);
-                    continue;
-                }
-                chosen.insert((pose_of[r], rank), r);
-                rules[r] = Some(Rule::Ee(rank));
-            }
+            ModeLabel::Unlabelled => by_pose.entry(pose_of[r]).or_default().push(r),
         }
     }
-    conflicts.sort_unstable();
-    conflicts.dedup();
-    for &r in &conflicts {
-        rules[r] = None;
-        let others: Vec<String> = conflicts
-            .iter()
-            .filter(|&&o| o != r && pose_of[o] == pose_of[r])
-            .map(|&o| rows[o].line.to_string())
-            .collect();
-        unpaired.push(Unpaired {
-            line: rows[r].line,
-            reason: format!(
-                "ambiguous: line {} pairs with the same end-effector mode",
-                others.join(", ")
-            ),
-        });
+    for (pose, group) in by_pose {
+        pair_pose(
+            rows,
+            &group,
+            &outs[pose],
+            threshold,
+            params,
+            &mut rules,
+            &mut unpaired,
+        );
     }
     unpaired.sort_by_key(|u| u.line);
     (rules, unpaired)
+}
+
+/// Largest number of order-preserving assignments compared at one pose; beyond, each row
+/// is paired with its nearest mode alone.
+const MAX_ASSIGNMENTS: usize = 100_000;
+
+/// The unlabelled rows `group` of one pose, paired with the model's end-effector modes
+/// there by the order-preserving assignment of least Σ ln²(f_measured/f_model): the
+/// measured modes ascending take end-effector modes ascending (each at most once). Rows on
+/// which the best and the second-best assignment differ are ambiguous unless the second is
+/// clearly worse (its RMS log distance above `ambiguity_ratio` × the best's plus 3σ/f).
+fn pair_pose(
+    rows: &[ModeRow],
+    group: &[usize],
+    out: &PoseOut,
+    threshold: f64,
+    params: &PairingParams,
+    rules: &mut [Option<Rule>],
+    unpaired: &mut Vec<Unpaired>,
+) {
+    let cand = ee_candidates(out, threshold);
+    let mut g: Vec<usize> = group.to_vec();
+    g.sort_by(|&a, &b| rows[a].frequency_hz.total_cmp(&rows[b].frequency_hz));
+    let max_gap = (1.0 + params.max_gap_rel).ln();
+    let dist = |r: usize, c: usize| (rows[r].frequency_hz / lambda_to_hz(cand[c].1)).ln();
+    let fhz = |c: usize| lambda_to_hz(cand[c].1);
+    if cand.len() < g.len() {
+        for &r in &g {
+            unpaired.push(Unpaired {
+                line: rows[r].line,
+                reason: format!(
+                    "{} unlabelled measured modes at this pose, the model has {} end-effector modes up to {:.4} Hz",
+                    g.len(),
+                    cand.len(),
+                    params.band_factor * rows[*g.last().unwrap()].frequency_hz
+                ),
+            });
+        }
+        return;
+    }
+    // Every order-preserving assignment (indices into `cand`), with its cost.
+    let mut best: Vec<(f64, Vec<usize>)> = Vec::new();
+    let mut count = 0usize;
+    let mut pick = vec![0usize; g.len()];
+    fn walk(
+        i: usize,
+        from: usize,
+        pick: &mut Vec<usize>,
+        n_cand: usize,
+        cost: &dyn Fn(&[usize]) -> f64,
+        best: &mut Vec<(f64, Vec<usize>)>,
+        count: &mut usize,
+    ) {
+        if *count >= MAX_ASSIGNMENTS {
+            return;
+        }
+        if i == pick.len() {
+            *count += 1;
+            let c = cost(pick);
+            best.push((c, pick.clone()));
+            best.sort_by(|a, b| a.0.total_cmp(&b.0));
+            best.truncate(2);
+            return;
+        }
+        let left = pick.len() - i - 1;
+        for c in from..n_cand.saturating_sub(left) {
+            pick[i] = c;
+            walk(i + 1, c + 1, pick, n_cand, cost, best, count);
+        }
+    }
+    let cost = |p: &[usize]| {
+        p.iter()
+            .enumerate()
+            .map(|(i, &c)| dist(g[i], c).powi(2))
+            .sum::<f64>()
+    };
+    walk(0, 0, &mut pick, cand.len(), &cost, &mut best, &mut count);
+    let Some((b_cost, b)) = best.first().cloned() else {
+        return;
+    };
+    let sigma_rel = g
+        .iter()
+        .map(|&r| rows[r].sigma_hz / rows[r].frequency_hz)
+        .fold(0.0, f64::max);
+    let rms = |c: f64| (c / g.len() as f64).sqrt();
+    let second = best.get(1).filter(|(s_cost, _)| {
+        rms(*s_cost) < params.ambiguity_ratio * rms(b_cost) + 3.0 * sigma_rel
+    });
+    for (i, &r) in g.iter().enumerate() {
+        let c = b[i];
+        let f = rows[r].frequency_hz;
+        if dist(r, c).abs() > max_gap {
+            unpaired.push(Unpaired {
+                line: rows[r].line,
+                reason: format!(
+                    "the end-effector mode it would pair with ({:.4} Hz) is more than {:.0} % away",
+                    fhz(c),
+                    100.0 * params.max_gap_rel
+                ),
+            });
+            continue;
+        }
+        if let Some((_, s)) = second {
+            if s[i] != c {
+                unpaired.push(Unpaired {
+                    line: rows[r].line,
+                    reason: format!(
+                        "ambiguous: end-effector modes at {:.4} Hz and {:.4} Hz fit {f:.4} Hz almost equally well",
+                        fhz(c),
+                        fhz(s[i])
+                    ),
+                });
+                continue;
+            }
+        }
+        rules[r] = Some(Rule::Ee(cand[c].0));
+    }
 }

@@ -15,8 +15,8 @@ pub struct ParameterResult {
     pub value: f64,
     /// Standard error (None when undetermined).
     pub std_error: Option<f64>,
-    /// Whether the data determine it (its data-only standard error is below the set
-    /// fraction of its range).
+    /// Whether the data determine it (its data-only standard error is below half its
+    /// scale: min(|nominal|, range), or the range for a nominal of 0).
     pub determined: bool,
     /// Its standard error from the data alone (∞ → None when the data cannot see it).
     pub data_std_error: Option<f64>,
@@ -178,6 +178,8 @@ pub struct Report {
     pub evaluations: u32,
     /// Rounds of fit and re-pairing by frequency.
     pub pairing_rounds: u32,
+    /// Starts of the iteration (more than one when the first answer failed the χ² test).
+    pub starts: u32,
     /// Whether the iteration met its tolerance.
     pub converged: bool,
     /// Wall time, s.

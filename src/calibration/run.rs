@@ -189,9 +189,17 @@ pub fn calibrate(
     let mut rounds = 0;
     let (mut iterations, mut evaluations) = (0, nominal_tasks);
     let mut converged;
+    let mut starts = 0;
     let (problem_tasks, layout) = loop {
         rounds += 1;
-        let (tasks, layout) = build(data, &poses, &rules, &damping_rows, fits_model);
+        let (tasks, layout) = build(
+            data,
+            &poses,
+            &rules,
+            &damping_rows,
+            fits_model,
+            params.pairing.search_factor,
+        );
         if spec.params.len() > layout.data_rows() {
             return Err(CalibrationError::Problem(format!(
                 "{} parameters but only {} measurements left after pairing ({} left out): fit fewer parameters",
@@ -211,11 +219,13 @@ pub fn calibrate(
         );
         let lower: Vec<f64> = spec.params.iter().map(|p| p.lower).collect();
         let upper: Vec<f64> = spec.params.iter().map(|p| p.upper).collect();
-        let (xf, _, _, info) =
-            levenberg_marquardt(&mut problem, &x, &lower, &upper, &params.fit)
-                .map_err(|e| CalibrationError::Model(format!("at the nominal parameters: {e}")))?;
+        let scale = scales(spec);
+        let bounds = (&lower[..], &upper[..], &scale[..]);
+        let (xf, info, tried) = fit_with_restarts(&mut problem, &x, bounds, &params.fit)
+            .map_err(|e| CalibrationError::Model(format!("at the nominal parameters: {e}")))?;
         iterations += info.iterations;
         evaluations += problem.evaluations;
+        starts += tried;
         converged = info.converged;
         x = xf;
         let relabel = data.modes.iter().any(|m| m.label == ModeLabel::Unlabelled);
@@ -269,7 +279,8 @@ pub fn calibrate(
         .map(|p| p.prior_sigma.map_or(0.0, |s| 1.0 / (s * s)))
         .collect();
     let range: Vec<f64> = spec.params.iter().map(|p| p.upper - p.lower).collect();
-    let stats = statistics(&j_data, &prior, &range, &params.fit);
+    let scale = scales(spec);
+    let stats = statistics(&j_data, &prior, &range, &scale, &params.fit);
     let chi2: f64 = r_after.rows(0, nd).norm_squared();
     let chi2_before: f64 = r_before.rows(0, nd).norm_squared();
     let n_det = stats.determined.iter().filter(|&&d| d).count();
@@ -398,6 +409,7 @@ pub fn calibrate(
         iterations,
         evaluations,
         pairing_rounds: rounds,
+        starts,
         converged,
         seconds: t0.elapsed().as_secs_f64(),
     };
@@ -406,6 +418,76 @@ pub fn calibrate(
         applied: apply(&base, spec, &x),
         values: x,
     })
+}
+
+/// The iteration from `x0` and, when its answer fails the χ² test, from up to
+/// [`FitParams::restarts`] more starts drawn within ±[`FitParams::restart_spread`] of each
+/// parameter's scale about `x0` (a fixed sequence: the same data give the same answer); the
+/// answer with the least cost is kept. Returns it, the info of its iteration and the number
+/// of starts tried.
+fn fit_with_restarts(
+    problem: &mut Problem<'_>,
+    x0: &[f64],
+    (lower, upper, scale): (&[f64], &[f64], &[f64]),
+    params: &FitParams,
+) -> Result<(Vec<f64>, super::fit::FitInfo, u32), String> {
+    let rows = problem.layout.data_rows();
+    let dof = rows.saturating_sub(x0.len()).max(1);
+    let data_chi2 = |r: &nalgebra::DVector<f64>| r.rows(0, rows).norm_squared();
+    let (mut best_x, r, _, mut best_info) =
+        levenberg_marquardt(problem, x0, (lower, upper, scale), params)?;
+    let mut best = r.norm_squared();
+    let mut tried = 1;
+    let mut rng = 0x5EED_CA11_B4A7_E5u64;
+    let mut uniform = || {
+        // SplitMix64: a fixed, portable sequence.
+        rng = rng.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = rng;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut ok = chi2_upper_tail(data_chi2(&r), dof) >= params.p_min;
+    for _ in 0..params.restarts {
+        if ok {
+            break;
+        }
+        let start: Vec<f64> = (0..x0.len())
+            .map(|k| {
+                let u = 2.0 * uniform() - 1.0;
+                (x0[k] + u * params.restart_spread * scale[k]).clamp(lower[k], upper[k])
+            })
+            .collect();
+        tried += 1;
+        let Ok((x, r, _, info)) =
+            levenberg_marquardt(problem, &start, (lower, upper, scale), params)
+        else {
+            continue;
+        };
+        let c = r.norm_squared();
+        if c < best {
+            best = c;
+            best_x = x;
+            best_info = info;
+            ok = chi2_upper_tail(data_chi2(&r), dof) >= params.p_min;
+        }
+    }
+    Ok((best_x, best_info, tried))
+}
+
+/// Each parameter's scale: min(|nominal|, range), or the range for a nominal of 0.
+fn scales(spec: &FitSpec) -> Vec<f64> {
+    spec.params
+        .iter()
+        .map(|p| {
+            let r = p.upper - p.lower;
+            if p.nominal != 0.0 {
+                p.nominal.abs().min(r)
+            } else {
+                r
+            }
+        })
+        .collect()
 }
 
 fn sensitivity_method(kind: super::ParamKind, analytic: bool) -> &'static str {
@@ -452,10 +534,12 @@ fn pair_at(
             rules: Vec::new(),
             cables: Vec::new(),
             band_hz: 0.0,
+            max_hz: 0.0,
         })
         .collect();
     for (r, m) in data.modes.iter().enumerate() {
         let t = &mut tasks[poses.of_mode[r]];
+        t.max_hz = t.max_hz.max(params.pairing.search_factor * m.frequency_hz);
         match m.label {
             ModeLabel::Order(k) => t.rules.push(Rule::Order(k)),
             ModeLabel::Ee(k) => t.rules.push(Rule::Ee(k)),
@@ -532,6 +616,7 @@ fn build(
     rules: &[Option<Rule>],
     damping_rows: &[usize],
     fits_model: bool,
+    search_factor: f64,
 ) -> (Vec<PoseTask>, Layout) {
     let mut tasks: Vec<PoseTask> = poses
         .list
@@ -541,6 +626,7 @@ fn build(
             rules: Vec::new(),
             cables: Vec::new(),
             band_hz: 0.0,
+            max_hz: 0.0,
         })
         .collect();
     let mut layout = Layout::default();
@@ -548,6 +634,7 @@ fn build(
         let Some(rule) = rule else { continue };
         let k = poses.of_mode[r];
         let t = &mut tasks[k];
+        t.max_hz = t.max_hz.max(search_factor * data.modes[r].frequency_hz);
         let i = match t.rules.iter().position(|q| q == rule) {
             Some(i) => i,
             None => {

@@ -29,19 +29,31 @@ impl Scene {
     /// [`SceneError::NotFound`]; a file that exists but cannot be read or validated gives
     /// that error.
     pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
+        let (text, origin) = Self::source_text(name_or_path)?;
+        Scene::from_toml_str(&text, &origin)
+    }
+
+    /// The TOML text [`Scene::load`] reads for `name_or_path` and the name its messages
+    /// give it: a file's (a regular file of at most [`super::MAX_SCENE_BYTES`]) or an
+    /// embedded scene's. What a writer of a changed copy of the scene starts from
+    /// (`cablevib calibrate -o`).
+    pub fn source_text(name_or_path: &str) -> Result<(String, String), SceneError> {
         let p = Path::new(name_or_path);
         let exists = p.try_exists();
         if !matches!(exists, Ok(true)) {
-            match name_or_path {
-                "spatial-paper" | "spatial" | "default" => return Ok(Scene::default_scene()),
-                "planar-paper" | "planar" => return Ok(Scene::planar_paper()),
-                "fast-like" => {
-                    return Scene::from_toml_str(FAST_LIKE_TOML, "<embedded fast_like.toml>")
+            let embedded = match name_or_path {
+                "spatial-paper" | "spatial" | "default" => {
+                    Some((super::DEFAULT_SCENE_TOML, "<embedded spatial_paper.toml>"))
                 }
-                "suspended-8" => {
-                    return Scene::from_toml_str(SUSPENDED_8_TOML, "<embedded suspended_8.toml>")
+                "planar-paper" | "planar" => {
+                    Some((super::PLANAR_SCENE_TOML, "<embedded planar_paper.toml>"))
                 }
-                _ => {}
+                "fast-like" => Some((FAST_LIKE_TOML, "<embedded fast_like.toml>")),
+                "suspended-8" => Some((SUSPENDED_8_TOML, "<embedded suspended_8.toml>")),
+                _ => None,
+            };
+            if let Some((text, origin)) = embedded {
+                return Ok((text.to_string(), origin.to_string()));
             }
             // Known absent (not, e.g., an unreadable directory: that reports its reason).
             if matches!(exists, Ok(false)) {
@@ -50,7 +62,8 @@ impl Scene {
                 });
             }
         }
-        Scene::from_path(p)
+        let text = crate::input_file::read_text(p, "scene file", super::MAX_SCENE_BYTES)?;
+        Ok((text, p.display().to_string()))
     }
 }
 

@@ -4,4 +4,6 @@
 //! undetermined, a model that lacks an effect judged not to fit).
 //! Area binary of the core crate (see tests/README.md).
 
+mod honesty;
+mod recovery;
 mod sensitivities;

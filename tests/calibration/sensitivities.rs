@@ -129,6 +129,7 @@ fn tasks(poses: &[MeasuredPose], rules: &[Rule]) -> Vec<PoseTask> {
             rules: rules.to_vec(),
             cables: Vec::new(),
             band_hz: 0.0,
+            max_hz: 0.0,
         })
         .collect()
 }
