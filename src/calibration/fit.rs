@@ -52,7 +52,7 @@ pub struct FitParams {
     /// from the nominal values can be a local minimum.
     pub restarts: u32,
     /// The further starts are drawn uniformly within ± this fraction of each parameter's
-    /// scale about the nominal value (default 0.3).
+    /// scale about the nominal value (default 0.5).
     pub restart_spread: f64,
 }
 
@@ -68,7 +68,7 @@ impl Default for FitParams {
             max_pairing_rounds: 3,
             max_step: 0.2,
             restarts: 6,
-            restart_spread: 0.3,
+            restart_spread: 0.5,
         }
     }
 }

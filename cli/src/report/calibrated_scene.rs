@@ -198,17 +198,19 @@ pub fn calibrated_scene_toml(
         // default), or where the file gives it: then the calibrated value.
         if let Some(h) = c.hidden {
             if ea || hidden || weight {
-                let own = |k: &str| t.contains_key(k);
-                if h.youngs_modulus_pa != c.youngs_modulus_pa || own("hidden_youngs_modulus") {
+                let own_e = t.contains_key("hidden_youngs_modulus");
+                let own_a = t.contains_key("hidden_area");
+                let own_mu = t.contains_key("hidden_weight_per_length")
+                    || t.contains_key("hidden_mass_per_length");
+                if h.youngs_modulus_pa != c.youngs_modulus_pa || own_e {
                     t.insert(
                         "hidden_youngs_modulus",
                         Item::Value(float(h.youngs_modulus_pa)),
                     );
                 }
-                if h.area_m2 != c.area_m2 || own("hidden_area") {
+                if h.area_m2 != c.area_m2 || own_a {
                     t.insert("hidden_area", Item::Value(float(h.area_m2)));
                 }
-                let own_mu = own("hidden_weight_per_length") || own("hidden_mass_per_length");
                 if h.mass_per_length_kg_m != c.mass_per_length_kg_m || own_mu {
                     t.remove("hidden_weight_per_length");
                     t.insert(
