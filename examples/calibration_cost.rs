@@ -44,22 +44,39 @@ fn cpu_seconds() -> f64 {
 struct Lcg(u64);
 impl Lcg {
     fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
 }
 
 /// `count` poses of the box robot about its default pose (±0.3 m, ±0.05 rad) where the
 /// model with the parameters `spec` at `truth` holds the platform.
-fn poses(s: &Scene, spec: &FitSpec, truth: &[f64], count: usize, rng: &mut Lcg) -> Vec<MeasuredPose> {
+fn poses(
+    s: &Scene,
+    spec: &FitSpec,
+    truth: &[f64],
+    count: usize,
+    rng: &mut Lcg,
+) -> Vec<MeasuredPose> {
     let mut out = Vec::new();
     while out.len() < count {
         let p = s.ee_position_m
-            + Vector3::new(0.6 * rng.next() - 0.3, 0.6 * rng.next() - 0.3, 0.6 * rng.next() - 0.3);
+            + Vector3::new(
+                0.6 * rng.next() - 0.3,
+                0.6 * rng.next() - 0.3,
+                0.6 * rng.next() - 0.3,
+            );
         let axis = Vector3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
         let pose = MeasuredPose {
             position_m: p,
-            orientation_wxyz: Some(rotated_about(&s.ee_orientation_wxyz, &axis, 0.1 * rng.next() - 0.05)),
+            orientation_wxyz: Some(rotated_about(
+                &s.ee_orientation_wxyz,
+                &axis,
+                0.1 * rng.next() - 0.05,
+            )),
             t_min_n: None,
         };
         if model(s, spec, truth, &[pose]).is_some() {
@@ -87,9 +104,17 @@ fn model(
         })
         .collect();
     let hints: Vec<AtomicUsize> = tasks.iter().map(|_| AtomicUsize::new(0)).collect();
-    let ev = Evaluator { base: s, spec, tasks: &tasks, analytic: true, hints: &hints };
+    let ev = Evaluator {
+        base: s,
+        spec,
+        tasks: &tasks,
+        analytic: true,
+        hints: &hints,
+    };
     let (_, outs) = ev.eval(x, false).ok()?;
-    outs.iter().all(|o| o.picked.iter().all(Option::is_some)).then_some(outs)
+    outs.iter()
+        .all(|o| o.picked.iter().all(Option::is_some))
+        .then_some(outs)
 }
 
 /// The modes and tensions CSVs of the model `s` with the parameters `spec` at `truth`.
@@ -99,7 +124,10 @@ fn data(s: &Scene, spec: &FitSpec, truth: &[f64], poses: &[MeasuredPose]) -> (St
     let mut tensions = String::from("x_m,y_m,z_m,qw,qx,qy,qz,cable,tension_n,sigma_n\n");
     for (p, o) in poses.iter().zip(&outs) {
         let q = p.orientation_wxyz.unwrap();
-        let at = format!("{:?},{:?},{:?},{:?},{:?},{:?},{:?}", p.position_m.x, p.position_m.y, p.position_m.z, q[0], q[1], q[2], q[3]);
+        let at = format!(
+            "{:?},{:?},{:?},{:?},{:?},{:?},{:?}",
+            p.position_m.x, p.position_m.y, p.position_m.z, q[0], q[1], q[2], q[3]
+        );
         let mut seen = Vec::new();
         for (k, m) in o.picked.iter().enumerate() {
             let m = m.as_ref().expect("six end-effector modes");

@@ -121,7 +121,12 @@ fn end_to_end_json_figure_and_calibrated_scene() {
             i + 1
         );
         let (h, hn) = (c.hidden.unwrap(), n.hidden.unwrap());
-        assert_eq!(h.youngs_modulus_pa, hn.youngs_modulus_pa * f, "hidden {}", i + 1);
+        assert_eq!(
+            h.youngs_modulus_pa,
+            hn.youngs_modulus_pa * f,
+            "hidden {}",
+            i + 1
+        );
         assert_eq!((h.area_m2, h.length_m), (hn.area_m2, hn.length_m));
     }
     assert_eq!(calibrated.ee_mass_kg, params[8]["value"].as_f64().unwrap());

@@ -13,6 +13,7 @@ from ._cablevib import (
     TminAnswer,
     __version__,
     analyze,
+    calibrate,
     frf,
     sweep,
 )
@@ -24,6 +25,7 @@ __all__ = [
     "Scene",
     "TminAnswer",
     "analyze",
+    "calibrate",
     "frf",
     "sweep",
 ]
