@@ -12,6 +12,14 @@ use pyo3::prelude::*;
 use std::collections::HashMap;
 use std::path::PathBuf;
 
+/// The entries of `m` sorted by name, so the first error is the same whatever the dict's
+/// order.
+fn sorted<T>(m: Option<HashMap<String, T>>) -> Vec<(String, T)> {
+    let mut v: Vec<_> = m.unwrap_or_default().into_iter().collect();
+    v.sort_by(|a, b| a.0.cmp(&b.0));
+    v
+}
+
 /// Fits the scene's parameters ``fit`` (names as ``--fit``: ``ea_factor``, ``ea_factor.3``,
 /// ``ea_factor_all``, ``hidden_length[.i]``, ``weight_per_length``, ``ee_mass``,
 /// ``ee_inertia[.xx|yy|zz]``, ``ee_com[.x|y|z]``, ``pulley_radius``, ``modal_ratio``,
@@ -48,19 +56,13 @@ pub fn calibrate<'py>(
     let s = &scene.inner;
     let names: Vec<&str> = fit.iter().map(String::as_str).collect();
     let mut spec = FitSpec::new(s, &names).map_err(err)?;
-    // Sorted, so the first error is the same whatever the dict's order.
-    let sorted = |m: HashMap<String, _>| {
-        let mut v: Vec<_> = m.into_iter().collect();
-        v.sort_by(|a, b| a.0.cmp(&b.0));
-        v
-    };
-    for (name, (lo, hi)) in sorted(bounds.unwrap_or_default()) {
+    for (name, (lo, hi)) in sorted(bounds) {
         spec.set_bounds(&name, lo, hi).map_err(err)?;
     }
-    for (name, v) in sorted(nominal.unwrap_or_default()) {
+    for (name, v) in sorted(nominal) {
         spec.set_nominal(&name, v).map_err(err)?;
     }
-    for (name, v) in sorted(prior.unwrap_or_default()) {
+    for (name, v) in sorted(prior) {
         spec.set_prior(&name, v).map_err(err)?;
     }
     spec.check().map_err(err)?;

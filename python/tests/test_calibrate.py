@@ -30,7 +30,7 @@ def data(tmp_path_factory):
     rows = ["x_m,y_m,z_m,frequency_hz,sigma_hz,mode"]
     for p in POSITIONS:
         r = cablevib.analyze(scene, position=list(p), modes=40)
-        ee = [f for f, q in zip(r["frequencies_hz"], r["ee_participation"]) if q >= 0.5][:3]
+        ee = [float(f) for f, q in zip(r["frequencies_hz"], r["ee_participation"]) if q >= 0.5][:3]
         for k, f in enumerate(ee):
             rows.append(f"{p[0]},{p[1]},{p[2]},{f!r},{0.003 * f!r},ee{k + 1}")
     modes = d / "modes.csv"

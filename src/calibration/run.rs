@@ -438,7 +438,7 @@ fn fit_with_restarts(
         levenberg_marquardt(problem, x0, (lower, upper, scale), params)?;
     let mut best = r.norm_squared();
     let mut tried = 1;
-    let mut rng = 0x5EED_CA11_B4A7_E5u64;
+    let mut rng = 0x5EED_CA11_B4A7_E5F1_u64;
     let mut uniform = || {
         // SplitMix64: a fixed, portable sequence.
         rng = rng.wrapping_add(0x9E37_79B9_7F4A_7C15);
@@ -513,6 +513,10 @@ fn verdict(chi2_dof: f64, p: f64, fits: bool, dof: usize) -> String {
     }
 }
 
+/// The rules of the rows (None: left out), the rows left out and the model evaluations
+/// spent.
+type Pairs = (Vec<Option<Rule>>, Vec<Unpaired>, u32);
+
 /// Pairs every row at parameters `x`: the rules (None: left out), the unpaired rows and the
 /// number of model evaluations spent. A pose the model cannot solve is an error naming the
 /// data line (at the nominal parameters) or a model error.
@@ -524,7 +528,7 @@ fn pair_at(
     x: &[f64],
     params: &CalibrationParams,
     nominal: bool,
-) -> Result<(Vec<Option<Rule>>, Vec<Unpaired>, u32), CalibrationError> {
+) -> Result<Pairs, CalibrationError> {
     // Each pose: the rules of its labelled rows, and the band of its unlabelled ones.
     let mut tasks: Vec<PoseTask> = poses
         .list

@@ -77,6 +77,7 @@ pub fn dense_modes(
 /// end-effector modes (participation ≥ `threshold`) of `truth` at each of `poses`, each
 /// frequency times (1 + `noise_rel` · N(0, 1)) with σ = `noise_rel` × the true frequency;
 /// `mode` is `ee1`, `ee2`, … when `labelled`, else empty.
+#[allow(clippy::too_many_arguments)]
 pub fn measured_csv(
     truth: &Scene,
     n: usize,
