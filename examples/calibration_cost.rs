@@ -96,11 +96,8 @@ fn model(
     let tasks: Vec<PoseTask> = poses
         .iter()
         .map(|p| PoseTask {
-            pose: *p,
-            rules: (1..=6).map(Rule::Ee).collect(),
             cables: (0..s.n_cables()).collect(),
-            band_hz: 0.0,
-            max_hz: 0.0,
+            ..PoseTask::new(*p, (1..=6).map(Rule::Ee).collect())
         })
         .collect();
     let hints: Vec<AtomicUsize> = tasks.iter().map(|_| AtomicUsize::new(0)).collect();

@@ -430,15 +430,20 @@ fn parse_label(s: &str) -> Option<ModeLabel> {
         .map(ModeLabel::Order)
 }
 
-/// Reads the modes CSV at `path` (a regular file of at most [`MAX_DATA_BYTES`]).
-pub fn read_modes(path: &Path, sigma: &SigmaDefaults) -> Result<Measurements, CalibrationError> {
+/// The text of the data file `path` (a regular file of at most [`MAX_DATA_BYTES`]; `what`
+/// names it in messages) and its name.
+fn read(path: &Path, what: &'static str) -> Result<(String, String), CalibrationError> {
     let origin = path.display().to_string();
-    let text = read_text(path, "measured-modes CSV", MAX_DATA_BYTES).map_err(|e| {
-        CalibrationError::File {
-            file: origin.clone(),
-            message: strip_file(&e.to_string(), &origin),
-        }
+    let text = read_text(path, what, MAX_DATA_BYTES).map_err(|e| CalibrationError::File {
+        file: origin.clone(),
+        message: strip_file(&e.to_string(), &origin),
     })?;
+    Ok((text, origin))
+}
+
+/// Reads the modes CSV at `path`.
+pub fn read_modes(path: &Path, sigma: &SigmaDefaults) -> Result<Measurements, CalibrationError> {
+    let (text, origin) = read(path, "measured-modes CSV")?;
     parse_modes(&text, &origin, sigma)
 }
 
@@ -449,13 +454,7 @@ pub fn read_tensions(
     sigma: &SigmaDefaults,
     m: &mut Measurements,
 ) -> Result<(), CalibrationError> {
-    let origin = path.display().to_string();
-    let text = read_text(path, "measured-tensions CSV", MAX_DATA_BYTES).map_err(|e| {
-        CalibrationError::File {
-            file: origin.clone(),
-            message: strip_file(&e.to_string(), &origin),
-        }
-    })?;
+    let (text, origin) = read(path, "measured-tensions CSV")?;
     parse_tensions(&text, &origin, n_cables, sigma, m)
 }
 

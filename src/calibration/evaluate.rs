@@ -53,6 +53,19 @@ pub struct PoseTask {
     pub max_hz: f64,
 }
 
+impl PoseTask {
+    /// The task of `rules` at `pose`, no tension and no band.
+    pub fn new(pose: MeasuredPose, rules: Vec<Rule>) -> PoseTask {
+        PoseTask {
+            pose,
+            rules,
+            cables: Vec::new(),
+            band_hz: 0.0,
+            max_hz: 0.0,
+        }
+    }
+}
+
 /// The model mode a rule picked.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Picked {

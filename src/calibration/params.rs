@@ -125,6 +125,22 @@ pub struct FitSpec {
     pub params: Vec<Parameter>,
 }
 
+/// The kinds of a three-component parameter: all three (`r` None) or the one named `r`.
+fn components(
+    r: Option<&str>,
+    names: &[&str; 3],
+    kind: fn(usize) -> ParamKind,
+    which: &str,
+) -> Result<Vec<ParamKind>, String> {
+    match r {
+        None => Ok((0..3).map(kind).collect()),
+        Some(r) => match names.iter().position(|&a| a == r) {
+            Some(k) => Ok(vec![kind(k)]),
+            None => Err(which.to_string()),
+        },
+    }
+}
+
 /// Parses `name` into the parameter kinds it stands for (a group expands to its members).
 fn expand(scene: &Scene, name: &str) -> Result<Vec<ParamKind>, CalibrationError> {
     let n = scene.n_cables();
@@ -160,23 +176,23 @@ fn expand(scene: &Scene, name: &str) -> Result<Vec<ParamKind>, CalibrationError>
         ("ee_mass", None) => vec![ParamKind::EeMass],
         ("ee_inertia", r) => {
             rigid_only("inertia")?;
-            match r {
-                None => (0..3).map(ParamKind::EeInertia).collect(),
-                Some(r) => match INERTIA.iter().position(|&a| a == r) {
-                    Some(k) => vec![ParamKind::EeInertia(k)],
-                    None => return Err(bad("the inertia's entries are xx, yy, zz".into())),
-                },
-            }
+            components(
+                r,
+                &INERTIA,
+                ParamKind::EeInertia,
+                "the inertia's entries are xx, yy, zz",
+            )
+            .map_err(bad)?
         }
         ("ee_com", r) => {
             rigid_only("centre-of-mass offset")?;
-            match r {
-                None => (0..3).map(ParamKind::EeCom).collect(),
-                Some(r) => match AXES.iter().position(|&a| a == r) {
-                    Some(k) => vec![ParamKind::EeCom(k)],
-                    None => return Err(bad("the offset's components are x, y, z".into())),
-                },
-            }
+            components(
+                r,
+                &AXES,
+                ParamKind::EeCom,
+                "the offset's components are x, y, z",
+            )
+            .map_err(bad)?
         }
         ("pulley_radius", None) => vec![ParamKind::PulleyRadius],
         ("modal_ratio", None) => vec![ParamKind::ModalRatio],

@@ -533,13 +533,7 @@ fn pair_at(
     let mut tasks: Vec<PoseTask> = poses
         .list
         .iter()
-        .map(|p| PoseTask {
-            pose: *p,
-            rules: Vec::new(),
-            cables: Vec::new(),
-            band_hz: 0.0,
-            max_hz: 0.0,
-        })
+        .map(|p| PoseTask::new(*p, Vec::new()))
         .collect();
     for (r, m) in data.modes.iter().enumerate() {
         let t = &mut tasks[poses.of_mode[r]];
@@ -625,13 +619,7 @@ fn build(
     let mut tasks: Vec<PoseTask> = poses
         .list
         .iter()
-        .map(|p| PoseTask {
-            pose: *p,
-            rules: Vec::new(),
-            cables: Vec::new(),
-            band_hz: 0.0,
-            max_hz: 0.0,
-        })
+        .map(|p| PoseTask::new(*p, Vec::new()))
         .collect();
     let mut layout = Layout::default();
     for (r, rule) in rules.iter().enumerate() {

@@ -245,3 +245,38 @@ pub fn recovery_truth(rng: &mut Rng) -> (Scene, Vec<f64>, f64, Vec<f64>) {
     let m = s.ee_mass_kg;
     (s, factors, m, hidden)
 }
+
+/// The recovery's measurements of `truth`: 20 feasible poses drawn in
+/// [−0.6, 0.6]² × [0.6, 1.9] m, its first three end-effector modes there with 0.3 % noise
+/// (`mode` = `eeK` when `labelled`) and every cable's tension with 1 % noise.
+pub struct RecoveryData {
+    /// The poses, m.
+    pub poses: Vec<Vector3<f64>>,
+    /// The modes CSV.
+    pub modes_csv: String,
+    /// The tensions CSV.
+    pub tensions_csv: String,
+}
+
+/// [`RecoveryData`] of `truth`, drawn from `rng`.
+pub fn recovery_data(truth: &Scene, labelled: bool, rng: &mut Rng) -> RecoveryData {
+    let lo = Vector3::new(-0.6, -0.6, 0.6);
+    let hi = Vector3::new(0.6, 0.6, 1.9);
+    let poses = feasible_poses(truth, 20, lo, hi, rng);
+    let modes_csv = measured_csv(
+        truth,
+        RECOVERY_ELEMENTS,
+        &poses,
+        3,
+        0.5,
+        0.003,
+        labelled,
+        rng,
+    );
+    let tensions_csv = measured_tensions_csv(truth, &poses, 0.01, rng);
+    RecoveryData {
+        poses,
+        modes_csv,
+        tensions_csv,
+    }
+}

@@ -5,8 +5,8 @@ use cablevib::calibration::data::{parse_modes, parse_tensions};
 use cablevib::calibration::{calibrate, CalibrationParams, FitSpec, Report, SigmaDefaults};
 use cablevib::scene::Scene;
 use cablevib_testkit::calibration_truth::{
-    dense_modes, feasible_poses, gaussian, measured_csv, measured_tensions_csv,
-    recovery_scene_toml, recovery_truth, RECOVERY_ELEMENTS,
+    dense_modes, gaussian, measured_tensions_csv, recovery_data, recovery_scene_toml,
+    recovery_truth, RECOVERY_ELEMENTS,
 };
 use cablevib_testkit::Rng;
 use nalgebra::Vector3;
@@ -96,42 +96,25 @@ fn a_wrong_anchor_does_not_fit() {
     let (mut truth, _, _, hidden) = recovery_truth(&mut rng);
     truth.cables[0].anchor_m += Vector3::new(0.05, 0.0, 0.0);
     let nominal = Scene::from_toml_str(&recovery_scene_toml(Some(&hidden)), "nominal").unwrap();
-    let poses = feasible_poses(
-        &truth,
-        20,
-        Vector3::new(-0.6, -0.6, 0.6),
-        Vector3::new(0.6, 0.6, 1.9),
-        &mut rng,
+    let d = recovery_data(&truth, true, &mut rng);
+    let r = fit(
+        &nominal,
+        &d.modes_csv,
+        Some(&d.tensions_csv),
+        &["ea_factor", "ee_mass"],
     );
-    let csv = measured_csv(
-        &truth,
-        RECOVERY_ELEMENTS,
-        &poses,
-        3,
-        0.5,
-        NOISE,
-        true,
-        &mut rng,
-    );
-    let tensions = measured_tensions_csv(&truth, &poses, TENSION_NOISE, &mut rng);
-    let r = fit(&nominal, &csv, Some(&tensions), &["ea_factor", "ee_mass"]);
     println!("wrong anchor: χ²/dof {:.2}, {}", r.chi2_per_dof, r.verdict);
     assert!(!r.fits, "{}", r.verdict);
     assert!(r.verdict.starts_with("does not fit"), "{}", r.verdict);
     // The same data from the right anchor fit (the test's own control).
     truth.cables[0].anchor_m -= Vector3::new(0.05, 0.0, 0.0);
-    let csv = measured_csv(
-        &truth,
-        RECOVERY_ELEMENTS,
-        &poses,
-        3,
-        0.5,
-        NOISE,
-        true,
-        &mut rng,
+    let d = recovery_data(&truth, true, &mut rng);
+    let r = fit(
+        &nominal,
+        &d.modes_csv,
+        Some(&d.tensions_csv),
+        &["ea_factor", "ee_mass"],
     );
-    let tensions = measured_tensions_csv(&truth, &poses, TENSION_NOISE, &mut rng);
-    let r = fit(&nominal, &csv, Some(&tensions), &["ea_factor", "ee_mass"]);
     assert!(r.fits, "control: {}", r.verdict);
 }
 
@@ -144,24 +127,8 @@ fn frequencies_alone_do_not_claim_the_mass() {
     let mut rng = Rng(31);
     let (truth, _, mass, hidden) = recovery_truth(&mut rng);
     let nominal = Scene::from_toml_str(&recovery_scene_toml(Some(&hidden)), "nominal").unwrap();
-    let poses = feasible_poses(
-        &truth,
-        20,
-        Vector3::new(-0.6, -0.6, 0.6),
-        Vector3::new(0.6, 0.6, 1.9),
-        &mut rng,
-    );
-    let csv = measured_csv(
-        &truth,
-        RECOVERY_ELEMENTS,
-        &poses,
-        3,
-        0.5,
-        NOISE,
-        true,
-        &mut rng,
-    );
-    let r = fit(&nominal, &csv, None, &["ea_factor", "ee_mass"]);
+    let d = recovery_data(&truth, true, &mut rng);
+    let r = fit(&nominal, &d.modes_csv, None, &["ea_factor", "ee_mass"]);
     let m = r.parameters.iter().find(|p| p.name == "ee_mass").unwrap();
     println!(
         "frequencies alone: ee_mass {} ± {:?} (determined {}), data-only σ {:?}",
@@ -174,8 +141,12 @@ fn frequencies_alone_do_not_claim_the_mass() {
         ),
         None => assert!(!m.determined),
     }
-    let tensions = measured_tensions_csv(&truth, &poses, TENSION_NOISE, &mut rng);
-    let r = fit(&nominal, &csv, Some(&tensions), &["ea_factor", "ee_mass"]);
+    let r = fit(
+        &nominal,
+        &d.modes_csv,
+        Some(&d.tensions_csv),
+        &["ea_factor", "ee_mass"],
+    );
     let m = r.parameters.iter().find(|p| p.name == "ee_mass").unwrap();
     let s = m.std_error.unwrap();
     assert!(

@@ -8,17 +8,8 @@
 use cablevib::calibration::data::{parse_modes, parse_tensions};
 use cablevib::calibration::{calibrate, CalibrationParams, FitSpec, SigmaDefaults};
 use cablevib::scene::Scene;
-use cablevib_testkit::calibration_truth::{
-    feasible_poses, measured_csv, measured_tensions_csv, recovery_scene_toml, recovery_truth,
-    RECOVERY_ELEMENTS,
-};
+use cablevib_testkit::calibration_truth::{recovery_data, recovery_scene_toml, recovery_truth};
 use cablevib_testkit::Rng;
-use nalgebra::Vector3;
-
-/// Relative noise of the measured frequencies (and their stated σ).
-const NOISE: f64 = 0.003;
-/// Relative noise of the measured tensions (load cells).
-const TENSION_NOISE: f64 = 0.01;
 
 /// The nominal robot (`recovery_scene_toml`: the paper's robot with a light rope, fem × 10),
 /// with hidden cables of the given lengths.
@@ -50,25 +41,11 @@ struct Setup {
 fn trial(seed: u64, setup: Setup, verbose: bool) -> (cablevib::calibration::Report, Vec<f64>) {
     let mut rng = Rng(seed);
     let (t, values) = truth(&mut rng);
-    let poses = feasible_poses(
-        &t,
-        20,
-        Vector3::new(-0.6, -0.6, 0.6),
-        Vector3::new(0.6, 0.6, 1.9),
-        &mut rng,
-    );
-    let csv = measured_csv(&t, RECOVERY_ELEMENTS, &poses, 3, 0.5, NOISE, true, &mut rng);
-    let mut data = parse_modes(&csv, "truth.csv", &SigmaDefaults::default()).unwrap();
+    let d = recovery_data(&t, true, &mut rng);
+    let mut data = parse_modes(&d.modes_csv, "truth.csv", &SigmaDefaults::default()).unwrap();
     if setup.tensions {
-        let tcsv = measured_tensions_csv(&t, &poses, TENSION_NOISE, &mut rng);
-        parse_tensions(
-            &tcsv,
-            "tensions.csv",
-            8,
-            &SigmaDefaults::default(),
-            &mut data,
-        )
-        .unwrap();
+        let sd = SigmaDefaults::default();
+        parse_tensions(&d.tensions_csv, "tensions.csv", 8, &sd, &mut data).unwrap();
     }
     let mut values = values;
     let s = if setup.hidden {

@@ -124,13 +124,7 @@ fn check(s: &Scene, names: &[&str], x: &[f64], tasks: &[PoseTask]) {
 fn tasks(poses: &[MeasuredPose], rules: &[Rule]) -> Vec<PoseTask> {
     poses
         .iter()
-        .map(|p| PoseTask {
-            pose: *p,
-            rules: rules.to_vec(),
-            cables: Vec::new(),
-            band_hz: 0.0,
-            max_hz: 0.0,
-        })
+        .map(|p| PoseTask::new(*p, rules.to_vec()))
         .collect()
 }
 

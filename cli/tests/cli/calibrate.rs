@@ -4,12 +4,8 @@
 //! and bad input: one-line errors naming the row or the parameter, nothing written.
 
 use cablevib::scene::Scene;
-use cablevib_testkit::calibration_truth::{
-    feasible_poses, measured_csv, measured_tensions_csv, recovery_scene_toml, recovery_truth,
-    RECOVERY_ELEMENTS,
-};
+use cablevib_testkit::calibration_truth::{recovery_data, recovery_scene_toml, recovery_truth};
 use cablevib_testkit::Rng;
-use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -37,23 +33,10 @@ fn tmp(name: &str) -> PathBuf {
 fn robot(dir: &Path, seed: u64, labelled: bool) -> (Vec<f64>, f64) {
     let mut rng = Rng(seed);
     let (truth, factors, mass, hidden) = recovery_truth(&mut rng);
-    let lo = Vector3::new(-0.6, -0.6, 0.6);
-    let hi = Vector3::new(0.6, 0.6, 1.9);
-    let poses = feasible_poses(&truth, 20, lo, hi, &mut rng);
-    let modes = measured_csv(
-        &truth,
-        RECOVERY_ELEMENTS,
-        &poses,
-        3,
-        0.5,
-        0.003,
-        labelled,
-        &mut rng,
-    );
-    let tensions = measured_tensions_csv(&truth, &poses, 0.01, &mut rng);
+    let d = recovery_data(&truth, labelled, &mut rng);
     std::fs::write(dir.join("robot.toml"), recovery_scene_toml(Some(&hidden))).unwrap();
-    std::fs::write(dir.join("modes.csv"), modes).unwrap();
-    std::fs::write(dir.join("tensions.csv"), tensions).unwrap();
+    std::fs::write(dir.join("modes.csv"), d.modes_csv).unwrap();
+    std::fs::write(dir.join("tensions.csv"), d.tensions_csv).unwrap();
     (factors, mass)
 }
 
@@ -294,85 +277,59 @@ fn bad_input_is_one_line_naming_the_row_or_parameter() {
         "two.csv",
         format!("{}\n{}\n{}\n", lines[0], lines[1], lines[2]),
     );
-    let cases: Vec<(Vec<&str>, &str)> = vec![
+    // (arguments after the scene, split at spaces; what the one line must contain)
+    let cases = [
         (
-            vec!["--data", "nan.csv", "--fit", "ee_mass"],
+            "--data nan.csv --fit ee_mass",
             "nan.csv: line 3: frequency_hz = `NaN` is not a finite number",
         ),
         (
-            vec!["--data", "dup.csv", "--fit", "ee_mass"],
+            "--data dup.csv --fit ee_mass",
             "dup.csv: line 3: duplicate of line 2",
         ),
         (
-            vec!["--data", "far.csv", "--fit", "ee_mass"],
+            "--data far.csv --fit ee_mass",
             "far.csv: line 2: the nominal model has no answer at the pose (9",
         ),
         (
-            vec!["--data", "two.csv", "--fit", "ea_factor"],
+            "--data two.csv --fit ea_factor",
             "8 parameters but only 2 measurements",
         ),
         (
-            vec![
-                "--data",
-                "modes.csv",
-                "--fit",
-                "ee_mass",
-                "--bounds",
-                "ee_mass=40:50",
-            ],
+            "--data modes.csv --fit ee_mass --bounds ee_mass=40:50",
             "parameter `ee_mass`: the bounds [40, 50] kg exclude the nominal value 30",
         ),
         (
-            vec!["--data", "modes.csv", "--fit", "ea_factor,ee_mas"],
+            "--data modes.csv --fit ea_factor,ee_mas",
             "parameter `ee_mas`: unknown parameter",
         ),
         (
-            vec!["--data", "modes.csv", "--fit", "ea_factor.9"],
+            "--data modes.csv --fit ea_factor.9",
             "parameter `ea_factor.9`",
         ),
         (
-            vec!["--data", "modes.csv", "--fit", "modal_ratio"],
+            "--data modes.csv --fit modal_ratio",
             "parameter `modal_ratio`: the data have no measured damping ratio",
         ),
         (
-            vec![
-                "--data",
-                "modes.csv",
-                "--fit",
-                "ee_mass",
-                "--prior",
-                "ee_mass=-1",
-            ],
+            "--data modes.csv --fit ee_mass --prior ee_mass=-1",
             "parameter `ee_mass`: prior standard deviation -1",
         ),
         (
-            vec!["--data", "modes.csv", "--fit", "ee_mass", "-o", "modes.csv"],
+            "--data modes.csv --fit ee_mass -o modes.csv",
             "-o modes.csv: is --data",
         ),
         (
-            vec![
-                "--data",
-                "modes.csv",
-                "--fit",
-                "ee_mass",
-                "-o",
-                "robot.toml",
-            ],
+            "--data modes.csv --fit ee_mass -o robot.toml",
             "-o robot.toml: is the scene",
         ),
         (
-            vec![
-                "--data",
-                "modes.csv",
-                "--fit",
-                "ee_mass",
-                "--position",
-                "0,0,1",
-            ],
+            "--data modes.csv --fit ee_mass --position 0,0,1",
             "--position/--orientation",
         ),
     ];
     for (args, needle) in cases {
+        let args: Vec<&str> = args.split(' ').collect();
         let mut all = vec!["calibrate", "robot.toml"];
         all.extend(&args);
         if !args.contains(&"-o") {
