@@ -71,6 +71,7 @@
 // Layer 0
 pub mod alloc_count;
 pub mod eig3;
+pub mod identify;
 pub mod input_file;
 mod simd;
 pub mod status;

@@ -6,7 +6,10 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 // The core's modules and the service, under the paths the files name (`crate::scene::...`).
-use cablevib::{calibration, caspr, estimator, kinematics, modal, scene, study, trajectory};
+use cablevib::{
+    calibration, caspr, estimator, identify, input_file, kinematics, modal, scene, study,
+    trajectory,
+};
 use cablevib_service as service;
 
 // Layer 7

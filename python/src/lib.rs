@@ -7,6 +7,7 @@
 //! | `analyze(scene, ...)` | [`cablevib::study::analysis::analyze`] (what `cablevib analyze --json` prints) |
 //! | `calibrate(scene, measurements, fit=[...])` | [`cablevib::calibration::calibrate`] (what `cablevib calibrate --json` prints) |
 //! | `frf(scene, ...)` | [`cablevib::modal::receptance_over`] (what `cablevib frf --json` prints) |
+//! | `identify(t, channels, ...)` | [`cablevib::identify::identify`] (what `cablevib identify --json` prints per window, without the model) |
 //! | `Estimator(scene).update(...)` | [`cablevib::estimator::Estimator::update`] |
 //! | `Estimator.sweep(...)`, `sweep(scene, ...)` | [`cablevib::estimator::Estimator::update`] over many poses on worker threads ([`sweep`]) |
 //! | `Estimator.t_min_for_f1(...)` | [`cablevib::estimator::Estimator::t_min_for_f1`] |
@@ -21,6 +22,7 @@ mod convert;
 mod error;
 mod estimator;
 mod frf;
+mod identify;
 mod scene;
 mod sweep;
 mod toml_text;
@@ -36,6 +38,7 @@ fn cablevib_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(analysis::analyze, m)?)?;
     m.add_function(wrap_pyfunction!(frf::frf, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
+    m.add_function(wrap_pyfunction!(identify::identify, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::sweep_scene, m)?)?;
     m.add_class::<scene::PyScene>()?;
     m.add_class::<estimator::PyEstimator>()?;

@@ -21,6 +21,29 @@ const FAST_LIKE_TOML: &str = include_str!("../../scenes/fast_like.toml");
 const SUSPENDED_8_TOML: &str = include_str!("../../scenes/suspended_8.toml");
 
 impl Scene {
+    /// The TOML text and origin of the embedded scene of name `name` (`spatial-paper`,
+    /// `spatial`, `default`, `planar-paper`, `planar`, `fast-like`, `suspended-8`; see
+    /// [`Scene::load`]); `None` for any other name.
+    fn builtin_text(name: &str) -> Option<(&'static str, &'static str)> {
+        match name {
+            "spatial-paper" | "spatial" | "default" => {
+                Some((super::DEFAULT_SCENE_TOML, "<embedded spatial_paper.toml>"))
+            }
+            "planar-paper" | "planar" => {
+                Some((super::PLANAR_SCENE_TOML, "<embedded planar_paper.toml>"))
+            }
+            "fast-like" => Some((FAST_LIKE_TOML, "<embedded fast_like.toml>")),
+            "suspended-8" => Some((SUSPENDED_8_TOML, "<embedded suspended_8.toml>")),
+            _ => None,
+        }
+    }
+
+    /// The embedded scene of name `name` (see [`Scene::load`]), without looking at files;
+    /// `None` for any other name.
+    pub fn builtin(name: &str) -> Option<Result<Scene, SceneError>> {
+        Self::builtin_text(name).map(|(text, origin)| Scene::from_toml_str(text, origin))
+    }
+
     /// Load a scene by path or by name: `name_or_path` is read as a scene file when it
     /// exists; otherwise `spatial-paper` (also `spatial`, `default`) is the embedded
     /// [`Scene::default_scene`] and `planar-paper` (also `planar`) the embedded
@@ -41,18 +64,7 @@ impl Scene {
         let p = Path::new(name_or_path);
         let exists = p.try_exists();
         if !matches!(exists, Ok(true)) {
-            let embedded = match name_or_path {
-                "spatial-paper" | "spatial" | "default" => {
-                    Some((super::DEFAULT_SCENE_TOML, "<embedded spatial_paper.toml>"))
-                }
-                "planar-paper" | "planar" => {
-                    Some((super::PLANAR_SCENE_TOML, "<embedded planar_paper.toml>"))
-                }
-                "fast-like" => Some((FAST_LIKE_TOML, "<embedded fast_like.toml>")),
-                "suspended-8" => Some((SUSPENDED_8_TOML, "<embedded suspended_8.toml>")),
-                _ => None,
-            };
-            if let Some((text, origin)) = embedded {
+            if let Some((text, origin)) = Self::builtin_text(name_or_path) {
                 return Ok((text.to_string(), origin.to_string()));
             }
             // Known absent (not, e.g., an unreadable directory: that reports its reason).

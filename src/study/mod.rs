@@ -19,6 +19,7 @@
 
 pub mod accuracy;
 pub mod analysis;
+pub mod identify;
 pub mod map;
 pub mod points;
 pub mod progress;

@@ -14,6 +14,7 @@
 pub mod calibration_truth;
 pub mod dense_fem;
 pub mod hard_cases;
+pub mod modal_record;
 pub mod pinned_venv;
 pub mod sag_cases;
 pub mod sag_reference_py;

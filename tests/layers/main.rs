@@ -25,6 +25,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("status", 0),
     ("simd", 0),
     ("eig3", 0),
+    ("identify", 0),
     ("scene", 1),
     ("stats", 1),
     ("kinematics", 2),

@@ -20,6 +20,7 @@
 //! | `sweep-tmin` | [`sweep_tmin`] | f1 against T_min with the √T_min fit |
 //! | `sag-compare` | [`sag_compare`](mod@sag_compare) | chord vs sagged cables along a line: f1, k_min, tensions, λ² |
 //! | `completions`, `man` | [`completions`](mod@completions) | shell completions and the man page |
+//! | `identify` | [`identify`](mod@identify) | modal parameters from a recording (CSV, MCAP / ROS 2), beside the model's |
 //! | `import caspr` | [`import`](mod@import) | a scene file from CASPR's XML model files |
 //!
 //! Functions here return `Result<_, CliError>`; the binary maps errors to a one-line reason
@@ -35,10 +36,12 @@ pub mod error;
 pub mod figure;
 pub mod frf;
 pub mod frf_dense;
+pub mod identify;
 pub mod import;
 pub mod map;
 pub mod modes;
 pub mod monitor;
+pub mod recording;
 pub mod sag_compare;
 pub mod serve;
 pub mod simulate;
@@ -114,6 +117,10 @@ pub enum Command {
     /// damping ratios and tensions) at many poses: estimates with standard errors, what the
     /// data cannot determine, the χ² verdict, the calibrated scene.
     Calibrate(calibrate::CalibrateArgs),
+    /// Modal parameters from measured vibration (CSV or MCAP / ROS 2 bag): frequencies,
+    /// damping ratios, shapes and their uncertainty per window by SSI-cov, beside the
+    /// model's prediction at the window's pose.
+    Identify(identify::IdentifyArgs),
 }
 
 /// Heap allocation counter supplied by the binary's global allocator (0 when none).
@@ -142,6 +149,7 @@ pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
         Command::Simulate(a) => simulate::run(&a),
         Command::Shape(a) => simulate::shape(&a),
         Command::Calibrate(a) => calibrate::run(&a),
+        Command::Identify(a) => identify::run(&a),
     }
 }
 

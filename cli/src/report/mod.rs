@@ -26,6 +26,7 @@ pub mod csv;
 pub mod figure;
 pub mod frf;
 pub mod hold;
+pub mod identify;
 pub mod map;
 pub mod sag_compare;
 pub mod shapes_csv;

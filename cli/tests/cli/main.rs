@@ -10,6 +10,7 @@ mod csv_pandas;
 mod figures;
 mod frf;
 mod hidden_sag;
+mod identify;
 mod map_shard;
 mod mode_shapes;
 mod sag_compare;

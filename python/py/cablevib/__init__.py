@@ -15,6 +15,7 @@ from ._cablevib import (
     analyze,
     calibrate,
     frf,
+    identify,
     sweep,
 )
 
@@ -27,5 +28,6 @@ __all__ = [
     "analyze",
     "calibrate",
     "frf",
+    "identify",
     "sweep",
 ]
