@@ -9,6 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{sync_channel, SyncSender, TrySendError};
 use std::time::{Duration, Instant};
 
+use cablevib::output_file::OutputFile;
 use cablevib::scene::Scene;
 use cablevib_ipc::{monotonic_now_ns, MarginRequest, PoseSample, ServiceNames, TminSetpoint};
 pub use cablevib_service::ports::RECORD_BUFFER;
@@ -267,11 +268,14 @@ pub fn run(
         }
     }
     cablevib_ipc::check_instance(&cfg.instance).map_err(|e| MonitorError::Usage(e.to_string()))?;
-    // The file first: a bad path fails before anything else starts.
+    // The file first: a bad path fails before anything else starts. Recorded under a
+    // temporary name beside it, put in place when closed (never over an existing file).
     let file = match &cfg.record {
-        Some(p) => Some(std::fs::File::create_new(p).map_err(|e| {
-            MonitorError::Record(format!("{}: cannot create the recording: {e}", p.display()))
-        })?),
+        Some(p) => Some(
+            OutputFile::create_new(p)
+                .and_then(OutputFile::unbuffered)
+                .map_err(|e| MonitorError::Record(format!("cannot create the recording: {e}")))?,
+        ),
         None => None,
     };
 
@@ -506,8 +510,13 @@ pub fn run(
     if let Some(h) = mcap {
         h.write_metadata(COMPLETENESS_METADATA, report.metadata())
             .map_err(|e| MonitorError::Record(format!("MCAP metadata: {e}")))?;
+        let end = end_metadata(cfg, &loop_result);
+        h.write_metadata("cablevib.end", end)
+            .map_err(|e| MonitorError::Record(format!("MCAP metadata: {e}")))?;
         h.close()
-            .map_err(|e| MonitorError::Record(format!("closing the MCAP file: {e}")))?;
+            .map_err(|e| MonitorError::Record(format!("closing the MCAP file: {e}")))?
+            .commit()
+            .map_err(|e| MonitorError::Record(format!("the recording: {e}")))?;
     }
     if let Some(s) = server {
         // Not a graceful wait: a viewer that does not read would hold it forever (its close
@@ -516,6 +525,31 @@ pub fn run(
     }
     loop_result?;
     Ok(report)
+}
+
+/// The metadata record `cablevib.end`: why the recording stopped (`stopped_by`: `signal`
+/// for SIGINT/SIGTERM, `duration`, `stop` when the caller stopped it, `error` with `error`)
+/// and whether that cut the run short (`interrupted`).
+fn end_metadata(
+    cfg: &MonitorConfig,
+    loop_result: &Result<(), MonitorError>,
+) -> BTreeMap<String, String> {
+    let mut m = BTreeMap::new();
+    let by = match loop_result {
+        Err(e) => {
+            m.insert("error".into(), e.to_string());
+            "error"
+        }
+        Ok(()) if crate::signal::received() => "signal",
+        Ok(()) if cfg.duration.is_some() => "duration",
+        Ok(()) => "stop",
+    };
+    m.insert("stopped_by".into(), by.into());
+    m.insert(
+        "interrupted".into(),
+        (by == "signal" || by == "error").to_string(),
+    );
+    m
 }
 
 /// Name of the MCAP metadata record written when the recording closes: per channel

@@ -29,6 +29,9 @@
 //! each estimate, so a controller can block too.
 
 #![warn(missing_docs)]
+// Standard output through `cablevib::outln!` (an error, not a panic, when it cannot be
+// written).
+#![warn(clippy::print_stdout)]
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod bench;
@@ -48,7 +51,7 @@ use core::sync::atomic::AtomicBool;
 use clap::ValueEnum;
 
 // The core's modules, under the paths the service's files name (`crate::scene::...`).
-use cablevib::{alloc_count, estimator, kinematics, scene, trajectory};
+use cablevib::{alloc_count, estimator, kinematics, output_file, scene, trajectory};
 
 use crate::estimator::BuildError;
 use crate::scene::{Scene, SceneError};
@@ -87,6 +90,9 @@ impl core::fmt::Display for WaitMode {
 /// Errors of the service commands.
 #[derive(Debug, thiserror::Error)]
 pub enum ServiceError {
+    /// Standard output could not be written.
+    #[error(transparent)]
+    Stdout(#[from] crate::output_file::StdoutError),
     /// The scene could not be loaded.
     #[error(transparent)]
     Scene(#[from] SceneError),

@@ -10,7 +10,9 @@
 //! mode at the pose in ascending frequency, `ee` = `ee1`; or the 1-based order of the mode
 //! at the pose; empty: paired by frequency), `model_mode` (a pairing hint, reported, never
 //! taken as the pairing) and `status` (rows whose status is not `ok` are left out and
-//! listed). Every other column is listed once as not used.
+//! listed, except `identify`'s [`PAIRING_STATUSES`]: those say how the row paired with the
+//! nominal model, a hint like `model_mode`, and the row is kept and counted). Every other
+//! column is listed once as not used.
 //!
 //! **Tensions.** `x_m, y_m, z_m, cable, tension_n` (cable 1-based), optional `sigma_n` (else
 //! `tension_sigma_rel` × tension), `qw..qz`, `t_min_n`.
@@ -129,6 +131,13 @@ pub struct TensionRow {
     pub sigma_n: f64,
 }
 
+/// `identify`'s statuses of a row it could not pair with the nominal model (`unpaired`: no
+/// model mode near it; `ambiguous`: two about as near). They are about the model the
+/// calibration corrects (identify pairs at the uncalibrated model, which can be 20 % off),
+/// not about the measurement: such rows are kept, paired by the calibration itself and
+/// counted in [`Measurements::pairing_hint_lines`].
+pub const PAIRING_STATUSES: [&str; 2] = ["unpaired", "ambiguous"];
+
 /// A row left out of the fit, with the reason.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LeftOut {
@@ -147,6 +156,8 @@ pub struct Measurements {
     pub modes: Vec<ModeRow>,
     /// Rows of the modes file left out (status not ok).
     pub left_out: Vec<LeftOut>,
+    /// Lines of rows kept whose status was one of [`PAIRING_STATUSES`].
+    pub pairing_hint_lines: Vec<usize>,
     /// Columns of the modes file not used.
     pub unused_columns: Vec<String>,
     /// Name of the tensions file, when given.
@@ -507,7 +518,9 @@ pub fn parse_modes(
     for (line, f) in &t.rows {
         let line = *line;
         if let Some(c) = status_col {
-            if f[c] != "ok" {
+            if PAIRING_STATUSES.contains(&f[c]) {
+                m.pairing_hint_lines.push(line);
+            } else if f[c] != "ok" {
                 let reason = if f[c].is_empty() {
                     "status is empty".to_string()
                 } else {
@@ -694,12 +707,16 @@ mod tests {
 window,t_start_s,t_end_s,x_m,y_m,z_m,qw,qx,qy,qz,identified_mode,frequency_hz,frequency_std_hz,damping_ratio,damping_ratio_std,model_frequency_hz,model_mode,model_ee_participation,status\n\
 0,0,10,0.1,0,1.2,,,,,1,30.5,0.05,0.01,0.002,31.0,25,0.97,ok\n\
 0,0,10,0.1,0,1.2,,,,,2,33.0,,0.012,,33.1,26,0.95,ok\n\
-1,10,20,0.2,0,1.2,,,,,1,29.0,0.05,,,,,,unstable\n";
+1,10,20,0.2,0,1.2,,,,,1,29.0,0.05,,,,,,unstable\n\
+1,10,20,0.2,0,1.2,,,,,2,31.0,0.05,,,30.0,3,0.9,ambiguous\n\
+1,10,20,0.2,0,1.2,,,,,3,34.0,0.05,,,,,,unpaired\n";
 
     #[test]
     fn identify_output_is_read_as_it_is() {
         let m = parse_modes(IDENTIFY, "id.csv", &SigmaDefaults::default()).unwrap();
-        assert_eq!(m.modes.len(), 2);
+        // identify's pairing statuses are hints about the nominal model: kept, counted.
+        assert_eq!(m.modes.len(), 4);
+        assert_eq!(m.pairing_hint_lines, [6, 7]);
         assert_eq!(m.modes[0].sigma_source, SigmaSource::IdentifyStd);
         assert_eq!(m.modes[0].sigma_hz, 0.05);
         assert_eq!(m.modes[1].sigma_source, SigmaSource::Relative);

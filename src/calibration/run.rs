@@ -36,18 +36,33 @@ pub struct Calibration {
     pub applied: Applied,
 }
 
-fn pose_key(p: &MeasuredPose) -> [u64; 8] {
-    let q = p.orientation_wxyz.unwrap_or([f64::NAN; 4]);
-    [
-        p.position_m.x.to_bits(),
-        p.position_m.y.to_bits(),
-        p.position_m.z.to_bits(),
-        q[0].to_bits(),
-        q[1].to_bits(),
-        q[2].to_bits(),
-        q[3].to_bits(),
-        p.t_min_n.unwrap_or(f64::NAN).to_bits(),
-    ]
+/// Positions that differ by at most this in every coordinate are one pose, m: a file written
+/// with fewer digits (identify's CSV keeps 11 significant) names the same pose as one
+/// written in full (the load cells' tensions). Orientations then agree to 1e-9 and T_min to
+/// 1e-9 relative.
+const SAME_POSE_M: f64 = 1e-6;
+
+/// The grid cell of `p`'s position, [`SAME_POSE_M`] wide (a finite position: checked by the
+/// parser; saturating otherwise).
+fn pose_cell(p: &MeasuredPose) -> [i64; 3] {
+    let c = |v: f64| (v / SAME_POSE_M).round() as i64;
+    [c(p.position_m.x), c(p.position_m.y), c(p.position_m.z)]
+}
+
+/// `a` and `b` are the same pose (see [`SAME_POSE_M`]).
+fn same_pose(a: &MeasuredPose, b: &MeasuredPose) -> bool {
+    let near = |x: f64, y: f64, tol: f64| (x - y).abs() <= tol;
+    (a.position_m - b.position_m).amax() <= SAME_POSE_M
+        && match (a.orientation_wxyz, b.orientation_wxyz) {
+            (None, None) => true,
+            (Some(p), Some(q)) => (0..4).all(|k| near(p[k], q[k], 1e-9)),
+            _ => false,
+        }
+        && match (a.t_min_n, b.t_min_n) {
+            (None, None) => true,
+            (Some(x), Some(y)) => near(x, y, 1e-9 * x.abs().max(1.0)),
+            _ => false,
+        }
 }
 
 /// The poses of the data (in order of first appearance), each row's pose index, and the
@@ -61,7 +76,8 @@ struct Poses {
 }
 
 fn collect_poses(scene: &Scene, data: &Measurements) -> Result<Poses, CalibrationError> {
-    let mut index: HashMap<[u64; 8], usize> = HashMap::new();
+    // Pose indices by grid cell; a pose is looked for in its cell and the 26 around it.
+    let mut index: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
     let mut p = Poses {
         list: Vec::new(),
         of_mode: Vec::new(),
@@ -89,12 +105,28 @@ fn collect_poses(scene: &Scene, data: &Measurements) -> Result<Poses, Calibratio
                 .check_uniform_t_min(t)
                 .map_err(|e| row(format!("t_min_n: {e}")))?;
         }
-        let k = pose_key(pose);
-        Ok(*index.entry(k).or_insert_with(|| {
-            p.list.push(*pose);
-            p.first_line.push((file.to_string(), line));
-            p.list.len() - 1
-        }))
+        let c = pose_cell(pose);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let near = [
+                        c[0].saturating_add(dx),
+                        c[1].saturating_add(dy),
+                        c[2].saturating_add(dz),
+                    ];
+                    if let Some(found) = index
+                        .get(&near)
+                        .and_then(|v| v.iter().copied().find(|&k| same_pose(&p.list[k], pose)))
+                    {
+                        return Ok(found);
+                    }
+                }
+            }
+        }
+        p.list.push(*pose);
+        p.first_line.push((file.to_string(), line));
+        index.entry(c).or_default().push(p.list.len() - 1);
+        Ok(p.list.len() - 1)
     };
     let mut of_mode = Vec::with_capacity(data.modes.len());
     for m in &data.modes {
@@ -143,6 +175,13 @@ pub fn calibrate(
         notes.push(format!(
             "rows without an orientation are at the scene's orientation {:?}",
             base.ee_orientation_wxyz
+        ));
+    }
+    if !data.pairing_hint_lines.is_empty() {
+        notes.push(format!(
+            "{} rows whose status says how identify paired them with the nominal model ({}): kept, and paired here",
+            data.pairing_hint_lines.len(),
+            super::data::PAIRING_STATUSES.join(" or ")
         ));
     }
     let fits_damping = spec.params.iter().any(|p| p.kind.is_damping());
@@ -701,4 +740,40 @@ fn mode_residuals(
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    /// A pose written with identify's 11 significant digits is the full-precision one; poses
+    /// 2 µm apart, or with and without an orientation, are not.
+    #[test]
+    fn poses_rounded_by_a_writer_are_one_pose() {
+        let full = MeasuredPose {
+            position_m: Vector3::new(0.585_067_598_523_7, -0.090_383_794_821_49, 0.814_678),
+            orientation_wxyz: None,
+            t_min_n: None,
+        };
+        let rounded = |v: f64| format!("{v:.10e}").parse::<f64>().unwrap();
+        let written = MeasuredPose {
+            position_m: full.position_m.map(rounded),
+            ..full
+        };
+        assert_ne!(written.position_m, full.position_m);
+        assert!(same_pose(&full, &written));
+        let d = (pose_cell(&full)[0] - pose_cell(&written)[0]).abs();
+        assert!(d <= 1, "neighbouring cells at most");
+        let apart = MeasuredPose {
+            position_m: full.position_m + Vector3::new(2e-6, 0.0, 0.0),
+            ..full
+        };
+        assert!(!same_pose(&full, &apart));
+        let turned = MeasuredPose {
+            orientation_wxyz: Some([1.0, 0.0, 0.0, 0.0]),
+            ..full
+        };
+        assert!(!same_pose(&full, &turned));
+    }
 }

@@ -199,17 +199,13 @@ mod tests {
     }
 
     #[test]
-    fn a_toml_error_keeps_the_snippet_under_the_file_name() {
+    fn a_toml_error_is_one_line_under_the_file_name() {
         let e = Scene::from_toml_str("name = \"x\"\ngravity = [0, 0\n", "s.toml")
             .unwrap_err()
             .to_string();
-        let lines: Vec<&str> = e.lines().collect();
-        assert!(lines.len() >= 4, "{e}");
-        assert!(
-            lines[0].starts_with("s.toml: ") && lines[0].contains("line 2"),
-            "{e}"
+        assert_eq!(
+            e,
+            "s.toml: line 2, column 16: key `gravity`: unclosed array, expected `]`"
         );
-        assert!(e.contains("2 | gravity = [0, 0") && e.contains('^'), "{e}");
-        assert!(!e.contains(" | 2 |"), "flattened: {e}");
     }
 }

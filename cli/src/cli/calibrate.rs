@@ -12,8 +12,9 @@ use crate::report::calibration::calibration_svg;
 use crate::report::csv::process_command_line;
 use crate::report::figure::FigureFormat;
 use crate::scene::Scene;
+use cablevib::outln;
 use clap::Args;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// `cablevib calibrate`.
 #[derive(Debug, Args)]
@@ -119,77 +120,17 @@ fn spec(scene: &Scene, a: &CalibrateArgs) -> Result<FitSpec, CliError> {
     Ok(spec)
 }
 
-/// The identity (device, inode) of an existing file.
-fn identity(p: &Path) -> Option<(u64, u64)> {
-    use std::os::unix::fs::MetadataExt;
-    std::fs::metadata(p).ok().map(|m| (m.dev(), m.ino()))
-}
-
-/// Refuses an output that is one of the inputs (the same file by device and inode, or the
-/// same path), before anything is computed.
-fn check_outputs(a: &CalibrateArgs) -> Result<(), CliError> {
-    let mut inputs: Vec<(&str, PathBuf)> = vec![("--data", a.data.clone())];
-    if let Some(t) = &a.tensions {
-        inputs.push(("--tensions", t.clone()));
+/// The files `calibrate` reads (the data, the tensions, the scene when it is a file) and
+/// writes (the calibrated scene, the figure), for the check that no output is an input
+/// ([`super::files`]).
+pub fn files(a: &CalibrateArgs) -> Result<(Vec<PathBuf>, Vec<PathBuf>), CliError> {
+    let mut inputs = vec![a.data.clone(), a.scene.input_path()];
+    inputs.extend(a.tensions.clone());
+    let mut outputs: Vec<PathBuf> = a.output.iter().cloned().collect();
+    if let Some(p) = &a.svg {
+        outputs.push(figure::target(p, a.format)?.0);
     }
-    if Path::new(&a.scene.scene).exists() {
-        inputs.push(("the scene", PathBuf::from(&a.scene.scene)));
-    }
-    let mut outputs: Vec<(&str, &PathBuf)> = Vec::new();
-    if let Some(o) = &a.output {
-        outputs.push(("-o", o));
-    }
-    if let Some(s) = &a.svg {
-        outputs.push(("--svg", s));
-    }
-    for (oname, o) in &outputs {
-        for (iname, i) in &inputs {
-            let same =
-                *o == i || matches!((identity(o), identity(i)), (Some(x), Some(y)) if x == y);
-            if same {
-                return Err(CliError::Usage(format!(
-                    "{oname} {}: is {iname} ({}); an output never replaces an input",
-                    o.display(),
-                    i.display()
-                )));
-            }
-        }
-    }
-    if let (Some(o), Some(s)) = (&a.output, &a.svg) {
-        if o == s {
-            return Err(CliError::Usage(format!(
-                "-o and --svg are the same file {}",
-                o.display()
-            )));
-        }
-    }
-    Ok(())
-}
-
-/// Writes `text` to `path` whole or not at all: a temporary file in the same directory,
-/// synced, then renamed over `path`.
-fn write_whole(path: &Path, text: &str) -> Result<(), CliError> {
-    use std::io::Write;
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    std::fs::create_dir_all(&dir)?;
-    let name = path
-        .file_name()
-        .map_or("calibrated".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| -> std::io::Result<()> {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(text.as_bytes())?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(CliError::Usage(format!("-o {}: {e}", path.display())));
-    }
-    Ok(())
+    Ok((inputs, outputs))
 }
 
 /// `cablevib calibrate`.
@@ -200,7 +141,6 @@ pub fn run(a: &CalibrateArgs) -> Result<(), CliError> {
         ));
     }
     figure::format_needs_svg(&a.svg, a.format)?;
-    check_outputs(a)?;
     let scene = resolve_scene(&a.scene)?;
     let sigma = SigmaDefaults {
         frequency_rel: a.sigma_rel,
@@ -218,21 +158,23 @@ pub fn run(a: &CalibrateArgs) -> Result<(), CliError> {
     if a.json {
         let text =
             serde_json::to_string_pretty(r).map_err(|e| CliError::Analysis(e.to_string()))?;
-        println!("{text}");
+        outln!("{text}")?;
     } else {
-        print!("{}", text_report(r));
+        crate::output_file::stdout_bytes(text_report(r).as_bytes())?;
     }
-    let say = |m: String| {
+    // Where the files went: on stdout with the text report, on stderr beside the JSON.
+    let say = |m: String| -> Result<(), CliError> {
         if a.json {
             eprintln!("{m}");
         } else {
-            println!("{m}");
+            outln!("{m}")?;
         }
+        Ok(())
     };
     if let Some(path) = &a.svg {
         let (path, fmt) = figure::target(path, a.format)?;
         figure::write(&path, &calibration_svg(r), fmt)?;
-        say(format!("wrote {}", path.display()));
+        say(format!("wrote {}", path.display()))?;
     }
     if let Some(path) = &a.output {
         let (source, origin) = Scene::source_text(&a.scene.scene)?;
@@ -275,8 +217,8 @@ pub fn run(a: &CalibrateArgs) -> Result<(), CliError> {
         .collect::<Vec<_>>();
         let text = calibrated_scene_toml(&source, &origin, &scene, &spec, &c.applied, r, &header)
             .map_err(|e| CliError::Analysis(e.to_string()))?;
-        write_whole(path, &text)?;
-        say(format!("wrote {}", path.display()));
+        crate::report::write_file(path, &text)?;
+        say(format!("wrote {}", path.display()))?;
     }
     Ok(())
 }

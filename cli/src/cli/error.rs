@@ -25,6 +25,12 @@ pub enum CliError {
     /// A study failed or was given bad values.
     #[error(transparent)]
     Study(#[from] StudyError),
+    /// Standard output could not be written.
+    #[error(transparent)]
+    Stdout(#[from] crate::output_file::StdoutError),
+    /// An output was refused (it is an input) or not written whole.
+    #[error(transparent)]
+    Output(#[from] crate::output_file::OutputFileError),
     /// Writing a result file failed.
     #[error(transparent)]
     Report(#[from] ReportError),

@@ -21,6 +21,7 @@ use crate::report::figure::FigureFormat;
 use crate::report::identify::{identify_csv, stabilisation_svg, Paired, WindowRows};
 use crate::scene::Scene;
 use crate::study::identify::{model_modes, pair, PairStatus};
+use cablevib::outln;
 use clap::Args;
 use nalgebra::Vector3;
 use serde_json::{json, Map, Value};
@@ -424,12 +425,12 @@ fn output(
     poses: &PoseBins,
 ) -> Result<(), CliError> {
     if a.json {
-        println!(
+        outln!(
             "{}",
             json_of(a, layout, rows, scene, rate_hz, (identify_s, total_s))
-        );
+        )?;
     } else {
-        println!(
+        outln!(
             "{}: {} channel(s) ({}) at {:.4} Hz, band {} … {} Hz; {} window(s) identified in {:.3} s",
             layout.source,
             layout.channels.len(),
@@ -439,19 +440,19 @@ fn output(
             a.to_hz,
             rows.len(),
             identify_s
-        );
+        )?;
         if poses.nonfinite > 0 {
-            println!(
+            outln!(
                 "{} pose(s) with non-finite values left out",
                 poses.nonfinite
-            );
+            )?;
         }
         for w in rows {
             let r = w.result;
             let pos = w.position_m.map_or("pose unknown".to_string(), |p| {
                 format!("pose ({:.4}, {:.4}, {:.4}) m", p[0], p[1], p[2])
             });
-            println!(
+            outln!(
                 "window {} [{:.3}, {:.3}] s: {}, {} mode(s), {}{}",
                 r.index,
                 r.t_start_s,
@@ -467,7 +468,7 @@ fn output(
                 } else {
                     String::new()
                 }
-            );
+            )?;
             for (j, m) in r.modes.iter().enumerate() {
                 let model = w.paired[j].map_or(String::new(), |p| {
                     format!(
@@ -478,7 +479,7 @@ fn output(
                         p.frequency_hz - m.frequency_hz
                     )
                 });
-                println!(
+                outln!(
                     "  {:>2}: {:>10.4} ± {:.4} Hz  ζ {:.4} ± {:.4}  [{}]{model}",
                     j + 1,
                     m.frequency_hz,
@@ -486,7 +487,7 @@ fn output(
                     m.damping_ratio,
                     m.damping_ratio_std,
                     w.status[j]
-                );
+                )?;
             }
         }
     }
@@ -500,7 +501,7 @@ fn output(
         let csv = identify_csv(rows, &layout.channels, meta);
         write_csv(path, csv, &process_command_line())?;
         if !a.json {
-            println!("wrote {}", path.display());
+            outln!("wrote {}", path.display())?;
         }
     }
     if let Some(path) = &a.svg {
@@ -528,7 +529,7 @@ fn output(
             fmt,
         )?;
         if !a.json {
-            println!("wrote {}", path.display());
+            outln!("wrote {}", path.display())?;
         }
     }
     Ok(())

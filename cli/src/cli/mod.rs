@@ -34,6 +34,7 @@ pub mod calibrate;
 pub mod completions;
 pub mod error;
 pub mod figure;
+pub mod files;
 pub mod frf;
 pub mod frf_dense;
 pub mod identify;
@@ -126,8 +127,11 @@ pub enum Command {
 /// Heap allocation counter supplied by the binary's global allocator (0 when none).
 pub type AllocCounter = fn() -> u64;
 
-/// Run one command; `allocations` counts heap allocations (for `bench` and `serve`).
+/// Run one command; `allocations` counts heap allocations (for `bench` and `serve`). An
+/// output that is one of the command's inputs is refused first ([`files`]).
 pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
+    let f = files::files(&cli.command)?;
+    files::refuse_inputs(&f.outputs, &f.inputs)?;
     match cli.command {
         Command::Analyze(a) => analyze::run(&a),
         Command::Bench(a) => bench::run(&a, allocations),

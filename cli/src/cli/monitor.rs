@@ -2,6 +2,7 @@
 //! (a recording's poses and T_min set-points into a service) and `demo --monitor`. The work is
 //! the `cablevib-monitor` crate's.
 
+use cablevib::outln;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -130,29 +131,42 @@ pub fn monitor(a: &MonitorArgs) -> Result<(), CliError> {
         )));
     }
     cfg.max_viewers = a.max_viewers;
+    // Standard output that cannot be written stops the monitor (the recording is closed),
+    // and the error is the command's.
+    let mut printed = Ok(());
     let report = cablevib_monitor::run(&cfg, stop, |at| {
-        println!(
-            "cablevib monitor: attached to instance {:?}{}{}",
-            a.instance,
-            at.url
-                .as_ref()
-                .map_or(String::new(), |u| format!(", Foxglove at {u}")),
-            a.record
-                .as_ref()
-                .map_or(String::new(), |p| format!(", recording to {}", p.display()))
-        );
-        match &at.scene {
-            SceneSource::Given => {}
-            SceneSource::Service => println!(
-                "  3D view of the service's scene {:?}",
-                at.attributes
-                    .get(cablevib_ipc::ATTR_SCENE)
-                    .unwrap_or_default()
-            ),
-            SceneSource::None(why) => println!("  no 3D view: {why}"),
+        printed = attached_lines(a, at);
+        if printed.is_err() {
+            stop.store(true, Ordering::Release);
         }
     })?;
-    println!("cablevib monitor: {report}");
+    printed?;
+    outln!("cablevib monitor: {report}")?;
+    Ok(())
+}
+
+/// The lines `cablevib monitor` prints once attached.
+fn attached_lines(a: &MonitorArgs, at: &cablevib_monitor::Attached) -> Result<(), CliError> {
+    outln!(
+        "cablevib monitor: attached to instance {:?}{}{}",
+        a.instance,
+        at.url
+            .as_ref()
+            .map_or(String::new(), |u| format!(", Foxglove at {u}")),
+        a.record
+            .as_ref()
+            .map_or(String::new(), |p| format!(", recording to {}", p.display()))
+    )?;
+    match &at.scene {
+        SceneSource::Given => {}
+        SceneSource::Service => outln!(
+            "  3D view of the service's scene {:?}",
+            at.attributes
+                .get(cablevib_ipc::ATTR_SCENE)
+                .unwrap_or_default()
+        )?,
+        SceneSource::None(why) => outln!("  no 3D view: {why}")?,
+    }
     Ok(())
 }
 
@@ -213,7 +227,7 @@ pub fn replay(a: &ReplayArgs) -> Result<(), CliError> {
         max_gap: duration("--max-gap-s", a.max_gap_s)?,
     };
     let r = cablevib_monitor::replay::replay(&cfg, stop, |_| {})?;
-    println!(
+    outln!(
         "cablevib replay: {} poses and {} T_min set-points sent, {} estimates received ({} ok), \
          {} unanswered, {} pauses shortened to {} s{}",
         r.poses,
@@ -228,7 +242,7 @@ pub fn replay(a: &ReplayArgs) -> Result<(), CliError> {
         } else {
             ""
         }
-    );
+    )?;
     Ok(())
 }
 
@@ -282,8 +296,9 @@ pub fn start_beside_demo(
         std::thread::Builder::new()
             .name("cablevib-monitor".into())
             .spawn(move || {
+                // The demo's own lines report a standard output that cannot be written.
                 let r = cablevib_monitor::run(&cfg, &stop, |at| {
-                    println!(
+                    let _ = outln!(
                         "  monitor: Foxglove at {}{}",
                         at.url.clone().unwrap_or_default(),
                         record
@@ -293,7 +308,9 @@ pub fn start_beside_demo(
                 });
                 if signal.load(Ordering::Acquire) && !done.load(Ordering::Acquire) {
                     match &r {
-                        Ok(report) => println!("  monitor: {report}"),
+                        Ok(report) => {
+                            let _ = outln!("  monitor: {report}");
+                        }
                         Err(e) => eprintln!("cablevib: monitor: {e}"),
                     }
                     std::process::exit(130);
@@ -328,7 +345,7 @@ impl DemoMonitor {
             .thread
             .join()
             .map_err(|_| CliError::Analysis("the monitor thread panicked".into()))??;
-        println!("  monitor: {report}");
+        outln!("  monitor: {report}")?;
         Ok(())
     }
 }

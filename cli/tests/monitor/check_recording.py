@@ -79,6 +79,9 @@ def full(expected_path, path):
                 raise AssertionError(f"unexpected schema encoding {s.encoding}")
         meta = {m.name: dict(m.metadata) for m in reader.iter_metadata()}
         assert "cablevib" in meta and meta["cablevib"].get("scene"), meta
+        # Stopped by SIGTERM: the file is complete and says it was interrupted.
+        end = meta.get("cablevib.end", {})
+        assert end.get("stopped_by") == "signal" and end.get("interrupted") == "true", meta
         estimates, poses, scenes, t_mins = [], [], 0, 0
         for schema, channel, message in reader.iter_messages():
             if schema.name == "cablevib.Estimate":

@@ -445,8 +445,9 @@ fn record_watch_read_back_and_replay() {
     }
 }
 
-/// A monitor killed with SIGKILL mid-run leaves a file the Python `mcap` reader reads up to
-/// its last complete chunk.
+/// A monitor killed with SIGKILL mid-run leaves its temporary file `FILE.PID.part` (FILE
+/// itself is never created: it appears only complete), which the Python `mcap` reader reads
+/// up to its last complete chunk.
 #[test]
 fn killed_monitor_leaves_a_readable_file() {
     let py = python();
@@ -464,12 +465,16 @@ fn killed_monitor_leaves_a_readable_file() {
         file.to_str().unwrap(),
     ]);
     let run = control(&instance, &scene, 3.0, 1000.0, None);
+    let pid = monitor.id();
     signal(&monitor, libc::SIGKILL);
     let _ = monitor.wait();
     stop_service(service);
+    assert!(!file.exists(), "{} exists after SIGKILL", file.display());
+    let part = PathBuf::from(format!("{}.{pid}.part", file.display()));
+    assert!(part.exists(), "no {}", part.display());
     let out = Command::new(&py)
         .arg(script("check_recording.py"))
-        .args(["killed", file.to_str().unwrap()])
+        .args(["killed", part.to_str().unwrap()])
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
