@@ -44,6 +44,16 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// `cablevib calibrate robot.toml ARGS --json` in `dir`: it succeeds; its JSON.
+fn calibrate_json(dir: &Path, args: &[&str]) -> serde_json::Value {
+    let mut all = vec!["calibrate", "robot.toml"];
+    all.extend(args);
+    all.push("--json");
+    let o = run(dir, &all);
+    assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
 /// The JSON holds parameters (name, value, std_error, determined), chi2_per_dof and fits;
 /// the estimates are the truth's within 3σ; `-o` writes a scene that the scene parser reads
 /// with those EA values and mass and that `analyze` and `modes` run on; the figure is an
@@ -211,40 +221,14 @@ fn damping_fits() {
         ));
     }
     std::fs::write(d.join("damped.csv"), out).unwrap();
-    let o = run(
-        &d,
-        &[
-            "calibrate",
-            "robot.toml",
-            "--data",
-            "damped.csv",
-            "--fit",
-            "rayleigh",
-            "--json",
-        ],
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let v = calibrate_json(&d, &["--data", "damped.csv", "--fit", "rayleigh"]);
     let a = v["parameters"][0]["value"].as_f64().unwrap();
     let b = v["parameters"][1]["value"].as_f64().unwrap();
     assert!(
         (a - alpha).abs() < 1e-6 * alpha && (b - beta).abs() < 1e-6 * beta,
         "α {a}, β {b}"
     );
-    let o = run(
-        &d,
-        &[
-            "calibrate",
-            "robot.toml",
-            "--data",
-            "damped.csv",
-            "--fit",
-            "modal_ratio",
-            "--json",
-        ],
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let v = calibrate_json(&d, &["--data", "damped.csv", "--fit", "modal_ratio"]);
     let z = v["parameters"][0]["value"].as_f64().unwrap();
     let (num, den) = zetas.iter().fold((0.0, 0.0), |(n, d), (z, s)| {
         (n + z / (s * s), d + 1.0 / (s * s))
@@ -488,22 +472,17 @@ fn identify_then_calibrate_recovers_the_truth() {
     let text = String::from_utf8_lossy(&o.stdout);
     println!("{text}");
     assert!(o.status.success(), "calibrate: {}", stderr(&o));
-    let o = run(
+    let v = calibrate_json(
         &d,
         &[
-            "calibrate",
-            "robot.toml",
             "--data",
             "id.csv",
             "--tensions",
             "tensions.csv",
             "--fit",
             "ea_factor,ee_mass",
-            "--json",
         ],
     );
-    assert!(o.status.success(), "calibrate --json: {}", stderr(&o));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let truth_values: Vec<f64> = factors.iter().copied().chain([mass]).collect();
     let mut worst = 0.0f64;
     for (p, t) in v["parameters"]
