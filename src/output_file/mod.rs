@@ -131,7 +131,9 @@ pub fn refuse_inputs<P: AsRef<Path>, Q: AsRef<Path>>(
         .iter()
         .filter_map(|p| identity(p.as_ref()).map(|id| (p.as_ref(), id)))
         .collect();
-    let mut seen: Vec<(&Path, Option<(u64, u64)>, PathBuf)> = Vec::new();
+    // Each output so far: as given, its identity, its normal path.
+    type Seen<'a> = (&'a Path, Option<(u64, u64)>, PathBuf);
+    let mut seen: Vec<Seen> = Vec::new();
     for out in outputs {
         let out = out.as_ref();
         let id = identity(out);
