@@ -120,19 +120,6 @@ fn spec(scene: &Scene, a: &CalibrateArgs) -> Result<FitSpec, CliError> {
     Ok(spec)
 }
 
-/// The files `calibrate` reads (the data, the tensions, the scene when it is a file) and
-/// writes (the calibrated scene, the figure), for the check that no output is an input
-/// ([`super::files`]).
-pub fn files(a: &CalibrateArgs) -> Result<(Vec<PathBuf>, Vec<PathBuf>), CliError> {
-    let mut inputs = vec![a.data.clone(), a.scene.input_path()];
-    inputs.extend(a.tensions.clone());
-    let mut outputs: Vec<PathBuf> = a.output.iter().cloned().collect();
-    if let Some(p) = &a.svg {
-        outputs.push(figure::target(p, a.format)?.0);
-    }
-    Ok((inputs, outputs))
-}
-
 /// `cablevib calibrate`.
 pub fn run(a: &CalibrateArgs) -> Result<(), CliError> {
     if a.scene.position.is_some() || a.scene.orientation.is_some() {
