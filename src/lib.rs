@@ -95,6 +95,7 @@ pub mod modal;
 // Layer 5
 pub mod estimator;
 // Layer 6
+pub mod calibration;
 pub mod study;
 #[cfg(test)]
 mod readme_tests {

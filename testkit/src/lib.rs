@@ -4,12 +4,14 @@
 //!
 //! | module | what |
 //! |---|---|
+//! | [`calibration_truth`] | "measured" modes for the calibration tests from the dense FEM of a true scene |
 //! | [`dense_fem`] | dense references written in the tests: a FEM with explicit hidden-cable nodes, dense eigenpairs |
 //! | [`hard_cases`] | the real-time-against-dense checks of the hard-case tests |
 //! | [`sag_cases`] | the sagged scenes and poses the sag tests share, the sagged shipped robots with FEM chains |
 //! | [`sag_reference_py`] | the independent sagged-cable reference, tests/py/sag_reference.py |
 //! | [`sag_robot`] | sagged chains (`modal::sagged`) of a small robot, for the sagged FEM tests |
 //! | [`pinned_venv`] | a Python venv under target/ with pinned packages |
+pub mod calibration_truth;
 pub mod dense_fem;
 pub mod exact_response;
 pub mod hard_cases;

@@ -41,6 +41,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("modal", 4),
     ("estimator", 5),
     ("study", 6),
+    ("calibration", 6),
     ("service", 7),
     ("monitor", 8),
     ("report", 8),
