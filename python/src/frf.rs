@@ -2,7 +2,7 @@
 //! ``cablevib frf SCENE --json`` prints (the library's `modal::receptance_over`).
 
 use crate::analysis::{finite_position, with_overrides};
-use crate::convert::json_to_py;
+use crate::convert::{asarray, json_to_py};
 use crate::error::CablevibError;
 use crate::scene::PyScene;
 use cablevib::estimator::{Estimator, PoseModel, Tmin};
@@ -149,7 +149,16 @@ pub fn frf<'py>(
         "damping": damping.kind_str(),
         "dim": dim,
     });
-    json_to_py(py, &value)
+    let out = json_to_py(py, &value)?;
+    // The cubes arrive as lists of N d × d arrays: one float64 array of shape (N, d, d),
+    // as the stub says.
+    let d = out.cast::<pyo3::types::PyDict>()?;
+    for key in ["receptance_re", "receptance_im"] {
+        if let Some(v) = d.get_item(key)? {
+            d.set_item(key, asarray(py, v, "float64")?)?;
+        }
+    }
+    Ok(out)
 }
 
 /// The receptance at one frequency, m/N (the leading `dim` × `dim` block).
