@@ -18,13 +18,13 @@ use std::process::Command;
 const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
 
 /// The tolerances (relative) of a mode at `f_hz` with damping `zeta` in 60 s.
-fn tolerance(f_hz: f64, zeta: f64) -> (f64, f64) {
+pub(super) fn tolerance(f_hz: f64, zeta: f64) -> (f64, f64) {
     let (sf, sz) = cablevib::identify::statistical_limit(f_hz, zeta, 60.0);
     ((3.0 * sf).max(1e-3), (3.0 * sz).max(0.1))
 }
 
 /// `got` (ascending) holds every known mode within its tolerance, one to one.
-fn assert_known(got: &[(f64, f64)], sys: &Modal, what: &str) {
+pub(super) fn assert_known(got: &[(f64, f64)], sys: &Modal, what: &str) {
     assert_eq!(got.len(), sys.frequencies_hz.len(), "{what}: {got:?}");
     for ((f, z), (&ft, &zt)) in got.iter().zip(sys.frequencies_hz.iter().zip(&sys.zetas)) {
         let (tf, tz) = tolerance(ft, zt);
@@ -41,7 +41,7 @@ fn assert_known(got: &[(f64, f64)], sys: &Modal, what: &str) {
 
 /// Write `t` and the columns `names` of `cols(k)` per sample as CSV (t as the MCAP reader
 /// computes it, k·10⁶ ns × 10⁻⁹).
-fn write(path: &Path, n: usize, names: &str, cols: impl Fn(usize) -> Vec<f64>) {
+pub(super) fn write(path: &Path, n: usize, names: &str, cols: impl Fn(usize) -> Vec<f64>) {
     let mut s = format!("t,{names}\n");
     for k in 0..n {
         s.push_str(&format!("{}", (k as f64 * 1e6) * 1e-9));
