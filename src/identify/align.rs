@@ -66,6 +66,13 @@ impl Queue {
 
     fn push(&mut self, t_s: f64, v: &[f64], what: &str) -> Result<(), IdentifyError> {
         let k = self.taken;
+        if v.len() != self.width {
+            return Err(IdentifyError::Input(format!(
+                "{what} sample {k}: {} values, expected {}",
+                v.len(),
+                self.width
+            )));
+        }
         if !t_s.is_finite() {
             return Err(IdentifyError::Input(format!(
                 "{what} sample {k}: time {t_s} is not finite"
@@ -143,28 +150,12 @@ impl Aligner {
             self.resp.width = y.len();
             self.out = vec![0.0; y.len() + self.inp.width];
         }
-        if y.len() != self.resp.width {
-            return Err(IdentifyError::Input(format!(
-                "response sample {}: {} values, expected {}",
-                self.resp.taken,
-                y.len(),
-                self.resp.width
-            )));
-        }
         self.resp.push(t_s, y, "response")?;
         self.flush(false, emit)
     }
 
     /// An input sample.
     pub fn input(&mut self, t_s: f64, u: &[f64], emit: &mut Emit<'_>) -> Result<(), IdentifyError> {
-        if u.len() != self.inp.width {
-            return Err(IdentifyError::Input(format!(
-                "input sample {}: {} values, expected {}",
-                self.inp.taken,
-                u.len(),
-                self.inp.width
-            )));
-        }
         self.inp.push(t_s, u, "input")?;
         if self.dt_input_s.is_none() {
             self.probe.push(t_s);

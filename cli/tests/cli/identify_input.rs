@@ -9,7 +9,7 @@
 
 use super::identify::{chain, dir, json_of, modes, one_line, run};
 use cablevib_testkit::modal_record::{
-    close_pair, simulate, simulate_forced, Modal, Output as Measured,
+    close_pair, simulate, simulate_forced, Modal, Output as Measured, Record,
 };
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -53,6 +53,21 @@ pub(super) fn write(path: &Path, n: usize, names: &str, cols: impl Fn(usize) -> 
     std::fs::write(path, s).unwrap();
 }
 
+/// The chain's record forced at mass 1 by a measured white force (held over each step):
+/// 3 accelerations (masses 1, 2, 4) with 20 dB sensor noise, `duration_s` at 1 kHz.
+pub(super) fn forced_chain(duration_s: f64, seed: u64) -> Record {
+    simulate_forced(
+        &chain(),
+        &[0, 1, 3],
+        &[0],
+        Measured::Acceleration,
+        1000.0,
+        duration_s,
+        20.0,
+        seed,
+    )
+}
+
 /// The chain forced at mass 1 by a measured white force `fx`: `--input fx` gives H1 and its
 /// fit, the five known modes, coherence per mode, shapes at the responses only; and the
 /// refusals of a wrong `--input`.
@@ -60,16 +75,7 @@ pub(super) fn write(path: &Path, n: usize, names: &str, cols: impl Fn(usize) -> 
 fn input_channel_gives_the_h1_fit_of_the_known_modes() {
     let d = dir("input");
     let sys = chain();
-    let rec = simulate_forced(
-        &sys,
-        &[0, 1, 3],
-        &[0],
-        Measured::Acceleration,
-        1000.0,
-        60.0,
-        20.0,
-        5,
-    );
+    let rec = forced_chain(60.0, 5);
     let csv = d.join("forced.csv");
     write(&csv, rec.t_s.len(), "ax,ay,az,fx", |k| rec.sample(k));
     let out = d.join("modes.csv");

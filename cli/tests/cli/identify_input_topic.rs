@@ -7,8 +7,8 @@
 //! aligner's code, the one-clock CSV whose force column is the interpolation in closed form.
 
 use super::identify::{dir, json_of, modes, one_line, ros2_python, run, write_bag};
-use super::identify_input::{assert_known, write};
-use cablevib_testkit::modal_record::{simulate_forced, Output as Measured, Record};
+use super::identify_input::{assert_known, forced_chain, write};
+use cablevib_testkit::modal_record::Record;
 use std::path::Path;
 
 /// The force on the chain is held over each 1 ms step (testkit), so a sensor sampling it
@@ -60,16 +60,7 @@ fn wrench_topic_beside_imu_gives_the_known_modes() {
     let d = dir("input_topic");
     let sys = super::identify::chain();
     // The record of the CSV --input test (same system, sensors, seed).
-    let rec = simulate_forced(
-        &sys,
-        &[0, 1, 3],
-        &[0],
-        Measured::Acceleration,
-        1000.0,
-        60.0,
-        20.0,
-        5,
-    );
+    let rec = forced_chain(60.0, 5);
     // One clock: the CSV with the force column.
     let csv = d.join("forced.csv");
     write(&csv, rec.t_s.len(), "ax,ay,az,fx", |k| rec.sample(k));
@@ -168,17 +159,7 @@ const ZETA_VS_CSV: f64 = 0.03;
 #[test]
 fn wrench_topic_hostile() {
     let d = dir("input_topic_hostile");
-    let sys = super::identify::chain();
-    let rec = simulate_forced(
-        &sys,
-        &[0, 1, 3],
-        &[0],
-        Measured::Acceleration,
-        1000.0,
-        40.0,
-        20.0,
-        7,
-    );
+    let rec = forced_chain(40.0, 7);
     let (imu, wrench, bag) = (d.join("imu.csv"), d.join("wrench.csv"), d.join("gap.mcap"));
     // IMU from sample 0, wrench from 0.3 ms: IMU sample 0 is before the wrench's span. The
     // wrench lacks samples 25000 … 25099: IMU samples 25000 … 25100 lie in the 101 ms gap

@@ -84,6 +84,32 @@ fn flatten(v: &serde_json::Value, prefix: &str, out: &mut Vec<(String, f64)>) {
     }
 }
 
+/// The positions of `wanted` among the message's field names; the first name missing.
+fn positions<'w>(wanted: &'w [String], fnames: &[String]) -> Result<Vec<usize>, &'w String> {
+    wanted
+        .iter()
+        .map(|w| fnames.iter().position(|k| k == w).ok_or(w))
+        .collect()
+}
+
+/// `values` from the message's `vals` at `picks` (a field found again by its name when a
+/// sequence of another length moved it); the name missing otherwise.
+fn fill<'n>(
+    values: &mut [f64],
+    picks: &[usize],
+    names: &'n [String],
+    fnames: &[String],
+    vals: &[f64],
+) -> Result<(), &'n String> {
+    for (v, (&p, n)) in values.iter_mut().zip(picks.iter().zip(names)) {
+        *v = match fnames.get(p) {
+            Some(k) if k == n => vals[p],
+            _ => vals[fnames.iter().position(|k| k == n).ok_or(n)?],
+        };
+    }
+    Ok(())
+}
+
 /// Read the MCAP recording `path` (module docs).
 pub fn read(
     path: &Path,
@@ -293,27 +319,18 @@ pub fn read(
                 } else {
                     &wanted[..]
                 };
-                picks = on_topic
-                    .iter()
-                    .map(|w| {
-                        fnames.iter().position(|k| k == w).ok_or_else(|| {
-                            bad(format!(
-                                "topic {}: no field `{w}`{} (fields: {})",
-                                ch.topic,
-                                if opts.inputs.contains(w) {
-                                    " for --input (a measured input is a field of the vibration topic's messages, or of --input-topic's)"
-                                } else {
-                                    ""
-                                },
-                                fnames
-                                    .iter()
-                                    .map(|f| f.as_str())
-                                    .collect::<Vec<_>>()
-                                    .join(", ")
-                            ))
-                        })
-                    })
-                    .collect::<Result<_, _>>()?;
+                picks = positions(on_topic, fnames).map_err(|w| {
+                    bad(format!(
+                        "topic {}: no field `{w}`{} (fields: {})",
+                        ch.topic,
+                        if opts.inputs.contains(w) {
+                            " for --input (a measured input is a field of the vibration topic's messages, or of --input-topic's)"
+                        } else {
+                            ""
+                        },
+                        fnames.join(", ")
+                    ))
+                })?;
                 if picks.len() <= if separate { 0 } else { n_in } {
                     return Err(bad(format!(
                         "topic {}: no numeric field to identify from",
@@ -342,56 +359,33 @@ pub fn read(
                 }))?;
             }
             vib_messages += 1;
-            for (v, (&p, n)) in values.iter_mut().zip(picks.iter().zip(&names)) {
-                *v = match fnames.get(p) {
-                    Some(k) if k == n => vals[p],
-                    _ => get(n).ok_or_else(|| {
-                        bad(format!(
-                            "topic {}, message {}: no field `{n}`",
-                            ch.topic, m.sequence
-                        ))
-                    })?,
-                };
-            }
+            fill(&mut values, &picks, &names, fnames, &vals).map_err(|n| {
+                bad(format!(
+                    "topic {}, message {}: no field `{n}`",
+                    ch.topic, m.sequence
+                ))
+            })?;
             sink(Item::Sample {
                 t_s,
                 values: &values,
             })?;
         } else if *role == Role::Input {
             if input_messages == 0 {
-                input_picks = opts
-                    .inputs
-                    .iter()
-                    .map(|w| {
-                        fnames.iter().position(|k| k == w).ok_or_else(|| {
-                            bad(format!(
-                                "--input-topic {}: no field `{w}` for --input (fields: {})",
-                                ch.topic,
-                                fnames
-                                    .iter()
-                                    .map(|f| f.as_str())
-                                    .collect::<Vec<_>>()
-                                    .join(", ")
-                            ))
-                        })
-                    })
-                    .collect::<Result<_, _>>()?;
+                input_picks = positions(&opts.inputs, fnames).map_err(|w| {
+                    bad(format!(
+                        "--input-topic {}: no field `{w}` for --input (fields: {})",
+                        ch.topic,
+                        fnames.join(", ")
+                    ))
+                })?;
             }
             input_messages += 1;
-            for (v, (&p, n)) in input_values
-                .iter_mut()
-                .zip(input_picks.iter().zip(&opts.inputs))
-            {
-                *v = match fnames.get(p) {
-                    Some(k) if k == n => vals[p],
-                    _ => get(n).ok_or_else(|| {
-                        bad(format!(
-                            "topic {}, message {}: no field `{n}`",
-                            ch.topic, m.sequence
-                        ))
-                    })?,
-                };
-            }
+            fill(&mut input_values, &input_picks, &opts.inputs, fnames, &vals).map_err(|n| {
+                bad(format!(
+                    "topic {}, message {}: no field `{n}`",
+                    ch.topic, m.sequence
+                ))
+            })?;
             sink(Item::Input {
                 t_s,
                 values: &input_values,
