@@ -11,6 +11,16 @@ use super::identify_input::{assert_known, forced_chain, write};
 use cablevib_testkit::modal_record::Record;
 use std::path::Path;
 
+/// The IMU's accelerations as responses, the wrench topic's force x as the input.
+const WRENCH_TOPIC: [&str; 6] = [
+    "--channels",
+    "linear_acceleration.x,linear_acceleration.y,linear_acceleration.z",
+    "--input-topic",
+    "/wrench",
+    "--input",
+    "wrench.force.x",
+];
+
 /// The force on the chain is held over each 1 ms step (testkit), so a sensor sampling it
 /// `phase_s` after the IMU's sample k reads sample k's force exactly: the wrench stream is
 /// what a force sensor on its own clock records. `keep(k)`: which wrench samples are written.
@@ -95,17 +105,7 @@ fn wrench_topic_beside_imu_gives_the_known_modes() {
     let py = ros2_python();
     write_bag(&py, &imu, &bag, ["0", "0", "1"], Some(&wrench));
     let b = bag.to_str().unwrap();
-    let o = run(&[
-        "identify",
-        b,
-        "--channels",
-        "linear_acceleration.x,linear_acceleration.y,linear_acceleration.z",
-        "--input-topic",
-        "/wrench",
-        "--input",
-        "wrench.force.x",
-        "--json",
-    ]);
+    let o = run(&[&["identify", b][..], &WRENCH_TOPIC, &["--json"]].concat());
     let v = json_of(&o);
     assert_eq!(v["method"], "h1-era");
     assert_eq!(v["inputs"], serde_json::json!(["wrench.force.x"]));
@@ -169,16 +169,7 @@ fn wrench_topic_hostile() {
     let py = ros2_python();
     write_bag(&py, &imu, &bag, ["0", "0", "1"], Some(&wrench));
     let b = bag.to_str().unwrap();
-    let args = [
-        "identify",
-        b,
-        "--channels",
-        "linear_acceleration.x,linear_acceleration.y,linear_acceleration.z",
-        "--input-topic",
-        "/wrench",
-        "--input",
-        "wrench.force.x",
-    ];
+    let args = [&["identify", b][..], &WRENCH_TOPIC].concat();
     let v = json_of(&run(&[
         &args[..],
         &["--json", "--window", "20", "--overlap", "0"],
