@@ -9,7 +9,7 @@
 //!   channel is left out: both end the contiguous run (no lag product straddles them), are
 //!   counted in the windows they fall in, and give those windows the status `gap`;
 //! - a sample [`Identifier::push_unmatched`] (a response with no measured input at its time,
-//!   [`super::align`]) is left out the same way and counted apart (`unmatched`).
+//!   the `align` module) is left out the same way and counted apart (`unmatched`).
 //!
 //! Samples left out before the first decimated sample are counted in the first window.
 //!
@@ -60,7 +60,7 @@ pub struct WindowResult {
     /// Samples left out because a channel was not finite.
     pub nonfinite: usize,
     /// Response samples left out because the measured input had no value at their time
-    /// (outside its span, or inside a gap of it; [`super::align`]).
+    /// (outside its span, or inside a gap of it; the `align` module).
     pub unmatched: usize,
     /// Modes, ascending.
     pub modes: Vec<IdentifiedMode>,
