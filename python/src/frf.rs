@@ -2,12 +2,12 @@
 //! ``cablevib frf SCENE --json`` prints (the library's `modal::receptance_over`).
 
 use crate::analysis::{finite_position, with_overrides};
-use crate::convert::json_to_py;
+use crate::convert::{asarray, json_to_py};
 use crate::error::CablevibError;
 use crate::scene::PyScene;
 use cablevib::estimator::{Estimator, PoseModel, Tmin};
 use cablevib::kinematics::Pose;
-use cablevib::modal::{frequency_grid, receptance_over, FrfError, ModalParams, ModalSolver};
+use cablevib::modal::{frequency_grid, FrfError, ModalParams, ModalSolver};
 use cablevib::scene::{
     Damping, ElementKind, Scene, MAX_LOSS_FACTOR, MAX_MODAL_RATIO, MAX_RAYLEIGH_ALPHA_PER_S,
     MAX_RAYLEIGH_BETA_S,
@@ -107,13 +107,14 @@ pub fn frf<'py>(
             let pose = PoseModel::new(&s).map_err(|e| e.to_string())?;
             let mut solver = ModalSolver::new(ModalParams::default());
             pose.load(&mut solver);
-            let h = receptance_over(
+            // The command line's computation, its memory checked first (the one budget).
+            let h = cablevib::study::cost::receptance(
+                &pose,
                 &mut solver,
-                &pose.models,
-                &pose.geometry.arm_m,
                 &damping,
                 &freqs,
                 MODAL_CUTOFF_RATIO * to_hz,
+                None,
             )
             .map_err(|e| e.to_string())?;
             Ok((h, pose.dim()))
@@ -148,7 +149,16 @@ pub fn frf<'py>(
         "damping": damping.kind_str(),
         "dim": dim,
     });
-    json_to_py(py, &value)
+    let out = json_to_py(py, &value)?;
+    // The cubes arrive as lists of N d × d arrays: one float64 array of shape (N, d, d),
+    // as the stub says.
+    let d = out.cast::<pyo3::types::PyDict>()?;
+    for key in ["receptance_re", "receptance_im"] {
+        if let Some(v) = d.get_item(key)? {
+            d.set_item(key, asarray(py, v, "float64")?)?;
+        }
+    }
+    Ok(out)
 }
 
 /// The receptance at one frequency, m/N (the leading `dim` × `dim` block).

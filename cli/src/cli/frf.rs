@@ -13,9 +13,7 @@ use super::modes::pose_model;
 use super::{json_f64, CliError};
 use crate::estimator::{Estimator, Tmin};
 use crate::kinematics::Pose;
-use crate::modal::{
-    frequency_grid, lambda_to_hz, receptance_over, FrfError, ModalBasis, ModalParams, ModalSolver,
-};
+use crate::modal::{frequency_grid, lambda_to_hz, FrfError, ModalBasis, ModalParams, ModalSolver};
 use crate::report::csv::{process_command_line, write_csv};
 use crate::report::figure::FigureFormat;
 use crate::report::frf::{bode_svg, frf_csv, frf_meta, FrfData, COORDS};
@@ -23,6 +21,7 @@ use crate::scene::{
     Damping, ElementKind, Scene, MAX_LOSS_FACTOR, MAX_MODAL_RATIO, MAX_RAYLEIGH_ALPHA_PER_S,
     MAX_RAYLEIGH_BETA_S,
 };
+use crate::study;
 use cablevib::outln;
 use clap::Args;
 use nalgebra::{DMatrix, Matrix6};
@@ -414,16 +413,14 @@ fn taut(a: &FrfArgs, s: &Scene, damping: &Damping, freqs: &[f64]) -> Result<Comp
         .modes(modes.len(), &mut modes)
         .map_err(|e| CliError::Analysis(e.to_string()))?;
     let natural_hz = marked(a, &modes[..nm]);
+    let cutoff_hz = MODAL_CUTOFF_RATIO * a.to_hz;
+    let basis_modes = match damping {
+        Damping::ModalRatio { .. } => solver.count_below(crate::modal::hz_to_lambda(cutoff_hz)),
+        _ => 0,
+    };
+    announce_frf(&pose.scene, damping, freqs.len(), basis_modes as usize)?;
     let t0 = Instant::now();
-    let h = receptance_over(
-        &mut solver,
-        &pose.models,
-        &pose.geometry.arm_m,
-        damping,
-        freqs,
-        MODAL_CUTOFF_RATIO * a.to_hz,
-    )
-    .map_err(|e| CliError::Analysis(e.to_string()))?;
+    let h = study::cost::receptance(&pose, &mut solver, damping, freqs, cutoff_hz, Some("frf"))?;
     let structured_s = t0.elapsed().as_secs_f64();
     let get = || pose.dense().map_err(|e| e.to_string());
     let dense = dense_check(a, get, dim, damping, freqs, &h)?;
@@ -435,6 +432,21 @@ fn taut(a: &FrfArgs, s: &Scene, damping: &Damping, freqs: &[f64]) -> Result<Comp
         structured_s,
         dense,
     })
+}
+
+/// The up-front estimate of a long response on stderr ([`study::cost::estimate_cost`]).
+fn announce_frf(
+    s: &Scene,
+    damping: &Damping,
+    points: usize,
+    basis_modes: usize,
+) -> Result<(), CliError> {
+    let work = study::cost::Work::Frf {
+        damping,
+        points,
+        basis_modes: basis_modes.min(crate::modal::MAX_FRF_MODES),
+    };
+    super::modes::announce(&study::cost::estimate_cost(s, &work))
 }
 
 /// The natural frequencies to mark: first of each cluster, end-effector participation at
@@ -522,8 +534,12 @@ fn sagged(a: &FrfArgs, s: &Scene, damping: &Damping, freqs: &[f64]) -> Result<Co
     let h = if let Damping::ModalRatio { zeta } = *damping {
         sagged_modal(&mut est, zeta, MODAL_CUTOFF_RATIO * a.to_hz, total, freqs)?
     } else {
-        sag.receptance_over(damping, freqs)
-            .map_err(|e| CliError::Analysis(e.to_string()))?
+        announce_frf(s, damping, freqs.len(), 0)?;
+        let chunk = study::cost::frf_chunk(s, damping);
+        study::cost::in_chunks(Some("frf"), freqs.len(), chunk, |r| {
+            sag.receptance_over(damping, &freqs[r])
+        })
+        .map_err(|e| CliError::Analysis(e.to_string()))?
     };
     let structured_s = t0.elapsed().as_secs_f64();
     let get = || est.dense_matrices().map_err(|e| e.to_string());

@@ -14,7 +14,10 @@ use super::figure::{self, parse_format};
 use super::recording::{self, Item, Layout, ReadOptions};
 use super::{json_f64, CliError};
 use crate::estimator::Estimator;
-use crate::identify::{Identifier, IdentifyParams, WindowResult, WindowStatus};
+use crate::identify::align::MAX_INPUT_GAP_PERIODS;
+use crate::identify::{
+    Aligned, Aligner, Identifier, IdentifyError, IdentifyParams, WindowResult, WindowStatus,
+};
 use crate::kinematics::Pose;
 use crate::report::csv::{process_command_line, write_csv};
 use crate::report::figure::FigureFormat;
@@ -53,9 +56,23 @@ pub struct IdentifyArgs {
     /// `linear_acceleration.x`); default: every channel.
     #[arg(long, value_delimiter = ',')]
     pub channels: Vec<String>,
+    /// Measured input channels (force or hammer, e.g. `fx` in N), comma-separated: CSV
+    /// column names, or MCAP field names of the vibration topic's messages (or of
+    /// --input-topic's, e.g. `wrench.force.x`). With an input
+    /// the modes come from the H1 estimate of the frequency response (outputs / inputs) and
+    /// a modal fit to its impulse response, instead of output-only SSI-cov.
+    #[arg(long, value_delimiter = ',')]
+    pub input: Vec<String>,
     /// MCAP: the topic of the vibration messages (default: the only IMU or wrench topic).
     #[arg(long)]
     pub topic: Option<String>,
+    /// MCAP: the topic of the measured inputs when they are recorded on their own (e.g. a
+    /// WrenchStamped topic beside the IMU's; --input names its fields). Each input is
+    /// interpolated linearly at every response sample's time; a response sample outside the
+    /// input's span or inside an input gap longer than 2 input periods is left out and
+    /// counted in its window (`unmatched_samples`, status `gap`).
+    #[arg(long)]
+    pub input_topic: Option<String>,
     /// MCAP: the topic of the poses (default: the only PoseStamped topic, if any).
     #[arg(long)]
     pub pose_topic: Option<String>,
@@ -197,15 +214,28 @@ pub fn run(a: &IdentifyArgs) -> Result<(), CliError> {
         channels: a.channels.clone(),
         topic: a.topic.clone(),
         pose_topic: a.pose_topic.clone(),
+        inputs: a.input.clone(),
+        input_topic: a.input_topic.clone(),
     };
     let t0 = Instant::now();
     let mut layout: Option<Layout> = None;
     let mut id: Option<Identifier> = None;
     let mut poses = PoseBins::default();
+    let mut aligner = a.input_topic.as_ref().map(|_| Aligner::new(a.input.len()));
+    let shown = a.recording.display().to_string();
+    let analysis = |e: IdentifyError| CliError::Analysis(format!("{shown}: {e}"));
+    // An aligned response sample (the inputs interpolated at its time) to the identifier.
+    let feed = |id: &mut Option<Identifier>, x: Aligned<'_>| -> Result<(), IdentifyError> {
+        let id = id.as_mut().expect("layout before samples");
+        match x {
+            Aligned::Sample { t_s, values } => id.push(t_s, values),
+            Aligned::Unmatched { t_s } => id.push_unmatched(t_s),
+        }
+    };
     let mut sink = |item: Item<'_>| -> Result<(), CliError> {
         match item {
             Item::Layout(l) => {
-                let mut i = Identifier::new(l.channels.len(), p)
+                let mut i = Identifier::with_inputs(l.channels.len() - l.inputs, l.inputs, p)
                     .map_err(|e| CliError::Usage(format!("{}: {e}", a.recording.display())))?;
                 // Only the drawn window's diagram is kept: memory stays bounded by the
                 // windows' modes on a long record.
@@ -214,10 +244,19 @@ pub fn run(a: &IdentifyArgs) -> Result<(), CliError> {
                 layout = Some(l.clone());
                 Ok(())
             }
-            Item::Sample { t_s, values } => {
-                let id = id.as_mut().expect("layout before samples");
-                id.push(t_s, values)
-                    .map_err(|e| CliError::Analysis(format!("{}: {e}", a.recording.display())))
+            Item::Sample { t_s, values } => match aligner.as_mut() {
+                Some(al) => al
+                    .response(t_s, values, &mut |x| feed(&mut id, x))
+                    .map_err(analysis),
+                None => {
+                    let id = id.as_mut().expect("layout before samples");
+                    id.push(t_s, values).map_err(analysis)
+                }
+            },
+            Item::Input { t_s, values } => {
+                let al = aligner.as_mut().expect("inputs on a topic of their own");
+                al.input(t_s, values, &mut |x| feed(&mut id, x))
+                    .map_err(analysis)
             }
             Item::Pose {
                 t_s,
@@ -230,6 +269,17 @@ pub fn run(a: &IdentifyArgs) -> Result<(), CliError> {
         }
     };
     recording::read(&a.recording, &opts, &mut sink)?;
+    let alignment = match aligner {
+        Some(al) => {
+            let n = al.inputs();
+            let dt = al.finish(&mut |x| feed(&mut id, x)).map_err(analysis)?;
+            Some(Alignment {
+                input_samples: n,
+                input_period_s: dt,
+            })
+        }
+        None => None,
+    };
     let layout = layout.ok_or_else(|| {
         CliError::Usage(format!("{}: no vibration channel", a.recording.display()))
     })?;
@@ -247,9 +297,9 @@ pub fn run(a: &IdentifyArgs) -> Result<(), CliError> {
         &rows,
         scene.as_ref(),
         rate_hz,
-        identify_s,
-        total_s,
+        (identify_s, total_s),
         &poses,
+        alignment,
     )
 }
 
@@ -307,6 +357,40 @@ fn pair_windows<'a>(
     Ok(out)
 }
 
+/// The measured inputs of their own topic, put on the responses' clock.
+#[derive(Debug, Clone, Copy)]
+struct Alignment {
+    input_samples: u64,
+    /// The input's nominal period, s.
+    input_period_s: f64,
+}
+
+impl Alignment {
+    fn json(&self, topic: &str) -> Value {
+        json!({
+            "topic": topic,
+            "interpolation": "linear",
+            "input_samples": self.input_samples,
+            "input_period_s": json_f64(self.input_period_s),
+            "max_gap_s": json_f64(MAX_INPUT_GAP_PERIODS * self.input_period_s),
+        })
+    }
+}
+
+/// The response channels (the layout's channels less the measured inputs).
+fn outputs(layout: &Layout) -> &[String] {
+    &layout.channels[..layout.channels.len() - layout.inputs]
+}
+
+/// The identification used: output-only SSI-cov, or H1 and its modal fit.
+fn method(layout: &Layout) -> &'static str {
+    if layout.inputs == 0 {
+        "ssi-cov"
+    } else {
+        "h1-era"
+    }
+}
+
 /// The JSON object of the run.
 fn json_of(
     a: &IdentifyArgs,
@@ -315,6 +399,7 @@ fn json_of(
     scene: Option<&Scene>,
     rate_hz: f64,
     times: (f64, f64),
+    alignment: Option<Alignment>,
 ) -> Value {
     let windows: Vec<Value> = rows
         .iter()
@@ -325,8 +410,7 @@ fn json_of(
                 .iter()
                 .enumerate()
                 .map(|(j, m)| {
-                    let shape: Vec<Value> = layout
-                        .channels
+                    let shape: Vec<Value> = outputs(layout)
                         .iter()
                         .zip(&m.shape)
                         .map(|(c, z)| json!({"channel": c, "re": json_f64(z.re), "im": json_f64(z.im)}))
@@ -343,6 +427,7 @@ fn json_of(
                         "stable_poles": m.stable_poles,
                         "order": m.order,
                         "jackknife_groups": m.jackknife_groups,
+                        "coherence": json_f64(m.coherence),
                         "shape": shape,
                         "model": model,
                         "status": w.status[j],
@@ -358,6 +443,7 @@ fn json_of(
                 "rate_hz": json_f64(r.rate_hz),
                 "gaps": r.gaps,
                 "nonfinite_samples": r.nonfinite,
+                "unmatched_samples": r.unmatched,
                 "position_m": w.position_m.map_or(Value::Null, |p| json!(p.map(json_f64))),
                 "orientation_wxyz": w.orientation_wxyz.map_or(Value::Null, |q| json!(q.map(json_f64))),
                 "modes": modes,
@@ -367,7 +453,13 @@ fn json_of(
     json!({
         "recording": a.recording.display().to_string(),
         "source": layout.source,
-        "channels": layout.channels,
+        "channels": outputs(layout),
+        "inputs": &layout.channels[layout.channels.len() - layout.inputs..],
+        "method": method(layout),
+        "input_alignment": match (alignment, &a.input_topic) {
+            (Some(al), Some(t)) => al.json(t),
+            _ => Value::Null,
+        },
         "sample_rate_hz": json_f64(rate_hz),
         "band_hz": [a.from_hz, a.to_hz],
         "scene": scene.map(|s| s.name.clone()),
@@ -385,27 +477,52 @@ fn output(
     rows: &[WindowRows<'_>],
     scene: Option<&Scene>,
     rate_hz: f64,
-    identify_s: f64,
-    total_s: f64,
+    (identify_s, total_s): (f64, f64),
     poses: &PoseBins,
+    alignment: Option<Alignment>,
 ) -> Result<(), CliError> {
     if a.json {
         outln!(
             "{}",
-            json_of(a, layout, rows, scene, rate_hz, (identify_s, total_s))
+            json_of(
+                a,
+                layout,
+                rows,
+                scene,
+                rate_hz,
+                (identify_s, total_s),
+                alignment
+            )
         )?;
     } else {
+        let inputs = &layout.channels[outputs(layout).len()..];
         outln!(
-            "{}: {} channel(s) ({}) at {:.4} Hz, band {} … {} Hz; {} window(s) identified in {:.3} s",
+            "{}: {} channel(s) ({}){} at {:.4} Hz, band {} … {} Hz; {} window(s) identified in {:.3} s",
             layout.source,
-            layout.channels.len(),
-            layout.channels.join(", "),
+            outputs(layout).len(),
+            outputs(layout).join(", "),
+            if inputs.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    ", measured input(s) {}: H1 and its modal fit",
+                    inputs.join(", ")
+                )
+            },
             rate_hz,
             a.from_hz,
             a.to_hz,
             rows.len(),
             identify_s
         )?;
+        if let Some(al) = alignment {
+            outln!(
+                "{} input sample(s) every {:.6} s interpolated linearly at each response sample's time; a response sample outside their span or in a gap over {:.6} s left out (unmatched)",
+                al.input_samples,
+                al.input_period_s,
+                MAX_INPUT_GAP_PERIODS * al.input_period_s
+            )?;
+        }
         if poses.nonfinite > 0 {
             outln!(
                 "{} pose(s) with non-finite values left out",
@@ -425,10 +542,10 @@ fn output(
                 r.status.as_str(),
                 r.modes.len(),
                 pos,
-                if r.gaps + r.nonfinite > 0 {
+                if r.gaps + r.nonfinite + r.unmatched > 0 {
                     format!(
-                        " ({} gap(s), {} non-finite sample(s) left out)",
-                        r.gaps, r.nonfinite
+                        " ({} gap(s), {} non-finite and {} unmatched sample(s) left out)",
+                        r.gaps, r.nonfinite, r.unmatched
                     )
                 } else {
                     String::new()
@@ -444,8 +561,13 @@ fn output(
                         p.frequency_hz - m.frequency_hz
                     )
                 });
+                let coh = if m.coherence.is_finite() {
+                    format!("  γ² {:.2}", m.coherence)
+                } else {
+                    String::new()
+                };
                 outln!(
-                    "  {:>2}: {:>10.4} ± {:.4} Hz  ζ {:.4} ± {:.4}  [{}]{model}",
+                    "  {:>2}: {:>10.4} ± {:.4} Hz  ζ {:.4} ± {:.4}{coh}  [{}]{model}",
                     j + 1,
                     m.frequency_hz,
                     m.frequency_std_hz,
@@ -460,10 +582,15 @@ fn output(
         let mut meta = Map::new();
         meta.insert("recording".into(), json!(a.recording.display().to_string()));
         meta.insert("source".into(), json!(layout.source));
-        meta.insert("channels".into(), json!(layout.channels));
+        meta.insert("channels".into(), json!(outputs(layout)));
+        meta.insert(
+            "inputs".into(),
+            json!(&layout.channels[outputs(layout).len()..]),
+        );
+        meta.insert("method".into(), json!(method(layout)));
         meta.insert("band_hz".into(), json!([a.from_hz, a.to_hz]));
         meta.insert("scene".into(), json!(scene.map(|s| s.name.clone())));
-        let csv = identify_csv(rows, &layout.channels, meta);
+        let csv = identify_csv(rows, outputs(layout), meta);
         write_csv(path, csv, &process_command_line())?;
         if !a.json {
             outln!("wrote {}", path.display())?;
@@ -483,9 +610,14 @@ fn output(
             w.result.index, w.result.t_start_s, w.result.t_end_s
         );
         let sub = format!(
-            "{}; {} mode(s); SSI-cov, orders 2 … {}",
+            "{}; {} mode(s); {}, orders 2 … {}",
             layout.source,
             w.result.modes.len(),
+            if layout.inputs == 0 {
+                "SSI-cov"
+            } else {
+                "H1 and its impulse response's subspace fit (ERA)"
+            },
             a.max_order
         );
         figure::write(

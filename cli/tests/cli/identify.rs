@@ -4,20 +4,19 @@
 //! both files, the CSV columns `calibrate` reads, the figure, the pairing with the model, and
 //! hostile records.
 
-use cablevib_testkit::modal_record::{simulate, Modal, Output as Measured, Record};
+use cablevib_testkit::modal_record::{self, simulate, Modal, Output as Measured, Record};
 use serde_json::Value;
-use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 const BIN: &str = env!("CARGO_BIN_EXE_cablevib");
 const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
 
-fn run(args: &[&str]) -> Output {
+pub(super) fn run(args: &[&str]) -> Output {
     Command::new(BIN).args(args).output().expect("run cablevib")
 }
 
-fn dir(name: &str) -> PathBuf {
+pub(super) fn dir(name: &str) -> PathBuf {
     let d = PathBuf::from(ROOT).join("target/tmp/identify").join(name);
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
@@ -25,23 +24,8 @@ fn dir(name: &str) -> PathBuf {
 }
 
 /// The chain of 5 masses (closed-form modes 5 … 18.7 Hz) measured at masses 1, 2, 4.
-fn chain() -> Modal {
-    let n = 5usize;
-    let m: f64 = 2.0;
-    let s1 = (PI / 12.0).sin();
-    Modal {
-        frequencies_hz: (1..=n)
-            .map(|j| 5.0 * (j as f64 * PI / 12.0).sin() / s1)
-            .collect(),
-        zetas: vec![0.01, 0.005, 0.02, 0.01, 0.008],
-        shapes: (1..=n)
-            .map(|j| {
-                (1..=n)
-                    .map(|i| (2.0 / (6.0 * m)).sqrt() * (i as f64 * j as f64 * PI / 6.0).sin())
-                    .collect()
-            })
-            .collect(),
-    }
+pub(super) fn chain() -> Modal {
+    modal_record::chain(5.0, &[0.01, 0.005, 0.02, 0.01, 0.008])
 }
 
 /// The chain's record: 3 accelerations with 20 dB sensor noise, `duration_s` at 1 kHz.
@@ -60,7 +44,7 @@ fn chain_record(duration_s: f64, seed: u64) -> (Modal, Record) {
 }
 
 /// The command failed with one line on stderr containing `want`.
-fn one_line(o: &Output, want: &str) {
+pub(super) fn one_line(o: &Output, want: &str) {
     assert!(!o.status.success());
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(e.trim().lines().count(), 1, "{e}");
@@ -68,7 +52,7 @@ fn one_line(o: &Output, want: &str) {
 }
 
 /// The pinned venv with the ROS 2 MCAP writer.
-fn ros2_python() -> PathBuf {
+pub(super) fn ros2_python() -> PathBuf {
     cablevib_testkit::pinned_venv::pinned_venv_python(
         "venv-ros2-mcap",
         &[
@@ -79,12 +63,14 @@ fn ros2_python() -> PathBuf {
     )
 }
 
-/// The CSV record `csv` as a ROS 2 bag `bag` (tests/py/write_ros2_bag.py), poses at `xyz`.
-fn write_bag(py: &Path, csv: &Path, bag: &Path, xyz: [&str; 3]) {
+/// The CSV record `csv` as a ROS 2 bag `bag` (tests/py/write_ros2_bag.py), poses at `xyz`,
+/// and the wrench CSV `t,fx,fy,fz` on /wrench when given.
+pub(super) fn write_bag(py: &Path, csv: &Path, bag: &Path, xyz: [&str; 3], wrench: Option<&Path>) {
     let st = Command::new(py)
         .arg(PathBuf::from(ROOT).join("tests/py/write_ros2_bag.py"))
         .args([csv.to_str().unwrap(), bag.to_str().unwrap()])
         .args(xyz)
+        .args(wrench.map(|w| w.to_str().unwrap()))
         .status()
         .unwrap();
     assert!(st.success());
@@ -103,12 +89,12 @@ fn write_csv(r: &Record, path: &Path, edit: impl Fn(usize, &mut String)) {
     std::fs::write(path, s).unwrap();
 }
 
-fn json_of(o: &Output) -> Value {
+pub(super) fn json_of(o: &Output) -> Value {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     serde_json::from_slice(&o.stdout).unwrap()
 }
 
-fn modes(v: &Value, w: usize) -> Vec<(f64, f64)> {
+pub(super) fn modes(v: &Value, w: usize) -> Vec<(f64, f64)> {
     v["windows"][w]["modes"]
         .as_array()
         .unwrap()
@@ -180,7 +166,7 @@ fn csv_and_ros2_bag_give_the_known_modes_and_identical_results() {
     // The same record as a ROS 2 bag.
     let py = ros2_python();
     let bag = d.join("rec.mcap");
-    write_bag(&py, &csv, &bag, ["0.3", "0.2", "1.0"]);
+    write_bag(&py, &csv, &bag, ["0.3", "0.2", "1.0"], None);
     let o = run(&[
         "identify",
         bag.to_str().unwrap(),
@@ -242,6 +228,16 @@ fn hostile_records() {
     let v = json_of(&run(&["identify", p.to_str().unwrap(), "--json"]));
     assert_eq!(v["windows"][0]["status"], "gap");
     assert_eq!(v["windows"][0]["nonfinite_samples"], 2);
+    // A non-finite first sample (before the first decimated one): counted in the first window.
+    let p = d.join("nan_first.csv");
+    write_csv(&rec, &p, |k, l| {
+        if k == 0 {
+            *l = "0,NaN,0,0\n".into();
+        }
+    });
+    let v = json_of(&run(&["identify", p.to_str().unwrap(), "--json"]));
+    assert_eq!(v["windows"][0]["status"], "gap");
+    assert_eq!(v["windows"][0]["nonfinite_samples"], 1);
     // A gap in time: counted, status `gap`.
     let p = d.join("gap.csv");
     write_csv(&rec, &p, |k, l| {
@@ -334,7 +330,7 @@ fn hostile_bags() {
     write_csv(&rec, &csv, |_, _| {});
     let py = ros2_python();
     let bag = d.join("rec.mcap");
-    write_bag(&py, &csv, &bag, ["0", "0", "1"]);
+    write_bag(&py, &csv, &bag, ["0", "0", "1"], None);
     let b = bag.to_str().unwrap();
     one_line(&run(&["identify", b, "--topic", "/accel"]), "no message on topic /accel; topics in the file: /imu (sensor_msgs/msg/Imu), /pose (geometry_msgs/msg/PoseStamped)");
     // The pose topic as vibration: fine (its fields are channels); a field not there: refused.

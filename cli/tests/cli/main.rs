@@ -2,6 +2,7 @@
 //! CSV files read back by pandas, figures, mode shapes, the sweeps and `sag-compare`.
 //! Area binary of the command-line crate (see tests/README.md at the repository root).
 
+mod calibrate;
 mod cli_hostile;
 mod cli_orientation;
 mod cli_tool;
@@ -10,7 +11,11 @@ mod figures;
 mod frf;
 mod hidden_sag;
 mod identify;
+mod identify_input;
+mod identify_input_topic;
+mod long_work;
 mod map_shard;
+mod memory_budget;
 mod mode_shapes;
 mod outputs;
 mod sag_compare;

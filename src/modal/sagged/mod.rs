@@ -43,7 +43,7 @@ mod dense;
 mod load;
 mod problem;
 
-pub use dense::{assemble_sagged, SagDenseCable};
+pub use dense::{assemble_sagged, sagged_assembled_dof, SagDenseCable};
 pub use problem::SagChains;
 
 use crate::cable::sagged::{SagChainError, SagContError};

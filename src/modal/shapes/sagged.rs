@@ -280,7 +280,7 @@ impl SagShapes<'_> {
                 got => got?,
             };
             let v = &null.vectors;
-            let nodes: Vec<(Vec<Vec<Vector3<f64>>>, Vec<f64>)> = (0..v.ncols())
+            let nodes: Vec<LocalNodes> = (0..v.ncols())
                 .map(|c| local_nodes(&attach, &shapes, &hcol, &v.column(c).into_owned(), dim))
                 .collect();
             let cols = v.ncols();
@@ -507,6 +507,10 @@ impl SagShapes<'_> {
     }
 }
 
+/// One null-space vector's shape: each cable's node displacements (m) and its hidden
+/// part's amplitudes.
+type LocalNodes = (Vec<Vec<Vector3<f64>>>, Vec<f64>);
+
 /// The bordered matrix at λ (module docs); `hcol` the column of each hidden cable's
 /// amplitude (its junction's row the same index).
 fn bordered(
@@ -574,7 +578,7 @@ fn local_nodes(
     hcol: &[Option<usize>],
     col: &DVector<f64>,
     dim: usize,
-) -> (Vec<Vec<Vector3<f64>>>, Vec<f64>) {
+) -> LocalNodes {
     let mut phi = Vector6::zeros();
     for r in 0..dim {
         phi[r] = col[r];

@@ -22,6 +22,14 @@ pub enum Item<'a> {
         /// The channels' values.
         values: &'a [f64],
     },
+    /// A measured input sample from a topic of its own ([`ReadOptions::input_topic`]): one
+    /// value per input, on its own clock.
+    Input {
+        /// Time, s.
+        t_s: f64,
+        /// The inputs' values.
+        values: &'a [f64],
+    },
     /// A pose of the end-effector.
     Pose {
         /// Time, s.
@@ -42,6 +50,40 @@ pub struct ReadOptions {
     pub topic: Option<String>,
     /// MCAP: the topic of the poses (`None`: the only `PoseStamped` topic, if any).
     pub pose_topic: Option<String>,
+    /// Measured inputs (force or hammer channels: CSV column names, or MCAP field names of
+    /// the vibration topic's messages): left out of the default channels and handed after
+    /// them in each sample.
+    pub inputs: Vec<String>,
+    /// MCAP: the topic of the measured inputs when they are not fields of the vibration
+    /// topic (a `WrenchStamped` stream beside an IMU's): its samples come as [`Item::Input`],
+    /// and [`Item::Sample`] holds the responses only.
+    pub input_topic: Option<String>,
+}
+
+impl ReadOptions {
+    /// The channels of a sample: `all` (the wanted outputs, or the reader's default) less
+    /// the inputs, then the inputs; an input also named in `--channels` is refused.
+    pub fn with_inputs(&self, all: Vec<String>) -> Result<Vec<String>, String> {
+        if let Some(c) = self.channels.iter().find(|c| self.inputs.contains(c)) {
+            return Err(format!(
+                "`{c}` is named both by --channels and by --input: a channel is a response or a measured input"
+            ));
+        }
+        if let Some((i, c)) = self
+            .inputs
+            .iter()
+            .enumerate()
+            .find(|(i, c)| self.inputs[..*i].contains(c))
+        {
+            return Err(format!("--input `{c}` is named twice (input {})", i + 1));
+        }
+        let mut out: Vec<String> = all
+            .into_iter()
+            .filter(|c| !self.inputs.contains(c))
+            .collect();
+        out.extend(self.inputs.iter().cloned());
+        Ok(out)
+    }
 }
 
 /// What a reader found before the first sample.
@@ -51,6 +93,10 @@ pub struct Layout {
     pub channels: Vec<String>,
     /// Where they come from (file kind, topic, schema), for the output.
     pub source: String,
+    /// How many of the channels, the last ones, are measured inputs ([`ReadOptions::inputs`]).
+    pub inputs: usize,
+    /// The inputs come on a topic of their own ([`Item::Input`]), not in [`Item::Sample`].
+    pub separate_inputs: bool,
 }
 
 /// Read `path` (CSV or MCAP, by its first bytes): `sink` gets the [`Item::Layout`], then
