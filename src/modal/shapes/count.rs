@@ -32,17 +32,7 @@ pub(super) fn split_cluster(
     if (count(hi) as usize) < found0 + m as usize {
         return None;
     }
-    let (mut found, mut cur) = (found0, lo);
-    let mut out = Vec::new();
-    while found < found0 + m as usize {
-        let l = bisect_next(count, cur, hi, found, params).ok()?;
-        let above = l * (1.0 + params.cluster_rel);
-        let k = (count(above) as usize).saturating_sub(found).max(1);
-        out.push((l, k as u32));
-        found += k;
-        cur = above;
-    }
-    Some(out)
+    clusters_between(count, lo, hi, found0, found0 + m as usize, params).ok()
 }
 
 /// The lowest eigenvalues of the problem whose count of eigenvalues strictly below λ is
@@ -56,9 +46,8 @@ pub(in crate::modal) fn clusters_by_count(
     params: &ShapeParams,
 ) -> Result<Vec<(f64, u32)>, ShapeError> {
     params.check()?;
-    let mut out = Vec::new();
     if k == 0 {
-        return Ok(out);
+        return Ok(Vec::new());
     }
     let mut hi = START_HI;
     let mut steps = 0;
@@ -69,10 +58,23 @@ pub(in crate::modal) fn clusters_by_count(
             return Err(ShapeError::BadParams("no finite bound holds k eigenvalues"));
         }
     }
-    let mut found = 0usize;
-    let mut lo = 0.0f64;
-    while found < k {
-        let lambda = bisect_next(&mut count, lo, hi, found, params)?;
+    clusters_between(&mut count, 0.0, hi, 0, k, params)
+}
+
+/// The eigenvalues in (lo, hi] above the `found` ones at or below lo, as clusters (λ,
+/// multiplicity) ascending, until `until` modes are covered: each λ the bisection limit of
+/// the count, the modes within [`ShapeParams::cluster_rel`] (relative) of it its cluster.
+fn clusters_between(
+    count: &mut impl FnMut(f64) -> u32,
+    mut lo: f64,
+    hi: f64,
+    mut found: usize,
+    until: usize,
+    params: &ShapeParams,
+) -> Result<Vec<(f64, u32)>, ShapeError> {
+    let mut out = Vec::new();
+    while found < until {
+        let lambda = bisect_next(count, lo, hi, found, params)?;
         let above = lambda * (1.0 + params.cluster_rel);
         let m = (count(above) as usize).saturating_sub(found).max(1);
         out.push((lambda, m as u32));

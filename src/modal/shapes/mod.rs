@@ -42,9 +42,13 @@
 //! coarse to separate it from a neighbour). Before the SVD the matrix is equilibrated
 //! (Ruiz: rows and columns scaled to unit largest entry): the chains' rows range from T/l
 //! to EA/l, and unbalanced, the SVD's backward error ε‖A‖ would swamp the soft rows. A
-//! cluster given that fails the test (modes 1e-10 apart given as one; the catenary model's
-//! identical cables differ by ~ε·EA/T) is resolved by the count from its λ to 1e-8 above,
-//! and each part's shapes are taken.
+//! cluster that fails the test is repaired the same way for every model (`bordered`): modes
+//! given apart within 1e-9 that are one eigenvalue are merged; one given as a cluster that
+//! is several (modes 1e-10 apart given as one; the catenary model's identical cables differ
+//! by ~ε·EA/T) is split by the count from its λ to 1e-8 above, and each part's shapes are
+//! taken; a near-cluster (distinct modes too close for the null space to separate, ~5e-6
+//! apart with sag) is resolved with its neighbours by a symmetric orthonormalisation of
+//! each member's own null vectors.
 //!
 //! **Normalisation.** The consistent mass of the model is block diagonal in the chain
 //! coordinates (its 3 × 3 blocks are multiples of I and the chain directions are
@@ -70,24 +74,28 @@
 //! part enters m_ii. A sagged chain on a hidden cable (`sagged`) has one more amplitude,
 //! the hidden cable's, and the junction's equation one more row.
 //!
-//! **Layout.** `chain_shape`: one chain's w, f, g and mass moments; `supported_shape`: a
-//! supported chain's; `sag_chain_shape`: a sagged FEM chain's solutions. `sagged`: the same
-//! bordered system on sagging cables' FEM chains (behind
-//! [`SagModalSolver::mode_shapes`](crate::modal::SagModalSolver::mode_shapes)). `solve`:
-//! the taut chains' (behind [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes)).
-//! `count`: the lowest eigenvalues and their multiplicities by count bisection
-//! ([`Solver::eigen_clusters`](crate::modal::Solver::eigen_clusters)).
+//! **Layout.** `bordered`: the one pipeline over a model's bordered system (null space,
+//! normalisation, cluster repairs); `taut`: the taut chains' system (behind
+//! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes)), `sagged`: the
+//! sagging cables' FEM chains' (behind
+//! [`SagModalSolver::mode_shapes`](crate::modal::SagModalSolver::mode_shapes));
+//! `chain_shape`: one chain's w, f, g and mass moments; `supported_shape`: a supported
+//! chain's; `sag_chain_shape`: a sagged FEM chain's solutions. `count`: the lowest
+//! eigenvalues and their multiplicities by count bisection
+//! ([`Solver::eigen_clusters`](crate::modal::Solver::eigen_clusters)) and the split of a
+//! cluster.
 
+mod bordered;
 mod chain_shape;
 mod count;
 mod sag_chain_shape;
 mod sagged;
-mod solve;
 mod supported_shape;
+mod taut;
 
 pub(in crate::modal) use count::clusters_by_count;
 pub(in crate::modal) use sagged::SagShapes;
-pub(in crate::modal) use solve::TautShapes;
+pub(in crate::modal) use taut::TautShapes;
 
 use super::ModalError;
 use nalgebra::{Vector3, Vector6};
@@ -193,14 +201,7 @@ impl ModeShapes {
                 let mut s = (a.ee.transpose() * ee_mass * b.ee)[(0, 0)];
                 for (i, (ua, ub)) in a.cables.iter().zip(&b.cables).enumerate() {
                     let m = self.element_mass_kg.get(i).copied().unwrap_or(0.0);
-                    let mut e = 0.0;
-                    for j in 0..ua.len().saturating_sub(1) {
-                        e += 2.0 * ua[j].dot(&ub[j])
-                            + ua[j].dot(&ub[j + 1])
-                            + ua[j + 1].dot(&ub[j])
-                            + 2.0 * ua[j + 1].dot(&ub[j + 1]);
-                    }
-                    s += m / 6.0 * e;
+                    s += bordered::element_mass_form(m, ua, ub);
                 }
                 out.push(s);
             }

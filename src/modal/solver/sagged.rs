@@ -128,14 +128,14 @@ impl Solver<SagChains> {
     /// normalisation. Continuous cables: [`ShapeError::SagContinuous`]. Allocates; never on
     /// the real-time path.
     pub fn mode_shapes(
-        &self,
+        &mut self,
         h: &[Vector3<f64>],
         up: &Vector3<f64>,
         arms_m: &[Vector3<f64>],
         modes: &[(f64, u32)],
         params: &ShapeParams,
     ) -> Result<ModeShapes, ShapeError> {
-        SagShapes(&self.problem).mode_shapes(h, up, arms_m, modes, params)
+        SagShapes(&mut self.problem).mode_shapes(h, up, arms_m, modes, params)
     }
 
     /// [`Self::receptance`] at each frequency of `freqs_hz` (Hz).
