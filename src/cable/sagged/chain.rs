@@ -1,9 +1,8 @@
 //! The sagged FEM chain's data: per-element in-plane 2 × 2 and out-of-plane stiffness in
 //! buffers sized once, filled from a profile without allocating.
 
-use super::supported::{junction_start, SagSupport};
+use super::supported::SagSupport;
 use super::{SagChainError, SagChainEval};
-use crate::cable::ChainScalar;
 use crate::elastic_catenary::{Catenary, CatenaryElements};
 use num_complex::Complex64;
 
@@ -262,29 +261,6 @@ impl SagChain {
     /// The chain's support (None: the anchor is fixed).
     pub fn support(&self) -> Option<SagSupport> {
         self.support
-    }
-
-    /// The in-plane recurrence's start at node 1 with the anchor node on the support: S₁,
-    /// S₁′ (as [a, b, c] in (h, up)) and the count so far (module docs). `h`, `dh`,
-    /// `h_below`: the hidden segment's end stiffness, its derivative and its count at λ.
-    pub(super) fn junction_start<T: ChainScalar>(
-        &self,
-        support: &SagSupport,
-        lambda: T,
-        h: T,
-        dh: T,
-        h_below: u32,
-    ) -> ([T; 3], [T; 3], u32) {
-        junction_start(
-            self.k_in[0],
-            self.mass_kg,
-            self.nudge,
-            support,
-            lambda,
-            h,
-            dh,
-            h_below,
-        )
     }
 
     /// The hidden segment's end stiffness at a real λ (its ChainEval).

@@ -55,20 +55,17 @@ impl SagSupport {
     }
 }
 
-/// [`SagChain::junction_start`] from the chain's first element `k0` ([a, b, c] in (h, up),
-/// N/m), element mass `m` (kg) and singular-pivot nudge (N/m): the one computation of the
-/// scalar recurrence and the lockstep batch's supported lanes (`batch`).
-#[allow(clippy::too_many_arguments)]
+/// The in-plane recurrence's start at node 1 with the anchor node on the support: S₁, S₁′
+/// (as [a, b, c] in (h, up)) and the count so far (module docs), from the chain's first
+/// element (k0: [a, b, c] in (h, up), N/m; the element mass m, kg; the singular-pivot nudge,
+/// N/m) and the hidden segment's end stiffness, its derivative and its count at λ. The one
+/// computation of the scalar recurrence and the lockstep batch's supported lanes (`batch`).
 #[inline]
 pub(super) fn junction_start<T: ChainScalar>(
-    k0: [f64; 3],
-    m: f64,
-    nudge: f64,
+    (k0, m, nudge): ([f64; 3], f64, f64),
     support: &SagSupport,
     lambda: T,
-    h: T,
-    dh: T,
-    h_below: u32,
+    (h, dh, h_below): (T, T, u32),
 ) -> ([T; 3], [T; 3], u32) {
     let re = T::re;
     let [dc, ds] = support.direction;

@@ -3,7 +3,7 @@
 //! allocation.
 
 use super::problem::SagChains;
-use super::{HangingCable, SagCableFrame, SagEndEffector, SagLoadError};
+use super::{SagCableFrame, SagEndEffector, SagLoadError};
 use crate::cable::sagged::{SagChain, SagContMesh, SagSupport};
 use crate::elastic_catenary::Catenary;
 use nalgebra::{Matrix3, Vector3};
@@ -91,28 +91,6 @@ impl SagChains {
         self.add_exit_term();
         self.loaded = true;
         Ok(())
-    }
-
-    /// Set every cable's chain to `n_el` FEM elements on its catenary and load the pose
-    /// (the end force of cable i is −(H h_i + V_e up)).
-    pub(in crate::modal) fn load_catenaries(
-        &mut self,
-        cables: &[HangingCable],
-        n_el: usize,
-        up: &Vector3<f64>,
-        ee: &SagEndEffector,
-    ) -> Result<(), SagLoadError> {
-        self.load_with(cables.len(), up, ee, |p, i| {
-            let c = &cables[i];
-            p.chains[i]
-                .set_fem(&c.catenary, c.mu_kg_m, n_el)
-                .map_err(|e| SagLoadError::Chain(i, e))?;
-            Ok(SagCableFrame {
-                h: c.h,
-                arm_m: c.arm_m,
-                end_force_n: -(c.h * c.catenary.h_n + up * c.catenary.v_end_n()),
-            })
-        })
     }
 
     /// Number of cables of the loaded pose (0 before any load).

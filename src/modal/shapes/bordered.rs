@@ -46,7 +46,7 @@ const NEAR_GRAM_MIN: f64 = 0.5;
 const RUIZ_SWEEPS: usize = 30;
 
 /// One model's bordered system (`shapes`' module docs): what the pipeline asks of it.
-pub(super) trait Bordered {
+pub(in crate::modal) trait Bordered {
     /// The chains' solutions at one λ.
     type At;
     /// What the mass form needs of one null vector (its nodes or chain amplitudes).
@@ -88,7 +88,7 @@ pub(super) struct NullSpace {
 /// The mass-normalised mode shapes of `sys` at the eigenvalues `modes` = (λ in rad²/s²,
 /// multiplicity), appended to `out`: for each, `multiplicity` shapes, M-orthonormal,
 /// ordered by descending end-effector participation, with the repairs of the module docs.
-pub(super) fn mode_shapes<B: Bordered>(
+pub(in crate::modal) fn mode_shapes<B: Bordered>(
     sys: &mut B,
     modes: &[(f64, u32)],
     params: &ShapeParams,
@@ -554,7 +554,9 @@ mod tests {
         fn new(lambdas: [f64; 6]) -> Toy {
             // A fixed orthogonal Q (QR of a fixed full matrix), so no eigenvector is a
             // coordinate axis.
-            let a = Matrix6::from_fn(|r, c| ((r * 7 + c * 3) % 11) as f64 + (r == c) as u8 as f64 * 5.0);
+            let a = Matrix6::from_fn(|r, c| {
+                ((r * 7 + c * 3) % 11) as f64 + (r == c) as u8 as f64 * 5.0
+            });
             let q = a.qr().q();
             let k = q * Matrix6::from_diagonal(&lambdas.into()) * q.transpose();
             Toy { k, lambdas, q }

@@ -93,9 +93,10 @@ mod sagged;
 mod supported_shape;
 mod taut;
 
+pub(in crate::modal) use bordered::mode_shapes;
 pub(in crate::modal) use count::clusters_by_count;
-pub(in crate::modal) use sagged::SagShapes;
-pub(in crate::modal) use taut::TautShapes;
+pub(in crate::modal) use sagged::SagSystem;
+pub(in crate::modal) use taut::TautSystem;
 
 use super::ModalError;
 use nalgebra::{Vector3, Vector6};

@@ -1,4 +1,4 @@
-//! Mode shapes of sagging cables ([`SagShapes`], behind
+//! Mode shapes of sagging cables ([`SagSystem`], behind
 //! [`SagModalSolver::mode_shapes`](crate::modal::SagModalSolver::mode_shapes)): the bordered system of
 //! the module docs with the sagged FEM chains ([`crate::cable::sagged`]) in place of the
 //! uniform scalar ones.
@@ -71,10 +71,9 @@
 //! without hidden cables; cli/tests/cli/hidden_sag.rs, the frequency response of the large
 //! robots above their cut-off against the dense modal sum). Offline: allocates.
 
-use super::bordered::{self, element_mass_form, Bordered};
+use super::bordered::{element_mass_form, Bordered};
 use super::sag_chain_shape::SagChainShape;
 use super::{ModeShapes, ShapeError, ShapeParams};
-use crate::cable::sagged::SagChain;
 use crate::kinematics::attach_map;
 use crate::modal::engine::Condensed;
 use crate::modal::sagged::SagChains;
@@ -86,57 +85,31 @@ struct Attach {
     map: Matrix3x6<f64>,
 }
 
-/// The mode shapes of the loaded sagged problem.
-pub(in crate::modal) struct SagShapes<'a>(pub(in crate::modal) &'a mut SagChains);
-
-impl SagShapes<'_> {
-    fn loaded_cables(&self) -> usize {
-        self.0.loaded_cables()
-    }
-
-    fn chain(&self, i: usize) -> &SagChain {
-        &self.0.chains[i]
-    }
-
-    fn dim(&self) -> usize {
-        self.0.dim
-    }
-
-    fn is_continuous(&self) -> bool {
-        self.0.continuous
-    }
-
-    /// The mass-normalised mode shapes of the loaded pose (FEM chains) at the eigenvalues
-    /// `modes` = (λ in rad²/s², multiplicity), e.g. from the solver's `eigen_clusters`: for
-    /// each, `multiplicity` shapes, M-orthonormal, ordered by descending end-effector
-    /// participation (see the module docs). `h` is each cable's unit horizontal (world
-    /// frame), `up` the unit vertical, `arms_m` the attachment arms of a rigid end-effector
-    /// (ignored for a point mass): the frames the pose was loaded with. A cable's nodes are
-    /// at the fractions j/N of its unstretched length ([`ModeShapes::fractions`]); on a
-    /// hidden cable node 0 is the junction's motion and the hidden cable's mass is in the
-    /// normalisation (module docs). Continuous cables: [`ShapeError::SagContinuous`].
-    /// Allocates; never on the real-time path.
-    pub(in crate::modal) fn mode_shapes(
-        &mut self,
+impl<'a> SagSystem<'a> {
+    /// The bordered system of the loaded `chains` (FEM chains) and the empty shapes with
+    /// its node lists; for
+    /// [`SagModalSolver::mode_shapes`](crate::modal::SagModalSolver::mode_shapes), whose
+    /// `h`, `up` and `arms_m` are the frames the pose was loaded with. Continuous cables:
+    /// [`ShapeError::SagContinuous`].
+    pub(in crate::modal) fn new(
+        chains: &'a mut SagChains,
         h: &[Vector3<f64>],
         up: &Vector3<f64>,
         arms_m: &[Vector3<f64>],
-        modes: &[(f64, u32)],
         params: &ShapeParams,
-    ) -> Result<ModeShapes, ShapeError> {
+    ) -> Result<(SagSystem<'a>, ModeShapes), ShapeError> {
         params.check()?;
-        if self.is_continuous() {
+        if chains.continuous {
             return Err(ShapeError::SagContinuous);
         }
         // A FEM chain's hidden cable is discrete (the continuous bar goes with the
         // continuous chain, refused above).
-        if (0..self.loaded_cables())
-            .any(|i| self.chain(i).support().is_some_and(|s| s.hidden.n_el == 0))
-        {
+        let n_cables = chains.loaded_cables();
+        let chain = |i: usize| &chains.chains[i];
+        if (0..n_cables).any(|i| chain(i).support().is_some_and(|s| s.hidden.n_el == 0)) {
             return Err(ShapeError::HiddenCable);
         }
-        let dim = self.dim();
-        let n_cables = self.loaded_cables();
+        let dim = chains.dim;
         if h.len() != n_cables || n_cables == 0 {
             return Err(ShapeError::NotLoaded {
                 loaded: n_cables,
@@ -165,41 +138,40 @@ impl SagShapes<'_> {
             .collect();
         let fractions = (0..n_cables)
             .map(|i| {
-                let n = self.chain(i).n_el().max(1);
+                let n = chain(i).n_el().max(1);
                 (0..=n).map(|j| j as f64 / n as f64).collect()
             })
             .collect();
-        let mut out = ModeShapes {
+        let out = ModeShapes {
             dim,
             fractions,
             modes: Vec::new(),
-            element_mass_kg: (0..n_cables)
-                .map(|i| self.chain(i).element_mass_kg())
-                .collect(),
+            element_mass_kg: (0..n_cables).map(|i| chain(i).element_mass_kg()).collect(),
         };
         // The columns of the hidden cables' amplitudes c_i, after every a_i.
         let mut next = dim + 3 * n_cables;
         let hcol: Vec<Option<usize>> = (0..n_cables)
             .map(|i| {
-                self.chain(i).support().map(|_| {
+                chain(i).support().map(|_| {
                     next += 1;
                     next - 1
                 })
             })
             .collect();
-        let mut sys = SagSystem {
-            chains: &mut *self.0,
-            attach,
-            hcol,
-        };
-        bordered::mode_shapes(&mut sys, modes, params, &mut out)?;
-        Ok(out)
+        Ok((
+            SagSystem {
+                chains,
+                attach,
+                hcol,
+            },
+            out,
+        ))
     }
 }
 
 /// The sagged FEM chains' bordered system (module docs): the loaded chains, how each cable
 /// attaches and the columns of the hidden cables' amplitudes.
-struct SagSystem<'a> {
+pub(in crate::modal) struct SagSystem<'a> {
     chains: &'a mut SagChains,
     attach: Vec<Attach>,
     hcol: Vec<Option<usize>>,
@@ -225,7 +197,15 @@ impl Bordered for SagSystem<'_> {
 
     fn matrix(&self, shapes: &Vec<SagChainShape>, lambda: f64) -> DMatrix<f64> {
         let c = &*self.chains;
-        bordered(&self.attach, shapes, &self.hcol, &c.m6, &c.k6, c.dim, lambda)
+        bordered(
+            &self.attach,
+            shapes,
+            &self.hcol,
+            &c.m6,
+            &c.k6,
+            c.dim,
+            lambda,
+        )
     }
 
     fn vector(&self, shapes: &Vec<SagChainShape>, col: &DVector<f64>) -> LocalNodes {
@@ -268,7 +248,7 @@ impl Bordered for SagSystem<'_> {
 
 /// One null-space vector's shape: each cable's node displacements (m) and its hidden
 /// part's amplitudes.
-type LocalNodes = (Vec<Vec<Vector3<f64>>>, Vec<f64>);
+pub(in crate::modal) type LocalNodes = (Vec<Vec<Vector3<f64>>>, Vec<f64>);
 
 /// The bordered matrix at λ (module docs); `hcol` the column of each hidden cable's
 /// amplitude (its junction's row the same index).

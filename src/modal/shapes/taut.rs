@@ -1,9 +1,9 @@
-//! The taut chains' bordered system ([`TautShapes`], behind
+//! The taut chains' bordered system ([`TautSystem`], behind
 //! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes)): one scalar chain
 //! copy per direction of each chain, its amplitude C_k one unknown (the module docs); the
 //! pipeline (`bordered`) takes its null space, normalises and repairs clusters.
 
-use super::bordered::{self, element_mass_form, Bordered};
+use super::bordered::{element_mass_form, Bordered};
 use super::chain_shape::ChainShape;
 use super::{ModeShapes, ShapeError, ShapeParams};
 use crate::cable::{CableModel, ChainKind};
@@ -114,24 +114,36 @@ impl Layout {
     }
 }
 
+/// The taut chains' bordered system (module docs): the loaded chains and their layout.
+pub(in crate::modal) struct TautSystem<'a> {
+    chains: &'a mut TautChains,
+    layout: Layout,
+    /// Every chain is a discrete FEM chain (the mass form of two chain solutions at
+    /// different λ is then the node form, exact).
+    discrete: bool,
+}
 
-/// The mode shapes of the loaded taut problem.
-pub(in crate::modal) struct TautShapes<'a>(pub(in crate::modal) &'a mut TautChains);
+/// A null vector of the taut system: the vector and each chain copy's end displacement
+/// e = b_kᵀφ.
+pub(in crate::modal) struct TautVector {
+    col: DVector<f64>,
+    ends: Vec<f64>,
+}
 
-impl TautShapes<'_> {
-    /// The mass-normalised mode shapes at the eigenvalues `modes` = (λ in rad²/s²,
-    /// multiplicity): for each, `multiplicity` shapes, M-orthonormal, ordered by descending
-    /// end-effector participation; see
+impl<'a> TautSystem<'a> {
+    /// The bordered system of `chains`, loaded with the cable models `models` (arms `arms_m`
+    /// of a rigid end-effector, world frame, m; ignored for a point mass), and the empty
+    /// shapes with its node lists (continuous cables at
+    /// [`ShapeParams::continuous_samples`] points); for
     /// [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes).
-    pub(in crate::modal) fn mode_shapes(
-        &mut self,
+    pub(in crate::modal) fn new(
+        chains: &'a mut TautChains,
         models: &[CableModel],
         arms_m: &[Vector3<f64>],
-        modes: &[(f64, u32)],
         params: &ShapeParams,
-    ) -> Result<ModeShapes, ShapeError> {
+    ) -> Result<(TautSystem<'a>, ModeShapes), ShapeError> {
         params.check()?;
-        let dim = self.0.p.dim;
+        let dim = chains.p.dim;
         if dim == 6 && arms_m.len() < models.len() {
             return Err(ShapeError::MissingArms {
                 given: arms_m.len(),
@@ -148,45 +160,31 @@ impl TautShapes<'_> {
         }
         let arms = (dim == 6).then_some(arms_m);
         let layout = Layout::new(models, arms, params.continuous_samples);
-        if layout.kinds.len() != self.0.p.n_chains {
+        if layout.kinds.len() != chains.p.n_chains {
             return Err(ShapeError::NotLoaded {
-                loaded: self.0.p.n_chains,
+                loaded: chains.p.n_chains,
                 given: layout.kinds.len(),
             });
         }
-        let mut out = ModeShapes {
+        let out = ModeShapes {
             dim,
             fractions: layout.fractions.clone(),
             modes: Vec::new(),
             element_mass_kg: layout.element_mass_kg(),
         };
-        let mut sys = TautSystem {
-            chains: &mut *self.0,
-            discrete: layout
-                .kinds
-                .iter()
-                .all(|k| matches!(k, ChainKind::Discrete { .. })),
-            layout,
-        };
-        bordered::mode_shapes(&mut sys, modes, params, &mut out)?;
-        Ok(out)
+        let discrete = layout
+            .kinds
+            .iter()
+            .all(|k| matches!(k, ChainKind::Discrete { .. }));
+        Ok((
+            TautSystem {
+                chains,
+                layout,
+                discrete,
+            },
+            out,
+        ))
     }
-}
-
-/// The taut chains' bordered system (module docs): the loaded chains and their layout.
-struct TautSystem<'a> {
-    chains: &'a mut TautChains,
-    layout: Layout,
-    /// Every chain is a discrete FEM chain (the mass form of two chain solutions at
-    /// different λ is then the node form, exact).
-    discrete: bool,
-}
-
-/// A null vector of the taut system: the vector and each chain copy's end displacement
-/// e = b_kᵀφ.
-struct TautVector {
-    col: DVector<f64>,
-    ends: Vec<f64>,
 }
 
 impl Bordered for TautSystem<'_> {

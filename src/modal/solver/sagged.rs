@@ -8,7 +8,7 @@ use crate::elastic_catenary::Catenary;
 use crate::modal::engine::DynEval;
 use crate::modal::frf::FrfError;
 use crate::modal::sagged::{HangingCable, SagCableFrame, SagChains, SagEndEffector, SagLoadError};
-use crate::modal::shapes::{ModeShapes, SagShapes, ShapeError, ShapeParams};
+use crate::modal::shapes::{mode_shapes, ModeShapes, SagSystem, ShapeError, ShapeParams};
 use crate::modal::ModalParams;
 use crate::scene::Damping;
 use nalgebra::{Matrix3, Matrix6, Vector3};
@@ -102,7 +102,17 @@ impl Solver<SagChains> {
         up: &Vector3<f64>,
         ee: &SagEndEffector,
     ) -> Result<(), SagLoadError> {
-        self.problem.load_catenaries(cables, n_el, up, ee)
+        self.problem.load_with(cables.len(), up, ee, |p, i| {
+            let c = &cables[i];
+            p.chain_mut(i)
+                .set_fem(&c.catenary, c.mu_kg_m, n_el)
+                .map_err(|e| SagLoadError::Chain(i, e))?;
+            Ok(SagCableFrame {
+                h: c.h,
+                arm_m: c.arm_m,
+                end_force_n: -(c.h * c.catenary.h_n + up * c.catenary.v_end_n()),
+            })
+        })
     }
 
     /// Number of cables of the loaded pose (0 before any load).
@@ -135,7 +145,9 @@ impl Solver<SagChains> {
         modes: &[(f64, u32)],
         params: &ShapeParams,
     ) -> Result<ModeShapes, ShapeError> {
-        SagShapes(&mut self.problem).mode_shapes(h, up, arms_m, modes, params)
+        let (mut sys, mut out) = SagSystem::new(&mut self.problem, h, up, arms_m, params)?;
+        mode_shapes(&mut sys, modes, params, &mut out)?;
+        Ok(out)
     }
 
     /// [`Self::receptance`] at each frequency of `freqs_hz` (Hz).

@@ -5,7 +5,7 @@
 use super::{ModalSolver, Solver};
 use crate::cable::CableModel;
 use crate::modal::frf::{inverse_block, FrfError, ModalBasis, MAX_FRF_MODES};
-use crate::modal::shapes::{ModeShapes, ShapeError, ShapeParams, TautShapes};
+use crate::modal::shapes::{mode_shapes, ModeShapes, ShapeError, ShapeParams, TautSystem};
 use crate::modal::{hz_to_lambda, ModalParams, TautChains};
 use crate::scene::Damping;
 use nalgebra::{Matrix3, Matrix6, Vector3};
@@ -82,7 +82,9 @@ impl Solver<TautChains> {
         modes: &[(f64, u32)],
         params: &ShapeParams,
     ) -> Result<ModeShapes, ShapeError> {
-        TautShapes(&mut self.problem).mode_shapes(models, arms_m, modes, params)
+        let (mut sys, mut out) = TautSystem::new(&mut self.problem, models, arms_m, params)?;
+        mode_shapes(&mut sys, modes, params, &mut out)?;
+        Ok(out)
     }
 
     /// The modes of the loaded pose (loaded with `models`, arms `arms_m` for a rigid
