@@ -81,6 +81,10 @@ pub enum FrfError {
     /// The sagged continuous (Magnus) model has no complex form.
     #[error("the sagged continuous model has no damped (complex) form: use --element fem for the frequency response with sag")]
     SagContinuous,
+    /// Modal damping with sag has no complex-λ form: it goes by the modal basis of the
+    /// sagged shapes ([`ModalBasis::from_modes`]); the Python binding's refusal.
+    #[error("modal damping with sag goes by modal superposition (ModalBasis::from_modes), not the complex-λ receptance")]
+    SagModalDamping,
 }
 
 /// The frequencies of a response: `points` values from `from_hz` to `to_hz` (both
