@@ -120,7 +120,7 @@ impl Estimator {
             ));
         }
         let (ee_mass, dim) = self.cycle.ee_mass();
-        let s = self.estimate.stiffness6;
+        let s = self.estimate.stiffness.k6;
         let block = s.view((0, 0), (dim, dim)).into_owned();
         let mut flexibility = Matrix6::repeat(f64::NAN);
         if let Some(inv) = block.try_inverse() {

@@ -62,7 +62,7 @@ pub enum FrfError {
     #[error("{0}")]
     Modal(#[from] ModalError),
     /// The sagged continuous (Magnus) model has no complex form.
-    #[error("the sagged continuous model has no damped (complex) form: use --element fem for the frequency response with sag")]
+    #[error("the sagged continuous model has no damped (complex) form: the frequency response with sag takes the fem element")]
     SagContinuous,
     /// Modal damping with sag has no complex-λ form: it goes by the modal basis of the
     /// sagged shapes ([`ModalBasis::from_modes`]).

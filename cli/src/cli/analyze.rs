@@ -85,7 +85,7 @@ pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
         solver: a.solver,
         compare_dense: a.compare_dense,
     };
-    let r = analyze(&s, &opts).map_err(|e| CliError::Analysis(e.to_string()))?;
+    let r = analyze(&s, &opts)?;
     if let Some(prefix) = &a.export_matrices {
         export_matrices(&s, prefix)?;
     }
@@ -114,7 +114,7 @@ fn write_shapes(s: &Scene, modes: usize, path: &std::path::Path) -> Result<(), C
 
 /// K and M of the structured path's models as PREFIX.K.mtx and PREFIX.M.mtx.
 fn export_matrices(s: &Scene, prefix: &std::path::Path) -> Result<(), CliError> {
-    let (k, m) = assembled_matrices(s).map_err(|e| CliError::Analysis(e.to_string()))?;
+    let (k, m) = assembled_matrices(s)?;
     for (name, a) in [("K", &k), ("M", &m)] {
         let mut path = prefix.as_os_str().to_owned();
         path.push(format!(".{name}.mtx"));
@@ -232,9 +232,9 @@ fn realtime_estimator(a: &AnalyzeArgs, s: &Scene) -> Result<Estimator, CliError>
 /// The published static stiffness as JSON rows: 3 × 3 (N/m) for a point mass, 6 × 6 for a
 /// rigid end-effector (N/m, N/rad, N·m/m, N·m/rad blocks; see `AnalysisReport`).
 fn stiffness_rows(e: &crate::estimator::Estimate) -> Vec<Vec<serde_json::Value>> {
-    let d = e.stiffness_dim;
+    let d = e.stiffness.dim;
     (0..d)
-        .map(|r| (0..d).map(|c| json_f64(e.stiffness6[(r, c)])).collect())
+        .map(|r| (0..d).map(|c| json_f64(e.stiffness.k6[(r, c)])).collect())
         .collect()
 }
 
@@ -243,6 +243,9 @@ fn analyze_realtime(a: &AnalyzeArgs, s: &Scene) -> Result<(), CliError> {
     let t0 = Instant::now();
     let e = *est.update(&Pose::in_scene(s, s.ee_position_m), Tmin::Scene);
     let ns = t0.elapsed().as_nanos();
+    // Absent: null in JSON, NaN in the text.
+    let ee_hz = e.ee_mode.map_or(f64::NAN, |m| m.frequency_hz);
+    let ee_p = e.ee_mode.map_or(f64::NAN, |m| m.participation);
     if a.json {
         let o = serde_json::json!({
             "scene": s.name,
@@ -251,9 +254,9 @@ fn analyze_realtime(a: &AnalyzeArgs, s: &Scene) -> Result<(), CliError> {
             "tensions_n": e.tensions().iter().map(|&x| json_f64(x)).collect::<Vec<_>>(),
             "f1_hz": json_f64(e.f1_hz),
             "f1_ee_participation": json_f64(e.f1_ee_participation),
-            "ee_mode_hz": json_f64(e.ee_mode_hz),
-            "ee_mode_participation": json_f64(e.ee_mode_participation),
-            "ee_mode_age_cycles": (e.ee_mode_age_cycles != u32::MAX).then_some(e.ee_mode_age_cycles),
+            "ee_mode_hz": json_f64(ee_hz),
+            "ee_mode_participation": json_f64(ee_p),
+            "ee_mode_age_cycles": e.ee_mode.map(|m| m.age_cycles),
             "orientation_wxyz": s.ee_orientation_wxyz,
             "stiffness_n_m": stiffness_rows(&e),
             "element": s.model.element.as_str(),
@@ -284,7 +287,7 @@ fn analyze_realtime(a: &AnalyzeArgs, s: &Scene) -> Result<(), CliError> {
         );
         println!(
             "  end-effector  {:.9} Hz (participation {:.4})",
-            e.ee_mode_hz, e.ee_mode_participation
+            ee_hz, ee_p
         );
         println!(
             "  {} evaluations of D(λ), {:.1} µs (first cycle, cold)",

@@ -183,7 +183,7 @@ fn hostile_inputs_are_one_line_errors() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/suspended_8.toml");
     let (extra, needle) = (
         &["--element", "continuous", "--loss-factor", "0.02"][..],
-        "use --element fem",
+        "the frequency response with sag takes the fem element",
     );
     let mut args = vec!["frf", scene];
     args.extend_from_slice(extra);

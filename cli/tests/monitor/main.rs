@@ -133,7 +133,7 @@ fn control(
     wait_for_service(
         || input.service_connected() && output.service_connected(),
         &never,
-        || ServiceError::Usage("stopped".into()),
+        || ServiceError::Timeout("stopped".into()),
     )
     .unwrap();
     let trajectory = Trajectory::circle(scene, CIRCLE_PERIOD_S).unwrap();

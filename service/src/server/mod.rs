@@ -50,7 +50,7 @@ use core::time::Duration;
 
 use cablevib_ipc::{
     monotonic_now_ns, EstimateSample, MarginResponse, PoseSample, ServiceNames, StatusCode,
-    TminSetpoint, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_RESPONSE, MAX_CABLES,
+    TminSetpoint, EE_MODE_AGE_UNKNOWN, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_RESPONSE, MAX_CABLES,
 };
 use iceoryx2::identifiers::UniquePublisherId;
 use iceoryx2::prelude::*;
@@ -117,7 +117,10 @@ pub fn spawn_thread(
             stop.store(true, Ordering::Release);
             r
         })
-        .map_err(|e| ServiceError::Usage(format!("cannot start the service thread: {e}")))
+        .map_err(|e| ServiceError::Thread {
+            what: "service",
+            reason: e.to_string(),
+        })
 }
 
 /// Capacity of the per-period compute-time ring.
@@ -217,8 +220,9 @@ impl Server {
             *t = scene.cable_t_max_n(i);
         }
         let t_min_n = estimator.default_t_min_n();
-        let inverse = InverseWorker::spawn(&estimator).map_err(|e| {
-            ServiceError::Usage(format!("cannot start the inverse T_min thread: {e}"))
+        let inverse = InverseWorker::spawn(&estimator).map_err(|e| ServiceError::Thread {
+            what: "inverse T_min",
+            reason: e.to_string(),
         })?;
         Ok(Server {
             n_cables,
@@ -372,14 +376,17 @@ impl Server {
         out.cable_count = n as u32;
         out.tensions_n[..n].copy_from_slice(&e.tensions_n[..n]);
         out.f1_hz = e.f1_hz;
-        out.ee_mode_hz = e.ee_mode_hz;
-        out.ee_mode_age_cycles = e.ee_mode_age_cycles;
+        // The wire's codes for an absent end-effector mode: NaN and EE_MODE_AGE_UNKNOWN.
+        (out.ee_mode_hz, out.ee_mode_age_cycles) = match e.ee_mode {
+            Some(m) => (m.frequency_hz, m.age_cycles),
+            None => (f64::NAN, EE_MODE_AGE_UNKNOWN),
+        };
         // 3 × 3 (N/m) for a point mass, 6 × 6 (N/m, N/rad, N·m/m, N·m/rad) for a rigid body.
-        let dim = e.stiffness_dim;
+        let dim = e.stiffness.dim;
         out.stiffness_dim = dim as u32;
         for r in 0..dim {
             for c in 0..dim {
-                out.stiffness[dim * r + c] = e.stiffness6[(r, c)];
+                out.stiffness[dim * r + c] = e.stiffness.k6[(r, c)];
             }
         }
         out.compute_ns = compute_ns;
@@ -684,7 +691,7 @@ pub fn run(
     stop: &AtomicBool,
     allocations: AllocCounter,
 ) -> Result<ServerReport, ServiceError> {
-    cablevib_ipc::check_instance(&cfg.instance).map_err(|e| ServiceError::Usage(e.to_string()))?;
+    cablevib_ipc::check_instance(&cfg.instance)?;
     let (removed, failed) = ports::remove_stale_nodes();
     if removed > 0 {
         tracing::info!("removed the stale resources of {removed} dead iceoryx2 node(s)");
