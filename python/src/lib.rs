@@ -5,7 +5,7 @@
 //! |---|---|
 //! | `Scene.load(path_or_name)` | [`cablevib::scene::Scene::load`] |
 //! | `analyze(scene, ...)` | [`cablevib::study::analysis::analyze`] (what `cablevib analyze --json` prints) |
-//! | `frf(scene, ...)` | [`cablevib::modal::receptance_over`] (what `cablevib frf --json` prints) |
+//! | `frf(scene, ...)` | [`cablevib::study::frf::frf`] (what `cablevib frf --json` prints) |
 //! | `Estimator(scene).update(...)` | [`cablevib::estimator::Estimator::update`] |
 //! | `Estimator.sweep(...)`, `sweep(scene, ...)` | [`cablevib::estimator::Estimator::update`] over many poses on worker threads ([`sweep`]) |
 //! | `Estimator.t_min_for_f1(...)` | [`cablevib::estimator::Estimator::t_min_for_f1`] |

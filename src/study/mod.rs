@@ -4,8 +4,9 @@
 //! ([`map`]), frequencies along a trajectory ([`trajectory`]) and against the minimum tension
 //! ([`tmin`]), the chord and the sagged cable model side by side along a line
 //! ([`sag_compare`]), the end-effector's vibration along a path and input shaping from
-//! the estimated modes ([`simulate`]), and what accuracy costs in time ([`accuracy`], with the dense mode-3
-//! convergence study of the paper's Figs. 5 and 10).
+//! the estimated modes ([`simulate`]), the frequency response of one pose ([`frf`]), and
+//! what accuracy costs in time ([`accuracy`], with the dense mode-3 convergence study of the
+//! paper's Figs. 5 and 10).
 //!
 //! Every study drives [`Estimator::update`] (the per-cycle path, exact to ~1e-12 against
 //! the faithful model) and keeps one result per evaluated point — including the points where
@@ -21,6 +22,7 @@
 
 pub mod accuracy;
 pub mod analysis;
+pub mod frf;
 pub mod map;
 pub mod param;
 pub mod points;

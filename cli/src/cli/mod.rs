@@ -32,7 +32,6 @@ pub mod completions;
 pub mod error;
 pub mod figure;
 pub mod frf;
-pub mod frf_dense;
 pub mod import;
 pub mod map;
 pub mod modes;

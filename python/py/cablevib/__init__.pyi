@@ -147,12 +147,15 @@ def frf(
     modal_ratio: Optional[float] = None,
     undamped: bool = False,
 ) -> Dict[str, Any]:
-    """What ``cablevib frf SCENE --json`` prints: ``frequencies_hz`` (N), ``receptance_re``,
-    ``receptance_im`` (N × d × d numpy arrays, m/N; d = 3, or 6 for a rigid end-effector,
-    translations first), ``damping``, ``dim``. Damping: the scene's, or one of
+    """What ``cablevib frf SCENE --json`` prints, from the same library function:
+    ``frequencies_hz`` (N,), ``receptance_re``, ``receptance_im`` (float64 numpy arrays of
+    shape (N, d, d), m/N; d = 3, or 6 for a rigid end-effector, translations first),
+    ``natural_frequencies_hz`` (the band's natural frequencies whose modes move the
+    end-effector, Hz), ``damping`` (str), ``dim`` (int). Damping: the scene's, or one of
     ``loss_factor`` (η), ``rayleigh`` ((α 1/s, β s)), ``modal_ratio`` (ζ), ``undamped``.
-    With sag on, the sagged FEM chains at the pose's sagged tensions (``element="continuous"``
-    and ``modal_ratio`` refused), as on the command line."""
+    With sag on, the sagged FEM chains at the pose's sagged tensions (modal damping by
+    superposition of the sagged shapes; ``element="continuous"`` refused), as on the
+    command line."""
 
 def sweep(
     scene: Scene,
