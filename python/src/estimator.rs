@@ -16,6 +16,10 @@ use pyo3::types::PyDict;
 ///
 /// ``Estimator(scene)`` raises CablevibError when the scene's own default pose cannot be
 /// solved (the message is the command line's). An ``auto`` model is resolved here.
+/// ``realtime=True`` runs each update as the service does (``EstimatorParams::realtime()``:
+/// a budget of D(λ) evaluations per call, the end-effector work that does not fit continued
+/// in the next calls, so the end-effector mode of a cold call may be pending), what
+/// ``cablevib analyze --realtime`` prints; the default answers every call in full.
 #[pyclass(name = "Estimator", module = "cablevib")]
 pub struct PyEstimator {
     inner: Estimator,
@@ -28,9 +32,14 @@ pub struct PyEstimator {
 #[pymethods]
 impl PyEstimator {
     #[new]
-    fn new(scene: &PyScene) -> PyResult<Self> {
-        let inner =
-            Estimator::new(&scene.inner).map_err(|e| CablevibError::new_err(e.to_string()))?;
+    #[pyo3(signature = (scene, realtime = false))]
+    fn new(scene: &PyScene, realtime: bool) -> PyResult<Self> {
+        let built = if realtime {
+            Estimator::realtime(&scene.inner)
+        } else {
+            Estimator::new(&scene.inner)
+        };
+        let inner = built.map_err(|e| CablevibError::new_err(e.to_string()))?;
         let cold = inner.clone();
         Ok(PyEstimator {
             inner,

@@ -266,6 +266,23 @@ impl Estimator {
     /// T_max: not finite, not > 0, subnormal, above T_max), or a per-cable slice whose
     /// length is not the scene's cable count, gives the status `TminOutOfRange` and no
     /// numbers.
+    ///
+    /// ```
+    /// use cablevib::prelude::*;
+    ///
+    /// let scene = Scene::load("spatial-paper")?;
+    /// let mut est = Estimator::new(&scene)?; // allocates here, never in `update`
+    /// let e = *est.update(&Pose::in_scene(&scene, Vector3::new(0.1, 0.0, 1.25)), Tmin::Scene);
+    /// assert_eq!(e.status, Status::Ok);
+    /// assert!(e.tensions().iter().all(|&t| t >= scene.t_min_n - 1e-9));
+    /// if let Some(m) = e.ee_mode {
+    ///     assert!(m.frequency_hz >= e.f1_hz && m.participation >= scene.model.ee_participation_min);
+    /// }
+    /// // A pose outside the frame is a status, never a panic.
+    /// let bad = est.update(&Pose::in_scene(&scene, Vector3::new(50.0, 0.0, 1.25)), Tmin::Scene);
+    /// assert!(!bad.is_ok() && bad.f1_hz.is_nan() && bad.ee_mode.is_none());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn update(&mut self, pose: &Pose, t_min: Tmin<'_>) -> &Estimate {
         t_min.fill(&self.scene, &mut self.t_min_n);
         self.update_loaded(pose)

@@ -330,6 +330,25 @@ fn solve_pose(
 }
 
 /// The dynamic deviation along `path` (module docs).
+///
+/// ```
+/// use cablevib::prelude::*;
+/// use cablevib::trajectory::moves::{Move, Profile};
+///
+/// let scene = Scene::load("spatial-paper")?;
+/// // 0.1 m along x in 0.5 s (s-curve), sampled every ms, then 0.5 s at rest.
+/// let dx = Vector3::new(0.1, 0.0, 0.0);
+/// let mv = Move::new(scene.ee_position_m, dx, 0.5, Profile::SCurve)?;
+/// let path = SampledPath::from_samples(&mv.sampled(1e-3, 0.5)?, 1e-3)?;
+/// let cfg = SimulateConfig { modes: 4, settle_s: 0.0, ..SimulateConfig::default() };
+/// let r = simulate(&scene, &path, &cfg)?;
+/// assert_eq!(r.deviation_m.len(), r.t_s.len());
+/// // The move excites the robot; the deviation is small beside the move itself.
+/// let peak = r.deviation_m.iter().map(|u| u.norm()).fold(0.0, f64::max);
+/// assert!(peak > 0.0 && peak < 1e-2 * dx.norm());
+/// assert_eq!(r.stops.len(), 1);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn simulate(
     scene: &Scene,
     path: &SampledPath,

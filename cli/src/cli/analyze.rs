@@ -48,9 +48,11 @@ pub struct AnalyzeArgs {
     /// One JSON object on stdout instead of tables.
     #[arg(long)]
     pub json: bool,
-    /// Print what the real-time path computes (f1, end-effector mode, tensions, status). A pose
-    /// the estimator refuses (e.g. outside the workspace) is still printed with its status,
-    /// then the command exits with code 1 naming that status.
+    /// Print what the real-time path computes in one cold cycle with the service's parameters
+    /// (f1, end-effector mode, tensions, status; the end-effector mode may be left for the
+    /// next cycles by the per-cycle budget). A pose the estimator refuses (e.g. outside the
+    /// workspace) is still printed with its status, then the command exits with code 1
+    /// naming that status.
     #[arg(long)]
     pub realtime: bool,
 }
@@ -215,14 +217,16 @@ fn at_own_default_pose(a: &AnalyzeArgs, s: &Scene) -> Result<Scene, CliError> {
     Ok(at_position(s, Scene::load(&a.scene.scene)?.ee_position_m))
 }
 
-/// The estimator of `s` at `s.ee_position_m`. A --position the estimator cannot be built at
-/// is not the scene's fault: the estimator is then built at the scene's own pose, as the
-/// service builds it, and the requested pose is estimated like any other (its status, e.g.
-/// `outside_workspace`, names the real cause).
+/// The real-time estimator of `s` at `s.ee_position_m`, with the service's parameters
+/// ([`Estimator::realtime`]: `EstimatorParams::realtime()`, its per-cycle evaluation
+/// budget). A --position the estimator cannot be built at is not the scene's fault: the
+/// estimator is then built at the scene's own pose, as the service builds it, and the
+/// requested pose is estimated like any other (its status, e.g. `outside_workspace`, names
+/// the real cause).
 fn realtime_estimator(a: &AnalyzeArgs, s: &Scene) -> Result<Estimator, CliError> {
-    match Estimator::new(s) {
+    match Estimator::realtime(s) {
         Err(BuildError::DefaultPose { .. }) if a.scene.position.is_some() => {
-            Estimator::new(&at_own_default_pose(a, s)?)
+            Estimator::realtime(&at_own_default_pose(a, s)?)
         }
         r => r,
     }

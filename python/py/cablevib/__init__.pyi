@@ -234,7 +234,10 @@ class TminAnswer:
 class Estimator:
     """The real-time estimator of one scene, warm-started from call to call."""
 
-    def __init__(self, scene: Scene) -> None: ...
+    def __init__(self, scene: Scene, realtime: bool = False) -> None:
+        """``realtime=True``: each update as the service runs it (a budget of D(λ)
+        evaluations per call; the end-effector mode of a cold call may be pending), what
+        ``cablevib analyze --realtime`` prints. Default: every call answered in full."""
     def update(
         self,
         position: _Vec,

@@ -200,6 +200,33 @@ pub fn frequencies(cfg: &FrfConfig) -> Result<Vec<f64>, StudyError> {
 }
 
 /// The response of `scene` at its own pose and T_min (module docs).
+///
+/// ```
+/// use cablevib::prelude::*;
+///
+/// let scene = Scene::load("spatial-paper")?;
+/// let cfg = FrfConfig {
+///     from_hz: 0.0,
+///     to_hz: 20.0,
+///     points: 5,
+///     damping: DampingChoice { undamped: true, ..Default::default() },
+///     ..FrfConfig::default()
+/// };
+/// let r = frf(&scene, &cfg)?;
+/// assert_eq!((r.dim, r.receptance.len()), (3, 5));
+/// // At 0 Hz the receptance is the static flexibility: the inverse of the stiffness the
+/// // estimator reports at the same pose.
+/// let mut est = Estimator::new(&scene)?;
+/// let e = est.update(&Pose::in_scene(&scene, scene.ee_position_m), Tmin::Scene);
+/// let k_inv = e.stiffness.translational_n_m().try_inverse().unwrap();
+/// for i in 0..3 {
+///     for j in 0..3 {
+///         let h = r.receptance[0][(i, j)];
+///         assert!((h.re - k_inv[(i, j)]).abs() <= 1e-8 * k_inv.norm() && h.im == 0.0);
+///     }
+/// }
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn frf(scene: &Scene, cfg: &FrfConfig) -> Result<FrfResult, StudyError> {
     let freqs = frequencies(cfg)?;
     let damping = cfg.damping.resolve(scene.damping)?;
