@@ -71,7 +71,9 @@
 // Layer 0
 pub mod alloc_count;
 pub mod eig3;
+pub mod identify;
 pub mod input_file;
+pub mod output_file;
 mod simd;
 pub mod status;
 // Layer 1

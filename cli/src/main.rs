@@ -26,14 +26,30 @@ fn default_sigpipe() {
 
 fn main() {
     default_sigpipe();
-    let cli = cablevib_cli::cli::Cli::parse();
+    let cli = match cablevib_cli::cli::Cli::try_parse() {
+        Ok(cli) => cli,
+        // Help and version go to standard output, usage errors to standard error; a failed
+        // write of either is a one-line error, not a silent exit.
+        Err(e) => match e.print() {
+            Ok(()) => std::process::exit(e.exit_code()),
+            Err(io) => fail(&cablevib::output_file::StdoutError(io).into()),
+        },
+    };
     if let Err(e) = run(cli) {
-        eprintln!("cablevib: {e:#}");
-        std::process::exit(1);
+        fail(&e);
     }
 }
 
+/// The one-line error and exit status 1.
+fn fail(e: &anyhow::Error) -> ! {
+    eprintln!("cablevib: {e:#}");
+    std::process::exit(1);
+}
+
+/// The command, then standard output flushed (every command writes whole lines, so this
+/// only reports what a line-less write left).
 fn run(cli: cablevib_cli::cli::Cli) -> anyhow::Result<()> {
     cablevib_cli::cli::run(cli, allocations)?;
+    cablevib::output_file::flush_stdout()?;
     Ok(())
 }

@@ -145,8 +145,11 @@ class Ports:
         self.estimate_name = names[cv.SERVICE_ESTIMATE]
         margin_name = names[cv.SERVICE_MARGIN]
         self.attributes = None
+        # The wake services too: the service creates them after the estimate and margin ones.
         for name, pattern in ((self.estimate_name, iox2.MessagingPattern.PublishSubscribe),
-                              (margin_name, iox2.MessagingPattern.RequestResponse)):
+                              (margin_name, iox2.MessagingPattern.RequestResponse),
+                              (names[cv.SERVICE_WAKE_SERVICE], iox2.MessagingPattern.Event),
+                              (names[cv.SERVICE_WAKE_CONTROLLER], iox2.MessagingPattern.Event)):
             attributes = service_attributes(name, pattern, timeout_s)
             if attributes is None:
                 fail('no cablevib service "%s" within %g s: is `cablevib serve --instance %s` running?' % (

@@ -1,5 +1,5 @@
 /*
- * cablevib_ipc.h - C/C++ mirror of the cablevib-ipc message types (schema v2).
+ * cablevib_ipc.h - C/C++ mirror of the cablevib-ipc message types (schema v3).
  *
  * The Rust crate cablevib-ipc (ipc-schema/) is the reference; its test tests/c_header.rs
  * compiles this header and checks every size, alignment, offset, field type and constant
@@ -22,7 +22,7 @@
 
 /* ---- constants --------------------------------------------------------------------------- */
 
-#define CABLEVIB_SCHEMA_VERSION 2u
+#define CABLEVIB_SCHEMA_VERSION 3u
 #define CABLEVIB_MAX_CABLES 16
 #define CABLEVIB_MAX_STIFFNESS_DIM 6
 
@@ -51,11 +51,11 @@
 #define CABLEVIB_REQUIRED_F1_MAX_HZ 1e6
 
 /* iceoryx2 type names; they end with "::v<CABLEVIB_SCHEMA_VERSION>". */
-#define CABLEVIB_TYPE_NAME_POSE_SAMPLE "cablevib::PoseSample::v2"
-#define CABLEVIB_TYPE_NAME_T_MIN_SETPOINT "cablevib::TminSetpoint::v2"
-#define CABLEVIB_TYPE_NAME_ESTIMATE_SAMPLE "cablevib::EstimateSample::v2"
-#define CABLEVIB_TYPE_NAME_MARGIN_REQUEST "cablevib::MarginRequest::v2"
-#define CABLEVIB_TYPE_NAME_MARGIN_RESPONSE "cablevib::MarginResponse::v2"
+#define CABLEVIB_TYPE_NAME_POSE_SAMPLE "cablevib::PoseSample::v3"
+#define CABLEVIB_TYPE_NAME_T_MIN_SETPOINT "cablevib::TminSetpoint::v3"
+#define CABLEVIB_TYPE_NAME_ESTIMATE_SAMPLE "cablevib::EstimateSample::v3"
+#define CABLEVIB_TYPE_NAME_MARGIN_REQUEST "cablevib::MarginRequest::v3"
+#define CABLEVIB_TYPE_NAME_MARGIN_RESPONSE "cablevib::MarginResponse::v3"
 
 /* Status codes (the uint32_t `status` fields). Values never change; treat unknown ones as
  * "not valid". */
@@ -111,7 +111,7 @@ typedef struct cablevib_t_min_setpoint {
     double per_cable_t_min_n[CABLEVIB_MAX_CABLES];  /* N */
 } cablevib_t_min_setpoint_t;
 
-/* Estimate, cablevib -> controller on CABLEVIB_SERVICE_ESTIMATE. 512 bytes.
+/* Estimate, cablevib -> controller on CABLEVIB_SERVICE_ESTIMATE. 520 bytes.
  * Echoes the answered pose's sequence and timestamp: compare pose_sequence with the last pose
  * sent to tell fresh from stale. Values are meaningful only when status == CABLEVIB_STATUS_OK
  * (frequencies are NaN otherwise). */
@@ -145,6 +145,8 @@ typedef struct cablevib_estimate_sample {
                                      * to first order the relative distance of l to the root;
                                      * <= 1e-9 on converged answers (dimensionless) */
     uint64_t skipped_poses;         /* poses skipped since start (a newer one was queued) */
+    uint64_t sequence;              /* the service's estimate count: 1 for its first estimate,
+                                     * +1 per estimate; a gap is estimates lost on the way */
 } cablevib_estimate_sample_t;
 
 /* Margin query, controller -> cablevib on CABLEVIB_SERVICE_MARGIN (request). 24 bytes. */
@@ -182,9 +184,10 @@ CABLEVIB_STATIC_ASSERT(sizeof(cablevib_pose_sample_t) == 80, "cablevib_pose_samp
 CABLEVIB_STATIC_ASSERT(offsetof(cablevib_pose_sample_t, flags) == 72, "cablevib_pose_sample_t layout");
 CABLEVIB_STATIC_ASSERT(sizeof(cablevib_t_min_setpoint_t) == 160, "cablevib_t_min_setpoint_t size");
 CABLEVIB_STATIC_ASSERT(offsetof(cablevib_t_min_setpoint_t, per_cable_t_min_n) == 32, "cablevib_t_min_setpoint_t layout");
-CABLEVIB_STATIC_ASSERT(sizeof(cablevib_estimate_sample_t) == 512, "cablevib_estimate_sample_t size");
+CABLEVIB_STATIC_ASSERT(sizeof(cablevib_estimate_sample_t) == 520, "cablevib_estimate_sample_t size");
 CABLEVIB_STATIC_ASSERT(offsetof(cablevib_estimate_sample_t, stiffness) == 192, "cablevib_estimate_sample_t layout");
 CABLEVIB_STATIC_ASSERT(offsetof(cablevib_estimate_sample_t, skipped_poses) == 504, "cablevib_estimate_sample_t layout");
+CABLEVIB_STATIC_ASSERT(offsetof(cablevib_estimate_sample_t, sequence) == 512, "cablevib_estimate_sample_t layout");
 CABLEVIB_STATIC_ASSERT(sizeof(cablevib_margin_request_t) == 24, "cablevib_margin_request_t size");
 CABLEVIB_STATIC_ASSERT(sizeof(cablevib_margin_response_t) == 64, "cablevib_margin_response_t size");
 CABLEVIB_STATIC_ASSERT(offsetof(cablevib_margin_response_t, timestamp_ns) == 56, "cablevib_margin_response_t layout");

@@ -20,7 +20,7 @@ STATUS_OK means the numbers of that message are not valid (frequencies are NaN).
 
 import ctypes
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 MAX_CABLES = 16
 MAX_STIFFNESS_DIM = 6
 AGE_UNKNOWN = 4294967295
@@ -107,7 +107,7 @@ class PoseSample(ctypes.Structure):
         ("reserved0", ctypes.c_uint32),
     ]
 
-    TYPE_NAME = "cablevib::PoseSample::v2"
+    TYPE_NAME = "cablevib::PoseSample::v3"
 
     @classmethod
     def type_name(cls):
@@ -127,7 +127,7 @@ class TminSetpoint(ctypes.Structure):
         ("per_cable_t_min_n", ctypes.c_double * 16),
     ]
 
-    TYPE_NAME = "cablevib::TminSetpoint::v2"
+    TYPE_NAME = "cablevib::TminSetpoint::v3"
 
     @classmethod
     def type_name(cls):
@@ -136,7 +136,7 @@ class TminSetpoint(ctypes.Structure):
 
 
 class EstimateSample(ctypes.Structure):
-    """`cablevib_estimate_sample_t` of the C header: 512 bytes, alignment 8."""
+    """`cablevib_estimate_sample_t` of the C header: 520 bytes, alignment 8."""
 
     _fields_ = [
         ("pose_sequence", ctypes.c_uint64),
@@ -156,9 +156,10 @@ class EstimateSample(ctypes.Structure):
         ("tension_iterations", ctypes.c_uint32),
         ("eigen_residual", ctypes.c_double),
         ("skipped_poses", ctypes.c_uint64),
+        ("sequence", ctypes.c_uint64),
     ]
 
-    TYPE_NAME = "cablevib::EstimateSample::v2"
+    TYPE_NAME = "cablevib::EstimateSample::v3"
 
     @classmethod
     def type_name(cls):
@@ -175,7 +176,7 @@ class MarginRequest(ctypes.Structure):
         ("required_f1_hz", ctypes.c_double),
     ]
 
-    TYPE_NAME = "cablevib::MarginRequest::v2"
+    TYPE_NAME = "cablevib::MarginRequest::v3"
 
     @classmethod
     def type_name(cls):
@@ -198,7 +199,7 @@ class MarginResponse(ctypes.Structure):
         ("timestamp_ns", ctypes.c_uint64),
     ]
 
-    TYPE_NAME = "cablevib::MarginResponse::v2"
+    TYPE_NAME = "cablevib::MarginResponse::v3"
 
     @classmethod
     def type_name(cls):
@@ -224,7 +225,7 @@ LAYOUT = {
         ("reserved0", 28, 4),
         ("per_cable_t_min_n", 32, 128),
     )),
-    EstimateSample: (512, 8, (
+    EstimateSample: (520, 8, (
         ("pose_sequence", 0, 8),
         ("pose_timestamp_ns", 8, 8),
         ("receive_timestamp_ns", 16, 8),
@@ -242,6 +243,7 @@ LAYOUT = {
         ("tension_iterations", 492, 4),
         ("eigen_residual", 496, 8),
         ("skipped_poses", 504, 8),
+        ("sequence", 512, 8),
     )),
     MarginRequest: (24, 8, (
         ("sequence", 0, 8),

@@ -150,8 +150,8 @@ frozen_layout! {
 }
 
 frozen_layout! {
-    /// Layout of [`EstimateSample`]: 512 bytes.
-    ESTIMATE_SAMPLE_LAYOUT = EstimateSample { size: 512, align: 8, fields: {
+    /// Layout of [`EstimateSample`]: 520 bytes.
+    ESTIMATE_SAMPLE_LAYOUT = EstimateSample { size: 520, align: 8, fields: {
         pose_sequence: u64 = 0,
         pose_timestamp_ns: u64 = 8,
         receive_timestamp_ns: u64 = 16,
@@ -169,6 +169,7 @@ frozen_layout! {
         tension_iterations: u32 = 492,
         eigen_residual: f64 = 496,
         skipped_poses: u64 = 504,
+        sequence: u64 = 512,
     } }
 }
 

@@ -59,7 +59,7 @@
 //! # Versioning
 //!
 //! Every iceoryx2 type name ends with `::v{SCHEMA_VERSION}` (e.g.
-//! `cablevib::PoseSample::v2`, [`Message::TYPE_NAME`]). iceoryx2 compares the type name, size
+//! `cablevib::PoseSample::v3`, [`Message::TYPE_NAME`]). iceoryx2 compares the type name, size
 //! and alignment of the payload when a port opens a service, so a peer built against another
 //! schema is refused at connect time (`IncompatibleTypes`; [`compat`] turns that into a
 //! readable message) instead of misreading bytes. The rule: **any change of a message's
@@ -125,7 +125,7 @@ pub use cablevib::scene::MAX_CABLES;
 pub const MAX_STIFFNESS_DIM: usize = 6;
 
 /// Version of the wire schema; every type name ends with `::v{SCHEMA_VERSION}`.
-pub const SCHEMA_VERSION: u32 = 2;
+pub const SCHEMA_VERSION: u32 = 3;
 
 /// `CLOCK_MONOTONIC` now, ns: the clock of every `*timestamp_ns` field. It is shared by all
 /// processes of a machine (it counts from boot), never jumps, and takes ~20 ns (vDSO, no

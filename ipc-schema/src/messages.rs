@@ -62,7 +62,7 @@ pub const IDENTITY_QUATERNION: [f64; 4] = [1.0, 0.0, 0.0, 0.0];
 /// older ones are skipped (and counted in [`EstimateSample::skipped_poses`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::PoseSample::v2")]
+#[type_name("cablevib::PoseSample::v3")]
 pub struct PoseSample {
     /// Sender's sequence number, incremented by one per pose; echoed by the estimate.
     pub sequence: u64,
@@ -154,7 +154,7 @@ impl Default for PoseSample {
 }
 
 impl Message for PoseSample {
-    const TYPE_NAME: &'static str = "cablevib::PoseSample::v2";
+    const TYPE_NAME: &'static str = "cablevib::PoseSample::v3";
     const C_NAME: &'static str = "cablevib_pose_sample_t";
     const SERVICE: &'static str = crate::SERVICE_POSE;
 }
@@ -170,7 +170,7 @@ impl Message for PoseSample {
 /// cable `i < per_cable_count` uses `per_cable_t_min_n[i]` and the others `t_min_n`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::TminSetpoint::v2")]
+#[type_name("cablevib::TminSetpoint::v3")]
 pub struct TminSetpoint {
     /// Sender's sequence number, incremented by one per set-point.
     pub sequence: u64,
@@ -259,7 +259,7 @@ impl Default for TminSetpoint {
 }
 
 impl Message for TminSetpoint {
-    const TYPE_NAME: &'static str = "cablevib::TminSetpoint::v2";
+    const TYPE_NAME: &'static str = "cablevib::TminSetpoint::v3";
     const C_NAME: &'static str = "cablevib_t_min_setpoint_t";
     const SERVICE: &'static str = crate::SERVICE_T_MIN;
 }
@@ -285,14 +285,14 @@ pub const T_MIN_AGE_UNKNOWN: u32 = u32::MAX;
 /// One estimator cycle's result, cablevib → controller on
 /// [`SERVICE_ESTIMATE`](crate::SERVICE_ESTIMATE).
 ///
-/// 512 bytes, alignment 8. It answers the pose whose `sequence` and `timestamp_ns` it echoes
+/// 520 bytes, alignment 8. It answers the pose whose `sequence` and `timestamp_ns` it echoes
 /// in `pose_sequence` / `pose_timestamp_ns`; the controller compares them with the pose it
 /// last sent to tell a fresh estimate from a stale one. The numeric fields are meaningful only
 /// when `status` is [`StatusCode::Ok`]; otherwise frequencies are NaN and tensions and
 /// stiffness may be zero.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::EstimateSample::v2")]
+#[type_name("cablevib::EstimateSample::v3")]
 pub struct EstimateSample {
     /// `sequence` of the pose this estimate answers.
     pub pose_sequence: u64,
@@ -342,6 +342,10 @@ pub struct EstimateSample {
     pub eigen_residual: f64,
     /// Poses skipped since the service started because a newer one was queued.
     pub skipped_poses: u64,
+    /// The service's estimate count: 1 for the first estimate it publishes, one more for each
+    /// next one. A subscriber that sees a gap (for one publisher) lost that many estimates in
+    /// its queue; a restarted service starts again from 1.
+    pub sequence: u64,
 }
 
 impl EstimateSample {
@@ -366,6 +370,7 @@ impl EstimateSample {
             tension_iterations: 0,
             eigen_residual: 0.0,
             skipped_poses: 0,
+            sequence: 0,
         }
     }
 
@@ -463,7 +468,7 @@ impl Default for EstimateSample {
 }
 
 impl Message for EstimateSample {
-    const TYPE_NAME: &'static str = "cablevib::EstimateSample::v2";
+    const TYPE_NAME: &'static str = "cablevib::EstimateSample::v3";
     const C_NAME: &'static str = "cablevib_estimate_sample_t";
     const SERVICE: &'static str = crate::SERVICE_ESTIMATE;
 }
@@ -476,7 +481,7 @@ impl Message for EstimateSample {
 /// [`SERVICE_MARGIN`](crate::SERVICE_MARGIN). 24 bytes, alignment 8.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::MarginRequest::v2")]
+#[type_name("cablevib::MarginRequest::v3")]
 pub struct MarginRequest {
     /// Requester's sequence number; echoed as [`MarginResponse::request_sequence`].
     pub sequence: u64,
@@ -521,7 +526,7 @@ impl Default for MarginRequest {
 }
 
 impl Message for MarginRequest {
-    const TYPE_NAME: &'static str = "cablevib::MarginRequest::v2";
+    const TYPE_NAME: &'static str = "cablevib::MarginRequest::v3";
     const C_NAME: &'static str = "cablevib_margin_request_t";
     const SERVICE: &'static str = crate::SERVICE_MARGIN;
 }
@@ -531,7 +536,7 @@ impl Message for MarginRequest {
 /// Frequencies and margins are NaN unless `status` is [`StatusCode::Ok`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::MarginResponse::v2")]
+#[type_name("cablevib::MarginResponse::v3")]
 pub struct MarginResponse {
     /// `sequence` of the request answered.
     pub request_sequence: u64,
@@ -645,7 +650,7 @@ impl Default for MarginResponse {
 }
 
 impl Message for MarginResponse {
-    const TYPE_NAME: &'static str = "cablevib::MarginResponse::v2";
+    const TYPE_NAME: &'static str = "cablevib::MarginResponse::v3";
     const C_NAME: &'static str = "cablevib_margin_response_t";
     const SERVICE: &'static str = crate::SERVICE_MARGIN;
 }

@@ -34,6 +34,8 @@ pub const JSON_MESSAGE_ENCODING: &str = "json";
 /// service's pose → publish latency and the margin against the monitor's required f1.
 #[derive(Debug, Clone, Serialize)]
 pub struct EstimateRecord {
+    /// `sequence` (the service's estimate count).
+    pub sequence: u64,
     /// `pose_sequence`.
     pub pose_sequence: u64,
     /// `pose_timestamp_ns`.
@@ -105,6 +107,7 @@ impl EstimateRecord {
         let dim = (e.stiffness_dim as usize).min(MAX_STIFFNESS_DIM);
         let stiffness = e.stiffness_matrix().to_vec();
         EstimateRecord {
+            sequence: e.sequence,
             pose_sequence: e.pose_sequence,
             pose_timestamp_ns: e.pose_timestamp_ns,
             receive_timestamp_ns: e.receive_timestamp_ns,
@@ -290,6 +293,7 @@ pub fn estimate_schema() -> String {
     schema(
         SCHEMA_ESTIMATE,
         &[
+            ("sequence", i()),
             ("pose_sequence", i()),
             ("pose_timestamp_ns", i()),
             ("receive_timestamp_ns", i()),

@@ -4,12 +4,16 @@
 //! The monitor is one more iceoryx2 participant of an instance, in its own process: a
 //! subscriber of the pose, T_min and estimate services (and, with a required f1, a margin
 //! client asking a few times a second), so the service's real-time loop is the same with or
-//! without it. Its iceoryx2 thread only copies samples into a bounded queue ([`QUEUE_CAPACITY`];
-//! when full the newest sample is dropped and counted); a writer thread encodes them
-//! ([`encode`]: JSON with a JSON Schema per channel; [`scene3d`]: Foxglove's `SceneUpdate`)
-//! and logs them through the official Foxglove SDK to its sinks: an MCAP file
-//! (`--record`, LZ4 chunks of [`CHUNK_BYTES`], metadata record `cablevib`) and a Foxglove
-//! WebSocket server (`--foxglove`, loopback by default, [`addr`]).
+//! without it. Its subscribers queue [`RECORD_BUFFER`] samples each; every message carries its
+//! sender's sequence number, so every message lost before the monitor read it is counted
+//! ([`completeness`]). Its iceoryx2 thread only copies samples into a bounded queue
+//! ([`QUEUE_CAPACITY`]; when full the newest sample is dropped and counted); a writer thread
+//! encodes them ([`encode`]: JSON with a JSON Schema per channel; [`scene3d`]: Foxglove's
+//! `SceneUpdate`) and logs them through the official Foxglove SDK to the record, an MCAP file
+//! (`--record`, LZ4 chunks of [`CHUNK_BYTES`], metadata records `cablevib` and, when closed,
+//! [`COMPLETENESS_METADATA`]). The Foxglove WebSocket viewers (`--foxglove`, loopback by
+//! default, [`addr`]) have a context, a thread and a queue of their own ([`viewers`]: a cap
+//! on viewers, a bound per viewer), so no viewer can slow or shorten the record.
 //!
 //! | topic | schema | rate |
 //! |---|---|---|
@@ -23,21 +27,31 @@
 //! pose, set-point: sender's time; margin: answer time) moved to the Unix epoch by one offset
 //! taken at start (metadata `log_time_minus_monotonic_ns`); the payloads keep the raw values.
 //!
-//! [`replay`](mod@replay) reads the poses and set-points of a recording and sends them to a
-//! service, at the recorded timing or as fast as the service answers.
+//! [`replay`](mod@replay) streams the poses and set-points of a recording ([`recording`]:
+//! chunk by chunk, bounded memory) and sends them to a service, at the recorded timing (pauses
+//! bounded) or as fast as the service answers.
 
 #![warn(missing_docs)]
 
 pub mod addr;
+pub mod completeness;
 pub mod encode;
+pub mod recording;
 pub mod replay;
 pub mod run;
 pub mod scene3d;
 pub mod signal;
+pub mod viewers;
+mod writer;
 
 pub use addr::{FoxgloveAddr, DEFAULT_FOXGLOVE};
-pub use replay::{Pace, ReplayConfig, ReplayReport};
-pub use run::{run, topic, Attached, MonitorConfig, MonitorReport, CHUNK_BYTES, QUEUE_CAPACITY};
+pub use completeness::ChannelCompleteness;
+pub use replay::{Pace, ReplayConfig, ReplayReport, DEFAULT_MAX_GAP_S};
+pub use run::{
+    run, topic, Attached, MonitorConfig, MonitorReport, SceneSource, CHUNK_BYTES,
+    COMPLETENESS_METADATA, QUEUE_CAPACITY, RECORD_BUFFER,
+};
+pub use viewers::{ViewerReport, DEFAULT_MAX_VIEWERS, LOG_FILTER};
 
 use cablevib_service::ServiceError;
 

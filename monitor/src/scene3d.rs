@@ -17,7 +17,11 @@
 use cablevib::elastic_catenary::{CableChord, SagParams};
 use cablevib::kinematics::rotation_of;
 use cablevib::scene::Scene;
-use cablevib_ipc::{EstimateSample, PoseSample, TminSetpoint};
+use cablevib_ipc::{
+    EstimateSample, PoseSample, TminSetpoint, ATTR_ELEMENTS_PER_CABLE, ATTR_ELEMENT_MODEL,
+    ATTR_SCENE,
+};
+use cablevib_service::ports::ReadAttributes;
 use foxglove::messages::{
     Color, CubePrimitive, KeyValuePair, LinePrimitive, Point3, Pose, Quaternion, SceneEntity,
     SceneUpdate, SpherePrimitive, TextPrimitive, Timestamp, Vector3,
@@ -129,6 +133,44 @@ fn sagged_profile(
             })
             .collect(),
     )
+}
+
+/// The scene the service names in its attributes (`cablevib.scene`), when it is an embedded
+/// one (`Scene::builtin`: no file named by another process is read) whose cable element model
+/// and elements per cable equal the service's attributes; otherwise why not, in one line.
+pub fn scene_of_service(attributes: &ReadAttributes) -> Result<Scene, String> {
+    let Some(name) = attributes.get(ATTR_SCENE) else {
+        return Err(format!(
+            "the service names no scene (no {ATTR_SCENE} attribute: a peer created the \
+             services before `cablevib serve`); pass --scene"
+        ));
+    };
+    let scene = match Scene::builtin(name) {
+        Some(Ok(s)) => s,
+        Some(Err(e)) => return Err(format!("the service's scene {name:?}: {e}")),
+        None => {
+            return Err(format!(
+                "the service's scene {name:?} is not an embedded one; pass its file with --scene"
+            ))
+        }
+    };
+    let model = scene.model.element.as_str();
+    let elements = scene.model.elements_per_cable.to_string();
+    for (key, ours) in [
+        (ATTR_ELEMENT_MODEL, model),
+        (ATTR_ELEMENTS_PER_CABLE, elements.as_str()),
+    ] {
+        match attributes.get(key) {
+            Some(theirs) if theirs != ours => {
+                return Err(format!(
+                    "the service runs {name:?} with {key} = {theirs}, the embedded scene has \
+                     {ours}; pass --scene with the service's options"
+                ))
+            }
+            _ => {}
+        }
+    }
+    Ok(scene)
 }
 
 /// Wall-clock stamp (ns since the Unix epoch) as a Foxglove timestamp.

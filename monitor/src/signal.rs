@@ -23,3 +23,8 @@ pub fn stop_on_signals() -> &'static AtomicBool {
     }
     &STOP
 }
+
+/// Whether SIGINT or SIGTERM arrived since [`stop_on_signals`] installed the handler.
+pub fn received() -> bool {
+    STOP.load(Ordering::Acquire)
+}

@@ -6,6 +6,7 @@
 //! | `Scene.load(path_or_name)` | [`cablevib::scene::Scene::load`] |
 //! | `analyze(scene, ...)` | [`cablevib::study::analysis::analyze`] (what `cablevib analyze --json` prints) |
 //! | `frf(scene, ...)` | [`cablevib::study::frf::frf`] (what `cablevib frf --json` prints) |
+//! | `identify(t, channels, ...)` | [`cablevib::identify::identify`] (what `cablevib identify --json` prints per window, without the model) |
 //! | `Estimator(scene).update(...)` | [`cablevib::estimator::Estimator::update`] |
 //! | `Estimator.sweep(...)`, `sweep(scene, ...)` | [`cablevib::estimator::Estimator::update`] over many poses on worker threads ([`sweep`]) |
 //! | `Estimator.t_min_for_f1(...)` | [`cablevib::estimator::Estimator::t_min_for_f1`] |
@@ -19,6 +20,7 @@ mod convert;
 mod error;
 mod estimator;
 mod frf;
+mod identify;
 mod scene;
 mod sweep;
 mod toml_text;
@@ -33,6 +35,7 @@ fn cablevib_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("CablevibError", m.py().get_type::<error::CablevibError>())?;
     m.add_function(wrap_pyfunction!(analysis::analyze, m)?)?;
     m.add_function(wrap_pyfunction!(frf::frf, m)?)?;
+    m.add_function(wrap_pyfunction!(identify::identify, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::sweep_scene, m)?)?;
     m.add_class::<scene::PyScene>()?;
     m.add_class::<estimator::PyEstimator>()?;

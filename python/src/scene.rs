@@ -94,10 +94,13 @@ impl PyScene {
     /// ``geometric_stiffness``, ``cable_mass``.
     ///
     /// The arrays are written as a scene file's TOML text (``Scene.toml``), which is then
-    /// read and validated as a scene file is: a scene that cannot be built (NaN, too few
-    /// cables, a missing bound, …) raises CablevibError with the message a scene file with
-    /// those values gives (its source named ``source``). An argument with the wrong number
-    /// of rows raises ValueError.
+    /// read and validated as a scene file is: a value that cannot be built (NaN, too few
+    /// cables, a bound out of range, …) raises CablevibError with the message a scene file
+    /// with those values gives (its source named ``source``; ``cables[i].anchor`` is row i
+    /// of ``anchors_m``); a required argument left out (``t_min_n``) or of the wrong type
+    /// (a string for a number, an unknown ``element``) raises CablevibError naming the
+    /// argument. An argument with the wrong number of rows (0 rows of ``anchors_m``)
+    /// raises ValueError.
     #[staticmethod]
     #[pyo3(signature = (anchors_m, ee_mass_kg, ee_position_m, *, attachments_m = None,
         name = "from-arrays", gravity_m_s2 = None, ee_orientation_wxyz = None,
@@ -139,6 +142,11 @@ impl PyScene {
         use crate::toml_text::{rows, value, Table};
         let anchors = rows(anchors_m, "anchors_m")?;
         let n = anchors.len();
+        if n == 0 {
+            return Err(PyValueError::new_err(
+                "anchors_m: 0 rows: one row (x, y, z in m) per cable",
+            ));
+        }
         let per_cable = |obj: Option<&Bound<'_, PyAny>>, what: &str| match obj {
             None => Ok(None),
             Some(o) => {
@@ -233,7 +241,16 @@ impl PyScene {
                 text.push_str(&format!("{key} = {}\n", col[i]));
             }
         }
-        PyScene::from_text(text, source.to_string())
+        match Scene::from_toml_str(&text, source) {
+            Ok(inner) => Ok(PyScene {
+                inner,
+                origin: Some(Origin::Toml {
+                    text,
+                    source: source.to_string(),
+                }),
+            }),
+            Err(e) => Err(CablevibError::new_err(from_arrays_message(&e, source))),
+        }
     }
 
     /// The TOML text this scene was read from (a scene file's, ``from_toml``'s, or what
@@ -394,4 +411,66 @@ impl PyScene {
             p.z
         )
     }
+}
+
+/// The argument of `Scene.from_arrays` that a scene-file key was written from
+/// (`cables[2].anchor` → `anchors_m[2]`), `None` for a key it does not write.
+fn argument_of(key: &str) -> Option<String> {
+    let (head, leaf) = key.split_once('.').unwrap_or((key, ""));
+    if let Some(i) = head
+        .strip_prefix("cables[")
+        .and_then(|r| r.strip_suffix(']'))
+    {
+        let name = match leaf {
+            "anchor" => "anchors_m",
+            "attachment" => "attachments_m",
+            "t_min" => "cable_t_min_n",
+            "t_max" => "cable_t_max_n",
+            "youngs_modulus" => "youngs_modulus_pa",
+            "area" => "area_m2",
+            "weight_per_length" => "weight_per_length_n_m",
+            "mass_per_length" => "mass_per_length_kg_m",
+            _ => return None,
+        };
+        return Some(format!("{name}[{i}]"));
+    }
+    let name = match (head, leaf) {
+        ("name", "") => "name",
+        ("gravity", "") => "gravity_m_s2",
+        ("cables", "") => "anchors_m",
+        ("end_effector", "mass") => "ee_mass_kg",
+        ("end_effector", "position") => "ee_position_m",
+        ("end_effector", "orientation") => "ee_orientation_wxyz",
+        ("end_effector", "inertia") => "ee_inertia_kg_m2",
+        ("end_effector", "weight_carried") => "weight_carried",
+        ("cable", "youngs_modulus") => "youngs_modulus_pa",
+        ("cable", "area") => "area_m2",
+        ("cable", "weight_per_length") => "weight_per_length_n_m",
+        ("cable", "mass_per_length") => "mass_per_length_kg_m",
+        ("tension", "t_min") => "t_min_n",
+        ("tension", "t_max") => "t_max_n",
+        ("model", "element") => "element",
+        ("model", "elements_per_cable") => "elements",
+        ("model", "ee_participation_min") => "ee_participation_min",
+        ("model", "f1_tolerance") => "f1_tolerance",
+        ("effects", f) if !f.is_empty() => f,
+        _ => return None,
+    };
+    Some(name.to_string())
+}
+
+/// The message of a scene `from_arrays` could not build: a TOML error (a missing argument,
+/// a wrong type) names the argument instead of a line of the text it wrote; any other error
+/// is the scene file's.
+fn from_arrays_message(e: &cablevib::scene::SceneError, source: &str) -> String {
+    if let cablevib::scene::SceneError::Parse { report, .. } = e {
+        if let Some(arg) = report.key.as_deref().and_then(argument_of) {
+            return if report.message.starts_with("missing field") {
+                format!("{source}: argument `{arg}` is required")
+            } else {
+                format!("{source}: argument `{arg}`: {}", report.message)
+            };
+        }
+    }
+    e.to_string()
 }

@@ -90,3 +90,19 @@ def test_a_killed_worker_is_retried_and_the_study_is_complete(client):
     assert pids[addr] not in client.run(os.getpid).values()
     assert_bitwise_equal(df, cd.local(scene, p, chunk_poses=64))
     assert df["pose"].tolist() == list(range(len(p)))
+
+
+def test_without_the_extra_the_import_names_it():
+    """Without pandas (the dask extra) `import cablevib.dask` raises an ImportError naming
+    `pip install ./python[dask]` (before: a bare `ModuleNotFoundError: No module named
+    'pandas'`). pandas is hidden in a fresh interpreter (None in sys.modules)."""
+    import subprocess
+    import sys
+
+    code = ("import sys; sys.modules['pandas'] = None\n"
+            "try:\n    import cablevib.dask\n"
+            "except ImportError as e:\n    print(type(e).__name__, e)\n")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       check=True)
+    assert p.stdout.startswith("ImportError cablevib.dask needs the dask extra: "
+                               "pip install ./python[dask]"), p.stdout

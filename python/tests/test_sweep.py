@@ -208,6 +208,27 @@ def test_bad_arrays_raise_the_scene_files_error(run_cli, tmp_path, what, over, e
     assert str(e2.value) == want
 
 
+def test_from_arrays_errors_name_the_argument():
+    """A required argument left out or of the wrong type names the argument, not a line of
+    the TOML text from_arrays writes (before: `<arrays>: TOML parse error at line 13` and a
+    snippet of that text)."""
+    kw = paper_arrays()
+    del kw["t_min_n"]
+    for over, want in [
+        (kw, "<arrays>: argument `t_min_n` is required"),
+        (paper_arrays(element="bogus"),
+         "<arrays>: argument `element`: unknown variant `bogus`, expected one of"),
+        (paper_arrays(ee_mass_kg="heavy"),
+         "<arrays>: argument `ee_mass_kg`: invalid type: string \"heavy\", expected f64"),
+    ]:
+        with pytest.raises(cablevib.CablevibError) as e:
+            cablevib.Scene.from_arrays(**over)
+        msg = str(e.value)
+        assert msg.startswith(want) and "line" not in msg and "\n" not in msg, msg
+    with pytest.raises(ValueError, match=r"^anchors_m: 0 rows"):
+        cablevib.Scene.from_arrays(**paper_arrays(anchors_m=np.zeros((0, 3))))
+
+
 def test_from_arrays_row_count_mismatch_is_a_value_error():
     with pytest.raises(ValueError, match="attachments_m: 3 values for 8 cables"):
         cablevib.Scene.from_arrays(**paper_arrays(attachments_m=np.zeros((3, 3))))

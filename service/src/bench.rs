@@ -14,6 +14,7 @@
 //!
 //! Ping-pong (one pose in flight), after 1000 warm-up samples.
 
+use cablevib::outln;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -89,10 +90,10 @@ pub fn run(scene: &Scene, a: &BenchIpcConfig) -> Result<(), ServiceError> {
                 "seconds": r.seconds,
             })).collect::<Vec<_>>(),
         });
-        println!("{o}");
+        outln!("{o}")?;
         return Ok(());
     }
-    println!(
+    outln!(
         "cablevib bench-ipc: pose published → estimate received over iceoryx2, scene `{}`, {} \
          samples per mode (ping-pong{}), {} CPUs",
         scene.name,
@@ -103,11 +104,16 @@ pub fn run(scene: &Scene, a: &BenchIpcConfig) -> Result<(), ServiceError> {
             String::new()
         },
         cpus
-    );
-    println!(
+    )?;
+    outln!(
         "  {:<6} {:<34} {:>9} {:>9} {:>9} {:>9}",
-        "wait", "µs", "p50", "p99", "p99.9", "max"
-    );
+        "wait",
+        "µs",
+        "p50",
+        "p99",
+        "p99.9",
+        "max"
+    )?;
     for r in &results {
         for (name, p) in [
             ("end-to-end", &r.end_to_end),
@@ -116,7 +122,7 @@ pub fn run(scene: &Scene, a: &BenchIpcConfig) -> Result<(), ServiceError> {
             ("  pose → taken by the service", &r.pickup),
             ("  estimate publish → received", &r.delivery),
         ] {
-            println!(
+            outln!(
                 "  {:<6} {:<34} {:>9.1} {:>9.1} {:>9.1} {:>9.1}",
                 r.mode.as_str(),
                 name,
@@ -124,15 +130,15 @@ pub fn run(scene: &Scene, a: &BenchIpcConfig) -> Result<(), ServiceError> {
                 p.p99_ns as f64 / 1e3,
                 p.p999_ns as f64 / 1e3,
                 p.max_ns as f64 / 1e3
-            );
+            )?;
         }
-        println!(
+        outln!(
             "  {:<6} {} samples in {:.2} s, {} unanswered",
             r.mode.as_str(),
             r.end_to_end.count,
             r.seconds,
             r.timeouts
-        );
+        )?;
     }
     Ok(())
 }

@@ -8,6 +8,7 @@
 //! With `--hold-f1 HZ` the controller also holds f1 with T_min set-points (`demo_hold.rs`)
 //! and the summary adds the hold's lines.
 
+use cablevib::outln;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -192,8 +193,13 @@ fn validate(a: &DemoConfig) -> Result<(), ServiceError> {
 }
 
 /// What the demo is about to run.
-fn print_header(scene: &Scene, a: &DemoConfig, trajectory: &Trajectory, schedule: &TminSchedule) {
-    println!(
+fn print_header(
+    scene: &Scene,
+    a: &DemoConfig,
+    trajectory: &Trajectory,
+    schedule: &TminSchedule,
+) -> Result<(), ServiceError> {
+    outln!(
         "cablevib demo: {:.1} s on scene `{}` ({} cables, {} × {} elements/cable); the service \
          waits by {}, the controller by {}",
         a.seconds,
@@ -203,8 +209,8 @@ fn print_header(scene: &Scene, a: &DemoConfig, trajectory: &Trajectory, schedule
         scene.model.elements_per_cable,
         a.wait,
         a.controller_wait
-    );
-    println!(
+    )?;
+    outln!(
         "  replay: {}, {} Hz; T_min {}",
         trajectory.describe(),
         a.rate_hz,
@@ -218,7 +224,8 @@ fn print_header(scene: &Scene, a: &DemoConfig, trajectory: &Trajectory, schedule
                 .collect::<Vec<_>>()
                 .join(", ")
         }
-    );
+    )?;
+    Ok(())
 }
 
 /// The instance the demo's services run under: `cablevib_demo_{pid}` (a monitor started beside
@@ -243,7 +250,7 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
     let n_poses = (a.seconds * a.rate_hz).round().max(1.0) as usize;
     let capacity = n_poses + LOG_SLACK;
 
-    print_header(scene, a, &trajectory, &schedule);
+    print_header(scene, a, &trajectory, &schedule)?;
 
     let stop = Arc::new(AtomicBool::new(false));
     let controller_ready = Arc::new(AtomicBool::new(false));
@@ -320,9 +327,9 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
     let sent = replay?;
     let server_report = server_report?;
     let log = log?;
-    summary(a, &trajectory, sent, &server_report, &log);
+    summary(a, &trajectory, sent, &server_report, &log)?;
     if let Some(s) = &shape {
-        println!("{}", s.summary_line());
+        outln!("{}", s.summary_line())?;
     }
     if let Some(h) = &log.hold {
         super::demo_hold::summary(scene, a, &trajectory, h)?;
@@ -392,7 +399,7 @@ fn replay(
             let f1 = f64::from_bits(progress.last_f1_bits.load(Ordering::Relaxed));
             let margin = f64::from_bits(progress.last_margin_bits.load(Ordering::Relaxed));
             let max_lat = progress.max_latency_ns.swap(0, Ordering::Relaxed);
-            println!(
+            outln!(
                 "  t = {:>4.1} s  poses {:>6}  estimates {:>6} (+{:>4})  f1 {:.4} Hz  margin \
                  {:+.4} Hz  worst latency this second {:.1} µs  not ok {}",
                 next_progress,
@@ -403,7 +410,7 @@ fn replay(
                 margin,
                 max_lat as f64 / 1e3,
                 progress.not_ok.load(Ordering::Relaxed)
-            );
+            )?;
             last_estimates = n;
             next_progress += 1.0;
         }
@@ -420,7 +427,7 @@ fn summary(
     sent: u64,
     service: &ServerReport,
     log: &ControllerLog,
-) {
+) -> Result<(), ServiceError> {
     let where_ = |seq: u64| {
         let t = (seq.saturating_sub(1)) as f64 / a.rate_hz;
         match trajectory.position_at(t) {
@@ -433,8 +440,8 @@ fn summary(
             None => format!("t = {t:.3} s"),
         }
     };
-    println!("summary");
-    println!(
+    outln!("summary")?;
+    outln!(
         "  service: {} poses published, {} estimated ({} skipped as stale, {} overwritten in \
          the queue before the service drained them), estimator compute {}",
         sent,
@@ -442,7 +449,7 @@ fn summary(
         service.skipped_poses,
         service.overwritten_poses,
         service.compute.display_us()
-    );
+    )?;
     let ok: Vec<&Seen> = log
         .seen
         .iter()
@@ -451,14 +458,14 @@ fn summary(
     let min = ok.iter().min_by(|x, y| x.f1_hz.total_cmp(&y.f1_hz));
     let max = ok.iter().max_by(|x, y| x.f1_hz.total_cmp(&y.f1_hz));
     if let (Some(min), Some(max)) = (min, max) {
-        println!(
+        outln!(
             "  first natural frequency f1 along the trajectory: min {:.4} Hz ({}), max {:.4} Hz \
              ({})",
             min.f1_hz,
             where_(min.pose_sequence),
             max.f1_hz,
             where_(max.pose_sequence)
-        );
+        )?;
         let ee: Vec<f64> = ok
             .iter()
             .map(|s| s.ee_mode_hz)
@@ -467,10 +474,10 @@ fn summary(
         if !ee.is_empty() {
             let lo = ee.iter().copied().fold(f64::INFINITY, f64::min);
             let hi = ee.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            println!("  end-effector mode frequency: {lo:.4} … {hi:.4} Hz");
+            outln!("  end-effector mode frequency: {lo:.4} … {hi:.4} Hz")?;
         }
     } else {
-        println!("  no valid estimate was received");
+        outln!("  no valid estimate was received")?;
     }
     let answered: Vec<&(u64, f64, u32)> = log
         .margins
@@ -479,7 +486,7 @@ fn summary(
         .collect();
     if let Some(worst) = answered.iter().min_by(|x, y| x.1.total_cmp(&y.1)) {
         let below = answered.iter().filter(|m| m.1 < 0.0).count();
-        println!(
+        outln!(
             "  margin f1 − {:.2} Hz (required): worst {:+.4} Hz ({}); below the requirement in \
              {} of {} answers{}",
             log.hold.as_ref().map_or(a.required_hz, |h| h.request_hz()),
@@ -496,22 +503,23 @@ fn summary(
             } else {
                 String::new()
             }
-        );
+        )?;
     }
-    println!(
+    outln!(
         "  estimates per status: {}",
         service.status_counts.summary()
-    );
+    )?;
     let lat: Percentiles = log.latency.percentiles();
-    println!(
+    outln!(
         "  latency pose published → estimate received by the controller ({} estimates): {}",
         lat.count,
         lat.display_us()
-    );
+    )?;
     let rtt = log.margin_rtt.percentiles();
-    println!(
+    outln!(
         "  margin query round trip ({} queries): {}",
         rtt.count,
         rtt.display_us()
-    );
+    )?;
+    Ok(())
 }

@@ -15,6 +15,7 @@
 //!   falls short (f1 is not monotone in T_min: docs/inverse.md), never below the floor. Σ T²
 //!   at it comes from the same estimator at the same poses.
 
+use cablevib::outln;
 use std::io::Write;
 use std::path::Path;
 
@@ -217,10 +218,10 @@ pub(crate) fn summary(
 ) -> Result<(), ServiceError> {
     let p = log.params;
     let Some(start) = log.start_ns else {
-        println!(
+        outln!(
             "  hold f1 ≥ {} Hz: no margin answer carried a T_min; nothing to count",
             p.required_hz
-        );
+        )?;
         return Ok(());
     };
     let after: Vec<&Seen> = log.seen.iter().filter(|s| s.receive_ns > start).collect();
@@ -238,7 +239,7 @@ pub(crate) fn summary(
         .fold((p.floor_n, p.floor_n), |(l, h), s| (l.min(s.1), h.max(s.1)));
     let f1_min = after.iter().map(|s| s.f1_hz).fold(f64::INFINITY, f64::min);
     let mean_hold = after.iter().map(|s| s.sum_t2_n2).sum::<f64>() / after.len().max(1) as f64;
-    println!(
+    outln!(
         "  hold f1 ≥ {} Hz (asks for +{} Hz guard, relaxes above +{} Hz at ≤ {} N/s, T_min in \
          [{}, {}] N): {} set-points ({}..{} N; actions {}); ok estimates below {} Hz after the \
          first answer: {below} of {} (lowest f1 {f1_min:.4} Hz)",
@@ -254,15 +255,15 @@ pub(crate) fn summary(
         HoldAction::summary(&log.actions),
         p.required_hz,
         after.len(),
-    );
+    )?;
     if poses.len() != after.len() || poses.is_empty() {
-        println!("  hold: no poses to compare with a fixed T_min");
+        outln!("  hold: no poses to compare with a fixed T_min")?;
         return no_record(a, "no poses to compare with a fixed T_min");
     }
     match fixed_t_min(scene, &poses, p.required_hz, p.floor_n) {
         Ok((t_fixed, at)) => {
             let mean_fixed = at.iter().map(|x| x.1).sum::<f64>() / at.len() as f64;
-            println!(
+            outln!(
                 "  hold: mean Σ T² {:.5e} N² under the hold against {:.5e} N² at the fixed T_min \
                  {} N that meets {} Hz at every one of these {} poses ({:+.1} %)",
                 mean_hold,
@@ -271,7 +272,7 @@ pub(crate) fn summary(
                 p.required_hz,
                 poses.len(),
                 100.0 * (mean_hold / mean_fixed - 1.0)
-            );
+            )?;
             if let Some(path) = &a.hold_csv {
                 write_csv(path, a, log, &after, &at, t_fixed).map_err(|e| {
                     ServiceError::HoldRecord {
@@ -279,11 +280,11 @@ pub(crate) fn summary(
                         reason: e.to_string(),
                     }
                 })?;
-                println!("  hold: per-estimate record written to {}", path.display());
+                outln!("  hold: per-estimate record written to {}", path.display())?;
             }
         }
         Err(e) => {
-            println!("  hold: no fixed T_min to compare with: {e}");
+            outln!("  hold: no fixed T_min to compare with: {e}")?;
             return no_record(a, &format!("no fixed T_min to compare with: {e}"));
         }
     }
@@ -316,7 +317,8 @@ fn write_csv(
     fixed: &[(f64, f64)],
     t_fixed: f64,
 ) -> std::io::Result<()> {
-    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    // Whole or not at all: a failed run leaves an older record at `path` as it was.
+    let mut w = crate::output_file::OutputFile::create(path).map_err(std::io::Error::other)?;
     writeln!(
         w,
         "t_s,pose_sequence,f1_hz,setpoint_n,sum_t2_n2,fixed_t_min_n,f1_fixed_hz,sum_t2_fixed_n2"
@@ -341,5 +343,5 @@ fn write_csv(
             t2_fixed
         )?;
     }
-    w.flush()
+    w.commit().map_err(std::io::Error::other)
 }

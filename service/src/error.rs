@@ -54,6 +54,9 @@ impl ParamName for ServiceParam {
 /// Errors of the service commands.
 #[derive(Debug, thiserror::Error)]
 pub enum ServiceError {
+    /// Standard output could not be written.
+    #[error(transparent)]
+    Stdout(#[from] crate::output_file::StdoutError),
     /// The scene could not be loaded.
     #[error(transparent)]
     Scene(#[from] SceneError),

@@ -29,6 +29,9 @@
 //! each estimate, so a controller can block too.
 
 #![warn(missing_docs)]
+// Standard output through `cablevib::outln!` (an error, not a panic, when it cannot be
+// written).
+#![warn(clippy::print_stdout)]
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod bench;
@@ -47,7 +50,7 @@ pub use cablevib::stats;
 use core::sync::atomic::AtomicBool;
 
 // The core's modules, under the paths the service's files name (`crate::scene::...`).
-use cablevib::{alloc_count, estimator, kinematics, scene, trajectory};
+use cablevib::{alloc_count, estimator, kinematics, output_file, scene, trajectory};
 
 use crate::scene::Scene;
 

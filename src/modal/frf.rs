@@ -26,12 +26,18 @@
 use super::sagged::SagModalSolver;
 use super::{ModalError, ModalSolver, ShapeParams};
 use crate::cable::CableModel;
+use crate::input_file::message_number;
 use crate::scene::Damping;
 use nalgebra::{DMatrix, Matrix6, Vector3, Vector6};
 use num_complex::Complex64;
 
 /// Most frequencies one response is computed at.
 pub const MAX_FRF_POINTS: usize = 100_000;
+/// Highest frequency of a response, Hz (1 THz). The receptance of every cable model falls
+/// as 1/(ω² m) long before it (≈ 1e-28 m/N at 1 THz on the paper's robot); from ≈ 1e24 Hz
+/// it underflows to 0 and from ≈ 1e30 Hz ω²M overflows, so that no answer would mean
+/// anything there.
+pub const MAX_FRF_HZ: f64 = 1e12;
 /// Most modes a modal-damping basis holds.
 pub const MAX_FRF_MODES: usize = 2000;
 
@@ -39,13 +45,24 @@ pub const MAX_FRF_MODES: usize = 2000;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FrfError {
     /// The frequency range is not 0 ≤ from < to, finite.
-    #[error("frequency range {from_hz} .. {to_hz} Hz: need finite 0 <= from < to")]
+    #[error(
+        "frequency range {} .. {} Hz: need finite 0 <= from < to",
+        message_number(*from_hz),
+        message_number(*to_hz)
+    )]
     Range {
         /// Lower end, Hz.
         from_hz: f64,
         /// Upper end, Hz.
         to_hz: f64,
     },
+    /// The range ends above [`MAX_FRF_HZ`].
+    #[error(
+        "frequency range up to {} Hz: above the highest frequency of a response, {} Hz",
+        message_number(*.0),
+        message_number(MAX_FRF_HZ)
+    )]
+    TooHigh(f64),
     /// A log-spaced range must start above 0.
     #[error("a log-spaced range needs from > 0 Hz (got {0})")]
     LogFromZero(f64),
@@ -71,7 +88,9 @@ pub enum FrfError {
 }
 
 /// The frequencies of a response: `points` values from `from_hz` to `to_hz` (both
-/// included; one point: `from_hz`), evenly spaced, or geometrically with `log`.
+/// included, exactly; one point: `from_hz`), evenly spaced, or geometrically with `log`
+/// (evenly in ln f, so that no ratio of the bounds overflows: 1e-310 .. 1 Hz is a valid
+/// range). `to_hz` is at most [`MAX_FRF_HZ`].
 pub fn frequency_grid(
     from_hz: f64,
     to_hz: f64,
@@ -81,6 +100,9 @@ pub fn frequency_grid(
     if !(from_hz.is_finite() && to_hz.is_finite() && from_hz >= 0.0 && from_hz < to_hz) {
         return Err(FrfError::Range { from_hz, to_hz });
     }
+    if to_hz > MAX_FRF_HZ {
+        return Err(FrfError::TooHigh(to_hz));
+    }
     if points == 0 || points > MAX_FRF_POINTS {
         return Err(FrfError::Points(points));
     }
@@ -88,10 +110,15 @@ pub fn frequency_grid(
         return Err(FrfError::LogFromZero(from_hz));
     }
     let step = |i: usize| i as f64 / (points - 1).max(1) as f64;
+    let (ln_from, ln_to) = (from_hz.ln(), to_hz.ln());
     Ok((0..points)
         .map(|i| {
-            if log {
-                from_hz * (to_hz / from_hz).powf(step(i))
+            if i == 0 {
+                from_hz
+            } else if i == points - 1 {
+                to_hz
+            } else if log {
+                (ln_from + (ln_to - ln_from) * step(i)).exp()
             } else {
                 from_hz + (to_hz - from_hz) * step(i)
             }

@@ -10,7 +10,8 @@
 //! [`Scene::from_path`], [`Scene::from_toml_str`] and [`Scene::load`] return a
 //! [`SceneError`] that names the file, the key and what is wrong; they never panic.
 //!
-//! The module is split by stage: `parse` (TOML into serde's raw types), `validate` (raw
+//! The module is split by stage: `parse` (TOML into serde's raw types; [`toml_error`] its
+//! errors as one line naming the line and the key), `validate` (raw
 //! types into a [`Scene`], one check per concern) and `load` (a file path or the name of an
 //! embedded scene).
 
@@ -20,16 +21,19 @@ use std::path::Path;
 
 mod bounds;
 mod damping;
+mod direction;
 use crate::input_file::{InputFileError, MAX_SCENE_BYTES};
 
 mod load;
 mod parse;
+pub mod toml_error;
 mod validate;
 
 pub use bounds::{check_t_min, is_valid_t_min, TminRangeError, T_MIN_FLOOR_N};
 pub use damping::{
     Damping, MAX_LOSS_FACTOR, MAX_MODAL_RATIO, MAX_RAYLEIGH_ALPHA_PER_S, MAX_RAYLEIGH_BETA_S,
 };
+pub use direction::unit_direction;
 
 /// The embedded default scene: the paper's spatial robot (Tables 5-6).
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../../scenes/spatial_paper.toml");
@@ -54,14 +58,14 @@ pub enum SceneError {
     /// [`MAX_SCENE_BYTES`] or not UTF-8.
     #[error(transparent)]
     Input(#[from] InputFileError),
-    /// TOML syntax error, wrong type, missing or unknown key: the toml crate's own report
-    /// (several lines: line and column, the offending line with a caret, what is wrong).
-    #[error("{file}: {message}")]
+    /// TOML syntax error, wrong type, missing or unknown key, on one line: the line and
+    /// column, the key, the toml crate's message ([`toml_error`]).
+    #[error("{file}: {report}")]
     Parse {
         /// File name.
         file: String,
-        /// The toml crate's report.
-        message: String,
+        /// Where and what.
+        report: toml_error::TomlErrorReport,
     },
     /// A value that parses but is not physically valid.
     #[error("{file}: key `{key}`: {message}")]
@@ -423,7 +427,7 @@ impl Scene {
     pub fn from_toml_str(text: &str, file: &str) -> Result<Scene, SceneError> {
         let raw: parse::RawScene = toml::from_str(text).map_err(|e| SceneError::Parse {
             file: file.to_string(),
-            message: e.to_string().trim_end().to_string(),
+            report: toml_error::report(text, &e),
         })?;
         validate::scene_from_raw(raw, file)
     }

@@ -279,7 +279,9 @@ pub const SEQUENCE_GAP_WINDOW: u64 = 1 << 20;
 pub const SEQUENCE_MAX_RATE_PER_S: u64 = 10_000_000;
 
 /// Losses a sender may have besides its rate budget: the poses it can queue after its first
-/// received one before that one is read (the pose queue, `service::ports::POSE_BUFFER`).
+/// received one before that one is read (the service's pose queue,
+/// `service::ports::POSE_BUFFER`). [`SequenceGaps::with_queue_slack`] sets another (a recorder's
+/// longer queue).
 pub const SEQUENCE_QUEUE_SLACK: u64 = 16;
 
 /// Poses lost in a queue, counted from the senders' sequence numbers. Every sender increments
@@ -309,6 +311,9 @@ pub const SEQUENCE_QUEUE_SLACK: u64 = 16;
 #[derive(Debug, Clone, Copy)]
 pub struct SequenceGaps<K: Copy + Eq, const N: usize> {
     senders: [Option<Sender<K>>; N],
+    /// The losses a sender may have besides its rate budget ([`SEQUENCE_QUEUE_SLACK`] by
+    /// default).
+    queue_slack: u64,
     /// Messages received (any key), for the least-recently-heard eviction.
     clock: u64,
     /// Messages missing between consecutive sequences of one sender, in total.
@@ -321,7 +326,8 @@ pub struct SequenceGaps<K: Copy + Eq, const N: usize> {
 #[derive(Debug, Clone, Copy)]
 struct Sender<K> {
     key: K,
-    /// The last sequence received.
+    /// The first and the last sequence received.
+    first: u64,
     last: u64,
     /// When last heard from, in `clock` ticks.
     heard: u64,
@@ -338,6 +344,10 @@ struct Sender<K> {
 pub struct SenderCounts<K> {
     /// The sender.
     pub key: K,
+    /// The first sequence received from it while tracked.
+    pub first: u64,
+    /// The last sequence received from it.
+    pub last: u64,
     /// Its messages received while tracked.
     pub received: u64,
     /// Its messages missing between consecutive sequences (overwritten).
@@ -350,6 +360,7 @@ impl<K: Copy + Eq, const N: usize> Default for SequenceGaps<K, N> {
     fn default() -> Self {
         SequenceGaps {
             senders: [None; N],
+            queue_slack: SEQUENCE_QUEUE_SLACK,
             clock: 0,
             lost: 0,
             resets: 0,
@@ -358,6 +369,15 @@ impl<K: Copy + Eq, const N: usize> Default for SequenceGaps<K, N> {
 }
 
 impl<K: Copy + Eq, const N: usize> SequenceGaps<K, N> {
+    /// No sender yet; a sender may lose `queue_slack` messages besides its rate budget (the
+    /// subscriber's queue length).
+    pub fn with_queue_slack(queue_slack: u64) -> Self {
+        SequenceGaps {
+            queue_slack,
+            ..SequenceGaps::default()
+        }
+    }
+
     /// Records sequence `seq` received from sender `key` at `now_ns` (monotonic); returns
     /// how many of that sender's messages are missing just before it (0 when it follows the
     /// previous one, is the sender's first, or is a reset: not above the last, or a jump past
@@ -380,6 +400,7 @@ impl<K: Copy + Eq, const N: usize> SequenceGaps<K, N> {
             if let Some(slot) = self.senders.get_mut(i) {
                 *slot = Some(Sender {
                     key,
+                    first: seq,
                     last: seq,
                     heard: now,
                     first_ns: now_ns,
@@ -397,7 +418,7 @@ impl<K: Copy + Eq, const N: usize> SequenceGaps<K, N> {
         s.last = seq;
         s.heard = now;
         s.received += 1;
-        let budget = (SEQUENCE_QUEUE_SLACK
+        let budget = (self.queue_slack
             + now_ns.saturating_sub(s.first_ns) / (1_000_000_000 / SEQUENCE_MAX_RATE_PER_S))
             .saturating_sub(s.lost);
         if seq > last && seq - last - 1 <= SEQUENCE_GAP_WINDOW.min(budget) {
@@ -427,6 +448,8 @@ impl<K: Copy + Eq, const N: usize> SequenceGaps<K, N> {
     pub fn senders(&self) -> impl Iterator<Item = SenderCounts<K>> + '_ {
         self.senders.iter().flatten().map(|s| SenderCounts {
             key: s.key,
+            first: s.first,
+            last: s.last,
             received: s.received,
             lost: s.lost,
             resets: s.resets,

@@ -19,9 +19,12 @@ use nalgebra::Vector3;
 pub const MAX_AXIS_VALUES: usize = 100_000;
 /// Most grid points of one map (one `PointResult` each, ~0.5 kB).
 pub const MAX_GRID_POINTS: usize = 5_000_000;
-/// Grid values are rounded to a lattice of 1/this m (1 nm), so that 0.25 + 7 × 0.1 prints as
-/// 0.95.
+/// Floating-point noise of a grid value is snapped to a lattice of 1/this m (1 nm), so that
+/// 0.25 + 7 × 0.1 prints as 0.95 ([`grid_axis`]).
 const GRID_LATTICE_PER_M: f64 = 1e9;
+/// A grid value's floating-point noise, relative to the size of its terms: a snap to the
+/// lattice (or to 0) larger than this is a value the user gave, kept as it is.
+const GRID_NOISE: f64 = 1e-12;
 /// A plane axis given no range spans the central 80 % of the frame: this is half of it.
 const DEFAULT_HALF_SPAN_SHARE: f64 = 0.4;
 
@@ -156,6 +159,9 @@ impl Shard {
 }
 
 /// Grid values lo, lo + step, …, hi (the last value snaps to hi when within 1e-9 step).
+/// The rounding noise of lo + i·step (within 1e-12 of max(|lo|, i·step)) is snapped to the
+/// 1 nm lattice or to 0; nothing else is rounded: lo itself, and every value off the
+/// lattice by more (−1e-12 m, a grid of 0.1 nm steps), is kept to full precision.
 pub fn grid_axis(iv: Interval, step: f64, param: Param) -> Result<Vec<f64>, StudyError> {
     if !(step.is_finite() && step > 0.0) {
         return Err(ParamError::invalid(param, format!("{step:?}"), "must be > 0").into());
@@ -175,11 +181,17 @@ pub fn grid_axis(iv: Interval, step: f64, param: Param) -> Result<Vec<f64>, Stud
     let n = steps as usize + 1;
     Ok((0..n)
         .map(|i| {
-            // Snap to a 1e-9 m lattice so 0.25 + 7 × 0.1 prints as 0.95.
-            let v = ((iv.lo + i as f64 * step) * GRID_LATTICE_PER_M).round() / GRID_LATTICE_PER_M;
+            let exact = iv.lo + i as f64 * step;
+            let noise = GRID_NOISE * iv.lo.abs().max(i as f64 * step);
+            let snapped = (exact * GRID_LATTICE_PER_M).round() / GRID_LATTICE_PER_M;
+            let v = if (snapped - exact).abs() <= noise {
+                snapped
+            } else {
+                exact
+            };
             if (v - iv.hi).abs() < 1e-9 * step {
                 iv.hi
-            } else if v.abs() < 1e-12 * step {
+            } else if v.abs() <= noise {
                 0.0
             } else {
                 v
@@ -310,7 +322,6 @@ fn orientations(
             axis: Vector3::zeros(),
         });
     };
-    let axis_norm = t.axis.norm();
     if !s.rigid {
         let reason = format!(
             "scene `{}` has a point-mass end-effector, where orientation has no effect",
@@ -318,11 +329,11 @@ fn orientations(
         );
         return Err(ParamError::not_applicable(Param::TiltDeg, reason).into());
     }
-    if !(axis_norm.is_finite() && axis_norm > 0.0) {
+    let Some(axis) = crate::scene::unit_direction(&t.axis) else {
         let value = format!("{:?}", t.axis.as_slice());
         let rule = "must be finite and non-zero";
         return Err(ParamError::invalid(Param::TiltAxis, value, rule).into());
-    }
+    };
     if slices != 1 {
         let reason = "the panels are the tilt angles, so the slice axis takes a single value";
         return Err(ParamError::not_applicable(Param::TiltDeg, reason).into());
@@ -336,7 +347,6 @@ fn orientations(
         let rule = format!("{} tilt angles: at most {MAX_TILTS}", angles.len());
         return Err(ParamError::invalid(Param::TiltStepDeg, t.step_deg, rule).into());
     }
-    let axis = t.axis / axis_norm;
     let quaternions = angles
         .iter()
         .map(|a| rotated_about(&s.ee_orientation_wxyz, &axis, a.to_radians()))
@@ -418,6 +428,22 @@ mod tests {
         assert_eq!(g[10], 0.0);
         let g = grid_axis(Interval { lo: 0.25, hi: 1.25 }, 0.1, Param::StepM).unwrap();
         assert_eq!(g.len(), 11);
+        assert_eq!(g[7], 0.95);
+        let g = grid_axis(Interval { lo: -0.3, hi: 0.3 }, 0.1, Param::StepM).unwrap();
+        assert_eq!(g, [-0.3, -0.2, -0.1, 0.0, 0.1, 0.2, 0.3]);
+        // A value the user gave is not noise: kept to full precision (it was 0 and 0, 0).
+        let g = grid_axis(
+            Interval {
+                lo: -1e-12,
+                hi: -1e-12,
+            },
+            0.1,
+            Param::StepM,
+        )
+        .unwrap();
+        assert_eq!(g, [-1e-12]);
+        let g = grid_axis(Interval { lo: 0.0, hi: 3e-10 }, 1e-10, Param::StepM).unwrap();
+        assert_eq!(g, [0.0, 1e-10, 2e-10, 3e-10]);
     }
 
     #[test]

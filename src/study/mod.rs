@@ -23,6 +23,7 @@
 pub mod accuracy;
 pub mod analysis;
 pub mod frf;
+pub mod identify;
 pub mod map;
 pub mod param;
 pub mod points;

@@ -124,7 +124,12 @@ impl Move {
         self.start_m + self.displacement_m * self.fraction(t_s / self.duration_s)
     }
 
-    /// The move sampled every `dt_s` from 0 to its end plus `hold_s` at rest.
+    /// The move sampled every `dt_s` from 0 to its end plus `hold_s` at rest. The samples
+    /// always reach the end: the last is at or after the move's duration (rounding the
+    /// sample count down would stop short of the target, and a move shorter than half a
+    /// sample period would be dropped whole, its two samples both at the start). A move
+    /// faster than the sampling is then the jump it is, which the path's acceleration bound
+    /// refuses.
     pub fn sampled(&self, dt_s: f64, hold_s: f64) -> Result<Samples, TrajectoryError> {
         if !(dt_s.is_finite() && dt_s > 0.0) {
             let (what, value, bound) = ("sample period_s", dt_s, "> 0");
@@ -134,7 +139,10 @@ impl Move {
             let (what, value, bound) = ("hold_s", hold_s, "≥ 0");
             return Err(TrajectoryError::BadCircle { what, value, bound });
         }
-        let n = ((self.duration_s + hold_s) / dt_s).round();
+        // The relative 1e-9 keeps a duration that is a whole number of periods up to
+        // rounding (0.5 s / 1 ms) at that number.
+        let to_end = (self.duration_s / dt_s * (1.0 - 1e-9)).ceil();
+        let n = ((self.duration_s + hold_s) / dt_s).round().max(to_end);
         if !(n < MAX_MOVE_SAMPLES as f64) {
             let (what, value, bound) = ("move samples", n, "below 1e7");
             return Err(TrajectoryError::BadCircle { what, value, bound });
@@ -162,6 +170,32 @@ mod tests {
         (m.fraction((t + h) / m.duration_s) - 2.0 * m.fraction(t / m.duration_s)
             + m.fraction((t - h) / m.duration_s))
             / (h * h)
+    }
+
+    #[test]
+    fn the_samples_reach_the_end_of_every_move() {
+        let start = Vector3::new(0.0, 0.0, 1.25);
+        let d = Vector3::new(0.1, 0.0, 0.0);
+        let dt = 1e-3;
+        // Shorter than dt/2 (dropped whole before), a fraction below .5 of dt over a whole
+        // number (its end cut before), whole numbers of dt (unchanged: 2, 11, 501 samples).
+        for (duration, samples) in [
+            (1e-9, 2),
+            (4e-4, 2),
+            (1.5e-3, 3),
+            (1.04e-2, 12),
+            (1e-3, 2),
+            (1e-2, 11),
+            (0.5, 501),
+        ] {
+            for profile in [Profile::SCurve, Profile::Trapezoid] {
+                let m = Move::new(start, d, duration, profile).unwrap();
+                let s = m.sampled(dt, 0.0).unwrap();
+                assert_eq!(s.t_s.len(), samples, "{duration} s");
+                assert!(*s.t_s.last().unwrap() >= duration, "{duration} s");
+                assert_eq!(*s.position_m.last().unwrap(), start + d, "{duration} s");
+            }
+        }
     }
 
     #[test]

@@ -12,6 +12,7 @@
 //! | [`pinned_venv`] | a Python venv under target/ with pinned packages |
 pub mod dense_fem;
 pub mod hard_cases;
+pub mod modal_record;
 pub mod pinned_venv;
 pub mod sag_cases;
 pub mod sag_reference_py;

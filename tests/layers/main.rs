@@ -21,10 +21,12 @@ use std::path::{Path, PathBuf};
 /// crate and the two modules of the command-line crate.
 const LAYERS: &[(&str, u32)] = &[
     ("input_file", 0),
+    ("output_file", 0),
     ("alloc_count", 0),
     ("status", 0),
     ("simd", 0),
     ("eig3", 0),
+    ("identify", 0),
     ("scene", 1),
     ("stats", 1),
     ("kinematics", 2),

@@ -14,6 +14,7 @@ mod fem_dense;
 mod fem_physics;
 mod frf;
 mod frf_modal;
+mod many_modes;
 mod pulleys;
 mod realtime;
 mod shapes;

@@ -6,9 +6,10 @@ use super::figure::{self, parse_format};
 use super::CliError;
 use crate::report::accuracy_doc::{accuracy_markdown, hz, sci, update_section, us};
 use crate::report::accuracy_figures::{accuracy_csv, accuracy_svgs, file_stem, mode3_csv};
-use crate::report::csv::write_csv;
+use crate::report::csv::{sidecar_path, write_csv};
 use crate::report::figure::FigureFormat;
 use crate::study::accuracy::{self as study, dense_element_counts, AccuracyConfig};
+use cablevib::outln;
 use clap::Args;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -90,12 +91,39 @@ fn command_line(a: &AccuracyArgs) -> String {
     c
 }
 
+/// The figures' parts: OUT/img/accuracy-SCENE-PART.EXT.
+const FIGURES: [&str; 3] = ["error-vs-n", "cost", "mode3"];
+
+/// OUT/data/accuracy-SCENE.csv and OUT/data/mode3-SCENE.csv (`stem` the scene's file stem).
+fn csv_paths(a: &AccuracyArgs, stem: &str) -> [PathBuf; 2] {
+    ["accuracy", "mode3"].map(|k| a.out_dir.join("data").join(format!("{k}-{stem}.csv")))
+}
+
+/// OUT/img/accuracy-SCENE-PART.EXT.
+fn figure_path(a: &AccuracyArgs, stem: &str, part: &str, fmt: FigureFormat) -> PathBuf {
+    let name = format!("accuracy-{stem}-{part}.{}", fmt.ext());
+    a.out_dir.join("img").join(name)
+}
+
 /// `cablevib accuracy`: writes OUT/data/accuracy-SCENE.csv, OUT/data/mode3-SCENE.csv (each
 /// with its `.csv.json` sidecar),
 /// OUT/img/accuracy-SCENE-{error-vs-n,cost,mode3}.svg and this scene's section of
 /// OUT/accuracy.md.
 pub fn run(a: &AccuracyArgs) -> Result<(), CliError> {
     let s = resolve_scene(&a.scene)?;
+    // The file names hold the scene's name: checked here, before the work.
+    let stem = file_stem(&s.name);
+    let fmt = a.format.unwrap_or_default();
+    let [accuracy_csv_path, mode3_csv_path] = csv_paths(a, &stem);
+    let mut outputs = vec![
+        sidecar_path(&accuracy_csv_path),
+        sidecar_path(&mode3_csv_path),
+        accuracy_csv_path.clone(),
+        mode3_csv_path.clone(),
+        a.out_dir.join("accuracy.md"),
+    ];
+    outputs.extend(FIGURES.map(|part| figure_path(a, &stem, part, fmt)));
+    super::files::refuse_inputs(&outputs, &[a.scene.input_path()])?;
     let cfg = AccuracyConfig::new(a.max_elements, a.all_n, a.cycles, a.rounds, a.period_s)?;
     let t0 = Instant::now();
     eprintln!(
@@ -113,50 +141,33 @@ pub fn run(a: &AccuracyArgs) -> Result<(), CliError> {
         dense_ns
     );
     let mode3 = study::compute_mode3(&s, &dense_ns)?;
-    let stem = file_stem(&s.name);
-    let data = a.out_dir.join("data");
-    let imgd = a.out_dir.join("img");
     let cmd = command_line(a);
-    write_csv(
-        &data.join(format!("accuracy-{stem}.csv")),
-        accuracy_csv(&s, &r),
-        &cmd,
-    )?;
+    write_csv(&accuracy_csv_path, accuracy_csv(&s, &r), &cmd)?;
     if !mode3.is_empty() {
-        write_csv(
-            &data.join(format!("mode3-{stem}.csv")),
-            mode3_csv(&s, &mode3),
-            &cmd,
-        )?;
+        write_csv(&mode3_csv_path, mode3_csv(&s, &mode3), &cmd)?;
     }
     let (e_n, cost, m3) = accuracy_svgs(&s, &r, &mode3);
-    let fmt = a.format.unwrap_or_default();
     let mut imgs = Vec::new();
-    let figures = [
-        ("error-vs-n", Some(e_n)),
-        ("cost", Some(cost)),
-        ("mode3", m3),
-    ];
-    for (part, svg) in figures {
+    for (part, svg) in FIGURES.into_iter().zip([Some(e_n), Some(cost), m3]) {
         if let Some(svg) = svg {
-            let name = format!("accuracy-{stem}-{part}.{}", fmt.ext());
-            figure::write(&imgd.join(&name), &svg, fmt)?;
-            imgs.push(name);
+            let path = figure_path(a, &stem, part, fmt);
+            figure::write(&path, &svg, fmt)?;
+            imgs.extend(path.file_name().map(|n| n.to_string_lossy().into_owned()));
         }
     }
     let rel: Vec<String> = imgs.iter().map(|i| format!("img/{i}")).collect();
     let body = accuracy_markdown(&s, &r, &mode3, &cmd, a.cycles, a.rounds.max(1), &rel);
     let md = a.out_dir.join("accuracy.md");
     update_section(&md, &s.name, &body)?;
-    println!(
+    outln!(
         "accuracy: {}  f1,ref {:.9} Hz  continuous {:.9} Hz  ({:.1} s)",
         s.name,
         r.f1_ref_hz,
         r.f1_continuous_hz,
         t0.elapsed().as_secs_f64()
-    );
+    )?;
     for x in &r.rows {
-        println!(
+        outln!(
             "  {:<34} {:<10} f1 {:>14}  err {:>10}  p50 {:>7} µs  (+EE {:>7} µs)",
             x.label(),
             x.status.as_str(),
@@ -164,8 +175,8 @@ pub fn run(a: &AccuracyArgs) -> Result<(), CliError> {
             sci(x.err_ref),
             us(x.f1_ns.0),
             us(x.ee_ns.0)
-        );
+        )?;
     }
-    println!("  wrote {}", md.display());
+    outln!("  wrote {}", md.display())?;
     Ok(())
 }

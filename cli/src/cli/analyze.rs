@@ -11,6 +11,7 @@ use crate::scene::{ElementKind, Scene};
 use crate::study::analysis::{
     analyze, assembled_matrices, AnalysisReport, AnalyzeOptions, SolverChoice,
 };
+use cablevib::outln;
 use clap::Args;
 use nalgebra::Vector3;
 use std::time::Instant;
@@ -73,7 +74,7 @@ pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
         };
         let (resolved, choice) = resolved.map_err(|e| CliError::Analysis(e.to_string()))?;
         if !a.json {
-            println!("{choice}");
+            outln!("{choice}")?;
         }
         resolved
     } else {
@@ -96,9 +97,9 @@ pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
     }
     if a.json {
         let o = serde_json::to_string(&r).map_err(|e| CliError::Analysis(e.to_string()))?;
-        println!("{o}");
+        outln!("{o}")?;
     } else {
-        print_report(&r);
+        print_report(&r)?;
     }
     super::args::warn_if_sag_matters(&s, None);
     Ok(())
@@ -114,16 +115,22 @@ fn write_shapes(s: &Scene, modes: usize, path: &std::path::Path) -> Result<(), C
     Ok(write_csv(path, csv, &process_command_line())?)
 }
 
+/// The files of `--export-matrices PREFIX`: PREFIX.K.mtx and PREFIX.M.mtx.
+pub fn matrix_paths(prefix: &std::path::Path) -> [std::path::PathBuf; 2] {
+    ["K", "M"].map(|name| {
+        let mut path = prefix.as_os_str().to_owned();
+        path.push(format!(".{name}.mtx"));
+        path.into()
+    })
+}
+
 /// K and M of the structured path's models as PREFIX.K.mtx and PREFIX.M.mtx.
 fn export_matrices(s: &Scene, prefix: &std::path::Path) -> Result<(), CliError> {
     let (k, m) = assembled_matrices(s)?;
-    for (name, a) in [("K", &k), ("M", &m)] {
-        let mut path = prefix.as_os_str().to_owned();
-        path.push(format!(".{name}.mtx"));
+    for (path, a) in matrix_paths(prefix).iter().zip([&k, &m]) {
         let text = matrix_market(a);
-        std::fs::write(&path, text).map_err(|e| {
-            CliError::Analysis(format!("--export-matrices {}: {e}", path.to_string_lossy()))
-        })?;
+        crate::output_file::write_whole(path, text.as_bytes())
+            .map_err(|e| CliError::Analysis(format!("--export-matrices {e}")))?;
     }
     Ok(())
 }
@@ -160,38 +167,41 @@ fn parse_solver(s: &str) -> Result<SolverChoice, String> {
 }
 
 /// The report as tables.
-fn print_report(r: &AnalysisReport) {
+fn print_report(r: &AnalysisReport) -> Result<(), CliError> {
     let p = r.position_m;
     let dof = r
         .dof
         .map_or("continuous".to_string(), |d| format!("{d} DOF"));
-    println!(
+    outln!(
         "scene {}  position ({:.4}, {:.4}, {:.4}) m  T_min {}  model {} × {} elements/cable  ({dof}, {} solve {:.3} ms)",
         r.scene, p[0], p[1], p[2], r.t_min_label, r.element, r.elements_per_cable, r.solver,
         r.solve_seconds * 1e3
-    );
+    )?;
     if r.stiffness_n_m.len() == 6 {
         // A rigid end-effector: its orientation is part of the pose.
         let q = r.orientation_wxyz;
-        println!(
+        outln!(
             "orientation (w, x, y, z) ({}, {}, {}, {})",
-            q[0], q[1], q[2], q[3]
-        );
+            q[0],
+            q[1],
+            q[2],
+            q[3]
+        )?;
     }
-    println!("\n cable   tension (N)");
+    outln!("\n cable   tension (N)")?;
     for (i, t) in r.tensions_n.iter().enumerate() {
-        println!(" {:>5}   {:>11.4}", i + 1, t);
+        outln!(" {:>5}   {:>11.4}", i + 1, t)?;
     }
-    println!("\n mode   frequency (Hz)   end-effector participation   multiplicity");
+    outln!("\n mode   frequency (Hz)   end-effector participation   multiplicity")?;
     for (i, (fi, pi)) in r.frequencies_hz.iter().zip(&r.ee_participation).enumerate() {
         let m = r
             .multiplicity
             .as_ref()
             .map_or(String::new(), |m| m[i].to_string());
-        println!(" {:>4}   {:>14.9}   {:>26.6}   {:>12}", i + 1, fi, pi, m);
+        outln!(" {:>4}   {:>14.9}   {:>26.6}   {:>12}", i + 1, fi, pi, m)?;
     }
     if let Some(c) = &r.compare_dense {
-        println!(
+        outln!(
             "\nstructured {:.3} ms (median), dense {:.3} ms on the same models: ratio {:.0}×; \
              largest relative difference of λ {:.2e} (dense bound ε·λ_max/λ there {:.2e}), of \
              cluster participations {:.2e}",
@@ -201,8 +211,9 @@ fn print_report(r: &AnalysisReport) {
             c.max_rel_diff_lambda,
             c.dense_bound_there,
             c.max_abs_diff_cluster_participation
-        );
+        )?;
     }
+    Ok(())
 }
 
 /// The scene with `position` as its end-effector position.
@@ -270,34 +281,36 @@ fn analyze_realtime(a: &AnalyzeArgs, s: &Scene) -> Result<(), CliError> {
             "solver": "realtime",
             "compute_ns": ns as u64,
         });
-        println!("{o}");
+        outln!("{o}")?;
     } else {
-        println!(
+        outln!(
             "scene {}  model {} × {}  status {}",
             s.name,
             s.model.element.as_str(),
             s.model.elements_per_cable,
             e.status.as_str()
-        );
+        )?;
         if let Some(err) = e.error {
-            println!("  reason: {err}");
+            outln!("  reason: {err}")?;
         }
         for (i, t) in e.tensions().iter().enumerate() {
-            println!("  cable {:>2}: {t:>11.4} N", i + 1);
+            outln!("  cable {:>2}: {t:>11.4} N", i + 1)?;
         }
-        println!(
+        outln!(
             "  f1            {:.9} Hz (end-effector participation {:.3e})",
-            e.f1_hz, e.f1_ee_participation
-        );
-        println!(
+            e.f1_hz,
+            e.f1_ee_participation
+        )?;
+        outln!(
             "  end-effector  {:.9} Hz (participation {:.4})",
-            ee_hz, ee_p
-        );
-        println!(
+            ee_hz,
+            ee_p
+        )?;
+        outln!(
             "  {} evaluations of D(λ), {:.1} µs (first cycle, cold)",
             e.eigen_evaluations,
             ns as f64 / 1e3
-        );
+        )?;
     }
     if e.status != Status::Ok {
         return Err(CliError::Analysis(format!(

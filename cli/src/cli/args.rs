@@ -35,6 +35,13 @@ pub struct SceneArgs {
     pub effects: EffectArgs,
 }
 
+impl SceneArgs {
+    /// The scene file read (a name of an embedded scene names no file).
+    pub fn input_path(&self) -> std::path::PathBuf {
+        std::path::PathBuf::from(&self.scene)
+    }
+}
+
 /// The scene's effect flags, taken by every command that takes a scene (the offline ones
 /// through [`SceneArgs`], `serve`, `demo` and `bench-ipc` directly).
 #[derive(Debug, Args, Clone, Default)]

@@ -9,6 +9,7 @@ use crate::modal::lambda_to_hz;
 use crate::scene::Scene;
 use crate::service::stats::{percentile, StatusHistogram};
 use crate::trajectory::{circle_pose_with_radius, CIRCLE_RADIUS_M};
+use cablevib::outln;
 use clap::Args;
 use std::time::Instant;
 
@@ -170,9 +171,9 @@ pub fn run(a: &BenchArgs, allocations: AllocCounter) -> Result<(), CliError> {
     // Dense reference on a sample of poses, timed in the same run.
     let d = dense_check(&s, a, p)?;
     if a.json {
-        print_json(&s, a, p, &c, &d);
+        print_json(&s, a, p, &c, &d)?;
     } else {
-        print_text(&s, a, p, &c, &d, &est);
+        print_text(&s, a, p, &c, &d, &est)?;
     }
     Ok(())
 }
@@ -187,7 +188,13 @@ fn dense_ratio(c: &CircleRun, d: &DenseCheck) -> f64 {
     }
 }
 
-fn print_json(s: &Scene, a: &BenchArgs, p: EstimatorParams, c: &CircleRun, d: &DenseCheck) {
+fn print_json(
+    s: &Scene,
+    a: &BenchArgs,
+    p: EstimatorParams,
+    c: &CircleRun,
+    d: &DenseCheck,
+) -> Result<(), CliError> {
     let q = |x: f64| percentile(&c.ns, x);
     let names: Vec<(String, usize)> = c
         .statuses
@@ -216,7 +223,8 @@ fn print_json(s: &Scene, a: &BenchArgs, p: EstimatorParams, c: &CircleRun, d: &D
         "f1_min_hz": json_f64(c.f1_min.0), "f1_max_hz": json_f64(c.f1_max.0),
         "statuses": names.iter().map(|(n, c)| serde_json::json!({"status": n, "count": c})).collect::<Vec<_>>(),
     });
-    println!("{o}");
+    outln!("{o}")?;
+    Ok(())
 }
 
 fn print_text(
@@ -226,7 +234,7 @@ fn print_text(
     c: &CircleRun,
     d: &DenseCheck,
     est: &Estimator,
-) {
+) -> Result<(), CliError> {
     let q = |x: f64| percentile(&c.ns, x);
     let allocs = c.allocs;
     let per_cycle_allocs = allocs as f64 / a.cycles as f64;
@@ -235,7 +243,7 @@ fn print_text(
         .nonzero()
         .map(|(code, n)| (cablevib_ipc::status_str(code).to_string(), n as usize))
         .collect();
-    println!(
+    outln!(
         "scene {}  model {} × {}  {} cycles along the r = {} m circle ({} s per revolution, 1 ms spacing){}",
         s.name,
         s.model.element.as_str(),
@@ -244,31 +252,31 @@ fn print_text(
         a.radius_m,
         a.period_s,
         if p.ee_mode { "" } else { ", f1 only" }
-    );
-    println!(
+    )?;
+    outln!(
         "  per-cycle compute: p50 {} ns  p90 {} ns  p99 {} ns  p99.9 {} ns  max {} ns",
         q(0.5),
         q(0.9),
         q(0.99),
         q(0.999),
         q(1.0)
-    );
+    )?;
     let ev = &c.evals;
-    println!(
+    outln!(
         "  D(λ) evaluations per cycle: p50 {}  p90 {}  p99 {}  max {} (budget {})",
         percentile(ev, 0.5),
         percentile(ev, 0.9),
         percentile(ev, 0.99),
         percentile(ev, 1.0),
         p.modal.cycle_evaluations
-    );
-    println!(
+    )?;
+    outln!(
         "  heap allocations: {allocs} in {} cycles ({per_cycle_allocs} per cycle)",
         a.cycles
-    );
-    println!("  statuses: {names:?}");
+    )?;
+    outln!("  statuses: {names:?}")?;
     let rc = est.rescan_counts();
-    println!(
+    outln!(
         "  end-effector mode bookkeeping: full scans cold {} uncertified {} none {}; lost {} dropped {}; partner searches {} neighbour searches {}; scans continued over cycles {}, cycles over budget {}",
         rc.cold_scans,
         rc.uncertified_scans,
@@ -279,22 +287,26 @@ fn print_text(
         rc.neighbour_searches,
         rc.continued_scans,
         rc.starved_cycles
-    );
+    )?;
     let (f1_min, f1_max) = (c.f1_min, c.f1_max);
     if f1_min.0.is_finite() {
-        println!(
+        outln!(
             "  f1 along the circle: min {:.6} Hz (cycle {}), max {:.6} Hz (cycle {})",
-            f1_min.0, f1_min.1, f1_max.0, f1_max.1
-        );
+            f1_min.0,
+            f1_min.1,
+            f1_max.0,
+            f1_max.1
+        )?;
     }
     if !d.ns.is_empty() {
-        println!(
+        outln!(
             "  dense reference on {} poses: median {:.3} ms  → {:.0}× the real-time p50; max |Δf1|/f1 {:.2e}, max |Δf_ee|/f_ee {:.2e}",
             d.ns.len(),
             percentile(&d.ns, 0.5) as f64 / 1e6,
             dense_ratio(c, d),
             d.max_rel_err_f1,
             d.max_rel_err_ee
-        );
+        )?;
     }
+    Ok(())
 }

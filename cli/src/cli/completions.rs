@@ -3,9 +3,9 @@
 //! drift from it).
 
 use super::{Cli, CliError};
+use crate::output_file::stdout_bytes;
 use clap::{Args, CommandFactory};
 use clap_complete::Shell;
-use std::io::Write;
 
 /// `cablevib completions` options.
 #[derive(Debug, Clone, Args)]
@@ -23,17 +23,18 @@ pub struct ManArgs {}
 /// Print the completion script for `a.shell` to stdout.
 pub fn completions(a: &CompletionsArgs) -> Result<(), CliError> {
     let mut cmd = Cli::command();
-    let mut out = std::io::stdout().lock();
-    clap_complete::generate(a.shell, &mut cmd, "cablevib", &mut out);
-    out.flush()?;
+    // Generated in memory (clap_complete panics when its writer fails), then written.
+    let mut script = Vec::new();
+    clap_complete::generate(a.shell, &mut cmd, "cablevib", &mut script);
+    stdout_bytes(&script)?;
     Ok(())
 }
 
 /// Print the man page (roff, section 1) to stdout: `cablevib man > cablevib.1`.
 pub fn man(_: &ManArgs) -> Result<(), CliError> {
     let page = clap_mangen::Man::new(Cli::command());
-    let mut out = std::io::stdout().lock();
-    page.render(&mut out)?;
-    out.flush()?;
+    let mut roff = Vec::new();
+    page.render(&mut roff)?;
+    stdout_bytes(&roff)?;
     Ok(())
 }

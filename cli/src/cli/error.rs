@@ -32,6 +32,12 @@ pub enum CliError {
     /// The analysis of one pose failed or was given bad values.
     #[error("{}", .0.render(&flag))]
     Analyze(AnalyzeError),
+    /// Standard output could not be written.
+    #[error(transparent)]
+    Stdout(#[from] crate::output_file::StdoutError),
+    /// An output was refused (it is an input) or not written whole.
+    #[error(transparent)]
+    Output(#[from] crate::output_file::OutputFileError),
     /// Writing a result file failed.
     #[error(transparent)]
     Report(#[from] ReportError),

@@ -12,6 +12,7 @@ use crate::report::frf::{bode_svg, frf_csv, frf_meta, FrfData, COORDS};
 use crate::study::frf::{
     frequencies, frf, DampingChoice, DenseCheck, DenseCheckKind, FrfConfig, MARK_PARTICIPATION,
 };
+use cablevib::outln;
 use clap::Args;
 use num_complex::Complex64;
 use std::path::PathBuf;
@@ -208,9 +209,9 @@ pub fn run(a: &FrfArgs) -> Result<(), CliError> {
                 o["dense_lu_s"] = json_f64(lu.seconds);
             }
         }
-        println!("{o}");
+        outln!("{o}")?;
     } else {
-        println!(
+        outln!(
             "scene {}  position ({:.4}, {:.4}, {:.4}) m  model {} × {}  damping: {}",
             sc.name,
             p.x,
@@ -219,8 +220,8 @@ pub fn run(a: &FrfArgs) -> Result<(), CliError> {
             sc.model.element.as_str(),
             sc.model.elements_per_cable,
             damping_label(&damping)
-        );
-        println!(
+        )?;
+        outln!(
             "{} frequencies {} .. {} Hz{} in {:.3} ms ({:.2} µs each)",
             data.frequencies_hz.len(),
             a.from_hz,
@@ -228,13 +229,13 @@ pub fn run(a: &FrfArgs) -> Result<(), CliError> {
             if a.log { " (log)" } else { "" },
             structured_s * 1e3,
             structured_s * 1e6 / data.frequencies_hz.len() as f64
-        );
+        )?;
         let nat: Vec<String> = data.natural_hz.iter().map(|f| format!("{f:.4}")).collect();
-        println!(
+        outln!(
             "natural frequencies in the band with end-effector participation >= {} % (Hz): {}",
             MARK_PARTICIPATION * 100.0,
             nat.join(", ")
-        );
+        )?;
         for &(o, i) in &data.pairs {
             let (k, peak) = data
                 .h
@@ -242,20 +243,23 @@ pub fn run(a: &FrfArgs) -> Result<(), CliError> {
                 .map(|m| m[(o, i)].norm())
                 .enumerate()
                 .fold((0, 0.0f64), |b, (k, v)| if v > b.1 { (k, v) } else { b });
-            println!(
+            outln!(
                 "  H {}/{}: peak |H| {:.4e} at {:.4} Hz",
-                COORDS[o], COORDS[i], peak, data.frequencies_hz[k]
-            );
+                COORDS[o],
+                COORDS[i],
+                peak,
+                data.frequencies_hz[k]
+            )?;
         }
         if let Some(d) = &dense {
-            print_dense(d, structured_s, data.frequencies_hz.len());
+            print_dense(d, structured_s, data.frequencies_hz.len())?;
         }
     }
     let meta = frf_meta(&sc.name, &damping_label(&damping), &data.natural_hz);
     if let Some(path) = &a.csv {
         write_csv(path, frf_csv(&data, meta), &process_command_line())?;
         if !a.json {
-            println!("wrote {}", path.display());
+            outln!("wrote {}", path.display())?;
         }
     }
     if let Some(path) = &a.svg {
@@ -272,32 +276,32 @@ pub fn run(a: &FrfArgs) -> Result<(), CliError> {
         );
         figure::write(&path, &bode_svg(&data, &title, &sub, a.log), fmt)?;
         if !a.json {
-            println!("wrote {}", path.display());
+            outln!("wrote {}", path.display())?;
         }
     }
     Ok(())
 }
 
 /// The dense check's lines of the text output.
-fn print_dense(d: &DenseCheck, structured_s: f64, n: usize) {
+fn print_dense(d: &DenseCheck, structured_s: f64, n: usize) -> Result<(), CliError> {
     let ratio = d.seconds / structured_s.max(1e-12);
     match d.method {
-        "lu" => println!(
+        "lu" => outln!(
             "dense complex LU ({} DOF) at every frequency: {:.3} s; largest relative difference {:.2e}; structured {ratio:.0}× faster",
             d.dof, d.seconds, d.max_rel_diff
-        ),
+        )?,
         _ => {
-            println!(
+            outln!(
                 "dense modal summation ({} DOF, every mode) at every frequency: {:.3} s ({:.3} s eigendecomposition); largest relative difference {:.2e}; structured {ratio:.0}× faster",
                 d.dof,
                 d.seconds,
                 d.eig_seconds.unwrap_or(f64::NAN),
                 d.max_rel_diff
-            );
+            )?;
             if let Some(lu) = &d.lu {
                 let k = lu.frequencies_hz.len();
                 let per = lu.seconds / k.max(1) as f64;
-                println!(
+                outln!(
                     "dense complex LU at {k} of them ({:.3} s, {:.3} s each): modal summation within {:.2e}, structured within {:.2e}; {n} frequencies by LU would take ≈ {:.0} s, {:.0}× the structured run",
                     lu.seconds,
                     per,
@@ -305,8 +309,9 @@ fn print_dense(d: &DenseCheck, structured_s: f64, n: usize) {
                     lu.structured_rel_diff,
                     per * n as f64,
                     per * n as f64 / structured_s.max(1e-12)
-                );
+                )?;
             }
         }
     }
+    Ok(())
 }

@@ -5,6 +5,7 @@ use super::args::{parse_vec3, ElementArg};
 use super::CliError;
 use crate::caspr::{import_files, message_number, ImportOptions};
 use crate::scene::ElementKind;
+use cablevib::outln;
 use clap::{Args, Subcommand};
 use nalgebra::Vector3;
 use std::path::PathBuf;
@@ -91,15 +92,11 @@ fn caspr(a: &CasprArgs) -> Result<(), CliError> {
     };
     let imported =
         import_files(&a.bodies, &a.cables, &opts).map_err(|e| CliError::Usage(e.to_string()))?;
-    std::fs::write(&a.output, &imported.toml).map_err(|e| {
-        CliError::Usage(format!(
-            "{}: cannot write the scene: {e}",
-            a.output.display()
-        ))
-    })?;
+    crate::output_file::write_whole(&a.output, imported.toml.as_bytes())
+        .map_err(|e| CliError::Usage(format!("cannot write the scene: {e}")))?;
     let s = &imported.scene;
     let p = &s.ee_position_m;
-    println!(
+    outln!(
         "{}: {} cables (set `{}`), {} kg, {}, centre of mass at [{}, {}, {}] m",
         a.output.display(),
         s.n_cables(),
@@ -115,9 +112,9 @@ fn caspr(a: &CasprArgs) -> Result<(), CliError> {
         message_number(p.x),
         message_number(p.y),
         message_number(p.z)
-    );
+    )?;
     if let Some(note) = imported.not_modelled() {
-        println!("{note}");
+        outln!("{note}")?;
     }
     Ok(())
 }

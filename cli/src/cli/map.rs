@@ -11,6 +11,7 @@ use crate::report::with_ext;
 use crate::scene::Scene;
 use crate::study::map::{self as study, Interval, MapConfig, MapResult, Shard, Tilt};
 use crate::study::points::MAX_MODES;
+use cablevib::outln;
 use clap::{Args, ValueEnum};
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
@@ -227,7 +228,7 @@ pub fn run(a: &MapArgs) -> Result<(), CliError> {
         ),
         None => String::new(),
     };
-    println!(
+    outln!(
         "map: scene {}  T_min {}  {} points{of_grid} in {:.2} s ({} threads)  statuses: {}",
         s.name,
         s.t_min_label(),
@@ -235,17 +236,17 @@ pub fn run(a: &MapArgs) -> Result<(), CliError> {
         secs,
         m.threads,
         m.status_counts().summary()
-    );
+    )?;
     for v in std::iter::once(value).chain(a.show.iter().copied()) {
-        print_range(&m, v);
+        print_range(&m, v)?;
     }
-    println!("  wrote {}", written.join(", "));
+    outln!("  wrote {}", written.join(", "))?;
     Ok(())
 }
 
 /// The figure of a `--show` value next to the main figure: `DIR/NAME.EXT` →
 /// `DIR/NAME-PART.EXT` (`map.svg` → `map-k-min.svg`), EXT the format's.
-fn shown_path(main: &Path, part: &str, fmt: FigureFormat) -> PathBuf {
+pub fn shown_path(main: &Path, part: &str, fmt: FigureFormat) -> PathBuf {
     let stem = match main.extension() {
         Some(e) if e == fmt.ext() => main.with_extension(""),
         _ => main.to_path_buf(),
@@ -256,7 +257,7 @@ fn shown_path(main: &Path, part: &str, fmt: FigureFormat) -> PathBuf {
 }
 
 /// The smallest and largest valid value `v` of the map, and where.
-fn print_range(m: &MapResult, v: study::MapValue) {
+fn print_range(m: &MapResult, v: study::MapValue) -> Result<(), CliError> {
     let (_, unit, part) = value_names(v);
     let name = if v == study::MapValue::EeMode {
         "end-effector mode".to_string()
@@ -264,9 +265,10 @@ fn print_range(m: &MapResult, v: study::MapValue) {
         part
     };
     if let (Some((pmin, fmin)), Some((pmax, fmax))) = (m.min(v), m.max(v)) {
-        println!(
+        outln!(
             "  {name}: min {fmin:.4} {unit} at ({:.3}, {:.3}, {:.3}) m, max {fmax:.4} {unit} at ({:.3}, {:.3}, {:.3}) m",
             pmin.x, pmin.y, pmin.z, pmax.x, pmax.y, pmax.z
-        );
+        )?;
     }
+    Ok(())
 }

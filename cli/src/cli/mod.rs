@@ -19,6 +19,7 @@
 //! | `sweep-tmin` | [`sweep_tmin`] | f1 against T_min with the √T_min fit |
 //! | `sag-compare` | [`sag_compare`](mod@sag_compare) | chord vs sagged cables along a line: f1, k_min, tensions, λ² |
 //! | `completions`, `man` | [`completions`](mod@completions) | shell completions and the man page |
+//! | `identify` | [`identify`](mod@identify) | modal parameters from a recording (CSV, MCAP / ROS 2), beside the model's |
 //! | `import caspr` | [`import`](mod@import) | a scene file from CASPR's XML model files |
 //!
 //! Functions here return `Result<_, CliError>`; the binary maps errors to a one-line reason
@@ -31,11 +32,14 @@ pub mod bench;
 pub mod completions;
 pub mod error;
 pub mod figure;
+pub mod files;
 pub mod frf;
+pub mod identify;
 pub mod import;
 pub mod map;
 pub mod modes;
 pub mod monitor;
+pub mod recording;
 pub mod sag_compare;
 pub mod serve;
 pub mod simulate;
@@ -107,13 +111,20 @@ pub enum Command {
     /// Shape a trajectory with a time-varying ZV / ZVD / EI shaper that follows the
     /// estimated end-effector (or first) mode at each pose.
     Shape(simulate::ShapeArgs),
+    /// Modal parameters from measured vibration (CSV or MCAP / ROS 2 bag): frequencies,
+    /// damping ratios, shapes and their uncertainty per window by SSI-cov, beside the
+    /// model's prediction at the window's pose.
+    Identify(identify::IdentifyArgs),
 }
 
 /// Heap allocation counter supplied by the binary's global allocator (0 when none).
 pub type AllocCounter = fn() -> u64;
 
-/// Run one command; `allocations` counts heap allocations (for `bench` and `serve`).
+/// Run one command; `allocations` counts heap allocations (for `bench` and `serve`). An
+/// output that is one of the command's inputs is refused first ([`files`]).
 pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
+    let f = files::files(&cli.command)?;
+    files::refuse_inputs(&f.outputs, &f.inputs)?;
     match cli.command {
         Command::Analyze(a) => analyze::run(&a),
         Command::Bench(a) => bench::run(&a, allocations),
@@ -134,6 +145,7 @@ pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
         Command::Frf(a) => frf::run(&a),
         Command::Simulate(a) => simulate::run(&a),
         Command::Shape(a) => simulate::shape(&a),
+        Command::Identify(a) => identify::run(&a),
     }
 }
 

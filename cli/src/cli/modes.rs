@@ -13,6 +13,7 @@ use crate::report::figure::FigureFormat;
 use crate::report::shapes_csv::shapes_csv;
 use crate::report::svg::modes::modes_svg;
 use crate::scene::Scene;
+use cablevib::outln;
 use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -105,7 +106,7 @@ pub fn run(a: &ModesArgs) -> Result<(), CliError> {
     let secs = t0.elapsed().as_secs_f64();
     let sc = &pose.scene;
     let p = sc.ee_position_m;
-    println!(
+    outln!(
         "scene {}  position ({:.4}, {:.4}, {:.4}) m  T_min {}  model {} × {}  ({} modes with shapes in {:.1} ms)",
         sc.name,
         p.x,
@@ -116,16 +117,16 @@ pub fn run(a: &ModesArgs) -> Result<(), CliError> {
         sc.model.elements_per_cable,
         shapes.modes.len(),
         secs * 1e3
-    );
-    println!("\n mode   frequency (Hz)   multiplicity   end-effector participation");
+    )?;
+    outln!("\n mode   frequency (Hz)   multiplicity   end-effector participation")?;
     for (i, m) in shapes.modes.iter().enumerate() {
-        println!(
+        outln!(
             " {:>4}   {:>14.6}   {:>12}   {:>8.4}",
             i + 1,
             m.frequency_hz,
             m.multiplicity,
             m.ee_participation
-        );
+        )?;
     }
     if let Some(path) = &a.csv {
         write_csv(
@@ -133,14 +134,14 @@ pub fn run(a: &ModesArgs) -> Result<(), CliError> {
             shapes_csv(sc, &pose.geometry, &shapes),
             &process_command_line(),
         )?;
-        println!("\nwrote {}", path.display());
+        outln!("\nwrote {}", path.display())?;
     }
     figure::format_needs_svg(&a.svg, a.format)?;
     if let Some(path) = &a.svg {
         let (path, fmt) = figure::target(path, a.format)?;
         let k = a.modes.min(shapes.modes.len());
         figure::write(&path, &modes_svg(sc, &pose.geometry, &shapes, k), fmt)?;
-        println!("wrote {}", path.display());
+        outln!("wrote {}", path.display())?;
     }
     Ok(())
 }

@@ -2,12 +2,15 @@
 //! (a recording's poses and T_min set-points into a service) and `demo --monitor`. The work is
 //! the `cablevib-monitor` crate's.
 
+use cablevib::outln;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
-use cablevib_monitor::{FoxgloveAddr, MonitorConfig, MonitorError, Pace, ReplayConfig};
+use cablevib_monitor::{
+    FoxgloveAddr, MonitorConfig, MonitorError, Pace, ReplayConfig, SceneSource,
+};
 use clap::{Args, ValueEnum};
 
 use super::CliError;
@@ -33,7 +36,9 @@ pub struct MonitorArgs {
     #[arg(long, value_name = "NAME")]
     pub topics: Option<String>,
     /// The scene the service estimates (file, or `spatial-paper` / `planar-paper`), for the 3D
-    /// view; default: the scene the service names in its attributes, when it is a built-in one.
+    /// view; default: the scene the service names in its attributes (`cablevib.scene`) when it
+    /// is a built-in one with the service's element model and elements per cable (otherwise a
+    /// line says why there is no 3D view).
     #[arg(long)]
     pub scene: Option<String>,
     /// The scene's effect flags (as given to `serve`).
@@ -63,6 +68,10 @@ pub struct MonitorArgs {
     /// Stop after this long, s (default: on Ctrl-C / SIGTERM).
     #[arg(long)]
     pub seconds: Option<f64>,
+    /// Foxglove viewers that get data at most; a further one is told so and gets none
+    /// (counted). Each viewer queues at most 256 messages (a slow one loses its oldest).
+    #[arg(long, default_value_t = cablevib_monitor::DEFAULT_MAX_VIEWERS)]
+    pub max_viewers: usize,
 }
 
 fn duration(what: &str, s: f64) -> Result<Duration, CliError> {
@@ -89,7 +98,7 @@ fn foxglove_addr(s: &str) -> Result<FoxgloveAddr, CliError> {
 /// `cablevib monitor`: attaches to the service of `--instance` until Ctrl-C / SIGTERM.
 pub fn monitor(a: &MonitorArgs) -> Result<(), CliError> {
     let stop = cablevib_monitor::signal::stop_on_signals();
-    cablevib_service::init_tracing("warn");
+    cablevib_service::init_tracing(cablevib_monitor::LOG_FILTER);
     let scene = match &a.scene {
         Some(name) => {
             let mut s = Scene::load(name)?;
@@ -115,28 +124,54 @@ pub fn monitor(a: &MonitorArgs) -> Result<(), CliError> {
     cfg.scene_rate_hz = a.scene_rate_hz;
     cfg.wait_timeout = duration("--wait-s", a.wait_s)?;
     cfg.duration = a.seconds.map(|s| duration("--seconds", s)).transpose()?;
-    let scene_named = cfg.scene.is_some();
+    if !(1..=MAX_VIEWERS_LIMIT).contains(&a.max_viewers) {
+        return Err(CliError::Usage(format!(
+            "--max-viewers {} must be in [1, {MAX_VIEWERS_LIMIT}]",
+            a.max_viewers
+        )));
+    }
+    cfg.max_viewers = a.max_viewers;
+    // Standard output that cannot be written stops the monitor (the recording is closed),
+    // and the error is the command's.
+    let mut printed = Ok(());
     let report = cablevib_monitor::run(&cfg, stop, |at| {
-        println!(
-            "cablevib monitor: attached to instance {:?}{}{}",
-            a.instance,
-            at.url
-                .as_ref()
-                .map_or(String::new(), |u| format!(", Foxglove at {u}")),
-            a.record
-                .as_ref()
-                .map_or(String::new(), |p| format!(", recording to {}", p.display()))
-        );
-        if !scene_named {
-            println!(
-                "  no --scene: no 3D view (service attributes: {})",
-                at.attributes
-            );
+        printed = attached_lines(a, at);
+        if printed.is_err() {
+            stop.store(true, Ordering::Release);
         }
     })?;
-    println!("cablevib monitor: {report}");
+    printed?;
+    outln!("cablevib monitor: {report}")?;
     Ok(())
 }
+
+/// The lines `cablevib monitor` prints once attached.
+fn attached_lines(a: &MonitorArgs, at: &cablevib_monitor::Attached) -> Result<(), CliError> {
+    outln!(
+        "cablevib monitor: attached to instance {:?}{}{}",
+        a.instance,
+        at.url
+            .as_ref()
+            .map_or(String::new(), |u| format!(", Foxglove at {u}")),
+        a.record
+            .as_ref()
+            .map_or(String::new(), |p| format!(", recording to {}", p.display()))
+    )?;
+    match &at.scene {
+        SceneSource::Given => {}
+        SceneSource::Service => outln!(
+            "  3D view of the service's scene {:?}",
+            at.attributes
+                .get(cablevib_ipc::ATTR_SCENE)
+                .unwrap_or_default()
+        )?,
+        SceneSource::None(why) => outln!("  no 3D view: {why}")?,
+    }
+    Ok(())
+}
+
+/// The largest `--max-viewers`: each viewer may hold 256 queued messages (≈ 0.3 MB).
+const MAX_VIEWERS_LIMIT: usize = 1024;
 
 /// Pace of `cablevib replay`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -169,6 +204,10 @@ pub struct ReplayArgs {
     /// How long to wait for the service (and, with --pace fast, for each estimate), s.
     #[arg(long, default_value_t = 10.0)]
     pub wait_s: f64,
+    /// With --pace recorded: a pause longer than this in the recording is shortened to it
+    /// (counted in the summary), s.
+    #[arg(long, default_value_t = cablevib_monitor::DEFAULT_MAX_GAP_S)]
+    pub max_gap_s: f64,
 }
 
 /// `cablevib replay FILE.mcap`.
@@ -185,18 +224,25 @@ pub fn replay(a: &ReplayArgs) -> Result<(), CliError> {
         answered_only: a.answered_only,
         t_min_n: a.t_min,
         timeout: duration("--wait-s", a.wait_s)?,
+        max_gap: duration("--max-gap-s", a.max_gap_s)?,
     };
-    let r = cablevib_monitor::replay::replay(&cfg, stop)?;
-    let ok = r.estimates.iter().filter(|e| e.is_ok()).count();
-    println!(
+    let r = cablevib_monitor::replay::replay(&cfg, stop, |_| {})?;
+    outln!(
         "cablevib replay: {} poses and {} T_min set-points sent, {} estimates received ({} ok), \
-         {} unanswered",
+         {} unanswered, {} pauses shortened to {} s{}",
         r.poses,
         r.t_mins,
-        r.estimates.len(),
-        ok,
-        r.timeouts
-    );
+        r.estimates,
+        r.estimates_ok,
+        r.timeouts,
+        r.gaps_shortened,
+        a.max_gap_s,
+        if r.stopped {
+            "; stopped by a signal"
+        } else {
+            ""
+        }
+    )?;
     Ok(())
 }
 
@@ -233,6 +279,7 @@ pub fn start_beside_demo(
         return Ok(None);
     }
     let signal = cablevib_monitor::signal::stop_on_signals();
+    cablevib_service::init_tracing(cablevib_monitor::LOG_FILTER);
     let mut cfg = MonitorConfig::new(&crate::service::demo::instance_name());
     // The bare topics, which the layout in docs/foxglove/ shows.
     cfg.topic_namespace = String::new();
@@ -249,8 +296,9 @@ pub fn start_beside_demo(
         std::thread::Builder::new()
             .name("cablevib-monitor".into())
             .spawn(move || {
+                // The demo's own lines report a standard output that cannot be written.
                 let r = cablevib_monitor::run(&cfg, &stop, |at| {
-                    println!(
+                    let _ = outln!(
                         "  monitor: Foxglove at {}{}",
                         at.url.clone().unwrap_or_default(),
                         record
@@ -260,7 +308,9 @@ pub fn start_beside_demo(
                 });
                 if signal.load(Ordering::Acquire) && !done.load(Ordering::Acquire) {
                     match &r {
-                        Ok(report) => println!("  monitor: {report}"),
+                        Ok(report) => {
+                            let _ = outln!("  monitor: {report}");
+                        }
                         Err(e) => eprintln!("cablevib: monitor: {e}"),
                     }
                     std::process::exit(130);
@@ -295,7 +345,7 @@ impl DemoMonitor {
             .thread
             .join()
             .map_err(|_| CliError::Analysis("the monitor thread panicked".into()))??;
-        println!("  monitor: {report}");
+        outln!("  monitor: {report}")?;
         Ok(())
     }
 }

@@ -11,6 +11,7 @@ use crate::report::sag_compare::{sag_compare_csv, sag_compare_svg, statuses};
 use crate::scene::ElementKind;
 use crate::study::map::Interval;
 use crate::study::sag_compare::{self as study, SagCompare, SagCompareConfig};
+use cablevib::outln;
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -97,21 +98,21 @@ pub fn run(a: &SagCompareArgs) -> Result<(), CliError> {
     let (csv_path, fig_path, fmt) = output_paths(&a.out, &a.svg, a.format)?;
     write_csv(&csv_path, sag_compare_csv(&s, &r), &process_command_line())?;
     figure::write(&fig_path, &sag_compare_svg(&s, &r), fmt)?;
-    print_summary(&s.name, &r, secs);
-    println!("  wrote {} and {}", csv_path.display(), fig_path.display());
+    print_summary(&s.name, &r, secs)?;
+    outln!("  wrote {} and {}", csv_path.display(), fig_path.display())?;
     Ok(())
 }
 
 /// Statuses and the ranges of f1 and k_min of both models.
-fn print_summary(scene: &str, r: &SagCompare, secs: f64) {
-    println!(
+fn print_summary(scene: &str, r: &SagCompare, secs: f64) -> Result<(), CliError> {
+    outln!(
         "sag-compare: scene {scene}  {} poses along {} (offsets {} .. {} m) × 2 models in {secs:.2} s ({} threads)",
         r.points.len(),
         r.axis_name(),
         r.span_m.lo,
         r.span_m.hi,
         r.threads
-    );
+    )?;
     for (name, pick) in [
         (
             "chord ",
@@ -126,12 +127,13 @@ fn print_summary(scene: &str, r: &SagCompare, secs: f64) {
             });
             format!("{lo:.4} .. {hi:.4}")
         };
-        println!(
+        outln!(
             "  {name}: f1 {} Hz  k_min {} N/m  largest tension {} N  statuses: {}",
             range(|m| m.f1_hz),
             range(|m| m.stiffness_min_n_m),
             range(study::ModelPoint::tension_max_n),
             statuses(r, pick).summary()
-        );
+        )?;
     }
+    Ok(())
 }

@@ -6,6 +6,7 @@
 use super::{AllocCounter, CliError};
 use crate::scene::Scene;
 use crate::service::{BenchIpcConfig, DemoConfig, ServerConfig, TminSchedule, WaitMode};
+use cablevib::outln;
 use clap::Args;
 use std::time::Duration;
 
@@ -265,16 +266,23 @@ fn hold_figures(csv: &std::path::Path, hold_hz: f64) -> Result<(), CliError> {
             csv.display()
         )));
     };
-    let stem = csv.with_extension("");
-    for (suffix, svg) in [("-f1.svg", f1), ("-tmin.svg", t_min)] {
-        let mut name = stem.clone().into_os_string();
-        name.push(suffix);
-        let path = std::path::PathBuf::from(name);
-        std::fs::write(&path, svg)
-            .map_err(|e| CliError::Usage(format!("{}: {e}", path.display())))?;
-        println!("  hold: figure written to {}", path.display());
+    for (path, svg) in hold_figure_paths(csv).into_iter().zip([f1, t_min]) {
+        crate::output_file::write_whole(&path, svg.as_bytes())
+            .map_err(|e| CliError::Usage(e.to_string()))?;
+        outln!("  hold: figure written to {}", path.display())?;
     }
     Ok(())
+}
+
+/// The figures of a `--hold-csv` record: PATH without its extension + `-f1.svg` and
+/// `-tmin.svg`.
+pub fn hold_figure_paths(csv: &std::path::Path) -> [std::path::PathBuf; 2] {
+    let stem = csv.with_extension("");
+    ["-f1.svg", "-tmin.svg"].map(|suffix| {
+        let mut name = stem.clone().into_os_string();
+        name.push(suffix);
+        name.into()
+    })
 }
 
 /// `cablevib bench-ipc`: pose-published → estimate-received latency.

@@ -20,6 +20,7 @@ use crate::study::StudyError;
 use crate::trajectory::moves::{Move, Profile};
 use crate::trajectory::shaping::{Impulses, ShaperKind};
 use crate::trajectory::{Samples, Trajectory, CIRCLE_PERIOD_S};
+use cablevib::outln;
 use clap::{Args, ValueEnum};
 use nalgebra::Vector3;
 use std::path::PathBuf;
@@ -97,13 +98,6 @@ pub struct PathArgs {
     /// Velocity profile of the --move.
     #[arg(long, value_enum, default_value_t = ProfileArg::SCurve)]
     pub profile: ProfileArg,
-    /// Without --csv or --move: seconds of the paper's circle (one revolution per
-    /// --period-s).
-    #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
-    pub circle_s: f64,
-    /// Period of one revolution of the circle, s.
-    #[arg(long, default_value_t = CIRCLE_PERIOD_S, allow_hyphen_values = true)]
-    pub period_s: f64,
     /// Sample period, s, in (0, 0.1].
     #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true)]
     pub dt: f64,
@@ -113,6 +107,19 @@ pub struct PathArgs {
     /// Largest path acceleration accepted, m/s² (a jump in the path exceeds it).
     #[arg(long, default_value_t = DEFAULT_MAX_ACCELERATION_M_S2, allow_hyphen_values = true)]
     pub max_acceleration: f64,
+}
+
+/// The circle `simulate` follows without --csv or --move (`shape` shapes a CSV or a move
+/// only, so these are not its options).
+#[derive(Debug, Args, Clone)]
+pub struct CircleArgs {
+    /// Without --csv or --move: seconds of the paper's circle (one revolution per
+    /// --period-s).
+    #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
+    pub circle_s: f64,
+    /// Period of one revolution of the circle, s.
+    #[arg(long, default_value_t = CIRCLE_PERIOD_S, allow_hyphen_values = true)]
+    pub period_s: f64,
 }
 
 impl PathArgs {
@@ -141,8 +148,13 @@ impl PathArgs {
         Ok(())
     }
 
-    /// The sampled path and a one-line description.
-    fn path(&self, s: &Scene) -> Result<(SampledPath, String), CliError> {
+    /// The sampled path and a one-line description: the CSV, else the move, else the
+    /// `circle` (without one, a usage error).
+    fn path(
+        &self,
+        s: &Scene,
+        circle: Option<&CircleArgs>,
+    ) -> Result<(SampledPath, String), CliError> {
         // Checked here, for every path, so that the message names the option (a move's own
         // sampling would report it as a sample period).
         if !(self.dt.is_finite() && self.dt > 0.0 && self.dt <= MAX_DT_S) {
@@ -185,9 +197,14 @@ impl PathArgs {
             );
             return Ok((p, desc));
         }
-        let t = Trajectory::circle(s, self.period_s).map_err(StudyError::from)?;
-        let p = SampledPath::from_trajectory(&t, self.circle_s, self.dt, false)?;
-        Ok((p, format!("{} for {} s", t.describe(), self.circle_s)))
+        let Some(c) = circle else {
+            return Err(CliError::Usage(
+                "give a TRAJECTORY CSV (or --move DX,DY,DZ) to shape".into(),
+            ));
+        };
+        let t = Trajectory::circle(s, c.period_s).map_err(StudyError::from)?;
+        let p = SampledPath::from_trajectory(&t, c.circle_s, self.dt, false)?;
+        Ok((p, format!("{} for {} s", t.describe(), c.circle_s)))
     }
 }
 
@@ -200,6 +217,9 @@ pub struct SimulateArgs {
     /// The path.
     #[command(flatten)]
     pub path: PathArgs,
+    /// The circle, when the path is neither a CSV nor a move.
+    #[command(flatten)]
+    pub circle: CircleArgs,
     /// Modes K in the superposition (a cluster cut by K completed), 1..=256.
     #[arg(long, default_value_t = 12)]
     pub modes: usize,
@@ -223,6 +243,14 @@ pub struct SimulateArgs {
     pub format: Option<FigureFormat>,
 }
 
+impl SimulateArgs {
+    /// The CSV (PREFIX.csv) and the figure (PREFIX.svg, or the --format's extension).
+    pub fn output_paths(&self) -> Result<(PathBuf, PathBuf, FigureFormat), CliError> {
+        let (fig, fmt) = figure::target(&self.out.with_extension("svg"), self.format)?;
+        Ok((self.out.with_extension("csv"), fig, fmt))
+    }
+}
+
 /// One run: a shaper, its result, the time it added, its wall time.
 struct Run {
     shaper: ShaperArg,
@@ -235,7 +263,7 @@ struct Run {
 pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
     let mut s = resolve_scene(&a.scene)?;
     a.path.apply_damping(&mut s)?;
-    let (path, desc) = a.path.path(&s)?;
+    let (path, desc) = a.path.path(&s, Some(&a.circle))?;
     let cfg = SimulateConfig {
         modes: a.modes,
         update_every: a.update_every,
@@ -243,14 +271,14 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
         max_acceleration_m_s2: a.path.max_acceleration,
     };
     a.path.check(&path)?;
-    println!(
+    outln!(
         "scene {}  damping {}  path {desc}  dt {} s  K = {}  modes updated every {} samples",
         s.name,
         damping_label(&s.damping),
         path.dt_s,
         a.modes,
         a.update_every
-    );
+    )?;
     let mut runs = Vec::new();
     for &sh in &a.shaper {
         let t0 = Instant::now();
@@ -275,16 +303,16 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
         .find(|r| r.shaper == ShaperArg::None)
         .and_then(|r| r.result.stops.last())
         .map(|st| st.peak_to_peak_max_m());
-    println!(
+    outln!(
         "\n shaper     samples   time added (s)   residual p-p (mm)   residual RMS (mm)   reduction   f1 range (Hz)    wall (s)"
-    );
+    )?;
     for r in &runs {
         let res = &r.result;
         let (pp, rms) = res.stops.last().map_or((f64::NAN, f64::NAN), |st| {
             (st.peak_to_peak_max_m(), st.rms_m)
         });
         let red = base.map_or(f64::NAN, |b| 1.0 - pp / b);
-        println!(
+        outln!(
             " {:<9} {:>8}   {:>14.4}   {:>17.5}   {:>17.5}   {:>8.1} %   {:>6.3}-{:<6.3}   {:>8.3}",
             r.shaper.name(),
             res.t_s.len(),
@@ -295,7 +323,7 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
             res.f1_range_hz.0,
             res.f1_range_hz.1,
             r.wall_s
-        );
+        )?;
     }
     if let Some(r) = runs.first() {
         let peak = r
@@ -303,7 +331,7 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
             .deviation_m
             .iter()
             .fold(0.0f64, |m, u| m.max(u.norm()));
-        println!(
+        outln!(
             "\n{}: peak |deviation| {:.5} mm, {} stops, {} mode updates, {} modes ({})",
             r.shaper.name(),
             peak * 1e3,
@@ -315,7 +343,7 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
             } else {
                 "dense model of the sagged cables"
             }
-        );
+        )?;
     }
     write_outputs(a, &s, &runs)?;
     Ok(())
@@ -362,9 +390,9 @@ fn write_outputs(a: &SimulateArgs, s: &Scene, runs: &[Run]) -> Result<(), CliErr
         }
         csv.row(row);
     }
-    let csv_path = a.out.with_extension("csv");
+    let (csv_path, fig, fmt) = a.output_paths()?;
     write_csv(&csv_path, csv, &process_command_line())?;
-    println!("wrote {}", csv_path.display());
+    outln!("wrote {}", csv_path.display())?;
     let mut plot = LinePlot::new(
         "End-effector deviation from the quasi-static pose",
         Axis::linear("time (s)"),
@@ -384,9 +412,8 @@ fn write_outputs(a: &SimulateArgs, s: &Scene, runs: &[Run]) -> Result<(), CliErr
         plot.series
             .push(Series::new(r.shaper.name(), pts, Mark::Line));
     }
-    let (fig, fmt) = figure::target(&a.out.with_extension("svg"), a.format)?;
     figure::write(&fig, &plot.to_svg(), fmt)?;
-    println!("wrote {}", fig.display());
+    outln!("wrote {}", fig.display())?;
     Ok(())
 }
 
@@ -444,7 +471,7 @@ pub fn shape(a: &ShapeArgs) -> Result<(), CliError> {
     let Some(out) = &a.output else {
         return Err(CliError::Usage("-o SHAPED.csv is required".into()));
     };
-    let (path, desc) = pa.path(&s)?;
+    let (path, desc) = pa.path(&s, None)?;
     // A jump stays a jump when shaped (ZV splits it in two), which no robot follows and
     // `simulate` refuses: refused here too.
     pa.check(&path)?;
@@ -469,7 +496,7 @@ pub fn shape(a: &ShapeArgs) -> Result<(), CliError> {
         csv.row([num(k as f64 * path.dt_s), num(p.x), num(p.y), num(p.z)]);
     }
     write_csv(out, csv, &process_command_line())?;
-    println!(
+    outln!(
         "shaped {desc} with {} following the {} mode ({lo:.4}-{hi:.4} Hz, ζ from {}): {} samples, {:.4} s added; wrote {}",
         kind.as_str(),
         match a.mode {
@@ -480,7 +507,7 @@ pub fn shape(a: &ShapeArgs) -> Result<(), CliError> {
         r.path.positions_m.len(),
         r.added_s,
         out.display()
-    );
+    )?;
     Ok(())
 }
 
@@ -510,6 +537,6 @@ fn sensitivity_figure(
     }
     let (fig, fmt) = figure::target(path, format)?;
     figure::write(&fig, &plot.to_svg(), fmt)?;
-    println!("wrote {}", fig.display());
+    outln!("wrote {}", fig.display())?;
     Ok(())
 }

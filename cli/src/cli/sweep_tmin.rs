@@ -8,6 +8,7 @@ use crate::report::csv::{process_command_line, write_csv};
 use crate::report::figure::FigureFormat;
 use crate::report::tmin::{tmin_csv, tmin_svg, Compared};
 use crate::study::tmin::{self as study, TminConfig};
+use cablevib::outln;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -82,24 +83,24 @@ pub fn run(a: &SweepTminArgs) -> Result<(), CliError> {
                 .find(|p| (p.t_min_n - t).abs() < SAME_TMIN_N && p.estimate.is_ok())
                 .map(|p| p.estimate.f1_hz);
             if let Some(o) = ours {
-                println!(
+                outln!(
                     "  T_min {t} N: {} {f} Hz, estimator {o:.6} Hz, ratio {:.6}",
                     a.compare_label,
                     f / o
-                );
+                )?;
             }
         }
     }
     let svg = tmin_svg(&s, &r, (from, to), cfg.ee_mode, compare);
     figure::write(&svg_path, &svg, fmt)?;
-    println!(
+    outln!(
         "sweep-tmin: scene {}  T_min {from}..{to} N ({} values)  fit f1 = {:.6}·sqrt(T_min) Hz, max relative deviation {:.2e}  statuses: {}",
         s.name,
         a.steps,
         r.a,
         r.max_rel_residual,
         crate::study::points::status_histogram(&r.points).summary()
-    );
-    println!("  wrote {} and {}", csv_path.display(), svg_path.display());
+    )?;
+    outln!("  wrote {} and {}", csv_path.display(), svg_path.display())?;
     Ok(())
 }

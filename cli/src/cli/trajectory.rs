@@ -9,6 +9,7 @@ use crate::report::figure::FigureFormat;
 use crate::report::trajectory::{trajectory_svg, TrajectoryCsv};
 use crate::study::trajectory::{self as study, PathSource, TrajectoryConfig};
 use crate::trajectory::CIRCLE_RADIUS_M;
+use cablevib::outln;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -106,30 +107,30 @@ pub fn run(a: &TrajectoryArgs) -> Result<(), CliError> {
             s.name
         );
     }
-    println!(
+    outln!(
         "trajectory: scene {}  {} poses × {} T_min values",
         s.name,
         t.poses,
         t.t_mins_n.len()
-    );
+    )?;
     for (k, &tm) in t.t_mins_n.iter().enumerate() {
         let c = t.summary(k);
         if c.f1_min_hz.is_finite() {
-            println!(
+            outln!(
                 "  T_min {tm} N: f1 min {:.4} Hz  max {:.4} Hz  statuses: {}",
                 c.f1_min_hz,
                 c.f1_max_hz,
                 c.counts.summary()
-            );
+            )?;
         } else {
-            println!(
+            outln!(
                 "  T_min {tm} N: no valid estimate  statuses: {}",
                 c.counts.summary()
-            );
+            )?;
         }
     }
     let svg = trajectory_svg(&s, &t, a.radius_m, !a.no_ee_mode);
     figure::write(&svg_path, &svg, fmt)?;
-    println!("  wrote {} and {}", csv_path.display(), svg_path.display());
+    outln!("  wrote {} and {}", csv_path.display(), svg_path.display())?;
     Ok(())
 }

@@ -11,6 +11,7 @@
 //! `PATH.json` (`map.csv` → `map.csv.json`), written by [`write_csv`].
 
 use super::{with_ext, write_file, ReportError};
+use crate::output_file::{OutputFile, ScratchFile};
 use crate::scene::Scene;
 use crate::study::points::{ee_mode_hz, PointResult};
 use serde_json::{json, Map, Value};
@@ -115,25 +116,26 @@ fn sidecar_text(
 }
 
 /// A CSV written row by row to its file (the same bytes as [`Csv`] and [`write_csv`], in
-/// bounded memory), with the rows of later *sections* spilled to files beside it until
-/// [`CsvFile::finish`] appends them in order: a document whose order (e.g. curve-major) is
-/// not the order its rows are computed in.
+/// bounded memory), with the rows of later *sections* spilled to scratch files beside it
+/// until [`CsvFile::finish`] appends them in order: a document whose order (e.g. curve-major)
+/// is not the order its rows are computed in. The file is an [`OutputFile`]: it replaces
+/// its target only when finished, and an error, a panic or a signal leaves the target as it
+/// was and no temporary or scratch file.
 #[derive(Debug)]
 pub struct CsvFile {
     path: std::path::PathBuf,
     columns: Vec<Column>,
     meta: Map<String, Value>,
-    /// Section 0 (the file itself), then the spill files of sections 1, 2, ...
-    sections: Vec<(
-        std::path::PathBuf,
-        csv::Writer<std::io::BufWriter<std::fs::File>>,
-    )>,
+    /// Section 0, the file itself.
+    first: csv::Writer<OutputFile>,
+    /// The spill files of sections 1, 2, ...
+    spills: Vec<(ScratchFile, csv::Writer<std::io::BufWriter<std::fs::File>>)>,
     rows: usize,
 }
 
 impl CsvFile {
-    /// Creates `path` (and its parent directories) with the header row of `columns`, and
-    /// `sections − 1` spill files `PATH.partK`; `meta` goes to the sidecar.
+    /// Starts `path` (creating its parent directories) with the header row of `columns`,
+    /// and `sections − 1` scratch files beside it; `meta` goes to the sidecar.
     pub fn create(
         path: &Path,
         columns: Vec<Column>,
@@ -141,27 +143,27 @@ impl CsvFile {
         sections: usize,
     ) -> Result<CsvFile, ReportError> {
         super::create_parent(path)?;
-        let mut out = CsvFile {
+        let mut first = csv::Writer::from_writer(OutputFile::create(path)?);
+        let mut spills = Vec::new();
+        for _ in 1..sections.max(1) {
+            let scratch = ScratchFile::create_beside(path)?;
+            let f = scratch.file().try_clone().map_err(super::io_err(path))?;
+            spills.push((
+                scratch,
+                csv::Writer::from_writer(std::io::BufWriter::new(f)),
+            ));
+        }
+        first
+            .write_record(columns.iter().map(|c| c.name.as_str()))
+            .map_err(|e| csv_err(path, e))?;
+        Ok(CsvFile {
             path: path.to_path_buf(),
             columns,
             meta,
-            sections: Vec::new(),
+            first,
+            spills,
             rows: 0,
-        };
-        for k in 0..sections.max(1) {
-            let p = if k == 0 {
-                path.to_path_buf()
-            } else {
-                std::path::PathBuf::from(format!("{}.part{k}", path.display()))
-            };
-            let f = std::fs::File::create(&p).map_err(super::io_err(&p))?;
-            let w = csv::Writer::from_writer(std::io::BufWriter::new(f));
-            out.sections.push((p, w));
-        }
-        let header: Vec<&str> = out.columns.iter().map(|c| c.name.as_str()).collect();
-        let (p, w) = &mut out.sections[0];
-        w.write_record(&header).map_err(|e| csv_err(p, e))?;
-        Ok(out)
+        })
     }
 
     /// Appends one row (one field per column) to section `k`.
@@ -170,50 +172,51 @@ impl CsvFile {
         I: IntoIterator<Item = S>,
         S: AsRef<[u8]>,
     {
-        let Some((p, w)) = self.sections.get_mut(k) else {
-            return Ok(());
+        let w = match k {
+            0 => {
+                self.first
+                    .write_record(fields)
+                    .map_err(|e| csv_err(&self.path, e))?;
+                self.rows += 1;
+                return Ok(());
+            }
+            _ => match self.spills.get_mut(k - 1) {
+                Some((_, w)) => w,
+                None => return Ok(()),
+            },
         };
-        w.write_record(fields).map_err(|e| csv_err(p, e))?;
+        w.write_record(fields).map_err(|e| csv_err(&self.path, e))?;
         self.rows += 1;
         Ok(())
     }
 
-    /// Appends the sections to the file in order, removes the spill files and writes the
-    /// sidecar (with `command_line` and the row count).
-    pub fn finish(mut self, command_line: &str) -> Result<(), ReportError> {
-        let mut sections = std::mem::take(&mut self.sections).into_iter();
-        let Some((path, first)) = sections.next() else {
-            return Ok(());
-        };
+    /// Appends the sections to the file in order, puts it in place (the scratch files
+    /// removed) and writes the sidecar (with `command_line` and the row count).
+    pub fn finish(self, command_line: &str) -> Result<(), ReportError> {
+        let CsvFile {
+            path,
+            columns,
+            meta,
+            first,
+            spills,
+            rows,
+        } = self;
         let mut out = first
             .into_inner()
             .map_err(|e| super::io_err(&path)(e.into_error()))?;
-        for (p, w) in sections {
-            w.into_inner()
-                .map_err(|e| super::io_err(&p)(e.into_error()))?
+        for (scratch, w) in spills {
+            let mut f = w
                 .into_inner()
-                .map_err(|e| super::io_err(&p)(e.into_error()))?;
-            let mut part = std::fs::File::open(&p).map_err(super::io_err(&p))?;
-            std::io::copy(&mut part, &mut out).map_err(super::io_err(&path))?;
-            std::fs::remove_file(&p).map_err(super::io_err(&p))?;
+                .map_err(|e| super::io_err(&path)(e.into_error()))?
+                .into_inner()
+                .map_err(|e| super::io_err(&path)(e.into_error()))?;
+            std::io::Seek::rewind(&mut f).map_err(super::io_err(&path))?;
+            std::io::copy(&mut f, &mut out).map_err(super::io_err(&path))?;
+            drop(scratch);
         }
-        std::io::Write::flush(&mut out).map_err(super::io_err(&path))?;
-        let side = sidecar_text(
-            &self.columns,
-            std::mem::take(&mut self.meta),
-            self.rows,
-            command_line,
-        );
-        write_file(&sidecar_path(&self.path), &side)
-    }
-}
-
-impl Drop for CsvFile {
-    /// Removes the spill files left by an error (after [`CsvFile::finish`] there are none).
-    fn drop(&mut self) {
-        for (p, _) in self.sections.iter().skip(1) {
-            let _ = std::fs::remove_file(p);
-        }
+        out.commit()?;
+        let side = sidecar_text(&columns, meta, rows, command_line);
+        write_file(&sidecar_path(&path), &side)
     }
 }
 

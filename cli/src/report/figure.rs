@@ -11,7 +11,7 @@
 //! extension of the path is replaced (`fig.svg` with `--format png` writes `fig.png`), any
 //! other ending is kept and the extension appended.
 
-use super::{io_err, ReportError};
+use super::ReportError;
 use resvg::{tiny_skia, usvg};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -130,7 +130,7 @@ pub fn write_figure(path: &Path, svg: &str, format: FigureFormat) -> Result<(), 
         source,
     })?;
     super::create_parent(path)?;
-    std::fs::write(path, bytes).map_err(io_err(path))
+    Ok(crate::output_file::write_whole(path, &bytes)?)
 }
 
 /// Parser options: only the embedded font, standing in for every family the SVG names.

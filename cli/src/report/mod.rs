@@ -22,6 +22,7 @@ pub mod csv;
 pub mod figure;
 pub mod frf;
 pub mod hold;
+pub mod identify;
 pub mod map;
 pub mod sag_compare;
 pub mod shapes_csv;
@@ -42,6 +43,9 @@ pub enum ReportError {
         /// Why.
         source: std::io::Error,
     },
+    /// An output file was refused or could not be written whole.
+    #[error(transparent)]
+    Output(#[from] crate::output_file::OutputFileError),
     /// A figure could not be rendered to its format.
     #[error("{path}: {source}")]
     Figure {
@@ -59,10 +63,11 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {
     }
 }
 
-/// Write `text` to `path`, creating parent directories.
+/// Write `text` to `path` whole or not at all ([`crate::output_file`]), creating parent
+/// directories.
 pub fn write_file(path: &Path, text: &str) -> Result<(), ReportError> {
     create_parent(path)?;
-    std::fs::write(path, text).map_err(io_err(path))
+    Ok(crate::output_file::write_whole(path, text.as_bytes())?)
 }
 
 /// Create the parent directories of `path`.

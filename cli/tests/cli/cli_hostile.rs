@@ -326,3 +326,106 @@ fn user_scale_numbers_in_tension_and_estimator_messages_print_compactly() {
     }
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// Directions of any scale are normalised by scaling first: `entry_direction = [1e308, 0,
+/// 1e308]` is the direction (1, 0, 1) (it was "must be a non-zero direction": its norm
+/// overflowed), `--tilt-axis 1e308,1e308,0` is (1, 1, 0) (it was "must be finite and
+/// non-zero"). Each gives the same numbers, bit for bit, as the same direction of unit
+/// scale; a zero direction is still refused.
+#[test]
+fn directions_of_any_scale_are_the_same_direction() {
+    let d = temp_dir("directions");
+    let pulleys = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/spatial_paper_pulleys.toml"),
+    )
+    .unwrap();
+    let analyze = |dir: &str, name: &str| {
+        let p = d.join(name);
+        let text = pulleys.replace(
+            "entry_direction = [0.0, 0.0, 1.0]",
+            &format!("entry_direction = {dir}"),
+        );
+        std::fs::write(&p, text).unwrap();
+        run(&["analyze", p.to_str().unwrap(), "--json"])
+    };
+    // The JSON without its one timing field.
+    let numbers = |o: &Output| {
+        assert!(o.status.success(), "{}", stderr(o));
+        let mut v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        v.as_object_mut().unwrap().remove("solve_seconds");
+        v
+    };
+    let big = numbers(&analyze("[1e308, 0.0, 1e308]", "big.toml"));
+    assert_eq!(big, numbers(&analyze("[1.0, 0.0, 1.0]", "unit.toml")));
+    let zero = analyze("[0.0, 0.0, 0.0]", "zero.toml");
+    assert_usage_error(
+        "zero entry direction",
+        &zero,
+        "must be a non-zero direction",
+    );
+
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/box_6dof.toml");
+    let map = |axis: &str, out: &str| {
+        let out = d.join(out);
+        let o = run(&[
+            "map",
+            scene.to_str().unwrap(),
+            "--tilt-deg",
+            "0,10",
+            "--tilt-axis",
+            axis,
+            "--x",
+            "0,0",
+            "--y",
+            "0,0",
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        (o, std::fs::read(out.with_extension("csv")).ok())
+    };
+    let (o, big) = map("1e308,1e308,0", "big");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (o, unit) = map("1,1,0", "unit");
+    assert!(o.status.success() && big.is_some() && big == unit);
+    let (o, _) = map("0,0,0", "zero");
+    assert_usage_error("zero tilt axis", &o, "must be finite and non-zero");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `map` keeps grid coordinates to full precision: a grid at x = −1e-12 m is computed and
+/// written at −1e-12 m (it was snapped to 0 in the grid, so both the CSV and the pose said
+/// 0). Floating-point noise (0.25 + 7 × 0.1) is still written as 0.95.
+#[test]
+fn map_keeps_user_coordinates_to_full_precision() {
+    let d = temp_dir("map-precision");
+    let out = d.join("m");
+    let o = run(&[
+        "map",
+        "spatial-paper",
+        "--x",
+        "-1e-12,-1e-12",
+        "--y",
+        "0.25,0.95",
+        "--step",
+        "0.1",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(out.with_extension("csv")).unwrap();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 8, "{text}");
+    assert!(rows.iter().all(|r| r[0] == "-0.000000000001"), "{text}");
+    let ys: Vec<&str> = rows.iter().map(|r| r[1]).collect();
+    assert_eq!(
+        ys,
+        ["0.25", "0.35", "0.45", "0.55", "0.65", "0.75", "0.85", "0.95"]
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -154,6 +154,12 @@ fn hostile_inputs_are_one_line_errors() {
         (&["--points", "0"], "--points 0: must be in 1..=100000"),
         (&["--points", "100001"], "--points 100001: must be in 1..=100000"),
         (&["--log", "--from-hz", "0"], "--from-hz 0 Hz: a log-spaced band"),
+        // A finite bound (the receptance underflows from ≈ 1e24 Hz, ω²M overflows from
+        // ≈ 1e30 Hz): 1e308 gave null receptances and no natural frequency, exit 0.
+        (
+            &["--to-hz", "1e308"],
+            "--to-hz 1e308 Hz: above the highest frequency of a response, 1e12 Hz",
+        ),
         (&["--modal-ratio", "1"], "--modal-ratio 1"),
         (&["--modal-ratio", "-0.01"], "--modal-ratio -0.01"),
         (&["--loss-factor", "NaN"], "--loss-factor NaN"),
@@ -228,4 +234,92 @@ fn sagged_frf_matches_its_dense_solve() {
     assert!(err <= 1e-8, "{err:e}");
     assert_eq!(v["receptance_re"].as_array().unwrap().len(), 40);
     assert_eq!(v["dim"].as_u64(), Some(3));
+}
+
+/// The frequencies and receptance of `frf spatial-paper --elements 4 EXTRA --json`.
+fn frf_json(extra: &[&str]) -> (Vec<f64>, Vec<f64>, serde_json::Value) {
+    let mut args = vec!["frf", "spatial-paper", "--elements", "4", "--json"];
+    args.extend_from_slice(extra);
+    let o = run(&args);
+    assert!(
+        o.status.success(),
+        "{extra:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let nums = |k: &str| -> Vec<f64> {
+        v[k].as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap_or(f64::NAN))
+            .collect()
+    };
+    (nums("frequencies_hz"), nums("natural_frequencies_hz"), v)
+}
+
+/// Every receptance entry of the JSON, NaN for a `null`.
+fn receptance_entries(v: &serde_json::Value) -> Vec<f64> {
+    let mut out = Vec::new();
+    for part in ["receptance_re", "receptance_im"] {
+        for m in v[part].as_array().unwrap() {
+            for row in m.as_array().unwrap() {
+                for x in row.as_array().unwrap() {
+                    out.push(x.as_f64().unwrap_or(f64::NAN));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// A log range whose bounds' ratio overflows (1e-310 .. 1 Hz: 1e310) is computed in ln f:
+/// before, its frequencies were `null` and its rows NaN with exit 0. Its first row is the
+/// static compliance, the receptance at 0 Hz of the linear range (an independent path:
+/// D(0)⁻¹ without any log), to 1e-12 relative; its frequencies increase from exactly
+/// 1e-310 to exactly 1. A range up to the bound, 1e12 Hz, keeps the natural frequencies of
+/// the default band 0.5 .. 50 Hz (1e308 listed none).
+#[test]
+fn log_ranges_of_any_ratio_and_the_highest_frequency() {
+    let (f, _, v) = frf_json(&[
+        "--from-hz",
+        "1e-310",
+        "--to-hz",
+        "1",
+        "--log",
+        "--points",
+        "7",
+    ]);
+    assert_eq!(f.len(), 7);
+    assert_eq!((f[0], f[6]), (1e-310, 1.0));
+    assert!(f.windows(2).all(|w| w[0] < w[1]), "{f:?}");
+    let h = receptance_entries(&v);
+    assert!(h.iter().all(|x| x.is_finite()), "{h:?}");
+    let (_, _, v0) = frf_json(&["--from-hz", "0", "--to-hz", "1", "--points", "2"]);
+    let h0 = receptance_entries(&v0);
+    let (dim2, n0) = (h.len() / 14, h0.len() / 4);
+    assert_eq!(dim2, n0);
+    // Row 0 of each part: re then im.
+    for (a, b) in h[..dim2]
+        .iter()
+        .zip(&h0[..n0])
+        .chain(h[7 * dim2..8 * dim2].iter().zip(&h0[2 * n0..3 * n0]))
+    {
+        assert!((a - b).abs() <= 1e-12 * b.abs().max(1e-30), "{a} vs {b}");
+    }
+    let (f, natural, v) = frf_json(&[
+        "--from-hz",
+        "1",
+        "--to-hz",
+        "1e12",
+        "--log",
+        "--points",
+        "7",
+    ]);
+    assert_eq!((f[0], f[6]), (1.0, 1e12));
+    let (_, in_default_band, _) = frf_json(&["--points", "2"]);
+    assert!(!in_default_band.is_empty());
+    for x in &in_default_band {
+        assert!(natural.contains(x), "{x} Hz missing from {natural:?}");
+    }
+    assert!(receptance_entries(&v).iter().all(|x| x.is_finite()));
 }

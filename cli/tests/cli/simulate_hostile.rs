@@ -190,3 +190,50 @@ fn shape_refuses_hostile_inputs_in_one_line() {
     assert!(!std::path::Path::new(out).exists(), "nothing shaped");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// A move shorter than the sample period is a jump, refused by the one acceleration rule
+/// whatever its duration: below half a period (1e-9 s, 4e-4 s) its samples both sat at the
+/// start before (`shape` wrote 2 rows at x = 0 and `simulate` reported a peak of 0 mm, exit
+/// 0), from half a period on (5e-4 s) it was refused as a jump already.
+#[test]
+fn a_move_shorter_than_a_sample_is_refused_as_the_jump_it_is() {
+    let d = dir();
+    let shaped = d.join("short-shaped.csv");
+    let out = d.join("short-sim");
+    for duration in ["1e-9", "4e-4", "5e-4"] {
+        let mv = ["--move", "0.1,0,0", "--duration", duration];
+        let mut args = vec!["shape"];
+        args.extend(mv);
+        args.extend(["-o", shaped.to_str().unwrap()]);
+        assert_one_line_error(&args.join(" "), &run(&args), "the path jumps at t = 0");
+        let mut args = vec!["simulate", "spatial-paper"];
+        args.extend(mv);
+        args.extend(["--out", out.to_str().unwrap()]);
+        assert_one_line_error(&args.join(" "), &run(&args), "the path jumps at t = 0");
+    }
+    assert!(!shaped.exists());
+    assert!(!d.join("short-sim.csv").exists());
+}
+
+/// `shape --help` lists only what `shape` accepts: the circle's options are `simulate`'s
+/// (they were listed, and `shape --circle-s 5 --move ...` ignored them with exit 0); given
+/// to `shape` they are clap's usage error.
+#[test]
+fn shape_lists_and_takes_no_circle_options() {
+    let help = run(&["shape", "--help"]);
+    let text = String::from_utf8_lossy(&help.stdout);
+    assert!(help.status.success() && text.contains("--move"), "{text}");
+    for opt in ["--circle-s", "--period-s"] {
+        assert!(!text.contains(opt), "{opt} in shape --help: {text}");
+        let o = run(&["shape", opt, "5", "--move", "0.01,0,0", "-o", "x.csv"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{opt}: {err}");
+        assert!(err.contains(opt), "{opt}: {err}");
+    }
+    let help = run(&["simulate", "--help"]);
+    let text = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        text.contains("--circle-s") && text.contains("--period-s"),
+        "{text}"
+    );
+}

@@ -38,8 +38,8 @@ use cablevib_ipc::{
 };
 use cablevib_service::ports::{
     create_node, load_iceoryx2_config, open_event, open_margin, open_pubsub, EstimateOutput,
-    MarginClient, PoseInput, ESTIMATE_BUFFER, ESTIMATE_SETTINGS, MAX_CLIENTS, MAX_NODES,
-    MAX_PUBLISHERS, MAX_SUBSCRIBERS, POSE_BUFFER, POSE_SETTINGS, T_MIN_SETTINGS,
+    MarginClient, PoseInput, ESTIMATE_SETTINGS, MAX_CLIENTS, MAX_NODES, MAX_PUBLISHERS,
+    MAX_SUBSCRIBERS, POSE_SETTINGS, T_MIN_SETTINGS,
 };
 use cablevib_service::WaitMode;
 use iceoryx2::node::{NodeState, NodeView};
@@ -1057,7 +1057,7 @@ fn a_peer_with_another_layout_gets_a_clear_error() {
         "{log}"
     );
     assert!(
-        log.contains("`cablevib::PoseSample::v2` (80 bytes, align 8)"),
+        log.contains("`cablevib::PoseSample::v3` (80 bytes, align 8)"),
         "{log}"
     );
     assert!(log.contains("rebuild the other peer"), "{log}");
@@ -1073,7 +1073,7 @@ fn a_peer_with_another_layout_gets_a_clear_error() {
     let text = err.to_string();
     assert!(text.contains("incompatible peer"), "{text}");
     assert!(
-        text.contains("carries payload `cablevib::PoseSample::v2`"),
+        text.contains("carries payload `cablevib::PoseSample::v3`"),
         "{text}"
     );
     assert!(node
@@ -1278,16 +1278,21 @@ fn services_pre_created_with_other_limits_make_serve_refuse() {
     assert_serve_refuses(
         &inst,
         &format!(
-            "service \"{}\" exists with subscriber_max_buffer_size = 1, expected {POSE_BUFFER}",
-            names.pose
+            "service \"{}\" exists with subscriber_max_buffer_size = 1, expected {}",
+            names.pose, POSE_SETTINGS.buffer
         ),
     );
 
     // Pose buffer right, no safe overflow: publishers would block or drop the newest pose.
     let inst = instance("hostile_pose_overflow");
     let names = ServiceNames::new(&inst);
-    let _pose =
-        hostile_pubsub::<PoseSample>(&node, &names.pose, MAX_PUBLISHERS, POSE_BUFFER, false);
+    let _pose = hostile_pubsub::<PoseSample>(
+        &node,
+        &names.pose,
+        MAX_PUBLISHERS,
+        POSE_SETTINGS.buffer,
+        false,
+    );
     assert_serve_refuses(
         &inst,
         &format!(
@@ -1300,7 +1305,7 @@ fn services_pre_created_with_other_limits_make_serve_refuse() {
     let inst = instance("hostile_estimate");
     let names = ServiceNames::new(&inst);
     let _estimate =
-        hostile_pubsub::<EstimateSample>(&node, &names.estimate, 4, ESTIMATE_BUFFER, true);
+        hostile_pubsub::<EstimateSample>(&node, &names.estimate, 4, ESTIMATE_SETTINGS.buffer, true);
     assert_serve_refuses(
         &inst,
         &format!(

@@ -8,6 +8,10 @@ controller's bit for bit (floats compared as IEEE-754 bit patterns; a JSON null 
 
 killed FILE.mcap: a file whose writer was killed: read record by record up to where it ends;
 prints the number of estimates read (each a decodable JSON object).
+
+completeness FILE.mcap: prints one JSON object: the metadata records (`cablevib`,
+`cablevib.completeness`), and, counted from the messages themselves, per channel the number
+of messages and, from their sequence numbers, first, last and the number missing between them.
 """
 import json
 import struct
@@ -36,7 +40,7 @@ def same(recorded, expected_hex):
 
 FLOATS = ["f1_hz", "ee_mode_hz", "eigen_residual"]
 FLOAT_ARRAYS = ["tensions_n", "stiffness"]
-INTS = ["pose_sequence", "pose_timestamp_ns", "receive_timestamp_ns", "publish_timestamp_ns",
+INTS = ["sequence", "pose_sequence", "pose_timestamp_ns", "receive_timestamp_ns", "publish_timestamp_ns",
         "status", "cable_count", "ee_mode_age_cycles", "stiffness_dim", "compute_ns",
         "eigen_evaluations", "tension_iterations", "skipped_poses"]
 
@@ -75,6 +79,9 @@ def full(expected_path, path):
                 raise AssertionError(f"unexpected schema encoding {s.encoding}")
         meta = {m.name: dict(m.metadata) for m in reader.iter_metadata()}
         assert "cablevib" in meta and meta["cablevib"].get("scene"), meta
+        # Stopped by SIGTERM: the file is complete and says it was interrupted.
+        end = meta.get("cablevib.end", {})
+        assert end.get("stopped_by") == "signal" and end.get("interrupted") == "true", meta
         estimates, poses, scenes, t_mins = [], [], 0, 0
         for schema, channel, message in reader.iter_messages():
             if schema.name == "cablevib.Estimate":
@@ -126,8 +133,31 @@ def killed(path):
     print(f"READ {n_est} estimates ({ended})")
 
 
+def completeness(path):
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        meta = {m.name: dict(m.metadata) for m in reader.iter_metadata()}
+        sequences = {"estimate": [], "pose": [], "t_min": []}
+        scene = 0
+        for schema, channel, message in reader.iter_messages():
+            name = channel.topic.rsplit("/", 1)[-1]
+            if name in sequences:
+                sequences[name].append(json.loads(message.data)["sequence"])
+            elif name == "scene":
+                scene += 1
+    counted = {"scene": {"messages": scene}}
+    for name, seqs in sequences.items():
+        c = {"messages": len(seqs), "distinct": len(set(seqs))}
+        if seqs:
+            c.update(first=min(seqs), last=max(seqs), missing=max(seqs) - min(seqs) + 1 - len(set(seqs)))
+        counted[name] = c
+    print(json.dumps({"metadata": meta, "counted": counted}))
+
+
 if __name__ == "__main__":
     if sys.argv[1] == "full":
         full(sys.argv[2], sys.argv[3])
+    elif sys.argv[1] == "completeness":
+        completeness(sys.argv[2])
     else:
         killed(sys.argv[2])

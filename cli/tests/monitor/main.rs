@@ -4,6 +4,10 @@
 //! protocol client in Python (a venv under target/ with pinned versions).
 //! Area binary of the command-line crate (see tests/README.md at the repository root).
 
+mod completeness;
+mod replay_bounds;
+mod viewers;
+
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -17,7 +21,8 @@ use cablevib_ipc::{
     monotonic_now_ns, EstimateSample, PoseSample, ServiceNames, TminSetpoint, IDENTITY_QUATERNION,
 };
 use cablevib_monitor::encode::EstimateRecord;
-use cablevib_monitor::replay::{read_recording, replay, Pace, ReplayConfig};
+use cablevib_monitor::recording::{read_recording, Recorded};
+use cablevib_monitor::replay::{replay, Pace, ReplayConfig};
 use cablevib_service::ports::{create_node, wait_for_service, EstimateOutput, PoseInput};
 use cablevib_service::server::{self, ServerConfig, ServerReport};
 use cablevib_service::{ServiceError, WaitMode};
@@ -186,6 +191,23 @@ fn control(
     run
 }
 
+/// [`control`] in a thread of its own.
+fn control_in_background(
+    instance: &str,
+    scene: &Scene,
+    seconds: f64,
+    rate_hz: f64,
+) -> std::thread::JoinHandle<Run> {
+    let (instance, scene) = (instance.to_owned(), scene.clone());
+    std::thread::spawn(move || control(&instance, &scene, seconds, rate_hz, None))
+}
+
+/// The child's stderr, read to its end in a thread.
+fn stderr_of(child: &mut Child) -> std::thread::JoinHandle<String> {
+    let mut e = child.stderr.take().unwrap();
+    std::thread::spawn(move || std::io::read_to_string(&mut e).unwrap())
+}
+
 fn hex(v: f64) -> String {
     format!("{:016x}", v.to_bits())
 }
@@ -198,6 +220,7 @@ fn expected_json(run: &Run) -> String {
         .iter()
         .map(|e| {
             serde_json::json!({
+                "sequence": e.sequence,
                 "pose_sequence": e.pose_sequence,
                 "pose_timestamp_ns": e.pose_timestamp_ns,
                 "receive_timestamp_ns": e.receive_timestamp_ns,
@@ -251,17 +274,28 @@ fn replay_into_fresh_service(
     let service = start_service(&instance, scene);
     let never = AtomicBool::new(false);
     let cfg = ReplayConfig {
-        file: file.to_owned(),
-        instance,
         pace: Pace::Fast,
         answered_only: true,
         t_min_n: t_min,
-        timeout: Duration::from_secs(10),
+        ..ReplayConfig::new(file.to_owned(), &instance)
     };
-    let r = replay(&cfg, &never).unwrap();
+    let mut estimates = Vec::new();
+    let r = replay(&cfg, &never, |e| estimates.push(*e)).unwrap();
     stop_service(service);
     assert_eq!(r.timeouts, 0);
-    r.estimates
+    assert_eq!(r.estimates, estimates.len() as u64);
+    estimates
+}
+
+/// The estimates of a recording, as JSON objects, in file order.
+fn recorded_estimates(file: &Path) -> Vec<serde_json::Value> {
+    read_recording(file)
+        .unwrap()
+        .filter_map(|m| match m.unwrap() {
+            Recorded::Estimate(json) => Some(serde_json::from_slice(&json).unwrap()),
+            _ => None,
+        })
+        .collect()
 }
 
 /// A 10 s run at 1 kHz recorded by the monitor process and watched live by a Foxglove
@@ -341,16 +375,27 @@ fn record_watch_read_back_and_replay() {
         String::from_utf8_lossy(&out.stderr)
     );
     println!("{}", String::from_utf8_lossy(&out.stdout).trim());
+    // The record says it is complete, and is: every estimate the service published.
+    let c = completeness::completeness_of(&py, &file);
+    let m = &c["metadata"]["cablevib.completeness"];
+    assert_eq!(
+        c["counted"]["estimate"]["messages"].as_u64(),
+        Some(service_report.cycles)
+    );
+    assert_eq!(m["complete"].as_str(), Some("true"), "{c}");
+    assert!(
+        lines.iter().any(|l| l.contains("record complete")),
+        "{lines:?}"
+    );
 
     // Replay: the same scene gives the same estimates, bit for bit.
-    let recorded = read_recording(&file).unwrap();
+    let recorded = recorded_estimates(&file);
     let by_seq: std::collections::HashMap<u64, &serde_json::Value> = recorded
-        .estimates
         .iter()
         .map(|e| (e["pose_sequence"].as_u64().unwrap(), e))
         .collect();
     let same = replay_into_fresh_service(&file, &scene, "same", None);
-    assert_eq!(same.len(), recorded.estimates.len());
+    assert_eq!(same.len(), recorded.len());
     for e in &same {
         let again = serde_json::to_value(EstimateRecord::new(e, f64::NAN)).unwrap();
         let then = by_seq[&e.pose_sequence];
@@ -358,7 +403,7 @@ fn record_watch_read_back_and_replay() {
     }
     // Another T_min: other tensions (a higher floor moves the distribution).
     let other = replay_into_fresh_service(&file, &scene, "tmin", Some(scene.t_min_n + 50.0));
-    assert_eq!(other.len(), recorded.estimates.len());
+    assert_eq!(other.len(), recorded.len());
     let differ = other
         .iter()
         .filter(|e| {
@@ -400,8 +445,9 @@ fn record_watch_read_back_and_replay() {
     }
 }
 
-/// A monitor killed with SIGKILL mid-run leaves a file the Python `mcap` reader reads up to
-/// its last complete chunk.
+/// A monitor killed with SIGKILL mid-run leaves its temporary file `FILE.PID.part` (FILE
+/// itself is never created: it appears only complete), which the Python `mcap` reader reads
+/// up to its last complete chunk.
 #[test]
 fn killed_monitor_leaves_a_readable_file() {
     let py = python();
@@ -419,12 +465,16 @@ fn killed_monitor_leaves_a_readable_file() {
         file.to_str().unwrap(),
     ]);
     let run = control(&instance, &scene, 3.0, 1000.0, None);
+    let pid = monitor.id();
     signal(&monitor, libc::SIGKILL);
     let _ = monitor.wait();
     stop_service(service);
+    assert!(!file.exists(), "{} exists after SIGKILL", file.display());
+    let part = PathBuf::from(format!("{}.{pid}.part", file.display()));
+    assert!(part.exists(), "no {}", part.display());
     let out = Command::new(&py)
         .arg(script("check_recording.py"))
-        .args(["killed", file.to_str().unwrap()])
+        .args(["killed", part.to_str().unwrap()])
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);

@@ -14,6 +14,7 @@ from ._cablevib import (
     __version__,
     analyze,
     frf,
+    identify,
     sweep,
 )
 
@@ -25,5 +26,6 @@ __all__ = [
     "TminAnswer",
     "analyze",
     "frf",
+    "identify",
     "sweep",
 ]

@@ -157,6 +157,26 @@ def frf(
     superposition of the sagged shapes; ``element="continuous"`` refused), as on the
     command line."""
 
+def identify(
+    t: _Arr,
+    channels: _Arr,
+    from_hz: float = 0.5,
+    to_hz: float = 50.0,
+    max_order: int = 60,
+    block_rows: Optional[int] = None,
+    frequency_tol: float = 0.01,
+    damping_tol: float = 0.05,
+    mac_min: float = 0.98,
+    max_damping: float = 0.2,
+    window: Optional[float] = None,
+    overlap: float = 0.5,
+) -> Dict[str, Any]:
+    """Modal identification (SSI-cov) of ``t`` (N, s) and ``channels`` (N × l or N): what
+    ``cablevib identify --json`` prints per window without the model: ``{"windows":
+    [{"t_start_s", "t_end_s", "status", "modes": [{"frequency_hz", "damping_ratio",
+    "frequency_std_hz", "damping_ratio_std", "shape_re", "shape_im", ...}]}]}``, modes
+    ascending. Raises CablevibError on a bad record or parameter."""
+
 def sweep(
     scene: Scene,
     positions: _Arr,

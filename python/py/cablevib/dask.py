@@ -17,7 +17,14 @@ from __future__ import annotations
 from typing import Any, Dict, List, Optional, Sequence, Union
 
 import numpy as np
-import pandas as pd
+
+try:
+    import pandas as pd
+except ImportError as e:  # the extra is not installed
+    raise ImportError(
+        f"cablevib.dask needs the dask extra: pip install ./python[dask] "
+        f"(dask[distributed], pandas); {e}"
+    ) from e
 
 import cablevib
 

@@ -107,12 +107,31 @@ pub struct EstimateOutput {
 }
 
 impl EstimateOutput {
-    /// Opens (or creates) the estimate and wake-controller services of instance `names`.
+    /// Opens (or creates) the estimate and wake-controller services of instance `names`, with
+    /// a queue of [`ESTIMATE_BUFFER`] estimates (a controller wants the newest).
     pub fn open(node: &Node<Ipc>, names: &ServiceNames) -> Result<EstimateOutput, ServiceError> {
+        EstimateOutput::open_with_queue(node, names, ESTIMATE_BUFFER)
+    }
+
+    /// [`EstimateOutput::open`] for a recorder, which wants every estimate: a queue of
+    /// [`RECORD_BUFFER`] estimates.
+    pub fn open_recorder(
+        node: &Node<Ipc>,
+        names: &ServiceNames,
+    ) -> Result<EstimateOutput, ServiceError> {
+        EstimateOutput::open_with_queue(node, names, RECORD_BUFFER)
+    }
+
+    fn open_with_queue(
+        node: &Node<Ipc>,
+        names: &ServiceNames,
+        queue: usize,
+    ) -> Result<EstimateOutput, ServiceError> {
         let estimate_factory =
             open_pubsub::<EstimateSample>(node, &names.estimate, ESTIMATE_SETTINGS)?;
         let subscriber = estimate_factory
             .subscriber_builder()
+            .buffer_size(queue)
             .create()
             .map_err(|e| ipc_error("create the estimate subscriber", e))?;
         let wake = open_event(node, &names.wake_controller)?
@@ -128,11 +147,26 @@ impl EstimateOutput {
 
     /// The next queued estimate, if any.
     pub fn try_receive(&self) -> Result<Option<EstimateSample>, ServiceError> {
+        Ok(self.try_receive_from()?.map(|(e, _)| e))
+    }
+
+    /// The next queued estimate with the id of the publisher that sent it (the key of its
+    /// [`EstimateSample::sequence`]: a restarted service is another publisher).
+    pub fn try_receive_from(
+        &self,
+    ) -> Result<Option<(EstimateSample, iceoryx2::identifiers::UniquePublisherId)>, ServiceError>
+    {
         match self.subscriber.receive() {
-            Ok(Some(s)) => Ok(Some(*s)),
+            Ok(Some(s)) => Ok(Some((*s, s.header().publisher_id()))),
             Ok(None) => Ok(None),
             Err(e) => Err(ipc_error("receive an estimate", e)),
         }
+    }
+
+    /// Blocks up to `timeout` on the wake-controller event (returns at once on a notification
+    /// or a signal); receives nothing.
+    pub fn wait_event(&self, timeout: Duration) {
+        listener_timed_wait(&self.wake, timeout);
     }
 
     /// Waits up to `timeout` for the next estimate: busy-polling ([`WaitMode::Spin`]) or

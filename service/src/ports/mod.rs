@@ -12,9 +12,9 @@
 //!
 //! | service | pattern | created with |
 //! |---|---|---|
-//! | pose | publish-subscribe | [`POSE_BUFFER`] queued poses per subscriber, history 0, [`MAX_PUBLISHERS`] publishers |
-//! | T_min | publish-subscribe | history 1: a (re)started service gets the set-point in force |
-//! | estimate | publish-subscribe | [`ESTIMATE_BUFFER`] queued estimates per subscriber, [`ESTIMATE_PUBLISHERS`] publisher |
+//! | pose | publish-subscribe | up to [`RECORD_BUFFER`] queued poses per subscriber (the service's own: [`POSE_BUFFER`]), history 0, [`MAX_PUBLISHERS`] publishers |
+//! | T_min | publish-subscribe | up to [`RECORD_BUFFER`] queued (the service's own: [`T_MIN_BUFFER`]), history 1: a (re)started service gets the set-point in force |
+//! | estimate | publish-subscribe | up to [`RECORD_BUFFER`] queued estimates per subscriber (a controller's: [`ESTIMATE_BUFFER`]), [`ESTIMATE_PUBLISHERS`] publisher |
 //! | margin | request-response | [`MARGIN_SERVERS`] server, [`MAX_CLIENTS`] clients, [`MARGIN_ACTIVE_REQUESTS`] active requests per client |
 //! | wake/service, wake/controller | event | [`EVENT_PORTS`] listeners and notifiers |
 //!
@@ -81,11 +81,23 @@ pub use open::{
 /// The iceoryx2 service flavour used everywhere: inter-process, shared memory.
 pub type Ipc = ipc::Service;
 
-/// How many poses a subscriber queues before the oldest is overwritten. The service drains the
-/// queue every cycle and estimates the newest pose only ("latest pose wins").
+/// How many poses the service's subscriber queues before the oldest is overwritten. The service
+/// drains the queue every cycle and estimates the newest pose only ("latest pose wins").
 pub const POSE_BUFFER: usize = 16;
-/// How many estimates a subscriber queues before the oldest is overwritten.
+/// How many T_min set-points the service's subscriber queues (the newest one wins).
+pub const T_MIN_BUFFER: usize = 4;
+/// How many estimates a controller's subscriber ([`EstimateOutput::open`]) queues before the
+/// oldest is overwritten.
 pub const ESTIMATE_BUFFER: usize = 16;
+/// The most samples one subscriber of the pose, T_min or estimate service may queue (the
+/// services' `subscriber_max_buffer_size`), and what a recorder takes
+/// ([`EstimateOutput::open_recorder`], the monitor's pose and T_min subscribers): 2048, i.e.
+/// a recorder may be descheduled ≈ 2 s at 1 kHz (≈ 1 s at 2 kHz) before a sample is
+/// overwritten. Each publisher's shared-memory segment is sized for [`MAX_SUBSCRIBERS`] queues
+/// of this many samples (≈ 8.6 MB for the estimate publisher, 1.4 MB per pose publisher, of
+/// which only the samples in use are touched); the service and the controllers ask for their
+/// own short queues ([`POSE_BUFFER`], [`T_MIN_BUFFER`], [`ESTIMATE_BUFFER`]).
+pub const RECORD_BUFFER: usize = 2048;
 /// Publishers of the pose and T_min services: one controller or replay at a time; the slack
 /// covers killed peers whose ports are not cleaned up yet.
 pub const MAX_PUBLISHERS: usize = 4;
@@ -259,10 +271,12 @@ impl ServicePorts {
         let t_min =
             open_pubsub_with::<TminSetpoint>(node, &names.t_min, T_MIN_SETTINGS, attributes)?
                 .subscriber_builder()
+                .buffer_size(T_MIN_BUFFER)
                 .create()
                 .map_err(|e| ipc_error("create the T_min subscriber", e))?;
         let pose = open_pubsub_with::<PoseSample>(node, &names.pose, POSE_SETTINGS, attributes)?
             .subscriber_builder()
+            .buffer_size(POSE_BUFFER)
             .create()
             .map_err(|e| ipc_error("create the pose subscriber", e))?;
         Ok(ServicePorts {

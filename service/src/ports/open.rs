@@ -7,7 +7,8 @@ use super::*;
 /// Settings a publish-subscribe service is created with.
 #[derive(Debug, Clone, Copy)]
 pub struct PubSubSettings {
-    /// Queued samples per subscriber.
+    /// The most samples a subscriber may queue (`subscriber_max_buffer_size`); each subscriber
+    /// asks for its own queue up to this.
     pub buffer: usize,
     /// Samples replayed to a late subscriber.
     pub history: usize,
@@ -325,19 +326,19 @@ pub fn open_event_with(
 
 /// The pose service's settings.
 pub const POSE_SETTINGS: PubSubSettings = PubSubSettings {
-    buffer: POSE_BUFFER,
+    buffer: RECORD_BUFFER,
     history: 0,
     max_publishers: MAX_PUBLISHERS,
 };
 /// The T_min service's settings.
 pub const T_MIN_SETTINGS: PubSubSettings = PubSubSettings {
-    buffer: 4,
+    buffer: RECORD_BUFFER,
     history: 1,
     max_publishers: MAX_PUBLISHERS,
 };
 /// The estimate service's settings.
 pub const ESTIMATE_SETTINGS: PubSubSettings = PubSubSettings {
-    buffer: ESTIMATE_BUFFER,
+    buffer: RECORD_BUFFER,
     history: 0,
     max_publishers: ESTIMATE_PUBLISHERS,
 };

@@ -394,6 +394,7 @@ impl Server {
         out.tension_iterations = e.tension_iterations;
         out.eigen_residual = e.eigen_residual;
         out.skipped_poses = self.total.skipped + self.period.skipped;
+        out.sequence = self.cycles() + 1;
 
         match self.ports.estimate.loan_uninit() {
             Ok(sample) => {

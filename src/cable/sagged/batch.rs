@@ -18,6 +18,7 @@
 //! `ds_in`, `ds_out` are 0.
 
 use super::chain::SagChain;
+use super::recurrence::first_form;
 use super::supported::junction_start;
 use super::{SagChainEval, SagSupport};
 
@@ -250,12 +251,16 @@ fn block<const D: bool>(
     let mut lm = [0.0; L];
     let mut m3 = [0.0; L];
     let mut m2 = [0.0; L];
+    let mut d6 = [0.0; L];
+    let mut m6 = [0.0; L];
     for i in 0..L {
         lm[i] = lambda * m[i];
         d3[i] = lambda * m[i] / 3.0;
         d2[i] = lambda * m[i] / 2.0;
+        d6[i] = lambda * m[i] / 6.0;
         m3[i] = m[i] / 3.0;
         m2[i] = m[i] / 2.0;
+        m6[i] = m[i] / 6.0;
     }
     let e0 = &els[0];
     let [mut s0, mut s1, mut s2] = init.s;
@@ -285,25 +290,49 @@ fn block<const D: bool>(
             let negative = det < 0.0;
             neg1[i] += negative as u64;
             neg2[i] += (!negative & (q0 < 0.0)) as u64;
-            let (e0, e1, e2) = (s0[i] - d2[i], s1[i], s2[i] - d2[i]);
+            // S_{j+1} = A − X Q⁻¹ X in the form with the smaller terms (`recurrence`'s
+            // `first_form`), chosen per lane by a select.
+            let first = first_form(
+                s0[i].abs() + s2[i].abs() + 2.0 * s1[i].abs(),
+                ej.a[i].abs() + ej.c[i].abs(),
+            );
+            let (a0, a1, a2) = if first {
+                (ej.a[i] - d3[i], ej.b[i], ej.c[i] - d3[i])
+            } else {
+                (s0[i] - lm[i], s1[i], s2[i] - lm[i])
+            };
+            let (x0, x1, x2) = if first {
+                (ej.a[i] + d6[i], ej.b[i], ej.c[i] + d6[i])
+            } else {
+                (s0[i] - d2[i], s1[i], s2[i] - d2[i])
+            };
             let inv = 1.0 / det;
             let (ia, ib, ic) = (q2 * inv, -q1 * inv, q0 * inv);
-            let y00 = ia * e0 + ib * e1;
-            let y01 = ia * e1 + ib * e2;
-            let y10 = ib * e0 + ic * e1;
-            let y11 = ib * e1 + ic * e2;
-            let p00 = e0 * y00 + e1 * y10;
-            let p01 = e0 * y01 + e1 * y11;
-            let p10 = e1 * y00 + e2 * y10;
-            let p11 = e1 * y01 + e2 * y11;
+            let y00 = ia * x0 + ib * x1;
+            let y01 = ia * x1 + ib * x2;
+            let y10 = ib * x0 + ic * x1;
+            let y11 = ib * x1 + ic * x2;
+            let p00 = x0 * y00 + x1 * y10;
+            let p01 = x0 * y01 + x1 * y11;
+            let p10 = x1 * y00 + x2 * y10;
+            let p11 = x1 * y01 + x2 * y11;
             if D {
                 let (dq0, dq1, dq2) = (ds0[i] - m3[i], ds1[i], ds2[i] - m3[i]);
-                let (de0, de1, de2) = (ds0[i] - m2[i], ds1[i], ds2[i] - m2[i]);
-                let dey0 = de0 * y00 + de1 * y10;
-                let dey01 = de0 * y01 + de1 * y11;
-                let dey10 = de1 * y00 + de2 * y10;
-                let dey1 = 0.5 * (dey01 + dey10);
-                let dey2 = de1 * y01 + de2 * y11;
+                let (da0, da1, da2) = if first {
+                    (-m3[i], 0.0, -m3[i])
+                } else {
+                    (ds0[i] - m[i], ds1[i], ds2[i] - m[i])
+                };
+                let (dx0, dx1, dx2) = if first {
+                    (m6[i], 0.0, m6[i])
+                } else {
+                    (ds0[i] - m2[i], ds1[i], ds2[i] - m2[i])
+                };
+                let dxy0 = dx0 * y00 + dx1 * y10;
+                let dxy01 = dx0 * y01 + dx1 * y11;
+                let dxy10 = dx1 * y00 + dx2 * y10;
+                let dxy1 = 0.5 * (dxy01 + dxy10);
+                let dxy2 = dx1 * y01 + dx2 * y11;
                 let xy00 = dq0 * y00 + dq1 * y10;
                 let xy10 = dq1 * y00 + dq2 * y10;
                 let xy01 = dq0 * y01 + dq1 * y11;
@@ -311,27 +340,36 @@ fn block<const D: bool>(
                 let yqy0 = y00 * xy00 + y10 * xy10;
                 let yqy1 = y00 * xy01 + y10 * xy11;
                 let yqy2 = y01 * xy01 + y11 * xy11;
-                ds0[i] = ds0[i] - m[i] - 2.0 * dey0 + yqy0;
-                ds1[i] = ds1[i] - 2.0 * dey1 + yqy1;
-                ds2[i] = ds2[i] - m[i] - 2.0 * dey2 + yqy2;
+                ds0[i] = da0 - 2.0 * dxy0 + yqy0;
+                ds1[i] = da1 - 2.0 * dxy1 + yqy1;
+                ds2[i] = da2 - 2.0 * dxy2 + yqy2;
             }
-            s0[i] = s0[i] - lm[i] - p00;
-            s1[i] -= 0.5 * (p01 + p10);
-            s2[i] = s2[i] - lm[i] - p11;
+            s0[i] = a0 - p00;
+            s1[i] = a1 - 0.5 * (p01 + p10);
+            s2[i] = a2 - p11;
             // Out of plane: the scalar string.
             let mut qo = so[i] + ej.out[i] - d3[i];
             if qo == 0.0 {
                 qo = k.nudge[i];
             }
             nego[i] += (qo < 0.0) as u64;
-            let eo = so[i] - d2[i];
-            let yo = eo / qo;
+            let first = first_form(so[i].abs(), ej.out[i].abs());
+            let (ao, xo) = if first {
+                (ej.out[i] - d3[i], ej.out[i] + d6[i])
+            } else {
+                (so[i] - lm[i], so[i] - d2[i])
+            };
+            let yo = xo / qo;
             if D {
                 let dqo = dso[i] - m3[i];
-                let deo = dso[i] - m2[i];
-                dso[i] = dso[i] - m[i] - 2.0 * deo * yo + dqo * yo * yo;
+                let (dao, dxo) = if first {
+                    (-m3[i], m6[i])
+                } else {
+                    (dso[i] - m[i], dso[i] - m2[i])
+                };
+                dso[i] = dao - 2.0 * dxo * yo + dqo * yo * yo;
             }
-            so[i] = so[i] - lm[i] - eo * yo;
+            so[i] = ao - xo * yo;
         }
     }
     for i in 0..L {

@@ -80,6 +80,7 @@
 
 mod chain_shape;
 mod count;
+mod sag_chain_shape;
 mod sagged;
 mod solve;
 mod supported_shape;

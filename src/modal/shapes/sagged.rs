@@ -12,9 +12,9 @@
 //! ```
 //!
 //! for j = 1 … N − 1, are solved forward from u₁ (K_j + λm/6 is positive definite, so
-//! u_{j+1} always exists): the three columns Y (u₁ = e_h, e_up, e_n, then each column scaled
-//! to largest entry 1) span every interior solution, u_j = Y_j a with a free amplitude
-//! a ∈ ℝ³. The end value is Y_N a and the force the chain puts on its end node per unit
+//! u_{j+1} always exists): the three columns Y (u₁ = e_h, e_up, e_n; re-orthonormalised at
+//! each element, `sag_chain_shape`) span every interior solution, u_j = Y_j a with a free
+//! amplitude a ∈ ℝ³. The end value is Y_N a and the force the chain puts on its end node per unit
 //! amplitude F = (K_{N−1} − λm/3) Y_N − (K_{N−1} + λm/6) Y_{N−1}; F Y_N⁻¹ is the chain's
 //! condensed stiffness S(λ) = diag(S_in, s_out) (the one D(λ) sums).
 //!
@@ -37,8 +37,8 @@
 //! N_h axial elements (k_h, m_h) from the fixed drum. A fourth solution joins the three:
 //! the hidden cable from the drum, t_0 = 0, t_1 = 1, β_h t_{j−1} + 2α_h t_j + β_h t_{j+1} = 0
 //! (α_h = k_h − λm_h/3, β_h = −k_h − λm_h/6 < 0), puts the junction at z_0 = d t_{N_h}; with
-//! z_1 = 0 the same interior equations give z_2 … z_N (rescaled on the way, then with t to
-//! largest entry 1). Every solution of the chain and its hidden cable is u_j = Y_j a + z_j c
+//! z_1 = 0 the same interior equations give z_2 … z_N (t to largest entry 1; z the fourth
+//! column of the re-orthonormalised state). Every solution of the chain and its hidden cable is u_j = Y_j a + z_j c
 //! (hidden nodes c t_j): the amplitude c is one more unknown, and the junction's own
 //! equation along d one more row,
 //!
@@ -72,21 +72,25 @@
 //! member keeping its λ; shapes already given for a member are replaced. Isolated clusters
 //! never take this path.
 //!
-//! **Accuracy.** The forward solution is exact in exact arithmetic; in floating point its
-//! rounding grows with the solution's own growth along the chain, which is at most linear
-//! below the chains' cut-off (the first modes of a robot lie far below it; above it the
-//! solution grows like sinh(jφ) and is still the dominant, accurately computed one). The
-//! dense eigenvectors are the check (`tests/sag/shapes.rs`, with and without hidden
-//! cables). Offline: allocates.
+//! **Accuracy.** The forward solution is exact in exact arithmetic. Above a chain's
+//! transverse cut-off the transverse solution grows like sinh(jφ) along it, and solved
+//! alone every column turns towards it, the axial one lost in their rounding; the state of
+//! the solutions at two neighbouring nodes is therefore re-orthonormalised after each step
+//! (`sag_chain_shape`: the same span, kept well conditioned; the amplitudes a are those of
+//! the end's basis). The dense eigenvectors are the check (`tests/sag/shapes.rs`, with and
+//! without hidden cables; cli/tests/cli/hidden_sag.rs, the frequency response of the large
+//! robots above their cut-off against the dense modal sum). Offline: allocates.
 
 use super::count::clusters_by_count;
+use super::sag_chain_shape::SagChainShape;
 use super::solve::{null_of, null_within, orthonormalise};
 use super::{ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_MULTIPLICITY};
-use crate::cable::sagged::{SagChain, SagSupport};
 use crate::kinematics::attach_map;
 use crate::modal::lambda_to_hz;
 use crate::modal::sagged::SagModalSolver;
-use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x6, Matrix6, SymmetricEigen, Vector3, Vector6};
+use nalgebra::{
+    DMatrix, DVector, Matrix3, Matrix3x6, Matrix6, SymmetricEigen, Vector3, Vector4, Vector6,
+};
 
 /// Largest relative distance of two modes given apart that are taken as one cluster when
 /// neither alone is a clean null space of the bordered system (the count's bisection
@@ -103,155 +107,6 @@ const NEAR_MAX_REL: f64 = 1e-3;
 /// members' shapes are close to one vector (not two modes) and the cluster is refused.
 const NEAR_GRAM_MIN: f64 = 0.5;
 
-/// One cable's interior solutions at one λ, in the cable's frame (h, up, n).
-#[derive(Debug, Clone, Default)]
-struct SagChainShape {
-    /// Y_j for j = 0 ..= N (Y_0 = 0): the three solutions as columns.
-    y: Vec<Matrix3<f64>>,
-    /// Element mass μ l0, kg.
-    mass_kg: f64,
-    /// End force per unit amplitude, F (N/m per unit amplitude).
-    force: Matrix3<f64>,
-    /// Row scale of the end constraint, N/m.
-    scale: f64,
-    /// On a hidden cable: the fourth solution (module docs).
-    hidden: Option<HiddenShape>,
-}
-
-/// The fourth solution of a chain on a hidden cable: the hidden cable's nodes from the drum
-/// t_0 = 0, t_1 = 1 on (then scaled with the rest), the junction at d t_{N_h}, node 1 at 0.
-#[derive(Debug, Clone, Default)]
-struct HiddenShape {
-    /// The free cable's nodes z_j, j = 0 ..= N, cable frame (z_0 = d t_{N_h}, z_1 = 0).
-    z: Vec<Vector3<f64>>,
-    /// The hidden cable's axial nodes t_j, j = 0 ..= N_h (t_0 = 0 at the drum).
-    t: Vec<f64>,
-    /// The hidden cable's element mass, kg.
-    mass_kg: f64,
-    /// End force of z per unit amplitude, N/m.
-    force: Vector3<f64>,
-    /// The junction's equation along d: its coefficients on the amplitudes (a, c), N/m.
-    row: [f64; 4],
-    /// Row scale of the junction's equation, N/m.
-    scale: f64,
-}
-
-/// Element j's stiffness in the cable frame, diag(K_in, k_out), N/m.
-fn element_k(chain: &SagChain, j: usize) -> Matrix3<f64> {
-    let e = chain.element(j);
-    let [a, b, c] = e.k_in;
-    Matrix3::new(a, b, 0.0, b, c, 0.0, 0.0, 0.0, e.k_out)
-}
-
-impl SagChainShape {
-    /// The interior solutions of `chain` at λ (see the module docs).
-    fn fill(chain: &SagChain, lambda: f64) -> SagChainShape {
-        let n = chain.n_el().max(1);
-        let m = chain.element_mass_kg();
-        let id = Matrix3::identity();
-        let mut y = vec![Matrix3::zeros(); n + 1];
-        y[1] = id;
-        for j in 1..n {
-            let (kp, kn) = (element_k(chain, j - 1), element_k(chain, j));
-            let rhs = (kp + kn - id * (2.0 * lambda * m / 3.0)) * y[j]
-                - (kp + id * (lambda * m / 6.0)) * y[j - 1];
-            let lhs = kn + id * (lambda * m / 6.0);
-            // Positive definite (K_j ⪰ 0 with T > 0, and λm ≥ 0): the solve exists.
-            y[j + 1] = lhs.lu().solve(&rhs).unwrap_or_else(Matrix3::zeros);
-        }
-        // Each column to largest entry 1 (its growth along the chain is arbitrary).
-        for c in 0..3 {
-            let mx = y.iter().fold(0.0f64, |a, yj| a.max(yj.column(c).amax()));
-            if mx > 0.0 {
-                for yj in y.iter_mut() {
-                    yj.column_mut(c).scale_mut(1.0 / mx);
-                }
-            }
-        }
-        let kl = element_k(chain, n - 1);
-        let force =
-            (kl - id * (lambda * m / 3.0)) * y[n] - (kl + id * (lambda * m / 6.0)) * y[n - 1];
-        let scale = (kl.amax() + 0.5 * lambda * m).max(f64::MIN_POSITIVE);
-        let hidden = chain
-            .support()
-            .map(|sp| fill_hidden(chain, &sp, &y, lambda));
-        SagChainShape {
-            y,
-            mass_kg: m,
-            force,
-            scale,
-            hidden,
-        }
-    }
-}
-
-/// Rescale the hidden cable's recurrence when a value passes this (far from overflow).
-const RESCALE_ABOVE: f64 = 1e150;
-
-/// The fourth solution of `chain` on the hidden cable `sp` at λ, and the junction's
-/// equation (module docs); `y` the chain's three solutions (already scaled).
-fn fill_hidden(chain: &SagChain, sp: &SagSupport, y: &[Matrix3<f64>], lambda: f64) -> HiddenShape {
-    let n = chain.n_el().max(1);
-    let m = chain.element_mass_kg();
-    let id = Matrix3::identity();
-    let seg = sp.hidden;
-    let nh = seg.n_el.max(1);
-    // The hidden cable from the drum: β t_{j−1} + 2α t_j + β t_{j+1} = 0 (β < 0 for λ ≥ 0).
-    let (ah, bh) = (seg.k - lambda * seg.m / 3.0, -seg.k - lambda * seg.m / 6.0);
-    let mut t = vec![0.0; nh + 1];
-    t[1] = 1.0;
-    for j in 1..nh {
-        t[j + 1] = -(bh * t[j - 1] + 2.0 * ah * t[j]) / bh;
-        if t[j + 1].abs() > RESCALE_ABOVE {
-            let s = 1.0 / t[j + 1].abs();
-            t[..=j + 1].iter_mut().for_each(|x| *x *= s);
-        }
-    }
-    let d = Vector3::new(sp.direction[0], sp.direction[1], 0.0);
-    // The free cable: z_0 = d t_{N_h}, z_1 = 0, then the interior equations.
-    let mut z = vec![Vector3::zeros(); n + 1];
-    z[0] = d * t[nh];
-    for j in 1..n {
-        let (kp, kn) = (element_k(chain, j - 1), element_k(chain, j));
-        let rhs = (kp + kn - id * (2.0 * lambda * m / 3.0)) * z[j]
-            - (kp + id * (lambda * m / 6.0)) * z[j - 1];
-        let lhs = kn + id * (lambda * m / 6.0);
-        z[j + 1] = lhs.lu().solve(&rhs).unwrap_or_else(Vector3::zeros);
-        if z[j + 1].amax() > RESCALE_ABOVE {
-            let s = 1.0 / z[j + 1].amax();
-            z[..=j + 1].iter_mut().for_each(|x| *x *= s);
-            t.iter_mut().for_each(|x| *x *= s);
-        }
-    }
-    // To largest entry 1, the hidden cable's nodes and the free cable's together.
-    let mx = z
-        .iter()
-        .map(|x| x.amax())
-        .chain(t.iter().map(|x| x.abs()))
-        .fold(0.0f64, f64::max);
-    if mx > 0.0 {
-        z.iter_mut().for_each(|x| *x /= mx);
-        t.iter_mut().for_each(|x| *x /= mx);
-    }
-    let kl = element_k(chain, n - 1);
-    let force = (kl - id * (lambda * m / 3.0)) * z[n] - (kl + id * (lambda * m / 6.0)) * z[n - 1];
-    // The junction's equation along d: the free cable's first element (nodes 0 and 1) and
-    // the hidden cable's last (nodes N_h − 1 and N_h).
-    let k0 = element_k(chain, 0);
-    let (a0, b0) = (k0 - id * (lambda * m / 3.0), -k0 - id * (lambda * m / 6.0));
-    let on_a = d.transpose() * b0 * y[1];
-    let on_c = d.dot(&(a0 * z[0] + b0 * z[1])) + ah * t[nh] + bh * t[nh - 1];
-    let scale = (k0.amax() + seg.k + 0.5 * lambda * (m + seg.m)).max(f64::MIN_POSITIVE);
-    HiddenShape {
-        z,
-        t,
-        mass_kg: seg.m,
-        force,
-        row: [on_a[0], on_a[1], on_a[2], on_c],
-        scale,
-    }
-}
-
 /// How one loaded cable attaches: its frame E = [h up n] and attachment map (3 × dim).
 struct Attach {
     frame: Matrix3<f64>,
@@ -261,7 +116,8 @@ struct Attach {
 impl SagModalSolver {
     /// The lowest clusters of the loaded pose, (λ in rad²/s², multiplicity), ascending,
     /// until at least `k` modes are covered (a cluster cut by `k` completed): bisection on
-    /// the Wittrick–Williams count ([`Self::count_below`]) to a relative width of 4ε, modes
+    /// the Wittrick–Williams count ([`Self::count_below`]) to a relative width of 4ε (at most
+    /// every mode of the model: `k` is capped at [`Self::total_modes`]), modes
     /// within [`ShapeParams::cluster_rel`] of each other grouped (as
     /// [`crate::modal::ModalSolver::eigen_clusters`]). The count is exact at and next to
     /// the chains' poles, where modes with the end-effector still sit; the input of
@@ -274,7 +130,8 @@ impl SagModalSolver {
         if self.loaded_cables() == 0 {
             return Err(crate::modal::ModalError::NotLoaded.into());
         }
-        clusters_by_count(|x| self.count_below(x), k.max(1), params)
+        let k = k.max(1).min(self.total_modes());
+        clusters_by_count(|x| self.count_below(x), k, params)
     }
 
     /// The mass-normalised mode shapes of the loaded pose (FEM chains) at the eigenvalues
@@ -419,7 +276,7 @@ impl SagModalSolver {
                 got => got?,
             };
             let v = &null.vectors;
-            let nodes: Vec<Vec<Vec<Vector3<f64>>>> = (0..v.ncols())
+            let nodes: Vec<(Vec<Vec<Vector3<f64>>>, Vec<f64>)> = (0..v.ncols())
                 .map(|c| local_nodes(&attach, &shapes, &hcol, &v.column(c).into_owned(), dim))
                 .collect();
             let cols = v.ncols();
@@ -432,8 +289,9 @@ impl SagModalSolver {
                         .iter()
                         .enumerate()
                         .map(|(i, sh)| {
-                            element_mass_form(sh.mass_kg, &nodes[a][i], &nodes[b][i])
-                                + hidden_mass_form(sh, amp(v, a, hcol[i]), amp(v, b, hcol[i]))
+                            let ((na, ha), (nb, hb)) = (&nodes[a], &nodes[b]);
+                            element_mass_form(sh.mass_kg, &na[i], &nb[i])
+                                + sh.hidden_mass_form(sh, ha[i], hb[i])
                         })
                         .sum();
                     gram[(a, b)] = own + cab;
@@ -449,6 +307,7 @@ impl SagModalSolver {
                     phi[r] = col[r];
                 }
                 let cables = local_nodes(&attach, &shapes, &hcol, &col, dim)
+                    .0
                     .into_iter()
                     .zip(&attach)
                     .map(|(u, at)| u.into_iter().map(|x| at.frame * x).collect())
@@ -563,11 +422,12 @@ impl SagModalSolver {
                 for r in 0..dim {
                     phi[r] = col[r];
                 }
+                let (nodes, hidden) = local_nodes(attach, &shapes, hcol, &col, dim);
                 raw.push(NearVector {
                     member: p,
                     phi,
-                    nodes: local_nodes(attach, &shapes, hcol, &col, dim),
-                    hidden: hcol.iter().map(|&hc| hc.map_or(0.0, |r| col[r])).collect(),
+                    nodes,
+                    hidden,
                 });
             }
             all_shapes.push(shapes);
@@ -583,7 +443,7 @@ impl SagModalSolver {
                     .map(|i| {
                         let (sa, sb) = (&all_shapes[ra.member][i], &all_shapes[rb.member][i]);
                         element_mass_form(sa.mass_kg, &ra.nodes[i], &rb.nodes[i])
-                            + hidden_cross_form(sa, sb, ra.hidden[i], rb.hidden[i])
+                            + sa.hidden_mass_form(sb, ra.hidden[i], rb.hidden[i])
                     })
                     .sum();
                 gram[(a, b)] = own + cab;
@@ -643,23 +503,6 @@ impl SagModalSolver {
     }
 }
 
-/// The hidden cables' consistent mass form of two vectors at two λ (amplitudes ca, cb of
-/// the fourth solutions of `sa` and `sb`); 0 without a hidden cable.
-fn hidden_cross_form(sa: &SagChainShape, sb: &SagChainShape, ca: f64, cb: f64) -> f64 {
-    let (Some(ha), Some(hb)) = (&sa.hidden, &sb.hidden) else {
-        return 0.0;
-    };
-    let (ta, tb) = (&ha.t, &hb.t);
-    let mut s = 0.0;
-    for j in 0..ta.len().saturating_sub(1) {
-        s += 2.0 * ta[j] * tb[j]
-            + ta[j] * tb[j + 1]
-            + ta[j + 1] * tb[j]
-            + 2.0 * ta[j + 1] * tb[j + 1];
-    }
-    ha.mass_kg / 6.0 * s * ca * cb
-}
-
 /// The bordered matrix at λ (module docs); `hcol` the column of each hidden cable's
 /// amplitude (its junction's row the same index).
 fn bordered(
@@ -680,33 +523,29 @@ fn bordered(
     }
     for (i, (sh, at)) in shapes.iter().zip(attach).enumerate() {
         let col = dim + 3 * i;
-        // G_iᵀ E_i F_i (dim × 3) and σ E_iᵀ G_i (3 × dim).
+        // G_iᵀ E_i F_i (dim × 4) and σ E_iᵀ G_i (3 × dim).
         let gef = at.map.transpose() * at.frame * sh.force;
         let eg = at.frame.transpose() * at.map;
-        let yn = sh.y[sh.y.len() - 1];
+        // The columns of the amplitudes: the three solutions', then the hidden cable's.
+        let cols = [col, col + 1, col + 2, hcol[i].unwrap_or(usize::MAX)];
+        for (q, &c) in cols.iter().enumerate().take(sh.ncol) {
+            for r in 0..dim {
+                a[(r, c)] = gef[(r, q)];
+            }
+            for r in 0..3 {
+                a[(col + r, c)] = -sh.scale * sh.end[(r, q)];
+            }
+        }
         for r in 0..dim {
             for q in 0..3 {
-                a[(r, col + q)] = gef[(r, q)];
                 a[(col + q, r)] = sh.scale * eg[(q, r)];
             }
         }
-        for r in 0..3 {
-            for q in 0..3 {
-                a[(col + r, col + q)] = -sh.scale * yn[(r, q)];
-            }
-        }
         if let (Some(hs), Some(hc)) = (&sh.hidden, hcol[i]) {
-            // The fourth solution's end force and end value, and the junction's row.
-            let gez = at.map.transpose() * at.frame * hs.force;
-            let zn = hs.z[hs.z.len() - 1];
-            for r in 0..dim {
-                a[(r, hc)] = gez[r];
+            // The junction's row.
+            for (q, &c) in cols.iter().enumerate() {
+                a[(hc, c)] = hs.scale * hs.row[q];
             }
-            for r in 0..3 {
-                a[(col + r, hc)] = -sh.scale * zn[r];
-                a[(hc, col + r)] = hs.scale * hs.row[r];
-            }
-            a[(hc, hc)] = hs.scale * hs.row[3];
         }
     }
     a
@@ -723,20 +562,15 @@ fn quad(m6: &Matrix6<f64>, v: &DMatrix<f64>, a: usize, b: usize, dim: usize) -> 
     s
 }
 
-/// The hidden cable's amplitude c (row `hc` of column `col` of `v`; 0 without one).
-fn amp(v: &DMatrix<f64>, col: usize, hc: Option<usize>) -> f64 {
-    hc.map_or(0.0, |r| v[(r, col)])
-}
-
-/// Each cable's nodes (cable frame) of a bordered vector: Y_j a (+ z_j c on a hidden
-/// cable) from the anchor or junction on, E_iᵀ G_i φ at the end.
+/// Each cable's nodes (cable frame) of a bordered vector, from the anchor or junction on
+/// (E_iᵀ G_i φ at the end), and each hidden cable's amplitude (`SagChainShape::nodes`).
 fn local_nodes(
     attach: &[Attach],
     shapes: &[SagChainShape],
     hcol: &[Option<usize>],
     col: &DVector<f64>,
     dim: usize,
-) -> Vec<Vec<Vector3<f64>>> {
+) -> (Vec<Vec<Vector3<f64>>>, Vec<f64>) {
     let mut phi = Vector6::zeros();
     for r in 0..dim {
         phi[r] = col[r];
@@ -746,17 +580,16 @@ fn local_nodes(
         .zip(attach)
         .enumerate()
         .map(|(i, (sh, at))| {
-            let a = Vector3::new(col[dim + 3 * i], col[dim + 3 * i + 1], col[dim + 3 * i + 2]);
-            let last = sh.y.len() - 1;
-            let mut u: Vec<Vector3<f64>> = sh.y.iter().map(|yj| yj * a).collect();
-            if let (Some(hs), Some(hc)) = (&sh.hidden, hcol[i]) {
-                let c = col[hc];
-                u.iter_mut().zip(&hs.z).for_each(|(x, z)| *x += z * c);
-            }
-            u[last] = at.frame.transpose() * (at.map * phi);
-            u
+            let c = hcol[i].map_or(0.0, |r| col[r]);
+            let a = Vector4::new(
+                col[dim + 3 * i],
+                col[dim + 3 * i + 1],
+                col[dim + 3 * i + 2],
+                c,
+            );
+            sh.nodes(&a, at.frame.transpose() * (at.map * phi))
         })
-        .collect()
+        .unzip()
 }
 
 /// The consistent mass's bilinear form of two node sets of one cable (element mass m, kg).
@@ -769,18 +602,4 @@ fn element_mass_form(m: f64, u: &[Vector3<f64>], v: &[Vector3<f64>]) -> f64 {
             + 2.0 * u[j + 1].dot(&v[j + 1]);
     }
     m / 6.0 * s
-}
-
-/// The hidden cable's consistent mass form of two amplitudes ca, cb of its fourth solution
-/// (nodes ca t_j and cb t_j, drum to junction); 0 without a hidden cable.
-fn hidden_mass_form(sh: &SagChainShape, ca: f64, cb: f64) -> f64 {
-    let Some(hs) = &sh.hidden else {
-        return 0.0;
-    };
-    let t = &hs.t;
-    let mut s = 0.0;
-    for j in 0..t.len().saturating_sub(1) {
-        s += 2.0 * t[j] * t[j] + 2.0 * t[j] * t[j + 1] + 2.0 * t[j + 1] * t[j + 1];
-    }
-    hs.mass_kg / 6.0 * s * ca * cb
 }

@@ -20,7 +20,7 @@ use super::chain_shape::ChainShape;
 use crate::cable::Segment;
 
 /// Rescale the discrete recurrence when a value passes this (far from overflow).
-const RESCALE_ABOVE: f64 = 1e150;
+pub(super) const RESCALE_ABOVE: f64 = 1e150;
 
 impl ChainShape {
     /// Fill for the supported chain `free` on `hidden` at λ (rad²/s²). False when the two

@@ -14,10 +14,12 @@ use crate::modal::engine::{
 };
 use crate::modal::{lambda_to_hz, ModalError};
 /// Where the count alone shows the poles (sagged chains) and a mode's cluster probes do
-/// not straddle it, they are tried again this many times wider. Next to a pole the sagged
-/// chains' recurrence carries noise far above ε·‖D‖ (measured: 5e-3 on μ₂ of suspended-8
-/// at N = 10 near λ = 2600 rad²/s², where μ₁ ≈ −2.9e6 N/m), which puts Newton's root
-/// ~3e-10 (relative) from the dense one, outside the default 1e-10 probes.
+/// not straddle it, they are tried again this many times wider. A partial chain (anchor to
+/// an inner node) near its own pole makes the recurrence's 2 × 2 end stiffness huge in one
+/// direction, and its rounding (ε times that) lands in the other direction's entries too:
+/// D then carries noise far above ε·‖D‖ (measured: 5e-3 N/m on μ₁ of suspended-8 at N = 10
+/// at mode 88, λ = 3451.66 rad²/s², where the other eigenvalues are ~5e5 N/m), which puts
+/// Newton's root ~6e-11 (relative) from the count's step, beside the default 1e-10 probes.
 const NOISY_CLUSTER_PROBE: f64 = 100.0;
 /// Evaluations a cycle budget keeps for the end of a mode after its search loops (the
 /// cluster's count probes, twice where they are widened, and the residue quotient's two
@@ -291,22 +293,31 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
         let eta = self.params.pole_probe;
         loop {
             self.check_budget(lo.x, hi.x)?;
-            let Some((pa, pb)) = self.p.pole_interval(lo.x) else {
-                // The poles are seen only through the count: the bracket is pole-free
-                // once the blocked count is the same at both ends.
-                if lo.below == hi.below {
-                    return self.newton(i, lo, hi, 0.0, f64::INFINITY);
+            let known = self.p.pole_interval(lo.x);
+            // The closed-form poles say the bracket is pole-free, but the chains' own
+            // count steps inside it: a pole within rounding of an end (near-equal poles of
+            // cables a hair apart, 1e-12 relative on a symmetric pose perturbed by
+            // 1e-12 m). The count decides, as where it alone shows the poles.
+            let disagree = known.is_some_and(|(_, pb)| pb >= hi.x && lo.below != hi.below);
+            let (pa, pb) = match known {
+                Some(ab) if !disagree => ab,
+                _ => {
+                    // The bracket is pole-free once the blocked count is the same at both
+                    // ends.
+                    if lo.below == hi.below {
+                        return self.newton(i, lo, hi, 0.0, f64::INFINITY);
+                    }
+                    if hi.x - lo.x <= eta * hi.x {
+                        return Ok(Found::Pole(0.5 * (lo.x + hi.x)));
+                    }
+                    let mid = self.probe(0.5 * (lo.x + hi.x));
+                    if mid.count as usize > i {
+                        hi = mid;
+                    } else {
+                        lo = mid;
+                    }
+                    continue;
                 }
-                if hi.x - lo.x <= eta * hi.x {
-                    return Ok(Found::Pole(0.5 * (lo.x + hi.x)));
-                }
-                let mid = self.probe(0.5 * (lo.x + hi.x));
-                if mid.count as usize > i {
-                    hi = mid;
-                } else {
-                    lo = mid;
-                }
-                continue;
             };
             if pb >= hi.x {
                 return self.newton(i, lo, hi, pa, pb);

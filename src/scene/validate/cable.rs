@@ -90,8 +90,7 @@ fn validate_pulley(ck: &Checker, key: &str, p: &RawPulley) -> Result<Pulley, Sce
     }
     let dkey = format!("{key}.entry_direction");
     let d = ck.finite3(&dkey, &p.entry_direction)?;
-    let norm = d.norm();
-    if !(norm > 0.0 && norm.is_finite()) {
+    let Some(entry_unit) = crate::scene::unit_direction(&d) else {
         return Err(ck.inv(
             &dkey,
             format!(
@@ -99,9 +98,9 @@ fn validate_pulley(ck: &Checker, key: &str, p: &RawPulley) -> Result<Pulley, Sce
                 [d.x, d.y, d.z]
             ),
         ));
-    }
+    };
     Ok(Pulley {
-        entry_unit: d / norm,
+        entry_unit,
         radius_m: p.radius,
     })
 }

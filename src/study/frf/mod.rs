@@ -24,10 +24,11 @@ pub use dense::{DenseCheck, LuSpot};
 
 use super::{Param, ParamError, ParamName, StudyError};
 use crate::estimator::{Estimator, PoseModel, Tmin};
+use crate::input_file::message_number;
 use crate::kinematics::Pose;
 use crate::modal::{
     frequency_grid, hz_to_lambda, lambda_to_hz, receptance_over, FrfError, ModalBasis, ModalParams,
-    ModalSolver, Mode, MAX_FRF_MODES, MAX_FRF_POINTS,
+    ModalSolver, Mode, MAX_FRF_HZ, MAX_FRF_MODES, MAX_FRF_POINTS,
 };
 use crate::scene::{
     Damping, ElementKind, Scene, MAX_LOSS_FACTOR, MAX_MODAL_RATIO, MAX_RAYLEIGH_ALPHA_PER_S,
@@ -178,6 +179,7 @@ pub struct FrfResult {
 
 /// The frequencies of `cfg`'s band ([`frequency_grid`]), refusals naming the parameter.
 pub fn frequencies(cfg: &FrfConfig) -> Result<Vec<f64>, StudyError> {
+    let hz = |f: f64| format!("{} Hz", message_number(f));
     frequency_grid(cfg.from_hz, cfg.to_hz, cfg.points, cfg.log).map_err(|e| match e {
         FrfError::Points(n) => {
             let rule = format!("must be in 1..={MAX_FRF_POINTS}");
@@ -185,15 +187,25 @@ pub fn frequencies(cfg: &FrfConfig) -> Result<Vec<f64>, StudyError> {
         }
         FrfError::LogFromZero(f) => {
             let rule = "a log-spaced band must start above 0 Hz";
-            ParamError::invalid(Param::FromHz, format!("{f} Hz"), rule).into()
+            ParamError::invalid(Param::FromHz, hz(f), rule).into()
         }
         FrfError::Range { from_hz, .. } if !(from_hz.is_finite() && from_hz >= 0.0) => {
             let rule = "must be finite and >= 0";
-            ParamError::invalid(Param::FromHz, format!("{from_hz} Hz"), rule).into()
+            ParamError::invalid(Param::FromHz, hz(from_hz), rule).into()
         }
         FrfError::Range { from_hz, to_hz } => {
-            let rule = format!("must be finite and above the lowest frequency, {from_hz} Hz");
-            ParamError::invalid(Param::ToHz, format!("{to_hz} Hz"), rule).into()
+            let rule = format!(
+                "must be finite and above the lowest frequency, {}",
+                hz(from_hz)
+            );
+            ParamError::invalid(Param::ToHz, hz(to_hz), rule).into()
+        }
+        FrfError::TooHigh(to_hz) => {
+            let rule = format!(
+                "above the highest frequency of a response, {}",
+                hz(MAX_FRF_HZ)
+            );
+            ParamError::invalid(Param::ToHz, hz(to_hz), rule).into()
         }
         other => StudyError::Frf(other),
     })
