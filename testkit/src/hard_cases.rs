@@ -98,7 +98,7 @@ pub fn assert_no_numbers(label: &str, e: &Estimate) {
         e.f1_hz,
         e.status
     );
-    assert!(ee_hz(&e).is_nan(), "{label}: ee {}", ee_hz(&e));
+    assert!(ee_hz(e).is_nan(), "{label}: ee {}", ee_hz(e));
     assert!(e.stiffness.k6.iter().all(|x| x.is_nan()), "{label}");
 }
 
@@ -139,7 +139,7 @@ pub fn assert_matches_modes(
         e.f1_hz
     );
     let exists = m.ee_participation.iter().any(|&p| p >= thr - 1e-3);
-    if ee_hz(&e).is_finite() && ee_p(&e) < thr {
+    if ee_hz(e).is_finite() && ee_p(e) < thr {
         // Weak answer: no mode reached the threshold in the bounded scan; the most
         // end-effector-like mode found is reported with its participation.
         assert!(
@@ -147,7 +147,7 @@ pub fn assert_matches_modes(
             "{label}: real-time reports a weak end-effector mode, dense has {:?}",
             m.first_ee_mode(thr).map(|(i, l)| (i, lambda_to_hz(l)))
         );
-        let le = hz_to_lambda(ee_hz(&e));
+        let le = hz_to_lambda(ee_hz(e));
         let (idx, _) = m
             .lambda
             .iter()
@@ -156,17 +156,17 @@ pub fn assert_matches_modes(
             .unwrap();
         let tol_w = dense_tol(m.lambda[idx], m) + extra;
         assert!(
-            rel(ee_hz(&e), lambda_to_hz(m.lambda[idx])) <= tol_w
-                && (m.ee_participation[idx] - ee_p(&e)).abs() <= 1e-3,
+            rel(ee_hz(e), lambda_to_hz(m.lambda[idx])) <= tol_w
+                && (m.ee_participation[idx] - ee_p(e)).abs() <= 1e-3,
             "{label}: weak end-effector mode {} Hz (p {}) is not the dense mode {} Hz (p {})",
-            ee_hz(&e),
-            ee_p(&e),
+            ee_hz(e),
+            ee_p(e),
             lambda_to_hz(m.lambda[idx]),
             m.ee_participation[idx]
         );
         return (err, tol);
     }
-    if ee_hz(&e).is_nan() {
+    if ee_hz(e).is_nan() {
         assert!(
             !m.ee_participation.iter().any(|&p| p >= thr + 1e-3),
             "{label}: real-time has no end-effector mode, dense has {:?}",
@@ -177,9 +177,9 @@ pub fn assert_matches_modes(
     assert!(
         exists,
         "{label}: real-time end-effector mode {} Hz, dense has none",
-        ee_hz(&e)
+        ee_hz(e)
     );
-    let le = hz_to_lambda(ee_hz(&e));
+    let le = hz_to_lambda(ee_hz(e));
     let (idx, _) = m
         .lambda
         .iter()
@@ -190,10 +190,10 @@ pub fn assert_matches_modes(
     let fe = lambda_to_hz(m.lambda[idx]);
     let tol_e = dense_tol(m.lambda[idx], m) + extra;
     assert!(
-        rel(ee_hz(&e), fe) <= tol_e,
+        rel(ee_hz(e), fe) <= tol_e,
         "{label}: real-time ee mode {} vs nearest dense {fe}: rel {:.2e} > {tol_e:.2e}",
-        ee_hz(&e),
-        rel(ee_hz(&e), fe)
+        ee_hz(e),
+        rel(ee_hz(e), fe)
     );
     // Within a cluster the dense vectors are arbitrary: accept any member of the cluster.
     let cluster_part = m
@@ -206,15 +206,15 @@ pub fn assert_matches_modes(
     assert!(
         cluster_part >= thr - 1e-3,
         "{label}: real-time ee mode {} Hz has dense participation {cluster_part:.4} < {thr}",
-        ee_hz(&e)
+        ee_hz(e)
     );
     for (i, (&l, &p)) in m.lambda.iter().zip(&m.ee_participation).enumerate() {
-        if lambda_to_hz(l) < ee_hz(&e) * (1.0 - tol_e) - 1e-12 {
+        if lambda_to_hz(l) < ee_hz(e) * (1.0 - tol_e) - 1e-12 {
             assert!(
                 p < thr + 1e-3,
                 "{label}: dense mode {i} at {} Hz (participation {p:.4}) is an end-effector mode below the real-time one at {} Hz",
                 lambda_to_hz(l),
-                ee_hz(&e)
+                ee_hz(e)
             );
         }
     }
