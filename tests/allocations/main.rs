@@ -211,7 +211,7 @@ fn continued_scans_allocate_nothing() {
         for k in 1..=3_000 {
             let e = est.update(&circle_pose(&s, &c, k), Tmin::Scene);
             assert!(e.eigen_evaluations <= budget);
-            continued += (ee_age(&e) != Some(0)) as usize;
+            continued += (ee_age(e) != Some(0)) as usize;
         }
         let after = thread_allocations();
         assert_eq!(after - before, 0, "{} {el:?} budget {budget}", s.name);

@@ -159,7 +159,7 @@ fn check_against_dense(
         e.f1_hz,
         lambda_to_hz(l1)
     );
-    if ee_hz(&e).is_nan() {
+    if ee_hz(e).is_nan() {
         prop_assert!(
             !m.ee_participation.iter().any(|&p| p >= thr + 1e-3),
             "no real-time end-effector mode, dense has {:?}",
@@ -167,7 +167,7 @@ fn check_against_dense(
         );
         return Ok(());
     }
-    let le = hz_to_lambda(ee_hz(&e));
+    let le = hz_to_lambda(ee_hz(e));
     let idx = (0..m.lambda.len())
         .min_by(|&a, &b| {
             (m.lambda[a] - le)
@@ -178,10 +178,10 @@ fn check_against_dense(
     let fe = lambda_to_hz(m.lambda[idx]);
     let tol_e = tol_of(m.lambda[idx], m, extra);
     prop_assert!(
-        (ee_hz(&e) - fe).abs() <= tol_e * fe,
+        (ee_hz(e) - fe).abs() <= tol_e * fe,
         "ee mode {} vs nearest dense {fe}: {:.2e} > {tol_e:.2e}",
-        ee_hz(&e),
-        (ee_hz(&e) - fe).abs() / fe
+        ee_hz(e),
+        (ee_hz(e) - fe).abs() / fe
     );
     let part = m
         .lambda
@@ -195,12 +195,12 @@ fn check_against_dense(
         "ee mode {fe} Hz has dense participation {part}"
     );
     for (&l, &p) in m.lambda.iter().zip(&m.ee_participation) {
-        if lambda_to_hz(l) < ee_hz(&e) * (1.0 - tol_e) - 1e-12 {
+        if lambda_to_hz(l) < ee_hz(e) * (1.0 - tol_e) - 1e-12 {
             prop_assert!(
                 p < thr + 1e-3,
                 "dense end-effector mode at {} Hz (participation {p}) below the real-time one at {} Hz",
                 lambda_to_hz(l),
-                ee_hz(&e)
+                ee_hz(e)
             );
         }
     }

@@ -131,7 +131,7 @@ fn tracked_along_the_circle_without_allocation() {
             if e.ee_mode.is_some() {
                 known += 1;
             }
-            if ee_age(&e) == Some(0) && n_fresh < fresh.len() {
+            if ee_age(e) == Some(0) && n_fresh < fresh.len() {
                 fresh[n_fresh] = k;
                 n_fresh += 1;
             }
@@ -156,7 +156,7 @@ fn tracked_along_the_circle_without_allocation() {
             for j in 1..=k {
                 let e = est2.update(&circle_pose(&s, j, CIRCLE_PERIOD_S), Tmin::Scene);
                 if j == k {
-                    got = Some((ee_hz(&e), ee_p(&e), ee_age(&e)));
+                    got = Some((ee_hz(e), ee_p(e), ee_age(e)));
                 }
             }
             let (hz, p, age) = got.unwrap();

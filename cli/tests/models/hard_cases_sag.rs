@@ -248,7 +248,7 @@ fn interior_low_points_and_huge_lambda2_are_finite() {
 
 fn assert_not_ok_is_nan(e: &Estimate, what: &str) {
     assert!(e.status != Status::Ok && e.error.is_some(), "{what}");
-    assert!(e.f1_hz.is_nan() && ee_hz(&e).is_nan(), "{what}: {e:?}");
+    assert!(e.f1_hz.is_nan() && ee_hz(e).is_nan(), "{what}: {e:?}");
     assert!(
         e.stiffness.translational_n_m().iter().all(|x| x.is_nan()),
         "{what}: {e:?}"
