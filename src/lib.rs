@@ -73,10 +73,13 @@ pub mod alloc_count;
 pub mod eig3;
 pub mod identify;
 pub mod input_file;
+pub mod memory_budget;
 pub mod output_file;
+pub mod rng;
 mod simd;
 pub mod status;
 // Layer 1
+pub mod measured;
 pub mod scene;
 pub mod stats;
 // Layer 2
@@ -92,6 +95,7 @@ pub mod modal;
 // Layer 5
 pub mod estimator;
 // Layer 6
+pub mod calibration;
 pub mod study;
 // Layer 7: the names most programs need
 pub mod prelude;

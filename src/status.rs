@@ -1,37 +1,67 @@
 //! The outcome of one estimator cycle ([`StatusCode`], also `estimator::Status`), carried
 //! as `u32` in the IPC messages' `status` fields (`cablevib-ipc` re-exports this module).
 
-/// Defines [`StatusCode`] from one list of `variant = code, "name"` rows (each with its
-/// docs): the enum with those wire values, `ALL` in the list's order, and `as_str`. One list,
-/// so that a new code cannot be added to the enum and missed by `ALL` or by its name (the
-/// tests check the list is in numeric order without gaps and its names are unique).
+/// Defines a wire status enum ([`StatusCode`] here; the measured-vibration codes of
+/// the measured-frequency module's too) from one list of `variant = code, "name"` rows (each with its
+/// docs): the enum with those wire values, `ALL` in the list's order, `as_str`, `as_u32`,
+/// `from_u32` and `Display`. One list, so that a new code cannot be added to the enum and
+/// missed by `ALL` or by its name (the tests check the list is in numeric order without gaps
+/// and its names are unique).
 macro_rules! status_codes {
     (
         $(#[$enum_meta:meta])*
-        pub enum StatusCode {
+        pub enum $enum:ident {
             $( $(#[$meta:meta])* $variant:ident = $code:literal, $name:literal; )+
         }
     ) => {
         $(#[$enum_meta])*
         #[repr(u32)]
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-        pub enum StatusCode {
+        pub enum $enum {
             $( $(#[$meta])* $variant = $code, )+
         }
 
-        impl StatusCode {
+        impl $enum {
             /// Every code, in numeric order.
-            pub const ALL: [StatusCode; [$($code),+].len()] = [$(StatusCode::$variant),+];
+            pub const ALL: [$enum; [$($code),+].len()] = [$($enum::$variant),+];
 
             /// A stable snake_case identifier (for logs and CSV output).
             pub const fn as_str(self) -> &'static str {
                 match self {
-                    $( StatusCode::$variant => $name, )+
+                    $( $enum::$variant => $name, )+
                 }
+            }
+
+            /// The wire value.
+            pub const fn as_u32(self) -> u32 {
+                self as u32
+            }
+
+            /// The code of a wire value; `None` for a value this build does not know.
+            pub const fn from_u32(value: u32) -> Option<$enum> {
+                // `ALL` is in numeric order without gaps (tested): the value is the index.
+                if (value as usize) < Self::ALL.len() {
+                    Some(Self::ALL[value as usize])
+                } else {
+                    None
+                }
+            }
+        }
+
+        impl core::fmt::Display for $enum {
+            fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                f.write_str(self.as_str())
+            }
+        }
+
+        impl From<$enum> for u32 {
+            fn from(code: $enum) -> u32 {
+                code as u32
             }
         }
     };
 }
+pub(crate) use status_codes;
 
 status_codes! {
     /// Outcome of one estimator cycle, as carried on the wire (`u32`).
@@ -78,36 +108,9 @@ status_codes! {
 }
 
 impl StatusCode {
-    /// The wire value.
-    pub const fn as_u32(self) -> u32 {
-        self as u32
-    }
-
-    /// The code of a wire value; `None` for a value this build does not know.
-    pub const fn from_u32(value: u32) -> Option<StatusCode> {
-        // `ALL` is in numeric order without gaps (tested below): the value is the index.
-        if (value as usize) < Self::ALL.len() {
-            Some(Self::ALL[value as usize])
-        } else {
-            None
-        }
-    }
-
     /// `true` only for [`StatusCode::Ok`].
     pub const fn is_ok(self) -> bool {
         matches!(self, StatusCode::Ok)
-    }
-}
-
-impl core::fmt::Display for StatusCode {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
-impl From<StatusCode> for u32 {
-    fn from(code: StatusCode) -> u32 {
-        code as u32
     }
 }
 

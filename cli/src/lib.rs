@@ -10,8 +10,8 @@
 
 // The core's modules and the service, under the paths the files name (`crate::scene::...`).
 use cablevib::{
-    caspr, estimator, identify, input_file, kinematics, modal, output_file, scene, study,
-    trajectory,
+    calibration, caspr, estimator, identify, input_file, kinematics, modal, output_file, scene,
+    study, trajectory,
 };
 use cablevib_service as service;
 

@@ -54,7 +54,7 @@ CONNECT_POLL_S = 0.05
 
 def fail(message):
     """Prints a one-line error and exits with status 2."""
-    print("controller.py: error: " + message, file=sys.stderr)
+    print("%s: error: %s" % (os.path.basename(sys.argv[0]), message), file=sys.stderr)
     sys.exit(2)
 
 
@@ -363,6 +363,14 @@ def run(ports, a):
             print("controller.py: t = %.1f s  f1 = %.6f Hz (%s)  margin = %s" % (
                 t, s.last_estimate.f1_hz, cv.status_str(s.last_estimate.status),
                 "none yet" if m is None else "%.6f Hz (%s)" % (m.margin_hz, cv.status_str(m.status))))
+            e = s.last_estimate
+            if e.vibration_samples > 0:
+                # measured_*_status: cv.MEASURED_OK (0) with a number, another code without.
+                print("controller.py:   measured: near f1 %.3f Hz (status %d), end-effector mode "
+                      "%.3f Hz (status %d, model %.3f Hz); vibration samples %d taken, %d refused, "
+                      "%d lost" % (e.measured_f1_hz, e.measured_f1_status, e.measured_ee_mode_hz,
+                                   e.measured_ee_mode_status, e.ee_mode_hz, e.vibration_samples,
+                                   e.vibration_refused, e.vibration_lost))
             if hold is not None:
                 print("controller.py: T_min set-point %.3f N" % hold.setpoint_n)
         ports.wait(WAIT_SLICE_S)

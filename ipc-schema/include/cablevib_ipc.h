@@ -1,5 +1,5 @@
 /*
- * cablevib_ipc.h - C/C++ mirror of the cablevib-ipc message types (schema v3).
+ * cablevib_ipc.h - C/C++ mirror of the cablevib-ipc message types (schema v4).
  *
  * The Rust crate cablevib-ipc (ipc-schema/) is the reference; its test tests/c_header.rs
  * compiles this header and checks every size, alignment, offset, field type and constant
@@ -22,7 +22,7 @@
 
 /* ---- constants --------------------------------------------------------------------------- */
 
-#define CABLEVIB_SCHEMA_VERSION 3u
+#define CABLEVIB_SCHEMA_VERSION 4u
 #define CABLEVIB_MAX_CABLES 16
 #define CABLEVIB_MAX_STIFFNESS_DIM 6
 
@@ -31,6 +31,7 @@
 #define CABLEVIB_SERVICE_T_MIN "cablevib/t_min"       /* publish-subscribe, TminSetpoint   */
 #define CABLEVIB_SERVICE_ESTIMATE "cablevib/estimate" /* publish-subscribe, EstimateSample */
 #define CABLEVIB_SERVICE_MARGIN "cablevib/margin"     /* request-response, MarginRequest -> MarginResponse */
+#define CABLEVIB_SERVICE_VIBRATION "cablevib/vibration" /* publish-subscribe, VibrationSample (optional) */
 
 /* Event services (wake-ups for peers that block instead of busy-polling): notify
  * CABLEVIB_SERVICE_WAKE_SERVICE after sending a pose, set-point or margin request; cablevib
@@ -42,20 +43,28 @@
 #define CABLEVIB_EVENT_ID_MARGIN_REQUEST 3
 #define CABLEVIB_EVENT_ID_ESTIMATE 4
 #define CABLEVIB_EVENT_ID_MARGIN_RESPONSE 5
+#define CABLEVIB_EVENT_ID_VIBRATION 6
 
 /* ee_mode_age_cycles / t_min_required_age_cycles when nothing is known. */
 #define CABLEVIB_AGE_UNKNOWN 4294967295u
+
+/* measured_age_ns when no frequency is measured. */
+#define CABLEVIB_MEASURED_AGE_UNKNOWN 18446744073709551615u
+
+/* cablevib_vibration_sample_t.flags: angular_velocity_rad_s holds a measurement. */
+#define CABLEVIB_VIBRATION_FLAG_ANGULAR_VELOCITY 1u
 
 /* The range of a margin request's required_f1_hz, Hz; outside it: status invalid_request. */
 #define CABLEVIB_REQUIRED_F1_MIN_HZ 1e-6
 #define CABLEVIB_REQUIRED_F1_MAX_HZ 1e6
 
 /* iceoryx2 type names; they end with "::v<CABLEVIB_SCHEMA_VERSION>". */
-#define CABLEVIB_TYPE_NAME_POSE_SAMPLE "cablevib::PoseSample::v3"
-#define CABLEVIB_TYPE_NAME_T_MIN_SETPOINT "cablevib::TminSetpoint::v3"
-#define CABLEVIB_TYPE_NAME_ESTIMATE_SAMPLE "cablevib::EstimateSample::v3"
-#define CABLEVIB_TYPE_NAME_MARGIN_REQUEST "cablevib::MarginRequest::v3"
-#define CABLEVIB_TYPE_NAME_MARGIN_RESPONSE "cablevib::MarginResponse::v3"
+#define CABLEVIB_TYPE_NAME_POSE_SAMPLE "cablevib::PoseSample::v4"
+#define CABLEVIB_TYPE_NAME_T_MIN_SETPOINT "cablevib::TminSetpoint::v4"
+#define CABLEVIB_TYPE_NAME_ESTIMATE_SAMPLE "cablevib::EstimateSample::v4"
+#define CABLEVIB_TYPE_NAME_MARGIN_REQUEST "cablevib::MarginRequest::v4"
+#define CABLEVIB_TYPE_NAME_MARGIN_RESPONSE "cablevib::MarginResponse::v4"
+#define CABLEVIB_TYPE_NAME_VIBRATION_SAMPLE "cablevib::VibrationSample::v4"
 
 /* Status codes (the uint32_t `status` fields). Values never change; treat unknown ones as
  * "not valid". */
@@ -76,6 +85,20 @@ typedef enum cablevib_status {
     CABLEVIB_STATUS_CABLE_SLACK = 11,
     CABLEVIB_STATUS_MECHANISM = 12
 } cablevib_status_t;
+
+/* Measured-frequency status codes (the uint32_t measured_*_status fields of the estimate):
+ * only OK carries a number. Values never change; treat unknown ones as "no measurement". */
+typedef enum cablevib_measured_status {
+    CABLEVIB_MEASURED_OK = 0,
+    CABLEVIB_MEASURED_NO_INPUT = 1,       /* no vibration sample within the silence time */
+    CABLEVIB_MEASURED_FILLING = 2,        /* the window is not full yet */
+    CABLEVIB_MEASURED_NO_PEAK = 3,        /* no peak stands above the band's floor */
+    CABLEVIB_MEASURED_NO_MODEL = 4,       /* the model's frequency is not known */
+    CABLEVIB_MEASURED_BAND_TOO_HIGH = 5,  /* the band reaches above 0.4 x the sample rate */
+    CABLEVIB_MEASURED_BAND_TOO_LOW = 6,   /* the band reaches below 4 / window */
+    CABLEVIB_MEASURED_INPUT_FAULT = 7,    /* too many missing samples in the window */
+    CABLEVIB_MEASURED_RATE_TOO_HIGH = 8   /* the sample rate is above the service's maximum */
+} cablevib_measured_status_t;
 
 #ifdef __cplusplus
 #define CABLEVIB_IOX2_TYPE_NAME(name) static constexpr const char* IOX2_TYPE_NAME = name;
@@ -111,7 +134,7 @@ typedef struct cablevib_t_min_setpoint {
     double per_cable_t_min_n[CABLEVIB_MAX_CABLES];  /* N */
 } cablevib_t_min_setpoint_t;
 
-/* Estimate, cablevib -> controller on CABLEVIB_SERVICE_ESTIMATE. 520 bytes.
+/* Estimate, cablevib -> controller on CABLEVIB_SERVICE_ESTIMATE. 592 bytes.
  * Echoes the answered pose's sequence and timestamp: compare pose_sequence with the last pose
  * sent to tell fresh from stale. Values are meaningful only when status == CABLEVIB_STATUS_OK
  * (frequencies are NaN otherwise). */
@@ -147,6 +170,20 @@ typedef struct cablevib_estimate_sample {
     uint64_t skipped_poses;         /* poses skipped since start (a newer one was queued) */
     uint64_t sequence;              /* the service's estimate count: 1 for its first estimate,
                                      * +1 per estimate; a gap is estimates lost on the way */
+    double measured_f1_hz;          /* dominant measured frequency near f1_hz, Hz; NaN unless
+                                     * measured_f1_status == CABLEVIB_MEASURED_OK */
+    double f1_residual_hz;          /* f1_hz - measured_f1_hz (model - measured), Hz; NaN when
+                                     * either is absent */
+    double measured_ee_mode_hz;     /* dominant measured frequency near ee_mode_hz, Hz */
+    double ee_mode_residual_hz;     /* ee_mode_hz - measured_ee_mode_hz, Hz */
+    uint64_t measured_age_ns;       /* receive_timestamp_ns - centre of the measured window, ns;
+                                     * CABLEVIB_MEASURED_AGE_UNKNOWN when nothing is measured */
+    uint32_t measured_f1_status;    /* cablevib_measured_status_t */
+    uint32_t measured_ee_mode_status; /* cablevib_measured_status_t */
+    uint64_t vibration_samples;     /* vibration samples taken since start */
+    uint64_t vibration_refused;     /* refused since start (not finite, beyond 1e6 m/s^2,
+                                     * sequence or time not after the previous) */
+    uint64_t vibration_lost;        /* never received since start (sequence gaps) */
 } cablevib_estimate_sample_t;
 
 /* Margin query, controller -> cablevib on CABLEVIB_SERVICE_MARGIN (request). 24 bytes. */
@@ -177,6 +214,19 @@ typedef struct cablevib_margin_response {
     uint64_t timestamp_ns;      /* cablevib's CLOCK_MONOTONIC when answering, ns */
 } cablevib_margin_response_t;
 
+/* A sample of a sensor on the platform (accelerometer or IMU), sensor -> cablevib on
+ * CABLEVIB_SERVICE_VIBRATION (optional). 72 bytes. Send every sample in order: sequence is
+ * its place in the sensor's uniform sample grid, timestamp_ns when it was taken. */
+typedef struct cablevib_vibration_sample {
+    CABLEVIB_IOX2_TYPE_NAME(CABLEVIB_TYPE_NAME_VIBRATION_SAMPLE)
+    uint64_t sequence;                 /* +1 per sample; a gap is a lost sample */
+    uint64_t timestamp_ns;             /* CLOCK_MONOTONIC when the sample was taken, ns */
+    double acceleration_m_s2[3];       /* specific force along the sensor's axes, m/s^2 */
+    double angular_velocity_rad_s[3];  /* rad/s, when flags has the angular-velocity bit */
+    uint32_t flags;                    /* CABLEVIB_VIBRATION_FLAG_ANGULAR_VELOCITY or 0 */
+    uint32_t reserved0;                /* padding: write 0 */
+} cablevib_vibration_sample_t;
+
 /* ---- layout checks (the Rust side asserts the same numbers) ------------------------------- */
 
 CABLEVIB_STATIC_ASSERT(sizeof(double) == 8, "cablevib_ipc.h needs 64-bit IEEE doubles");
@@ -184,12 +234,15 @@ CABLEVIB_STATIC_ASSERT(sizeof(cablevib_pose_sample_t) == 80, "cablevib_pose_samp
 CABLEVIB_STATIC_ASSERT(offsetof(cablevib_pose_sample_t, flags) == 72, "cablevib_pose_sample_t layout");
 CABLEVIB_STATIC_ASSERT(sizeof(cablevib_t_min_setpoint_t) == 160, "cablevib_t_min_setpoint_t size");
 CABLEVIB_STATIC_ASSERT(offsetof(cablevib_t_min_setpoint_t, per_cable_t_min_n) == 32, "cablevib_t_min_setpoint_t layout");
-CABLEVIB_STATIC_ASSERT(sizeof(cablevib_estimate_sample_t) == 520, "cablevib_estimate_sample_t size");
+CABLEVIB_STATIC_ASSERT(sizeof(cablevib_estimate_sample_t) == 592, "cablevib_estimate_sample_t size");
 CABLEVIB_STATIC_ASSERT(offsetof(cablevib_estimate_sample_t, stiffness) == 192, "cablevib_estimate_sample_t layout");
 CABLEVIB_STATIC_ASSERT(offsetof(cablevib_estimate_sample_t, skipped_poses) == 504, "cablevib_estimate_sample_t layout");
 CABLEVIB_STATIC_ASSERT(offsetof(cablevib_estimate_sample_t, sequence) == 512, "cablevib_estimate_sample_t layout");
+CABLEVIB_STATIC_ASSERT(offsetof(cablevib_estimate_sample_t, measured_f1_hz) == 520, "cablevib_estimate_sample_t layout");
+CABLEVIB_STATIC_ASSERT(offsetof(cablevib_estimate_sample_t, vibration_lost) == 584, "cablevib_estimate_sample_t layout");
 CABLEVIB_STATIC_ASSERT(sizeof(cablevib_margin_request_t) == 24, "cablevib_margin_request_t size");
 CABLEVIB_STATIC_ASSERT(sizeof(cablevib_margin_response_t) == 64, "cablevib_margin_response_t size");
 CABLEVIB_STATIC_ASSERT(offsetof(cablevib_margin_response_t, timestamp_ns) == 56, "cablevib_margin_response_t layout");
+CABLEVIB_STATIC_ASSERT(sizeof(cablevib_vibration_sample_t) == 72, "cablevib_vibration_sample_t size");
 
 #endif /* CABLEVIB_IPC_H */

@@ -20,10 +20,12 @@ STATUS_OK means the numbers of that message are not valid (frequencies are NaN).
 
 import ctypes
 
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 MAX_CABLES = 16
 MAX_STIFFNESS_DIM = 6
 AGE_UNKNOWN = 4294967295
+MEASURED_AGE_UNKNOWN = 18446744073709551615
+VIBRATION_FLAG_ANGULAR_VELOCITY = 1
 
 # The range of MarginRequest.required_f1_hz, Hz (outside: STATUS_INVALID_REQUEST).
 REQUIRED_F1_MIN_HZ = 1e-6
@@ -34,6 +36,7 @@ SERVICE_POSE = "cablevib/pose"
 SERVICE_T_MIN = "cablevib/t_min"
 SERVICE_ESTIMATE = "cablevib/estimate"
 SERVICE_MARGIN = "cablevib/margin"
+SERVICE_VIBRATION = "cablevib/vibration"
 SERVICE_WAKE_SERVICE = "cablevib/wake/service"
 SERVICE_WAKE_CONTROLLER = "cablevib/wake/controller"
 
@@ -43,6 +46,7 @@ EVENT_ID_T_MIN = 2
 EVENT_ID_MARGIN_REQUEST = 3
 EVENT_ID_ESTIMATE = 4
 EVENT_ID_MARGIN_RESPONSE = 5
+EVENT_ID_VIBRATION = 6
 
 # iceoryx2 service attribute keys and the units value.
 ATTR_SCHEMA_VERSION = "cablevib.schema_version"
@@ -83,6 +87,17 @@ STATUS_NAMES = {
     12: "mechanism",
 }
 
+# Measured-frequency status codes (measured_*_status); only MEASURED_OK has a number.
+MEASURED_OK = 0
+MEASURED_NO_INPUT = 1
+MEASURED_FILLING = 2
+MEASURED_NO_PEAK = 3
+MEASURED_NO_MODEL = 4
+MEASURED_BAND_TOO_HIGH = 5
+MEASURED_BAND_TOO_LOW = 6
+MEASURED_INPUT_FAULT = 7
+MEASURED_RATE_TOO_HIGH = 8
+
 
 def status_str(value):
     """The name of a wire status value, or "unknown(N)"."""
@@ -107,7 +122,7 @@ class PoseSample(ctypes.Structure):
         ("reserved0", ctypes.c_uint32),
     ]
 
-    TYPE_NAME = "cablevib::PoseSample::v3"
+    TYPE_NAME = "cablevib::PoseSample::v4"
 
     @classmethod
     def type_name(cls):
@@ -127,7 +142,7 @@ class TminSetpoint(ctypes.Structure):
         ("per_cable_t_min_n", ctypes.c_double * 16),
     ]
 
-    TYPE_NAME = "cablevib::TminSetpoint::v3"
+    TYPE_NAME = "cablevib::TminSetpoint::v4"
 
     @classmethod
     def type_name(cls):
@@ -136,7 +151,7 @@ class TminSetpoint(ctypes.Structure):
 
 
 class EstimateSample(ctypes.Structure):
-    """`cablevib_estimate_sample_t` of the C header: 520 bytes, alignment 8."""
+    """`cablevib_estimate_sample_t` of the C header: 592 bytes, alignment 8."""
 
     _fields_ = [
         ("pose_sequence", ctypes.c_uint64),
@@ -157,9 +172,19 @@ class EstimateSample(ctypes.Structure):
         ("eigen_residual", ctypes.c_double),
         ("skipped_poses", ctypes.c_uint64),
         ("sequence", ctypes.c_uint64),
+        ("measured_f1_hz", ctypes.c_double),
+        ("f1_residual_hz", ctypes.c_double),
+        ("measured_ee_mode_hz", ctypes.c_double),
+        ("ee_mode_residual_hz", ctypes.c_double),
+        ("measured_age_ns", ctypes.c_uint64),
+        ("measured_f1_status", ctypes.c_uint32),
+        ("measured_ee_mode_status", ctypes.c_uint32),
+        ("vibration_samples", ctypes.c_uint64),
+        ("vibration_refused", ctypes.c_uint64),
+        ("vibration_lost", ctypes.c_uint64),
     ]
 
-    TYPE_NAME = "cablevib::EstimateSample::v3"
+    TYPE_NAME = "cablevib::EstimateSample::v4"
 
     @classmethod
     def type_name(cls):
@@ -176,7 +201,7 @@ class MarginRequest(ctypes.Structure):
         ("required_f1_hz", ctypes.c_double),
     ]
 
-    TYPE_NAME = "cablevib::MarginRequest::v3"
+    TYPE_NAME = "cablevib::MarginRequest::v4"
 
     @classmethod
     def type_name(cls):
@@ -199,7 +224,27 @@ class MarginResponse(ctypes.Structure):
         ("timestamp_ns", ctypes.c_uint64),
     ]
 
-    TYPE_NAME = "cablevib::MarginResponse::v3"
+    TYPE_NAME = "cablevib::MarginResponse::v4"
+
+    @classmethod
+    def type_name(cls):
+        """The iceoryx2 payload type name (equal to the Rust Message::TYPE_NAME)."""
+        return cls.TYPE_NAME
+
+
+class VibrationSample(ctypes.Structure):
+    """`cablevib_vibration_sample_t` of the C header: 72 bytes, alignment 8."""
+
+    _fields_ = [
+        ("sequence", ctypes.c_uint64),
+        ("timestamp_ns", ctypes.c_uint64),
+        ("acceleration_m_s2", ctypes.c_double * 3),
+        ("angular_velocity_rad_s", ctypes.c_double * 3),
+        ("flags", ctypes.c_uint32),
+        ("reserved0", ctypes.c_uint32),
+    ]
+
+    TYPE_NAME = "cablevib::VibrationSample::v4"
 
     @classmethod
     def type_name(cls):
@@ -225,7 +270,7 @@ LAYOUT = {
         ("reserved0", 28, 4),
         ("per_cable_t_min_n", 32, 128),
     )),
-    EstimateSample: (520, 8, (
+    EstimateSample: (592, 8, (
         ("pose_sequence", 0, 8),
         ("pose_timestamp_ns", 8, 8),
         ("receive_timestamp_ns", 16, 8),
@@ -244,6 +289,16 @@ LAYOUT = {
         ("eigen_residual", 496, 8),
         ("skipped_poses", 504, 8),
         ("sequence", 512, 8),
+        ("measured_f1_hz", 520, 8),
+        ("f1_residual_hz", 528, 8),
+        ("measured_ee_mode_hz", 536, 8),
+        ("ee_mode_residual_hz", 544, 8),
+        ("measured_age_ns", 552, 8),
+        ("measured_f1_status", 560, 4),
+        ("measured_ee_mode_status", 564, 4),
+        ("vibration_samples", 568, 8),
+        ("vibration_refused", 576, 8),
+        ("vibration_lost", 584, 8),
     )),
     MarginRequest: (24, 8, (
         ("sequence", 0, 8),
@@ -260,6 +315,14 @@ LAYOUT = {
         ("margin_ratio", 40, 8),
         ("t_min_required_n", 48, 8),
         ("timestamp_ns", 56, 8),
+    )),
+    VibrationSample: (72, 8, (
+        ("sequence", 0, 8),
+        ("timestamp_ns", 8, 8),
+        ("acceleration_m_s2", 16, 24),
+        ("angular_velocity_rad_s", 40, 24),
+        ("flags", 64, 4),
+        ("reserved0", 68, 4),
     )),
 }
 

@@ -9,6 +9,7 @@
 
 use crate::messages::{
     EstimateSample, MarginRequest, MarginResponse, Message, PoseSample, TminSetpoint,
+    VibrationSample,
 };
 
 /// Layout of one field.
@@ -150,8 +151,8 @@ frozen_layout! {
 }
 
 frozen_layout! {
-    /// Layout of [`EstimateSample`]: 520 bytes.
-    ESTIMATE_SAMPLE_LAYOUT = EstimateSample { size: 520, align: 8, fields: {
+    /// Layout of [`EstimateSample`]: 592 bytes.
+    ESTIMATE_SAMPLE_LAYOUT = EstimateSample { size: 592, align: 8, fields: {
         pose_sequence: u64 = 0,
         pose_timestamp_ns: u64 = 8,
         receive_timestamp_ns: u64 = 16,
@@ -170,6 +171,16 @@ frozen_layout! {
         eigen_residual: f64 = 496,
         skipped_poses: u64 = 504,
         sequence: u64 = 512,
+        measured_f1_hz: f64 = 520,
+        f1_residual_hz: f64 = 528,
+        measured_ee_mode_hz: f64 = 536,
+        ee_mode_residual_hz: f64 = 544,
+        measured_age_ns: u64 = 552,
+        measured_f1_status: u32 = 560,
+        measured_ee_mode_status: u32 = 564,
+        vibration_samples: u64 = 568,
+        vibration_refused: u64 = 576,
+        vibration_lost: u64 = 584,
     } }
 }
 
@@ -197,14 +208,27 @@ frozen_layout! {
     } }
 }
 
+frozen_layout! {
+    /// Layout of [`VibrationSample`]: 72 bytes.
+    VIBRATION_SAMPLE_LAYOUT = VibrationSample { size: 72, align: 8, fields: {
+        sequence: u64 = 0,
+        timestamp_ns: u64 = 8,
+        acceleration_m_s2: [f64; 3] = 16,
+        angular_velocity_rad_s: [f64; 3] = 40,
+        flags: u32 = 64,
+        reserved0: u32 = 68,
+    } }
+}
+
 /// The layout of every message type, in the order pose, T_min, estimate, margin request,
-/// margin response.
-pub const ALL_LAYOUTS: [StructLayout; 5] = [
+/// margin response, vibration.
+pub const ALL_LAYOUTS: [StructLayout; 6] = [
     POSE_SAMPLE_LAYOUT,
     T_MIN_SETPOINT_LAYOUT,
     ESTIMATE_SAMPLE_LAYOUT,
     MARGIN_REQUEST_LAYOUT,
     MARGIN_RESPONSE_LAYOUT,
+    VIBRATION_SAMPLE_LAYOUT,
 ];
 
 #[cfg(test)]

@@ -13,6 +13,7 @@
 //! | [`SERVICE_T_MIN`]     | publish-subscribe| [`TminSetpoint`]                            | controller → cablevib |
 //! | [`SERVICE_ESTIMATE`]  | publish-subscribe| [`EstimateSample`]                          | cablevib → controller |
 //! | [`SERVICE_MARGIN`]    | request-response | [`MarginRequest`] → [`MarginResponse`]      | controller ⇄ cablevib |
+//! | [`SERVICE_VIBRATION`] | publish-subscribe| [`VibrationSample`] (optional)              | sensor → cablevib     |
 //!
 //! Several instances share a machine by prefixing the names ([`prefixed`], [`ServiceNames`]).
 //!
@@ -59,7 +60,7 @@
 //! # Versioning
 //!
 //! Every iceoryx2 type name ends with `::v{SCHEMA_VERSION}` (e.g.
-//! `cablevib::PoseSample::v3`, [`Message::TYPE_NAME`]). iceoryx2 compares the type name, size
+//! `cablevib::PoseSample::v4`, [`Message::TYPE_NAME`]). iceoryx2 compares the type name, size
 //! and alignment of the payload when a port opens a service, so a peer built against another
 //! schema is refused at connect time (`IncompatibleTypes`; [`compat`] turns that into a
 //! readable message) instead of misreading bytes. The rule: **any change of a message's
@@ -103,17 +104,20 @@ pub use attributes::{
     schema_version_value, ALL_ATTRIBUTE_KEYS, ATTR_CABLEVIB_VERSION, ATTR_ELEMENTS_PER_CABLE,
     ATTR_ELEMENT_MODEL, ATTR_SCENE, ATTR_SCHEMA_VERSION, ATTR_UNITS, UNITS,
 };
+/// The measured-frequency status codes are the core's (`cablevib::measured`): one definition
+/// for the tracker and the wire.
+pub use cablevib::measured::MeasuredStatus;
 pub use compat::{explain_publish_subscribe_mismatch, explain_request_response_mismatch, TypeInfo};
 pub use messages::{
     EstimateSample, MarginRequest, MarginResponse, Message, PoseSample, SchemaError, TminSetpoint,
-    EE_MODE_AGE_UNKNOWN, IDENTITY_QUATERNION, REQUIRED_F1_MAX_HZ, REQUIRED_F1_MIN_HZ,
-    T_MIN_AGE_UNKNOWN,
+    VibrationSample, EE_MODE_AGE_UNKNOWN, IDENTITY_QUATERNION, MEASURED_AGE_UNKNOWN,
+    REQUIRED_F1_MAX_HZ, REQUIRED_F1_MIN_HZ, T_MIN_AGE_UNKNOWN, VIBRATION_FLAG_ANGULAR_VELOCITY,
 };
 pub use names::{
     check_instance, prefixed, InstanceError, ServiceNames, ALL_SERVICES, EVENT_ID_ESTIMATE,
     EVENT_ID_MARGIN_REQUEST, EVENT_ID_MARGIN_RESPONSE, EVENT_ID_POSE, EVENT_ID_T_MIN,
-    INSTANCE_CHARACTERS, MAX_INSTANCE_LEN, SERVICE_ESTIMATE, SERVICE_MARGIN, SERVICE_POSE,
-    SERVICE_T_MIN, SERVICE_WAKE_CONTROLLER, SERVICE_WAKE_SERVICE,
+    EVENT_ID_VIBRATION, INSTANCE_CHARACTERS, MAX_INSTANCE_LEN, SERVICE_ESTIMATE, SERVICE_MARGIN,
+    SERVICE_POSE, SERVICE_T_MIN, SERVICE_VIBRATION, SERVICE_WAKE_CONTROLLER, SERVICE_WAKE_SERVICE,
 };
 pub use status::{status_str, StatusCode, StatusText};
 
@@ -125,7 +129,7 @@ pub use cablevib::scene::MAX_CABLES;
 pub const MAX_STIFFNESS_DIM: usize = 6;
 
 /// Version of the wire schema; every type name ends with `::v{SCHEMA_VERSION}`.
-pub const SCHEMA_VERSION: u32 = 3;
+pub const SCHEMA_VERSION: u32 = 4;
 
 /// `CLOCK_MONOTONIC` now, ns: the clock of every `*timestamp_ns` field. It is shared by all
 /// processes of a machine (it counts from boot), never jumps, and takes ~20 ns (vDSO, no

@@ -9,6 +9,7 @@ use iceoryx2::prelude::ZeroCopySend;
 
 use crate::status::StatusCode;
 use crate::{MAX_CABLES, MAX_STIFFNESS_DIM};
+use cablevib::measured::MeasuredStatus;
 
 /// What every cablevib message type provides besides its fields.
 pub trait Message: ZeroCopySend + Copy + Debug + Default + PartialEq + 'static {
@@ -62,7 +63,7 @@ pub const IDENTITY_QUATERNION: [f64; 4] = [1.0, 0.0, 0.0, 0.0];
 /// older ones are skipped (and counted in [`EstimateSample::skipped_poses`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::PoseSample::v3")]
+#[type_name("cablevib::PoseSample::v4")]
 pub struct PoseSample {
     /// Sender's sequence number, incremented by one per pose; echoed by the estimate.
     pub sequence: u64,
@@ -154,7 +155,7 @@ impl Default for PoseSample {
 }
 
 impl Message for PoseSample {
-    const TYPE_NAME: &'static str = "cablevib::PoseSample::v3";
+    const TYPE_NAME: &'static str = "cablevib::PoseSample::v4";
     const C_NAME: &'static str = "cablevib_pose_sample_t";
     const SERVICE: &'static str = crate::SERVICE_POSE;
 }
@@ -170,7 +171,7 @@ impl Message for PoseSample {
 /// cable `i < per_cable_count` uses `per_cable_t_min_n[i]` and the others `t_min_n`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::TminSetpoint::v3")]
+#[type_name("cablevib::TminSetpoint::v4")]
 pub struct TminSetpoint {
     /// Sender's sequence number, incremented by one per set-point.
     pub sequence: u64,
@@ -259,7 +260,7 @@ impl Default for TminSetpoint {
 }
 
 impl Message for TminSetpoint {
-    const TYPE_NAME: &'static str = "cablevib::TminSetpoint::v3";
+    const TYPE_NAME: &'static str = "cablevib::TminSetpoint::v4";
     const C_NAME: &'static str = "cablevib_t_min_setpoint_t";
     const SERVICE: &'static str = crate::SERVICE_T_MIN;
 }
@@ -279,20 +280,22 @@ pub const REQUIRED_F1_MAX_HZ: f64 = 1e6;
 
 /// [`EstimateSample::ee_mode_age_cycles`] when no end-effector mode is known.
 pub const EE_MODE_AGE_UNKNOWN: u32 = u32::MAX;
+/// [`EstimateSample::measured_age_ns`] when no frequency is measured.
+pub const MEASURED_AGE_UNKNOWN: u64 = u64::MAX;
 /// [`MarginResponse::t_min_required_age_cycles`] when no T_min is known for the requirement.
 pub const T_MIN_AGE_UNKNOWN: u32 = u32::MAX;
 
 /// One estimator cycle's result, cablevib → controller on
 /// [`SERVICE_ESTIMATE`](crate::SERVICE_ESTIMATE).
 ///
-/// 520 bytes, alignment 8. It answers the pose whose `sequence` and `timestamp_ns` it echoes
+/// 592 bytes, alignment 8. It answers the pose whose `sequence` and `timestamp_ns` it echoes
 /// in `pose_sequence` / `pose_timestamp_ns`; the controller compares them with the pose it
 /// last sent to tell a fresh estimate from a stale one. The numeric fields are meaningful only
 /// when `status` is [`StatusCode::Ok`]; otherwise frequencies are NaN and tensions and
 /// stiffness may be zero.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::EstimateSample::v3")]
+#[type_name("cablevib::EstimateSample::v4")]
 pub struct EstimateSample {
     /// `sequence` of the pose this estimate answers.
     pub pose_sequence: u64,
@@ -346,6 +349,33 @@ pub struct EstimateSample {
     /// next one. A subscriber that sees a gap (for one publisher) lost that many estimates in
     /// its queue; a restarted service starts again from 1.
     pub sequence: u64,
+    /// The dominant measured frequency near `f1_hz`, Hz, from the vibration input
+    /// ([`VibrationSample`]s on [`SERVICE_VIBRATION`](crate::SERVICE_VIBRATION)); NaN unless
+    /// `measured_f1_status` is [`MeasuredStatus::Ok`].
+    pub measured_f1_hz: f64,
+    /// `f1_hz − measured_f1_hz`, Hz (model − measured); NaN when either is absent.
+    pub f1_residual_hz: f64,
+    /// The dominant measured frequency near `ee_mode_hz`, Hz; NaN unless
+    /// `measured_ee_mode_status` is [`MeasuredStatus::Ok`].
+    pub measured_ee_mode_hz: f64,
+    /// `ee_mode_hz − measured_ee_mode_hz`, Hz; NaN when either is absent.
+    pub ee_mode_residual_hz: f64,
+    /// Age of the measured frequencies: `receive_timestamp_ns` minus the centre of the
+    /// window they describe (the vibration samples' clock), ns; [`MEASURED_AGE_UNKNOWN`]
+    /// (`u64::MAX`) when neither is measured.
+    pub measured_age_ns: u64,
+    /// A [`MeasuredStatus`] as `u32`: why `measured_f1_hz` is or is not a number
+    /// (`no_input` while no vibration arrives).
+    pub measured_f1_status: u32,
+    /// A [`MeasuredStatus`] as `u32` for `measured_ee_mode_hz`.
+    pub measured_ee_mode_status: u32,
+    /// Vibration samples taken since the service started.
+    pub vibration_samples: u64,
+    /// Vibration samples refused since the service started (a component not finite or beyond
+    /// ±1e6 m/s², a sequence or timestamp not after the previous sample's).
+    pub vibration_refused: u64,
+    /// Vibration samples never received since the service started (gaps in the sequence).
+    pub vibration_lost: u64,
 }
 
 impl EstimateSample {
@@ -371,6 +401,16 @@ impl EstimateSample {
             eigen_residual: 0.0,
             skipped_poses: 0,
             sequence: 0,
+            measured_f1_hz: 0.0,
+            f1_residual_hz: 0.0,
+            measured_ee_mode_hz: 0.0,
+            ee_mode_residual_hz: 0.0,
+            measured_age_ns: 0,
+            measured_f1_status: 0,
+            measured_ee_mode_status: 0,
+            vibration_samples: 0,
+            vibration_refused: 0,
+            vibration_lost: 0,
         }
     }
 
@@ -383,7 +423,20 @@ impl EstimateSample {
         e.ee_mode_hz = f64::NAN;
         e.ee_mode_age_cycles = EE_MODE_AGE_UNKNOWN;
         e.eigen_residual = f64::NAN;
+        e.set_measured_none(MeasuredStatus::NoInput);
         e
+    }
+
+    /// No measured frequencies, for `status` (both tracks): NaN frequencies and residuals,
+    /// age [`MEASURED_AGE_UNKNOWN`].
+    pub const fn set_measured_none(&mut self, status: MeasuredStatus) {
+        self.measured_f1_hz = f64::NAN;
+        self.f1_residual_hz = f64::NAN;
+        self.measured_ee_mode_hz = f64::NAN;
+        self.ee_mode_residual_hz = f64::NAN;
+        self.measured_age_ns = MEASURED_AGE_UNKNOWN;
+        self.measured_f1_status = status as u32;
+        self.measured_ee_mode_status = status as u32;
     }
 
     /// The status as a [`StatusCode`] (`None` for a code this build does not know).
@@ -468,7 +521,7 @@ impl Default for EstimateSample {
 }
 
 impl Message for EstimateSample {
-    const TYPE_NAME: &'static str = "cablevib::EstimateSample::v3";
+    const TYPE_NAME: &'static str = "cablevib::EstimateSample::v4";
     const C_NAME: &'static str = "cablevib_estimate_sample_t";
     const SERVICE: &'static str = crate::SERVICE_ESTIMATE;
 }
@@ -481,7 +534,7 @@ impl Message for EstimateSample {
 /// [`SERVICE_MARGIN`](crate::SERVICE_MARGIN). 24 bytes, alignment 8.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::MarginRequest::v3")]
+#[type_name("cablevib::MarginRequest::v4")]
 pub struct MarginRequest {
     /// Requester's sequence number; echoed as [`MarginResponse::request_sequence`].
     pub sequence: u64,
@@ -526,7 +579,7 @@ impl Default for MarginRequest {
 }
 
 impl Message for MarginRequest {
-    const TYPE_NAME: &'static str = "cablevib::MarginRequest::v3";
+    const TYPE_NAME: &'static str = "cablevib::MarginRequest::v4";
     const C_NAME: &'static str = "cablevib_margin_request_t";
     const SERVICE: &'static str = crate::SERVICE_MARGIN;
 }
@@ -536,7 +589,7 @@ impl Message for MarginRequest {
 /// Frequencies and margins are NaN unless `status` is [`StatusCode::Ok`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::MarginResponse::v3")]
+#[type_name("cablevib::MarginResponse::v4")]
 pub struct MarginResponse {
     /// `sequence` of the request answered.
     pub request_sequence: u64,
@@ -650,9 +703,107 @@ impl Default for MarginResponse {
 }
 
 impl Message for MarginResponse {
-    const TYPE_NAME: &'static str = "cablevib::MarginResponse::v3";
+    const TYPE_NAME: &'static str = "cablevib::MarginResponse::v4";
     const C_NAME: &'static str = "cablevib_margin_response_t";
     const SERVICE: &'static str = crate::SERVICE_MARGIN;
+}
+
+// ---------------------------------------------------------------------------------------------
+// VibrationSample
+// ---------------------------------------------------------------------------------------------
+
+/// [`VibrationSample::flags`] bit: `angular_velocity_rad_s` holds a measurement (an IMU);
+/// clear for an accelerometer alone.
+pub const VIBRATION_FLAG_ANGULAR_VELOCITY: u32 = 1;
+
+/// One sample of a sensor on the platform (an accelerometer or IMU), sensor → cablevib on
+/// [`SERVICE_VIBRATION`](crate::SERVICE_VIBRATION). Optional: without it every estimate
+/// says `no_input` in its measured fields and is otherwise unchanged.
+///
+/// 72 bytes, alignment 8. `sequence` gives the sample's place in the sensor's uniform sample
+/// grid (a gap is a lost sample) and `timestamp_ns` the time it was taken (the sensor's time,
+/// not its arrival), from which the service learns the sample period: send every sample, in
+/// order.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, ZeroCopySend)]
+#[type_name("cablevib::VibrationSample::v4")]
+pub struct VibrationSample {
+    /// Sender's sequence number, incremented by one per sample.
+    pub sequence: u64,
+    /// `CLOCK_MONOTONIC` when the sample was taken, ns.
+    pub timestamp_ns: u64,
+    /// Specific force (acceleration minus gravity, what an accelerometer reads) along three
+    /// axes fixed to the platform (the sensor's own), m/s². The measured frequencies use the
+    /// sum of the three axes' power, which does not depend on how the sensor is turned.
+    pub acceleration_m_s2: [f64; 3],
+    /// Angular velocity about the same axes, rad/s, when the
+    /// [`VIBRATION_FLAG_ANGULAR_VELOCITY`] flag is set (zero otherwise). Carried for
+    /// recording and offline identification; the live estimate uses the accelerations.
+    pub angular_velocity_rad_s: [f64; 3],
+    /// [`VIBRATION_FLAG_ANGULAR_VELOCITY`]; other bits: write 0, receivers ignore them.
+    pub flags: u32,
+    /// Explicit padding: write 0.
+    pub reserved0: u32,
+}
+
+impl VibrationSample {
+    /// All fields zero.
+    pub const fn zeroed() -> VibrationSample {
+        VibrationSample {
+            sequence: 0,
+            timestamp_ns: 0,
+            acceleration_m_s2: [0.0; 3],
+            angular_velocity_rad_s: [0.0; 3],
+            flags: 0,
+            reserved0: 0,
+        }
+    }
+
+    /// An accelerometer sample (no angular velocity).
+    pub const fn acceleration(
+        sequence: u64,
+        timestamp_ns: u64,
+        acceleration_m_s2: [f64; 3],
+    ) -> VibrationSample {
+        VibrationSample {
+            sequence,
+            timestamp_ns,
+            acceleration_m_s2,
+            angular_velocity_rad_s: [0.0; 3],
+            flags: 0,
+            reserved0: 0,
+        }
+    }
+
+    /// An IMU sample: accelerations (m/s²) and angular velocity (rad/s).
+    pub const fn imu(
+        sequence: u64,
+        timestamp_ns: u64,
+        acceleration_m_s2: [f64; 3],
+        angular_velocity_rad_s: [f64; 3],
+    ) -> VibrationSample {
+        VibrationSample {
+            sequence,
+            timestamp_ns,
+            acceleration_m_s2,
+            angular_velocity_rad_s,
+            flags: VIBRATION_FLAG_ANGULAR_VELOCITY,
+            reserved0: 0,
+        }
+    }
+}
+
+impl Default for VibrationSample {
+    /// [`VibrationSample::zeroed`].
+    fn default() -> VibrationSample {
+        VibrationSample::zeroed()
+    }
+}
+
+impl Message for VibrationSample {
+    const TYPE_NAME: &'static str = "cablevib::VibrationSample::v4";
+    const C_NAME: &'static str = "cablevib_vibration_sample_t";
+    const SERVICE: &'static str = crate::SERVICE_VIBRATION;
 }
 
 #[cfg(test)]

@@ -6,6 +6,9 @@ pub const SERVICE_POSE: &str = "cablevib/pose";
 pub const SERVICE_T_MIN: &str = "cablevib/t_min";
 /// Publish-subscribe service of [`EstimateSample`](crate::EstimateSample)s (cablevib → controller).
 pub const SERVICE_ESTIMATE: &str = "cablevib/estimate";
+/// Publish-subscribe service of [`VibrationSample`](crate::VibrationSample)s (a sensor on
+/// the platform → cablevib), optional.
+pub const SERVICE_VIBRATION: &str = "cablevib/vibration";
 /// Request-response service: [`MarginRequest`](crate::MarginRequest) →
 /// [`MarginResponse`](crate::MarginResponse).
 pub const SERVICE_MARGIN: &str = "cablevib/margin";
@@ -29,13 +32,17 @@ pub const EVENT_ID_MARGIN_REQUEST: usize = 3;
 pub const EVENT_ID_ESTIMATE: usize = 4;
 /// Event id: a margin response was sent on [`SERVICE_MARGIN`].
 pub const EVENT_ID_MARGIN_RESPONSE: usize = 5;
+/// Event id: a vibration sample was sent on [`SERVICE_VIBRATION`] (optional: the service
+/// drains the vibration samples whenever it wakes).
+pub const EVENT_ID_VIBRATION: usize = 6;
 
-/// Every base service name, in the order pose, T_min, estimate, margin.
-pub const ALL_SERVICES: [&str; 4] = [
+/// Every base service name, in the order pose, T_min, estimate, margin, vibration.
+pub const ALL_SERVICES: [&str; 5] = [
     SERVICE_POSE,
     SERVICE_T_MIN,
     SERVICE_ESTIMATE,
     SERVICE_MARGIN,
+    SERVICE_VIBRATION,
 ];
 
 /// `base` prefixed with an instance name: `"{instance}/{base}"`, or `base` itself when
@@ -86,7 +93,7 @@ pub fn check_instance(instance: &str) -> Result<(), InstanceError> {
     Ok(())
 }
 
-/// The four service names of one cablevib instance.
+/// The service names of one cablevib instance.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ServiceNames {
     /// [`SERVICE_POSE`], prefixed.
@@ -97,6 +104,8 @@ pub struct ServiceNames {
     pub estimate: String,
     /// [`SERVICE_MARGIN`], prefixed.
     pub margin: String,
+    /// [`SERVICE_VIBRATION`], prefixed.
+    pub vibration: String,
     /// [`SERVICE_WAKE_SERVICE`] (event), prefixed.
     pub wake_service: String,
     /// [`SERVICE_WAKE_CONTROLLER`] (event), prefixed.
@@ -111,14 +120,21 @@ impl ServiceNames {
             t_min: prefixed(instance, SERVICE_T_MIN),
             estimate: prefixed(instance, SERVICE_ESTIMATE),
             margin: prefixed(instance, SERVICE_MARGIN),
+            vibration: prefixed(instance, SERVICE_VIBRATION),
             wake_service: prefixed(instance, SERVICE_WAKE_SERVICE),
             wake_controller: prefixed(instance, SERVICE_WAKE_CONTROLLER),
         }
     }
 
-    /// The names in the order pose, T_min, estimate, margin.
-    pub fn all(&self) -> [&str; 4] {
-        [&self.pose, &self.t_min, &self.estimate, &self.margin]
+    /// The names in the order pose, T_min, estimate, margin, vibration.
+    pub fn all(&self) -> [&str; 5] {
+        [
+            &self.pose,
+            &self.t_min,
+            &self.estimate,
+            &self.margin,
+            &self.vibration,
+        ]
     }
 
     /// The event service names, in the order wake-service, wake-controller.
@@ -180,7 +196,8 @@ mod tests {
                 "r/cablevib/pose",
                 "r/cablevib/t_min",
                 "r/cablevib/estimate",
-                "r/cablevib/margin"
+                "r/cablevib/margin",
+                "r/cablevib/vibration"
             ]
         );
         assert_eq!(ServiceNames::default().all(), ALL_SERVICES);

@@ -13,9 +13,10 @@ use std::process::Command;
 
 use cablevib_ipc::layout::{StructLayout, ALL_LAYOUTS};
 use cablevib_ipc::{
-    StatusCode, ALL_SERVICES, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST, EVENT_ID_MARGIN_RESPONSE,
-    EVENT_ID_POSE, EVENT_ID_T_MIN, MAX_CABLES, MAX_STIFFNESS_DIM, SCHEMA_VERSION, SERVICE_ESTIMATE,
-    SERVICE_MARGIN, SERVICE_POSE, SERVICE_T_MIN, SERVICE_WAKE_CONTROLLER, SERVICE_WAKE_SERVICE,
+    MeasuredStatus, StatusCode, ALL_SERVICES, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST,
+    EVENT_ID_MARGIN_RESPONSE, EVENT_ID_POSE, EVENT_ID_T_MIN, EVENT_ID_VIBRATION, MAX_CABLES,
+    MAX_STIFFNESS_DIM, SCHEMA_VERSION, SERVICE_ESTIMATE, SERVICE_MARGIN, SERVICE_POSE,
+    SERVICE_T_MIN, SERVICE_VIBRATION, SERVICE_WAKE_CONTROLLER, SERVICE_WAKE_SERVICE,
 };
 
 fn include_dir() -> PathBuf {
@@ -37,6 +38,10 @@ fn c_stem(c_name: &str) -> String {
 
 fn status_c_name(code: StatusCode) -> String {
     format!("CABLEVIB_STATUS_{}", code.as_str().to_ascii_uppercase())
+}
+
+fn measured_c_name(code: MeasuredStatus) -> String {
+    format!("CABLEVIB_MEASURED_{}", code.as_str().to_ascii_uppercase())
 }
 
 /// Every constant the header must define, as (C name, value as C would print it).
@@ -81,6 +86,22 @@ fn expected_constants() -> Vec<(String, String)> {
             format!("\"{SERVICE_MARGIN}\""),
         ),
         (
+            "CABLEVIB_SERVICE_VIBRATION".into(),
+            format!("\"{SERVICE_VIBRATION}\""),
+        ),
+        (
+            "CABLEVIB_EVENT_ID_VIBRATION".into(),
+            EVENT_ID_VIBRATION.to_string(),
+        ),
+        (
+            "CABLEVIB_MEASURED_AGE_UNKNOWN".into(),
+            cablevib_ipc::MEASURED_AGE_UNKNOWN.to_string(),
+        ),
+        (
+            "CABLEVIB_VIBRATION_FLAG_ANGULAR_VELOCITY".into(),
+            cablevib_ipc::VIBRATION_FLAG_ANGULAR_VELOCITY.to_string(),
+        ),
+        (
             "CABLEVIB_SERVICE_WAKE_SERVICE".into(),
             format!("\"{SERVICE_WAKE_SERVICE}\""),
         ),
@@ -105,7 +126,7 @@ fn expected_constants() -> Vec<(String, String)> {
     ];
     assert_eq!(
         ALL_SERVICES.len(),
-        4,
+        5,
         "a new service needs a header constant and a line here"
     );
     for l in ALL_LAYOUTS {
@@ -131,7 +152,7 @@ fn parse_header() -> (BTreeMap<String, String>, BTreeMap<String, u32>) {
             if !name.contains('(') {
                 defines.insert(name.to_owned(), value.trim_end_matches('u').to_owned());
             }
-        } else if line.starts_with("CABLEVIB_STATUS_") {
+        } else if line.starts_with("CABLEVIB_STATUS_") || line.starts_with("CABLEVIB_MEASURED_") {
             let (name, value) = line
                 .trim_end_matches(',')
                 .split_once('=')
@@ -154,6 +175,11 @@ fn header_constants_match_rust() {
     let expected: BTreeMap<String, u32> = StatusCode::ALL
         .iter()
         .map(|&c| (status_c_name(c), c.as_u32()))
+        .chain(
+            MeasuredStatus::ALL
+                .iter()
+                .map(|&c| (measured_c_name(c), c.as_u32())),
+        )
         .collect();
     assert_eq!(
         statuses, expected,
@@ -278,6 +304,9 @@ fn expected_output() -> String {
     for c in StatusCode::ALL {
         s += &format!("const {} {}\n", status_c_name(c), c.as_u32());
     }
+    for c in MeasuredStatus::ALL {
+        s += &format!("const {} {}\n", measured_c_name(c), c.as_u32());
+    }
     s
 }
 
@@ -319,8 +348,8 @@ fn c_program() -> String {
             p += &format!("  printf(\"const {name} %llu\\n\", (unsigned long long)({name}));\n");
         }
     }
-    for c in StatusCode::ALL {
-        let name = status_c_name(c);
+    let codes = StatusCode::ALL.iter().map(|&c| status_c_name(c));
+    for name in codes.chain(MeasuredStatus::ALL.iter().map(|&c| measured_c_name(c))) {
         p += &format!("  printf(\"const {name} %u\\n\", (unsigned)({name}));\n");
     }
     p += "  return 0;\n}\n";

@@ -171,11 +171,11 @@ fn other_payload_type_is_refused_with_a_clear_error() -> TestResult {
     // The crate's explanation names both sides.
     let text = explain_publish_subscribe_mismatch::<ipc::Service, TminSetpoint>(&name);
     assert!(
-        text.contains("`cablevib::PoseSample::v3` (80 bytes, align 8)"),
+        text.contains("`cablevib::PoseSample::v4` (80 bytes, align 8)"),
         "{text}"
     );
     assert!(
-        text.contains("`cablevib::TminSetpoint::v3` (160 bytes, align 8)"),
+        text.contains("`cablevib::TminSetpoint::v4` (160 bytes, align 8)"),
         "{text}"
     );
     assert!(text.contains(&name), "{text}");
@@ -186,7 +186,7 @@ fn other_payload_type_is_refused_with_a_clear_error() -> TestResult {
 /// that forgot to bump the version.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::PoseSample::v3")]
+#[type_name("cablevib::PoseSample::v4")]
 struct PoseWithExtraField {
     sequence: u64,
     timestamp_ns: u64,
@@ -200,7 +200,7 @@ struct PoseWithExtraField {
 /// Same layout as the real pose under the next schema version's name.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
-#[type_name("cablevib::PoseSample::v4")]
+#[type_name("cablevib::PoseSample::v5")]
 struct PoseNextVersion {
     sequence: u64,
     timestamp_ns: u64,
@@ -289,7 +289,7 @@ fn margin_request_response_round_trip_and_mismatch() -> TestResult {
     let text =
         explain_request_response_mismatch::<ipc::Service, MarginResponse, MarginRequest>(&name);
     assert!(
-        text.contains("carries request `cablevib::MarginRequest::v3` (24 bytes, align 8) and response `cablevib::MarginResponse::v3` (64 bytes, align 8)"),
+        text.contains("carries request `cablevib::MarginRequest::v4` (24 bytes, align 8) and response `cablevib::MarginResponse::v4` (64 bytes, align 8)"),
         "{text}"
     );
     Ok(())
@@ -300,5 +300,5 @@ fn explanation_of_a_missing_service_is_still_readable() {
     let name = unique_name("missing", cablevib_ipc::SERVICE_ESTIMATE);
     let text = explain_publish_subscribe_mismatch::<ipc::Service, EstimateSample>(&name);
     assert!(text.contains("could not be read"), "{text}");
-    assert!(text.contains("cablevib::EstimateSample::v3"), "{text}");
+    assert!(text.contains("cablevib::EstimateSample::v4"), "{text}");
 }

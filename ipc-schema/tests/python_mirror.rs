@@ -20,12 +20,13 @@ use std::path::{Path, PathBuf};
 
 use cablevib_ipc::layout::{FieldLayout, StructLayout, ALL_LAYOUTS};
 use cablevib_ipc::{
-    StatusCode, ALL_ATTRIBUTE_KEYS, ALL_SERVICES, ATTR_CABLEVIB_VERSION, ATTR_ELEMENTS_PER_CABLE,
-    ATTR_ELEMENT_MODEL, ATTR_SCENE, ATTR_SCHEMA_VERSION, ATTR_UNITS, EE_MODE_AGE_UNKNOWN,
-    EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST, EVENT_ID_MARGIN_RESPONSE, EVENT_ID_POSE,
-    EVENT_ID_T_MIN, MAX_CABLES, MAX_STIFFNESS_DIM, REQUIRED_F1_MAX_HZ, REQUIRED_F1_MIN_HZ,
-    SCHEMA_VERSION, SERVICE_ESTIMATE, SERVICE_MARGIN, SERVICE_POSE, SERVICE_T_MIN,
-    SERVICE_WAKE_CONTROLLER, SERVICE_WAKE_SERVICE, T_MIN_AGE_UNKNOWN, UNITS,
+    MeasuredStatus, StatusCode, ALL_ATTRIBUTE_KEYS, ALL_SERVICES, ATTR_CABLEVIB_VERSION,
+    ATTR_ELEMENTS_PER_CABLE, ATTR_ELEMENT_MODEL, ATTR_SCENE, ATTR_SCHEMA_VERSION, ATTR_UNITS,
+    EE_MODE_AGE_UNKNOWN, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST, EVENT_ID_MARGIN_RESPONSE,
+    EVENT_ID_POSE, EVENT_ID_T_MIN, EVENT_ID_VIBRATION, MAX_CABLES, MAX_STIFFNESS_DIM,
+    MEASURED_AGE_UNKNOWN, REQUIRED_F1_MAX_HZ, REQUIRED_F1_MIN_HZ, SCHEMA_VERSION, SERVICE_ESTIMATE,
+    SERVICE_MARGIN, SERVICE_POSE, SERVICE_T_MIN, SERVICE_VIBRATION, SERVICE_WAKE_CONTROLLER,
+    SERVICE_WAKE_SERVICE, T_MIN_AGE_UNKNOWN, UNITS, VIBRATION_FLAG_ANGULAR_VELOCITY,
 };
 
 const BLESS_ENV: &str = "CABLEVIB_BLESS";
@@ -88,11 +89,16 @@ fn render_constants(out: &mut String) {
         EE_MODE_AGE_UNKNOWN, T_MIN_AGE_UNKNOWN,
         "one AGE_UNKNOWN, as in the C header"
     );
-    let ints: [(&str, usize); 4] = [
-        ("SCHEMA_VERSION", SCHEMA_VERSION as usize),
-        ("MAX_CABLES", MAX_CABLES),
-        ("MAX_STIFFNESS_DIM", MAX_STIFFNESS_DIM),
-        ("AGE_UNKNOWN", T_MIN_AGE_UNKNOWN as usize),
+    let ints: [(&str, u64); 6] = [
+        ("SCHEMA_VERSION", SCHEMA_VERSION as u64),
+        ("MAX_CABLES", MAX_CABLES as u64),
+        ("MAX_STIFFNESS_DIM", MAX_STIFFNESS_DIM as u64),
+        ("AGE_UNKNOWN", T_MIN_AGE_UNKNOWN as u64),
+        ("MEASURED_AGE_UNKNOWN", MEASURED_AGE_UNKNOWN),
+        (
+            "VIBRATION_FLAG_ANGULAR_VELOCITY",
+            VIBRATION_FLAG_ANGULAR_VELOCITY as u64,
+        ),
     ];
     out.push('\n');
     for (name, v) in ints {
@@ -107,13 +113,14 @@ fn render_constants(out: &mut String) {
     ] {
         writeln!(out, "{name} = {v:e}").unwrap();
     }
-    assert_eq!(ALL_SERVICES.len(), 4, "a new service needs a line here");
+    assert_eq!(ALL_SERVICES.len(), 5, "a new service needs a line here");
     out.push_str("\n# iceoryx2 service names (prefix them with prefixed()).\n");
     for (name, v) in [
         ("SERVICE_POSE", SERVICE_POSE),
         ("SERVICE_T_MIN", SERVICE_T_MIN),
         ("SERVICE_ESTIMATE", SERVICE_ESTIMATE),
         ("SERVICE_MARGIN", SERVICE_MARGIN),
+        ("SERVICE_VIBRATION", SERVICE_VIBRATION),
         ("SERVICE_WAKE_SERVICE", SERVICE_WAKE_SERVICE),
         ("SERVICE_WAKE_CONTROLLER", SERVICE_WAKE_CONTROLLER),
     ] {
@@ -126,6 +133,7 @@ fn render_constants(out: &mut String) {
         ("EVENT_ID_MARGIN_REQUEST", EVENT_ID_MARGIN_REQUEST),
         ("EVENT_ID_ESTIMATE", EVENT_ID_ESTIMATE),
         ("EVENT_ID_MARGIN_RESPONSE", EVENT_ID_MARGIN_RESPONSE),
+        ("EVENT_ID_VIBRATION", EVENT_ID_VIBRATION),
     ] {
         writeln!(out, "{name} = {v}").unwrap();
     }
@@ -159,6 +167,13 @@ fn render_status(out: &mut String) {
         writeln!(out, "    {}: {},", c.as_u32(), py_str(c.as_str())).unwrap();
     }
     out.push_str("}\n");
+    out.push_str(
+        "\n# Measured-frequency status codes (measured_*_status); only MEASURED_OK has a number.\n",
+    );
+    for c in MeasuredStatus::ALL {
+        let upper = c.as_str().to_ascii_uppercase();
+        writeln!(out, "MEASURED_{upper} = {}", c.as_u32()).unwrap();
+    }
     out.push_str(
         r#"
 

@@ -18,7 +18,7 @@ use std::time::Instant;
 
 use cablevib::scene::Scene;
 use cablevib_service::bench::bench_mode;
-use cablevib_service::{BenchIpcConfig, WaitMode};
+use cablevib_service::{BenchIpcConfig, BenchVibration, WaitMode};
 
 /// utime + stime of process `pid`, s.
 fn cpu_s(pid: u32) -> f64 {
@@ -51,6 +51,7 @@ fn main() {
         cpu: None,
         json: false,
         alloc_pool: true,
+        vibration: BenchVibration::Off,
     };
     let instance = format!("cablevib_bench_{}_event", std::process::id());
     let dir = std::env::temp_dir();
@@ -89,7 +90,9 @@ fn main() {
             }
             let t0 = Instant::now();
             let cpu0 = monitor.as_ref().map_or(0.0, |m| cpu_s(m.id()));
-            let r = bench_mode(&scene, WaitMode::Event, &cfg).expect("bench");
+            let r = bench_mode(&scene, WaitMode::Event, &cfg)
+                .expect("bench")
+                .remove(0);
             let wall = t0.elapsed().as_secs_f64();
             let cpu = monitor.as_ref().map(|m| cpu_s(m.id()) - cpu0);
             if let Some(mut m) = monitor {

@@ -9,8 +9,8 @@
 //! Python and Rust.
 
 use cablevib_ipc::{
-    status_str, EstimateSample, MarginResponse, PoseSample, TminSetpoint, MAX_CABLES,
-    MAX_STIFFNESS_DIM,
+    status_str, EstimateSample, MarginResponse, MeasuredStatus, PoseSample, TminSetpoint,
+    MAX_CABLES, MAX_STIFFNESS_DIM, MEASURED_AGE_UNKNOWN,
 };
 use nalgebra::{Matrix3, SymmetricEigen};
 use serde::{Deserialize, Serialize};
@@ -83,6 +83,35 @@ pub struct EstimateRecord {
     pub eigen_residual: f64,
     /// `skipped_poses`.
     pub skipped_poses: u64,
+    /// `measured_f1_hz`: the measured frequency near f1, Hz (null when not measured).
+    pub measured_f1_hz: f64,
+    /// `f1_residual_hz`: model − measured, Hz.
+    pub f1_residual_hz: f64,
+    /// `measured_ee_mode_hz`: the measured frequency near the end-effector mode, Hz.
+    pub measured_ee_mode_hz: f64,
+    /// `ee_mode_residual_hz`: model − measured, Hz.
+    pub ee_mode_residual_hz: f64,
+    /// `measured_age_ns` (null when neither frequency is measured).
+    pub measured_age_ns: Option<u64>,
+    /// `measured_f1_status` (a measured-status code).
+    pub measured_f1_status: u32,
+    /// Its name (`ok`, `no_input`, ...; `unknown` for a code this build does not know).
+    pub measured_f1_status_name: &'static str,
+    /// `measured_ee_mode_status`.
+    pub measured_ee_mode_status: u32,
+    /// Its name.
+    pub measured_ee_mode_status_name: &'static str,
+    /// `vibration_samples`.
+    pub vibration_samples: u64,
+    /// `vibration_refused`.
+    pub vibration_refused: u64,
+    /// `vibration_lost`.
+    pub vibration_lost: u64,
+}
+
+/// The name of a measured-status code (`unknown` for one this build does not know).
+fn measured_status_name(code: u32) -> &'static str {
+    MeasuredStatus::from_u32(code).map_or("unknown", MeasuredStatus::as_str)
 }
 
 /// Eigenvalues (ascending) of the symmetric part of the 3×3 block of `k` (row-major,
@@ -135,6 +164,19 @@ impl EstimateRecord {
             tension_iterations: e.tension_iterations,
             eigen_residual: e.eigen_residual,
             skipped_poses: e.skipped_poses,
+            measured_f1_hz: e.measured_f1_hz,
+            f1_residual_hz: e.f1_residual_hz,
+            measured_ee_mode_hz: e.measured_ee_mode_hz,
+            ee_mode_residual_hz: e.ee_mode_residual_hz,
+            measured_age_ns: (e.measured_age_ns != MEASURED_AGE_UNKNOWN)
+                .then_some(e.measured_age_ns),
+            measured_f1_status: e.measured_f1_status,
+            measured_f1_status_name: measured_status_name(e.measured_f1_status),
+            measured_ee_mode_status: e.measured_ee_mode_status,
+            measured_ee_mode_status_name: measured_status_name(e.measured_ee_mode_status),
+            vibration_samples: e.vibration_samples,
+            vibration_refused: e.vibration_refused,
+            vibration_lost: e.vibration_lost,
         }
     }
 }
@@ -317,6 +359,24 @@ pub fn estimate_schema() -> String {
             ("tension_iterations", i()),
             ("eigen_residual", n()),
             ("skipped_poses", i()),
+            ("measured_f1_hz", n()),
+            ("f1_residual_hz", n()),
+            ("measured_ee_mode_hz", n()),
+            ("ee_mode_residual_hz", n()),
+            (
+                "measured_age_ns",
+                r#"{"type": ["integer", "null"], "minimum": 0}"#.into(),
+            ),
+            ("measured_f1_status", i()),
+            ("measured_f1_status_name", r#"{"type": "string"}"#.into()),
+            ("measured_ee_mode_status", i()),
+            (
+                "measured_ee_mode_status_name",
+                r#"{"type": "string"}"#.into(),
+            ),
+            ("vibration_samples", i()),
+            ("vibration_refused", i()),
+            ("vibration_lost", i()),
         ],
     )
 }
@@ -397,8 +457,34 @@ mod tests {
         }
         assert_eq!(v["f1_hz"].as_f64().unwrap().to_bits(), e.f1_hz.to_bits());
         assert!(v["ee_mode_hz"].is_null() && v["margin_hz"].is_null());
-        // The schema is JSON.
-        let _: serde_json::Value = serde_json::from_str(&estimate_schema()).unwrap();
+        // Without vibration input: the statuses by name, no age.
+        assert_eq!(v["measured_ee_mode_status_name"], "no_input");
+        assert!(v["measured_age_ns"].is_null() && v["measured_ee_mode_hz"].is_null());
+        // A measured end-effector mode, bit for bit, with its age.
+        e.measured_ee_mode_hz = 29.0 + 1.0 / 3.0;
+        e.ee_mode_residual_hz = -0.1 - 0.2;
+        e.measured_age_ns = 1_000_000_007;
+        e.measured_ee_mode_status = MeasuredStatus::Ok.as_u32();
+        e.measured_f1_status = 99;
+        let v = serde_json::to_value(EstimateRecord::new(&e, f64::NAN)).unwrap();
+        assert_eq!(
+            v["measured_ee_mode_hz"].as_f64().unwrap().to_bits(),
+            e.measured_ee_mode_hz.to_bits()
+        );
+        assert_eq!(
+            v["ee_mode_residual_hz"].as_f64().unwrap().to_bits(),
+            e.ee_mode_residual_hz.to_bits()
+        );
+        assert_eq!(v["measured_age_ns"], 1_000_000_007u64);
+        assert_eq!(v["measured_ee_mode_status_name"], "ok");
+        assert_eq!(v["measured_f1_status_name"], "unknown");
+        // The schema is JSON and names exactly the record's fields.
+        let schema: serde_json::Value = serde_json::from_str(&estimate_schema()).unwrap();
+        let mut fields: Vec<&String> = v.as_object().unwrap().keys().collect();
+        let mut props: Vec<&String> = schema["properties"].as_object().unwrap().keys().collect();
+        fields.sort();
+        props.sort();
+        assert_eq!(fields, props);
         let _: serde_json::Value = serde_json::from_str(&margin_schema()).unwrap();
     }
 

@@ -61,6 +61,7 @@ pub fn frf<'py>(
             undamped,
         },
         dense: None,
+        progress: None,
     };
     let mut s = scene.inner.clone();
     if let Some(p) = position {

@@ -4,7 +4,7 @@
 
 use crate::convert::json_to_py;
 use crate::error::CablevibError;
-use cablevib::identify::{identify as run, IdentifyParams, WindowResult};
+use cablevib::identify::{identify_with_inputs as run, IdentifyParams, WindowResult};
 use pyo3::prelude::*;
 use serde_json::{json, Value};
 
@@ -24,17 +24,18 @@ fn num(x: f64) -> Value {
 /// ``from_hz``, ``to_hz`` (the band; the sample rate must be at least 2.5 × ``to_hz``),
 /// ``max_order``, ``block_rows``, ``frequency_tol``, ``damping_tol``, ``mac_min``,
 /// ``max_damping``, ``window`` (s; ``None``: one window), ``overlap`` as the command line's
-/// ``--from-hz`` … ``--overlap``.
+/// ``--from-hz`` … ``--overlap``. ``inputs`` (N × m, or N; e.g. a measured force in N): the
+/// modes come from the H1 estimate and its modal fit, as ``--input``.
 ///
 /// Returns ``{"windows": [{"index", "t_start_s", "t_end_s", "status", "samples", "rate_hz",
 /// "gaps", "nonfinite_samples", "modes": [{"frequency_hz", "damping_ratio",
 /// "frequency_std_hz", "damping_ratio_std", "frequency_spread_hz", "shape_re", "shape_im",
-/// "stable_poles", "order"}]}]}``, modes ascending. Raises CablevibError with a one-line
+/// "stable_poles", "order", "coherence" (H1's; None without inputs)}]}]}``, modes ascending. Raises CablevibError with a one-line
 /// reason on a bad record (time not increasing, rate too low for the band) or parameter.
 #[pyfunction]
 #[pyo3(signature = (t, channels, from_hz = 0.5, to_hz = 50.0, max_order = 60, block_rows = None,
                     frequency_tol = 0.01, damping_tol = 0.05, mac_min = 0.98, max_damping = 0.2,
-                    window = None, overlap = 0.5))]
+                    window = None, overlap = 0.5, inputs = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn identify<'py>(
     py: Python<'py>,
@@ -50,6 +51,7 @@ pub fn identify<'py>(
     max_damping: f64,
     window: Option<f64>,
     overlap: f64,
+    inputs: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let np = py.import("numpy")?;
     let f64s = |obj: &Bound<'py, PyAny>| -> PyResult<(Vec<f64>, Vec<usize>)> {
@@ -69,16 +71,23 @@ pub fn identify<'py>(
             "t: a 1-D array expected, got shape {ts:?}"
         )));
     }
-    let l = match ys[..] {
-        [n] if n == t.len() => 1,
-        [n, l] if n == t.len() => l,
-        _ => {
-            return Err(CablevibError::new_err(format!(
-                "channels: shape {ys:?}, expected ({},) or ({}, channels)",
-                t.len(),
-                t.len()
-            )))
+    let width = |name: &str, s: &[usize]| match s[..] {
+        [n] if n == t.len() => Ok(1),
+        [n, l] if n == t.len() => Ok(l),
+        _ => Err(CablevibError::new_err(format!(
+            "{name}: shape {s:?}, expected ({},) or ({}, {name})",
+            t.len(),
+            t.len()
+        ))),
+    };
+    let l = width("channels", &ys)?;
+    let (u, m) = match inputs {
+        Some(obj) => {
+            let (u, us) = f64s(obj)?;
+            let m = width("inputs", &us)?;
+            (u, m)
         }
+        None => (Vec::new(), 0),
     };
     let p = IdentifyParams {
         from_hz,
@@ -94,7 +103,7 @@ pub fn identify<'py>(
         ..IdentifyParams::default()
     };
     let w = py
-        .detach(|| run(&t, &y, l, &p))
+        .detach(|| run(&t, &y, l, &u, m, &p))
         .map_err(|e| CablevibError::new_err(e.to_string()))?;
     json_to_py(
         py,
@@ -117,6 +126,7 @@ fn window_json(r: &WindowResult) -> Value {
                 "shape_im": m.shape.iter().map(|z| num(z.im)).collect::<Vec<_>>(),
                 "stable_poles": m.stable_poles,
                 "order": m.order,
+                "coherence": num(m.coherence),
             })
         })
         .collect();

@@ -5,6 +5,7 @@
 //! |---|---|
 //! | `Scene.load(path_or_name)` | [`cablevib::scene::Scene::load`] |
 //! | `analyze(scene, ...)` | [`cablevib::study::analysis::analyze`] (what `cablevib analyze --json` prints) |
+//! | `calibrate(scene, measurements, fit=[...])` | [`cablevib::calibration::calibrate`] (what `cablevib calibrate --json` prints) |
 //! | `frf(scene, ...)` | [`cablevib::study::frf::frf`] (what `cablevib frf --json` prints) |
 //! | `identify(t, channels, ...)` | [`cablevib::identify::identify`] (what `cablevib identify --json` prints per window, without the model) |
 //! | `Estimator(scene).update(...)` | [`cablevib::estimator::Estimator::update`] |
@@ -16,6 +17,7 @@
 //! numpy arrays (SI units, named in every attribute).
 
 mod analysis;
+mod calibrate;
 mod convert;
 mod error;
 mod estimator;
@@ -35,6 +37,7 @@ fn cablevib_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("CablevibError", m.py().get_type::<error::CablevibError>())?;
     m.add_function(wrap_pyfunction!(analysis::analyze, m)?)?;
     m.add_function(wrap_pyfunction!(frf::frf, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(identify::identify, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::sweep_scene, m)?)?;
     m.add_class::<scene::PyScene>()?;

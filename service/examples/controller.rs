@@ -31,7 +31,9 @@
 
 use std::time::{Duration, Instant};
 
-use cablevib_ipc::{monotonic_now_ns, status_str, MarginRequest, ServiceNames, TminSetpoint};
+use cablevib_ipc::{
+    monotonic_now_ns, status_str, MarginRequest, MeasuredStatus, ServiceNames, TminSetpoint,
+};
 use cablevib_service::hold::{
     F1Hold, HoldAction, HoldInput, HoldParams, DEFAULT_GUARD_HZ, DEFAULT_RELAX_BAND_HZ,
     DEFAULT_RELAX_RATE_N_PER_S,
@@ -297,6 +299,22 @@ fn main() -> anyhow::Result<()> {
                 e.f1_hz,
                 margin_hz
             );
+            if e.vibration_samples > 0 {
+                let measured_status_str =
+                    |c: u32| MeasuredStatus::from_u32(c).map_or("unknown", MeasuredStatus::as_str);
+                println!(
+                    "controller:   measured: near f1 {:.3} Hz ({}), end-effector mode {:.3} Hz \
+                     ({}, model {:.3} Hz); vibration samples {} taken, {} refused, {} lost",
+                    e.measured_f1_hz,
+                    measured_status_str(e.measured_f1_status),
+                    e.measured_ee_mode_hz,
+                    measured_status_str(e.measured_ee_mode_status),
+                    e.ee_mode_hz,
+                    e.vibration_samples,
+                    e.vibration_refused,
+                    e.vibration_lost
+                );
+            }
             if let Some(h) = &hold {
                 println!("controller: T_min set-point {:.3} N", h.hold.setpoint_n());
             }

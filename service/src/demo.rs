@@ -50,6 +50,10 @@ struct Seen {
     status: u32,
     f1_hz: f64,
     ee_mode_hz: f64,
+    measured_f1_hz: f64,
+    measured_ee_mode_hz: f64,
+    measured_status: [u32; 2],
+    measured_age_ns: u64,
 }
 
 /// Everything the controller thread recorded.
@@ -119,6 +123,10 @@ fn controller(
                 status: e.status,
                 f1_hz: e.f1_hz,
                 ee_mode_hz: e.ee_mode_hz,
+                measured_f1_hz: e.measured_f1_hz,
+                measured_ee_mode_hz: e.measured_ee_mode_hz,
+                measured_status: [e.measured_f1_status, e.measured_ee_mode_status],
+                measured_age_ns: e.measured_age_ns,
             });
         }
         if let Some(h) = &mut hold {
@@ -304,6 +312,28 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
         .shape
         .map(|kind| super::demo_shape::DemoShape::new(kind, a.rate_hz, scene))
         .transpose()?;
+    // The synthetic accelerometer starts with the replay, on the same circle.
+    let accelerometer =
+        if a.accelerometer && a.seconds <= super::demo_accel::MAX_SECONDS {
+            let (samples, zeta) = super::demo_accel::record(scene, &trajectory, a.seconds)?;
+            outln!(
+            "  accelerometer (synthetic): {} samples at 1 kHz, simulated vibration of the circle \
+             ({}), white force {} N, sensor noise {} m/s²",
+            samples.len(),
+            zeta.map_or("the scene's damping".to_owned(), |z| format!("ζ = {z} in every mode")),
+            super::demo_accel::FORCE_NOISE_N,
+            super::demo_accel::SENSOR_NOISE_M_S2
+        )?;
+            Some(super::demo_accel::spawn(&names, samples, stop.clone())?)
+        } else {
+            if a.accelerometer {
+                outln!(
+                    "  accelerometer (synthetic): off, the demo is longer than its {} s",
+                    super::demo_accel::MAX_SECONDS
+                )?;
+            }
+            None
+        };
     let replay = replay(
         a,
         &names,
@@ -325,6 +355,10 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
         .join()
         .map_err(|_| ServiceError::ThreadPanicked("controller"))?;
     let sent = replay?;
+    if let Some(t) = accelerometer {
+        t.join()
+            .map_err(|_| ServiceError::ThreadPanicked("accelerometer"))??;
+    }
     let server_report = server_report?;
     let log = log?;
     summary(a, &trajectory, sent, &server_report, &log)?;
@@ -476,6 +510,7 @@ fn summary(
             let hi = ee.iter().copied().fold(f64::NEG_INFINITY, f64::max);
             outln!("  end-effector mode frequency: {lo:.4} … {hi:.4} Hz")?;
         }
+        measured_summary(&ok)?;
     } else {
         outln!("  no valid estimate was received")?;
     }
@@ -521,5 +556,72 @@ fn summary(
         rtt.count,
         rtt.display_us()
     )?;
+    Ok(())
+}
+
+/// The measured frequencies of the ok estimates: per track, how often measured, the range,
+/// model − measured (median and largest magnitude), the median age, the other statuses.
+fn measured_summary(ok: &[&Seen]) -> Result<(), ServiceError> {
+    use cablevib_ipc::MeasuredStatus;
+    for (i, what) in ["f1", "end-effector mode"].into_iter().enumerate() {
+        let model = |s: &Seen| [s.f1_hz, s.ee_mode_hz][i];
+        let measured = |s: &Seen| [s.measured_f1_hz, s.measured_ee_mode_hz][i];
+        let mut res: Vec<f64> = ok
+            .iter()
+            .filter(|s| s.measured_status[i] == MeasuredStatus::Ok.as_u32())
+            .map(|s| model(s) - measured(s))
+            .filter(|r| r.is_finite())
+            .collect();
+        let mut counts = [0u64; 16];
+        for s in ok.iter().filter(|s| s.measured_status[i] != 0) {
+            counts[(s.measured_status[i] as usize).min(15)] += 1;
+        }
+        let others: Vec<String> = counts
+            .iter()
+            .enumerate()
+            .filter(|(_, &c)| c > 0)
+            .map(|(code, c)| {
+                let name = MeasuredStatus::from_u32(code as u32).map_or("unknown", |m| m.as_str());
+                format!("{name} {c}")
+            })
+            .collect();
+        if res.is_empty() {
+            outln!("  measured near {what}: none ({})", others.join(", "))?;
+            continue;
+        }
+        let lo = ok
+            .iter()
+            .map(|s| measured(s))
+            .filter(|x| x.is_finite())
+            .fold(f64::INFINITY, f64::min);
+        let hi = ok
+            .iter()
+            .map(|s| measured(s))
+            .filter(|x| x.is_finite())
+            .fold(f64::NEG_INFINITY, f64::max);
+        res.sort_by(|a, b| a.abs().total_cmp(&b.abs()));
+        let median = res[res.len() / 2];
+        let worst = res[res.len() - 1];
+        let mut ages: Vec<u64> = ok
+            .iter()
+            .filter(|s| s.measured_status[i] == 0)
+            .map(|s| s.measured_age_ns)
+            .collect();
+        ages.sort_unstable();
+        outln!(
+            "  measured near {what}: {} of {} estimates, {lo:.3} … {hi:.3} Hz; model − measured: \
+             median |{:.3}| Hz, largest {:+.3} Hz; age median {:.2} s{}",
+            res.len(),
+            ok.len(),
+            median.abs(),
+            worst,
+            ages[ages.len() / 2] as f64 * 1e-9,
+            if others.is_empty() {
+                String::new()
+            } else {
+                format!(" (otherwise {})", others.join(", "))
+            }
+        )?;
+    }
     Ok(())
 }

@@ -115,6 +115,13 @@ pub enum ServiceError {
         /// The operating system's reason.
         reason: String,
     },
+    /// The vibration tracker's parameters were refused.
+    #[error("vibration tracker: {0}")]
+    Tracker(#[from] cablevib::measured::ParamsError),
+    /// The demo's synthetic accelerometer could not be set up (its simulation's pose,
+    /// modal basis or path).
+    #[error("accelerometer: {0}")]
+    Accelerometer(String),
     /// The demo's service or controller stopped before the demo began.
     #[error("the service or the controller stopped before the demo began")]
     DemoNotStarted,

@@ -36,6 +36,7 @@
 
 pub mod bench;
 pub mod demo;
+pub mod demo_accel;
 mod demo_hold;
 pub mod demo_shape;
 mod error;
@@ -50,7 +51,9 @@ pub use cablevib::stats;
 use core::sync::atomic::AtomicBool;
 
 // The core's modules, under the paths the service's files name (`crate::scene::...`).
-use cablevib::{alloc_count, estimator, kinematics, output_file, scene, trajectory};
+use cablevib::{
+    alloc_count, estimator, kinematics, measured, modal, output_file, rng, scene, study, trajectory,
+};
 
 use crate::scene::Scene;
 
@@ -122,6 +125,9 @@ pub struct DemoConfig {
     /// Shape the replay's poses online with this shaper at the live end-effector mode
     /// (None: the poses as the trajectory gives them).
     pub shape: Option<crate::trajectory::shaping::ShaperKind>,
+    /// Publish the synthetic accelerometer's samples ([`demo_accel`]) on the vibration
+    /// service (demos of at most [`demo_accel::MAX_SECONDS`]).
+    pub accelerometer: bool,
 }
 
 /// What `cablevib bench-ipc` measures (the scene is passed beside it).
@@ -140,6 +146,21 @@ pub struct BenchIpcConfig {
     /// The service thread serves iceoryx2's per-loan allocations from the block pool
     /// ([`server::ServerConfig::alloc_pool`]).
     pub alloc_pool: bool,
+    /// Without, with, or alternately without and with an accelerometer sample before each
+    /// pose.
+    pub vibration: BenchVibration,
+}
+
+/// `bench-ipc --vibration`: whether the vibration input is fed while measuring.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BenchVibration {
+    /// No vibration sender (the latency without the input).
+    #[default]
+    Off,
+    /// One accelerometer sample (1 kHz sensor) before each pose.
+    On,
+    /// Both, in alternating blocks of the same run (side by side).
+    Both,
 }
 
 /// Routes `tracing` (and iceoryx2's logs) to stderr, filtered by `RUST_LOG` (default

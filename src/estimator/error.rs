@@ -79,6 +79,17 @@ pub enum EstimatorError {
     /// The sagged cables could not be loaded into the modal solver.
     #[error("sagged cable model: {0}")]
     SagModel(SagLoadError),
+    /// The cycle's answer fails the estimator's own check ([`super::check_answer`]): a
+    /// natural frequency, participation or static stiffness that is not finite, or a first
+    /// eigenvalue whose relative residual exceeds [`super::MAX_EIGEN_RESIDUAL`]. The
+    /// model's numbers left the range f64 resolves somewhere; never reported as ok.
+    #[error("the answer fails its check: {what} is {} (the model's numbers are out of f64's range here)", message_number(*value))]
+    Unverified {
+        /// What failed (e.g. `the first eigenvalue's relative residual`, `the static stiffness`).
+        what: &'static str,
+        /// Its value (NaN, ±∞, or the residual).
+        value: f64,
+    },
     /// The static stiffness does not hold one direction of the end-effector (a mechanism):
     /// there is no natural frequency (see [`crate::modal::free_direction`]).
     #[error("a mechanism: the end-effector direction {} has no stiffness, so there is no natural frequency", FreeDirection(.direction))]
@@ -145,6 +156,7 @@ impl EstimatorError {
             EstimatorError::Sag(e) => sag_status(e),
             EstimatorError::SagModel(_) => Status::InvalidInput,
             EstimatorError::Mechanism { .. } => Status::Mechanism,
+            EstimatorError::Unverified { .. } => Status::NotConverged,
         }
     }
 }
@@ -217,6 +229,10 @@ pub enum BuildError {
     /// A parameter is out of its bounds ([`super::EstimatorParams::check`]).
     #[error(transparent)]
     Params(#[from] super::ParamsError),
+    /// The model's preallocated buffers would be over the one memory budget (sagging FEM
+    /// cables hold each element's state: [`super::SAG_BYTES_PER_ELEMENT`]).
+    #[error(transparent)]
+    Memory(#[from] crate::memory_budget::OverBudget),
 }
 
 /// Errors of the offline reference pipeline ([`reference_analysis`](super::reference_analysis)

@@ -62,9 +62,12 @@ mod t_min;
 pub use auto::{resolve_auto, AutoChoice};
 pub use error::{BuildError, EstimatorError, ReferenceError, RejectedInput, TminQueryError};
 pub use estimate::{EeMode, Estimate, Status, Stiffness};
-pub use forward::EndEffector;
+pub use forward::{EndEffector, BEHIND_EXIT_COMPLIANCE_FLOOR};
 pub use inverse::{TminAnswer, MAX_EVALUATIONS as TMIN_QUERY_MAX_EVALUATIONS};
-pub use modes::{BasisError, EeModalBasis};
+pub use modes::{
+    check_shapes_memory, shape_nodes, shapes_memory_bytes, BasisError, EeModalBasis, SHAPES_REMEDY,
+    SHAPE_BYTES_PER_NODE,
+};
 pub use params::{EstimatorParams, ParamsError, SagModelParams};
 pub use pose_model::{build_models, PoseModel};
 pub use reference::{
@@ -132,6 +135,7 @@ impl Estimator {
             return Ok(est);
         }
         let n = scene.n_cables();
+        check_model_memory(scene)?;
         let mut est = Estimator {
             scene: scene.clone(),
             params,
@@ -424,6 +428,14 @@ impl Estimator {
         self.write_stiffness(e);
         e.eigen_evaluations = self.cycle.evaluations_since_load();
         check_mechanism(&self.scene, pose, &e.stiffness.k6, r1.lambda)?;
+        let (m6, _) = self.cycle.ee_mass();
+        check_answer(
+            r1.lambda,
+            r1.residual,
+            r1.ee_participation,
+            &e.stiffness.k6,
+            &m6,
+        )?;
         if self.params.ee_mode {
             self.ee_mode(&r1, warm_l.is_some(), e);
             e.eigen_evaluations = self.cycle.evaluations_since_load();
@@ -443,7 +455,8 @@ impl Estimator {
         }
         let thr = self.params.modal.ee_participation_min;
         match self.cycle.ee_mode_tracked(r1, warm) {
-            Ok(Some((lambda, p))) if p >= thr => {
+            // A mode without a finite, positive λ is no answer (check_answer's rule).
+            Ok(Some((lambda, p))) if p >= thr && lambda.is_finite() && lambda > 0.0 => {
                 self.last_ee = Some((lambda_to_hz(lambda), p, 0));
             }
             // Still being worked on: the last answer, one cycle older.
@@ -478,6 +491,75 @@ impl Estimator {
             dim: self.ee_dim(),
         };
     }
+}
+
+/// Memory a sagging FEM cable's model holds per element, bytes (its chords, tensions and
+/// recurrence state, preallocated when the estimator is built): 180 measured on the paper
+/// robot at N = 10⁵ and 3·10⁵ (154 and 442 MB resident for 8 cables), with margin.
+pub const SAG_BYTES_PER_ELEMENT: u64 = 200;
+
+/// Refuse an estimator whose preallocated model would be over the one memory budget: the
+/// sagging FEM cables' O(N) state (the taut models are O(1) in N).
+fn check_model_memory(scene: &Scene) -> Result<(), crate::memory_budget::OverBudget> {
+    if !scene.model.sag || scene.model.element == ElementKind::Continuous {
+        return Ok(());
+    }
+    let (n, c) = (scene.model.elements_per_cable, scene.n_cables());
+    let bytes = (n as u64)
+        .saturating_mul(c as u64)
+        .saturating_mul(SAG_BYTES_PER_ELEMENT);
+    crate::memory_budget::check(
+        || format!("the sagged model of {c} cables × {n} elements"),
+        bytes,
+        "use fewer elements per cable (the sagged FEM converges as 1/N²: docs/sag.md)",
+    )
+}
+
+/// Largest relative residual of the first eigenvalue an ok estimate may carry
+/// ([`crate::modal::Root::residual`]) beyond what rounding in D(λ) explains: 1e-6, a
+/// thousand times what the root search accepts (a Newton step below
+/// `ModalParams::newton_accept`, 1e-9, leaves a residual of a few 1e-9 at most).
+pub const MAX_EIGEN_RESIDUAL: f64 = 1e-6;
+
+/// The rounding allowance of the residual check, in units of ε·max|K|/(λ₁·max M_ii) (K the
+/// static stiffness, M the end-effector's mass matrix): 1e6. The residual is
+/// |μ|/(λ·max|D'|), and rounding leaves |μ| ~ ε·‖D(λ₁)‖ ≲ 2ε‖K‖ (λ₁ is at most a Rayleigh
+/// quotient of K) with max|D'| ≥ max M_ii, so a root λ₁ far below the stiffness's scale
+/// (T_min = 1e-100 N: λ₁ ~ 1e-98 rad²/s², exact to 1e-12 of its closed form, residual
+/// 2e75) is within rounding of a root; 1e6 covers the chains' accumulated rounding, and at
+/// the usual scale (λ₁ ~ 1e3, ‖K‖ ~ 1e6) the allowance is ~1e-9, below the threshold.
+pub const EIGEN_RESIDUAL_ROUNDING: f64 = 1e6;
+
+/// The estimator's check of its own answer before it calls it ok: λ₁ (rad²/s²) finite and
+/// positive; its relative `residual` at most [`MAX_EIGEN_RESIDUAL`] plus what rounding explains
+/// ([`EIGEN_RESIDUAL_ROUNDING`] · ε·max|K|/(λ₁·max M_ii), `k6` the static stiffness, `m6` the
+/// end-effector's mass matrix); its end-effector `participation` finite; every entry of
+/// `k6` finite. Else [`EstimatorError::Unverified`] naming what failed. The guard behind
+/// every ok (the cycle, the service, the offline modes), so an overflow anywhere in the
+/// model is a status, never a number. No allocation.
+pub fn check_answer(
+    lambda: f64,
+    residual: f64,
+    participation: f64,
+    k6: &Matrix6<f64>,
+    m6: &Matrix6<f64>,
+) -> Result<(), EstimatorError> {
+    let fail = |what: &'static str, value: f64| Err(EstimatorError::Unverified { what, value });
+    if !(lambda.is_finite() && lambda > 0.0) {
+        return fail("the first eigenvalue (rad²/s²)", lambda);
+    }
+    if let Some(&x) = k6.iter().find(|x| !x.is_finite()) {
+        return fail("the static stiffness", x);
+    }
+    let m_max = m6.diagonal().max();
+    let rounding = EIGEN_RESIDUAL_ROUNDING * f64::EPSILON * k6.abs().max() / (lambda * m_max);
+    if !(residual <= MAX_EIGEN_RESIDUAL + rounding) {
+        return fail("the first eigenvalue's relative residual", residual);
+    }
+    if !participation.is_finite() {
+        return fail("the end-effector participation", participation);
+    }
+    Ok(())
 }
 
 /// A mechanism of `scene` at `pose` — a motion of a rigid end-effector that moves none of

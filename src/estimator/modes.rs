@@ -31,7 +31,9 @@ impl Estimator {
     /// The first `k` natural frequencies (ascending) of the pose of the last successful
     /// [`Estimator::update`] into `out`; returns how many were written (min(k, out.len(),
     /// the model's number of modes)). When the last cycle was not ok, its error; before
-    /// any cycle, `Modal(NotLoaded)`.
+    /// any cycle, `Modal(NotLoaded)`. A mode whose λ is not finite and > 0 or whose
+    /// participation is not finite is [`EstimatorError::Unverified`] (the cycle's own rule,
+    /// [`super::check_answer`]), never a number.
     ///
     /// ```
     /// use cablevib::prelude::*;
@@ -51,7 +53,20 @@ impl Estimator {
     /// ```
     pub fn modes(&mut self, k: usize, out: &mut [Mode]) -> Result<usize, EstimatorError> {
         match self.estimate.status {
-            Status::Ok => Ok(self.cycle.modes(k, out)?),
+            Status::Ok => {
+                let n = self.cycle.modes(k, out)?;
+                for m in &out[..n] {
+                    if !(m.lambda.is_finite() && m.lambda > 0.0) {
+                        let (what, value) = ("an eigenvalue (rad²/s²)", m.lambda);
+                        return Err(EstimatorError::Unverified { what, value });
+                    }
+                    if !m.ee_participation.is_finite() {
+                        let (what, value) = ("an end-effector participation", m.ee_participation);
+                        return Err(EstimatorError::Unverified { what, value });
+                    }
+                }
+                Ok(n)
+            }
             _ => Err(self
                 .estimate
                 .error
@@ -71,6 +86,16 @@ impl Estimator {
         Ok(modal::dense_modes_ee(&k, &m, &ee, dim, vectors)?)
     }
 
+    /// The degrees of freedom of the last successful cycle's model: the size of
+    /// [`Self::dense_matrices`]' K and M (the end-effector's 3 or 6, 3 per interior node,
+    /// one axial DOF per node of a cable behind a pulley), the count every solver reports;
+    /// None for continuous cables or before an ok cycle.
+    pub fn model_dof(&self) -> Option<usize> {
+        (self.estimate.status == Status::Ok)
+            .then(|| self.cycle.assembled_dof())
+            .flatten()
+    }
+
     /// The assembled K (N/m) and M (kg) of the last successful cycle's models (DOF order of
     /// [`modal::assemble`]: the end-effector's 3 or 6 first, then each cable's interior
     /// nodes from the anchor).
@@ -85,8 +110,66 @@ impl Estimator {
     }
 }
 
+/// Bytes of one node's displacement in a mode shape (a `Vector3<f64>`).
+pub const SHAPE_BYTES_PER_NODE: u64 = 24;
+
+/// Modes beyond the K asked for that a mode-shape computation holds at its peak: a cluster
+/// cut by K is completed, and the recovery's working arrays (each chain's node function)
+/// take about as much again; measured within 10 % on the paper robot at N = 10⁵
+/// (`modes --modes 1, 12, 48`: 89, 333, 934 MB against 134, 346, 1037 MB estimated).
+const SHAPE_EXTRA_MODES: u64 = 6;
+
+/// The nodes of one mode shape of `scene`'s model: each cable's N + 1 nodes (`fem`,
+/// `catenary`, sagging FEM), 2 (`massless`) or `continuous_samples` (`continuous`), and the
+/// end-effector's 2.
+pub fn shape_nodes(scene: &crate::scene::Scene, continuous_samples: usize) -> u64 {
+    use crate::scene::ElementKind;
+    let per_cable = match scene.model.element {
+        ElementKind::Continuous => continuous_samples as u64,
+        ElementKind::Massless => 2,
+        _ => scene.model.elements_per_cable as u64 + 1,
+    };
+    per_cable * scene.n_cables() as u64 + 2
+}
+
+/// The memory a computation holding the shapes of `modes` modes of `scene` needs at its
+/// peak, bytes: ([`SHAPE_EXTRA_MODES`] + `modes`) × [`shape_nodes`] × `bytes_per_node_mode`
+/// ([`SHAPE_BYTES_PER_NODE`] for one set of shapes; more when a caller holds two sets or
+/// their CSV text). Saturating.
+pub fn shapes_memory_bytes(
+    scene: &crate::scene::Scene,
+    modes: usize,
+    continuous_samples: usize,
+    bytes_per_node_mode: u64,
+) -> u64 {
+    (modes as u64)
+        .saturating_add(SHAPE_EXTRA_MODES)
+        .saturating_mul(shape_nodes(scene, continuous_samples))
+        .saturating_mul(bytes_per_node_mode)
+}
+
+/// What to change when mode shapes are over the memory budget.
+pub const SHAPES_REMEDY: &str =
+    "use fewer elements per cable or fewer modes; the frequencies alone (analyze) need no shapes";
+
+/// Refuse holding the shapes of `modes` modes of `scene` when [`shapes_memory_bytes`] is
+/// over the one memory budget ([`crate::memory_budget`]).
+pub fn check_shapes_memory(
+    scene: &crate::scene::Scene,
+    modes: usize,
+    continuous_samples: usize,
+    bytes_per_node_mode: u64,
+) -> Result<(), crate::memory_budget::OverBudget> {
+    let nodes = shape_nodes(scene, continuous_samples);
+    crate::memory_budget::check(
+        || format!("the mode shapes of {modes} modes × {nodes} nodes"),
+        shapes_memory_bytes(scene, modes, continuous_samples, bytes_per_node_mode),
+        SHAPES_REMEDY,
+    )
+}
+
 /// Why [`Estimator::ee_modal_basis`] has no basis.
-#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum BasisError {
     /// The last cycle was not ok, or the eigen solve failed.
     #[error(transparent)]
@@ -94,6 +177,9 @@ pub enum BasisError {
     /// The mode shapes could not be recovered.
     #[error(transparent)]
     Shapes(#[from] modal::ShapeError),
+    /// The shapes would need more memory than the budget (refused before allocating).
+    #[error(transparent)]
+    Memory(#[from] crate::memory_budget::OverBudget),
 }
 
 /// The end-effector's view of the first modes of one pose: what a time response needs.
@@ -145,6 +231,10 @@ impl Estimator {
             flexibility.view_mut((0, 0), (dim, dim)).copy_from(&inv);
         }
         let k = k.max(1);
+        // The whole shapes (structured engines) or the dense model's n × n matrices: each
+        // refused past the one memory budget before it allocates.
+        let samples = ShapeParams::default().continuous_samples;
+        check_shapes_memory(&self.scene, k, samples, SHAPE_BYTES_PER_NODE)?;
         if let Some((solver, models, geometry)) = self.cycle.taut_shapes_input() {
             let mut modes = vec![Mode::default(); k + modal::MAX_MULTIPLICITY as usize];
             let n = solver

@@ -97,8 +97,9 @@ pub fn structured_analysis(scene: &Scene, position_m: &Vector3<f64>, t_min: Tmin
             e.error = Some(*reason);
             e
         }
-        // The default parameters are within their bounds (params.rs tests it).
-        Err(BuildError::Params(_)) => {
+        // The default parameters are within their bounds (params.rs tests it); a model over
+        // the memory budget is refused input.
+        Err(BuildError::Params(_) | BuildError::Memory(_)) => {
             let mut e = Estimate::empty(scene.n_cables());
             e.status = Status::InvalidInput;
             e

@@ -24,6 +24,8 @@
 pub mod cluster;
 pub mod covariance;
 pub mod decimate;
+pub mod fft;
+pub mod frf;
 pub mod params;
 pub mod ssi;
 pub mod stream;
@@ -64,16 +66,33 @@ pub fn identify(
     channels: usize,
     p: &IdentifyParams,
 ) -> Result<Vec<WindowResult>, IdentifyError> {
-    if channels == 0 || y.len() != t_s.len() * channels {
+    identify_with_inputs(t_s, y, channels, &[], 0, p)
+}
+
+/// As [`identify`], with `inputs` measured inputs `u` (row-major like `y`; 0: output-only
+/// SSI-cov, else H1 and its modal fit, [`frf`]).
+pub fn identify_with_inputs(
+    t_s: &[f64],
+    y: &[f64],
+    channels: usize,
+    u: &[f64],
+    inputs: usize,
+    p: &IdentifyParams,
+) -> Result<Vec<WindowResult>, IdentifyError> {
+    if channels == 0 || y.len() != t_s.len() * channels || u.len() != t_s.len() * inputs {
         return Err(IdentifyError::Input(format!(
-            "{} values for {} times × {channels} channels",
+            "{} values for {} times × {channels} channels, {} for {inputs} inputs",
             y.len(),
-            t_s.len()
+            t_s.len(),
+            u.len()
         )));
     }
-    let mut id = Identifier::new(channels, *p)?;
+    let mut id = Identifier::with_inputs(channels, inputs, *p)?;
+    let mut sample = vec![0.0; channels + inputs];
     for (k, &t) in t_s.iter().enumerate() {
-        id.push(t, &y[k * channels..(k + 1) * channels])?;
+        sample[..channels].copy_from_slice(&y[k * channels..(k + 1) * channels]);
+        sample[channels..].copy_from_slice(&u[k * inputs..(k + 1) * inputs]);
+        id.push(t, &sample)?;
     }
     id.finish()
 }

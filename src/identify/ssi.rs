@@ -99,15 +99,17 @@ pub struct Subspace {
     r: DMatrix<f64>,
     /// Qᵀ O↓.
     m: DMatrix<f64>,
-    /// The right singular vectors times S^{−1/2} (p l × n_max): O_j = H_j W for the jackknife.
+    /// The right singular vectors times S^{−1/2} (columns of H × n_max): O_j = H_j W for the
+    /// jackknife.
     w: DMatrix<f64>,
     /// Singular values, descending.
     pub singular_values: Vec<f64>,
 }
 
 impl Subspace {
-    /// SVD of `h` (p l square) and the factors up to order `n_max`; `None` when the SVD does
-    /// not converge or the Hankel matrix holds less than order `n_max`.
+    /// SVD of `h` (p l rows; p l columns of covariances, or p m of an impulse response of m
+    /// inputs) and the factors up to order `n_max`; `None` when the SVD does not converge or
+    /// the Hankel matrix holds less than order `n_max`.
     pub fn new(h: &DMatrix<f64>, l: usize, n_max: usize) -> Option<Subspace> {
         let rows = h.nrows();
         if !h.iter().all(|x| x.is_finite()) {
@@ -122,7 +124,7 @@ impl Subspace {
             return None;
         }
         let o = DMatrix::from_fn(rows, n_max, |i, j| u[(i, idx[j])] * sv[j].sqrt());
-        let w = DMatrix::from_fn(rows, n_max, |i, j| vt[(idx[j], i)] / sv[j].sqrt());
+        let w = DMatrix::from_fn(h.ncols(), n_max, |i, j| vt[(idx[j], i)] / sv[j].sqrt());
         let up = o.rows(0, rows - l).into_owned();
         let down = o.rows(l, rows - l).into_owned();
         let qr = up.qr();

@@ -18,8 +18,9 @@
 
 use super::covariance::LagCovariance;
 use super::decimate::{factor, Decimator};
+use super::frf::{Frf, WelchH1};
 use super::params::MIN_RATE_OVER_BAND;
-use super::window::{identify_window, IdentifiedMode, WindowStatus};
+use super::window::{identify_io_window, identify_window, IdentifiedMode, WindowStatus};
 use super::{DiagramPole, IdentifyError, IdentifyParams};
 
 /// Samples whose median step sets the nominal sample period.
@@ -28,6 +29,12 @@ pub const RATE_PROBE: usize = 64;
 pub const GAP_FACTOR: f64 = 1.5;
 /// A window needs at least this many decimated samples per lag of its Hankel matrix.
 const SAMPLES_PER_LAG: usize = 10;
+/// Input-output data: the Welch segments' longest length, decimated samples (the segment is
+/// the largest power of two ≤ this and ≤ a quarter of the window, and ≥ 4 × the impulse
+/// response's lags).
+pub const MAX_WELCH_LEN: usize = 1024;
+/// Input-output data: a window needs at least this many Welch segments.
+const MIN_WELCH_SEGMENTS: usize = 2;
 
 /// The result of one window.
 #[derive(Debug, Clone)]
@@ -54,6 +61,33 @@ pub struct WindowResult {
     pub diagram: Vec<DiagramPole>,
     /// Singular values of the scaled Hankel matrix.
     pub singular_values: Vec<f64>,
+    /// Input-output data: the H1 estimate and its coherence (kept with the diagram; line k
+    /// is at k × `rate_hz` / N Hz).
+    pub frf: Option<Frf>,
+}
+
+/// What a window accumulates: lag covariances of the outputs (output-only data) or the
+/// Welch spectra of outputs and inputs.
+#[derive(Debug)]
+enum Accum {
+    Cov(LagCovariance),
+    Io(Box<WelchH1>),
+}
+
+impl Accum {
+    fn push(&mut self, t_s: f64, v: &[f64]) {
+        match self {
+            Accum::Cov(c) => c.push(t_s, v),
+            Accum::Io(w) => w.push(v),
+        }
+    }
+
+    fn break_run(&mut self) {
+        match self {
+            Accum::Cov(c) => c.break_run(),
+            Accum::Io(w) => w.break_run(),
+        }
+    }
 }
 
 #[derive(Debug)]
@@ -61,7 +95,8 @@ struct Open {
     index: usize,
     start_s: f64,
     end_s: f64,
-    cov: LagCovariance,
+    acc: Accum,
+    taken: u64,
     last_t: Option<f64>,
     last_sample_s: f64,
     /// Σ steps and their count between consecutive decimated samples of one run.
@@ -76,6 +111,8 @@ struct Open {
 pub struct Identifier {
     p: IdentifyParams,
     l: usize,
+    /// Measured inputs (after the l outputs in each sample).
+    m: usize,
     probe: Vec<(f64, Vec<f64>)>,
     dt_nominal_s: f64,
     decimator: Option<Decimator>,
@@ -99,16 +136,32 @@ pub struct Identifier {
 }
 
 impl Identifier {
-    /// An identifier of `channels` channels.
+    /// An identifier of `channels` channels (output-only data).
     pub fn new(channels: usize, p: IdentifyParams) -> Result<Identifier, IdentifyError> {
-        p.validate(channels)?;
+        Identifier::with_inputs(channels, 0, p)
+    }
+
+    /// An identifier of `outputs` measured responses and `inputs` measured forces (each
+    /// sample: the outputs, then the inputs); `inputs` 0: output-only data (SSI-cov), else
+    /// H1 and its modal fit ([`super::frf`]).
+    pub fn with_inputs(
+        outputs: usize,
+        inputs: usize,
+        p: IdentifyParams,
+    ) -> Result<Identifier, IdentifyError> {
+        if inputs == 0 {
+            p.validate(outputs)?;
+        } else {
+            p.validate_io(outputs, inputs)?;
+        }
         Ok(Identifier {
             p,
-            l: channels,
+            l: outputs,
+            m: inputs,
             probe: Vec::new(),
             dt_nominal_s: f64::NAN,
             decimator: None,
-            out: vec![0.0; channels],
+            out: vec![0.0; outputs + inputs],
             last_t: None,
             samples: 0,
             prev_t: None,
@@ -149,11 +202,11 @@ impl Identifier {
     /// Take sample `y` (one value per channel) at `t_s`.
     pub fn push(&mut self, t_s: f64, y: &[f64]) -> Result<(), IdentifyError> {
         let k = self.samples;
-        if y.len() != self.l {
+        if y.len() != self.l + self.m {
             return Err(IdentifyError::Input(format!(
                 "sample {k}: {} values, expected {} channels",
                 y.len(),
-                self.l
+                self.l + self.m
             )));
         }
         if !t_s.is_finite() {
@@ -207,7 +260,7 @@ impl Identifier {
             )));
         }
         self.dt_nominal_s = dt;
-        self.decimator = Some(Decimator::new(factor(rate, self.p.to_hz), self.l));
+        self.decimator = Some(Decimator::new(factor(rate, self.p.to_hz), self.l + self.m));
         for (t, y) in std::mem::take(&mut self.probe) {
             self.take(t, &y);
         }
@@ -277,7 +330,6 @@ impl Identifier {
             self.done.push(r);
         }
         // Open the windows that start at or before t_s.
-        let lags = 2 * self.p.block_rows(self.l);
         while let Some(s) = self.next_start_s {
             if s > t_s {
                 break;
@@ -286,12 +338,12 @@ impl Identifier {
                 Some(w) => (s + w, Some(s + w * (1.0 - self.p.overlap))),
                 None => (f64::INFINITY, None),
             };
-            let seg = self.p.window_s.map_or(1.0, |w| w / self.p.segments as f64);
             let mut w = Open {
                 index: self.next_index,
                 start_s: s,
                 end_s: end,
-                cov: LagCovariance::new(self.l, lags, s, seg, self.p.segments),
+                acc: self.accumulator(s, dt),
+                taken: 0,
                 last_t: None,
                 last_sample_s: s,
                 step_sum: 0.0,
@@ -316,7 +368,7 @@ impl Identifier {
         }
         for w in &mut self.open {
             if lost.is_some() {
-                w.cov.break_run();
+                w.acc.break_run();
                 w.last_t = None;
             }
             if let Some(prev) = w.last_t {
@@ -325,9 +377,37 @@ impl Identifier {
             }
             w.last_t = Some(t_s);
             w.last_sample_s = t_s;
-            w.cov.push(t_s, &self.out);
+            w.acc.push(t_s, &self.out);
+            w.taken += 1;
         }
         self.last_output_s = Some(t_s);
+    }
+
+    /// A new window's accumulator, the window starting at `start_s`, `dt_s` the decimated
+    /// period.
+    fn accumulator(&self, start_s: f64, dt_s: f64) -> Accum {
+        if self.m == 0 {
+            let lags = 2 * self.p.block_rows(self.l);
+            let seg = self.p.window_s.map_or(1.0, |w| w / self.p.segments as f64);
+            return Accum::Cov(LagCovariance::new(
+                self.l,
+                lags,
+                start_s,
+                seg,
+                self.p.segments,
+            ));
+        }
+        let lags = 2 * self.p.block_rows_io(self.l, self.m);
+        let n_min = (4 * lags).next_power_of_two();
+        let quarter = self
+            .p
+            .window_s
+            .map_or(usize::MAX, |w| (w / dt_s / 4.0).max(1.0) as usize);
+        let below = |x: usize| 1usize << (usize::BITS - 1 - x.max(1).leading_zeros());
+        let n = n_min.max(below(quarter.min(MAX_WELCH_LEN)));
+        Accum::Io(Box::new(
+            WelchH1::new(self.l, self.m, n, self.p.segments).expect("a power of two ≥ 8"),
+        ))
     }
 
     fn finish_window(&self, w: Open, dt_fallback: f64) -> WindowResult {
@@ -336,8 +416,7 @@ impl Identifier {
         } else {
             dt_fallback
         };
-        let lags = 2 * self.p.block_rows(self.l);
-        let samples = w.cov.samples();
+        let samples = w.taken;
         let t_end = if w.end_s.is_finite() {
             w.end_s
         } else {
@@ -355,21 +434,37 @@ impl Identifier {
             modes: Vec::new(),
             diagram: Vec::new(),
             singular_values: Vec::new(),
+            frf: None,
         };
         if samples == 0 {
             r.status = WindowStatus::NoData;
             return r;
         }
-        if (samples as usize) < SAMPLES_PER_LAG * lags {
-            r.status = WindowStatus::Short;
-            return r;
-        }
-        match identify_window(&w.cov, &self.p, self.l, dt) {
-            Ok(id) => {
+        let found = match &w.acc {
+            Accum::Cov(cov) => {
+                let lags = 2 * self.p.block_rows(self.l);
+                if (samples as usize) < SAMPLES_PER_LAG * lags {
+                    r.status = WindowStatus::Short;
+                    return r;
+                }
+                identify_window(cov, &self.p, self.l, dt).map(|id| (id, None))
+            }
+            Accum::Io(welch) => {
+                if welch.segments() < MIN_WELCH_SEGMENTS {
+                    r.status = WindowStatus::Short;
+                    return r;
+                }
+                identify_io_window(welch, &self.p, self.l, self.m, dt)
+                    .map(|(id, frf)| (id, Some(frf)))
+            }
+        };
+        match found {
+            Ok((id, frf)) => {
                 r.modes = id.modes;
                 if self.diagram_of.is_none_or(|k| k == Some(w.index)) {
                     r.diagram = id.diagram;
                     r.singular_values = id.singular_values;
+                    r.frf = frf;
                 }
                 if w.gaps > 0 || w.nonfinite > 0 {
                     r.status = WindowStatus::Gap;

@@ -11,8 +11,10 @@
 
 use super::cluster::{classify, cluster, distance, median, DiagramPole};
 use super::covariance::LagCovariance;
+use super::frf::{Frf, WelchH1};
 use super::ssi::{channel_scale, hankel, normalise, PoleFilter, Subspace};
 use super::IdentifyParams;
+use nalgebra::DMatrix;
 use num_complex::Complex64;
 
 /// Why a window's modes are doubtful or missing.
@@ -66,6 +68,9 @@ pub struct IdentifiedMode {
     pub order: usize,
     /// Segment groups whose leave-one-out estimate found the mode.
     pub jackknife_groups: usize,
+    /// Input-output data: the outputs' mean multiple coherence of H1 at the mode's frequency
+    /// (NaN for output-only data).
+    pub coherence: f64,
 }
 
 /// What one window's identification found.
@@ -91,7 +96,90 @@ pub fn identify_window(
     let full = cov.covariances(0..0).ok_or(WindowStatus::Short)?;
     let scale = channel_scale(&full);
     let h = hankel(&full, rows, &scale);
-    let sub = Subspace::new(&h, l, p.max_order).ok_or(WindowStatus::Failed)?;
+    // Leave-one-group-out Hankel matrices.
+    let groups = cov.groups(p.segments);
+    let jack: Vec<DMatrix<f64>> = if groups.len() >= 2 {
+        groups
+            .iter()
+            .filter_map(|g| cov.covariances(g.clone()))
+            .map(|c| hankel(&c, rows, &scale))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    identify_hankel(&h, &jack, &scale, p, dt_s)
+}
+
+/// Identify one window of input-output data from its Welch spectra (`l` outputs, `m`
+/// inputs): H1 → impulse response → the block Hankel matrix of its Markov parameters
+/// (block (r, c) = h̃_{r+c+1}, p l × p m, h̃ = D_y⁻¹ h D_u scaled by the channels' RMS) →
+/// the same subspace identification, diagram and clustering as the output-only data (the
+/// eigensystem realisation algorithm: SSI-cov's covariances replaced by the impulse
+/// response); the jackknife over the groups of segments.
+pub fn identify_io_window(
+    welch: &WelchH1,
+    p: &IdentifyParams,
+    l: usize,
+    m: usize,
+    dt_s: f64,
+) -> Result<(Identified, Frf), WindowStatus> {
+    let rows = p.block_rows_io(l, m);
+    let lags = 2 * rows;
+    let full = welch.frf(None).ok_or(WindowStatus::Short)?;
+    let h0 = welch.impulse_response(&full, lags);
+    // The channels' scale: the RMS of each output's and input's impulse-response entries.
+    let rms = |f: &dyn Fn(usize) -> f64, n: usize| {
+        let v = ((0..n).map(|i| f(i).powi(2)).sum::<f64>() / n as f64).sqrt();
+        if v > 0.0 && v.is_finite() {
+            v
+        } else {
+            1.0
+        }
+    };
+    let dy: Vec<f64> = (0..l)
+        .map(|a| rms(&|i| h0[(i / m * l + a) * m + i % m], lags * m))
+        .collect();
+    let du: Vec<f64> = (0..m)
+        .map(|b| 1.0 / rms(&|i| h0[(i / l * l + i % l) * m + b], lags * l))
+        .collect();
+    let hankel_of = |h: &[f64]| {
+        DMatrix::from_fn(rows * l, rows * m, |row, col| {
+            let (r, a) = (row / l, row % l);
+            let (c, b) = (col / m, col % m);
+            h[((r + c + 1) * l + a) * m + b] / dy[a] * du[b]
+        })
+    };
+    let h = hankel_of(&h0);
+    let jack: Vec<DMatrix<f64>> = if welch.groups() >= 2 {
+        (0..welch.groups())
+            .filter_map(|g| welch.frf(Some(g)))
+            .map(|f| hankel_of(&welch.impulse_response(&f, lags)))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let mut id = identify_hankel(&h, &jack, &dy, p, dt_s)?;
+    // Each mode's coherence: the outputs' mean at the nearest line.
+    let df = 1.0 / (full.n as f64 * dt_s);
+    for md in &mut id.modes {
+        let k = ((md.frequency_hz / df).round() as usize).min(full.lines() - 1);
+        md.coherence = (0..l).map(|a| full.coherence[k * l + a]).sum::<f64>() / l as f64;
+    }
+    Ok((id, full))
+}
+
+/// The subspace identification of a block Hankel matrix `h` (rows scaled by `scale` per
+/// output channel), its stabilisation diagram and clusters, and the jackknife over the
+/// leave-one-group-out Hankel matrices `jack`.
+fn identify_hankel(
+    h: &DMatrix<f64>,
+    jack: &[DMatrix<f64>],
+    scale: &[f64],
+    p: &IdentifyParams,
+    dt_s: f64,
+) -> Result<Identified, WindowStatus> {
+    let l = scale.len();
+    let sub = Subspace::new(h, l, p.max_order).ok_or(WindowStatus::Failed)?;
     let filter = PoleFilter {
         from_hz: p.from_hz,
         to_hz: p.to_hz,
@@ -115,17 +203,6 @@ pub fn identify_window(
     let orders = by_order.len();
     let diagram = classify(by_order, p);
     let clusters = cluster(&diagram, p, orders);
-    // Leave-one-group-out Hankel matrices, built once.
-    let groups = cov.groups(p.segments);
-    let jack: Vec<nalgebra::DMatrix<f64>> = if groups.len() >= 2 {
-        groups
-            .iter()
-            .filter_map(|g| cov.covariances(g.clone()))
-            .map(|c| hankel(&c, rows, &scale))
-            .collect()
-    } else {
-        Vec::new()
-    };
     let mut cache: Vec<(usize, Vec<Option<Vec<super::ssi::Pole>>>)> = Vec::new();
     let mut modes = Vec::new();
     for c in &clusters {
@@ -176,7 +253,7 @@ pub fn identify_window(
             }
         }
         let (f_std, z_std) = jackknife_std(&est);
-        let phys: Vec<Complex64> = rep.shape.iter().zip(&scale).map(|(x, s)| x * s).collect();
+        let phys: Vec<Complex64> = rep.shape.iter().zip(scale).map(|(x, s)| x * s).collect();
         modes.push(IdentifiedMode {
             frequency_hz: f,
             damping_ratio: z,
@@ -187,6 +264,7 @@ pub fn identify_window(
             stable_poles: c.members.len(),
             order: n,
             jackknife_groups: est.len(),
+            coherence: f64::NAN,
         });
     }
     Ok(Identified {

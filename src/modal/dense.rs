@@ -33,9 +33,10 @@ pub fn assemble_rigid(
     assemble_general(models, ee_mass_kg, Some((inertia_kg_m2, arms_m, k_geo_rot)))
 }
 
-/// Memory the dense reference may use, bytes (2 GiB): a dense solve at this size already
+/// Memory the dense reference may use, bytes: the one budget of the offline work
+/// ([`crate::memory_budget::MEMORY_BUDGET_BYTES`], 2 GiB); a dense solve at this size already
 /// takes minutes, and beyond it the structured solver is the only sensible path.
-pub const DENSE_MEMORY_BUDGET_BYTES: u64 = 2 << 30;
+pub const DENSE_MEMORY_BUDGET_BYTES: u64 = crate::memory_budget::MEMORY_BUDGET_BYTES;
 
 /// Bytes per DOF² of a dense solve: K and M, the Cholesky factor and its copy, L⁻¹K, C and
 /// its symmetrised copy, the eigenvectors, the eigensolver's workspace and the mode shapes
@@ -62,11 +63,13 @@ pub fn check_dense_budget(dof: usize) -> Result<(), ModalError> {
     Ok(())
 }
 
-fn assemble_general(
-    models: &[CableModel],
-    ee_mass_kg: f64,
-    rigid: Option<RigidParts<'_>>,
-) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
+/// The degrees of freedom of the model of `models` with an end-effector of `ee_dim` (3 or
+/// 6): the end-effector's, 3 per interior node of each cable, and one axial DOF per node of
+/// the cable behind a pulley (the hidden cable's interior nodes and the junction, as many
+/// as its elements). None for continuous cables (no finite assembly). The one count of the
+/// model's DOF: [`assemble`] builds matrices of this size, and the structured solver's
+/// reports give it.
+pub fn assembled_dof(models: &[CableModel], ee_dim: usize) -> Option<usize> {
     if models.iter().any(|m| {
         m.chains[..m.n_chains].iter().any(|c| match c.kind {
             ChainKind::Continuous { .. } => true,
@@ -74,15 +77,23 @@ fn assemble_general(
             ChainKind::Discrete { .. } => false,
         })
     }) {
-        return Err(ModalError::NotAssemblable);
+        return None;
     }
-    let ee_dim = if rigid.is_some() { 6 } else { 3 };
     let interior: usize = models.iter().map(|m| m.n_el - 1).sum();
     let hidden_dofs: usize = models
         .iter()
         .map(|m| hidden_of(m).map_or(0, |h| h.0.n_el))
         .sum();
-    let ndof = ee_dim + 3 * interior + hidden_dofs;
+    Some(ee_dim + 3 * interior + hidden_dofs)
+}
+
+fn assemble_general(
+    models: &[CableModel],
+    ee_mass_kg: f64,
+    rigid: Option<RigidParts<'_>>,
+) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
+    let ee_dim = if rigid.is_some() { 6 } else { 3 };
+    let ndof = assembled_dof(models, ee_dim).ok_or(ModalError::NotAssemblable)?;
     check_dense_budget(ndof)?;
     let mut k = DMatrix::<f64>::zeros(ndof, ndof);
     let mut mm = DMatrix::<f64>::zeros(ndof, ndof);

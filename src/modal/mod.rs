@@ -89,8 +89,9 @@ mod solver;
 mod spectrum;
 
 pub use dense::{
-    assemble, assemble_rigid, check_dense_budget, condense_static, dense_memory_bytes, dense_modes,
-    dense_modes_ee, dense_relative_accuracy, DenseModes, DENSE_MEMORY_BUDGET_BYTES,
+    assemble, assemble_rigid, assembled_dof, check_dense_budget, condense_static,
+    dense_memory_bytes, dense_modes, dense_modes_ee, dense_relative_accuracy, DenseModes,
+    DENSE_MEMORY_BUDGET_BYTES,
 };
 pub use dynamic_stiffness::{DynEval, EigD};
 pub use ee_tracker::RescanCounts;

@@ -131,7 +131,9 @@ pub fn refuse_inputs<P: AsRef<Path>, Q: AsRef<Path>>(
         .iter()
         .filter_map(|p| identity(p.as_ref()).map(|id| (p.as_ref(), id)))
         .collect();
-    let mut seen: Vec<(&Path, Option<(u64, u64)>, PathBuf)> = Vec::new();
+    // (the output as named, its file identity when it exists, its normalised path)
+    type Seen<'a> = (&'a Path, Option<(u64, u64)>, PathBuf);
+    let mut seen: Vec<Seen<'_>> = Vec::new();
     for out in outputs {
         let out = out.as_ref();
         let id = identity(out);

@@ -21,23 +21,27 @@ const FAST_LIKE_TOML: &str = include_str!("../../scenes/fast_like.toml");
 const SUSPENDED_8_TOML: &str = include_str!("../../scenes/suspended_8.toml");
 
 impl Scene {
-    /// The embedded scene of name `name` (`spatial-paper`, `spatial`, `default`,
-    /// `planar-paper`, `planar`, `fast-like`, `suspended-8`; see [`Scene::load`]), without
-    /// looking at files; `None` for any other name.
-    pub fn builtin(name: &str) -> Option<Result<Scene, SceneError>> {
+    /// The TOML text and origin of the embedded scene of name `name` (`spatial-paper`,
+    /// `spatial`, `default`, `planar-paper`, `planar`, `fast-like`, `suspended-8`; see
+    /// [`Scene::load`]); `None` for any other name.
+    fn builtin_text(name: &str) -> Option<(&'static str, &'static str)> {
         match name {
-            "spatial-paper" | "spatial" | "default" => Some(Ok(Scene::default_scene())),
-            "planar-paper" | "planar" => Some(Ok(Scene::planar_paper())),
-            "fast-like" => Some(Scene::from_toml_str(
-                FAST_LIKE_TOML,
-                "<embedded fast_like.toml>",
-            )),
-            "suspended-8" => Some(Scene::from_toml_str(
-                SUSPENDED_8_TOML,
-                "<embedded suspended_8.toml>",
-            )),
+            "spatial-paper" | "spatial" | "default" => {
+                Some((super::DEFAULT_SCENE_TOML, "<embedded spatial_paper.toml>"))
+            }
+            "planar-paper" | "planar" => {
+                Some((super::PLANAR_SCENE_TOML, "<embedded planar_paper.toml>"))
+            }
+            "fast-like" => Some((FAST_LIKE_TOML, "<embedded fast_like.toml>")),
+            "suspended-8" => Some((SUSPENDED_8_TOML, "<embedded suspended_8.toml>")),
             _ => None,
         }
+    }
+
+    /// The embedded scene of name `name` (see [`Scene::load`]), without looking at files;
+    /// `None` for any other name.
+    pub fn builtin(name: &str) -> Option<Result<Scene, SceneError>> {
+        Self::builtin_text(name).map(|(text, origin)| Scene::from_toml_str(text, origin))
     }
 
     /// Load a scene by path or by name: `name_or_path` is read as a scene file when it
@@ -57,11 +61,20 @@ impl Scene {
     /// # Ok::<(), cablevib::scene::SceneError>(())
     /// ```
     pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
+        let (text, origin) = Self::source_text(name_or_path)?;
+        Scene::from_toml_str(&text, &origin)
+    }
+
+    /// The TOML text [`Scene::load`] reads for `name_or_path` and the name its messages
+    /// give it: a file's (a regular file of at most [`super::MAX_SCENE_BYTES`]) or an
+    /// embedded scene's. What a writer of a changed copy of the scene starts from
+    /// (`cablevib calibrate -o`).
+    pub fn source_text(name_or_path: &str) -> Result<(String, String), SceneError> {
         let p = Path::new(name_or_path);
         let exists = p.try_exists();
         if !matches!(exists, Ok(true)) {
-            if let Some(scene) = Scene::builtin(name_or_path) {
-                return scene;
+            if let Some((text, origin)) = Self::builtin_text(name_or_path) {
+                return Ok((text.to_string(), origin.to_string()));
             }
             // Known absent (not, e.g., an unreadable directory: that reports its reason).
             if matches!(exists, Ok(false)) {
@@ -70,7 +83,8 @@ impl Scene {
                 });
             }
         }
-        Scene::from_path(p)
+        let text = crate::input_file::read_text(p, "scene file", super::MAX_SCENE_BYTES)?;
+        Ok((text, p.display().to_string()))
     }
 }
 

@@ -174,10 +174,8 @@ fn key_before(prefix: &str) -> Vec<String> {
                 after_eq = false;
                 word.clear();
             }
-            c if c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.' => {
-                if !after_eq {
-                    word.push(c);
-                }
+            c if !after_eq && (c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.') => {
+                word.push(c);
             }
             _ => {}
         }

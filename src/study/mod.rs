@@ -13,7 +13,8 @@
 //! the estimator has no valid answer, which keep their status and NaN frequencies. Long
 //! studies split their points over a rayon pool ([`points`]: all cores by default, one
 //! estimator per worker, results equal bit for bit to one thread's) and show a progress bar
-//! with ETA when stderr is a terminal ([`progress`]).
+//! with ETA when stderr is a terminal ([`progress`]). What a study costs in memory (checked
+//! against the one budget before it allocates) and time (estimated up front) is [`cost`]'s.
 //!
 //! Studies take plain configuration structs in SI units and return results; rendering and
 //! files are the `report` layer's (above this one), option parsing is the command line's: a
@@ -22,6 +23,7 @@
 
 pub mod accuracy;
 pub mod analysis;
+pub mod cost;
 pub mod frf;
 pub mod identify;
 pub mod map;
@@ -80,6 +82,9 @@ pub enum StudyError {
         /// Rows at the second.
         after: usize,
     },
+    /// The work would need more memory than the one budget (refused before allocating).
+    #[error(transparent)]
+    Memory(#[from] crate::memory_budget::OverBudget),
 }
 
 impl From<PathError> for StudyError {

@@ -56,6 +56,8 @@ pub enum Param {
     UpdateEvery,
     /// Time simulated after the path's end, s.
     SettleS,
+    /// A simulation's accuracy target, relative to the peak deviation.
+    Tolerance,
     /// Lowest frequency of a response band, Hz.
     FromHz,
     /// Highest frequency of a response band, Hz.
@@ -112,6 +114,7 @@ impl ParamName for Param {
             Param::MaxAccelerationMS2 => "max_acceleration_m_s2",
             Param::UpdateEvery => "update_every",
             Param::SettleS => "settle_s",
+            Param::Tolerance => "tolerance",
             Param::FromHz => "from_hz",
             Param::ToHz => "to_hz",
             Param::LossFactor => "loss_factor",

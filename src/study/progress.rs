@@ -26,8 +26,8 @@ pub const SHOW_AFTER: Duration = Duration::from_secs(1);
 /// Most redraws a second (indicatif's default is 20; 4 keep a shared terminal quiet).
 const REFRESH_PER_S: u8 = 4;
 #[cfg(feature = "progress")]
-/// The bar's layout: label, bar, points done of total, percentage, ETA.
-const TEMPLATE: &str = "{prefix}: [{bar:30}] {pos}/{len} points {percent:>3}% ETA {eta}";
+/// The bar's layout: label, bar, units done of total (`{msg}`: their name), percentage, ETA.
+const TEMPLATE: &str = "{prefix}: [{bar:30}] {pos}/{len} {msg} {percent:>3}% ETA {eta}";
 
 /// A progress bar that stays hidden until [`SHOW_AFTER`] has passed on a terminal.
 #[derive(Debug)]
@@ -41,9 +41,14 @@ impl Progress {
     /// A bar labelled `label` over `total` points; none when `label` is None or stderr is
     /// not a terminal.
     pub fn new(label: Option<&str>, total: usize) -> Progress {
+        Progress::counting(label, total, "points")
+    }
+
+    /// A bar labelled `label` over `total` units named `unit` (`frequencies`, `samples`).
+    pub fn counting(label: Option<&str>, total: usize, unit: &'static str) -> Progress {
         #[cfg(not(feature = "progress"))]
         let bar = {
-            let _ = (label, total);
+            let _ = (label, total, unit);
             None
         };
         #[cfg(feature = "progress")]
@@ -53,6 +58,7 @@ impl Progress {
                 b.set_style(style.progress_chars("=> "));
             }
             b.set_prefix(l.to_string());
+            b.set_message(unit);
             b
         });
         Progress {

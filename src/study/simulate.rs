@@ -11,7 +11,7 @@
 //! mode, through the first K modes of the pose (the structured engine's frequencies and
 //! mass-normalised shapes, taut or sagging), the damping of the
 //! scene (each mode's ratio [`Damping::modal_ratio`]), the static correction of the modes
-//! left out (mode-acceleration method, [`ModalResponse`]). Left out: the cables' own
+//! left out (mode-acceleration method, [`ModalResponse`](crate::modal::response::ModalResponse)). Left out: the cables' own
 //! share of the quasi-static motion's inertia (their nodes following the end-effector:
 //! about a third of each cable's mass), the rotational load −I·α − ω×Iω (the paths here
 //! keep the orientation fixed: it is zero for them), gravity's change with the pose (it is
@@ -19,9 +19,9 @@
 //!
 //! **Along the path.** Every `update_every` samples the estimator solves the pose and the
 //! basis is replaced, the modal state carried across by the mass overlap of the old and
-//! new whole shapes ([`ModalResponse::set_basis_projected`]: the motion of every mode the
+//! new whole shapes ([`ModalResponse::set_basis_projected`](crate::modal::response::ModalResponse::set_basis_projected): the motion of every mode the
 //! new basis holds is kept, the cable-borne ones too); the end-effector's state alone
-//! ([`ModalResponse::set_basis`]) where the shapes are the dense model's;
+//! ([`ModalResponse::set_basis`](crate::modal::response::ModalResponse::set_basis)) where the shapes are the dense model's;
 //! between updates the last basis holds.
 //!
 //! **Residual vibration.** After each stop (the commanded path at rest from one sample to
@@ -31,11 +31,15 @@
 use super::{Param, ParamError, ParamName, StudyError};
 use crate::estimator::{Estimator, EstimatorParams, Status, Tmin};
 use crate::kinematics::Pose;
-use crate::modal::response::{ModalResponse, MAX_RESPONSE_MODES};
+use crate::modal::response::MAX_RESPONSE_MODES;
 use crate::scene::{Damping, Scene};
 use crate::trajectory::shaping::{OnlineShaper, ShaperKind, DEFAULT_MIN_FREQUENCY_HZ};
 use crate::trajectory::{Samples, Trajectory};
 use nalgebra::{Vector3, Vector6};
+
+pub mod pilot;
+mod propagate;
+pub mod updates;
 
 /// Default largest path acceleration accepted, m/s² (20 g: a path sampled from a jump
 /// exceeds it).
@@ -179,9 +183,9 @@ impl SampledPath {
         })
     }
 
-    /// The acceleration of sample k (central second difference; at rest beyond the ends
+    /// The acceleration of sample k, m/s² (central second difference; at rest beyond the ends
     /// when `at_rest_ends`, else the neighbour's value).
-    fn acceleration(&self, k: usize) -> Vector3<f64> {
+    pub fn acceleration(&self, k: usize) -> Vector3<f64> {
         let n = self.positions_m.len();
         let p = &self.positions_m;
         let h2 = self.dt_s * self.dt_s;
@@ -239,25 +243,59 @@ fn check_dt(dt_s: f64) -> Result<(), StudyError> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SimulateConfig {
     /// Modes K in the superposition (1 ..= [`MAX_RESPONSE_MODES`]; a cluster cut by K is
-    /// completed).
-    pub modes: usize,
-    /// Samples between two updates of the modal basis (≥ 1).
-    pub update_every: usize,
+    /// completed); None: the fewest whose estimated truncation error meets `tolerance`
+    /// ([`pilot`]).
+    pub modes: Option<usize>,
+    /// Samples between two updates of the modal basis (≥ 1); None: chosen along the path
+    /// so that a held basis meets `tolerance` ([`updates`]).
+    pub update_every: Option<usize>,
+    /// The error allowed on the end-effector's deviation, relative to its peak, in
+    /// [[`pilot::MIN_TOLERANCE`], [`pilot::MAX_TOLERANCE`]]; default
+    /// [`pilot::DEFAULT_TOLERANCE`].
+    pub tolerance: f64,
     /// Time simulated at rest after a path that ends at rest, s (≥ 0).
     pub settle_s: f64,
     /// Largest path acceleration accepted, m/s².
     pub max_acceleration_m_s2: f64,
+    /// Label of the progress bar drawn on a terminal (None: no bar).
+    pub progress: Option<&'static str>,
 }
 
 impl Default for SimulateConfig {
     fn default() -> Self {
         SimulateConfig {
-            modes: 12,
-            update_every: 10,
+            modes: None,
+            update_every: None,
+            tolerance: pilot::DEFAULT_TOLERANCE,
             settle_s: 2.0,
             max_acceleration_m_s2: DEFAULT_MAX_ACCELERATION_M_S2,
+            progress: None,
         }
     }
+}
+
+/// What the accuracy controls of [`simulate`] chose and estimated.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Accuracy {
+    /// The tolerance asked for, relative to the peak deviation.
+    pub tolerance: f64,
+    /// Whether K was chosen for the tolerance (false: given).
+    pub modes_chosen: bool,
+    /// The truncation estimate of the K kept, relative to the pilot's peak, the largest
+    /// over the pilot poses ([`pilot`]).
+    pub modes_estimate: f64,
+    /// Whether that estimate met the tolerance at every pilot pose.
+    pub modes_met: bool,
+    /// The pilot's peak deviation, m (the scale of the tolerance).
+    pub peak_m: f64,
+    /// Whether the update interval was chosen for the tolerance (false: given).
+    pub updates_chosen: bool,
+    /// The largest predicted error of one interval between basis updates, relative to
+    /// the pilot's peak ([`updates`]).
+    pub interval_estimate: f64,
+    /// The sum of the intervals' predicted errors, relative to the pilot's peak (a bound
+    /// when every interval's phase error adds up).
+    pub interval_estimate_sum: f64,
 }
 
 /// Residual vibration after one stop.
@@ -300,6 +338,8 @@ pub struct SimulateResult {
     /// Whether the shapes came from the structured engine (taut cables, or sagging FEM
     /// cables); false: the dense model.
     pub structured: bool,
+    /// What the accuracy controls chose and estimated.
+    pub accuracy: Accuracy,
 }
 
 /// The estimator a simulation or shaping drives (the scene's participation threshold).
@@ -354,12 +394,76 @@ pub fn simulate(
     path: &SampledPath,
     cfg: &SimulateConfig,
 ) -> Result<SimulateResult, StudyError> {
-    if !(1..=MAX_RESPONSE_MODES).contains(&cfg.modes) {
-        let rule = format!("must be in 1..={MAX_RESPONSE_MODES}");
-        return Err(ParamError::invalid(Param::Modes, cfg.modes, rule).into());
+    run(scene, path, cfg, None, None)
+}
+
+/// What [`simulate_forced`] computed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ForcedResult {
+    /// [`simulate`]'s result under the force.
+    pub response: SimulateResult,
+    /// The deviation's acceleration at each sample, m/s², from the modal state
+    /// ([`ModalResponse::acceleration`]: the K modes' q̈, not differences of the deviation).
+    pub acceleration_m_s2: Vec<Vector3<f64>>,
+}
+
+/// [`simulate`] with an external force on the end-effector besides the path's inertial
+/// load: `force_n(k)` (N, base frame) at sample k, held linearly between samples like the
+/// load (e.g. white noise standing for the disturbances a real robot feels, which keep its
+/// modes ringing); also the deviation's acceleration.
+pub fn simulate_forced(
+    scene: &Scene,
+    path: &SampledPath,
+    cfg: &SimulateConfig,
+    mut force_n: impl FnMut(usize) -> Vector3<f64>,
+) -> Result<ForcedResult, StudyError> {
+    // Drawn once per sample, in order: the propagation may ask for a sample's force more
+    // than once (the pilot, a basis update), and a random force must be the same each time.
+    let forces: Vec<Vector3<f64>> = (0..simulated_samples(path, cfg))
+        .map(&mut force_n)
+        .collect();
+    let mut acceleration_m_s2 = Vec::new();
+    let response = run(
+        scene,
+        path,
+        cfg,
+        Some(&forces),
+        Some(&mut acceleration_m_s2),
+    )?;
+    Ok(ForcedResult {
+        response,
+        acceleration_m_s2,
+    })
+}
+
+/// The simulation of [`simulate`] and [`simulate_forced`]: the external force at each
+/// simulated sample when given (N), the deviation's acceleration pushed to `acceleration`
+/// when given.
+fn run(
+    scene: &Scene,
+    path: &SampledPath,
+    cfg: &SimulateConfig,
+    forces_n: Option<&[Vector3<f64>]>,
+    mut acceleration: Option<&mut Vec<Vector3<f64>>>,
+) -> Result<SimulateResult, StudyError> {
+    if let Some(k) = cfg.modes {
+        if !(1..=MAX_RESPONSE_MODES).contains(&k) {
+            let rule = format!("must be in 1..={MAX_RESPONSE_MODES}");
+            return Err(ParamError::invalid(Param::Modes, k, rule).into());
+        }
     }
-    if cfg.update_every == 0 {
+    if cfg.update_every == Some(0) {
         return Err(ParamError::invalid(Param::UpdateEvery, 0, "must be ≥ 1").into());
+    }
+    if !(cfg.tolerance.is_finite()
+        && (pilot::MIN_TOLERANCE..=pilot::MAX_TOLERANCE).contains(&cfg.tolerance))
+    {
+        let rule = format!(
+            "must be in [{}, {}] (relative to the peak deviation)",
+            pilot::MIN_TOLERANCE,
+            pilot::MAX_TOLERANCE
+        );
+        return Err(ParamError::invalid(Param::Tolerance, cfg.tolerance, rule).into());
     }
     if !(cfg.settle_s.is_finite() && cfg.settle_s >= 0.0 && cfg.settle_s <= 3600.0) {
         let value = format!("{} s", cfg.settle_s);
@@ -373,10 +477,10 @@ pub fn simulate(
         path.positions_m.extend(std::iter::repeat_n(last, extra));
     }
     let n = path.positions_m.len();
+    // The memory of the whole run (two bases across an update, the path and its
+    // deviation), refused past the one budget before anything is computed.
+    super::cost::estimate_cost(scene, &simulate_work(n, cfg)).check_memory()?;
     let mut est = estimator(scene)?;
-    let damping = scene.damping;
-    let dim = if scene.rigid { 6 } else { 3 };
-    let mut resp = ModalResponse::new(dim);
     let mut out = SimulateResult {
         t_s: Vec::with_capacity(n),
         command_m: Vec::with_capacity(n),
@@ -386,66 +490,61 @@ pub fn simulate(
         modes: 0,
         f1_range_hz: (f64::INFINITY, f64::NEG_INFINITY),
         structured: true,
+        accuracy: Accuracy::default(),
     };
-    let mut ee_mass = nalgebra::Matrix6::zeros();
-    let mut f_prev = Vector6::zeros();
-    let mut prev_shapes = None;
-    for k in 0..n {
-        let t = k as f64 * path.dt_s;
-        let p = path.positions_m[k];
-        if k % cfg.update_every == 0 {
-            solve_pose(&mut est, scene, &p, t)?;
-            let f1 = est.estimate().f1_hz;
-            out.f1_range_hz = (out.f1_range_hz.0.min(f1), out.f1_range_hz.1.max(f1));
-            let basis = est
-                .ee_modal_basis(cfg.modes)
-                .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))?;
-            // The whole state carried by the mass overlap of the whole shapes when both
-            // bases have them; else the end-effector's (module docs).
-            let overlap = match (&basis.shapes, &prev_shapes) {
-                (Some(new), Some(old)) => new.mass_overlap(old, &basis.ee_mass),
-                _ => None,
-            };
-            match overlap {
-                Some(o) => resp.set_basis_projected(
-                    &basis.lambda,
-                    &basis.phi_ee,
-                    &damping,
-                    &basis.flexibility,
-                    &o,
-                ),
-                None => resp.set_basis(
-                    &basis.lambda,
-                    &basis.phi_ee,
-                    &damping,
-                    &basis.flexibility,
-                    &basis.ee_mass,
-                ),
+    let bar = super::progress::Progress::counting(cfg.progress, n, "samples");
+    propagate::run(
+        &mut est,
+        scene,
+        &path,
+        cfg,
+        |k| {
+            let mut f = Vector6::zeros();
+            if let Some(forces) = forces_n {
+                f.fixed_rows_mut::<3>(0)
+                    .copy_from(&forces[k.min(forces.len() - 1)]);
             }
-            .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))?;
-            prev_shapes = basis.shapes;
-            ee_mass = basis.ee_mass;
-            out.structured = basis.structured;
-            out.modes = basis.lambda.len();
-            out.updates += 1;
-        }
-        let a = path.acceleration(k);
-        let mut a6 = Vector6::zeros();
-        a6.fixed_rows_mut::<3>(0).copy_from(&a);
-        let f = -(ee_mass * a6);
-        if k == 0 {
-            f_prev = f;
-        } else {
-            resp.step(&f_prev, &f, path.dt_s);
-            f_prev = f;
-        }
-        let u = resp.displacement(&f);
-        out.t_s.push(t);
-        out.command_m.push(p);
-        out.deviation_m.push(u.fixed_rows::<3>(0).into_owned());
-    }
+            f
+        },
+        |k, resp, f| {
+            if let Some(acc) = acceleration.as_deref_mut() {
+                acc.push(resp.acceleration(f).fixed_rows::<3>(0).into_owned());
+            }
+            if k % PROGRESS_SAMPLES == 0 && k > 0 {
+                bar.advance(PROGRESS_SAMPLES);
+            }
+        },
+        &mut out,
+    )?;
+    bar.finish();
     out.stops = stop_residuals(&out.t_s, &out.command_m, &out.deviation_m);
     Ok(out)
+}
+
+/// The work of [`simulate`] on a path of `samples` samples (with its settling time), for
+/// [`super::cost::estimate_cost`].
+pub fn simulate_work(samples: usize, cfg: &SimulateConfig) -> super::cost::Work<'static> {
+    super::cost::Work::Simulate {
+        samples,
+        // The chosen K and interval are known only after the pilot: the smallest pilot and
+        // the first interval make the estimate a lower bound, so a refusal is certain.
+        update_every: cfg.update_every.unwrap_or(updates::FIRST_INTERVAL),
+        modes: cfg.modes.unwrap_or(pilot::FIRST_PILOT),
+    }
+}
+
+/// Samples between two advances of the progress bar.
+const PROGRESS_SAMPLES: usize = 256;
+
+/// The samples [`simulate`] runs for `path` with `cfg`: the path's, and the settling time
+/// after a path that ends at rest.
+pub fn simulated_samples(path: &SampledPath, cfg: &SimulateConfig) -> usize {
+    let extra = if path.at_rest_ends && cfg.settle_s.is_finite() && cfg.settle_s >= 0.0 {
+        (cfg.settle_s / path.dt_s).round() as usize
+    } else {
+        0
+    };
+    path.positions_m.len() + extra
 }
 
 /// Residual vibration after each stop of `command` (module docs).

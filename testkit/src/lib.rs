@@ -4,19 +4,23 @@
 //!
 //! | module | what |
 //! |---|---|
+//! | [`calibration_truth`] | "measured" modes for the calibration tests from the dense FEM of a true scene |
 //! | [`dense_fem`] | dense references written in the tests: a FEM with explicit hidden-cable nodes, dense eigenpairs |
 //! | [`hard_cases`] | the real-time-against-dense checks of the hard-case tests |
 //! | [`sag_cases`] | the sagged scenes and poses the sag tests share, the sagged shipped robots with FEM chains |
 //! | [`sag_reference_py`] | the independent sagged-cable reference, tests/py/sag_reference.py |
 //! | [`sag_robot`] | sagged chains (`modal::sagged`) of a small robot, for the sagged FEM tests |
 //! | [`pinned_venv`] | a Python venv under target/ with pinned packages |
+pub mod calibration_truth;
 pub mod dense_fem;
+pub mod exact_response;
 pub mod hard_cases;
 pub mod modal_record;
 pub mod pinned_venv;
 pub mod sag_cases;
 pub mod sag_reference_py;
 pub mod sag_robot;
+pub mod vibration;
 
 /// The allocator every test that counts allocations runs under: `count_allocations!();` at
 /// the root of a test binary (its `main.rs`) sets [`cablevib::alloc_count::CountingAlloc`]
@@ -125,17 +129,16 @@ pub fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
 
-/// Deterministic pseudo-random numbers (SplitMix64). Never allocates, so it can drive
+/// Deterministic pseudo-random numbers (the core's [`cablevib::rng::SplitMix64`]). Never allocates, so it can drive
 /// loops whose heap allocations are counted.
 pub struct Rng(pub u64);
 impl Rng {
     /// The next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        let mut s = cablevib::rng::SplitMix64(self.0);
+        let z = s.next_u64();
+        self.0 = s.0;
+        z
     }
     /// Uniform in [0, 1). (Not an `Iterator`: the tests call it as a plain method, a stream
     /// without end.)

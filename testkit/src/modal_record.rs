@@ -4,6 +4,7 @@
 //! known ones. Written independently of the identifier.
 
 use crate::Rng;
+use std::f64::consts::PI;
 
 /// A standard normal sample (Box–Muller).
 pub fn gauss(r: &mut Rng) -> f64 {
@@ -28,11 +29,62 @@ pub enum Output {
     Displacement,
 }
 
-/// A record: times and row-major samples of the sensed DOFs.
+/// A fixed–fixed chain of 5 equal masses m = 2 and springs k: ω_j = 2√(k/m) sin(jπ/12)
+/// (k set by `f1_hz`), mass-normalised φ_j(i) = √(2/(6m)) sin(i j π/6) (i = 1 … 5).
+pub fn chain(f1_hz: f64, zetas: &[f64]) -> Modal {
+    let n = 5;
+    let m: f64 = 2.0;
+    let s1 = (PI / (2.0 * (n + 1) as f64)).sin();
+    Modal {
+        frequencies_hz: (1..=n)
+            .map(|j| f1_hz * (j as f64 * PI / (2.0 * (n + 1) as f64)).sin() / s1)
+            .collect(),
+        zetas: zetas.to_vec(),
+        shapes: (1..=n)
+            .map(|j| {
+                (1..=n)
+                    .map(|i| {
+                        (2.0 / ((n + 1) as f64 * m)).sqrt()
+                            * (i as f64 * j as f64 * PI / (n + 1) as f64).sin()
+                    })
+                    .collect()
+            })
+            .collect(),
+    }
+}
+
+/// Two equal oscillators (m = 1.5) coupled to modes 1 % apart, 10 and 10.1 Hz (in-phase and
+/// anti-phase shapes on DOFs 1, 2), and a third at 6 Hz on DOF 3; ζ 1 %, 0.8 %, 1 %.
+pub fn close_pair() -> Modal {
+    let m: f64 = 1.5;
+    let a = 1.0 / (2.0 * m).sqrt();
+    Modal {
+        frequencies_hz: vec![6.0, 10.0, 10.1],
+        zetas: vec![0.01, 0.008, 0.01],
+        shapes: vec![
+            vec![0.0, 0.0, 1.0 / m.sqrt()],
+            vec![a, a, 0.0],
+            vec![a, -a, 0.0],
+        ],
+    }
+}
+
+/// A record: times and row-major samples of the sensed DOFs (and of the measured forces).
 pub struct Record {
     pub t_s: Vec<f64>,
     pub y: Vec<f64>,
     pub channels: usize,
+    /// The measured forces, row-major (empty under unmeasured ambient forcing).
+    pub u: Vec<f64>,
+    pub inputs: usize,
+}
+
+impl Record {
+    /// Sample k: the outputs, then the inputs.
+    pub fn sample(&self, k: usize) -> Vec<f64> {
+        let (l, m) = (self.channels, self.inputs);
+        [&self.y[k * l..(k + 1) * l], &self.u[k * m..(k + 1) * m]].concat()
+    }
 }
 
 /// Simulate `duration_s` at `rate_hz` under independent white-noise forces (unit variance,
@@ -41,6 +93,45 @@ pub struct Record {
 pub fn simulate(
     m: &Modal,
     sensors: &[usize],
+    out: Output,
+    rate_hz: f64,
+    duration_s: f64,
+    snr_db: f64,
+    seed: u64,
+) -> Record {
+    simulate_with(m, sensors, None, out, rate_hz, duration_s, snr_db, seed)
+}
+
+/// As [`simulate`], but the white-noise forces (unit variance, held over each step) act on
+/// the DOFs `forced` only and are measured exactly (the record's inputs, in that order).
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_forced(
+    m: &Modal,
+    sensors: &[usize],
+    forced: &[usize],
+    out: Output,
+    rate_hz: f64,
+    duration_s: f64,
+    snr_db: f64,
+    seed: u64,
+) -> Record {
+    simulate_with(
+        m,
+        sensors,
+        Some(forced),
+        out,
+        rate_hz,
+        duration_s,
+        snr_db,
+        seed,
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn simulate_with(
+    m: &Modal,
+    sensors: &[usize],
+    forced: Option<&[usize]>,
     out: Output,
     rate_hz: f64,
     duration_s: f64,
@@ -72,11 +163,21 @@ pub fn simulate(
     let mut q = vec![[0.0f64; 2]; nm];
     let mut clean = vec![0.0; n * sensors.len()];
     let mut f = vec![0.0; dofs];
+    let nf = forced.map_or(0, |d| d.len());
+    let mut uv = vec![0.0; n * nf];
     // Burn-in of 20 s so the record starts in the stationary state.
     let burn = (20.0 * rate_hz) as usize;
     for k in 0..burn + n {
-        for v in f.iter_mut() {
-            *v = gauss(&mut r);
+        match forced {
+            None => f.iter_mut().for_each(|v| *v = gauss(&mut r)),
+            Some(ds) => {
+                for (i, &d) in ds.iter().enumerate() {
+                    f[d] = gauss(&mut r);
+                    if k >= burn {
+                        uv[(k - burn) * nf + i] = f[d];
+                    }
+                }
+            }
         }
         let mut y = vec![0.0; sensors.len()];
         for j in 0..nm {
@@ -111,6 +212,8 @@ pub fn simulate(
         t_s: (0..n).map(|k| k as f64 * h).collect(),
         y: yv,
         channels: l,
+        u: uv,
+        inputs: nf,
     }
 }
 

@@ -21,12 +21,14 @@ pub fn pinned_venv_python(dir_name: &str, packages: &[(&str, &str, &str)]) -> Pa
         .join(dir_name);
     let py = venv.join("bin").join("python");
     let imports: Vec<&str> = packages.iter().map(|p| p.0).collect();
+    // The installed distribution's version (importlib.metadata: some packages, pyOMA-2
+    // among them, have no `__version__`).
     let stale: Vec<String> = packages
         .iter()
-        .map(|(m, _, v)| format!("{m}.__version__ != '{v}'"))
+        .map(|(_, name, v)| format!("importlib.metadata.version('{name}') != '{v}'"))
         .collect();
     let check = format!(
-        "import sys, {}; sys.exit({})",
+        "import sys, importlib.metadata, {}; sys.exit({})",
         imports.join(", "),
         stale.join(" or ")
     );

@@ -7,3 +7,4 @@ mod element;
 mod inputs;
 mod modes;
 mod tension;
+mod tiny_lengths;

@@ -3,32 +3,7 @@
 
 use cablevib::identify::ssi::mac;
 use cablevib::identify::{identify, IdentifyParams, WindowStatus};
-use cablevib_testkit::modal_record::{check_modes, simulate, Modal, Output};
-use std::f64::consts::PI;
-
-/// A fixed–fixed chain of 5 equal masses m and springs k: ω_j = 2√(k/m) sin(jπ/12),
-/// mass-normalised φ_j(i) = √(2/(6m)) sin(i j π/6) (i = 1 … 5).
-fn chain(f1_hz: f64, zetas: &[f64]) -> Modal {
-    let n = 5;
-    let m: f64 = 2.0;
-    let s1 = (PI / (2.0 * (n + 1) as f64)).sin();
-    Modal {
-        frequencies_hz: (1..=n)
-            .map(|j| f1_hz * (j as f64 * PI / (2.0 * (n + 1) as f64)).sin() / s1)
-            .collect(),
-        zetas: zetas.to_vec(),
-        shapes: (1..=n)
-            .map(|j| {
-                (1..=n)
-                    .map(|i| {
-                        (2.0 / ((n + 1) as f64 * m)).sqrt()
-                            * (i as f64 * j as f64 * PI / (n + 1) as f64).sin()
-                    })
-                    .collect()
-            })
-            .collect(),
-    }
-}
+use cablevib_testkit::modal_record::{chain, check_modes, close_pair, simulate, Output};
 
 /// The chain measured at masses 1, 2 and 4 (accelerations): five modes 5 … 18.7 Hz, damping
 /// ratios 0.5 … 2 %.
@@ -63,19 +38,7 @@ fn chain_five_modes_three_accelerometers() {
 /// The pair must come out as two modes, each within its tolerance.
 #[test]
 fn modes_one_percent_apart_are_separated() {
-    let m: f64 = 1.5;
-    let f1: f64 = 10.0;
-    let f2 = 1.01 * f1;
-    let a = 1.0 / (2.0 * m).sqrt();
-    let sys = Modal {
-        frequencies_hz: vec![6.0, f1, f2],
-        zetas: vec![0.01, 0.008, 0.01],
-        shapes: vec![
-            vec![0.0, 0.0, 1.0 / m.sqrt()],
-            vec![a, a, 0.0],
-            vec![a, -a, 0.0],
-        ],
-    };
+    let sys = close_pair();
     let rec = simulate(
         &sys,
         &[0, 1, 2],

@@ -4,4 +4,5 @@
 //! modes, and hostile records. Area binary of the core crate (see tests/README.md).
 
 mod closed_form;
+mod input_output;
 mod robot;

@@ -410,9 +410,23 @@ fn paper_robot_with_hidden_cables_table() {
     };
     let base = run(0.0);
     eprintln!(
-        "mean free length {mean_free:.4} m; base k_min {:.1} N/m f1 {:.3} Hz ee {:.3} Hz",
+        "pose {p:?} m, mean free length {mean_free:.4} m; base k_min {:.1} N/m f1 {:.3} Hz ee {:.3} Hz",
         base.0, base.1, base.2
     );
+    // The document's pose and first row are this run's (it once named a pose the numbers
+    // were not computed at): the pose as written, k_min to 1 N/m, the frequencies to 1 mHz.
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/hidden-cable.md"))
+        .unwrap()
+        .replace('\n', " ");
+    let pose = format!("at its default pose ({}, {}, {}) m", p.x, p.y, p.z);
+    assert!(doc.contains(&pose), "docs/hidden-cable.md lacks {pose:?}");
+    let row = format!(
+        "| 0 (today) | 0 | {} | {:.3} | {:.3} |",
+        group_thousands(base.0.round() as u64),
+        base.1,
+        base.2
+    );
+    assert!(doc.contains(&row), "docs/hidden-cable.md lacks {row:?}");
     let mut last = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
     for lh in [0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5] {
         let r = run(lh);
@@ -429,6 +443,19 @@ fn paper_robot_with_hidden_cables_table() {
             100.0 * (r.2 / base.2 - 1.0)
         );
     }
+}
+
+/// `n` with a space between groups of three digits, as the documents print them.
+fn group_thousands(n: u64) -> String {
+    let d = n.to_string();
+    let mut out = String::new();
+    for (i, c) in d.chars().enumerate() {
+        if i > 0 && (d.len() - i).is_multiple_of(3) {
+            out.push(' ');
+        }
+        out.push(c);
+    }
+    out
 }
 
 /// The real-time cycle's cost with and without hidden cables on the paper robot, measured

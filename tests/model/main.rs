@@ -22,3 +22,4 @@ mod scene_fuzz;
 mod sum_rules;
 mod tiny_t_min;
 mod vibration;
+mod vibration_exact;

@@ -110,8 +110,10 @@ pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
 fn write_shapes(s: &Scene, modes: usize, path: &std::path::Path) -> Result<(), CliError> {
     use crate::report::csv::{process_command_line, write_csv};
     let pose = super::modes::pose_model(s)?;
-    let shapes = super::modes::shapes(&pose, modes, &crate::modal::ShapeParams::default())?;
-    let csv = crate::report::shapes_csv::shapes_csv(&pose.scene, &pose.geometry, &shapes);
+    let params = crate::modal::ShapeParams::default();
+    let shapes = super::modes::shapes(&pose, modes, &params, true)?;
+    let csv =
+        crate::report::shapes_csv::shapes_csv(&pose.scene, &pose.geometry, &shapes, Some("CSV"));
     Ok(write_csv(path, csv, &process_command_line())?)
 }
 

@@ -88,6 +88,7 @@ pub fn flag(p: Param) -> &'static str {
         Param::MaxAccelerationMS2 => "--max-acceleration",
         Param::UpdateEvery => "--update-every",
         Param::SettleS => "--settle",
+        Param::Tolerance => "--tolerance",
         Param::FromHz => "--from-hz",
         Param::ToHz => "--to-hz",
         Param::LossFactor => "--loss-factor",

@@ -158,6 +158,15 @@ pub fn files(command: &Command) -> Result<Files, CliError> {
             }
             f
         }
+        Command::Calibrate(a) => {
+            let mut f = Files::new([a.data.clone(), a.scene.input_path()]);
+            f.inputs.extend(a.tensions.clone());
+            f.outputs.extend(a.output.clone());
+            if let Some(p) = &a.svg {
+                f.out(target(p, a.format)?.0);
+            }
+            f
+        }
         Command::Shape(a) => {
             let mut f = Files::new([PathBuf::from(&a.scene)]);
             f.inputs.extend(a.trajectory.clone());

@@ -10,7 +10,8 @@ use crate::report::csv::{process_command_line, write_csv};
 use crate::report::figure::FigureFormat;
 use crate::report::frf::{bode_svg, frf_csv, frf_meta, FrfData, COORDS};
 use crate::study::frf::{
-    frequencies, frf, DampingChoice, DenseCheck, DenseCheckKind, FrfConfig, MARK_PARTICIPATION,
+    frequencies, frf_announced, DampingChoice, DenseCheck, DenseCheckKind, FrfConfig,
+    MARK_PARTICIPATION,
 };
 use cablevib::outln;
 use clap::Args;
@@ -140,6 +141,7 @@ fn config(a: &FrfArgs) -> FrfConfig {
         } else {
             None
         },
+        progress: Some("frf"),
     }
 }
 
@@ -149,7 +151,12 @@ pub fn run(a: &FrfArgs) -> Result<(), CliError> {
     frequencies(&cfg)?;
     figure::format_needs_svg(&a.svg, a.format)?;
     let s = resolve_scene(&a.scene)?;
-    let c = frf(&s, &cfg)?;
+    // A long response is announced on stderr before it runs (its memory checked first).
+    let c = frf_announced(&s, &cfg, |e| {
+        if let Some(line) = e.announcement() {
+            eprintln!("cablevib: {line}");
+        }
+    })?;
     let dim = c.dim;
     let outputs = coords(&a.output, dim, "--output")?;
     let inputs = coords(&a.input, dim, "--input")?;

@@ -53,6 +53,12 @@ pub struct IdentifyArgs {
     /// `linear_acceleration.x`); default: every channel.
     #[arg(long, value_delimiter = ',')]
     pub channels: Vec<String>,
+    /// Measured input channels (force or hammer, e.g. `fx` in N), comma-separated: CSV
+    /// column names, or MCAP field names of the vibration topic's messages. With an input
+    /// the modes come from the H1 estimate of the frequency response (outputs / inputs) and
+    /// a modal fit to its impulse response, instead of output-only SSI-cov.
+    #[arg(long, value_delimiter = ',')]
+    pub input: Vec<String>,
     /// MCAP: the topic of the vibration messages (default: the only IMU or wrench topic).
     #[arg(long)]
     pub topic: Option<String>,
@@ -197,6 +203,7 @@ pub fn run(a: &IdentifyArgs) -> Result<(), CliError> {
         channels: a.channels.clone(),
         topic: a.topic.clone(),
         pose_topic: a.pose_topic.clone(),
+        inputs: a.input.clone(),
     };
     let t0 = Instant::now();
     let mut layout: Option<Layout> = None;
@@ -205,7 +212,7 @@ pub fn run(a: &IdentifyArgs) -> Result<(), CliError> {
     let mut sink = |item: Item<'_>| -> Result<(), CliError> {
         match item {
             Item::Layout(l) => {
-                let mut i = Identifier::new(l.channels.len(), p)
+                let mut i = Identifier::with_inputs(l.channels.len() - l.inputs, l.inputs, p)
                     .map_err(|e| CliError::Usage(format!("{}: {e}", a.recording.display())))?;
                 // Only the drawn window's diagram is kept: memory stays bounded by the
                 // windows' modes on a long record.
@@ -307,6 +314,20 @@ fn pair_windows<'a>(
     Ok(out)
 }
 
+/// The response channels (the layout's channels less the measured inputs).
+fn outputs(layout: &Layout) -> &[String] {
+    &layout.channels[..layout.channels.len() - layout.inputs]
+}
+
+/// The identification used: output-only SSI-cov, or H1 and its modal fit.
+fn method(layout: &Layout) -> &'static str {
+    if layout.inputs == 0 {
+        "ssi-cov"
+    } else {
+        "h1-era"
+    }
+}
+
 /// The JSON object of the run.
 fn json_of(
     a: &IdentifyArgs,
@@ -325,8 +346,7 @@ fn json_of(
                 .iter()
                 .enumerate()
                 .map(|(j, m)| {
-                    let shape: Vec<Value> = layout
-                        .channels
+                    let shape: Vec<Value> = outputs(layout)
                         .iter()
                         .zip(&m.shape)
                         .map(|(c, z)| json!({"channel": c, "re": json_f64(z.re), "im": json_f64(z.im)}))
@@ -343,6 +363,7 @@ fn json_of(
                         "stable_poles": m.stable_poles,
                         "order": m.order,
                         "jackknife_groups": m.jackknife_groups,
+                        "coherence": json_f64(m.coherence),
                         "shape": shape,
                         "model": model,
                         "status": w.status[j],
@@ -367,7 +388,9 @@ fn json_of(
     json!({
         "recording": a.recording.display().to_string(),
         "source": layout.source,
-        "channels": layout.channels,
+        "channels": outputs(layout),
+        "inputs": &layout.channels[layout.channels.len() - layout.inputs..],
+        "method": method(layout),
         "sample_rate_hz": json_f64(rate_hz),
         "band_hz": [a.from_hz, a.to_hz],
         "scene": scene.map(|s| s.name.clone()),
@@ -395,11 +418,20 @@ fn output(
             json_of(a, layout, rows, scene, rate_hz, (identify_s, total_s))
         )?;
     } else {
+        let inputs = &layout.channels[outputs(layout).len()..];
         outln!(
-            "{}: {} channel(s) ({}) at {:.4} Hz, band {} … {} Hz; {} window(s) identified in {:.3} s",
+            "{}: {} channel(s) ({}){} at {:.4} Hz, band {} … {} Hz; {} window(s) identified in {:.3} s",
             layout.source,
-            layout.channels.len(),
-            layout.channels.join(", "),
+            outputs(layout).len(),
+            outputs(layout).join(", "),
+            if inputs.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    ", measured input(s) {}: H1 and its modal fit",
+                    inputs.join(", ")
+                )
+            },
             rate_hz,
             a.from_hz,
             a.to_hz,
@@ -444,8 +476,13 @@ fn output(
                         p.frequency_hz - m.frequency_hz
                     )
                 });
+                let coh = if m.coherence.is_finite() {
+                    format!("  γ² {:.2}", m.coherence)
+                } else {
+                    String::new()
+                };
                 outln!(
-                    "  {:>2}: {:>10.4} ± {:.4} Hz  ζ {:.4} ± {:.4}  [{}]{model}",
+                    "  {:>2}: {:>10.4} ± {:.4} Hz  ζ {:.4} ± {:.4}{coh}  [{}]{model}",
                     j + 1,
                     m.frequency_hz,
                     m.frequency_std_hz,
@@ -460,10 +497,15 @@ fn output(
         let mut meta = Map::new();
         meta.insert("recording".into(), json!(a.recording.display().to_string()));
         meta.insert("source".into(), json!(layout.source));
-        meta.insert("channels".into(), json!(layout.channels));
+        meta.insert("channels".into(), json!(outputs(layout)));
+        meta.insert(
+            "inputs".into(),
+            json!(&layout.channels[outputs(layout).len()..]),
+        );
+        meta.insert("method".into(), json!(method(layout)));
         meta.insert("band_hz".into(), json!([a.from_hz, a.to_hz]));
         meta.insert("scene".into(), json!(scene.map(|s| s.name.clone())));
-        let csv = identify_csv(rows, &layout.channels, meta);
+        let csv = identify_csv(rows, outputs(layout), meta);
         write_csv(path, csv, &process_command_line())?;
         if !a.json {
             outln!("wrote {}", path.display())?;
@@ -483,9 +525,14 @@ fn output(
             w.result.index, w.result.t_start_s, w.result.t_end_s
         );
         let sub = format!(
-            "{}; {} mode(s); SSI-cov, orders 2 … {}",
+            "{}; {} mode(s); {}, orders 2 … {}",
             layout.source,
             w.result.modes.len(),
+            if layout.inputs == 0 {
+                "SSI-cov"
+            } else {
+                "H1 and its impulse response's subspace fit (ERA)"
+            },
             a.max_order
         );
         figure::write(

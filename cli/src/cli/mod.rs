@@ -7,6 +7,7 @@
 //! |---|---|---|
 //! | `analyze` | [`analyze`](mod@analyze) | tensions and natural frequencies of one pose |
 //! | `bench` | [`bench`](mod@bench) | per-cycle latency of the real-time estimator along the circle |
+//! | `calibrate` | [`calibrate`](mod@calibrate) | fit the scene's parameters to measured frequencies: report, figure, calibrated scene |
 //! | `serve`, `demo`, `bench-ipc` | [`serve`](mod@serve) | the iceoryx2 service, the demo, the IPC latency |
 //! | `monitor`, `replay`, `demo --monitor` | [`monitor`](mod@monitor) | Foxglove live view and MCAP recording of a service; replay of a recording |
 //! | `accuracy` | [`accuracy`](mod@accuracy) | what accuracy costs: error and time of every model |
@@ -29,6 +30,7 @@ pub mod accuracy;
 pub mod analyze;
 pub mod args;
 pub mod bench;
+pub mod calibrate;
 pub mod completions;
 pub mod error;
 pub mod figure;
@@ -111,6 +113,10 @@ pub enum Command {
     /// Shape a trajectory with a time-varying ZV / ZVD / EI shaper that follows the
     /// estimated end-effector (or first) mode at each pose.
     Shape(simulate::ShapeArgs),
+    /// Fit the scene's stiffness, mass and damping parameters to measured frequencies (and
+    /// damping ratios and tensions) at many poses: estimates with standard errors, what the
+    /// data cannot determine, the χ² verdict, the calibrated scene.
+    Calibrate(calibrate::CalibrateArgs),
     /// Modal parameters from measured vibration (CSV or MCAP / ROS 2 bag): frequencies,
     /// damping ratios, shapes and their uncertainty per window by SSI-cov, beside the
     /// model's prediction at the window's pose.
@@ -145,6 +151,7 @@ pub fn run(cli: Cli, allocations: AllocCounter) -> Result<(), CliError> {
         Command::Frf(a) => frf::run(&a),
         Command::Simulate(a) => simulate::run(&a),
         Command::Shape(a) => simulate::shape(&a),
+        Command::Calibrate(a) => calibrate::run(&a),
         Command::Identify(a) => identify::run(&a),
     }
 }

@@ -7,12 +7,13 @@ use super::args::{resolve_scene, SceneArgs};
 use super::figure::{self, parse_format};
 use super::CliError;
 pub use crate::estimator::PoseModel;
-use crate::modal::{self, ModalParams, ModalSolver, Mode, ModeShapes, ShapeParams};
+use crate::modal::{ModeShapes, ShapeParams};
 use crate::report::csv::{process_command_line, write_csv};
 use crate::report::figure::FigureFormat;
 use crate::report::shapes_csv::shapes_csv;
 use crate::report::svg::modes::modes_svg;
 use crate::scene::Scene;
+use crate::study;
 use cablevib::outln;
 use clap::Args;
 use std::path::PathBuf;
@@ -52,36 +53,38 @@ pub fn pose_model(scene: &Scene) -> Result<PoseModel, CliError> {
     PoseModel::new(scene).map_err(|e| CliError::Analysis(e.to_string()))
 }
 
-/// The lowest `k` modes' shapes of `pose` (clusters completed) from the structured solver.
-pub fn shapes(pose: &PoseModel, k: usize, params: &ShapeParams) -> Result<ModeShapes, CliError> {
-    let mut solver = ModalSolver::new(ModalParams::default());
-    pose.load(&mut solver);
-    let err = |e: modal::ShapeError| CliError::Analysis(e.to_string());
-    let clusters = lowest_clusters(&mut solver, k)?;
-    solver
-        .mode_shapes(&pose.models, &pose.geometry.arm_m, &clusters, params)
-        .map_err(err)
+/// The lowest `k` modes' shapes of `pose` (clusters completed) from the structured solver
+/// ([`study::cost::mode_shapes`]: refused past the memory budget, counting the CSV text when
+/// `csv`; an estimate of a long run on stderr and a progress bar on a terminal).
+pub fn shapes(
+    pose: &PoseModel,
+    k: usize,
+    params: &ShapeParams,
+    csv: bool,
+) -> Result<ModeShapes, CliError> {
+    let work = study::cost::Work::Modes {
+        modes: k,
+        continuous_samples: params.continuous_samples,
+        csv,
+    };
+    announce(&study::cost::estimate_cost(&pose.scene, &work))?;
+    Ok(study::cost::mode_shapes(
+        pose,
+        k,
+        params,
+        csv,
+        Some("mode shapes"),
+    )?)
 }
 
-/// The lowest clusters (λ, multiplicity) covering at least `k` modes, from the spectrum
-/// engine ([`ModalSolver::modes`]); a cluster cut by `k` is completed.
-fn lowest_clusters(solver: &mut ModalSolver, k: usize) -> Result<Vec<(f64, u32)>, CliError> {
-    let mut modes = vec![Mode::default(); k + modal::MAX_MULTIPLICITY as usize];
-    let n = solver
-        .modes(modes.len(), &mut modes)
-        .map_err(|e| CliError::Analysis(e.to_string()))?;
-    let mut out = Vec::new();
-    let mut covered = 0usize;
-    for (i, m) in modes[..n].iter().enumerate() {
-        if covered >= k {
-            break;
-        }
-        if m.cluster_start == i {
-            out.push((m.lambda, m.multiplicity));
-            covered += m.multiplicity as usize;
-        }
+/// A study's estimate: refused past the memory budget, else a long one announced on stderr
+/// ([`study::cost::WorkEstimate::announcement`]).
+pub fn announce(e: &study::cost::WorkEstimate) -> Result<(), CliError> {
+    e.check_memory().map_err(study::StudyError::from)?;
+    if let Some(line) = e.announcement() {
+        eprintln!("cablevib: {line}");
     }
-    Ok(out)
+    Ok(())
 }
 
 /// `cablevib modes`.
@@ -102,7 +105,7 @@ pub fn run(a: &ModesArgs) -> Result<(), CliError> {
     let s = resolve_scene(&a.scene)?;
     let pose = pose_model(&s)?;
     let t0 = Instant::now();
-    let shapes = shapes(&pose, a.modes, &params)?;
+    let shapes = shapes(&pose, a.modes, &params, a.csv.is_some())?;
     let secs = t0.elapsed().as_secs_f64();
     let sc = &pose.scene;
     let p = sc.ee_position_m;
@@ -131,7 +134,7 @@ pub fn run(a: &ModesArgs) -> Result<(), CliError> {
     if let Some(path) = &a.csv {
         write_csv(
             path,
-            shapes_csv(sc, &pose.geometry, &shapes),
+            shapes_csv(sc, &pose.geometry, &shapes, Some("CSV")),
             &process_command_line(),
         )?;
         outln!("\nwrote {}", path.display())?;

@@ -5,7 +5,9 @@
 
 use super::{AllocCounter, CliError};
 use crate::scene::Scene;
-use crate::service::{BenchIpcConfig, DemoConfig, ServerConfig, TminSchedule, WaitMode};
+use crate::service::{
+    BenchIpcConfig, BenchVibration, DemoConfig, ServerConfig, TminSchedule, WaitMode,
+};
 use cablevib::outln;
 use clap::Args;
 use std::time::Duration;
@@ -79,6 +81,27 @@ impl From<WaitArg> for WaitMode {
     }
 }
 
+/// `--vibration` values: the service's [`BenchVibration`]s, as the command line spells them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum VibrationArg {
+    /// No vibration sender (the latency without the input).
+    Off,
+    /// One accelerometer sample (1 kHz sensor) before each pose.
+    On,
+    /// Both, in alternating blocks of the same run (side by side).
+    Both,
+}
+
+impl From<VibrationArg> for BenchVibration {
+    fn from(v: VibrationArg) -> Self {
+        match v {
+            VibrationArg::Off => BenchVibration::Off,
+            VibrationArg::On => BenchVibration::On,
+            VibrationArg::Both => BenchVibration::Both,
+        }
+    }
+}
+
 /// `cablevib demo` options.
 #[derive(Debug, Clone, Args)]
 pub struct DemoArgs {
@@ -132,6 +155,12 @@ pub struct DemoArgs {
     /// unshaped one (docs/vibration.md, "Input shaping").
     #[arg(long, value_name = "zv|zvd|ei", value_parser = parse_shaper)]
     pub shape: Option<crate::trajectory::shaping::ShaperKind>,
+    /// Without the synthetic accelerometer (by default the simulated vibration of the
+    /// trajectory is published on the vibration service and the estimates carry the
+    /// measured frequencies; demos over 60 s run without it, since the record is simulated
+    /// before the demo starts, about 0.35 s per second).
+    #[arg(long)]
+    pub no_accelerometer: bool,
     /// A monitor beside the demo (Foxglove, MCAP).
     #[command(flatten)]
     pub monitor: super::monitor::DemoMonitorArgs,
@@ -172,6 +201,11 @@ pub struct BenchIpcArgs {
     /// to measure the difference)
     #[arg(long, value_name = "true|false", default_value_t = true, action = clap::ArgAction::Set)]
     pub alloc_pool: bool,
+    /// Feed the service's vibration input while measuring: off, on (a 1 kHz accelerometer
+    /// sample before each pose), or both in alternating blocks of 2000 poses (the latency
+    /// with and without the input, side by side in one run)
+    #[arg(long, value_enum, default_value_t = VibrationArg::Off)]
+    pub vibration: VibrationArg,
 }
 
 /// Longest `--stats-period-s`, s: one line a day is already rarer than anyone watches a log;
@@ -242,6 +276,7 @@ pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
         hold_f1_hz: a.hold_f1,
         hold_csv: a.hold_csv.clone(),
         shape: a.shape,
+        accelerometer: !a.no_accelerometer,
     };
     let monitor = super::monitor::start_beside_demo(&a.monitor, &scene, &a.scene, a.required_hz)?;
     crate::service::demo(&scene, &cfg)?;
@@ -295,6 +330,7 @@ pub fn bench_ipc(a: &BenchIpcArgs) -> Result<(), CliError> {
         cpu: a.cpu,
         json: a.json,
         alloc_pool: a.alloc_pool,
+        vibration: a.vibration.into(),
     };
     Ok(crate::service::bench_ipc(&scene, &cfg)?)
 }

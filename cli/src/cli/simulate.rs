@@ -220,12 +220,17 @@ pub struct SimulateArgs {
     /// The circle, when the path is neither a CSV nor a move.
     #[command(flatten)]
     pub circle: CircleArgs,
-    /// Modes K in the superposition (a cluster cut by K completed), 1..=256.
-    #[arg(long, default_value_t = 12)]
-    pub modes: usize,
-    /// Samples between two updates of the modes along the path.
-    #[arg(long, default_value_t = 10)]
-    pub update_every: usize,
+    /// Modes K in the superposition (a cluster cut by K completed), 1..=256; default: the
+    /// fewest whose estimated truncation error meets --tolerance.
+    #[arg(long)]
+    pub modes: Option<usize>,
+    /// Samples between two updates of the modes along the path; default: chosen along the
+    /// path so that a held basis meets --tolerance.
+    #[arg(long)]
+    pub update_every: Option<usize>,
+    /// Error allowed on the end-effector's deviation, relative to its peak (1e-9..=0.5).
+    #[arg(long, default_value_t = study::pilot::DEFAULT_TOLERANCE, allow_hyphen_values = true)]
+    pub tolerance: f64,
     /// Time simulated at rest after a path that ends at rest, s.
     #[arg(long, default_value_t = 2.0, allow_hyphen_values = true)]
     pub settle: f64,
@@ -267,18 +272,29 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
     let cfg = SimulateConfig {
         modes: a.modes,
         update_every: a.update_every,
+        tolerance: a.tolerance,
         settle_s: a.settle,
         max_acceleration_m_s2: a.path.max_acceleration,
+        progress: Some("simulate"),
     };
     a.path.check(&path)?;
+    let given = |v: Option<usize>, what: &str| {
+        v.map_or(format!("{what} for the tolerance"), |k| k.to_string())
+    };
     outln!(
-        "scene {}  damping {}  path {desc}  dt {} s  K = {}  modes updated every {} samples",
+        "scene {}  damping {}  path {desc}  dt {} s  K = {}  modes updated every {} samples  tolerance {:e} of the peak",
         s.name,
         damping_label(&s.damping),
         path.dt_s,
-        a.modes,
-        a.update_every
+        given(a.modes, "chosen"),
+        given(a.update_every, "chosen"),
+        a.tolerance
     )?;
+    let samples = study::simulated_samples(&path, &cfg);
+    let mut cost = crate::study::cost::estimate_cost(&s, &study::simulate_work(samples, &cfg));
+    // Every shaper is one more run of the same path (longer by the shaper's delay).
+    cost.seconds *= a.shaper.len() as f64;
+    super::modes::announce(&cost)?;
     let mut runs = Vec::new();
     for &sh in &a.shaper {
         let t0 = Instant::now();
@@ -345,6 +361,22 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
             }
         )?;
     }
+    for r in &runs {
+        let acc = &r.result.accuracy;
+        outln!(
+            "{}: accuracy: K = {} ({}), truncation estimate {:.2e} of the peak ({:.5} mm){}; basis updates {} ({}), largest interval estimate {:.2e}, sum {:.2e}",
+            r.shaper.name(),
+            r.result.modes,
+            if acc.modes_chosen { "chosen" } else { "given" },
+            acc.modes_estimate,
+            acc.peak_m * 1e3,
+            if acc.modes_met { "" } else { " — over the tolerance" },
+            r.result.updates,
+            if acc.updates_chosen { "chosen" } else { "given" },
+            acc.interval_estimate,
+            acc.interval_estimate_sum
+        )?;
+    }
     write_outputs(a, &s, &runs)?;
     Ok(())
 }
@@ -368,6 +400,13 @@ fn write_outputs(a: &SimulateArgs, s: &Scene, runs: &[Run]) -> Result<(), CliErr
             serde_json::json!({
                 "shaper": r.shaper.name(),
                 "time_added_s": r.added_s,
+                "modes": r.result.modes,
+                "modes_chosen": r.result.accuracy.modes_chosen,
+                "tolerance": r.result.accuracy.tolerance,
+                "truncation_estimate": r.result.accuracy.modes_estimate,
+                "basis_updates": r.result.updates,
+                "update_interval_chosen": r.result.accuracy.updates_chosen,
+                "update_interval_estimate": r.result.accuracy.interval_estimate,
                 "stops": r.result.stops.iter().map(|st| serde_json::json!({
                     "t_start_s": st.t_start_s,
                     "t_end_s": st.t_end_s,

@@ -5,6 +5,8 @@
 //! | module | what |
 //! |---|---|
 //! | [`svg`] | the SVG writer: line plots, heat maps |
+//! | [`calibration`](mod@calibration) | `cablevib calibrate`: measured against model frequency |
+//! | [`calibrated_scene`] | `cablevib calibrate -o`: the calibrated scene file |
 //! | [`figure`] | figure files: SVG, or PNG / PDF rendered from it (`--format`) |
 //! | [`csv`] | the one CSV writer (`csv` crate, `PATH.json` sidecars) and the number formats of every command's CSV |
 //! | [`map`](mod@map) | `cablevib map`: CSV and heat-map figure |
@@ -18,6 +20,8 @@
 
 pub mod accuracy_doc;
 pub mod accuracy_figures;
+pub mod calibrated_scene;
+pub mod calibration;
 pub mod csv;
 pub mod figure;
 pub mod frf;

@@ -22,6 +22,7 @@ use super::csv::{num, scene_meta, Column, Csv};
 use crate::kinematics::Geometry;
 use crate::modal::ModeShapes;
 use crate::scene::Scene;
+use crate::study::progress::Progress;
 use nalgebra::Vector3;
 
 /// The CSV header.
@@ -64,8 +65,13 @@ const SHAPES_COLUMNS: [(&str, &str, &str); 10] = [
 
 /// The CSV of `shapes` for the pose of `scene` (its `ee_position_m`) with `geometry`; write
 /// it with [`super::csv::write_csv`] (text and sidecar) or take its text with
-/// [`Csv::into_parts`].
-pub fn shapes_csv(scene: &Scene, geometry: &Geometry, shapes: &ModeShapes) -> Csv {
+/// [`Csv::into_parts`]. A progress bar labelled `label` on a terminal (one step per mode).
+pub fn shapes_csv(
+    scene: &Scene,
+    geometry: &Geometry,
+    shapes: &ModeShapes,
+    label: Option<&str>,
+) -> Csv {
     let columns = SHAPES_COLUMNS
         .iter()
         .map(|&(n, u, d)| Column::new(n, u, d))
@@ -77,6 +83,8 @@ pub fn shapes_csv(scene: &Scene, geometry: &Geometry, shapes: &ModeShapes) -> Cs
     let positions: Vec<Vec<Vector3<f64>>> = (0..shapes.fractions.len())
         .map(|i| node_positions(scene, geometry, i, &shapes.fractions[i]))
         .collect();
+    // The text of 10⁵ elements per cable is ~0.1 GB per mode (seconds each): a bar per mode.
+    let bar = Progress::counting(label, shapes.modes.len(), "modes written");
     for (k, m) in shapes.modes.iter().enumerate() {
         let head = [(k + 1).to_string(), num(m.frequency_hz)];
         let mut row = |cable: usize, node: usize, x: &Vector3<f64>, u: &Vector3<f64>| {
@@ -93,6 +101,8 @@ pub fn shapes_csv(scene: &Scene, geometry: &Geometry, shapes: &ModeShapes) -> Cs
                 row(i + 1, j, &positions[i][j], u);
             }
         }
+        bar.advance(1);
     }
+    bar.finish();
     csv
 }

@@ -4,20 +4,19 @@
 //! both files, the CSV columns `calibrate` reads, the figure, the pairing with the model, and
 //! hostile records.
 
-use cablevib_testkit::modal_record::{simulate, Modal, Output as Measured, Record};
+use cablevib_testkit::modal_record::{self, simulate, Modal, Output as Measured, Record};
 use serde_json::Value;
-use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 const BIN: &str = env!("CARGO_BIN_EXE_cablevib");
 const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
 
-fn run(args: &[&str]) -> Output {
+pub(super) fn run(args: &[&str]) -> Output {
     Command::new(BIN).args(args).output().expect("run cablevib")
 }
 
-fn dir(name: &str) -> PathBuf {
+pub(super) fn dir(name: &str) -> PathBuf {
     let d = PathBuf::from(ROOT).join("target/tmp/identify").join(name);
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
@@ -25,23 +24,8 @@ fn dir(name: &str) -> PathBuf {
 }
 
 /// The chain of 5 masses (closed-form modes 5 … 18.7 Hz) measured at masses 1, 2, 4.
-fn chain() -> Modal {
-    let n = 5usize;
-    let m: f64 = 2.0;
-    let s1 = (PI / 12.0).sin();
-    Modal {
-        frequencies_hz: (1..=n)
-            .map(|j| 5.0 * (j as f64 * PI / 12.0).sin() / s1)
-            .collect(),
-        zetas: vec![0.01, 0.005, 0.02, 0.01, 0.008],
-        shapes: (1..=n)
-            .map(|j| {
-                (1..=n)
-                    .map(|i| (2.0 / (6.0 * m)).sqrt() * (i as f64 * j as f64 * PI / 6.0).sin())
-                    .collect()
-            })
-            .collect(),
-    }
+pub(super) fn chain() -> Modal {
+    modal_record::chain(5.0, &[0.01, 0.005, 0.02, 0.01, 0.008])
 }
 
 /// The chain's record: 3 accelerations with 20 dB sensor noise, `duration_s` at 1 kHz.
@@ -60,7 +44,7 @@ fn chain_record(duration_s: f64, seed: u64) -> (Modal, Record) {
 }
 
 /// The command failed with one line on stderr containing `want`.
-fn one_line(o: &Output, want: &str) {
+pub(super) fn one_line(o: &Output, want: &str) {
     assert!(!o.status.success());
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(e.trim().lines().count(), 1, "{e}");
@@ -103,12 +87,12 @@ fn write_csv(r: &Record, path: &Path, edit: impl Fn(usize, &mut String)) {
     std::fs::write(path, s).unwrap();
 }
 
-fn json_of(o: &Output) -> Value {
+pub(super) fn json_of(o: &Output) -> Value {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     serde_json::from_slice(&o.stdout).unwrap()
 }
 
-fn modes(v: &Value, w: usize) -> Vec<(f64, f64)> {
+pub(super) fn modes(v: &Value, w: usize) -> Vec<(f64, f64)> {
     v["windows"][w]["modes"]
         .as_array()
         .unwrap()

@@ -3,6 +3,7 @@
 //! Area binary of the command-line crate (see tests/README.md at the repository root).
 
 mod analyze_realtime;
+mod calibrate;
 mod cli_hostile;
 mod cli_orientation;
 mod cli_tool;
@@ -11,7 +12,10 @@ mod figures;
 mod frf;
 mod hidden_sag;
 mod identify;
+mod identify_input;
+mod long_work;
 mod map_shard;
+mod memory_budget;
 mod mode_shapes;
 mod outputs;
 mod sag_compare;

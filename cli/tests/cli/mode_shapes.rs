@@ -405,7 +405,7 @@ fn csv_and_svg_of_the_rigid_box() {
     let s = solver
         .mode_shapes(&pm.models, &pm.geometry.arm_m, &cl, &p)
         .unwrap();
-    let (text, sidecar) = shapes_csv(&pm.scene, &pm.geometry, &s).into_parts("test");
+    let (text, sidecar) = shapes_csv(&pm.scene, &pm.geometry, &s, None).into_parts("test");
     let sidecar: serde_json::Value = serde_json::from_str(&sidecar).expect("sidecar JSON");
     assert_eq!(sidecar["modes"], s.modes.len());
     let mut lines = text.lines();

@@ -525,6 +525,48 @@ const PATH_OPTIONS: &[(&str, &str, Role)] = &[
             offline: true,
         }]),
     ),
+    ("calibrate", "data", Role::Input),
+    ("calibrate", "tensions", Role::Input),
+    // Not `offline`: a run needs measured modes, which none of the table's inputs is (here
+    // the trajectory stands for the data file); the refusal comes before any file is read.
+    (
+        "calibrate",
+        "output",
+        Role::Output(&[Case {
+            args: &[
+                "calibrate",
+                "{scene}",
+                "--data",
+                "{traj}",
+                "--fit",
+                "ee_mass",
+                "-o",
+                "{out}.toml",
+            ],
+            writes: &["{out}.toml"],
+            input: Input::Scene,
+            offline: false,
+        }]),
+    ),
+    (
+        "calibrate",
+        "svg",
+        Role::Output(&[Case {
+            args: &[
+                "calibrate",
+                "{scene}",
+                "--data",
+                "{traj}",
+                "--fit",
+                "ee_mass",
+                "--svg",
+                "{out}.svg",
+            ],
+            writes: &["{out}.svg"],
+            input: Input::Trajectory,
+            offline: false,
+        }]),
+    ),
 ];
 
 /// (command path, clap id) of every option or positional whose value is a path.

@@ -2,7 +2,8 @@
 //! with no data rows, with a single row or two rows at the same time (a path of zero
 //! duration), with a NaN or an infinity, a CSV that does not exist, a `--move 0,0,0` (a move
 //! of zero length), `--duration 0` (and negative), `--dt 0` (and NaN), `--modal-ratio 1`
-//! (and NaN, and negative). Each is a one-line error naming the cause, exit code 1, no panic.
+//! (and NaN, and negative), `--tolerance` 0, 1 or NaN, `--modes` 0 or 257, `--update-every 0`.
+//! Each is a one-line error naming the cause, exit code 1, no panic.
 
 use std::path::PathBuf;
 use std::process::{Command, Output};
@@ -117,12 +118,54 @@ fn simulate_refuses_hostile_inputs_in_one_line() {
             &["--move", "0.1,0,0", "--modal-ratio", "NaN"][..],
             "--modal-ratio NaN",
         ),
+        (
+            &["--move", "0.1,0,0", "--tolerance", "0"][..],
+            "--tolerance 0",
+        ),
+        (
+            &["--move", "0.1,0,0", "--tolerance", "1"][..],
+            "--tolerance 1",
+        ),
+        (
+            &["--move", "0.1,0,0", "--tolerance", "NaN"][..],
+            "--tolerance NaN",
+        ),
+        (&["--move", "0.1,0,0", "--modes", "0"][..], "--modes 0"),
+        (&["--move", "0.1,0,0", "--modes", "257"][..], "--modes 257"),
+        (
+            &["--move", "0.1,0,0", "--update-every", "0"][..],
+            "--update-every must be",
+        ),
     ] {
         let mut all = vec!["simulate", "spatial-paper", "--out", out];
         all.extend_from_slice(args);
         let o = run(&all);
         assert_one_line_error(&format!("{args:?}"), &o, needle);
     }
+    // A scene whose damping leaves modes over-damped (Rayleigh β = 0.05 s: ζ = βω/2 = 1.76
+    // at 11.2 Hz) is answered, not refused: every damping regime is propagated exactly
+    // (tests/model/vibration_exact.rs checks the answer against the test's own integration).
+    let scene = d.join("overdamped.toml");
+    let text = format!(
+        "{}\n[damping]\nrayleigh_beta = 0.05\n",
+        cablevib::scene::DEFAULT_SCENE_TOML
+    );
+    std::fs::write(&scene, text).unwrap();
+    let o = run(&[
+        "simulate",
+        scene.to_str().unwrap(),
+        "--move",
+        "0.1,0,0",
+        "--elements",
+        "10",
+        "--out",
+        out,
+    ]);
+    assert!(
+        o.status.success(),
+        "overdamped modes: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let _ = std::fs::remove_dir_all(&d);
 }
 

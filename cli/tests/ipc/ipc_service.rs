@@ -34,7 +34,7 @@ use cablevib::scene::Scene;
 use cablevib::trajectory::Trajectory;
 use cablevib_ipc::{
     monotonic_now_ns, EstimateSample, MarginRequest, PoseSample, ServiceNames, StatusCode,
-    TminSetpoint, EVENT_ID_POSE, IDENTITY_QUATERNION,
+    TminSetpoint, EVENT_ID_POSE, IDENTITY_QUATERNION, SCHEMA_VERSION,
 };
 use cablevib_service::ports::{
     create_node, load_iceoryx2_config, open_event, open_margin, open_pubsub, EstimateOutput,
@@ -1057,7 +1057,9 @@ fn a_peer_with_another_layout_gets_a_clear_error() {
         "{log}"
     );
     assert!(
-        log.contains("`cablevib::PoseSample::v3` (80 bytes, align 8)"),
+        log.contains(&format!(
+            "`cablevib::PoseSample::v{SCHEMA_VERSION}` (80 bytes, align 8)"
+        )),
         "{log}"
     );
     assert!(log.contains("rebuild the other peer"), "{log}");
@@ -1073,7 +1075,9 @@ fn a_peer_with_another_layout_gets_a_clear_error() {
     let text = err.to_string();
     assert!(text.contains("incompatible peer"), "{text}");
     assert!(
-        text.contains("carries payload `cablevib::PoseSample::v3`"),
+        text.contains(&format!(
+            "carries payload `cablevib::PoseSample::v{SCHEMA_VERSION}`"
+        )),
         "{text}"
     );
     assert!(node

@@ -552,7 +552,7 @@ fn estimator_answer(s: &Scene) -> Result<Vec<f64>, String> {
         Err(BuildError::DefaultPose { reason, .. }) => {
             Err(format!("{:?} (build): {reason}", reason.status()))
         }
-        Err(e @ BuildError::Params(_)) => Err(e.to_string()),
+        Err(e @ (BuildError::Params(_) | BuildError::Memory(_))) => Err(e.to_string()),
     }
 }
 

@@ -38,11 +38,14 @@ def same(recorded, expected_hex):
     return bits(float(recorded)) == expected_hex
 
 
-FLOATS = ["f1_hz", "ee_mode_hz", "eigen_residual"]
+FLOATS = ["f1_hz", "ee_mode_hz", "eigen_residual", "measured_f1_hz", "f1_residual_hz",
+          "measured_ee_mode_hz", "ee_mode_residual_hz"]
 FLOAT_ARRAYS = ["tensions_n", "stiffness"]
 INTS = ["sequence", "pose_sequence", "pose_timestamp_ns", "receive_timestamp_ns", "publish_timestamp_ns",
         "status", "cable_count", "ee_mode_age_cycles", "stiffness_dim", "compute_ns",
-        "eigen_evaluations", "tension_iterations", "skipped_poses"]
+        "eigen_evaluations", "tension_iterations", "skipped_poses", "measured_f1_status",
+        "measured_ee_mode_status", "vibration_samples", "vibration_refused", "vibration_lost",
+        "measured_age_ns"]
 
 
 def scene_class(schema):
@@ -110,8 +113,13 @@ def full(expected_path, path):
             assert len(r[k]) == len(x[k]), k
             for a, b in zip(r[k], x[k]):
                 assert same(a, b), (x["pose_sequence"], k, a, b)
-    print(f"OK {len(estimates)} estimates, {len(poses)} poses, {t_mins} T_min, {scenes} scene updates; "
-          f"every estimate value bit for bit")
+    # The test's accelerometer (a 29.4 Hz sine) is measured once its 2 s window is full: the
+    # recorded end-effector mode is the sine's, the status named.
+    measured = [e for e in estimates if e["measured_ee_mode_status_name"] == "ok"]
+    assert len(measured) > len(estimates) // 2, (len(measured), len(estimates))
+    assert all(abs(e["measured_ee_mode_hz"] - 29.4) < 0.01 for e in measured), measured[-1]
+    print(f"OK {len(estimates)} estimates ({len(measured)} with a measured end-effector mode), "
+          f"{len(poses)} poses, {t_mins} T_min, {scenes} scene updates; every estimate value bit for bit")
 
 
 def killed(path):

@@ -18,12 +18,15 @@ use std::time::{Duration, Instant};
 use cablevib::scene::Scene;
 use cablevib::trajectory::{Trajectory, CIRCLE_PERIOD_S};
 use cablevib_ipc::{
-    monotonic_now_ns, EstimateSample, PoseSample, ServiceNames, TminSetpoint, IDENTITY_QUATERNION,
+    monotonic_now_ns, EstimateSample, PoseSample, ServiceNames, TminSetpoint, VibrationSample,
+    IDENTITY_QUATERNION, MEASURED_AGE_UNKNOWN,
 };
 use cablevib_monitor::encode::EstimateRecord;
 use cablevib_monitor::recording::{read_recording, Recorded};
 use cablevib_monitor::replay::{replay, Pace, ReplayConfig};
-use cablevib_service::ports::{create_node, wait_for_service, EstimateOutput, PoseInput};
+use cablevib_service::ports::{
+    create_node, open_pubsub, wait_for_service, EstimateOutput, PoseInput, VIBRATION_SETTINGS,
+};
 use cablevib_service::server::{self, ServerConfig, ServerReport};
 use cablevib_service::{ServiceError, WaitMode};
 
@@ -122,7 +125,8 @@ struct Run {
 }
 
 /// The controller: the circle at `rate_hz` for `seconds`, T_min `t_min_at` (time, N) once;
-/// takes every estimate.
+/// takes every estimate. An accelerometer sample (a 29.4 Hz sine, stamped as a sensor at
+/// `rate_hz`) goes before each pose, so the estimates carry measured frequencies.
 fn control(
     instance: &str,
     scene: &Scene,
@@ -141,6 +145,13 @@ fn control(
         || ServiceError::Timeout("stopped".into()),
     )
     .unwrap();
+    let sensor = open_pubsub::<VibrationSample>(&node, &names.vibration, VIBRATION_SETTINGS)
+        .unwrap()
+        .publisher_builder()
+        .create()
+        .unwrap();
+    let t0_ns = monotonic_now_ns();
+    let mut rng = cablevib::rng::SplitMix64(7);
     let trajectory = Trajectory::circle(scene, CIRCLE_PERIOD_S).unwrap();
     let n = (seconds * rate_hz) as usize;
     let mut run = Run {
@@ -163,6 +174,15 @@ fn control(
                 t_min_sent = true;
             }
         }
+        let a = (2.0 * std::f64::consts::PI * 29.4 * t).sin();
+        let mut noise = || 0.02 * rng.normal();
+        sensor
+            .send_copy(VibrationSample::acceleration(
+                k as u64 + 1,
+                t0_ns + (t * 1e9) as u64,
+                [a + noise(), noise(), 9.81 + noise()],
+            ))
+            .unwrap();
         let p = trajectory.position_at(t).unwrap();
         let pose = PoseSample::new(
             k as u64 + 1,
@@ -233,6 +253,17 @@ fn expected_json(run: &Run) -> String {
                 "eigen_evaluations": e.eigen_evaluations,
                 "tension_iterations": e.tension_iterations,
                 "skipped_poses": e.skipped_poses,
+                "measured_f1_status": e.measured_f1_status,
+                "measured_ee_mode_status": e.measured_ee_mode_status,
+                "vibration_samples": e.vibration_samples,
+                "vibration_refused": e.vibration_refused,
+                "vibration_lost": e.vibration_lost,
+                "measured_age_ns": (e.measured_age_ns != MEASURED_AGE_UNKNOWN)
+                    .then_some(e.measured_age_ns),
+                "measured_f1_hz": hex(e.measured_f1_hz),
+                "f1_residual_hz": hex(e.f1_residual_hz),
+                "measured_ee_mode_hz": hex(e.measured_ee_mode_hz),
+                "ee_mode_residual_hz": hex(e.ee_mode_residual_hz),
                 "f1_hz": hex(e.f1_hz),
                 "ee_mode_hz": hex(e.ee_mode_hz),
                 "eigen_residual": hex(e.eigen_residual),

@@ -2,7 +2,7 @@
 parallel robots (Python bindings of the Rust crate). SI units: m, kg, N, N/m, Hz."""
 
 import os
-from typing import Any, Dict, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -157,6 +157,25 @@ def frf(
     superposition of the sagged shapes; ``element="continuous"`` refused), as on the
     command line."""
 
+def calibrate(
+    scene: Scene,
+    measurements: Union[str, "os.PathLike[str]"],
+    fit: List[str],
+    tensions: Union[None, str, "os.PathLike[str]"] = None,
+    sigma_rel: float = 0.005,
+    damping_sigma_rel: float = 0.2,
+    tension_sigma_rel: float = 0.02,
+    bounds: Optional[Dict[str, Tuple[float, float]]] = None,
+    nominal: Optional[Dict[str, float]] = None,
+    prior: Optional[Dict[str, float]] = None,
+) -> Dict[str, Any]:
+    """What ``cablevib calibrate SCENE --data MEASUREMENTS --fit ... --json`` prints:
+    ``parameters`` (``name``, ``value``, ``std_error`` (None when undetermined),
+    ``determined``, ``unit``, ``nominal``, bounds, ``sensitivity``), ``correlation``,
+    ``singular_values``, ``undetermined``, ``chi2_per_dof``, ``fits``, ``verdict``,
+    ``residuals`` (each measured mode before and after), ``left_out``, ``unused_columns``.
+    ``measurements``: the modes CSV (``cablevib identify``'s as it is); ``tensions``: the
+    tensions CSV; ``bounds``, ``nominal``, ``prior`` by parameter or group name (SI units)."""
 def identify(
     t: _Arr,
     channels: _Arr,
@@ -170,8 +189,10 @@ def identify(
     max_damping: float = 0.2,
     window: Optional[float] = None,
     overlap: float = 0.5,
+    inputs: Optional[_Arr] = None,
 ) -> Dict[str, Any]:
-    """Modal identification (SSI-cov) of ``t`` (N, s) and ``channels`` (N × l or N): what
+    """Modal identification (SSI-cov; with ``inputs``, measured forces N × m or N, H1 and its
+    modal fit, as ``--input``) of ``t`` (N, s) and ``channels`` (N × l or N): what
     ``cablevib identify --json`` prints per window without the model: ``{"windows":
     [{"t_start_s", "t_end_s", "status", "modes": [{"frequency_hz", "damping_ratio",
     "frequency_std_hz", "damping_ratio_std", "shape_re", "shape_im", ...}]}]}``, modes

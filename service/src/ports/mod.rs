@@ -14,6 +14,7 @@
 //! |---|---|---|
 //! | pose | publish-subscribe | up to [`RECORD_BUFFER`] queued poses per subscriber (the service's own: [`POSE_BUFFER`]), history 0, [`MAX_PUBLISHERS`] publishers |
 //! | T_min | publish-subscribe | up to [`RECORD_BUFFER`] queued (the service's own: [`T_MIN_BUFFER`]), history 1: a (re)started service gets the set-point in force |
+//! | vibration | publish-subscribe | up to [`RECORD_BUFFER`] queued samples per subscriber (the service's own: [`VIBRATION_BUFFER`]), history 0, [`MAX_PUBLISHERS`] publishers |
 //! | estimate | publish-subscribe | up to [`RECORD_BUFFER`] queued estimates per subscriber (a controller's: [`ESTIMATE_BUFFER`]), [`ESTIMATE_PUBLISHERS`] publisher |
 //! | margin | request-response | [`MARGIN_SERVERS`] server, [`MAX_CLIENTS`] clients, [`MARGIN_ACTIVE_REQUESTS`] active requests per client |
 //! | wake/service, wake/controller | event | [`EVENT_PORTS`] listeners and notifiers |
@@ -36,8 +37,8 @@ use core::time::Duration;
 use cablevib_ipc::{
     explain_publish_subscribe_mismatch, explain_request_response_mismatch, EstimateSample,
     MarginRequest, MarginResponse, Message, PoseSample, ServiceNames, TminSetpoint,
-    EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST, EVENT_ID_MARGIN_RESPONSE, EVENT_ID_POSE,
-    EVENT_ID_T_MIN,
+    VibrationSample, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_REQUEST, EVENT_ID_MARGIN_RESPONSE,
+    EVENT_ID_POSE, EVENT_ID_T_MIN, EVENT_ID_VIBRATION,
 };
 use iceoryx2::config::Config as Iceoryx2Config;
 use iceoryx2::node::{NodeState, NodeView};
@@ -76,6 +77,7 @@ pub use node::{
 pub use open::{
     open_event, open_event_with, open_margin, open_margin_with, open_pubsub, open_pubsub_with,
     MarginFactory, PubSubSettings, ESTIMATE_SETTINGS, POSE_SETTINGS, T_MIN_SETTINGS,
+    VIBRATION_SETTINGS,
 };
 
 /// The iceoryx2 service flavour used everywhere: inter-process, shared memory.
@@ -84,19 +86,24 @@ pub type Ipc = ipc::Service;
 /// How many poses the service's subscriber queues before the oldest is overwritten. The service
 /// drains the queue every cycle and estimates the newest pose only ("latest pose wins").
 pub const POSE_BUFFER: usize = 16;
+/// How many vibration samples the service queues before the oldest is overwritten (counted
+/// from the sequence gaps): 50 ms of a 5 kHz sensor, the longest the service sleeps in
+/// `--wait event` without a wake-up.
+pub const VIBRATION_BUFFER: usize = 256;
 /// How many T_min set-points the service's subscriber queues (the newest one wins).
 pub const T_MIN_BUFFER: usize = 4;
 /// How many estimates a controller's subscriber ([`EstimateOutput::open`]) queues before the
 /// oldest is overwritten.
 pub const ESTIMATE_BUFFER: usize = 16;
-/// The most samples one subscriber of the pose, T_min or estimate service may queue (the
-/// services' `subscriber_max_buffer_size`), and what a recorder takes
-/// ([`EstimateOutput::open_recorder`], the monitor's pose and T_min subscribers): 2048, i.e.
-/// a recorder may be descheduled ≈ 2 s at 1 kHz (≈ 1 s at 2 kHz) before a sample is
+/// The most samples one subscriber of the pose, T_min, vibration or estimate service may queue
+/// (the services' `subscriber_max_buffer_size`), and what a recorder takes
+/// ([`EstimateOutput::open_recorder`], the monitor's pose, T_min and vibration subscribers):
+/// 2048, i.e. a recorder may be descheduled ≈ 2 s at 1 kHz (≈ 1 s at 2 kHz) before a sample is
 /// overwritten. Each publisher's shared-memory segment is sized for [`MAX_SUBSCRIBERS`] queues
-/// of this many samples (≈ 8.6 MB for the estimate publisher, 1.4 MB per pose publisher, of
-/// which only the samples in use are touched); the service and the controllers ask for their
-/// own short queues ([`POSE_BUFFER`], [`T_MIN_BUFFER`], [`ESTIMATE_BUFFER`]).
+/// of this many samples (≈ 9.8 MB for the estimate publisher, 1.4 MB per pose publisher,
+/// 1.2 MB per vibration publisher, of which only the samples in use are touched); the service
+/// and the controllers ask for their own short queues ([`POSE_BUFFER`], [`T_MIN_BUFFER`],
+/// [`VIBRATION_BUFFER`], [`ESTIMATE_BUFFER`]).
 pub const RECORD_BUFFER: usize = 2048;
 /// Publishers of the pose and T_min services: one controller or replay at a time; the slack
 /// covers killed peers whose ports are not cleaned up yet.
@@ -131,9 +138,10 @@ const EVENT_ID_LARGEST: usize = max_event_id([
     EVENT_ID_MARGIN_REQUEST,
     EVENT_ID_ESTIMATE,
     EVENT_ID_MARGIN_RESPONSE,
+    EVENT_ID_VIBRATION,
 ]);
 
-const fn max_event_id(ids: [usize; 5]) -> usize {
+const fn max_event_id(ids: [usize; 6]) -> usize {
     let mut max = 0;
     let mut i = 0;
     while i < ids.len() {
@@ -200,6 +208,8 @@ pub struct ServicePorts {
     pub wake_out: Notifier<Ipc>,
     /// T_min set-points, from the controller.
     pub t_min: Subscriber<Ipc, TminSetpoint, ()>,
+    /// Vibration samples, from a sensor on the platform (optional).
+    pub vibration: Subscriber<Ipc, VibrationSample, ()>,
     /// Poses, from the controller.
     pub pose: Subscriber<Ipc, PoseSample, ()>,
 }
@@ -274,6 +284,16 @@ impl ServicePorts {
                 .buffer_size(T_MIN_BUFFER)
                 .create()
                 .map_err(|e| ipc_error("create the T_min subscriber", e))?;
+        let vibration = open_pubsub_with::<VibrationSample>(
+            node,
+            &names.vibration,
+            VIBRATION_SETTINGS,
+            attributes,
+        )?
+        .subscriber_builder()
+        .buffer_size(VIBRATION_BUFFER)
+        .create()
+        .map_err(|e| ipc_error("create the vibration subscriber", e))?;
         let pose = open_pubsub_with::<PoseSample>(node, &names.pose, POSE_SETTINGS, attributes)?
             .subscriber_builder()
             .buffer_size(POSE_BUFFER)
@@ -285,6 +305,7 @@ impl ServicePorts {
             wake_in,
             wake_out,
             t_min,
+            vibration,
             pose,
         })
     }

@@ -330,6 +330,14 @@ pub const POSE_SETTINGS: PubSubSettings = PubSubSettings {
     history: 0,
     max_publishers: MAX_PUBLISHERS,
 };
+/// The vibration service's settings: up to [`RECORD_BUFFER`] samples queued per subscriber
+/// (the service's own queue is [`VIBRATION_BUFFER`]; a vibration sender need not notify: the
+/// service drains them whenever it wakes, at least every 50 ms).
+pub const VIBRATION_SETTINGS: PubSubSettings = PubSubSettings {
+    buffer: RECORD_BUFFER,
+    history: 0,
+    max_publishers: MAX_PUBLISHERS,
+};
 /// The T_min service's settings.
 pub const T_MIN_SETTINGS: PubSubSettings = PubSubSettings {
     buffer: RECORD_BUFFER,

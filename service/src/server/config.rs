@@ -113,6 +113,9 @@ pub struct ServerReport {
     /// Of those, the ones iceoryx2 0.10 makes by design per cycle: one per loan (estimate,
     /// margin response) and one per received margin request.
     pub iceoryx2_allocations_per_cycle: f64,
+    /// What happened to the vibration samples (taken, refused by kind, lost, filled, window
+    /// restarts, abandoned evaluations).
+    pub vibration: crate::measured::Counters,
 }
 
 /// The log line at the start of a run.
@@ -160,4 +163,21 @@ pub(super) fn log_stop(reason: StopReason, report: &ServerReport) {
         report.pool_allocations_per_cycle,
         report.iceoryx2_allocations_per_cycle
     );
+    let v = report.vibration;
+    if v.accepted + v.refused() > 0 {
+        tracing::info!(
+            "vibration samples: {} taken, {} refused (invalid {}, out of order {}, time not \
+             increasing {}), {} lost, {} places filled, {} window restarts, {} evaluations \
+             overrun",
+            v.accepted,
+            v.refused(),
+            v.invalid,
+            v.out_of_order,
+            v.time_not_increasing,
+            v.lost,
+            v.filled,
+            v.restarts,
+            v.overruns
+        );
+    }
 }

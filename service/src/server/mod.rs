@@ -49,8 +49,9 @@ use core::sync::atomic::{AtomicBool, Ordering};
 use core::time::Duration;
 
 use cablevib_ipc::{
-    monotonic_now_ns, EstimateSample, MarginResponse, PoseSample, ServiceNames, StatusCode,
-    TminSetpoint, EE_MODE_AGE_UNKNOWN, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_RESPONSE, MAX_CABLES,
+    monotonic_now_ns, EstimateSample, MarginResponse, MeasuredStatus, PoseSample, ServiceNames,
+    StatusCode, TminSetpoint, EE_MODE_AGE_UNKNOWN, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_RESPONSE,
+    MAX_CABLES, MEASURED_AGE_UNKNOWN,
 };
 use iceoryx2::identifiers::UniquePublisherId;
 use iceoryx2::prelude::*;
@@ -62,6 +63,7 @@ use super::stats::{Ring, SequenceGaps, StatusHistogram};
 use super::{ServiceError, WaitMode};
 use crate::estimator::{Estimator, Tmin};
 use crate::kinematics::Pose;
+use crate::measured::{Measured, MeasuredMode, TrackerParams, VibrationTracker};
 use crate::scene::{is_valid_t_min, Scene};
 use inverse_worker::{ClientSlots, InverseJob, InverseWorker};
 
@@ -195,6 +197,10 @@ pub struct Server {
     first_cycle_allocations: u64,
     period_ring: Ring,
     run_ring: Ring,
+    /// The measured frequencies from the vibration input.
+    tracker: VibrationTracker,
+    /// The latest known model f1 and end-effector mode, Hz (the tracker's band centres).
+    model_hz: [Option<f64>; 2],
 }
 
 impl Server {
@@ -242,6 +248,8 @@ impl Server {
             first_cycle_allocations: 0,
             period_ring: Ring::new(PERIOD_RING),
             run_ring: Ring::new(RUN_RING),
+            tracker: VibrationTracker::new(TrackerParams::default())?,
+            model_hz: [None; 2],
         })
     }
 
@@ -304,6 +312,10 @@ impl Server {
         iceoryx2_allocations += 2 * answered;
         worked |= answered > 0;
 
+        // The vibration input last, after the estimate went out: at most VIBRATION_BUFFER
+        // samples and the tracker's bounded slice of work per iteration.
+        worked |= self.drain_vibration();
+
         if cycle {
             let d = (self.allocations)().wrapping_sub(a0);
             if self.cycles() == 1 {
@@ -317,6 +329,26 @@ impl Server {
             self.period.iceoryx2_allocations += iceoryx2_allocations;
         }
         worked
+    }
+
+    /// Takes the queued vibration samples into the tracker and lets it work one slice.
+    fn drain_vibration(&mut self) -> bool {
+        let mut any = false;
+        for _ in 0..crate::ports::VIBRATION_BUFFER {
+            match self.ports.vibration.receive() {
+                Ok(Some(s)) => {
+                    self.tracker
+                        .push(s.sequence, s.timestamp_ns, s.acceleration_m_s2);
+                    any = true;
+                }
+                Ok(None) => break,
+                Err(_) => {
+                    self.period.ipc_errors += 1;
+                    break;
+                }
+            }
+        }
+        self.tracker.work() > 0 || any
     }
 
     fn drain_t_min(&mut self) -> bool {
@@ -395,6 +427,20 @@ impl Server {
         out.eigen_residual = e.eigen_residual;
         out.skipped_poses = self.total.skipped + self.period.skipped;
         out.sequence = self.cycles() + 1;
+        // The measured frequencies: the tracker's latest, beside this estimate's model.
+        // The bands follow the latest known model frequencies (an estimate without an
+        // end-effector mode leaves the last one in force).
+        let known = |f: f64| (e.is_ok() && f.is_finite() && f > 0.0).then_some(f);
+        self.model_hz = [
+            known(e.f1_hz).or(self.model_hz[0]),
+            known(e.ee_mode.map_or(f64::NAN, |m| m.frequency_hz)).or(self.model_hz[1]),
+        ];
+        self.tracker.set_model(self.model_hz[0], self.model_hz[1]);
+        measured_fields(&mut out, &self.tracker.measured(receive_ns), receive_ns);
+        let c = self.tracker.counters();
+        out.vibration_samples = c.accepted;
+        out.vibration_refused = c.refused();
+        out.vibration_lost = c.lost;
 
         match self.ports.estimate.loan_uninit() {
             Ok(sample) => {
@@ -591,6 +637,7 @@ impl Server {
             allocations_first_cycle: self.first_cycle_allocations,
             pool_allocations_per_cycle: per(t.pool_allocations),
             iceoryx2_allocations_per_cycle: per(t.iceoryx2_allocations),
+            vibration: self.tracker.counters(),
         }
     }
 }
@@ -672,6 +719,24 @@ fn margin_response(
     let mut r = MarginResponse::with_status(req, status, now_ns);
     r.pose_sequence = pose_sequence;
     r
+}
+
+/// Writes the measured frequencies `m` into `out` (whose model fields are set): each
+/// track's frequency and model − measured residual (NaN when either is absent), its status,
+/// and the age of the measured window at `receive_ns`.
+pub fn measured_fields(out: &mut EstimateSample, m: &Measured, receive_ns: u64) {
+    out.set_measured_none(MeasuredStatus::NoInput);
+    let track = |r: &Result<MeasuredMode, MeasuredStatus>, model: f64| match r {
+        Ok(mm) => (mm.frequency_hz, model - mm.frequency_hz),
+        Err(_) => (f64::NAN, f64::NAN),
+    };
+    (out.measured_f1_hz, out.f1_residual_hz) = track(&m.first, out.f1_hz);
+    (out.measured_ee_mode_hz, out.ee_mode_residual_hz) = track(&m.ee_mode, out.ee_mode_hz);
+    out.measured_f1_status = MeasuredStatus::of(&m.first).as_u32();
+    out.measured_ee_mode_status = MeasuredStatus::of(&m.ee_mode).as_u32();
+    out.measured_age_ns = m
+        .window_centre_ns()
+        .map_or(MEASURED_AGE_UNKNOWN, |c| receive_ns.saturating_sub(c));
 }
 
 /// `" (outside_workspace 3, t_min_out_of_range 1)"`, or `""` when every status was ok.

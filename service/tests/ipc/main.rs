@@ -16,6 +16,7 @@ pub(crate) fn one_server_at_a_time() -> std::sync::MutexGuard<'static, ()> {
 }
 
 mod hostile_client;
+mod hostile_vibration;
 mod ipc_counters;
 mod message_fuzz;
 mod serve_allocations;

@@ -279,6 +279,18 @@ impl Forward {
         }
     }
 
+    /// The degrees of freedom of the loaded model (None for continuous cables): the size
+    /// of [`Self::dense_matrices`]' K and M, without assembling them.
+    pub(super) fn assembled_dof(&self) -> Option<usize> {
+        match &self.model {
+            Model::Taut(t) => crate::modal::assembled_dof(&t.models, t.modal.dim()),
+            Model::Sagged(s) => (!s.modal.is_continuous()).then(|| {
+                let chains = (0..s.modal.loaded_cables()).map(|i| s.modal.chain(i));
+                crate::modal::sagged::sagged_assembled_dof(chains, s.modal.dim())
+            }),
+        }
+    }
+
     /// The taut cable models of the last successful load (none when the cables sag).
     pub(super) fn cable_models(&self) -> &[CableModel] {
         match &self.model {
@@ -429,28 +441,47 @@ pub(super) fn fill_models(
 /// this pose), EA and mass per length (the hidden cable's; the free cable's for a pulley
 /// without a hidden cable: the wrapped arc is the same cable, stretching with the same
 /// tension); None when there is neither a hidden cable nor a wrapped arc (no pulley, a
-/// pulley of radius 0, or a pose that wraps nothing). The one place every model (taut and
-/// sagged, statics and vibration) takes this length from.
+/// pulley of radius 0, or a pose that wraps nothing), and None when its axial compliance
+/// l/EA is below [`BEHIND_EXIT_COMPLIANCE_FLOOR`] of the free cable's (its effect on the
+/// cable's axial stiffness is below that fraction: taken as 0 exactly, so a tiny radius,
+/// hidden length or wrap angle gives the answer without it, continuously). The one place
+/// every model (taut and sagged, statics and vibration) takes this length from.
 pub(in crate::estimator) fn axial_behind_exit(
     c: &crate::scene::Cable,
     g: &Geometry,
     i: usize,
 ) -> Option<crate::cable::HiddenAxial> {
     let wrap_m = g.wrap_arc_m(i);
-    match c.hidden {
-        Some(h) => Some(crate::cable::HiddenAxial {
+    let behind = match c.hidden {
+        Some(h) => crate::cable::HiddenAxial {
             length_m: h.length_m + wrap_m,
             ea_n: h.ea_n(),
             mu_kg_m: h.mass_per_length_kg_m,
-        }),
-        None if wrap_m > 0.0 => Some(crate::cable::HiddenAxial {
+        },
+        None => crate::cable::HiddenAxial {
             length_m: wrap_m,
             ea_n: c.ea_n(),
             mu_kg_m: c.mass_per_length_kg_m,
-        }),
-        None => None,
-    }
+        },
+    };
+    let free_compliance = g.length_m[i] / c.ea_n();
+    // Also None for a length of 0 (no hidden cable, nothing wrapped).
+    (behind.length_m / behind.ea_n >= BEHIND_EXIT_COMPLIANCE_FLOOR * free_compliance)
+        .then_some(behind)
 }
+
+/// The smallest axial compliance l/EA of the cable behind a cable's exit point (hidden
+/// cable plus wrapped arc), as a fraction of the free cable's L/EA, that the models keep
+/// (1e-12). Below it the part behind the exit point is taken as 0 exactly: in series with
+/// the free cable it changes the cable's axial stiffness by less than this fraction (the
+/// eigenvalue solver's own tolerance, `ModalParams::rel_tol`), so every answer is
+/// continuous in the hidden length and the pulley radius down to 0 within it. Kept, such a
+/// segment is a spring over 10¹² times stiffer than the free cable on a mass 10¹² times
+/// lighter, and the supported chain's products (h², h·s, the segment's k/m) overflow f64
+/// below about 1e-145 of it (the paper robot's pulleys at a radius of 1e-150 m): the floor is far
+/// above that, and far below any pulley or hidden cable a robot has (1e-12 of a 1 m cable
+/// is a picometre).
+pub const BEHIND_EXIT_COMPLIANCE_FLOOR: f64 = 1e-12;
 
 /// A valid stand-in cable model (a 1 N/m massless spring) for preallocated model buffers.
 pub(super) fn placeholder_model() -> CableModel {

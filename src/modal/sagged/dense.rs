@@ -34,11 +34,7 @@ pub fn assemble_sagged(
     k6: &Matrix6<f64>,
     dim: usize,
 ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
-    let interior: usize = cables
-        .iter()
-        .map(|c| 3 * c.chain.n_el().saturating_sub(1) + hidden_dofs(c.chain))
-        .sum();
-    let ndof = dim + interior;
+    let ndof = sagged_assembled_dof(cables.iter().map(|c| c.chain), dim);
     check_dense_budget(ndof)?;
     let mut k = DMatrix::<f64>::zeros(ndof, ndof);
     let mut m = DMatrix::<f64>::zeros(ndof, ndof);
@@ -112,6 +108,15 @@ pub fn assemble_sagged(
         base += 3 * n.saturating_sub(1) + hidden_dofs(cab.chain);
     }
     Ok((k, m))
+}
+
+/// The degrees of freedom of the sagged model of `chains` with an end-effector of `dim`
+/// (3 or 6): [`assemble_sagged`]'s matrix size, the sagged model's DOF count (as
+/// [`crate::modal::assembled_dof`] for taut cables).
+pub fn sagged_assembled_dof<'a>(chains: impl Iterator<Item = &'a SagChain>, dim: usize) -> usize {
+    dim + chains
+        .map(|c| 3 * c.n_el().saturating_sub(1) + hidden_dofs(c))
+        .sum::<usize>()
 }
 
 /// DOFs of a chain's hidden cable: its interior nodes and the junction (0 when the anchor

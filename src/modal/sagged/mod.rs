@@ -55,7 +55,7 @@ mod dense;
 mod modes;
 mod problem;
 
-pub use dense::{assemble_sagged, SagDenseCable};
+pub use dense::{assemble_sagged, sagged_assembled_dof, SagDenseCable};
 
 use super::ee_tracker::{EeTracker, RescanCounts, SumMatrices, SumRules};
 use super::first_mode::{FirstRootState, RootFinder};

@@ -267,39 +267,6 @@ fn fill_sag(r: &mut AnalysisReport, est: &Estimator) {
     }
 }
 
-/// Degrees of freedom of the assembled model of `s` (None for continuous cables), hidden
-/// cables' included.
-pub(crate) fn model_dof(s: &Scene) -> Option<usize> {
-    if s.model.element == ElementKind::Continuous {
-        return None;
-    }
-    let dim = if s.rigid { 6 } else { 3 };
-    let n_el = if s.model.element == ElementKind::Massless {
-        1
-    } else {
-        s.model.elements_per_cable
-    };
-    // A hidden cable adds its interior nodes and the junction, one axial DOF each: as many
-    // as the free cable's elements (one spring when massless); the massless model folds it
-    // into the cable's spring.
-    let hidden: usize = match s.model.element {
-        ElementKind::Massless => 0,
-        _ => s
-            .cables
-            .iter()
-            .filter_map(|c| c.hidden)
-            .map(|h| {
-                if h.mass_per_length_kg_m > 0.0 {
-                    n_el
-                } else {
-                    1
-                }
-            })
-            .sum(),
-    };
-    Some(dim + 3 * s.n_cables() * (n_el - 1) + hidden)
-}
-
 /// The estimator built for `scene` and its estimate at the scene's own pose and T_min; a
 /// failed build or an estimate that is not ok is the error.
 fn estimate_at_scene_pose(scene: &Scene) -> Result<(Estimator, Estimate), AnalyzeError> {
@@ -331,7 +298,7 @@ fn structured(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, An
     r.ee_participation = modes.iter().map(|m| m.ee_participation).collect();
     r.multiplicity = Some(modes.iter().map(|m| m.multiplicity).collect());
     r.cluster_start = Some(modes.iter().map(|m| m.cluster_start).collect());
-    r.dof = model_dof(&s);
+    r.dof = est.model_dof();
     r.stiffness_n_m = rows(&e.stiffness.k6, e.stiffness.dim);
     r.solve_seconds = secs;
     fill_sag(&mut r, &est);
@@ -372,6 +339,7 @@ fn dense(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, Analyze
     }
     let secs = t0.elapsed().as_secs_f64();
     let k = opts.modes.min(a.modes.lambda.len());
+    check_dense(&a.modes.lambda[..k], a.modes.lambda_max)?;
     let mut r = report_frame(scene, SolverChoice::Dense);
     r.tensions_n = a.tensions_n.clone();
     r.frequencies_hz = a.modes.lambda[..k]
@@ -397,16 +365,49 @@ fn dense_sagged(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, 
         .map_err(|e| AnalyzeError::Solve(e.to_string()))?;
     let secs = t0.elapsed().as_secs_f64();
     let k = opts.modes.min(d.lambda.len());
+    check_dense(&d.lambda[..k], d.lambda_max)?;
     let mut r = report_frame(scene, SolverChoice::Dense);
     r.tensions_n = e.tensions().to_vec();
     r.frequencies_hz = d.lambda[..k].iter().map(|&l| lambda_to_hz(l)).collect();
     r.ee_participation = d.ee_participation[..k].to_vec();
-    r.dof = model_dof(scene);
+    r.dof = est.model_dof();
     r.stiffness_n_m = rows(&e.stiffness.k6, e.stiffness.dim);
     r.solve_seconds = secs;
     r.dense_seconds = Some(secs);
     fill_sag(&mut r, &est);
     Ok(r)
+}
+
+/// Largest accuracy bound ε·λ_max/λ₁ of an answer of the dense reference (1: beyond it
+/// not one digit of the lowest eigenvalue is guaranteed). A model with a very stiff, very
+/// light part (micrometres of cable behind a pulley: springs 10⁶ times the free cable's
+/// on masses 10⁶ times lighter) puts λ_max 10¹⁹ times above λ₁, and the dense solve's
+/// lowest eigenvalues are then rounding noise, negative or NaN.
+pub const DENSE_MAX_BOUND: f64 = 1.0;
+
+/// The dense reference's reported eigenvalues `lambda` (rad²/s², ascending) checked before
+/// they are printed: each finite and > 0, and the bound ε·λ_max/λ₁ at most
+/// [`DENSE_MAX_BOUND`]; else a one-line refusal naming the structured solver.
+fn check_dense(lambda: &[f64], lambda_max: f64) -> Result<(), AnalyzeError> {
+    if let Some((j, &l)) = lambda
+        .iter()
+        .enumerate()
+        .find(|(_, l)| !(l.is_finite() && **l > 0.0))
+    {
+        return Err(AnalyzeError::Solve(format!(
+            "--solver dense: the dense eigen-solve gave λ = {l:.3e} rad²/s² for mode {} (rounding: the model's stiffness spans more than f64 resolves densely); use the structured solver",
+            j + 1
+        )));
+    }
+    if let Some(&l1) = lambda.first() {
+        let bound = dense_bound(l1, lambda_max);
+        if !(bound <= DENSE_MAX_BOUND) {
+            return Err(AnalyzeError::Solve(format!(
+                "--solver dense: its accuracy bound ε·λ_max/λ₁ = {bound:.1e} (λ_max = {lambda_max:.1e}, λ₁ = {l1:.1e} rad²/s²) leaves no correct digit: a very stiff, light part of the model (e.g. micrometres of cable behind a pulley); use the structured solver"
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// The dense bound ε·λ_max/λ (re-exported for the comparison).

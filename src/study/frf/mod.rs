@@ -6,7 +6,7 @@
 //! ([`dense`]).
 //!
 //! - Taut (chord) cables: the structured solver of the pose model ([`PoseModel`]: Clarabel
-//!   tensions at the scene's pose), [`receptance_over`]; modal damping superposes the modes
+//!   tensions at the scene's pose), [`crate::modal::receptance_over`]; modal damping superposes the modes
 //!   below [`MODAL_CUTOFF_RATIO`] × `to_hz`.
 //! - Sagging cables (FEM chains on the catenary): the estimator's sagged tension solve at the
 //!   scene's pose, then the sagged solver's D at the complex λ of each frequency; modal
@@ -15,6 +15,10 @@
 //!   residual flexibility of the rest ([`ModalBasis::from_modes`]). The continuous sagged
 //!   model has no complex form and is refused.
 //!
+//! The work's memory is checked against the one budget before it allocates and its
+//! estimated time handed to the caller ([`frf_announced`], [`super::cost`]); the exact
+//! damped forms go in chunks with a progress bar on a terminal ([`FrfConfig::progress`]).
+//!
 //! Refusals name the parameter ([`Param`]): a bad band, a damping value out of range, two
 //! dampings given, the dense LU with modal damping.
 
@@ -22,13 +26,14 @@ pub mod dense;
 
 pub use dense::{DenseCheck, LuSpot};
 
+use super::cost::{estimate_cost, frf_chunk, in_chunks, receptance, Work, WorkEstimate};
 use super::{Param, ParamError, ParamName, StudyError};
 use crate::estimator::{Estimator, PoseModel, Tmin};
 use crate::input_file::message_number;
 use crate::kinematics::Pose;
 use crate::modal::{
-    frequency_grid, hz_to_lambda, lambda_to_hz, receptance_over, FrfError, ModalBasis, ModalParams,
-    ModalSolver, Mode, MAX_FRF_HZ, MAX_FRF_MODES, MAX_FRF_POINTS,
+    frequency_grid, hz_to_lambda, lambda_to_hz, FrfError, ModalBasis, ModalParams, ModalSolver,
+    Mode, MAX_FRF_HZ, MAX_FRF_MODES, MAX_FRF_POINTS,
 };
 use crate::scene::{
     Damping, ElementKind, Scene, MAX_LOSS_FACTOR, MAX_MODAL_RATIO, MAX_RAYLEIGH_ALPHA_PER_S,
@@ -138,10 +143,13 @@ pub struct FrfConfig {
     pub damping: DampingChoice,
     /// The dense check, if any.
     pub dense: Option<DenseCheckKind>,
+    /// Label of the progress bar drawn on a terminal over the exact damped forms' frequencies
+    /// ([`super::cost::in_chunks`]; None: no bar).
+    pub progress: Option<&'static str>,
 }
 
 impl Default for FrfConfig {
-    /// 0.5 .. 50 Hz, 1000 even points, the scene's damping, no dense check.
+    /// 0.5 .. 50 Hz, 1000 even points, the scene's damping, no dense check, no progress bar.
     fn default() -> Self {
         FrfConfig {
             from_hz: 0.5,
@@ -150,6 +158,7 @@ impl Default for FrfConfig {
             log: false,
             damping: DampingChoice::default(),
             dense: None,
+            progress: None,
         }
     }
 }
@@ -240,6 +249,17 @@ pub fn frequencies(cfg: &FrfConfig) -> Result<Vec<f64>, StudyError> {
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn frf(scene: &Scene, cfg: &FrfConfig) -> Result<FrfResult, StudyError> {
+    frf_announced(scene, cfg, |_| {})
+}
+
+/// [`frf`], with the work's estimate ([`super::cost::estimate_cost`]: refused past the
+/// memory budget before it allocates) handed to `announce` before the response is computed
+/// (the command line prints a long one's on stderr: [`WorkEstimate::announcement`]).
+pub fn frf_announced(
+    scene: &Scene,
+    cfg: &FrfConfig,
+    announce: impl FnMut(&WorkEstimate),
+) -> Result<FrfResult, StudyError> {
     let freqs = frequencies(cfg)?;
     let damping = cfg.damping.resolve(scene.damping)?;
     if cfg.dense == Some(DenseCheckKind::Lu) && matches!(damping, Damping::ModalRatio { .. }) {
@@ -253,10 +273,30 @@ pub fn frf(scene: &Scene, cfg: &FrfConfig) -> Result<FrfResult, StudyError> {
         .into());
     }
     if scene.model.sag {
-        sagged(scene, cfg, damping, freqs)
+        sagged(scene, cfg, damping, freqs, announce)
     } else {
-        taut(scene, cfg, damping, freqs)
+        taut(scene, cfg, damping, freqs, announce)
     }
+}
+
+/// The cost of `points` frequencies with `damping` (a modal basis of `basis_modes` modes,
+/// at most [`MAX_FRF_MODES`]): refused past the memory budget, else given to `announce`.
+fn check_cost(
+    s: &Scene,
+    damping: &Damping,
+    points: usize,
+    basis_modes: usize,
+    mut announce: impl FnMut(&WorkEstimate),
+) -> Result<(), StudyError> {
+    let work = Work::Frf {
+        damping,
+        points,
+        basis_modes: basis_modes.min(MAX_FRF_MODES),
+    };
+    let estimate = estimate_cost(s, &work);
+    estimate.check_memory()?;
+    announce(&estimate);
+    Ok(())
 }
 
 /// The natural frequencies to list: first of each cluster, end-effector participation at
@@ -302,6 +342,7 @@ fn taut(
     cfg: &FrfConfig,
     damping: Damping,
     freqs: Vec<f64>,
+    announce: impl FnMut(&WorkEstimate),
 ) -> Result<FrfResult, StudyError> {
     let pose = PoseModel::new(s).map_err(|e| StudyError::Solve(e.to_string()))?;
     let dim = pose.dim();
@@ -313,14 +354,20 @@ fn taut(
         .modes(modes.len(), &mut modes)
         .map_err(|e| StudyError::Solve(e.to_string()))?;
     let natural_hz = marked(cfg, &modes[..nm]);
+    let cutoff_hz = MODAL_CUTOFF_RATIO * cfg.to_hz;
+    let basis_modes = match damping {
+        Damping::ModalRatio { .. } => solver.count_below(hz_to_lambda(cutoff_hz)) as usize,
+        _ => 0,
+    };
+    check_cost(&pose.scene, &damping, freqs.len(), basis_modes, announce)?;
     let t0 = Instant::now();
-    let h = receptance_over(
+    let h = receptance(
+        &pose,
         &mut solver,
-        &pose.models,
-        &pose.geometry.arm_m,
         &damping,
         &freqs,
-        MODAL_CUTOFF_RATIO * cfg.to_hz,
+        cutoff_hz,
+        cfg.progress,
     )?;
     let structured_s = t0.elapsed().as_secs_f64();
     let get = || pose.dense().map_err(|e| e.to_string());
@@ -373,6 +420,7 @@ fn sagged(
     cfg: &FrfConfig,
     damping: Damping,
     freqs: Vec<f64>,
+    announce: impl FnMut(&WorkEstimate),
 ) -> Result<FrfResult, StudyError> {
     if s.model.element == ElementKind::Continuous {
         return Err(FrfError::SagContinuous.into());
@@ -387,7 +435,7 @@ fn sagged(
     // The lowest modes, doubling the count until one lies above the band (the sagged
     // solver has no count query here; the top of its spectrum is not needed), never more
     // than the model has: asking for more failed where every mode lies below the cut-off.
-    let total = super::analysis::model_dof(est.scene()).unwrap_or(0);
+    let total = est.model_dof().unwrap_or(0);
     let mut k = 16usize;
     let (modes, nm) = loop {
         let mut modes = vec![Mode::default(); k.min(total)];
@@ -410,7 +458,11 @@ fn sagged(
         let cutoff_hz = MODAL_CUTOFF_RATIO * cfg.to_hz;
         sagged_modal(&mut est, zeta, cutoff_hz, total, &freqs)?
     } else {
-        sag.receptance_over(&damping, &freqs)?
+        check_cost(s, &damping, freqs.len(), 0, announce)?;
+        let chunk = frf_chunk(s, &damping);
+        in_chunks(cfg.progress, freqs.len(), chunk, |r| {
+            sag.receptance_over(&damping, &freqs[r])
+        })?
     };
     let structured_s = t0.elapsed().as_secs_f64();
     let get = || est.dense_matrices().map_err(|e| e.to_string());

@@ -74,31 +74,44 @@ pub fn read(
         .collect();
     let has_pos = pose_cols[..3].iter().all(|c| c.is_some());
     let has_quat = pose_cols[3..].iter().all(|c| c.is_some());
-    let chans: Vec<usize> = if opts.channels.is_empty() {
+    let wanted: Vec<String> = if opts.channels.is_empty() {
         (0..names.len())
             .filter(|&i| i != t_col && !POSE.contains(&names[i].as_str()))
+            .map(|i| names[i].clone())
             .collect()
     } else {
-        opts.channels
+        opts.channels.clone()
+    };
+    let wanted = opts
+        .with_inputs(wanted)
+        .map_err(|e| CliError::Usage(format!("{shown}: {e}")))?;
+    let chans: Vec<usize> = {
+        wanted
             .iter()
             .map(|c| {
                 names.iter().position(|n| n == c).ok_or_else(|| {
+                    let opt = if opts.inputs.contains(c) {
+                        "--input"
+                    } else {
+                        "--channels"
+                    };
                     CliError::Usage(format!(
-                        "{shown}: --channels `{c}`: no such column (the header has {})",
+                        "{shown}: {opt} `{c}`: no such column (the header has {})",
                         names.join(",")
                     ))
                 })
             })
             .collect::<Result<_, _>>()?
     };
-    if chans.is_empty() {
+    if chans.len() <= opts.inputs.len() {
         return Err(CliError::Usage(format!(
-            "{shown}: no vibration channel (columns other than t and the pose)"
+            "{shown}: no response channel (columns other than t, the pose and the --input ones)"
         )));
     }
     sink(Item::Layout(&Layout {
         channels: chans.iter().map(|&i| names[i].clone()).collect(),
         source: format!("CSV {shown}"),
+        inputs: opts.inputs.len(),
     }))?;
     let mut fields: Vec<f64> = vec![f64::NAN; names.len()];
     let mut values = vec![0.0; chans.len()];

@@ -259,13 +259,21 @@ pub fn read(
                 } else {
                     opts.channels.clone()
                 };
+                let wanted = opts
+                    .with_inputs(wanted)
+                    .map_err(|e| bad(format!("topic {}: {e}", ch.topic)))?;
                 picks = wanted
                     .iter()
                     .map(|w| {
                         fnames.iter().position(|k| k == w).ok_or_else(|| {
                             bad(format!(
-                                "topic {}: no field `{w}` (fields: {})",
+                                "topic {}: no field `{w}`{} (fields: {})",
                                 ch.topic,
+                                if opts.inputs.contains(w) {
+                                    " for --input (a measured input is a field of the vibration topic's messages)"
+                                } else {
+                                    ""
+                                },
                                 fnames
                                     .iter()
                                     .map(|f| f.as_str())
@@ -275,7 +283,7 @@ pub fn read(
                         })
                     })
                     .collect::<Result<_, _>>()?;
-                if picks.is_empty() {
+                if picks.len() <= opts.inputs.len() {
                     return Err(bad(format!(
                         "topic {}: no numeric field to identify from",
                         ch.topic
@@ -295,6 +303,7 @@ pub fn read(
                         },
                         o as f64 * 1e-9
                     ),
+                    inputs: opts.inputs.len(),
                 }))?;
             }
             vib_messages += 1;

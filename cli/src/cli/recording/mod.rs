@@ -42,6 +42,36 @@ pub struct ReadOptions {
     pub topic: Option<String>,
     /// MCAP: the topic of the poses (`None`: the only `PoseStamped` topic, if any).
     pub pose_topic: Option<String>,
+    /// Measured inputs (force or hammer channels: CSV column names, or MCAP field names of
+    /// the vibration topic's messages): left out of the default channels and handed after
+    /// them in each sample.
+    pub inputs: Vec<String>,
+}
+
+impl ReadOptions {
+    /// The channels of a sample: `all` (the wanted outputs, or the reader's default) less
+    /// the inputs, then the inputs; an input also named in `--channels` is refused.
+    pub fn with_inputs(&self, all: Vec<String>) -> Result<Vec<String>, String> {
+        if let Some(c) = self.channels.iter().find(|c| self.inputs.contains(c)) {
+            return Err(format!(
+                "`{c}` is named both by --channels and by --input: a channel is a response or a measured input"
+            ));
+        }
+        if let Some((i, c)) = self
+            .inputs
+            .iter()
+            .enumerate()
+            .find(|(i, c)| self.inputs[..*i].contains(c))
+        {
+            return Err(format!("--input `{c}` is named twice (input {})", i + 1));
+        }
+        let mut out: Vec<String> = all
+            .into_iter()
+            .filter(|c| !self.inputs.contains(c))
+            .collect();
+        out.extend(self.inputs.iter().cloned());
+        Ok(out)
+    }
 }
 
 /// What a reader found before the first sample.
@@ -51,6 +81,8 @@ pub struct Layout {
     pub channels: Vec<String>,
     /// Where they come from (file kind, topic, schema), for the output.
     pub source: String,
+    /// How many of the channels, the last ones, are measured inputs ([`ReadOptions::inputs`]).
+    pub inputs: usize,
 }
 
 /// Read `path` (CSV or MCAP, by its first bytes): `sink` gets the [`Item::Layout`], then

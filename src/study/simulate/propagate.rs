@@ -1,0 +1,268 @@
+//! The modal time response along a path: one implementation of the loop every
+//! time-domain study runs (module docs of [`super`] for the model).
+//!
+//! [`run`] chooses K ([`super::pilot`], or takes it), installs the first pose's basis,
+//! and then, interval by interval, solves the next update pose's basis, predicts the
+//! interval's error ([`super::updates`]; shortening it while the prediction is over its
+//! budget, when the interval is chosen), steps the K modes across the interval under the
+//! force linear between samples with the static flexibility interpolated between the two
+//! poses ([`ModalResponse::displacement_with`]), and installs the new basis, the state
+//! carried by the mass overlap of the whole shapes. The force at sample k is the inertial
+//! load of the quasi-static motion −M_ee [a_k; 0] plus the caller's `external_n(k)`; the
+//! caller sees the response at every sample (`on_sample`).
+
+use super::{pilot, solve_pose, updates, Accuracy, SampledPath, SimulateConfig, SimulateResult};
+use crate::estimator::{EeModalBasis, Estimator};
+use crate::modal::response::{ModalResponse, MAX_RESPONSE_MODES};
+use crate::scene::{Damping, Scene};
+use crate::study::StudyError;
+use nalgebra::{Matrix6, Vector3, Vector6};
+
+/// The basis of the estimator's pose for `modes` (a cluster cut completed).
+fn basis_at(
+    est: &mut Estimator,
+    scene: &Scene,
+    p: &Vector3<f64>,
+    t: f64,
+    modes: usize,
+) -> Result<EeModalBasis, StudyError> {
+    solve_pose(est, scene, p, t)?;
+    est.ee_modal_basis(modes)
+        .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
+}
+
+/// Install `basis` in `resp`, carrying the state across: the whole state by the mass
+/// overlap of the whole shapes when both bases have them, else the end-effector's.
+fn install(
+    resp: &mut ModalResponse,
+    basis: &EeModalBasis,
+    previous: Option<&EeModalBasis>,
+    damping: &Damping,
+    t: f64,
+) -> Result<(), StudyError> {
+    let overlap = match (&basis.shapes, previous.and_then(|b| b.shapes.as_ref())) {
+        (Some(new), Some(old)) => new.mass_overlap(old, &basis.ee_mass),
+        _ => None,
+    };
+    match overlap {
+        Some(o) => resp.set_basis_projected(
+            &basis.lambda,
+            &basis.phi_ee,
+            damping,
+            &basis.flexibility,
+            &o,
+        ),
+        None => resp.set_basis(
+            &basis.lambda,
+            &basis.phi_ee,
+            damping,
+            &basis.flexibility,
+            &basis.ee_mass,
+        ),
+    }
+    .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
+}
+
+/// The force at each sample: the inertial load −M_ee [a_k; 0] and the external force.
+struct Loads<'a, F: Fn(usize) -> Vector6<f64>> {
+    path: &'a SampledPath,
+    ee_mass: Matrix6<f64>,
+    external_n: F,
+}
+
+impl<F: Fn(usize) -> Vector6<f64>> Loads<'_, F> {
+    fn at(&self, k: usize) -> Vector6<f64> {
+        let mut a6 = Vector6::zeros();
+        a6.fixed_rows_mut::<3>(0)
+            .copy_from(&self.path.acceleration(k));
+        (self.external_n)(k) - self.ee_mass * a6
+    }
+}
+
+/// What the mode choice found: K, its truncation estimate relative to the peak, whether
+/// it met the tolerance, the peak, m.
+struct ModesChosen {
+    modes: usize,
+    estimate: f64,
+    met: bool,
+    peak_m: f64,
+}
+
+/// K for `cfg` along the path: given, or the largest the pilot chooses at the path's
+/// first, middle and last poses (the whole path's force at each), with the estimate and
+/// the peak.
+fn choose_modes<F: Fn(usize) -> Vector6<f64>>(
+    est: &mut Estimator,
+    scene: &Scene,
+    loads: &Loads<'_, F>,
+    cfg: &SimulateConfig,
+) -> Result<ModesChosen, StudyError> {
+    let path = loads.path;
+    let n = path.positions_m.len();
+    let all: Vec<Vector6<f64>> = (0..n).map(|k| loads.at(k)).collect();
+    let mut samples = vec![0, n / 2, n - 1];
+    samples.dedup_by(|a, b| path.positions_m[*a] == path.positions_m[*b]);
+    let mut chosen = ModesChosen {
+        modes: 0,
+        estimate: 0.0,
+        met: true,
+        peak_m: 0.0,
+    };
+    for &k in &samples {
+        let t = k as f64 * path.dt_s;
+        solve_pose(est, scene, &path.positions_m[k], t)?;
+        let c = match cfg.modes {
+            None => pilot::choose(est, &scene.damping, &all, path.dt_s, cfg.tolerance)?,
+            Some(given) => {
+                pilot::assess(est, given, &scene.damping, &all, path.dt_s, cfg.tolerance)?
+            }
+        };
+        chosen.modes = chosen.modes.max(c.modes);
+        chosen.estimate = chosen.estimate.max(c.estimate);
+        chosen.met &= c.met;
+        chosen.peak_m = chosen.peak_m.max(c.peak_m);
+    }
+    Ok(chosen)
+}
+
+/// The response along `path` (module docs) into `out` (its accuracy, samples, updates,
+/// modes, f1 range and structured flag); `est` is the scene's estimator. The force at
+/// sample k is the inertial load plus `external_n(k)` (N, and N·m on a rigid body);
+/// `on_sample(k, response, force)` is called after each sample's state is reached.
+pub(super) fn run(
+    est: &mut Estimator,
+    scene: &Scene,
+    path: &SampledPath,
+    cfg: &SimulateConfig,
+    external_n: impl Fn(usize) -> Vector6<f64>,
+    mut on_sample: impl FnMut(usize, &ModalResponse, &Vector6<f64>),
+    out: &mut SimulateResult,
+) -> Result<(), StudyError> {
+    let n = path.positions_m.len();
+    let damping = scene.damping;
+    // The end-effector's mass matrix is the scene's, the same at every pose.
+    let mut held = basis_at(est, scene, &path.positions_m[0], 0.0, 1)?;
+    let loads = Loads {
+        path,
+        ee_mass: held.ee_mass,
+        external_n,
+    };
+    let chosen = choose_modes(est, scene, &loads, cfg)?;
+    out.accuracy = Accuracy {
+        tolerance: cfg.tolerance,
+        modes_chosen: cfg.modes.is_none(),
+        modes_estimate: chosen.estimate,
+        modes_met: chosen.met,
+        peak_m: chosen.peak_m,
+        updates_chosen: cfg.update_every.is_none(),
+        interval_estimate: 0.0,
+        interval_estimate_sum: 0.0,
+    };
+    let modes = chosen.modes;
+    let peak_m = chosen.peak_m;
+    let f1_seen = |est: &Estimator, out: &mut SimulateResult| {
+        let f1 = est.estimate().f1_hz;
+        out.f1_range_hz = (out.f1_range_hz.0.min(f1), out.f1_range_hz.1.max(f1));
+    };
+    let dim = if scene.rigid { 6 } else { 3 };
+    let mut resp = ModalResponse::new(dim);
+    let budget = updates::BUDGET_SHARE * cfg.tolerance * peak_m;
+    let max_interval = ((updates::MAX_INTERVAL_S / path.dt_s).round() as usize).max(1);
+    let mut interval = cfg
+        .update_every
+        .unwrap_or(updates::FIRST_INTERVAL.min(max_interval));
+    held = basis_at(est, scene, &path.positions_m[0], 0.0, modes)?;
+    f1_seen(est, out);
+    install(&mut resp, &held, None, &damping, 0.0)?;
+    out.updates = 1;
+    // The previous update's flexibility and how many samples before the held pose.
+    let mut previous: Option<(Matrix6<f64>, usize)> = None;
+    let mut k0 = 0usize;
+    let mut amplitude = vec![0.0; MAX_RESPONSE_MODES];
+    let mut phi2 = vec![0.0; MAX_RESPONSE_MODES];
+    let mut lambda0 = vec![0.0; MAX_RESPONSE_MODES];
+    let mut f_prev = loads.at(0);
+    let push = |out: &mut SimulateResult, k: usize, u: &Vector6<f64>| {
+        out.t_s.push(k as f64 * path.dt_s);
+        out.command_m.push(path.positions_m[k]);
+        out.deviation_m.push(u.fixed_rows::<3>(0).into_owned());
+    };
+    push(out, 0, &resp.displacement(&f_prev));
+    on_sample(0, &resp, &f_prev);
+    while k0 + 1 < n {
+        // The next update's pose and basis; the interval shortened until its predicted
+        // error is within the budget (when the interval is chosen).
+        let nm = resp.modes();
+        resp.dynamic_amplitudes(&f_prev, &mut amplitude[..nm]);
+        for (j, (p, l)) in phi2.iter_mut().zip(lambda0.iter_mut()).enumerate().take(nm) {
+            *p = resp.phi(j).norm_squared();
+            *l = resp.lambda(j);
+        }
+        let (k1, next, error) = loop {
+            let k1 = (k0 + interval).min(n - 1);
+            let t1 = k1 as f64 * path.dt_s;
+            let next = basis_at(est, scene, &path.positions_m[k1], t1, modes)?;
+            let u = k1 - k0;
+            let impulse: f64 = (k0 + 1..=k1).map(|k| loads.at(k).norm() * path.dt_s).sum();
+            let dynamic_m = updates::dynamic_error(
+                &amplitude[..nm],
+                &phi2[..nm],
+                &lambda0[..nm],
+                &next.lambda,
+                impulse,
+                u as f64 * path.dt_s,
+            );
+            let d2 = match previous {
+                Some((fp, back)) => {
+                    updates::second_difference(&fp, &held.flexibility, &next.flexibility, back, u)
+                }
+                None => Matrix6::zeros(),
+            };
+            let static_m = updates::static_error(&d2, (k0 + 1..=k1).map(|k| loads.at(k)), u);
+            let error = updates::IntervalError {
+                dynamic_m,
+                static_m,
+            };
+            if cfg.update_every.is_none() && error.total_m() > budget && u > 1 {
+                interval = updates::shortened(u, error.total_m(), budget);
+                continue;
+            }
+            break (k1, next, error);
+        };
+        f1_seen(est, out);
+        let u = k1 - k0;
+        for k in k0 + 1..=k1 {
+            let f = loads.at(k);
+            resp.step(&f_prev, &f, path.dt_s);
+            f_prev = f;
+            let w = (k - k0) as f64 / u as f64;
+            let flex = held.flexibility * (1.0 - w) + next.flexibility * w;
+            push(out, k, &resp.displacement_with(&f, &flex));
+            on_sample(k, &resp, &f);
+        }
+        install(
+            &mut resp,
+            &next,
+            Some(&held),
+            &damping,
+            k1 as f64 * path.dt_s,
+        )?;
+        out.updates += 1;
+        let rel = if peak_m > 0.0 {
+            error.total_m() / peak_m
+        } else {
+            0.0
+        };
+        out.accuracy.interval_estimate = out.accuracy.interval_estimate.max(rel);
+        out.accuracy.interval_estimate_sum += rel;
+        previous = Some((held.flexibility, u));
+        held = next;
+        k0 = k1;
+        if cfg.update_every.is_none() {
+            interval = updates::next_interval(u, error.total_m(), budget, max_interval);
+        }
+    }
+    out.structured = held.structured;
+    out.modes = held.lambda.len();
+    Ok(())
+}
