@@ -276,7 +276,7 @@ impl SagModalSolver {
                 got => got?,
             };
             let v = &null.vectors;
-            let nodes: Vec<(Vec<Vec<Vector3<f64>>>, Vec<f64>)> = (0..v.ncols())
+            let nodes: Vec<_> = (0..v.ncols())
                 .map(|c| local_nodes(&attach, &shapes, &hcol, &v.column(c).into_owned(), dim))
                 .collect();
             let cols = v.ncols();
