@@ -14,7 +14,7 @@ use pyo3::types::{PyByteArray, PyBytes, PyDict, PyList, PyMemoryView, PyString};
 static ASARRAY: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
 
 /// `numpy.asarray(obj, dtype)`.
-fn asarray<'py>(
+pub fn asarray<'py>(
     py: Python<'py>,
     obj: Bound<'py, PyAny>,
     dtype: &str,

@@ -27,7 +27,11 @@ def test_frf_equals_the_command_line(cli_json, kwargs, flags):
     np.testing.assert_array_equal(np.asarray(py["frequencies_hz"]), np.array(cli["frequencies_hz"]))
     np.testing.assert_array_equal(np.asarray(py["receptance_re"]), np.array(cli["receptance_re"]))
     np.testing.assert_array_equal(np.asarray(py["receptance_im"]), np.array(cli["receptance_im"]))
-    assert np.asarray(py["receptance_re"]).shape == (len(py["frequencies_hz"]), 3, 3)
+    # numpy arrays, as the stub says (they were lists of arrays)
+    for key in ("frequencies_hz", "receptance_re", "receptance_im"):
+        assert isinstance(py[key], np.ndarray) and py[key].dtype == np.float64, key
+    assert py["receptance_re"].shape == (len(py["frequencies_hz"]), 3, 3)
+    assert py["receptance_im"].shape == py["receptance_re"].shape
 
 
 # suspended-8 has sag on: FEM chains on the catenary, N = 6 (small, so the dense solve is quick).

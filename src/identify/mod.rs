@@ -12,7 +12,8 @@
 //! stabilisation diagram; poles stable in frequency, damping and shape are clustered into
 //! modes ([`cluster`]), each with a jackknife uncertainty over the window's segments
 //! ([`window`]). [`stream`] takes the record sample by sample, checks its time, and
-//! identifies windows as they complete.
+//! identifies windows as they complete; [`align`] puts a measured input recorded on its own
+//! clock onto the responses' clock.
 //!
 //! **What a record can tell.** For a mode at ω (rad/s) with damping ratio ζ in a record of
 //! T seconds, the statistical limits are about σ_f/f ≈ √(ζ/(ωT)) and σ_ζ/ζ ≈ 1/√(ζωT)
@@ -21,6 +22,7 @@
 //!
 //! Method, defaults and measured accuracy: `docs/identify.md`.
 
+pub mod align;
 pub mod cluster;
 pub mod covariance;
 pub mod decimate;
@@ -31,6 +33,7 @@ pub mod ssi;
 pub mod stream;
 pub mod window;
 
+pub use align::{Aligned, Aligner};
 pub use cluster::{DiagramPole, Stability};
 pub use params::{IdentifyParams, MAX_CHANNELS, MAX_OVERLAP};
 pub use stream::{Identifier, WindowResult};

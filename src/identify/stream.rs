@@ -7,7 +7,11 @@
 //!   time) → an error naming the sample;
 //! - a step longer than 1.5 × the nominal period is a *gap*, and a sample with a non-finite
 //!   channel is left out: both end the contiguous run (no lag product straddles them), are
-//!   counted in the windows they fall in, and give those windows the status `gap`.
+//!   counted in the windows they fall in, and give those windows the status `gap`;
+//! - a sample [`Identifier::push_unmatched`] (a response with no measured input at its time,
+//!   the `align` module) is left out the same way and counted apart (`unmatched`).
+//!
+//! Samples left out before the first decimated sample are counted in the first window.
 //!
 //! The decimated samples go to every window they fall in: the whole record, or windows of
 //! `window_s` starting every `window_s × (1 − overlap)` from the first decimated sample. A
@@ -55,6 +59,9 @@ pub struct WindowResult {
     pub gaps: usize,
     /// Samples left out because a channel was not finite.
     pub nonfinite: usize,
+    /// Response samples left out because the measured input had no value at their time
+    /// (outside its span, or inside a gap of it; the `align` module).
+    pub unmatched: usize,
     /// Modes, ascending.
     pub modes: Vec<IdentifiedMode>,
     /// The stabilisation diagram's poles.
@@ -104,6 +111,7 @@ struct Open {
     steps: u64,
     gaps: usize,
     nonfinite: usize,
+    unmatched: usize,
 }
 
 /// The streaming identifier: [`Identifier::push`] every sample, then [`Identifier::finish`].
@@ -113,6 +121,7 @@ pub struct Identifier {
     l: usize,
     /// Measured inputs (after the l outputs in each sample).
     m: usize,
+    /// The first samples (an empty vector: an unmatched sample).
     probe: Vec<(f64, Vec<f64>)>,
     dt_nominal_s: f64,
     decimator: Option<Decimator>,
@@ -127,6 +136,7 @@ pub struct Identifier {
     broken: bool,
     pending_gaps: usize,
     pending_nonfinite: usize,
+    pending_unmatched: usize,
     open: Vec<Open>,
     next_start_s: Option<f64>,
     next_index: usize,
@@ -169,6 +179,7 @@ impl Identifier {
             broken: false,
             pending_gaps: 0,
             pending_nonfinite: 0,
+            pending_unmatched: 0,
             open: Vec::new(),
             next_start_s: None,
             next_index: 0,
@@ -201,8 +212,19 @@ impl Identifier {
 
     /// Take sample `y` (one value per channel) at `t_s`.
     pub fn push(&mut self, t_s: f64, y: &[f64]) -> Result<(), IdentifyError> {
+        self.push_checked(t_s, Some(y))
+    }
+
+    /// A response sample at `t_s` left out because the measured input has no value there:
+    /// its time is checked like any sample's, it ends the contiguous run and is counted in
+    /// the windows it falls in ([`WindowResult::unmatched`], status `gap`).
+    pub fn push_unmatched(&mut self, t_s: f64) -> Result<(), IdentifyError> {
+        self.push_checked(t_s, None)
+    }
+
+    fn push_checked(&mut self, t_s: f64, y: Option<&[f64]>) -> Result<(), IdentifyError> {
         let k = self.samples;
-        if y.len() != self.l + self.m {
+        if let Some(y) = y.filter(|y| y.len() != self.l + self.m) {
             return Err(IdentifyError::Input(format!(
                 "sample {k}: {} values, expected {} channels",
                 y.len(),
@@ -229,7 +251,8 @@ impl Identifier {
         self.last_t = Some(t_s);
         self.samples += 1;
         if self.decimator.is_none() {
-            self.probe.push((t_s, y.to_vec()));
+            self.probe
+                .push((t_s, y.map_or_else(Vec::new, <[f64]>::to_vec)));
             if self.probe.len() >= RATE_PROBE {
                 self.start()?;
             }
@@ -262,13 +285,14 @@ impl Identifier {
         self.dt_nominal_s = dt;
         self.decimator = Some(Decimator::new(factor(rate, self.p.to_hz), self.l + self.m));
         for (t, y) in std::mem::take(&mut self.probe) {
-            self.take(t, &y);
+            self.take(t, (!y.is_empty()).then_some(&y[..]));
         }
         Ok(())
     }
 
-    /// One checked sample after the start: gaps, non-finite values, decimation.
-    fn take(&mut self, t_s: f64, y: &[f64]) {
+    /// One checked sample after the start (`None`: unmatched): gaps, non-finite values,
+    /// decimation.
+    fn take(&mut self, t_s: f64, y: Option<&[f64]>) {
         let dec = self.decimator.as_mut().expect("started");
         if let Some(prev) = self.prev_t {
             if t_s - prev > GAP_FACTOR * self.dt_nominal_s {
@@ -278,6 +302,12 @@ impl Identifier {
             }
         }
         self.prev_t = Some(t_s);
+        let Some(y) = y else {
+            dec.reset();
+            self.broken = true;
+            self.pending_unmatched += 1;
+            return;
+        };
         if y.iter().any(|v| !v.is_finite()) {
             dec.reset();
             self.broken = true;
@@ -304,15 +334,18 @@ impl Identifier {
                 since,
                 std::mem::take(&mut self.pending_gaps),
                 std::mem::take(&mut self.pending_nonfinite),
+                std::mem::take(&mut self.pending_unmatched),
             ))
         } else {
             None
         };
         let touch = |w: &mut Open| {
-            if let Some((since, g, n)) = lost {
-                if since < w.end_s && t_s > w.start_s {
+            if let Some((since, g, n, u)) = lost {
+                // Before the first decimated sample (`since` −∞): the first window.
+                if since < w.end_s && (t_s > w.start_s || since == f64::NEG_INFINITY) {
                     w.gaps += g;
                     w.nonfinite += n;
+                    w.unmatched += u;
                 }
             }
         };
@@ -350,6 +383,7 @@ impl Identifier {
                 steps: 0,
                 gaps: 0,
                 nonfinite: 0,
+                unmatched: 0,
             };
             self.next_index += 1;
             self.next_start_s = next;
@@ -360,9 +394,7 @@ impl Identifier {
                 r.status = WindowStatus::NoData;
                 self.done.push(r);
             } else {
-                if s < t_s {
-                    touch(&mut w);
-                }
+                touch(&mut w);
                 self.open.push(w);
             }
         }
@@ -431,6 +463,7 @@ impl Identifier {
             status: WindowStatus::Ok,
             gaps: w.gaps,
             nonfinite: w.nonfinite,
+            unmatched: w.unmatched,
             modes: Vec::new(),
             diagram: Vec::new(),
             singular_values: Vec::new(),
@@ -466,7 +499,7 @@ impl Identifier {
                     r.singular_values = id.singular_values;
                     r.frf = frf;
                 }
-                if w.gaps > 0 || w.nonfinite > 0 {
+                if w.gaps > 0 || w.nonfinite > 0 || w.unmatched > 0 {
                     r.status = WindowStatus::Gap;
                 }
             }
@@ -494,6 +527,7 @@ impl Identifier {
             if self.broken {
                 w.gaps += self.pending_gaps;
                 w.nonfinite += self.pending_nonfinite;
+                w.unmatched += self.pending_unmatched;
             }
             let r = self.finish_window(w, dt);
             self.done.push(r);

@@ -31,10 +31,11 @@
 use super::{Param, ParamError, ParamName, StudyError};
 use crate::estimator::{Estimator, EstimatorParams, Status, Tmin};
 use crate::kinematics::Pose;
-use crate::modal::response::MAX_RESPONSE_MODES;
+use crate::modal::response::{ModalResponse, MAX_RESPONSE_MODES};
 use crate::scene::{Damping, Scene};
 use crate::trajectory::shaping::{OnlineShaper, ShaperKind, DEFAULT_MIN_FREQUENCY_HZ};
 use crate::trajectory::{Samples, Trajectory};
+use core::ops::AddAssign;
 use nalgebra::{Vector3, Vector6};
 
 pub mod pilot;
@@ -394,7 +395,7 @@ pub fn simulate(
     path: &SampledPath,
     cfg: &SimulateConfig,
 ) -> Result<SimulateResult, StudyError> {
-    run(scene, path, cfg, None, None)
+    run(scene, path, cfg)
 }
 
 /// What [`simulate_forced`] computed.
@@ -415,37 +416,20 @@ pub fn simulate_forced(
     scene: &Scene,
     path: &SampledPath,
     cfg: &SimulateConfig,
-    mut force_n: impl FnMut(usize) -> Vector3<f64>,
+    force_n: impl FnMut(usize) -> Vector3<f64>,
 ) -> Result<ForcedResult, StudyError> {
-    // Drawn once per sample, in order: the propagation may ask for a sample's force more
-    // than once (the pilot, a basis update), and a random force must be the same each time.
-    let forces: Vec<Vector3<f64>> = (0..simulated_samples(path, cfg))
-        .map(&mut force_n)
-        .collect();
     let mut acceleration_m_s2 = Vec::new();
-    let response = run(
-        scene,
-        path,
-        cfg,
-        Some(&forces),
-        Some(&mut acceleration_m_s2),
-    )?;
+    let response = run_forced(scene, path, cfg, force_n, Some(&mut acceleration_m_s2))?;
     Ok(ForcedResult {
         response,
         acceleration_m_s2,
     })
 }
 
-/// The simulation of [`simulate`] and [`simulate_forced`]: the external force at each
-/// simulated sample when given (N), the deviation's acceleration pushed to `acceleration`
-/// when given.
-fn run(
-    scene: &Scene,
-    path: &SampledPath,
-    cfg: &SimulateConfig,
-    forces_n: Option<&[Vector3<f64>]>,
-    mut acceleration: Option<&mut Vec<Vector3<f64>>>,
-) -> Result<SimulateResult, StudyError> {
+/// The path as simulated, the configuration checked first (the same refusals for
+/// [`simulate`] and [`simulate_forced`]): the path itself, then the samples held at its
+/// end for `cfg.settle_s` when it ends at rest.
+fn settled_path(path: &SampledPath, cfg: &SimulateConfig) -> Result<SampledPath, StudyError> {
     if let Some(k) = cfg.modes {
         if !(1..=MAX_RESPONSE_MODES).contains(&k) {
             let rule = format!("must be in 1..={MAX_RESPONSE_MODES}");
@@ -476,6 +460,120 @@ fn run(
         let extra = (cfg.settle_s / path.dt_s).round() as usize;
         path.positions_m.extend(std::iter::repeat_n(last, extra));
     }
+    Ok(path)
+}
+
+/// [`simulate_forced`]'s loop: K = `cfg.modes` and the basis updated every
+/// `cfg.update_every` samples (both must be given), the state carried across an update by
+/// the mass overlap of the shapes. Not yet [`simulate`]'s propagation (`propagate::run`):
+/// through that one the demo's synthetic accelerometer moved one 2 s window's dominant peak
+/// from the model's end-effector mode (32.96 Hz) to a neighbour at 34.09 Hz, which its test
+/// refuses; until that is understood this loop stays as it was measured.
+fn run_forced(
+    scene: &Scene,
+    path: &SampledPath,
+    cfg: &SimulateConfig,
+    mut force_n: impl FnMut(usize) -> Vector3<f64>,
+    mut acceleration: Option<&mut Vec<Vector3<f64>>>,
+) -> Result<SimulateResult, StudyError> {
+    let path = settled_path(path, cfg)?;
+    let (Some(modes), Some(update_every)) = (cfg.modes, cfg.update_every) else {
+        let param = if cfg.modes.is_none() {
+            Param::Modes
+        } else {
+            Param::UpdateEvery
+        };
+        let rule = "must be given: a forced simulation runs a fixed basis, no pilot chooses it";
+        return Err(ParamError::invalid(param, "unset", rule).into());
+    };
+    let n = path.positions_m.len();
+    let mut est = estimator(scene)?;
+    let damping = scene.damping;
+    let dim = if scene.rigid { 6 } else { 3 };
+    let mut resp = ModalResponse::new(dim);
+    let mut out = SimulateResult {
+        t_s: Vec::with_capacity(n),
+        command_m: Vec::with_capacity(n),
+        deviation_m: Vec::with_capacity(n),
+        stops: Vec::new(),
+        updates: 0,
+        modes: 0,
+        f1_range_hz: (f64::INFINITY, f64::NEG_INFINITY),
+        structured: true,
+        accuracy: Accuracy::default(),
+    };
+    let mut ee_mass = nalgebra::Matrix6::zeros();
+    let mut f_prev = Vector6::zeros();
+    let mut prev_shapes = None;
+    for k in 0..n {
+        let t = k as f64 * path.dt_s;
+        let p = path.positions_m[k];
+        if k % update_every == 0 {
+            solve_pose(&mut est, scene, &p, t)?;
+            let f1 = est.estimate().f1_hz;
+            out.f1_range_hz = (out.f1_range_hz.0.min(f1), out.f1_range_hz.1.max(f1));
+            let basis = est
+                .ee_modal_basis(modes)
+                .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))?;
+            // The whole state carried by the mass overlap of the whole shapes when both
+            // bases have them; else the end-effector's (module docs).
+            let overlap = match (&basis.shapes, &prev_shapes) {
+                (Some(new), Some(old)) => new.mass_overlap(old, &basis.ee_mass),
+                _ => None,
+            };
+            match overlap {
+                Some(o) => resp.set_basis_projected(
+                    &basis.lambda,
+                    &basis.phi_ee,
+                    &damping,
+                    &basis.flexibility,
+                    &o,
+                ),
+                None => resp.set_basis(
+                    &basis.lambda,
+                    &basis.phi_ee,
+                    &damping,
+                    &basis.flexibility,
+                    &basis.ee_mass,
+                ),
+            }
+            .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))?;
+            prev_shapes = basis.shapes;
+            ee_mass = basis.ee_mass;
+            out.structured = basis.structured;
+            out.modes = basis.lambda.len();
+            out.updates += 1;
+        }
+        let a = path.acceleration(k);
+        let mut a6 = Vector6::zeros();
+        a6.fixed_rows_mut::<3>(0).copy_from(&a);
+        let mut f = -(ee_mass * a6);
+        f.fixed_rows_mut::<3>(0).add_assign(&force_n(k));
+        if k == 0 {
+            f_prev = f;
+        } else {
+            resp.step(&f_prev, &f, path.dt_s);
+            f_prev = f;
+        }
+        let u = resp.displacement(&f);
+        if let Some(acc) = acceleration.as_deref_mut() {
+            acc.push(resp.acceleration(&f).fixed_rows::<3>(0).into_owned());
+        }
+        out.t_s.push(t);
+        out.command_m.push(p);
+        out.deviation_m.push(u.fixed_rows::<3>(0).into_owned());
+    }
+    out.stops = stop_residuals(&out.t_s, &out.command_m, &out.deviation_m);
+    Ok(out)
+}
+
+/// The simulation of [`simulate`] (module docs).
+fn run(
+    scene: &Scene,
+    path: &SampledPath,
+    cfg: &SimulateConfig,
+) -> Result<SimulateResult, StudyError> {
+    let path = settled_path(path, cfg)?;
     let n = path.positions_m.len();
     // The memory of the whole run (two bases across an update, the path and its
     // deviation), refused past the one budget before anything is computed.
@@ -498,18 +596,8 @@ fn run(
         scene,
         &path,
         cfg,
-        |k| {
-            let mut f = Vector6::zeros();
-            if let Some(forces) = forces_n {
-                f.fixed_rows_mut::<3>(0)
-                    .copy_from(&forces[k.min(forces.len() - 1)]);
-            }
-            f
-        },
-        |k, resp, f| {
-            if let Some(acc) = acceleration.as_deref_mut() {
-                acc.push(resp.acceleration(f).fixed_rows::<3>(0).into_owned());
-            }
+        |_| Vector6::zeros(),
+        |k, _, _| {
             if k % PROGRESS_SAMPLES == 0 && k > 0 {
                 bar.advance(PROGRESS_SAMPLES);
             }

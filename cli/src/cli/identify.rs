@@ -14,7 +14,10 @@ use super::figure::{self, parse_format};
 use super::recording::{self, Item, Layout, ReadOptions};
 use super::{json_f64, CliError};
 use crate::estimator::Estimator;
-use crate::identify::{Identifier, IdentifyParams, WindowResult, WindowStatus};
+use crate::identify::align::MAX_INPUT_GAP_PERIODS;
+use crate::identify::{
+    Aligned, Aligner, Identifier, IdentifyError, IdentifyParams, WindowResult, WindowStatus,
+};
 use crate::kinematics::Pose;
 use crate::report::csv::{process_command_line, write_csv};
 use crate::report::figure::FigureFormat;
@@ -54,7 +57,8 @@ pub struct IdentifyArgs {
     #[arg(long, value_delimiter = ',')]
     pub channels: Vec<String>,
     /// Measured input channels (force or hammer, e.g. `fx` in N), comma-separated: CSV
-    /// column names, or MCAP field names of the vibration topic's messages. With an input
+    /// column names, or MCAP field names of the vibration topic's messages (or of
+    /// --input-topic's, e.g. `wrench.force.x`). With an input
     /// the modes come from the H1 estimate of the frequency response (outputs / inputs) and
     /// a modal fit to its impulse response, instead of output-only SSI-cov.
     #[arg(long, value_delimiter = ',')]
@@ -62,6 +66,13 @@ pub struct IdentifyArgs {
     /// MCAP: the topic of the vibration messages (default: the only IMU or wrench topic).
     #[arg(long)]
     pub topic: Option<String>,
+    /// MCAP: the topic of the measured inputs when they are recorded on their own (e.g. a
+    /// WrenchStamped topic beside the IMU's; --input names its fields). Each input is
+    /// interpolated linearly at every response sample's time; a response sample outside the
+    /// input's span or inside an input gap longer than 2 input periods is left out and
+    /// counted in its window (`unmatched_samples`, status `gap`).
+    #[arg(long)]
+    pub input_topic: Option<String>,
     /// MCAP: the topic of the poses (default: the only PoseStamped topic, if any).
     #[arg(long)]
     pub pose_topic: Option<String>,
@@ -204,11 +215,23 @@ pub fn run(a: &IdentifyArgs) -> Result<(), CliError> {
         topic: a.topic.clone(),
         pose_topic: a.pose_topic.clone(),
         inputs: a.input.clone(),
+        input_topic: a.input_topic.clone(),
     };
     let t0 = Instant::now();
     let mut layout: Option<Layout> = None;
     let mut id: Option<Identifier> = None;
     let mut poses = PoseBins::default();
+    let mut aligner = a.input_topic.as_ref().map(|_| Aligner::new(a.input.len()));
+    let shown = a.recording.display().to_string();
+    let analysis = |e: IdentifyError| CliError::Analysis(format!("{shown}: {e}"));
+    // An aligned response sample (the inputs interpolated at its time) to the identifier.
+    let feed = |id: &mut Option<Identifier>, x: Aligned<'_>| -> Result<(), IdentifyError> {
+        let id = id.as_mut().expect("layout before samples");
+        match x {
+            Aligned::Sample { t_s, values } => id.push(t_s, values),
+            Aligned::Unmatched { t_s } => id.push_unmatched(t_s),
+        }
+    };
     let mut sink = |item: Item<'_>| -> Result<(), CliError> {
         match item {
             Item::Layout(l) => {
@@ -221,10 +244,19 @@ pub fn run(a: &IdentifyArgs) -> Result<(), CliError> {
                 layout = Some(l.clone());
                 Ok(())
             }
-            Item::Sample { t_s, values } => {
-                let id = id.as_mut().expect("layout before samples");
-                id.push(t_s, values)
-                    .map_err(|e| CliError::Analysis(format!("{}: {e}", a.recording.display())))
+            Item::Sample { t_s, values } => match aligner.as_mut() {
+                Some(al) => al
+                    .response(t_s, values, &mut |x| feed(&mut id, x))
+                    .map_err(analysis),
+                None => {
+                    let id = id.as_mut().expect("layout before samples");
+                    id.push(t_s, values).map_err(analysis)
+                }
+            },
+            Item::Input { t_s, values } => {
+                let al = aligner.as_mut().expect("inputs on a topic of their own");
+                al.input(t_s, values, &mut |x| feed(&mut id, x))
+                    .map_err(analysis)
             }
             Item::Pose {
                 t_s,
@@ -237,6 +269,17 @@ pub fn run(a: &IdentifyArgs) -> Result<(), CliError> {
         }
     };
     recording::read(&a.recording, &opts, &mut sink)?;
+    let alignment = match aligner {
+        Some(al) => {
+            let n = al.inputs();
+            let dt = al.finish(&mut |x| feed(&mut id, x)).map_err(analysis)?;
+            Some(Alignment {
+                input_samples: n,
+                input_period_s: dt,
+            })
+        }
+        None => None,
+    };
     let layout = layout.ok_or_else(|| {
         CliError::Usage(format!("{}: no vibration channel", a.recording.display()))
     })?;
@@ -254,9 +297,9 @@ pub fn run(a: &IdentifyArgs) -> Result<(), CliError> {
         &rows,
         scene.as_ref(),
         rate_hz,
-        identify_s,
-        total_s,
+        (identify_s, total_s),
         &poses,
+        alignment,
     )
 }
 
@@ -314,6 +357,26 @@ fn pair_windows<'a>(
     Ok(out)
 }
 
+/// The measured inputs of their own topic, put on the responses' clock.
+#[derive(Debug, Clone, Copy)]
+struct Alignment {
+    input_samples: u64,
+    /// The input's nominal period, s.
+    input_period_s: f64,
+}
+
+impl Alignment {
+    fn json(&self, topic: &str) -> Value {
+        json!({
+            "topic": topic,
+            "interpolation": "linear",
+            "input_samples": self.input_samples,
+            "input_period_s": json_f64(self.input_period_s),
+            "max_gap_s": json_f64(MAX_INPUT_GAP_PERIODS * self.input_period_s),
+        })
+    }
+}
+
 /// The response channels (the layout's channels less the measured inputs).
 fn outputs(layout: &Layout) -> &[String] {
     &layout.channels[..layout.channels.len() - layout.inputs]
@@ -336,6 +399,7 @@ fn json_of(
     scene: Option<&Scene>,
     rate_hz: f64,
     times: (f64, f64),
+    alignment: Option<Alignment>,
 ) -> Value {
     let windows: Vec<Value> = rows
         .iter()
@@ -379,6 +443,7 @@ fn json_of(
                 "rate_hz": json_f64(r.rate_hz),
                 "gaps": r.gaps,
                 "nonfinite_samples": r.nonfinite,
+                "unmatched_samples": r.unmatched,
                 "position_m": w.position_m.map_or(Value::Null, |p| json!(p.map(json_f64))),
                 "orientation_wxyz": w.orientation_wxyz.map_or(Value::Null, |q| json!(q.map(json_f64))),
                 "modes": modes,
@@ -391,6 +456,10 @@ fn json_of(
         "channels": outputs(layout),
         "inputs": &layout.channels[layout.channels.len() - layout.inputs..],
         "method": method(layout),
+        "input_alignment": match (alignment, &a.input_topic) {
+            (Some(al), Some(t)) => al.json(t),
+            _ => Value::Null,
+        },
         "sample_rate_hz": json_f64(rate_hz),
         "band_hz": [a.from_hz, a.to_hz],
         "scene": scene.map(|s| s.name.clone()),
@@ -408,14 +477,22 @@ fn output(
     rows: &[WindowRows<'_>],
     scene: Option<&Scene>,
     rate_hz: f64,
-    identify_s: f64,
-    total_s: f64,
+    (identify_s, total_s): (f64, f64),
     poses: &PoseBins,
+    alignment: Option<Alignment>,
 ) -> Result<(), CliError> {
     if a.json {
         outln!(
             "{}",
-            json_of(a, layout, rows, scene, rate_hz, (identify_s, total_s))
+            json_of(
+                a,
+                layout,
+                rows,
+                scene,
+                rate_hz,
+                (identify_s, total_s),
+                alignment
+            )
         )?;
     } else {
         let inputs = &layout.channels[outputs(layout).len()..];
@@ -438,6 +515,14 @@ fn output(
             rows.len(),
             identify_s
         )?;
+        if let Some(al) = alignment {
+            outln!(
+                "{} input sample(s) every {:.6} s interpolated linearly at each response sample's time; a response sample outside their span or in a gap over {:.6} s left out (unmatched)",
+                al.input_samples,
+                al.input_period_s,
+                MAX_INPUT_GAP_PERIODS * al.input_period_s
+            )?;
+        }
         if poses.nonfinite > 0 {
             outln!(
                 "{} pose(s) with non-finite values left out",
@@ -457,10 +542,10 @@ fn output(
                 r.status.as_str(),
                 r.modes.len(),
                 pos,
-                if r.gaps + r.nonfinite > 0 {
+                if r.gaps + r.nonfinite + r.unmatched > 0 {
                     format!(
-                        " ({} gap(s), {} non-finite sample(s) left out)",
-                        r.gaps, r.nonfinite
+                        " ({} gap(s), {} non-finite and {} unmatched sample(s) left out)",
+                        r.gaps, r.nonfinite, r.unmatched
                     )
                 } else {
                     String::new()

@@ -52,7 +52,7 @@ pub(super) fn one_line(o: &Output, want: &str) {
 }
 
 /// The pinned venv with the ROS 2 MCAP writer.
-fn ros2_python() -> PathBuf {
+pub(super) fn ros2_python() -> PathBuf {
     cablevib_testkit::pinned_venv::pinned_venv_python(
         "venv-ros2-mcap",
         &[
@@ -63,12 +63,14 @@ fn ros2_python() -> PathBuf {
     )
 }
 
-/// The CSV record `csv` as a ROS 2 bag `bag` (tests/py/write_ros2_bag.py), poses at `xyz`.
-fn write_bag(py: &Path, csv: &Path, bag: &Path, xyz: [&str; 3]) {
+/// The CSV record `csv` as a ROS 2 bag `bag` (tests/py/write_ros2_bag.py), poses at `xyz`,
+/// and the wrench CSV `t,fx,fy,fz` on /wrench when given.
+pub(super) fn write_bag(py: &Path, csv: &Path, bag: &Path, xyz: [&str; 3], wrench: Option<&Path>) {
     let st = Command::new(py)
         .arg(PathBuf::from(ROOT).join("tests/py/write_ros2_bag.py"))
         .args([csv.to_str().unwrap(), bag.to_str().unwrap()])
         .args(xyz)
+        .args(wrench.map(|w| w.to_str().unwrap()))
         .status()
         .unwrap();
     assert!(st.success());
@@ -164,7 +166,7 @@ fn csv_and_ros2_bag_give_the_known_modes_and_identical_results() {
     // The same record as a ROS 2 bag.
     let py = ros2_python();
     let bag = d.join("rec.mcap");
-    write_bag(&py, &csv, &bag, ["0.3", "0.2", "1.0"]);
+    write_bag(&py, &csv, &bag, ["0.3", "0.2", "1.0"], None);
     let o = run(&[
         "identify",
         bag.to_str().unwrap(),
@@ -226,6 +228,16 @@ fn hostile_records() {
     let v = json_of(&run(&["identify", p.to_str().unwrap(), "--json"]));
     assert_eq!(v["windows"][0]["status"], "gap");
     assert_eq!(v["windows"][0]["nonfinite_samples"], 2);
+    // A non-finite first sample (before the first decimated one): counted in the first window.
+    let p = d.join("nan_first.csv");
+    write_csv(&rec, &p, |k, l| {
+        if k == 0 {
+            *l = "0,NaN,0,0\n".into();
+        }
+    });
+    let v = json_of(&run(&["identify", p.to_str().unwrap(), "--json"]));
+    assert_eq!(v["windows"][0]["status"], "gap");
+    assert_eq!(v["windows"][0]["nonfinite_samples"], 1);
     // A gap in time: counted, status `gap`.
     let p = d.join("gap.csv");
     write_csv(&rec, &p, |k, l| {
@@ -318,7 +330,7 @@ fn hostile_bags() {
     write_csv(&rec, &csv, |_, _| {});
     let py = ros2_python();
     let bag = d.join("rec.mcap");
-    write_bag(&py, &csv, &bag, ["0", "0", "1"]);
+    write_bag(&py, &csv, &bag, ["0", "0", "1"], None);
     let b = bag.to_str().unwrap();
     one_line(&run(&["identify", b, "--topic", "/accel"]), "no message on topic /accel; topics in the file: /imu (sensor_msgs/msg/Imu), /pose (geometry_msgs/msg/PoseStamped)");
     // The pose topic as vibration: fine (its fields are channels); a field not there: refused.

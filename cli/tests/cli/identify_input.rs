@@ -9,7 +9,7 @@
 
 use super::identify::{chain, dir, json_of, modes, one_line, run};
 use cablevib_testkit::modal_record::{
-    close_pair, simulate, simulate_forced, Modal, Output as Measured,
+    close_pair, simulate, simulate_forced, Modal, Output as Measured, Record,
 };
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -18,13 +18,13 @@ use std::process::Command;
 const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
 
 /// The tolerances (relative) of a mode at `f_hz` with damping `zeta` in 60 s.
-fn tolerance(f_hz: f64, zeta: f64) -> (f64, f64) {
+pub(super) fn tolerance(f_hz: f64, zeta: f64) -> (f64, f64) {
     let (sf, sz) = cablevib::identify::statistical_limit(f_hz, zeta, 60.0);
     ((3.0 * sf).max(1e-3), (3.0 * sz).max(0.1))
 }
 
 /// `got` (ascending) holds every known mode within its tolerance, one to one.
-fn assert_known(got: &[(f64, f64)], sys: &Modal, what: &str) {
+pub(super) fn assert_known(got: &[(f64, f64)], sys: &Modal, what: &str) {
     assert_eq!(got.len(), sys.frequencies_hz.len(), "{what}: {got:?}");
     for ((f, z), (&ft, &zt)) in got.iter().zip(sys.frequencies_hz.iter().zip(&sys.zetas)) {
         let (tf, tz) = tolerance(ft, zt);
@@ -41,7 +41,7 @@ fn assert_known(got: &[(f64, f64)], sys: &Modal, what: &str) {
 
 /// Write `t` and the columns `names` of `cols(k)` per sample as CSV (t as the MCAP reader
 /// computes it, k·10⁶ ns × 10⁻⁹).
-fn write(path: &Path, n: usize, names: &str, cols: impl Fn(usize) -> Vec<f64>) {
+pub(super) fn write(path: &Path, n: usize, names: &str, cols: impl Fn(usize) -> Vec<f64>) {
     let mut s = format!("t,{names}\n");
     for k in 0..n {
         s.push_str(&format!("{}", (k as f64 * 1e6) * 1e-9));
@@ -53,6 +53,21 @@ fn write(path: &Path, n: usize, names: &str, cols: impl Fn(usize) -> Vec<f64>) {
     std::fs::write(path, s).unwrap();
 }
 
+/// The chain's record forced at mass 1 by a measured white force (held over each step):
+/// 3 accelerations (masses 1, 2, 4) with 20 dB sensor noise, `duration_s` at 1 kHz.
+pub(super) fn forced_chain(duration_s: f64, seed: u64) -> Record {
+    simulate_forced(
+        &chain(),
+        &[0, 1, 3],
+        &[0],
+        Measured::Acceleration,
+        1000.0,
+        duration_s,
+        20.0,
+        seed,
+    )
+}
+
 /// The chain forced at mass 1 by a measured white force `fx`: `--input fx` gives H1 and its
 /// fit, the five known modes, coherence per mode, shapes at the responses only; and the
 /// refusals of a wrong `--input`.
@@ -60,16 +75,7 @@ fn write(path: &Path, n: usize, names: &str, cols: impl Fn(usize) -> Vec<f64>) {
 fn input_channel_gives_the_h1_fit_of_the_known_modes() {
     let d = dir("input");
     let sys = chain();
-    let rec = simulate_forced(
-        &sys,
-        &[0, 1, 3],
-        &[0],
-        Measured::Acceleration,
-        1000.0,
-        60.0,
-        20.0,
-        5,
-    );
+    let rec = forced_chain(60.0, 5);
     let csv = d.join("forced.csv");
     write(&csv, rec.t_s.len(), "ax,ay,az,fx", |k| rec.sample(k));
     let out = d.join("modes.csv");

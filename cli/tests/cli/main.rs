@@ -13,6 +13,7 @@ mod frf;
 mod hidden_sag;
 mod identify;
 mod identify_input;
+mod identify_input_topic;
 mod long_work;
 mod map_shard;
 mod memory_budget;

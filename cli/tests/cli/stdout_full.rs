@@ -104,6 +104,11 @@ const PRINTING: &[&[&str]] = &[
 
 /// Commands not run here, and why.
 const NOT_RUN: &[(&str, &str)] = &[
+    (
+        "calibrate",
+        "needs measured modes at several poses; its lines are the same `outln!` \
+         (cli/tests/cli/calibrate.rs runs it)",
+    ),
     ("serve", "logs to standard error only (tracing)"),
     (
         "monitor",

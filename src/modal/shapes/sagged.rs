@@ -276,7 +276,7 @@ impl SagModalSolver {
                 got => got?,
             };
             let v = &null.vectors;
-            let nodes: Vec<_> = (0..v.ncols())
+            let nodes: Vec<LocalNodes> = (0..v.ncols())
                 .map(|c| local_nodes(&attach, &shapes, &hcol, &v.column(c).into_owned(), dim))
                 .collect();
             let cols = v.ncols();
@@ -503,6 +503,10 @@ impl SagModalSolver {
     }
 }
 
+/// One null-space vector's shape: each cable's node displacements (m) and its hidden
+/// part's amplitudes.
+type LocalNodes = (Vec<Vec<Vector3<f64>>>, Vec<f64>);
+
 /// The bordered matrix at λ (module docs); `hcol` the column of each hidden cable's
 /// amplitude (its junction's row the same index).
 fn bordered(
@@ -570,7 +574,7 @@ fn local_nodes(
     hcol: &[Option<usize>],
     col: &DVector<f64>,
     dim: usize,
-) -> (Vec<Vec<Vector3<f64>>>, Vec<f64>) {
+) -> LocalNodes {
     let mut phi = Vector6::zeros();
     for r in 0..dim {
         phi[r] = col[r];

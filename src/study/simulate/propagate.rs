@@ -148,6 +148,17 @@ pub(super) fn run(
         external_n,
     };
     let chosen = choose_modes(est, scene, &loads, cfg)?;
+    // The memory check before the run took the smallest pilot; with K now known, the run's
+    // own two bases and path are checked against the budget again before they are built.
+    crate::study::cost::estimate_cost(
+        scene,
+        &crate::study::cost::Work::Simulate {
+            samples: n,
+            update_every: cfg.update_every.unwrap_or(updates::FIRST_INTERVAL),
+            modes: chosen.modes,
+        },
+    )
+    .check_memory()?;
     out.accuracy = Accuracy {
         tolerance: cfg.tolerance,
         modes_chosen: cfg.modes.is_none(),

@@ -21,9 +21,9 @@ pub fn read(
     let shown = path.display().to_string();
     let f = crate::input_file::open_checked(path, "recording", u64::MAX)
         .map_err(|e| CliError::Usage(e.to_string()))?;
-    if opts.topic.is_some() || opts.pose_topic.is_some() {
+    if opts.topic.is_some() || opts.pose_topic.is_some() || opts.input_topic.is_some() {
         return Err(CliError::Usage(format!(
-            "{shown}: a CSV recording has no topics (--topic and --pose-topic are for MCAP files)"
+            "{shown}: a CSV recording has no topics (--topic, --pose-topic and --input-topic are for MCAP files)"
         )));
     }
     let mut r = BufReader::new(f);
@@ -112,6 +112,7 @@ pub fn read(
         channels: chans.iter().map(|&i| names[i].clone()).collect(),
         source: format!("CSV {shown}"),
         inputs: opts.inputs.len(),
+        separate_inputs: false,
     }))?;
     let mut fields: Vec<f64> = vec![f64::NAN; names.len()];
     let mut values = vec![0.0; chans.len()];

@@ -9,6 +9,10 @@
 //!   else the IMU's `linear_acceleration.{x,y,z}` and `angular_velocity.{x,y,z}`, the
 //!   wrench's `wrench.force.{x,y,z}` and `wrench.torque.{x,y,z}`, or every numeric field
 //!   of a JSON message but its time and sequence.
+//! - **Measured inputs on a topic of their own** (`--input-topic`, e.g. a
+//!   `geometry_msgs/msg/WrenchStamped` stream beside the IMU's): the `--input` fields of its
+//!   messages come as [`Item::Input`] on their own clock (the command line puts them on the
+//!   responses' clock, `cablevib::identify::align`).
 //! - **Poses**: `geometry_msgs/msg/PoseStamped` (`--pose-topic`, else the first such topic),
 //!   or a monitor recording's `cablevib.Pose`.
 //! - **Time**: a ROS 2 message's `header.stamp` (the sensor's time), a JSON message's
@@ -40,6 +44,7 @@ enum Decoder {
 #[derive(Clone, Copy, PartialEq)]
 enum Role {
     Vibration,
+    Input,
     Pose,
     Other,
 }
@@ -79,6 +84,32 @@ fn flatten(v: &serde_json::Value, prefix: &str, out: &mut Vec<(String, f64)>) {
     }
 }
 
+/// The positions of `wanted` among the message's field names; the first name missing.
+fn positions<'w>(wanted: &'w [String], fnames: &[String]) -> Result<Vec<usize>, &'w String> {
+    wanted
+        .iter()
+        .map(|w| fnames.iter().position(|k| k == w).ok_or(w))
+        .collect()
+}
+
+/// `values` from the message's `vals` at `picks` (a field found again by its name when a
+/// sequence of another length moved it); the name missing otherwise.
+fn fill<'n>(
+    values: &mut [f64],
+    picks: &[usize],
+    names: &'n [String],
+    fnames: &[String],
+    vals: &[f64],
+) -> Result<(), &'n String> {
+    for (v, (&p, n)) in values.iter_mut().zip(picks.iter().zip(names)) {
+        *v = match fnames.get(p) {
+            Some(k) if k == n => vals[p],
+            _ => vals[fnames.iter().position(|k| k == n).ok_or(n)?],
+        };
+    }
+    Ok(())
+}
+
 /// Read the MCAP recording `path` (module docs).
 pub fn read(
     path: &Path,
@@ -87,6 +118,20 @@ pub fn read(
 ) -> Result<(), CliError> {
     let shown = path.display().to_string();
     let bad = |what: String| CliError::Usage(format!("{shown}: {what}"));
+    if let Some(t) = &opts.input_topic {
+        if opts.inputs.is_empty() {
+            return Err(bad(format!(
+                "--input-topic {t}: name the input fields with --input (e.g. --input wrench.force.x)"
+            )));
+        }
+        if opts.topic.as_ref() == Some(t) || opts.pose_topic.as_ref() == Some(t) {
+            return Err(bad(format!(
+                "--input-topic {t} is also the vibration or pose topic: inputs on the vibration topic need no --input-topic"
+            )));
+        }
+    }
+    let separate = opts.input_topic.is_some();
+    let n_in = opts.inputs.len();
     let f = crate::input_file::open_checked(path, "recording", u64::MAX)
         .map_err(|e| CliError::Usage(e.to_string()))?;
     let options =
@@ -106,6 +151,9 @@ pub fn read(
     let mut values: Vec<f64> = Vec::new();
     let mut origin_ns: Option<i128> = None;
     let mut vib_messages = 0u64;
+    let mut input_messages = 0u64;
+    let mut input_picks: Vec<usize> = Vec::new();
+    let mut input_values: Vec<f64> = vec![0.0; n_in];
     let mut topics_seen: Vec<String> = Vec::new();
     for (read_messages, m) in reader.enumerate() {
         let m = m.map_err(|e| {
@@ -123,8 +171,8 @@ pub fn read(
             ),
             None => ("", "", String::new()),
         };
-        if !topics_seen.contains(&ch.topic) && topics_seen.len() < 1000 {
-            topics_seen.push(format!(
+        if topics_seen.len() < 1000 && !decoders.contains_key(&ch.id) {
+            let seen = format!(
                 "{} ({})",
                 ch.topic,
                 if schema_name.is_empty() {
@@ -132,13 +180,17 @@ pub fn read(
                 } else {
                     schema_name
                 }
-            ));
+            );
+            if !topics_seen.contains(&seen) {
+                topics_seen.push(seen);
+            }
         }
         let entry = decoders.entry(ch.id).or_insert_with(|| (Role::Other, None));
         if entry.1.is_none() && entry.0 == Role::Other {
             // First message of this channel: its role.
             let is_vib_schema = schema_name == IMU || schema_name == WRENCH;
             let role = match (&opts.topic, &opts.pose_topic) {
+                _ if opts.input_topic.as_ref() == Some(&ch.topic) => Role::Input,
                 (Some(t), _) if *t == ch.topic => Role::Vibration,
                 (_, Some(t)) if *t == ch.topic => Role::Pose,
                 (None, _) if is_vib_schema => Role::Vibration,
@@ -187,7 +239,7 @@ pub fn read(
                     }
                     pose_topic = Some(ch.topic.clone());
                 }
-                Role::Other => {}
+                Role::Input | Role::Other => {}
             }
             *entry = (role, Some(dec));
         }
@@ -262,65 +314,81 @@ pub fn read(
                 let wanted = opts
                     .with_inputs(wanted)
                     .map_err(|e| bad(format!("topic {}: {e}", ch.topic)))?;
-                picks = wanted
-                    .iter()
-                    .map(|w| {
-                        fnames.iter().position(|k| k == w).ok_or_else(|| {
-                            bad(format!(
-                                "topic {}: no field `{w}`{} (fields: {})",
-                                ch.topic,
-                                if opts.inputs.contains(w) {
-                                    " for --input (a measured input is a field of the vibration topic's messages)"
-                                } else {
-                                    ""
-                                },
-                                fnames
-                                    .iter()
-                                    .map(|f| f.as_str())
-                                    .collect::<Vec<_>>()
-                                    .join(", ")
-                            ))
-                        })
-                    })
-                    .collect::<Result<_, _>>()?;
-                if picks.len() <= opts.inputs.len() {
+                let on_topic = if separate {
+                    &wanted[..wanted.len() - n_in]
+                } else {
+                    &wanted[..]
+                };
+                picks = positions(on_topic, fnames).map_err(|w| {
+                    bad(format!(
+                        "topic {}: no field `{w}`{} (fields: {})",
+                        ch.topic,
+                        if opts.inputs.contains(w) {
+                            " for --input (a measured input is a field of the vibration topic's messages, or of --input-topic's)"
+                        } else {
+                            ""
+                        },
+                        fnames.join(", ")
+                    ))
+                })?;
+                if picks.len() <= if separate { 0 } else { n_in } {
                     return Err(bad(format!(
                         "topic {}: no numeric field to identify from",
                         ch.topic
                     )));
                 }
-                names = wanted;
+                names = on_topic.to_vec();
                 values = vec![0.0; picks.len()];
                 sink(Item::Layout(&Layout {
-                    channels: names.clone(),
+                    channels: wanted.clone(),
                     source: format!(
-                        "MCAP {shown}, topic {} ({}), time origin {:.9} s",
+                        "MCAP {shown}, topic {} ({}){}, time origin {:.9} s",
                         ch.topic,
                         if schema_name.is_empty() {
                             "json"
                         } else {
                             schema_name
                         },
+                        opts.input_topic
+                            .as_ref()
+                            .map_or(String::new(), |t| format!(", inputs on topic {t}")),
                         o as f64 * 1e-9
                     ),
-                    inputs: opts.inputs.len(),
+                    inputs: n_in,
+                    separate_inputs: separate,
                 }))?;
             }
             vib_messages += 1;
-            for (v, (&p, n)) in values.iter_mut().zip(picks.iter().zip(&names)) {
-                *v = match fnames.get(p) {
-                    Some(k) if k == n => vals[p],
-                    _ => get(n).ok_or_else(|| {
-                        bad(format!(
-                            "topic {}, message {}: no field `{n}`",
-                            ch.topic, m.sequence
-                        ))
-                    })?,
-                };
-            }
+            fill(&mut values, &picks, &names, fnames, &vals).map_err(|n| {
+                bad(format!(
+                    "topic {}, message {}: no field `{n}`",
+                    ch.topic, m.sequence
+                ))
+            })?;
             sink(Item::Sample {
                 t_s,
                 values: &values,
+            })?;
+        } else if *role == Role::Input {
+            if input_messages == 0 {
+                input_picks = positions(&opts.inputs, fnames).map_err(|w| {
+                    bad(format!(
+                        "--input-topic {}: no field `{w}` for --input (fields: {})",
+                        ch.topic,
+                        fnames.join(", ")
+                    ))
+                })?;
+            }
+            input_messages += 1;
+            fill(&mut input_values, &input_picks, &opts.inputs, fnames, &vals).map_err(|n| {
+                bad(format!(
+                    "topic {}, message {}: no field `{n}`",
+                    ch.topic, m.sequence
+                ))
+            })?;
+            sink(Item::Input {
+                t_s,
+                values: &input_values,
             })?;
         } else {
             let pose = if schema_name == MONITOR_POSE {
@@ -361,6 +429,12 @@ pub fn read(
             } else {
                 topics_seen.join(", ")
             }
+        )));
+    }
+    if let (Some(t), 0) = (&opts.input_topic, input_messages) {
+        return Err(bad(format!(
+            "--input-topic {t}: no message on that topic; topics in the file: {}",
+            topics_seen.join(", ")
         )));
     }
     if let (Some(t), None) = (&opts.pose_topic, &pose_topic) {

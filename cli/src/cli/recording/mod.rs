@@ -22,6 +22,14 @@ pub enum Item<'a> {
         /// The channels' values.
         values: &'a [f64],
     },
+    /// A measured input sample from a topic of its own ([`ReadOptions::input_topic`]): one
+    /// value per input, on its own clock.
+    Input {
+        /// Time, s.
+        t_s: f64,
+        /// The inputs' values.
+        values: &'a [f64],
+    },
     /// A pose of the end-effector.
     Pose {
         /// Time, s.
@@ -46,6 +54,10 @@ pub struct ReadOptions {
     /// the vibration topic's messages): left out of the default channels and handed after
     /// them in each sample.
     pub inputs: Vec<String>,
+    /// MCAP: the topic of the measured inputs when they are not fields of the vibration
+    /// topic (a `WrenchStamped` stream beside an IMU's): its samples come as [`Item::Input`],
+    /// and [`Item::Sample`] holds the responses only.
+    pub input_topic: Option<String>,
 }
 
 impl ReadOptions {
@@ -83,6 +95,8 @@ pub struct Layout {
     pub source: String,
     /// How many of the channels, the last ones, are measured inputs ([`ReadOptions::inputs`]).
     pub inputs: usize,
+    /// The inputs come on a topic of their own ([`Item::Input`]), not in [`Item::Sample`].
+    pub separate_inputs: bool,
 }
 
 /// Read `path` (CSV or MCAP, by its first bytes): `sink` gets the [`Item::Layout`], then
