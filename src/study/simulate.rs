@@ -381,7 +381,7 @@ fn solve_pose(
 /// let dx = Vector3::new(0.1, 0.0, 0.0);
 /// let mv = Move::new(scene.ee_position_m, dx, 0.5, Profile::SCurve)?;
 /// let path = SampledPath::from_samples(&mv.sampled(1e-3, 0.5)?, 1e-3)?;
-/// let cfg = SimulateConfig { modes: 4, settle_s: 0.0, ..SimulateConfig::default() };
+/// let cfg = SimulateConfig { modes: Some(4), settle_s: 0.0, ..SimulateConfig::default() };
 /// let r = simulate(&scene, &path, &cfg)?;
 /// assert_eq!(r.deviation_m.len(), r.t_s.len());
 /// // The move excites the robot; the deviation is small beside the move itself.
