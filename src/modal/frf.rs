@@ -79,7 +79,7 @@ pub enum FrfError {
     #[error("{0}")]
     Modal(#[from] ModalError),
     /// The sagged continuous (Magnus) model has no complex form.
-    #[error("the sagged continuous model has no damped (complex) form: use --element fem for the frequency response with sag")]
+    #[error("the sagged continuous model has no damped (complex) form: the frequency response with sag takes the fem element")]
     SagContinuous,
     /// Modal damping with sag has no complex-λ form: it goes by the modal basis of the
     /// sagged shapes ([`ModalBasis::from_modes`]).
@@ -198,7 +198,8 @@ impl ModalSolver {
 /// `models`, arms `arms_m` for a rigid end-effector) with `damping`: exact at a complex λ
 /// for loss-factor, Rayleigh or no damping; for modal damping by [`ModalBasis`] over the
 /// modes below `modal_cutoff_hz` (at most [`MAX_FRF_MODES`]) with the static correction.
-/// The one computation behind `cablevib frf` and the Python `frf`.
+/// The taut computation of the frequency-response study (`study::frf`), behind `cablevib frf`
+/// and the Python `frf`.
 pub fn receptance_over(
     solver: &mut ModalSolver,
     models: &[CableModel],

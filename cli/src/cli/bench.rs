@@ -134,9 +134,9 @@ fn dense_check(s: &Scene, a: &BenchArgs, p: EstimatorParams) -> Result<DenseChec
                 max_rel_err_f1 =
                     max_rel_err_f1.max((e.f1_hz - lambda_to_hz(r.modes.lambda[0])).abs() / e.f1_hz);
                 if let Some((_, l)) = r.modes.first_ee_mode(p.modal.ee_participation_min) {
-                    if e.ee_mode_hz.is_finite() {
+                    if let Some(m) = e.ee_mode {
                         max_rel_err_ee = max_rel_err_ee
-                            .max((e.ee_mode_hz - lambda_to_hz(l)).abs() / e.ee_mode_hz);
+                            .max((m.frequency_hz - lambda_to_hz(l)).abs() / m.frequency_hz);
                     }
                 }
             }
