@@ -97,6 +97,8 @@ pub mod estimator;
 // Layer 6
 pub mod calibration;
 pub mod study;
+// Layer 7: the names most programs need
+pub mod prelude;
 #[cfg(test)]
 mod readme_tests {
     /// The README's Rust example is `examples/estimate.rs` (below its `//!` header), which

@@ -36,6 +36,13 @@ pub fn array2<'py>(py: Python<'py>, rows: &[Vec<f64>]) -> PyResult<Bound<'py, Py
     asarray(py, list.into_any(), "float64")
 }
 
+/// A float64 array of `shape` from `v` in row-major order (`v.len()` = the product of
+/// `shape`; an empty array keeps its shape).
+pub fn array3<'py>(py: Python<'py>, v: &[f64], shape: [usize; 3]) -> PyResult<Bound<'py, PyAny>> {
+    debug_assert_eq!(v.len(), shape.iter().product::<usize>());
+    array1(py, v)?.call_method1("reshape", (shape[0], shape[1], shape[2]))
+}
+
 /// A 3-vector as a float64 array of shape (3,).
 pub fn vector3<'py>(py: Python<'py>, v: &Vector3<f64>) -> PyResult<Bound<'py, PyAny>> {
     array1(py, v.as_slice())

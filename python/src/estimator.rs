@@ -16,6 +16,10 @@ use pyo3::types::PyDict;
 ///
 /// ``Estimator(scene)`` raises CablevibError when the scene's own default pose cannot be
 /// solved (the message is the command line's). An ``auto`` model is resolved here.
+/// ``realtime=True`` runs each update as the service does (``EstimatorParams::realtime()``:
+/// a budget of D(λ) evaluations per call, the end-effector work that does not fit continued
+/// in the next calls, so the end-effector mode of a cold call may be pending), what
+/// ``cablevib analyze --realtime`` prints; the default answers every call in full.
 #[pyclass(name = "Estimator", module = "cablevib")]
 pub struct PyEstimator {
     inner: Estimator,
@@ -28,9 +32,14 @@ pub struct PyEstimator {
 #[pymethods]
 impl PyEstimator {
     #[new]
-    fn new(scene: &PyScene) -> PyResult<Self> {
-        let inner =
-            Estimator::new(&scene.inner).map_err(|e| CablevibError::new_err(e.to_string()))?;
+    #[pyo3(signature = (scene, realtime = false))]
+    fn new(scene: &PyScene, realtime: bool) -> PyResult<Self> {
+        let built = if realtime {
+            Estimator::realtime(&scene.inner)
+        } else {
+            Estimator::new(&scene.inner)
+        };
+        let inner = built.map_err(|e| CablevibError::new_err(e.to_string()))?;
         let cold = inner.clone();
         Ok(PyEstimator {
             inner,
@@ -250,33 +259,33 @@ impl PyEstimate {
     /// threshold, Hz (the end-effector mode).
     #[getter]
     fn ee_mode_hz(&self) -> f64 {
-        self.inner.ee_mode_hz
+        self.inner.ee_mode.map_or(f64::NAN, |m| m.frequency_hz)
     }
 
     /// End-effector participation of the end-effector mode (0 … 1).
     #[getter]
     fn ee_mode_participation(&self) -> f64 {
-        self.inner.ee_mode_participation
+        self.inner.ee_mode.map_or(f64::NAN, |m| m.participation)
     }
 
     /// How many cycles old the end-effector mode answer is (0: computed at this pose); None
     /// when no answer is known (`ee_mode_hz` is then NaN).
     #[getter]
     fn ee_mode_age_cycles(&self) -> Option<u32> {
-        (self.inner.ee_mode_age_cycles != u32::MAX).then_some(self.inner.ee_mode_age_cycles)
+        self.inner.ee_mode.map(|m| m.age_cycles)
     }
 
     /// Static end-effector stiffness, translational block, N/m, shape (3, 3).
     #[getter]
     fn stiffness_n_m<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        matrix3(py, &self.inner.stiffness_n_m)
+        matrix3(py, &self.inner.stiffness.translational_n_m())
     }
 
     /// Full static end-effector stiffness, shape (3, 3) for a point mass (N/m) or (6, 6)
     /// for a rigid body (N/m, N/rad, N·m/rad blocks).
     #[getter]
     fn stiffness<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        matrix6(py, &self.inner.stiffness6, self.inner.stiffness_dim)
+        matrix6(py, &self.inner.stiffness.k6, self.inner.stiffness.dim)
     }
 
     /// Evaluations of the dynamic stiffness D(λ) spent in this cycle.
@@ -338,7 +347,7 @@ impl PyEstimate {
             "Estimate(status={:?}, f1_hz={}, ee_mode_hz={}, tensions_n={:?})",
             e.status.as_str(),
             e.f1_hz,
-            e.ee_mode_hz,
+            self.ee_mode_hz(),
             e.tensions()
         )
     }

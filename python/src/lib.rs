@@ -6,7 +6,7 @@
 //! | `Scene.load(path_or_name)` | [`cablevib::scene::Scene::load`] |
 //! | `analyze(scene, ...)` | [`cablevib::study::analysis::analyze`] (what `cablevib analyze --json` prints) |
 //! | `calibrate(scene, measurements, fit=[...])` | [`cablevib::calibration::calibrate`] (what `cablevib calibrate --json` prints) |
-//! | `frf(scene, ...)` | [`cablevib::modal::receptance_over`] (what `cablevib frf --json` prints) |
+//! | `frf(scene, ...)` | [`cablevib::study::frf::frf`] (what `cablevib frf --json` prints) |
 //! | `identify(t, channels, ...)` | [`cablevib::identify::identify`] (what `cablevib identify --json` prints per window, without the model) |
 //! | `Estimator(scene).update(...)` | [`cablevib::estimator::Estimator::update`] |
 //! | `Estimator.sweep(...)`, `sweep(scene, ...)` | [`cablevib::estimator::Estimator::update`] over many poses on worker threads ([`sweep`]) |

@@ -73,8 +73,10 @@ impl Columns {
         self.tensions_n.extend_from_slice(e.tensions());
         self.f1_hz.push(e.f1_hz);
         self.f1_ee_participation.push(e.f1_ee_participation);
-        self.ee_mode_hz.push(e.ee_mode_hz);
-        self.ee_mode_participation.push(e.ee_mode_participation);
+        self.ee_mode_hz
+            .push(e.ee_mode.map_or(f64::NAN, |m| m.frequency_hz));
+        self.ee_mode_participation
+            .push(e.ee_mode.map_or(f64::NAN, |m| m.participation));
         self.stiffness_principal_n_m
             .extend_from_slice(&principal_stiffness_n_m(e));
         self.t_min_n.push(t_min_n);
@@ -99,7 +101,7 @@ impl Columns {
 /// ascending: the eigenvalues of (K + Kᵀ)/2 (K is symmetric up to rounding), as the
 /// studies' `k_min_n_m` (the first). NaN unless the estimate is ok and K finite.
 fn principal_stiffness_n_m(e: &Estimate) -> [f64; 3] {
-    let k = e.stiffness_n_m;
+    let k = e.stiffness.translational_n_m();
     if !e.is_ok() || !k.iter().all(|x| x.is_finite()) {
         return [f64::NAN; 3];
     }

@@ -60,7 +60,8 @@ def test_update_equals_the_cli_bit_for_bit(run_cli, scene, position, t_min):
     s = cablevib.Scene.load(scene)
     rc, j = cli_realtime(run_cli, scene, position, t_min)
     assert rc == 0
-    e = cablevib.Estimator(s).update(
+    # `analyze --realtime` is the service's cold cycle: the real-time preset.
+    e = cablevib.Estimator(s, realtime=True).update(
         s.ee_position_m if position is None else position, t_min=t_min
     )
     assert e.ok and e.status_code == 0
@@ -72,7 +73,9 @@ def test_rigid_scene_equals_the_cli(run_cli):
     s = cablevib.Scene.load(path)
     rc, j = cli_realtime(run_cli, path)
     assert rc == 0
-    e = cablevib.Estimator(s).update(s.ee_position_m, orientation=[1.0, 0.0, 0.0, 0.0])
+    e = cablevib.Estimator(s, realtime=True).update(
+        s.ee_position_m, orientation=[1.0, 0.0, 0.0, 0.0]
+    )
     assert_same_as_cli(e, j)
     k = e.stiffness
     assert k.shape == (6, 6)
@@ -83,7 +86,7 @@ def test_refused_pose_has_the_clis_status_and_message(run_cli):
     s = cablevib.Scene.load("spatial-paper")
     rc, j = cli_realtime(run_cli, "spatial-paper", (9.0, 0.0, 1.2))
     assert rc == 1
-    e = cablevib.Estimator(s).update([9.0, 0.0, 1.2])
+    e = cablevib.Estimator(s, realtime=True).update([9.0, 0.0, 1.2])
     assert e.status == "tension_infeasible" and e.status_code == 1 and not e.ok
     assert math.isnan(e.f1_hz) and np.isnan(e.stiffness_n_m).all()
     assert_same_as_cli(e, j)

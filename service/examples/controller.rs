@@ -64,7 +64,7 @@ struct Args {
     required_hz: f64,
     /// event: block on the wake-controller event (no CPU while waiting); spin: busy-poll
     /// (lowest latency, but needs a CPU of its own besides the service's).
-    #[arg(long, value_enum, default_value_t = WaitMode::Event)]
+    #[arg(long, default_value_t = WaitMode::Event)]
     wait: WaitMode,
     /// Only take the estimates; do not query the margin.
     #[arg(long)]

@@ -37,9 +37,10 @@ use super::ports::{
 use super::rt;
 use super::server::{self, ServerConfig};
 use super::stats::{Percentiles, SampleLog};
-use super::{init_tracing, BenchIpcConfig, BenchVibration, ServiceError, WaitMode};
+use super::{init_tracing, BenchIpcConfig, BenchVibration, ServiceError, ServiceParam, WaitMode};
 use crate::scene::Scene;
 use crate::trajectory::{Trajectory, CIRCLE_PERIOD_S, SAMPLE_PERIOD_S};
+use cablevib::study::ParamError;
 
 const WARM_UP: usize = 1000;
 /// Warm-up with the vibration input: its 2 s window of 1 kHz samples filled, then evaluated.
@@ -79,7 +80,7 @@ pub struct BenchResult {
 pub fn run(scene: &Scene, a: &BenchIpcConfig) -> Result<(), ServiceError> {
     init_tracing("warn");
     if a.samples == 0 {
-        return Err(ServiceError::Usage("--samples must be > 0".into()));
+        return Err(ParamError::invalid(ServiceParam::Samples, 0, "must be > 0").into());
     }
     let modes = match a.wait {
         Some(m) => vec![m],

@@ -22,8 +22,9 @@ use super::ports::{create_node, wait_for_service, EstimateOutput, MarginClient, 
 use super::server::{self, ServerConfig, ServerReport};
 use super::stats::{Percentiles, SampleLog};
 use super::TminSchedule;
-use super::{init_tracing, DemoConfig, ServiceError, WaitMode};
+use super::{init_tracing, DemoConfig, ServiceError, ServiceParam, WaitMode};
 use crate::scene::Scene;
+use cablevib::study::ParamError;
 
 /// Longest demo, s (its logs are preallocated for the whole run).
 const MAX_SECONDS: f64 = 3600.0;
@@ -169,30 +170,32 @@ fn controller(
 }
 
 fn validate(a: &DemoConfig) -> Result<(), ServiceError> {
-    let bad = |m: String| Err(ServiceError::Usage(m));
+    let bad = |p: ServiceParam, v: f64, rule: String| {
+        Err(ParamError::invalid(p, format!("{v:?}"), rule).into())
+    };
     if !(a.seconds.is_finite() && a.seconds > 0.0 && a.seconds <= MAX_SECONDS) {
-        return bad(format!(
-            "--seconds {:?} must be in (0, {MAX_SECONDS}]",
-            a.seconds
-        ));
+        let rule = format!("must be in (0, {MAX_SECONDS}] s");
+        return bad(ServiceParam::Seconds, a.seconds, rule);
     }
     if !(a.rate_hz.is_finite() && a.rate_hz >= 1.0 && a.rate_hz <= MAX_RATE_HZ) {
-        return bad(format!(
-            "--rate-hz {:?} must be in [1, {MAX_RATE_HZ}] Hz",
-            a.rate_hz
-        ));
+        let rule = format!("must be in [1, {MAX_RATE_HZ}] Hz");
+        return bad(ServiceParam::RateHz, a.rate_hz, rule);
     }
     if a.hold_f1_hz.is_some() && a.t_min_schedule.is_some() {
-        return bad("--hold-f1 and --t-min-schedule both set T_min: give one".into());
+        let both = vec![ServiceParam::HoldF1Hz, ServiceParam::TMinSchedule];
+        return Err(ParamError::OneOf(both).into());
     }
     if a.hold_csv.is_some() && a.hold_f1_hz.is_none() {
-        return bad("--hold-csv needs --hold-f1".into());
+        return Err(ParamError::NotApplicable {
+            param: ServiceParam::HoldCsv,
+            reason: "records the hold of f1, which is not asked for".into(),
+            instead: Some(ServiceParam::HoldF1Hz),
+        }
+        .into());
     }
     if !(a.required_hz.is_finite() && a.required_hz > 0.0) {
-        return bad(format!(
-            "--required-hz {:?} must be finite and > 0",
-            a.required_hz
-        ));
+        let rule = "must be finite and > 0 Hz".into();
+        return bad(ServiceParam::RequiredHz, a.required_hz, rule);
     }
     Ok(())
 }
@@ -299,7 +302,10 @@ pub fn run(scene: &Scene, a: &DemoConfig) -> Result<(), ServiceError> {
                 }
                 r
             })
-            .map_err(|e| ServiceError::Usage(format!("cannot start the controller thread: {e}")))?
+            .map_err(|e| ServiceError::Thread {
+                what: "controller",
+                reason: e.to_string(),
+            })?
     };
 
     let mut shape = a
@@ -383,11 +389,7 @@ fn replay(
     wait_for_service(
         || input.service_connected() && controller_ready.load(Ordering::Acquire),
         stop,
-        || {
-            ServiceError::Usage(
-                "the service or the controller stopped before the demo began".into(),
-            )
-        },
+        || ServiceError::DemoNotStarted,
     )?;
     let start = Instant::now();
     let mut step = None;

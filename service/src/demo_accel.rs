@@ -54,13 +54,14 @@ const MODES_UP_TO_EE: f64 = 1.25;
 /// The number of modes of the first pose of `path` at or below [`MODES_UP_TO_EE`] × its
 /// end-effector mode (the first mode alone without one), at most [`MAX_RESPONSE_MODES`].
 fn modes_to_simulate(scene: &Scene, first: Vector3<f64>) -> Result<usize, ServiceError> {
-    let bad = |e: String| ServiceError::Usage(format!("accelerometer: {e}"));
+    let bad = ServiceError::Accelerometer;
     let mut est = Estimator::new(scene).map_err(|e| bad(e.to_string()))?;
     let e = est.update(&Pose::in_scene(scene, first), Tmin::Scene);
     if e.status != Status::Ok {
         return Err(bad(format!("the first pose: {}", e.status.as_str())));
     }
-    let top = 2.0 * core::f64::consts::PI * MODES_UP_TO_EE * e.ee_mode_hz;
+    let ee_mode_hz = e.ee_mode.map_or(f64::NAN, |m| m.frequency_hz);
+    let top = 2.0 * core::f64::consts::PI * MODES_UP_TO_EE * ee_mode_hz;
     if !top.is_finite() {
         return Ok(1);
     }
@@ -87,7 +88,7 @@ pub fn record(
     if let Some(z) = zeta {
         scene.damping = Damping::ModalRatio { zeta: z };
     }
-    let bad = |e: crate::study::StudyError| ServiceError::Usage(format!("accelerometer: {e}"));
+    let bad = |e: crate::study::StudyError| ServiceError::Accelerometer(e.to_string());
     let path =
         SampledPath::from_trajectory(trajectory, seconds, SAMPLE_PERIOD_S, false).map_err(bad)?;
     let cfg = SimulateConfig {
@@ -156,7 +157,10 @@ pub fn spawn(
             }
             Ok(sent)
         })
-        .map_err(|e| ServiceError::Usage(format!("cannot start the accelerometer thread: {e}")))
+        .map_err(|e| ServiceError::Thread {
+            what: "accelerometer",
+            reason: e.to_string(),
+        })
 }
 
 #[cfg(test)]
@@ -169,7 +173,7 @@ mod tests {
         let p = tr.position_at(t_s).expect("on the circle");
         let e = est.update(&Pose::in_scene(scene, p), Tmin::Scene);
         assert_eq!(e.status, Status::Ok);
-        (e.f1_hz, e.ee_mode_hz)
+        (e.f1_hz, e.ee_mode.map_or(f64::NAN, |m| m.frequency_hz))
     }
 
     /// The model's frequency (`which` 0: f1, 1: end-effector mode) that a window centred at

@@ -45,7 +45,7 @@ pub(crate) fn params(scene: &Scene, hold_hz: f64) -> Result<HoldParams, ServiceE
     let ceiling = (0..scene.n_cables())
         .map(|i| scene.cable_t_max_n(i))
         .fold(f64::INFINITY, f64::min);
-    HoldParams::new(hold_hz, scene.t_min_n, ceiling).map_err(|e| ServiceError::Usage(e.to_string()))
+    Ok(HoldParams::new(hold_hz, scene.t_min_n, ceiling)?)
 }
 
 /// One ok estimate the hold saw.
@@ -275,7 +275,10 @@ pub(crate) fn summary(
             )?;
             if let Some(path) = &a.hold_csv {
                 write_csv(path, a, log, &after, &at, t_fixed).map_err(|e| {
-                    ServiceError::Usage(format!("--hold-csv {}: {e}", path.display()))
+                    ServiceError::HoldRecord {
+                        path: path.clone(),
+                        reason: e.to_string(),
+                    }
                 })?;
                 outln!("  hold: per-estimate record written to {}", path.display())?;
             }
@@ -292,10 +295,10 @@ pub(crate) fn summary(
 /// older file at that path as this run's record); without the option, nothing to report.
 fn no_record(a: &DemoConfig, why: &str) -> Result<(), ServiceError> {
     match &a.hold_csv {
-        Some(path) => Err(ServiceError::Usage(format!(
-            "--hold-csv {}: no record written: {why}",
-            path.display()
-        ))),
+        Some(path) => Err(ServiceError::HoldRecord {
+            path: path.clone(),
+            reason: format!("no record written: {why}"),
+        }),
         None => Ok(()),
     }
 }

@@ -32,8 +32,13 @@ pub struct DemoShape {
 impl DemoShape {
     /// A shaper of `kind` for poses at `rate_hz` on `scene` (its damping).
     pub fn new(kind: ShaperKind, rate_hz: f64, scene: &Scene) -> Result<Self, ServiceError> {
-        let shaper = OnlineShaper::new(kind, 1.0 / rate_hz, DEFAULT_MIN_FREQUENCY_HZ)
-            .map_err(|e| ServiceError::Usage(format!("--shape {}: {e}", kind.as_str())))?;
+        let shaper =
+            OnlineShaper::new(kind, 1.0 / rate_hz, DEFAULT_MIN_FREQUENCY_HZ).map_err(|reason| {
+                ServiceError::Shape {
+                    kind: kind.as_str(),
+                    reason,
+                }
+            })?;
         Ok(DemoShape {
             shaper,
             damping: scene.damping,

@@ -39,6 +39,7 @@ pub mod demo;
 pub mod demo_accel;
 mod demo_hold;
 pub mod demo_shape;
+mod error;
 pub mod hold;
 pub mod ports;
 pub mod rt;
@@ -49,23 +50,20 @@ pub use cablevib::stats;
 
 use core::sync::atomic::AtomicBool;
 
-use clap::ValueEnum;
-
 // The core's modules, under the paths the service's files name (`crate::scene::...`).
 use cablevib::{
     alloc_count, estimator, kinematics, measured, modal, output_file, rng, scene, study, trajectory,
 };
 
-use crate::estimator::BuildError;
-use crate::scene::{Scene, SceneError};
-use crate::trajectory::TrajectoryError;
+use crate::scene::Scene;
 
+pub use error::{ServiceError, ServiceParam};
 pub use schedule::TminSchedule;
 
 pub use server::{AllocCounter, ServerConfig, ServerReport, StopReason};
 
 /// How a loop waits for its input.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WaitMode {
     /// Busy-poll: lowest latency, one CPU core at 100 %.
     Spin,
@@ -84,75 +82,22 @@ impl WaitMode {
     }
 }
 
+impl core::str::FromStr for WaitMode {
+    type Err = String;
+    /// `spin` or `event`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "spin" => Ok(WaitMode::Spin),
+            "event" => Ok(WaitMode::Event),
+            _ => Err(format!("wait mode `{s}`: expected spin or event")),
+        }
+    }
+}
+
 impl core::fmt::Display for WaitMode {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str(self.as_str())
     }
-}
-
-/// Errors of the service commands.
-#[derive(Debug, thiserror::Error)]
-pub enum ServiceError {
-    /// Standard output could not be written.
-    #[error(transparent)]
-    Stdout(#[from] crate::output_file::StdoutError),
-    /// The scene could not be loaded.
-    #[error(transparent)]
-    Scene(#[from] SceneError),
-    /// The trajectory could not be made or read.
-    #[error(transparent)]
-    Trajectory(#[from] TrajectoryError),
-    /// The estimator could not be built for the scene.
-    #[error(transparent)]
-    Build(#[from] BuildError),
-    /// A bad option or input file.
-    #[error("{0}")]
-    Usage(String),
-    /// A peer created a service with another message layout (another schema version).
-    #[error("incompatible peer: {0}")]
-    IncompatiblePeer(String),
-    /// iceoryx2 refused an operation.
-    #[error("iceoryx2: {context}: {reason}")]
-    Ipc {
-        /// What was being done.
-        context: String,
-        /// iceoryx2's error.
-        reason: String,
-    },
-    /// An existing service was created (by another program) with other limits than cablevib
-    /// creates it with; using it could admit impostors or drop messages.
-    #[error(
-        "service \"{service}\" exists with {setting} = {found}, expected {expected}; another \
-         program created it: stop that program, or use another --instance"
-    )]
-    ServiceSettings {
-        /// The iceoryx2 service name.
-        service: String,
-        /// The static setting that differs.
-        setting: &'static str,
-        /// Its value in the existing service.
-        found: String,
-        /// What cablevib needs.
-        expected: String,
-    },
-    /// Another live cablevib service already serves this instance.
-    #[error(
-        "another cablevib service already serves \"{service}\"; stop it, or give this one \
-         another --instance"
-    )]
-    AlreadyServing {
-        /// The margin service both would serve.
-        service: String,
-    },
-    /// SIGINT/SIGTERM arrived before the service was up.
-    #[error("interrupted by a signal")]
-    Interrupted,
-    /// A thread of `demo` or `bench-ipc` panicked.
-    #[error("the {0} thread panicked")]
-    ThreadPanicked(&'static str),
-    /// The other side did not answer in time.
-    #[error("timed out: {0}")]
-    Timeout(String),
 }
 
 /// What `cablevib demo` runs (the scene is passed beside it).
@@ -207,7 +152,7 @@ pub struct BenchIpcConfig {
 }
 
 /// `bench-ipc --vibration`: whether the vibration input is fed while measuring.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum BenchVibration {
     /// No vibration sender (the latency without the input).
     #[default]

@@ -15,26 +15,28 @@ impl TminSchedule {
     pub fn parse(text: &str) -> Result<TminSchedule, ServiceError> {
         let mut steps: Vec<(f64, f64)> = Vec::new();
         for item in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-            let (t, v) = item.split_once(':').ok_or_else(|| {
-                ServiceError::Usage(format!(
-                    "T_min schedule item `{item}`: expected SECONDS:NEWTONS, e.g. 2:80"
-                ))
+            let (t, v) = item.split_once(':').ok_or_else(|| ServiceError::Schedule {
+                item: item.to_string(),
+                reason: "expected SECONDS:NEWTONS, e.g. 2:80".into(),
             })?;
             let parse = |x: &str, what: &str| {
-                x.trim().parse::<f64>().map_err(|e| {
-                    ServiceError::Usage(format!("T_min schedule item `{item}`: {what}: {e}"))
+                x.trim().parse::<f64>().map_err(|e| ServiceError::Schedule {
+                    item: item.to_string(),
+                    reason: format!("{what}: {e}"),
                 })
             };
             let (t, v) = (parse(t, "time (s)")?, parse(v, "T_min (N)")?);
             if !(t.is_finite() && t >= 0.0) {
-                return Err(ServiceError::Usage(format!(
-                    "T_min schedule item `{item}`: time must be finite and ≥ 0 s"
-                )));
+                return Err(ServiceError::Schedule {
+                    item: item.to_string(),
+                    reason: "time must be finite and ≥ 0 s".into(),
+                });
             }
             if steps.last().is_some_and(|&(last, _)| t <= last) {
-                return Err(ServiceError::Usage(format!(
-                    "T_min schedule item `{item}`: times must increase"
-                )));
+                return Err(ServiceError::Schedule {
+                    item: item.to_string(),
+                    reason: "times must increase".into(),
+                });
             }
             steps.push((t, v));
         }

@@ -20,7 +20,7 @@
 //! [`EstimatorParams::realtime`]: [`crate::modal::CYCLE_EVALUATIONS`] = 32) a cycle never evaluates
 //! D(λ) more often than that: f1 is solved exactly first, the end-effector mode with what is
 //! left, and the end-effector work that does not fit is continued in the next cycles; the
-//! estimate then carries the last answer and its age ([`Estimate::ee_mode_age_cycles`]).
+//! estimate then carries the last answer and its age ([`EeMode::age_cycles`]).
 //! The default ([`EstimatorParams::default`]) is unlimited, for offline analyses.
 //!
 //! [`Estimator`] owns every buffer of the cycle, sized in [`Estimator::new`]; the cycle
@@ -61,7 +61,7 @@ mod t_min;
 
 pub use auto::{resolve_auto, AutoChoice};
 pub use error::{BuildError, EstimatorError, ReferenceError, RejectedInput, TminQueryError};
-pub use estimate::{Estimate, Status};
+pub use estimate::{EeMode, Estimate, Status, Stiffness};
 pub use forward::{EndEffector, BEHIND_EXIT_COMPLIANCE_FLOOR};
 pub use inverse::{TminAnswer, MAX_EVALUATIONS as TMIN_QUERY_MAX_EVALUATIONS};
 pub use modes::{
@@ -82,7 +82,7 @@ use crate::modal::{lambda_to_hz, ModalParams, ModalSolver};
 use crate::scene::{is_valid_t_min, ElementKind, Scene, MAX_CABLES};
 use crate::tension::TensionInfo;
 use forward::{Forward, ForwardParams};
-use nalgebra::{Matrix3, Matrix6, Vector3};
+use nalgebra::{Matrix6, Vector3};
 
 /// The real-time estimator of one scene.
 #[derive(Debug, Clone)]
@@ -270,6 +270,23 @@ impl Estimator {
     /// T_max: not finite, not > 0, subnormal, above T_max), or a per-cable slice whose
     /// length is not the scene's cable count, gives the status `TminOutOfRange` and no
     /// numbers.
+    ///
+    /// ```
+    /// use cablevib::prelude::*;
+    ///
+    /// let scene = Scene::load("spatial-paper")?;
+    /// let mut est = Estimator::new(&scene)?; // allocates here, never in `update`
+    /// let e = *est.update(&Pose::in_scene(&scene, Vector3::new(0.1, 0.0, 1.25)), Tmin::Scene);
+    /// assert_eq!(e.status, Status::Ok);
+    /// assert!(e.tensions().iter().all(|&t| t >= scene.t_min_n - 1e-9));
+    /// if let Some(m) = e.ee_mode {
+    ///     assert!(m.frequency_hz >= e.f1_hz && m.participation >= scene.model.ee_participation_min);
+    /// }
+    /// // A pose outside the frame is a status, never a panic.
+    /// let bad = est.update(&Pose::in_scene(&scene, Vector3::new(50.0, 0.0, 1.25)), Tmin::Scene);
+    /// assert!(!bad.is_ok() && bad.f1_hz.is_nan() && bad.ee_mode.is_none());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn update(&mut self, pose: &Pose, t_min: Tmin<'_>) -> &Estimate {
         t_min.fill(&self.scene, &mut self.t_min_n);
         self.update_loaded(pose)
@@ -286,7 +303,7 @@ impl Estimator {
         let n = self.scene.n_cables();
         let mut e = Estimate::empty(n);
         // The stiffness's dimension is the scene's even when the pose has no answer.
-        e.stiffness_dim = if self.scene.rigid { 6 } else { 3 };
+        e.stiffness = Stiffness::unknown(self.ee_dim());
         match self.run(pose, &mut e) {
             Ok(()) => {
                 e.status = Status::Ok;
@@ -298,9 +315,8 @@ impl Estimator {
                 e.error = Some(err);
                 e.f1_hz = f64::NAN;
                 e.f1_ee_participation = f64::NAN;
-                e.ee_mode_hz = f64::NAN;
-                e.stiffness_n_m = Matrix3::repeat(f64::NAN);
-                e.stiffness6 = Matrix6::repeat(f64::NAN);
+                e.ee_mode = None;
+                e.stiffness = Stiffness::unknown(self.ee_dim());
                 // An infeasible solve has its closest tensions, a mechanism valid ones.
                 if !matches!(e.status, Status::TensionInfeasible | Status::Mechanism) {
                     e.tensions_n = [f64::NAN; MAX_CABLES];
@@ -411,13 +427,13 @@ impl Estimator {
         self.last_lambda1 = r1.lambda;
         self.write_stiffness(e);
         e.eigen_evaluations = self.cycle.evaluations_since_load();
-        check_mechanism(&self.scene, pose, &e.stiffness6, r1.lambda)?;
+        check_mechanism(&self.scene, pose, &e.stiffness.k6, r1.lambda)?;
         let (m6, _) = self.cycle.ee_mass();
         check_answer(
             r1.lambda,
             r1.residual,
             r1.ee_participation,
-            &e.stiffness6,
+            &e.stiffness.k6,
             &m6,
         )?;
         if self.params.ee_mode {
@@ -429,7 +445,7 @@ impl Estimator {
 
     /// The end-effector mode within what is left of the cycle's budget, into `e`: this
     /// cycle's answer (age 0), or while the work goes on over the cycles the last answer
-    /// with its age; unknown (NaN, age `u32::MAX`) when no mode reaching the participation
+    /// with its age; None when no mode reaching the participation
     /// threshold is known — a mode below the threshold is never reported. Neither case
     /// invalidates f1 and the tensions.
     fn ee_mode(&mut self, r1: &crate::modal::Root, warm: bool, e: &mut Estimate) {
@@ -452,19 +468,28 @@ impl Estimator {
             // None reaches the threshold within the scan's bounds, or the scan failed.
             Ok(Some(_)) | Err(_) => self.last_ee = None,
         }
-        if let Some((hz, p, age)) = self.last_ee {
-            e.ee_mode_hz = hz;
-            e.ee_mode_participation = p;
-            e.ee_mode_age_cycles = age;
+        e.ee_mode = self.last_ee.map(|(hz, p, age)| EeMode {
+            frequency_hz: hz,
+            participation: p,
+            age_cycles: age,
+        });
+    }
+
+    /// The end-effector's degrees of freedom: 6 for a rigid body, 3 for a point mass.
+    fn ee_dim(&self) -> usize {
+        if self.scene.rigid {
+            6
+        } else {
+            3
         }
     }
 
     /// The static end-effector stiffness of the loaded models into `e`.
     fn write_stiffness(&mut self, e: &mut Estimate) {
-        let k6 = self.cycle.static_stiffness(&self.scene);
-        e.stiffness6 = k6;
-        e.stiffness_n_m = k6.fixed_view::<3, 3>(0, 0).into_owned();
-        e.stiffness_dim = if self.scene.rigid { 6 } else { 3 };
+        e.stiffness = Stiffness {
+            k6: self.cycle.static_stiffness(&self.scene),
+            dim: self.ee_dim(),
+        };
     }
 }
 

@@ -34,6 +34,23 @@ impl Estimator {
     /// any cycle, `Modal(NotLoaded)`. A mode whose λ is not finite and > 0 or whose
     /// participation is not finite is [`EstimatorError::Unverified`] (the cycle's own rule,
     /// [`super::check_answer`]), never a number.
+    ///
+    /// ```
+    /// use cablevib::prelude::*;
+    ///
+    /// let scene = Scene::load("spatial-paper")?;
+    /// let mut est = Estimator::new(&scene)?;
+    /// let f1 = est.update(&Pose::in_scene(&scene, scene.ee_position_m), Tmin::Scene).f1_hz;
+    /// let mut modes = [Mode::default(); 10];
+    /// let n = est.modes(10, &mut modes)?;
+    /// assert_eq!(n, 10);
+    /// // The first of them is the cycle's f1; they ascend, by clusters: at this symmetric
+    /// // pose 3 modes share f1 and the next 5 another frequency (the paper's modes 4-8).
+    /// assert!((modes[0].frequency_hz - f1).abs() <= 1e-9 * f1);
+    /// assert!(modes.windows(2).all(|w| w[0].frequency_hz <= w[1].frequency_hz));
+    /// assert_eq!((modes[0].multiplicity, modes[3].multiplicity), (3, 5));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn modes(&mut self, k: usize, out: &mut [Mode]) -> Result<usize, EstimatorError> {
         match self.estimate.status {
             Status::Ok => {
@@ -206,7 +223,7 @@ impl Estimator {
             ));
         }
         let (ee_mass, dim) = self.cycle.ee_mass();
-        let s = self.estimate.stiffness6;
+        let s = self.estimate.stiffness.k6;
         let block = s.view((0, 0), (dim, dim)).into_owned();
         let mut flexibility = Matrix6::repeat(f64::NAN);
         if let Some(inv) = block.try_inverse() {

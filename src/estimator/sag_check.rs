@@ -29,7 +29,7 @@ impl std::fmt::Display for SagWarning {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "warning: sag is off, but sagging cables change f1 by {:.1e} here ({:.4} → {:.4} Hz, over the tolerance {:.0e}; largest Irvine λ² = {:.3e}, cable {}): set [effects] sag = true (or false, to keep the chord model and this line quiet) or pass --sag true|false",
+            "warning: sag is off, but sagging cables change f1 by {:.1e} here ({:.4} → {:.4} Hz, over the tolerance {:.0e}; largest Irvine λ² = {:.3e}, cable {}): set [effects] sag = true (or false, to keep the chord model and this line quiet)",
             self.f1_change,
             self.f1_chord_hz,
             self.f1_sag_hz,

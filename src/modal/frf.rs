@@ -79,12 +79,8 @@ pub enum FrfError {
     #[error("{0}")]
     Modal(#[from] ModalError),
     /// The sagged continuous (Magnus) model has no complex form.
-    #[error("the sagged continuous model has no damped (complex) form: use --element fem for the frequency response with sag")]
+    #[error("the sagged continuous model has no damped (complex) form: the frequency response with sag takes the fem element")]
     SagContinuous,
-    /// Modal damping with sag has no complex-λ form: it goes by the modal basis of the
-    /// sagged shapes ([`ModalBasis::from_modes`]); the Python binding's refusal.
-    #[error("modal damping with sag goes by modal superposition (ModalBasis::from_modes), not the complex-λ receptance")]
-    SagModalDamping,
 }
 
 /// The frequencies of a response: `points` values from `from_hz` to `to_hz` (both

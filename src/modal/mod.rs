@@ -98,8 +98,8 @@ pub use ee_tracker::RescanCounts;
 pub use engine::{Condensed, DynEval, EigD, PoleCursor, SumRules};
 pub use error::ModalError;
 pub use frf::{
-    complex_shift, dense_receptance, frequency_grid, FrfError, ModalBasis, MAX_FRF_MODES,
-    MAX_FRF_POINTS,
+    complex_shift, dense_receptance, frequency_grid, FrfError, ModalBasis, MAX_FRF_HZ,
+    MAX_FRF_MODES, MAX_FRF_POINTS,
 };
 pub use mechanism::{free_direction, may_be_mechanism, MECHANISM_REL};
 pub use shapes::{

@@ -51,6 +51,15 @@ impl Scene {
     /// scenes/suspended_8.toml (the sagging-cable robots). Anything else is
     /// [`SceneError::NotFound`]; a file that exists but cannot be read or validated gives
     /// that error.
+    ///
+    /// ```
+    /// use cablevib::scene::Scene;
+    ///
+    /// let s = Scene::load("spatial-paper")?; // or a path to a scene .toml
+    /// assert_eq!(s.n_cables(), 8);
+    /// assert!(Scene::load("no-such-robot").is_err());
+    /// # Ok::<(), cablevib::scene::SceneError>(())
+    /// ```
     pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
         let (text, origin) = Self::source_text(name_or_path)?;
         Scene::from_toml_str(&text, &origin)

@@ -3,8 +3,8 @@
 //! against a Richardson-extrapolated catenary reference, with per-cycle timings along the
 //! circle; and the dense convergence of mode 3 against N (paper Figs. 5 and 10).
 
-use super::points::valid;
-use super::{build, estimator_params, StudyError};
+use super::points::{ee_mode_hz, valid};
+use super::{build, estimator_params, Param, ParamError, StudyError};
 use crate::estimator::{reference_analysis, Estimate, Status, Tmin};
 use crate::kinematics::Pose;
 use crate::modal::lambda_to_hz;
@@ -40,12 +40,11 @@ impl AccuracyConfig {
         period_s: f64,
     ) -> Result<AccuracyConfig, StudyError> {
         if max_elements == 0 || max_elements > MAX_ELEMENTS {
-            return Err(StudyError::Usage(
-                "--max-elements must be in 1..=2000".into(),
-            ));
+            let rule = format!("must be in 1..={MAX_ELEMENTS}");
+            return Err(ParamError::invalid(Param::MaxElements, max_elements, rule).into());
         }
         if !(period_s.is_finite() && period_s > 0.0) {
-            return Err(StudyError::Usage("--period-s must be > 0".into()));
+            return Err(ParamError::invalid(Param::PeriodS, period_s, "must be > 0").into());
         }
         Ok(AccuracyConfig {
             element_counts: element_counts(max_elements, all_n),
@@ -245,7 +244,7 @@ fn row(s: &Scene, b: Option<Best>) -> Result<AccuracyRow, StudyError> {
         status: e.status,
         reason: e.error.map(|x| x.to_string()).unwrap_or_default(),
         f1_hz: valid(&e, e.f1_hz),
-        ee_mode_hz: valid(&e, e.ee_mode_hz),
+        ee_mode_hz: ee_mode_hz(&e),
         err_ref: f64::NAN,
         err_continuous: f64::NAN,
         ee_err_ref: f64::NAN,

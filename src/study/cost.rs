@@ -22,8 +22,7 @@ use crate::estimator::{
     check_shapes_memory, shape_nodes, shapes_memory_bytes, PoseModel, SHAPE_BYTES_PER_NODE,
 };
 use crate::modal::{
-    self, hz_to_lambda, FrfError, ModalParams, ModalSolver, Mode, ModeShapes, ShapeParams,
-    MAX_FRF_MODES,
+    self, hz_to_lambda, ModalParams, ModalSolver, Mode, ModeShapes, ShapeParams, MAX_FRF_MODES,
 };
 use crate::scene::{Damping, ElementKind, Scene};
 use nalgebra::Matrix6;
@@ -296,7 +295,7 @@ pub fn receptance(
     cutoff_hz: f64,
     label: Option<&str>,
 ) -> Result<Vec<Matrix6<Complex64>>, StudyError> {
-    let frf = |e: FrfError| StudyError::Build(e.to_string());
+    let frf = StudyError::Frf;
     let (models, arms) = (&pose.models, &pose.geometry.arm_m);
     if let Damping::ModalRatio { .. } = damping {
         let k = (solver.count_below(hz_to_lambda(cutoff_hz)) as usize).clamp(1, MAX_FRF_MODES);

@@ -8,7 +8,7 @@
 //! and panel k has q_k = R(a, θ_k) · q₀, q₀ turned by θ_k about the world axis a.
 
 use super::points::{evaluate_points_with, status_histogram, PointResult, Workers};
-use super::{estimator_params, StudyError};
+use super::{estimator_params, Param, ParamError, StudyError};
 use crate::estimator::Tmin;
 use crate::kinematics::{rotated_about, Pose};
 use crate::scene::Scene;
@@ -162,20 +162,21 @@ impl Shard {
 /// The rounding noise of lo + i·step (within 1e-12 of max(|lo|, i·step)) is snapped to the
 /// 1 nm lattice or to 0; nothing else is rounded: lo itself, and every value off the
 /// lattice by more (−1e-12 m, a grid of 0.1 nm steps), is kept to full precision.
-pub fn grid_axis(iv: Interval, step: f64) -> Result<Vec<f64>, StudyError> {
+pub fn grid_axis(iv: Interval, step: f64, param: Param) -> Result<Vec<f64>, StudyError> {
     if !(step.is_finite() && step > 0.0) {
-        return Err(StudyError::Usage(format!("--step {step:?}: must be > 0")));
+        return Err(ParamError::invalid(param, format!("{step:?}"), "must be > 0").into());
     }
     // Counted in f64 first: a subnormal step gives an infinite count, which `as usize`
     // saturates and `+ 1` wrapped to an empty grid.
     let steps = ((iv.hi - iv.lo) / step + 1e-9).floor();
     if !(steps < MAX_AXIS_VALUES as f64) {
-        return Err(StudyError::Usage(format!(
-            "{:?} grid values on [{:?}, {:?}] at step {step:?}: too many (at most {MAX_AXIS_VALUES})",
+        let rule = format!(
+            "{:?} grid values on [{:?}, {:?}]: too many (at most {MAX_AXIS_VALUES})",
             steps + 1.0,
             iv.lo,
             iv.hi
-        )));
+        );
+        return Err(ParamError::invalid(param, format!("{step:?}"), rule).into());
     }
     let n = steps as usize + 1;
     Ok((0..n)
@@ -262,7 +263,7 @@ pub fn pick(p: &PointResult, v: MapValue) -> Option<f64> {
     let e = &p.estimate;
     let f = match v {
         MapValue::F1 => e.f1_hz,
-        MapValue::EeMode => e.ee_mode_hz,
+        MapValue::EeMode => super::points::ee_mode_hz(e),
         MapValue::Mode(k) => p.mode_hz(k),
         MapValue::StiffnessMin => p.stiffness_min_n_m,
     };
@@ -292,7 +293,7 @@ fn grid(s: &Scene, cfg: &MapConfig) -> Result<[Vec<f64>; 3], StudyError> {
                 }
             }
         };
-        axes[k] = grid_axis(iv, cfg.step_m)?;
+        axes[k] = grid_axis(iv, cfg.step_m, Param::StepM)?;
     }
     Ok(axes)
 }
@@ -322,35 +323,29 @@ fn orientations(
         });
     };
     if !s.rigid {
-        return Err(StudyError::Usage(format!(
-            "--tilt-deg: scene `{}` has a point-mass end-effector, where orientation has no effect",
+        let reason = format!(
+            "scene `{}` has a point-mass end-effector, where orientation has no effect",
             s.name
-        )));
+        );
+        return Err(ParamError::not_applicable(Param::TiltDeg, reason).into());
     }
     let Some(axis) = crate::scene::unit_direction(&t.axis) else {
-        return Err(StudyError::Usage(format!(
-            "--tilt-axis {:?}: must be finite and non-zero",
-            t.axis.as_slice()
-        )));
+        let value = format!("{:?}", t.axis.as_slice());
+        let rule = "must be finite and non-zero";
+        return Err(ParamError::invalid(Param::TiltAxis, value, rule).into());
     };
     if slices != 1 {
-        return Err(StudyError::Usage(
-            "--tilt-deg: the panels are the tilt angles, so the slice axis takes a single value"
-                .into(),
-        ));
+        let reason = "the panels are the tilt angles, so the slice axis takes a single value";
+        return Err(ParamError::not_applicable(Param::TiltDeg, reason).into());
     }
     if !(t.step_deg.is_finite() && t.step_deg > 0.0) {
-        return Err(StudyError::Usage(format!(
-            "--tilt-step-deg {:?}: must be > 0",
-            t.step_deg
-        )));
+        let value = format!("{:?}", t.step_deg);
+        return Err(ParamError::invalid(Param::TiltStepDeg, value, "must be > 0").into());
     }
-    let angles = grid_axis(t.range_deg, t.step_deg)?;
+    let angles = grid_axis(t.range_deg, t.step_deg, Param::TiltStepDeg)?;
     if angles.len() > MAX_TILTS {
-        return Err(StudyError::Usage(format!(
-            "{} tilt angles: at most {MAX_TILTS}",
-            angles.len()
-        )));
+        let rule = format!("{} tilt angles: at most {MAX_TILTS}", angles.len());
+        return Err(ParamError::invalid(Param::TiltStepDeg, t.step_deg, rule).into());
     }
     let quaternions = angles
         .iter()
@@ -374,7 +369,9 @@ pub fn compute(s: &Scene, cfg: &MapConfig) -> Result<MapResult, StudyError> {
     } = orientations(s, cfg, axes[sl].len())?;
     let n = axes[h].len() * axes[v].len() * axes[sl].len() * qs.len();
     if n > MAX_GRID_POINTS {
-        return Err(StudyError::Usage(format!("{n} grid points: too many")));
+        let rule = format!("{n} grid points: too many (at most {MAX_GRID_POINTS})");
+        let step = format!("{:?}", cfg.step_m);
+        return Err(ParamError::invalid(Param::StepM, step, rule).into());
     }
     let mut points = Vec::with_capacity(n);
     for q in &qs {
@@ -425,14 +422,14 @@ mod tests {
 
     #[test]
     fn grid_axes() {
-        let g = grid_axis(Interval { lo: -1.0, hi: 1.0 }, 0.1).unwrap();
+        let g = grid_axis(Interval { lo: -1.0, hi: 1.0 }, 0.1, Param::StepM).unwrap();
         assert_eq!(g.len(), 21);
         assert_eq!(g[20], 1.0);
         assert_eq!(g[10], 0.0);
-        let g = grid_axis(Interval { lo: 0.25, hi: 1.25 }, 0.1).unwrap();
+        let g = grid_axis(Interval { lo: 0.25, hi: 1.25 }, 0.1, Param::StepM).unwrap();
         assert_eq!(g.len(), 11);
         assert_eq!(g[7], 0.95);
-        let g = grid_axis(Interval { lo: -0.3, hi: 0.3 }, 0.1).unwrap();
+        let g = grid_axis(Interval { lo: -0.3, hi: 0.3 }, 0.1, Param::StepM).unwrap();
         assert_eq!(g, [-0.3, -0.2, -0.1, 0.0, 0.1, 0.2, 0.3]);
         // A value the user gave is not noise: kept to full precision (it was 0 and 0, 0).
         let g = grid_axis(
@@ -441,10 +438,11 @@ mod tests {
                 hi: -1e-12,
             },
             0.1,
+            Param::StepM,
         )
         .unwrap();
         assert_eq!(g, [-1e-12]);
-        let g = grid_axis(Interval { lo: 0.0, hi: 3e-10 }, 1e-10).unwrap();
+        let g = grid_axis(Interval { lo: 0.0, hi: 3e-10 }, 1e-10, Param::StepM).unwrap();
         assert_eq!(g, [0.0, 1e-10, 2e-10, 3e-10]);
     }
 

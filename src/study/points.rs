@@ -9,7 +9,7 @@
 //! real): the stiffness of the softest direction.
 
 use super::progress::Progress;
-use super::{build, StudyError};
+use super::{build, Param, ParamError, StudyError};
 use crate::estimator::{Estimate, Estimator, EstimatorParams, Tmin};
 use crate::kinematics::Pose;
 use crate::modal::Mode;
@@ -66,16 +66,21 @@ pub fn check_modes(k: usize) -> Result<usize, StudyError> {
     if (1..=MAX_MODES).contains(&k) {
         Ok(k)
     } else {
-        Err(StudyError::Usage(format!(
-            "--modes {k}: must be within 1..={MAX_MODES}"
-        )))
+        let rule = format!("must be within 1..={MAX_MODES}");
+        Err(ParamError::invalid(Param::Modes, k, rule).into())
     }
 }
 
-/// The smallest eigenvalue of the symmetric stiffness `e.stiffness_n_m`, N/m (NaN unless
+/// The end-effector mode's frequency of `e` as a table's cell, Hz: NaN when there is none
+/// (or the estimate is not ok).
+pub fn ee_mode_hz(e: &Estimate) -> f64 {
+    valid(e, e.ee_mode.map_or(f64::NAN, |m| m.frequency_hz))
+}
+
+/// The smallest eigenvalue of the symmetric translational stiffness of `e`, N/m (NaN unless
 /// the estimate is ok and the matrix finite).
 pub fn stiffness_min_n_m(e: &Estimate) -> f64 {
-    let k = e.stiffness_n_m;
+    let k = e.stiffness.translational_n_m();
     if !e.is_ok() || !k.iter().all(|x| x.is_finite()) {
         return f64::NAN;
     }

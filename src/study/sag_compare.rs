@@ -25,7 +25,7 @@
 use super::map::Interval;
 use super::points::{stiffness_min_n_m, MAX_THREADS};
 use super::progress::Progress;
-use super::{build, StudyError};
+use super::{build, Param, ParamError, StudyError};
 use crate::estimator::{Estimator, EstimatorParams, Status, Tmin};
 use crate::input_file::message_number;
 use crate::kinematics::Pose;
@@ -133,10 +133,15 @@ fn span(s: &Scene, cfg: &SagCompareConfig) -> Result<Interval, StudyError> {
     let (lo, hi) = s.frame_bounds_m();
     let (lo, hi) = (lo[cfg.axis], hi[cfg.axis]);
     if hi - lo <= 0.0 {
-        return Err(StudyError::Usage(format!(
-            "the anchors have no extent along axis {}: give --span-m A,B",
-            ["x", "y", "z"][cfg.axis]
-        )));
+        return Err(ParamError::NotApplicable {
+            param: Param::Axis,
+            reason: format!(
+                "the anchors have no extent along {}",
+                ["x", "y", "z"][cfg.axis]
+            ),
+            instead: Some(Param::SpanM),
+        }
+        .into());
     }
     let c = (lo + hi) / 2.0 - s.ee_position_m[cfg.axis];
     let r = DEFAULT_HALF_SPAN_SHARE * (hi - lo);
@@ -149,24 +154,18 @@ fn span(s: &Scene, cfg: &SagCompareConfig) -> Result<Interval, StudyError> {
 /// Check the config and list the offsets of the line.
 fn offsets(s: &Scene, cfg: &SagCompareConfig) -> Result<(Interval, Vec<f64>), StudyError> {
     if cfg.axis > 2 {
-        return Err(StudyError::Usage(format!(
-            "axis {}: must be 0, 1 or 2",
-            cfg.axis
-        )));
+        return Err(ParamError::invalid(Param::Axis, cfg.axis, "must be 0, 1 or 2").into());
     }
     if !(2..=MAX_POINTS).contains(&cfg.points) {
-        return Err(StudyError::Usage(format!(
-            "--points {}: must be within 2..={MAX_POINTS}",
-            cfg.points
-        )));
+        let rule = format!("must be within 2..={MAX_POINTS}");
+        return Err(ParamError::invalid(Param::Points, cfg.points, rule).into());
     }
     let iv = span(s, cfg)?;
     if !(iv.lo.abs() <= MAX_OFFSET_M && iv.hi.abs() <= MAX_OFFSET_M && iv.lo <= iv.hi) {
-        return Err(StudyError::Usage(format!(
-            "--span-m {},{}: must be finite offsets in m with MIN <= MAX, each within ±{MAX_OFFSET_M:e}",
-            message_number(iv.lo),
-            message_number(iv.hi),
-        )));
+        let value = format!("{},{}", message_number(iv.lo), message_number(iv.hi));
+        let rule =
+            format!("must be finite offsets in m with MIN <= MAX, each within ±{MAX_OFFSET_M:e}");
+        return Err(ParamError::invalid(Param::SpanM, value, rule).into());
     }
     let n = cfg.points;
     let step = (iv.hi - iv.lo) / (n - 1) as f64;

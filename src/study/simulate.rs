@@ -28,7 +28,7 @@
 //! the next, after motion), peak-to-peak per axis and RMS of |u| until the path moves
 //! again or ends.
 
-use super::StudyError;
+use super::{Param, ParamError, ParamName, StudyError};
 use crate::estimator::{Estimator, EstimatorParams, Status, Tmin};
 use crate::kinematics::Pose;
 use crate::modal::response::{ModalResponse, MAX_RESPONSE_MODES};
@@ -63,6 +63,65 @@ pub struct SampledPath {
     pub at_rest_ends: bool,
 }
 
+/// Why a sampled path cannot be simulated or shaped.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PathError {
+    /// No samples.
+    #[error("the path has no samples")]
+    Empty,
+    /// Fewer than two rows, or no time between them.
+    #[error("the path lasts {duration_s} s ({rows} row(s)): it needs at least two rows, over a time > 0")]
+    TooShort {
+        /// Its duration, s.
+        duration_s: f64,
+        /// Its rows.
+        rows: usize,
+    },
+    /// More samples than [`MAX_SAMPLES`].
+    #[error("the path would have {samples} samples at {dt_s} s (at most {MAX_SAMPLES})")]
+    TooManySamples {
+        /// The count, as computed (may be infinite).
+        samples: f64,
+        /// The sample period, s.
+        dt_s: f64,
+    },
+    /// A position that is not finite.
+    #[error("sample {sample} (t = {t_s:.6} s) is not finite")]
+    NotFinite {
+        /// Its index.
+        sample: usize,
+        /// Its time, s.
+        t_s: f64,
+    },
+    /// An acceleration above the largest accepted (a jump).
+    #[error("{}", self.render(&Param::name))]
+    Jump {
+        /// Where, s.
+        t_s: f64,
+        /// The acceleration there, m/s².
+        acceleration_m_s2: f64,
+        /// The largest accepted, m/s².
+        max_m_s2: f64,
+    },
+}
+
+impl PathError {
+    /// The message with the parameter of the acceleration bound called `name(param)`.
+    pub fn render(&self, name: &dyn Fn(Param) -> &'static str) -> String {
+        match self {
+            PathError::Jump {
+                t_s,
+                acceleration_m_s2,
+                max_m_s2,
+            } => format!(
+                "the path jumps at t = {t_s:.6} s: acceleration {acceleration_m_s2:.4e} m/s² over {max_m_s2} m/s² ({})",
+                name(Param::MaxAccelerationMS2)
+            ),
+            other => other.to_string(),
+        }
+    }
+}
+
 impl SampledPath {
     /// Samples of a file, resampled every `dt_s` from its first to its last time
     /// (linear interpolation).
@@ -72,16 +131,15 @@ impl SampledPath {
         let dur = s.duration_s();
         if !(dur.is_finite() && dur > 0.0) {
             // One row: nothing to simulate (a circle or move of duration 0 is refused alike).
-            return Err(StudyError::Usage(format!(
-                "the path lasts {dur} s ({} row(s)): it needs at least two rows, over a time > 0",
-                s.t_s.len()
-            )));
+            return Err(PathError::TooShort {
+                duration_s: dur,
+                rows: s.t_s.len(),
+            }
+            .into());
         }
         let n = (dur / dt_s).round();
         if !(n < MAX_SAMPLES as f64) {
-            return Err(StudyError::Usage(format!(
-                "the path would have {n} samples at {dt_s} s (at most {MAX_SAMPLES})"
-            )));
+            return Err(PathError::TooManySamples { samples: n, dt_s }.into());
         }
         let positions_m = (0..=n as usize)
             .map(|k| {
@@ -106,15 +164,14 @@ impl SampledPath {
     ) -> Result<SampledPath, StudyError> {
         check_dt(dt_s)?;
         if !(duration_s.is_finite() && duration_s > 0.0) {
-            return Err(StudyError::Usage(format!(
-                "duration {duration_s} s must be finite and > 0"
-            )));
+            let rule = "must be finite and > 0";
+            return Err(
+                ParamError::invalid(Param::DurationS, format!("{duration_s} s"), rule).into(),
+            );
         }
         let n = (duration_s / dt_s).round();
         if !(n < MAX_SAMPLES as f64) {
-            return Err(StudyError::Usage(format!(
-                "the path would have {n} samples (at most {MAX_SAMPLES})"
-            )));
+            return Err(PathError::TooManySamples { samples: n, dt_s }.into());
         }
         let last = trajectory.position_at(0.0).unwrap_or_default();
         let positions_m = (0..=n as usize)
@@ -149,25 +206,26 @@ impl SampledPath {
     /// Refuses non-finite positions and accelerations above `max_m_s2` (a jump).
     pub fn check(&self, max_m_s2: f64) -> Result<(), StudyError> {
         if self.positions_m.is_empty() {
-            return Err(StudyError::Usage("the path has no samples".into()));
+            return Err(PathError::Empty.into());
         }
         for (k, p) in self.positions_m.iter().enumerate() {
             if !p.iter().all(|v| v.is_finite()) {
-                return Err(StudyError::Usage(format!(
-                    "sample {k} (t = {:.6} s) is not finite",
-                    k as f64 * self.dt_s
-                )));
+                return Err(PathError::NotFinite {
+                    sample: k,
+                    t_s: k as f64 * self.dt_s,
+                }
+                .into());
             }
         }
         for k in 0..self.positions_m.len() {
             let a = self.acceleration(k).norm();
             if a > max_m_s2 {
-                return Err(StudyError::Usage(format!(
-                    "the path jumps at t = {:.6} s: acceleration {:.4e} m/s² over {} m/s² (--max-acceleration)",
-                    k as f64 * self.dt_s,
-                    a,
-                    max_m_s2
-                )));
+                return Err(PathError::Jump {
+                    t_s: k as f64 * self.dt_s,
+                    acceleration_m_s2: a,
+                    max_m_s2,
+                }
+                .into());
             }
         }
         Ok(())
@@ -176,9 +234,8 @@ impl SampledPath {
 
 fn check_dt(dt_s: f64) -> Result<(), StudyError> {
     if !(dt_s.is_finite() && dt_s > 0.0 && dt_s <= 0.1) {
-        return Err(StudyError::Usage(format!(
-            "sample period {dt_s} s must be in (0, 0.1]"
-        )));
+        let rule = "must be in (0, 0.1]";
+        return Err(ParamError::invalid(Param::DtS, format!("{dt_s} s"), rule).into());
     }
     Ok(())
 }
@@ -314,6 +371,25 @@ fn solve_pose(
 }
 
 /// The dynamic deviation along `path` (module docs).
+///
+/// ```
+/// use cablevib::prelude::*;
+/// use cablevib::trajectory::moves::{Move, Profile};
+///
+/// let scene = Scene::load("spatial-paper")?;
+/// // 0.1 m along x in 0.5 s (s-curve), sampled every ms, then 0.5 s at rest.
+/// let dx = Vector3::new(0.1, 0.0, 0.0);
+/// let mv = Move::new(scene.ee_position_m, dx, 0.5, Profile::SCurve)?;
+/// let path = SampledPath::from_samples(&mv.sampled(1e-3, 0.5)?, 1e-3)?;
+/// let cfg = SimulateConfig { modes: Some(4), settle_s: 0.0, ..SimulateConfig::default() };
+/// let r = simulate(&scene, &path, &cfg)?;
+/// assert_eq!(r.deviation_m.len(), r.t_s.len());
+/// // The move excites the robot; the deviation is small beside the move itself.
+/// let peak = r.deviation_m.iter().map(|u| u.norm()).fold(0.0, f64::max);
+/// assert!(peak > 0.0 && peak < 1e-2 * dx.norm());
+/// assert_eq!(r.stops.len(), 1);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn simulate(
     scene: &Scene,
     path: &SampledPath,
@@ -350,6 +426,43 @@ pub fn simulate_forced(
     })
 }
 
+/// The path as simulated, the configuration checked first (the same refusals for
+/// [`simulate`] and [`simulate_forced`]): the path itself, then the samples held at its
+/// end for `cfg.settle_s` when it ends at rest.
+fn settled_path(path: &SampledPath, cfg: &SimulateConfig) -> Result<SampledPath, StudyError> {
+    if let Some(k) = cfg.modes {
+        if !(1..=MAX_RESPONSE_MODES).contains(&k) {
+            let rule = format!("must be in 1..={MAX_RESPONSE_MODES}");
+            return Err(ParamError::invalid(Param::Modes, k, rule).into());
+        }
+    }
+    if cfg.update_every == Some(0) {
+        return Err(ParamError::invalid(Param::UpdateEvery, 0, "must be ≥ 1").into());
+    }
+    if !(cfg.tolerance.is_finite()
+        && (pilot::MIN_TOLERANCE..=pilot::MAX_TOLERANCE).contains(&cfg.tolerance))
+    {
+        let rule = format!(
+            "must be in [{}, {}] (relative to the peak deviation)",
+            pilot::MIN_TOLERANCE,
+            pilot::MAX_TOLERANCE
+        );
+        return Err(ParamError::invalid(Param::Tolerance, cfg.tolerance, rule).into());
+    }
+    if !(cfg.settle_s.is_finite() && cfg.settle_s >= 0.0 && cfg.settle_s <= 3600.0) {
+        let value = format!("{} s", cfg.settle_s);
+        return Err(ParamError::invalid(Param::SettleS, value, "must be in [0, 3600]").into());
+    }
+    path.check(cfg.max_acceleration_m_s2)?;
+    let mut path = path.clone();
+    if path.at_rest_ends {
+        let last = path.positions_m[path.positions_m.len() - 1];
+        let extra = (cfg.settle_s / path.dt_s).round() as usize;
+        path.positions_m.extend(std::iter::repeat_n(last, extra));
+    }
+    Ok(path)
+}
+
 /// [`simulate_forced`]'s loop: K = `cfg.modes` and the basis updated every
 /// `cfg.update_every` samples (both must be given), the state carried across an update by
 /// the mass overlap of the shapes. Not yet [`simulate`]'s propagation (`propagate::run`):
@@ -363,32 +476,16 @@ fn run_forced(
     mut force_n: impl FnMut(usize) -> Vector3<f64>,
     mut acceleration: Option<&mut Vec<Vector3<f64>>>,
 ) -> Result<SimulateResult, StudyError> {
+    let path = settled_path(path, cfg)?;
     let (Some(modes), Some(update_every)) = (cfg.modes, cfg.update_every) else {
-        return Err(StudyError::Usage(
-            "simulate_forced: modes and update_every must be given".into(),
-        ));
+        let param = if cfg.modes.is_none() {
+            Param::Modes
+        } else {
+            Param::UpdateEvery
+        };
+        let rule = "must be given: a forced simulation runs a fixed basis, no pilot chooses it";
+        return Err(ParamError::invalid(param, "unset", rule).into());
     };
-    if !(1..=MAX_RESPONSE_MODES).contains(&modes) {
-        return Err(StudyError::Usage(format!(
-            "--modes {modes}: must be in 1..={MAX_RESPONSE_MODES}"
-        )));
-    }
-    if update_every == 0 {
-        return Err(StudyError::Usage("--update-every must be ≥ 1".into()));
-    }
-    if !(cfg.settle_s.is_finite() && cfg.settle_s >= 0.0 && cfg.settle_s <= 3600.0) {
-        return Err(StudyError::Usage(format!(
-            "--settle {} s must be in [0, 3600]",
-            cfg.settle_s
-        )));
-    }
-    path.check(cfg.max_acceleration_m_s2)?;
-    let mut path = path.clone();
-    if path.at_rest_ends {
-        let last = path.positions_m[path.positions_m.len() - 1];
-        let extra = (cfg.settle_s / path.dt_s).round() as usize;
-        path.positions_m.extend(std::iter::repeat_n(last, extra));
-    }
     let n = path.positions_m.len();
     let mut est = estimator(scene)?;
     let damping = scene.damping;
@@ -476,39 +573,7 @@ fn run(
     path: &SampledPath,
     cfg: &SimulateConfig,
 ) -> Result<SimulateResult, StudyError> {
-    if let Some(k) = cfg.modes {
-        if !(1..=MAX_RESPONSE_MODES).contains(&k) {
-            return Err(StudyError::Usage(format!(
-                "--modes {k}: must be in 1..={MAX_RESPONSE_MODES}"
-            )));
-        }
-    }
-    if cfg.update_every == Some(0) {
-        return Err(StudyError::Usage("--update-every must be ≥ 1".into()));
-    }
-    if !(cfg.tolerance.is_finite()
-        && (pilot::MIN_TOLERANCE..=pilot::MAX_TOLERANCE).contains(&cfg.tolerance))
-    {
-        return Err(StudyError::Usage(format!(
-            "--tolerance {}: must be in [{}, {}] (relative to the peak deviation)",
-            cfg.tolerance,
-            pilot::MIN_TOLERANCE,
-            pilot::MAX_TOLERANCE
-        )));
-    }
-    if !(cfg.settle_s.is_finite() && cfg.settle_s >= 0.0 && cfg.settle_s <= 3600.0) {
-        return Err(StudyError::Usage(format!(
-            "--settle {} s must be in [0, 3600]",
-            cfg.settle_s
-        )));
-    }
-    path.check(cfg.max_acceleration_m_s2)?;
-    let mut path = path.clone();
-    if path.at_rest_ends {
-        let last = path.positions_m[path.positions_m.len() - 1];
-        let extra = (cfg.settle_s / path.dt_s).round() as usize;
-        path.positions_m.extend(std::iter::repeat_n(last, extra));
-    }
+    let path = settled_path(path, cfg)?;
     let n = path.positions_m.len();
     // The memory of the whole run (two bases across an update, the path and its
     // deviation), refused past the one budget before anything is computed.
@@ -613,7 +678,7 @@ pub fn stop_residuals(
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ShapeMode {
     /// The end-effector mode (the lowest with the scene's participation), the estimator's
-    /// `ee_mode_hz`.
+    /// `ee_mode`.
     EndEffector,
     /// The first mode, `f1_hz`.
     First,
@@ -642,8 +707,8 @@ pub fn shape(
 ) -> Result<ShapeResult, StudyError> {
     path.check(f64::INFINITY)?;
     let mut est = estimator(scene)?;
-    let mut shaper = OnlineShaper::new(kind, path.dt_s, DEFAULT_MIN_FREQUENCY_HZ)
-        .map_err(|e| StudyError::Usage(e.to_string()))?;
+    let mut shaper =
+        OnlineShaper::new(kind, path.dt_s, DEFAULT_MIN_FREQUENCY_HZ).map_err(StudyError::from)?;
     let damping: Damping = scene.damping;
     let last = path.positions_m[path.positions_m.len() - 1];
     let mut out = Vec::with_capacity(path.positions_m.len());
@@ -657,7 +722,7 @@ pub fn shape(
         solve_pose(&mut est, scene, &y, t)?;
         let e = est.estimate();
         let f = match mode {
-            ShapeMode::EndEffector => e.ee_mode_hz,
+            ShapeMode::EndEffector => super::points::ee_mode_hz(e),
             ShapeMode::First => e.f1_hz,
         };
         let zeta = damping.modal_ratio(2.0 * std::f64::consts::PI * f);

@@ -2,7 +2,7 @@
 //! least-squares fit f1 = a·√T_min.
 
 use super::points::{check_modes, evaluate_one, valid, PointResult};
-use super::{build, estimator_params, StudyError};
+use super::{build, estimator_params, Param, ParamError, StudyError};
 use crate::estimator::Tmin;
 use crate::kinematics::Pose;
 use crate::scene::Scene;
@@ -53,6 +53,20 @@ pub fn sqrt_fit(t_min_n: &[f64], f_hz: &[f64]) -> f64 {
     }
 }
 
+/// The first of the sweep's bounds that breaks 0 ≤ from ≤ to ≤ t_max, 1 ≤ steps ≤
+/// [`MAX_STEPS`].
+fn tmin_range_error(from: f64, to: f64, steps: usize, t_max_n: f64) -> ParamError {
+    if !(1..=MAX_STEPS).contains(&steps) {
+        return ParamError::invalid(Param::Steps, steps, format!("must be in 1..={MAX_STEPS}"));
+    }
+    if !(from.is_finite() && from >= 0.0 && from <= t_max_n) {
+        let rule = format!("must be within [0, t_max = {t_max_n} N]");
+        return ParamError::invalid(Param::FromN, format!("{from} N"), rule);
+    }
+    let rule = format!("must be within [{from}, {t_max_n}] N (the lowest T_min, t_max)");
+    ParamError::invalid(Param::ToN, format!("{to} N"), rule)
+}
+
 /// Compute f1 against T_min at the scene's position (one estimator, warm-started from one
 /// T_min to the next).
 pub fn compute(s: &Scene, cfg: &TminConfig) -> Result<TminSweep, StudyError> {
@@ -68,10 +82,7 @@ pub fn compute(s: &Scene, cfg: &TminConfig) -> Result<TminSweep, StudyError> {
         || steps == 0
         || steps > MAX_STEPS
     {
-        return Err(StudyError::Usage(format!(
-            "need 0 <= --from ({from}) <= --to ({to}) <= t_max ({}) and 1 <= --steps <= 100000",
-            s.t_max_n
-        )));
+        return Err(tmin_range_error(from, to, steps, s.t_max_n).into());
     }
     let ts: Vec<f64> = (0..steps)
         .map(|i| {

@@ -14,7 +14,7 @@ use super::points::{
     check_modes, evaluate_jobs_with, evaluate_one, status_histogram, valid, PointResult, Workers,
 };
 use super::progress::Progress;
-use super::{build, estimator_params, StudyError};
+use super::{build, estimator_params, Param, ParamError, StudyError};
 use crate::estimator::{Estimator, Tmin};
 use crate::kinematics::Pose;
 use crate::scene::Scene;
@@ -307,11 +307,10 @@ where
         .iter()
         .find(|t| !(t.is_finite() && **t >= 0.0 && **t <= s.t_max_n))
     {
-        return Err(StudyError::Usage(format!(
-            "--t-mins {t:?}: must be within [0, t_max = {:?} N]",
-            s.t_max_n
-        ))
-        .into());
+        let rule = format!("must be within [0, t_max = {:?} N]", s.t_max_n);
+        return Err(
+            StudyError::from(ParamError::invalid(Param::TMinsN, format!("{t:?}"), rule)).into(),
+        );
     }
     let circle = match &cfg.path {
         // First pass: every row checked (and counted) before anything is evaluated or written.
@@ -321,16 +320,14 @@ where
             Err((p, shape))
         }
         &PathSource::Circle { radius_m, period_s } => {
-            if !(period_s.is_finite()
-                && period_s > 0.0
-                && period_s <= MAX_PERIOD_S
-                && radius_m.is_finite()
-                && radius_m >= 0.0)
-            {
-                return Err(StudyError::Usage(
-                    "--period-s must be in (0, 3600] and --radius-m finite and >= 0".into(),
-                )
-                .into());
+            if !(period_s.is_finite() && period_s > 0.0 && period_s <= MAX_PERIOD_S) {
+                let rule = format!("must be in (0, {MAX_PERIOD_S}] s");
+                let e = ParamError::invalid(Param::PeriodS, period_s, rule);
+                return Err(StudyError::from(e).into());
+            }
+            if !(radius_m.is_finite() && radius_m >= 0.0) {
+                let e = ParamError::invalid(Param::RadiusM, radius_m, "must be finite and >= 0");
+                return Err(StudyError::from(e).into());
             }
             Ok(Circle::new(s, radius_m, period_s).map_err(StudyError::from)?)
         }
@@ -401,12 +398,11 @@ where
                 ReadOrSink::Sink(e) => e,
             })?;
             if again != *shape {
-                return Err(StudyError::Usage(format!(
-                    "{}: the file changed while it was read ({} rows, then {})",
-                    p.display(),
-                    shape.rows,
-                    again.rows
-                ))
+                return Err(StudyError::FileChanged {
+                    path: p.to_path_buf(),
+                    before: shape.rows,
+                    after: again.rows,
+                }
                 .into());
             }
         }

@@ -7,6 +7,7 @@
 //! real-time path's own Newton tolerance is 1e-12 relative), applied to the frequency
 //! (conservative: a relative error δ in λ is δ/2 in f).
 use super::rel;
+use crate::{ee_hz, ee_p};
 use cablevib::estimator::Tmin;
 use cablevib::estimator::{
     build_models, reference_analysis, Estimate, Estimator, ReferenceAnalysis, Status,
@@ -77,7 +78,7 @@ pub fn assert_sane(label: &str, e: &Estimate, s: &Scene, t_min: f64) {
         "{label}: participation {}",
         e.f1_ee_participation
     );
-    assert!(e.stiffness_n_m.iter().all(|x| x.is_finite()), "{label}");
+    assert!(e.stiffness.k6.iter().all(|x| x.is_finite()), "{label}");
     let tol = 1e-9 * s.t_max_n.max(1.0);
     for &t in e.tensions() {
         assert!(
@@ -97,8 +98,8 @@ pub fn assert_no_numbers(label: &str, e: &Estimate) {
         e.f1_hz,
         e.status
     );
-    assert!(e.ee_mode_hz.is_nan(), "{label}: ee {}", e.ee_mode_hz);
-    assert!(e.stiffness_n_m.iter().all(|x| x.is_nan()), "{label}");
+    assert!(ee_hz(e).is_nan(), "{label}: ee {}", ee_hz(e));
+    assert!(e.stiffness.k6.iter().all(|x| x.is_nan()), "{label}");
 }
 
 /// Real-time f1 and end-effector mode against the dense spectrum. Returns the relative
@@ -138,7 +139,7 @@ pub fn assert_matches_modes(
         e.f1_hz
     );
     let exists = m.ee_participation.iter().any(|&p| p >= thr - 1e-3);
-    if e.ee_mode_hz.is_finite() && e.ee_mode_participation < thr {
+    if ee_hz(e).is_finite() && ee_p(e) < thr {
         // Weak answer: no mode reached the threshold in the bounded scan; the most
         // end-effector-like mode found is reported with its participation.
         assert!(
@@ -146,7 +147,7 @@ pub fn assert_matches_modes(
             "{label}: real-time reports a weak end-effector mode, dense has {:?}",
             m.first_ee_mode(thr).map(|(i, l)| (i, lambda_to_hz(l)))
         );
-        let le = hz_to_lambda(e.ee_mode_hz);
+        let le = hz_to_lambda(ee_hz(e));
         let (idx, _) = m
             .lambda
             .iter()
@@ -155,17 +156,17 @@ pub fn assert_matches_modes(
             .unwrap();
         let tol_w = dense_tol(m.lambda[idx], m) + extra;
         assert!(
-            rel(e.ee_mode_hz, lambda_to_hz(m.lambda[idx])) <= tol_w
-                && (m.ee_participation[idx] - e.ee_mode_participation).abs() <= 1e-3,
+            rel(ee_hz(e), lambda_to_hz(m.lambda[idx])) <= tol_w
+                && (m.ee_participation[idx] - ee_p(e)).abs() <= 1e-3,
             "{label}: weak end-effector mode {} Hz (p {}) is not the dense mode {} Hz (p {})",
-            e.ee_mode_hz,
-            e.ee_mode_participation,
+            ee_hz(e),
+            ee_p(e),
             lambda_to_hz(m.lambda[idx]),
             m.ee_participation[idx]
         );
         return (err, tol);
     }
-    if e.ee_mode_hz.is_nan() {
+    if ee_hz(e).is_nan() {
         assert!(
             !m.ee_participation.iter().any(|&p| p >= thr + 1e-3),
             "{label}: real-time has no end-effector mode, dense has {:?}",
@@ -176,9 +177,9 @@ pub fn assert_matches_modes(
     assert!(
         exists,
         "{label}: real-time end-effector mode {} Hz, dense has none",
-        e.ee_mode_hz
+        ee_hz(e)
     );
-    let le = hz_to_lambda(e.ee_mode_hz);
+    let le = hz_to_lambda(ee_hz(e));
     let (idx, _) = m
         .lambda
         .iter()
@@ -189,10 +190,10 @@ pub fn assert_matches_modes(
     let fe = lambda_to_hz(m.lambda[idx]);
     let tol_e = dense_tol(m.lambda[idx], m) + extra;
     assert!(
-        rel(e.ee_mode_hz, fe) <= tol_e,
+        rel(ee_hz(e), fe) <= tol_e,
         "{label}: real-time ee mode {} vs nearest dense {fe}: rel {:.2e} > {tol_e:.2e}",
-        e.ee_mode_hz,
-        rel(e.ee_mode_hz, fe)
+        ee_hz(e),
+        rel(ee_hz(e), fe)
     );
     // Within a cluster the dense vectors are arbitrary: accept any member of the cluster.
     let cluster_part = m
@@ -205,15 +206,15 @@ pub fn assert_matches_modes(
     assert!(
         cluster_part >= thr - 1e-3,
         "{label}: real-time ee mode {} Hz has dense participation {cluster_part:.4} < {thr}",
-        e.ee_mode_hz
+        ee_hz(e)
     );
     for (i, (&l, &p)) in m.lambda.iter().zip(&m.ee_participation).enumerate() {
-        if lambda_to_hz(l) < e.ee_mode_hz * (1.0 - tol_e) - 1e-12 {
+        if lambda_to_hz(l) < ee_hz(e) * (1.0 - tol_e) - 1e-12 {
             assert!(
                 p < thr + 1e-3,
                 "{label}: dense mode {i} at {} Hz (participation {p:.4}) is an end-effector mode below the real-time one at {} Hz",
                 lambda_to_hz(l),
-                e.ee_mode_hz
+                ee_hz(e)
             );
         }
     }

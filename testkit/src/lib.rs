@@ -181,3 +181,19 @@ pub fn without_effects(text: &str) -> String {
         + 2;
     format!("{}{}", &text[..i], &text[j..])
 }
+
+/// The end-effector mode's frequency of an estimate as the tests compare it, Hz: NaN when
+/// none is known (`Estimate::ee_mode` is None).
+pub fn ee_hz(e: &cablevib::estimator::Estimate) -> f64 {
+    e.ee_mode.map_or(f64::NAN, |m| m.frequency_hz)
+}
+
+/// The end-effector mode's participation of an estimate: NaN when none is known.
+pub fn ee_p(e: &cablevib::estimator::Estimate) -> f64 {
+    e.ee_mode.map_or(f64::NAN, |m| m.participation)
+}
+
+/// The age of an estimate's end-effector mode, cycles: None when none is known.
+pub fn ee_age(e: &cablevib::estimator::Estimate) -> Option<u32> {
+    e.ee_mode.map(|m| m.age_cycles)
+}

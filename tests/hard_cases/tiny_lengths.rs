@@ -70,14 +70,24 @@ fn answers(s: &Scene) -> Answers {
     let pose = Pose::in_scene(s, s.ee_position_m);
     let mut off = Estimator::new(s).unwrap();
     let e = *off.update(&pose, Tmin::Scene);
-    let realtime = (e.status, e.f1_hz, e.ee_mode_hz, e.eigen_residual);
+    let realtime = (
+        e.status,
+        e.f1_hz,
+        cablevib_testkit::ee_hz(&e),
+        e.eigen_residual,
+    );
     // The service's estimator: its per-cycle budget may spread the end-effector mode over
     // a few cycles at one pose; every cycle is checked, the last one kept.
     let mut rt = Estimator::with_params(s, EstimatorParams::realtime()).unwrap();
     let mut service = Vec::new();
     for _ in 0..SERVICE_CYCLES {
         let e = *rt.update(&pose, Tmin::Scene);
-        service.push((e.status, e.f1_hz, e.ee_mode_hz, e.eigen_residual));
+        service.push((
+            e.status,
+            e.f1_hz,
+            cablevib_testkit::ee_hz(&e),
+            e.eigen_residual,
+        ));
     }
     let mut modes = vec![Mode::default(); MODES];
     let n = off.modes(MODES, &mut modes).unwrap();

@@ -43,6 +43,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("modal", 4),
     ("estimator", 5),
     ("study", 6),
+    ("prelude", 7),
     ("calibration", 6),
     ("service", 7),
     ("monitor", 8),
@@ -89,7 +90,16 @@ const FORBIDDEN: &[(&str, &[&str])] = &[
     ),
     (
         "service",
-        &["cablevib-cli", "cablevib-monitor", "foxglove", "mcap"],
+        &[
+            "cablevib-cli",
+            "cablevib-monitor",
+            "foxglove",
+            "mcap",
+            // Option parsing is the command line's: the service's errors name parameters.
+            "clap",
+            "clap_complete",
+            "clap_mangen",
+        ],
     ),
     ("monitor", &["cablevib-cli", "clap"]),
     (

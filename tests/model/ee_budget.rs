@@ -16,6 +16,7 @@ use cablevib::kinematics::Pose;
 use cablevib::modal::{hz_to_lambda, CYCLE_EVALUATIONS};
 use cablevib::scene::{ElementKind, Scene};
 use cablevib_testkit::Rng;
+use cablevib_testkit::{ee_age, ee_hz, ee_p};
 use nalgebra::Vector3;
 
 /// The heavy-cable scene of the test data (the paper's robot, cables 50× heavier).
@@ -89,11 +90,11 @@ fn no_cycle_exceeds_the_budget_on_random_trajectories() {
                 ok += 1;
                 assert!(e.f1_hz.is_finite());
                 // A number is always a mode reaching the threshold.
-                if e.ee_mode_hz.is_finite() {
-                    assert!(e.ee_mode_participation >= s.model.ee_participation_min);
-                    fresh += (e.ee_mode_age_cycles == 0) as usize;
+                if ee_hz(&e).is_finite() {
+                    assert!(ee_p(&e) >= s.model.ee_participation_min);
+                    fresh += (ee_age(&e) == Some(0)) as usize;
                 } else {
-                    assert_eq!(e.ee_mode_age_cycles, u32::MAX);
+                    assert!(e.ee_mode.is_none());
                 }
             }
         }
@@ -137,39 +138,35 @@ fn heavy_cable_end_effector_mode_meets_the_threshold() {
         let e = *est.update(&pose, Tmin::Scene);
         assert!(e.is_ok(), "{:?}", e.error);
         assert!(e.eigen_evaluations <= budget);
-        if e.ee_mode_hz.is_finite() {
-            assert!(e.ee_mode_participation >= thr, "{e:?}");
+        if ee_hz(&e).is_finite() {
+            assert!(ee_p(&e) >= thr, "{e:?}");
             found = Some((cycle, e));
             break;
         }
-        assert_eq!(
-            e.ee_mode_age_cycles,
-            u32::MAX,
-            "unknown while the scan goes on"
-        );
+        assert!(e.ee_mode.is_none(), "unknown while the scan goes on");
     }
     let (cycle, e) = found.expect("found within 1000 cycles");
     eprintln!(
         "end-effector mode after {cycle} cycles: {} Hz, participation {} (dense: mode {k}, {} Hz, {})",
-        e.ee_mode_hz,
-        e.ee_mode_participation,
+        ee_hz(&e),
+        ee_p(&e),
         m.lambda[k].sqrt() / (2.0 * std::f64::consts::PI),
         m.ee_participation[k]
     );
     // The same mode: λ within the dense solver's accuracy (ε·λ_max, ~1e-8 relative here;
     // 1e-7 allowed), participation within 1e-6 (the dense eigenvectors' accuracy).
-    let l = hz_to_lambda(e.ee_mode_hz);
+    let l = hz_to_lambda(ee_hz(&e));
     assert!(
         (l - m.lambda[k]).abs() <= 1e-7 * m.lambda[k],
         "{l} vs {}",
         m.lambda[k]
     );
-    assert!((e.ee_mode_participation - m.ee_participation[k]).abs() <= 1e-6);
+    assert!((ee_p(&e) - m.ee_participation[k]).abs() <= 1e-6);
     // Stays found (and fresh) on the next cycles at the same pose.
     for _ in 0..10 {
         let e = *est.update(&pose, Tmin::Scene);
-        assert_eq!(e.ee_mode_age_cycles, 0);
-        assert!(e.ee_mode_participation >= thr);
+        assert_eq!(ee_age(&e), Some(0));
+        assert!(ee_p(&e) >= thr);
     }
 }
 
@@ -190,11 +187,11 @@ fn heavy_cable_continuous_never_reports_a_weak_mode() {
     for _ in 0..1000 {
         let e = *est.update(&pose, Tmin::Scene);
         assert!(e.is_ok());
-        if e.ee_mode_hz.is_finite() {
-            assert!(e.ee_mode_participation >= thr, "{e:?}");
+        if ee_hz(&e).is_finite() {
+            assert!(ee_p(&e) >= thr, "{e:?}");
             found += 1;
         } else {
-            assert_eq!(e.ee_mode_age_cycles, u32::MAX);
+            assert!(e.ee_mode.is_none());
         }
     }
     eprintln!("continuous heavy cable: end-effector mode known in {found} of 1000 cycles");

@@ -62,21 +62,31 @@ fn compare(p: &PoseModel, solver: &mut ModalSolver, freqs: &[f64]) -> (f64, f64)
     (away, on)
 }
 
+/// The frequencies of the dense comparisons, Hz.
+fn compared_frequencies() -> Vec<f64> {
+    (0..12).map(|i| 0.5 + 7.3 * i as f64).collect()
+}
+
+/// Loss factor and Rayleigh on the paper's spatial robot with `n` elements per cable (fem
+/// and catenary) against the dense complex solve: [`damped_receptance_matches_the_dense_complex_solve`].
+fn damped_spatial_matches_the_dense_complex_solve(n: usize) {
+    for kind in [ElementKind::Fem, ElementKind::Catenary] {
+        let (p, mut s) = pose(Scene::default_scene(), kind, n);
+        let (away, on) = compare(&p, &mut s, &compared_frequencies());
+        eprintln!("spatial {kind:?} N {n}: away {away:.2e}, on resonance {on:.2e}");
+        assert!(away < 1e-9, "{kind:?} {n}: {away}");
+        assert!(on < 1e-7, "{kind:?} {n}: {on}");
+    }
+}
+
 /// Loss factor and Rayleigh are exact: structured = dense to 1e-9 relative away from the
 /// resonances (measured ~1e-12), and to 1e-7 on them (the dense solve's conditioning
-/// there grows as 1/η).
+/// there grows as 1/η). N = 10 here; N = 40 (939 DOF, 64 dense complex LUs) in
+/// [`slow::damped_receptance_at_40_elements_matches_the_dense_complex_solve`].
 #[test]
 fn damped_receptance_matches_the_dense_complex_solve() {
-    let freqs: Vec<f64> = (0..12).map(|i| 0.5 + 7.3 * i as f64).collect();
-    for kind in [ElementKind::Fem, ElementKind::Catenary] {
-        for n in [10, 40] {
-            let (p, mut s) = pose(Scene::default_scene(), kind, n);
-            let (away, on) = compare(&p, &mut s, &freqs);
-            eprintln!("spatial {kind:?} N {n}: away {away:.2e}, on resonance {on:.2e}");
-            assert!(away < 1e-9, "{kind:?} {n}: {away}");
-            assert!(on < 1e-7, "{kind:?} {n}: {on}");
-        }
-    }
+    let freqs = compared_frequencies();
+    damped_spatial_matches_the_dense_complex_solve(10);
     // Rigid body (6 × 6, translations first).
     let (p, mut s) = pose(Scene::box_6dof(), ElementKind::Fem, 10);
     assert_eq!(p.dim(), 6);
@@ -172,9 +182,16 @@ fn modal_damping_matches_the_dense_modal_superposition() {
 /// With 2.5 m of cable hidden behind each anchor (the supported chain at a complex λ), and
 /// with it behind swivel pulleys (the wrap arc in series too): structured = the dense complex
 /// solve of the FEM assembled with the hidden cable's own nodes, to the same bounds as
-/// without.
+/// without. N = 10 here; N = 40 in
+/// [`slow::damped_receptance_with_a_hidden_cable_at_40_elements_matches_the_dense_complex_solve`].
 #[test]
 fn damped_receptance_with_a_hidden_cable_matches_the_dense_complex_solve() {
+    hidden_cable_matches_the_dense_complex_solve(10);
+}
+
+/// [`damped_receptance_with_a_hidden_cable_matches_the_dense_complex_solve`] with `n`
+/// elements per cable.
+fn hidden_cable_matches_the_dense_complex_solve(n: usize) {
     let hide = |mut s: Scene| {
         for c in &mut s.cables {
             c.hidden = Some(cablevib::scene::HiddenCable {
@@ -191,17 +208,30 @@ fn damped_receptance_with_a_hidden_cable_matches_the_dense_complex_solve() {
         "/scenes/spatial_paper_pulleys.toml"
     )))
     .expect("pulley scene");
-    let freqs: Vec<f64> = (0..12).map(|i| 0.5 + 7.3 * i as f64).collect();
     for (name, scene) in [
         ("spatial", hide(Scene::default_scene())),
         ("spatial with pulleys", hide(pulleys)),
     ] {
-        for n in [10, 40] {
-            let (p, mut s) = pose(scene.clone(), ElementKind::Fem, n);
-            let (away, on) = compare(&p, &mut s, &freqs);
-            eprintln!("{name} hidden N {n}: away {away:.2e}, on resonance {on:.2e}");
-            assert!(away < 1e-9, "{name} {n}: {away}");
-            assert!(on < 1e-7, "{name} {n}: {on}");
-        }
+        let (p, mut s) = pose(scene, ElementKind::Fem, n);
+        let (away, on) = compare(&p, &mut s, &compared_frequencies());
+        eprintln!("{name} hidden N {n}: away {away:.2e}, on resonance {on:.2e}");
+        assert!(away < 1e-9, "{name} {n}: {away}");
+        assert!(on < 1e-7, "{name} {n}: {on}");
+    }
+}
+
+/// The dense sweeps at N = 40 (939 DOF and more: a dense complex LU takes seconds), run by
+/// `.ci/run` (tests/README.md, "Slow reference sweeps").
+mod slow {
+    #[test]
+    #[ignore = "slow reference sweep: cargo test --release --tests -- --ignored slow::"]
+    fn damped_receptance_at_40_elements_matches_the_dense_complex_solve() {
+        super::damped_spatial_matches_the_dense_complex_solve(40);
+    }
+
+    #[test]
+    #[ignore = "slow reference sweep: cargo test --release --tests -- --ignored slow::"]
+    fn damped_receptance_with_a_hidden_cable_at_40_elements_matches_the_dense_complex_solve() {
+        super::hidden_cable_matches_the_dense_complex_solve(40);
     }
 }

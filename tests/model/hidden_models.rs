@@ -63,51 +63,73 @@ fn sagged_with_hidden(n: usize) -> Scene {
     s
 }
 
+/// The sagged FEM with hidden cables against the independent dense sagged FEM: the first 12
+/// modes, f1 and the static stiffness. N = 10 here; N = 40 in
+/// [`slow::sagged_hidden_cable_frequencies_at_40_elements_equal_an_independent_dense_fem`].
 #[test]
 fn sagged_hidden_cable_frequencies_equal_an_independent_dense_fem() {
-    for n in [10, 40] {
-        let scene = sagged_with_hidden(n);
-        for p in [Vector3::new(0.0, 0.0, 1.0), Vector3::new(0.3, 0.2, 1.0)] {
-            let mut est = Estimator::new(&scene).unwrap();
-            let e = *est.update(&Pose::at(p), Tmin::Scene);
-            assert!(e.is_ok(), "N {n} {p:?}: {:?}", e.error);
-            let (k, m) = dense_sagged(&est, &p, n);
-            let dense = dense_modes(&k, &m, scene.ee_mass_kg, false).unwrap();
-            let mut solver = est.sag_modal().expect("sagged").clone();
-            let count = 12;
-            let mut modes = vec![Mode::default(); count];
-            let got = solver.modes(count, &mut modes).unwrap();
-            assert_eq!(got, count);
-            let mut worst = 0.0f64;
-            for (j, mode) in modes.iter().enumerate() {
-                let ld = dense.lambda[j];
-                let tol = 1e-9f64.max(8.0 * dense_relative_accuracy(ld, dense.lambda_max));
-                let err = (mode.lambda - ld).abs() / ld;
-                assert!(
-                    err <= tol,
-                    "N {n} {p:?} mode {j}: {} vs dense {ld}: {err:.2e} > {tol:.2e}",
-                    mode.lambda
-                );
-                worst = worst.max(err);
-            }
-            // f1 of the estimate is the first mode (dense, to the tolerance above).
-            let l1 = (2.0 * std::f64::consts::PI * e.f1_hz).powi(2);
-            let tol1 =
-                1e-9f64.max(8.0 * dense_relative_accuracy(dense.lambda[0], dense.lambda_max));
+    sagged_hidden_cable_frequencies_equal_the_dense_fem(10);
+}
+
+/// The dense sagged FEMs at N = 40 (over 1000 DOF, a dense eigen-solve per pose), run by
+/// `.ci/run` (tests/README.md, "Slow reference sweeps").
+mod slow {
+    #[test]
+    #[ignore = "slow reference sweep: cargo test --release --tests -- --ignored slow::"]
+    fn sagged_hidden_cable_frequencies_at_40_elements_equal_an_independent_dense_fem() {
+        super::sagged_hidden_cable_frequencies_equal_the_dense_fem(40);
+    }
+
+    #[test]
+    #[ignore = "slow reference sweep: cargo test --release --tests -- --ignored slow::"]
+    fn sagged_continuous_hidden_cable_is_the_dense_fem_limit() {
+        super::sagged_continuous_hidden_cable_is_the_dense_fem_limit();
+    }
+}
+
+/// [`sagged_hidden_cable_frequencies_equal_an_independent_dense_fem`] with `n` elements per
+/// free and per hidden cable.
+fn sagged_hidden_cable_frequencies_equal_the_dense_fem(n: usize) {
+    let scene = sagged_with_hidden(n);
+    for p in [Vector3::new(0.0, 0.0, 1.0), Vector3::new(0.3, 0.2, 1.0)] {
+        let mut est = Estimator::new(&scene).unwrap();
+        let e = *est.update(&Pose::at(p), Tmin::Scene);
+        assert!(e.is_ok(), "N {n} {p:?}: {:?}", e.error);
+        let (k, m) = dense_sagged(&est, &p, n);
+        let dense = dense_modes(&k, &m, scene.ee_mass_kg, false).unwrap();
+        let mut solver = est.sag_modal().expect("sagged").clone();
+        let count = 12;
+        let mut modes = vec![Mode::default(); count];
+        let got = solver.modes(count, &mut modes).unwrap();
+        assert_eq!(got, count);
+        let mut worst = 0.0f64;
+        for (j, mode) in modes.iter().enumerate() {
+            let ld = dense.lambda[j];
+            let tol = 1e-9f64.max(8.0 * dense_relative_accuracy(ld, dense.lambda_max));
+            let err = (mode.lambda - ld).abs() / ld;
             assert!(
-                (l1 - dense.lambda[0]).abs() <= tol1 * dense.lambda[0],
-                "N {n} {p:?}: f1 λ {l1} vs dense {}",
-                dense.lambda[0]
+                err <= tol,
+                "N {n} {p:?} mode {j}: {} vs dense {ld}: {err:.2e} > {tol:.2e}",
+                mode.lambda
             );
-            // The static stiffness: the dense static condensation.
-            let kd = condense_static(&k, 3);
-            let kd = Matrix3::from_fn(|r, c| kd[(r, c)]);
-            let rel = (e.stiffness_n_m - kd).norm() / kd.norm();
-            assert!(rel <= 1e-9, "N {n} {p:?}: stiffness {rel:.2e}");
-            eprintln!(
-                "sag N {n} at {p:?}: worst relative λ error over {count} modes {worst:.1e}, stiffness {rel:.1e}"
-            );
+            worst = worst.max(err);
         }
+        // f1 of the estimate is the first mode (dense, to the tolerance above).
+        let l1 = (2.0 * std::f64::consts::PI * e.f1_hz).powi(2);
+        let tol1 = 1e-9f64.max(8.0 * dense_relative_accuracy(dense.lambda[0], dense.lambda_max));
+        assert!(
+            (l1 - dense.lambda[0]).abs() <= tol1 * dense.lambda[0],
+            "N {n} {p:?}: f1 λ {l1} vs dense {}",
+            dense.lambda[0]
+        );
+        // The static stiffness: the dense static condensation.
+        let kd = condense_static(&k, 3);
+        let kd = Matrix3::from_fn(|r, c| kd[(r, c)]);
+        let rel = (e.stiffness.translational_n_m() - kd).norm() / kd.norm();
+        assert!(rel <= 1e-9, "N {n} {p:?}: stiffness {rel:.2e}");
+        eprintln!(
+            "sag N {n} at {p:?}: worst relative λ error over {count} modes {worst:.1e}, stiffness {rel:.1e}"
+        );
     }
 }
 
@@ -118,8 +140,8 @@ fn sagged_hidden_cable_frequencies_equal_an_independent_dense_fem() {
 /// Richardson extrapolation (4 λ₄₀ − λ₂₀)/3 removes it: what remains is the O(N⁻⁴) term
 /// and the continuous mesh's error (offline rule, 1e-9), measured 4.2e-7 at most on the
 /// first 6 modes (N = 40 alone: 5.1e-4), so TOL = 2e-6; the static stiffness likewise,
-/// measured 1.1e-9 (N = 40 alone: 1.2e-5), so 1e-8.
-#[test]
+/// measured 1.1e-9 (N = 40 alone: 1.2e-5), so 1e-8. Two dense sagged FEMs per pose (N = 20
+/// and 40): in the slow sweeps ([`slow::sagged_continuous_hidden_cable_is_the_dense_fem_limit`]).
 fn sagged_continuous_hidden_cable_is_the_dense_fem_limit() {
     const TOL: f64 = 2e-6;
     let count = 6;
@@ -158,8 +180,8 @@ fn sagged_continuous_hidden_cable_is_the_dense_fem_limit() {
             assert!(err <= TOL, "{p:?} mode {j}: {err:.2e}");
         }
         let rich = (kst[1] * 4.0 - kst[0]) / 3.0;
-        let rel = (e.stiffness_n_m - rich).norm() / rich.norm();
-        let rel40 = (e.stiffness_n_m - kst[1]).norm() / rich.norm();
+        let rel = (e.stiffness.translational_n_m() - rich).norm() / rich.norm();
+        let rel40 = (e.stiffness.translational_n_m() - kst[1]).norm() / rich.norm();
         eprintln!("{p:?} stiffness: N40 {rel40:.1e} richardson {rel:.1e}");
         assert!(rel <= 1e-8, "{p:?}: stiffness {rel:.2e}");
     }
@@ -177,7 +199,13 @@ fn sagged_hidden_cable_tends_to_none() {
         let mut est = Estimator::new(&s).unwrap();
         let e = *est.update(&p, Tmin::Scene);
         assert!(e.is_ok(), "{lh}: {:?}", e.error);
-        (e.stiffness_n_m.symmetric_eigenvalues().min(), e.f1_hz)
+        (
+            e.stiffness
+                .translational_n_m()
+                .symmetric_eigenvalues()
+                .min(),
+            e.f1_hz,
+        )
     };
     let (k0, f0) = run(0.0);
     let (ks, fs) = run(1e-6);

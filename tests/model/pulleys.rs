@@ -60,7 +60,7 @@ fn static_stiffness_equals_finite_differences_of_the_equilibrium_with_pulleys() 
                 (resultant(&s, &g0, t0, &(p + d)) - resultant(&s, &g0, t0, &(p - d))) / (2.0 * h);
             k_fd.set_column(j, &col);
         }
-        let k = e.stiffness_n_m;
+        let k = e.stiffness.translational_n_m();
         let rel = (k - k_fd).norm() / k_fd.norm();
         assert!(rel <= 1e-6, "{p}: {rel:e}\n{k}\n{k_fd}");
         // The pulleys' own term.
@@ -102,7 +102,10 @@ fn structured_f1_with_pulleys_equals_the_dense_reference() {
             "{p}: {} vs {f_dense}",
             e.f1_hz
         );
-        assert!((e.stiffness_n_m - r.stiffness_n_m).norm() <= 1e-9 * r.stiffness_n_m.norm());
+        assert!(
+            (e.stiffness.translational_n_m() - r.stiffness_n_m).norm()
+                <= 1e-9 * r.stiffness_n_m.norm()
+        );
     }
 }
 
@@ -208,7 +211,7 @@ fn d_of_zero_is_the_static_stiffness_with_pulleys() {
             let mut est = Estimator::new(&s).unwrap();
             let e = *est.update(&pose, Tmin::Scene);
             assert!(e.is_ok(), "{rel}: {:?}", e.status);
-            e.stiffness6.view((0, 0), (3, 3)).into_owned()
+            e.stiffness.k6.view((0, 0), (3, 3)).into_owned()
         } else {
             let r = reference_analysis_at(&s, &pose, Tmin::Scene, false).unwrap();
             r.stiffness6.view((0, 0), (6, 6)).into_owned()

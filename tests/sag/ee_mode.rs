@@ -20,6 +20,7 @@ use cablevib::modal::{hz_to_lambda, Mode, CYCLE_EVALUATIONS};
 use cablevib::scene::Scene;
 use cablevib::trajectory::{circle_pose, CIRCLE_PERIOD_S};
 use cablevib_testkit::sag_cases::{home, sagged_robots};
+use cablevib_testkit::{ee_age, ee_hz, ee_p};
 
 /// λ agreement with the dense reference (module docs).
 const LAMBDA_TOL: f64 = 1e-9;
@@ -55,21 +56,23 @@ fn sagged_ee_mode_matches_the_dense_reference() {
             let thr = est.params().modal.ee_participation_min;
             let e = *est.update(&home(&s), Tmin::Scene);
             assert!(e.is_ok(), "{} N {n}: {:?}", s.name, e.error);
-            assert_eq!(e.ee_mode_age_cycles, 0, "{} N {n}", s.name);
+            assert_eq!(ee_age(&e), Some(0), "{} N {n}", s.name);
             let (dl, dp, idx) = dense_ee(&est, thr);
-            let l = hz_to_lambda(e.ee_mode_hz);
+            let l = hz_to_lambda(ee_hz(&e));
             let err = (l - dl).abs() / dl;
             eprintln!(
                 "{} N {n}: ee mode #{idx} {:.9} Hz, λ rel err {err:.1e}, p {:.6} (dense {dp:.6})",
-                s.name, e.ee_mode_hz, e.ee_mode_participation
+                s.name,
+                ee_hz(&e),
+                ee_p(&e)
             );
             // hz_to_lambda(lambda_to_hz(λ)) rounds twice: a few ε.
             assert!(err <= LAMBDA_TOL, "{} N {n}: λ {l} vs dense {dl}", s.name);
             assert!(
-                (e.ee_mode_participation - dp).abs() <= P_TOL,
+                (ee_p(&e) - dp).abs() <= P_TOL,
                 "{} N {n}: p {} vs dense {dp}",
                 s.name,
-                e.ee_mode_participation
+                ee_p(&e)
             );
         }
     }
@@ -125,10 +128,10 @@ fn tracked_along_the_circle_without_allocation() {
                 s.name,
                 e.eigen_evaluations
             );
-            if e.ee_mode_age_cycles != u32::MAX {
+            if e.ee_mode.is_some() {
                 known += 1;
             }
-            if e.ee_mode_age_cycles == 0 && n_fresh < fresh.len() {
+            if ee_age(e) == Some(0) && n_fresh < fresh.len() {
                 fresh[n_fresh] = k;
                 n_fresh += 1;
             }
@@ -153,11 +156,11 @@ fn tracked_along_the_circle_without_allocation() {
             for j in 1..=k {
                 let e = est2.update(&circle_pose(&s, j, CIRCLE_PERIOD_S), Tmin::Scene);
                 if j == k {
-                    got = Some((e.ee_mode_hz, e.ee_mode_participation, e.ee_mode_age_cycles));
+                    got = Some((ee_hz(e), ee_p(e), ee_age(e)));
                 }
             }
             let (hz, p, age) = got.unwrap();
-            assert_eq!(age, 0);
+            assert_eq!(age, Some(0));
             let (dl, dp, _) = dense_ee(&est2, thr);
             let err = (hz_to_lambda(hz) - dl).abs() / dl;
             assert!(err <= LAMBDA_TOL, "{} cycle {k}: λ err {err:.1e}", s.name);
@@ -268,14 +271,14 @@ fn certified_along_the_circle(s: &Scene, expect: &Expect) {
         let e = *est.update(&circle_pose(s, k, CIRCLE_PERIOD_S), Tmin::Scene);
         assert!(e.is_ok(), "{} cycle {k}: {:?}", s.name, e.error);
         if first.is_none() {
-            if e.ee_mode_age_cycles == 0 {
+            if ee_age(&e) == Some(0) {
                 first = Some(k);
                 uncertified_then = est.rescan_counts().uncertified_scans;
             }
             continue;
         }
         warm += 1;
-        if e.ee_mode_age_cycles == 0 {
+        if ee_age(&e) == Some(0) {
             fresh += 1;
             evals.push(e.eigen_evaluations);
         }
@@ -286,16 +289,16 @@ fn certified_along_the_circle(s: &Scene, expect: &Expect) {
                 s.name,
                 checks[next_check]
             );
-            if e.ee_mode_age_cycles == 0 {
+            if ee_age(&e) == Some(0) {
                 next_check += 1;
                 let (dl, dp, _) = dense_ee(&est, thr);
-                let err = (hz_to_lambda(e.ee_mode_hz) - dl).abs() / dl;
+                let err = (hz_to_lambda(ee_hz(&e)) - dl).abs() / dl;
                 assert!(err <= LAMBDA_TOL, "{} cycle {k}: λ err {err:.1e}", s.name);
                 assert!(
-                    (e.ee_mode_participation - dp).abs() <= expect.p_tol,
+                    (ee_p(&e) - dp).abs() <= expect.p_tol,
                     "{} cycle {k}: p {} vs dense {dp}",
                     s.name,
-                    e.ee_mode_participation
+                    ee_p(&e)
                 );
             }
         }

@@ -148,5 +148,5 @@ fn sagged_refusals() {
         .receptance(&Damping::LossFactor { eta: 0.02 }, 10.0)
         .unwrap_err();
     assert_eq!(e, FrfError::SagContinuous);
-    assert!(e.to_string().contains("--element fem"));
+    assert!(e.to_string().contains("takes the fem element"));
 }

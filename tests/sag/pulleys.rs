@@ -19,6 +19,7 @@ use cablevib::estimator::{Estimator, EstimatorParams, Tmin};
 use cablevib::kinematics::{rotation_of, Geometry, Pose};
 use cablevib::modal::{dense_modes_ee, dense_relative_accuracy, Mode};
 use cablevib::scene::{ElementKind, Scene};
+use cablevib_testkit::ee_hz;
 use nalgebra::{Matrix3, Matrix6, Rotation3, Vector3, Vector6};
 
 /// The scene at `rel` (from the repository root) with sag on and the element model given.
@@ -374,7 +375,7 @@ fn sagged_modes_with_pulleys_equal_a_dense_solve_with_the_term() {
         let thr = s.model.ee_participation_min;
         let (je, le) = d_with.first_ee_mode(thr).unwrap();
         let (_, le0) = d_without.first_ee_mode(thr).unwrap();
-        let lam_ee = (2.0 * std::f64::consts::PI * e.ee_mode_hz).powi(2);
+        let lam_ee = (2.0 * std::f64::consts::PI * ee_hz(&e)).powi(2);
         let err_ee = (lam_ee - le).abs() / le;
         assert!(
             err_ee <= tol(je),

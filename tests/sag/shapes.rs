@@ -192,13 +192,18 @@ fn compare(
     w
 }
 
+/// N = 10 here, 40 in [`slow`].
 #[test]
 fn sagged_shapes_equal_dense_eigenvectors() {
+    sagged_shapes_equal_dense_eigenvectors_at(&[10]);
+}
+
+fn sagged_shapes_equal_dense_eigenvectors_at(sizes: &[usize]) {
     let mut worst = Worst::default();
     for heavy in [false, true] {
         let cables = robot(8, 0.6, 2.0e5, heavy);
         for ee in [point(), rigid()] {
-            for n_el in [10usize, 40] {
+            for &n_el in sizes {
                 let mut s = solver_for(&cables, n_el, &ee);
                 let clusters = s.eigen_clusters(12, &ShapeParams::default()).unwrap();
                 let h: Vec<_> = cables.iter().map(|c| c.h).collect();
@@ -236,14 +241,18 @@ const HIDDEN_M: f64 = 2.5;
 /// [`assemble_sagged`] with the hidden cables' nodes explicit (module docs' checks and
 /// tolerances, with the whole vector: the junction and the hidden nodes included in uᵀMu),
 /// N = 1, 2 (one element from the junction to the end, or one interior node), 10 and 40, point
-/// mass and rigid body, light and heavy sag.
+/// mass and rigid body, light and heavy sag. N = 40 in [`slow`].
 #[test]
 fn sagged_shapes_on_hidden_cables_equal_dense_eigenvectors() {
+    sagged_shapes_on_hidden_cables_at(&[1, 2, 10]);
+}
+
+fn sagged_shapes_on_hidden_cables_at(sizes: &[usize]) {
     let mut worst = Worst::default();
     for heavy in [false, true] {
         let cables = robot(8, 0.6, 2.0e5, heavy);
         for ee in [point(), rigid()] {
-            for n_el in [1usize, 2, 10, 40] {
+            for &n_el in sizes {
                 let mut s = SagModalSolver::new(ModalParams::default(), cables.len(), n_el);
                 s.load_catenaries(&cables, n_el, &up(), &ee).unwrap();
                 let mut hidden = Vec::new();
@@ -313,11 +322,16 @@ fn sagged_shapes_on_hidden_cables_equal_dense_eigenvectors() {
 /// `scenes/spatial_paper.toml` with 2.5 m under [cable], sag on, fem × 10 and 40, at its
 /// centre and off it): structured (not the dense fallback) and equal to the estimator's
 /// own dense model with the hidden nodes explicit, by the module docs' checks on the whole
-/// vector; the junction's direction d = h (H/T_a) + up (V_a/T_a) from the catenaries.
+/// vector; the junction's direction d = h (H/T_a) + up (V_a/T_a) from the catenaries. N = 40
+/// in [`slow`].
 #[test]
 fn estimator_shapes_with_sag_and_hidden_length_equal_dense() {
+    estimator_shapes_with_sag_and_hidden_length_at(&[10]);
+}
+
+fn estimator_shapes_with_sag_and_hidden_length_at(sizes: &[usize]) {
     let text = with_hidden(&std::fs::read_to_string("scenes/spatial_paper.toml").unwrap());
-    for n_el in [10usize, 40] {
+    for &n_el in sizes {
         for offset in [[0.0, 0.0], [0.3, 0.2]] {
             let mut scene = Scene::from_toml_str(&text, "spatial_hidden.toml").unwrap();
             assert!(scene.has_hidden_cable());
@@ -367,10 +381,14 @@ fn sagged_shapes_refuse_bad_input() {
 /// structured engine and equals the dense model's: λ to the dense bound 64·ε·λ_max/λ (as in
 /// `fem_dense.rs`) + 1e-12, and the end-effector block Σ φ φᵀ of each group of modes
 /// within 1e-6 of each other (basis-independent), times the end-effector's mass, to the
-/// dense eigenvector bound 64·ε·λ_max/(λ·gap) + 1e-9 (module docs).
+/// dense eigenvector bound 64·ε·λ_max/(λ·gap) + 1e-9 (module docs). N = 40 in [`slow`].
 #[test]
 fn estimator_basis_with_sag_is_structured_and_equals_dense() {
-    for (n_el, offset) in [(10usize, [0.0, 0.0]), (10, [0.2, 0.1]), (40, [0.2, 0.1])] {
+    estimator_basis_with_sag_at(&[(10, [0.0, 0.0]), (10, [0.2, 0.1])]);
+}
+
+fn estimator_basis_with_sag_at(cases: &[(usize, [f64; 2])]) {
+    for &(n_el, offset) in cases {
         let scene = sagged_fem(shipped("suspended_8.toml"), n_el);
         let mut est = Estimator::new(&scene).unwrap();
         let pose = Pose {
@@ -442,20 +460,22 @@ fn estimator_basis_with_sag_is_structured_and_equals_dense() {
 /// separated at the null tolerance alone are resolved as near-clusters, not refused; every
 /// shape equals the dense eigenvectors by the module docs' checks (the subspace test with
 /// the gap to the nearest other eigenvalue, so the near-cluster's members are compared as
-/// the subspace their bound allows).
+/// the subspace their bound allows). Here the 32 modes with hidden cables (the near-double at
+/// 22.36 Hz); the other five bases (a dense solve of 939 DOF and more each) in [`slow`].
 #[test]
 fn paper_robot_sag_shapes_over_the_default_frf_band_equal_dense() {
+    paper_robot_sag_shapes_at(&[("hidden", 32)]);
+}
+
+fn paper_robot_sag_shapes_at(cases: &[(&str, usize)]) {
     let text = std::fs::read_to_string("scenes/spatial_paper.toml").unwrap();
     let hidden_text = with_hidden(&text);
-    for (name, text, k) in [
-        ("plain", &text, 16usize),
-        ("plain", &text, 32),
-        ("plain", &text, 64),
-        ("plain", &text, 128),
-        ("hidden", &hidden_text, 16),
-        ("hidden", &hidden_text, 32),
-        ("hidden", &hidden_text, 256),
-    ] {
+    for &(name, k) in cases {
+        let text = if name == "hidden" {
+            &hidden_text
+        } else {
+            &text
+        };
         let mut scene = Scene::from_toml_str(text, "spatial.toml").unwrap();
         scene.set_sag(true).unwrap();
         let mut est = Estimator::new(&scene).unwrap();
@@ -515,4 +535,45 @@ fn junction_directions(
             Some((n_el, h * (cat.h_n / ta) + up * (cat.v_anchor_n / ta)))
         })
         .collect()
+}
+
+/// The dense comparisons at N = 40 (a dense eigen-solve with vectors of about 1000 DOF each),
+/// run by `.ci/run` (tests/README.md, "Slow reference sweeps").
+mod slow {
+    #[test]
+    #[ignore = "slow reference sweep: cargo test --release --tests -- --ignored slow::"]
+    fn sagged_shapes_at_40_elements_equal_dense_eigenvectors() {
+        super::sagged_shapes_equal_dense_eigenvectors_at(&[40]);
+    }
+
+    #[test]
+    #[ignore = "slow reference sweep: cargo test --release --tests -- --ignored slow::"]
+    fn sagged_shapes_on_hidden_cables_at_40_elements_equal_dense_eigenvectors() {
+        super::sagged_shapes_on_hidden_cables_at(&[40]);
+    }
+
+    #[test]
+    #[ignore = "slow reference sweep: cargo test --release --tests -- --ignored slow::"]
+    fn estimator_shapes_with_sag_and_hidden_length_at_40_elements_equal_dense() {
+        super::estimator_shapes_with_sag_and_hidden_length_at(&[40]);
+    }
+
+    #[test]
+    #[ignore = "slow reference sweep: cargo test --release --tests -- --ignored slow::"]
+    fn estimator_basis_with_sag_at_40_elements_equals_dense() {
+        super::estimator_basis_with_sag_at(&[(40, [0.2, 0.1])]);
+    }
+
+    #[test]
+    #[ignore = "slow reference sweep: cargo test --release --tests -- --ignored slow::"]
+    fn paper_robot_sag_shapes_over_the_default_frf_band_equal_dense() {
+        super::paper_robot_sag_shapes_at(&[
+            ("plain", 16),
+            ("plain", 32),
+            ("plain", 64),
+            ("plain", 128),
+            ("hidden", 16),
+            ("hidden", 256),
+        ]);
+    }
 }

@@ -28,6 +28,7 @@ use cablevib::kinematics::Pose;
 use cablevib::scene::{ElementKind, Scene};
 use cablevib::stats::percentile;
 use cablevib_testkit::Rng;
+use cablevib_testkit::{ee_hz, ee_p};
 use nalgebra::Vector3;
 use std::time::Instant;
 
@@ -200,17 +201,22 @@ fn soak(scene: &Scene, cycles: usize, seed: u64) -> Report {
             // The end-effector mode is unknown (NaN, age u32::MAX) when no mode reaches the
             // participation threshold (an avoided crossing splits it); a number is a mode at
             // or above f1 that reaches it.
-            let ee_ok = if e.ee_mode_hz.is_nan() {
-                e.ee_mode_age_cycles == u32::MAX
+            let ee_ok = if ee_hz(e).is_nan() {
+                e.ee_mode.is_none()
             } else {
-                e.ee_mode_hz.is_finite()
-                    && e.ee_mode_hz >= e.f1_hz * (1.0 - 1e-9)
-                    && e.ee_mode_participation >= scene.model.ee_participation_min
+                ee_hz(e).is_finite()
+                    && ee_hz(e) >= e.f1_hz * (1.0 - 1e-9)
+                    && ee_p(e) >= scene.model.ee_participation_min
             };
             if !ee_ok {
-                fail(k, 2, e.ee_mode_hz, pose.position_m, tm, f64::NAN, f64::NAN);
+                fail(k, 2, ee_hz(e), pose.position_m, tm, f64::NAN, f64::NAN);
             }
-            if !e.stiffness_n_m.iter().all(|x| x.is_finite()) {
+            if !e
+                .stiffness
+                .translational_n_m()
+                .iter()
+                .all(|x| x.is_finite())
+            {
                 fail(k, 3, f64::NAN, pose.position_m, tm, f64::NAN, f64::NAN);
             }
             let tol = 1e-9 * t_max;
@@ -222,7 +228,7 @@ fn soak(scene: &Scene, cycles: usize, seed: u64) -> Report {
             if bad {
                 fail(k, 5, 0.0, pose.position_m, tm, f64::NAN, f64::NAN); // an injected bad sample answered ok
             }
-        } else if !(e.f1_hz.is_nan() && e.ee_mode_hz.is_nan()) {
+        } else if !(e.f1_hz.is_nan() && ee_hz(e).is_nan()) {
             fail(k, 6, e.f1_hz, pose.position_m, tm, f64::NAN, f64::NAN);
         }
         // Cold cross-check (not timed).
@@ -244,16 +250,16 @@ fn soak(scene: &Scene, cycles: usize, seed: u64) -> Report {
             } else if e.status == Status::Ok {
                 let d1 = (c.f1_hz - e.f1_hz).abs() / c.f1_hz;
                 // Both unknown (NaN) agree too.
-                let de = if c.ee_mode_hz.is_nan() && e.ee_mode_hz.is_nan() {
+                let de = if ee_hz(c).is_nan() && ee_hz(&e).is_nan() {
                     0.0
                 } else {
-                    (c.ee_mode_hz - e.ee_mode_hz).abs() / c.ee_mode_hz
+                    (ee_hz(c) - ee_hz(&e)).abs() / ee_hz(c)
                 };
                 if !(d1 <= 1e-9) {
                     fail(k, 8, d1, pose.position_m, tm, e.f1_hz, c.f1_hz);
                 }
                 if !(de <= 1e-9) {
-                    fail(k, 9, de, pose.position_m, tm, e.ee_mode_hz, c.ee_mode_hz);
+                    fail(k, 9, de, pose.position_m, tm, ee_hz(&e), ee_hz(c));
                 }
             }
         }

@@ -49,9 +49,11 @@ pub struct AnalyzeArgs {
     /// One JSON object on stdout instead of tables.
     #[arg(long)]
     pub json: bool,
-    /// Print what the real-time path computes (f1, end-effector mode, tensions, status). A pose
-    /// the estimator refuses (e.g. outside the workspace) is still printed with its status,
-    /// then the command exits with code 1 naming that status.
+    /// Print what the real-time path computes in one cold cycle with the service's parameters
+    /// (f1, end-effector mode, tensions, status; the end-effector mode may be left for the
+    /// next cycles by the per-cycle budget). A pose the estimator refuses (e.g. outside the
+    /// workspace) is still printed with its status, then the command exits with code 1
+    /// naming that status.
     #[arg(long)]
     pub realtime: bool,
 }
@@ -86,7 +88,7 @@ pub fn run(a: &AnalyzeArgs) -> Result<(), CliError> {
         solver: a.solver,
         compare_dense: a.compare_dense,
     };
-    let r = analyze(&s, &opts).map_err(|e| CliError::Analysis(e.to_string()))?;
+    let r = analyze(&s, &opts)?;
     if let Some(prefix) = &a.export_matrices {
         export_matrices(&s, prefix)?;
     }
@@ -126,7 +128,7 @@ pub fn matrix_paths(prefix: &std::path::Path) -> [std::path::PathBuf; 2] {
 
 /// K and M of the structured path's models as PREFIX.K.mtx and PREFIX.M.mtx.
 fn export_matrices(s: &Scene, prefix: &std::path::Path) -> Result<(), CliError> {
-    let (k, m) = assembled_matrices(s).map_err(|e| CliError::Analysis(e.to_string()))?;
+    let (k, m) = assembled_matrices(s)?;
     for (path, a) in matrix_paths(prefix).iter().zip([&k, &m]) {
         let text = matrix_market(a);
         crate::output_file::write_whole(path, text.as_bytes())
@@ -228,14 +230,16 @@ fn at_own_default_pose(a: &AnalyzeArgs, s: &Scene) -> Result<Scene, CliError> {
     Ok(at_position(s, Scene::load(&a.scene.scene)?.ee_position_m))
 }
 
-/// The estimator of `s` at `s.ee_position_m`. A --position the estimator cannot be built at
-/// is not the scene's fault: the estimator is then built at the scene's own pose, as the
-/// service builds it, and the requested pose is estimated like any other (its status, e.g.
-/// `outside_workspace`, names the real cause).
+/// The real-time estimator of `s` at `s.ee_position_m`, with the service's parameters
+/// ([`Estimator::realtime`]: `EstimatorParams::realtime()`, its per-cycle evaluation
+/// budget). A --position the estimator cannot be built at is not the scene's fault: the
+/// estimator is then built at the scene's own pose, as the service builds it, and the
+/// requested pose is estimated like any other (its status, e.g. `outside_workspace`, names
+/// the real cause).
 fn realtime_estimator(a: &AnalyzeArgs, s: &Scene) -> Result<Estimator, CliError> {
-    match Estimator::new(s) {
+    match Estimator::realtime(s) {
         Err(BuildError::DefaultPose { .. }) if a.scene.position.is_some() => {
-            Estimator::new(&at_own_default_pose(a, s)?)
+            Estimator::realtime(&at_own_default_pose(a, s)?)
         }
         r => r,
     }
@@ -245,9 +249,9 @@ fn realtime_estimator(a: &AnalyzeArgs, s: &Scene) -> Result<Estimator, CliError>
 /// The published static stiffness as JSON rows: 3 × 3 (N/m) for a point mass, 6 × 6 for a
 /// rigid end-effector (N/m, N/rad, N·m/m, N·m/rad blocks; see `AnalysisReport`).
 fn stiffness_rows(e: &crate::estimator::Estimate) -> Vec<Vec<serde_json::Value>> {
-    let d = e.stiffness_dim;
+    let d = e.stiffness.dim;
     (0..d)
-        .map(|r| (0..d).map(|c| json_f64(e.stiffness6[(r, c)])).collect())
+        .map(|r| (0..d).map(|c| json_f64(e.stiffness.k6[(r, c)])).collect())
         .collect()
 }
 
@@ -256,6 +260,9 @@ fn analyze_realtime(a: &AnalyzeArgs, s: &Scene) -> Result<(), CliError> {
     let t0 = Instant::now();
     let e = *est.update(&Pose::in_scene(s, s.ee_position_m), Tmin::Scene);
     let ns = t0.elapsed().as_nanos();
+    // Absent: null in JSON, NaN in the text.
+    let ee_hz = e.ee_mode.map_or(f64::NAN, |m| m.frequency_hz);
+    let ee_p = e.ee_mode.map_or(f64::NAN, |m| m.participation);
     if a.json {
         let o = serde_json::json!({
             "scene": s.name,
@@ -264,9 +271,9 @@ fn analyze_realtime(a: &AnalyzeArgs, s: &Scene) -> Result<(), CliError> {
             "tensions_n": e.tensions().iter().map(|&x| json_f64(x)).collect::<Vec<_>>(),
             "f1_hz": json_f64(e.f1_hz),
             "f1_ee_participation": json_f64(e.f1_ee_participation),
-            "ee_mode_hz": json_f64(e.ee_mode_hz),
-            "ee_mode_participation": json_f64(e.ee_mode_participation),
-            "ee_mode_age_cycles": (e.ee_mode_age_cycles != u32::MAX).then_some(e.ee_mode_age_cycles),
+            "ee_mode_hz": json_f64(ee_hz),
+            "ee_mode_participation": json_f64(ee_p),
+            "ee_mode_age_cycles": e.ee_mode.map(|m| m.age_cycles),
             "orientation_wxyz": s.ee_orientation_wxyz,
             "stiffness_n_m": stiffness_rows(&e),
             "element": s.model.element.as_str(),
@@ -298,8 +305,8 @@ fn analyze_realtime(a: &AnalyzeArgs, s: &Scene) -> Result<(), CliError> {
         )?;
         outln!(
             "  end-effector  {:.9} Hz (participation {:.4})",
-            e.ee_mode_hz,
-            e.ee_mode_participation
+            ee_hz,
+            ee_p
         )?;
         outln!(
             "  {} evaluations of D(λ), {:.1} µs (first cycle, cold)",

@@ -214,7 +214,8 @@ pub fn warn_if_sag_matters(scene: &Scene, position_m: Option<Vector3<f64>>) {
         orientation_wxyz: scene.ee_orientation_wxyz,
     };
     if let Some(w) = crate::estimator::sag_warning(scene, &pose) {
-        eprintln!("{w}");
+        // The library's line names the scene file's key; the command line adds its option.
+        eprintln!("{w} or pass --sag true|false");
     }
 }
 

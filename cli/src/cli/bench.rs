@@ -94,10 +94,9 @@ fn run_circle(
             if e.f1_hz > f1_max.0 {
                 f1_max = (e.f1_hz, k);
             }
-            if e.ee_mode_age_cycles == u32::MAX {
-                ee_unknown += 1;
-            } else {
-                ee_age.push(u64::from(e.ee_mode_age_cycles));
+            match e.ee_mode {
+                Some(m) => ee_age.push(u64::from(m.age_cycles)),
+                None => ee_unknown += 1,
             }
         }
     }
@@ -148,9 +147,9 @@ fn dense_check(s: &Scene, a: &BenchArgs, p: EstimatorParams) -> Result<DenseChec
                 max_rel_err_f1 =
                     max_rel_err_f1.max((e.f1_hz - lambda_to_hz(r.modes.lambda[0])).abs() / e.f1_hz);
                 if let Some((_, l)) = r.modes.first_ee_mode(p.modal.ee_participation_min) {
-                    if e.ee_mode_hz.is_finite() {
+                    if let Some(m) = e.ee_mode {
                         max_rel_err_ee = max_rel_err_ee
-                            .max((e.ee_mode_hz - lambda_to_hz(l)).abs() / e.ee_mode_hz);
+                            .max((m.frequency_hz - lambda_to_hz(l)).abs() / m.frequency_hz);
                     }
                 }
             }

@@ -1,8 +1,11 @@
-//! The error of the command-line tools.
+//! The error of the command-line tools, and the options by which it names the studies'
+//! parameters.
 
 use crate::report::ReportError;
 use crate::scene::SceneError;
-use crate::study::StudyError;
+use crate::service::{ServiceError, ServiceParam};
+use crate::study::analysis::AnalyzeError;
+use crate::study::{Param, StudyError};
 
 /// Errors of the command-line tools.
 #[derive(Debug, thiserror::Error)]
@@ -19,12 +22,16 @@ pub enum CliError {
     /// Output failed.
     #[error("output: {0}")]
     Io(#[from] std::io::Error),
-    /// A service command failed.
-    #[error(transparent)]
-    Service(#[from] crate::service::ServiceError),
-    /// A study failed or was given bad values.
-    #[error(transparent)]
-    Study(#[from] StudyError),
+    /// A service command failed (its parameters named by their options; the message is
+    /// the whole line, no source below it).
+    #[error("{}", .0.render(&service_flag))]
+    Service(ServiceError),
+    /// A study failed or was given bad values (its parameters named by their options).
+    #[error("{}", .0.render(&flag))]
+    Study(StudyError),
+    /// The analysis of one pose failed or was given bad values.
+    #[error("{}", .0.render(&flag))]
+    Analyze(AnalyzeError),
     /// Standard output could not be written.
     #[error(transparent)]
     Stdout(#[from] crate::output_file::StdoutError),
@@ -34,4 +41,80 @@ pub enum CliError {
     /// Writing a result file failed.
     #[error(transparent)]
     Report(#[from] ReportError),
+}
+
+// Not `#[from]`: that would make the wrapped error the source as well, and `{:#}` would
+// print the message twice.
+impl From<StudyError> for CliError {
+    fn from(e: StudyError) -> Self {
+        CliError::Study(e)
+    }
+}
+
+impl From<AnalyzeError> for CliError {
+    fn from(e: AnalyzeError) -> Self {
+        CliError::Analyze(e)
+    }
+}
+
+impl From<ServiceError> for CliError {
+    fn from(e: ServiceError) -> Self {
+        CliError::Service(e)
+    }
+}
+
+/// The option that sets a study's parameter (`--modes` for [`Param::Modes`]).
+pub fn flag(p: Param) -> &'static str {
+    match p {
+        Param::Modes => "--modes",
+        Param::Solver => "--solver",
+        Param::CompareDense => "--compare-dense",
+        Param::StepM => "--step",
+        Param::TiltDeg => "--tilt-deg",
+        Param::TiltAxis => "--tilt-axis",
+        Param::TiltStepDeg => "--tilt-step-deg",
+        Param::TMinsN => "--t-mins",
+        Param::PeriodS => "--period-s",
+        Param::RadiusM => "--radius-m",
+        Param::MaxElements => "--max-elements",
+        Param::Points => "--points",
+        Param::Axis => "--axis",
+        Param::SpanM => "--span-m",
+        Param::FromN => "--from",
+        Param::ToN => "--to",
+        Param::Steps => "--steps",
+        Param::DurationS => "--duration",
+        Param::DtS => "--dt",
+        Param::MaxAccelerationMS2 => "--max-acceleration",
+        Param::UpdateEvery => "--update-every",
+        Param::SettleS => "--settle",
+        Param::Tolerance => "--tolerance",
+        Param::FromHz => "--from-hz",
+        Param::ToHz => "--to-hz",
+        Param::LossFactor => "--loss-factor",
+        Param::Rayleigh => "--rayleigh",
+        Param::RayleighAlpha => "--rayleigh alpha",
+        Param::RayleighBeta => "--rayleigh beta",
+        Param::ModalRatio => "--modal-ratio",
+        Param::Undamped => "--undamped",
+        Param::Dense => "--dense",
+        Param::DenseModal => "--dense-modal",
+        Param::DenseLuPoints => "--dense-lu-points",
+    }
+}
+
+/// The option that sets a service command's parameter (`--rate-hz` for
+/// [`ServiceParam::RateHz`]).
+pub fn service_flag(p: ServiceParam) -> &'static str {
+    match p {
+        ServiceParam::Seconds => "--seconds",
+        ServiceParam::RateHz => "--rate-hz",
+        ServiceParam::RequiredHz => "--required-hz",
+        ServiceParam::HoldF1Hz => "--hold-f1",
+        ServiceParam::TMinSchedule => "--t-min-schedule",
+        ServiceParam::HoldCsv => "--hold-csv",
+        ServiceParam::Samples => "--samples",
+        ServiceParam::Shape => "--shape",
+        ServiceParam::Instance => "--instance",
+    }
 }

@@ -36,7 +36,6 @@ pub mod error;
 pub mod figure;
 pub mod files;
 pub mod frf;
-pub mod frf_dense;
 pub mod identify;
 pub mod import;
 pub mod map;

@@ -32,8 +32,8 @@ pub struct ServeArgs {
     pub instance: String,
     /// spin: busy-poll (lowest latency, one CPU at 100 %); event: block on the wake-service
     /// event that peers notify after sending (tens of µs per wake-up).
-    #[arg(long, value_enum, default_value_t = WaitMode::Spin)]
-    pub wait: WaitMode,
+    #[arg(long, value_enum, default_value_t = WaitArg::Spin)]
+    pub wait: WaitArg,
     /// Pin the service thread to this CPU (0-based); a warning if not permitted.
     #[arg(long)]
     pub cpu: Option<usize>,
@@ -62,6 +62,46 @@ impl ServeArgs {
     }
 }
 
+/// `--wait` values: the service's [`WaitMode`]s, as the command line spells them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum WaitArg {
+    /// Busy-poll: lowest latency, one CPU core at 100 %.
+    Spin,
+    /// Block on an iceoryx2 event that the sender notifies: no CPU while idle, a wake-up
+    /// costs tens of µs.
+    Event,
+}
+
+impl From<WaitArg> for WaitMode {
+    fn from(w: WaitArg) -> Self {
+        match w {
+            WaitArg::Spin => WaitMode::Spin,
+            WaitArg::Event => WaitMode::Event,
+        }
+    }
+}
+
+/// `--vibration` values: the service's [`BenchVibration`]s, as the command line spells them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum VibrationArg {
+    /// No vibration sender (the latency without the input).
+    Off,
+    /// One accelerometer sample (1 kHz sensor) before each pose.
+    On,
+    /// Both, in alternating blocks of the same run (side by side).
+    Both,
+}
+
+impl From<VibrationArg> for BenchVibration {
+    fn from(v: VibrationArg) -> Self {
+        match v {
+            VibrationArg::Off => BenchVibration::Off,
+            VibrationArg::On => BenchVibration::On,
+            VibrationArg::Both => BenchVibration::Both,
+        }
+    }
+}
+
 /// `cablevib demo` options.
 #[derive(Debug, Clone, Args)]
 pub struct DemoArgs {
@@ -72,13 +112,13 @@ pub struct DemoArgs {
     #[arg(long, default_value_t = 8.0)]
     pub required_hz: f64,
     /// How the service waits for poses: spin (busy-poll, one CPU) or event.
-    #[arg(long, value_enum, default_value_t = WaitMode::Spin)]
-    pub wait: WaitMode,
+    #[arg(long, value_enum, default_value_t = WaitArg::Spin)]
+    pub wait: WaitArg,
     /// How the controller waits for estimates and margin answers; event leaves the other CPU
     /// to the replay and the controller (spin only pays off with a free CPU per spinning
     /// thread).
-    #[arg(long, value_enum, default_value_t = WaitMode::Event)]
-    pub controller_wait: WaitMode,
+    #[arg(long, value_enum, default_value_t = WaitArg::Event)]
+    pub controller_wait: WaitArg,
     /// Pose rate, Hz.
     #[arg(long, default_value_t = 1000.0)]
     pub rate_hz: f64,
@@ -140,7 +180,7 @@ pub struct BenchIpcArgs {
     pub samples: usize,
     /// Wait mode to measure; both when omitted.
     #[arg(long, value_enum)]
-    pub wait: Option<WaitMode>,
+    pub wait: Option<WaitArg>,
     /// Pause between a received estimate and the next pose, µs (0: ping-pong).
     #[arg(long, default_value_t = 0)]
     pub gap_us: u64,
@@ -164,8 +204,8 @@ pub struct BenchIpcArgs {
     /// Feed the service's vibration input while measuring: off, on (a 1 kHz accelerometer
     /// sample before each pose), or both in alternating blocks of 2000 poses (the latency
     /// with and without the input, side by side in one run)
-    #[arg(long, value_enum, default_value_t = BenchVibration::Off)]
-    pub vibration: BenchVibration,
+    #[arg(long, value_enum, default_value_t = VibrationArg::Off)]
+    pub vibration: VibrationArg,
 }
 
 /// Longest `--stats-period-s`, s: one line a day is already rarer than anyone watches a log;
@@ -207,7 +247,7 @@ pub fn serve(a: &ServeArgs, allocations: AllocCounter) -> Result<(), CliError> {
     super::args::warn_if_sag_matters(&scene, None);
     let cfg = ServerConfig {
         instance: a.instance.clone(),
-        wait: a.wait,
+        wait: a.wait.into(),
         stats_period,
         max_cycles: a.max_cycles,
         cpu: a.cpu,
@@ -228,8 +268,8 @@ pub fn demo(a: &DemoArgs) -> Result<(), CliError> {
     let cfg = DemoConfig {
         seconds: a.seconds,
         required_hz: a.required_hz,
-        wait: a.wait,
-        controller_wait: a.controller_wait,
+        wait: a.wait.into(),
+        controller_wait: a.controller_wait.into(),
         rate_hz: a.rate_hz,
         period_s: a.period_s,
         t_min_schedule,
@@ -285,12 +325,12 @@ pub fn bench_ipc(a: &BenchIpcArgs) -> Result<(), CliError> {
     let scene = load_scene(&a.scene, &a.effects)?;
     let cfg = BenchIpcConfig {
         samples: a.samples,
-        wait: a.wait,
+        wait: a.wait.map(WaitMode::from),
         gap_us: a.gap_us,
         cpu: a.cpu,
         json: a.json,
         alloc_pool: a.alloc_pool,
-        vibration: a.vibration,
+        vibration: a.vibration.into(),
     };
     Ok(crate::service::bench_ipc(&scene, &cfg)?)
 }

@@ -13,7 +13,7 @@
 use super::{with_ext, write_file, ReportError};
 use crate::output_file::{OutputFile, ScratchFile};
 use crate::scene::Scene;
-use crate::study::points::PointResult;
+use crate::study::points::{ee_mode_hz, PointResult};
 use serde_json::{json, Map, Value};
 use std::path::Path;
 
@@ -367,9 +367,9 @@ pub fn point_fields(r: &PointResult, orientation: bool) -> Vec<String> {
         r.t_min_n.to_string(),
         e.status.as_str().to_string(),
         num(e.f1_hz),
-        num(e.ee_mode_hz),
+        num(ee_mode_hz(e)),
         num_p(e.f1_ee_participation, 4),
-        num_p(e.ee_mode_participation, 4),
+        num_p(e.ee_mode.map_or(f64::NAN, |m| m.participation), 4),
     ]);
     s.extend(e.tensions().iter().map(|t| num_p(*t, 6)));
     s.extend((2..=r.n_modes).map(|j| num(r.mode_hz(j))));

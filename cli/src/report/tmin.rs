@@ -5,7 +5,7 @@ use super::ee_curve_differs;
 use super::svg::{Axis, LinePlot, Mark, Series, PALETTE};
 use crate::estimator::Estimate;
 use crate::scene::Scene;
-use crate::study::points::valid;
+use crate::study::points::{ee_mode_hz, valid};
 use crate::study::tmin::TminSweep;
 use serde_json::json;
 
@@ -73,7 +73,7 @@ pub fn tmin_csv(s: &Scene, r: &TminSweep) -> Csv {
             p.t_min_n.to_string(),
             p.estimate.status.as_str().to_string(),
             num(p.estimate.f1_hz),
-            num(p.estimate.ee_mode_hz),
+            num(ee_mode_hz(&p.estimate)),
             num(r.a * p.t_min_n.sqrt()),
         ];
         row.extend((2..=p.n_modes).map(|j| num(p.mode_hz(j))));
@@ -99,7 +99,7 @@ pub fn tmin_svg(
             .collect()
     };
     let f1 = pts(|e| e.f1_hz);
-    let ee = pts(|e| e.ee_mode_hz);
+    let ee = pts(ee_mode_hz);
     let fine: Vec<(f64, f64)> = (0..=FIT_CURVE_SEGMENTS)
         .map(|i| {
             let t = from_n + (to_n - from_n) * i as f64 / FIT_CURVE_SEGMENTS as f64;

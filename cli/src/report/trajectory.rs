@@ -6,7 +6,7 @@ use super::svg::{Axis, LinePlot, Mark, Series, PALETTE};
 use super::ReportError;
 use crate::estimator::Estimate;
 use crate::scene::Scene;
-use crate::study::points::{valid, PointResult};
+use crate::study::points::{ee_mode_hz, valid, PointResult};
 use crate::study::trajectory::{Chunk, TrajectoryStudy};
 use serde_json::json;
 use std::fmt::Write as _;
@@ -144,7 +144,7 @@ pub fn trajectory_svg(s: &Scene, t: &TrajectoryStudy, radius_m: f64, ee_mode: bo
     for (k, &tm) in t.t_mins_n.iter().enumerate() {
         let rows = t.curve(k);
         let f1 = curve(rows, xs, |e| e.f1_hz);
-        let ee = curve(rows, xs, |e| e.ee_mode_hz);
+        let ee = curve(rows, xs, ee_mode_hz);
         let color = PALETTE[k % PALETTE.len()];
         let differs = ee_curve_differs(&f1, &ee);
         plot.series

@@ -186,7 +186,7 @@ fn subnormal_numbers_print_compactly() {
             // A subnormal step: an infinite count, not an empty map.
             "map --step 5e-324",
             &["map", "spatial-paper", "--step", "5e-324"][..],
-            "at step 5e-324: too many",
+            "--step 5e-324: inf grid values on",
         ),
         (
             "demo --required-hz",

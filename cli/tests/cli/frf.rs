@@ -143,22 +143,22 @@ fn hostile_inputs_are_one_line_errors() {
     let cases: &[(&[&str], &str)] = &[
         (
             &["--from-hz", "10", "--to-hz", "5"],
-            "need finite 0 <= from < to",
+            "--to-hz 5 Hz: must be finite and above the lowest frequency, 10 Hz",
         ),
         (
             &["--from-hz", "5", "--to-hz", "5"],
-            "need finite 0 <= from < to",
+            "--to-hz 5 Hz: must be finite and above",
         ),
-        (&["--from-hz", "NaN"], "need finite 0 <= from < to"),
-        (&["--to-hz", "inf"], "need finite 0 <= from < to"),
-        (&["--points", "0"], "0 frequencies"),
-        (&["--points", "100001"], "need 1 ..= 100000"),
-        (&["--log", "--from-hz", "0"], "needs from > 0"),
+        (&["--from-hz", "NaN"], "--from-hz NaN Hz: must be finite and >= 0"),
+        (&["--to-hz", "inf"], "--to-hz inf Hz: must be finite"),
+        (&["--points", "0"], "--points 0: must be in 1..=100000"),
+        (&["--points", "100001"], "--points 100001: must be in 1..=100000"),
+        (&["--log", "--from-hz", "0"], "--from-hz 0 Hz: a log-spaced band"),
         // A finite bound (the receptance underflows from ≈ 1e24 Hz, ω²M overflows from
         // ≈ 1e30 Hz): 1e308 gave null receptances and no natural frequency, exit 0.
         (
             &["--to-hz", "1e308"],
-            "frequency range up to 1e308 Hz: above the highest frequency of a response, 1e12 Hz",
+            "--to-hz 1e308 Hz: above the highest frequency of a response, 1e12 Hz",
         ),
         (&["--modal-ratio", "1"], "--modal-ratio 1"),
         (&["--modal-ratio", "-0.01"], "--modal-ratio -0.01"),
@@ -171,7 +171,11 @@ fn hostile_inputs_are_one_line_errors() {
         (&["--input", "rx"], "--input `rx`"),
         (
             &["--modal-ratio", "0.01", "--dense"],
-            "--dense: modal damping",
+            "--dense: modal damping has no damping matrix to assemble (loss factor, Rayleigh or none); use --dense-modal",
+        ),
+        (
+            &["--loss-factor", "0.1", "--rayleigh", "1,0"],
+            "give one of --loss-factor, --rayleigh, --modal-ratio, --undamped",
         ),
     ];
     for (extra, needle) in cases {
@@ -189,7 +193,7 @@ fn hostile_inputs_are_one_line_errors() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/suspended_8.toml");
     let (extra, needle) = (
         &["--element", "continuous", "--loss-factor", "0.02"][..],
-        "use --element fem",
+        "the frequency response with sag takes the fem element",
     );
     let mut args = vec!["frf", scene];
     args.extend_from_slice(extra);

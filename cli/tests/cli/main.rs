@@ -2,6 +2,7 @@
 //! CSV files read back by pandas, figures, mode shapes, the sweeps and `sag-compare`.
 //! Area binary of the command-line crate (see tests/README.md at the repository root).
 
+mod analyze_realtime;
 mod calibrate;
 mod cli_hostile;
 mod cli_orientation;

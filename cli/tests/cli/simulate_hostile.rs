@@ -134,7 +134,7 @@ fn simulate_refuses_hostile_inputs_in_one_line() {
         (&["--move", "0.1,0,0", "--modes", "257"][..], "--modes 257"),
         (
             &["--move", "0.1,0,0", "--update-every", "0"][..],
-            "--update-every must be",
+            "--update-every 0: must be ≥ 1",
         ),
     ] {
         let mut all = vec!["simulate", "spatial-paper", "--out", out];

@@ -329,21 +329,19 @@ fn assert_same(got: &EstimateSample, want: &Estimate, what: &str) {
         got.f1_hz,
         want.f1_hz
     );
-    assert_eq!(
-        bits(got.ee_mode_hz),
-        bits(want.ee_mode_hz),
-        "{what}: ee mode"
-    );
-    assert_eq!(
-        got.ee_mode_age_cycles, want.ee_mode_age_cycles,
-        "{what}: ee mode age"
-    );
+    // The wire's codes for the end-effector mode: NaN and EE_MODE_AGE_UNKNOWN when absent.
+    let (want_hz, want_age) = match want.ee_mode {
+        Some(m) => (m.frequency_hz, m.age_cycles),
+        None => (f64::NAN, cablevib_ipc::EE_MODE_AGE_UNKNOWN),
+    };
+    assert_eq!(bits(got.ee_mode_hz), bits(want_hz), "{what}: ee mode");
+    assert_eq!(got.ee_mode_age_cycles, want_age, "{what}: ee mode age");
     assert_eq!(got.stiffness_dim, 3, "{what}");
     for r in 0..3 {
         for c in 0..3 {
             assert_eq!(
                 bits(got.stiffness_at(r, c).unwrap()),
-                bits(want.stiffness_n_m[(r, c)]),
+                bits(want.stiffness.translational_n_m()[(r, c)]),
                 "{what}: stiffness ({r}, {c})"
             );
         }

@@ -142,7 +142,7 @@ fn control(
     wait_for_service(
         || input.service_connected() && output.service_connected(),
         &never,
-        || ServiceError::Usage("stopped".into()),
+        || ServiceError::Timeout("stopped".into()),
     )
     .unwrap();
     let sensor = open_pubsub::<VibrationSample>(&node, &names.vibration, VIBRATION_SETTINGS)

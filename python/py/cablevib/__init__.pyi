@@ -147,12 +147,15 @@ def frf(
     modal_ratio: Optional[float] = None,
     undamped: bool = False,
 ) -> Dict[str, Any]:
-    """What ``cablevib frf SCENE --json`` prints: ``frequencies_hz`` (N), ``receptance_re``,
-    ``receptance_im`` (N × d × d numpy arrays, m/N; d = 3, or 6 for a rigid end-effector,
-    translations first), ``damping``, ``dim``. Damping: the scene's, or one of
+    """What ``cablevib frf SCENE --json`` prints, from the same library function:
+    ``frequencies_hz`` (N,), ``receptance_re``, ``receptance_im`` (float64 numpy arrays of
+    shape (N, d, d), m/N; d = 3, or 6 for a rigid end-effector, translations first),
+    ``natural_frequencies_hz`` (the band's natural frequencies whose modes move the
+    end-effector, Hz), ``damping`` (str), ``dim`` (int). Damping: the scene's, or one of
     ``loss_factor`` (η), ``rayleigh`` ((α 1/s, β s)), ``modal_ratio`` (ζ), ``undamped``.
-    With sag on, the sagged FEM chains at the pose's sagged tensions (``element="continuous"``
-    and ``modal_ratio`` refused), as on the command line."""
+    With sag on, the sagged FEM chains at the pose's sagged tensions (modal damping by
+    superposition of the sagged shapes; ``element="continuous"`` refused), as on the
+    command line."""
 
 def calibrate(
     scene: Scene,
@@ -272,7 +275,10 @@ class TminAnswer:
 class Estimator:
     """The real-time estimator of one scene, warm-started from call to call."""
 
-    def __init__(self, scene: Scene) -> None: ...
+    def __init__(self, scene: Scene, realtime: bool = False) -> None:
+        """``realtime=True``: each update as the service runs it (a budget of D(λ)
+        evaluations per call; the end-effector mode of a cold call may be pending), what
+        ``cablevib analyze --realtime`` prints. Default: every call answered in full."""
     def update(
         self,
         position: _Vec,

@@ -61,10 +61,14 @@ impl ServiceAttributes {
     pub(super) fn specifier(&self) -> Result<AttributeSpecifier, ServiceError> {
         let mut spec = AttributeSpecifier::new();
         for (key, value) in &self.pairs {
-            let k = AttributeKey::try_from(*key)
-                .map_err(|e| ServiceError::Usage(format!("attribute key `{key}`: {e:?}")))?;
-            let v = AttributeValue::try_from(value.as_str())
-                .map_err(|e| ServiceError::Usage(format!("attribute {key} = `{value}`: {e:?}")))?;
+            let k = AttributeKey::try_from(*key).map_err(|e| ServiceError::Name {
+                what: format!("attribute key `{key}`"),
+                reason: format!("{e:?}"),
+            })?;
+            let v = AttributeValue::try_from(value.as_str()).map_err(|e| ServiceError::Name {
+                what: format!("attribute {key} = `{value}`"),
+                reason: format!("{e:?}"),
+            })?;
             spec = spec
                 .define(&k, &v)
                 .map_err(|e| ipc_error(format!("define attribute {key}"), e))?;

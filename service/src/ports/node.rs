@@ -34,7 +34,10 @@ pub fn wait_for_service(
 
 /// A validated iceoryx2 service name.
 pub fn service_name(name: &str) -> Result<ServiceName, ServiceError> {
-    ServiceName::new(name).map_err(|e| ServiceError::Usage(format!("service name `{name}`: {e:?}")))
+    ServiceName::new(name).map_err(|e| ServiceError::Name {
+        what: format!("service name `{name}`"),
+        reason: format!("{e:?}"),
+    })
 }
 
 /// Loads iceoryx2's global configuration once. Without a config file iceoryx2 warns that it
@@ -111,12 +114,15 @@ pub fn remove_stale_nodes() -> (usize, usize) {
 /// node if its process dies.
 pub fn create_node(name: &str) -> Result<Node<Ipc>, ServiceError> {
     if !is_cablevib_node(name) {
-        return Err(ServiceError::Usage(format!(
-            "node name `{name}`: must start with `{NODE_NAME_PREFIX}`"
-        )));
+        return Err(ServiceError::Name {
+            what: format!("node name `{name}`"),
+            reason: format!("must start with `{NODE_NAME_PREFIX}`"),
+        });
     }
-    let node_name = NodeName::new(name)
-        .map_err(|e| ServiceError::Usage(format!("node name `{name}`: {e:?}")))?;
+    let node_name = NodeName::new(name).map_err(|e| ServiceError::Name {
+        what: format!("node name `{name}`"),
+        reason: format!("{e:?}"),
+    })?;
     NodeBuilder::new()
         .name(&node_name)
         .config(node_config())
@@ -152,7 +158,7 @@ mod tests {
     fn nodes_must_carry_the_prefix() {
         assert!(matches!(
             create_node("controller"),
-            Err(ServiceError::Usage(_))
+            Err(ServiceError::Name { .. })
         ));
     }
 }

@@ -50,8 +50,8 @@ use core::time::Duration;
 
 use cablevib_ipc::{
     monotonic_now_ns, EstimateSample, MarginResponse, MeasuredStatus, PoseSample, ServiceNames,
-    StatusCode, TminSetpoint, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_RESPONSE, MAX_CABLES,
-    MEASURED_AGE_UNKNOWN,
+    StatusCode, TminSetpoint, EE_MODE_AGE_UNKNOWN, EVENT_ID_ESTIMATE, EVENT_ID_MARGIN_RESPONSE,
+    MAX_CABLES, MEASURED_AGE_UNKNOWN,
 };
 use iceoryx2::identifiers::UniquePublisherId;
 use iceoryx2::prelude::*;
@@ -119,7 +119,10 @@ pub fn spawn_thread(
             stop.store(true, Ordering::Release);
             r
         })
-        .map_err(|e| ServiceError::Usage(format!("cannot start the service thread: {e}")))
+        .map_err(|e| ServiceError::Thread {
+            what: "service",
+            reason: e.to_string(),
+        })
 }
 
 /// Capacity of the per-period compute-time ring.
@@ -223,8 +226,9 @@ impl Server {
             *t = scene.cable_t_max_n(i);
         }
         let t_min_n = estimator.default_t_min_n();
-        let inverse = InverseWorker::spawn(&estimator).map_err(|e| {
-            ServiceError::Usage(format!("cannot start the inverse T_min thread: {e}"))
+        let inverse = InverseWorker::spawn(&estimator).map_err(|e| ServiceError::Thread {
+            what: "inverse T_min",
+            reason: e.to_string(),
         })?;
         Ok(Server {
             n_cables,
@@ -244,8 +248,7 @@ impl Server {
             first_cycle_allocations: 0,
             period_ring: Ring::new(PERIOD_RING),
             run_ring: Ring::new(RUN_RING),
-            tracker: VibrationTracker::new(TrackerParams::default())
-                .map_err(|e| ServiceError::Usage(format!("vibration tracker: {e}")))?,
+            tracker: VibrationTracker::new(TrackerParams::default())?,
             model_hz: [None; 2],
         })
     }
@@ -405,14 +408,17 @@ impl Server {
         out.cable_count = n as u32;
         out.tensions_n[..n].copy_from_slice(&e.tensions_n[..n]);
         out.f1_hz = e.f1_hz;
-        out.ee_mode_hz = e.ee_mode_hz;
-        out.ee_mode_age_cycles = e.ee_mode_age_cycles;
+        // The wire's codes for an absent end-effector mode: NaN and EE_MODE_AGE_UNKNOWN.
+        (out.ee_mode_hz, out.ee_mode_age_cycles) = match e.ee_mode {
+            Some(m) => (m.frequency_hz, m.age_cycles),
+            None => (f64::NAN, EE_MODE_AGE_UNKNOWN),
+        };
         // 3 × 3 (N/m) for a point mass, 6 × 6 (N/m, N/rad, N·m/m, N·m/rad) for a rigid body.
-        let dim = e.stiffness_dim;
+        let dim = e.stiffness.dim;
         out.stiffness_dim = dim as u32;
         for r in 0..dim {
             for c in 0..dim {
-                out.stiffness[dim * r + c] = e.stiffness6[(r, c)];
+                out.stiffness[dim * r + c] = e.stiffness.k6[(r, c)];
             }
         }
         out.compute_ns = compute_ns;
@@ -427,7 +433,7 @@ impl Server {
         let known = |f: f64| (e.is_ok() && f.is_finite() && f > 0.0).then_some(f);
         self.model_hz = [
             known(e.f1_hz).or(self.model_hz[0]),
-            known(e.ee_mode_hz).or(self.model_hz[1]),
+            known(e.ee_mode.map_or(f64::NAN, |m| m.frequency_hz)).or(self.model_hz[1]),
         ];
         self.tracker.set_model(self.model_hz[0], self.model_hz[1]);
         measured_fields(&mut out, &self.tracker.measured(receive_ns), receive_ns);
@@ -751,7 +757,7 @@ pub fn run(
     stop: &AtomicBool,
     allocations: AllocCounter,
 ) -> Result<ServerReport, ServiceError> {
-    cablevib_ipc::check_instance(&cfg.instance).map_err(|e| ServiceError::Usage(e.to_string()))?;
+    cablevib_ipc::check_instance(&cfg.instance)?;
     let (removed, failed) = ports::remove_stale_nodes();
     if removed > 0 {
         tracing::info!("removed the stale resources of {removed} dead iceoryx2 node(s)");

@@ -119,7 +119,8 @@ impl Solver<TautChains> {
 /// `models`, arms `arms_m` for a rigid end-effector) with `damping`: exact at a complex λ
 /// for loss-factor, Rayleigh or no damping; for modal damping by [`ModalBasis`] over the
 /// modes below `modal_cutoff_hz` (at most [`MAX_FRF_MODES`]) with the static correction.
-/// The one computation behind `cablevib frf` and the Python `frf`.
+/// The taut computation of the frequency-response study (`study::frf`), behind `cablevib frf`
+/// and the Python `frf`.
 pub fn receptance_over(
     solver: &mut ModalSolver,
     models: &[CableModel],

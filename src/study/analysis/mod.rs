@@ -12,6 +12,7 @@
 
 mod compare;
 
+use super::{Param, ParamError};
 use crate::estimator::{
     check_mechanism, reference_analysis_at, resolve_auto, Estimate, Estimator, Tmin,
 };
@@ -171,25 +172,37 @@ pub enum AnalyzeError {
     /// The eigen-solve or the dense reference failed (or was refused).
     #[error("{0}")]
     Solve(String),
-    /// A combination of options that cannot be honoured.
-    #[error("{0}")]
-    Usage(String),
+    /// A parameter refused (out of range, or a combination that cannot be honoured).
+    #[error(transparent)]
+    Param(#[from] ParamError),
+}
+
+impl AnalyzeError {
+    /// The message with each parameter called `name(param)` (the command line passes its
+    /// option names); equal to the `Display` text with [`Param::name`].
+    pub fn render(&self, name: &dyn Fn(Param) -> &'static str) -> String {
+        match self {
+            AnalyzeError::Param(e) => e.render(name),
+            other => other.to_string(),
+        }
+    }
 }
 
 /// Analyse the scene at its own pose (`ee_position_m`, `ee_orientation_wxyz`) and T_min.
 pub fn analyze(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, AnalyzeError> {
     if opts.modes > MAX_ANALYZE_MODES {
-        return Err(AnalyzeError::Usage(format!(
-            "--modes {}: at most {MAX_ANALYZE_MODES}",
-            opts.modes
-        )));
+        let rule = format!("at most {MAX_ANALYZE_MODES}");
+        return Err(ParamError::invalid(Param::Modes, opts.modes, rule).into());
     }
     match opts.solver {
         SolverChoice::Structured => structured(scene, opts),
-        SolverChoice::Dense if opts.compare_dense => Err(AnalyzeError::Usage(
-            "--compare-dense compares the structured solver with the dense one: drop --solver dense"
-                .into(),
-        )),
+        SolverChoice::Dense if opts.compare_dense => Err(ParamError::Conflict {
+            param: Param::CompareDense,
+            with: Param::Solver,
+            with_value: "dense".into(),
+            reason: "the comparison runs the structured solver beside the dense one".into(),
+        }
+        .into()),
         SolverChoice::Dense => dense(scene, opts),
     }
 }
@@ -286,7 +299,7 @@ fn structured(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, An
     r.multiplicity = Some(modes.iter().map(|m| m.multiplicity).collect());
     r.cluster_start = Some(modes.iter().map(|m| m.cluster_start).collect());
     r.dof = est.model_dof();
-    r.stiffness_n_m = rows(&e.stiffness6, e.stiffness_dim);
+    r.stiffness_n_m = rows(&e.stiffness.k6, e.stiffness.dim);
     r.solve_seconds = secs;
     fill_sag(&mut r, &est);
     if opts.compare_dense {
@@ -300,10 +313,12 @@ fn structured(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, An
 /// The dense reference: Clarabel tensions, assembled K and M, a dense eigensolver.
 fn dense(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, AnalyzeError> {
     if scene.model.element == ElementKind::Continuous {
-        return Err(AnalyzeError::Usage(
-            "--solver dense: the continuous model has no finite assembly (use the structured solver)"
-                .into(),
-        ));
+        return Err(ParamError::invalid(
+            Param::Solver,
+            "dense",
+            "the continuous model has no finite assembly (use the structured solver)",
+        )
+        .into());
     }
     if scene.model.element == ElementKind::Auto {
         let (resolved, _) = resolve_auto(scene).map_err(|e| AnalyzeError::Build(e.to_string()))?;
@@ -356,7 +371,7 @@ fn dense_sagged(scene: &Scene, opts: &AnalyzeOptions) -> Result<AnalysisReport, 
     r.frequencies_hz = d.lambda[..k].iter().map(|&l| lambda_to_hz(l)).collect();
     r.ee_participation = d.ee_participation[..k].to_vec();
     r.dof = est.model_dof();
-    r.stiffness_n_m = rows(&e.stiffness6, e.stiffness_dim);
+    r.stiffness_n_m = rows(&e.stiffness.k6, e.stiffness.dim);
     r.solve_seconds = secs;
     r.dense_seconds = Some(secs);
     fill_sag(&mut r, &est);

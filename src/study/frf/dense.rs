@@ -1,9 +1,9 @@
-//! `cablevib frf --dense` and `--dense-modal`: the structured receptance checked against the
-//! assembled dense problem in the same run.
+//! The dense checks of a frequency response ([`super::DenseCheckKind`]): the structured
+//! receptance checked against the assembled dense problem in the same run.
 //!
-//! - `--dense`: one complex LU of the assembled c(K − λM) per frequency
+//! - LU: one complex LU of the assembled c(K − λM) per frequency
 //!   ([`crate::modal::dense_receptance`]), O(n³) each.
-//! - `--dense-modal`: one generalized symmetric eigendecomposition of the assembled (K, M)
+//! - modal: one generalized symmetric eigendecomposition of the assembled (K, M)
 //!   (M = L Lᵀ, L⁻¹ K L⁻ᵀ = Y Λ Yᵀ, mass-normalised shapes u_r = L⁻ᵀ y_r), then at each
 //!   frequency the exact dense receptance by summation over every mode: with the damped
 //!   dynamic stiffness written c_K K − c_M M (loss factor: c_K = 1 + iη, c_M = ω²; Rayleigh:
@@ -11,13 +11,13 @@
 //!   (c_K K − c_M M)⁻¹ = Σ_r u_r u_rᵀ / (c_K λ_r − c_M); modal damping ζ:
 //!   Σ_r u_r u_rᵀ / (λ_r − ω² + 2iζ ω_r ω), every mode kept (no residual term). O(n³) once,
 //!   then O(n d²) per frequency, so 1 000 frequencies at 939 DOF run in seconds. The
-//!   summation is itself checked against the dense complex LU at `--dense-lu-points`
-//!   frequencies spread over the band (loss factor, Rayleigh, none; modal damping has no
+//!   summation is itself checked against the dense complex LU at a few
+//!   frequencies spread over the band (`lu_points`; loss factor, Rayleigh, none; modal damping has no
 //!   matrix to factor).
 
-use super::CliError;
 use crate::modal::dense_receptance;
 use crate::scene::Damping;
+use crate::study::StudyError;
 use nalgebra::{DMatrix, Matrix6, SymmetricEigen};
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -70,7 +70,7 @@ fn rel_diff(a: &Matrix6<Complex64>, b: &Matrix6<Complex64>, dim: usize) -> f64 {
     (num / den).sqrt()
 }
 
-/// `--dense`: the dense complex LU at every frequency (loss factor, Rayleigh or none; the
+/// [`super::DenseCheckKind::Lu`]: the dense complex LU at every frequency (loss factor, Rayleigh or none; the
 /// caller refuses modal damping).
 pub fn lu_every(
     k: &DMatrix<f64>,
@@ -79,12 +79,11 @@ pub fn lu_every(
     damping: &Damping,
     freqs: &[f64],
     h: &[Matrix6<Complex64>],
-) -> Result<DenseCheck, CliError> {
+) -> Result<DenseCheck, StudyError> {
     let t0 = Instant::now();
     let mut diff = Vec::with_capacity(freqs.len());
     for (&f, hs) in freqs.iter().zip(h) {
-        let r = dense_receptance(k, m, dim, damping, 2.0 * PI * f)
-            .map_err(|e| CliError::Analysis(e.to_string()))?;
+        let r = dense_receptance(k, m, dim, damping, 2.0 * PI * f)?;
         diff.push(rel_diff(hs, &r, dim));
     }
     Ok(DenseCheck {
@@ -105,9 +104,10 @@ struct DenseModes {
     ee: DMatrix<f64>,
 }
 
-fn dense_modes(k: &DMatrix<f64>, m: &DMatrix<f64>, dim: usize) -> Result<DenseModes, CliError> {
-    let fail =
-        || CliError::Analysis("--dense-modal: the mass matrix is not positive definite".into());
+fn dense_modes(k: &DMatrix<f64>, m: &DMatrix<f64>, dim: usize) -> Result<DenseModes, StudyError> {
+    let fail = || {
+        StudyError::Solve("dense modal summation: the mass matrix is not positive definite".into())
+    };
     let n = k.nrows();
     let l = m.clone().cholesky().ok_or_else(fail)?.l();
     let linv_k = l.solve_lower_triangular(k).ok_or_else(fail)?;
@@ -156,7 +156,7 @@ fn modal_sum(modes: &DenseModes, dim: usize, damping: &Damping, w: f64) -> Matri
     out
 }
 
-/// `--dense-modal`: the summation over every dense mode at every frequency, and the LU at
+/// [`super::DenseCheckKind::Modal`]: the summation over every dense mode at every frequency, and the LU at
 /// `lu_points` of them (evenly spread indices, both ends included).
 pub fn modal_every(
     k: &DMatrix<f64>,
@@ -166,7 +166,7 @@ pub fn modal_every(
     freqs: &[f64],
     h: &[Matrix6<Complex64>],
     lu_points: usize,
-) -> Result<DenseCheck, CliError> {
+) -> Result<DenseCheck, StudyError> {
     let t0 = Instant::now();
     let modes = dense_modes(k, m, dim)?;
     let eig_seconds = t0.elapsed().as_secs_f64();
@@ -196,8 +196,7 @@ pub fn modal_every(
         let t1 = Instant::now();
         let (mut modal_rel_diff, mut structured_rel_diff) = (0.0f64, 0.0f64);
         for &i in &picks {
-            let r = dense_receptance(k, m, dim, damping, 2.0 * PI * freqs[i])
-                .map_err(|e| CliError::Analysis(e.to_string()))?;
+            let r = dense_receptance(k, m, dim, damping, 2.0 * PI * freqs[i])?;
             modal_rel_diff = modal_rel_diff.max(rel_diff(&dense[i], &r, dim));
             structured_rel_diff = structured_rel_diff.max(rel_diff(&h[i], &r, dim));
         }
