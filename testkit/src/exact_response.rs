@@ -13,7 +13,7 @@ use cablevib::modal::response::ModalResponse;
 use cablevib::scene::Damping;
 use cablevib::study::simulate::pilot;
 use cablevib::trajectory::moves::{Move, Profile};
-use nalgebra::{DMatrix, Matrix4, Matrix6, Vector3, Vector4, Vector6};
+use nalgebra::{DMatrix, DVector, Matrix4, Matrix6, Vector3, Vector4, Vector6};
 
 /// The damping ratio of a mode at ω (rad/s), from the damping's own numbers.
 fn zeta_of(d: &Damping, omega: f64) -> f64 {
@@ -52,8 +52,25 @@ pub fn exact_response(
     loads: &[Vector6<f64>],
     dt: f64,
 ) -> (Vec<Vector3<f64>>, ExactModes) {
+    exact_response_by(k, m, dim, damping, loads.len(), dt, |u, s| {
+        (0..dim).map(|r| u[r] * loads[s][r]).sum()
+    })
+}
+
+/// As [`exact_response`] for any load on the whole model: `modal_force(u, s)` is the force
+/// uᵀP(t_s) of the load P at sample s on the mass-normalised mode u (every DOF), over
+/// `samples` samples.
+pub fn exact_response_by(
+    k: &DMatrix<f64>,
+    m: &DMatrix<f64>,
+    dim: usize,
+    damping: &Damping,
+    samples: usize,
+    dt: f64,
+    modal_force: impl Fn(&DVector<f64>, usize) -> f64,
+) -> (Vec<Vector3<f64>>, ExactModes) {
     let (lambda, u) = dense_eig(k, m);
-    let mut out = vec![Vector3::zeros(); loads.len()];
+    let mut out = vec![Vector3::zeros(); samples];
     let mut info = ExactModes {
         count: lambda.len(),
         overdamped: 0,
@@ -64,9 +81,10 @@ pub fn exact_response(
         let z = zeta_of(damping, w);
         info.overdamped += usize::from(z > 1.0);
         info.zeta_max = info.zeta_max.max(z);
+        let uj: DVector<f64> = u.column(j).into_owned();
         let mut phi = Vector6::zeros();
         for (r, v) in phi.iter_mut().enumerate().take(dim) {
-            *v = u[(r, j)];
+            *v = uj[r];
         }
         #[rustfmt::skip]
         let a = Matrix4::new(
@@ -76,12 +94,12 @@ pub fn exact_response(
             0.0, 0.0, 0.0, 0.0,
         );
         let prop = (a * dt).exp();
-        let g = |s: usize| phi.dot(&loads[s]);
-        let mut x = Vector4::new(0.0, 0.0, g(0) / w, 0.0);
+        let g: Vec<f64> = (0..samples).map(|s| modal_force(&uj, s)).collect();
+        let mut x = Vector4::new(0.0, 0.0, g[0] / w, 0.0);
         for (s, o) in out.iter_mut().enumerate().skip(1) {
             // The ramp of this interval: ġ/ω set at its start, g/ω carried (continuous).
-            x[2] = g(s - 1) / w;
-            x[3] = (g(s) - g(s - 1)) / dt / w;
+            x[2] = g[s - 1] / w;
+            x[3] = (g[s] - g[s - 1]) / dt / w;
             x = prop * x;
             *o += phi.fixed_rows::<3>(0) * (x[0] / w);
         }
@@ -108,6 +126,14 @@ pub fn move_loads(
     rest: f64,
     dt: f64,
 ) -> Vec<Vector6<f64>> {
+    move_accelerations(d, t, rest, dt)
+        .iter()
+        .map(|a| -(ee_mass * Vector6::new(a.x, a.y, a.z, 0.0, 0.0, 0.0)))
+        .collect()
+}
+
+/// The accelerations (m/s²) of [`move_loads`]' move at its samples.
+pub fn move_accelerations(d: Vector3<f64>, t: f64, rest: f64, dt: f64) -> Vec<Vector3<f64>> {
     let mv = Move::new(Vector3::zeros(), d, t, Profile::SCurve).unwrap();
     let p = mv.sampled(dt, rest).unwrap().position_m;
     let n = p.len();
@@ -115,8 +141,7 @@ pub fn move_loads(
         .map(|k| {
             let prev = p[k.saturating_sub(1)];
             let next = p[(k + 1).min(n - 1)];
-            let a = (next - p[k] * 2.0 + prev) / (dt * dt);
-            -(ee_mass * Vector6::new(a.x, a.y, a.z, 0.0, 0.0, 0.0))
+            (next - p[k] * 2.0 + prev) / (dt * dt)
         })
         .collect()
 }

@@ -76,10 +76,13 @@
 //! ([`SagModalSolver::mode_shapes`](crate::modal::sagged::SagModalSolver::mode_shapes)). `solve`:
 //! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes). `count`:
 //! [`ModalSolver::eigen_clusters`](crate::modal::ModalSolver::eigen_clusters), the lowest
-//! eigenvalues and their multiplicities by count bisection.
+//! eigenvalues and their multiplicities by count bisection. `influence`: the quasi-static
+//! influence field (the nodes' static displacement per unit end-effector motion) in the
+//! shapes' layout, taut and sagged.
 
 mod chain_shape;
 mod count;
+mod influence;
 mod sag_chain_shape;
 mod sagged;
 mod solve;

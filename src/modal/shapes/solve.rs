@@ -17,26 +17,26 @@ const RUIZ_SWEEPS: usize = 30;
 
 /// One chain copy: a direction of one chain of one cable.
 #[derive(Debug, Clone)]
-struct ChainCopy {
+pub(super) struct ChainCopy {
     /// The chain's index in [`Layout::kinds`].
-    chain: usize,
+    pub(super) chain: usize,
     /// Unit direction of the copy (world frame).
     dir: Vector3<f64>,
     /// End direction on the end-effector's coordinates, G_iᵀ dir.
-    b: Vector6<f64>,
+    pub(super) b: Vector6<f64>,
 }
 
 /// How the models' chains attach, independent of λ.
 #[derive(Debug, Clone)]
-struct Layout {
+pub(super) struct Layout {
     /// Each active chain's kind.
-    kinds: Vec<ChainKind>,
+    pub(super) kinds: Vec<ChainKind>,
     /// Every chain copy.
-    copies: Vec<ChainCopy>,
+    pub(super) copies: Vec<ChainCopy>,
     /// Per cable: its copies' indices, its attachment map and whether it is continuous.
     cable_copies: Vec<Vec<usize>>,
     attach: Vec<Matrix3x6<f64>>,
-    fractions: Vec<Vec<f64>>,
+    pub(super) fractions: Vec<Vec<f64>>,
 }
 
 impl Layout {
@@ -96,7 +96,7 @@ impl Layout {
 impl Layout {
     /// Each cable's element mass between its node list's nodes, kg (its first chain's: all
     /// chains of a cable share the element mass; 0 without chains).
-    fn element_mass_kg(&self) -> Vec<f64> {
+    pub(super) fn element_mass_kg(&self) -> Vec<f64> {
         self.cable_copies
             .iter()
             .zip(&self.fractions)
@@ -135,30 +135,8 @@ impl ModalSolver {
         modes: &[(f64, u32)],
         params: &ShapeParams,
     ) -> Result<ModeShapes, ShapeError> {
-        params.check()?;
+        let layout = self.layout(models, arms_m, params)?;
         let dim = self.problem.dim;
-        if dim == 6 && arms_m.len() < models.len() {
-            return Err(ShapeError::MissingArms {
-                given: arms_m.len(),
-                cables: models.len(),
-            });
-        }
-        if models.iter().any(|m| {
-            m.chains[..m.n_chains].iter().any(|c| {
-                matches!(c.kind, ChainKind::Supported { free, hidden }
-                    if (free.n_el == 0) != (hidden.n_el == 0))
-            })
-        }) {
-            return Err(ShapeError::HiddenCable);
-        }
-        let arms = (dim == 6).then_some(arms_m);
-        let layout = Layout::new(models, arms, params.continuous_samples);
-        if layout.kinds.len() != self.problem.n_chains {
-            return Err(ShapeError::NotLoaded {
-                loaded: self.problem.n_chains,
-                given: layout.kinds.len(),
-            });
-        }
         let mut shapes = vec![ChainShape::default(); layout.kinds.len()];
         let mut out = ModeShapes {
             dim,
@@ -185,6 +163,42 @@ impl ModalSolver {
             }
         }
         Ok(out)
+    }
+
+    /// The chains' layout of `models` (the checks of [`Self::mode_shapes`]: parameters,
+    /// a rigid body's arms, hidden cables both discrete or both continuous, the models the
+    /// solver was loaded with).
+    pub(super) fn layout(
+        &self,
+        models: &[CableModel],
+        arms_m: &[Vector3<f64>],
+        params: &ShapeParams,
+    ) -> Result<Layout, ShapeError> {
+        params.check()?;
+        let dim = self.problem.dim;
+        if dim == 6 && arms_m.len() < models.len() {
+            return Err(ShapeError::MissingArms {
+                given: arms_m.len(),
+                cables: models.len(),
+            });
+        }
+        if models.iter().any(|m| {
+            m.chains[..m.n_chains].iter().any(|c| {
+                matches!(c.kind, ChainKind::Supported { free, hidden }
+                    if (free.n_el == 0) != (hidden.n_el == 0))
+            })
+        }) {
+            return Err(ShapeError::HiddenCable);
+        }
+        let arms = (dim == 6).then_some(arms_m);
+        let layout = Layout::new(models, arms, params.continuous_samples);
+        if layout.kinds.len() != self.problem.n_chains {
+            return Err(ShapeError::NotLoaded {
+                loaded: self.problem.n_chains,
+                given: layout.kinds.len(),
+            });
+        }
+        Ok(layout)
     }
 
     /// The shapes of one cluster (λ, m), appended to `out`.
@@ -430,7 +444,7 @@ fn ee_of(col: &DVector<f64>, dim: usize) -> Vector6<f64> {
 }
 
 /// Every cable's node displacements of a null vector: C_k w inside, G_i φ at the end.
-fn nodes(
+pub(super) fn nodes(
     layout: &Layout,
     shapes: &[ChainShape],
     col: &DVector<f64>,
