@@ -35,6 +35,11 @@
 //! basis and step (the propagator), so a step costs O(K·dim). A step or ramp load is
 //! reproduced to rounding whatever the step; no ζ ≥ 0 is refused.
 //!
+//! **A load on the whole robot.** The force f may stand for a load on every node: with
+//! load shapes ψ_j ([`ModalResponse::set_load_shapes`]) mode j's force is ψ_jᵀ f and the
+//! quasi-static answer F_ψ f, so u = F_ψ f + Σ φ_j (q_j − ψ_jᵀf/λ_j) (the cables' inertia
+//! under f = −M_ee a, [`crate::modal::quasi_static`]); by default ψ_j = φ_j and F_ψ = F.
+//!
 //! [`ModalResponse::set_basis`] changes the modes (the pose moved): the end-effector's
 //! dynamic displacement and velocity are carried across, projected on the new modes.
 //! Nothing allocates after [`ModalResponse::new`].
@@ -377,6 +382,11 @@ impl ModalResponse {
     /// The basis's end-effector shape part φ_j.
     pub fn phi(&self, j: usize) -> &Vector6<f64> {
         &self.modes[j].phi
+    }
+
+    /// The basis's load shape ψ_j ([`Self::set_load_shapes`]; φ_j by default).
+    pub fn load_shape(&self, j: usize) -> &Vector6<f64> {
+        &self.modes[j].load
     }
 
     /// The end-effector's acceleration under the force `f` now (the force of the last

@@ -7,7 +7,7 @@
 //! independent of the structured shapes the response uses), its influence field
 //! r = [I; −K_ii⁻¹ K_ie] by an LU solve of the dense K, the load −M r a(t) of the path's
 //! acceleration on every DOF, and every mode propagated exactly
-//! (`exact_response::exact_response_by`). The crate's response is its modal superposition
+//! (`exact_response::exact_whole_robot`). The crate's response is its modal superposition
 //! of the structured shapes with the load shapes of `ee_modal_basis` (participation factors
 //! φ_kᵀ M r from the structured shapes and the structured influence field).
 //!
@@ -18,14 +18,14 @@
 
 use cablevib::estimator::{Estimator, Tmin};
 use cablevib::kinematics::Pose;
-use cablevib::modal::response::ModalResponse;
 use cablevib::scene::{Damping, ElementKind, Scene};
 use cablevib::study::simulate::pilot::{self, DEFAULT_TOLERANCE};
 use cablevib_testkit::exact_response::{
-    crate_response, exact_response, exact_response_by, move_accelerations, move_loads,
+    crate_response, exact_response, exact_whole_robot, move_accelerations, move_loads,
     relative_error,
 };
-use nalgebra::{DMatrix, Vector3, Vector6};
+use cablevib_testkit::sag_cases::{sagged_fem, shipped};
+use nalgebra::{DMatrix, Vector3};
 
 use crate::hidden_cable::dense_ref;
 
@@ -49,62 +49,12 @@ fn paper_at(p: Vector3<f64>, mass_factor: f64) -> (Estimator, DMatrix<f64>, DMat
 /// suspended-8 with sag (fem × 10) at its scene position, with the crate's dense sagged
 /// (K, M).
 fn suspended() -> (Estimator, DMatrix<f64>, DMatrix<f64>) {
-    let mut scene = Scene::load("scenes/suspended_8.toml").unwrap();
-    scene.model.sag = true;
-    scene.model.element = ElementKind::Fem;
-    scene.model.elements_per_cable = 10;
+    let scene = sagged_fem(shipped("suspended_8.toml"), 10);
     let mut est = Estimator::new(&scene).unwrap();
     let e = *est.update(&Pose::in_scene(&scene, scene.ee_position_m), Tmin::Scene);
     assert!(e.is_ok(), "{:?}", e.error);
     let (k, m) = est.dense_matrices().unwrap();
     (est, k, m)
-}
-
-/// The exact response of the whole robot to the prescribed end-effector motion with
-/// accelerations `acc` (module docs): r by an LU solve of the dense K (end-effector DOFs
-/// 0..3, a point mass), the modal force −uᵀ M r a.
-fn exact_whole_robot(
-    k: &DMatrix<f64>,
-    m: &DMatrix<f64>,
-    acc: &[Vector3<f64>],
-) -> (Vec<Vector3<f64>>, f64) {
-    let (n, dim) = (k.nrows(), 3);
-    let kii = k.view((dim, dim), (n - dim, n - dim)).into_owned();
-    let kie = k.view((dim, 0), (n - dim, dim)).into_owned();
-    let mut r = DMatrix::<f64>::zeros(n, dim);
-    for d in 0..dim {
-        r[(d, d)] = 1.0;
-    }
-    let ri = kii.lu().solve(&kie).expect("K_ii regular");
-    r.view_mut((dim, 0), (n - dim, dim)).copy_from(&(-ri));
-    let mr = m * &r;
-    let mqs = r.transpose() * &mr;
-    let (u, _) = exact_response_by(k, m, dim, &DAMPING, acc.len(), DT, |u, s| {
-        let l = u.transpose() * &mr;
-        -(0..dim).map(|d| l[d] * acc[s][d]).sum::<f64>()
-    });
-    // The quasi-static mass's x entry, kg (the end-effector's and the cables' share).
-    (u, mqs[(0, 0)])
-}
-
-/// The crate's response with the first `kk` modes (a cluster cut completed) and the basis's
-/// load shapes, under the end-effector load `loads` (−M_ee a); its quasi-static x mass.
-fn crate_whole_robot(
-    est: &mut Estimator,
-    kk: usize,
-    loads: &[Vector6<f64>],
-) -> (Vec<Vector3<f64>>, usize, f64) {
-    let b = est.ee_modal_basis(kk).unwrap();
-    let mut r = ModalResponse::new(b.dim);
-    r.set_basis(&b.lambda, &b.phi_ee, &DAMPING, &b.flexibility, &b.ee_mass)
-        .unwrap();
-    r.set_load_shapes(&b.load_ee, &b.load_flexibility).unwrap();
-    let mut out = vec![r.displacement(&loads[0]).fixed_rows::<3>(0).into_owned()];
-    for s in 1..loads.len() {
-        r.step(&loads[s - 1], &loads[s], DT);
-        out.push(r.displacement(&loads[s]).fixed_rows::<3>(0).into_owned());
-    }
-    (out, b.lambda.len(), b.quasi_static_mass_kg[(0, 0)])
 }
 
 fn peak(u: &[Vector3<f64>]) -> f64 {
@@ -136,15 +86,17 @@ fn check(
     let acc = move_accelerations(d, 0.3, 0.2, DT);
     let ee_mass = est.ee_modal_basis(1).unwrap().ee_mass;
     let loads = move_loads(&ee_mass, d, 0.3, 0.2, DT);
-    let (exact, mqs_dense) = exact_whole_robot(k, m, &acc);
+    let (exact, _, mqs_dense) = exact_whole_robot(k, m, 3, &DAMPING, &acc, DT);
+    let mqs_dense = mqs_dense[(0, 0)];
     let (ee_only, _) = exact_response(k, m, 3, &DAMPING, &loads, DT);
     let all = all_modes.then(|| {
-        let (got, kept, _) = crate_whole_robot(est, k.nrows(), &loads);
+        let (got, kept) = crate_response(est, k.nrows(), &DAMPING, &loads, DT, true);
         assert_eq!(kept, k.nrows(), "{label}: every mode kept");
         relative_error(&got, &exact)
     });
     let c = pilot::choose(est, &DAMPING, &loads, DT, DEFAULT_TOLERANCE).unwrap();
-    let (got, kept, mqs) = crate_whole_robot(est, c.modes, &loads);
+    let (got, kept) = crate_response(est, c.modes, &DAMPING, &loads, DT, true);
+    let mqs = est.ee_modal_basis(1).unwrap().quasi_static_mass_kg[(0, 0)];
     let default_err = relative_error(&got, &exact);
     // The quasi-static mass: the structured field's against the dense solve's (rounding
     // of the two O(N) sums; a wrong field is off by a share of the cables' mass).
@@ -152,7 +104,7 @@ fn check(
         (mqs - mqs_dense).abs() <= 1e-9 * mqs_dense,
         "{label}: M_qs {mqs} vs {mqs_dense} kg"
     );
-    let (today, _) = crate_response(est, c.modes, &DAMPING, &loads, DT);
+    let (today, _) = crate_response(est, c.modes, &DAMPING, &loads, DT, false);
     let today_err = relative_error(&today, &exact);
     let out = Measured {
         all_modes: all,

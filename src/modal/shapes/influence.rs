@@ -11,7 +11,8 @@
 //! a hidden cable) interior solutions at λ = 0 are combined so that the end node has the
 //! attachment point's displacement E_iᵀ G_i e_d (and the junction's equation holds):
 //! a 3 × 3 (4 × 4) solve per cable and DOF. Exact to rounding for every chain model,
-//! O(N) per cable and DOF. The hidden cables' own nodes are not drawn (as in the shapes).
+//! O(N) per cable and DOF. A hidden cable's nodes are its axial displacements
+//! ([`ModeShape::hidden`]).
 
 use super::chain_shape::ChainShape;
 use super::sag_chain_shape::SagChainShape;
@@ -23,7 +24,7 @@ use crate::modal::ModalSolver;
 use nalgebra::{DVector, Matrix4, Vector3, Vector4, Vector6};
 
 /// The field of DOF `d`: a pseudo-shape at λ = 0 with the end-effector's unit displacement.
-fn field_shape(d: usize, cables: Vec<Vec<Vector3<f64>>>) -> ModeShape {
+fn field_shape(d: usize, (cables, hidden): (Vec<Vec<Vector3<f64>>>, Vec<Vec<f64>>)) -> ModeShape {
     let mut ee = Vector6::zeros();
     ee[d] = 1.0;
     ModeShape {
@@ -31,6 +32,7 @@ fn field_shape(d: usize, cables: Vec<Vec<Vector3<f64>>>) -> ModeShape {
         frequency_hz: 0.0,
         ee,
         cables,
+        hidden,
         ee_participation: 0.0,
         cluster_start: d,
         multiplicity: 1,
@@ -61,6 +63,7 @@ impl ModalSolver {
             fractions: layout.fractions.clone(),
             modes: Vec::with_capacity(dim),
             element_mass_kg: layout.element_mass_kg(),
+            hidden_element_mass_kg: layout.hidden_mass_kg.clone(),
         };
         for d in 0..dim {
             let mut col = DVector::zeros(dim + layout.copies.len());
@@ -102,6 +105,7 @@ impl SagModalSolver {
             .collect();
         for d in 0..dim {
             let mut cables = Vec::with_capacity(attach.len());
+            let mut hidden = Vec::with_capacity(attach.len());
             for (sh, at) in statics.iter().zip(&attach) {
                 let end = at.frame.transpose() * at.map.column(d);
                 // Amplitudes a: the end node's value (and, on a hidden cable, the
@@ -118,10 +122,11 @@ impl SagModalSolver {
                     rhs[3] = 0.0;
                 }
                 let amp = a.lu().solve(&rhs).ok_or(singular)?;
-                let (local, _) = sh.nodes(&amp, end);
+                let (local, c) = sh.nodes(&amp, end);
                 cables.push(local.into_iter().map(|x| at.frame * x).collect());
+                hidden.push(sh.hidden_nodes(c));
             }
-            out.modes.push(field_shape(d, cables));
+            out.modes.push(field_shape(d, (cables, hidden)));
         }
         Ok(out)
     }

@@ -246,17 +246,23 @@ impl SagModalSolver {
                 for r in 0..dim {
                     phi[r] = col[r];
                 }
-                let cables = local_nodes(&attach, &shapes, &hcol, &col, dim)
-                    .0
+                let (local, amps) = local_nodes(&attach, &shapes, &hcol, &col, dim);
+                let cables = local
                     .into_iter()
                     .zip(&attach)
                     .map(|(u, at)| u.into_iter().map(|x| at.frame * x).collect())
+                    .collect();
+                let hidden = shapes
+                    .iter()
+                    .zip(amps)
+                    .map(|(sh, c)| sh.hidden_nodes(c))
                     .collect();
                 out.modes.push(ModeShape {
                     lambda,
                     frequency_hz: lambda_to_hz(lambda),
                     ee: phi,
                     cables,
+                    hidden,
                     ee_participation: part,
                     cluster_start: start,
                     multiplicity: m,
@@ -332,6 +338,9 @@ impl SagModalSolver {
             modes: Vec::new(),
             element_mass_kg: (0..n_cables)
                 .map(|i| self.chain(i).element_mass_kg())
+                .collect(),
+            hidden_element_mass_kg: (0..n_cables)
+                .map(|i| self.chain(i).support().map_or(0.0, |s| s.hidden.m))
                 .collect(),
         };
         // The columns of the hidden cables' amplitudes c_i, after every a_i.
@@ -499,8 +508,19 @@ impl SagModalSolver {
                     .zip(&raw[0].nodes)
                     .map(|(_, u)| vec![Vector3::zeros(); u.len()])
                     .collect();
+                let mut hidden: Vec<Vec<f64>> = all_shapes[0]
+                    .iter()
+                    .map(|sh| vec![0.0; sh.hidden_nodes(0.0).len()])
+                    .collect();
                 for (r, w) in raw.iter().zip(c.iter()) {
                     phi += r.phi * *w;
+                    for ((dst, sh), &amp) in
+                        hidden.iter_mut().zip(&all_shapes[r.member]).zip(&r.hidden)
+                    {
+                        for (x, t) in dst.iter_mut().zip(sh.hidden_nodes(amp)) {
+                            *x += t * *w;
+                        }
+                    }
                     for ((dst, src), at) in cables.iter_mut().zip(&r.nodes).zip(attach) {
                         for (x, y) in dst.iter_mut().zip(src) {
                             *x += at.frame * y * *w;
@@ -512,6 +532,7 @@ impl SagModalSolver {
                     frequency_hz: lambda_to_hz(lambda),
                     ee: phi,
                     cables,
+                    hidden,
                     ee_participation: part,
                     cluster_start: first,
                     multiplicity: m,

@@ -37,6 +37,8 @@ pub(super) struct Layout {
     cable_copies: Vec<Vec<usize>>,
     attach: Vec<Matrix3x6<f64>>,
     pub(super) fractions: Vec<Vec<f64>>,
+    /// Per cable: its discrete hidden cable's element mass, kg (0 without one).
+    pub(super) hidden_mass_kg: Vec<f64>,
 }
 
 impl Layout {
@@ -51,6 +53,7 @@ impl Layout {
             cable_copies: Vec::new(),
             attach: Vec::new(),
             fractions: Vec::new(),
+            hidden_mass_kg: Vec::new(),
         };
         for (i, m) in models.iter().enumerate() {
             let g = match arms_m {
@@ -59,12 +62,18 @@ impl Layout {
             };
             let mut mine = Vec::new();
             let mut continuous = false;
+            let mut hidden_kg = 0.0;
             for c in &m.chains[..m.n_chains] {
                 if matches!(c.kind, ChainKind::Discrete { k, m, .. } if k == 0.0 && m == 0.0) {
                     continue; // no stiffness, no mass: loads nothing (as `load` skips it)
                 }
                 continuous |= matches!(c.kind, ChainKind::Continuous { .. })
                     || matches!(c.kind, ChainKind::Supported { free, .. } if free.n_el == 0);
+                if let ChainKind::Supported { hidden, .. } = c.kind {
+                    if hidden.n_el > 0 {
+                        hidden_kg = hidden.m;
+                    }
+                }
                 let e = eig3_jacobi(&c.proj);
                 for r in 0..3 {
                     if e.values[r] > PROJ_RANGE_MIN {
@@ -88,6 +97,7 @@ impl Layout {
                 .push((0..=n).map(|j| j as f64 / n as f64).collect());
             l.cable_copies.push(mine);
             l.attach.push(g);
+            l.hidden_mass_kg.push(hidden_kg);
         }
         l
     }
@@ -105,6 +115,12 @@ impl Layout {
                     Some(ChainKind::Discrete { m, .. }) => m,
                     Some(ChainKind::Continuous { m_total, .. }) => {
                         m_total / (fr.len().saturating_sub(1)).max(1) as f64
+                    }
+                    // A supported chain's free cable: its element mass, or its whole mass
+                    // over the sample intervals (continuous).
+                    Some(ChainKind::Supported { free, .. }) if free.n_el > 0 => free.m,
+                    Some(ChainKind::Supported { free, .. }) => {
+                        free.m / (fr.len().saturating_sub(1)).max(1) as f64
                     }
                     _ => 0.0,
                 },
@@ -143,6 +159,7 @@ impl ModalSolver {
             fractions: layout.fractions.clone(),
             modes: Vec::new(),
             element_mass_kg: layout.element_mass_kg(),
+            hidden_element_mass_kg: layout.hidden_mass_kg.clone(),
         };
         for &(lambda, m) in modes {
             if !(lambda.is_finite() && lambda > 0.0) || m == 0 || m > MAX_MULTIPLICITY {
@@ -217,11 +234,13 @@ impl ModalSolver {
         let v = self.normalise(layout, shapes, &null.vectors);
         let start = out.modes.len();
         for (col, part) in v {
+            let (cables, hidden) = nodes(layout, shapes, &col, out.dim);
             out.modes.push(ModeShape {
                 lambda,
                 frequency_hz: lambda_to_hz(lambda),
                 ee: ee_of(&col, out.dim),
-                cables: nodes(layout, shapes, &col, out.dim),
+                cables,
+                hidden,
                 ee_participation: part,
                 cluster_start: start,
                 multiplicity: m,
@@ -443,15 +462,31 @@ fn ee_of(col: &DVector<f64>, dim: usize) -> Vector6<f64> {
     ee
 }
 
-/// Every cable's node displacements of a null vector: C_k w inside, G_i φ at the end.
+/// Every cable's node displacements of a null vector: C_k w inside, G_i φ at the end; and
+/// each hidden cable's (C_k times the supported chain's hidden nodes, empty without one).
 pub(super) fn nodes(
     layout: &Layout,
     shapes: &[ChainShape],
     col: &DVector<f64>,
     dim: usize,
-) -> Vec<Vec<Vector3<f64>>> {
+) -> (Vec<Vec<Vector3<f64>>>, Vec<Vec<f64>>) {
     let phi = ee_of(col, dim);
-    layout
+    let hidden = layout
+        .cable_copies
+        .iter()
+        .map(|copies| {
+            copies
+                .iter()
+                .find(|&&q| !shapes[layout.copies[q].chain].hidden_w.is_empty())
+                .map(|&q| {
+                    let amp = col[dim + q];
+                    let sh = &shapes[layout.copies[q].chain];
+                    sh.hidden_w.iter().map(|w| amp * w).collect()
+                })
+                .unwrap_or_default()
+        })
+        .collect();
+    let cables = layout
         .cable_copies
         .iter()
         .enumerate()
@@ -476,5 +511,6 @@ pub(super) fn nodes(
             u[last] = layout.attach[i] * phi;
             u
         })
-        .collect()
+        .collect();
+    (cables, hidden)
 }

@@ -211,7 +211,8 @@ pub(super) fn run(
         let nm = resp.modes();
         resp.dynamic_amplitudes(&f_prev, &mut amplitude[..nm]);
         for (j, (p, l)) in phi2.iter_mut().zip(lambda0.iter_mut()).enumerate().take(nm) {
-            *p = resp.phi(j).norm_squared();
+            // |φ_j| |ψ_j|: the end-effector's share of what the load ψ_jᵀf can add.
+            *p = resp.phi(j).norm() * resp.load_shape(j).norm();
             *l = resp.lambda(j);
         }
         let (k1, next, error) = loop {
