@@ -38,7 +38,7 @@
 //! **A load on the whole robot.** The force f may stand for a load on every node: with
 //! load shapes ψ_j ([`ModalResponse::set_load_shapes`]) mode j's force is ψ_jᵀ f and the
 //! quasi-static answer F_ψ f, so u = F_ψ f + Σ φ_j (q_j − ψ_jᵀf/λ_j) (the cables' inertia
-//! under f = −M_ee a, [`crate::modal::quasi_static`]); by default ψ_j = φ_j and F_ψ = F.
+//! under f = −M_ee a, the modal `quasi_static` module); by default ψ_j = φ_j and F_ψ = F.
 //!
 //! [`ModalResponse::set_basis`] changes the modes (the pose moved): the end-effector's
 //! dynamic displacement and velocity are carried across, projected on the new modes.
@@ -263,7 +263,7 @@ impl ModalResponse {
     /// `load` (one per mode of the basis just set, in its order; first `dim` entries) and
     /// the quasi-static answer as `load_flexibility` · f, the displacement staying
     /// Σ φ_j q_j: a force f that stands for a load on the whole robot
-    /// ([`crate::modal::quasi_static`]: the cables' inertia under f = −M_ee a). Call it
+    /// (the modal `quasi_static` module: the cables' inertia under f = −M_ee a). Call it
     /// after [`Self::set_basis`] or [`Self::set_basis_projected`]; the modes' dynamic parts
     /// d_j = q_j − ψ_jᵀf/λ_j are kept. Until then (or with ψ = φ and F) the force acts on
     /// the end-effector alone. Allocation-free.
