@@ -10,17 +10,21 @@ use nalgebra::{DMatrix, Matrix6, Vector6};
 
 impl EeModalBasis {
     /// The basis of the structured engine's mode shapes (taut or sagging FEM cables) and
-    /// the pose's influence field (the same node lists).
+    /// the pose's influence field (the same node lists), or with the end-effector's load
+    /// alone when `field` is None (sagging cables: [`modal::quasi_static`]).
     fn structured(
         dim: usize,
         shapes: modal::ModeShapes,
-        field: &modal::ModeShapes,
+        field: Option<&modal::ModeShapes>,
         flexibility: Matrix6<f64>,
         ee_mass: Matrix6<f64>,
     ) -> Result<EeModalBasis, BasisError> {
-        let load = QuasiStaticLoad::from_shapes(&shapes, field, &ee_mass).ok_or(
-            BasisError::QuasiStatic("the influence field's nodes are not the shapes'"),
-        )?;
+        let load = match field {
+            Some(field) => QuasiStaticLoad::from_shapes(&shapes, field, &ee_mass).ok_or(
+                BasisError::QuasiStatic("the influence field's nodes are not the shapes'"),
+            )?,
+            None => QuasiStaticLoad::end_effector_only(&shapes, &ee_mass),
+        };
         EeModalBasis {
             dim,
             lambda: shapes.modes.iter().map(|m| m.lambda).collect(),
@@ -214,13 +218,15 @@ pub struct EeModalBasis {
     /// Each mode's load shape ψ_k = M_ee⁻¹ L_k (1/√kg; zeros beyond `dim`): under the
     /// end-effector load f = −M_ee a of a path's acceleration a, mode k's force is ψ_kᵀ f =
     /// −L_kᵀ a, the quasi-static inertia of the whole robot, the cables' included
-    /// ([`modal::quasi_static`]); `phi_ee` where the cables carry no mass.
+    /// ([`modal::quasi_static`]); `phi_ee` where the cables carry no mass or sag (the
+    /// end-effector's load alone).
     pub load_ee: Vec<Vector6<f64>>,
     /// The end-effector's static answer to that load per unit f, F M_qs M_ee⁻¹ (m/N;
-    /// `flexibility` where the cables carry no mass).
+    /// `flexibility` where the cables carry no mass or sag).
     pub load_flexibility: Matrix6<f64>,
     /// The robot's quasi-static mass M_qs = rᵀ M r (kg, kg·m²): the end-effector's and the
-    /// share of the cables' the end-effector's motion carries.
+    /// share of the cables' the end-effector's motion carries (`ee_mass` where the cables
+    /// sag).
     pub quasi_static_mass_kg: Matrix6<f64>,
 }
 
@@ -277,7 +283,7 @@ impl Estimator {
             let field = solver
                 .influence_field(models, &geometry.arm_m, &params)
                 .map_err(BasisError::Shapes)?;
-            return EeModalBasis::structured(dim, shapes, &field, flexibility, ee_mass);
+            return EeModalBasis::structured(dim, shapes, Some(&field), flexibility, ee_mass);
         }
         if let Some((solver, h, up, geometry)) = self.cycle.sag_shapes_input() {
             if !solver.is_continuous() {
@@ -288,10 +294,9 @@ impl Estimator {
                 let shapes = solver
                     .mode_shapes(&h, &up, &geometry.arm_m, &clusters, &params)
                     .map_err(BasisError::Shapes)?;
-                let field = solver
-                    .influence_field(&h, &up, &geometry.arm_m, &params)
-                    .map_err(BasisError::Shapes)?;
-                return EeModalBasis::structured(dim, shapes, &field, flexibility, ee_mass);
+                // The end-effector's load alone: the cables' fixed-length field is not
+                // the path's on sagging cables ([`modal::quasi_static`]).
+                return EeModalBasis::structured(dim, shapes, None, flexibility, ee_mass);
             }
         }
         let (kk, mm) = self.dense_matrices()?;

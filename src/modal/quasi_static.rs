@@ -33,6 +33,19 @@
 //! [`QuasiStaticLoad::load_shapes`] and [`QuasiStaticLoad::load_flexibility`]. Without cable
 //! mass L_k = M_ee φ_k, so ψ_k = φ_k and F_ψ = F: today's end-effector load. Only the
 //! dim × dim blocks are used (a point mass: translations).
+//!
+//! **Sagging cables: the end-effector's load alone.** The field r above holds every cable
+//! at its unstretched length, the linear model's own static condensation. Along a path the
+//! winches change the lengths with the pose, and the nodes (at fixed fractions of the
+//! length) follow the sagged equilibrium of each pose's tension distribution instead. On
+//! taut cables both fields are the linear interpolation along the chord; on a slack
+//! sagging cable they are not: at fixed length a chord change changes the sag by many
+//! times the end-effector's motion (`suspended-8` with sag: M_qs = 545.6 kg against an
+//! end-effector of 50 kg, and a response 11× the end-effector-only one), far more than the
+//! path's catenaries move. The path's field (the derivative of the sagged equilibrium's
+//! node positions with the pose, lengths re-solved) is not computed, so sagging models
+//! take the end-effector's load alone ([`QuasiStaticLoad::end_effector_only`]): the
+//! cables' inertia is applied to taut cables only.
 
 use super::ModeShapes;
 use nalgebra::{DMatrix, Matrix6, Vector6};
@@ -86,6 +99,23 @@ impl QuasiStaticLoad {
             participation,
             mass_kg,
         })
+    }
+
+    /// The end-effector's load alone, L_k = M_ee φ_k and M_qs = M_ee (on the `dim` block):
+    /// the load shapes are then the end-effector parts of the shapes and the load
+    /// flexibility the static one. What sagging cables take (module docs).
+    pub fn end_effector_only(shapes: &ModeShapes, ee_mass: &Matrix6<f64>) -> QuasiStaticLoad {
+        let dim = shapes.dim;
+        let mut mass_kg = Matrix6::zeros();
+        mass_kg
+            .view_mut((0, 0), (dim, dim))
+            .copy_from(&ee_mass.view((0, 0), (dim, dim)));
+        let participation = shapes.modes.iter().map(|m| mass_kg * m.ee).collect();
+        QuasiStaticLoad {
+            dim,
+            participation,
+            mass_kg,
+        }
     }
 
     /// From a dense (K, M) whose first `dim` DOFs are the end-effector's and the

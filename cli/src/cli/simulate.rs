@@ -354,6 +354,10 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
             acc.interval_estimate_sum
         )?;
     }
+    if s.model.sag {
+        // The fixed-length field of a sagging cable is not the path's (modal::quasi_static).
+        outln!("note: cable inertia applied to taut cables only (sagging cables: the end-effector's load alone)")?;
+    }
     write_outputs(a, &s, &runs)?;
     Ok(())
 }
