@@ -223,7 +223,9 @@ pub struct DefaultChoice {
 /// (`study::simulate::pilot::choose` at the default tolerance), the crate's response with
 /// them (the whole robot's inertia, as `simulate`), and its error against
 /// [`exact_whole_robot`] of the dense (K, M) (DOF 0..`dim` the end-effector) under the
-/// path's accelerations `acc` (`loads` = −M_ee a of the same).
+/// path's accelerations `acc` (`loads` = −M_ee a of the same). Sagging models take the
+/// end-effector's load alone (the crate's `modal::quasi_static` docs), so for them the
+/// reference is [`exact_response`] of the same (K, M) under `loads`.
 #[allow(clippy::too_many_arguments)]
 pub fn default_choice(
     est: &mut Estimator,
@@ -239,7 +241,12 @@ pub fn default_choice(
     assert!(c.met, "the choice reports it missed the tolerance: {c:?}");
     let (got, kept) = crate_response(est, c.modes, damping, loads, dt, true);
     assert_eq!(kept, c.modes, "the choice ends a cluster");
-    let (exact, info, _) = exact_whole_robot(k, m, dim, damping, acc, dt);
+    let (exact, info) = if est.scene().model.sag {
+        exact_response(k, m, dim, damping, loads, dt)
+    } else {
+        let (exact, info, _) = exact_whole_robot(k, m, dim, damping, acc, dt);
+        (exact, info)
+    };
     DefaultChoice {
         modes: c.modes,
         estimate: c.estimate,
