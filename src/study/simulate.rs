@@ -5,15 +5,20 @@
 //! **Model.** The robot follows the commanded path quasi-statically (each sample's pose is
 //! the equilibrium the estimator solves); what vibrates is the deviation u from it. About
 //! each pose the structure is linear (the estimator's model: stiffness, mass, tensions of
-//! that pose), so M ü + C u̇ + K u = f with the inertial load of the quasi-static motion on
-//! the end-effector, f = −M_ee [a; 0] (the end-effector's mass times the path's
-//! acceleration a, by central differences of the samples). Included: that load on every
-//! mode, through the first K modes of the pose (the structured engine's frequencies and
-//! mass-normalised shapes, taut or sagging), the damping of the
-//! scene (each mode's ratio [`Damping::modal_ratio`]), the static correction of the modes
-//! left out (mode-acceleration method, [`ModalResponse`](crate::modal::response::ModalResponse)). Left out: the cables' own
-//! share of the quasi-static motion's inertia (their nodes following the end-effector:
-//! about a third of each cable's mass), the rotational load −I·α − ω×Iω (the paths here
+//! that pose), so M ü + C u̇ + K u = −M r a with the inertial load of the quasi-static
+//! motion of the whole robot: every cable node carried along with the end-effector by the
+//! static influence field r (anchors held, lengths fixed), M the whole robot's mass, a the
+//! path's acceleration by central differences of the samples
+//! ([`crate::modal::quasi_static`]: the modes' participation factors φ_kᵀ M r and the
+//! quasi-static mass rᵀ M r, taken by the response as load shapes of the end-effector
+//! force −M_ee [a; 0]). Included: that load on every mode, through the first K modes of
+//! the pose (the structured engine's frequencies and mass-normalised shapes, taut or
+//! sagging), the damping of the scene (each mode's ratio [`Damping::modal_ratio`]), the
+//! static correction of the modes left out (mode-acceleration method,
+//! [`ModalResponse`](crate::modal::response::ModalResponse)). Left out: a sagging cable's
+//! change of profile with the winches' lengths along the path (the field is the
+//! fixed-length one), [`simulate_forced`]'s loop (the end-effector's mass alone), the
+//! rotational load −I·α − ω×Iω (the paths here
 //! keep the orientation fixed: it is zero for them), gravity's change with the pose (it is
 //! in the quasi-static pose), and the winches' dynamics.
 //!
@@ -38,6 +43,9 @@ use crate::trajectory::{Samples, Trajectory};
 use core::ops::AddAssign;
 use nalgebra::{Vector3, Vector6};
 
+pub use path_spec::{simulate_shaped, PathSpec, ShapedRun};
+
+pub mod path_spec;
 pub mod pilot;
 mod propagate;
 pub mod updates;

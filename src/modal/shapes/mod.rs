@@ -76,10 +76,13 @@
 //! ([`SagModalSolver::mode_shapes`](crate::modal::sagged::SagModalSolver::mode_shapes)). `solve`:
 //! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes). `count`:
 //! [`ModalSolver::eigen_clusters`](crate::modal::ModalSolver::eigen_clusters), the lowest
-//! eigenvalues and their multiplicities by count bisection.
+//! eigenvalues and their multiplicities by count bisection. `influence`: the quasi-static
+//! influence field (the nodes' static displacement per unit end-effector motion) in the
+//! shapes' layout, taut and sagged.
 
 mod chain_shape;
 mod count;
+mod influence;
 mod sag_chain_shape;
 mod sagged;
 mod solve;
@@ -142,6 +145,10 @@ pub struct ModeShape {
     /// motion along the cable on a hidden cable) to end-effector; at the fractions
     /// [`ModeShapes::fractions`] of the chord (the hidden cable's own nodes are not drawn).
     pub cables: Vec<Vec<Vector3<f64>>>,
+    /// Each cable's hidden cable (behind its pulley, FEM): its nodes' displacement along
+    /// it (1/√kg), from the fixed drum to the junction; empty for a cable without one (or
+    /// a continuous one, whose hidden part enters the normalisation only).
+    pub hidden: Vec<Vec<f64>>,
     /// End-effector participation φ_eeᵀ M_ee φ_ee (0 ..= 1).
     pub ee_participation: f64,
     /// Index (in [`ModeShapes::modes`]) of the first shape of this mode's cluster.
@@ -166,10 +173,13 @@ pub struct ModeShapes {
     /// (m/6)[2I I; I 2I] of each element of the node lists (a continuous cable's total
     /// mass over its sample intervals, an approximation of its mass there).
     pub element_mass_kg: Vec<f64>,
+    /// Each cable's hidden cable's element mass, kg (0 without one).
+    pub hidden_element_mass_kg: Vec<f64>,
 }
 
 impl ModeShapes {
-    /// The mass overlaps O_ji = φ_jᵀ M φ'_i of these shapes (j, rows) with `old` (i,
+    /// The mass overlaps O_ji = φ_jᵀ M φ'_i of these shapes (the hidden cables' nodes
+    /// included) (j, rows) with `old` (i,
     /// columns), row-major, the mass M of these shapes' cables and `ee_mass` (the
     /// end-effector's, kg and kg·m²) on node lists of the same sizes: at one pose, the
     /// identity for M-orthonormal shapes; across a small change of pose, how each old mode
@@ -198,11 +208,25 @@ impl ModeShapes {
                     }
                     s += m / 6.0 * e;
                 }
+                for (i, (ha, hb)) in a.hidden.iter().zip(&b.hidden).enumerate() {
+                    if ha.len() == hb.len() {
+                        let m = self.hidden_element_mass_kg.get(i).copied().unwrap_or(0.0);
+                        s += m / 6.0 * scalar_mass_form(ha, hb);
+                    }
+                }
                 out.push(s);
             }
         }
         Some(out)
     }
+}
+
+/// Σ over the elements of a scalar chain of 2a_j b_j + a_j b_{j+1} + a_{j+1} b_j +
+/// 2a_{j+1} b_{j+1} (6/m times its consistent mass's bilinear form).
+fn scalar_mass_form(a: &[f64], b: &[f64]) -> f64 {
+    (0..a.len().saturating_sub(1))
+        .map(|j| 2.0 * a[j] * b[j] + a[j] * b[j + 1] + a[j + 1] * b[j] + 2.0 * a[j + 1] * b[j + 1])
+        .sum()
 }
 
 /// Errors of the mode-shape recovery.

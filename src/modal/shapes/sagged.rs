@@ -108,9 +108,9 @@ const NEAR_MAX_REL: f64 = 1e-3;
 const NEAR_GRAM_MIN: f64 = 0.5;
 
 /// How one loaded cable attaches: its frame E = [h up n] and attachment map (3 × dim).
-struct Attach {
-    frame: Matrix3<f64>,
-    map: Matrix3x6<f64>,
+pub(super) struct Attach {
+    pub(super) frame: Matrix3<f64>,
+    pub(super) map: Matrix3x6<f64>,
 }
 
 impl SagModalSolver {
@@ -152,69 +152,9 @@ impl SagModalSolver {
         modes: &[(f64, u32)],
         params: &ShapeParams,
     ) -> Result<ModeShapes, ShapeError> {
-        params.check()?;
-        if self.is_continuous() {
-            return Err(ShapeError::SagContinuous);
-        }
-        // A FEM chain's hidden cable is discrete (the continuous bar goes with the
-        // continuous chain, refused above).
-        if (0..self.loaded_cables())
-            .any(|i| self.chain(i).support().is_some_and(|s| s.hidden.n_el == 0))
-        {
-            return Err(ShapeError::HiddenCable);
-        }
+        let (attach, mut out, hcol) = self.frame(h, up, arms_m, params)?;
         let dim = self.dim();
         let n_cables = self.loaded_cables();
-        if h.len() != n_cables || n_cables == 0 {
-            return Err(ShapeError::NotLoaded {
-                loaded: n_cables,
-                given: h.len(),
-            });
-        }
-        if dim == 6 && arms_m.len() < n_cables {
-            return Err(ShapeError::MissingArms {
-                given: arms_m.len(),
-                cables: n_cables,
-            });
-        }
-        let attach: Vec<Attach> = (0..n_cables)
-            .map(|i| {
-                let n = h[i].cross(up);
-                let map = if dim == 6 {
-                    attach_map(&arms_m[i])
-                } else {
-                    attach_map(&Vector3::zeros())
-                };
-                Attach {
-                    frame: Matrix3::from_columns(&[h[i], *up, n]),
-                    map,
-                }
-            })
-            .collect();
-        let fractions = (0..n_cables)
-            .map(|i| {
-                let n = self.chain(i).n_el().max(1);
-                (0..=n).map(|j| j as f64 / n as f64).collect()
-            })
-            .collect();
-        let mut out = ModeShapes {
-            dim,
-            fractions,
-            modes: Vec::new(),
-            element_mass_kg: (0..n_cables)
-                .map(|i| self.chain(i).element_mass_kg())
-                .collect(),
-        };
-        // The columns of the hidden cables' amplitudes c_i, after every a_i.
-        let mut next = dim + 3 * n_cables;
-        let hcol: Vec<Option<usize>> = (0..n_cables)
-            .map(|i| {
-                self.chain(i).support().map(|_| {
-                    next += 1;
-                    next - 1
-                })
-            })
-            .collect();
         let (m6, k6) = self.ee_matrices();
         for &(lambda, m) in modes {
             if !(lambda.is_finite() && lambda > 0.0) || m == 0 || m > MAX_MULTIPLICITY {
@@ -306,17 +246,23 @@ impl SagModalSolver {
                 for r in 0..dim {
                     phi[r] = col[r];
                 }
-                let cables = local_nodes(&attach, &shapes, &hcol, &col, dim)
-                    .0
+                let (local, amps) = local_nodes(&attach, &shapes, &hcol, &col, dim);
+                let cables = local
                     .into_iter()
                     .zip(&attach)
                     .map(|(u, at)| u.into_iter().map(|x| at.frame * x).collect())
+                    .collect();
+                let hidden = shapes
+                    .iter()
+                    .zip(amps)
+                    .map(|(sh, c)| sh.hidden_nodes(c))
                     .collect();
                 out.modes.push(ModeShape {
                     lambda,
                     frequency_hz: lambda_to_hz(lambda),
                     ee: phi,
                     cables,
+                    hidden,
                     ee_participation: part,
                     cluster_start: start,
                     multiplicity: m,
@@ -325,6 +271,89 @@ impl SagModalSolver {
             }
         }
         Ok(out)
+    }
+}
+
+impl SagModalSolver {
+    /// The checks of [`Self::mode_shapes`] (parameters, FEM chains, discrete hidden cables,
+    /// one horizontal per loaded cable, a rigid body's arms), each cable's frame and
+    /// attachment, the shapes' node lists without modes, and the column of each hidden
+    /// cable's amplitude in the bordered system.
+    #[allow(clippy::type_complexity)]
+    pub(super) fn frame(
+        &self,
+        h: &[Vector3<f64>],
+        up: &Vector3<f64>,
+        arms_m: &[Vector3<f64>],
+        params: &ShapeParams,
+    ) -> Result<(Vec<Attach>, ModeShapes, Vec<Option<usize>>), ShapeError> {
+        params.check()?;
+        if self.is_continuous() {
+            return Err(ShapeError::SagContinuous);
+        }
+        // A FEM chain's hidden cable is discrete (the continuous bar goes with the
+        // continuous chain, refused above).
+        if (0..self.loaded_cables())
+            .any(|i| self.chain(i).support().is_some_and(|s| s.hidden.n_el == 0))
+        {
+            return Err(ShapeError::HiddenCable);
+        }
+        let dim = self.dim();
+        let n_cables = self.loaded_cables();
+        if h.len() != n_cables || n_cables == 0 {
+            return Err(ShapeError::NotLoaded {
+                loaded: n_cables,
+                given: h.len(),
+            });
+        }
+        if dim == 6 && arms_m.len() < n_cables {
+            return Err(ShapeError::MissingArms {
+                given: arms_m.len(),
+                cables: n_cables,
+            });
+        }
+        let attach: Vec<Attach> = (0..n_cables)
+            .map(|i| {
+                let n = h[i].cross(up);
+                let map = if dim == 6 {
+                    attach_map(&arms_m[i])
+                } else {
+                    attach_map(&Vector3::zeros())
+                };
+                Attach {
+                    frame: Matrix3::from_columns(&[h[i], *up, n]),
+                    map,
+                }
+            })
+            .collect();
+        let fractions = (0..n_cables)
+            .map(|i| {
+                let n = self.chain(i).n_el().max(1);
+                (0..=n).map(|j| j as f64 / n as f64).collect()
+            })
+            .collect();
+        let out = ModeShapes {
+            dim,
+            fractions,
+            modes: Vec::new(),
+            element_mass_kg: (0..n_cables)
+                .map(|i| self.chain(i).element_mass_kg())
+                .collect(),
+            hidden_element_mass_kg: (0..n_cables)
+                .map(|i| self.chain(i).support().map_or(0.0, |s| s.hidden.m))
+                .collect(),
+        };
+        // The columns of the hidden cables' amplitudes c_i, after every a_i.
+        let mut next = dim + 3 * n_cables;
+        let hcol: Vec<Option<usize>> = (0..n_cables)
+            .map(|i| {
+                self.chain(i).support().map(|_| {
+                    next += 1;
+                    next - 1
+                })
+            })
+            .collect();
+        Ok((attach, out, hcol))
     }
 }
 
@@ -479,8 +508,19 @@ impl SagModalSolver {
                     .zip(&raw[0].nodes)
                     .map(|(_, u)| vec![Vector3::zeros(); u.len()])
                     .collect();
+                let mut hidden: Vec<Vec<f64>> = all_shapes[0]
+                    .iter()
+                    .map(|sh| vec![0.0; sh.hidden_nodes(0.0).len()])
+                    .collect();
                 for (r, w) in raw.iter().zip(c.iter()) {
                     phi += r.phi * *w;
+                    for ((dst, sh), &amp) in
+                        hidden.iter_mut().zip(&all_shapes[r.member]).zip(&r.hidden)
+                    {
+                        for (x, t) in dst.iter_mut().zip(sh.hidden_nodes(amp)) {
+                            *x += t * *w;
+                        }
+                    }
                     for ((dst, src), at) in cables.iter_mut().zip(&r.nodes).zip(attach) {
                         for (x, y) in dst.iter_mut().zip(src) {
                             *x += at.frame * y * *w;
@@ -492,6 +532,7 @@ impl SagModalSolver {
                     frequency_hz: lambda_to_hz(lambda),
                     ee: phi,
                     cables,
+                    hidden,
                     ee_participation: part,
                     cluster_start: first,
                     multiplicity: m,

@@ -17,26 +17,28 @@ const RUIZ_SWEEPS: usize = 30;
 
 /// One chain copy: a direction of one chain of one cable.
 #[derive(Debug, Clone)]
-struct ChainCopy {
+pub(super) struct ChainCopy {
     /// The chain's index in [`Layout::kinds`].
-    chain: usize,
+    pub(super) chain: usize,
     /// Unit direction of the copy (world frame).
     dir: Vector3<f64>,
     /// End direction on the end-effector's coordinates, G_iᵀ dir.
-    b: Vector6<f64>,
+    pub(super) b: Vector6<f64>,
 }
 
 /// How the models' chains attach, independent of λ.
 #[derive(Debug, Clone)]
-struct Layout {
+pub(super) struct Layout {
     /// Each active chain's kind.
-    kinds: Vec<ChainKind>,
+    pub(super) kinds: Vec<ChainKind>,
     /// Every chain copy.
-    copies: Vec<ChainCopy>,
+    pub(super) copies: Vec<ChainCopy>,
     /// Per cable: its copies' indices, its attachment map and whether it is continuous.
     cable_copies: Vec<Vec<usize>>,
     attach: Vec<Matrix3x6<f64>>,
-    fractions: Vec<Vec<f64>>,
+    pub(super) fractions: Vec<Vec<f64>>,
+    /// Per cable: its discrete hidden cable's element mass, kg (0 without one).
+    pub(super) hidden_mass_kg: Vec<f64>,
 }
 
 impl Layout {
@@ -51,6 +53,7 @@ impl Layout {
             cable_copies: Vec::new(),
             attach: Vec::new(),
             fractions: Vec::new(),
+            hidden_mass_kg: Vec::new(),
         };
         for (i, m) in models.iter().enumerate() {
             let g = match arms_m {
@@ -59,12 +62,18 @@ impl Layout {
             };
             let mut mine = Vec::new();
             let mut continuous = false;
+            let mut hidden_kg = 0.0;
             for c in &m.chains[..m.n_chains] {
                 if matches!(c.kind, ChainKind::Discrete { k, m, .. } if k == 0.0 && m == 0.0) {
                     continue; // no stiffness, no mass: loads nothing (as `load` skips it)
                 }
                 continuous |= matches!(c.kind, ChainKind::Continuous { .. })
                     || matches!(c.kind, ChainKind::Supported { free, .. } if free.n_el == 0);
+                if let ChainKind::Supported { hidden, .. } = c.kind {
+                    if hidden.n_el > 0 {
+                        hidden_kg = hidden.m;
+                    }
+                }
                 let e = eig3_jacobi(&c.proj);
                 for r in 0..3 {
                     if e.values[r] > PROJ_RANGE_MIN {
@@ -88,6 +97,7 @@ impl Layout {
                 .push((0..=n).map(|j| j as f64 / n as f64).collect());
             l.cable_copies.push(mine);
             l.attach.push(g);
+            l.hidden_mass_kg.push(hidden_kg);
         }
         l
     }
@@ -96,7 +106,7 @@ impl Layout {
 impl Layout {
     /// Each cable's element mass between its node list's nodes, kg (its first chain's: all
     /// chains of a cable share the element mass; 0 without chains).
-    fn element_mass_kg(&self) -> Vec<f64> {
+    pub(super) fn element_mass_kg(&self) -> Vec<f64> {
         self.cable_copies
             .iter()
             .zip(&self.fractions)
@@ -105,6 +115,12 @@ impl Layout {
                     Some(ChainKind::Discrete { m, .. }) => m,
                     Some(ChainKind::Continuous { m_total, .. }) => {
                         m_total / (fr.len().saturating_sub(1)).max(1) as f64
+                    }
+                    // A supported chain's free cable: its element mass, or its whole mass
+                    // over the sample intervals (continuous).
+                    Some(ChainKind::Supported { free, .. }) if free.n_el > 0 => free.m,
+                    Some(ChainKind::Supported { free, .. }) => {
+                        free.m / (fr.len().saturating_sub(1)).max(1) as f64
                     }
                     _ => 0.0,
                 },
@@ -135,6 +151,46 @@ impl ModalSolver {
         modes: &[(f64, u32)],
         params: &ShapeParams,
     ) -> Result<ModeShapes, ShapeError> {
+        let layout = self.layout(models, arms_m, params)?;
+        let dim = self.problem.dim;
+        let mut shapes = vec![ChainShape::default(); layout.kinds.len()];
+        let mut out = ModeShapes {
+            dim,
+            fractions: layout.fractions.clone(),
+            modes: Vec::new(),
+            element_mass_kg: layout.element_mass_kg(),
+            hidden_element_mass_kg: layout.hidden_mass_kg.clone(),
+        };
+        for &(lambda, m) in modes {
+            if !(lambda.is_finite() && lambda > 0.0) || m == 0 || m > MAX_MULTIPLICITY {
+                return Err(ShapeError::BadMode {
+                    lambda,
+                    multiplicity: m,
+                });
+            }
+            let first = self.cluster_shapes(&layout, &mut shapes, (lambda, m), params, &mut out);
+            if let Err(e @ ShapeError::NotAnEigenvalue { .. }) = first {
+                // Not one clean cluster (e.g. modes 1e-10 apart given as one): resolve it by
+                // the count and take each part's shapes.
+                for part in self.split_cluster(lambda, m, params).ok_or(e)? {
+                    self.cluster_shapes(&layout, &mut shapes, part, params, &mut out)?;
+                }
+            } else {
+                first?;
+            }
+        }
+        Ok(out)
+    }
+
+    /// The chains' layout of `models` (the checks of [`Self::mode_shapes`]: parameters,
+    /// a rigid body's arms, hidden cables both discrete or both continuous, the models the
+    /// solver was loaded with).
+    pub(super) fn layout(
+        &self,
+        models: &[CableModel],
+        arms_m: &[Vector3<f64>],
+        params: &ShapeParams,
+    ) -> Result<Layout, ShapeError> {
         params.check()?;
         let dim = self.problem.dim;
         if dim == 6 && arms_m.len() < models.len() {
@@ -159,32 +215,7 @@ impl ModalSolver {
                 given: layout.kinds.len(),
             });
         }
-        let mut shapes = vec![ChainShape::default(); layout.kinds.len()];
-        let mut out = ModeShapes {
-            dim,
-            fractions: layout.fractions.clone(),
-            modes: Vec::new(),
-            element_mass_kg: layout.element_mass_kg(),
-        };
-        for &(lambda, m) in modes {
-            if !(lambda.is_finite() && lambda > 0.0) || m == 0 || m > MAX_MULTIPLICITY {
-                return Err(ShapeError::BadMode {
-                    lambda,
-                    multiplicity: m,
-                });
-            }
-            let first = self.cluster_shapes(&layout, &mut shapes, (lambda, m), params, &mut out);
-            if let Err(e @ ShapeError::NotAnEigenvalue { .. }) = first {
-                // Not one clean cluster (e.g. modes 1e-10 apart given as one): resolve it by
-                // the count and take each part's shapes.
-                for part in self.split_cluster(lambda, m, params).ok_or(e)? {
-                    self.cluster_shapes(&layout, &mut shapes, part, params, &mut out)?;
-                }
-            } else {
-                first?;
-            }
-        }
-        Ok(out)
+        Ok(layout)
     }
 
     /// The shapes of one cluster (λ, m), appended to `out`.
@@ -203,11 +234,13 @@ impl ModalSolver {
         let v = self.normalise(layout, shapes, &null.vectors);
         let start = out.modes.len();
         for (col, part) in v {
+            let (cables, hidden) = nodes(layout, shapes, &col, out.dim);
             out.modes.push(ModeShape {
                 lambda,
                 frequency_hz: lambda_to_hz(lambda),
                 ee: ee_of(&col, out.dim),
-                cables: nodes(layout, shapes, &col, out.dim),
+                cables,
+                hidden,
                 ee_participation: part,
                 cluster_start: start,
                 multiplicity: m,
@@ -429,15 +462,31 @@ fn ee_of(col: &DVector<f64>, dim: usize) -> Vector6<f64> {
     ee
 }
 
-/// Every cable's node displacements of a null vector: C_k w inside, G_i φ at the end.
-fn nodes(
+/// Every cable's node displacements of a null vector: C_k w inside, G_i φ at the end; and
+/// each hidden cable's (C_k times the supported chain's hidden nodes, empty without one).
+pub(super) fn nodes(
     layout: &Layout,
     shapes: &[ChainShape],
     col: &DVector<f64>,
     dim: usize,
-) -> Vec<Vec<Vector3<f64>>> {
+) -> (Vec<Vec<Vector3<f64>>>, Vec<Vec<f64>>) {
     let phi = ee_of(col, dim);
-    layout
+    let hidden = layout
+        .cable_copies
+        .iter()
+        .map(|copies| {
+            copies
+                .iter()
+                .find(|&&q| !shapes[layout.copies[q].chain].hidden_w.is_empty())
+                .map(|&q| {
+                    let amp = col[dim + q];
+                    let sh = &shapes[layout.copies[q].chain];
+                    sh.hidden_w.iter().map(|w| amp * w).collect()
+                })
+                .unwrap_or_default()
+        })
+        .collect();
+    let cables = layout
         .cable_copies
         .iter()
         .enumerate()
@@ -462,5 +511,6 @@ fn nodes(
             u[last] = layout.attach[i] * phi;
             u
         })
-        .collect()
+        .collect();
+    (cables, hidden)
 }

@@ -7,7 +7,8 @@
 //! modes (a basis of 24, 48, 96, … modes at a pose, the whole path's load) gives those of
 //! modes K < j ≤ N exactly, for every cluster end K at once (suffix sums of the per-mode
 //! dynamic parts at each sample); the modes beyond N are estimated conservatively, the whole
-//! residual flexibility F_r(N) = F − Σ_{j≤N} φ_jφ_jᵀ/λ_j put at the lowest frequency left
+//! residual flexibility F_r(N) = F_ψ − Σ_{j≤N} φ_jψ_jᵀ/λ_j (ψ, F_ψ the load shapes and flexibility
+//! of the whole robot's quasi-static inertia, [`crate::modal::quasi_static`]) put at the lowest frequency left
 //! out, ω_{N+1}, with that mode's damping ratio (each left-out mode's dynamic part relative
 //! to its static one is largest for the lowest of them: below a mode, the load's
 //! amplification minus one, (ω_load/ω_j)², falls with ω_j):
@@ -88,10 +89,9 @@ pub fn truncation_estimate(
     if k >= basis.lambda.len() {
         return Ok(0.0);
     }
-    let mut rf = basis.flexibility;
+    let mut rf = basis.load_flexibility;
     for j in 0..k {
-        let p = basis.phi_ee[j];
-        rf -= p * p.transpose() / basis.lambda[j];
+        rf -= basis.phi_ee[j] * basis.load_ee[j].transpose() / basis.lambda[j];
     }
     let dim = basis.dim;
     // The unit-gain oscillator at λ_{K+1} on each direction: mode i has φ = √λ e_i, so its
@@ -205,6 +205,7 @@ pub fn pilot(
             &flex,
             &basis.ee_mass,
         )?;
+        r.set_load_shapes(&basis.load_ee[..reference], &basis.load_flexibility)?;
         for (i, f) in loads.iter().enumerate() {
             if i > 0 {
                 r.step(&loads[i - 1], f, dt_s);

@@ -8,8 +8,11 @@
 //! force linear between samples with the static flexibility interpolated between the two
 //! poses ([`ModalResponse::displacement_with`]), and installs the new basis, the state
 //! carried by the mass overlap of the whole shapes. The force at sample k is the inertial
-//! load of the quasi-static motion −M_ee [a_k; 0] plus the caller's `external_n(k)`; the
-//! caller sees the response at every sample (`on_sample`).
+//! load of the quasi-static motion −M_ee [a_k; 0] plus the caller's `external_n(k)`, taken
+//! by each mode through the basis's load shapes (the whole robot's quasi-static inertia,
+//! [`crate::modal::quasi_static`]; an external force therefore acts as that load would,
+//! exact for it only where the cables carry no mass); the caller sees the response at
+//! every sample (`on_sample`).
 
 use super::{pilot, solve_pose, updates, Accuracy, SampledPath, SimulateConfig, SimulateResult};
 use crate::estimator::{EeModalBasis, Estimator};
@@ -32,7 +35,8 @@ fn basis_at(
 }
 
 /// Install `basis` in `resp`, carrying the state across: the whole state by the mass
-/// overlap of the whole shapes when both bases have them, else the end-effector's.
+/// overlap of the whole shapes when both bases have them, else the end-effector's; the
+/// modes loaded by the whole robot's quasi-static inertia (the basis's load shapes).
 fn install(
     resp: &mut ModalResponse,
     basis: &EeModalBasis,
@@ -60,6 +64,7 @@ fn install(
             &basis.ee_mass,
         ),
     }
+    .and_then(|()| resp.set_load_shapes(&basis.load_ee, &basis.load_flexibility))
     .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
 }
 
@@ -206,7 +211,8 @@ pub(super) fn run(
         let nm = resp.modes();
         resp.dynamic_amplitudes(&f_prev, &mut amplitude[..nm]);
         for (j, (p, l)) in phi2.iter_mut().zip(lambda0.iter_mut()).enumerate().take(nm) {
-            *p = resp.phi(j).norm_squared();
+            // |φ_j| |ψ_j|: the end-effector's share of what the load ψ_jᵀf can add.
+            *p = resp.phi(j).norm() * resp.load_shape(j).norm();
             *l = resp.lambda(j);
         }
         let (k1, next, error) = loop {
@@ -224,9 +230,13 @@ pub(super) fn run(
                 u as f64 * path.dt_s,
             );
             let d2 = match previous {
-                Some((fp, back)) => {
-                    updates::second_difference(&fp, &held.flexibility, &next.flexibility, back, u)
-                }
+                Some((fp, back)) => updates::second_difference(
+                    &fp,
+                    &held.load_flexibility,
+                    &next.load_flexibility,
+                    back,
+                    u,
+                ),
                 None => Matrix6::zeros(),
             };
             let static_m = updates::static_error(&d2, (k0 + 1..=k1).map(|k| loads.at(k)), u);
@@ -247,7 +257,7 @@ pub(super) fn run(
             resp.step(&f_prev, &f, path.dt_s);
             f_prev = f;
             let w = (k - k0) as f64 / u as f64;
-            let flex = held.flexibility * (1.0 - w) + next.flexibility * w;
+            let flex = held.load_flexibility * (1.0 - w) + next.load_flexibility * w;
             push(out, k, &resp.displacement_with(&f, &flex));
             on_sample(k, &resp, &f);
         }
@@ -266,7 +276,7 @@ pub(super) fn run(
         };
         out.accuracy.interval_estimate = out.accuracy.interval_estimate.max(rel);
         out.accuracy.interval_estimate_sum += rel;
-        previous = Some((held.flexibility, u));
+        previous = Some((held.load_flexibility, u));
         held = next;
         k0 = k1;
         if cfg.update_every.is_none() {
