@@ -5,7 +5,7 @@
 
 use super::{shape, simulate, SampledPath, ShapeMode, SimulateConfig, SimulateResult};
 use crate::scene::Scene;
-use crate::study::StudyError;
+use crate::study::{Param, ParamError, StudyError};
 use crate::trajectory::moves::{Move, Profile};
 use crate::trajectory::shaping::ShaperKind;
 use crate::trajectory::{Samples, Trajectory};
@@ -45,9 +45,12 @@ impl PathSpec {
     /// description of it.
     pub fn sample(&self, scene: &Scene, dt_s: f64) -> Result<(SampledPath, String), StudyError> {
         if !(dt_s.is_finite() && dt_s > 0.0 && dt_s <= MAX_DT_S) {
-            return Err(StudyError::Usage(format!(
-                "dt {dt_s}: the sample period must be in (0, {MAX_DT_S}] s"
-            )));
+            return Err(ParamError::invalid(
+                Param::DtS,
+                dt_s,
+                format!("the sample period must be in (0, {MAX_DT_S}] s"),
+            )
+            .into());
         }
         match self {
             PathSpec::Csv(csv) => {
@@ -61,12 +64,14 @@ impl PathSpec {
                 profile,
             } => {
                 if !(duration_s.is_finite() && *duration_s > 0.0) {
-                    return Err(StudyError::Usage(format!(
-                        "duration {duration_s}: a move takes a finite time > 0 s"
-                    )));
+                    return Err(ParamError::invalid(
+                        Param::DurationS,
+                        duration_s,
+                        "a move takes a finite time > 0 s",
+                    )
+                    .into());
                 }
-                let mv = Move::new(scene.ee_position_m, *d, *duration_s, *profile)
-                    .map_err(|e| StudyError::Usage(e.to_string()))?;
+                let mv = Move::new(scene.ee_position_m, *d, *duration_s, *profile)?;
                 let samples = mv.sampled(dt_s, 0.0)?;
                 let p = SampledPath {
                     dt_s,
