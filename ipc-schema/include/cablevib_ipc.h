@@ -97,7 +97,8 @@ typedef enum cablevib_measured_status {
     CABLEVIB_MEASURED_BAND_TOO_HIGH = 5,  /* the band reaches above 0.4 x the sample rate */
     CABLEVIB_MEASURED_BAND_TOO_LOW = 6,   /* the band reaches below 4 / window */
     CABLEVIB_MEASURED_INPUT_FAULT = 7,    /* too many missing samples in the window */
-    CABLEVIB_MEASURED_RATE_TOO_HIGH = 8   /* the sample rate is above the service's maximum */
+    CABLEVIB_MEASURED_RATE_TOO_HIGH = 8,  /* the sample rate is above the service's maximum */
+    CABLEVIB_MEASURED_OUTSIDE_BAND = 9    /* the strongest vibration near the band lies outside it */
 } cablevib_measured_status_t;
 
 #ifdef __cplusplus

@@ -30,6 +30,29 @@
 //! parabola through the logarithm of the three grid powers around it, then by a second
 //! parabola through three powers ±¼ of a grid step around that.
 //!
+//! # At the band's edges
+//!
+//! A component just outside the band (the model further off than `band_rel`, or its
+//! prediction jumping to a neighbouring mode for a cycle) puts its Hann sidelobes into the
+//! band: the first, 2.36/T from it at −31.5 dB, is a local maximum that a clean signal's
+//! floor lets stand far above `min_peak_ratio`. Read as a peak it would be a wrong frequency
+//! given as ok (a 29.4 Hz sine read as 30.58 Hz with T = 2 s). So the band's peak at f_p,
+//! power P_p, is refused as [`MeasuredStatus::OutsideBand`] when a grid point outside the
+//! band (in the margins), at f_i with power P_i > P_p, could have leaked it:
+//!
+//!   P_p ≤ 100 · P_i · L(|f_i − f_p| T),  L(x) = 1 (x ≤ 2), 1/(π x (x² − 1))² (x > 2),
+//!
+//! L being the envelope of a sinusoid's Hann leakage (within 0.9 dB of each sidelobe's crest,
+//! falling as x⁻⁶); the factor 100 covers a grid point a quarter bin off the component (×2.2
+//! at the first sidelobe), a damped mode's wider skirt near its main lobe, and the noise on
+//! both powers. A component beyond the margins leaks less into the band than into the
+//! margin's points, which sample each of its sidelobes there. A peak whose grid point is in
+//! the band but whose refined frequency is outside [f̂(1 − b), f̂(1 + b)] is `outside_band`
+//! too. So an ok answer is a peak inside the band that no stronger component outside it
+//! explains. The price: a stronger component outside the band masks, in the band, a peak
+//! weaker than 100 · L of it: −10.6 dB at 2.36/T (1.18 Hz at T = 2 s), −28 dB at 4.4/T,
+//! −45.5 dB at 8.5/T.
+//!
 //! Why this and not a tracking filter bank or a subspace fit: the grid moves with the model's
 //! prediction at no cost (there is no filter state to re-tune, and a band jump is not a
 //! transient), the cost of one evaluation is exactly N × (bins) multiply-adds, cut into
@@ -102,6 +125,11 @@ crate::status::status_codes! {
         InputFault = 7, "input_fault";
         /// The input's sample rate is above `max_sample_rate_hz`: the window would not fit.
         RateTooHigh = 8, "rate_too_high";
+        /// The strongest component of the searched spectrum (the band and its margins of
+        /// 2/T) lies outside the search band: the vibration near the prediction is not in
+        /// the band (the model is further off than `band_rel`, or a neighbouring mode
+        /// dominates), and what the band holds may be its leakage.
+        OutsideBand = 9, "outside_band";
     }
 }
 

@@ -122,6 +122,25 @@ fn accumulate(x: &[[f64; CHANNELS]], f_hz: f64, p: f64, k0: usize, acc: &mut [[f
     }
 }
 
+/// How far above the Hann leakage bound ([`hann_leakage`]) of a stronger component outside
+/// the band a peak in the band must stand to be a mode of its own: 100 (20 dB). The bound is
+/// a clean sinusoid's, tight to 1 dB at each sidelobe's crest; the margin covers a damped
+/// mode's wider skirt near its main lobe and the noise on both powers.
+const LEAKAGE_MARGIN: f64 = 100.0;
+
+/// The Hann window's leakage: an upper bound of the power a sinusoid puts at `x` bins (1/T)
+/// from its frequency, relative to its peak power. Inside the main lobe (`x ≤ 2`) 1; beyond,
+/// the envelope of |W(x)/W(0)|² = (sinc x / (1 − x²))²: 1/(π x (x² − 1))² (−31.5 dB at the
+/// first sidelobe's crest, x ≈ 2.36, falling as x⁻⁶).
+fn hann_leakage(x: f64) -> f64 {
+    if x <= 2.0 {
+        1.0
+    } else {
+        let a = core::f64::consts::PI * x * (x * x - 1.0);
+        1.0 / (a * a)
+    }
+}
+
 /// The offset, within ±`bound`, of the vertex of the parabola through (−1, a), (0, b),
 /// (1, c): 0 when it is not a maximum or a value is not finite.
 fn vertex(a: f64, b: f64, c: f64, bound: f64) -> f64 {
@@ -374,7 +393,8 @@ impl Evaluation {
         self.phase = Phase::Idle;
     }
 
-    /// The grid is complete: floor, the peak nearest the prediction, the refinement points.
+    /// The grid is complete: the floor, the band's dominant peak, whether a stronger
+    /// component outside the band could have leaked it, the refinement points.
     fn pick_peak(&mut self, track: usize) {
         let t_s = self.n as f64 * self.period_s;
         let tr = self.tracks[track];
@@ -418,6 +438,20 @@ impl Evaluation {
             self.next_track(track + 1);
             return;
         };
+        // A stronger component outside the band (in its margins) whose Hann leakage could
+        // make this peak: the band holds no mode of its own that the window can tell.
+        let leaked = (0..power.len()).any(|i| {
+            let f = f_of(i);
+            let outside = f < tr.lo_hz || f > tr.hi_hz;
+            outside
+                && power[i] > power[j]
+                && power[j] <= LEAKAGE_MARGIN * power[i] * hann_leakage((f - f_of(j)).abs() * t_s)
+        });
+        if leaked {
+            self.tracks[track].result = Err(MeasuredStatus::OutsideBand);
+            self.next_track(track + 1);
+            return;
+        }
         let d = vertex(power[j - 1].ln(), power[j].ln(), power[j + 1].ln(), 0.5);
         let centre = f_of(j) + d * tr.df_hz;
         let h = 0.25 * tr.df_hz;
@@ -440,14 +474,20 @@ impl Evaluation {
         let d = vertex(a.ln(), b.ln(), c.ln(), 1.0);
         let h = t.refine_hz[1] - t.refine_hz[0];
         let peak = self.power[track][t.peak_bin].max(b);
-        t.result = Ok(Peak {
-            frequency_hz: t.refine_hz[1] + d * h,
-            peak_ratio: if t.floor > 0.0 {
-                peak / t.floor
-            } else {
-                f64::INFINITY
-            },
-        });
+        let frequency_hz = t.refine_hz[1] + d * h;
+        // A peak whose grid point is in the band but which lies, located, just outside it.
+        t.result = if (t.lo_hz..=t.hi_hz).contains(&frequency_hz) {
+            Ok(Peak {
+                frequency_hz,
+                peak_ratio: if t.floor > 0.0 {
+                    peak / t.floor
+                } else {
+                    f64::INFINITY
+                },
+            })
+        } else {
+            Err(MeasuredStatus::OutsideBand)
+        };
         self.next_track(track + 1);
     }
 }

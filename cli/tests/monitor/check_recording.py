@@ -114,15 +114,21 @@ def full(expected_path, path):
             for a, b in zip(r[k], x[k]):
                 assert same(a, b), (x["pose_sequence"], k, a, b)
     # The test's accelerometer (a 29.4 Hz sine) is measured once its 2 s window is full: the
-    # recorded end-effector mode is the sine's, the status named.
+    # recorded end-effector mode is the sine's, the status named. Every ok estimate reads
+    # the sine within 0.01 Hz (the noise limit of the 2 s window at amplitude/sigma = 50 is
+    # 0.1 mHz; a grid step is 0.25 Hz, the Hann first sidelobe 1.18 Hz away). Where the
+    # model's end-effector mode jumps to its other mode (~33 Hz) for a few cycles, the band
+    # of an evaluation started then misses the sine: a status (outside_band, no_peak), never
+    # a number.
     measured = [e for e in estimates if e["measured_ee_mode_status_name"] == "ok"]
     assert len(measured) > len(estimates) // 2, (len(measured), len(estimates))
-    # KNOWN DEFECT, not a tolerance: on this build one window's worth of estimates (198 of
-    # 7895, 2.5 %) reads the 29.4 Hz sine as 30.58 Hz with status ok and nothing lost; the
-    # cause is not found yet. The check keeps every other estimate exact and bounds the
-    # misread share so that it cannot grow unnoticed.
     off = [e for e in measured if abs(e["measured_ee_mode_hz"] - 29.4) >= 0.01]
-    assert len(off) <= len(measured) // 20, (len(off), len(measured), [(e["sequence"], e["measured_ee_mode_hz"], e["measured_age_ns"], e["vibration_lost"]) for e in off[:5]])
+    assert not off, (len(off), len(measured), [(e["sequence"], e["measured_ee_mode_hz"], e["ee_mode_hz"]) for e in off[:5]])
+    names = {}
+    for e in estimates:
+        n = e["measured_ee_mode_status_name"]
+        names[n] = names.get(n, 0) + 1
+    print(f"measured end-effector mode: {len(measured)} ok, all within 0.01 Hz of the sine; statuses {names}")
     print(f"OK {len(estimates)} estimates ({len(measured)} with a measured end-effector mode), "
           f"{len(poses)} poses, {t_mins} T_min, {scenes} scene updates; every estimate value bit for bit")
 
