@@ -142,7 +142,7 @@ pub const SHAPE_BYTES_PER_NODE: u64 = 24;
 /// Modes beyond the K asked for that a mode-shape computation holds at its peak: a cluster
 /// cut by K is completed, and the recovery's working arrays (each chain's node function)
 /// take about as much again; measured within 10 % on the paper robot at N = 10⁵
-/// (`modes --modes 1, 12, 48`: 89, 333, 934 MB against 134, 346, 1037 MB estimated).
+/// (the shapes of 1, 12, 48 modes: 89, 333, 934 MB against 134, 346, 1037 MB estimated).
 const SHAPE_EXTRA_MODES: u64 = 6;
 
 /// The nodes of one mode shape of `scene`'s model: each cable's N + 1 nodes (`fem`,

@@ -2,7 +2,7 @@
 //!
 //! **Memory.** Every study whose memory grows with the user's input checks its estimate
 //! against the one budget of the offline work ([`crate::memory_budget`], 2 GiB) before it
-//! allocates: the mode shapes of `modes` and `analyze --shapes` (and their CSV text), the
+//! allocates: the mode shapes of the modes and analysis studies (and their CSV text), the
 //! modal basis of `frf` with modal damping, the two bases `simulate` holds across a basis
 //! update (and its path); the dense reference by the same rule
 //! ([`crate::modal::check_dense_budget`]).
@@ -73,7 +73,7 @@ pub enum Work<'a> {
         /// Modes K.
         modes: usize,
     },
-    /// `modes`, `analyze --shapes`: the shapes of `modes` modes, their CSV when `csv`.
+    /// The mode shapes (modes, analysis): the shapes of `modes` modes, their CSV when `csv`.
     Modes {
         /// Modes K.
         modes: usize,
@@ -332,7 +332,7 @@ fn lowest_clusters(solver: &mut ModalSolver, k: usize) -> Result<Vec<(f64, u32)>
 }
 
 /// The lowest `k` modes' shapes of `pose` (clusters completed) from the structured solver,
-/// what `cablevib modes` and `analyze --shapes` draw and write: refused first when the
+/// what the mode-shape studies draw and write: refused first when the
 /// shapes (and their CSV text, `csv`) would be over the memory budget; the clusters'
 /// shapes computed a few at a time with a progress bar labelled `label` on a terminal.
 pub fn mode_shapes(
