@@ -213,6 +213,28 @@ fn a_million_elements_per_cable_is_refused_before_allocating() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `simulate` of a 0.1 m move in 0.2 s (201 samples, no settling) at `elements` per cable,
+/// with `extra` options, writing `out`.
+fn simulate_move<'a>(elements: &'a str, extra: &[&'a str], out: &'a str) -> Vec<&'a str> {
+    let mut a = vec![
+        "simulate",
+        "spatial-paper",
+        "--elements",
+        elements,
+        "--move",
+        "0.1,0,0",
+        "--duration",
+        "0.2",
+        "--settle",
+        "0",
+        "--max-acceleration",
+        "1e4",
+    ];
+    a.extend_from_slice(extra);
+    a.extend(["--out", out]);
+    a
+}
+
 /// The estimates the refusals rest on, against the peak resident memory measured under the
 /// budget (`modes` at N = 3·10⁴ with 12 and 48 modes, its CSV; `simulate` at N = 10⁴ with
 /// its defaults, the K and pilot it chose): each within a factor 1.5 of the measured peak,
@@ -286,22 +308,7 @@ fn estimates_bound_the_measured_peak() {
     // simulate with its defaults: K and the pilot's largest basis are chosen as it runs and
     // read from its CSV's sidecar, then the same estimate the run checked before building
     // each (`Work::Simulate`).
-    let simulate = [
-        "simulate",
-        "spatial-paper",
-        "--elements",
-        "10000",
-        "--move",
-        "0.1,0,0",
-        "--duration",
-        "0.2",
-        "--settle",
-        "0",
-        "--max-acceleration",
-        "1e4",
-        "--out",
-        out,
-    ];
+    let simulate = simulate_move("10000", &[], out);
     let check = |a: &[&str], work: &dyn Fn() -> Work<'static>, n: usize| {
         let (o, rss) = run_limited(a);
         assert!(
@@ -362,24 +369,7 @@ fn simulate_refuses_a_pilot_basis_past_the_budget_naming_its_overrides() {
     let dir = std::env::temp_dir().join(format!("cablevib-membudget-pilot-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let out = dir.join("sim");
-    let args = [
-        "simulate",
-        "spatial-paper",
-        "--elements",
-        "150000",
-        "--move",
-        "0.1,0,0",
-        "--duration",
-        "0.2",
-        "--settle",
-        "0",
-        "--max-acceleration",
-        "1e4",
-        "--tolerance",
-        "1e-6",
-        "--out",
-        out.to_str().unwrap(),
-    ];
+    let args = simulate_move("150000", &["--tolerance", "1e-6"], out.to_str().unwrap());
     let (o, rss) = run_limited(&args);
     let what = args.join(" ");
     assert_refused(
