@@ -105,7 +105,8 @@ pub use frf::{
 };
 pub use mechanism::{free_direction, may_be_mechanism, MECHANISM_REL};
 pub use shapes::{
-    ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_CONTINUOUS_SAMPLES, MAX_MULTIPLICITY,
+    near_runs, ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_CONTINUOUS_SAMPLES,
+    MAX_MULTIPLICITY,
 };
 pub use solver::ModalSolver;
 pub use spectrum::{Mode, SpectrumParams};

@@ -297,6 +297,8 @@ pub struct Accuracy {
     pub modes_met: bool,
     /// The pilot's peak deviation, m (the scale of the tolerance).
     pub peak_m: f64,
+    /// Modes of the pilot's largest basis (what its memory held).
+    pub pilot_modes: usize,
     /// Whether the update interval was chosen for the tolerance (false: given).
     pub updates_chosen: bool,
     /// The largest predicted error of one interval between basis updates, relative to
@@ -622,10 +624,13 @@ fn run(
 pub fn simulate_work(samples: usize, cfg: &SimulateConfig) -> super::cost::Work<'static> {
     super::cost::Work::Simulate {
         samples,
-        // The chosen K and interval are known only after the pilot: the smallest pilot and
-        // the first interval make the estimate a lower bound, so a refusal is certain.
+        // The chosen K, the pilot's growth and the interval are known only as the run goes:
+        // its first pilot basis, K at least that pilot's and the first interval make this
+        // estimate a lower bound (a refusal is certain); each larger pilot basis and the K
+        // chosen are checked again before they are built.
         update_every: cfg.update_every.unwrap_or(updates::FIRST_INTERVAL),
         modes: cfg.modes.unwrap_or(pilot::FIRST_PILOT),
+        pilot_modes: pilot::pilot_sizes(cfg.modes.unwrap_or(0))[0],
     }
 }
 

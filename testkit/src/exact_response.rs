@@ -237,7 +237,7 @@ pub fn default_choice(
     loads: &[Vector6<f64>],
     dt: f64,
 ) -> DefaultChoice {
-    let c = pilot::choose(est, damping, loads, dt, pilot::DEFAULT_TOLERANCE).unwrap();
+    let c = pilot::choose(est, damping, loads, dt, pilot::DEFAULT_TOLERANCE, None).unwrap();
     assert!(c.met, "the choice reports it missed the tolerance: {c:?}");
     let (got, kept) = crate_response(est, c.modes, damping, loads, dt, true);
     assert_eq!(kept, c.modes, "the choice ends a cluster");

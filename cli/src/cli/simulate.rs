@@ -341,10 +341,11 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
     for r in &runs {
         let acc = &r.result.accuracy;
         outln!(
-            "{}: accuracy: K = {} ({}), truncation estimate {:.2e} of the peak ({:.5} mm){}; basis updates {} ({}), largest interval estimate {:.2e}, sum {:.2e}",
+            "{}: accuracy: K = {} ({}; pilot of {} modes), truncation estimate {:.2e} of the peak ({:.5} mm){}; basis updates {} ({}), largest interval estimate {:.2e}, sum {:.2e}",
             r.shaper.name(),
             r.result.modes,
             if acc.modes_chosen { "chosen" } else { "given" },
+            acc.pilot_modes,
             acc.modes_estimate,
             acc.peak_m * 1e3,
             if acc.modes_met { "" } else { " — over the tolerance" },
@@ -385,6 +386,7 @@ fn write_outputs(a: &SimulateArgs, s: &Scene, runs: &[Run]) -> Result<(), CliErr
                 "modes_chosen": r.result.accuracy.modes_chosen,
                 "tolerance": r.result.accuracy.tolerance,
                 "truncation_estimate": r.result.accuracy.modes_estimate,
+                "pilot_modes": r.result.accuracy.pilot_modes,
                 "basis_updates": r.result.updates,
                 "update_interval_chosen": r.result.accuracy.updates_chosen,
                 "update_interval_estimate": r.result.accuracy.interval_estimate,

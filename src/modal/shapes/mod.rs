@@ -44,7 +44,15 @@
 //! to EA/l, and unbalanced, the SVD's backward error ε‖A‖ would swamp the soft rows. A
 //! cluster given that fails the test (modes 1e-10 apart given as one; the catenary model's
 //! identical cables differ by ~ε·EA/T) is resolved by the count from its λ to 1e-8 above,
-//! and each part's shapes are taken.
+//! and each part's shapes are taken. A mode still not separated from a given neighbour (a
+//! near-cluster: the paper robot's end-effector triplet 4e-9 apart 1e-6 m off its symmetric
+//! pose at N = 10⁵, where the chains' rounding keeps each member's σ_m near 1e-12 and the
+//! neighbours' σ_{m+1} near 1e-9) is taken with its nearest given neighbours, across gaps of
+//! at most 1e-6 relative, as one cluster at their multiplicity-weighted mean λ, once the
+//! count certifies that the group's span holds exactly its multiplicity and the merged null
+//! space is separated (its members' frequencies are then given at the mean, within 5e-7
+//! relative; a caller asking a few clusters at a time keeps such runs together,
+//! [`near_runs`]).
 //!
 //! **Normalisation.** The consistent mass of the model is block diagonal in the chain
 //! coordinates (its 3 × 3 blocks are multiples of I and the chain directions are
@@ -87,6 +95,8 @@ mod sag_chain_shape;
 mod sagged;
 mod solve;
 mod supported_shape;
+
+pub use solve::near_runs;
 
 use super::ModalError;
 use nalgebra::{Vector3, Vector6};

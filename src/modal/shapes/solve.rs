@@ -9,6 +9,12 @@ use crate::kinematics::attach_map;
 use crate::modal::{lambda_to_hz, ModalSolver};
 use nalgebra::{DMatrix, DVector, Matrix3x6, SymmetricEigen, Vector3, Vector6};
 
+/// A near-cluster (module docs) grows across gaps between given modes up to this,
+/// relative: its members' frequencies are then given at their mean, within half of it.
+pub(super) const NEAR_MERGE_REL: f64 = 1e-6;
+/// The count's window around a near-cluster's span, relative (above the eigenvalue
+/// sources' ≲ 1e-12, below [`NEAR_MERGE_REL`]).
+const NEAR_SPAN_MARGIN: f64 = 1e-10;
 /// A projector eigenvalue above this is in its range (they are 0 or 1 to rounding).
 const PROJ_RANGE_MIN: f64 = 0.5;
 /// Sweeps of Ruiz equilibration (each halves the logarithm of every row's and column's
@@ -129,6 +135,22 @@ impl Layout {
     }
 }
 
+/// The clusters `modes` (ascending λ) in runs whose neighbours are within the reach of a
+/// near-cluster ([`ModalSolver::mode_shapes`] merges a near-cluster only with modes given in
+/// the same call): what a caller that asks for shapes a few clusters at a time keeps
+/// together.
+pub fn near_runs(modes: &[(f64, u32)]) -> Vec<std::ops::Range<usize>> {
+    let mut runs = Vec::new();
+    let mut start = 0;
+    for i in 1..=modes.len() {
+        if i == modes.len() || (modes[i].0 - modes[i - 1].0) > NEAR_MERGE_REL * modes[i].0 {
+            runs.push(start..i);
+            start = i;
+        }
+    }
+    runs
+}
+
 /// The null space of one cluster before normalisation: columns (φ, C_1 … C_n).
 pub(super) struct NullSpace {
     pub(super) vectors: DMatrix<f64>,
@@ -168,19 +190,104 @@ impl ModalSolver {
                     multiplicity: m,
                 });
             }
+        }
+        // Where each given mode's shapes start in `out.modes`.
+        let mut starts = vec![0; modes.len()];
+        let mut i = 0;
+        while i < modes.len() {
+            starts[i] = out.modes.len();
+            let (lambda, m) = modes[i];
             let first = self.cluster_shapes(&layout, &mut shapes, (lambda, m), params, &mut out);
-            if let Err(e @ ShapeError::NotAnEigenvalue { .. }) = first {
-                // Not one clean cluster (e.g. modes 1e-10 apart given as one): resolve it by
-                // the count and take each part's shapes.
-                for part in self.split_cluster(lambda, m, params).ok_or(e)? {
-                    self.cluster_shapes(&layout, &mut shapes, part, params, &mut out)?;
-                }
-            } else {
+            let Err(e @ ShapeError::NotAnEigenvalue { .. }) = first else {
                 first?;
+                i += 1;
+                continue;
+            };
+            // Not one clean cluster (e.g. modes 1e-10 apart given as one): resolve it by
+            // the count and take each part's shapes.
+            if let Some(parts) = self.split_cluster(lambda, m, params) {
+                let split = parts.into_iter().try_for_each(|part| {
+                    self.cluster_shapes(&layout, &mut shapes, part, params, &mut out)
+                });
+                match split {
+                    Ok(()) => {
+                        i += 1;
+                        continue;
+                    }
+                    Err(ShapeError::NotAnEigenvalue { .. }) => out.modes.truncate(starts[i]),
+                    Err(e) => return Err(e),
+                }
             }
+            // Not separated from a given neighbour either (a near-cluster): taken with its
+            // nearest neighbours as one cluster (module docs).
+            let (lo, hi) = self
+                .near_cluster(&layout, &mut shapes, modes, &starts, i, params, &mut out)
+                .ok_or(e)?;
+            debug_assert!(lo <= i && i < hi);
+            let first = starts[lo];
+            starts[lo..hi].fill(first);
+            i = hi;
         }
         Ok(out)
     }
+
+    /// The given modes around `modes[i]` (whose own null space is not separated) grown by
+    /// their nearest given neighbours within [`NEAR_MERGE_REL`] until the group, taken as one
+    /// cluster at its multiplicity-weighted mean λ with the multiplicity the count
+    /// certifies in its span, has a separated null space; its shapes replace those of the
+    /// group's members already in `out` (from `starts`). The group's range, or `None`.
+    #[allow(clippy::too_many_arguments)]
+    fn near_cluster(
+        &mut self,
+        layout: &Layout,
+        shapes: &mut [ChainShape],
+        modes: &[(f64, u32)],
+        starts: &[usize],
+        i: usize,
+        params: &ShapeParams,
+        out: &mut ModeShapes,
+    ) -> Option<(usize, usize)> {
+        let (mut lo, mut hi) = (i, i + 1);
+        loop {
+            let gap = |a: f64, b: f64| (b - a) / b;
+            let below = (lo > 0)
+                .then(|| gap(modes[lo - 1].0, modes[lo].0))
+                .filter(|&g| g <= NEAR_MERGE_REL);
+            let above = modes
+                .get(hi)
+                .map(|&(l, _)| gap(modes[hi - 1].0, l))
+                .filter(|&g| g <= NEAR_MERGE_REL);
+            match (below, above) {
+                (Some(b), Some(a)) if b <= a => lo -= 1,
+                (Some(_), None) => lo -= 1,
+                (_, Some(_)) => hi += 1,
+                (None, None) => return None,
+            }
+            let group = &modes[lo..hi];
+            let total: u32 = group.iter().map(|x| x.1).sum();
+            if total > MAX_MULTIPLICITY {
+                return None;
+            }
+            // The count certificate: exactly `total` eigenvalues in the group's span.
+            let (first, last) = (group[0].0, group[group.len() - 1].0);
+            let below_span = self.count_below(first * (1.0 - NEAR_SPAN_MARGIN));
+            let in_span = self
+                .count_below(last * (1.0 + NEAR_SPAN_MARGIN))
+                .saturating_sub(below_span);
+            if in_span != total {
+                continue;
+            }
+            let mean = group.iter().map(|&(l, m)| l * m as f64).sum::<f64>() / total as f64;
+            out.modes.truncate(starts[lo]);
+            if self
+                .cluster_shapes(layout, shapes, (mean, total), params, out)
+                .is_ok()
+            {
+                return Some((lo, hi));
+            }
+        }
+    }
+
 
     /// The chains' layout of `models` (the checks of [`Self::mode_shapes`]: parameters,
     /// a rigid body's arms, hidden cables both discrete or both continuous, the models the

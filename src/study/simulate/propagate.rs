@@ -84,10 +84,11 @@ impl<F: Fn(usize) -> Vector6<f64>> Loads<'_, F> {
     }
 }
 
-/// What the mode choice found: K, its truncation estimate relative to the peak, whether
-/// it met the tolerance, the peak, m.
+/// What the mode choice found: K, the pilot's largest basis, K's truncation estimate
+/// relative to the peak, whether it met the tolerance, the peak, m.
 struct ModesChosen {
     modes: usize,
+    pilot_modes: usize,
     estimate: f64,
     met: bool,
     peak_m: f64,
@@ -104,25 +105,66 @@ fn choose_modes<F: Fn(usize) -> Vector6<f64>>(
 ) -> Result<ModesChosen, StudyError> {
     let path = loads.path;
     let n = path.positions_m.len();
-    let all: Vec<Vector6<f64>> = (0..n).map(|k| loads.at(k)).collect();
     let mut samples = vec![0, n / 2, n - 1];
     samples.dedup_by(|a, b| path.positions_m[*a] == path.positions_m[*b]);
+    // Each pilot basis's memory checked before it is built (with the run's samples), and
+    // the pilot's progress in modes run.
+    let check = |pilot_modes: usize| {
+        crate::study::cost::estimate_cost(
+            scene,
+            &crate::study::cost::Work::Simulate {
+                samples: n,
+                update_every: cfg.update_every.unwrap_or(updates::FIRST_INTERVAL),
+                modes: cfg.modes.unwrap_or(0),
+                pilot_modes,
+            },
+        )
+        .check_memory()
+    };
+    let per_pose: usize = pilot::pilot_sizes(cfg.modes.unwrap_or(0)).iter().sum();
+    let bar = crate::study::progress::Progress::counting(
+        cfg.progress,
+        per_pose * samples.len(),
+        "pilot modes",
+    );
+    let growth = pilot::Growth {
+        check: &check,
+        bar: &bar,
+    };
+    let chosen = pilot_poses(est, scene, loads, cfg, &samples, Some(&growth));
+    bar.finish();
+    chosen
+}
+
+/// [`choose_modes`] at the path's `samples`, watched by `growth`.
+fn pilot_poses<F: Fn(usize) -> Vector6<f64>>(
+    est: &mut Estimator,
+    scene: &Scene,
+    loads: &Loads<'_, F>,
+    cfg: &SimulateConfig,
+    samples: &[usize],
+    growth: Option<&pilot::Growth<'_>>,
+) -> Result<ModesChosen, StudyError> {
+    let path = loads.path;
+    let n = path.positions_m.len();
+    let all: Vec<Vector6<f64>> = (0..n).map(|k| loads.at(k)).collect();
     let mut chosen = ModesChosen {
         modes: 0,
+        pilot_modes: 0,
         estimate: 0.0,
         met: true,
         peak_m: 0.0,
     };
-    for &k in &samples {
+    for &k in samples {
         let t = k as f64 * path.dt_s;
         solve_pose(est, scene, &path.positions_m[k], t)?;
+        let (damping, dt, tol) = (&scene.damping, path.dt_s, cfg.tolerance);
         let c = match cfg.modes {
-            None => pilot::choose(est, &scene.damping, &all, path.dt_s, cfg.tolerance)?,
-            Some(given) => {
-                pilot::assess(est, given, &scene.damping, &all, path.dt_s, cfg.tolerance)?
-            }
+            None => pilot::choose(est, damping, &all, dt, tol, growth)?,
+            Some(given) => pilot::assess(est, given, damping, &all, dt, tol, growth)?,
         };
         chosen.modes = chosen.modes.max(c.modes);
+        chosen.pilot_modes = chosen.pilot_modes.max(c.pilot_modes);
         chosen.estimate = chosen.estimate.max(c.estimate);
         chosen.met &= c.met;
         chosen.peak_m = chosen.peak_m.max(c.peak_m);
@@ -146,21 +188,21 @@ pub(super) fn run(
     let n = path.positions_m.len();
     let damping = scene.damping;
     // The end-effector's mass matrix is the scene's, the same at every pose.
-    let mut held = basis_at(est, scene, &path.positions_m[0], 0.0, 1)?;
     let loads = Loads {
         path,
-        ee_mass: held.ee_mass,
+        ee_mass: basis_at(est, scene, &path.positions_m[0], 0.0, 1)?.ee_mass,
         external_n,
     };
     let chosen = choose_modes(est, scene, &loads, cfg)?;
-    // The memory check before the run took the smallest pilot; with K now known, the run's
-    // own two bases and path are checked against the budget again before they are built.
+    // Each pilot basis was checked before it was built; with K now known, the run's own
+    // two bases and path are checked against the budget before they are built.
     crate::study::cost::estimate_cost(
         scene,
         &crate::study::cost::Work::Simulate {
             samples: n,
             update_every: cfg.update_every.unwrap_or(updates::FIRST_INTERVAL),
             modes: chosen.modes,
+            pilot_modes: 0,
         },
     )
     .check_memory()?;
@@ -170,6 +212,7 @@ pub(super) fn run(
         modes_estimate: chosen.estimate,
         modes_met: chosen.met,
         peak_m: chosen.peak_m,
+        pilot_modes: chosen.pilot_modes,
         updates_chosen: cfg.update_every.is_none(),
         interval_estimate: 0.0,
         interval_estimate_sum: 0.0,
@@ -187,7 +230,7 @@ pub(super) fn run(
     let mut interval = cfg
         .update_every
         .unwrap_or(updates::FIRST_INTERVAL.min(max_interval));
-    held = basis_at(est, scene, &path.positions_m[0], 0.0, modes)?;
+    let mut held = basis_at(est, scene, &path.positions_m[0], 0.0, modes)?;
     f1_seen(est, out);
     install(&mut resp, &held, None, &damping, 0.0)?;
     out.updates = 1;
