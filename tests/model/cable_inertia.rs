@@ -95,7 +95,7 @@ fn check(
         assert_eq!(kept, k.nrows(), "{label}: every mode kept");
         relative_error(&got, &exact)
     });
-    let c = pilot::choose(est, &DAMPING, &loads, DT, DEFAULT_TOLERANCE).unwrap();
+    let c = pilot::choose(est, &DAMPING, &loads, DT, DEFAULT_TOLERANCE, None).unwrap();
     let (got, kept) = crate_response(est, c.modes, &DAMPING, &loads, DT, true);
     let mqs = est.ee_modal_basis(1).unwrap().quasi_static_mass_kg[(0, 0)];
     let default_err = relative_error(&got, &exact);
@@ -184,7 +184,7 @@ fn sagging_cables_take_the_end_effector_load_alone_on_suspended_8() {
     let loads = move_loads(&ee_mass, d, 0.3, 0.2, DT);
     let (ee_only, _) = exact_response(&k, &m, 3, &DAMPING, &loads, DT);
     let (fixed_length, _, mqs_dense) = exact_whole_robot(&k, &m, 3, &DAMPING, &acc, DT);
-    let c = pilot::choose(&mut est, &DAMPING, &loads, DT, DEFAULT_TOLERANCE).unwrap();
+    let c = pilot::choose(&mut est, &DAMPING, &loads, DT, DEFAULT_TOLERANCE, None).unwrap();
     let b = est.ee_modal_basis(c.modes).unwrap();
     let mee = ee_mass.fixed_view::<3, 3>(0, 0).norm();
     let mqs_err = (b.quasi_static_mass_kg - ee_mass).norm() / mee;

@@ -288,7 +288,6 @@ impl ModalSolver {
         }
     }
 
-
     /// The chains' layout of `models` (the checks of [`Self::mode_shapes`]: parameters,
     /// a rigid body's arms, hidden cables both discrete or both continuous, the models the
     /// solver was loaded with).
