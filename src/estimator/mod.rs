@@ -167,7 +167,7 @@ impl Estimator {
         c.set_pose(scene, &pose)
             .map_err(|e| default_pose(e.into()))?;
         // The structure matrix's rank is set up before feasibility is decided, so a default
-        // pose the cables cannot hold (a robot whose force_min is too high there, a --t-min
+        // pose the cables cannot hold (a robot whose force_min is too high there, a T_min override
         // near t_max) still gives it; such a pose is then estimated like any other, with the
         // status TensionInfeasible. Only a default pose with no rank at all is refused.
         let (solved, rank) = c.chord_tensions(scene, &est.t_min_n[..n], params.tension);

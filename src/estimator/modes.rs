@@ -4,17 +4,27 @@
 //! keeps its loaded problem; only its evaluation counter moves).
 
 use super::{Estimator, EstimatorError, Status};
+use crate::modal::quasi_static::QuasiStaticLoad;
 use crate::modal::{self, DenseModes, Mode, ShapeParams};
 use nalgebra::{DMatrix, Matrix6, Vector6};
 
 impl EeModalBasis {
-    /// The basis of the structured engine's mode shapes (taut or sagging FEM cables).
+    /// The basis of the structured engine's mode shapes (taut or sagging FEM cables) and
+    /// the pose's influence field (the same node lists), or with the end-effector's load
+    /// alone when `field` is None (sagging cables: [`modal::quasi_static`]).
     fn structured(
         dim: usize,
         shapes: modal::ModeShapes,
+        field: Option<&modal::ModeShapes>,
         flexibility: Matrix6<f64>,
         ee_mass: Matrix6<f64>,
-    ) -> EeModalBasis {
+    ) -> Result<EeModalBasis, BasisError> {
+        let load = match field {
+            Some(field) => QuasiStaticLoad::from_shapes(&shapes, field, &ee_mass).ok_or(
+                BasisError::QuasiStatic("the influence field's nodes are not the shapes'"),
+            )?,
+            None => QuasiStaticLoad::end_effector_only(&shapes, &ee_mass),
+        };
         EeModalBasis {
             dim,
             lambda: shapes.modes.iter().map(|m| m.lambda).collect(),
@@ -23,7 +33,23 @@ impl EeModalBasis {
             ee_mass,
             structured: true,
             shapes: Some(shapes),
+            load_ee: Vec::new(),
+            load_flexibility: Matrix6::zeros(),
+            quasi_static_mass_kg: Matrix6::zeros(),
         }
+        .with_load(&load)
+    }
+
+    /// The load shapes, load flexibility and quasi-static mass of `load`
+    /// ([`QuasiStaticLoad`]).
+    fn with_load(mut self, load: &QuasiStaticLoad) -> Result<EeModalBasis, BasisError> {
+        let singular = BasisError::QuasiStatic("the end-effector's mass matrix is singular");
+        self.load_ee = load.load_shapes(&self.ee_mass).ok_or(singular.clone())?;
+        self.load_flexibility = load
+            .load_flexibility(&self.flexibility, &self.ee_mass)
+            .ok_or(singular)?;
+        self.quasi_static_mass_kg = load.mass_kg;
+        Ok(self)
     }
 }
 
@@ -116,7 +142,7 @@ pub const SHAPE_BYTES_PER_NODE: u64 = 24;
 /// Modes beyond the K asked for that a mode-shape computation holds at its peak: a cluster
 /// cut by K is completed, and the recovery's working arrays (each chain's node function)
 /// take about as much again; measured within 10 % on the paper robot at N = 10⁵
-/// (`modes --modes 1, 12, 48`: 89, 333, 934 MB against 134, 346, 1037 MB estimated).
+/// (the shapes of 1, 12, 48 modes: 89, 333, 934 MB against 134, 346, 1037 MB estimated).
 const SHAPE_EXTRA_MODES: u64 = 6;
 
 /// The nodes of one mode shape of `scene`'s model: each cable's N + 1 nodes (`fem`,
@@ -180,6 +206,9 @@ pub enum BasisError {
     /// The shapes would need more memory than the budget (refused before allocating).
     #[error(transparent)]
     Memory(#[from] crate::memory_budget::OverBudget),
+    /// The quasi-static load could not be formed.
+    #[error("the quasi-static load of the cables: {0}")]
+    QuasiStatic(&'static str),
 }
 
 /// The end-effector's view of the first modes of one pose: what a time response needs.
@@ -203,6 +232,19 @@ pub struct EeModalBasis {
     /// what carries a time response's state across poses
     /// ([`modal::ModeShapes::mass_overlap`]).
     pub shapes: Option<modal::ModeShapes>,
+    /// Each mode's load shape ψ_k = M_ee⁻¹ L_k (1/√kg; zeros beyond `dim`): under the
+    /// end-effector load f = −M_ee a of a path's acceleration a, mode k's force is ψ_kᵀ f =
+    /// −L_kᵀ a, the quasi-static inertia of the whole robot, the cables' included
+    /// ([`modal::quasi_static`]); `phi_ee` where the cables carry no mass or sag (the
+    /// end-effector's load alone).
+    pub load_ee: Vec<Vector6<f64>>,
+    /// The end-effector's static answer to that load per unit f, F M_qs M_ee⁻¹ (m/N;
+    /// `flexibility` where the cables carry no mass or sag).
+    pub load_flexibility: Matrix6<f64>,
+    /// The robot's quasi-static mass M_qs = rᵀ M r (kg, kg·m²): the end-effector's and the
+    /// share of the cables' the end-effector's motion carries (`ee_mass` where the cables
+    /// sag).
+    pub quasi_static_mass_kg: Matrix6<f64>,
 }
 
 impl Estimator {
@@ -251,10 +293,14 @@ impl Estimator {
                     covered += m.multiplicity as usize;
                 }
             }
+            let params = ShapeParams::default();
             let shapes = solver
-                .mode_shapes(models, &geometry.arm_m, &clusters, &ShapeParams::default())
+                .mode_shapes(models, &geometry.arm_m, &clusters, &params)
                 .map_err(BasisError::Shapes)?;
-            return Ok(EeModalBasis::structured(dim, shapes, flexibility, ee_mass));
+            let field = solver
+                .influence_field(models, &geometry.arm_m, &params)
+                .map_err(BasisError::Shapes)?;
+            return EeModalBasis::structured(dim, shapes, Some(&field), flexibility, ee_mass);
         }
         if let Some((solver, h, up, geometry)) = self.cycle.sag_shapes_input() {
             if !solver.is_continuous() {
@@ -265,12 +311,17 @@ impl Estimator {
                 let shapes = solver
                     .mode_shapes(&h, &up, &geometry.arm_m, &clusters, &params)
                     .map_err(BasisError::Shapes)?;
-                return Ok(EeModalBasis::structured(dim, shapes, flexibility, ee_mass));
+                // The end-effector's load alone: the cables' fixed-length field is not
+                // the path's on sagging cables ([`modal::quasi_static`]).
+                return EeModalBasis::structured(dim, shapes, None, flexibility, ee_mass);
             }
         }
         let (kk, mm) = self.dense_matrices()?;
-        let (lambda, phi_ee) = dense_ee_shapes(&kk, &mm, dim, k)?;
-        Ok(EeModalBasis {
+        let (lambda, phi_ee, vectors) = dense_ee_shapes(&kk, &mm, dim, k)?;
+        let load = QuasiStaticLoad::from_dense(&kk, &mm, dim, &vectors).ok_or(
+            BasisError::QuasiStatic("the cables' static stiffness is not positive definite"),
+        )?;
+        EeModalBasis {
             dim,
             lambda,
             phi_ee,
@@ -278,18 +329,23 @@ impl Estimator {
             ee_mass,
             structured: false,
             shapes: None,
-        })
+            load_ee: Vec::new(),
+            load_flexibility: Matrix6::zeros(),
+            quasi_static_mass_kg: Matrix6::zeros(),
+        }
+        .with_load(&load)
     }
 }
 
 /// The lowest `k` eigenpairs of K u = λ M u (dense), the first `dim` entries of each
-/// mass-normalised u.
+/// mass-normalised u, and the u (columns).
+#[allow(clippy::type_complexity)]
 fn dense_ee_shapes(
     k: &DMatrix<f64>,
     m: &DMatrix<f64>,
     dim: usize,
     count: usize,
-) -> Result<(Vec<f64>, Vec<Vector6<f64>>), EstimatorError> {
+) -> Result<(Vec<f64>, Vec<Vector6<f64>>, DMatrix<f64>), EstimatorError> {
     let not_definite = EstimatorError::Modal(modal::ModalError::MassNotDefinite);
     let chol = m.clone().cholesky().ok_or(not_definite)?;
     let l = chol.l();
@@ -307,7 +363,8 @@ fn dense_ee_shapes(
         .ok_or(not_definite)?;
     let mut lambda = Vec::new();
     let mut phi = Vec::new();
-    for &i in idx.iter().take(count) {
+    let kept: Vec<usize> = idx.iter().copied().take(count).collect();
+    for &i in &kept {
         lambda.push(eig.eigenvalues[i]);
         let mut p = Vector6::zeros();
         for r in 0..dim {
@@ -315,5 +372,5 @@ fn dense_ee_shapes(
         }
         phi.push(p);
     }
-    Ok((lambda, phi))
+    Ok((lambda, phi, u.select_columns(&kept)))
 }

@@ -5,15 +5,20 @@
 //! **Model.** The robot follows the commanded path quasi-statically (each sample's pose is
 //! the equilibrium the estimator solves); what vibrates is the deviation u from it. About
 //! each pose the structure is linear (the estimator's model: stiffness, mass, tensions of
-//! that pose), so M ü + C u̇ + K u = f with the inertial load of the quasi-static motion on
-//! the end-effector, f = −M_ee [a; 0] (the end-effector's mass times the path's
-//! acceleration a, by central differences of the samples). Included: that load on every
-//! mode, through the first K modes of the pose (the structured engine's frequencies and
-//! mass-normalised shapes, taut or sagging), the damping of the
-//! scene (each mode's ratio [`Damping::modal_ratio`]), the static correction of the modes
-//! left out (mode-acceleration method, [`ModalResponse`](crate::modal::response::ModalResponse)). Left out: the cables' own
-//! share of the quasi-static motion's inertia (their nodes following the end-effector:
-//! about a third of each cable's mass), the rotational load −I·α − ω×Iω (the paths here
+//! that pose), so M ü + C u̇ + K u = −M r a with the inertial load of the quasi-static
+//! motion of the whole robot: every cable node carried along with the end-effector by the
+//! static influence field r (anchors held, lengths fixed), M the whole robot's mass, a the
+//! path's acceleration by central differences of the samples
+//! ([`crate::modal::quasi_static`]: the modes' participation factors φ_kᵀ M r and the
+//! quasi-static mass rᵀ M r, taken by the response as load shapes of the end-effector
+//! force −M_ee [a; 0]). Included: that load on every mode, through the first K modes of
+//! the pose (the structured engine's frequencies and mass-normalised shapes, taut or
+//! sagging), the damping of the scene (each mode's ratio [`Damping::modal_ratio`]), the
+//! static correction of the modes left out (mode-acceleration method,
+//! [`ModalResponse`](crate::modal::response::ModalResponse)). Left out: a sagging cable's
+//! change of profile with the winches' lengths along the path (the field is the
+//! fixed-length one), [`simulate_forced`]'s loop (the end-effector's mass alone), the
+//! rotational load −I·α − ω×Iω (the paths here
 //! keep the orientation fixed: it is zero for them), gravity's change with the pose (it is
 //! in the quasi-static pose), and the winches' dynamics.
 //!
@@ -38,6 +43,9 @@ use crate::trajectory::{Samples, Trajectory};
 use core::ops::AddAssign;
 use nalgebra::{Vector3, Vector6};
 
+pub use path_spec::{simulate_shaped, PathSpec, ShapedRun};
+
+pub mod path_spec;
 pub mod pilot;
 mod propagate;
 pub mod updates;
@@ -289,6 +297,8 @@ pub struct Accuracy {
     pub modes_met: bool,
     /// The pilot's peak deviation, m (the scale of the tolerance).
     pub peak_m: f64,
+    /// Modes of the pilot's largest basis (what its memory held).
+    pub pilot_modes: usize,
     /// Whether the update interval was chosen for the tolerance (false: given).
     pub updates_chosen: bool,
     /// The largest predicted error of one interval between basis updates, relative to
@@ -614,10 +624,13 @@ fn run(
 pub fn simulate_work(samples: usize, cfg: &SimulateConfig) -> super::cost::Work<'static> {
     super::cost::Work::Simulate {
         samples,
-        // The chosen K and interval are known only after the pilot: the smallest pilot and
-        // the first interval make the estimate a lower bound, so a refusal is certain.
+        // The chosen K, the pilot's growth and the interval are known only as the run goes:
+        // its first pilot basis, K at least that pilot's and the first interval make this
+        // estimate a lower bound (a refusal is certain); each larger pilot basis and the K
+        // chosen are checked again before they are built.
         update_every: cfg.update_every.unwrap_or(updates::FIRST_INTERVAL),
         modes: cfg.modes.unwrap_or(pilot::FIRST_PILOT),
+        pilot_modes: pilot::pilot_sizes(cfg.modes.unwrap_or(0))[0],
     }
 }
 

@@ -7,6 +7,7 @@
 cablevib_testkit::count_allocations!();
 
 mod budget_continuation;
+mod cable_inertia;
 mod ee_budget;
 mod effects_rigid;
 mod frf;

@@ -9,19 +9,13 @@
 //! 2. a cluster given as one that is not one eigenvalue (modes 1e-10 apart given together)
 //!    is split by the count from its λ to 1e-8 above (`count::split_cluster`), each part's
 //!    shapes taken;
-//! 3. a cluster still not separated (σ_m/σ_{m+1} above the tolerance: a near-double 2e-6 …
-//!    5e-6 apart on the symmetric paper robot with sag) is grown by its nearest given
-//!    neighbours within [`NEAR_MAX_REL`] until, at each member's λ, the member's own m
-//!    smallest singular vectors are separated from all but the cluster's other M − m
-//!    (σ_m/σ_{M+1} ≤ the tolerance, M the cluster's total). Those vectors (each a chain
-//!    solution at its own λ) are M-orthonormalised together by the symmetric
-//!    orthonormalisation (the least change to each; refused when the normalised Gram matrix
-//!    has an eigenvalue below [`NEAR_GRAM_MIN`], i.e. two members gave nearly one vector),
-//!    each member keeping its λ; shapes already given for a member are replaced. It needs
-//!    the mass form of two chain solutions at different λ, which a model gives where it is
-//!    exact ([`Bordered::cable_mass`]). Isolated clusters never take this path.
+//! 3. a cluster still not separated from a given neighbour is a near-cluster (`near`):
+//!    below the null space's resolution taken with its neighbours as one cluster at their
+//!    mean λ under the count's certificate, else resolved with them member by member; the
+//!    neighbours' shapes given already are replaced.
 
 use super::count::split_cluster;
+use super::near;
 use super::{ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_MULTIPLICITY};
 use crate::modal::lambda_to_hz;
 use nalgebra::{DMatrix, DVector, Matrix6, SymmetricEigen, Vector3, Vector6};
@@ -30,16 +24,7 @@ use nalgebra::{DMatrix, DVector, Matrix6, SymmetricEigen, Vector3, Vector6};
 /// neither alone is a clean null space of the bordered system (the count's bisection
 /// resolves λ to ~ε·λ_max/λ; modes this close are one eigenvalue to the f64 model's
 /// accuracy).
-const MERGE_REL: f64 = 1e-9;
-
-/// Largest relative distance of a neighbour taken into a near-cluster (module docs): modes
-/// farther apart are separated by the bordered system's singular values at every pose met
-/// (the near-doubles of the symmetric paper robot with sag are ~5e-6 apart).
-const NEAR_MAX_REL: f64 = 1e-3;
-
-/// Smallest eigenvalue of a near-cluster's normalised mass Gram matrix: below it, two
-/// members' shapes are close to one vector (not two modes) and the cluster is refused.
-const NEAR_GRAM_MIN: f64 = 0.5;
+pub(super) const MERGE_REL: f64 = 1e-9;
 
 /// Sweeps of Ruiz equilibration (each halves the logarithm of every row's and column's
 /// imbalance: 30 sweeps bring a 1e30 spread to within a factor 1 + 1e-7).
@@ -72,12 +57,17 @@ pub(in crate::modal) trait Bordered {
         b: &Self::Vector,
         same: bool,
     ) -> Option<f64>;
-    /// Every cable's node displacements (world frame) of a null vector.
-    fn nodes(&self, at: &Self::At, v: &Self::Vector) -> Vec<Vec<Vector3<f64>>>;
+    /// Every cable's node displacements (world frame) of a null vector, and each cable's
+    /// hidden cable's nodes (displacement along it, drum to junction; empty without one).
+    fn nodes(&self, at: &Self::At, v: &Self::Vector) -> Nodes;
     /// The number of eigenvalues strictly below λ (Wittrick–Williams), for splitting a
     /// cluster.
     fn count(&mut self, lambda: f64) -> u32;
 }
+
+/// A shape's node displacements: every cable's (world frame) and each hidden cable's
+/// ([`ModeShape::cables`], [`ModeShape::hidden`]).
+pub(in crate::modal) type Nodes = (Vec<Vec<Vector3<f64>>>, Vec<Vec<f64>>);
 
 /// The null space of one cluster before normalisation: columns (φ, amplitudes).
 pub(super) struct NullSpace {
@@ -150,19 +140,34 @@ pub(in crate::modal) fn mode_shapes<B: Bordered>(
                 }
             }
         }
-        // 3. Not separated from a neighbour: resolved with it as a near-cluster, the
-        // neighbour's shapes given already replaced.
-        let (lo, hi) = near_cluster(sys, modes, (first_mode, next_mode), params).ok_or(e)?;
-        out.modes.truncate(starts[lo]);
-        let group = resolve_near(sys, &modes[lo..hi], starts[lo], params).ok_or(e)?;
-        out.modes.extend(group);
-        next_mode = hi;
+        // 3. Not separated from a given neighbour: a near-cluster (`near`), the
+        // neighbours' shapes given already replaced.
+        if let Some((group, at, null, mean, total)) =
+            near::merged(sys, modes, (first_mode, next_mode), params)
+        {
+            out.modes.truncate(starts[group.start]);
+            starts[group.clone()].fill(out.modes.len());
+            push_cluster(sys, &at, &null, mean, total, out);
+            next_mode = group.end;
+            continue;
+        }
+        let (group, shapes) =
+            near::near_cluster(sys, modes, &starts, (first_mode, next_mode), params).ok_or(e)?;
+        out.modes.truncate(starts[group.start]);
+        // Each given mode's shapes start at its member's first.
+        let mut at = out.modes.len();
+        for j in group.clone() {
+            starts[j] = shapes[at - out.modes.len()].cluster_start;
+            at += modes[j].1 as usize;
+        }
+        out.modes.extend(shapes);
+        next_mode = group.end;
     }
     Ok(())
 }
 
 /// The chains' solutions at λ and the bordered system's m-dimensional null space there.
-fn solve<B: Bordered>(
+pub(super) fn solve<B: Bordered>(
     sys: &mut B,
     lambda: f64,
     m: u32,
@@ -174,7 +179,7 @@ fn solve<B: Bordered>(
 }
 
 /// The end-effector part of a null vector.
-fn ee_of(col: &DVector<f64>, dim: usize) -> Vector6<f64> {
+pub(super) fn ee_of(col: &DVector<f64>, dim: usize) -> Vector6<f64> {
     let mut ee = Vector6::zeros();
     for r in 0..dim {
         ee[r] = col[r];
@@ -194,7 +199,7 @@ fn ee_quad(m6: &Matrix6<f64>, v: &DMatrix<f64>, a: usize, b: usize, dim: usize) 
 }
 
 /// The shapes of one clean cluster (λ, m) from its null space, appended to `out`.
-fn push_cluster<B: Bordered>(
+pub(super) fn push_cluster<B: Bordered>(
     sys: &B,
     at: &B::At,
     null: &NullSpace,
@@ -226,11 +231,13 @@ fn push_cluster<B: Bordered>(
     }
     let start = out.modes.len();
     for (col, part) in orthonormalise(v, gram, &ee) {
+        let (cables, hidden) = sys.nodes(at, &sys.vector(at, &col));
         out.modes.push(ModeShape {
             lambda,
             frequency_hz: lambda_to_hz(lambda),
             ee: ee_of(&col, dim),
-            cables: sys.nodes(at, &sys.vector(at, &col)),
+            cables,
+            hidden,
             ee_participation: part,
             cluster_start: start,
             multiplicity: m,
@@ -239,168 +246,10 @@ fn push_cluster<B: Bordered>(
     }
 }
 
-/// The given modes `lo..hi` (a cluster whose bordered system is not separated) grown by
-/// their nearest neighbours within [`NEAR_MAX_REL`] until [`resolve_near`] resolves them:
-/// the range, or `None` when no neighbour is left to take.
-fn near_cluster<B: Bordered>(
-    sys: &mut B,
-    modes: &[(f64, u32)],
-    (mut lo, mut hi): (usize, usize),
-    params: &ShapeParams,
-) -> Option<(usize, usize)> {
-    loop {
-        let below = (lo > 0)
-            .then(|| (modes[lo].0 - modes[lo - 1].0) / modes[lo].0)
-            .filter(|&g| g <= NEAR_MAX_REL);
-        let above = modes
-            .get(hi)
-            .map(|&(l, _)| (l - modes[hi - 1].0) / modes[hi - 1].0)
-            .filter(|&g| g <= NEAR_MAX_REL);
-        match (below, above) {
-            (Some(b), Some(a)) if b <= a => lo -= 1,
-            (Some(_), None) => lo -= 1,
-            (_, Some(_)) => hi += 1,
-            (None, None) => return None,
-        }
-        let total: u32 = modes[lo..hi].iter().map(|x| x.1).sum();
-        if total > MAX_MULTIPLICITY {
-            return None;
-        }
-        if resolve_near(sys, &modes[lo..hi], 0, params).is_some() {
-            return Some((lo, hi));
-        }
-    }
-}
-
-/// One null vector of a near-cluster's member (at the member's λ).
-struct NearVector<V> {
-    member: usize,
-    phi: Vector6<f64>,
-    parts: V,
-}
-
-/// The shapes of a near-cluster `group` (module docs), the first at index `start` of the
-/// output: at each member's λ the smallest singular vectors of its own multiplicity, taken
-/// only where the cluster's whole multiplicity M is separated (σ_M/σ_{M+1} ≤
-/// [`ShapeParams::null_tol`]); then M-orthonormalised together (symmetric
-/// orthonormalisation, the least change to each), each member keeping its λ. `None` when a
-/// member's test fails, the model has no mass form across two λ, or two members' vectors
-/// are close to one (normalised Gram eigenvalue below [`NEAR_GRAM_MIN`]).
-fn resolve_near<B: Bordered>(
-    sys: &mut B,
-    group: &[(f64, u32)],
-    start: usize,
-    params: &ShapeParams,
-) -> Option<Vec<ModeShape>> {
-    let dim = sys.dim();
-    let m6 = sys.ee_mass();
-    // Members: the given modes, those within MERGE_REL as one.
-    let mut members: Vec<(f64, u32)> = Vec::new();
-    for &(l, m) in group {
-        match members.last_mut() {
-            Some(last) if (l - last.0).abs() <= MERGE_REL * last.0 => {
-                last.0 = (last.0 * last.1 as f64 + l * m as f64) / (last.1 + m) as f64;
-                last.1 += m;
-            }
-            _ => members.push((l, m)),
-        }
-    }
-    let total: u32 = members.iter().map(|x| x.1).sum();
-    let mut ats = Vec::new();
-    let mut raw = Vec::new();
-    let mut separation = 0.0f64;
-    for (p, &(lambda, m)) in members.iter().enumerate() {
-        let at = sys.at(lambda);
-        let a = sys.matrix(&at, lambda);
-        let null = null_within(a, m as usize, total as usize, lambda, params).ok()?;
-        separation = separation.max(null.residual);
-        for c in 0..m as usize {
-            let col = null.vectors.column(c).into_owned();
-            raw.push(NearVector {
-                member: p,
-                phi: ee_of(&col, dim),
-                parts: sys.vector(&at, &col),
-            });
-        }
-        ats.push(at);
-    }
-    let k = raw.len();
-    let mut gram = DMatrix::<f64>::zeros(k, k);
-    let mut ee = DMatrix::<f64>::zeros(k, k);
-    for a in 0..k {
-        for b in 0..=a {
-            let (ra, rb) = (&raw[a], &raw[b]);
-            let own = (ra.phi.transpose() * m6 * rb.phi)[(0, 0)];
-            let cab = sys.cable_mass(
-                &ats[ra.member],
-                &ra.parts,
-                &ats[rb.member],
-                &rb.parts,
-                ra.member == rb.member,
-            )?;
-            gram[(a, b)] = own + cab;
-            gram[(b, a)] = own + cab;
-            ee[(a, b)] = own;
-            ee[(b, a)] = own;
-        }
-    }
-    // Symmetric orthonormalisation of the unit-M-norm vectors: C = D G̃^{-1/2}.
-    let d = DVector::from_iterator(k, (0..k).map(|a| 1.0 / gram[(a, a)].sqrt()));
-    let dm = DMatrix::from_diagonal(&d);
-    let g = SymmetricEigen::new(&dm * &gram * &dm);
-    if !(g.eigenvalues.min() >= NEAR_GRAM_MIN) {
-        return None;
-    }
-    let mut q = g.eigenvectors.clone();
-    for (c, &l) in g.eigenvalues.iter().enumerate() {
-        q.column_mut(c).scale_mut(1.0 / l.sqrt());
-    }
-    let coef = &dm * &q * g.eigenvectors.transpose();
-    let nodes: Vec<_> = raw
-        .iter()
-        .map(|r| sys.nodes(&ats[r.member], &r.parts))
-        .collect();
-    let mut out = Vec::with_capacity(k);
-    let mut col0 = 0;
-    for &(lambda, m) in &members {
-        let cp = coef.columns(col0, m as usize).into_owned();
-        col0 += m as usize;
-        let gp = cp.transpose() * &gram * &cp;
-        let ep = cp.transpose() * &ee * &cp;
-        let first = start + out.len();
-        for (c, part) in orthonormalise(&cp, gp, &ep) {
-            let mut phi = Vector6::zeros();
-            let mut cables: Vec<Vec<Vector3<f64>>> = nodes[0]
-                .iter()
-                .map(|u| vec![Vector3::zeros(); u.len()])
-                .collect();
-            for ((r, src), w) in raw.iter().zip(&nodes).zip(c.iter()) {
-                phi += r.phi * *w;
-                for (dst, s) in cables.iter_mut().zip(src) {
-                    for (x, y) in dst.iter_mut().zip(s) {
-                        *x += y * *w;
-                    }
-                }
-            }
-            out.push(ModeShape {
-                lambda,
-                frequency_hz: lambda_to_hz(lambda),
-                ee: phi,
-                cables,
-                ee_participation: part,
-                cluster_start: first,
-                multiplicity: m,
-                null_residual: separation,
-            });
-        }
-    }
-    Some(out)
-}
-
 /// M-orthonormalise the null vectors `v` (columns) from their mass Gram matrix `gram`
 /// (vᵀMv) and rotate them to diagonalise the end-effector's mass `ee` (φᵀM_eeφ);
 /// returns the columns with their participations, descending.
-fn orthonormalise(
+pub(super) fn orthonormalise(
     v: &DMatrix<f64>,
     gram: DMatrix<f64>,
     ee: &DMatrix<f64>,
@@ -448,7 +297,7 @@ fn null_of(
 /// beyond the `within` smallest (`within ≥ m`): σ_m/σ_{within+1} ≤
 /// [`ShapeParams::null_tol`] (a near-cluster's member: its vectors may mix with the
 /// cluster's other `within − m` directions, resolved by the caller).
-fn null_within(
+pub(super) fn null_within(
     mut a: DMatrix<f64>,
     m: usize,
     within: usize,
@@ -581,8 +430,8 @@ mod tests {
         fn cable_mass(&self, _: &(), _: &(), _: &(), _: &(), _: bool) -> Option<f64> {
             Some(0.0)
         }
-        fn nodes(&self, _: &(), _: &()) -> Vec<Vec<Vector3<f64>>> {
-            Vec::new()
+        fn nodes(&self, _: &(), _: &()) -> Nodes {
+            (Vec::new(), Vec::new())
         }
         fn count(&mut self, lambda: f64) -> u32 {
             self.lambdas.iter().filter(|&&l| l < lambda).count() as u32

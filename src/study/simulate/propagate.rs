@@ -8,8 +8,11 @@
 //! force linear between samples with the static flexibility interpolated between the two
 //! poses ([`ModalResponse::displacement_with`]), and installs the new basis, the state
 //! carried by the mass overlap of the whole shapes. The force at sample k is the inertial
-//! load of the quasi-static motion −M_ee [a_k; 0] plus the caller's `external_n(k)`; the
-//! caller sees the response at every sample (`on_sample`).
+//! load of the quasi-static motion −M_ee [a_k; 0] plus the caller's `external_n(k)`, taken
+//! by each mode through the basis's load shapes (the whole robot's quasi-static inertia,
+//! [`crate::modal::quasi_static`]; an external force therefore acts as that load would,
+//! exact for it only where the cables carry no mass); the caller sees the response at
+//! every sample (`on_sample`).
 
 use super::{pilot, solve_pose, updates, Accuracy, SampledPath, SimulateConfig, SimulateResult};
 use crate::estimator::{EeModalBasis, Estimator};
@@ -32,7 +35,8 @@ fn basis_at(
 }
 
 /// Install `basis` in `resp`, carrying the state across: the whole state by the mass
-/// overlap of the whole shapes when both bases have them, else the end-effector's.
+/// overlap of the whole shapes when both bases have them, else the end-effector's; the
+/// modes loaded by the whole robot's quasi-static inertia (the basis's load shapes).
 fn install(
     resp: &mut ModalResponse,
     basis: &EeModalBasis,
@@ -60,6 +64,7 @@ fn install(
             &basis.ee_mass,
         ),
     }
+    .and_then(|()| resp.set_load_shapes(&basis.load_ee, &basis.load_flexibility))
     .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
 }
 
@@ -79,10 +84,11 @@ impl<F: Fn(usize) -> Vector6<f64>> Loads<'_, F> {
     }
 }
 
-/// What the mode choice found: K, its truncation estimate relative to the peak, whether
-/// it met the tolerance, the peak, m.
+/// What the mode choice found: K, the pilot's largest basis, K's truncation estimate
+/// relative to the peak, whether it met the tolerance, the peak, m.
 struct ModesChosen {
     modes: usize,
+    pilot_modes: usize,
     estimate: f64,
     met: bool,
     peak_m: f64,
@@ -99,25 +105,66 @@ fn choose_modes<F: Fn(usize) -> Vector6<f64>>(
 ) -> Result<ModesChosen, StudyError> {
     let path = loads.path;
     let n = path.positions_m.len();
-    let all: Vec<Vector6<f64>> = (0..n).map(|k| loads.at(k)).collect();
     let mut samples = vec![0, n / 2, n - 1];
     samples.dedup_by(|a, b| path.positions_m[*a] == path.positions_m[*b]);
+    // Each pilot basis's memory checked before it is built (with the run's samples), and
+    // the pilot's progress in modes run.
+    let check = |pilot_modes: usize| {
+        crate::study::cost::estimate_cost(
+            scene,
+            &crate::study::cost::Work::Simulate {
+                samples: n,
+                update_every: cfg.update_every.unwrap_or(updates::FIRST_INTERVAL),
+                modes: cfg.modes.unwrap_or(0),
+                pilot_modes,
+            },
+        )
+        .check_memory()
+    };
+    let per_pose: usize = pilot::pilot_sizes(cfg.modes.unwrap_or(0)).iter().sum();
+    let bar = crate::study::progress::Progress::counting(
+        cfg.progress,
+        per_pose * samples.len(),
+        "pilot modes",
+    );
+    let growth = pilot::Growth {
+        check: &check,
+        bar: &bar,
+    };
+    let chosen = pilot_poses(est, scene, loads, cfg, &samples, Some(&growth));
+    bar.finish();
+    chosen
+}
+
+/// [`choose_modes`] at the path's `samples`, watched by `growth`.
+fn pilot_poses<F: Fn(usize) -> Vector6<f64>>(
+    est: &mut Estimator,
+    scene: &Scene,
+    loads: &Loads<'_, F>,
+    cfg: &SimulateConfig,
+    samples: &[usize],
+    growth: Option<&pilot::Growth<'_>>,
+) -> Result<ModesChosen, StudyError> {
+    let path = loads.path;
+    let n = path.positions_m.len();
+    let all: Vec<Vector6<f64>> = (0..n).map(|k| loads.at(k)).collect();
     let mut chosen = ModesChosen {
         modes: 0,
+        pilot_modes: 0,
         estimate: 0.0,
         met: true,
         peak_m: 0.0,
     };
-    for &k in &samples {
+    for &k in samples {
         let t = k as f64 * path.dt_s;
         solve_pose(est, scene, &path.positions_m[k], t)?;
+        let (damping, dt, tol) = (&scene.damping, path.dt_s, cfg.tolerance);
         let c = match cfg.modes {
-            None => pilot::choose(est, &scene.damping, &all, path.dt_s, cfg.tolerance)?,
-            Some(given) => {
-                pilot::assess(est, given, &scene.damping, &all, path.dt_s, cfg.tolerance)?
-            }
+            None => pilot::choose(est, damping, &all, dt, tol, growth)?,
+            Some(given) => pilot::assess(est, given, damping, &all, dt, tol, growth)?,
         };
         chosen.modes = chosen.modes.max(c.modes);
+        chosen.pilot_modes = chosen.pilot_modes.max(c.pilot_modes);
         chosen.estimate = chosen.estimate.max(c.estimate);
         chosen.met &= c.met;
         chosen.peak_m = chosen.peak_m.max(c.peak_m);
@@ -141,21 +188,21 @@ pub(super) fn run(
     let n = path.positions_m.len();
     let damping = scene.damping;
     // The end-effector's mass matrix is the scene's, the same at every pose.
-    let mut held = basis_at(est, scene, &path.positions_m[0], 0.0, 1)?;
     let loads = Loads {
         path,
-        ee_mass: held.ee_mass,
+        ee_mass: basis_at(est, scene, &path.positions_m[0], 0.0, 1)?.ee_mass,
         external_n,
     };
     let chosen = choose_modes(est, scene, &loads, cfg)?;
-    // The memory check before the run took the smallest pilot; with K now known, the run's
-    // own two bases and path are checked against the budget again before they are built.
+    // Each pilot basis was checked before it was built; with K now known, the run's own
+    // two bases and path are checked against the budget before they are built.
     crate::study::cost::estimate_cost(
         scene,
         &crate::study::cost::Work::Simulate {
             samples: n,
             update_every: cfg.update_every.unwrap_or(updates::FIRST_INTERVAL),
             modes: chosen.modes,
+            pilot_modes: 0,
         },
     )
     .check_memory()?;
@@ -165,6 +212,7 @@ pub(super) fn run(
         modes_estimate: chosen.estimate,
         modes_met: chosen.met,
         peak_m: chosen.peak_m,
+        pilot_modes: chosen.pilot_modes,
         updates_chosen: cfg.update_every.is_none(),
         interval_estimate: 0.0,
         interval_estimate_sum: 0.0,
@@ -182,7 +230,7 @@ pub(super) fn run(
     let mut interval = cfg
         .update_every
         .unwrap_or(updates::FIRST_INTERVAL.min(max_interval));
-    held = basis_at(est, scene, &path.positions_m[0], 0.0, modes)?;
+    let mut held = basis_at(est, scene, &path.positions_m[0], 0.0, modes)?;
     f1_seen(est, out);
     install(&mut resp, &held, None, &damping, 0.0)?;
     out.updates = 1;
@@ -206,7 +254,8 @@ pub(super) fn run(
         let nm = resp.modes();
         resp.dynamic_amplitudes(&f_prev, &mut amplitude[..nm]);
         for (j, (p, l)) in phi2.iter_mut().zip(lambda0.iter_mut()).enumerate().take(nm) {
-            *p = resp.phi(j).norm_squared();
+            // |φ_j| |ψ_j|: the end-effector's share of what the load ψ_jᵀf can add.
+            *p = resp.phi(j).norm() * resp.load_shape(j).norm();
             *l = resp.lambda(j);
         }
         let (k1, next, error) = loop {
@@ -224,9 +273,13 @@ pub(super) fn run(
                 u as f64 * path.dt_s,
             );
             let d2 = match previous {
-                Some((fp, back)) => {
-                    updates::second_difference(&fp, &held.flexibility, &next.flexibility, back, u)
-                }
+                Some((fp, back)) => updates::second_difference(
+                    &fp,
+                    &held.load_flexibility,
+                    &next.load_flexibility,
+                    back,
+                    u,
+                ),
                 None => Matrix6::zeros(),
             };
             let static_m = updates::static_error(&d2, (k0 + 1..=k1).map(|k| loads.at(k)), u);
@@ -247,7 +300,7 @@ pub(super) fn run(
             resp.step(&f_prev, &f, path.dt_s);
             f_prev = f;
             let w = (k - k0) as f64 / u as f64;
-            let flex = held.flexibility * (1.0 - w) + next.flexibility * w;
+            let flex = held.load_flexibility * (1.0 - w) + next.load_flexibility * w;
             push(out, k, &resp.displacement_with(&f, &flex));
             on_sample(k, &resp, &f);
         }
@@ -266,7 +319,7 @@ pub(super) fn run(
         };
         out.accuracy.interval_estimate = out.accuracy.interval_estimate.max(rel);
         out.accuracy.interval_estimate_sum += rel;
-        previous = Some((held.flexibility, u));
+        previous = Some((held.load_flexibility, u));
         held = next;
         k0 = k1;
         if cfg.update_every.is_none() {

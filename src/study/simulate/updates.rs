@@ -7,7 +7,8 @@
 //! Both bases are solved before the interval is run, so its error is predicted from them:
 //!
 //! - **dynamic**: mode j rings with the end-effector amplitude A_j (its dynamic amplitude
-//!   now, plus what the interval's load can add, |φ_j|²∫|f|dt/ω_j); held at ω_j(p₀) while
+//!   now, plus what the interval's load can add, |φ_j||ψ_j|∫|f|dt/ω_j, ψ_j the mode's load
+//!   shape, φ_j where the cables carry no mass); held at ω_j(p₀) while
 //!   the robot's drifts towards ω_j(p₁), it falls out of phase by |Δω_j|·T/2 over the
 //!   interval: e_dyn = Σ_j A_j |Δω_j| T/2 (modes matched by index: a crossing shows as a
 //!   large Δω and shortens the interval, the safe side);
@@ -46,7 +47,7 @@ impl IntervalError {
 }
 
 /// e_dyn of the module docs: `amplitude[j]` the end-effector dynamic amplitude of held mode
-/// j now (m), `phi_norm2[j]` its |φ_j|² (1/kg), `lambda0`, `lambda1` the held and the next
+/// j now (m), `phi_norm2[j]` its |φ_j||ψ_j| (1/kg; ψ_j its load shape), `lambda0`, `lambda1` the held and the next
 /// basis's λ (rad²/s², matched by index), `load_impulse` ∫|f|dt over the interval (N·s),
 /// `t_s` the interval.
 pub fn dynamic_error(
