@@ -491,6 +491,49 @@ mod tests {
     }
 
     #[test]
+    fn a_near_cluster_below_the_resolution_is_one_cluster_at_its_mean() {
+        // Three eigenvalues 2e-8 apart (above the 1e-9 of a plain merge), each given 5e-11
+        // off (inside the count's 1e-10 window, as rounding leaves a source's λ): alone
+        // σ₁/σ₂ ≈ 2.5e-3 > the 1e-3 tolerance; the count certifies exactly three in the
+        // group's span, and at the mean the triple's null space is separated (σ₃/σ₄ ≈
+        // 2e-8). Expected: one cluster of 3 at the mean spanning the three eigenvectors,
+        // the neighbour at 2 on its own.
+        let exact = [1.0, 1.0 + 2e-8, 1.0 + 4e-8, 2.0, 3.0, 4.0];
+        let mut toy = Toy::new(exact);
+        let given = [
+            (1.0 + 5e-11, 1),
+            (1.0 + 2e-8 - 5e-11, 1),
+            (1.0 + 4e-8 + 5e-11, 1),
+            (2.0, 1),
+        ];
+        let alone = solve(&mut toy, given[0].0, 1, &ShapeParams::default());
+        assert!(matches!(alone, Err(ShapeError::NotAnEigenvalue { .. })));
+        let out = run(&mut toy, &given).unwrap();
+        assert_eq!(out.modes.len(), 4);
+        let mean = given[..3].iter().map(|g| g.0).sum::<f64>() / 3.0;
+        for s in &out.modes[..3] {
+            assert_eq!((s.multiplicity, s.cluster_start), (3, 0));
+            assert_eq!(s.lambda, mean);
+            // Within the triple's eigenspace (Q's first three columns) to the separation
+            // σ₃/σ₄ ≈ 2e-8 (squared in the projection).
+            let p: f64 = (0..3).map(|k| alignment(&toy, s, k).powi(2)).sum();
+            assert!((p - 1.0).abs() <= 1e-9, "{p}");
+            assert!((s.ee.norm() - 1.0).abs() <= 1e-12);
+        }
+        assert_eq!(out.modes[3].multiplicity, 1);
+        assert!(1.0 - alignment(&toy, &out.modes[3], 3) <= 1e-12);
+        // A group whose span holds more modes than given (the middle one left out) is
+        // not merged: the count finds three there, the group has two.
+        let short = [given[0], given[2], given[3]];
+        let got = run(&mut toy, &short);
+        assert!(
+            got.as_ref()
+                .map_or(true, |o| o.modes.iter().all(|s| s.multiplicity == 1)),
+            "{got:?}"
+        );
+    }
+
+    #[test]
     fn modes_given_apart_that_are_one_are_merged() {
         // An exact double given as two modes 1e-12 apart (a count's rounding): neither
         // alone has a clean 1-dimensional null space; merged, the double's.
