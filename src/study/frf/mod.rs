@@ -491,24 +491,16 @@ impl ResponseModel for Sagged {
         self.sag.dim()
     }
 
-    /// The lowest modes, doubling the count until one lies above the band (the top of the
-    /// spectrum is not needed), never more than the model has: asking for more failed
-    /// where every mode lies below the cut-off.
+    /// The modes below the band's top (the count's, as for taut cables; at most
+    /// [`SAG_MARK_MODES`], never more than the model has).
     fn natural_hz(&mut self, cfg: &FrfConfig) -> Result<Vec<f64>, StudyError> {
-        let total = self.total;
-        let mut k = 16usize;
-        loop {
-            let mut modes = vec![Mode::default(); k.min(total)];
-            let nm = self
-                .est
-                .modes(modes.len(), &mut modes)
-                .map_err(|e| StudyError::Solve(e.to_string()))?;
-            let top = modes[..nm].last().map_or(0.0, |m| lambda_to_hz(m.lambda));
-            if top > cfg.to_hz || k >= SAG_MARK_MODES.min(total) {
-                return Ok(marked(cfg, &modes[..nm]));
-            }
-            k *= 2;
-        }
+        let n_band = self.sag.count_below(hz_to_lambda(cfg.to_hz)) as usize;
+        let mut modes = vec![Mode::default(); n_band.min(SAG_MARK_MODES).min(self.total)];
+        let nm = self
+            .est
+            .modes(modes.len(), &mut modes)
+            .map_err(|e| StudyError::Solve(e.to_string()))?;
+        Ok(marked(cfg, &modes[..nm]))
     }
 
     fn receptance(
