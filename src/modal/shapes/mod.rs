@@ -42,7 +42,7 @@
 //! coarse to separate it from a neighbour). Before the SVD the matrix is equilibrated
 //! (Ruiz: rows and columns scaled to unit largest entry): the chains' rows range from T/l
 //! to EA/l, and unbalanced, the SVD's backward error ε‖A‖ would swamp the soft rows. A
-//! cluster that fails the test is repaired the same way for every model (`bordered`,
+//! cluster that fails the test is repaired the same way for every model (`pipeline`,
 //! `near`): modes given apart within 1e-9 that are one eigenvalue are merged; one given as a
 //! cluster that is several (modes 1e-10 apart given as one; the catenary model's identical
 //! cables differ by ~ε·EA/T) is split by the count from its λ to 1e-8 above, and each
@@ -82,8 +82,9 @@
 //! part enters m_ii. A sagged chain on a hidden cable (`sagged`) has one more amplitude,
 //! the hidden cable's, and the junction's equation one more row.
 //!
-//! **Layout.** `bordered`: the one pipeline over a model's bordered system (null space,
-//! normalisation, cluster merge and split); `near`: its near-cluster repairs; `taut`: the
+//! **Layout.** `pipeline`: the one pipeline over a model's bordered system (cluster merge
+//! and split), `bordered`: what it does at one λ (null space, normalisation); `near`: its
+//! near-cluster repairs; `taut`: the
 //! taut chains' system (behind
 //! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes)), `sagged`: the
 //! sagging cables' FEM chains' (behind
@@ -100,13 +101,14 @@ mod chain_shape;
 mod count;
 mod influence;
 mod near;
+mod pipeline;
 mod sag_chain_shape;
 mod sagged;
 mod supported_shape;
 mod taut;
 
-pub(in crate::modal) use bordered::mode_shapes;
 pub(in crate::modal) use count::clusters_by_count;
+pub(in crate::modal) use pipeline::mode_shapes;
 pub(in crate::modal) use sagged::SagSystem;
 pub(in crate::modal) use taut::TautSystem;
 

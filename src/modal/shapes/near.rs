@@ -1,4 +1,4 @@
-//! The near-cluster repairs of the mode-shape pipeline (`bordered`, the `shapes` module
+//! The near-cluster repairs of the mode-shape pipeline (`pipeline`, the `shapes` module
 //! docs): a given mode whose bordered system has no clean null space of its multiplicity,
 //! not one eigenvalue merged with a neighbour nor a cluster the count splits, is taken
 //! with its nearest given neighbours, the same for every model:

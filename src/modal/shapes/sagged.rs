@@ -60,7 +60,7 @@
 //! (m/6)(2u_j·v_j + u_j·v_{j+1} + u_{j+1}·v_j + 2u_{j+1}·v_{j+1}), plus φᵀM_eeφ: the dense
 //! M's, with the hidden cables' term above); a cluster is M-orthonormalised and rotated as
 //! the taut shapes are; clusters that are not one clean eigenvalue are repaired as for
-//! every model (`bordered`: merged, split by the count, or resolved as a near-cluster with
+//! every model (`pipeline`: merged, split by the count, or resolved as a near-cluster with
 //! the element mass form of chain solutions at two λ, exact for the FEM chains).
 //!
 //! **Accuracy.** The forward solution is exact in exact arithmetic. Above a chain's

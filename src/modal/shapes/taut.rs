@@ -1,7 +1,7 @@
 //! The taut chains' bordered system ([`TautSystem`], behind
 //! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes)): one scalar chain
 //! copy per direction of each chain, its amplitude C_k one unknown (the module docs); the
-//! pipeline (`bordered`) takes its null space, normalises and repairs clusters.
+//! pipeline (`pipeline`) takes its null space, normalises and repairs clusters.
 
 use super::bordered::{element_mass_form, Bordered, Nodes};
 use super::chain_shape::ChainShape;
