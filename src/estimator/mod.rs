@@ -236,6 +236,17 @@ impl Estimator {
         self.cycle.sag_modal()
     }
 
+    /// [`Self::sag_modal`], mutable, for a study that owns this estimator (the frequency
+    /// response's count and receptance): they move the solver's scratch and warm starts,
+    /// not the pose it holds, so no copy of a model that may fill most of the memory budget
+    /// is made.
+    pub(crate) fn sag_modal_mut(&mut self) -> Option<&mut crate::modal::SagModalSolver> {
+        if self.estimate.status != Status::Ok {
+            return None;
+        }
+        self.cycle.sag_modal_mut()
+    }
+
     /// End-effector bookkeeping counters (see [`ModalSolver::rescan_counts`]).
     pub fn rescan_counts(&self) -> crate::modal::RescanCounts {
         self.cycle.rescan_counts()

@@ -379,6 +379,15 @@ impl Forward {
         }
     }
 
+    /// [`Self::sag_modal`], mutable: a count or a receptance moves the solver's scratch
+    /// and warm starts, not the loaded pose.
+    pub(super) fn sag_modal_mut(&mut self) -> Option<&mut crate::modal::SagModalSolver> {
+        match &mut self.model {
+            Model::Taut(_) => None,
+            Model::Sagged(s) => Some(&mut s.modal),
+        }
+    }
+
     /// The taut structured solver (None when the cables sag).
     pub(super) fn taut_modal(&self) -> Option<&ModalSolver> {
         match &self.model {

@@ -33,7 +33,7 @@ use crate::input_file::message_number;
 use crate::kinematics::Pose;
 use crate::modal::{
     frequency_grid, hz_to_lambda, lambda_to_hz, FrfError, ModalBasis, ModalParams, ModalSolver,
-    Mode, SagModalSolver, MAX_FRF_HZ, MAX_FRF_MODES, MAX_FRF_POINTS,
+    Mode, MAX_FRF_HZ, MAX_FRF_MODES, MAX_FRF_POINTS,
 };
 use crate::scene::{
     Damping, ElementKind, Scene, MAX_LOSS_FACTOR, MAX_MODAL_RATIO, MAX_RAYLEIGH_ALPHA_PER_S,
@@ -455,13 +455,14 @@ impl ResponseModel for Taut {
 /// the scene's pose, then the sagged structured solver's D at the complex λ of each
 /// frequency, or its shapes' superposition for modal damping.
 struct Sagged {
-    /// The estimator, updated at the scene's pose.
+    /// The estimator, updated at the scene's pose; its sagged structured solver (the count
+    /// and the receptance move its scratch, not its pose) is used in place: a copy would
+    /// double a model that may fill most of the memory budget before the budget is checked.
     est: Estimator,
-    /// Its sagged structured solver at that pose (a copy: the count and the receptance
-    /// move the solver's state, the estimator's stays as its cycle left it).
-    sag: SagModalSolver,
     /// Degrees of freedom of its model.
     total: usize,
+    /// 3 (point mass) or 6 (rigid body).
+    dim: usize,
 }
 
 impl Sagged {
@@ -477,8 +478,8 @@ impl Sagged {
             return Err(StudyError::Solve(format!("sagged pose: {why}")));
         }
         let total = est.model_dof().unwrap_or(0);
-        let sag = est.sag_modal().ok_or_else(no_sagged_pose)?.clone();
-        Ok(Sagged { est, sag, total })
+        let dim = est.sag_modal().ok_or_else(no_sagged_pose)?.dim();
+        Ok(Sagged { est, total, dim })
     }
 }
 
@@ -488,13 +489,17 @@ impl ResponseModel for Sagged {
     }
 
     fn dim(&self) -> usize {
-        self.sag.dim()
+        self.dim
     }
 
     /// The modes below the band's top (the count's, as for taut cables; at most
     /// [`SAG_MARK_MODES`], never more than the model has).
     fn natural_hz(&mut self, cfg: &FrfConfig) -> Result<Vec<f64>, StudyError> {
-        let n_band = self.sag.count_below(hz_to_lambda(cfg.to_hz)) as usize;
+        let n_band = self
+            .est
+            .sag_modal_mut()
+            .ok_or_else(no_sagged_pose)?
+            .count_below(hz_to_lambda(cfg.to_hz)) as usize;
         let mut modes = vec![Mode::default(); n_band.min(SAG_MARK_MODES).min(self.total)];
         let nm = self
             .est
@@ -515,8 +520,8 @@ impl ResponseModel for Sagged {
             return sagged_modal(&mut self.est, zeta, cutoff_hz, self.total, freqs);
         }
         check_cost(self.est.scene(), damping, freqs.len(), 0, announce)?;
-        let sag = &mut self.sag;
         let chunk = frf_chunk(self.est.scene(), damping);
+        let sag = self.est.sag_modal_mut().ok_or_else(no_sagged_pose)?;
         let h = in_chunks(cfg.progress, freqs.len(), chunk, |r| {
             sag.receptance_over(damping, &freqs[r])
         })?;
