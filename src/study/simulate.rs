@@ -7,7 +7,8 @@
 //! each pose the structure is linear (the estimator's model: stiffness, mass, tensions of
 //! that pose), so M ü + C u̇ + K u = −M r a with the inertial load of the quasi-static
 //! motion of the whole robot: every cable node carried along with the end-effector by the
-//! static influence field r (anchors held, lengths fixed), M the whole robot's mass, a the
+//! influence field r (taut cables: the static one, anchors held, lengths fixed), M the
+//! whole robot's mass, a the
 //! path's acceleration by central differences of the samples
 //! ([`crate::modal::quasi_static`]: the modes' participation factors φ_kᵀ M r and the
 //! quasi-static mass rᵀ M r, taken by the response as load shapes of the end-effector
@@ -15,10 +16,11 @@
 //! the pose (the structured engine's frequencies and mass-normalised shapes, taut or
 //! sagging), the damping of the scene (each mode's ratio [`Damping::modal_ratio`]), the
 //! static correction of the modes left out (mode-acceleration method,
-//! [`ModalResponse`](crate::modal::response::ModalResponse)). Left out: a sagging cable's
-//! change of profile with the winches' lengths along the path (the field is the
-//! fixed-length one), [`simulate_forced`]'s loop (the end-effector's mass alone), the
-//! rotational load −I·α − ω×Iω (the paths here
+//! [`ModalResponse`](crate::modal::response::ModalResponse)). On sagging cables the field is
+//! the path's instead (the nodes follow the sagged equilibrium with the winches' lengths
+//! re-solved at each pose, [`crate::estimator::sag_path_field_applies`]; its convective
+//! term ∂²x/∂p²[ṗ, ṗ] is left out). Left out: [`simulate_forced`]'s loop (the
+//! end-effector's mass alone), the rotational load −I·α − ω×Iω (the paths here
 //! keep the orientation fixed: it is zero for them), gravity's change with the pose (it is
 //! in the quasi-static pose), and the winches' dynamics.
 //!
