@@ -67,11 +67,7 @@ pub fn irvine_solve(x: f64, z: f64, l0: f64, w: f64, ea: f64, start: Vector2<f64
 
 /// The nodes of every cable of `scene` (`n` elements each) at `p`, from a cold estimator's
 /// L0 and the catenaries solved here; also each cable's (H, V_a) here and the crate's.
-pub fn reference_nodes(
-    scene: &Scene,
-    p: Vector3<f64>,
-    n: usize,
-) -> (Nodes, Catenaries) {
+pub fn reference_nodes(scene: &Scene, p: Vector3<f64>, n: usize) -> (Nodes, Catenaries) {
     let mut est = Estimator::new(scene).unwrap();
     let e = *est.update(&Pose::in_scene(scene, p), Tmin::Scene);
     assert!(e.is_ok(), "{p:?}: {:?}", e.error);
