@@ -19,7 +19,8 @@ use cablevib::cable::sagged::SagContinuousParams;
 use cablevib::elastic_catenary::{CableChord, Catenary, SagParams, SagTrack};
 use cablevib::estimator::{Estimator, EstimatorParams, Tmin};
 use cablevib::kinematics::Geometry;
-use cablevib::modal::sagged::{SagCableFrame, SagEndEffector, SagModalSolver};
+use cablevib::modal::sagged::{SagCableFrame, SagEndEffector};
+use cablevib::modal::SagModalSolver;
 use cablevib::modal::{ModalParams, CYCLE_EVALUATIONS};
 use cablevib::scene::{ElementKind, Scene};
 use cablevib::tension::{

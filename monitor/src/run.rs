@@ -23,6 +23,7 @@ use iceoryx2::identifiers::UniquePublisherId;
 use crate::addr::FoxgloveAddr;
 use crate::completeness::{ChannelCompleteness, SequenceCounter};
 use crate::viewers::{self, Admission, ViewerReport};
+pub use crate::writer::topic;
 use crate::writer::{self, Channels, Record, Sinks};
 use crate::MonitorError;
 
@@ -86,17 +87,6 @@ impl MonitorConfig {
             duration: None,
             max_viewers: viewers::DEFAULT_MAX_VIEWERS,
         }
-    }
-}
-
-/// Topic of channel `name` of `instance`: `/cablevib/{instance}/{name}` (`/cablevib/{name}`
-/// for the bare instance).
-pub fn topic(instance: &str, name: &str) -> String {
-    let instance = instance.trim_matches('/');
-    if instance.is_empty() {
-        format!("/cablevib/{name}")
-    } else {
-        format!("/cablevib/{instance}/{name}")
     }
 }
 

@@ -12,9 +12,19 @@ use foxglove::messages::SceneUpdate;
 use foxglove::{Channel, ChannelBuilder, Context, PartialMetadata, RawChannel, Schema};
 
 use crate::encode::{self, EstimateRecord, MarginRecord, PoseRecord, TminRecord};
-use crate::run::topic;
 use crate::scene3d;
 use crate::MonitorError;
+
+/// Topic of channel `name` of `instance`: `/cablevib/{instance}/{name}` (`/cablevib/{name}`
+/// for the bare instance).
+pub fn topic(instance: &str, name: &str) -> String {
+    let instance = instance.trim_matches('/');
+    if instance.is_empty() {
+        format!("/cablevib/{name}")
+    } else {
+        format!("/cablevib/{instance}/{name}")
+    }
+}
 
 /// Poses remembered to draw the one an estimate answers.
 const POSE_MEMORY: usize = 256;

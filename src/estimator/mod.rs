@@ -83,7 +83,7 @@ use crate::kinematics::Pose;
 use crate::modal::{lambda_to_hz, ModalParams, ModalSolver};
 use crate::scene::{is_valid_t_min, ElementKind, Scene, MAX_CABLES};
 use crate::tension::TensionInfo;
-use forward::Forward;
+use forward::{Forward, ForwardParams};
 use nalgebra::{Matrix6, Vector3};
 
 /// The real-time estimator of one scene.
@@ -143,7 +143,7 @@ impl Estimator {
         let mut est = Estimator {
             scene: scene.clone(),
             params,
-            cycle: Forward::new(scene, &params.cycle_forward()),
+            cycle: Forward::new(scene, &ForwardParams::cycle(&params)),
             expected_rank: 0,
             last_ok_position: None,
             loaded_pose: Pose::at(scene.ee_position_m),
@@ -154,7 +154,7 @@ impl Estimator {
             t_min_n: Tmin::Scene.per_cable(scene),
             t_max_n: forward::cable_t_max_n(scene),
             estimate: Estimate::empty(n),
-            inverse: Forward::new(scene, &params.t_min_query_forward()),
+            inverse: Forward::new(scene, &ForwardParams::t_min_query(&params)),
             auto: None,
             last_ee: None,
         };
@@ -234,7 +234,7 @@ impl Estimator {
     /// With `[effects] sag`: the sagged structured solver as loaded at the pose of the last
     /// successful cycle (its complex D for the frequency response); None for the chord
     /// models or when the last cycle was not ok.
-    pub fn sag_modal(&self) -> Option<&crate::modal::sagged::SagModalSolver> {
+    pub fn sag_modal(&self) -> Option<&crate::modal::SagModalSolver> {
         if self.estimate.status != Status::Ok {
             return None;
         }

@@ -262,7 +262,7 @@ impl Estimator {
     /// ([`crate::modal::ModalSolver::modes`]) and shapes
     /// ([`crate::modal::ModalSolver::mode_shapes`]); sagging cables (FEM chains): the
     /// sagged engine's clusters and shapes
-    /// ([`crate::modal::sagged::SagModalSolver::mode_shapes`]); otherwise the dense model.
+    /// ([`crate::modal::SagModalSolver::mode_shapes`]); otherwise the dense model.
     /// Offline: allocates.
     pub fn ee_modal_basis(&mut self, k: usize) -> Result<EeModalBasis, BasisError> {
         if self.estimate.status != Status::Ok {
@@ -317,7 +317,7 @@ impl Estimator {
             if !solver.is_continuous() {
                 let params = ShapeParams::default();
                 let clusters = solver
-                    .lowest_clusters(k, &params)
+                    .eigen_clusters(k, &params)
                     .map_err(BasisError::Shapes)?;
                 let shapes = solver
                     .mode_shapes(&h, &up, &geometry.arm_m, &clusters, &params)

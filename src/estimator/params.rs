@@ -4,7 +4,6 @@
 //! [`EstimatorParams::realtime`] (the cycle as the service, `bench` and the real-time tests
 //! run it). [`EstimatorParams::check`] holds each value to finite bounds.
 
-use super::forward::ForwardParams;
 use crate::cable::sagged::SagContinuousParams;
 use crate::modal::{ModalParams, CYCLE_EVALUATIONS, SPREAD_SCAN_EVALUATIONS};
 use crate::scene::Scene;
@@ -271,30 +270,6 @@ impl EstimatorParams {
             }
         }
         Ok(())
-    }
-
-    /// The cycle's forward model.
-    pub(super) fn cycle_forward(&self) -> ForwardParams {
-        ForwardParams {
-            tension: self.tension,
-            modal: self.modal,
-            sag_tension: self.sag.tension,
-            sag_continuous: self.sag.continuous,
-        }
-    }
-
-    /// The inverse T_min query's forward model: not a cycle, so no per-cycle budget and no
-    /// certificate; the query's sagged mesh.
-    pub(super) fn t_min_query_forward(&self) -> ForwardParams {
-        ForwardParams {
-            modal: ModalParams {
-                certify: false,
-                cycle_evaluations: u32::MAX,
-                ..self.modal
-            },
-            sag_continuous: self.sag.t_min_query_continuous,
-            ..self.cycle_forward()
-        }
     }
 }
 

@@ -1,17 +1,134 @@
 //! The condensed problem D(λ) behind one trait, and the numerical constants its searches
 //! share.
 //!
-//! Both structured solvers reduce the free vibration problem to the end-effector's dynamic
+//! The structured solver reduces the free vibration problem to the end-effector's dynamic
 //! stiffness D(λ) (3 × 3 or 6 × 6), its derivative D'(λ) = −(a mass matrix) and the blocked
-//! count of the chains (Wittrick–Williams). The taut chains ([`TautView`]: uniform chains,
-//! their blocked eigenvalues known in closed form) and the sagged ones (`sagged::problem::SagView`:
-//! non-uniform chains, their poles only seen through the count) implement [`Condensed`];
-//! the first root (`first_mode`), the end-effector tracker (`ee_tracker`) and the spectrum
-//! search (`spectrum`) are written once over it and monomorphised for each (no dynamic
-//! dispatch, no allocation).
+//! count of the chains (Wittrick–Williams). The taut chains
+//! ([`TautChains`](super::TautChains): uniform chains, their blocked eigenvalues known in
+//! closed form) and the sagged ones ([`SagChains`](super::sagged::SagChains): non-uniform
+//! chains, their poles only seen through the count) implement [`Condensed`]; the solver
+//! ([`Solver`](super::Solver)), the first root (`first_mode`), the end-effector tracker
+//! (`ee_tracker`), the spectrum search (`spectrum`) and the frequency response are written
+//! once over it and monomorphised for each (no dynamic dispatch, no allocation). What differs
+//! between the models is a method of the trait: the poles in closed form or through the
+//! count, the sum rules' terms, D at a complex λ.
+//!
+//! Also here, shared by every model: one evaluation's result ([`DynEval`]) and its sorted
+//! eigen-decomposition ([`EigD`]), and the pole-removed Newton function ([`pole_free`]).
 
-use super::dynamic_stiffness::{quad, DynEval, EvalScratch, LoadedChains};
-use nalgebra::{Matrix6, Vector6};
+use crate::eig3::eig3;
+use crate::scene::MAX_CABLES;
+use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector6};
+use num_complex::Complex64;
+
+/// Largest number of chains (a taut cable model has up to three).
+pub(in crate::modal) const MAX_CHAINS: usize = 3 * MAX_CABLES;
+
+/// (row, column) of the six distinct entries of a symmetric 3 × 3 matrix, in the order
+/// both problems store a point mass's D and D' while summing the chains.
+///
+/// Why: a point mass's D is a symmetric 3 × 3 block; summing its six distinct entries
+/// instead of nine (or 36 in a 6 × 6) is what keeps one evaluation cheap, and the two
+/// problems must agree on the order to share the assembly's conventions.
+pub(in crate::modal) const SYM3: [(usize, usize); 6] =
+    [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+
+/// D(λ), D'(λ) and the blocked count at one λ. D is 3 × 3 (point mass, in the top-left
+/// block) or 6 × 6 (rigid body: translation then rotation).
+#[derive(Debug, Clone, Copy)]
+pub struct DynEval {
+    /// Dynamic stiffness D(λ), N/m (N·m/rad in the rotational block).
+    pub d: Matrix6<f64>,
+    /// dD/dλ, kg (kg·m² in the rotational block).
+    pub dd: Matrix6<f64>,
+    /// Σ mult · blocked eigenvalues below λ.
+    pub below: u32,
+    /// 3 or 6.
+    pub dim: usize,
+}
+
+impl DynEval {
+    /// Sorted eigen-decomposition of D.
+    pub fn eig(&self) -> EigD {
+        if self.dim == 3 {
+            let e = eig3(&self.d.fixed_view::<3, 3>(0, 0).into_owned());
+            let mut out = EigD {
+                values: [f64::INFINITY; 6],
+                vectors: [Vector6::zeros(); 6],
+                n: 3,
+            };
+            for k in 0..3 {
+                out.values[k] = e.values[k];
+                out.vectors[k]
+                    .fixed_rows_mut::<3>(0)
+                    .copy_from(&e.vectors[k]);
+            }
+            out
+        } else {
+            let e = SymmetricEigen::new(self.d);
+            let mut idx = [0usize, 1, 2, 3, 4, 5];
+            idx.sort_by(|&i, &j| e.eigenvalues[i].total_cmp(&e.eigenvalues[j]));
+            let mut out = EigD {
+                values: [0.0; 6],
+                vectors: [Vector6::zeros(); 6],
+                n: 6,
+            };
+            for (k, &i) in idx.iter().enumerate() {
+                out.values[k] = e.eigenvalues[i];
+                out.vectors[k] = e.eigenvectors.column(i).into_owned();
+            }
+            out
+        }
+    }
+}
+
+/// Sorted eigen-decomposition of D (3 or 6 valid entries).
+#[derive(Debug, Clone, Copy)]
+pub struct EigD {
+    /// Eigenvalues ascending (entries ≥ n are +∞ or unused).
+    pub values: [f64; 6],
+    /// Matching unit eigenvectors.
+    pub vectors: [Vector6<f64>; 6],
+    /// Number of valid entries.
+    pub n: usize,
+}
+
+impl EigD {
+    /// Number of negative eigenvalues.
+    pub fn negatives(&self) -> usize {
+        self.values[..self.n].iter().filter(|&&v| v < 0.0).count()
+    }
+}
+
+/// vᵀ A v for a symmetric A, over the leading `dim` × `dim` block (3 or 6).
+#[inline]
+pub(in crate::modal) fn quad(a: &Matrix6<f64>, v: &Vector6<f64>, dim: usize) -> f64 {
+    if dim == 3 {
+        let (x, y, z) = (v[0], v[1], v[2]);
+        x * x * a[(0, 0)]
+            + y * y * a[(1, 1)]
+            + z * z * a[(2, 2)]
+            + 2.0 * (x * y * a[(0, 1)] + x * z * a[(0, 2)] + y * z * a[(1, 2)])
+    } else {
+        (v.transpose() * a * v)[(0, 0)]
+    }
+}
+
+/// g = μ(λ)(λ − pa)(pb − λ) and dg/dλ at x, from μ = μ(x) and dμ/dλ: the branch μ with the
+/// poles bounding its interval removed (pa = 0 and pb = ∞ add nothing), which Newton can
+/// follow across the interval without being thrown by a pole.
+pub(in crate::modal) fn pole_free(mu: f64, dmu: f64, x: f64, pa: f64, pb: f64) -> (f64, f64) {
+    let (mut g, mut dg) = (mu, dmu);
+    if pb.is_finite() {
+        let w = pb - x;
+        (g, dg) = (g * w, dg * w - g);
+    }
+    if pa > 0.0 {
+        let w = x - pa;
+        (g, dg) = (g * w, dg * w + g);
+    }
+    (g, dg)
+}
 
 /// The first upper bracket of a search starts here when no better scale is known,
 /// rad²/s² (and a cold first root's Rayleigh guess is at least this).
@@ -61,7 +178,7 @@ pub(in crate::modal) const SUPERLINEAR_RATIO: f64 = 1e-2;
 ///
 /// Every evaluation is counted ([`Self::evaluations`]), so the callers can hold a search
 /// to a budget; none allocates.
-pub(in crate::modal) trait Condensed {
+pub trait Condensed: sealed::Sealed {
     /// D(λ), D'(λ) and the blocked count (one evaluation).
     fn eval(&mut self, lambda: f64) -> DynEval;
     /// An evaluation for the count only: D' may be left out (one evaluation).
@@ -93,9 +210,35 @@ pub(in crate::modal) trait Condensed {
     /// The pole-free interval around the λ of the last evaluation (the chains' blocked
     /// counts there), when the poles are known.
     fn last_pole_interval(&self) -> Option<(f64, f64)>;
-    /// The taut problem itself, for what walks its closed-form poles (the end-effector
-    /// tracker's pole-interval scan and neighbour search); None for the others.
-    fn taut(&mut self) -> Option<TautView<'_>>;
+    /// The next distinct pole above `a` over all chains, advancing each chain's pole cursor
+    /// past `a` (and first moving it back to the first pole above `a`: the poles move
+    /// between the cycles of a scan), with its identity (chain, number); (∞, 0, 0) where
+    /// the poles are seen only through the count (one interval holds the whole spectrum).
+    fn next_pole(&self, cursor: &mut PoleCursor, a: f64) -> (f64, usize, usize) {
+        let _ = (cursor, a);
+        (f64::INFINITY, 0, 0)
+    }
+    /// Pole `j` of chain `c` of the loaded problem (the identity [`Self::next_pole`] gave),
+    /// rad²/s²; None when there is no such chain (or the poles are not known).
+    fn keyed_pole(&self, c: usize, j: usize) -> Option<f64> {
+        let _ = (c, j);
+        None
+    }
+    /// The sum rules of the loaded pose ([`SumRules`]): Σ p_k over all modes and the
+    /// weighted Σ p_k/λ_k = `flex0` (tr(M_ee D(0)⁻¹), known from the first root), and
+    /// where the problem has them, their matrix forms. `evaluate`: one more evaluation of
+    /// D may be spent on them (the sagged problem's total comes from one far below zero;
+    /// without it, the traces alone with an unknown total).
+    fn sum_rules(&mut self, flex0: f64, evaluate: bool) -> SumRules;
+    /// D(λ) at a complex λ (the damped frequency response), N/m: None where the chains
+    /// have no complex form (the sagged continuous chains) or before a load. Point mass:
+    /// the leading 3 × 3 block. Not counted as an evaluation.
+    fn d_complex(&self, lambda: Complex64) -> Option<Matrix6<Complex64>>;
+    /// The end-effector's constant stiffness besides the chains (a rigid body's rotational
+    /// geometric stiffness, the swivel pulleys' term), its leading `dim` block.
+    fn ee_stiffness(&self) -> &Matrix6<f64>;
+    /// A pose is loaded (the queries of an unloaded problem answer `NotLoaded`).
+    fn is_loaded(&self) -> bool;
     /// The chain holding the largest share of the kinetic-energy norm of mode shape v at
     /// the last evaluation (at x, D' = `dd`): (share, its pole nearest x, whether above,
     /// the pole's key); (0, NaN, false, `u32::MAX`) where the poles are not known.
@@ -128,84 +271,9 @@ pub(in crate::modal) trait Condensed {
     }
 }
 
-/// The [`Condensed`] methods read from the loaded problem `self.p` (its `dim`, `m6` and
-/// `total_modes()`), the same for the taut and the sagged view.
-macro_rules! ee_from_problem {
-    () => {
-        #[inline]
-        fn dim(&self) -> usize {
-            self.p.dim
-        }
-        #[inline]
-        fn ee_mass(&self) -> &nalgebra::Matrix6<f64> {
-            &self.p.m6
-        }
-        #[inline]
-        fn total_modes(&self) -> usize {
-            self.p.total_modes()
-        }
-    };
-}
-pub(in crate::modal) use ee_from_problem;
-
-/// The taut problem: the loaded chains (read) and the evaluation scratch (written).
-pub(in crate::modal) struct TautView<'a> {
-    pub(in crate::modal) p: &'a LoadedChains,
-    pub(in crate::modal) s: &'a mut EvalScratch,
-}
-
-impl Condensed for TautView<'_> {
-    #[inline]
-    fn eval(&mut self, lambda: f64) -> DynEval {
-        self.s.eval(self.p, lambda)
-    }
-    #[inline]
-    fn count_eval(&mut self, lambda: f64) -> DynEval {
-        self.s.eval(self.p, lambda)
-    }
-    #[inline]
-    fn zero_eval(&mut self) -> DynEval {
-        self.s.eval(self.p, 0.0)
-    }
-    #[inline]
-    fn evaluations(&self) -> u32 {
-        self.s.evaluations
-    }
-    ee_from_problem!();
-    #[inline]
-    fn pole_interval(&self, lambda: f64) -> Option<(f64, f64)> {
-        Some(self.p.pole_interval(lambda))
-    }
-    #[inline]
-    fn poles_known(&self) -> bool {
-        true
-    }
-    #[inline]
-    fn lowest_pole(&self) -> Option<f64> {
-        Some(self.p.lowest_pole())
-    }
-    #[inline]
-    fn static_eval(&self) -> DynEval {
-        self.p.static_eval()
-    }
-    #[inline]
-    fn last_pole_interval(&self) -> Option<(f64, f64)> {
-        Some(self.s.last_pole_interval(self.p))
-    }
-    #[inline]
-    fn taut(&mut self) -> Option<TautView<'_>> {
-        Some(TautView {
-            p: self.p,
-            s: &mut *self.s,
-        })
-    }
-    #[inline]
-    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
-        self.s.coupling(self.p, x, dd, v)
-    }
-}
-
 /// A borrowed problem is the problem (a search may run on a view it does not own).
+impl<C: Condensed> sealed::Sealed for &mut C {}
+
 impl<C: Condensed> Condensed for &mut C {
     #[inline]
     fn eval(&mut self, lambda: f64) -> DynEval {
@@ -256,11 +324,90 @@ impl<C: Condensed> Condensed for &mut C {
         (**self).last_pole_interval()
     }
     #[inline]
-    fn taut(&mut self) -> Option<TautView<'_>> {
-        (**self).taut()
+    fn next_pole(&self, cursor: &mut PoleCursor, a: f64) -> (f64, usize, usize) {
+        (**self).next_pole(cursor, a)
+    }
+    #[inline]
+    fn keyed_pole(&self, c: usize, j: usize) -> Option<f64> {
+        (**self).keyed_pole(c, j)
+    }
+    fn sum_rules(&mut self, flex0: f64, evaluate: bool) -> SumRules {
+        (**self).sum_rules(flex0, evaluate)
+    }
+    fn d_complex(&self, lambda: Complex64) -> Option<Matrix6<Complex64>> {
+        (**self).d_complex(lambda)
+    }
+    #[inline]
+    fn ee_stiffness(&self) -> &Matrix6<f64> {
+        (**self).ee_stiffness()
+    }
+    #[inline]
+    fn is_loaded(&self) -> bool {
+        (**self).is_loaded()
     }
     #[inline]
     fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
         (**self).coupling(x, dd, v)
+    }
+}
+
+/// Each chain's next pole number: the cursor of a scan over the pole intervals
+/// ([`Condensed::next_pole`]).
+pub type PoleCursor = [usize; MAX_CHAINS];
+
+/// The trait is implemented by this crate's loaded problems only.
+pub(in crate::modal) mod sealed {
+    /// The seal.
+    pub trait Sealed {}
+}
+
+/// The sum rules of the loaded pose that bound the unwatched modes' participation (the
+/// end-effector tracker's certificate, `ee_tracker::bound`).
+#[derive(Debug, Clone, Copy)]
+pub struct SumRules {
+    /// Σ_k p_k over all modes.
+    pub(in crate::modal) total: f64,
+    /// Σ_k p_k/λ_k over all modes, s²/rad² (from the first root; NaN when unknown).
+    pub(in crate::modal) over_lambda: f64,
+    /// The matrix forms (None: the trace form only).
+    pub(in crate::modal) matrices: Option<SumMatrices>,
+}
+
+impl SumRules {
+    /// The trace forms only: Σ p_k and Σ p_k/λ_k.
+    pub(in crate::modal) fn traces(total: f64, over_lambda: f64) -> SumRules {
+        SumRules {
+            total,
+            over_lambda,
+            matrices: None,
+        }
+    }
+}
+
+/// The matrix forms of the sum rules (`ee_tracker::bound`'s docs), their leading `dim`
+/// blocks.
+#[derive(Debug, Clone, Copy)]
+pub struct SumMatrices {
+    /// M_∞⁻¹ = Σ_k φ_k φ_kᵀ, 1/kg (1/(kg·m²) in the rotational block).
+    pub(in crate::modal) m_inf_inv: Matrix6<f64>,
+    /// D(0)⁻¹ = Σ_k φ_k φ_kᵀ/λ_k, m/N (rad/(N·m) in the rotational block); NaN entries when
+    /// unknown (the weighted form is then not used).
+    pub(in crate::modal) flex: Matrix6<f64>,
+    /// M_ee^{1/2}, √kg (√(kg·m²) in the rotational block).
+    pub(in crate::modal) m_sqrt: Matrix6<f64>,
+    /// 3 (point mass) or 6 (rigid body).
+    pub(in crate::modal) dim: usize,
+}
+
+impl SumMatrices {
+    /// λ_max(M_ee^{1/2} r M_ee^{1/2}) over the leading `dim` block (no allocation).
+    pub(in crate::modal) fn top(&self, r: &Matrix6<f64>) -> f64 {
+        let s = self.m_sqrt * r * self.m_sqrt;
+        if self.dim == 3 {
+            let b: Matrix3<f64> = s.fixed_view::<3, 3>(0, 0).into_owned();
+            SymmetricEigen::new(b).eigenvalues.max()
+        } else {
+            SymmetricEigen::new(s).eigenvalues.max()
+        }
     }
 }

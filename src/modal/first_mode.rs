@@ -14,9 +14,9 @@
 //! cycles is [`FirstRootState`]: the certificate's schedule, the weighted sum rule, and a
 //! search the cycle's budget cut ([`Pending`]), continued by the next call.
 
-use super::dynamic_stiffness::{quad, DynEval};
-use super::engine::{Condensed, TautView, BRACKET_GROWTH, BRACKET_MIN, COLLAPSE_ULPS};
-use super::spectrum::pole_free;
+use super::engine::{
+    pole_free, quad, Condensed, DynEval, BRACKET_GROWTH, BRACKET_MIN, COLLAPSE_ULPS,
+};
 use super::{ModalError, ModalParams, Root};
 use nalgebra::{Matrix6, Vector6};
 
@@ -55,9 +55,6 @@ pub(super) struct RootFinder<'a, P: Condensed> {
     pub(super) budget_base: u32,
     pub(super) budget: u32,
 }
-
-/// The root finder of the taut problem (what the end-effector tracker works on).
-pub(super) type TautFinder<'a> = RootFinder<'a, TautView<'a>>;
 
 /// A root search in progress: its bracket [lo, hi] (hi = ∞: no upper end known yet), the
 /// next iterate, and the evaluations spent on it over all the calls it ran in.
@@ -129,18 +126,6 @@ impl<P: Condensed> RootFinder<'_, P> {
     #[inline]
     pub(super) fn exhausted(&self) -> bool {
         self.left() == 0
-    }
-
-    /// The taut finder on the same problem and budget (None where the poles are not known
-    /// in closed form).
-    pub(super) fn as_taut(&mut self) -> Option<TautFinder<'_>> {
-        let (params, budget_base, budget) = (self.params, self.budget_base, self.budget);
-        self.view.taut().map(|view| RootFinder {
-            params,
-            view,
-            budget_base,
-            budget,
-        })
     }
 
     /// The end-effector participation of the mode with null vector v, D' = `dd`.
@@ -447,13 +432,5 @@ impl Bracket {
             x,
             spent: 0,
         }
-    }
-}
-
-impl TautFinder<'_> {
-    /// The pole-free interval (a, b) around the λ of the last evaluation.
-    #[inline]
-    pub(super) fn last_pole_interval(&self) -> (f64, f64) {
-        self.view.s.last_pole_interval(self.view.p)
     }
 }

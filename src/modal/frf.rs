@@ -12,8 +12,9 @@
 //!
 //! so condensing the cables onto the end-effector gives H(ω) = D(λ)⁻¹/c, with D the
 //! structured solver's dynamic stiffness evaluated at the complex λ
-//! ([`ModalSolver::dynamic_stiffness_at`]: the chain recurrences instantiated for complex
-//! numbers). Undamped: H = D(ω²)⁻¹ (infinite on a natural frequency).
+//! ([`Solver::dynamic_stiffness_at`](super::Solver::dynamic_stiffness_at): the chain
+//! recurrences instantiated for complex numbers, every model but the sagged continuous
+//! chains). Undamped: H = D(ω²)⁻¹ (infinite on a natural frequency).
 //!
 //! **Modal damping** (ζ in every mode, no damping matrix): modal superposition over the
 //! modes below a cut-off with the residual flexibility of the modes left out (static
@@ -23,12 +24,11 @@
 //!
 //! Offline: allocates (the modal basis, the dense reference), never on the real-time path.
 
-use super::sagged::SagModalSolver;
-use super::{ModalError, ModalSolver, ShapeParams};
-use crate::cable::CableModel;
+use super::engine::Condensed;
+use super::ModalError;
 use crate::input_file::message_number;
 use crate::scene::Damping;
-use nalgebra::{DMatrix, Matrix6, Vector3, Vector6};
+use nalgebra::{DMatrix, Matrix6, Vector6};
 use num_complex::Complex64;
 
 /// Most frequencies one response is computed at.
@@ -81,10 +81,6 @@ pub enum FrfError {
     /// The sagged continuous (Magnus) model has no complex form.
     #[error("the sagged continuous model has no damped (complex) form: the frequency response with sag takes the fem element")]
     SagContinuous,
-    /// Modal damping with sag has no complex-λ form: it goes by the modal basis of the
-    /// sagged shapes ([`ModalBasis::from_modes`]).
-    #[error("modal damping with sag goes by modal superposition (ModalBasis::from_modes), not the complex-λ receptance")]
-    SagModalDamping,
 }
 
 /// The frequencies of a response: `points` values from `from_hz` to `to_hz` (both
@@ -149,7 +145,7 @@ pub fn complex_shift(damping: &Damping, omega_rad_s: f64) -> Option<(Complex64, 
 
 /// Inverse of the leading `dim` × `dim` block of `d` (3 or 6), embedded in a 6 × 6 (zeros
 /// elsewhere); NaN entries when it is singular (a natural frequency of an undamped model).
-fn inverse_block(d: &Matrix6<Complex64>, dim: usize) -> Matrix6<Complex64> {
+pub(in crate::modal) fn inverse_block(d: &Matrix6<Complex64>, dim: usize) -> Matrix6<Complex64> {
     let nan = Complex64::new(f64::NAN, f64::NAN);
     let mut out = Matrix6::from_element(Complex64::new(0.0, 0.0));
     if dim == 3 {
@@ -167,93 +163,26 @@ fn inverse_block(d: &Matrix6<Complex64>, dim: usize) -> Matrix6<Complex64> {
     out
 }
 
-impl ModalSolver {
-    /// The loaded problem's dynamic stiffness D(λ) at a complex λ, N/m (N·m/rad in the
-    /// rotational block): the chains' recurrences at complex λ (O(N) per discrete chain).
-    /// A point mass fills the leading 3 × 3 block.
-    pub fn dynamic_stiffness_at(&self, lambda: Complex64) -> Matrix6<Complex64> {
-        self.problem.d_complex(lambda)
-    }
-
-    /// The receptance H(ω) of the loaded problem at ω (rad/s) with loss-factor, Rayleigh or
-    /// no damping (exact, see the module docs): m/N, the leading `dim` × `dim` block.
-    /// Modal damping: [`FrfError::NeedsModes`] (see [`ModalBasis`]).
-    pub fn receptance(
-        &mut self,
-        damping: &Damping,
-        omega_rad_s: f64,
-    ) -> Result<Matrix6<Complex64>, FrfError> {
-        let (c, lambda) = complex_shift(damping, omega_rad_s).ok_or(FrfError::NeedsModes)?;
-        let dim = self.dim();
-        let d = if damping.is_none() {
-            self.eval(lambda.re).d.map(|x| Complex64::new(x, 0.0))
-        } else {
-            self.dynamic_stiffness_at(lambda)
-        };
-        Ok(inverse_block(&d, dim) / c)
-    }
-}
-
-/// The receptance at each frequency of `freqs_hz` (Hz) of the loaded `solver` (loaded with
-/// `models`, arms `arms_m` for a rigid end-effector) with `damping`: exact at a complex λ
-/// for loss-factor, Rayleigh or no damping; for modal damping by [`ModalBasis`] over the
-/// modes below `modal_cutoff_hz` (at most [`MAX_FRF_MODES`]) with the static correction.
-/// The taut computation of the frequency-response study (`study::frf`), behind `cablevib frf`
-/// and the Python `frf`.
-pub fn receptance_over(
-    solver: &mut ModalSolver,
-    models: &[CableModel],
-    arms_m: &[Vector3<f64>],
+/// The receptance H(ω) of the loaded problem `p` at ω (rad/s) with loss-factor, Rayleigh or
+/// no damping (exact, see the module docs): m/N, the leading `dim` × `dim` block. Undamped
+/// from one (counted) real evaluation, damped from D at the complex λ. Modal damping:
+/// [`FrfError::NeedsModes`] (see [`ModalBasis`]); a problem without a complex form:
+/// [`FrfError::SagContinuous`].
+pub(in crate::modal) fn receptance<P: Condensed>(
+    p: &mut P,
     damping: &Damping,
-    freqs_hz: &[f64],
-    modal_cutoff_hz: f64,
-) -> Result<Vec<Matrix6<Complex64>>, FrfError> {
-    let w = |f: f64| 2.0 * std::f64::consts::PI * f;
-    if let Damping::ModalRatio { zeta } = *damping {
-        let basis = ModalBasis::new(solver, models, arms_m, modal_cutoff_hz, MAX_FRF_MODES)?;
-        return Ok(freqs_hz
-            .iter()
-            .map(|&f| basis.receptance(zeta, w(f)))
-            .collect());
+    omega_rad_s: f64,
+) -> Result<Matrix6<Complex64>, FrfError> {
+    let (c, lambda) = complex_shift(damping, omega_rad_s).ok_or(FrfError::NeedsModes)?;
+    if !p.is_loaded() {
+        return Err(FrfError::Modal(ModalError::NotLoaded));
     }
-    freqs_hz
-        .iter()
-        .map(|&f| solver.receptance(damping, w(f)))
-        .collect()
-}
-
-impl SagModalSolver {
-    /// The receptance H(ω) of the loaded sagged problem (FEM chains) at ω (rad/s) with
-    /// loss-factor, Rayleigh or no damping: D(λ)⁻¹/c at the complex λ of [`complex_shift`]
-    /// (exact, as for taut cables: the sagged FEM's K and M are condensed by the same
-    /// recurrences), m/N, the leading `dim` × `dim` block. Modal damping:
-    /// [`FrfError::SagModalDamping`]; continuous cables: [`FrfError::SagContinuous`].
-    pub fn receptance(
-        &self,
-        damping: &Damping,
-        omega_rad_s: f64,
-    ) -> Result<Matrix6<Complex64>, FrfError> {
-        let (c, lambda) = complex_shift(damping, omega_rad_s).ok_or(FrfError::SagModalDamping)?;
-        if self.is_continuous() {
-            return Err(FrfError::SagContinuous);
-        }
-        let d = self
-            .dynamic_stiffness_at(lambda)
-            .ok_or(FrfError::Modal(ModalError::NotLoaded))?;
-        Ok(inverse_block(&d, self.dim()) / c)
-    }
-
-    /// [`Self::receptance`] at each frequency of `freqs_hz` (Hz).
-    pub fn receptance_over(
-        &self,
-        damping: &Damping,
-        freqs_hz: &[f64],
-    ) -> Result<Vec<Matrix6<Complex64>>, FrfError> {
-        freqs_hz
-            .iter()
-            .map(|&f| self.receptance(damping, 2.0 * std::f64::consts::PI * f))
-            .collect()
-    }
+    let d = if damping.is_none() {
+        p.eval(lambda.re).d.map(|x| Complex64::new(x, 0.0))
+    } else {
+        p.d_complex(lambda).ok_or(FrfError::SagContinuous)?
+    };
+    Ok(inverse_block(&d, p.dim()) / c)
 }
 
 /// The end-effector part of a pose's lowest modes, for modal damping: natural frequencies,
@@ -271,49 +200,10 @@ pub struct ModalBasis {
 }
 
 impl ModalBasis {
-    /// The modes of the loaded `solver` (loaded with `models`, arms `arms_m` for a rigid
-    /// end-effector) up to `max_hz` (at most `max_modes`, clusters completed), and the
-    /// residual flexibility of the others.
-    pub fn new(
-        solver: &mut ModalSolver,
-        models: &[CableModel],
-        arms_m: &[Vector3<f64>],
-        max_hz: f64,
-        max_modes: usize,
-    ) -> Result<ModalBasis, FrfError> {
-        let dim = solver.dim();
-        let params = ShapeParams::default();
-        let below = solver.count_below(super::hz_to_lambda(max_hz)) as usize;
-        let k = below.clamp(1, max_modes.clamp(1, MAX_FRF_MODES));
-        let err = |e: super::ShapeError| FrfError::Modes(e.to_string());
-        let clusters = solver.eigen_clusters(k, &params).map_err(err)?;
-        let shapes = solver
-            .mode_shapes(models, arms_m, &clusters, &params)
-            .map_err(err)?;
-        let d0 = solver.static_stiffness6();
-        let flex = inverse_block(&d0.map(|x| Complex64::new(x, 0.0)), dim).map(|z| z.re);
-        let mut residual = flex;
-        let (mut lambda, mut ee) = (Vec::new(), Vec::new());
-        for m in &shapes.modes {
-            if m.lambda > 0.0 {
-                residual -= m.ee * m.ee.transpose() / m.lambda;
-            }
-            lambda.push(m.lambda);
-            ee.push(m.ee);
-        }
-        Ok(ModalBasis {
-            lambda,
-            ee,
-            residual,
-            dim,
-        })
-    }
-
     /// A basis from given modes: λ_r (rad²/s², > 0), the end-effector parts φ_r of their
     /// mass-normalised shapes and the static flexibility D(0)⁻¹ (its `dim` block, m/N), the
-    /// residual D(0)⁻¹ − Σ_r φ_r φ_rᵀ/λ_r. For any engine's shapes: e.g. sagging cables'
-    /// ([`crate::modal::sagged::SagModalSolver::mode_shapes`]), whose damped response with
-    /// modal damping has no complex-λ form.
+    /// residual D(0)⁻¹ − Σ_r φ_r φ_rᵀ/λ_r. For any engine's shapes (the structured
+    /// solver's, [`Solver::modal_basis`](super::Solver::modal_basis), or the dense model's).
     pub fn from_modes(
         lambda: Vec<f64>,
         ee: Vec<Vector6<f64>>,

@@ -96,19 +96,20 @@ pub use dense::{
     dense_memory_bytes, dense_modes, dense_modes_ee, dense_relative_accuracy, DenseModes,
     DENSE_MEMORY_BUDGET_BYTES,
 };
-pub use dynamic_stiffness::{DynEval, EigD};
+pub use dynamic_stiffness::TautChains;
 pub use ee_tracker::RescanCounts;
+pub use engine::{Condensed, DynEval, EigD, PoleCursor, SumRules};
 pub use error::ModalError;
 pub use frf::{
-    complex_shift, dense_receptance, frequency_grid, receptance_over, FrfError, ModalBasis,
-    MAX_FRF_HZ, MAX_FRF_MODES, MAX_FRF_POINTS,
+    complex_shift, dense_receptance, frequency_grid, FrfError, ModalBasis, MAX_FRF_HZ,
+    MAX_FRF_MODES, MAX_FRF_POINTS,
 };
 pub use mechanism::{free_direction, may_be_mechanism, MECHANISM_REL};
 pub use shapes::{
     near_runs, ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_CONTINUOUS_SAMPLES,
     MAX_MULTIPLICITY,
 };
-pub use solver::ModalSolver;
+pub use solver::{receptance_over, ModalSolver, SagModalSolver, Solver};
 pub use spectrum::{Mode, SpectrumParams};
 
 /// A rigid end-effector's parts: world-frame inertia about the centroid (kg·m²), the

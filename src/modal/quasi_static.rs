@@ -6,7 +6,7 @@
 //! (3, or 6 for a rigid body) and the cables' interior nodes i, the nodes move by
 //! x_qs = r p(t), r = [I; −K_ii⁻¹ K_ie] the static condensation's influence field
 //! ([`crate::modal::ModalSolver::influence_field`], sagged:
-//! [`crate::modal::sagged::SagModalSolver::influence_field`]). The deviation u from it obeys
+//! [`crate::modal::SagModalSolver::influence_field`]). The deviation u from it obeys
 //!
 //! ```text
 //!     M ü + C u̇ + K u = −M r a,    a = p̈ (the path's acceleration, and α for a rigid body)

@@ -4,10 +4,8 @@
 //! end points need not meet for the dense/structured comparison); the structured solver
 //! loaded with one ([`solver_for`]) and the dense matrices of its chains ([`dense_matrices`]).
 use cablevib::elastic_catenary::Catenary;
-use cablevib::modal::sagged::{
-    assemble_sagged, HangingCable, SagDenseCable, SagEndEffector, SagModalSolver,
-};
-use cablevib::modal::ModalParams;
+use cablevib::modal::sagged::{assemble_sagged, HangingCable, SagDenseCable, SagEndEffector};
+use cablevib::modal::{ModalParams, SagModalSolver};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 /// Gravity's magnitude, m/s².

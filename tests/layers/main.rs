@@ -7,14 +7,16 @@
 //!   iceoryx2, clap, the renderers or the monitor's Foxglove and MCAP crates, the service not on
 //!   the command line or the monitor, and the monitor not on the command line, in their
 //!   `Cargo.toml` and in their sources;
-//! - inside a module no two files use each other (no two-file import cycle).
+//! - no import cycle of any length between the files of a crate (`cycles`).
 //!
 //! The layers, with what each module owns, are described in one place,
 //! `docs/architecture.md`; [`LAYERS`] below is their machine-readable form.
 //!
 //! Modules of one rank do not use each other, with the exceptions in [`SIBLING_EDGES`].
 
-use std::collections::{BTreeMap, BTreeSet};
+mod cycles;
+
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 /// (module, rank): every top-level module of the core, then the service crate, the monitor
@@ -327,97 +329,6 @@ fn the_core_builds_nothing_of_the_crates_above_it() {
     );
 }
 
-/// Every pair of files of one module that use each other, as "a.rs ↔ b.rs" (the module's
-/// files are its `.rs` files and sub-directories, `mod.rs` apart: a parent module and its
-/// children may use each other).
-fn two_file_cycles(src: &Path) -> Vec<String> {
-    let mut files = Vec::new();
-    rust_files(src, &mut files);
-    // module path (crate::a::b) → file
-    let mut modules: BTreeMap<Vec<String>, PathBuf> = BTreeMap::new();
-    for f in &files {
-        let rel = f.strip_prefix(src).expect("under src");
-        let mut path: Vec<String> = rel
-            .iter()
-            .map(|c| {
-                c.to_str()
-                    .expect("utf-8 path")
-                    .trim_end_matches(".rs")
-                    .to_string()
-            })
-            .collect();
-        if path
-            .last()
-            .is_some_and(|l| l == "mod" || l == "lib" || l == "main")
-        {
-            path.pop();
-        }
-        modules.insert(path, f.clone());
-    }
-    // The sibling modules each module names (through `super::`, `crate::…::` or `self::` of
-    // its parent); a sibling's sub-modules count as the sibling.
-    let mut uses: BTreeMap<Vec<String>, BTreeSet<String>> = BTreeMap::new();
-    for (path, file) in &modules {
-        let Some((_, parent)) = path.split_last() else {
-            continue;
-        };
-        let text = std::fs::read_to_string(file).expect("read source");
-        let is_dir_module = file.ends_with("mod.rs");
-        let mut names = BTreeSet::new();
-        let mut full = String::from("crate::");
-        for p in parent {
-            full.push_str(p);
-            full.push_str("::");
-        }
-        if !parent.is_empty() {
-            names.extend(names_after(&text, &full));
-        }
-        // In a mod.rs, `super::` is the parent of the directory's module as well.
-        names.extend(names_after(&text, "super::"));
-        let _ = is_dir_module;
-        let siblings: BTreeSet<String> = modules
-            .keys()
-            .filter(|k| k.len() == path.len() && k[..k.len() - 1] == *parent && *k != path)
-            .map(|k| k[k.len() - 1].clone())
-            .collect();
-        uses.insert(
-            path.clone(),
-            names.intersection(&siblings).cloned().collect(),
-        );
-    }
-    let mut cycles = Vec::new();
-    for (path, used) in &uses {
-        let parent = &path[..path.len() - 1];
-        for other in used {
-            let mut q = parent.to_vec();
-            q.push(other.clone());
-            if path.last() < Some(other)
-                && uses
-                    .get(&q)
-                    .is_some_and(|u| u.contains(path.last().expect("a module")))
-            {
-                cycles.push(format!("{} ↔ {}", path.join("::"), q.join("::")));
-            }
-        }
-    }
-    cycles
-}
-
-#[test]
-fn no_two_files_of_a_module_use_each_other() {
-    let mut cycles = Vec::new();
-    for dir in ["src", "service/src", "cli/src"] {
-        for c in two_file_cycles(&root().join(dir)) {
-            cycles.push(format!("{dir}: {c}"));
-        }
-    }
-    assert!(
-        cycles.is_empty(),
-        "two-file import cycles:\n{}",
-        cycles.join("\n")
-    );
-}
-
 #[test]
 fn the_scan_finds_paths_and_layers_reject_upward_uses() {
     let p = crate_paths(
@@ -440,19 +351,4 @@ fn the_scan_finds_paths_and_layers_reject_upward_uses() {
     let deps = dependencies("[package]\nname = \"x\"\n[dependencies]\na = \"1\"\n# c\nb = { path = \"..\" }\n[dev-dependencies]\nc = \"1\"\n");
     let want: BTreeSet<String> = ["a", "b"].iter().map(|s| s.to_string()).collect();
     assert_eq!(deps, want);
-}
-
-#[test]
-fn the_cycle_scan_finds_a_planted_cycle() {
-    let dir = std::env::temp_dir().join(format!("cablevib-layers-{}", std::process::id()));
-    let m = dir.join("m");
-    std::fs::create_dir_all(&m).expect("create temp dir");
-    std::fs::write(dir.join("lib.rs"), "pub mod m;").expect("write");
-    std::fs::write(m.join("mod.rs"), "mod a; mod b; mod c;").expect("write");
-    std::fs::write(m.join("a.rs"), "use super::b::B;").expect("write");
-    std::fs::write(m.join("b.rs"), "use crate::m::{a::A, c};").expect("write");
-    std::fs::write(m.join("c.rs"), "use super::super::x;").expect("write");
-    let cycles = two_file_cycles(&dir);
-    std::fs::remove_dir_all(&dir).ok();
-    assert_eq!(cycles, vec!["m::a ↔ m::b".to_string()]);
 }

@@ -4,7 +4,8 @@
 //! body. Plus an ignored measurement of the evaluation and solve times.
 
 use cablevib::alloc_count::thread_allocations;
-use cablevib::modal::sagged::{SagEndEffector, SagModalSolver};
+use cablevib::modal::sagged::SagEndEffector;
+use cablevib::modal::SagModalSolver;
 use cablevib::modal::{ModalParams, Mode};
 use cablevib_testkit::sag_robot::*;
 use std::time::Instant;

@@ -7,7 +7,8 @@
 
 use cablevib::cable::sagged::SagChain;
 use cablevib::elastic_catenary::Catenary;
-use cablevib::modal::sagged::{HangingCable, SagModalSolver};
+use cablevib::modal::sagged::HangingCable;
+use cablevib::modal::SagModalSolver;
 use cablevib::modal::{ModalParams, Mode};
 use cablevib_testkit::sag_robot::*;
 use nalgebra::Vector3;

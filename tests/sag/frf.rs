@@ -1,5 +1,5 @@
 //! The receptance of sagging cables (FEM chains on the catenary) at a complex λ
-//! ([`cablevib::modal::sagged::SagModalSolver::receptance`]: each chain's in-plane 2 × 2
+//! ([`cablevib::modal::SagModalSolver::receptance`]: each chain's in-plane 2 × 2
 //! and out-of-plane scalar recurrences at complex λ) against an independent reference: a
 //! dense complex LU solve of the assembled sagged (1 + iη)K − ω²M and (1 + iωβ)K −
 //! (ω² − iωα)M ([`cablevib::modal::sagged::assemble_sagged`]: the world-frame element
@@ -79,7 +79,7 @@ fn sagged_receptance_matches_dense_complex_solve() {
         let est = loaded(&s);
         let (k, m) = est.dense_matrices().unwrap();
         let dense = est.dense_modes(false).unwrap();
-        let sag = est.sag_modal().expect("sagged solver");
+        let mut sag = est.sag_modal().expect("sagged solver").clone();
         let dim = sag.dim();
         let lam: Vec<f64> = dense.lambda.iter().take(12).copied().collect();
         let away_w = away_from(&dense.lambda, lam[lam.len() - 1].sqrt(), 200);
@@ -108,14 +108,14 @@ fn sagged_receptance_matches_dense_complex_solve() {
     }
 }
 
-/// Undamped, away from resonances: the complex path with real λ against the dense solve.
+/// Undamped, away from resonances: one real evaluation of D against the dense solve.
 #[test]
 fn sagged_undamped_receptance_matches_dense() {
     let s = &scenes(10)[0];
     let est = loaded(s);
     let (k, m) = est.dense_matrices().unwrap();
     let dense = est.dense_modes(false).unwrap();
-    let sag = est.sag_modal().unwrap();
+    let mut sag = est.sag_modal().unwrap().clone();
     let ws = away_from(&dense.lambda, dense.lambda[11].sqrt(), 50);
     assert!(ws.len() >= 10);
     for w in ws {
@@ -129,20 +129,21 @@ fn sagged_undamped_receptance_matches_dense() {
     }
 }
 
-/// Modal damping and the continuous model are refused, each with its own error.
+/// Modal damping (it goes by a modal basis) and the continuous model's damped response are
+/// refused, each with its own error.
 #[test]
 fn sagged_refusals() {
     let s = &scenes(10)[0];
     let est = loaded(s);
-    let sag = est.sag_modal().unwrap();
+    let mut sag = est.sag_modal().unwrap().clone();
     assert_eq!(
         sag.receptance(&Damping::ModalRatio { zeta: 0.01 }, 10.0),
-        Err(FrfError::SagModalDamping)
+        Err(FrfError::NeedsModes)
     );
     let mut c = s.clone();
     c.model.element = ElementKind::Continuous;
     let est = loaded(&c);
-    let sag = est.sag_modal().unwrap();
+    let mut sag = est.sag_modal().unwrap().clone();
     let e = sag
         .receptance(&Damping::LossFactor { eta: 0.02 }, 10.0)
         .unwrap_err();

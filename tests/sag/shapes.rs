@@ -1,5 +1,5 @@
 //! The sagged mode shapes of the structured engine
-//! ([`cablevib::modal::sagged::SagModalSolver::mode_shapes`]: each chain's interior
+//! ([`cablevib::modal::SagModalSolver::mode_shapes`]: each chain's interior
 //! solutions by forward substitution, the bordered system's null space, the consistent
 //! mass's quadratic form) against the dense eigenvectors of the independently assembled
 //! sagged K and M ([`cablevib::modal::sagged::assemble_sagged`]: world-frame element
@@ -23,7 +23,8 @@ use cablevib::cable::sagged::SagSupport;
 use cablevib::cable::Segment;
 use cablevib::estimator::{Estimator, Tmin};
 use cablevib::kinematics::Pose;
-use cablevib::modal::sagged::{SagCableFrame, SagEndEffector, SagModalSolver};
+use cablevib::modal::sagged::{SagCableFrame, SagEndEffector};
+use cablevib::modal::SagModalSolver;
 use cablevib::modal::{ModalParams, ModeShapes, ShapeParams};
 use cablevib::scene::{ElementKind, Scene};
 use cablevib_testkit::dense_fem::dense_eig;
@@ -204,7 +205,7 @@ fn sagged_shapes_equal_dense_eigenvectors_at(sizes: &[usize]) {
         for ee in [point(), rigid()] {
             for &n_el in sizes {
                 let mut s = solver_for(&cables, n_el, &ee);
-                let clusters = s.lowest_clusters(12, &ShapeParams::default()).unwrap();
+                let clusters = s.eigen_clusters(12, &ShapeParams::default()).unwrap();
                 let h: Vec<_> = cables.iter().map(|c| c.h).collect();
                 let arms: Vec<_> = cables.iter().map(|c| c.arm_m).collect();
                 let shapes = s
@@ -278,7 +279,7 @@ fn sagged_shapes_on_hidden_cables_at(sizes: &[usize]) {
                 }
                 s.load(&frames, &up(), &ee).unwrap();
                 let want = 12.min(s.total_modes());
-                let clusters = s.lowest_clusters(want, &ShapeParams::default()).unwrap();
+                let clusters = s.eigen_clusters(want, &ShapeParams::default()).unwrap();
                 let h: Vec<_> = cables.iter().map(|c| c.h).collect();
                 let arms: Vec<_> = cables.iter().map(|c| c.arm_m).collect();
                 let shapes = s
@@ -369,7 +370,7 @@ fn sagged_shapes_refuse_bad_input() {
     );
     s.load_catenaries(&cables, 10, &up(), &point()).unwrap();
     assert!(s.mode_shapes(&h[..3], &up(), &[], &[(1.0, 1)], &p).is_err());
-    let c = s.lowest_clusters(1, &p).unwrap();
+    let c = s.eigen_clusters(1, &p).unwrap();
     assert!(s.mode_shapes(&h, &up(), &[], &c, &p).is_ok());
     let off = c[0].0 * 1.3;
     assert!(s.mode_shapes(&h, &up(), &[], &[(off, 1)], &p).is_err());

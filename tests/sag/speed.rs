@@ -6,7 +6,8 @@
 use cablevib::cable::sagged::SagSupport;
 use cablevib::cable::Segment;
 use cablevib::elastic_catenary::{CableChord, SagParams};
-use cablevib::modal::sagged::{SagCableFrame, SagModalSolver};
+use cablevib::modal::sagged::SagCableFrame;
+use cablevib::modal::SagModalSolver;
 use cablevib::modal::{ModalError, ModalParams};
 use cablevib_testkit::sag_robot::*;
 use std::time::Instant;
@@ -111,18 +112,15 @@ fn warm_first_root_prediction_equals_cold() {
     }
 }
 
-/// A first root that does not fit the cycle's budget is `NoConvergence`, and the solver
-/// spent no more than the budget.
+/// A first root that does not fit the cycle's budget ([`SagModalSolver::begin_cycle`]) is
+/// `NoConvergence`, and the solver spent no more than the budget.
 #[test]
 fn first_root_stops_at_the_cycle_budget() {
     let cables = robot(8, 0.6, 2.0e5, true);
     for budget in [1u32, 2, 3] {
-        let params = ModalParams {
-            cycle_evaluations: budget,
-            ..ModalParams::default()
-        };
-        let mut s = SagModalSolver::new(params, 8, 40);
+        let mut s = SagModalSolver::new(ModalParams::default(), 8, 40);
         s.load_catenaries(&cables, 40, &up(), &point()).unwrap();
+        s.begin_cycle(budget);
         let before = s.evaluations();
         let r = s.first_root_cold();
         let spent = s.evaluations() - before;

@@ -53,6 +53,10 @@ struct CircleRun {
     f1_min: (f64, usize),
     f1_max: (f64, usize),
     allocs: u64,
+    /// Age of the end-effector answer at each ok cycle that had one, cycles, ascending.
+    ee_age: Vec<u64>,
+    /// Ok cycles without an end-effector answer (none known yet, or none found).
+    ee_unknown: usize,
 }
 
 /// Time `a.cycles` cycles of `est` (after one cold cycle) along the circle.
@@ -72,6 +76,8 @@ fn run_circle(
     let mut statuses = StatusHistogram::default();
     let mut f1_min = (f64::INFINITY, 0usize);
     let mut f1_max = (f64::NEG_INFINITY, 0usize);
+    let mut ee_age = Vec::with_capacity(a.cycles);
+    let mut ee_unknown = 0;
     let alloc0 = allocations();
     for k in 1..=a.cycles {
         let pose = circle_pose_with_radius(s, k, a.period_s, a.radius_m);
@@ -88,11 +94,16 @@ fn run_circle(
             if e.f1_hz > f1_max.0 {
                 f1_max = (e.f1_hz, k);
             }
+            match e.ee_mode {
+                Some(m) => ee_age.push(u64::from(m.age_cycles)),
+                None => ee_unknown += 1,
+            }
         }
     }
     let allocs = allocations() - alloc0;
     ns.sort_unstable();
     evals.sort_unstable();
+    ee_age.sort_unstable();
     CircleRun {
         ns,
         evals: evals.iter().map(|&x| x as u64).collect(),
@@ -100,6 +111,8 @@ fn run_circle(
         f1_min,
         f1_max,
         allocs,
+        ee_age,
+        ee_unknown,
     }
 }
 
@@ -201,6 +214,8 @@ fn print_json(
         .nonzero()
         .map(|(code, n)| (cablevib_ipc::status_str(code).to_string(), n as usize))
         .collect();
+    // null when no ok cycle had an end-effector answer.
+    let ee_age = |x: f64| (!c.ee_age.is_empty()).then(|| percentile(&c.ee_age, x));
     let o = serde_json::json!({
         "scene": s.name,
         "element": s.model.element.as_str(),
@@ -212,6 +227,10 @@ fn print_json(
         "eigen_evaluations_p50": percentile(&c.evals, 0.5),
         "eigen_evaluations_p99": percentile(&c.evals, 0.99),
         "eigen_evaluations_max": c.evals.last().copied().unwrap_or(0) as usize,
+        "ee_mode_age_p50": ee_age(0.5),
+        "ee_mode_age_p99": ee_age(0.99),
+        "ee_mode_age_max": ee_age(1.0),
+        "ee_mode_unknown_cycles": c.ee_unknown,
         "cycle_evaluations_budget": p.modal.cycle_evaluations,
         "allocations_per_cycle": c.allocs as f64 / a.cycles as f64,
         "allocations_total": c.allocs,
@@ -270,6 +289,20 @@ fn print_text(
         percentile(ev, 1.0),
         p.modal.cycle_evaluations
     )?;
+    if p.ee_mode {
+        let ea = &c.ee_age;
+        if ea.is_empty() {
+            outln!("  end-effector answer: none in {} ok cycles", c.ee_unknown)?;
+        } else {
+            outln!(
+                "  end-effector answer's age, cycles: p50 {}  p99 {}  max {} ({} ok cycles without one)",
+                percentile(ea, 0.5),
+                percentile(ea, 0.99),
+                percentile(ea, 1.0),
+                c.ee_unknown
+            )?;
+        }
+    }
     outln!(
         "  heap allocations: {allocs} in {} cycles ({per_cycle_allocs} per cycle)",
         a.cycles

@@ -191,9 +191,9 @@ fn lane_start(
     }
     for (i, sup) in supports.iter().enumerate() {
         let Some(sup) = sup else { continue };
-        let (h, dh, hb) = SagChain::hidden_at_real(sup, lambda);
-        let k0 = [e0.a[i], e0.b[i], e0.c[i]];
-        let (s, ds, below) = junction_start(k0, k.mass[i], k.nudge[i], sup, lambda, h, dh, hb);
+        let hidden = SagChain::hidden_at_real(sup, lambda);
+        let first = ([e0.a[i], e0.b[i], e0.c[i]], k.mass[i], k.nudge[i]);
+        let (s, ds, below) = junction_start(first, sup, lambda, hidden);
         for q in 0..3 {
             init.s[q][i] = s[q];
             init.ds[q][i] = if derivative { ds[q] } else { 0.0 };

@@ -1,8 +1,10 @@
 //! The sagged FEM chain's data: per-element in-plane 2 × 2 and out-of-plane stiffness in
 //! buffers sized once, filled from a profile without allocating.
 
+use super::supported::SagSupport;
 use super::{SagChainError, SagChainEval};
 use crate::elastic_catenary::{Catenary, CatenaryElements};
+use num_complex::Complex64;
 
 /// One element of a sagged chain (element j runs from node j to node j + 1; node 0 is the
 /// anchor), as the dense reference assembles it.
@@ -47,7 +49,7 @@ pub struct SagChain {
     /// Scratch of `set_fem`: the elements' chords and tensions on the catenary.
     elements: CatenaryElements,
     /// The cable behind the anchor (its pulley), when the anchor node is not fixed.
-    pub(super) support: Option<super::SagSupport>,
+    pub(super) support: Option<SagSupport>,
 }
 
 impl SagChain {
@@ -242,5 +244,48 @@ impl SagChain {
     /// The elements from the anchor to the end (for the dense reference).
     pub fn elements(&self) -> impl ExactSizeIterator<Item = SagElement> + '_ {
         (0..self.n_el()).map(|j| self.element(j))
+    }
+}
+
+/// The anchor on a hidden cable (`supported`'s docs: the junction step).
+impl SagChain {
+    /// Put the chain's anchor node on the hidden cable `support` (None: the anchor fixed,
+    /// as [`Self::set_fem`] leaves it). Call after the chain is set: setting the chain
+    /// clears its support. No allocation.
+    pub fn set_support(&mut self, support: Option<SagSupport>) -> Result<(), SagChainError> {
+        SagSupport::check(support.as_ref())?;
+        self.support = support;
+        Ok(())
+    }
+
+    /// The chain's support (None: the anchor is fixed).
+    pub fn support(&self) -> Option<SagSupport> {
+        self.support
+    }
+
+    /// The hidden segment's end stiffness at a real λ (its ChainEval).
+    pub(super) fn hidden_at_real(support: &SagSupport, lambda: f64) -> (f64, f64, u32) {
+        let e = support.hidden.eval(lambda);
+        (e.s, e.ds, e.below)
+    }
+
+    /// The hidden segment's end stiffness at a complex λ (count 0).
+    pub(super) fn hidden_at_complex(
+        support: &SagSupport,
+        lambda: Complex64,
+    ) -> (Complex64, Complex64, u32) {
+        let e = support.hidden.eval_at(lambda);
+        (e.s, e.ds, 0)
+    }
+
+    /// Blocked eigenvalues the support adds: the hidden segment's and the junction's.
+    pub(super) fn support_modes(&self) -> usize {
+        match self.support {
+            Some(s) => {
+                s.hidden.n_poles().min(usize::MAX / 8)
+                    + (self.mass_kg > 0.0 || s.hidden.m > 0.0) as usize
+            }
+            None => 0,
+        }
     }
 }

@@ -2,6 +2,7 @@
 //! blocks, out-of-plane scalars, their λ-derivatives and the pivots' negative count.
 
 use super::chain::SagChain;
+use super::supported::junction_start;
 use super::SagChainEval;
 use crate::cable::ChainScalar;
 use num_complex::Complex64;
@@ -73,8 +74,9 @@ impl SagChain {
         let (s_in, ds_in, below_in) = match &self.support {
             None => self.eval_in_plane(lambda),
             Some(sup) => {
-                let (h, dh, hb) = Self::hidden_at_real(sup, lambda);
-                let (s, ds, below) = self.junction_start(sup, lambda, h, dh, hb);
+                let hidden = Self::hidden_at_real(sup, lambda);
+                let first = (self.k_in[0], self.mass_kg, self.nudge);
+                let (s, ds, below) = junction_start(first, sup, lambda, hidden);
                 self.in_plane_from(lambda, s, ds, below)
             }
         };
@@ -98,8 +100,9 @@ impl SagChain {
         let s_in = match &self.support {
             None => self.eval_in_plane(lambda).0,
             Some(sup) => {
-                let (h, dh, hb) = Self::hidden_at_complex(sup, lambda);
-                let (s, ds, below) = self.junction_start(sup, lambda, h, dh, hb);
+                let hidden = Self::hidden_at_complex(sup, lambda);
+                let first = (self.k_in[0], self.mass_kg, self.nudge);
+                let (s, ds, below) = junction_start(first, sup, lambda, hidden);
                 self.in_plane_from(lambda, s, ds, below).0
             }
         };

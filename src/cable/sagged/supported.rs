@@ -22,10 +22,8 @@
 //! hidden segment's blocked count and [q₀ < 0] (the junction's pivot, Wittrick–Williams).
 //! The out-of-plane chain is unchanged (the pulley holds node 0 out of the plane).
 
-use super::chain::SagChain;
 use super::SagChainError;
 use crate::cable::{ChainScalar, Segment};
-use num_complex::Complex64;
 
 /// The cable behind a sagged cable's anchor (its pulley): the hidden segment and the
 /// direction the junction moves along.
@@ -57,85 +55,17 @@ impl SagSupport {
     }
 }
 
-impl SagChain {
-    /// Put the chain's anchor node on the hidden cable `support` (None: the anchor fixed,
-    /// as [`Self::set_fem`] leaves it). Call after the chain is set: setting the chain
-    /// clears its support. No allocation.
-    pub fn set_support(&mut self, support: Option<SagSupport>) -> Result<(), SagChainError> {
-        SagSupport::check(support.as_ref())?;
-        self.support = support;
-        Ok(())
-    }
-
-    /// The chain's support (None: the anchor is fixed).
-    pub fn support(&self) -> Option<SagSupport> {
-        self.support
-    }
-
-    /// The in-plane recurrence's start at node 1 with the anchor node on the support: S₁,
-    /// S₁′ (as [a, b, c] in (h, up)) and the count so far (module docs). `h`, `dh`,
-    /// `h_below`: the hidden segment's end stiffness, its derivative and its count at λ.
-    pub(super) fn junction_start<T: ChainScalar>(
-        &self,
-        support: &SagSupport,
-        lambda: T,
-        h: T,
-        dh: T,
-        h_below: u32,
-    ) -> ([T; 3], [T; 3], u32) {
-        junction_start(
-            self.k_in[0],
-            self.mass_kg,
-            self.nudge,
-            support,
-            lambda,
-            h,
-            dh,
-            h_below,
-        )
-    }
-
-    /// The hidden segment's end stiffness at a real λ (its ChainEval).
-    pub(super) fn hidden_at_real(support: &SagSupport, lambda: f64) -> (f64, f64, u32) {
-        let e = support.hidden.eval(lambda);
-        (e.s, e.ds, e.below)
-    }
-
-    /// The hidden segment's end stiffness at a complex λ (count 0).
-    pub(super) fn hidden_at_complex(
-        support: &SagSupport,
-        lambda: Complex64,
-    ) -> (Complex64, Complex64, u32) {
-        let e = support.hidden.eval_at(lambda);
-        (e.s, e.ds, 0)
-    }
-
-    /// Blocked eigenvalues the support adds: the hidden segment's and the junction's.
-    pub(super) fn support_modes(&self) -> usize {
-        match self.support {
-            Some(s) => {
-                s.hidden.n_poles().min(usize::MAX / 8)
-                    + (self.mass_kg > 0.0 || s.hidden.m > 0.0) as usize
-            }
-            None => 0,
-        }
-    }
-}
-
-/// [`SagChain::junction_start`] from the chain's first element `k0` ([a, b, c] in (h, up),
-/// N/m), element mass `m` (kg) and singular-pivot nudge (N/m): the one computation of the
-/// scalar recurrence and the lockstep batch's supported lanes (`batch`).
-#[allow(clippy::too_many_arguments)]
+/// The in-plane recurrence's start at node 1 with the anchor node on the support: S₁, S₁′
+/// (as [a, b, c] in (h, up)) and the count so far (module docs), from the chain's first
+/// element (k0: [a, b, c] in (h, up), N/m; the element mass m, kg; the singular-pivot nudge,
+/// N/m) and the hidden segment's end stiffness, its derivative and its count at λ. The one
+/// computation of the scalar recurrence and the lockstep batch's supported lanes (`batch`).
 #[inline]
 pub(super) fn junction_start<T: ChainScalar>(
-    k0: [f64; 3],
-    m: f64,
-    nudge: f64,
+    (k0, m, nudge): ([f64; 3], f64, f64),
     support: &SagSupport,
     lambda: T,
-    h: T,
-    dh: T,
-    h_below: u32,
+    (h, dh, h_below): (T, T, u32),
 ) -> ([T; 3], [T; 3], u32) {
     let re = T::re;
     let [dc, ds] = support.direction;
@@ -179,7 +109,9 @@ pub(super) fn junction_start<T: ChainScalar>(
 mod tests {
     use super::*;
     use crate::cable::sagged::tests::test_chain;
+    use crate::cable::sagged::SagChain;
     use nalgebra::{DMatrix, SymmetricEigen};
+    use num_complex::Complex64;
 
     /// The in-plane K and M of a supported chain, dense: DOFs the hidden cable's nodes
     /// 1 ..= nh (nh the junction, moving along d), the free interior nodes (2 each), the end

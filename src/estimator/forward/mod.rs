@@ -22,12 +22,14 @@
 mod sagged;
 mod taut;
 
-use super::EstimatorError;
+use super::{EstimatorError, EstimatorParams};
 use crate::cable::sagged::SagContinuousParams;
 use crate::cable::{CableError, CableModel};
 use crate::elastic_catenary::Catenary;
 use crate::kinematics::{Geometry, KinematicsError, Pose};
-use crate::modal::{self, ModalError, ModalParams, ModalSolver, Mode, RescanCounts, Root};
+use crate::modal::{
+    self, Condensed, ModalError, ModalParams, ModalSolver, Mode, RescanCounts, Root, Solver,
+};
 use crate::scene::{ElementKind, Scene, MAX_CABLES};
 use crate::tension::{SagTensionParams, TensionError, TensionInfo, TensionParams, TensionSolver};
 use nalgebra::{DMatrix, Matrix3, Matrix6, Vector3};
@@ -46,6 +48,32 @@ pub(super) struct ForwardParams {
     pub(super) sag_tension: SagTensionParams,
     /// The mesh rule of continuous sagged chains.
     pub(super) sag_continuous: SagContinuousParams,
+}
+
+impl ForwardParams {
+    /// The cycle's forward model.
+    pub(super) fn cycle(p: &EstimatorParams) -> ForwardParams {
+        ForwardParams {
+            tension: p.tension,
+            modal: p.modal,
+            sag_tension: p.sag.tension,
+            sag_continuous: p.sag.continuous,
+        }
+    }
+
+    /// The inverse T_min query's forward model: not a cycle, so no per-cycle budget and no
+    /// certificate; the query's sagged mesh.
+    pub(super) fn t_min_query(p: &EstimatorParams) -> ForwardParams {
+        ForwardParams {
+            modal: ModalParams {
+                certify: false,
+                cycle_evaluations: u32::MAX,
+                ..p.modal
+            },
+            sag_continuous: p.sag.t_min_query_continuous,
+            ..ForwardParams::cycle(p)
+        }
+    }
 }
 
 /// What a cycle's tension solve reports to the estimate.
@@ -70,6 +98,67 @@ pub(super) enum Model {
     Taut(TautModel),
     /// Cables on their elastic catenaries (`[effects] sag`).
     Sagged(SagModel),
+}
+
+/// `$body` with `$m` bound to the cable model's own part (`&` or `&mut` as `$model` is):
+/// the one dispatch on [`Model`] for everything both models answer through [`CableSide`].
+macro_rules! with_model {
+    ($model:expr, $m:ident => $body:expr) => {
+        match $model {
+            Model::Taut($m) => $body,
+            Model::Sagged($m) => $body,
+        }
+    };
+}
+
+/// What differs between the taut and the sagged model: the tension distribution and the
+/// chains' set-up (loading the pose into the structured solver on their condensed problem),
+/// the static stiffness and the dense matrices of what they loaded. Everything above (the
+/// solver's queries) is written once in [`Forward`] over this trait.
+pub(super) trait CableSide {
+    /// The condensed problem the model's chains make.
+    type Problem: Condensed;
+    /// The structured solver, as loaded at the last pose.
+    fn solver(&self) -> &Solver<Self::Problem>;
+    /// The structured solver (mutable).
+    fn solver_mut(&mut self) -> &mut Solver<Self::Problem>;
+    /// The solver's evaluation counter when it was last loaded.
+    fn loaded_at(&self) -> u32;
+    /// Forget the tension solver's warm start.
+    fn reset_tensions(&mut self);
+    /// Forget every warm start ([`super::Estimator::reset`]).
+    fn reset(&mut self);
+    /// Info of the last tension solve.
+    fn tension_info(&self) -> TensionInfo;
+    /// See [`Forward::first_root`]; `g` the geometry at `pose`, `t_max_n` the upper bounds
+    /// (N).
+    #[allow(clippy::too_many_arguments)]
+    fn first_root(
+        &mut self,
+        scene: &Scene,
+        pose: &Pose,
+        g: &Geometry,
+        t_min_n: &[f64],
+        t_max_n: &[f64],
+        min_rank: u32,
+        warm: Option<f64>,
+        on_tensions: impl FnOnce(TensionReport<'_>),
+    ) -> Result<Root, EstimatorError>;
+    /// See [`Forward::static_stiffness`] (`g`: the geometry of the loaded pose).
+    fn static_stiffness(&self, scene: &Scene, g: &Geometry) -> Matrix6<f64>;
+    /// See [`Forward::dense_matrices`].
+    fn dense_matrices(
+        &self,
+        scene: &Scene,
+        g: &Geometry,
+    ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError>;
+    /// See [`Forward::ee_mode_tracked`]: the solver's tracker.
+    fn ee_mode(&mut self, r1: &Root, warm: bool) -> Result<Option<(f64, f64)>, ModalError> {
+        Ok(self
+            .solver_mut()
+            .ee_mode_tracked(r1, warm)?
+            .map(|m| (m.lambda, m.ee_participation)))
+    }
 }
 
 /// Every buffer of one forward evaluation, sized once.
@@ -157,19 +246,16 @@ impl Forward {
     ) -> Result<Root, EstimatorError> {
         let t_max_n = &self.t_max_n[..scene.n_cables()];
         let g = &self.geometry;
-        match &mut self.model {
-            Model::Taut(t) => t.first_root(
-                scene,
-                pose,
-                g,
-                t_min_n,
-                t_max_n,
-                min_rank,
-                warm,
-                on_tensions,
-            ),
-            Model::Sagged(s) => s.first_root(scene, pose, g, t_min_n, t_max_n, warm, on_tensions),
-        }
+        with_model!(&mut self.model, m => m.first_root(
+            scene,
+            pose,
+            g,
+            t_min_n,
+            t_max_n,
+            min_rank,
+            warm,
+            on_tensions,
+        ))
     }
 
     /// The sagged equilibrium's nodes at `pose` for the lower bounds `t_min_n` (N, one per
@@ -192,46 +278,26 @@ impl Forward {
 
     /// Evaluations of D(λ) since the modal solver was last loaded.
     pub(super) fn evaluations_since_load(&self) -> u32 {
-        match &self.model {
-            Model::Taut(t) => t.evaluations_since_load(),
-            Model::Sagged(s) => s.evaluations_since_load(),
-        }
+        with_model!(&self.model, m => m.solver().evaluations().wrapping_sub(m.loaded_at()))
     }
 
     /// A cold start of the cycle: forget the tension solver's warm start and the
     /// end-effector mode's tracking.
     pub(super) fn start_cold(&mut self) {
-        match &mut self.model {
-            Model::Taut(t) => {
-                t.tension.reset_warm_start();
-                t.modal.reset_tracking();
-            }
-            Model::Sagged(s) => {
-                s.reset_warm_start();
-                s.modal.reset_tracking();
-            }
-        }
+        with_model!(&mut self.model, m => {
+            m.reset_tensions();
+            m.solver_mut().reset_tracking();
+        })
     }
 
     /// Forget the tension solver's warm start.
     pub(super) fn reset_tension_warm_start(&mut self) {
-        match &mut self.model {
-            Model::Taut(t) => t.tension.reset_warm_start(),
-            Model::Sagged(s) => s.reset_warm_start(),
-        }
+        with_model!(&mut self.model, m => m.reset_tensions())
     }
 
-    /// Forget every warm start ([`super::Estimator::reset`]): the tensions', and a sagged
-    /// first-root search the cycle's budget cut.
+    /// Forget every warm start ([`super::Estimator::reset`]; [`CableSide::reset`]).
     pub(super) fn reset(&mut self) {
-        match &mut self.model {
-            Model::Taut(t) => t.tension.reset_warm_start(),
-            Model::Sagged(s) => {
-                s.reset_warm_start();
-                s.forget_pending();
-                s.modal.reset_tracking();
-            }
-        }
+        with_model!(&mut self.model, m => m.reset())
     }
 
     /// The end-effector mode of the loaded pose (λ in rad²/s², participation) within what
@@ -243,47 +309,24 @@ impl Forward {
         r1: &Root,
         warm: bool,
     ) -> Result<Option<(f64, f64)>, ModalError> {
-        match &mut self.model {
-            Model::Taut(t) => Ok(t
-                .modal
-                .ee_mode_tracked(r1, warm)?
-                .map(|r| (r.lambda, r.ee_participation))),
-            Model::Sagged(s) => s.ee_mode(r1, warm),
-        }
+        with_model!(&mut self.model, m => m.ee_mode(r1, warm))
     }
 
     /// The static end-effector stiffness of the loaded models (3 × 3 or 6 × 6 block, N/m,
     /// N/rad, N·m/rad; NaN when the sagged D(0) fails).
     pub(super) fn static_stiffness(&self, scene: &Scene) -> Matrix6<f64> {
-        match &self.model {
-            Model::Taut(t) => {
-                let k = t.static_stiffness(scene);
-                // A rigid body's closed form is D(0), which holds the pulleys' term already.
-                if self.geometry.has_pulleys() && !scene.rigid {
-                    k + self.geometry.pulley_stiffness(t.tension.tensions_n(), 3)
-                } else {
-                    k
-                }
-            }
-            Model::Sagged(s) => s.static_stiffness().unwrap_or(Matrix6::repeat(f64::NAN)),
-        }
+        with_model!(&self.model, m => m.static_stiffness(scene, &self.geometry))
     }
 
     /// The first `k` natural frequencies of the loaded pose into `out` (see
     /// [`ModalSolver::modes`]).
     pub(super) fn modes(&mut self, k: usize, out: &mut [Mode]) -> Result<usize, ModalError> {
-        match &mut self.model {
-            Model::Taut(t) => t.modal.modes(k, out),
-            Model::Sagged(s) => s.modal.modes(k, out),
-        }
+        with_model!(&mut self.model, m => m.solver_mut().modes(k, out))
     }
 
     /// The end-effector's mass matrix of the loaded pose (kg, kg·m²) and its dimension.
     pub(super) fn ee_mass(&self) -> (Matrix6<f64>, usize) {
-        match &self.model {
-            Model::Taut(t) => (t.modal.ee_matrices().0, t.modal.dim()),
-            Model::Sagged(s) => (s.modal.ee_matrices().0, s.modal.dim()),
-        }
+        with_model!(&self.model, m => (m.solver().ee_matrices().0, m.solver().dim()))
     }
 
     /// The assembled K (N/m) and M (kg) of the loaded models (the dense reference's).
@@ -291,10 +334,7 @@ impl Forward {
         &self,
         scene: &Scene,
     ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
-        match &self.model {
-            Model::Taut(t) => t.dense_matrices(scene, &self.geometry),
-            Model::Sagged(s) => s.dense_matrices(&self.geometry),
-        }
+        with_model!(&self.model, m => m.dense_matrices(scene, &self.geometry))
     }
 
     /// The degrees of freedom of the loaded model (None for continuous cables): the size
@@ -335,7 +375,7 @@ impl Forward {
     pub(super) fn sag_shapes_input(
         &mut self,
     ) -> Option<(
-        &mut crate::modal::sagged::SagModalSolver,
+        &mut crate::modal::SagModalSolver,
         Vec<nalgebra::Vector3<f64>>,
         nalgebra::Vector3<f64>,
         &Geometry,
@@ -350,7 +390,7 @@ impl Forward {
     }
 
     /// The sagged structured solver as loaded at the last pose (None for taut cables).
-    pub(super) fn sag_modal(&self) -> Option<&crate::modal::sagged::SagModalSolver> {
+    pub(super) fn sag_modal(&self) -> Option<&crate::modal::SagModalSolver> {
         match &self.model {
             Model::Taut(_) => None,
             Model::Sagged(s) => Some(&s.modal),
@@ -367,21 +407,12 @@ impl Forward {
 
     /// End-effector bookkeeping counters.
     pub(super) fn rescan_counts(&self) -> RescanCounts {
-        match &self.model {
-            Model::Taut(t) => t.modal.rescan_counts(),
-            Model::Sagged(s) => s.modal.rescan_counts(),
-        }
+        with_model!(&self.model, m => m.solver().rescan_counts())
     }
 
     /// Info of the last tension solve (sagged: its SQP iterations, the rest default).
     pub(super) fn tension_info(&self) -> TensionInfo {
-        match &self.model {
-            Model::Taut(t) => t.tension.info(),
-            Model::Sagged(s) => TensionInfo {
-                iterations: s.tension.info().iterations,
-                ..TensionInfo::default()
-            },
-        }
+        with_model!(&self.model, m => m.tension_info())
     }
 
     /// Each cable's catenary of the last sagged tension solve (None for taut cables).

@@ -6,16 +6,17 @@
 //! solver's first root ([`SagModalSolver`]) and its end-effector mode. Nothing here
 //! allocates after [`SagModel::new`].
 
-use super::{EndEffector, ForwardParams, TensionReport};
+use super::{CableSide, EndEffector, ForwardParams, TensionReport};
 use crate::elastic_catenary::Catenary;
 use crate::estimator::EstimatorError;
 use crate::kinematics::{Geometry, Pose};
+use crate::modal::sagged::SagChains;
 use crate::modal::sagged::{
-    assemble_sagged, SagCableFrame, SagDenseCable, SagEndEffector, SagLoadError, SagModalSolver,
+    assemble_sagged, SagCableFrame, SagDenseCable, SagEndEffector, SagLoadError,
 };
-use crate::modal::{ModalError, Root};
+use crate::modal::{ModalError, Root, SagModalSolver};
 use crate::scene::{ElementKind, Scene};
-use crate::tension::{SagCable, SagTensionSolver};
+use crate::tension::{SagCable, SagTensionSolver, TensionInfo};
 use nalgebra::{DMatrix, Matrix3, Matrix6, Vector3};
 
 /// Every buffer of the sagged forward model, sized once.
@@ -64,54 +65,6 @@ impl SagModel {
         }
     }
 
-    /// Forget the warm starts (tensions and first root).
-    pub(super) fn reset_warm_start(&mut self) {
-        self.tension.reset_warm_start();
-    }
-
-    /// Forget a first-root search the cycle's budget cut.
-    pub(super) fn forget_pending(&mut self) {
-        self.modal.forget_pending();
-    }
-
-    /// At geometry `g` (the chords at `pose`): the sagged tension distribution for the
-    /// per-cable bounds (N, on the end-effector-end tension), shown to `on_tensions` (also
-    /// when it failed), the chains on the catenaries, and the first root (Newton from the
-    /// predicted λ `warm`, rad²/s², cold when None).
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn first_root(
-        &mut self,
-        scene: &Scene,
-        pose: &Pose,
-        g: &Geometry,
-        t_min_n: &[f64],
-        t_max_n: &[f64],
-        warm: Option<f64>,
-        on_tensions: impl FnOnce(TensionReport<'_>),
-    ) -> Result<Root, EstimatorError> {
-        let w = scene.wrench6_n();
-        let res = self
-            .tension
-            .solve(
-                g,
-                &self.materials,
-                &scene.gravity_m_s2,
-                &w,
-                t_min_n,
-                t_max_n,
-            )
-            .map(|_| ());
-        on_tensions(TensionReport {
-            iterations: self.tension.info().iterations,
-            warm: false,
-            tensions_n: self.tension.tensions_n(),
-        });
-        res?;
-        self.load(scene, pose, g)?;
-        self.loaded_at = self.modal.evaluations();
-        Ok(self.modal.first_root(warm)?)
-    }
-
     /// Set each cable's chain on its catenary and load the end-effector.
     fn load(&mut self, scene: &Scene, pose: &Pose, g: &Geometry) -> Result<(), EstimatorError> {
         let n = scene.n_cables();
@@ -147,58 +100,6 @@ impl SagModel {
         self.modal
             .load(&self.frames[..n], &up, &ee)
             .map_err(EstimatorError::SagModel)
-    }
-
-    /// The end-effector mode (λ in rad²/s², participation) within what is left of this
-    /// cycle's budget, tracked from the last cycle ([`SagModalSolver::ee_mode_tracked`];
-    /// `r1` this cycle's first root): Ok(None) while the work goes on over the cycles
-    /// (`warm` false restarts it). Continuous cables: unknown (NaN), since their mesh rule
-    /// ([`SagContinuousParams`]) holds its accuracy only up to the cables' first few
-    /// half-waves, and the end-effector mode of a sagging robot lies above tens of them.
-    pub(super) fn ee_mode(
-        &mut self,
-        r1: &Root,
-        warm: bool,
-    ) -> Result<Option<(f64, f64)>, ModalError> {
-        if self.modal.is_continuous() {
-            return Ok(Some((f64::NAN, f64::NAN)));
-        }
-        Ok(self
-            .modal
-            .ee_mode_tracked(r1, warm)?
-            .map(|m| (m.lambda, m.ee_participation)))
-    }
-
-    /// Evaluations of D(λ) since the solver was last loaded.
-    pub(super) fn evaluations_since_load(&self) -> u32 {
-        self.modal.evaluations().wrapping_sub(self.loaded_at)
-    }
-
-    /// The static end-effector stiffness of the loaded pose (3 × 3 or 6 × 6 block), N/m.
-    pub(super) fn static_stiffness(&self) -> Result<Matrix6<f64>, EstimatorError> {
-        Ok(self.modal.static_stiffness()?)
-    }
-
-    /// The dense reference's K (N/m) and M (kg) of the loaded pose (FEM chains only).
-    pub(super) fn dense_matrices(
-        &self,
-        g: &Geometry,
-    ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
-        if self.modal.is_continuous() {
-            return Err(ModalError::NotAssemblable);
-        }
-        let n = self.frames.len();
-        let (m6, k6) = self.modal.ee_matrices();
-        let up = self.tension.basis(0)[1];
-        let mut cables = Vec::with_capacity(n);
-        for i in 0..n {
-            cables.push(SagDenseCable {
-                chain: self.modal.chain(i),
-                h: self.frames[i].h,
-                arm_m: g.arm_m[i],
-            });
-        }
-        assemble_sagged(&cables, &up, &m6, &k6, self.modal.dim())
     }
 
     /// Each cable's unit horizontal h of the last load and the unit vertical up (world
@@ -248,6 +149,130 @@ impl SagModel {
                     .collect()
             })
             .collect())
+    }
+}
+
+impl CableSide for SagModel {
+    type Problem = SagChains;
+
+    fn solver(&self) -> &SagModalSolver {
+        &self.modal
+    }
+
+    fn solver_mut(&mut self) -> &mut SagModalSolver {
+        &mut self.modal
+    }
+
+    fn loaded_at(&self) -> u32 {
+        self.loaded_at
+    }
+
+    fn reset_tensions(&mut self) {
+        self.tension.reset_warm_start();
+    }
+
+    /// The tensions' warm start, a first-root search the cycle's budget cut, and the
+    /// end-effector tracking.
+    fn reset(&mut self) {
+        self.tension.reset_warm_start();
+        self.modal.forget_pending();
+        self.modal.reset_tracking();
+    }
+
+    /// The SQP iterations of the sagged tension solve (the rest default).
+    fn tension_info(&self) -> TensionInfo {
+        TensionInfo {
+            iterations: self.tension.info().iterations,
+            ..TensionInfo::default()
+        }
+    }
+
+    /// At geometry `g` (the chords at `pose`): the sagged tension distribution for the
+    /// per-cable bounds (N, on the end-effector-end tension), shown to `on_tensions` (also
+    /// when it failed), the chains on the catenaries, and the first root (Newton from the
+    /// predicted λ `warm`, rad²/s², cold when None). No rank check (`min_rank` unused):
+    /// the sagged tension distribution has none.
+    fn first_root(
+        &mut self,
+        scene: &Scene,
+        pose: &Pose,
+        g: &Geometry,
+        t_min_n: &[f64],
+        t_max_n: &[f64],
+        _min_rank: u32,
+        warm: Option<f64>,
+        on_tensions: impl FnOnce(TensionReport<'_>),
+    ) -> Result<Root, EstimatorError> {
+        let w = scene.wrench6_n();
+        let res = self
+            .tension
+            .solve(
+                g,
+                &self.materials,
+                &scene.gravity_m_s2,
+                &w,
+                t_min_n,
+                t_max_n,
+            )
+            .map(|_| ());
+        on_tensions(TensionReport {
+            iterations: self.tension.info().iterations,
+            warm: false,
+            tensions_n: self.tension.tensions_n(),
+        });
+        res?;
+        self.load(scene, pose, g)?;
+        self.loaded_at = self.modal.evaluations();
+        self.modal
+            .begin_cycle(self.modal.params().cycle_evaluations);
+        Ok(self.modal.first_root(warm)?)
+    }
+
+    /// The static end-effector stiffness of the loaded pose (3 × 3 or 6 × 6 block), N/m;
+    /// NaN when D(0) fails.
+    fn static_stiffness(&self, _scene: &Scene, _g: &Geometry) -> Matrix6<f64> {
+        self.modal
+            .static_stiffness()
+            .unwrap_or(Matrix6::repeat(f64::NAN))
+    }
+
+    /// The dense reference's K (N/m) and M (kg) of the loaded pose (FEM chains only).
+    fn dense_matrices(
+        &self,
+        _scene: &Scene,
+        g: &Geometry,
+    ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
+        if self.modal.is_continuous() {
+            return Err(ModalError::NotAssemblable);
+        }
+        let n = self.frames.len();
+        let (m6, k6) = self.modal.ee_matrices();
+        let up = self.tension.basis(0)[1];
+        let mut cables = Vec::with_capacity(n);
+        for i in 0..n {
+            cables.push(SagDenseCable {
+                chain: self.modal.chain(i),
+                h: self.frames[i].h,
+                arm_m: g.arm_m[i],
+            });
+        }
+        assemble_sagged(&cables, &up, &m6, &k6, self.modal.dim())
+    }
+
+    /// The end-effector mode (λ in rad²/s², participation) within what is left of this
+    /// cycle's budget, tracked from the last cycle ([`SagModalSolver::ee_mode_tracked`];
+    /// `r1` this cycle's first root): Ok(None) while the work goes on over the cycles
+    /// (`warm` false restarts it). Continuous cables: unknown (NaN), since their mesh rule
+    /// ([`SagContinuousParams`]) holds its accuracy only up to the cables' first few
+    /// half-waves, and the end-effector mode of a sagging robot lies above tens of them.
+    fn ee_mode(&mut self, r1: &Root, warm: bool) -> Result<Option<(f64, f64)>, ModalError> {
+        if self.modal.is_continuous() {
+            return Ok(Some((f64::NAN, f64::NAN)));
+        }
+        Ok(self
+            .modal
+            .ee_mode_tracked(r1, warm)?
+            .map(|m| (m.lambda, m.ee_participation)))
     }
 }
 

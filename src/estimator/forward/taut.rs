@@ -1,13 +1,13 @@
 //! The taut forward model: straight chords, the active-set tension distribution, the
 //! scene's element on each chord, the structured solver of `modal`.
 
-use super::{fill_models, placeholder_model, EndEffector, ForwardParams, TensionReport};
+use super::{fill_models, placeholder_model, CableSide, EndEffector, ForwardParams, TensionReport};
 use crate::cable::{up_frame, CableModel};
 use crate::estimator::EstimatorError;
 use crate::kinematics::{Geometry, Pose};
-use crate::modal::{ModalError, ModalSolver, Root};
+use crate::modal::{ModalError, ModalSolver, Root, TautChains};
 use crate::scene::Scene;
-use crate::tension::TensionSolver;
+use crate::tension::{TensionInfo, TensionSolver};
 use nalgebra::{DMatrix, Matrix3, Matrix6};
 
 /// Every buffer of the taut forward model, sized once.
@@ -37,11 +37,38 @@ impl TautModel {
             loaded_at: 0,
         }
     }
+}
 
-    /// See [`super::Forward::first_root`]; `g` the geometry at `pose`, `t_max_n` the upper
-    /// bounds (N).
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn first_root(
+impl CableSide for TautModel {
+    type Problem = TautChains;
+
+    fn solver(&self) -> &ModalSolver {
+        &self.modal
+    }
+
+    fn solver_mut(&mut self) -> &mut ModalSolver {
+        &mut self.modal
+    }
+
+    fn loaded_at(&self) -> u32 {
+        self.loaded_at
+    }
+
+    fn reset_tensions(&mut self) {
+        self.tension.reset_warm_start();
+    }
+
+    /// The tensions' warm start only: the taut first root and tracker start from the next
+    /// pose's prediction.
+    fn reset(&mut self) {
+        self.tension.reset_warm_start();
+    }
+
+    fn tension_info(&self) -> TensionInfo {
+        self.tension.info()
+    }
+
+    fn first_root(
         &mut self,
         scene: &Scene,
         pose: &Pose,
@@ -79,17 +106,15 @@ impl TautModel {
         Ok(self.modal.first_root(warm)?)
     }
 
-    /// Evaluations of D(λ) since the modal solver was last loaded.
-    pub(super) fn evaluations_since_load(&self) -> u32 {
-        self.modal.evaluations() - self.loaded_at
-    }
-
     /// The static end-effector stiffness of the loaded models: the closed form for a rigid
     /// body (no evaluation of D(λ) out of the cycle's budget), the models' sum for a point
-    /// mass (the translational block, zeros elsewhere).
-    pub(super) fn static_stiffness(&self, scene: &Scene) -> Matrix6<f64> {
+    /// mass (the translational block, zeros elsewhere) plus the swivel pulleys' term at
+    /// the tensions (a rigid body's D(0) holds it already).
+    fn static_stiffness(&self, scene: &Scene, g: &Geometry) -> Matrix6<f64> {
         if scene.rigid {
-            self.modal.static_stiffness6_closed()
+            self.modal
+                .static_stiffness()
+                .unwrap_or(Matrix6::repeat(f64::NAN))
         } else {
             let mut k = Matrix3::zeros();
             for cm in &self.models {
@@ -97,13 +122,17 @@ impl TautModel {
             }
             let mut k6 = Matrix6::zeros();
             k6.fixed_view_mut::<3, 3>(0, 0).copy_from(&k);
-            k6
+            if g.has_pulleys() {
+                k6 + g.pulley_stiffness(self.tension.tensions_n(), 3)
+            } else {
+                k6
+            }
         }
     }
 
     /// The dense reference's K (N/m) and M (kg) of exactly the loaded models and
     /// end-effector (`g`: the geometry they were loaded at).
-    pub(super) fn dense_matrices(
+    fn dense_matrices(
         &self,
         scene: &Scene,
         g: &Geometry,

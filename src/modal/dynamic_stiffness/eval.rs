@@ -1,8 +1,9 @@
 //! One evaluation of the loaded problem at λ: D(λ), D'(λ) and the blocked count, with the
 //! buffers it writes ([`EvalScratch`]).
 
-use super::{quad, DynEval, LoadedChains, Plan, Slot, MAX_BATCHED, MAX_CHAINS, SYM3};
+use super::{LoadedChains, Plan, Slot, MAX_BATCHED};
 use crate::cable::{eval_continuous_batch, eval_discrete_batch, supported_from_parts, ChainEval};
+use crate::modal::engine::{quad, DynEval, MAX_CHAINS, SYM3};
 use nalgebra::{Matrix6, Vector6};
 
 /// What one evaluation of D(λ) writes: the chains' values at the last λ (and the batched

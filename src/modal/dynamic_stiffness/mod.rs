@@ -7,13 +7,13 @@
 //! [`EvalScratch`] (`eval.rs`) holds the buffers one evaluation writes (and the evaluation
 //! counter); `pole_memo.rs` the supported chains' memoized poles.
 
+use super::engine::{DynEval, MAX_CHAINS, SYM3};
 use super::RigidParts;
 use crate::cable::{supported_pole_near, Segment};
 use crate::cable::{CableModel, Chain, ChainKind, BATCH_MAX_ELEMENTS};
-use crate::eig3::eig3;
 use crate::kinematics::attach_map;
 use crate::scene::MAX_CABLES;
-use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector6};
+use nalgebra::{Matrix3, Matrix6};
 use num_complex::Complex64;
 
 /// Discrete chains up to this many elements have their blocked eigenvalues tabulated (16
@@ -21,29 +21,23 @@ use num_complex::Complex64;
 /// [`crate::scene::MAX_ELEMENTS_PER_CABLE`]) compute each one by trigonometry.
 const POLE_TABLE_MAX_ELEMENTS: usize = 10_000;
 
-/// (row, column) of the six distinct entries of a symmetric 3 × 3 matrix, in the order
-/// both solvers store a point mass's D and D' while summing the chains.
-///
-/// Why: a point mass's D is a symmetric 3 × 3 block; summing its six distinct entries
-/// instead of nine (or 36 in a 6 × 6) is what keeps one evaluation cheap, and the two
-/// solvers must agree on the order to share the assembly's conventions.
-pub(in crate::modal) const SYM3: [(usize, usize); 6] =
-    [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
-
 mod eval;
 mod pole_memo;
+mod problem;
 #[cfg(test)]
 mod tests;
 
 pub(super) use eval::EvalScratch;
 use pole_memo::{PoleMemo, SUPPORTED_POLE_MEMO};
-
-/// Largest number of chains (a [`CableModel`] has up to three).
-pub(super) const MAX_CHAINS: usize = 3 * MAX_CABLES;
+pub use problem::TautChains;
 
 /// Largest number of batched evaluations per λ: every chain, and a supported chain's two
 /// segments (one supported chain per cable).
 const MAX_BATCHED: usize = MAX_CHAINS + MAX_CABLES;
+
+/// Poles of different chains closer than this (relative) are one pole of a scan over the
+/// pole intervals.
+const POLE_MERGE: f64 = 1e-12;
 
 /// Where one chain (or one segment of a supported chain) takes its value at λ.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -69,87 +63,6 @@ enum Plan {
         free_slot: Slot,
         hidden_slot: Slot,
     },
-}
-
-/// D(λ), D'(λ) and the blocked count at one λ. D is 3 × 3 (point mass, in the top-left
-/// block) or 6 × 6 (rigid body: translation then rotation).
-#[derive(Debug, Clone, Copy)]
-pub struct DynEval {
-    /// Dynamic stiffness D(λ), N/m (N·m/rad in the rotational block).
-    pub d: Matrix6<f64>,
-    /// dD/dλ, kg (kg·m² in the rotational block).
-    pub dd: Matrix6<f64>,
-    /// Σ mult · blocked eigenvalues below λ.
-    pub below: u32,
-    /// 3 or 6.
-    pub dim: usize,
-}
-
-impl DynEval {
-    /// Sorted eigen-decomposition of D.
-    pub fn eig(&self) -> EigD {
-        if self.dim == 3 {
-            let e = eig3(&self.d.fixed_view::<3, 3>(0, 0).into_owned());
-            let mut out = EigD {
-                values: [f64::INFINITY; 6],
-                vectors: [Vector6::zeros(); 6],
-                n: 3,
-            };
-            for k in 0..3 {
-                out.values[k] = e.values[k];
-                out.vectors[k]
-                    .fixed_rows_mut::<3>(0)
-                    .copy_from(&e.vectors[k]);
-            }
-            out
-        } else {
-            let e = SymmetricEigen::new(self.d);
-            let mut idx = [0usize, 1, 2, 3, 4, 5];
-            idx.sort_by(|&i, &j| e.eigenvalues[i].total_cmp(&e.eigenvalues[j]));
-            let mut out = EigD {
-                values: [0.0; 6],
-                vectors: [Vector6::zeros(); 6],
-                n: 6,
-            };
-            for (k, &i) in idx.iter().enumerate() {
-                out.values[k] = e.eigenvalues[i];
-                out.vectors[k] = e.eigenvectors.column(i).into_owned();
-            }
-            out
-        }
-    }
-}
-
-/// Sorted eigen-decomposition of D (3 or 6 valid entries).
-#[derive(Debug, Clone, Copy)]
-pub struct EigD {
-    /// Eigenvalues ascending (entries ≥ n are +∞ or unused).
-    pub values: [f64; 6],
-    /// Matching unit eigenvectors.
-    pub vectors: [Vector6<f64>; 6],
-    /// Number of valid entries.
-    pub n: usize,
-}
-
-impl EigD {
-    /// Number of negative eigenvalues.
-    pub fn negatives(&self) -> usize {
-        self.values[..self.n].iter().filter(|&&v| v < 0.0).count()
-    }
-}
-
-/// vᵀ A v for a symmetric A, over the leading `dim` × `dim` block (3 or 6).
-#[inline]
-pub(super) fn quad(a: &Matrix6<f64>, v: &Vector6<f64>, dim: usize) -> f64 {
-    if dim == 3 {
-        let (x, y, z) = (v[0], v[1], v[2]);
-        x * x * a[(0, 0)]
-            + y * y * a[(1, 1)]
-            + z * z * a[(2, 2)]
-            + 2.0 * (x * y * a[(0, 1)] + x * z * a[(0, 2)] + y * z * a[(1, 2)])
-    } else {
-        (v.transpose() * a * v)[(0, 0)]
-    }
 }
 
 /// The problem of one pose, as `load` leaves it: the chains, how they attach to the
@@ -434,6 +347,56 @@ impl LoadedChains {
         for (j, &(r, c)) in SYM3.iter().enumerate() {
             self.k3_sym[j] = self.k6[(r, c)];
         }
+    }
+
+    /// The next distinct pole above `a` over all chains, advancing each chain's pole cursor
+    /// `next_pole` past `a` (and first moving it back to the first pole above `a`: the poles
+    /// move between the cycles of a scan). Returns the pole and its (chain, number).
+    pub(super) fn next_distinct_pole(
+        &self,
+        next_pole: &mut [usize; MAX_CHAINS],
+        a: f64,
+    ) -> (f64, usize, usize) {
+        let mut b = (f64::INFINITY, 0, 0);
+        for i in 0..self.n_chains {
+            let mut j = next_pole[i].max(1);
+            while j > 1 && self.chain_pole(i, j - 1) > a * (1.0 + POLE_MERGE) {
+                j -= 1;
+            }
+            let mut pole = self.chain_pole(i, j);
+            while pole <= a * (1.0 + POLE_MERGE) && pole.is_finite() {
+                j += 1;
+                pole = self.chain_pole(i, j);
+            }
+            next_pole[i] = j;
+            if pole < b.0 {
+                b = (pole, i, j);
+            }
+        }
+        b
+    }
+
+    /// Number of natural frequencies of the loaded model: the end-effector's DOF plus every
+    /// blocked eigenvalue (`usize::MAX` with a continuous chain).
+    pub(super) fn total_modes(&self) -> usize {
+        let mut n = self.dim;
+        for c in &self.chains[..self.n_chains] {
+            match c.kind {
+                ChainKind::Continuous { m_total, .. } if m_total > 0.0 => return usize::MAX,
+                ChainKind::Discrete { m, n_el, .. } if m > 0.0 => {
+                    n += c.mult as usize * (n_el.max(1) - 1);
+                }
+                ChainKind::Supported { free, hidden } => {
+                    let p = crate::cable::supported_n_poles(&free, &hidden);
+                    if p >= usize::MAX / 4 {
+                        return usize::MAX;
+                    }
+                    n += c.mult as usize * p;
+                }
+                _ => {}
+            }
+        }
+        n
     }
 
     /// Blocked eigenvalue j (1-based; 0 gives 0) of chain i, rad²/s², equal to

@@ -23,59 +23,9 @@
 //! when the strong modes of every direction are watched, including those far above the
 //! answer. The matrix form counts only the most-loaded direction, never more than the trace
 //! (R ≽ 0). It needs each counted watched mode's φ (from its Newton step) and the matrices
-//! of the pose ([`SumMatrices`]); where either is missing the trace form alone is used.
+//! of the pose (`engine::SumMatrices`); where either is missing the trace form alone is used.
 
 use super::EeTracker;
-use nalgebra::{Matrix3, Matrix6, SymmetricEigen};
-
-/// The sum rules of the loaded pose that bound the unwatched modes' participation.
-#[derive(Debug, Clone, Copy)]
-pub(in crate::modal) struct SumRules {
-    /// Σ_k p_k over all modes (from `load`).
-    pub(in crate::modal) total: f64,
-    /// Σ_k p_k/λ_k over all modes, s²/rad² (from the first root; NaN when unknown).
-    pub(in crate::modal) over_lambda: f64,
-    /// The matrix forms (None: the trace form only).
-    pub(in crate::modal) matrices: Option<SumMatrices>,
-}
-
-impl SumRules {
-    /// The trace forms only: Σ p_k and Σ p_k/λ_k.
-    pub(in crate::modal) fn traces(total: f64, over_lambda: f64) -> SumRules {
-        SumRules {
-            total,
-            over_lambda,
-            matrices: None,
-        }
-    }
-}
-
-/// The matrix forms of the sum rules (module docs), their leading `dim` blocks.
-#[derive(Debug, Clone, Copy)]
-pub(in crate::modal) struct SumMatrices {
-    /// M_∞⁻¹ = Σ_k φ_k φ_kᵀ, 1/kg (1/(kg·m²) in the rotational block).
-    pub(in crate::modal) m_inf_inv: Matrix6<f64>,
-    /// D(0)⁻¹ = Σ_k φ_k φ_kᵀ/λ_k, m/N (rad/(N·m) in the rotational block); NaN entries when
-    /// unknown (the weighted form is then not used).
-    pub(in crate::modal) flex: Matrix6<f64>,
-    /// M_ee^{1/2}, √kg (√(kg·m²) in the rotational block).
-    pub(in crate::modal) m_sqrt: Matrix6<f64>,
-    /// 3 (point mass) or 6 (rigid body).
-    pub(in crate::modal) dim: usize,
-}
-
-impl SumMatrices {
-    /// λ_max(M_ee^{1/2} r M_ee^{1/2}) over the leading `dim` block (no allocation).
-    fn top(&self, r: &Matrix6<f64>) -> f64 {
-        let s = self.m_sqrt * r * self.m_sqrt;
-        if self.dim == 3 {
-            let b: Matrix3<f64> = s.fixed_view::<3, 3>(0, 0).into_owned();
-            SymmetricEigen::new(b).eigenvalues.max()
-        } else {
-            SymmetricEigen::new(s).eigenvalues.max()
-        }
-    }
-}
 
 impl EeTracker {
     /// Bound on the participation of any unwatched mode below `l_ans` (rad²/s²): the

@@ -269,7 +269,7 @@ impl EeTracker {
             {
                 break;
             }
-            let Some(t) = f.as_taut().and_then(|mut t| neighbour(&mut t, &from, up)) else {
+            let Some(t) = neighbour(f, &from, up) else {
                 break;
             };
             let mut n = t.member(f64::NAN);

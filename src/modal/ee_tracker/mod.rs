@@ -23,9 +23,7 @@ mod phases;
 mod scan;
 mod track;
 
-pub(super) use bound::{SumMatrices, SumRules};
-
-use super::engine::Condensed;
+use super::engine::{Condensed, SumRules};
 use super::first_mode::RootFinder;
 use super::{ModalError, Root};
 use member::{predict, Member};

@@ -4,17 +4,14 @@
 
 use super::member::Member;
 use super::{EeTracker, MAX_MEMBERS, P_ADD, SCAN_BOUND};
-use crate::modal::dynamic_stiffness::{LoadedChains, MAX_CHAINS};
-use crate::modal::engine::Condensed;
-use crate::modal::first_mode::{RootFinder, TautFinder};
+use crate::modal::engine::{Condensed, PoleCursor, MAX_CHAINS};
+use crate::modal::first_mode::RootFinder;
 use crate::modal::spectrum::{SpectrumSearch, SweepState};
 use crate::modal::{ModalError, Root, SpectrumParams};
 
 /// Where the count alone shows the poles, a mode of the sweep that the cycle's budget cut
 /// in this many cycles running is skipped (`ScanState::skipped`).
 const STUCK_CYCLES: u32 = 3;
-/// Poles of different chains closer than this (relative) are one pole of the scan.
-const POLE_MERGE: f64 = 1e-12;
 /// Roots within this (relative) of the scan's `skip_to` count as already known.
 const SKIP_TOL: f64 = 1e-9;
 /// A rescan from a window skips roots up to this much (relative) below the window, so
@@ -31,38 +28,11 @@ pub(super) fn inset(w: f64, x: f64) -> f64 {
     (INSET_REL * x).min(INSET_MAX_FRACTION * w)
 }
 
-/// The next distinct pole above `a` over all chains, advancing each chain's pole cursor
-/// `next_pole` past `a` (and first moving it back to the first pole above `a`: the poles
-/// move between the cycles of a scan). Returns the pole and its (chain, number).
-fn next_distinct_pole(
-    p: &LoadedChains,
-    next_pole: &mut [usize; MAX_CHAINS],
-    a: f64,
-) -> (f64, usize, usize) {
-    let mut b = (f64::INFINITY, 0, 0);
-    for i in 0..p.n_chains {
-        let mut j = next_pole[i].max(1);
-        while j > 1 && p.chain_pole(i, j - 1) > a * (1.0 + POLE_MERGE) {
-            j -= 1;
-        }
-        let mut pole = p.chain_pole(i, j);
-        while pole <= a * (1.0 + POLE_MERGE) && pole.is_finite() {
-            j += 1;
-            pole = p.chain_pole(i, j);
-        }
-        next_pole[i] = j;
-        if pole < b.0 {
-            b = (pole, i, j);
-        }
-    }
-    b
-}
-
 /// The roots of the pole interval (a, b), evaluated at `lo` (a⁺) and `hi_eval` (b⁻): the
 /// blocked count there and the branches [na, nb) that have a root in it (two evaluations
 /// at most).
-fn interval_branches(
-    f: &mut TautFinder<'_>,
+fn interval_branches<P: Condensed>(
+    f: &mut RootFinder<'_, P>,
     a: f64,
     b: f64,
     lo: f64,
@@ -81,7 +51,7 @@ fn interval_branches(
         below = e.below;
         e.eig().negatives()
     } else {
-        f.view.p.dim
+        f.view.dim()
     };
     (below, na, nb)
 }
@@ -97,7 +67,7 @@ pub(super) struct ScanState {
     /// ... or, once the scan passed a pole, that pole's (chain, number).
     a_key: Option<(usize, usize)>,
     /// Each chain's next pole number (the scan's cursor).
-    next_pole: [usize; MAX_CHAINS],
+    next_pole: PoleCursor,
     /// The first branch of the current interval not solved yet ...
     branch: usize,
     /// ... and where its root search stood when the budget ran out (the middle of its
@@ -183,11 +153,10 @@ impl ScanState {
     }
 
     /// The lower end of the current interval on the loaded problem, rad²/s².
-    fn a(&self, p: &LoadedChains) -> f64 {
-        match self.a_key {
-            Some((c, j)) if c < p.n_chains => p.chain_pole(c, j),
-            _ => self.a_fixed,
-        }
+    fn a<P: Condensed>(&self, p: &P) -> f64 {
+        self.a_key
+            .and_then(|(c, j)| p.keyed_pole(c, j))
+            .unwrap_or(self.a_fixed)
     }
 }
 
@@ -215,19 +184,13 @@ impl EeTracker {
             return ScanStep::Done(Err(ModalError::NoEeMode(0)));
         };
         let begin = f.evaluations();
-        let params = f.params;
-        let (budget_base, budget) = (f.budget_base, f.budget);
-        let done = match f.view.taut() {
-            Some(view) => {
-                let mut t = RootFinder {
-                    params,
-                    view,
-                    budget_base,
-                    budget,
-                };
-                self.scan_intervals(&mut t, &mut st, begin)
-            }
-            None => self.scan_modes(f, &mut st, begin),
+        // Where the poles are known the scan walks the pole intervals (two evaluations and
+        // one Newton search per root); where the count alone shows them, it sweeps the
+        // spectrum mode by mode.
+        let done = if f.view.poles_known() {
+            self.scan_intervals(f, &mut st, begin)
+        } else {
+            self.scan_modes(f, &mut st, begin)
         };
         st.spent = st.spent.saturating_add(f.evaluations() - begin);
         match done {
@@ -244,9 +207,9 @@ impl EeTracker {
     }
 
     /// The scan's loop over the intervals; None when the budget ran out (state in `st`).
-    fn scan_intervals(
+    fn scan_intervals<P: Condensed>(
         &mut self,
-        f: &mut TautFinder<'_>,
+        f: &mut RootFinder<'_, P>,
         st: &mut ScanState,
         begin: u32,
     ) -> Option<Result<Root, ModalError>> {
@@ -254,8 +217,8 @@ impl EeTracker {
         while st.intervals < f.params.max_scan_intervals
             && st.spent + (f.evaluations() - begin) <= f.params.max_scan_evaluations
         {
-            let a = st.a(f.view.p);
-            let (b, bc, bj) = next_distinct_pole(f.view.p, &mut st.next_pole, a);
+            let a = st.a(&f.view);
+            let (b, bc, bj) = f.view.next_pole(&mut st.next_pole, a);
             if a > st.limit {
                 break;
             }
@@ -284,9 +247,9 @@ impl EeTracker {
         )
     }
     /// The roots of one pole interval (a, b) from branch `st.branch` on.
-    fn scan_interval(
+    fn scan_interval<P: Condensed>(
         &mut self,
-        f: &mut TautFinder<'_>,
+        f: &mut RootFinder<'_, P>,
         st: &mut ScanState,
         a: f64,
         b: f64,

@@ -5,9 +5,8 @@
 use super::member::{Member, Tracked};
 use super::scan::inset;
 use super::{CHEAP_ACCEPT, NEIGHBOUR_INTERVALS, P_STRONG};
-use crate::modal::dynamic_stiffness::{quad, DynEval, EigD};
-use crate::modal::engine::Condensed;
-use crate::modal::first_mode::{relative_residual, RootFinder, TautFinder};
+use crate::modal::engine::{pole_free, quad, Condensed, DynEval, EigD};
+use crate::modal::first_mode::{relative_residual, RootFinder};
 use crate::modal::Root;
 
 /// Newton steps (evaluations) a followed root may take, at most.
@@ -36,8 +35,13 @@ fn nearest_branch(e: &DynEval, eg: &EigD) -> usize {
 /// participation), searched across at most [`NEIGHBOUR_INTERVALS`] pole intervals; None when
 /// it is not found there. In a pole interval (a, b) with blocked count B the roots are
 /// those of branches j with D's j-th eigenvalue positive at a⁺ and negative at b⁻, in
-/// order, and the root of branch j has index B + j.
-pub(super) fn neighbour(f: &mut TautFinder<'_>, m: &Member, up: bool) -> Option<Tracked> {
+/// order, and the root of branch j has index B + j. It walks the pole intervals: None
+/// where the poles are not known.
+pub(super) fn neighbour<P: Condensed>(
+    f: &mut RootFinder<'_, P>,
+    m: &Member,
+    up: bool,
+) -> Option<Tracked> {
     let mut target = if up {
         m.index + 1
     } else {
@@ -49,7 +53,7 @@ pub(super) fn neighbour(f: &mut TautFinder<'_>, m: &Member, up: bool) -> Option<
     // (≥ 0 below the root when going up, ≤ 0 above it when going down).
     let mut known = m.lambda;
     for _ in 0..NEIGHBOUR_INTERVALS {
-        if target >= below && ((target - below) as usize) < f.view.p.dim {
+        if target >= below && ((target - below) as usize) < f.view.dim() {
             let j = (target - below) as usize;
             // The other end: b⁻ (∞ when there is no pole above: D → −λ M_∞ there) or
             // a⁺ (0 when a = 0: D(0) is positive definite).
@@ -115,7 +119,7 @@ pub(super) fn neighbour(f: &mut TautFinder<'_>, m: &Member, up: bool) -> Option<
             return None;
         }
         let e = f.eval(x);
-        (a, b) = f.last_pole_interval();
+        (a, b) = f.view.last_pole_interval()?;
         if !(x > a && x < b) {
             return None;
         }
@@ -184,7 +188,7 @@ pub(super) fn track_root<P: Condensed>(
         let mu = eg.values[branch];
         let dmu = quad(&e.dd, &v, e.dim);
         // Newton on μ(λ)(λ − a)(b − λ): both poles removed (a = 0 and b = ∞ add nothing).
-        let (g, dg) = crate::modal::spectrum::pole_free(mu, dmu, x, a, b);
+        let (g, dg) = pole_free(mu, dmu, x, a, b);
         if !(dg < 0.0) {
             return None;
         }

@@ -1,12 +1,10 @@
-//! The loaded problem of one pose (the sagged chains, how each attaches to the
-//! end-effector, its mass) and the evaluation of D(λ), D'(λ) and the blocked count.
+//! The loaded problem of one pose ([`SagChains`]: the sagged chains, how each attaches to
+//! the end-effector, its mass) and the evaluation of D(λ), D'(λ) and the blocked count.
 
 use super::{SagCableFrame, SagEndEffector, SagLoadError};
 use crate::cable::sagged::{SagBatch, SagChain, SagChainEval, SagContinuous, SagContinuousParams};
 use crate::kinematics::attach_map;
-use crate::modal::dynamic_stiffness::SYM3;
-use crate::modal::engine::{ee_from_problem, Condensed, TautView};
-use crate::modal::DynEval;
+use crate::modal::engine::{DynEval, SYM3};
 use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector3};
 use num_complex::Complex64;
 
@@ -26,15 +24,17 @@ pub(super) struct CableProj {
     p6: [Matrix6<f64>; 4],
 }
 
-/// The problem of one pose, as `load` leaves it. Read-only on the hot path.
+/// The sagged problem of one pose, as `load` leaves it (read-only on the hot path), and
+/// its evaluation counter: the problem of [`SagModalSolver`](crate::modal::SagModalSolver),
+/// which sets it up (`load`, `load_catenaries`, …) and solves it.
 #[derive(Debug, Clone)]
-pub(super) struct SagProblem {
-    pub(super) chains: Vec<SagChain>,
+pub struct SagChains {
+    pub(in crate::modal) chains: Vec<SagChain>,
     /// The continuous chains (empty unless the solver was built for them) and their
     /// cached static evaluations; used instead of `chains` when `continuous`.
-    pub(super) cont: Vec<SagContinuous>,
-    pub(super) cont_static: Vec<SagChainEval>,
-    pub(super) continuous: bool,
+    pub(in crate::modal) cont: Vec<SagContinuous>,
+    pub(in crate::modal) cont_static: Vec<SagChainEval>,
+    pub(in crate::modal) continuous: bool,
     /// The FEM chains packed for the lockstep evaluation, when they all have one element
     /// count (`batched`); else they are evaluated one by one.
     batch: SagBatch,
@@ -43,28 +43,32 @@ pub(super) struct SagProblem {
     static_fem: Vec<SagChainEval>,
     proj: Vec<CableProj>,
     /// Cables loaded.
-    pub(super) n: usize,
+    pub(in crate::modal) n: usize,
     /// 3 (point mass) or 6 (rigid body).
-    pub(super) dim: usize,
+    pub(in crate::modal) dim: usize,
     /// End-effector mass, kg.
     ee_mass_kg: f64,
     /// diag(m I, I_world), kg and kg·m².
-    pub(super) m6: Matrix6<f64>,
+    pub(in crate::modal) m6: Matrix6<f64>,
     /// M6^{1/2} (the cluster participations' congruence).
-    pub(super) m6_sqrt: Matrix6<f64>,
+    pub(in crate::modal) m6_sqrt: Matrix6<f64>,
     /// The tensions' rotational geometric stiffness (rigid body), N·m/rad, plus the
     /// swivel pulleys' own term ([`Self::add_exit_term`]; N/m in the translational block).
-    pub(super) k6: Matrix6<f64>,
+    pub(in crate::modal) k6: Matrix6<f64>,
     /// Each cable's map from the end's displacement to its chain's base translation,
     /// (I − τ_a sᵀ) ∂A/∂B (None: the base stays put; [`super::SagModalSolver::set_exit_motion`]).
-    pub(super) exit_map: Vec<Option<Matrix3<f64>>>,
+    pub(in crate::modal) exit_map: Vec<Option<Matrix3<f64>>>,
     /// Each loaded cable's attachment arm, m (rigid body: the term's map G).
     arm: Vec<Vector3<f64>>,
     /// Whether `k6` holds a pulley term (a point mass's D then adds its translational block).
-    pub(super) has_exit: bool,
+    pub(in crate::modal) has_exit: bool,
+    /// Evaluations of D(λ) since the problem was built (a wrapping counter).
+    pub(in crate::modal) evaluations: u32,
+    /// A pose is loaded (the chains set since have not been loaded yet: false).
+    pub(in crate::modal) loaded: bool,
 }
 
-impl SagProblem {
+impl SagChains {
     /// Cable `i` has a continuous chain (the solver was built for them and i is in range).
     pub(super) fn check_continuous_index(&self, i: usize) -> Result<(), SagLoadError> {
         if !self.continuous || i >= self.cont.len() {
@@ -77,18 +81,18 @@ impl SagProblem {
     }
 
     /// Room for `n_cables` chains of up to `n_el_max` elements each (the only allocation).
-    pub(super) fn new(
+    pub(in crate::modal) fn new(
         n_cables: usize,
         n_el_max: usize,
         continuous: Option<SagContinuousParams>,
-    ) -> SagProblem {
+    ) -> SagChains {
         let zero = CableProj {
             p3: [[0.0; 6]; 4],
             p6: [Matrix6::zeros(); 4],
         };
         let n_cont = if continuous.is_some() { n_cables } else { 0 };
         let cont_params = continuous.unwrap_or_default();
-        SagProblem {
+        SagChains {
             chains: (0..n_cables).map(|_| SagChain::new(n_el_max)).collect(),
             cont: (0..n_cont)
                 .map(|_| SagContinuous::new(cont_params))
@@ -108,6 +112,8 @@ impl SagProblem {
             exit_map: vec![None; n_cables],
             arm: vec![Vector3::zeros(); n_cables],
             has_exit: false,
+            evaluations: 0,
+            loaded: false,
         }
     }
 
@@ -274,15 +280,10 @@ impl SagProblem {
         }
     }
 
-    /// D(λ), D'(λ) and Σ_cables blocked count (one evaluation: every chain's recurrence).
-    #[inline]
-    pub(super) fn eval(&self, lambda: f64) -> DynEval {
-        self.eval_with(lambda, true)
-    }
-
-    /// As [`Self::eval`]; without `derivative` D' is not computed (it holds −M only):
-    /// for evaluations that only count.
-    pub(super) fn eval_with(&self, lambda: f64, derivative: bool) -> DynEval {
+    /// D(λ), D'(λ) and Σ_cables blocked count (every chain's recurrence; not counted: the
+    /// counted evaluation is [`Condensed::eval`](crate::modal::Condensed::eval)); without
+    /// `derivative` D' is not computed (it holds −M only): for evaluations that only count.
+    pub(super) fn evaluate_with(&self, lambda: f64, derivative: bool) -> DynEval {
         if self.continuous {
             self.assemble(lambda, |i| self.cont[i].eval(lambda))
         } else if self.batched {
@@ -295,11 +296,13 @@ impl SagProblem {
         }
     }
 
-    /// D(λ) by the chains' one-by-one recurrence ([`SagChain::eval`]), the reference of
-    /// the lockstep path.
-    pub(super) fn eval_reference(&self, lambda: f64) -> DynEval {
+    /// D(λ), D'(λ) and the blocked count by the chains' one-by-one recurrence
+    /// ([`SagChain::eval`]), the reference of the lockstep evaluation (counted as an
+    /// evaluation too).
+    pub fn eval_reference(&mut self, lambda: f64) -> DynEval {
+        self.evaluations = self.evaluations.wrapping_add(1);
         if self.continuous {
-            return self.eval(lambda);
+            return self.evaluate_with(lambda, true);
         }
         self.assemble(lambda, |i| self.chains[i].eval(lambda))
     }
@@ -308,7 +311,7 @@ impl SagProblem {
     /// the same assembly as [`Self::eval`] with each chain's in-plane and out-of-plane
     /// recurrences at complex λ ([`SagChain::eval_at`]). None for continuous cables (their
     /// Magnus propagator is real). Point mass: the leading 3 × 3 block.
-    pub(super) fn d_complex(&self, lambda: Complex64) -> Option<Matrix6<Complex64>> {
+    pub(in crate::modal) fn d_complex(&self, lambda: Complex64) -> Option<Matrix6<Complex64>> {
         if self.continuous {
             return None;
         }
@@ -390,7 +393,7 @@ impl SagProblem {
     }
 
     /// D(0) and D'(0) from the chains' cached static evaluations (no recurrence).
-    pub(super) fn static_eval(&self) -> DynEval {
+    pub(in crate::modal) fn static_eval(&self) -> DynEval {
         if self.continuous {
             self.assemble(0.0, |i| self.cont_static[i])
         } else {
@@ -400,7 +403,7 @@ impl SagProblem {
 
     /// Number of natural frequencies: the end-effector's DOF plus every blocked one
     /// (unbounded for continuous cables: [`CONTINUOUS_MODES`]).
-    pub(super) fn total_modes(&self) -> usize {
+    pub(in crate::modal) fn total_modes(&self) -> usize {
         if self.continuous {
             return CONTINUOUS_MODES;
         }
@@ -458,89 +461,3 @@ impl Acc {
         }
     }
 }
-
-/// The sagged problem as the searches see it: the loaded pose (read) and the solver's
-/// evaluation counter (written). Its poles are seen only through the count.
-pub(super) struct SagView<'a> {
-    pub(super) p: &'a SagProblem,
-    pub(super) evals: &'a mut u32,
-}
-
-impl Condensed for SagView<'_> {
-    #[inline]
-    fn eval(&mut self, lambda: f64) -> DynEval {
-        *self.evals = self.evals.wrapping_add(1);
-        self.p.eval(lambda)
-    }
-    #[inline]
-    fn count_eval(&mut self, lambda: f64) -> DynEval {
-        *self.evals = self.evals.wrapping_add(1);
-        self.p.eval_with(lambda, false)
-    }
-    #[inline]
-    fn zero_eval(&mut self) -> DynEval {
-        self.p.static_eval()
-    }
-    #[inline]
-    fn evaluations(&self) -> u32 {
-        *self.evals
-    }
-    ee_from_problem!();
-    #[inline]
-    fn pole_interval(&self, _lambda: f64) -> Option<(f64, f64)> {
-        None
-    }
-    #[inline]
-    fn poles_known(&self) -> bool {
-        false
-    }
-    #[inline]
-    fn lowest_pole(&self) -> Option<f64> {
-        None
-    }
-    #[inline]
-    fn static_eval(&self) -> DynEval {
-        self.p.static_eval()
-    }
-    #[inline]
-    fn last_pole_interval(&self) -> Option<(f64, f64)> {
-        None
-    }
-    #[inline]
-    fn taut(&mut self) -> Option<TautView<'_>> {
-        None
-    }
-}
-
-impl SagView<'_> {
-    /// M_∞⁻¹ = Σ_k φ_k φ_kᵀ (the plain sum rule's matrix form; the identity outside the
-    /// leading `dim` block), from one evaluation at σ = −[`FAR_BELOW`]·max|D(0)|/m_min
-    /// (m_min the end-effector's smallest mass entry): −D(σ)/σ = M_∞ + (a stiffness)/|σ|,
-    /// so the M_∞ it gives is above the true one by a relative ~(the chains' highest
-    /// pole)/|σ| (≤ 1e-5 for a thousand elements and a cable a ten-thousandth of the
-    /// end-effector's mass), and its inverse below by as much: far inside the tracker's
-    /// certificate margin. None when σ or the inverse is not finite.
-    pub(super) fn mass_limit_inverse(&mut self) -> Option<Matrix6<f64>> {
-        let dim = self.p.dim;
-        let d0 = self.p.static_eval().d;
-        let k = d0.abs().max();
-        let m = (0..dim)
-            .map(|j| self.p.m6[(j, j)])
-            .fold(f64::INFINITY, f64::min);
-        let sigma = -FAR_BELOW * k / m;
-        if !(sigma.is_finite() && sigma < 0.0) {
-            return None;
-        }
-        let d = self.eval(sigma).d * (-1.0 / sigma);
-        let mut m_inf = Matrix6::identity();
-        m_inf
-            .view_mut((0, 0), (dim, dim))
-            .copy_from(&d.view((0, 0), (dim, dim)));
-        m_inf.try_inverse()
-    }
-}
-
-/// How far below zero (relative to max|D(0)|/m_min) the sagged problem is evaluated for its
-/// participation total: far enough that the chains' stiffness is ~1e-16 of their mass
-/// there relative to the end-effector's static scale, close enough that nothing overflows.
-const FAR_BELOW: f64 = 1e16;

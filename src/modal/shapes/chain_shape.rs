@@ -14,7 +14,7 @@ use crate::cable::ChainKind;
 /// Continuous chain (end stiffness K = S/L, mass M = μL): w(x) ∝ sin(φx), φ = √(λM/K),
 /// x ∈ [0, 1] from anchor to end.
 #[derive(Debug, Clone, Default)]
-pub(super) struct ChainShape {
+pub(in crate::modal) struct ChainShape {
     /// Discrete: w_j for j = 0 ..= N (w_0 = 0, w_N = g). Continuous: empty (closed form).
     pub(super) w: Vec<f64>,
     /// A discrete supported chain's hidden nodes from the drum (0) to the junction (its

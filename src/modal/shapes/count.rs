@@ -1,9 +1,9 @@
-//! [`ModalSolver::eigen_clusters`]: the lowest eigenvalues and their multiplicities by
-//! bisection on the Wittrick-Williams count (offline; the shapes' input when no other
-//! eigenvalue source is at hand).
+//! The lowest eigenvalues and their multiplicities by bisection on the Wittrick-Williams
+//! count ([`Solver::eigen_clusters`](crate::modal::Solver::eigen_clusters); offline: the
+//! shapes' input when no other eigenvalue source is at hand), and a cluster that is not
+//! one eigenvalue split by the count.
 
 use super::{ShapeError, ShapeParams};
-use crate::modal::ModalSolver;
 
 /// A cluster that is not one eigenvalue is resolved by the count from [`SPLIT_BELOW`]
 /// below the λ given (its lowest member, to the eigenvalue source's accuracy ≲ 1e-12) ...
@@ -18,72 +18,36 @@ const GROWTH: f64 = 4.0;
 /// ... at most this many times (4⁶⁰⁰ covers any finite λ).
 const GROWTH_STEPS: usize = 600;
 
-impl ModalSolver {
-    /// The lowest eigenvalues of the loaded model as clusters (λ in rad²/s², multiplicity),
-    /// ascending, until at least `k` modes are covered. Each cluster's λ is the bisection
-    /// limit of the count J(λ) (numbers of modes strictly below λ) to a relative width of
-    /// 4ε; modes within [`ShapeParams::cluster_rel`] (relative) of it form its cluster.
-    pub fn eigen_clusters(
-        &mut self,
-        k: usize,
-        params: &ShapeParams,
-    ) -> Result<Vec<(f64, u32)>, ShapeError> {
-        clusters_by_count(|x| self.count_below(x), k, params)
+/// The eigenvalues (λ, multiplicity) by the count from `lambda` (its cluster's lowest
+/// member) to [`SPLIT_WINDOW`] above it, ascending, until they hold `m` modes; `None` when
+/// the window holds fewer.
+pub(super) fn split_cluster(
+    count: &mut impl FnMut(f64) -> u32,
+    lambda: f64,
+    m: u32,
+    params: &ShapeParams,
+) -> Option<Vec<(f64, u32)>> {
+    let (lo, hi) = (lambda * (1.0 - SPLIT_BELOW), lambda * (1.0 + SPLIT_WINDOW));
+    let found0 = count(lo) as usize;
+    if (count(hi) as usize) < found0 + m as usize {
+        return None;
     }
-
-    /// The smallest λ in (lo, hi] with more than `found` modes at or below it, by bisection.
-    pub(super) fn bisect_next(
-        &mut self,
-        lo: f64,
-        hi: f64,
-        found: usize,
-        params: &ShapeParams,
-    ) -> Result<f64, ShapeError> {
-        bisect_next(&mut |x| self.count_below(x), lo, hi, found, params)
-    }
-
-    /// The eigenvalues (λ, multiplicity) by the count from `lambda` (its cluster's lowest
-    /// member) to [`SPLIT_WINDOW`] above it, ascending, until they hold `m` modes; `None`
-    /// when the window holds fewer.
-    pub(super) fn split_cluster(
-        &mut self,
-        lambda: f64,
-        m: u32,
-        params: &ShapeParams,
-    ) -> Option<Vec<(f64, u32)>> {
-        let (lo, hi) = (lambda * (1.0 - SPLIT_BELOW), lambda * (1.0 + SPLIT_WINDOW));
-        let found0 = self.count_below(lo) as usize;
-        if (self.count_below(hi) as usize) < found0 + m as usize {
-            return None;
-        }
-        let (mut found, mut cur) = (found0, lo);
-        let mut out = Vec::new();
-        while found < found0 + m as usize {
-            let l = self.bisect_next(cur, hi, found, params).ok()?;
-            let above = l * (1.0 + params.cluster_rel);
-            let k = (self.count_below(above) as usize)
-                .saturating_sub(found)
-                .max(1);
-            out.push((l, k as u32));
-            found += k;
-            cur = above;
-        }
-        Some(out)
-    }
+    clusters_between(count, lo, hi, found0, found0 + m as usize, params).ok()
 }
 
 /// The lowest eigenvalues of the problem whose count of eigenvalues strictly below λ is
 /// `count(λ)`, as clusters (λ in rad²/s², multiplicity), ascending, until at least `k`
-/// modes are covered ([`ModalSolver::eigen_clusters`]).
-pub(super) fn clusters_by_count(
+/// modes are covered: each cluster's λ is the bisection limit of the count to a relative
+/// width of 4ε, modes within [`ShapeParams::cluster_rel`] (relative) of it form its
+/// cluster.
+pub(in crate::modal) fn clusters_by_count(
     mut count: impl FnMut(f64) -> u32,
     k: usize,
     params: &ShapeParams,
 ) -> Result<Vec<(f64, u32)>, ShapeError> {
     params.check()?;
-    let mut out = Vec::new();
     if k == 0 {
-        return Ok(out);
+        return Ok(Vec::new());
     }
     let mut hi = START_HI;
     let mut steps = 0;
@@ -94,10 +58,23 @@ pub(super) fn clusters_by_count(
             return Err(ShapeError::BadParams("no finite bound holds k eigenvalues"));
         }
     }
-    let mut found = 0usize;
-    let mut lo = 0.0f64;
-    while found < k {
-        let lambda = bisect_next(&mut count, lo, hi, found, params)?;
+    clusters_between(&mut count, 0.0, hi, 0, k, params)
+}
+
+/// The eigenvalues in (lo, hi] above the `found` ones at or below lo, as clusters (λ,
+/// multiplicity) ascending, until `until` modes are covered: each λ the bisection limit of
+/// the count, the modes within [`ShapeParams::cluster_rel`] (relative) of it its cluster.
+fn clusters_between(
+    count: &mut impl FnMut(f64) -> u32,
+    mut lo: f64,
+    hi: f64,
+    mut found: usize,
+    until: usize,
+    params: &ShapeParams,
+) -> Result<Vec<(f64, u32)>, ShapeError> {
+    let mut out = Vec::new();
+    while found < until {
+        let lambda = bisect_next(count, lo, hi, found, params)?;
         let above = lambda * (1.0 + params.cluster_rel);
         let m = (count(above) as usize).saturating_sub(found).max(1);
         out.push((lambda, m as u32));

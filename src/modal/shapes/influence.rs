@@ -14,17 +14,16 @@
 //! O(N) per cable and DOF. A hidden cable's nodes are its axial displacements
 //! ([`ModeShape::hidden`]).
 
+use super::bordered::Nodes;
 use super::chain_shape::ChainShape;
 use super::sag_chain_shape::SagChainShape;
-use super::solve::nodes;
-use super::{ModeShape, ModeShapes, ShapeError, ShapeParams};
-use crate::cable::CableModel;
-use crate::modal::sagged::SagModalSolver;
-use crate::modal::ModalSolver;
-use nalgebra::{DVector, Matrix4, Vector3, Vector4, Vector6};
+use super::sagged::SagSystem;
+use super::taut::TautSystem;
+use super::{ModeShape, ModeShapes, ShapeError};
+use nalgebra::{DVector, Matrix4, Vector4, Vector6};
 
 /// The field of DOF `d`: a pseudo-shape at λ = 0 with the end-effector's unit displacement.
-fn field_shape(d: usize, (cables, hidden): (Vec<Vec<Vector3<f64>>>, Vec<Vec<f64>>)) -> ModeShape {
+fn field_shape(d: usize, (cables, hidden): Nodes) -> ModeShape {
     let mut ee = Vector6::zeros();
     ee[d] = 1.0;
     ModeShape {
@@ -40,31 +39,18 @@ fn field_shape(d: usize, (cables, hidden): (Vec<Vec<Vector3<f64>>>, Vec<Vec<f64>
     }
 }
 
-impl ModalSolver {
-    /// The influence field of the loaded pose (module docs): one entry of
-    /// [`ModeShapes::modes`] per end-effector DOF (3, or 6 for a rigid body), its `ee` the
-    /// unit displacement (m, or rad), its `cables` every node's static displacement
-    /// (m per m, or m per rad). `models`, `arms_m` and `params` as [`Self::mode_shapes`].
-    /// Allocates; never on the real-time path.
-    pub fn influence_field(
-        &self,
-        models: &[CableModel],
-        arms_m: &[Vector3<f64>],
-        params: &ShapeParams,
-    ) -> Result<ModeShapes, ShapeError> {
-        let layout = self.layout(models, arms_m, params)?;
-        let dim = self.problem.dim;
+impl TautSystem<'_> {
+    /// The influence field of the loaded pose (module docs), appended to `out` (the
+    /// system's empty shapes): one entry per end-effector DOF (3, or 6 for a rigid body),
+    /// its `ee` the unit displacement (m, or rad), its `cables` every node's static
+    /// displacement (m per m, or m per rad).
+    pub(in crate::modal) fn influence_field(&self, out: &mut ModeShapes) {
+        let dim = self.chains.p.dim;
+        let layout = &self.layout;
         let mut shapes = vec![ChainShape::default(); layout.kinds.len()];
         for (sh, kind) in shapes.iter_mut().zip(&layout.kinds) {
             sh.fill(kind, 0.0);
         }
-        let mut out = ModeShapes {
-            dim,
-            fractions: layout.fractions.clone(),
-            modes: Vec::with_capacity(dim),
-            element_mass_kg: layout.element_mass_kg(),
-            hidden_element_mass_kg: layout.hidden_mass_kg.clone(),
-        };
         for d in 0..dim {
             let mut col = DVector::zeros(dim + layout.copies.len());
             col[d] = 1.0;
@@ -74,39 +60,30 @@ impl ModalSolver {
                 col[dim + q] = if g != 0.0 { cp.b[d] / g } else { 0.0 };
             }
             out.modes
-                .push(field_shape(d, nodes(&layout, &shapes, &col, dim)));
+                .push(field_shape(d, self.col_nodes(&shapes, &col)));
         }
-        Ok(out)
     }
 }
 
-impl SagModalSolver {
-    /// The influence field of the loaded pose on its sagging FEM chains (module docs), as
-    /// [`ModalSolver::influence_field`]; `h`, `up`, `arms_m` and `params` as
-    /// [`Self::mode_shapes`]. A cable whose static end map is singular (no stiffness) is
-    /// [`ShapeError::NotAnEigenvalue`] at λ = 0. Allocates; never on the real-time path.
-    pub fn influence_field(
-        &self,
-        h: &[Vector3<f64>],
-        up: &Vector3<f64>,
-        arms_m: &[Vector3<f64>],
-        params: &ShapeParams,
-    ) -> Result<ModeShapes, ShapeError> {
-        let (attach, mut out, _) = self.frame(h, up, arms_m, params)?;
-        let dim = self.dim();
+impl SagSystem<'_> {
+    /// The influence field of the loaded pose on its sagging FEM chains (module docs),
+    /// appended to `out` as [`TautSystem::influence_field`]. A cable whose static end map
+    /// is singular (no stiffness) is [`ShapeError::NotAnEigenvalue`] at λ = 0.
+    pub(in crate::modal) fn influence_field(&self, out: &mut ModeShapes) -> Result<(), ShapeError> {
+        let dim = self.chains.dim;
         let singular = ShapeError::NotAnEigenvalue {
             lambda: 0.0,
             multiplicity: 1,
             sigma_m: f64::NAN,
             sigma_next: f64::NAN,
         };
-        let statics: Vec<SagChainShape> = (0..attach.len())
-            .map(|i| SagChainShape::fill(self.chain(i), 0.0))
+        let statics: Vec<SagChainShape> = (0..self.attach.len())
+            .map(|i| SagChainShape::fill(&self.chains.chains[i], 0.0))
             .collect();
         for d in 0..dim {
-            let mut cables = Vec::with_capacity(attach.len());
-            let mut hidden = Vec::with_capacity(attach.len());
-            for (sh, at) in statics.iter().zip(&attach) {
+            let mut cables = Vec::with_capacity(self.attach.len());
+            let mut hidden = Vec::with_capacity(self.attach.len());
+            for (sh, at) in statics.iter().zip(&self.attach) {
                 let end = at.frame.transpose() * at.map.column(d);
                 // Amplitudes a: the end node's value (and, on a hidden cable, the
                 // junction's equation) from the solutions at λ = 0.
@@ -128,6 +105,6 @@ impl SagModalSolver {
             }
             out.modes.push(field_shape(d, (cables, hidden)));
         }
-        Ok(out)
+        Ok(())
     }
 }

@@ -42,17 +42,21 @@
 //! coarse to separate it from a neighbour). Before the SVD the matrix is equilibrated
 //! (Ruiz: rows and columns scaled to unit largest entry): the chains' rows range from T/l
 //! to EA/l, and unbalanced, the SVD's backward error ε‖A‖ would swamp the soft rows. A
-//! cluster given that fails the test (modes 1e-10 apart given as one; the catenary model's
-//! identical cables differ by ~ε·EA/T) is resolved by the count from its λ to 1e-8 above,
-//! and each part's shapes are taken. A mode still not separated from a given neighbour (a
-//! near-cluster: the paper robot's end-effector triplet 4e-9 apart 1e-6 m off its symmetric
-//! pose at N = 10⁵, where the chains' rounding keeps each member's σ_m near 1e-12 and the
-//! neighbours' σ_{m+1} near 1e-9) is taken with its nearest given neighbours, across gaps of
-//! at most 1e-6 relative, as one cluster at their multiplicity-weighted mean λ, once the
-//! count certifies that the group's span holds exactly its multiplicity and the merged null
-//! space is separated (its members' frequencies are then given at the mean, within 5e-7
-//! relative; a caller asking a few clusters at a time keeps such runs together,
-//! [`near_runs`]).
+//! cluster that fails the test is repaired the same way for every model (`pipeline`,
+//! `near`): modes given apart within 1e-9 that are one eigenvalue are merged; one given as a
+//! cluster that is several (modes 1e-10 apart given as one; the catenary model's identical
+//! cables differ by ~ε·EA/T) is split by the count from its λ to 1e-8 above, and each
+//! part's shapes are taken. A mode still not separated from a given neighbour is a
+//! near-cluster. Below the null space's resolution (the paper robot's end-effector triplet
+//! 4e-9 apart 1e-6 m off its symmetric pose at N = 10⁵, where the chains' rounding keeps
+//! each member's σ_m near 1e-12 and the neighbours' σ_{m+1} near 1e-9) it is taken with its
+//! nearest given neighbours, across gaps of at most 1e-6 relative, as one cluster at their
+//! multiplicity-weighted mean λ, once the count certifies that the group's span holds
+//! exactly its multiplicity and the merged null space is separated (its members'
+//! frequencies are then given at the mean, within 5e-7 relative; a caller asking a few
+//! clusters at a time keeps such runs together, [`near_runs`]). Farther apart (~5e-6 with
+//! sag, up to 1e-3) it is resolved with its neighbours by a symmetric orthonormalisation of
+//! each member's own null vectors, each member keeping its λ.
 //!
 //! **Normalisation.** The consistent mass of the model is block diagonal in the chain
 //! coordinates (its 3 × 3 blocks are multiples of I and the chain directions are
@@ -78,25 +82,37 @@
 //! part enters m_ii. A sagged chain on a hidden cable (`sagged`) has one more amplitude,
 //! the hidden cable's, and the junction's equation one more row.
 //!
-//! **Layout.** `chain_shape`: one chain's w, f, g and mass moments; `supported_shape`: a
-//! supported chain's. `sagged`: the same
-//! bordered system on sagging cables' FEM chains
-//! ([`SagModalSolver::mode_shapes`](crate::modal::sagged::SagModalSolver::mode_shapes)). `solve`:
-//! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes). `count`:
-//! [`ModalSolver::eigen_clusters`](crate::modal::ModalSolver::eigen_clusters), the lowest
-//! eigenvalues and their multiplicities by count bisection. `influence`: the quasi-static
-//! influence field (the nodes' static displacement per unit end-effector motion) in the
-//! shapes' layout, taut and sagged.
+//! **Layout.** `pipeline`: the one pipeline over a model's bordered system (cluster merge
+//! and split), `bordered`: what it does at one λ (null space, normalisation); `near`: its
+//! near-cluster repairs; `taut`: the
+//! taut chains' system (behind
+//! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes)), `sagged`: the
+//! sagging cables' FEM chains' (behind
+//! [`SagModalSolver::mode_shapes`](crate::modal::SagModalSolver::mode_shapes));
+//! `chain_shape`: one chain's w, f, g and mass moments; `supported_shape`: a supported
+//! chain's; `sag_chain_shape`: a sagged FEM chain's solutions. `count`: the lowest
+//! eigenvalues and their multiplicities by count bisection
+//! ([`Solver::eigen_clusters`](crate::modal::Solver::eigen_clusters)) and the split of a
+//! cluster. `influence`: the quasi-static influence field (the nodes' static displacement
+//! per unit end-effector motion) in the shapes' layout, taut and sagged.
 
+mod bordered;
 mod chain_shape;
 mod count;
 mod influence;
+mod near;
+mod pipeline;
 mod sag_chain_shape;
 mod sagged;
-mod solve;
 mod supported_shape;
+mod taut;
 
-pub use solve::near_runs;
+pub(in crate::modal) use count::clusters_by_count;
+pub(in crate::modal) use pipeline::mode_shapes;
+pub(in crate::modal) use sagged::SagSystem;
+pub(in crate::modal) use taut::TautSystem;
+
+pub use near::near_runs;
 
 use super::ModalError;
 use nalgebra::{Vector3, Vector6};
@@ -209,14 +225,7 @@ impl ModeShapes {
                 let mut s = (a.ee.transpose() * ee_mass * b.ee)[(0, 0)];
                 for (i, (ua, ub)) in a.cables.iter().zip(&b.cables).enumerate() {
                     let m = self.element_mass_kg.get(i).copied().unwrap_or(0.0);
-                    let mut e = 0.0;
-                    for j in 0..ua.len().saturating_sub(1) {
-                        e += 2.0 * ua[j].dot(&ub[j])
-                            + ua[j].dot(&ub[j + 1])
-                            + ua[j + 1].dot(&ub[j])
-                            + 2.0 * ua[j + 1].dot(&ub[j + 1]);
-                    }
-                    s += m / 6.0 * e;
+                    s += bordered::element_mass_form(m, ua, ub);
                 }
                 for (i, (ha, hb)) in a.hidden.iter().zip(&b.hidden).enumerate() {
                     if ha.len() == hb.len() {

@@ -35,7 +35,7 @@ fn element_k(chain: &SagChain, j: usize) -> Matrix3<f64> {
 
 /// One cable's interior solutions at one λ, in the cable's frame (h, up, n).
 #[derive(Debug, Clone, Default)]
-pub(super) struct SagChainShape {
+pub(in crate::modal) struct SagChainShape {
     /// Y_j for j = 0 ..= N, each in its own basis (module docs): the solutions as columns
     /// (the fourth: the hidden cable's, zero without one).
     y: Vec<Matrix3x4<f64>>,

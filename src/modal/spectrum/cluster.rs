@@ -3,7 +3,7 @@
 //! null space in a pole-free interval or from the residue of D⁻¹ at a pole.
 
 use super::Member;
-use crate::modal::dynamic_stiffness::{DynEval, EigD};
+use crate::modal::engine::{DynEval, EigD};
 use nalgebra::{Matrix6, SymmetricEigen, Vector6};
 
 /// M_ee as a 6 × 6 positive definite matrix: the unused rows of a point mass (dim 3) hold

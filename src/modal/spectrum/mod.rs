@@ -52,13 +52,9 @@
 mod cluster;
 mod search;
 
-use super::dynamic_stiffness::LoadedChains;
-use super::dynamic_stiffness::{DynEval, EigD};
-use super::engine::{Condensed, TautView};
-use super::solver::ModalSolver;
+use super::engine::{Condensed, DynEval, EigD};
 use super::ModalError;
-use crate::cable::ChainKind;
-pub(in crate::modal) use search::{pole_free, SpectrumSearch, SweepState};
+pub(in crate::modal) use search::{SpectrumSearch, SweepState};
 
 /// One solved member of a pole-free cluster: its root, the evaluation there, its branch.
 type Member = (f64, DynEval, EigD, usize);
@@ -79,7 +75,8 @@ pub struct Mode {
     pub multiplicity: u32,
 }
 
-/// Bounds and tolerances of [`ModalSolver::modes_with`] (finite everywhere).
+/// Bounds and tolerances of [`Solver::modes_with`](crate::modal::Solver::modes_with)
+/// (finite everywhere).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SpectrumParams {
     /// Largest number of D(λ) evaluations spent on one mode (bracket, pole probes, Newton,
@@ -124,87 +121,4 @@ pub(in crate::modal) fn modes_into<P: Condensed>(
         *slot = s.mode(i)?;
     }
     Ok(n)
-}
-
-/// The solvers' `modes` and `modes_with`, written once: the `impl` block they are
-/// expanded in provides `fn condensed(&mut self) -> Result<impl Condensed + '_,
-/// ModalError>` (the loaded problem as the searches see it).
-macro_rules! spectrum_modes {
-    () => {
-        /// The first `k` natural frequencies of the loaded problem (ascending) into `out`,
-        /// with [`SpectrumParams::default`](crate::modal::SpectrumParams::default). Returns
-        /// how many were written: min(k, out.len(), the number of modes the model has).
-        pub fn modes(
-            &mut self,
-            k: usize,
-            out: &mut [crate::modal::Mode],
-        ) -> Result<usize, crate::modal::ModalError> {
-            self.modes_with(k, &crate::modal::SpectrumParams::default(), out)
-        }
-
-        /// [`Self::modes`] with explicit parameters (`pole_probe` is the relative width at
-        /// which a bisection across a pole stops and reports the mode at the pole).
-        pub fn modes_with(
-            &mut self,
-            k: usize,
-            params: &crate::modal::SpectrumParams,
-            out: &mut [crate::modal::Mode],
-        ) -> Result<usize, crate::modal::ModalError> {
-            crate::modal::spectrum::modes_into(self.condensed()?, k, params, out)
-        }
-    };
-}
-pub(in crate::modal) use spectrum_modes;
-
-impl ModalSolver {
-    /// The loaded taut problem (the spectrum search's view).
-    fn condensed(&mut self) -> Result<TautView<'_>, ModalError> {
-        Ok(TautView {
-            p: &self.problem,
-            s: &mut self.scratch,
-        })
-    }
-
-    spectrum_modes!();
-
-    /// Total number of natural frequencies of the loaded model (`usize::MAX` when it has
-    /// continuous chains).
-    pub fn total_modes(&self) -> usize {
-        self.problem.total_modes()
-    }
-}
-
-impl ModalSolver {
-    /// The loaded end-effector's mass matrix diag(m I, I_world) (kg, kg·m²; the rotational
-    /// block is zero for a point mass) and the rigid body's constant rotational geometric
-    /// stiffness (N·m/rad, zero for a point mass): what a dense assembly of the same pose
-    /// needs besides the cable models.
-    pub fn ee_matrices(&self) -> (nalgebra::Matrix6<f64>, nalgebra::Matrix6<f64>) {
-        (self.problem.m6, self.problem.k6)
-    }
-}
-
-impl LoadedChains {
-    /// Number of natural frequencies of the loaded model: the end-effector's DOF plus every
-    /// blocked eigenvalue (`usize::MAX` with a continuous chain).
-    pub(in crate::modal) fn total_modes(&self) -> usize {
-        let mut n = self.dim;
-        for c in &self.chains[..self.n_chains] {
-            match c.kind {
-                ChainKind::Continuous { m_total, .. } if m_total > 0.0 => return usize::MAX,
-                ChainKind::Discrete { m, n_el, .. } if m > 0.0 => {
-                    n += c.mult as usize * (n_el.max(1) - 1);
-                }
-                ChainKind::Supported { free, hidden } => {
-                    let p = crate::cable::supported_n_poles(&free, &hidden);
-                    if p >= usize::MAX / 4 {
-                        return usize::MAX;
-                    }
-                    n += c.mult as usize * p;
-                }
-                _ => {}
-            }
-        }
-        n
-    }
 }

@@ -8,9 +8,9 @@
 
 use super::cluster::{members_residue, participations, residue_participations};
 use super::{Member, Mode, SpectrumParams};
-use crate::modal::dynamic_stiffness::{quad, DynEval, EigD};
 use crate::modal::engine::{
-    Condensed, BRACKET_GROWTH, BRACKET_MIN, COLLAPSE_ULPS, NOISE_STEP, SUPERLINEAR_RATIO,
+    pole_free, quad, Condensed, DynEval, EigD, BRACKET_GROWTH, BRACKET_MIN, COLLAPSE_ULPS,
+    NOISE_STEP, SUPERLINEAR_RATIO,
 };
 use crate::modal::{lambda_to_hz, ModalError};
 /// Where the count alone shows the poles (sagged chains) and a mode's cluster probes do
@@ -509,22 +509,6 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
             Found::Pole(x) => Err(ModalError::CountMismatch(x)),
         }
     }
-}
-
-/// g = μ(λ)(λ − pa)(pb − λ) and dg/dλ at x, from μ = μ(x) and dμ/dλ: the branch μ with the
-/// poles bounding its interval removed (pa = 0 and pb = ∞ add nothing), which Newton can
-/// follow across the interval without being thrown by a pole.
-pub(in crate::modal) fn pole_free(mu: f64, dmu: f64, x: f64, pa: f64, pb: f64) -> (f64, f64) {
-    let (mut g, mut dg) = (mu, dmu);
-    if pb.is_finite() {
-        let w = pb - x;
-        (g, dg) = (g * w, dg * w - g);
-    }
-    if pa > 0.0 {
-        let w = x - pa;
-        (g, dg) = (g * w, dg * w + g);
-    }
-    (g, dg)
 }
 
 /// The Newton iterate from x on [`pole_free`], NaN when the derivative is not negative.

@@ -33,7 +33,7 @@ use crate::input_file::message_number;
 use crate::kinematics::Pose;
 use crate::modal::{
     frequency_grid, hz_to_lambda, lambda_to_hz, FrfError, ModalBasis, ModalParams, ModalSolver,
-    Mode, MAX_FRF_HZ, MAX_FRF_MODES, MAX_FRF_POINTS,
+    Mode, SagModalSolver, MAX_FRF_HZ, MAX_FRF_MODES, MAX_FRF_POINTS,
 };
 use crate::scene::{
     Damping, ElementKind, Scene, MAX_LOSS_FACTOR, MAX_MODAL_RATIO, MAX_RAYLEIGH_ALPHA_PER_S,
@@ -457,10 +457,11 @@ impl ResponseModel for Taut {
 struct Sagged {
     /// The estimator, updated at the scene's pose.
     est: Estimator,
+    /// Its sagged structured solver at that pose (a copy: the count and the receptance
+    /// move the solver's state, the estimator's stays as its cycle left it).
+    sag: SagModalSolver,
     /// Degrees of freedom of its model.
     total: usize,
-    /// 3 (point mass) or 6 (rigid body).
-    dim: usize,
 }
 
 impl Sagged {
@@ -476,8 +477,8 @@ impl Sagged {
             return Err(StudyError::Solve(format!("sagged pose: {why}")));
         }
         let total = est.model_dof().unwrap_or(0);
-        let dim = est.sag_modal().ok_or_else(no_sagged_pose)?.dim();
-        Ok(Sagged { est, total, dim })
+        let sag = est.sag_modal().ok_or_else(no_sagged_pose)?.clone();
+        Ok(Sagged { est, sag, total })
     }
 }
 
@@ -487,27 +488,19 @@ impl ResponseModel for Sagged {
     }
 
     fn dim(&self) -> usize {
-        self.dim
+        self.sag.dim()
     }
 
-    /// The lowest modes, doubling the count until one lies above the band (the sagged
-    /// solver has no count query here; the top of its spectrum is not needed), never more
-    /// than the model has: asking for more failed where every mode lies below the cut-off.
+    /// The modes below the band's top (the count's, as for taut cables; at most
+    /// [`SAG_MARK_MODES`], never more than the model has).
     fn natural_hz(&mut self, cfg: &FrfConfig) -> Result<Vec<f64>, StudyError> {
-        let total = self.total;
-        let mut k = 16usize;
-        loop {
-            let mut modes = vec![Mode::default(); k.min(total)];
-            let nm = self
-                .est
-                .modes(modes.len(), &mut modes)
-                .map_err(|e| StudyError::Solve(e.to_string()))?;
-            let top = modes[..nm].last().map_or(0.0, |m| lambda_to_hz(m.lambda));
-            if top > cfg.to_hz || k >= SAG_MARK_MODES.min(total) {
-                return Ok(marked(cfg, &modes[..nm]));
-            }
-            k *= 2;
-        }
+        let n_band = self.sag.count_below(hz_to_lambda(cfg.to_hz)) as usize;
+        let mut modes = vec![Mode::default(); n_band.min(SAG_MARK_MODES).min(self.total)];
+        let nm = self
+            .est
+            .modes(modes.len(), &mut modes)
+            .map_err(|e| StudyError::Solve(e.to_string()))?;
+        Ok(marked(cfg, &modes[..nm]))
     }
 
     fn receptance(
@@ -522,7 +515,7 @@ impl ResponseModel for Sagged {
             return sagged_modal(&mut self.est, zeta, cutoff_hz, self.total, freqs);
         }
         check_cost(self.est.scene(), damping, freqs.len(), 0, announce)?;
-        let sag = self.est.sag_modal().ok_or_else(no_sagged_pose)?;
+        let sag = &mut self.sag;
         let chunk = frf_chunk(self.est.scene(), damping);
         let h = in_chunks(cfg.progress, freqs.len(), chunk, |r| {
             sag.receptance_over(damping, &freqs[r])

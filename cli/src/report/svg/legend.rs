@@ -4,8 +4,21 @@
 //! goes outside, right of the plot area, and the document grows by its width: it never
 //! covers a curve.
 
-use super::{rich, Mark};
+use super::rich;
 use std::fmt::Write as _;
+
+/// How a series is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mark {
+    /// A solid polyline.
+    Line,
+    /// A dashed polyline.
+    Dashed,
+    /// Circles at the points.
+    Points,
+    /// A polyline with circles.
+    LinePoints,
+}
 
 /// Clearance between the legend box and any drawn line or point, px (half a stroke plus a
 /// point's radius, rounded up).

@@ -1,22 +1,11 @@
 //! Line and scatter plots with a legend.
 
 use super::axis::{fit_range, tick_labels, ticks, Axis, Mapper};
+pub use super::legend::Mark;
+
 use super::legend::{self, LegendEntry, Segment};
 use super::{escape, header, rich, subtitle_lines, title, PALETTE};
 use std::fmt::Write as _;
-
-/// How a series is drawn.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Mark {
-    /// A solid polyline.
-    Line,
-    /// A dashed polyline.
-    Dashed,
-    /// Circles at the points.
-    Points,
-    /// A polyline with circles.
-    LinePoints,
-}
 
 /// One data series.
 #[derive(Debug, Clone)]
