@@ -54,6 +54,7 @@ mod forward;
 mod inverse;
 mod modes;
 mod params;
+mod path_field;
 mod pose_model;
 mod reference;
 mod sag_check;
@@ -69,6 +70,7 @@ pub use modes::{
     SHAPE_BYTES_PER_NODE,
 };
 pub use params::{EstimatorParams, ParamsError, SagModelParams};
+pub use path_field::{sag_path_field_applies, PATH_FIELD_STEP};
 pub use pose_model::{build_models, PoseModel};
 pub use reference::{
     reference_analysis, reference_analysis_at, structured_analysis, ReferenceAnalysis,
@@ -93,6 +95,8 @@ pub struct Estimator {
     cycle: Forward,
     expected_rank: u32,
     last_ok_position: Option<Vector3<f64>>,
+    /// The pose of the last ok cycle (what the offline queries of its model refer to).
+    loaded_pose: Pose,
     /// λ₁ of the last three warm cycles (rad²/s²; NaN where there is none): the predictor's
     /// history, newest first.
     last_lambda1: f64,
@@ -142,6 +146,7 @@ impl Estimator {
             cycle: Forward::new(scene, &ForwardParams::cycle(&params)),
             expected_rank: 0,
             last_ok_position: None,
+            loaded_pose: Pose::at(scene.ee_position_m),
             last_lambda1: f64::NAN,
             prev_lambda1: f64::NAN,
             prev2_lambda1: f64::NAN,
@@ -252,6 +257,12 @@ impl Estimator {
         self.cycle.rescan_counts()
     }
 
+    /// The pose of the last cycle when it was ok (what [`Self::ee_modal_basis`],
+    /// [`Self::dense_matrices`] and the other queries of its model refer to), else None.
+    pub fn loaded_pose(&self) -> Option<Pose> {
+        (self.estimate.status == Status::Ok).then_some(self.loaded_pose)
+    }
+
     /// With `[effects] sag`: each cable's elastic catenary of the last cycle's tension
     /// solve (unstretched length, H, V, tensions along it, sag, Irvine's λ²); None for the
     /// chord models.
@@ -319,6 +330,7 @@ impl Estimator {
             Ok(()) => {
                 e.status = Status::Ok;
                 self.last_ok_position = Some(pose.position_m);
+                self.loaded_pose = *pose;
                 self.last_t_min_n = self.t_min_n;
             }
             Err(err) => {

@@ -10,20 +10,18 @@ use nalgebra::{DMatrix, Matrix6, Vector6};
 
 impl EeModalBasis {
     /// The basis of the structured engine's mode shapes (taut or sagging FEM cables) and
-    /// the pose's influence field (the same node lists), or with the end-effector's load
-    /// alone when `field` is None (sagging cables: [`modal::quasi_static`]).
+    /// the load of the influence field `field` on them (the end-effector's alone when
+    /// None).
     fn structured(
         dim: usize,
         shapes: modal::ModeShapes,
-        field: Option<&modal::ModeShapes>,
+        field: Option<(QuasiStaticLoad, modal::ModeShapes)>,
         flexibility: Matrix6<f64>,
         ee_mass: Matrix6<f64>,
     ) -> Result<EeModalBasis, BasisError> {
-        let load = match field {
-            Some(field) => QuasiStaticLoad::from_shapes(&shapes, field, &ee_mass).ok_or(
-                BasisError::QuasiStatic("the influence field's nodes are not the shapes'"),
-            )?,
-            None => QuasiStaticLoad::end_effector_only(&shapes, &ee_mass),
+        let (load, field) = match field {
+            Some((load, field)) => (load, Some(field)),
+            None => (QuasiStaticLoad::end_effector_only(&shapes, &ee_mass), None),
         };
         EeModalBasis {
             dim,
@@ -33,6 +31,7 @@ impl EeModalBasis {
             ee_mass,
             structured: true,
             shapes: Some(shapes),
+            field,
             load_ee: Vec::new(),
             load_flexibility: Matrix6::zeros(),
             quasi_static_mass_kg: Matrix6::zeros(),
@@ -136,6 +135,9 @@ impl Estimator {
     }
 }
 
+/// Why a field's products with the shapes failed.
+const NODES_DIFFER: &str = "the influence field's nodes are not the shapes'";
+
 /// Bytes of one node's displacement in a mode shape (a `Vector3<f64>`).
 pub const SHAPE_BYTES_PER_NODE: u64 = 24;
 
@@ -232,18 +234,24 @@ pub struct EeModalBasis {
     /// what carries a time response's state across poses
     /// ([`modal::ModeShapes::mass_overlap`]).
     pub shapes: Option<modal::ModeShapes>,
+    /// The influence field the load was formed with, in the shapes' node lists (one entry
+    /// of its `modes` per end-effector DOF: every node's displacement per unit
+    /// end-effector displacement): the fixed-length static field on taut cables, the path's
+    /// field on sagging ones (`modal::quasi_static`); None where the load is the
+    /// end-effector's alone or the shapes are the dense model's.
+    pub field: Option<modal::ModeShapes>,
     /// Each mode's load shape ψ_k = M_ee⁻¹ L_k (1/√kg; zeros beyond `dim`): under the
     /// end-effector load f = −M_ee a of a path's acceleration a, mode k's force is ψ_kᵀ f =
     /// −L_kᵀ a, the quasi-static inertia of the whole robot, the cables' included
-    /// ([`modal::quasi_static`]); `phi_ee` where the cables carry no mass or sag (the
-    /// end-effector's load alone).
+    /// ([`modal::quasi_static`]); `phi_ee` where the cables carry no mass or take the
+    /// end-effector's load alone (sagging cables over pulleys).
     pub load_ee: Vec<Vector6<f64>>,
-    /// The end-effector's static answer to that load per unit f, F M_qs M_ee⁻¹ (m/N;
-    /// `flexibility` where the cables carry no mass or sag).
+    /// The end-effector's static answer to that load per unit f, F M_s M_ee⁻¹ (m/N;
+    /// `flexibility` where the cables carry no mass or take the end-effector's load alone).
     pub load_flexibility: Matrix6<f64>,
     /// The robot's quasi-static mass M_qs = rᵀ M r (kg, kg·m²): the end-effector's and the
     /// share of the cables' the end-effector's motion carries (`ee_mass` where the cables
-    /// sag).
+    /// take the end-effector's load alone).
     pub quasi_static_mass_kg: Matrix6<f64>,
 }
 
@@ -300,7 +308,10 @@ impl Estimator {
             let field = solver
                 .influence_field(models, &geometry.arm_m, &params)
                 .map_err(BasisError::Shapes)?;
-            return EeModalBasis::structured(dim, shapes, Some(&field), flexibility, ee_mass);
+            let load = QuasiStaticLoad::from_shapes(&shapes, &field, &ee_mass)
+                .ok_or(BasisError::QuasiStatic(NODES_DIFFER))?;
+            let field = Some((load, field));
+            return EeModalBasis::structured(dim, shapes, field, flexibility, ee_mass);
         }
         if let Some((solver, h, up, geometry)) = self.cycle.sag_shapes_input() {
             if !solver.is_continuous() {
@@ -311,9 +322,20 @@ impl Estimator {
                 let shapes = solver
                     .mode_shapes(&h, &up, &geometry.arm_m, &clusters, &params)
                     .map_err(BasisError::Shapes)?;
-                // The end-effector's load alone: the cables' fixed-length field is not
-                // the path's on sagging cables ([`modal::quasi_static`]).
-                return EeModalBasis::structured(dim, shapes, None, flexibility, ee_mass);
+                let fixed = solver
+                    .influence_field(&h, &up, &geometry.arm_m, &params)
+                    .map_err(BasisError::Shapes)?;
+                // The path's field (lengths re-solved along the path), not the fixed-length
+                // one; the end-effector's load alone where it is not covered (pulleys).
+                let field = match self.sag_path_field(&fixed)? {
+                    Some(path) => Some((
+                        QuasiStaticLoad::from_path_field(&shapes, &path, &fixed, &ee_mass)
+                            .ok_or(BasisError::QuasiStatic(NODES_DIFFER))?,
+                        path,
+                    )),
+                    None => None,
+                };
+                return EeModalBasis::structured(dim, shapes, field, flexibility, ee_mass);
             }
         }
         let (kk, mm) = self.dense_matrices()?;
@@ -329,6 +351,7 @@ impl Estimator {
             ee_mass,
             structured: false,
             shapes: None,
+            field: None,
             load_ee: Vec::new(),
             load_flexibility: Matrix6::zeros(),
             quasi_static_mass_kg: Matrix6::zeros(),

@@ -34,18 +34,27 @@
 //! mass L_k = M_ee φ_k, so ψ_k = φ_k and F_ψ = F: today's end-effector load. Only the
 //! dim × dim blocks are used (a point mass: translations).
 //!
-//! **Sagging cables: the end-effector's load alone.** The field r above holds every cable
-//! at its unstretched length, the linear model's own static condensation. Along a path the
+//! **Sagging cables: the path's field.** The field r above holds every cable at its
+//! unstretched length, the linear model's own static condensation. Along a path the
 //! winches change the lengths with the pose, and the nodes (at fixed fractions of the
-//! length) follow the sagged equilibrium of each pose's tension distribution instead. On
-//! taut cables both fields are the linear interpolation along the chord; on a slack
-//! sagging cable they are not: at fixed length a chord change changes the sag by many
-//! times the end-effector's motion (`suspended-8` with sag: M_qs = 545.6 kg against an
-//! end-effector of 50 kg, and a response 11× the end-effector-only one), far more than the
-//! path's catenaries move. The path's field (the derivative of the sagged equilibrium's
-//! node positions with the pose, lengths re-solved) is not computed, so sagging models
-//! take the end-effector's load alone ([`QuasiStaticLoad::end_effector_only`]): the
-//! cables' inertia is applied to taut cables only.
+//! length) follow the sagged equilibrium of each pose's tension distribution instead: the
+//! path's field r_p = ∂x/∂p (`estimator::path_field`). On taut cables both are the linear
+//! interpolation along the chord; on a slack sagging cable they are not: at fixed length a
+//! chord change changes the sag by many times the end-effector's motion (`suspended-8`
+//! with sag: the fixed-length field's M_qs = 545.6 kg against an end-effector of 50 kg,
+//! and a response 11× the end-effector-only one), far more than the path's catenaries
+//! move. With the path's field the load is −M r_p a and
+//!
+//! ```text
+//!     L_k = φ_kᵀ M r_p,   M_qs = r_pᵀ M r_p,   static answer F r_sᵀ(−M r_p a) = −F M_s a,
+//!     M_s = r_sᵀ M r_p,
+//! ```
+//!
+//! r_s the fixed-length field: the end-effector rows of K⁻¹ are F r_sᵀ, whatever the load.
+//! So the load flexibility is F M_s M_ee⁻¹ ([`QuasiStaticLoad::from_path_field`]); on taut
+//! cables r_p = r_s and M_s = M_qs. Sagging robots whose cables run over pulleys are not
+//! covered by the path's field and take the end-effector's load alone
+//! ([`QuasiStaticLoad::end_effector_only`]).
 
 use super::ModeShapes;
 use nalgebra::{DMatrix, Matrix6, Vector6};
@@ -60,6 +69,33 @@ pub struct QuasiStaticLoad {
     /// M_qs = rᵀ M r, kg (kg·m, kg·m² in a rigid body's rotational blocks; zeros beyond
     /// `dim`).
     pub mass_kg: Matrix6<f64>,
+    /// M_s = r_sᵀ M r of the static answer, r_s the fixed-length field (module docs; kg,
+    /// as `mass_kg`): `mass_kg` itself unless the field is a sagging robot's path field.
+    pub static_mass_kg: Matrix6<f64>,
+}
+
+/// The dim × dim products `a`ᵀ M `b` of two fields (the same node lists) by the consistent
+/// mass, as a 6 × 6 (zeros beyond `dim`); `symmetric` averages it with its transpose
+/// against the sums' rounding. None when the node lists differ.
+fn field_product(
+    a: &ModeShapes,
+    b: &ModeShapes,
+    ee_mass: &Matrix6<f64>,
+    symmetric: bool,
+) -> Option<Matrix6<f64>> {
+    let dim = a.modes.len();
+    let p = a.mass_overlap(b, ee_mass)?;
+    let mut out = Matrix6::zeros();
+    for r in 0..dim {
+        for c in 0..dim {
+            out[(r, c)] = if symmetric {
+                0.5 * (p[r * dim + c] + p[c * dim + r])
+            } else {
+                p[r * dim + c]
+            };
+        }
+    }
+    Some(out)
 }
 
 impl QuasiStaticLoad {
@@ -72,12 +108,23 @@ impl QuasiStaticLoad {
         field: &ModeShapes,
         ee_mass: &Matrix6<f64>,
     ) -> Option<QuasiStaticLoad> {
-        let dim = field.modes.len();
-        if dim != shapes.dim {
+        Self::from_path_field(shapes, field, field, ee_mass)
+    }
+
+    /// As [`Self::from_shapes`] with the path's field `path` of a sagging robot and the
+    /// fixed-length field `fixed` (module docs): L_k = φ_kᵀ M r_p, M_qs = r_pᵀ M r_p and
+    /// M_s = r_sᵀ M r_p. None when the node lists differ.
+    pub fn from_path_field(
+        shapes: &ModeShapes,
+        path: &ModeShapes,
+        fixed: &ModeShapes,
+        ee_mass: &Matrix6<f64>,
+    ) -> Option<QuasiStaticLoad> {
+        let dim = path.modes.len();
+        if dim != shapes.dim || fixed.modes.len() != dim {
             return None;
         }
-        let l = shapes.mass_overlap(field, ee_mass)?;
-        let mqs = field.mass_overlap(field, ee_mass)?;
+        let l = shapes.mass_overlap(path, ee_mass)?;
         let participation = (0..shapes.modes.len())
             .map(|k| {
                 let mut v = Vector6::zeros();
@@ -87,23 +134,24 @@ impl QuasiStaticLoad {
                 v
             })
             .collect();
-        let mut mass_kg = Matrix6::zeros();
-        for r in 0..dim {
-            for c in 0..dim {
-                // Symmetric by construction; averaged against the sums' rounding.
-                mass_kg[(r, c)] = 0.5 * (mqs[r * dim + c] + mqs[c * dim + r]);
-            }
-        }
+        let mass_kg = field_product(path, path, ee_mass, true)?;
+        // The same products when the fields are one (taut cables): bit for bit M_qs.
+        let static_mass_kg = if std::ptr::eq(path, fixed) {
+            mass_kg
+        } else {
+            field_product(fixed, path, ee_mass, false)?
+        };
         Some(QuasiStaticLoad {
             dim,
             participation,
             mass_kg,
+            static_mass_kg,
         })
     }
 
     /// The end-effector's load alone, L_k = M_ee φ_k and M_qs = M_ee (on the `dim` block):
     /// the load shapes are then the end-effector parts of the shapes and the load
-    /// flexibility the static one. What sagging cables take (module docs).
+    /// flexibility the static one. What sagging cables over pulleys take (module docs).
     pub fn end_effector_only(shapes: &ModeShapes, ee_mass: &Matrix6<f64>) -> QuasiStaticLoad {
         let dim = shapes.dim;
         let mut mass_kg = Matrix6::zeros();
@@ -115,6 +163,7 @@ impl QuasiStaticLoad {
             dim,
             participation,
             mass_kg,
+            static_mass_kg: mass_kg,
         }
     }
 
@@ -160,6 +209,7 @@ impl QuasiStaticLoad {
             dim,
             participation,
             mass_kg,
+            static_mass_kg: mass_kg,
         })
     }
 
@@ -180,13 +230,14 @@ impl QuasiStaticLoad {
         Some(self.participation.iter().map(|l| inv * l).collect())
     }
 
-    /// The load flexibility F_ψ = F M_qs M_ee⁻¹ of the static flexibility `flexibility`
-    /// (m/N; module docs), or None when the end-effector's mass is singular.
+    /// The load flexibility F_ψ = F M_s M_ee⁻¹ of the static flexibility `flexibility`
+    /// (m/N; module docs: M_s = M_qs but on a sagging robot's path field), or None when the
+    /// end-effector's mass is singular.
     pub fn load_flexibility(
         &self,
         flexibility: &Matrix6<f64>,
         ee_mass: &Matrix6<f64>,
     ) -> Option<Matrix6<f64>> {
-        Some(flexibility * self.mass_kg * self.ee_mass_inverse(ee_mass)?)
+        Some(flexibility * self.static_mass_kg * self.ee_mass_inverse(ee_mass)?)
     }
 }

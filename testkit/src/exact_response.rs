@@ -129,7 +129,21 @@ pub fn exact_whole_robot(
     }
     let ri = kii.lu().solve(&kie).expect("K_ii regular");
     r.view_mut((dim, 0), (n - dim, dim)).copy_from(&(-ri));
-    let mr = m * &r;
+    exact_with_field(k, m, dim, damping, &r, acc, dt)
+}
+
+/// As [`exact_whole_robot`] with the field `r` given (n × 3: every DOF's motion per unit
+/// end-effector translation; a sagging robot's path field, `crate::sag_field`).
+pub fn exact_with_field(
+    k: &DMatrix<f64>,
+    m: &DMatrix<f64>,
+    dim: usize,
+    damping: &Damping,
+    r: &DMatrix<f64>,
+    acc: &[Vector3<f64>],
+    dt: f64,
+) -> (Vec<Vector3<f64>>, ExactModes, DMatrix<f64>) {
+    let mr = m * r;
     let mqs = r.transpose() * &mr;
     let (u, info) = exact_response_by(k, m, dim, damping, acc.len(), dt, |u, s| {
         let l = u.transpose() * &mr;
@@ -223,9 +237,10 @@ pub struct DefaultChoice {
 /// (`study::simulate::pilot::choose` at the default tolerance), the crate's response with
 /// them (the whole robot's inertia, as `simulate`), and its error against
 /// [`exact_whole_robot`] of the dense (K, M) (DOF 0..`dim` the end-effector) under the
-/// path's accelerations `acc` (`loads` = −M_ee a of the same). Sagging models take the
-/// end-effector's load alone (the crate's `modal::quasi_static` docs), so for them the
-/// reference is [`exact_response`] of the same (K, M) under `loads`.
+/// path's accelerations `acc` (`loads` = −M_ee a of the same). Sagging models (a point mass
+/// without pulleys) are loaded along the path's field instead of the fixed-length one (the
+/// crate's `modal::quasi_static` docs): for them the field is [`crate::sag_field`]'s
+/// reference at the estimator's pose and the reference [`exact_with_field`].
 #[allow(clippy::too_many_arguments)]
 pub fn default_choice(
     est: &mut Estimator,
@@ -242,7 +257,12 @@ pub fn default_choice(
     let (got, kept) = crate_response(est, c.modes, damping, loads, dt, true);
     assert_eq!(kept, c.modes, "the choice ends a cluster");
     let (exact, info) = if est.scene().model.sag {
-        exact_response(k, m, dim, damping, loads, dt)
+        let scene = est.scene().clone();
+        let p = est.loaded_pose().expect("an ok cycle").position_m;
+        let n = scene.model.elements_per_cable;
+        let r = crate::sag_field::dense_reference_field(&scene, p, n, k.nrows());
+        let (exact, info, _) = exact_with_field(k, m, dim, damping, &r, acc, dt);
+        (exact, info)
     } else {
         let (exact, info, _) = exact_whole_robot(k, m, dim, damping, acc, dt);
         (exact, info)

@@ -11,11 +11,10 @@
 //! of the structured shapes with the load shapes of `ee_modal_basis` (participation factors
 //! φ_kᵀ M r from the structured shapes and the structured influence field).
 //!
-//! Scenes: the paper robot (fem × 10) at the centre and off-centre, the same robot with
-//! 10× the cable mass per length (a heavy-cable robot), and `suspended-8` with sag (fem ×
-//! 10), whose sagging cables take the end-effector's load alone (there the reference is
-//! the dense whole robot under −M_ee a on the end-effector). The move: an S-curve of (0.1, 0.2, −0.15) m (suspended-8: (0.3, 0, 0) m) in 0.3 s,
-//! then 0.2 s at rest, 1 ms samples, ζ = 2 %.
+//! Scenes: the paper robot (fem × 10) at the centre and off-centre and the same robot with
+//! 10× the cable mass per length (a heavy-cable robot). Sagging robots, loaded along the
+//! path's field instead of the fixed-length one: `sag_path_field.rs`. The move: an S-curve
+//! of (0.1, 0.2, −0.15) m in 0.3 s, then 0.2 s at rest, 1 ms samples, ζ = 2 %.
 
 use cablevib::estimator::{Estimator, Tmin};
 use cablevib::kinematics::Pose;
@@ -25,7 +24,6 @@ use cablevib_testkit::exact_response::{
     crate_response, exact_response, exact_whole_robot, move_accelerations, move_loads,
     relative_error,
 };
-use cablevib_testkit::sag_cases::{sagged_fem, shipped};
 use nalgebra::{DMatrix, Vector3};
 
 use crate::hidden_cable::dense_ref;
@@ -44,17 +42,6 @@ fn paper_at(p: Vector3<f64>, mass_factor: f64) -> (Estimator, DMatrix<f64>, DMat
     let e = *est.update(&Pose::at(p), Tmin::Scene);
     assert!(e.is_ok(), "{p:?}: {:?}", e.error);
     let (k, m) = dense_ref(&s, &p, e.tensions(), 10, false);
-    (est, k, m)
-}
-
-/// suspended-8 with sag (fem × 10) at its scene position, with the crate's dense sagged
-/// (K, M).
-fn suspended() -> (Estimator, DMatrix<f64>, DMatrix<f64>) {
-    let scene = sagged_fem(shipped("suspended_8.toml"), 10);
-    let mut est = Estimator::new(&scene).unwrap();
-    let e = *est.update(&Pose::in_scene(&scene, scene.ee_position_m), Tmin::Scene);
-    assert!(e.is_ok(), "{:?}", e.error);
-    let (k, m) = est.dense_matrices().unwrap();
     (est, k, m)
 }
 
@@ -163,46 +150,4 @@ fn cable_inertia_matches_the_dense_whole_robot_with_heavy_cables() {
         "the cables' load is {:e} of the peak",
         r.model_difference
     );
-}
-
-/// suspended-8 with sag: sagging models take the end-effector's load alone (the module
-/// docs of `modal::quasi_static`: the fixed-length field is not the path's). The crate's
-/// response with its load shapes and default K within the default tolerance of the exact
-/// dense response of the whole robot (cables' mass in M, modes and propagation the test's)
-/// under the end-effector's load −M_ee a alone; the load shapes are the shapes' end-effector
-/// parts and M_qs = M_ee to rounding (1e-12: one product by M_ee and its inverse). Before,
-/// the fixed-length field loaded the modes and this failed by 0.91 of the peak (229 mm
-/// against 20.6 mm). The peak of the whole robot under the fixed-length field is printed
-/// for the record (the dense solve's r = [I; −K_ii⁻¹ K_ie]).
-#[test]
-fn sagging_cables_take_the_end_effector_load_alone_on_suspended_8() {
-    let (mut est, k, m) = suspended();
-    let d = Vector3::new(0.3, 0.0, 0.0);
-    let acc = move_accelerations(d, 0.3, 0.2, DT);
-    let b = est.ee_modal_basis(1).unwrap();
-    let ee_mass = b.ee_mass;
-    let loads = move_loads(&ee_mass, d, 0.3, 0.2, DT);
-    let (ee_only, _) = exact_response(&k, &m, 3, &DAMPING, &loads, DT);
-    let (fixed_length, _, mqs_dense) = exact_whole_robot(&k, &m, 3, &DAMPING, &acc, DT);
-    let c = pilot::choose(&mut est, &DAMPING, &loads, DT, DEFAULT_TOLERANCE, None).unwrap();
-    let b = est.ee_modal_basis(c.modes).unwrap();
-    let mee = ee_mass.fixed_view::<3, 3>(0, 0).norm();
-    let mqs_err = (b.quasi_static_mass_kg - ee_mass).norm() / mee;
-    assert!(mqs_err <= 1e-12, "M_qs {:?}", b.quasi_static_mass_kg);
-    for (j, (psi, phi)) in b.load_ee.iter().zip(&b.phi_ee).enumerate() {
-        assert!(
-            (psi - phi).norm() <= 1e-12 * phi.norm().max(1e-300),
-            "mode {j}: load shape {psi:?} vs {phi:?}"
-        );
-    }
-    let (got, kept) = crate_response(&mut est, c.modes, &DAMPING, &loads, DT, true);
-    let err = relative_error(&got, &ee_only);
-    println!(
-        "suspended-8 sag: M_ee {:.3} kg; default K = {kept}: {err:.2e} of the end-effector-only peak {:.5e} m; the fixed-length field's whole robot (M_qs(x) {:.4} kg) peaks at {:.5e} m",
-        ee_mass[(0, 0)],
-        peak(&ee_only),
-        mqs_dense[(0, 0)],
-        peak(&fixed_length),
-    );
-    assert!(err <= DEFAULT_TOLERANCE, "K = {kept}: {err:e}");
 }

@@ -17,8 +17,8 @@ use cablevib_testkit::exact_response::assert_default_within_tolerance;
 
 /// suspended-8 with sag (FEM chains, N = 10): `simulate`'s default modes meet its default
 /// tolerance at a frozen pose against the exact all-mode integration of the crate's dense
-/// sagged model (`Estimator::dense_matrices`, every mode) under the end-effector's load
-/// alone (what sagging models take), ζ = 2 %, Rayleigh with the high modes overdamped and
+/// sagged model (`Estimator::dense_matrices`, every mode) loaded along the path's field
+/// (testkit's `sag_field` reference), ζ = 2 %, Rayleigh with the high modes overdamped and
 /// ζ = 1.5 (testkit's `exact_response`).
 #[test]
 fn sagged_default_modes_meet_the_tolerance_at_a_frozen_pose() {

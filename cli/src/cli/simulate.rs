@@ -355,9 +355,9 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
             acc.interval_estimate_sum
         )?;
     }
-    if s.model.sag {
-        // The fixed-length field of a sagging cable is not the path's (modal::quasi_static).
-        outln!("note: cable inertia applied to taut cables only (sagging cables: the end-effector's load alone)")?;
+    if s.model.sag && !cablevib::estimator::sag_path_field_applies(&s) {
+        // The path's field of sagging cables covers fixed anchors only (modal::quasi_static).
+        outln!("note: cable inertia not applied to sagging cables over pulleys (the end-effector's load alone)")?;
     }
     write_outputs(a, &s, &runs)?;
     Ok(())

@@ -95,7 +95,7 @@ fn hidden_scene(dir: &str) -> (std::path::PathBuf, String) {
 /// shapes with the junctions and the hidden cables (checked against the dense eigenvectors
 /// with explicit hidden nodes in the core crate's tests/sag/shapes.rs), not a refusal and
 /// not the dense fallback: it answers, says "structured engine" and that the cables'
-/// inertia is applied to taut cables only, and writes its CSV.
+/// inertia is not applied to sagging cables over pulleys, and writes its CSV.
 #[test]
 fn simulate_with_sag_and_hidden_cables_uses_the_structured_shapes() {
     let (file, _) = hidden_scene("hidden-sag-simulate");
@@ -121,9 +121,9 @@ fn simulate_with_sag_and_hidden_cables_uses_the_structured_shapes() {
     assert!(out.status.success(), "simulate failed: {err}");
     let printed = String::from_utf8(out.stdout).unwrap();
     assert!(printed.contains("(structured engine)"), "{printed}");
-    // Sagging cables take the end-effector's load alone, and say so.
+    // Sagging cables over pulleys take the end-effector's load alone, and say so.
     assert!(
-        printed.contains("note: cable inertia applied to taut cables only"),
+        printed.contains("note: cable inertia not applied to sagging cables over pulleys"),
         "{printed}"
     );
     assert!(out_base.with_extension("csv").exists());
