@@ -389,7 +389,12 @@ impl ModalResponse {
         free: &mut [f64],
         forced: &mut [f64],
     ) {
-        for (j, (a, b)) in free.iter_mut().zip(forced.iter_mut()).enumerate().take(self.n) {
+        for (j, (a, b)) in free
+            .iter_mut()
+            .zip(forced.iter_mut())
+            .enumerate()
+            .take(self.n)
+        {
             let m = &self.modes[j];
             let load_rate = m.load.dot(rate);
             let dp = -2.0 * m.zeta * load_rate / (m.lambda * m.omega);

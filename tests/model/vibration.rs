@@ -9,6 +9,7 @@ use cablevib::scene::{Damping, ElementKind, Scene};
 use cablevib::study::simulate::SampledPath;
 use cablevib::trajectory::moves::{Move, Profile};
 use cablevib::trajectory::shaping::{OnlineShaper, ShaperKind};
+use cablevib_testkit::exact_response::assert_update_policy_within_tolerance;
 use nalgebra::{DMatrix, DVector, Vector3, Vector6};
 
 /// Rayleigh mass-proportional damping α = 1.2 /s: ζ ≈ 1 % at the paper robot's ~10 Hz first
@@ -282,48 +283,6 @@ fn paper_circle(duration_s: f64) -> (Scene, SampledPath) {
     (scene, path)
 }
 
-/// The default basis-update policy (`study::simulate::updates`) on `path` against a run
-/// updating the modes at every sample with the same K: the largest difference relative to
-/// that run's peak, asserted within the default tolerance, and the policy's updates fewer
-/// than `at_most` of that run's.
-fn check_update_policy(name: &str, scene: &Scene, path: &SampledPath, at_most: f64) -> f64 {
-    use cablevib::study::simulate::{pilot, simulate, SimulateConfig};
-    let default = SimulateConfig {
-        settle_s: 0.5,
-        ..SimulateConfig::default()
-    };
-    let chosen = simulate(scene, path, &default).unwrap();
-    let every = SimulateConfig {
-        modes: Some(chosen.modes),
-        update_every: Some(1),
-        ..default
-    };
-    let reference = simulate(scene, path, &every).unwrap();
-    assert_eq!(reference.modes, chosen.modes);
-    let peak = reference
-        .deviation_m
-        .iter()
-        .fold(0.0f64, |a, u| a.max(u.norm()));
-    let err = chosen
-        .deviation_m
-        .iter()
-        .zip(&reference.deviation_m)
-        .fold(0.0f64, |a, (x, y)| a.max((x - y).norm()))
-        / peak;
-    println!(
-        "{name}: K = {}, {} updates (every sample: {}), predicted largest interval error {:.2e}, max |default − every sample| / peak {err:.2e}",
-        chosen.modes, chosen.updates, reference.updates, chosen.accuracy.interval_estimate
-    );
-    assert!(
-        (chosen.updates as f64) < at_most * reference.updates as f64,
-        "{name}: the policy saves updates ({} of {})",
-        chosen.updates,
-        reference.updates
-    );
-    assert!(err <= pilot::DEFAULT_TOLERANCE, "{name}: {err:e}");
-    err
-}
-
 /// The default basis-update policy against a run updating the modes at every sample, the
 /// same K: within the default tolerance of that run's peak, on the paper robot's
 /// off-centre S-curve (its frequencies change along it) and the circle's first second
@@ -347,8 +306,8 @@ fn default_update_policy_is_within_the_tolerance_of_updating_every_sample() {
     };
     // measured 203 of 801 and 572 of 1001 (the circle's first second rings from its start
     // at speed: mostly short intervals)
-    check_update_policy("S-curve", &scene, &s_curve, 0.5);
-    check_update_policy("circle 1 s", &scene, &circle, 0.75);
+    assert_update_policy_within_tolerance("S-curve", &scene, &s_curve, 0.5, 0.5);
+    assert_update_policy_within_tolerance("circle 1 s", &scene, &circle, 0.5, 0.75);
 }
 
 mod slow {
@@ -365,6 +324,6 @@ mod slow {
     fn default_update_policy_on_the_whole_circle() {
         let (scene, circle) = paper_circle(10.0);
         // measured 954 of 10 001, 5.0e-4
-        check_update_policy("circle 10 s", &scene, &circle, 0.2);
+        assert_update_policy_within_tolerance("circle 10 s", &scene, &circle, 0.5, 0.2);
     }
 }

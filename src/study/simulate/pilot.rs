@@ -185,7 +185,12 @@ impl Pilot {
             }
         };
         for only_separated in [true, false] {
-            for ((&k, &d), &sep) in self.ends.iter().zip(&self.differences_m).zip(&self.separated) {
+            for ((&k, &d), &sep) in self
+                .ends
+                .iter()
+                .zip(&self.differences_m)
+                .zip(&self.separated)
+            {
                 if (sep || !only_separated) && d + self.tail_m <= tolerance * self.peak_m {
                     return ModeChoice {
                         modes: k,

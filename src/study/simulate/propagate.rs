@@ -270,7 +270,11 @@ pub(super) fn run(
     };
     // The load's rate over the step ending at sample k (the first step's at sample 0), N/s.
     let rate = |k: usize| {
-        let (a, b) = if k == 0 { (0, 1.min(n - 1)) } else { (k - 1, k) };
+        let (a, b) = if k == 0 {
+            (0, 1.min(n - 1))
+        } else {
+            (k - 1, k)
+        };
         (loads.at(b) - loads.at(a)) / path.dt_s
     };
     push(out, 0, &resp.displacement(&f_prev));
@@ -317,7 +321,9 @@ pub(super) fn run(
                     if tried <= UNRESOLVED_RETRIES {
                         continue;
                     }
-                    return Err(first_refusal.unwrap_or_else(|| StudyError::Build("no update pose".into())));
+                    return Err(
+                        first_refusal.unwrap_or_else(|| StudyError::Build("no update pose".into()))
+                    );
                 };
                 let t1 = k1 as f64 * path.dt_s;
                 match shapes_at(est, scene, &path.positions_m[k1], t1, modes)? {

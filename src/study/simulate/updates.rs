@@ -219,7 +219,12 @@ mod tests {
         assert!((e - 0.5 / std::f64::consts::E).abs() < 1e-12, "{e}");
         // Followed through a crossing by the shape: held mode 0 is the next basis's mode 1.
         let mut w1 = [0.0; 2];
-        followed(&[4.0, 9.0], Some(&[0.0, 1.0, 1.0, 0.0]), &[2.5, 2.6], &mut w1);
+        followed(
+            &[4.0, 9.0],
+            Some(&[0.0, 1.0, 1.0, 0.0]),
+            &[2.5, 2.6],
+            &mut w1,
+        );
         assert_eq!(w1, [3.0, 2.0]);
         // A quadratic F(s) = s² I: F'' = 2 I whatever the spacing.
         let f = |s: f64| Matrix6::identity() * s * s;
