@@ -304,7 +304,7 @@ fn default_update_policy_is_within_the_tolerance_of_updating_every_sample() {
         positions_m: mv.sampled(dt, 0.0).unwrap().position_m,
         at_rest_ends: true,
     };
-    // measured 203 of 801 and 572 of 1001 (the circle's first second rings from its start
+    // measured 203 of 801 and 570 of 1001 (the circle's first second rings from its start
     // at speed: mostly short intervals)
     assert_update_policy_within_tolerance("S-curve", &scene, &s_curve, 0.5, 0.5);
     assert_update_policy_within_tolerance("circle 1 s", &scene, &circle, 0.5, 0.75);

@@ -41,8 +41,9 @@ fn sagged_default_modes_meet_the_tolerance_at_a_frozen_pose() {
     );
 }
 
-#[test]
-fn sagged_residual_does_not_depend_on_the_update_rate() {
+/// suspended-8 with sag (FEM chains, N = 10, ζ = 1 %) and its S-curve of 0.3 m along x in
+/// 0.5 s, sampled at 1 ms.
+fn sagged_s_curve() -> (Scene, SampledPath) {
     let mut scene = Scene::load("scenes/suspended_8.toml").unwrap();
     scene.model.sag = true;
     scene.model.element = ElementKind::Fem;
@@ -61,6 +62,12 @@ fn sagged_residual_does_not_depend_on_the_update_rate() {
         positions_m: mv.sampled(dt, 0.0).unwrap().position_m,
         at_rest_ends: true,
     };
+    (scene, path)
+}
+
+#[test]
+fn sagged_residual_does_not_depend_on_the_update_rate() {
+    let (scene, path) = sagged_s_curve();
     let mut pp = Vec::new();
     for every in [10usize, 40] {
         let cfg = SimulateConfig {
@@ -94,24 +101,7 @@ mod slow {
     #[test]
     #[ignore = "slow reference sweep: the sagged S-curve updated at every sample"]
     fn sagged_default_update_policy_within_the_tolerance() {
-        let mut scene = Scene::load("scenes/suspended_8.toml").unwrap();
-        scene.model.sag = true;
-        scene.model.element = ElementKind::Fem;
-        scene.model.elements_per_cable = 10;
-        scene.damping = cablevib::scene::Damping::ModalRatio { zeta: 0.01 };
-        let dt = 1e-3;
-        let mv = Move::new(
-            scene.ee_position_m,
-            nalgebra::Vector3::new(0.3, 0.0, 0.0),
-            0.5,
-            Profile::SCurve,
-        )
-        .unwrap();
-        let path = SampledPath {
-            dt_s: dt,
-            positions_m: mv.sampled(dt, 0.0).unwrap().position_m,
-            at_rest_ends: true,
-        };
+        let (scene, path) = sagged_s_curve();
         assert_update_policy_within_tolerance("suspended-8 sag S-curve", &scene, &path, 2.0, 0.1);
     }
 }
