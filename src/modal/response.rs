@@ -374,6 +374,39 @@ impl ModalResponse {
         }
     }
 
+    /// Each kept mode's end-effector amplitude split into its free vibration and its forced
+    /// part, m (rad for rotations), under the force `f` now ramping at `rate` (N/s, N·m/s):
+    /// the ramp's particular solution has d_p = −2ζ b/(λω) and q̇_p = b/λ, b = ψᵀ rate
+    /// (module docs), the free part is the rest of the mode's departure from the
+    /// quasi-static answer, d − d_p and q̇ − q̇_p. Into `free` and `forced` (their first
+    /// [`Self::modes`] entries): |φ_j| √(x² + (ẋ/ω_j)²) of each. A change of the mode's
+    /// frequency puts the free part out of phase for as long as it rings, the forced part
+    /// only in proportion (its amplitude follows the frequency).
+    pub fn ringing_amplitudes(
+        &self,
+        f: &Vector6<f64>,
+        rate: &Vector6<f64>,
+        free: &mut [f64],
+        forced: &mut [f64],
+    ) {
+        for (j, (a, b)) in free
+            .iter_mut()
+            .zip(forced.iter_mut())
+            .enumerate()
+            .take(self.n)
+        {
+            let m = &self.modes[j];
+            let load_rate = m.load.dot(rate);
+            let dp = -2.0 * m.zeta * load_rate / (m.lambda * m.omega);
+            let vp = load_rate / m.lambda;
+            let d = self.q[j] - m.load.dot(f) / m.lambda - dp;
+            let v = self.v[j] - vp;
+            let norm = m.phi.norm();
+            *a = norm * (d * d + (v / m.omega).powi(2)).sqrt();
+            *b = norm * (dp * dp + (vp / m.omega).powi(2)).sqrt();
+        }
+    }
+
     /// The basis's λ_j, rad²/s² (its first [`Self::modes`] entries are the modes').
     pub fn lambda(&self, j: usize) -> f64 {
         self.modes[j].lambda

@@ -316,3 +316,51 @@ pub fn assert_default_within_tolerance(
         );
     }
 }
+
+/// `simulate`'s default basis-update policy on `path` against a run updating the modes at
+/// every sample with the same K (settling `settle_s` after a path at rest): the largest
+/// difference relative to that run's peak, asserted within the default tolerance, and the
+/// policy's updates asserted fewer than `at_most` of that run's. Prints both.
+pub fn assert_update_policy_within_tolerance(
+    name: &str,
+    scene: &cablevib::scene::Scene,
+    path: &cablevib::study::simulate::SampledPath,
+    settle_s: f64,
+    at_most: f64,
+) -> f64 {
+    use cablevib::study::simulate::{simulate, SimulateConfig};
+    let default = SimulateConfig {
+        settle_s,
+        ..SimulateConfig::default()
+    };
+    let chosen = simulate(scene, path, &default).unwrap();
+    let every = SimulateConfig {
+        modes: Some(chosen.modes),
+        update_every: Some(1),
+        ..default
+    };
+    let reference = simulate(scene, path, &every).unwrap();
+    assert_eq!(reference.modes, chosen.modes);
+    let peak = reference
+        .deviation_m
+        .iter()
+        .fold(0.0f64, |a, u| a.max(u.norm()));
+    let err = chosen
+        .deviation_m
+        .iter()
+        .zip(&reference.deviation_m)
+        .fold(0.0f64, |a, (x, y)| a.max((x - y).norm()))
+        / peak;
+    println!(
+        "{name}: K = {}, {} updates (every sample: {}), predicted largest interval error {:.2e}, max |default − every sample| / peak {err:.2e}",
+        chosen.modes, chosen.updates, reference.updates, chosen.accuracy.interval_estimate
+    );
+    assert!(
+        (chosen.updates as f64) < at_most * reference.updates as f64,
+        "{name}: the policy saves updates ({} of {})",
+        chosen.updates,
+        reference.updates
+    );
+    assert!(err <= pilot::DEFAULT_TOLERANCE, "{name}: {err:e}");
+    err
+}

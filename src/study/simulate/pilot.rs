@@ -26,6 +26,17 @@
 //! triplet) does not fool it, as a K-versus-2K comparison would be fooled: while the
 //! end-effector modes are beyond N their flexibility is in F_r(N), put at the low frequency
 //! of the first cable mode left out, so the pilot grows past them; within N they are exact.
+//!
+//! **Where K may end.** Along a path the basis is replaced and the motion carried by the
+//! mass overlap of the old and new modes ([`super::updates`]); a near-degenerate pair that
+//! a cut separates (mode K in the basis, its partner K+1 not) rotates into each other
+//! along the path, and every update then drops the share of the kept mode's motion that
+//! has turned into the partner (on the paper robot's circle the end-effector pair at
+//! 33.75 Hz, exactly degenerate on the symmetry axes: with K = 38 between the two, 4.5 %
+//! of the kept mode's mass left the basis at each update across an axis, an error that
+//! grows with the update interval). So K ends where the next mode's frequency is at least
+//! [`CUT_SEPARATION`] above the last one kept (a *separated* cluster end), the fewest such
+//! modes meeting the tolerance; only when no separated end does is any cluster end taken.
 
 use crate::estimator::{EeModalBasis, Estimator};
 use crate::modal::response::{ModalResponse, ResponseError, MAX_RESPONSE_MODES};
@@ -42,6 +53,10 @@ pub const MAX_TOLERANCE: f64 = 0.5;
 pub const TAIL_SHARE: f64 = 0.5;
 /// The pilot's first basis, modes.
 pub(crate) const FIRST_PILOT: usize = 24;
+/// The least relative frequency gap ω_{K+1}/ω_K − 1 at a separated cut (module docs): the
+/// paper robot's end-effector pairs split by up to 3.4 % along its circle, exactly
+/// degenerate on its symmetry axes.
+pub const CUT_SEPARATION: f64 = 0.05;
 
 /// The modes kept and what the estimate says of them.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -77,6 +92,15 @@ pub fn cluster_ends(basis: &EeModalBasis) -> Vec<usize> {
         }
     }
     ends
+}
+
+/// Whether a cut after the first `k` modes of `basis` is separated (module docs): the
+/// basis holds mode k+1 and its frequency is at least [`CUT_SEPARATION`] above mode k's
+/// (false past the basis's last mode: its next frequency is not known).
+pub fn separated(basis: &EeModalBasis, k: usize) -> bool {
+    k > 0
+        && k < basis.lambda.len()
+        && (basis.lambda[k] / basis.lambda[k - 1]).sqrt() - 1.0 >= CUT_SEPARATION
 }
 
 /// e_tail(K) of the module docs, m: the largest |translation| of F_r(K)(x − f) along the
@@ -138,6 +162,8 @@ pub struct Pilot {
     pub ends: Vec<usize>,
     /// max_t |Σ_{K<j≤N} φ_j d_j(t)| for each of `ends`, m.
     pub differences_m: Vec<f64>,
+    /// Whether each of `ends` is separated ([`separated`]).
+    pub separated: Vec<bool>,
 }
 
 impl Pilot {
@@ -147,8 +173,9 @@ impl Pilot {
         Some(self.differences_m[i] + self.tail_m)
     }
 
-    /// The fewest modes whose e(K) is within `tolerance` of the peak, and that estimate
-    /// relative to the peak; N when none (`met` false).
+    /// The fewest modes at a separated cluster end (module docs) whose e(K) is within
+    /// `tolerance` of the peak, else at any cluster end, and that estimate relative to the
+    /// peak; N when none (`met` false).
     fn choice(&self, tolerance: f64) -> ModeChoice {
         let rel = |e: f64| {
             if self.peak_m > 0.0 {
@@ -157,15 +184,22 @@ impl Pilot {
                 0.0
             }
         };
-        for (&k, &d) in self.ends.iter().zip(&self.differences_m) {
-            if d + self.tail_m <= tolerance * self.peak_m {
-                return ModeChoice {
-                    modes: k,
-                    estimate: rel(d + self.tail_m),
-                    peak_m: self.peak_m,
-                    met: true,
-                    pilot_modes: self.basis_modes,
-                };
+        for only_separated in [true, false] {
+            for ((&k, &d), &sep) in self
+                .ends
+                .iter()
+                .zip(&self.differences_m)
+                .zip(&self.separated)
+            {
+                if (sep || !only_separated) && d + self.tail_m <= tolerance * self.peak_m {
+                    return ModeChoice {
+                        modes: k,
+                        estimate: rel(d + self.tail_m),
+                        peak_m: self.peak_m,
+                        met: true,
+                        pilot_modes: self.basis_modes,
+                    };
+                }
             }
         }
         ModeChoice {
@@ -237,6 +271,7 @@ pub fn pilot(
     } else {
         truncation_estimate(basis, reference, damping, loads, dt_s)?
     };
+    let separated = ends.iter().map(|&k| separated(basis, k)).collect();
     Ok(Pilot {
         basis_modes: len,
         reference,
@@ -244,6 +279,7 @@ pub fn pilot(
         peak_m,
         ends,
         differences_m,
+        separated,
     })
 }
 

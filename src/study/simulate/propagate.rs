@@ -29,33 +29,53 @@ fn basis_at(
     t: f64,
     modes: usize,
 ) -> Result<EeModalBasis, StudyError> {
+    shapes_at(est, scene, p, t, modes)?.map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
+}
+
+/// [`basis_at`] with the shapes' own refusal kept apart (the inner error): a near-cluster
+/// the shape engine cannot resolve at this pose (not the memory budget, not the pose).
+fn shapes_at(
+    est: &mut Estimator,
+    scene: &Scene,
+    p: &Vector3<f64>,
+    t: f64,
+    modes: usize,
+) -> Result<Result<EeModalBasis, crate::estimator::BasisError>, StudyError> {
     solve_pose(est, scene, p, t)?;
-    est.ee_modal_basis(modes)
-        .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
+    match est.ee_modal_basis(modes) {
+        Err(crate::estimator::BasisError::Memory(over)) => Err(over.into()),
+        other => Ok(other),
+    }
+}
+
+/// Poses tried before an update pose whose shapes the engine cannot resolve is refused:
+/// the update moves back one sample at a time (within its interval).
+const UNRESOLVED_RETRIES: usize = 4;
+
+/// The mass overlap of `basis`'s whole shapes (rows) with `previous`'s (columns), when both
+/// have them ([`crate::modal::ModeShapes::mass_overlap`]).
+fn overlap_of(basis: &EeModalBasis, previous: &EeModalBasis) -> Option<Vec<f64>> {
+    match (&basis.shapes, &previous.shapes) {
+        (Some(new), Some(old)) => new.mass_overlap(old, &basis.ee_mass),
+        _ => None,
+    }
 }
 
 /// Install `basis` in `resp`, carrying the state across: the whole state by the mass
-/// overlap of the whole shapes when both bases have them, else the end-effector's; the
-/// modes loaded by the whole robot's quasi-static inertia (the basis's load shapes).
+/// overlap with the previous basis's whole shapes (`overlap`) when both have them, else the
+/// end-effector's; the modes loaded by the whole robot's quasi-static inertia (the basis's
+/// load shapes).
 fn install(
     resp: &mut ModalResponse,
     basis: &EeModalBasis,
-    previous: Option<&EeModalBasis>,
+    overlap: Option<&[f64]>,
     damping: &Damping,
     t: f64,
 ) -> Result<(), StudyError> {
-    let overlap = match (&basis.shapes, previous.and_then(|b| b.shapes.as_ref())) {
-        (Some(new), Some(old)) => new.mass_overlap(old, &basis.ee_mass),
-        _ => None,
-    };
     match overlap {
-        Some(o) => resp.set_basis_projected(
-            &basis.lambda,
-            &basis.phi_ee,
-            damping,
-            &basis.flexibility,
-            &o,
-        ),
+        Some(o) => {
+            resp.set_basis_projected(&basis.lambda, &basis.phi_ee, damping, &basis.flexibility, o)
+        }
         None => resp.set_basis(
             &basis.lambda,
             &basis.phi_ee,
@@ -237,14 +257,25 @@ pub(super) fn run(
     // The previous update's flexibility and how many samples before the held pose.
     let mut previous: Option<(Matrix6<f64>, usize)> = None;
     let mut k0 = 0usize;
-    let mut amplitude = vec![0.0; MAX_RESPONSE_MODES];
-    let mut phi2 = vec![0.0; MAX_RESPONSE_MODES];
-    let mut lambda0 = vec![0.0; MAX_RESPONSE_MODES];
+    let mut held_modes = vec![updates::HeldMode::default(); MAX_RESPONSE_MODES];
+    let mut free = vec![0.0; MAX_RESPONSE_MODES];
+    let mut forced = vec![0.0; MAX_RESPONSE_MODES];
+    let mut omega0 = vec![0.0; MAX_RESPONSE_MODES];
+    let mut omega1 = vec![0.0; MAX_RESPONSE_MODES];
     let mut f_prev = loads.at(0);
     let push = |out: &mut SimulateResult, k: usize, u: &Vector6<f64>| {
         out.t_s.push(k as f64 * path.dt_s);
         out.command_m.push(path.positions_m[k]);
         out.deviation_m.push(u.fixed_rows::<3>(0).into_owned());
+    };
+    // The load's rate over the step ending at sample k (the first step's at sample 0), N/s.
+    let rate = |k: usize| {
+        let (a, b) = if k == 0 {
+            (0, 1.min(n - 1))
+        } else {
+            (k - 1, k)
+        };
+        (loads.at(b) - loads.at(a)) / path.dt_s
     };
     push(out, 0, &resp.displacement(&f_prev));
     on_sample(0, &resp, &f_prev);
@@ -252,25 +283,76 @@ pub(super) fn run(
         // The next update's pose and basis; the interval shortened until its predicted
         // error is within the budget (when the interval is chosen).
         let nm = resp.modes();
-        resp.dynamic_amplitudes(&f_prev, &mut amplitude[..nm]);
-        for (j, (p, l)) in phi2.iter_mut().zip(lambda0.iter_mut()).enumerate().take(nm) {
-            // |φ_j| |ψ_j|: the end-effector's share of what the load ψ_jᵀf can add.
-            *p = resp.phi(j).norm() * resp.load_shape(j).norm();
-            *l = resp.lambda(j);
+        let rate0 = rate(k0);
+        resp.ringing_amplitudes(&f_prev, &rate0, &mut free[..nm], &mut forced[..nm]);
+        let rest_s = ((n - 1 - k0) as f64 * path.dt_s).min(updates::MAX_MEMORY_S);
+        for (j, m) in held_modes.iter_mut().enumerate().take(nm) {
+            let omega = resp.lambda(j).sqrt();
+            let zeta = damping.modal_ratio(omega);
+            *m = updates::HeldMode {
+                free_m: free[j],
+                forced_m: forced[j],
+                // |φ_j| |ψ_j|/ω³: what a change of the load's rate starts ringing.
+                start_m_s_per_n: resp.phi(j).norm() * resp.load_shape(j).norm() / omega.powi(3),
+                omega_rad_s: omega,
+                memory_s: if zeta > 0.0 {
+                    (1.0 / (zeta * omega)).min(rest_s)
+                } else {
+                    rest_s
+                },
+            };
+            omega0[j] = omega;
         }
-        let (k1, next, error) = loop {
-            let k1 = (k0 + interval).min(n - 1);
-            let t1 = k1 as f64 * path.dt_s;
-            let next = basis_at(est, scene, &path.positions_m[k1], t1, modes)?;
-            let u = k1 - k0;
-            let impulse: f64 = (k0 + 1..=k1).map(|k| loads.at(k).norm() * path.dt_s).sum();
-            let dynamic_m = updates::dynamic_error(
-                &amplitude[..nm],
-                &phi2[..nm],
-                &lambda0[..nm],
+        let (k1, next, overlap, error) = loop {
+            let planned = (k0 + interval).min(n - 1);
+            // A pose whose shapes the engine cannot resolve (a near-cluster on a sagging
+            // cable) is stepped over: the update moves a sample back or on, a few times at
+            // most ([`UNRESOLVED_RETRIES`]), the first refusal kept when none resolves.
+            let mut tried = 0usize;
+            let mut first_refusal = None;
+            let (k1, next) = loop {
+                let k1 = match tried {
+                    0 => Some(planned),
+                    i if i % 2 == 1 => planned.checked_sub(i.div_ceil(2)).filter(|&k| k > k0),
+                    i => Some(planned + i / 2).filter(|&k| k < n),
+                };
+                tried += 1;
+                let Some(k1) = k1 else {
+                    if tried <= UNRESOLVED_RETRIES {
+                        continue;
+                    }
+                    return Err(
+                        first_refusal.unwrap_or_else(|| StudyError::Build("no update pose".into()))
+                    );
+                };
+                let t1 = k1 as f64 * path.dt_s;
+                match shapes_at(est, scene, &path.positions_m[k1], t1, modes)? {
+                    Ok(b) => break (k1, b),
+                    Err(e) => {
+                        let refusal = StudyError::Build(format!("t = {t1:.4} s: {e}"));
+                        let unresolved = matches!(e, crate::estimator::BasisError::Shapes(_));
+                        if !unresolved || tried > UNRESOLVED_RETRIES {
+                            return Err(first_refusal.unwrap_or(refusal));
+                        }
+                        first_refusal.get_or_insert(refusal);
+                    }
+                }
+            };
+            let overlap = overlap_of(&next, &held);
+            updates::followed(
                 &next.lambda,
-                impulse,
+                overlap.as_deref(),
+                &omega0[..nm],
+                &mut omega1[..nm],
+            );
+            let u = k1 - k0;
+            let rate_change = (k0 + 1..=k1).fold(0.0f64, |m, k| m.max((rate(k) - rate0).norm()));
+            let dynamic_m = updates::dynamic_error(
+                &held_modes[..nm],
+                &omega1[..nm],
+                rate_change,
                 u as f64 * path.dt_s,
+                path.dt_s,
             );
             let d2 = match previous {
                 Some((fp, back)) => updates::second_difference(
@@ -291,10 +373,11 @@ pub(super) fn run(
                 interval = updates::shortened(u, error.total_m(), budget);
                 continue;
             }
-            break (k1, next, error);
+            break (k1, next, overlap, error);
         };
         f1_seen(est, out);
         let u = k1 - k0;
+
         for k in k0 + 1..=k1 {
             let f = loads.at(k);
             resp.step(&f_prev, &f, path.dt_s);
@@ -307,7 +390,7 @@ pub(super) fn run(
         install(
             &mut resp,
             &next,
-            Some(&held),
+            overlap.as_deref(),
             &damping,
             k1 as f64 * path.dt_s,
         )?;
