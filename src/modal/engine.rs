@@ -247,6 +247,28 @@ pub trait Condensed: sealed::Sealed {
         (0.0, f64::NAN, false, u32::MAX)
     }
 
+    /// The end-effector tracker runs with `Some(left)` evaluations left in the cycle's
+    /// budget (`u32::MAX`: unlimited), or has stopped (None): a problem whose poles are
+    /// found by search (the sagged chains, by each chain's own count) shows them to the
+    /// searches only meanwhile (where they pay: the tracker's pole intervals), its pole
+    /// searches counted in [`Self::evaluations`] and stopped where the budget ends (a pole
+    /// not found then is NaN, and so is any pole interval it bounds: the searches that
+    /// need it fail as cut by the budget, and it is searched again in the next cycle from
+    /// where the last load's search left it); the other searches see the count alone.
+    /// Nothing for a problem whose poles are in closed form.
+    fn follow_poles(&mut self, left: Option<u32>) {
+        let _ = left;
+    }
+    /// The end-effector tracker's scans walk the pole intervals (two evaluations an
+    /// interval: the poles in closed form) rather than sweep the spectrum by the count.
+    /// Where each pole is found by a search (the sagged chains), the poles pay for the
+    /// local searches of a warm cycle (following, neighbours, partners: a few poles around
+    /// the watched modes, followed from the last load) but not for a scan over every pole
+    /// interval below the answer: false there, the scans sweep.
+    fn scan_by_intervals(&self) -> bool {
+        self.poles_known()
+    }
+
     /// The end-effector participation of the mode with unit null vector v at a root where
     /// D' = `dd`: the end-effector's share vᵀ M_ee v / vᵀ(−D')v of the mode's kinetic-energy
     /// norm (0 when that norm is not positive).
@@ -344,6 +366,12 @@ impl<C: Condensed> Condensed for &mut C {
     #[inline]
     fn is_loaded(&self) -> bool {
         (**self).is_loaded()
+    }
+    fn follow_poles(&mut self, left: Option<u32>) {
+        (**self).follow_poles(left)
+    }
+    fn scan_by_intervals(&self) -> bool {
+        (**self).scan_by_intervals()
     }
     #[inline]
     fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {

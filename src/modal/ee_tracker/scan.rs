@@ -187,10 +187,14 @@ impl EeTracker {
         // Where the poles are known the scan walks the pole intervals (two evaluations and
         // one Newton search per root); where the count alone shows them, it sweeps the
         // spectrum mode by mode.
-        let done = if f.view.poles_known() {
+        let done = if f.view.scan_by_intervals() {
             self.scan_intervals(f, &mut st, begin)
         } else {
-            self.scan_modes(f, &mut st, begin)
+            // The sweep sees the count alone (its brackets by the count, as its docs say).
+            f.view.follow_poles(None);
+            let d = self.scan_modes(f, &mut st, begin);
+            f.view.follow_poles(Some(f.left()));
+            d
         };
         st.spent = st.spent.saturating_add(f.evaluations() - begin);
         match done {

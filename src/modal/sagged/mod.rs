@@ -41,6 +41,7 @@
 mod condensed;
 mod dense;
 mod load;
+mod poles;
 mod problem;
 
 pub use dense::{assemble_sagged, sagged_assembled_dof, SagDenseCable};

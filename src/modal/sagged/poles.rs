@@ -1,0 +1,533 @@
+//! The sagged chains' poles (their blocked eigenvalues), each found by its own chain's
+//! count and followed from one load to the next ([`SagPoles`]).
+//!
+//! **What a pole is.** Pole j of chain i is the j-th eigenvalue of chain i with its end
+//! held: the λ where chain i's blocked count (`SagChainEval::below`, Wittrick–Williams on
+//! the chain alone) steps from j − 1 to j, and where its end stiffness S_i(λ) blows up.
+//! The poles of D(λ) are the union over the chains.
+//!
+//! **The search** ([`pole_search`]). G(λ) = blockdiag(S_in, s_out)⁻¹ (the chain's end
+//! flexibility in (h, up, n)) is smooth through a pole, G' = −G S' G is positive
+//! semidefinite (S' is minus a mass), so each eigenvalue g_k of G increases with λ and
+//! vanishes exactly where S_i blows up: every zero of a g_k is a pole of chain i, crossed
+//! from below. Newton on the g_k nearest its zero on the side of the target (from x with
+//! count c ≥ j: a g_k > 0, downwards to pole c; from c < j: a g_k < 0, upwards to pole
+//! c + 1) converges to the pole quadratically (g is nearly linear there: S ≈ r/(p − λ));
+//! every iterate's count keeps a bracket lo < p ≤ hi, and a step leaving it bisects. The
+//! answer is accepted when a Newton step is below [`POLE_STEP`] at an iterate whose count
+//! is j (going down) or j − 1 (going up): then no pole of the chain lies between it and
+//! the answer. A pole with no residue at the end (S_i stays finite) is found by the
+//! bisection alone, to [`COLLAPSE_ULPS`] ulps.
+//!
+//! **Following.** Each computed pole is memoized for the load and kept as the next load's
+//! start (a pose moves a millimetre a cycle: two or three chain evaluations from there).
+//! The memo is atomic (relaxed) so that the loaded problem stays read-only and shareable.
+//! Every chain evaluation is counted; [`SagPoles::evaluations`] converts them into
+//! evaluations of D (one per `n` chains) so that the cycle's budget covers them.
+
+use super::problem::SagChains;
+use crate::cable::sagged::SagChainEval;
+use crate::modal::engine::{quad, PoleCursor};
+use crate::scene::MAX_CABLES;
+use nalgebra::{Matrix2, Matrix6, SymmetricEigen, Vector6};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// A pole search's Newton step below this (relative) ends it: the iterate is then within
+/// ~step² of the pole (quadratic convergence on a nearly linear g).
+const POLE_STEP: f64 = 1e-12;
+/// ... or its count bracket narrower than this (relative). Why: next to a pole S is
+/// capped by the recurrence's pivot nudge (ε·the largest element stiffness) and its
+/// rounding, so g bottoms out at ~1e-17..1e-13 of its scale and Newton's last steps
+/// bounce at ~1e-12..3e-11 of λ (measured on the paper robot with sag); the searches
+/// that use the poles evaluate 1e-9 (relative) inside a pole interval, so a pole known to
+/// 1e-10 is on the right side of every such point.
+const POLE_BRACKET: f64 = 1e-10;
+/// Chain evaluations one pole search takes at most (Newton, else bisection: ~60 halvings
+/// reach [`COLLAPSE_ULPS`] from a finite bracket, ~40 doublings more from none).
+const POLE_MAX_EVALUATIONS: u32 = 160;
+/// A walk step past a pole that is not the target goes this much (relative) beyond the
+/// Newton estimate of that pole, so that the next iterate is across it.
+const WALK_PUSH: f64 = 1e-3;
+/// Without a start, a search above a known pole begins this far (relative) above it.
+const START_ABOVE: f64 = 1e-9;
+/// A search with no upper bracket and no start begins at this λ, rad²/s² (then doubles).
+const POLE_START: f64 = 1.0;
+
+/// Poles of different chains within this (relative) are one pole of D (as for taut).
+const POLE_MERGE: f64 = 1e-12;
+
+/// The bits of a memo entry not computed yet.
+const MEMO_EMPTY: u64 = 0x7ff8_0000_0000_0000; // f64::NAN
+
+/// The loaded chains' poles, memoized per load and followed between loads.
+#[derive(Debug)]
+pub(in crate::modal) struct SagPoles {
+    /// Poles 1 ..= `per_chain` of each chain (f64 bits; NaN: not computed for this load).
+    memo: Vec<AtomicU64>,
+    /// The same poles at the last load where they were computed (the searches' start).
+    hint: Vec<f64>,
+    per_chain: usize,
+    /// Chain evaluations spent on pole searches.
+    chain_evaluations: AtomicU64,
+}
+
+impl Clone for SagPoles {
+    fn clone(&self) -> SagPoles {
+        SagPoles {
+            memo: self
+                .memo
+                .iter()
+                .map(|e| AtomicU64::new(e.load(Ordering::Relaxed)))
+                .collect(),
+            hint: self.hint.clone(),
+            per_chain: self.per_chain,
+            chain_evaluations: AtomicU64::new(self.chain_evaluations.load(Ordering::Relaxed)),
+        }
+    }
+}
+
+impl SagPoles {
+    /// Room for `per_chain` poles of each of `n_chains` chains (the only allocation).
+    pub(in crate::modal) fn new(n_chains: usize, per_chain: usize) -> SagPoles {
+        SagPoles {
+            memo: (0..n_chains * per_chain)
+                .map(|_| AtomicU64::new(MEMO_EMPTY))
+                .collect(),
+            hint: vec![f64::NAN; n_chains * per_chain],
+            per_chain,
+            chain_evaluations: AtomicU64::new(0),
+        }
+    }
+
+    /// A new load: every computed pole becomes the next search's start.
+    pub(in crate::modal) fn clear(&mut self) {
+        for (e, h) in self.memo.iter_mut().zip(&mut self.hint) {
+            let bits = *e.get_mut();
+            if bits != MEMO_EMPTY {
+                *h = f64::from_bits(bits);
+            }
+            *e.get_mut() = MEMO_EMPTY;
+        }
+    }
+
+    /// Pole j of chain i (which has `n_poles`) as this load's search found it, else as the
+    /// last load's did (NaN: never searched); 0 for j = 0, ∞ past the chain's poles.
+    pub(in crate::modal) fn estimate(&self, i: usize, j: usize, n_poles: usize) -> f64 {
+        if j == 0 {
+            return 0.0;
+        }
+        if j > n_poles {
+            return f64::INFINITY;
+        }
+        if j > self.per_chain {
+            return f64::NAN;
+        }
+        let s = i * self.per_chain + j - 1;
+        let v = f64::from_bits(self.memo[s].load(Ordering::Relaxed));
+        if v.is_nan() {
+            self.hint[s]
+        } else {
+            v
+        }
+    }
+
+    /// Count `n` chain evaluations spent outside a search (a pole interval's counts).
+    pub(in crate::modal) fn spend(&self, n: u64) {
+        self.chain_evaluations.fetch_add(n, Ordering::Relaxed);
+    }
+
+    /// Chain evaluations spent on pole searches so far.
+    pub(in crate::modal) fn chain_evaluations(&self) -> u64 {
+        self.chain_evaluations.load(Ordering::Relaxed)
+    }
+
+    /// Pole j (1-based; 0 gives 0) of chain i, which has `n_poles` poles (∞ past them),
+    /// from its memo or by [`pole_search`] over `eval` (chain i's evaluation), bracketed by
+    /// the chain's memoized neighbours, from the last load's value or else from `near`.
+    pub(in crate::modal) fn get(
+        &self,
+        i: usize,
+        j: usize,
+        n_poles: usize,
+        near: f64,
+        allowance: u32,
+        eval: impl Fn(f64) -> SagChainEval,
+    ) -> f64 {
+        if j == 0 {
+            return 0.0;
+        }
+        if j > n_poles {
+            return f64::INFINITY;
+        }
+        let slot = (j <= self.per_chain).then(|| i * self.per_chain + j - 1);
+        let memo = |k: usize| -> f64 {
+            if k == 0 {
+                return 0.0;
+            }
+            if k > n_poles {
+                return f64::INFINITY;
+            }
+            if k > self.per_chain {
+                return f64::NAN;
+            }
+            f64::from_bits(self.memo[i * self.per_chain + k - 1].load(Ordering::Relaxed))
+        };
+        if let Some(s) = slot {
+            let v = f64::from_bits(self.memo[s].load(Ordering::Relaxed));
+            if !v.is_nan() {
+                return v;
+            }
+        }
+        // Bracket from the nearest memoized neighbours (a few on each side).
+        let mut lo = 0.0;
+        for k in (j.saturating_sub(4)..j).rev() {
+            let v = memo(k);
+            if !v.is_nan() {
+                lo = v;
+                break;
+            }
+        }
+        let mut hi = f64::INFINITY;
+        for k in j + 1..=j + 4 {
+            let v = memo(k);
+            if !v.is_nan() {
+                hi = v;
+                break;
+            }
+        }
+        let hint = slot.map_or(f64::NAN, |s| self.hint[s]);
+        let hint = if hint > lo && hint < hi { hint } else { near };
+        let (p, spent) = pole_search(&eval, j as u32, lo, hi, hint, allowance);
+        self.chain_evaluations
+            .fetch_add(u64::from(spent), Ordering::Relaxed);
+        if let (Some(s), false) = (slot, p.is_nan()) {
+            self.memo[s].store(p.to_bits(), Ordering::Relaxed);
+        }
+        p
+    }
+}
+
+/// The Newton candidates of one chain evaluation: each eigenvalue g_k of the end
+/// flexibility G = blockdiag(S_in, s_out)⁻¹ with g_k' = −(u_kᵀ S' u_k) g_k² (u_k its unit
+/// eigenvector in S's basis); None where S has a zero eigenvalue (G is infinite there).
+fn flexibility_branches(e: &SagChainEval) -> [Option<(f64, f64)>; 3] {
+    let s = Matrix2::new(e.s_in[0], e.s_in[1], e.s_in[1], e.s_in[2]);
+    let ds = Matrix2::new(e.ds_in[0], e.ds_in[1], e.ds_in[1], e.ds_in[2]);
+    let eg = SymmetricEigen::new(s);
+    let mut out = [None; 3];
+    for k in 0..2 {
+        let sigma = eg.eigenvalues[k];
+        let u = eg.eigenvectors.column(k);
+        if sigma != 0.0 && sigma.is_finite() {
+            let g = 1.0 / sigma;
+            out[k] = Some((g, -(u.transpose() * ds * u)[(0, 0)] * g * g));
+        }
+    }
+    if e.s_out != 0.0 && e.s_out.is_finite() {
+        let g = 1.0 / e.s_out;
+        out[2] = Some((g, -e.ds_out * g * g));
+    }
+    out
+}
+
+/// Pole j (1-based) of the chain evaluated by `eval`, searched in (lo, hi] (lo below it,
+/// hi at or above it; ∞ when unknown) from `start` (NaN: none), as the module docs say,
+/// with at most `allowance` chain evaluations. Returns the pole, rad²/s² (NaN: the
+/// allowance ran out first), and the chain evaluations spent.
+pub(super) fn pole_search(
+    eval: &impl Fn(f64) -> SagChainEval,
+    j: u32,
+    mut lo: f64,
+    mut hi: f64,
+    start: f64,
+    allowance: u32,
+) -> (f64, u32) {
+    let mid = |lo: f64, hi: f64| {
+        if hi.is_finite() {
+            0.5 * (lo + hi)
+        } else {
+            (2.0 * lo).max(POLE_START)
+        }
+    };
+    let mut x = if start > lo && start < hi {
+        start
+    } else if lo > 0.0 && !hi.is_finite() {
+        // Just above the pole below (the scan's order): Newton goes up to the next one.
+        lo * (1.0 + START_ABOVE)
+    } else {
+        mid(lo, hi)
+    };
+    for it in 1..=POLE_MAX_EVALUATIONS {
+        if it > allowance {
+            return (f64::NAN, it - 1);
+        }
+        let e = eval(x);
+        let down = e.below >= j;
+        if down {
+            hi = x;
+        } else {
+            lo = x;
+        }
+        if hi.is_finite() && hi - lo <= POLE_BRACKET * hi {
+            return (hi, it);
+        }
+        // Newton on the branch nearest its zero on the target's side: next to the target
+        // (no pole of the chain between x and it) to the target itself; farther away, a
+        // little past the nearest pole that way (a walk from pole to pole).
+        let adjacent = if down { e.below == j } else { e.below + 1 == j };
+        let mut step = f64::NAN;
+        for (g, dg) in flexibility_branches(&e).into_iter().flatten() {
+            if !(dg > 0.0) || (g > 0.0) != down {
+                continue;
+            }
+            let s = -g / dg;
+            if !(step.abs() <= s.abs()) {
+                step = s;
+            }
+        }
+        if !adjacent {
+            step *= 1.0 + WALK_PUSH;
+        }
+        let xn = x + step;
+        if adjacent && step.is_finite() && step.abs() <= POLE_STEP * x && xn >= lo && xn <= hi {
+            return (xn, it);
+        }
+        x = if xn > lo && xn < hi { xn } else { mid(lo, hi) };
+    }
+    (hi, POLE_MAX_EVALUATIONS)
+}
+
+/// The chains' poles as the searches see them (`condensed`: while `follow` is set).
+impl SagChains {
+    /// The poles are shown to the searches: the tracker asked for them and the chains are
+    /// FEM chains (the continuous ones are seen through the count alone).
+    #[inline]
+    pub(super) fn poles_shown(&self) -> bool {
+        self.follow && self.loaded && !self.continuous
+    }
+
+    /// Pole j (1-based; 0 gives 0, ∞ past the chain's last) of chain i of the loaded pose;
+    /// a search never done before starts at `near` (rad²/s², NaN: none), a λ next to it
+    /// (where the chain's count was j or j − 1).
+    /// NaN when the cycle's budget ([`Condensed::follow_poles`]) ends before it is found.
+    pub(super) fn chain_pole(&self, i: usize, j: usize, near: f64) -> f64 {
+        let chain = &self.chains[i];
+        let allowance = self.pole_allowance();
+        self.poles
+            .get(i, j, chain.blocked_modes(), near, allowance, |x| {
+                chain.eval(x)
+            })
+    }
+
+    /// Chain evaluations left before the cycle's budget ends (`u32::MAX`: unlimited).
+    fn pole_allowance(&self) -> u32 {
+        match self.pole_budget_end {
+            None => u32::MAX,
+            Some(end) => {
+                let now = self.evaluations.wrapping_add(self.pole_evaluations());
+                let left = end.wrapping_sub(now);
+                // Past the end the difference wraps to a huge value: nothing left.
+                if left > u32::MAX / 2 {
+                    0
+                } else {
+                    left.saturating_mul(self.n.max(1) as u32)
+                }
+            }
+        }
+    }
+
+    /// Evaluations of D spent on the pole searches (one per `n` chain evaluations).
+    pub(super) fn pole_evaluations(&self) -> u32 {
+        (self.poles.chain_evaluations() / self.n.max(1) as u64) as u32
+    }
+
+    /// The pole-free interval (a, b) around λ: each chain's poles next to its own count at
+    /// λ (one count-only evaluation of the chains).
+    pub(super) fn pole_interval_at(&self, lambda: f64) -> (f64, f64) {
+        let mut below = [0u32; MAX_CABLES];
+        if self.n > MAX_CABLES || self.pole_allowance() < self.n as u32 {
+            return (f64::NAN, f64::NAN);
+        }
+        self.evaluate_into(lambda, false, |i, e| below[i] = e.below);
+        self.poles.spend(self.n as u64);
+        self.interval_of(&below[..self.n], lambda)
+    }
+
+    /// The pole-free interval around the last counted evaluation's λ.
+    pub(super) fn last_interval(&self) -> (f64, f64) {
+        self.interval_of(&self.last_below[..self.n], self.last_lambda)
+    }
+
+    /// The pole-free interval of the chains' counts `below` at `near` (rad²/s²):
+    /// (max_i pole(i, below_i), min_i pole(i, below_i + 1)).
+    fn interval_of(&self, below: &[u32], near: f64) -> (f64, f64) {
+        (
+            self.extreme(below, near, false),
+            self.extreme(below, near, true),
+        )
+    }
+
+    /// max_i pole(i, below_i) (`upper` false) or min_i pole(i, below_i + 1) (true), with as
+    /// few pole searches as it can: the chain whose pole is estimated extreme (from this
+    /// load's searches or the last ones') is searched, and every other chain is checked
+    /// against that value by its count there (one count-only evaluation of all the chains):
+    /// below_i poles strictly below it (lower side) or at most below_i (upper side) prove
+    /// that chain's pole is not beyond it; only the chains it does not prove are searched.
+    /// Each search can only move the extreme outward, so one check suffices.
+    fn extreme(&self, below: &[u32], near: f64, upper: bool) -> f64 {
+        let n = below.len();
+        let idx = |i: usize| below[i] as usize + usize::from(upper);
+        let pole = |i: usize| self.chain_pole(i, idx(i), near);
+        // A pole the budget cut (NaN) leaves the extreme unknown.
+        let beyond = |x: f64, y: f64| if upper { x < y } else { x > y };
+        let mut best = if upper { f64::INFINITY } else { 0.0 };
+        if n > MAX_CABLES {
+            for i in 0..n {
+                let v = pole(i);
+                if v.is_nan() {
+                    return v;
+                }
+                if beyond(v, best) {
+                    best = v;
+                }
+            }
+            return best;
+        }
+        let mut done = [false; MAX_CABLES];
+        let mut lead: Option<(usize, f64)> = None;
+        for i in 0..n {
+            let est = self
+                .poles
+                .estimate(i, idx(i), self.chains[i].blocked_modes());
+            if est.is_nan() {
+                let v = pole(i);
+                done[i] = true;
+                if v.is_nan() {
+                    return v;
+                }
+                if beyond(v, best) {
+                    best = v;
+                }
+            } else if lead.is_none_or(|(_, e)| beyond(est, e)) {
+                lead = Some((i, est));
+            }
+        }
+        if let Some((k, _)) = lead {
+            let v = pole(k);
+            done[k] = true;
+            if v.is_nan() {
+                return v;
+            }
+            if beyond(v, best) {
+                best = v;
+            }
+        }
+        if done[..n].iter().all(|&d| d) || !(best > 0.0 && best.is_finite()) {
+            for i in (0..n).filter(|&i| !done[i]) {
+                let v = pole(i);
+                if v.is_nan() {
+                    return v;
+                }
+                if beyond(v, best) {
+                    best = v;
+                }
+            }
+            return best;
+        }
+        if self.pole_allowance() < n as u32 {
+            return f64::NAN;
+        }
+        let mut at = [0u32; MAX_CABLES];
+        self.evaluate_into(best, false, |i, e| at[i] = e.below);
+        self.poles.spend(n as u64);
+        for i in (0..n).filter(|&i| !done[i]) {
+            let proven = if upper {
+                at[i] <= below[i]
+            } else {
+                at[i] >= below[i]
+            };
+            if !proven {
+                let v = pole(i);
+                if v.is_nan() {
+                    return v;
+                }
+                if beyond(v, best) {
+                    best = v;
+                }
+            }
+        }
+        best
+    }
+
+    /// The lowest pole over the chains (NaN: the budget cut a search).
+    pub(super) fn lowest(&self) -> f64 {
+        let mut low = f64::INFINITY;
+        for i in 0..self.n {
+            let p = self.chain_pole(i, 1, f64::NAN);
+            if p.is_nan() {
+                return p;
+            }
+            low = low.min(p);
+        }
+        low
+    }
+
+    /// The next distinct pole above `a` over all chains, advancing each chain's cursor
+    /// (first moved back to its first pole above `a`): (pole, chain, number).
+    pub(super) fn next_distinct(&self, cursor: &mut PoleCursor, a: f64) -> (f64, usize, usize) {
+        let mut b = (f64::INFINITY, 0, 0);
+        for i in 0..self.n.min(cursor.len()) {
+            let mut j = cursor[i].max(1);
+            while j > 1 && self.chain_pole(i, j - 1, a) > a * (1.0 + POLE_MERGE) {
+                j -= 1;
+            }
+            let mut pole = self.chain_pole(i, j, a);
+            while pole <= a * (1.0 + POLE_MERGE) && pole.is_finite() {
+                j += 1;
+                pole = self.chain_pole(i, j, pole);
+            }
+            cursor[i] = j;
+            if pole < b.0 {
+                b = (pole, i, j);
+            }
+        }
+        b
+    }
+
+    /// The chain holding the largest share of the kinetic-energy norm vᵀ(−D'(x))v of mode
+    /// shape v at the last counted evaluation (at x, D' = `dd`): (share, that chain's pole
+    /// nearest x, whether above x, its key chain << 16 | number).
+    pub(super) fn chain_coupling(
+        &self,
+        x: f64,
+        dd: &Matrix6<f64>,
+        v: &Vector6<f64>,
+    ) -> (f64, f64, bool, u32) {
+        let none = (0.0, f64::NAN, false, u32::MAX);
+        let kin = -quad(dd, v, self.dim);
+        if !(kin > 0.0) {
+            return none;
+        }
+        let mut best = (0.0, usize::MAX);
+        for i in 0..self.n {
+            let q = -self.chain_quad(i, &self.last_ds[i], v);
+            if q > best.0 {
+                best = (q, i);
+            }
+        }
+        let i = best.1;
+        if i == usize::MAX {
+            return none;
+        }
+        let j = self.last_below[i] as usize;
+        let (lo, hi) = (self.chain_pole(i, j, x), self.chain_pole(i, j + 1, x));
+        let up = j == 0 || hi - x < x - lo;
+        let jp = if up { j + 1 } else { j };
+        (
+            best.0 / kin,
+            if up { hi } else { lo },
+            up,
+            (i as u32) << 16 | jp as u32,
+        )
+    }
+}
