@@ -130,6 +130,27 @@ pub(in crate::modal) fn pole_free(mu: f64, dmu: f64, x: f64, pa: f64, pb: f64) -
     (g, dg)
 }
 
+/// [`Condensed::coupling`]'s answer for chain i holding `share` of a mode at x, where the
+/// chain's count is j (its poles j and j + 1 are `lo` and `hi`): (share, the pole nearer
+/// x, whether it is above x, its key i << 16 | number).
+pub(in crate::modal) fn nearest_keyed_pole(
+    share: f64,
+    x: f64,
+    i: usize,
+    j: usize,
+    lo: f64,
+    hi: f64,
+) -> (f64, f64, bool, u32) {
+    let up = j == 0 || hi - x < x - lo;
+    let jp = if up { j + 1 } else { j };
+    (
+        share,
+        if up { hi } else { lo },
+        up,
+        (i as u32) << 16 | jp as u32,
+    )
+}
+
 /// The first upper bracket of a search starts here when no better scale is known,
 /// rad²/s² (and a cold first root's Rayleigh guess is at least this).
 ///

@@ -3,7 +3,7 @@
 
 use super::{LoadedChains, Plan, Slot, MAX_BATCHED};
 use crate::cable::{eval_continuous_batch, eval_discrete_batch, supported_from_parts, ChainEval};
-use crate::modal::engine::{quad, DynEval, MAX_CHAINS, SYM3};
+use crate::modal::engine::{nearest_keyed_pole, quad, DynEval, MAX_CHAINS, SYM3};
 use nalgebra::{Matrix6, Vector6};
 
 /// What one evaluation of D(λ) writes: the chains' values at the last λ (and the batched
@@ -201,15 +201,7 @@ impl EvalScratch {
         }
         let i = best.1;
         let j = self.chain_eval[i].below as usize;
-        let lo = p.chain_pole(i, j);
-        let hi = p.chain_pole(i, j + 1);
-        let up = j == 0 || hi - x < x - lo;
-        let jp = if up { j + 1 } else { j };
-        (
-            best.0 / kin,
-            if up { hi } else { lo },
-            up,
-            (i as u32) << 16 | jp as u32,
-        )
+        let (lo, hi) = (p.chain_pole(i, j), p.chain_pole(i, j + 1));
+        nearest_keyed_pole(best.0 / kin, x, i, j, lo, hi)
     }
 }

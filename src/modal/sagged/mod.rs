@@ -36,11 +36,14 @@
 //! matrix forms the tracker's certificate bounds one direction by.
 //!
 //! Files: `problem` (the loaded pose, D(λ)), `load` (setting it up), `condensed` (its view
-//! for the searches), `dense` (the assembled reference).
+//! for the searches), `poles` (each chain's poles by its own count, followed between
+//! loads), `pole_view` (the pole intervals the tracker sees), `dense` (the assembled
+//! reference).
 
 mod condensed;
 mod dense;
 mod load;
+mod pole_view;
 mod poles;
 mod problem;
 
