@@ -47,7 +47,7 @@ impl Pose {
         }
     }
     /// A pose at `position_m` with the orientation of scene `s` (its `ee_orientation_wxyz`:
-    /// the scene file's, or `--orientation`).
+    /// the scene file's, or a caller's override).
     pub fn in_scene(s: &crate::scene::Scene, position_m: Vector3<f64>) -> Pose {
         Pose {
             position_m,

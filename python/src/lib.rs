@@ -7,6 +7,7 @@
 //! | `analyze(scene, ...)` | [`cablevib::study::analysis::analyze`] (what `cablevib analyze --json` prints) |
 //! | `calibrate(scene, measurements, fit=[...])` | [`cablevib::calibration::calibrate`] (what `cablevib calibrate --json` prints) |
 //! | `frf(scene, ...)` | [`cablevib::study::frf::frf`] (what `cablevib frf --json` prints) |
+//! | `simulate(scene, ...)`, `shape(scene, ...)` | [`cablevib::study::simulate::simulate_shaped`], [`cablevib::study::simulate::shape`] (what `cablevib simulate` and `cablevib shape` write to their CSVs) |
 //! | `identify(t, channels, ...)` | [`cablevib::identify::identify`] (what `cablevib identify --json` prints per window, without the model) |
 //! | `Estimator(scene).update(...)` | [`cablevib::estimator::Estimator::update`] |
 //! | `Estimator.sweep(...)`, `sweep(scene, ...)` | [`cablevib::estimator::Estimator::update`] over many poses on worker threads ([`sweep`]) |
@@ -24,6 +25,7 @@ mod estimator;
 mod frf;
 mod identify;
 mod scene;
+mod simulate;
 mod sweep;
 mod toml_text;
 
@@ -39,6 +41,8 @@ fn cablevib_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(frf::frf, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(identify::identify, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate::shape, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::sweep_scene, m)?)?;
     m.add_class::<scene::PyScene>()?;
     m.add_class::<estimator::PyEstimator>()?;

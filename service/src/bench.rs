@@ -14,10 +14,11 @@
 //!
 //! Ping-pong (one pose in flight), after 1000 warm-up samples.
 //!
-//! With `--vibration on` the client also publishes one accelerometer sample before each pose
-//! (a 29.4 Hz sine and noise, stamped as a 1 kHz sensor: the service's tracker then does the
-//! work of a 1 kHz sensor beside 1 kHz poses), after a warm-up long enough to fill the
-//! tracker's window. With `--vibration both` the two alternate in blocks of [`BLOCK`] poses
+//! With the vibration input on ([`crate::BenchVibration::On`]) the client also publishes
+//! one accelerometer sample before each pose (a 29.4 Hz sine and noise, stamped as a 1 kHz
+//! sensor: the service's tracker then does the work of a 1 kHz sensor beside 1 kHz poses),
+//! after a warm-up long enough to fill the tracker's window. With
+//! [`crate::BenchVibration::Both`] the two alternate in blocks of [`BLOCK`] poses
 //! in the same service, so that both see the same machine load; the first [`BLOCK_SETTLE`]
 //! poses of a block are not timed (the tracker finishes the evaluation left from an `on`
 //! block, after which it has nothing to do until samples come again).

@@ -1,11 +1,11 @@
 //! `cablevib demo`: the service, a replay publisher and a controller, each with its own
 //! iceoryx2 node and thread in one process, talking over real shared-memory services.
 //!
-//! The replay (main thread) publishes the paper's circle at `--rate-hz`; the service thread
+//! The replay (main thread) publishes the paper's circle at `rate_hz`; the service thread
 //! estimates every pose; the controller thread takes every estimate, measures the latency from
 //! the pose's timestamp to its arrival, and asks the service for its margin against
-//! `--required-hz` after each one. A line of progress per second, then a summary.
-//! With `--hold-f1 HZ` the controller also holds f1 with T_min set-points (`demo_hold.rs`)
+//! `required_hz` after each one. A line of progress per second, then a summary.
+//! With `hold_f1_hz` the controller also holds f1 with T_min set-points (`demo_hold.rs`)
 //! and the summary adds the hold's lines.
 
 use cablevib::outln;
@@ -65,7 +65,7 @@ struct ControllerLog {
     /// (pose sequence, margin Hz, status) of each margin answer.
     margins: Vec<(u64, f64, u32)>,
     margin_timeouts: u64,
-    /// What `--hold-f1` recorded.
+    /// What the hold (`hold_f1_hz`) recorded.
     hold: Option<super::demo_hold::HoldLog>,
 }
 
@@ -78,7 +78,7 @@ struct Progress {
     max_latency_ns: AtomicU64,
     not_ok: AtomicU64,
     /// The end-effector mode frequency of the latest ok estimate that had one (f64 bits; 0.0,
-    /// none yet), for `--shape`.
+    /// none yet), for the shaper (`shape`).
     last_ee_mode_bits: AtomicU64,
 }
 
@@ -99,7 +99,7 @@ fn controller(
     let mut hold = hold
         .map(|p| super::demo_hold::DemoHold::open(&node, &names, p, capacity))
         .transpose()?;
-    // With --hold-f1 the margin is asked against the hold's requirement (+ guard).
+    // With a hold the margin is asked against the hold's requirement (+ guard).
     let required_hz = hold.as_ref().map_or(required_hz, |h| h.request_hz());
     ready.store(true, Ordering::Release);
     let mut log = ControllerLog {

@@ -1,5 +1,5 @@
-//! `cablevib demo --hold-f1 HZ`: the demo's controller holds f1 at or above HZ with the T_min
-//! set-points of [`F1Hold`] (one implementation with `service/examples/controller.rs`), and
+//! The demo's hold (`DemoConfig::hold_f1_hz`): its controller holds f1 at or above it with
+//! the T_min set-points of [`F1Hold`] (one implementation with `service/examples/controller.rs`), and
 //! the summary measures what that costs against the one fixed T_min that would also meet the
 //! requirement at every pose the demo estimated.
 //!
@@ -39,7 +39,7 @@ const FIXED_ROUNDS: usize = 50;
 /// fixed T_min (a dip of f1 in T_min).
 const FIXED_BUMP: f64 = 1e-3;
 
-/// The hold parameters of `--hold-f1 HZ` on `scene`: floor the scene's T_min, ceiling the
+/// The hold parameters of a hold at `hold_hz` on `scene`: floor the scene's T_min, ceiling the
 /// smallest cable t_max, the default guard, band and rate.
 pub(crate) fn params(scene: &Scene, hold_hz: f64) -> Result<HoldParams, ServiceError> {
     let ceiling = (0..scene.n_cables())
@@ -291,8 +291,9 @@ pub(crate) fn summary(
     Ok(())
 }
 
-/// A requested `--hold-csv` that cannot be written is an error (so that nothing reads an
-/// older file at that path as this run's record); without the option, nothing to report.
+/// A requested hold record (`DemoConfig::hold_csv`) that cannot be written is an error (so
+/// that nothing reads an older file at that path as this run's record); without the
+/// option, nothing to report.
 fn no_record(a: &DemoConfig, why: &str) -> Result<(), ServiceError> {
     match &a.hold_csv {
         Some(path) => Err(ServiceError::HoldRecord {

@@ -1,12 +1,12 @@
-//! `cablevib demo --shape zv|zvd|ei`: the demo's replay shapes its poses online with the live
-//! end-effector mode.
+//! The demo's shaping (`DemoConfig::shape`: ZV, ZVD or EI): its replay shapes its poses
+//! online with the live end-effector mode.
 //!
 //! Each pose of the circle goes through an [`OnlineShaper`] (ring buffer, no allocation per
 //! sample) designed at the end-effector mode frequency of the latest ok estimate that has one
 //! (`ee_mode_hz`), with the damping ratio the scene's damping gives at that frequency
 //! ([`Damping::modal_ratio`]; 0 without `[damping]`). Until the first such estimate arrives,
 //! the poses pass unshaped (the shaper has no design yet); the summary says how many did.
-//! The published pose is the shaper's output. The replay example (`--shape`) uses the same type.
+//! The published pose is the shaper's output. The replay example's shaping uses the same type.
 
 use nalgebra::Vector3;
 

@@ -1,5 +1,5 @@
 //! Holding f1: the T_min set-point a controller publishes from the service's margin answers
-//! so that the first natural frequency stays at or above a requirement (`--hold-f1 HZ` of the
+//! so that the first natural frequency stays at or above a requirement (the hold of the
 //! example controllers and of `cablevib demo`).
 //!
 //! The margin answer carries f1 at the latest pose and `t_min_required_n`, the smallest
@@ -45,19 +45,19 @@
 
 use cablevib_ipc::{MarginResponse, StatusCode, REQUIRED_F1_MAX_HZ, REQUIRED_F1_MIN_HZ};
 
-/// Default guard above the requirement, Hz (`--hold-guard-hz`): on the paper's circle (4 s per
-/// revolution) f1 at a fixed T_min moves by up to 2 Hz/s (measured, `demo --hold-f1 9.5`),
-/// 0.002 Hz per 1 kHz cycle; the √T_min step corrects it at each answer, so 0.1 Hz covers 50
+/// Default guard above the requirement, Hz ([`HoldParams::guard_hz`]): on the paper's circle
+/// (4 s per revolution) f1 at a fixed T_min moves by up to 2 Hz/s (measured, the demo
+/// holding 9.5 Hz), 0.002 Hz per 1 kHz cycle; the √T_min step corrects it at each answer, so 0.1 Hz covers 50
 /// ms without an answer (the controller's longest stalls on this shared 2-core machine were
 /// ~20 ms).
 pub const DEFAULT_GUARD_HZ: f64 = 0.1;
-/// Default relax band, Hz (`--hold-relax-band-hz`): relax only when f1 is at least this far
+/// Default relax band, Hz ([`HoldParams::relax_band_hz`]): relax only when f1 is at least this far
 /// above the requirement. It must exceed the guard: a raise lands f1 at the guard, and a relax
 /// that began right above it would lower f1 back under it at the next step, so that raise and
 /// relax alternated at every answer; 0.15 Hz above the guard is 75 ms of the circle's fastest
 /// drift.
 pub const DEFAULT_RELAX_BAND_HZ: f64 = 0.25;
-/// Default relax rate, N/s (`--hold-relax-n-per-s`): 20 N/s takes a 60 N set-point from
+/// Default relax rate, N/s ([`HoldParams::relax_rate_n_per_s`]): 20 N/s takes a 60 N set-point from
 /// 120 N back to 60 N in 3 s, slow against the robot's modes (periods of 0.1 s and shorter).
 pub const DEFAULT_RELAX_RATE_N_PER_S: f64 = 20.0;
 /// Largest guard or relax band, Hz (a band wider than any requirement is a typo).

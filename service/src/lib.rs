@@ -151,7 +151,7 @@ pub struct BenchIpcConfig {
     pub vibration: BenchVibration,
 }
 
-/// `bench-ipc --vibration`: whether the vibration input is fed while measuring.
+/// The IPC bench's vibration option: whether the vibration input is fed while measuring.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum BenchVibration {
     /// No vibration sender (the latency without the input).

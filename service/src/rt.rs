@@ -2,7 +2,7 @@
 //! text when the system refuses (no permission, no such CPU); the service logs it as a
 //! warning and runs on without it.
 
-/// SCHED_FIFO priority used by `--realtime` (1 = lowest, 99 = highest). 80 leaves room above
+/// SCHED_FIFO priority of the real-time mode (1 = lowest, 99 = highest). 80 leaves room above
 /// for the kernel's own threaded interrupt handlers (50) and a controller that must preempt.
 pub const FIFO_PRIORITY: i32 = 80;
 

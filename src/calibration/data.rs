@@ -62,7 +62,7 @@ pub enum SigmaSource {
     Column,
     /// `identify`'s `frequency_std_hz` column.
     IdentifyStd,
-    /// The relative default (`--sigma-rel`).
+    /// The relative default (`SigmaDefaults::frequency_rel`).
     Relative,
 }
 
@@ -171,7 +171,7 @@ pub struct Measurements {
 /// Defaults of the σ a row does not give (finite, > 0).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SigmaDefaults {
-    /// σ of a frequency relative to it (`--sigma-rel`, default 0.005).
+    /// σ of a frequency relative to it (default 0.005).
     pub frequency_rel: f64,
     /// σ of a damping ratio relative to it (default 0.2: damping is known far less well).
     pub damping_rel: f64,

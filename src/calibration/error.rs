@@ -38,9 +38,74 @@ pub enum CalibrationError {
     /// The model failed at the nominal parameters or could not be evaluated.
     #[error("{0}")]
     Model(String),
+    /// No parameter named to fit ([`CalibrationOption::Fit`]).
+    #[error("{}", nothing_to_fit(&CalibrationOption::name))]
+    NothingToFit,
+    /// A bound, nominal value or prior for a parameter that is not fitted.
+    #[error("{}", not_fitted(.0, &CalibrationOption::name))]
+    NotFitted(String),
+    /// A scene with sag on: only the chord model is calibrated.
+    #[error("{}", sagged(&CalibrationOption::name))]
+    Sagged,
+}
+
+/// What a calibration's caller sets, named in the refusals that ask for it: the library
+/// by its own names ([`CalibrationOption::name`]), a front end by its flags
+/// ([`CalibrationError::render`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CalibrationOption {
+    /// The parameters to fit (`FitSpec::new`'s names).
+    Fit,
+    /// The chord model: the scene with sag off.
+    SagOff,
+}
+
+impl CalibrationOption {
+    /// The option in the library's terms.
+    pub fn name(self) -> &'static str {
+        match self {
+            CalibrationOption::Fit => "fit",
+            CalibrationOption::SagOff => "sag = false",
+        }
+    }
+}
+
+/// [`CalibrationError::NothingToFit`]'s message.
+fn nothing_to_fit(name: &dyn Fn(CalibrationOption) -> &'static str) -> String {
+    format!(
+        "no parameter to fit: give {} NAME[,NAME...]",
+        name(CalibrationOption::Fit)
+    )
+}
+
+/// [`CalibrationError::NotFitted`]'s message.
+fn not_fitted(param: &str, name: &dyn Fn(CalibrationOption) -> &'static str) -> String {
+    format!(
+        "parameter `{param}`: is not among the fitted parameters (add it to {})",
+        name(CalibrationOption::Fit)
+    )
+}
+
+/// [`CalibrationError::Sagged`]'s message.
+fn sagged(name: &dyn Fn(CalibrationOption) -> &'static str) -> String {
+    format!(
+        "scenes with [effects] sag = true are not calibrated yet: calibrate the chord model ({}) or switch sag off",
+        name(CalibrationOption::SagOff)
+    )
 }
 
 impl CalibrationError {
+    /// The message with each option called `name(option)` (the command line passes its
+    /// flags); equal to the `Display` text with [`CalibrationOption::name`].
+    pub fn render(&self, name: &dyn Fn(CalibrationOption) -> &'static str) -> String {
+        match self {
+            CalibrationError::NothingToFit => nothing_to_fit(name),
+            CalibrationError::NotFitted(param) => not_fitted(param, name),
+            CalibrationError::Sagged => sagged(name),
+            other => other.to_string(),
+        }
+    }
+
     /// A [`CalibrationError::Parameter`].
     pub(crate) fn param(name: &str, message: impl Into<String>) -> Self {
         CalibrationError::Parameter {

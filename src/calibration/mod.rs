@@ -50,7 +50,7 @@ pub mod report;
 mod run;
 
 pub use data::{Measurements, ModeLabel, SigmaDefaults};
-pub use error::CalibrationError;
+pub use error::{CalibrationError, CalibrationOption};
 pub use fit::FitParams;
 pub use pairing::PairingParams;
 pub use params::{apply, Applied, FitSpec, ParamKind, Parameter, PARAMETER_NAMES};

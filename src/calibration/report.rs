@@ -1,4 +1,4 @@
-//! [`Report`]: what a calibration found, as the command line prints it (`--json` prints this
+//! [`Report`]: what a calibration found, as the command line prints it (its JSON form prints this
 //! structure) and the Python package returns it.
 
 use serde::Serialize;
@@ -129,8 +129,8 @@ pub struct Report {
     pub damping_ratios: usize,
     /// Measured tensions in the fit.
     pub tensions: usize,
-    /// Where the frequencies' σ came from: counts of `sigma_hz`, `frequency_std_hz`,
-    /// `--sigma-rel`.
+    /// Where the frequencies' σ came from: counts of `sigma_hz`, `frequency_std_hz`, the
+    /// relative default ([`crate::calibration::SigmaDefaults`]).
     pub sigma_sources: [usize; 3],
     /// The parameters.
     pub parameters: Vec<ParameterResult>,

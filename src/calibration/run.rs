@@ -165,9 +165,7 @@ pub fn calibrate(
         scene.clone()
     };
     if base.model.sag {
-        return Err(CalibrationError::Model(
-            "scenes with [effects] sag = true are not calibrated yet: calibrate the chord model (--sag false) or switch sag off".into(),
-        ));
+        return Err(CalibrationError::Sagged);
     }
     let analytic = matches!(base.model.element, ElementKind::Fem | ElementKind::Massless);
     let poses = collect_poses(&base, data)?;

@@ -109,11 +109,13 @@ pub(super) fn read_set(
         (None, Some(d)) => d.trim(),
         (None, None) if sets.len() == 1 => ids[0],
         (None, None) => {
-            return Err(root.err(format!(
-                "no default_cable_set and {} cable sets: pick one with --cable-set ({})",
-                sets.len(),
-                listed()
-            )))
+            return Err(CasprError::NoCableSet {
+                file: file.to_string(),
+                line: root.line(),
+                element: root.node.tag_name().name().to_string(),
+                sets: sets.len(),
+                listed: listed(),
+            })
         }
     };
     let Some(k) = ids.iter().position(|i| *i == id) else {

@@ -4,7 +4,7 @@
 
 use super::bodies::Link;
 use super::cables::{AttachmentReference, CasprCable};
-use super::{CasprError, ImportOptions};
+use super::{CasprError, ImportOption, ImportOptions, MissingOption};
 use crate::input_file::message_number;
 use crate::scene::MAX_ELEMENTS_PER_CABLE;
 use nalgebra::Vector3;
@@ -76,7 +76,7 @@ struct Material {
     area_m2: f64,
 }
 
-/// Every option the cable set needs and the command line did not give, reported at once
+/// Every option the cable set needs and the caller did not give, reported at once
 /// (naming the cables file): weight per length and area always, Young's modulus when a
 /// cable is a `cable_ideal`, T_min when a force_min is ≤ 0.
 fn material(
@@ -102,24 +102,32 @@ fn material(
         }
     };
     let mut missing = Vec::new();
+    let mut need = |option: ImportOption, why: String| missing.push(MissingOption { option, why });
     if o.weight_per_length_n_m.is_none() {
-        missing.push("--weight-per-length (N/m: CASPR's cables have no weight)".to_string());
+        need(
+            ImportOption::WeightPerLength,
+            "(N/m: CASPR's cables have no weight)".into(),
+        );
     }
     if o.area_m2.is_none() {
-        missing.push("--area (m²)".to_string());
+        need(ImportOption::Area, "(m²)".into());
     }
     if o.youngs_modulus_pa.is_none() {
         if let Some(who) = names(&|c| c.k_n.is_none()) {
-            missing.push(format!(
-                "--youngs-modulus (Pa) for the cable_ideal cables, rigid in CASPR ({who})"
-            ));
+            need(
+                ImportOption::YoungsModulus,
+                format!("(Pa) for the cable_ideal cables, rigid in CASPR ({who})"),
+            );
         }
     }
     if o.t_min_n.is_none() {
         if let Some(who) = names(&|c| !(c.force_min_n > 0.0)) {
-            missing.push(format!(
-                "--t-min (N) for the cables with force_min ≤ 0, slack ones without stiffness ({who})"
-            ));
+            need(
+                ImportOption::TMin,
+                format!(
+                    "(N) for the cables with force_min ≤ 0, slack ones without stiffness ({who})"
+                ),
+            );
         }
     }
     match (o.weight_per_length_n_m, o.area_m2) {
@@ -127,15 +135,10 @@ fn material(
             weight_per_length_n_m: g,
             area_m2: a,
         }),
-        _ => Err(CasprError::Model {
+        _ => Err(CasprError::MissingOptions {
             file: src.cables.to_string(),
-            message: format!(
-                "cable set `{}` needs {} more option{}: {}",
-                safe(src.cable_set),
-                missing.len(),
-                if missing.len() == 1 { "" } else { "s" },
-                missing.join("; ")
-            ),
+            cable_set: safe(src.cable_set),
+            missing,
         }),
     }
 }
@@ -181,7 +184,7 @@ fn scene_cables(
             AttachmentReference::Joint => c.platform_m - link.com_m,
             AttachmentReference::Com => c.platform_m,
         };
-        // `material` has refused a force_min ≤ 0 without --t-min.
+        // `material` has refused a force_min ≤ 0 without a T_min option.
         let t_min_n = o.t_min_n.unwrap_or(c.force_min_n);
         if !(c.force_max_n >= t_min_n) {
             return Err(model(format!(
@@ -300,7 +303,7 @@ fn end_effector(t: &mut String, link: &Link, o: &ImportOptions, rigid: bool) {
     let r = link.rotation;
     let g = origin + r * link.com_m;
     let pose = if o.position_m.is_some() {
-        "--position"
+        "the position given at import"
     } else {
         "q_initial"
     };
@@ -346,15 +349,15 @@ fn materials_and_model(
     let _ = writeln!(t, "\n[cable]");
     let _ = writeln!(
         t,
-        "# From the command line, not from CASPR (its cables have no material):"
+        "# Given at import, not from CASPR (its cables have no material):"
     );
     if let Some(e) = o.youngs_modulus_pa {
-        let _ = writeln!(t, "youngs_modulus = {e:?}   # Pa, --youngs-modulus");
+        let _ = writeln!(t, "youngs_modulus = {e:?}   # Pa");
     }
-    let _ = writeln!(t, "area = {:?}   # m², --area", m.area_m2);
+    let _ = writeln!(t, "area = {:?}   # m²", m.area_m2);
     let _ = writeln!(
         t,
-        "weight_per_length = {:?}   # N/m, --weight-per-length",
+        "weight_per_length = {:?}   # N/m",
         m.weight_per_length_n_m
     );
     let lo = sc.iter().map(|c| c.t_min_n).fold(f64::INFINITY, f64::min);
@@ -370,7 +373,7 @@ fn materials_and_model(
     let _ = writeln!(t, "t_min = {lo:?}   # N");
     let _ = writeln!(t, "t_max = {hi:?}   # N");
     let _ = writeln!(t, "\n[model]");
-    let _ = writeln!(t, "# From the command line, not from CASPR:");
+    let _ = writeln!(t, "# Given at import, not from CASPR:");
     let _ = writeln!(t, "element = \"{}\"", o.element.as_str());
     let _ = writeln!(t, "elements_per_cable = {}", o.elements_per_cable);
     let _ = writeln!(t, "\n[effects]");
@@ -419,7 +422,7 @@ fn cable(t: &mut String, c: &CasprCable, s: &SceneCable, o: &ImportOptions) {
         vec3(&s.attachment_m)
     );
     let from = if o.t_min_n.is_some() {
-        "--t-min"
+        "given at import"
     } else {
         "CASPR force_min"
     };

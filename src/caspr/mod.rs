@@ -102,13 +102,133 @@ pub enum CasprError {
         /// What is wrong.
         message: String,
     },
-    /// An import option is out of range (missing ones are a [`CasprError::Model`] naming
-    /// the cables file and every option the set needs).
+    /// Several cable sets, no `default_cable_set` and none chosen
+    /// ([`ImportOptions::cable_set`]).
+    #[error("{}", no_cable_set(.file, *.line, .element, *.sets, .listed, &ImportOption::name))]
+    NoCableSet {
+        /// File name.
+        file: String,
+        /// Line of the element (1-based).
+        line: u32,
+        /// The element's tag.
+        element: String,
+        /// Number of cable sets in the file.
+        sets: usize,
+        /// Their ids, comma-separated.
+        listed: String,
+    },
+    /// Options the cable set needs and that were not given, every one at once, naming the
+    /// cables file.
+    #[error("{}", missing_options(.file, .cable_set, .missing, &ImportOption::name))]
+    MissingOptions {
+        /// The cables file's name.
+        file: String,
+        /// The cable set.
+        cable_set: String,
+        /// What is missing, in the order of [`ImportOption`].
+        missing: Vec<MissingOption>,
+    },
+    /// An import option is out of range.
     #[error("{0}")]
     Options(String),
     /// The scene written does not validate (a value CASPR allows and the scene does not).
     #[error("imported scene: {0}")]
     Scene(#[from] SceneError),
+}
+
+/// An option of the import ([`ImportOptions`]), as the errors that ask for one name it: the
+/// library by its field ([`ImportOption::name`]), a front end by its own name
+/// ([`CasprError::render`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImportOption {
+    /// [`ImportOptions::cable_set`].
+    CableSet,
+    /// [`ImportOptions::weight_per_length_n_m`].
+    WeightPerLength,
+    /// [`ImportOptions::area_m2`].
+    Area,
+    /// [`ImportOptions::youngs_modulus_pa`].
+    YoungsModulus,
+    /// [`ImportOptions::t_min_n`].
+    TMin,
+}
+
+impl ImportOption {
+    /// The option's field in [`ImportOptions`].
+    pub fn name(self) -> &'static str {
+        match self {
+            ImportOption::CableSet => "cable_set",
+            ImportOption::WeightPerLength => "weight_per_length_n_m",
+            ImportOption::Area => "area_m2",
+            ImportOption::YoungsModulus => "youngs_modulus_pa",
+            ImportOption::TMin => "t_min_n",
+        }
+    }
+}
+
+/// An option a cable set needs and was not given.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MissingOption {
+    /// The option.
+    pub option: ImportOption,
+    /// Its unit and why the set needs it (`(Pa) for the cable_ideal cables, …`).
+    pub why: String,
+}
+
+impl CasprError {
+    /// The message with each option called `name(option)` (the command line passes its
+    /// flags); equal to the `Display` text with [`ImportOption::name`].
+    pub fn render(&self, name: &dyn Fn(ImportOption) -> &'static str) -> String {
+        match self {
+            CasprError::NoCableSet {
+                file,
+                line,
+                element,
+                sets,
+                listed,
+            } => no_cable_set(file, *line, element, *sets, listed, name),
+            CasprError::MissingOptions {
+                file,
+                cable_set,
+                missing,
+            } => missing_options(file, cable_set, missing, name),
+            other => other.to_string(),
+        }
+    }
+}
+
+/// [`CasprError::NoCableSet`]'s message.
+fn no_cable_set(
+    file: &str,
+    line: u32,
+    element: &str,
+    sets: usize,
+    listed: &str,
+    name: &dyn Fn(ImportOption) -> &'static str,
+) -> String {
+    format!(
+        "{file}:{line}: <{element}>: no default_cable_set and {sets} cable sets: pick one with {} ({listed})",
+        name(ImportOption::CableSet)
+    )
+}
+
+/// [`CasprError::MissingOptions`]'s message.
+fn missing_options(
+    file: &str,
+    cable_set: &str,
+    missing: &[MissingOption],
+    name: &dyn Fn(ImportOption) -> &'static str,
+) -> String {
+    let each: Vec<String> = missing
+        .iter()
+        .map(|m| format!("{} {}", name(m.option), m.why))
+        .collect();
+    format!(
+        "{file}: cable set `{cable_set}` needs {} more option{}: {}",
+        missing.len(),
+        if missing.len() == 1 { "" } else { "s" },
+        each.join("; ")
+    )
 }
 
 /// What the import needs that CASPR's files do not give. All SI.

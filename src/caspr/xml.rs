@@ -86,16 +86,19 @@ impl<'a, 'i> At<'a, 'i> {
         }
     }
 
-    /// An error about this element.
-    pub fn err(&self, message: impl Into<String>) -> CasprError {
-        let line = self
-            .node
+    /// The element's line in its file (1-based).
+    pub fn line(&self) -> u32 {
+        self.node
             .document()
             .text_pos_at(self.node.range().start)
-            .row;
+            .row
+    }
+
+    /// An error about this element.
+    pub fn err(&self, message: impl Into<String>) -> CasprError {
         CasprError::Element {
             file: self.file.to_string(),
-            line,
+            line: self.line(),
             element: self.node.tag_name().name().to_string(),
             message: message.into(),
         }

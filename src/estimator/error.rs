@@ -28,7 +28,7 @@ pub enum RejectedInput {
     NoFeasiblePose,
     /// A rotation (a quaternion other than the identity, see
     /// [`crate::kinematics::Pose::has_identity_orientation`]) on a point-mass end-effector,
-    /// which has no orientation: refused as the command line refuses `--orientation` there.
+    /// which has no orientation: refused as an orientation override is refused there.
     #[error("an orientation other than the identity on a point-mass end-effector, which has none")]
     OrientationOnPointMass,
 }
@@ -209,7 +209,7 @@ impl From<RejectedInput> for TminQueryError {
 /// Errors building an estimator.
 #[derive(Debug, thiserror::Error)]
 pub enum BuildError {
-    /// The scene's pose (its `position`, or the command line's `--position`) has no
+    /// The scene's pose (its `position`, or a caller's position override) has no
     /// answer that makes the robot usable (e.g. a cable of zero length): the message names
     /// the pose, which is the scene file's default only when no other was given.
     #[error(

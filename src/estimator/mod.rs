@@ -54,6 +54,7 @@ mod forward;
 mod inverse;
 mod modes;
 mod params;
+mod path_field;
 mod pose_model;
 mod reference;
 mod sag_check;
@@ -69,6 +70,7 @@ pub use modes::{
     SHAPE_BYTES_PER_NODE,
 };
 pub use params::{EstimatorParams, ParamsError, SagModelParams};
+pub use path_field::{sag_path_field_applies, PATH_FIELD_STEP};
 pub use pose_model::{build_models, PoseModel};
 pub use reference::{
     reference_analysis, reference_analysis_at, structured_analysis, ReferenceAnalysis,
@@ -93,6 +95,8 @@ pub struct Estimator {
     cycle: Forward,
     expected_rank: u32,
     last_ok_position: Option<Vector3<f64>>,
+    /// The pose of the last ok cycle (what the offline queries of its model refer to).
+    loaded_pose: Pose,
     /// λ₁ of the last three warm cycles (rad²/s²; NaN where there is none): the predictor's
     /// history, newest first.
     last_lambda1: f64,
@@ -142,6 +146,7 @@ impl Estimator {
             cycle: Forward::new(scene, &ForwardParams::cycle(&params)),
             expected_rank: 0,
             last_ok_position: None,
+            loaded_pose: Pose::at(scene.ee_position_m),
             last_lambda1: f64::NAN,
             prev_lambda1: f64::NAN,
             prev2_lambda1: f64::NAN,
@@ -167,7 +172,7 @@ impl Estimator {
         c.set_pose(scene, &pose)
             .map_err(|e| default_pose(e.into()))?;
         // The structure matrix's rank is set up before feasibility is decided, so a default
-        // pose the cables cannot hold (a robot whose force_min is too high there, a --t-min
+        // pose the cables cannot hold (a robot whose force_min is too high there, a T_min override
         // near t_max) still gives it; such a pose is then estimated like any other, with the
         // status TensionInfeasible. Only a default pose with no rank at all is refused.
         let (solved, rank) = c.chord_tensions(scene, &est.t_min_n[..n], params.tension);
@@ -236,9 +241,26 @@ impl Estimator {
         self.cycle.sag_modal()
     }
 
+    /// [`Self::sag_modal`], mutable, for a study that owns this estimator (the frequency
+    /// response's count and receptance): they move the solver's scratch and warm starts,
+    /// not the pose it holds, so no copy of a model that may fill most of the memory budget
+    /// is made.
+    pub(crate) fn sag_modal_mut(&mut self) -> Option<&mut crate::modal::SagModalSolver> {
+        if self.estimate.status != Status::Ok {
+            return None;
+        }
+        self.cycle.sag_modal_mut()
+    }
+
     /// End-effector bookkeeping counters (see [`ModalSolver::rescan_counts`]).
     pub fn rescan_counts(&self) -> crate::modal::RescanCounts {
         self.cycle.rescan_counts()
+    }
+
+    /// The pose of the last cycle when it was ok (what [`Self::ee_modal_basis`],
+    /// [`Self::dense_matrices`] and the other queries of its model refer to), else None.
+    pub fn loaded_pose(&self) -> Option<Pose> {
+        (self.estimate.status == Status::Ok).then_some(self.loaded_pose)
     }
 
     /// With `[effects] sag`: each cable's elastic catenary of the last cycle's tension
@@ -308,6 +330,7 @@ impl Estimator {
             Ok(()) => {
                 e.status = Status::Ok;
                 self.last_ok_position = Some(pose.position_m);
+                self.loaded_pose = *pose;
                 self.last_t_min_n = self.t_min_n;
             }
             Err(err) => {

@@ -4,17 +4,25 @@
 //! keeps its loaded problem; only its evaluation counter moves).
 
 use super::{Estimator, EstimatorError, Status};
+use crate::modal::quasi_static::QuasiStaticLoad;
 use crate::modal::{self, DenseModes, Mode, ShapeParams};
 use nalgebra::{DMatrix, Matrix6, Vector6};
 
 impl EeModalBasis {
-    /// The basis of the structured engine's mode shapes (taut or sagging FEM cables).
+    /// The basis of the structured engine's mode shapes (taut or sagging FEM cables) and
+    /// the load of the influence field `field` on them (the end-effector's alone when
+    /// None).
     fn structured(
         dim: usize,
         shapes: modal::ModeShapes,
+        field: Option<(QuasiStaticLoad, modal::ModeShapes)>,
         flexibility: Matrix6<f64>,
         ee_mass: Matrix6<f64>,
-    ) -> EeModalBasis {
+    ) -> Result<EeModalBasis, BasisError> {
+        let (load, field) = match field {
+            Some((load, field)) => (load, Some(field)),
+            None => (QuasiStaticLoad::end_effector_only(&shapes, &ee_mass), None),
+        };
         EeModalBasis {
             dim,
             lambda: shapes.modes.iter().map(|m| m.lambda).collect(),
@@ -23,7 +31,24 @@ impl EeModalBasis {
             ee_mass,
             structured: true,
             shapes: Some(shapes),
+            field,
+            load_ee: Vec::new(),
+            load_flexibility: Matrix6::zeros(),
+            quasi_static_mass_kg: Matrix6::zeros(),
         }
+        .with_load(&load)
+    }
+
+    /// The load shapes, load flexibility and quasi-static mass of `load`
+    /// ([`QuasiStaticLoad`]).
+    fn with_load(mut self, load: &QuasiStaticLoad) -> Result<EeModalBasis, BasisError> {
+        let singular = BasisError::QuasiStatic("the end-effector's mass matrix is singular");
+        self.load_ee = load.load_shapes(&self.ee_mass).ok_or(singular.clone())?;
+        self.load_flexibility = load
+            .load_flexibility(&self.flexibility, &self.ee_mass)
+            .ok_or(singular)?;
+        self.quasi_static_mass_kg = load.mass_kg;
+        Ok(self)
     }
 }
 
@@ -110,13 +135,16 @@ impl Estimator {
     }
 }
 
+/// Why a field's products with the shapes failed.
+const NODES_DIFFER: &str = "the influence field's nodes are not the shapes'";
+
 /// Bytes of one node's displacement in a mode shape (a `Vector3<f64>`).
 pub const SHAPE_BYTES_PER_NODE: u64 = 24;
 
 /// Modes beyond the K asked for that a mode-shape computation holds at its peak: a cluster
 /// cut by K is completed, and the recovery's working arrays (each chain's node function)
 /// take about as much again; measured within 10 % on the paper robot at N = 10⁵
-/// (`modes --modes 1, 12, 48`: 89, 333, 934 MB against 134, 346, 1037 MB estimated).
+/// (the shapes of 1, 12, 48 modes: 89, 333, 934 MB against 134, 346, 1037 MB estimated).
 const SHAPE_EXTRA_MODES: u64 = 6;
 
 /// The nodes of one mode shape of `scene`'s model: each cable's N + 1 nodes (`fem`,
@@ -180,6 +208,9 @@ pub enum BasisError {
     /// The shapes would need more memory than the budget (refused before allocating).
     #[error(transparent)]
     Memory(#[from] crate::memory_budget::OverBudget),
+    /// The quasi-static load could not be formed.
+    #[error("the quasi-static load of the cables: {0}")]
+    QuasiStatic(&'static str),
 }
 
 /// The end-effector's view of the first modes of one pose: what a time response needs.
@@ -203,6 +234,25 @@ pub struct EeModalBasis {
     /// what carries a time response's state across poses
     /// ([`modal::ModeShapes::mass_overlap`]).
     pub shapes: Option<modal::ModeShapes>,
+    /// The influence field the load was formed with, in the shapes' node lists (one entry
+    /// of its `modes` per end-effector DOF: every node's displacement per unit
+    /// end-effector displacement): the fixed-length static field on taut cables, the path's
+    /// field on sagging ones (`modal::quasi_static`); None where the load is the
+    /// end-effector's alone or the shapes are the dense model's.
+    pub field: Option<modal::ModeShapes>,
+    /// Each mode's load shape ψ_k = M_ee⁻¹ L_k (1/√kg; zeros beyond `dim`): under the
+    /// end-effector load f = −M_ee a of a path's acceleration a, mode k's force is ψ_kᵀ f =
+    /// −L_kᵀ a, the quasi-static inertia of the whole robot, the cables' included
+    /// ([`modal::quasi_static`]); `phi_ee` where the cables carry no mass or take the
+    /// end-effector's load alone (sagging cables over pulleys).
+    pub load_ee: Vec<Vector6<f64>>,
+    /// The end-effector's static answer to that load per unit f, F M_s M_ee⁻¹ (m/N;
+    /// `flexibility` where the cables carry no mass or take the end-effector's load alone).
+    pub load_flexibility: Matrix6<f64>,
+    /// The robot's quasi-static mass M_qs = rᵀ M r (kg, kg·m²): the end-effector's and the
+    /// share of the cables' the end-effector's motion carries (`ee_mass` where the cables
+    /// take the end-effector's load alone).
+    pub quasi_static_mass_kg: Matrix6<f64>,
 }
 
 impl Estimator {
@@ -251,10 +301,17 @@ impl Estimator {
                     covered += m.multiplicity as usize;
                 }
             }
+            let params = ShapeParams::default();
             let shapes = solver
-                .mode_shapes(models, &geometry.arm_m, &clusters, &ShapeParams::default())
+                .mode_shapes(models, &geometry.arm_m, &clusters, &params)
                 .map_err(BasisError::Shapes)?;
-            return Ok(EeModalBasis::structured(dim, shapes, flexibility, ee_mass));
+            let field = solver
+                .influence_field(models, &geometry.arm_m, &params)
+                .map_err(BasisError::Shapes)?;
+            let load = QuasiStaticLoad::from_shapes(&shapes, &field, &ee_mass)
+                .ok_or(BasisError::QuasiStatic(NODES_DIFFER))?;
+            let field = Some((load, field));
+            return EeModalBasis::structured(dim, shapes, field, flexibility, ee_mass);
         }
         if let Some((solver, h, up, geometry)) = self.cycle.sag_shapes_input() {
             if !solver.is_continuous() {
@@ -265,12 +322,28 @@ impl Estimator {
                 let shapes = solver
                     .mode_shapes(&h, &up, &geometry.arm_m, &clusters, &params)
                     .map_err(BasisError::Shapes)?;
-                return Ok(EeModalBasis::structured(dim, shapes, flexibility, ee_mass));
+                let fixed = solver
+                    .influence_field(&h, &up, &geometry.arm_m, &params)
+                    .map_err(BasisError::Shapes)?;
+                // The path's field (lengths re-solved along the path), not the fixed-length
+                // one; the end-effector's load alone where it is not covered (pulleys).
+                let field = match self.sag_path_field(&fixed)? {
+                    Some(path) => Some((
+                        QuasiStaticLoad::from_path_field(&shapes, &path, &fixed, &ee_mass)
+                            .ok_or(BasisError::QuasiStatic(NODES_DIFFER))?,
+                        path,
+                    )),
+                    None => None,
+                };
+                return EeModalBasis::structured(dim, shapes, field, flexibility, ee_mass);
             }
         }
         let (kk, mm) = self.dense_matrices()?;
-        let (lambda, phi_ee) = dense_ee_shapes(&kk, &mm, dim, k)?;
-        Ok(EeModalBasis {
+        let (lambda, phi_ee, vectors) = dense_ee_shapes(&kk, &mm, dim, k)?;
+        let load = QuasiStaticLoad::from_dense(&kk, &mm, dim, &vectors).ok_or(
+            BasisError::QuasiStatic("the cables' static stiffness is not positive definite"),
+        )?;
+        EeModalBasis {
             dim,
             lambda,
             phi_ee,
@@ -278,18 +351,24 @@ impl Estimator {
             ee_mass,
             structured: false,
             shapes: None,
-        })
+            field: None,
+            load_ee: Vec::new(),
+            load_flexibility: Matrix6::zeros(),
+            quasi_static_mass_kg: Matrix6::zeros(),
+        }
+        .with_load(&load)
     }
 }
 
 /// The lowest `k` eigenpairs of K u = λ M u (dense), the first `dim` entries of each
-/// mass-normalised u.
+/// mass-normalised u, and the u (columns).
+#[allow(clippy::type_complexity)]
 fn dense_ee_shapes(
     k: &DMatrix<f64>,
     m: &DMatrix<f64>,
     dim: usize,
     count: usize,
-) -> Result<(Vec<f64>, Vec<Vector6<f64>>), EstimatorError> {
+) -> Result<(Vec<f64>, Vec<Vector6<f64>>, DMatrix<f64>), EstimatorError> {
     let not_definite = EstimatorError::Modal(modal::ModalError::MassNotDefinite);
     let chol = m.clone().cholesky().ok_or(not_definite)?;
     let l = chol.l();
@@ -307,7 +386,8 @@ fn dense_ee_shapes(
         .ok_or(not_definite)?;
     let mut lambda = Vec::new();
     let mut phi = Vec::new();
-    for &i in idx.iter().take(count) {
+    let kept: Vec<usize> = idx.iter().copied().take(count).collect();
+    for &i in &kept {
         lambda.push(eig.eigenvalues[i]);
         let mut p = Vector6::zeros();
         for r in 0..dim {
@@ -315,5 +395,5 @@ fn dense_ee_shapes(
         }
         phi.push(p);
     }
-    Ok((lambda, phi))
+    Ok((lambda, phi, u.select_columns(&kept)))
 }

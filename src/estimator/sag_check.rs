@@ -55,7 +55,7 @@ pub fn sagged_reference(scene: &Scene) -> Scene {
 }
 
 /// At `pose` and the scene's T_min: the warning when `scene` has sag off (not chosen
-/// explicitly: `[effects] sag = false` or `--sag false` silence it), its cables can sag,
+/// explicitly: `[effects] sag = false`, or a front end's sag override, silences it), its cables can sag,
 /// and sag changes f1 by more than `model.f1_tolerance`; None otherwise (also when either
 /// model has no valid estimate there: nothing to compare).
 pub fn sag_warning(scene: &Scene, pose: &Pose) -> Option<SagWarning> {

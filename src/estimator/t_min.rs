@@ -2,7 +2,7 @@
 //!
 //! A scene gives each cable its own lower bound (`[[cables]] t_min`, else `[tension] t_min`);
 //! those are the default everywhere. A caller that wants other bounds says so by name —
-//! one value for every cable (`--t-min`, a uniform set-point) or one per cable — so the
+//! one value for every cable (a uniform set-point) or one per cable — so the
 //! scene-wide `[tension] t_min` cannot be passed by mistake where a cable has its own.
 
 use crate::scene::{Scene, MAX_CABLES};
@@ -13,7 +13,7 @@ pub enum Tmin<'a> {
     /// The scene's own bounds: cable i's `t_min`, else the scene's `[tension] t_min`.
     #[default]
     Scene,
-    /// One value (N) for every cable, overriding the scene's (`--t-min`, a uniform set-point).
+    /// One value (N) for every cable, overriding the scene's (a uniform set-point).
     Uniform(f64),
     /// One value (N) per cable of the scene, in the scene's cable order. A slice of another
     /// length is refused by the estimator as `TminOutOfRange`.
@@ -21,7 +21,7 @@ pub enum Tmin<'a> {
 }
 
 impl Tmin<'_> {
-    /// A command's `--t-min` override: `Uniform` when given, the scene's bounds otherwise.
+    /// A caller's T_min override: `Uniform` when given, the scene's bounds otherwise.
     pub fn from_override(t_min_n: Option<f64>) -> Tmin<'static> {
         t_min_n.map_or(Tmin::Scene, Tmin::Uniform)
     }

@@ -35,7 +35,7 @@ pub mod window;
 
 pub use align::{Aligned, Aligner};
 pub use cluster::{DiagramPole, Stability};
-pub use params::{IdentifyParams, MAX_CHANNELS, MAX_OVERLAP};
+pub use params::{IdentifyParams, MAX_CHANNELS, MAX_OVERLAP, MIN_RATE_OVER_BAND};
 pub use stream::{Identifier, WindowResult};
 pub use window::{IdentifiedMode, WindowStatus};
 
@@ -45,10 +45,39 @@ pub enum IdentifyError {
     /// A parameter out of its bounds.
     #[error("{0}")]
     Params(String),
-    /// The record cannot be identified (time not increasing, rate too low for the band, too
-    /// few samples).
+    /// The record cannot be identified (time not increasing, too few samples).
     #[error("{0}")]
     Input(String),
+    /// The record's sample rate is below [`MIN_RATE_OVER_BAND`] × the band's top
+    /// ([`IdentifyParams::to_hz`]).
+    #[error("{}", rate_too_low(*.rate_hz, *.to_hz, "to_hz"))]
+    RateTooLow {
+        /// The record's nominal sample rate (median step), Hz.
+        rate_hz: f64,
+        /// The band's top asked for, Hz.
+        to_hz: f64,
+    },
+}
+
+impl IdentifyError {
+    /// The message with the band's top called `to_hz` (the command line passes its flag);
+    /// the `Display` text names the parameter's field, `to_hz`.
+    pub fn render(&self, to_hz_name: &str) -> String {
+        match self {
+            IdentifyError::RateTooLow { rate_hz, to_hz } => {
+                rate_too_low(*rate_hz, *to_hz, to_hz_name)
+            }
+            other => other.to_string(),
+        }
+    }
+}
+
+/// [`IdentifyError::RateTooLow`]'s message, the band's top called `to_hz_name`.
+fn rate_too_low(rate_hz: f64, to_hz: f64, to_hz_name: &str) -> String {
+    format!(
+        "sample rate {rate_hz:.4} Hz is too low for the band up to {to_hz} Hz (needs ≥ {MIN_RATE_OVER_BAND} × the band's top: lower {to_hz_name} to ≤ {:.4} Hz)",
+        rate_hz / MIN_RATE_OVER_BAND
+    )
 }
 
 /// The statistical limits (σ_f/f, σ_ζ/ζ) ≈ (√(ζ/(ωT)), 1/√(ζωT)) of a mode at `frequency_hz`

@@ -276,11 +276,10 @@ impl Identifier {
         let dt = steps[steps.len() / 2];
         let rate = 1.0 / dt;
         if rate < MIN_RATE_OVER_BAND * self.p.to_hz {
-            return Err(IdentifyError::Input(format!(
-                "sample rate {rate:.4} Hz is too low for the band up to {} Hz (needs ≥ {MIN_RATE_OVER_BAND} × the band's top: lower --to-hz to ≤ {:.4} Hz)",
-                self.p.to_hz,
-                rate / MIN_RATE_OVER_BAND
-            )));
+            return Err(IdentifyError::RateTooLow {
+                rate_hz: rate,
+                to_hz: self.p.to_hz,
+            });
         }
         self.dt_nominal_s = dt;
         self.decimator = Some(Decimator::new(factor(rate, self.p.to_hz), self.l + self.m));

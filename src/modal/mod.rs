@@ -74,6 +74,8 @@
 //! a [`Condensed`](engine) view for the same first root, tracker and spectrum search, and its
 //! dense reference ([`sagged::SagModalSolver`]). `response`: the end-effector's time response by
 //! modal superposition with the static correction ([`response::ModalResponse`]).
+//! `quasi_static`: the inertial load of the quasi-static motion on the whole robot (its
+//! participation factors and quasi-static mass, [`quasi_static::QuasiStaticLoad`]).
 
 mod dense;
 mod dynamic_stiffness;
@@ -83,6 +85,7 @@ mod error;
 mod first_mode;
 mod frf;
 mod mechanism;
+pub mod quasi_static;
 pub mod response;
 pub mod sagged;
 mod shapes;
@@ -104,7 +107,8 @@ pub use frf::{
 };
 pub use mechanism::{free_direction, may_be_mechanism, MECHANISM_REL};
 pub use shapes::{
-    ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_CONTINUOUS_SAMPLES, MAX_MULTIPLICITY,
+    near_runs, ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_CONTINUOUS_SAMPLES,
+    MAX_MULTIPLICITY,
 };
 pub use solver::{receptance_over, ModalSolver, SagModalSolver, Solver};
 pub use spectrum::{Mode, SpectrumParams};

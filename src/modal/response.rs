@@ -35,6 +35,11 @@
 //! basis and step (the propagator), so a step costs O(K·dim). A step or ramp load is
 //! reproduced to rounding whatever the step; no ζ ≥ 0 is refused.
 //!
+//! **A load on the whole robot.** The force f may stand for a load on every node: with
+//! load shapes ψ_j ([`ModalResponse::set_load_shapes`]) mode j's force is ψ_jᵀ f and the
+//! quasi-static answer F_ψ f, so u = F_ψ f + Σ φ_j (q_j − ψ_jᵀf/λ_j) (the cables' inertia
+//! under f = −M_ee a, the modal `quasi_static` module); by default ψ_j = φ_j and F_ψ = F.
+//!
 //! [`ModalResponse::set_basis`] changes the modes (the pose moved): the end-effector's
 //! dynamic displacement and velocity are carried across, projected on the new modes.
 //! Nothing allocates after [`ModalResponse::new`].
@@ -80,6 +85,11 @@ struct ModeCoef {
     omega: f64,
     zeta: f64,
     phi: Vector6<f64>,
+    /// The load shape ψ: the mode's force under the force f is ψᵀf (φ, unless
+    /// [`ModalResponse::set_load_shapes`] gave another).
+    load: Vector6<f64>,
+    /// +1, or −1 when the basis's shape was installed with its sign flipped.
+    sign: f64,
     /// The transition matrix e^{Ah} of the free mode (module docs) for the step `h`,
     /// row-major.
     prop: [f64; 4],
@@ -147,7 +157,7 @@ impl ModalResponse {
         let mut v_ee = Vector6::zeros();
         for i in 0..self.n {
             let m = &self.modes[i];
-            u_dyn += m.phi * (self.q[i] - m.phi.dot(&f) / m.lambda);
+            u_dyn += m.phi * (self.q[i] - m.load.dot(&f) / m.lambda);
             v_ee += m.phi * self.v[i];
         }
         let mu = ee_mass * u_dyn;
@@ -190,7 +200,7 @@ impl ModalResponse {
         let mut v = [0.0; MAX_RESPONSE_MODES];
         for i in 0..old_n {
             let m = &self.modes[i];
-            d[i] = self.q[i] - m.phi.dot(&f) / m.lambda;
+            d[i] = self.q[i] - m.load.dot(&f) / m.lambda;
             v[i] = self.v[i];
         }
         self.install(lambda, phi_ee, damping, flexibility, |j, _, _| {
@@ -220,7 +230,9 @@ impl ModalResponse {
             for r in self.dim..6 {
                 phi[r] = 0.0;
             }
+            let before = phi;
             let (dynamic, vel) = carry(j, &mut phi, &self.modes);
+            let sign = if phi == before { 1.0 } else { -1.0 };
             let l = lambda[j];
             self.q[j] = phi.dot(&f) / l + dynamic;
             self.v[j] = vel;
@@ -230,6 +242,8 @@ impl ModalResponse {
                 omega,
                 zeta: damping.modal_ratio(omega),
                 phi,
+                load: phi,
+                sign,
                 prop: [0.0; 4],
                 h: f64::NAN,
             };
@@ -245,6 +259,49 @@ impl ModalResponse {
         self.n = lambda.len();
     }
 
+    /// Take each installed mode's force under the force f as ψ_jᵀ f with the load shapes
+    /// `load` (one per mode of the basis just set, in its order; first `dim` entries) and
+    /// the quasi-static answer as `load_flexibility` · f, the displacement staying
+    /// Σ φ_j q_j: a force f that stands for a load on the whole robot
+    /// (the modal `quasi_static` module: the cables' inertia under f = −M_ee a). Call it
+    /// after [`Self::set_basis`] or [`Self::set_basis_projected`]; the modes' dynamic parts
+    /// d_j = q_j − ψ_jᵀf/λ_j are kept. Until then (or with ψ = φ and F) the force acts on
+    /// the end-effector alone. Allocation-free.
+    pub fn set_load_shapes(
+        &mut self,
+        load: &[Vector6<f64>],
+        load_flexibility: &Matrix6<f64>,
+    ) -> Result<(), ResponseError> {
+        if load.len() != self.n {
+            return Err(ResponseError::Size("one load shape per mode of the basis"));
+        }
+        if !load_flexibility.iter().all(|x| x.is_finite())
+            || !load.iter().all(|p| p.iter().all(|x| x.is_finite()))
+        {
+            return Err(ResponseError::Flexibility);
+        }
+        let f = self.force;
+        let mut rf = *load_flexibility;
+        for (j, l) in load.iter().enumerate() {
+            let m = &mut self.modes[j];
+            let mut psi = l * m.sign;
+            for r in self.dim..6 {
+                psi[r] = 0.0;
+            }
+            self.q[j] += (psi - m.load).dot(&f) / m.lambda;
+            m.load = psi;
+            rf -= m.phi * psi.transpose() / m.lambda;
+        }
+        for r in self.dim..6 {
+            for c in 0..6 {
+                rf[(r, c)] = 0.0;
+                rf[(c, r)] = 0.0;
+            }
+        }
+        self.residual_flexibility = rf;
+        Ok(())
+    }
+
     /// Advance by `h_s` (s, > 0) under a force going linearly from `f0` to `f1` (N, and
     /// N·m for a rigid body's moment). Exact for that force, in every damping regime.
     pub fn step(&mut self, f0: &Vector6<f64>, f1: &Vector6<f64>, h_s: f64) {
@@ -257,8 +314,8 @@ impl ModalResponse {
             }
             let m = &self.modes[j];
             let w2 = m.lambda;
-            let g0 = m.phi.dot(f0);
-            let g1 = m.phi.dot(f1);
+            let g0 = m.load.dot(f0);
+            let g1 = m.load.dot(f1);
             let b = (g1 - g0) / h_s;
             // particular solution q_p(τ) = (g0 + bτ)/ω² − 2ζb/ω³, q_p' = b/ω²
             let shift = 2.0 * m.zeta * b / (w2 * m.omega);
@@ -288,7 +345,7 @@ impl ModalResponse {
         let mut u = flexibility * f;
         for j in 0..self.n {
             let m = &self.modes[j];
-            u += m.phi * (self.q[j] - m.phi.dot(f) / m.lambda);
+            u += m.phi * (self.q[j] - m.load.dot(f) / m.lambda);
         }
         for r in self.dim..6 {
             u[r] = 0.0;
@@ -300,7 +357,7 @@ impl ModalResponse {
     /// φ_j (q_j − φ_jᵀf/λ_j) (what the mode adds to the quasi-static answer).
     pub fn dynamic_part(&self, j: usize, f: &Vector6<f64>) -> Vector6<f64> {
         let m = &self.modes[j];
-        m.phi * (self.q[j] - m.phi.dot(f) / m.lambda)
+        m.phi * (self.q[j] - m.load.dot(f) / m.lambda)
     }
 
     /// The end-effector's dynamic amplitude in each kept mode, m (rad for rotations):
@@ -311,9 +368,42 @@ impl ModalResponse {
     pub fn dynamic_amplitudes(&self, f: &Vector6<f64>, out: &mut [f64]) {
         for (j, o) in out.iter_mut().enumerate().take(self.n) {
             let m = &self.modes[j];
-            let d = self.q[j] - m.phi.dot(f) / m.lambda;
+            let d = self.q[j] - m.load.dot(f) / m.lambda;
             let w = self.v[j] / m.omega;
             *o = m.phi.norm() * (d * d + w * w).sqrt();
+        }
+    }
+
+    /// Each kept mode's end-effector amplitude split into its free vibration and its forced
+    /// part, m (rad for rotations), under the force `f` now ramping at `rate` (N/s, N·m/s):
+    /// the ramp's particular solution has d_p = −2ζ b/(λω) and q̇_p = b/λ, b = ψᵀ rate
+    /// (module docs), the free part is the rest of the mode's departure from the
+    /// quasi-static answer, d − d_p and q̇ − q̇_p. Into `free` and `forced` (their first
+    /// [`Self::modes`] entries): |φ_j| √(x² + (ẋ/ω_j)²) of each. A change of the mode's
+    /// frequency puts the free part out of phase for as long as it rings, the forced part
+    /// only in proportion (its amplitude follows the frequency).
+    pub fn ringing_amplitudes(
+        &self,
+        f: &Vector6<f64>,
+        rate: &Vector6<f64>,
+        free: &mut [f64],
+        forced: &mut [f64],
+    ) {
+        for (j, (a, b)) in free
+            .iter_mut()
+            .zip(forced.iter_mut())
+            .enumerate()
+            .take(self.n)
+        {
+            let m = &self.modes[j];
+            let load_rate = m.load.dot(rate);
+            let dp = -2.0 * m.zeta * load_rate / (m.lambda * m.omega);
+            let vp = load_rate / m.lambda;
+            let d = self.q[j] - m.load.dot(f) / m.lambda - dp;
+            let v = self.v[j] - vp;
+            let norm = m.phi.norm();
+            *a = norm * (d * d + (v / m.omega).powi(2)).sqrt();
+            *b = norm * (dp * dp + (vp / m.omega).powi(2)).sqrt();
         }
     }
 
@@ -327,6 +417,11 @@ impl ModalResponse {
         &self.modes[j].phi
     }
 
+    /// The basis's load shape ψ_j ([`Self::set_load_shapes`]; φ_j by default).
+    pub fn load_shape(&self, j: usize) -> &Vector6<f64> {
+        &self.modes[j].load
+    }
+
     /// The end-effector's acceleration under the force `f` now (the force of the last
     /// [`Self::step`]'s end) from the modal state: Σ φ_j q̈_j with q̈_j = φ_jᵀf − 2ζ_jω_j q̇_j −
     /// ω_j² q_j, the modal equations themselves (exact at the sample, whatever the step, and
@@ -338,7 +433,7 @@ impl ModalResponse {
         let mut a = Vector6::zeros();
         for j in 0..self.n {
             let m = &self.modes[j];
-            let qdd = m.phi.dot(f) - 2.0 * m.zeta * m.omega * self.v[j] - m.lambda * self.q[j];
+            let qdd = m.load.dot(f) - 2.0 * m.zeta * m.omega * self.v[j] - m.lambda * self.q[j];
             a += m.phi * qdd;
         }
         a

@@ -239,7 +239,7 @@ pub struct ModelSettings {
     /// (the default, and every scene without an `[effects]` table): every cable on its
     /// straight chord.
     pub sag: bool,
-    /// Whether `sag` was chosen explicitly (`[effects] sag = …` or `--sag`): then the
+    /// Whether `sag` was chosen explicitly (`[effects] sag = …` or a front end's override): then the
     /// warning that sag would matter ([`crate::scene`] users: `estimator::sag_warning`) is
     /// not printed for `sag = false`.
     pub sag_explicit: bool,

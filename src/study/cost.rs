@@ -2,7 +2,7 @@
 //!
 //! **Memory.** Every study whose memory grows with the user's input checks its estimate
 //! against the one budget of the offline work ([`crate::memory_budget`], 2 GiB) before it
-//! allocates: the mode shapes of `modes` and `analyze --shapes` (and their CSV text), the
+//! allocates: the mode shapes of the modes and analysis studies (and their CSV text), the
 //! modal basis of `frf` with modal damping, the two bases `simulate` holds across a basis
 //! update (and its path); the dense reference by the same rule
 //! ([`crate::modal::check_dense_budget`]).
@@ -46,6 +46,10 @@ pub const CSV_ROW_S: f64 = 8e-6;
 /// Text a mode-shape CSV holds in memory per row (one node of one mode) until it is
 /// written, bytes: 124 measured at N = 10⁵ (1.39 GB for 14 modes), with margin.
 pub const SHAPES_CSV_BYTES_PER_ROW: u64 = 130;
+/// The poses at which `simulate`'s pilot runs (the path's first, middle and last).
+pub const PILOT_POSES: f64 = 3.0;
+/// What to change when `simulate` is over the memory budget.
+pub const SIMULATE_REMEDY: &str = "use fewer elements per cable, or give --modes (choosing K for --tolerance runs a pilot basis of more modes than K) or a larger --tolerance";
 /// Memory per path sample of `simulate` (position, command, deviation, time; unshaped and
 /// shaped runs), bytes.
 const SIMULATE_BYTES_PER_SAMPLE: u64 = 2 * 80;
@@ -64,7 +68,8 @@ pub enum Work<'a> {
         basis_modes: usize,
     },
     /// `simulate`: `samples` path samples, the basis of `modes` modes updated every
-    /// `update_every` samples.
+    /// `update_every` samples, after the pilot that chose or assessed K with bases of up
+    /// to `pilot_modes` modes.
     Simulate {
         /// Path samples (with the settling time).
         samples: usize,
@@ -72,8 +77,10 @@ pub enum Work<'a> {
         update_every: usize,
         /// Modes K.
         modes: usize,
+        /// The pilot's largest basis, modes.
+        pilot_modes: usize,
     },
-    /// `modes`, `analyze --shapes`: the shapes of `modes` modes, their CSV when `csv`.
+    /// The mode shapes (modes, analysis): the shapes of `modes` modes, their CSV when `csv`.
     Modes {
         /// Modes K.
         modes: usize,
@@ -99,6 +106,8 @@ pub struct WorkEstimate {
     pub memory_bytes: u64,
     /// Elements per cable of the model (for the message).
     pub elements_per_cable: usize,
+    /// What to change when the memory is over the budget.
+    pub remedy: &'static str,
 }
 
 impl WorkEstimate {
@@ -108,7 +117,7 @@ impl WorkEstimate {
         crate::memory_budget::check(
             || format!("{what} ({units} {unit}, {n} elements per cable)"),
             self.memory_bytes,
-            crate::estimator::SHAPES_REMEDY,
+            self.remedy,
         )
     }
 
@@ -178,27 +187,34 @@ pub fn estimate_cost(scene: &Scene, work: &Work<'_>) -> WorkEstimate {
                 seconds: basis_s + per * points as f64,
                 memory_bytes: memory.saturating_add(points as u64 * 600),
                 elements_per_cable: n,
+                remedy: crate::estimator::SHAPES_REMEDY,
             }
         }
         Work::Simulate {
             samples,
             update_every,
             modes,
+            pilot_modes,
         } => {
             let updates = samples.div_ceil(update_every.max(1)) as f64;
             let nodes = shape_nodes(scene, samples_default) as f64;
             let k = (modes + 6) as f64;
-            // Two bases at once across an update (the old one for the mass overlap).
-            let shapes =
-                shapes_memory_bytes(scene, modes, samples_default, 2 * SHAPE_BYTES_PER_NODE);
+            // The pilot holds one basis at a time (at three poses); the run two at once
+            // across an update (the old one for the mass overlap).
+            let pilot =
+                shapes_memory_bytes(scene, pilot_modes, samples_default, SHAPE_BYTES_PER_NODE);
+            let run = shapes_memory_bytes(scene, modes, samples_default, 2 * SHAPE_BYTES_PER_NODE);
+            let pilot_s = PILOT_POSES * (pilot_modes + 6) as f64 * nodes * SHAPE_NODE_MODE_S;
             WorkEstimate {
                 what: "simulate",
                 units: samples as u64,
                 unit: "samples",
-                seconds: updates * k * nodes * SIMULATE_NODE_MODE_S,
-                memory_bytes: shapes
+                seconds: pilot_s + updates * k * nodes * SIMULATE_NODE_MODE_S,
+                memory_bytes: pilot
+                    .max(run)
                     .saturating_add((samples as u64).saturating_mul(SIMULATE_BYTES_PER_SAMPLE)),
                 elements_per_cable: n,
+                remedy: SIMULATE_REMEDY,
             }
         }
         Work::Modes {
@@ -232,6 +248,7 @@ pub fn estimate_cost(scene: &Scene, work: &Work<'_>) -> WorkEstimate {
                 )
                 .saturating_add(csv_bytes),
                 elements_per_cable: n,
+                remedy: crate::estimator::SHAPES_REMEDY,
             }
         }
     }
@@ -332,7 +349,7 @@ fn lowest_clusters(solver: &mut ModalSolver, k: usize) -> Result<Vec<(f64, u32)>
 }
 
 /// The lowest `k` modes' shapes of `pose` (clusters completed) from the structured solver,
-/// what `cablevib modes` and `analyze --shapes` draw and write: refused first when the
+/// what the mode-shape studies draw and write: refused first when the
 /// shapes (and their CSV text, `csv`) would be over the memory budget; the clusters'
 /// shapes computed a few at a time with a progress bar labelled `label` on a terminal.
 pub fn mode_shapes(
@@ -355,16 +372,13 @@ pub fn mode_shapes(
     let total: usize = clusters.iter().map(|c| c.1 as usize).sum();
     let mut all: Option<ModeShapes> = None;
     let bar = Progress::counting(label, total, "modes");
-    // One cluster at a time: each call recovers its own shapes (no work is shared across
-    // clusters), so the bar moves by each cluster's multiplicity.
-    for c in &clusters {
+    // One cluster at a time (a run of near neighbours together, resolved as one when they
+    // are not separated): each call recovers its own shapes (no work is shared across
+    // clusters), so the bar moves by each run's multiplicity.
+    for run in modal::near_runs(&clusters) {
+        let c = &clusters[run];
         let part = solver
-            .mode_shapes(
-                &pose.models,
-                &pose.geometry.arm_m,
-                std::slice::from_ref(c),
-                params,
-            )
+            .mode_shapes(&pose.models, &pose.geometry.arm_m, c, params)
             .map_err(err);
         let mut part = match part {
             Ok(p) => p,
@@ -383,7 +397,7 @@ pub fn mode_shapes(
                 a.modes.append(&mut part.modes);
             }
         }
-        bar.advance(c.1 as usize);
+        bar.advance(c.iter().map(|x| x.1 as usize).sum());
     }
     bar.finish();
     Ok(all.unwrap_or_default())

@@ -3,7 +3,7 @@
 //!
 //! Grid points are lo, lo + step, …, hi on each axis; the heat-map plane's two axes make a
 //! panel, and the third (slice) axis gives one panel per value. Every point takes the
-//! scene's orientation q₀ (the scene file's, or `--orientation`). With a [`Tilt`] (rigid
+//! scene's orientation q₀ (the scene file's, or a caller's override). With a [`Tilt`] (rigid
 //! end-effectors only) the panels are orientations instead: the slice axis takes one value
 //! and panel k has q_k = R(a, θ_k) · q₀, q₀ turned by θ_k about the world axis a.
 

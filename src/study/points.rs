@@ -20,7 +20,7 @@ use rayon::prelude::*;
 
 /// Most worker threads a study starts (more only contend for the same cores).
 pub const MAX_THREADS: usize = 64;
-/// Most modes a study keeps per point (`--modes`): the spatial robot's first string cluster
+/// Most modes a study keeps per point (`modes`): the spatial robot's first string cluster
 /// has 8 modes, so 16 covers it and the modes above it, for 128 bytes more per point (a
 /// point is ~0.5 kB).
 pub const MAX_MODES: usize = 16;

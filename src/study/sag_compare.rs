@@ -5,16 +5,16 @@
 //! The line is x_k = p + o_k e_axis, o_k = A + k (B − A)/(n − 1), k = 0 .. n − 1, with p the
 //! scene's position, e_axis a world axis and [A, B] the span of offsets (m). A line, not a
 //! grid: the two models' curves are drawn over each other on shared axes, which a heat map
-//! cannot do (`cablevib map --sag true|false` gives the grid, one map per model).
+//! cannot do (a map per model gives the grid).
 //!
-//! Each (pose, model) is evaluated exactly as `cablevib analyze --position x_k --sag …`
+//! Each (pose, model) is evaluated exactly as the analysis of the scene moved to x_k with that model
 //! does (the structured path of [`super::analysis`]): an estimator built for the scene at
 //! that pose, one cycle, then the first mode by `Estimator::modes`. So every number equals
 //! `analyze`'s bit for bit, and does not depend on the order nor on the thread that
 //! evaluated it (no warm start carries over between points). Where the estimator cannot be
 //! built at the pose (outside the workspace, slack), a copy of the one built at the scene's
 //! default pose runs the cycle, and the row keeps the status that names the cause (as
-//! `analyze --realtime` does).
+//! the real-time estimator does).
 //!
 //! Per model and pose: f1 (Hz), k_min = the smallest principal value of the static
 //! end-effector stiffness's translational block (N/m, [`super::points::stiffness_min_n_m`]),
@@ -237,7 +237,7 @@ fn no_ee_mode() -> EstimatorParams {
     }
 }
 
-/// One model at position `p`, as `analyze --position p` computes it.
+/// One model at position `p`, as the analysis of the scene moved to `p` computes it.
 pub fn evaluate_at(model: &Scene, cold: &Estimator, p: Vector3<f64>) -> ModelPoint {
     let mut at = model.clone();
     at.ee_position_m = p;

@@ -5,15 +5,21 @@
 //! **Model.** The robot follows the commanded path quasi-statically (each sample's pose is
 //! the equilibrium the estimator solves); what vibrates is the deviation u from it. About
 //! each pose the structure is linear (the estimator's model: stiffness, mass, tensions of
-//! that pose), so M ü + C u̇ + K u = f with the inertial load of the quasi-static motion on
-//! the end-effector, f = −M_ee [a; 0] (the end-effector's mass times the path's
-//! acceleration a, by central differences of the samples). Included: that load on every
-//! mode, through the first K modes of the pose (the structured engine's frequencies and
-//! mass-normalised shapes, taut or sagging), the damping of the
-//! scene (each mode's ratio [`Damping::modal_ratio`]), the static correction of the modes
-//! left out (mode-acceleration method, [`ModalResponse`](crate::modal::response::ModalResponse)). Left out: the cables' own
-//! share of the quasi-static motion's inertia (their nodes following the end-effector:
-//! about a third of each cable's mass), the rotational load −I·α − ω×Iω (the paths here
+//! that pose), so M ü + C u̇ + K u = −M r a with the inertial load of the quasi-static
+//! motion of the whole robot: every cable node carried along with the end-effector by the
+//! influence field r (taut cables: the static one, anchors held, lengths fixed), M the
+//! whole robot's mass, a the
+//! path's acceleration by central differences of the samples
+//! ([`crate::modal::quasi_static`]: the modes' participation factors φ_kᵀ M r and the
+//! quasi-static mass rᵀ M r, taken by the response as load shapes of the end-effector
+//! force −M_ee [a; 0]). Included: that load on every mode, through the first K modes of
+//! the pose (the structured engine's frequencies and mass-normalised shapes, taut or
+//! sagging), the damping of the scene (each mode's ratio [`Damping::modal_ratio`]), the
+//! static correction of the modes left out (mode-acceleration method,
+//! [`ModalResponse`](crate::modal::response::ModalResponse)). On sagging cables the field is
+//! the path's instead (the nodes follow the sagged equilibrium with the winches' lengths
+//! re-solved at each pose, [`crate::estimator::sag_path_field_applies`]; its convective
+//! term ∂²x/∂p²[ṗ, ṗ] is left out). Left out: the rotational load −I·α − ω×Iω (the paths here
 //! keep the orientation fixed: it is zero for them), gravity's change with the pose (it is
 //! in the quasi-static pose), and the winches' dynamics.
 //!
@@ -35,9 +41,11 @@ use crate::modal::response::{ModalResponse, MAX_RESPONSE_MODES};
 use crate::scene::{Damping, Scene};
 use crate::trajectory::shaping::{OnlineShaper, ShaperKind, DEFAULT_MIN_FREQUENCY_HZ};
 use crate::trajectory::{Samples, Trajectory};
-use core::ops::AddAssign;
 use nalgebra::{Vector3, Vector6};
 
+pub use path_spec::{simulate_shaped, PathSpec, ShapedRun};
+
+pub mod path_spec;
 pub mod pilot;
 mod propagate;
 pub mod updates;
@@ -289,6 +297,8 @@ pub struct Accuracy {
     pub modes_met: bool,
     /// The pilot's peak deviation, m (the scale of the tolerance).
     pub peak_m: f64,
+    /// Modes of the pilot's largest basis (what its memory held).
+    pub pilot_modes: usize,
     /// Whether the update interval was chosen for the tolerance (false: given).
     pub updates_chosen: bool,
     /// The largest predicted error of one interval between basis updates, relative to
@@ -411,15 +421,32 @@ pub struct ForcedResult {
 /// [`simulate`] with an external force on the end-effector besides the path's inertial
 /// load: `force_n(k)` (N, base frame) at sample k, held linearly between samples like the
 /// load (e.g. white noise standing for the disturbances a real robot feels, which keep its
-/// modes ringing); also the deviation's acceleration.
+/// modes ringing); also the deviation's acceleration. The same loop as [`simulate`]
+/// (`propagate::run`: K and the update interval given or chosen for `cfg.tolerance`).
+/// `force_n` is called once per sample, in order, before the run (its values are held:
+/// 24 B per sample, within [`simulate`]'s memory budget per sample).
 pub fn simulate_forced(
     scene: &Scene,
     path: &SampledPath,
     cfg: &SimulateConfig,
     force_n: impl FnMut(usize) -> Vector3<f64>,
 ) -> Result<ForcedResult, StudyError> {
-    let mut acceleration_m_s2 = Vec::new();
-    let response = run_forced(scene, path, cfg, force_n, Some(&mut acceleration_m_s2))?;
+    let path = settled_path(path, cfg)?;
+    let n = path.positions_m.len();
+    super::cost::estimate_cost(scene, &simulate_work(n, cfg)).check_memory()?;
+    let forces: Vec<Vector3<f64>> = (0..n).map(force_n).collect();
+    let mut acceleration_m_s2 = Vec::with_capacity(n);
+    let response = run_settled(
+        scene,
+        &path,
+        cfg,
+        |k| {
+            let mut f = Vector6::zeros();
+            f.fixed_rows_mut::<3>(0).copy_from(&forces[k]);
+            f
+        },
+        |_, resp, f| acceleration_m_s2.push(resp.acceleration(f).fixed_rows::<3>(0).into_owned()),
+    )?;
     Ok(ForcedResult {
         response,
         acceleration_m_s2,
@@ -463,110 +490,6 @@ fn settled_path(path: &SampledPath, cfg: &SimulateConfig) -> Result<SampledPath,
     Ok(path)
 }
 
-/// [`simulate_forced`]'s loop: K = `cfg.modes` and the basis updated every
-/// `cfg.update_every` samples (both must be given), the state carried across an update by
-/// the mass overlap of the shapes. Not yet [`simulate`]'s propagation (`propagate::run`):
-/// through that one the demo's synthetic accelerometer moved one 2 s window's dominant peak
-/// from the model's end-effector mode (32.96 Hz) to a neighbour at 34.09 Hz, which its test
-/// refuses; until that is understood this loop stays as it was measured.
-fn run_forced(
-    scene: &Scene,
-    path: &SampledPath,
-    cfg: &SimulateConfig,
-    mut force_n: impl FnMut(usize) -> Vector3<f64>,
-    mut acceleration: Option<&mut Vec<Vector3<f64>>>,
-) -> Result<SimulateResult, StudyError> {
-    let path = settled_path(path, cfg)?;
-    let (Some(modes), Some(update_every)) = (cfg.modes, cfg.update_every) else {
-        let param = if cfg.modes.is_none() {
-            Param::Modes
-        } else {
-            Param::UpdateEvery
-        };
-        let rule = "must be given: a forced simulation runs a fixed basis, no pilot chooses it";
-        return Err(ParamError::invalid(param, "unset", rule).into());
-    };
-    let n = path.positions_m.len();
-    let mut est = estimator(scene)?;
-    let damping = scene.damping;
-    let dim = if scene.rigid { 6 } else { 3 };
-    let mut resp = ModalResponse::new(dim);
-    let mut out = SimulateResult {
-        t_s: Vec::with_capacity(n),
-        command_m: Vec::with_capacity(n),
-        deviation_m: Vec::with_capacity(n),
-        stops: Vec::new(),
-        updates: 0,
-        modes: 0,
-        f1_range_hz: (f64::INFINITY, f64::NEG_INFINITY),
-        structured: true,
-        accuracy: Accuracy::default(),
-    };
-    let mut ee_mass = nalgebra::Matrix6::zeros();
-    let mut f_prev = Vector6::zeros();
-    let mut prev_shapes = None;
-    for k in 0..n {
-        let t = k as f64 * path.dt_s;
-        let p = path.positions_m[k];
-        if k % update_every == 0 {
-            solve_pose(&mut est, scene, &p, t)?;
-            let f1 = est.estimate().f1_hz;
-            out.f1_range_hz = (out.f1_range_hz.0.min(f1), out.f1_range_hz.1.max(f1));
-            let basis = est
-                .ee_modal_basis(modes)
-                .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))?;
-            // The whole state carried by the mass overlap of the whole shapes when both
-            // bases have them; else the end-effector's (module docs).
-            let overlap = match (&basis.shapes, &prev_shapes) {
-                (Some(new), Some(old)) => new.mass_overlap(old, &basis.ee_mass),
-                _ => None,
-            };
-            match overlap {
-                Some(o) => resp.set_basis_projected(
-                    &basis.lambda,
-                    &basis.phi_ee,
-                    &damping,
-                    &basis.flexibility,
-                    &o,
-                ),
-                None => resp.set_basis(
-                    &basis.lambda,
-                    &basis.phi_ee,
-                    &damping,
-                    &basis.flexibility,
-                    &basis.ee_mass,
-                ),
-            }
-            .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))?;
-            prev_shapes = basis.shapes;
-            ee_mass = basis.ee_mass;
-            out.structured = basis.structured;
-            out.modes = basis.lambda.len();
-            out.updates += 1;
-        }
-        let a = path.acceleration(k);
-        let mut a6 = Vector6::zeros();
-        a6.fixed_rows_mut::<3>(0).copy_from(&a);
-        let mut f = -(ee_mass * a6);
-        f.fixed_rows_mut::<3>(0).add_assign(&force_n(k));
-        if k == 0 {
-            f_prev = f;
-        } else {
-            resp.step(&f_prev, &f, path.dt_s);
-            f_prev = f;
-        }
-        let u = resp.displacement(&f);
-        if let Some(acc) = acceleration.as_deref_mut() {
-            acc.push(resp.acceleration(&f).fixed_rows::<3>(0).into_owned());
-        }
-        out.t_s.push(t);
-        out.command_m.push(p);
-        out.deviation_m.push(u.fixed_rows::<3>(0).into_owned());
-    }
-    out.stops = stop_residuals(&out.t_s, &out.command_m, &out.deviation_m);
-    Ok(out)
-}
-
 /// The simulation of [`simulate`] (module docs).
 fn run(
     scene: &Scene,
@@ -574,6 +497,19 @@ fn run(
     cfg: &SimulateConfig,
 ) -> Result<SimulateResult, StudyError> {
     let path = settled_path(path, cfg)?;
+    run_settled(scene, &path, cfg, |_| Vector6::zeros(), |_, _, _| {})
+}
+
+/// [`run`] on the path as simulated ([`settled_path`]) with the external force
+/// `external_n(k)` (N, and N·m on a rigid body) and `on_sample(k, response, force)` after
+/// each sample's state is reached: `propagate::run` and the progress bar.
+fn run_settled(
+    scene: &Scene,
+    path: &SampledPath,
+    cfg: &SimulateConfig,
+    external_n: impl Fn(usize) -> Vector6<f64>,
+    mut on_sample: impl FnMut(usize, &ModalResponse, &Vector6<f64>),
+) -> Result<SimulateResult, StudyError> {
     let n = path.positions_m.len();
     // The memory of the whole run (two bases across an update, the path and its
     // deviation), refused past the one budget before anything is computed.
@@ -594,10 +530,11 @@ fn run(
     propagate::run(
         &mut est,
         scene,
-        &path,
+        path,
         cfg,
-        |_| Vector6::zeros(),
-        |k, _, _| {
+        external_n,
+        |k, resp, f| {
+            on_sample(k, resp, f);
             if k % PROGRESS_SAMPLES == 0 && k > 0 {
                 bar.advance(PROGRESS_SAMPLES);
             }
@@ -614,10 +551,13 @@ fn run(
 pub fn simulate_work(samples: usize, cfg: &SimulateConfig) -> super::cost::Work<'static> {
     super::cost::Work::Simulate {
         samples,
-        // The chosen K and interval are known only after the pilot: the smallest pilot and
-        // the first interval make the estimate a lower bound, so a refusal is certain.
+        // The chosen K, the pilot's growth and the interval are known only as the run goes:
+        // its first pilot basis, K at least that pilot's and the first interval make this
+        // estimate a lower bound (a refusal is certain); each larger pilot basis and the K
+        // chosen are checked again before they are built.
         update_every: cfg.update_every.unwrap_or(updates::FIRST_INTERVAL),
         modes: cfg.modes.unwrap_or(pilot::FIRST_PILOT),
+        pilot_modes: pilot::pilot_sizes(cfg.modes.unwrap_or(0))[0],
     }
 }
 

@@ -88,7 +88,7 @@ pub fn circle_pose(s: &Scene, k: usize, period_s: f64) -> Pose {
 
 /// Pose k of the circle of `radius_m` around `s`'s default position (as [`circle_pose`],
 /// which is this at [`CIRCLE_RADIUS_M`], bit for bit): for robots whose workspace is far
-/// larger than the paper's (`cablevib bench --radius-m`). Allocation-free.
+/// larger than the paper's (the bench's radius). Allocation-free.
 pub fn circle_pose_with_radius(s: &Scene, k: usize, period_s: f64, radius_m: f64) -> Pose {
     let frame = horizontal_axes(&s.gravity_m_s2);
     let th = 2.0 * std::f64::consts::PI * (k as f64 * SAMPLE_PERIOD_S) / period_s;

@@ -13,7 +13,7 @@ use cablevib::modal::response::ModalResponse;
 use cablevib::scene::Damping;
 use cablevib::study::simulate::pilot;
 use cablevib::trajectory::moves::{Move, Profile};
-use nalgebra::{DMatrix, Matrix4, Matrix6, Vector3, Vector4, Vector6};
+use nalgebra::{DMatrix, DVector, Matrix4, Matrix6, Vector3, Vector4, Vector6};
 
 /// The damping ratio of a mode at ω (rad/s), from the damping's own numbers.
 fn zeta_of(d: &Damping, omega: f64) -> f64 {
@@ -52,8 +52,25 @@ pub fn exact_response(
     loads: &[Vector6<f64>],
     dt: f64,
 ) -> (Vec<Vector3<f64>>, ExactModes) {
+    exact_response_by(k, m, dim, damping, loads.len(), dt, |u, s| {
+        (0..dim).map(|r| u[r] * loads[s][r]).sum()
+    })
+}
+
+/// As [`exact_response`] for any load on the whole model: `modal_force(u, s)` is the force
+/// uᵀP(t_s) of the load P at sample s on the mass-normalised mode u (every DOF), over
+/// `samples` samples.
+pub fn exact_response_by(
+    k: &DMatrix<f64>,
+    m: &DMatrix<f64>,
+    dim: usize,
+    damping: &Damping,
+    samples: usize,
+    dt: f64,
+    modal_force: impl Fn(&DVector<f64>, usize) -> f64,
+) -> (Vec<Vector3<f64>>, ExactModes) {
     let (lambda, u) = dense_eig(k, m);
-    let mut out = vec![Vector3::zeros(); loads.len()];
+    let mut out = vec![Vector3::zeros(); samples];
     let mut info = ExactModes {
         count: lambda.len(),
         overdamped: 0,
@@ -64,9 +81,10 @@ pub fn exact_response(
         let z = zeta_of(damping, w);
         info.overdamped += usize::from(z > 1.0);
         info.zeta_max = info.zeta_max.max(z);
+        let uj: DVector<f64> = u.column(j).into_owned();
         let mut phi = Vector6::zeros();
         for (r, v) in phi.iter_mut().enumerate().take(dim) {
-            *v = u[(r, j)];
+            *v = uj[r];
         }
         #[rustfmt::skip]
         let a = Matrix4::new(
@@ -76,17 +94,62 @@ pub fn exact_response(
             0.0, 0.0, 0.0, 0.0,
         );
         let prop = (a * dt).exp();
-        let g = |s: usize| phi.dot(&loads[s]);
-        let mut x = Vector4::new(0.0, 0.0, g(0) / w, 0.0);
+        let g: Vec<f64> = (0..samples).map(|s| modal_force(&uj, s)).collect();
+        let mut x = Vector4::new(0.0, 0.0, g[0] / w, 0.0);
         for (s, o) in out.iter_mut().enumerate().skip(1) {
             // The ramp of this interval: ġ/ω set at its start, g/ω carried (continuous).
-            x[2] = g(s - 1) / w;
-            x[3] = (g(s) - g(s - 1)) / dt / w;
+            x[2] = g[s - 1] / w;
+            x[3] = (g[s] - g[s - 1]) / dt / w;
             x = prop * x;
             *o += phi.fixed_rows::<3>(0) * (x[0] / w);
         }
     }
     (out, info)
+}
+
+/// The exact response of the whole robot to a prescribed end-effector motion with
+/// accelerations `acc` (m/s², translation) at the samples: the influence field
+/// r = [I; −K_ii⁻¹ K_ie] by an LU solve of the dense K (DOF 0..`dim` the end-effector), the
+/// load −M r a on every DOF (the relative-motion problem M ü + C u̇ + K u = −M r a), every
+/// mode propagated as [`exact_response_by`]; also the quasi-static mass rᵀ M r (kg).
+pub fn exact_whole_robot(
+    k: &DMatrix<f64>,
+    m: &DMatrix<f64>,
+    dim: usize,
+    damping: &Damping,
+    acc: &[Vector3<f64>],
+    dt: f64,
+) -> (Vec<Vector3<f64>>, ExactModes, DMatrix<f64>) {
+    let n = k.nrows();
+    let kii = k.view((dim, dim), (n - dim, n - dim)).into_owned();
+    let kie = k.view((dim, 0), (n - dim, dim)).into_owned();
+    let mut r = DMatrix::<f64>::zeros(n, dim);
+    for d in 0..dim {
+        r[(d, d)] = 1.0;
+    }
+    let ri = kii.lu().solve(&kie).expect("K_ii regular");
+    r.view_mut((dim, 0), (n - dim, dim)).copy_from(&(-ri));
+    exact_with_field(k, m, dim, damping, &r, acc, dt)
+}
+
+/// As [`exact_whole_robot`] with the field `r` given (n × 3: every DOF's motion per unit
+/// end-effector translation; a sagging robot's path field, `crate::sag_field`).
+pub fn exact_with_field(
+    k: &DMatrix<f64>,
+    m: &DMatrix<f64>,
+    dim: usize,
+    damping: &Damping,
+    r: &DMatrix<f64>,
+    acc: &[Vector3<f64>],
+    dt: f64,
+) -> (Vec<Vector3<f64>>, ExactModes, DMatrix<f64>) {
+    let mr = m * r;
+    let mqs = r.transpose() * &mr;
+    let (u, info) = exact_response_by(k, m, dim, damping, acc.len(), dt, |u, s| {
+        let l = u.transpose() * &mr;
+        -(0..3).map(|d| l[d] * acc[s][d]).sum::<f64>()
+    });
+    (u, info, mqs)
 }
 
 /// max |a − b| / max |b| over the samples (translation norms).
@@ -108,6 +171,14 @@ pub fn move_loads(
     rest: f64,
     dt: f64,
 ) -> Vec<Vector6<f64>> {
+    move_accelerations(d, t, rest, dt)
+        .iter()
+        .map(|a| -(ee_mass * Vector6::new(a.x, a.y, a.z, 0.0, 0.0, 0.0)))
+        .collect()
+}
+
+/// The accelerations (m/s²) of [`move_loads`]' move at its samples.
+pub fn move_accelerations(d: Vector3<f64>, t: f64, rest: f64, dt: f64) -> Vec<Vector3<f64>> {
     let mv = Move::new(Vector3::zeros(), d, t, Profile::SCurve).unwrap();
     let p = mv.sampled(dt, rest).unwrap().position_m;
     let n = p.len();
@@ -115,25 +186,30 @@ pub fn move_loads(
         .map(|k| {
             let prev = p[k.saturating_sub(1)];
             let next = p[(k + 1).min(n - 1)];
-            let a = (next - p[k] * 2.0 + prev) / (dt * dt);
-            -(ee_mass * Vector6::new(a.x, a.y, a.z, 0.0, 0.0, 0.0))
+            (next - p[k] * 2.0 + prev) / (dt * dt)
         })
         .collect()
 }
 
 /// The crate's response (translation) of the first `kk` modes (a cluster cut completed)
-/// of the estimator's pose with the static correction, and the modes it kept.
+/// of the estimator's pose with the static correction, and the modes it kept; `whole`: the
+/// end-effector load `loads` (−M_ee a) taken through the basis's load shapes (the whole
+/// robot's quasi-static inertia, as `simulate`), else on the end-effector alone.
 pub fn crate_response(
     est: &mut Estimator,
     kk: usize,
     damping: &Damping,
     loads: &[Vector6<f64>],
     dt: f64,
+    whole: bool,
 ) -> (Vec<Vector3<f64>>, usize) {
     let b = est.ee_modal_basis(kk).unwrap();
     let mut r = ModalResponse::new(b.dim);
     r.set_basis(&b.lambda, &b.phi_ee, damping, &b.flexibility, &b.ee_mass)
         .unwrap_or_else(|e| panic!("{damping:?}: {e}"));
+    if whole {
+        r.set_load_shapes(&b.load_ee, &b.load_flexibility).unwrap();
+    }
     let mut out = vec![r.displacement(&loads[0]).fixed_rows::<3>(0).into_owned()];
     for s in 1..loads.len() {
         r.step(&loads[s - 1], &loads[s], dt);
@@ -159,22 +235,38 @@ pub struct DefaultChoice {
 
 /// At the estimator's pose: the modes `simulate` chooses by default
 /// (`study::simulate::pilot::choose` at the default tolerance), the crate's response with
-/// them, and its error against [`exact_response`] of the dense (K, M) (DOF 0..`dim` the
-/// end-effector).
+/// them (the whole robot's inertia, as `simulate`), and its error against
+/// [`exact_whole_robot`] of the dense (K, M) (DOF 0..`dim` the end-effector) under the
+/// path's accelerations `acc` (`loads` = −M_ee a of the same). Sagging models (a point mass
+/// without pulleys) are loaded along the path's field instead of the fixed-length one (the
+/// crate's `modal::quasi_static` docs): for them the field is [`crate::sag_field`]'s
+/// reference at the estimator's pose and the reference [`exact_with_field`].
+#[allow(clippy::too_many_arguments)]
 pub fn default_choice(
     est: &mut Estimator,
     k: &DMatrix<f64>,
     m: &DMatrix<f64>,
     dim: usize,
     damping: &Damping,
+    acc: &[Vector3<f64>],
     loads: &[Vector6<f64>],
     dt: f64,
 ) -> DefaultChoice {
-    let c = pilot::choose(est, damping, loads, dt, pilot::DEFAULT_TOLERANCE).unwrap();
+    let c = pilot::choose(est, damping, loads, dt, pilot::DEFAULT_TOLERANCE, None).unwrap();
     assert!(c.met, "the choice reports it missed the tolerance: {c:?}");
-    let (got, kept) = crate_response(est, c.modes, damping, loads, dt);
+    let (got, kept) = crate_response(est, c.modes, damping, loads, dt, true);
     assert_eq!(kept, c.modes, "the choice ends a cluster");
-    let (exact, info) = exact_response(k, m, dim, damping, loads, dt);
+    let (exact, info) = if est.scene().model.sag {
+        let scene = est.scene().clone();
+        let p = est.loaded_pose().expect("an ok cycle").position_m;
+        let n = scene.model.elements_per_cable;
+        let r = crate::sag_field::dense_reference_field(&scene, p, n, k.nrows());
+        let (exact, info, _) = exact_with_field(k, m, dim, damping, &r, acc, dt);
+        (exact, info)
+    } else {
+        let (exact, info, _) = exact_whole_robot(k, m, dim, damping, acc, dt);
+        (exact, info)
+    };
     DefaultChoice {
         modes: c.modes,
         estimate: c.estimate,
@@ -197,7 +289,8 @@ pub const DEFAULT_CASES: [Damping; 3] = [
 
 /// The default choice at the estimator's pose for each of [`DEFAULT_CASES`] under the
 /// inertial load of a move of `d` (m) in 0.3 s then 0.2 s at rest, 1 ms samples: within
-/// the default tolerance (1e-3 of the peak) of the exact response of the dense (K, M).
+/// the default tolerance (1e-3 of the peak) of the exact response of the dense (K, M) to
+/// the prescribed motion ([`exact_whole_robot`]).
 pub fn assert_default_within_tolerance(
     label: &str,
     est: &mut Estimator,
@@ -208,8 +301,9 @@ pub fn assert_default_within_tolerance(
     let dt = 1e-3;
     let b = est.ee_modal_basis(1).unwrap();
     let loads = move_loads(&b.ee_mass, d, 0.3, 0.2, dt);
+    let acc = move_accelerations(d, 0.3, 0.2, dt);
     for damping in &DEFAULT_CASES {
-        let c = default_choice(est, k, m, b.dim, damping, &loads, dt);
+        let c = default_choice(est, k, m, b.dim, damping, &acc, &loads, dt);
         println!(
             "{label} {damping:?}: chose K = {} of {} (estimate {:.2e}), {} overdamped (ζ max {:.2}): peak {:.4e} m, max error / peak {:.2e}",
             c.modes, c.exact.count, c.estimate, c.exact.overdamped, c.exact.zeta_max, c.peak_m, c.error
@@ -221,4 +315,52 @@ pub fn assert_default_within_tolerance(
             pilot::DEFAULT_TOLERANCE
         );
     }
+}
+
+/// `simulate`'s default basis-update policy on `path` against a run updating the modes at
+/// every sample with the same K (settling `settle_s` after a path at rest): the largest
+/// difference relative to that run's peak, asserted within the default tolerance, and the
+/// policy's updates asserted fewer than `at_most` of that run's. Prints both.
+pub fn assert_update_policy_within_tolerance(
+    name: &str,
+    scene: &cablevib::scene::Scene,
+    path: &cablevib::study::simulate::SampledPath,
+    settle_s: f64,
+    at_most: f64,
+) -> f64 {
+    use cablevib::study::simulate::{simulate, SimulateConfig};
+    let default = SimulateConfig {
+        settle_s,
+        ..SimulateConfig::default()
+    };
+    let chosen = simulate(scene, path, &default).unwrap();
+    let every = SimulateConfig {
+        modes: Some(chosen.modes),
+        update_every: Some(1),
+        ..default
+    };
+    let reference = simulate(scene, path, &every).unwrap();
+    assert_eq!(reference.modes, chosen.modes);
+    let peak = reference
+        .deviation_m
+        .iter()
+        .fold(0.0f64, |a, u| a.max(u.norm()));
+    let err = chosen
+        .deviation_m
+        .iter()
+        .zip(&reference.deviation_m)
+        .fold(0.0f64, |a, (x, y)| a.max((x - y).norm()))
+        / peak;
+    println!(
+        "{name}: K = {}, {} updates (every sample: {}), predicted largest interval error {:.2e}, max |default − every sample| / peak {err:.2e}",
+        chosen.modes, chosen.updates, reference.updates, chosen.accuracy.interval_estimate
+    );
+    assert!(
+        (chosen.updates as f64) < at_most * reference.updates as f64,
+        "{name}: the policy saves updates ({} of {})",
+        chosen.updates,
+        reference.updates
+    );
+    assert!(err <= pilot::DEFAULT_TOLERANCE, "{name}: {err:e}");
+    err
 }

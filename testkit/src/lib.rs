@@ -8,6 +8,7 @@
 //! | [`dense_fem`] | dense references written in the tests: a FEM with explicit hidden-cable nodes, dense eigenpairs |
 //! | [`hard_cases`] | the real-time-against-dense checks of the hard-case tests |
 //! | [`sag_cases`] | the sagged scenes and poses the sag tests share, the sagged shipped robots with FEM chains |
+//! | [`sag_field`] | the path's influence field of a sagging robot (Irvine's catenaries, differences), the reference of the crate's |
 //! | [`sag_reference_py`] | the independent sagged-cable reference, tests/py/sag_reference.py |
 //! | [`sag_robot`] | sagged chains (`modal::sagged`) of a small robot, for the sagged FEM tests |
 //! | [`pinned_venv`] | a Python venv under target/ with pinned packages |
@@ -18,6 +19,7 @@ pub mod hard_cases;
 pub mod modal_record;
 pub mod pinned_venv;
 pub mod sag_cases;
+pub mod sag_field;
 pub mod sag_reference_py;
 pub mod sag_robot;
 pub mod vibration;

@@ -7,6 +7,7 @@
 cablevib_testkit::count_allocations!();
 
 mod budget_continuation;
+mod cable_inertia;
 mod ee_budget;
 mod effects_rigid;
 mod frf;
@@ -18,6 +19,7 @@ mod proptest_model;
 mod pulleys;
 mod realtime_exact;
 mod realtime_vs_dense;
+mod sag_path_field;
 mod scene_fuzz;
 mod sum_rules;
 mod tiny_t_min;

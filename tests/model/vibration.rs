@@ -9,6 +9,7 @@ use cablevib::scene::{Damping, ElementKind, Scene};
 use cablevib::study::simulate::SampledPath;
 use cablevib::trajectory::moves::{Move, Profile};
 use cablevib::trajectory::shaping::{OnlineShaper, ShaperKind};
+use cablevib_testkit::exact_response::assert_update_policy_within_tolerance;
 use nalgebra::{DMatrix, DVector, Vector3, Vector6};
 
 /// Rayleigh mass-proportional damping α = 1.2 /s: ζ ≈ 1 % at the paper robot's ~10 Hz first
@@ -272,16 +273,24 @@ fn zv_on_a_single_mode_against_fine_step_integration() {
     );
 }
 
-/// The default basis-update policy (`study::simulate::updates`) against a run updating the
-/// modes at every sample, the same K: within the default tolerance of that run's peak, on
-/// the paper robot's off-centre S-curve (its frequencies change along it) and the circle's
-/// first second (1 kHz), with the number of updates each made.
-#[test]
-fn default_update_policy_is_within_the_tolerance_of_updating_every_sample() {
-    use cablevib::study::simulate::{pilot, simulate, SimulateConfig};
+/// The paper robot (fem × 10, ζ = 2 %) and its circle at 1 kHz for `duration_s`.
+fn paper_circle(duration_s: f64) -> (Scene, SampledPath) {
     use cablevib::trajectory::{Trajectory, CIRCLE_PERIOD_S};
     let mut scene = Scene::default_scene().with_model(ElementKind::Fem, 10);
     scene.damping = Damping::ModalRatio { zeta: 0.02 };
+    let circle = Trajectory::circle(&scene, CIRCLE_PERIOD_S).unwrap();
+    let path = SampledPath::from_trajectory(&circle, duration_s, 1e-3, false).unwrap();
+    (scene, path)
+}
+
+/// The default basis-update policy against a run updating the modes at every sample, the
+/// same K: within the default tolerance of that run's peak, on the paper robot's
+/// off-centre S-curve (its frequencies change along it) and the circle's first second
+/// (1 kHz: it starts at speed, so its modes ring), with the number of updates each made.
+/// The whole 10 s circle is `slow::`.
+#[test]
+fn default_update_policy_is_within_the_tolerance_of_updating_every_sample() {
+    let (scene, circle) = paper_circle(1.0);
     let dt = 1e-3;
     let mv = Move::new(
         Vector3::new(0.3, 0.2, 1.0),
@@ -295,40 +304,26 @@ fn default_update_policy_is_within_the_tolerance_of_updating_every_sample() {
         positions_m: mv.sampled(dt, 0.0).unwrap().position_m,
         at_rest_ends: true,
     };
-    let circle = Trajectory::circle(&scene, CIRCLE_PERIOD_S).unwrap();
-    let circle = SampledPath::from_trajectory(&circle, 1.0, dt, false).unwrap();
-    for (name, path) in [("S-curve", &s_curve), ("circle 1 s", &circle)] {
-        let default = SimulateConfig {
-            settle_s: 0.5,
-            ..SimulateConfig::default()
-        };
-        let chosen = simulate(&scene, path, &default).unwrap();
-        let every = SimulateConfig {
-            modes: Some(chosen.modes),
-            update_every: Some(1),
-            ..default
-        };
-        let reference = simulate(&scene, path, &every).unwrap();
-        assert_eq!(reference.modes, chosen.modes);
-        let peak = reference
-            .deviation_m
-            .iter()
-            .fold(0.0f64, |a, u| a.max(u.norm()));
-        let err = chosen
-            .deviation_m
-            .iter()
-            .zip(&reference.deviation_m)
-            .fold(0.0f64, |a, (x, y)| a.max((x - y).norm()))
-            / peak;
-        println!(
-            "{name}: K = {}, {} updates (every sample: {}), predicted largest interval error {:.2e}, max |default − every sample| / peak {err:.2e}",
-            chosen.modes, chosen.updates, reference.updates, chosen.accuracy.interval_estimate
-        );
-        // measured 96 of 801 and 279 of 1001
-        assert!(
-            chosen.updates < reference.updates / 2,
-            "the policy saves updates"
-        );
-        assert!(err <= pilot::DEFAULT_TOLERANCE, "{name}: {err:e}");
+    // measured 203 of 801 and 570 of 1001 (the circle's first second rings from its start
+    // at speed: mostly short intervals)
+    assert_update_policy_within_tolerance("S-curve", &scene, &s_curve, 0.5, 0.5);
+    assert_update_policy_within_tolerance("circle 1 s", &scene, &circle, 0.5, 0.75);
+}
+
+mod slow {
+    use super::*;
+
+    /// The default update policy on the paper's whole 10 s circle at 1 kHz against updates
+    /// at every sample (10 001 bases: about a minute of CPU). Before K ended at a separated
+    /// cut (`study::simulate::pilot`), K = 38 split the end-effector pair at 33.75 Hz, which
+    /// is degenerate on the symmetry axes the circle crosses every second; each update
+    /// there dropped the share of the kept mode turned into its partner: 1.76e-3 of the
+    /// peak.
+    #[test]
+    #[ignore = "slow reference sweep: the whole circle updated at every sample"]
+    fn default_update_policy_on_the_whole_circle() {
+        let (scene, circle) = paper_circle(10.0);
+        // measured 954 of 10 001, 5.0e-4
+        assert_update_policy_within_tolerance("circle 10 s", &scene, &circle, 0.5, 0.2);
     }
 }

@@ -6,7 +6,10 @@ use super::args::{resolve_scene, SceneArgs};
 use super::figure::{self, parse_format};
 use super::CliError;
 use crate::calibration::data::{read_modes, read_tensions};
-use crate::calibration::{calibrate, CalibrationParams, FitSpec, Report, SigmaDefaults};
+use crate::calibration::{
+    calibrate, CalibrationError, CalibrationOption, CalibrationParams, FitSpec, Report,
+    SigmaDefaults,
+};
 use crate::report::calibrated_scene::calibrated_scene_toml;
 use crate::report::calibration::calibration_svg;
 use crate::report::csv::process_command_line;
@@ -88,7 +91,7 @@ fn number(option: &str, name: &str, v: &str) -> Result<f64, CliError> {
 
 /// The fit's parameters with the options' bounds, nominal values and priors.
 fn spec(scene: &Scene, a: &CalibrateArgs) -> Result<FitSpec, CliError> {
-    let usage = |e: crate::calibration::CalibrationError| CliError::Usage(e.to_string());
+    let usage = |e: CalibrationError| CliError::Usage(e.render(&calibration_flag));
     let names: Vec<&str> = a.fit.split(',').collect();
     let mut spec = FitSpec::new(scene, &names).map_err(usage)?;
     if let Some(b) = &a.bounds {
@@ -134,7 +137,7 @@ pub fn run(a: &CalibrateArgs) -> Result<(), CliError> {
         damping_rel: a.damping_sigma_rel,
         tension_rel: a.tension_sigma_rel,
     };
-    let analysis = |e: crate::calibration::CalibrationError| CliError::Analysis(e.to_string());
+    let analysis = |e: CalibrationError| CliError::Analysis(e.render(&calibration_flag));
     let spec = spec(&scene, a)?;
     let mut data = read_modes(&a.data, &sigma).map_err(analysis)?;
     if let Some(t) = &a.tensions {
@@ -355,4 +358,12 @@ pub fn text_report(r: &Report) -> String {
         );
     }
     o
+}
+
+/// The flag that sets a calibration option (`--fit` for [`CalibrationOption::Fit`]).
+fn calibration_flag(o: CalibrationOption) -> &'static str {
+    match o {
+        CalibrationOption::Fit => "--fit",
+        CalibrationOption::SagOff => "--sag false",
+    }
 }

@@ -1,6 +1,7 @@
 //! The error of the command-line tools, and the options by which it names the studies'
 //! parameters.
 
+use crate::caspr::{CasprError, ImportOption};
 use crate::report::ReportError;
 use crate::scene::SceneError;
 use crate::service::{ServiceError, ServiceParam};
@@ -32,6 +33,9 @@ pub enum CliError {
     /// The analysis of one pose failed or was given bad values.
     #[error("{}", .0.render(&flag))]
     Analyze(AnalyzeError),
+    /// An import was refused (its options named by their flags).
+    #[error("{}", .0.render(&import_flag))]
+    Import(CasprError),
     /// Standard output could not be written.
     #[error(transparent)]
     Stdout(#[from] crate::output_file::StdoutError),
@@ -54,6 +58,12 @@ impl From<StudyError> for CliError {
 impl From<AnalyzeError> for CliError {
     fn from(e: AnalyzeError) -> Self {
         CliError::Analyze(e)
+    }
+}
+
+impl From<CasprError> for CliError {
+    fn from(e: CasprError) -> Self {
+        CliError::Import(e)
     }
 }
 
@@ -116,5 +126,17 @@ pub fn service_flag(p: ServiceParam) -> &'static str {
         ServiceParam::Samples => "--samples",
         ServiceParam::Shape => "--shape",
         ServiceParam::Instance => "--instance",
+    }
+}
+
+/// The flag of `cablevib import caspr` that sets an import option (`--t-min` for
+/// [`ImportOption::TMin`]).
+pub fn import_flag(o: ImportOption) -> &'static str {
+    match o {
+        ImportOption::CableSet => "--cable-set",
+        ImportOption::WeightPerLength => "--weight-per-length",
+        ImportOption::Area => "--area",
+        ImportOption::YoungsModulus => "--youngs-modulus",
+        ImportOption::TMin => "--t-min",
     }
 }

@@ -223,7 +223,8 @@ pub fn run(a: &IdentifyArgs) -> Result<(), CliError> {
     let mut poses = PoseBins::default();
     let mut aligner = a.input_topic.as_ref().map(|_| Aligner::new(a.input.len()));
     let shown = a.recording.display().to_string();
-    let analysis = |e: IdentifyError| CliError::Analysis(format!("{shown}: {e}"));
+    let analysis =
+        |e: IdentifyError| CliError::Analysis(format!("{shown}: {}", e.render("--to-hz")));
     // An aligned response sample (the inputs interpolated at its time) to the identifier.
     let feed = |id: &mut Option<Identifier>, x: Aligned<'_>| -> Result<(), IdentifyError> {
         let id = id.as_mut().expect("layout before samples");
@@ -285,9 +286,7 @@ pub fn run(a: &IdentifyArgs) -> Result<(), CliError> {
     })?;
     let id = id.expect("with the layout");
     let rate_hz = 1.0 / id.dt_nominal_s();
-    let windows = id
-        .finish()
-        .map_err(|e| CliError::Analysis(format!("{}: {e}", a.recording.display())))?;
+    let windows = id.finish().map_err(analysis)?;
     let identify_s = t0.elapsed().as_secs_f64();
     let rows = pair_windows(a, scene.as_ref(), &windows, &poses)?;
     let total_s = t0.elapsed().as_secs_f64();

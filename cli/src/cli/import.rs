@@ -90,8 +90,7 @@ fn caspr(a: &CasprArgs) -> Result<(), CliError> {
         element,
         elements_per_cable: a.elements,
     };
-    let imported =
-        import_files(&a.bodies, &a.cables, &opts).map_err(|e| CliError::Usage(e.to_string()))?;
+    let imported = import_files(&a.bodies, &a.cables, &opts)?;
     crate::output_file::write_whole(&a.output, imported.toml.as_bytes())
         .map_err(|e| CliError::Usage(format!("cannot write the scene: {e}")))?;
     let s = &imported.scene;

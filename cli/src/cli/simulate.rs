@@ -13,21 +13,19 @@ use crate::report::svg::axis::Axis;
 use crate::report::svg::line_plot::{LinePlot, Mark, Series};
 use crate::scene::{Damping, Scene, MAX_MODAL_RATIO};
 use crate::study::simulate::{
-    self as study, SampledPath, ShapeMode, SimulateConfig, SimulateResult,
+    self as study, PathSpec, SampledPath, ShapeMode, SimulateConfig, SimulateResult,
     DEFAULT_MAX_ACCELERATION_M_S2,
 };
-use crate::study::StudyError;
-use crate::trajectory::moves::{Move, Profile};
+use crate::trajectory::moves::Profile;
 use crate::trajectory::shaping::{Impulses, ShaperKind};
-use crate::trajectory::{Samples, Trajectory, CIRCLE_PERIOD_S};
+use crate::trajectory::CIRCLE_PERIOD_S;
 use cablevib::outln;
 use clap::{Args, ValueEnum};
 use nalgebra::Vector3;
 use std::path::PathBuf;
 use std::time::Instant;
 
-/// Largest sample period `--dt`, s (the study's own bound on a sampled path).
-const MAX_DT_S: f64 = 0.1;
+use crate::study::simulate::path_spec::MAX_DT_S;
 
 /// Velocity profile of `--move`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -163,48 +161,34 @@ impl PathArgs {
                 self.dt
             )));
         }
-        if let Some(csv) = &self.csv {
-            let samples = Samples::read_csv(csv).map_err(StudyError::from)?;
-            let p = SampledPath::from_samples(&samples, self.dt)?;
-            return Ok((p, format!("{} ({})", csv.display(), samples.t_s.len())));
-        }
-        if let Some(d) = self.displacement {
+        let spec = if let Some(csv) = &self.csv {
+            PathSpec::Csv(csv.clone())
+        } else if let Some(d) = self.displacement {
             if !(self.duration.is_finite() && self.duration > 0.0) {
                 return Err(CliError::Usage(format!(
                     "--duration {}: a move takes a finite time > 0 s",
                     self.duration
                 )));
             }
-            let profile = match self.profile {
-                ProfileArg::SCurve => Profile::SCurve,
-                ProfileArg::Trapezoid => Profile::Trapezoid,
-            };
-            let mv = Move::new(s.ee_position_m, d, self.duration, profile)
-                .map_err(|e| CliError::Usage(e.to_string()))?;
-            let samples = mv.sampled(self.dt, 0.0).map_err(StudyError::from)?;
-            let p = SampledPath {
-                dt_s: self.dt,
-                positions_m: samples.position_m,
-                at_rest_ends: true,
-            };
-            let desc = format!(
-                "move ({:.3}, {:.3}, {:.3}) m in {} s, {}",
-                d.x,
-                d.y,
-                d.z,
-                self.duration,
-                profile.as_str()
-            );
-            return Ok((p, desc));
-        }
-        let Some(c) = circle else {
+            PathSpec::Move {
+                displacement_m: d,
+                duration_s: self.duration,
+                profile: match self.profile {
+                    ProfileArg::SCurve => Profile::SCurve,
+                    ProfileArg::Trapezoid => Profile::Trapezoid,
+                },
+            }
+        } else if let Some(c) = circle {
+            PathSpec::Circle {
+                duration_s: c.circle_s,
+                period_s: c.period_s,
+            }
+        } else {
             return Err(CliError::Usage(
                 "give a TRAJECTORY CSV (or --move DX,DY,DZ) to shape".into(),
             ));
         };
-        let t = Trajectory::circle(s, c.period_s).map_err(StudyError::from)?;
-        let p = SampledPath::from_trajectory(&t, c.circle_s, self.dt, false)?;
-        Ok((p, format!("{} for {} s", t.describe(), c.circle_s)))
+        Ok(spec.sample(s, self.dt)?)
     }
 }
 
@@ -298,19 +282,12 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
     let mut runs = Vec::new();
     for &sh in &a.shaper {
         let t0 = Instant::now();
-        let (p, added) = match sh.kind() {
-            None => (path.clone(), 0.0),
-            Some(kind) => {
-                let r = study::shape(&s, &path, kind, a.mode.into())?;
-                (r.path, r.added_s)
-            }
-        };
-        let result = study::simulate(&s, &p, &cfg)?;
+        let r = study::simulate_shaped(&s, &path, &cfg, sh.kind(), a.mode.into())?;
         let wall_s = t0.elapsed().as_secs_f64();
         runs.push(Run {
             shaper: sh,
-            result,
-            added_s: added,
+            result: r.result,
+            added_s: r.added_s,
             wall_s,
         });
     }
@@ -364,10 +341,11 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
     for r in &runs {
         let acc = &r.result.accuracy;
         outln!(
-            "{}: accuracy: K = {} ({}), truncation estimate {:.2e} of the peak ({:.5} mm){}; basis updates {} ({}), largest interval estimate {:.2e}, sum {:.2e}",
+            "{}: accuracy: K = {} ({}; pilot of {} modes), truncation estimate {:.2e} of the peak ({:.5} mm){}; basis updates {} ({}), largest interval estimate {:.2e}, sum {:.2e}",
             r.shaper.name(),
             r.result.modes,
             if acc.modes_chosen { "chosen" } else { "given" },
+            acc.pilot_modes,
             acc.modes_estimate,
             acc.peak_m * 1e3,
             if acc.modes_met { "" } else { " — over the tolerance" },
@@ -376,6 +354,10 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
             acc.interval_estimate,
             acc.interval_estimate_sum
         )?;
+    }
+    if s.model.sag && !cablevib::estimator::sag_path_field_applies(&s) {
+        // The path's field of sagging cables covers fixed anchors only (modal::quasi_static).
+        outln!("note: cable inertia not applied to sagging cables over pulleys (the end-effector's load alone)")?;
     }
     write_outputs(a, &s, &runs)?;
     Ok(())
@@ -404,6 +386,7 @@ fn write_outputs(a: &SimulateArgs, s: &Scene, runs: &[Run]) -> Result<(), CliErr
                 "modes_chosen": r.result.accuracy.modes_chosen,
                 "tolerance": r.result.accuracy.tolerance,
                 "truncation_estimate": r.result.accuracy.modes_estimate,
+                "pilot_modes": r.result.accuracy.pilot_modes,
                 "basis_updates": r.result.updates,
                 "update_interval_chosen": r.result.accuracy.updates_chosen,
                 "update_interval_estimate": r.result.accuracy.interval_estimate,

@@ -298,6 +298,10 @@ fn bad_input_is_one_line_naming_the_row_or_parameter() {
             "parameter `modal_ratio`: the data have no measured damping ratio",
         ),
         (
+            "--data modes.csv --fit ee_mass --bounds ea_factor=0.5:2",
+            "parameter `ea_factor`: is not among the fitted parameters (add it to --fit)",
+        ),
+        (
             "--data modes.csv --fit ee_mass --prior ee_mass=-1",
             "parameter `ee_mass`: prior standard deviation -1",
         ),

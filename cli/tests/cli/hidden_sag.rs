@@ -94,7 +94,8 @@ fn hidden_scene(dir: &str) -> (std::path::PathBuf, String) {
 /// `simulate --sag true` with hidden cables: its modal basis is the sagged structured
 /// shapes with the junctions and the hidden cables (checked against the dense eigenvectors
 /// with explicit hidden nodes in the core crate's tests/sag/shapes.rs), not a refusal and
-/// not the dense fallback: it answers, says "structured engine", and writes its CSV.
+/// not the dense fallback: it answers, says "structured engine" and that the cables'
+/// inertia is not applied to sagging cables over pulleys, and writes its CSV.
 #[test]
 fn simulate_with_sag_and_hidden_cables_uses_the_structured_shapes() {
     let (file, _) = hidden_scene("hidden-sag-simulate");
@@ -120,6 +121,11 @@ fn simulate_with_sag_and_hidden_cables_uses_the_structured_shapes() {
     assert!(out.status.success(), "simulate failed: {err}");
     let printed = String::from_utf8(out.stdout).unwrap();
     assert!(printed.contains("(structured engine)"), "{printed}");
+    // Sagging cables over pulleys take the end-effector's load alone, and say so.
+    assert!(
+        printed.contains("note: cable inertia not applied to sagging cables over pulleys"),
+        "{printed}"
+    );
     assert!(out_base.with_extension("csv").exists());
 }
 

@@ -271,7 +271,7 @@ fn hostile_records() {
     write_csv(&rec, &p, |_, _| {});
     one_line(
         &run(&["identify", p.to_str().unwrap(), "--to-hz", "450"]),
-        "too low for the band",
+        "too low for the band up to 450 Hz (needs ≥ 2.5 × the band's top: lower --to-hz to ≤",
     );
     // An output over the input.
     one_line(

@@ -106,13 +106,6 @@ fn long_runs_announce_their_estimate_and_draw_a_progress_bar_on_a_terminal() {
         "0.1,0,0",
         "--duration",
         "1",
-        // K and the interval given: with the K the tolerance chooses (≥ 24 modes), 10⁵
-        // elements per cable stop at t = 0.016 s on the shapes' multiplicity check (a
-        // one-line refusal).
-        "--modes",
-        "12",
-        "--update-every",
-        "10",
         "--out",
         sim.to_str().unwrap(),
     ];
@@ -148,10 +141,14 @@ fn long_runs_announce_their_estimate_and_draw_a_progress_bar_on_a_terminal() {
     // has gone on for a second; here within ~10 s, 60 s allowed for a loaded machine).
     // `modes`' long part is its CSV's text (~3.5 s per mode at 10⁵ elements per cable, after
     // ~1.5 s of shapes): its bar counts modes written.
-    // `simulate` is not in this loop: its bar starts with the first sample, after the pilot
-    // that assesses K's truncation error, which at 10⁵ elements per cable takes longer than
-    // this test waits (the pilot has no bar yet); its up-front estimate is checked above.
-    for (args, unit) in [(&frf[..], "frequencies"), (&modes[..], "modes written")] {
+    // `simulate`'s first long part is the pilot choosing K (its bases of 24, 48, … modes at
+    // three poses, ~2 s per 24 modes at 10⁵ elements per cable): its bar counts the pilot's
+    // modes run (before, it had none, and the test waited in vain).
+    for (args, unit) in [
+        (&frf[..], "frequencies"),
+        (&simulate[..], "pilot modes"),
+        (&modes[..], "modes written"),
+    ] {
         let text = stderr_on_a_terminal(args, unit, Duration::from_secs(60));
         println!("{}: {:?}", args[0], text.lines().last());
         assert!(text.contains("about "), "{args:?}: {text}");

@@ -106,7 +106,7 @@ fn planar_imports_the_published_geometry() {
     assert_eq!(s.ee_mass_kg, 5.0);
     // Point mass in a horizontal plane: 3 DOF, the plane carries the weight.
     assert!(!s.rigid && !s.weight_carried);
-    assert!(im.toml.contains("From the command line, not from CASPR"));
+    assert!(im.toml.contains("Given at import, not from CASPR"));
 }
 
 /// `cablevib analyze --json` on `path`, without the fields that name the file or time it.
@@ -233,5 +233,8 @@ fn variants_found_in_caspr_models_are_read() {
     let e = cablevib::caspr::import_str(&b, "b.xml", &no_default, "c.xml", &ipanema_opts())
         .unwrap_err()
         .to_string();
-    assert!(e.contains("--cable-set (original, springs)"), "{e}");
+    assert!(
+        e.contains("pick one with cable_set (original, springs)"),
+        "{e}"
+    );
 }

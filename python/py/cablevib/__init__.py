@@ -16,6 +16,8 @@ from ._cablevib import (
     calibrate,
     frf,
     identify,
+    shape,
+    simulate,
     sweep,
 )
 
@@ -29,5 +31,7 @@ __all__ = [
     "calibrate",
     "frf",
     "identify",
+    "shape",
+    "simulate",
     "sweep",
 ]

@@ -157,6 +157,56 @@ def frf(
     superposition of the sagged shapes; ``element="continuous"`` refused), as on the
     command line."""
 
+def simulate(
+    scene: Scene,
+    csv: Union[None, str, "os.PathLike[str]"] = None,
+    move: Optional[_Vec] = None,
+    duration: float = 0.5,
+    profile: str = "s-curve",
+    dt: float = 1e-3,
+    modal_ratio: Optional[float] = None,
+    max_acceleration: float = 200.0,
+    circle_s: float = 10.0,
+    period_s: float = 4.0,
+    modes: Optional[int] = None,
+    update_every: Optional[int] = None,
+    tolerance: float = 1e-3,
+    settle: float = 2.0,
+    shaper: str = "none",
+    mode: str = "ee",
+    position: Optional[_Vec] = None,
+    t_min: Optional[float] = None,
+    element: Optional[str] = None,
+    elements: Optional[int] = None,
+    sag: Optional[bool] = None,
+) -> Dict[str, Any]:
+    """What ``cablevib simulate SCENE`` writes to its CSV (one shaper), as numpy arrays:
+    ``t_s`` (N, s), ``deviation_m`` (N × 3, the end-effector's deviation from its
+    quasi-static pose, m), ``command_m`` (N × 3, the commanded path, shaped when ``shaper``
+    is given, m), ``time_added_s``, ``modes``, ``updates``, ``structured``,
+    ``f1_range_hz``, ``accuracy`` (dict), ``stops`` (the residual after each stop), ``path``.
+    The path: ``csv``, else ``move`` ((dx, dy, dz) m in ``duration`` s, ``profile``
+    ``"s-curve"`` or ``"trapezoid"``), else the paper's circle for ``circle_s`` s; the other
+    arguments as the command line's options of the same names."""
+
+def shape(
+    scene: Scene,
+    trajectory: Union[None, str, "os.PathLike[str]"] = None,
+    move: Optional[_Vec] = None,
+    duration: float = 0.5,
+    profile: str = "s-curve",
+    dt: float = 1e-3,
+    modal_ratio: Optional[float] = None,
+    max_acceleration: float = 200.0,
+    shaper: str = "zv",
+    mode: str = "ee",
+) -> Dict[str, Any]:
+    """What ``cablevib shape`` writes to its CSV, as numpy arrays: ``t_s`` (N, s),
+    ``path_m`` (N × 3, the shaped positions, m), ``design_hz`` (N, the shaper's design
+    frequency at each sample), ``time_added_s``, ``path``. The path: ``trajectory`` (a CSV
+    t,x,y,z), else ``move``; ``shaper`` ``"zv"``, ``"zvd"`` or ``"ei"`` following ``mode``
+    ``"ee"`` (the end-effector mode) or ``"f1"``."""
+
 def calibrate(
     scene: Scene,
     measurements: Union[str, "os.PathLike[str]"],

@@ -9,7 +9,7 @@ use super::*;
 // ---------------------------------------------------------------------------------------------
 
 /// A pose and T_min publisher (what a motion controller or `service/examples/replay.rs` sends), which
-/// notifies the wake-service event after each message so that a service in `--wait event`
+/// notifies the wake-service event after each message so that a service waiting on the event
 /// mode wakes up.
 pub struct PoseInput {
     pose_factory: publish_subscribe::PortFactory<Ipc, PoseSample, ()>,

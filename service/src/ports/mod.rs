@@ -88,7 +88,7 @@ pub type Ipc = ipc::Service;
 pub const POSE_BUFFER: usize = 16;
 /// How many vibration samples the service queues before the oldest is overwritten (counted
 /// from the sequence gaps): 50 ms of a 5 kHz sensor, the longest the service sleeps in
-/// `--wait event` without a wake-up.
+/// an event wait without a wake-up.
 pub const VIBRATION_BUFFER: usize = 256;
 /// How many T_min set-points the service's subscriber queues (the newest one wins).
 pub const T_MIN_BUFFER: usize = 4;
@@ -202,7 +202,7 @@ pub struct ServicePorts {
     pub estimate: Publisher<Ipc, EstimateSample, ()>,
     /// Margin requests, from the controller.
     pub margin: Server<Ipc, MarginRequest, (), MarginResponse, ()>,
-    /// Woken by peers after they send something (used in `--wait event`).
+    /// Woken by peers after they send something (used by the event wait).
     pub wake_in: Listener<Ipc>,
     /// Wakes controllers after an estimate or a margin response.
     pub wake_out: Notifier<Ipc>,

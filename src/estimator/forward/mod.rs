@@ -258,6 +258,24 @@ impl Forward {
         ))
     }
 
+    /// The sagged equilibrium's nodes at `pose` for the lower bounds `t_min_n` (N, one per
+    /// cable) and the scene's upper ones (`SagModel::equilibrium_nodes`), or None for taut
+    /// cables. Leaves the cycle's state alone. Allocates (offline).
+    pub(super) fn sag_nodes_at(
+        &self,
+        scene: &Scene,
+        pose: &Pose,
+        t_min_n: &[f64],
+    ) -> Result<Option<Vec<Vec<Vector3<f64>>>>, EstimatorError> {
+        let Model::Sagged(s) = &self.model else {
+            return Ok(None);
+        };
+        let mut g = self.geometry.clone();
+        update_geometry(scene, &mut g, pose)?;
+        let t_max_n = &self.t_max_n[..scene.n_cables()];
+        s.equilibrium_nodes(scene, &g, t_min_n, t_max_n).map(Some)
+    }
+
     /// Evaluations of D(λ) since the modal solver was last loaded.
     pub(super) fn evaluations_since_load(&self) -> u32 {
         with_model!(&self.model, m => m.solver().evaluations().wrapping_sub(m.loaded_at()))
@@ -376,6 +394,15 @@ impl Forward {
         match &self.model {
             Model::Taut(_) => None,
             Model::Sagged(s) => Some(&s.modal),
+        }
+    }
+
+    /// [`Self::sag_modal`], mutable: a count or a receptance moves the solver's scratch
+    /// and warm starts, not the loaded pose.
+    pub(super) fn sag_modal_mut(&mut self) -> Option<&mut crate::modal::SagModalSolver> {
+        match &mut self.model {
+            Model::Taut(_) => None,
+            Model::Sagged(s) => Some(&mut s.modal),
         }
     }
 

@@ -113,6 +113,43 @@ impl SagModel {
     pub(super) fn catenaries(&self) -> &[Catenary] {
         self.tension.catenaries_of()
     }
+
+    /// The sagged equilibrium at geometry `g` with the bounds (N) of a cycle, solved by a
+    /// copy of this model's tension solver (warm from its last solve; the cycle's own state
+    /// is left alone): every cable's nodes in world coordinates, m, at
+    /// s_j = j L0/N on its catenary (j = 0 ..= N, N this model's chain's elements; node 0
+    /// the anchor), the node lists of [`SagModalSolver::mode_shapes`]. Allocates (offline:
+    /// the path's influence field, `estimator::path_field`).
+    pub(super) fn equilibrium_nodes(
+        &self,
+        scene: &Scene,
+        g: &Geometry,
+        t_min_n: &[f64],
+        t_max_n: &[f64],
+    ) -> Result<Vec<Vec<Vector3<f64>>>, EstimatorError> {
+        let mut scratch = self.tension.clone();
+        scratch.solve(
+            g,
+            &self.materials,
+            &scene.gravity_m_s2,
+            &scene.wrench6_n(),
+            t_min_n,
+            t_max_n,
+        )?;
+        Ok((0..scene.n_cables())
+            .map(|i| {
+                let cat = scratch.catenaries_of()[i];
+                let [h, up, _] = scratch.basis(i);
+                let n = self.modal.chain(i).n_el().max(1);
+                (0..=n)
+                    .map(|j| {
+                        let [x, z] = cat.point_at_m(cat.l0_m * j as f64 / n as f64);
+                        g.exit_m[i] + h * x + up * z
+                    })
+                    .collect()
+            })
+            .collect())
+    }
 }
 
 impl CableSide for SagModel {

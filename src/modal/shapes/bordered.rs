@@ -1,28 +1,10 @@
-//! The one mode-shape pipeline over a model's bordered system ([`Bordered`]: the taut
-//! chains' in `taut`, the sagged FEM chains' in `sagged`): the null space at each
-//! eigenvalue, the M-orthonormalisation within a cluster, and the repairs of a cluster
-//! that is not one clean eigenvalue, the same for every model (the module docs):
-//!
-//! 1. two modes given apart by at most [`MERGE_REL`] whose bordered system has no clean null
-//!    space of its own multiplicity at either λ are one cluster (the count's bisection can
-//!    split an exact double by its rounding);
-//! 2. a cluster given as one that is not one eigenvalue (modes 1e-10 apart given together)
-//!    is split by the count from its λ to 1e-8 above (`count::split_cluster`), each part's
-//!    shapes taken;
-//! 3. a cluster still not separated (σ_m/σ_{m+1} above the tolerance: a near-double 2e-6 …
-//!    5e-6 apart on the symmetric paper robot with sag) is grown by its nearest given
-//!    neighbours within [`NEAR_MAX_REL`] until, at each member's λ, the member's own m
-//!    smallest singular vectors are separated from all but the cluster's other M − m
-//!    (σ_m/σ_{M+1} ≤ the tolerance, M the cluster's total). Those vectors (each a chain
-//!    solution at its own λ) are M-orthonormalised together by the symmetric
-//!    orthonormalisation (the least change to each; refused when the normalised Gram matrix
-//!    has an eigenvalue below [`NEAR_GRAM_MIN`], i.e. two members gave nearly one vector),
-//!    each member keeping its λ; shapes already given for a member are replaced. It needs
-//!    the mass form of two chain solutions at different λ, which a model gives where it is
-//!    exact ([`Bordered::cable_mass`]). Isolated clusters never take this path.
+//! A model's bordered system ([`Bordered`]: the taut chains' in `taut`, the sagged FEM
+//! chains' in `sagged`) and what the mode-shape pipeline (`pipeline`) does with it at one
+//! λ, the same for every model (the module docs): the equilibrated null space and its
+//! separation test, the M-orthonormalisation within a cluster ordered by end-effector
+//! participation, and the consistent mass's element form.
 
-use super::count::split_cluster;
-use super::{ModeShape, ModeShapes, ShapeError, ShapeParams, MAX_MULTIPLICITY};
+use super::{ModeShape, ModeShapes, ShapeError, ShapeParams};
 use crate::modal::lambda_to_hz;
 use nalgebra::{DMatrix, DVector, Matrix6, SymmetricEigen, Vector3, Vector6};
 
@@ -30,16 +12,7 @@ use nalgebra::{DMatrix, DVector, Matrix6, SymmetricEigen, Vector3, Vector6};
 /// neither alone is a clean null space of the bordered system (the count's bisection
 /// resolves λ to ~ε·λ_max/λ; modes this close are one eigenvalue to the f64 model's
 /// accuracy).
-const MERGE_REL: f64 = 1e-9;
-
-/// Largest relative distance of a neighbour taken into a near-cluster (module docs): modes
-/// farther apart are separated by the bordered system's singular values at every pose met
-/// (the near-doubles of the symmetric paper robot with sag are ~5e-6 apart).
-const NEAR_MAX_REL: f64 = 1e-3;
-
-/// Smallest eigenvalue of a near-cluster's normalised mass Gram matrix: below it, two
-/// members' shapes are close to one vector (not two modes) and the cluster is refused.
-const NEAR_GRAM_MIN: f64 = 0.5;
+pub(super) const MERGE_REL: f64 = 1e-9;
 
 /// Sweeps of Ruiz equilibration (each halves the logarithm of every row's and column's
 /// imbalance: 30 sweeps bring a 1e30 spread to within a factor 1 + 1e-7).
@@ -72,12 +45,17 @@ pub(in crate::modal) trait Bordered {
         b: &Self::Vector,
         same: bool,
     ) -> Option<f64>;
-    /// Every cable's node displacements (world frame) of a null vector.
-    fn nodes(&self, at: &Self::At, v: &Self::Vector) -> Vec<Vec<Vector3<f64>>>;
+    /// Every cable's node displacements (world frame) of a null vector, and each cable's
+    /// hidden cable's nodes (displacement along it, drum to junction; empty without one).
+    fn nodes(&self, at: &Self::At, v: &Self::Vector) -> Nodes;
     /// The number of eigenvalues strictly below λ (Wittrick–Williams), for splitting a
     /// cluster.
     fn count(&mut self, lambda: f64) -> u32;
 }
+
+/// A shape's node displacements: every cable's (world frame) and each hidden cable's
+/// ([`ModeShape::cables`], [`ModeShape::hidden`]).
+pub(in crate::modal) type Nodes = (Vec<Vec<Vector3<f64>>>, Vec<Vec<f64>>);
 
 /// The null space of one cluster before normalisation: columns (φ, amplitudes).
 pub(super) struct NullSpace {
@@ -85,84 +63,8 @@ pub(super) struct NullSpace {
     pub(super) residual: f64,
 }
 
-/// The mass-normalised mode shapes of `sys` at the eigenvalues `modes` = (λ in rad²/s²,
-/// multiplicity), appended to `out`: for each, `multiplicity` shapes, M-orthonormal,
-/// ordered by descending end-effector participation, with the repairs of the module docs.
-pub(in crate::modal) fn mode_shapes<B: Bordered>(
-    sys: &mut B,
-    modes: &[(f64, u32)],
-    params: &ShapeParams,
-    out: &mut ModeShapes,
-) -> Result<(), ShapeError> {
-    for &(lambda, m) in modes {
-        if !(lambda.is_finite() && lambda > 0.0) || m == 0 || m > MAX_MULTIPLICITY {
-            return Err(ShapeError::BadMode {
-                lambda,
-                multiplicity: m,
-            });
-        }
-    }
-    // The index in `out.modes` where each given mode's shapes start.
-    let mut starts = vec![0; modes.len()];
-    let mut next_mode = 0;
-    while next_mode < modes.len() {
-        let first_mode = next_mode;
-        starts[next_mode] = out.modes.len();
-        let (mut lambda, mut m) = modes[next_mode];
-        next_mode += 1;
-        let mut got = solve(sys, lambda, m, params);
-        // 1. Two modes given apart that are one.
-        while let Err(ShapeError::NotAnEigenvalue { .. }) = got {
-            match modes.get(next_mode) {
-                Some(&(ln, mn))
-                    if (ln - lambda).abs() <= MERGE_REL * lambda && m + mn <= MAX_MULTIPLICITY =>
-                {
-                    lambda = (lambda * m as f64 + ln * mn as f64) / (m + mn) as f64;
-                    m += mn;
-                    starts[next_mode] = out.modes.len();
-                    next_mode += 1;
-                    got = solve(sys, lambda, m, params);
-                }
-                _ => break,
-            }
-        }
-        let e = match got {
-            Ok((at, null)) => {
-                push_cluster(sys, &at, &null, lambda, m, out);
-                continue;
-            }
-            Err(e @ ShapeError::NotAnEigenvalue { .. }) => e,
-            Err(e) => return Err(e),
-        };
-        // 2. One cluster given that is several eigenvalues: split by the count.
-        if m > 1 {
-            let mut count = |x: f64| sys.count(x);
-            if let Some(parts) = split_cluster(&mut count, lambda, m, params) {
-                let solved: Result<Vec<_>, _> = parts
-                    .iter()
-                    .map(|&(l, k)| solve(sys, l, k, params).map(|s| (s, l, k)))
-                    .collect();
-                if let Ok(solved) = solved {
-                    for ((at, null), l, k) in solved {
-                        push_cluster(sys, &at, &null, l, k, out);
-                    }
-                    continue;
-                }
-            }
-        }
-        // 3. Not separated from a neighbour: resolved with it as a near-cluster, the
-        // neighbour's shapes given already replaced.
-        let (lo, hi) = near_cluster(sys, modes, (first_mode, next_mode), params).ok_or(e)?;
-        out.modes.truncate(starts[lo]);
-        let group = resolve_near(sys, &modes[lo..hi], starts[lo], params).ok_or(e)?;
-        out.modes.extend(group);
-        next_mode = hi;
-    }
-    Ok(())
-}
-
 /// The chains' solutions at λ and the bordered system's m-dimensional null space there.
-fn solve<B: Bordered>(
+pub(super) fn solve<B: Bordered>(
     sys: &mut B,
     lambda: f64,
     m: u32,
@@ -174,7 +76,7 @@ fn solve<B: Bordered>(
 }
 
 /// The end-effector part of a null vector.
-fn ee_of(col: &DVector<f64>, dim: usize) -> Vector6<f64> {
+pub(super) fn ee_of(col: &DVector<f64>, dim: usize) -> Vector6<f64> {
     let mut ee = Vector6::zeros();
     for r in 0..dim {
         ee[r] = col[r];
@@ -194,7 +96,7 @@ fn ee_quad(m6: &Matrix6<f64>, v: &DMatrix<f64>, a: usize, b: usize, dim: usize) 
 }
 
 /// The shapes of one clean cluster (λ, m) from its null space, appended to `out`.
-fn push_cluster<B: Bordered>(
+pub(super) fn push_cluster<B: Bordered>(
     sys: &B,
     at: &B::At,
     null: &NullSpace,
@@ -226,11 +128,13 @@ fn push_cluster<B: Bordered>(
     }
     let start = out.modes.len();
     for (col, part) in orthonormalise(v, gram, &ee) {
+        let (cables, hidden) = sys.nodes(at, &sys.vector(at, &col));
         out.modes.push(ModeShape {
             lambda,
             frequency_hz: lambda_to_hz(lambda),
             ee: ee_of(&col, dim),
-            cables: sys.nodes(at, &sys.vector(at, &col)),
+            cables,
+            hidden,
             ee_participation: part,
             cluster_start: start,
             multiplicity: m,
@@ -239,168 +143,10 @@ fn push_cluster<B: Bordered>(
     }
 }
 
-/// The given modes `lo..hi` (a cluster whose bordered system is not separated) grown by
-/// their nearest neighbours within [`NEAR_MAX_REL`] until [`resolve_near`] resolves them:
-/// the range, or `None` when no neighbour is left to take.
-fn near_cluster<B: Bordered>(
-    sys: &mut B,
-    modes: &[(f64, u32)],
-    (mut lo, mut hi): (usize, usize),
-    params: &ShapeParams,
-) -> Option<(usize, usize)> {
-    loop {
-        let below = (lo > 0)
-            .then(|| (modes[lo].0 - modes[lo - 1].0) / modes[lo].0)
-            .filter(|&g| g <= NEAR_MAX_REL);
-        let above = modes
-            .get(hi)
-            .map(|&(l, _)| (l - modes[hi - 1].0) / modes[hi - 1].0)
-            .filter(|&g| g <= NEAR_MAX_REL);
-        match (below, above) {
-            (Some(b), Some(a)) if b <= a => lo -= 1,
-            (Some(_), None) => lo -= 1,
-            (_, Some(_)) => hi += 1,
-            (None, None) => return None,
-        }
-        let total: u32 = modes[lo..hi].iter().map(|x| x.1).sum();
-        if total > MAX_MULTIPLICITY {
-            return None;
-        }
-        if resolve_near(sys, &modes[lo..hi], 0, params).is_some() {
-            return Some((lo, hi));
-        }
-    }
-}
-
-/// One null vector of a near-cluster's member (at the member's λ).
-struct NearVector<V> {
-    member: usize,
-    phi: Vector6<f64>,
-    parts: V,
-}
-
-/// The shapes of a near-cluster `group` (module docs), the first at index `start` of the
-/// output: at each member's λ the smallest singular vectors of its own multiplicity, taken
-/// only where the cluster's whole multiplicity M is separated (σ_M/σ_{M+1} ≤
-/// [`ShapeParams::null_tol`]); then M-orthonormalised together (symmetric
-/// orthonormalisation, the least change to each), each member keeping its λ. `None` when a
-/// member's test fails, the model has no mass form across two λ, or two members' vectors
-/// are close to one (normalised Gram eigenvalue below [`NEAR_GRAM_MIN`]).
-fn resolve_near<B: Bordered>(
-    sys: &mut B,
-    group: &[(f64, u32)],
-    start: usize,
-    params: &ShapeParams,
-) -> Option<Vec<ModeShape>> {
-    let dim = sys.dim();
-    let m6 = sys.ee_mass();
-    // Members: the given modes, those within MERGE_REL as one.
-    let mut members: Vec<(f64, u32)> = Vec::new();
-    for &(l, m) in group {
-        match members.last_mut() {
-            Some(last) if (l - last.0).abs() <= MERGE_REL * last.0 => {
-                last.0 = (last.0 * last.1 as f64 + l * m as f64) / (last.1 + m) as f64;
-                last.1 += m;
-            }
-            _ => members.push((l, m)),
-        }
-    }
-    let total: u32 = members.iter().map(|x| x.1).sum();
-    let mut ats = Vec::new();
-    let mut raw = Vec::new();
-    let mut separation = 0.0f64;
-    for (p, &(lambda, m)) in members.iter().enumerate() {
-        let at = sys.at(lambda);
-        let a = sys.matrix(&at, lambda);
-        let null = null_within(a, m as usize, total as usize, lambda, params).ok()?;
-        separation = separation.max(null.residual);
-        for c in 0..m as usize {
-            let col = null.vectors.column(c).into_owned();
-            raw.push(NearVector {
-                member: p,
-                phi: ee_of(&col, dim),
-                parts: sys.vector(&at, &col),
-            });
-        }
-        ats.push(at);
-    }
-    let k = raw.len();
-    let mut gram = DMatrix::<f64>::zeros(k, k);
-    let mut ee = DMatrix::<f64>::zeros(k, k);
-    for a in 0..k {
-        for b in 0..=a {
-            let (ra, rb) = (&raw[a], &raw[b]);
-            let own = (ra.phi.transpose() * m6 * rb.phi)[(0, 0)];
-            let cab = sys.cable_mass(
-                &ats[ra.member],
-                &ra.parts,
-                &ats[rb.member],
-                &rb.parts,
-                ra.member == rb.member,
-            )?;
-            gram[(a, b)] = own + cab;
-            gram[(b, a)] = own + cab;
-            ee[(a, b)] = own;
-            ee[(b, a)] = own;
-        }
-    }
-    // Symmetric orthonormalisation of the unit-M-norm vectors: C = D G̃^{-1/2}.
-    let d = DVector::from_iterator(k, (0..k).map(|a| 1.0 / gram[(a, a)].sqrt()));
-    let dm = DMatrix::from_diagonal(&d);
-    let g = SymmetricEigen::new(&dm * &gram * &dm);
-    if !(g.eigenvalues.min() >= NEAR_GRAM_MIN) {
-        return None;
-    }
-    let mut q = g.eigenvectors.clone();
-    for (c, &l) in g.eigenvalues.iter().enumerate() {
-        q.column_mut(c).scale_mut(1.0 / l.sqrt());
-    }
-    let coef = &dm * &q * g.eigenvectors.transpose();
-    let nodes: Vec<_> = raw
-        .iter()
-        .map(|r| sys.nodes(&ats[r.member], &r.parts))
-        .collect();
-    let mut out = Vec::with_capacity(k);
-    let mut col0 = 0;
-    for &(lambda, m) in &members {
-        let cp = coef.columns(col0, m as usize).into_owned();
-        col0 += m as usize;
-        let gp = cp.transpose() * &gram * &cp;
-        let ep = cp.transpose() * &ee * &cp;
-        let first = start + out.len();
-        for (c, part) in orthonormalise(&cp, gp, &ep) {
-            let mut phi = Vector6::zeros();
-            let mut cables: Vec<Vec<Vector3<f64>>> = nodes[0]
-                .iter()
-                .map(|u| vec![Vector3::zeros(); u.len()])
-                .collect();
-            for ((r, src), w) in raw.iter().zip(&nodes).zip(c.iter()) {
-                phi += r.phi * *w;
-                for (dst, s) in cables.iter_mut().zip(src) {
-                    for (x, y) in dst.iter_mut().zip(s) {
-                        *x += y * *w;
-                    }
-                }
-            }
-            out.push(ModeShape {
-                lambda,
-                frequency_hz: lambda_to_hz(lambda),
-                ee: phi,
-                cables,
-                ee_participation: part,
-                cluster_start: first,
-                multiplicity: m,
-                null_residual: separation,
-            });
-        }
-    }
-    Some(out)
-}
-
 /// M-orthonormalise the null vectors `v` (columns) from their mass Gram matrix `gram`
 /// (vᵀMv) and rotate them to diagonalise the end-effector's mass `ee` (φᵀM_eeφ);
 /// returns the columns with their participations, descending.
-fn orthonormalise(
+pub(super) fn orthonormalise(
     v: &DMatrix<f64>,
     gram: DMatrix<f64>,
     ee: &DMatrix<f64>,
@@ -448,7 +194,7 @@ fn null_of(
 /// beyond the `within` smallest (`within ≥ m`): σ_m/σ_{within+1} ≤
 /// [`ShapeParams::null_tol`] (a near-cluster's member: its vectors may mix with the
 /// cluster's other `within − m` directions, resolved by the caller).
-fn null_within(
+pub(super) fn null_within(
     mut a: DMatrix<f64>,
     m: usize,
     within: usize,
@@ -534,125 +280,4 @@ pub(super) fn element_mass_form(m: f64, u: &[Vector3<f64>], v: &[Vector3<f64>]) 
             + 2.0 * u[j + 1].dot(&v[j + 1]);
     }
     m / 6.0 * s
-}
-
-#[cfg(test)]
-mod tests {
-    //! The pipeline's repairs on a toy model whose eigen-decomposition is known exactly:
-    //! no chains, K = Q diag(λ_k) Qᵀ and M = I at the "end-effector" (dim 6), so the bordered
-    //! matrix is K − λI, its eigenvectors Q's columns, its count #{λ_k < λ}.
-    use super::*;
-    use nalgebra::Matrix6;
-
-    struct Toy {
-        k: Matrix6<f64>,
-        lambdas: [f64; 6],
-        q: Matrix6<f64>,
-    }
-
-    impl Toy {
-        fn new(lambdas: [f64; 6]) -> Toy {
-            // A fixed orthogonal Q (QR of a fixed full matrix), so no eigenvector is a
-            // coordinate axis.
-            let a = Matrix6::from_fn(|r, c| {
-                ((r * 7 + c * 3) % 11) as f64 + (r == c) as u8 as f64 * 5.0
-            });
-            let q = a.qr().q();
-            let k = q * Matrix6::from_diagonal(&lambdas.into()) * q.transpose();
-            Toy { k, lambdas, q }
-        }
-    }
-
-    impl Bordered for Toy {
-        type At = ();
-        type Vector = ();
-        fn dim(&self) -> usize {
-            6
-        }
-        fn ee_mass(&self) -> Matrix6<f64> {
-            Matrix6::identity()
-        }
-        fn at(&mut self, _: f64) {}
-        fn matrix(&self, _: &(), lambda: f64) -> DMatrix<f64> {
-            let a = self.k - Matrix6::identity() * lambda;
-            DMatrix::from_fn(6, 6, |r, c| a[(r, c)])
-        }
-        fn vector(&self, _: &(), _: &DVector<f64>) {}
-        fn cable_mass(&self, _: &(), _: &(), _: &(), _: &(), _: bool) -> Option<f64> {
-            Some(0.0)
-        }
-        fn nodes(&self, _: &(), _: &()) -> Vec<Vec<Vector3<f64>>> {
-            Vec::new()
-        }
-        fn count(&mut self, lambda: f64) -> u32 {
-            self.lambdas.iter().filter(|&&l| l < lambda).count() as u32
-        }
-    }
-
-    /// |cos| of the angle between shape `s`'s end-effector part and eigenvector k.
-    fn alignment(toy: &Toy, s: &ModeShape, k: usize) -> f64 {
-        (s.ee.dot(&toy.q.column(k)) / s.ee.norm()).abs()
-    }
-
-    fn run(toy: &mut Toy, modes: &[(f64, u32)]) -> Result<ModeShapes, ShapeError> {
-        let mut out = ModeShapes {
-            dim: 6,
-            ..ModeShapes::default()
-        };
-        mode_shapes(toy, modes, &ShapeParams::default(), &mut out).map(|_| out)
-    }
-
-    #[test]
-    fn a_cluster_given_as_one_that_is_several_is_split_by_the_count() {
-        // Three eigenvalues 1e-9 apart given as one double: σ₂/σ₃ = 1/2 at λ = 1, not a
-        // clean double; the count splits it into 1 and 1 + 1e-9, each clean.
-        let mut toy = Toy::new([1.0, 1.0 + 1e-9, 1.0 + 2e-9, 2.0, 3.0, 4.0]);
-        let out = run(&mut toy, &[(1.0, 2)]).unwrap();
-        assert_eq!(out.modes.len(), 2);
-        for (k, s) in out.modes.iter().enumerate() {
-            assert_eq!(s.multiplicity, 1);
-            // λ from the count's bisection to ~4ε; the shape within the separation σ₁/σ₂
-            // (≤ 1e-6 here) of the exact eigenvector.
-            assert!((s.lambda - toy.lambdas[k]).abs() <= 1e-14, "{}", s.lambda);
-            assert!(1.0 - alignment(&toy, s, k) <= 1e-6, "{k}");
-            // Mass-normalised: φᵀMφ = 1 (M = I).
-            assert!((s.ee.norm() - 1.0).abs() <= 1e-12);
-        }
-    }
-
-    #[test]
-    fn a_near_cluster_is_resolved_with_its_neighbour() {
-        // Two modes 2e-6 apart, each given 1e-8 off: alone, σ₁/σ₂ ≈ 5e-3 > the 1e-3
-        // tolerance at either λ; together (σ₂/σ₃ ≈ 2e-6) separated, and each member's own
-        // smallest singular vector is its eigenvector to ~1e-8/2e-6.
-        let mut toy = Toy::new([1.0, 1.0 + 2e-6, 2.0, 3.0, 4.0, 5.0]);
-        let given = [(1.0 + 1e-8, 1), (1.0 + 2e-6 - 1e-8, 1), (2.0, 1)];
-        let out = run(&mut toy, &given).unwrap();
-        assert_eq!(out.modes.len(), 3);
-        for (k, s) in out.modes.iter().enumerate() {
-            assert_eq!(s.lambda, given[k].0, "each member keeps its λ");
-            assert!(1.0 - alignment(&toy, s, k) <= 1e-4, "{k}");
-            assert!((s.ee.norm() - 1.0).abs() <= 1e-12);
-        }
-        // M-orthogonal after the symmetric orthonormalisation.
-        assert!(out.modes[0].ee.dot(&out.modes[1].ee).abs() <= 1e-12);
-        // Without the repair the first mode alone is refused.
-        let alone = run(&mut toy, &given[..1]);
-        assert!(matches!(alone, Err(ShapeError::NotAnEigenvalue { .. })));
-    }
-
-    #[test]
-    fn modes_given_apart_that_are_one_are_merged() {
-        // An exact double given as two modes 1e-12 apart (a count's rounding): neither
-        // alone has a clean 1-dimensional null space; merged, the double's.
-        let mut toy = Toy::new([1.0, 1.0, 2.0, 3.0, 4.0, 5.0]);
-        let out = run(&mut toy, &[(1.0, 1), (1.0 + 1e-12, 1)]).unwrap();
-        assert_eq!(out.modes.len(), 2);
-        assert!(out.modes.iter().all(|s| s.multiplicity == 2));
-        // The pair spans the double's eigenspace: projections onto Q's first two columns.
-        for s in &out.modes {
-            let p = alignment(&toy, s, 0).powi(2) + alignment(&toy, s, 1).powi(2);
-            assert!((p - 1.0).abs() <= 1e-9, "{p}");
-        }
-    }
 }

@@ -17,6 +17,9 @@ use crate::cable::ChainKind;
 pub(in crate::modal) struct ChainShape {
     /// Discrete: w_j for j = 0 ..= N (w_0 = 0, w_N = g). Continuous: empty (closed form).
     pub(super) w: Vec<f64>,
+    /// A discrete supported chain's hidden nodes from the drum (0) to the junction (its
+    /// w_0), on the same scale as `w`; empty otherwise.
+    pub(super) hidden_w: Vec<f64>,
     /// End value w(N) (w(1) for a continuous chain): 0 at a blocked eigenvalue.
     pub(super) g: f64,
     /// End force on the end-effector per unit amplitude, N/m: α w_N + β w_{N−1}
@@ -45,6 +48,7 @@ pub(in crate::modal) struct ChainShape {
 impl ChainShape {
     /// Fill for chain `kind` at λ (rad²/s²). Reuses `self.w`'s storage.
     pub(super) fn fill(&mut self, kind: &ChainKind, lambda: f64) {
+        self.hidden_w.clear();
         match *kind {
             ChainKind::Discrete { k, m, n_el } => self.fill_discrete(k, m, n_el.max(1), lambda),
             ChainKind::Continuous { k_total, m_total } => {

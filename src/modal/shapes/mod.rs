@@ -42,13 +42,21 @@
 //! coarse to separate it from a neighbour). Before the SVD the matrix is equilibrated
 //! (Ruiz: rows and columns scaled to unit largest entry): the chains' rows range from T/l
 //! to EA/l, and unbalanced, the SVD's backward error ε‖A‖ would swamp the soft rows. A
-//! cluster that fails the test is repaired the same way for every model (`bordered`): modes
-//! given apart within 1e-9 that are one eigenvalue are merged; one given as a cluster that
-//! is several (modes 1e-10 apart given as one; the catenary model's identical cables differ
-//! by ~ε·EA/T) is split by the count from its λ to 1e-8 above, and each part's shapes are
-//! taken; a near-cluster (distinct modes too close for the null space to separate, ~5e-6
-//! apart with sag) is resolved with its neighbours by a symmetric orthonormalisation of
-//! each member's own null vectors.
+//! cluster that fails the test is repaired the same way for every model (`pipeline`,
+//! `near`): modes given apart within 1e-9 that are one eigenvalue are merged; one given as a
+//! cluster that is several (modes 1e-10 apart given as one; the catenary model's identical
+//! cables differ by ~ε·EA/T) is split by the count from its λ to 1e-8 above, and each
+//! part's shapes are taken. A mode still not separated from a given neighbour is a
+//! near-cluster. Below the null space's resolution (the paper robot's end-effector triplet
+//! 4e-9 apart 1e-6 m off its symmetric pose at N = 10⁵, where the chains' rounding keeps
+//! each member's σ_m near 1e-12 and the neighbours' σ_{m+1} near 1e-9) it is taken with its
+//! nearest given neighbours, across gaps of at most 1e-6 relative, as one cluster at their
+//! multiplicity-weighted mean λ, once the count certifies that the group's span holds
+//! exactly its multiplicity and the merged null space is separated (its members'
+//! frequencies are then given at the mean, within 5e-7 relative; a caller asking a few
+//! clusters at a time keeps such runs together, [`near_runs`]). Farther apart (~5e-6 with
+//! sag, up to 1e-3) it is resolved with its neighbours by a symmetric orthonormalisation of
+//! each member's own null vectors, each member keeping its λ.
 //!
 //! **Normalisation.** The consistent mass of the model is block diagonal in the chain
 //! coordinates (its 3 × 3 blocks are multiples of I and the chain directions are
@@ -74,8 +82,10 @@
 //! part enters m_ii. A sagged chain on a hidden cable (`sagged`) has one more amplitude,
 //! the hidden cable's, and the junction's equation one more row.
 //!
-//! **Layout.** `bordered`: the one pipeline over a model's bordered system (null space,
-//! normalisation, cluster repairs); `taut`: the taut chains' system (behind
+//! **Layout.** `pipeline`: the one pipeline over a model's bordered system (cluster merge
+//! and split), `bordered`: what it does at one λ (null space, normalisation); `near`: its
+//! near-cluster repairs; `taut`: the
+//! taut chains' system (behind
 //! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes)), `sagged`: the
 //! sagging cables' FEM chains' (behind
 //! [`SagModalSolver::mode_shapes`](crate::modal::SagModalSolver::mode_shapes));
@@ -83,20 +93,26 @@
 //! chain's; `sag_chain_shape`: a sagged FEM chain's solutions. `count`: the lowest
 //! eigenvalues and their multiplicities by count bisection
 //! ([`Solver::eigen_clusters`](crate::modal::Solver::eigen_clusters)) and the split of a
-//! cluster.
+//! cluster. `influence`: the quasi-static influence field (the nodes' static displacement
+//! per unit end-effector motion) in the shapes' layout, taut and sagged.
 
 mod bordered;
 mod chain_shape;
 mod count;
+mod influence;
+mod near;
+mod pipeline;
 mod sag_chain_shape;
 mod sagged;
 mod supported_shape;
 mod taut;
 
-pub(in crate::modal) use bordered::mode_shapes;
 pub(in crate::modal) use count::clusters_by_count;
+pub(in crate::modal) use pipeline::mode_shapes;
 pub(in crate::modal) use sagged::SagSystem;
 pub(in crate::modal) use taut::TautSystem;
+
+pub use near::near_runs;
 
 use super::ModalError;
 use nalgebra::{Vector3, Vector6};
@@ -155,6 +171,10 @@ pub struct ModeShape {
     /// motion along the cable on a hidden cable) to end-effector; at the fractions
     /// [`ModeShapes::fractions`] of the chord (the hidden cable's own nodes are not drawn).
     pub cables: Vec<Vec<Vector3<f64>>>,
+    /// Each cable's hidden cable (behind its pulley, FEM): its nodes' displacement along
+    /// it (1/√kg), from the fixed drum to the junction; empty for a cable without one (or
+    /// a continuous one, whose hidden part enters the normalisation only).
+    pub hidden: Vec<Vec<f64>>,
     /// End-effector participation φ_eeᵀ M_ee φ_ee (0 ..= 1).
     pub ee_participation: f64,
     /// Index (in [`ModeShapes::modes`]) of the first shape of this mode's cluster.
@@ -179,10 +199,13 @@ pub struct ModeShapes {
     /// (m/6)[2I I; I 2I] of each element of the node lists (a continuous cable's total
     /// mass over its sample intervals, an approximation of its mass there).
     pub element_mass_kg: Vec<f64>,
+    /// Each cable's hidden cable's element mass, kg (0 without one).
+    pub hidden_element_mass_kg: Vec<f64>,
 }
 
 impl ModeShapes {
-    /// The mass overlaps O_ji = φ_jᵀ M φ'_i of these shapes (j, rows) with `old` (i,
+    /// The mass overlaps O_ji = φ_jᵀ M φ'_i of these shapes (the hidden cables' nodes
+    /// included) (j, rows) with `old` (i,
     /// columns), row-major, the mass M of these shapes' cables and `ee_mass` (the
     /// end-effector's, kg and kg·m²) on node lists of the same sizes: at one pose, the
     /// identity for M-orthonormal shapes; across a small change of pose, how each old mode
@@ -204,11 +227,25 @@ impl ModeShapes {
                     let m = self.element_mass_kg.get(i).copied().unwrap_or(0.0);
                     s += bordered::element_mass_form(m, ua, ub);
                 }
+                for (i, (ha, hb)) in a.hidden.iter().zip(&b.hidden).enumerate() {
+                    if ha.len() == hb.len() {
+                        let m = self.hidden_element_mass_kg.get(i).copied().unwrap_or(0.0);
+                        s += m / 6.0 * scalar_mass_form(ha, hb);
+                    }
+                }
                 out.push(s);
             }
         }
         Some(out)
     }
+}
+
+/// Σ over the elements of a scalar chain of 2a_j b_j + a_j b_{j+1} + a_{j+1} b_j +
+/// 2a_{j+1} b_{j+1} (6/m times its consistent mass's bilinear form).
+fn scalar_mass_form(a: &[f64], b: &[f64]) -> f64 {
+    (0..a.len().saturating_sub(1))
+        .map(|j| 2.0 * a[j] * b[j] + a[j] * b[j + 1] + a[j + 1] * b[j] + 2.0 * a[j + 1] * b[j + 1])
+        .sum()
 }
 
 /// Errors of the mode-shape recovery.

@@ -164,6 +164,14 @@ impl SagChainShape {
         (u, hidden)
     }
 
+    /// The hidden cable's nodes (axial displacement, drum to junction) for the amplitude
+    /// `c` (b_0) of the fourth solution; empty without a hidden cable.
+    pub(super) fn hidden_nodes(&self, c: f64) -> Vec<f64> {
+        self.hidden
+            .as_ref()
+            .map_or_else(Vec::new, |h| h.t.iter().map(|t| t * c).collect())
+    }
+
     /// The hidden cable's consistent mass form of amplitudes ca, cb (b_0) of this chain's
     /// and `other`'s fourth solutions (the same chain at two λ); 0 without a hidden cable.
     pub(super) fn hidden_mass_form(&self, other: &SagChainShape, ca: f64, cb: f64) -> f64 {

@@ -50,8 +50,9 @@
 //! (the free cable's first element and the hidden cable's last). The end force and end
 //! value gain F_z c and z_N c. The columns c and rows of the junctions come after every
 //! a_i and end row, so a robot without hidden cables has the same bordered matrix. The
-//! shapes draw node 0 as the junction's motion d c t_{N_h} (world frame) and not the hidden
-//! cable's nodes (as the taut hidden-cable shapes); those enter the normalisation:
+//! shapes draw node 0 as the junction's motion d c t_{N_h} (world frame); the hidden
+//! cable's nodes c t_j are given apart (`ModeShape::hidden`, as the taut hidden-cable
+//! shapes') and enter the normalisation:
 //! (m_h/6) c_a c_b Σ (2t_j² + 2t_j t_{j+1} + 2t_{j+1}²) over the hidden elements.
 //!
 //! **Normalisation.** The nodes u_j = Y_j a (interior) and E_iᵀ G_i φ (end) of each null
@@ -59,7 +60,7 @@
 //! (m/6)(2u_j·v_j + u_j·v_{j+1} + u_{j+1}·v_j + 2u_{j+1}·v_{j+1}), plus φᵀM_eeφ: the dense
 //! M's, with the hidden cables' term above); a cluster is M-orthonormalised and rotated as
 //! the taut shapes are; clusters that are not one clean eigenvalue are repaired as for
-//! every model (`bordered`: merged, split by the count, or resolved as a near-cluster with
+//! every model (`pipeline`: merged, split by the count, or resolved as a near-cluster with
 //! the element mass form of chain solutions at two λ, exact for the FEM chains).
 //!
 //! **Accuracy.** The forward solution is exact in exact arithmetic. Above a chain's
@@ -71,7 +72,7 @@
 //! without hidden cables; cli/tests/cli/hidden_sag.rs, the frequency response of the large
 //! robots above their cut-off against the dense modal sum). Offline: allocates.
 
-use super::bordered::{element_mass_form, Bordered};
+use super::bordered::{element_mass_form, Bordered, Nodes};
 use super::sag_chain_shape::SagChainShape;
 use super::{ModeShapes, ShapeError, ShapeParams};
 use crate::kinematics::attach_map;
@@ -80,9 +81,9 @@ use crate::modal::sagged::SagChains;
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x6, Matrix6, Vector3, Vector4, Vector6};
 
 /// How one loaded cable attaches: its frame E = [h up n] and attachment map (3 × dim).
-struct Attach {
-    frame: Matrix3<f64>,
-    map: Matrix3x6<f64>,
+pub(super) struct Attach {
+    pub(super) frame: Matrix3<f64>,
+    pub(super) map: Matrix3x6<f64>,
 }
 
 impl<'a> SagSystem<'a> {
@@ -147,6 +148,9 @@ impl<'a> SagSystem<'a> {
             fractions,
             modes: Vec::new(),
             element_mass_kg: (0..n_cables).map(|i| chain(i).element_mass_kg()).collect(),
+            hidden_element_mass_kg: (0..n_cables)
+                .map(|i| chain(i).support().map_or(0.0, |s| s.hidden.m))
+                .collect(),
         };
         // The columns of the hidden cables' amplitudes c_i, after every a_i.
         let mut next = dim + 3 * n_cables;
@@ -172,8 +176,8 @@ impl<'a> SagSystem<'a> {
 /// The sagged FEM chains' bordered system (module docs): the loaded chains, how each cable
 /// attaches and the columns of the hidden cables' amplitudes.
 pub(in crate::modal) struct SagSystem<'a> {
-    chains: &'a mut SagChains,
-    attach: Vec<Attach>,
+    pub(super) chains: &'a mut SagChains,
+    pub(super) attach: Vec<Attach>,
     hcol: Vec<Option<usize>>,
 }
 
@@ -233,12 +237,18 @@ impl Bordered for SagSystem<'_> {
         )
     }
 
-    fn nodes(&self, _: &Vec<SagChainShape>, (nodes, _): &LocalNodes) -> Vec<Vec<Vector3<f64>>> {
-        nodes
+    fn nodes(&self, shapes: &Vec<SagChainShape>, (nodes, amps): &LocalNodes) -> Nodes {
+        let cables = nodes
             .iter()
             .zip(&self.attach)
             .map(|(u, at)| u.iter().map(|x| at.frame * x).collect())
-            .collect()
+            .collect();
+        let hidden = shapes
+            .iter()
+            .zip(amps)
+            .map(|(sh, &c)| sh.hidden_nodes(c))
+            .collect();
+        (cables, hidden)
     }
 
     fn count(&mut self, lambda: f64) -> u32 {

@@ -69,6 +69,8 @@ impl ChainShape {
         }
         self.w.clear();
         self.w.extend_from_slice(&all[nh..]);
+        self.hidden_w.clear();
+        self.hidden_w.extend_from_slice(&all[..=nh]);
         let wn1 = self.w[n - 1];
         self.g = self.w[n];
         self.f = af * self.g + bf * wn1;

@@ -1,9 +1,9 @@
 //! The taut chains' bordered system ([`TautSystem`], behind
 //! [`ModalSolver::mode_shapes`](crate::modal::ModalSolver::mode_shapes)): one scalar chain
 //! copy per direction of each chain, its amplitude C_k one unknown (the module docs); the
-//! pipeline (`bordered`) takes its null space, normalises and repairs clusters.
+//! pipeline (`pipeline`) takes its null space, normalises and repairs clusters.
 
-use super::bordered::{element_mass_form, Bordered};
+use super::bordered::{element_mass_form, Bordered, Nodes};
 use super::chain_shape::ChainShape;
 use super::{ModeShapes, ShapeError, ShapeParams};
 use crate::cable::{CableModel, ChainKind};
@@ -18,26 +18,28 @@ const PROJ_RANGE_MIN: f64 = 0.5;
 
 /// One chain copy: a direction of one chain of one cable.
 #[derive(Debug, Clone)]
-struct ChainCopy {
+pub(super) struct ChainCopy {
     /// The chain's index in [`Layout::kinds`].
-    chain: usize,
+    pub(super) chain: usize,
     /// Unit direction of the copy (world frame).
     dir: Vector3<f64>,
     /// End direction on the end-effector's coordinates, G_iᵀ dir.
-    b: Vector6<f64>,
+    pub(super) b: Vector6<f64>,
 }
 
 /// How the models' chains attach, independent of λ.
 #[derive(Debug, Clone)]
-struct Layout {
+pub(super) struct Layout {
     /// Each active chain's kind.
-    kinds: Vec<ChainKind>,
+    pub(super) kinds: Vec<ChainKind>,
     /// Every chain copy.
-    copies: Vec<ChainCopy>,
+    pub(super) copies: Vec<ChainCopy>,
     /// Per cable: its copies' indices, its attachment map and whether it is continuous.
     cable_copies: Vec<Vec<usize>>,
     attach: Vec<Matrix3x6<f64>>,
     fractions: Vec<Vec<f64>>,
+    /// Per cable: its discrete hidden cable's element mass, kg (0 without one).
+    hidden_mass_kg: Vec<f64>,
 }
 
 impl Layout {
@@ -52,6 +54,7 @@ impl Layout {
             cable_copies: Vec::new(),
             attach: Vec::new(),
             fractions: Vec::new(),
+            hidden_mass_kg: Vec::new(),
         };
         for (i, m) in models.iter().enumerate() {
             let g = match arms_m {
@@ -60,12 +63,18 @@ impl Layout {
             };
             let mut mine = Vec::new();
             let mut continuous = false;
+            let mut hidden_kg = 0.0;
             for c in &m.chains[..m.n_chains] {
                 if matches!(c.kind, ChainKind::Discrete { k, m, .. } if k == 0.0 && m == 0.0) {
                     continue; // no stiffness, no mass: loads nothing (as `load` skips it)
                 }
                 continuous |= matches!(c.kind, ChainKind::Continuous { .. })
                     || matches!(c.kind, ChainKind::Supported { free, .. } if free.n_el == 0);
+                if let ChainKind::Supported { hidden, .. } = c.kind {
+                    if hidden.n_el > 0 {
+                        hidden_kg = hidden.m;
+                    }
+                }
                 let e = eig3_jacobi(&c.proj);
                 for r in 0..3 {
                     if e.values[r] > PROJ_RANGE_MIN {
@@ -89,6 +98,7 @@ impl Layout {
                 .push((0..=n).map(|j| j as f64 / n as f64).collect());
             l.cable_copies.push(mine);
             l.attach.push(g);
+            l.hidden_mass_kg.push(hidden_kg);
         }
         l
     }
@@ -107,6 +117,12 @@ impl Layout {
                     Some(ChainKind::Continuous { m_total, .. }) => {
                         m_total / (fr.len().saturating_sub(1)).max(1) as f64
                     }
+                    // A supported chain's free cable: its element mass, or its whole mass
+                    // over the sample intervals (continuous).
+                    Some(ChainKind::Supported { free, .. }) if free.n_el > 0 => free.m,
+                    Some(ChainKind::Supported { free, .. }) => {
+                        free.m / (fr.len().saturating_sub(1)).max(1) as f64
+                    }
                     _ => 0.0,
                 },
             )
@@ -116,8 +132,8 @@ impl Layout {
 
 /// The taut chains' bordered system (module docs): the loaded chains and their layout.
 pub(in crate::modal) struct TautSystem<'a> {
-    chains: &'a mut TautChains,
-    layout: Layout,
+    pub(super) chains: &'a mut TautChains,
+    pub(super) layout: Layout,
     /// Every chain is a discrete FEM chain (the mass form of two chain solutions at
     /// different λ is then the node form, exact).
     discrete: bool,
@@ -171,6 +187,7 @@ impl<'a> TautSystem<'a> {
             fractions: layout.fractions.clone(),
             modes: Vec::new(),
             element_mass_kg: layout.element_mass_kg(),
+            hidden_element_mass_kg: layout.hidden_mass_kg.clone(),
         };
         let discrete = layout
             .kinds
@@ -255,7 +272,7 @@ impl Bordered for TautSystem<'_> {
             if !self.discrete {
                 return None;
             }
-            let (na, nb) = (self.nodes(at_a, a), self.nodes(at_b, b));
+            let (na, nb) = (self.nodes(at_a, a).0, self.nodes(at_b, b).0);
             let mass = self.layout.element_mass_kg();
             return Some(
                 na.iter()
@@ -276,16 +293,42 @@ impl Bordered for TautSystem<'_> {
         Some(cab)
     }
 
-    /// Every cable's node displacements of a null vector: C_k w inside, G_i φ at the end.
-    fn nodes(&self, shapes: &Vec<ChainShape>, v: &TautVector) -> Vec<Vec<Vector3<f64>>> {
+    fn nodes(&self, shapes: &Vec<ChainShape>, v: &TautVector) -> Nodes {
+        self.col_nodes(shapes, &v.col)
+    }
+
+    fn count(&mut self, lambda: f64) -> u32 {
+        self.chains.count(lambda).0
+    }
+}
+
+impl TautSystem<'_> {
+    /// Every cable's node displacements of a bordered vector `col` (φ, C_1 … C_n): C_k w
+    /// inside, G_i φ at the end; and each hidden cable's, C_k times the supported chain's
+    /// hidden nodes (empty without one).
+    pub(super) fn col_nodes(&self, shapes: &[ChainShape], col: &DVector<f64>) -> Nodes {
         let layout = &self.layout;
         let dim = self.dim();
-        let col = &v.col;
         let mut phi = Vector6::zeros();
         for r in 0..dim {
             phi[r] = col[r];
         }
-        layout
+        let hidden = layout
+            .cable_copies
+            .iter()
+            .map(|copies| {
+                copies
+                    .iter()
+                    .find(|&&q| !shapes[layout.copies[q].chain].hidden_w.is_empty())
+                    .map(|&q| {
+                        let amp = col[dim + q];
+                        let sh = &shapes[layout.copies[q].chain];
+                        sh.hidden_w.iter().map(|w| amp * w).collect()
+                    })
+                    .unwrap_or_default()
+            })
+            .collect();
+        let cables = layout
             .cable_copies
             .iter()
             .enumerate()
@@ -310,10 +353,7 @@ impl Bordered for TautSystem<'_> {
                 u[last] = layout.attach[i] * phi;
                 u
             })
-            .collect()
-    }
-
-    fn count(&mut self, lambda: f64) -> u32 {
-        self.chains.count(lambda).0
+            .collect();
+        (cables, hidden)
     }
 }

@@ -150,6 +150,23 @@ impl Solver<SagChains> {
         Ok(out)
     }
 
+    /// The quasi-static influence field of the loaded pose on its sagging FEM chains, as
+    /// [`ModalSolver::influence_field`](crate::modal::ModalSolver::influence_field); `h`,
+    /// `up`, `arms_m` and `params` as [`Self::mode_shapes`]. A cable whose static end map
+    /// is singular (no stiffness) is [`ShapeError::NotAnEigenvalue`] at λ = 0. Allocates;
+    /// never on the real-time path.
+    pub fn influence_field(
+        &mut self,
+        h: &[Vector3<f64>],
+        up: &Vector3<f64>,
+        arms_m: &[Vector3<f64>],
+        params: &ShapeParams,
+    ) -> Result<ModeShapes, ShapeError> {
+        let (sys, mut out) = SagSystem::new(&mut self.problem, h, up, arms_m, params)?;
+        sys.influence_field(&mut out)?;
+        Ok(out)
+    }
+
     /// [`Self::receptance`] at each frequency of `freqs_hz` (Hz).
     pub fn receptance_over(
         &mut self,

@@ -87,6 +87,23 @@ impl Solver<TautChains> {
         Ok(out)
     }
 
+    /// The quasi-static influence field of the loaded pose: one entry of
+    /// [`ModeShapes::modes`] per end-effector DOF (3, or 6 for a rigid body), its `ee` the
+    /// unit displacement (m, or rad), its `cables` every node's static displacement (m per
+    /// m, or m per rad) with the anchors held (the `shapes` module's `influence`). `models`,
+    /// `arms_m` and `params` as [`Self::mode_shapes`]. Allocates; never on the real-time
+    /// path.
+    pub fn influence_field(
+        &mut self,
+        models: &[CableModel],
+        arms_m: &[Vector3<f64>],
+        params: &ShapeParams,
+    ) -> Result<ModeShapes, ShapeError> {
+        let (sys, mut out) = TautSystem::new(&mut self.problem, models, arms_m, params)?;
+        sys.influence_field(&mut out);
+        Ok(out)
+    }
+
     /// The modes of the loaded pose (loaded with `models`, arms `arms_m` for a rigid
     /// end-effector) up to `max_hz` (at most `max_modes`, clusters completed), their
     /// end-effector shapes, and the residual flexibility of the others: the basis of the

@@ -1,4 +1,4 @@
-//! `analyze --compare-dense`: the structured K modes against the dense spectrum of the
+//! The analysis's dense comparison (`compare_dense`): the structured K modes against the dense spectrum of the
 //! same models, both timed in one process.
 
 use super::{dense_bound, AnalyzeError, DenseComparison};

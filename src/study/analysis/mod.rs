@@ -387,24 +387,27 @@ pub const DENSE_MAX_BOUND: f64 = 1.0;
 
 /// The dense reference's reported eigenvalues `lambda` (rad²/s², ascending) checked before
 /// they are printed: each finite and > 0, and the bound ε·λ_max/λ₁ at most
-/// [`DENSE_MAX_BOUND`]; else a one-line refusal naming the structured solver.
+/// [`DENSE_MAX_BOUND`]; else the dense solver refused in one line ([`Param::Solver`]),
+/// naming the structured one.
 fn check_dense(lambda: &[f64], lambda_max: f64) -> Result<(), AnalyzeError> {
     if let Some((j, &l)) = lambda
         .iter()
         .enumerate()
         .find(|(_, l)| !(l.is_finite() && **l > 0.0))
     {
-        return Err(AnalyzeError::Solve(format!(
-            "--solver dense: the dense eigen-solve gave λ = {l:.3e} rad²/s² for mode {} (rounding: the model's stiffness spans more than f64 resolves densely); use the structured solver",
+        let rule = format!(
+            "the dense eigen-solve gave λ = {l:.3e} rad²/s² for mode {} (rounding: the model's stiffness spans more than f64 resolves densely); use the structured solver",
             j + 1
-        )));
+        );
+        return Err(ParamError::invalid(Param::Solver, "dense", rule).into());
     }
     if let Some(&l1) = lambda.first() {
         let bound = dense_bound(l1, lambda_max);
         if !(bound <= DENSE_MAX_BOUND) {
-            return Err(AnalyzeError::Solve(format!(
-                "--solver dense: its accuracy bound ε·λ_max/λ₁ = {bound:.1e} (λ_max = {lambda_max:.1e}, λ₁ = {l1:.1e} rad²/s²) leaves no correct digit: a very stiff, light part of the model (e.g. micrometres of cable behind a pulley); use the structured solver"
-            )));
+            let rule = format!(
+                "its accuracy bound ε·λ_max/λ₁ = {bound:.1e} (λ_max = {lambda_max:.1e}, λ₁ = {l1:.1e} rad²/s²) leaves no correct digit: a very stiff, light part of the model (e.g. micrometres of cable behind a pulley); use the structured solver"
+            );
+            return Err(ParamError::invalid(Param::Solver, "dense", rule).into());
         }
     }
     Ok(())

@@ -58,6 +58,23 @@ pub struct LuSpot {
     pub seconds: f64,
 }
 
+/// A structured response and the assembled dense problem it is checked against.
+#[derive(Debug, Clone, Copy)]
+pub struct Checked<'a> {
+    /// Stiffness matrix K of the assembled problem (N/m; N·m/rad in rotational rows).
+    pub k: &'a DMatrix<f64>,
+    /// Mass matrix M of the assembled problem (kg; kg·m² in rotational rows).
+    pub m: &'a DMatrix<f64>,
+    /// 3 (point mass) or 6 (rigid body): the leading block compared.
+    pub dim: usize,
+    /// The damping of both.
+    pub damping: &'a Damping,
+    /// The frequencies, Hz.
+    pub freqs: &'a [f64],
+    /// The structured receptance at each frequency, m/N.
+    pub h: &'a [Matrix6<Complex64>],
+}
+
 /// Relative Frobenius difference ‖a − b‖/‖b‖ of the leading `dim` × `dim` blocks.
 fn rel_diff(a: &Matrix6<Complex64>, b: &Matrix6<Complex64>, dim: usize) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);
@@ -68,33 +85,6 @@ fn rel_diff(a: &Matrix6<Complex64>, b: &Matrix6<Complex64>, dim: usize) -> f64 {
         }
     }
     (num / den).sqrt()
-}
-
-/// [`super::DenseCheckKind::Lu`]: the dense complex LU at every frequency (loss factor, Rayleigh or none; the
-/// caller refuses modal damping).
-pub fn lu_every(
-    k: &DMatrix<f64>,
-    m: &DMatrix<f64>,
-    dim: usize,
-    damping: &Damping,
-    freqs: &[f64],
-    h: &[Matrix6<Complex64>],
-) -> Result<DenseCheck, StudyError> {
-    let t0 = Instant::now();
-    let mut diff = Vec::with_capacity(freqs.len());
-    for (&f, hs) in freqs.iter().zip(h) {
-        let r = dense_receptance(k, m, dim, damping, 2.0 * PI * f)?;
-        diff.push(rel_diff(hs, &r, dim));
-    }
-    Ok(DenseCheck {
-        method: "lu",
-        max_rel_diff: diff.iter().fold(0.0f64, |w, &d| w.max(d)),
-        rel_diff: diff,
-        seconds: t0.elapsed().as_secs_f64(),
-        dof: k.nrows(),
-        eig_seconds: None,
-        lu: None,
-    })
 }
 
 /// The dense modes: eigenvalues λ_r (rad²/s²) and the end-effector rows of the
@@ -156,64 +146,85 @@ fn modal_sum(modes: &DenseModes, dim: usize, damping: &Damping, w: f64) -> Matri
     out
 }
 
-/// [`super::DenseCheckKind::Modal`]: the summation over every dense mode at every frequency, and the LU at
-/// `lu_points` of them (evenly spread indices, both ends included).
-pub fn modal_every(
-    k: &DMatrix<f64>,
-    m: &DMatrix<f64>,
-    dim: usize,
-    damping: &Damping,
-    freqs: &[f64],
-    h: &[Matrix6<Complex64>],
-    lu_points: usize,
-) -> Result<DenseCheck, StudyError> {
-    let t0 = Instant::now();
-    let modes = dense_modes(k, m, dim)?;
-    let eig_seconds = t0.elapsed().as_secs_f64();
-    let dense: Vec<Matrix6<Complex64>> = freqs
-        .iter()
-        .map(|&f| modal_sum(&modes, dim, damping, 2.0 * PI * f))
-        .collect();
-    let seconds = t0.elapsed().as_secs_f64();
-    let diff: Vec<f64> = h
-        .iter()
-        .zip(&dense)
-        .map(|(a, b)| rel_diff(a, b, dim))
-        .collect();
-    let n = freqs.len();
-    let lu = if lu_points == 0 || matches!(damping, Damping::ModalRatio { .. }) {
-        None
-    } else {
-        let picks: Vec<usize> = if lu_points >= n {
-            (0..n).collect()
-        } else if lu_points == 1 {
-            vec![n / 2]
-        } else {
-            (0..lu_points)
-                .map(|i| (i * (n - 1) + (lu_points - 1) / 2) / (lu_points - 1))
-                .collect()
-        };
-        let t1 = Instant::now();
-        let (mut modal_rel_diff, mut structured_rel_diff) = (0.0f64, 0.0f64);
-        for &i in &picks {
-            let r = dense_receptance(k, m, dim, damping, 2.0 * PI * freqs[i])?;
-            modal_rel_diff = modal_rel_diff.max(rel_diff(&dense[i], &r, dim));
-            structured_rel_diff = structured_rel_diff.max(rel_diff(&h[i], &r, dim));
-        }
-        Some(LuSpot {
-            frequencies_hz: picks.iter().map(|&i| freqs[i]).collect(),
-            modal_rel_diff,
-            structured_rel_diff,
-            seconds: t1.elapsed().as_secs_f64(),
+impl Checked<'_> {
+    /// The dense complex LU's receptance at frequency `i`.
+    fn lu_at(&self, i: usize) -> Result<Matrix6<Complex64>, StudyError> {
+        let w = 2.0 * PI * self.freqs[i];
+        Ok(dense_receptance(self.k, self.m, self.dim, self.damping, w)?)
+    }
+
+    /// [`super::DenseCheckKind::Lu`]: the dense complex LU at every frequency (loss factor,
+    /// Rayleigh or none; the caller refuses modal damping).
+    pub fn lu_every(&self) -> Result<DenseCheck, StudyError> {
+        let t0 = Instant::now();
+        let diff = (0..self.freqs.len())
+            .map(|i| Ok(rel_diff(&self.h[i], &self.lu_at(i)?, self.dim)))
+            .collect::<Result<Vec<f64>, StudyError>>()?;
+        Ok(DenseCheck {
+            method: "lu",
+            max_rel_diff: diff.iter().fold(0.0f64, |w, &d| w.max(d)),
+            rel_diff: diff,
+            seconds: t0.elapsed().as_secs_f64(),
+            dof: self.k.nrows(),
+            eig_seconds: None,
+            lu: None,
         })
-    };
-    Ok(DenseCheck {
-        method: "modal",
-        max_rel_diff: diff.iter().fold(0.0f64, |w, &d| w.max(d)),
-        rel_diff: diff,
-        seconds,
-        dof: k.nrows(),
-        eig_seconds: Some(eig_seconds),
-        lu,
-    })
+    }
+
+    /// [`super::DenseCheckKind::Modal`]: the summation over every dense mode at every
+    /// frequency, and the LU at `lu_points` of them (evenly spread indices, both ends
+    /// included).
+    pub fn modal_every(&self, lu_points: usize) -> Result<DenseCheck, StudyError> {
+        let (dim, freqs) = (self.dim, self.freqs);
+        let t0 = Instant::now();
+        let modes = dense_modes(self.k, self.m, dim)?;
+        let eig_seconds = t0.elapsed().as_secs_f64();
+        let dense: Vec<Matrix6<Complex64>> = freqs
+            .iter()
+            .map(|&f| modal_sum(&modes, dim, self.damping, 2.0 * PI * f))
+            .collect();
+        let seconds = t0.elapsed().as_secs_f64();
+        let diff: Vec<f64> = self
+            .h
+            .iter()
+            .zip(&dense)
+            .map(|(a, b)| rel_diff(a, b, dim))
+            .collect();
+        let n = freqs.len();
+        let lu = if lu_points == 0 || matches!(self.damping, Damping::ModalRatio { .. }) {
+            None
+        } else {
+            let picks: Vec<usize> = if lu_points >= n {
+                (0..n).collect()
+            } else if lu_points == 1 {
+                vec![n / 2]
+            } else {
+                (0..lu_points)
+                    .map(|i| (i * (n - 1) + (lu_points - 1) / 2) / (lu_points - 1))
+                    .collect()
+            };
+            let t1 = Instant::now();
+            let (mut modal_rel_diff, mut structured_rel_diff) = (0.0f64, 0.0f64);
+            for &i in &picks {
+                let r = self.lu_at(i)?;
+                modal_rel_diff = modal_rel_diff.max(rel_diff(&dense[i], &r, dim));
+                structured_rel_diff = structured_rel_diff.max(rel_diff(&self.h[i], &r, dim));
+            }
+            Some(LuSpot {
+                frequencies_hz: picks.iter().map(|&i| freqs[i]).collect(),
+                modal_rel_diff,
+                structured_rel_diff,
+                seconds: t1.elapsed().as_secs_f64(),
+            })
+        };
+        Ok(DenseCheck {
+            method: "modal",
+            max_rel_diff: diff.iter().fold(0.0f64, |w, &d| w.max(d)),
+            rel_diff: diff,
+            seconds,
+            dof: self.k.nrows(),
+            eig_seconds: Some(eig_seconds),
+            lu,
+        })
+    }
 }

@@ -24,7 +24,7 @@
 
 pub mod dense;
 
-pub use dense::{DenseCheck, LuSpot};
+pub use dense::{Checked, DenseCheck, LuSpot};
 
 use super::cost::{estimate_cost, frf_chunk, in_chunks, receptance, Work, WorkEstimate};
 use super::{Param, ParamError, ParamName, StudyError};
@@ -273,10 +273,80 @@ pub fn frf_announced(
         .into());
     }
     if scene.model.sag {
-        sagged(scene, cfg, damping, freqs, announce)
+        respond(&mut Sagged::new(scene)?, cfg, damping, freqs, announce)
     } else {
-        taut(scene, cfg, damping, freqs, announce)
+        respond(&mut Taut::new(scene)?, cfg, damping, freqs, announce)
     }
+}
+
+/// What differs between the models of a response: their set-up at the pose (in `new`),
+/// the natural frequencies, the structured receptance and the assembled dense problem.
+trait ResponseModel {
+    /// The scene as computed.
+    fn scene(&self) -> &Scene;
+    /// 3 (point mass) or 6 (rigid body).
+    fn dim(&self) -> usize;
+    /// The natural frequencies to list ([`marked`]), Hz.
+    fn natural_hz(&mut self, cfg: &FrfConfig) -> Result<Vec<f64>, StudyError>;
+    /// The structured receptance at each of `freqs`, its cost checked first
+    /// ([`check_cost`]).
+    fn receptance(
+        &mut self,
+        cfg: &FrfConfig,
+        damping: &Damping,
+        freqs: &[f64],
+        announce: &mut dyn FnMut(&WorkEstimate),
+    ) -> Result<Vec<Matrix6<Complex64>>, StudyError>;
+    /// The assembled (K, M) of the same model.
+    fn dense_matrices(&self) -> Result<(DMatrix<f64>, DMatrix<f64>), String>;
+}
+
+/// The response of one model: natural frequencies, receptance, the dense check asked for.
+fn respond(
+    model: &mut impl ResponseModel,
+    cfg: &FrfConfig,
+    damping: Damping,
+    freqs: Vec<f64>,
+    mut announce: impl FnMut(&WorkEstimate),
+) -> Result<FrfResult, StudyError> {
+    let natural_hz = model.natural_hz(cfg)?;
+    let t0 = Instant::now();
+    let h = model.receptance(cfg, &damping, &freqs, &mut announce)?;
+    let structured_s = t0.elapsed().as_secs_f64();
+    let dense = match cfg.dense {
+        None => None,
+        Some(kind) => {
+            let param = match kind {
+                DenseCheckKind::Lu => Param::Dense,
+                DenseCheckKind::Modal { .. } => Param::DenseModal,
+            };
+            let (k, m) = model
+                .dense_matrices()
+                .map_err(|e| StudyError::Solve(format!("{}: {e}", param.name())))?;
+            let checked = Checked {
+                k: &k,
+                m: &m,
+                dim: model.dim(),
+                damping: &damping,
+                freqs: &freqs,
+                h: &h,
+            };
+            Some(match kind {
+                DenseCheckKind::Lu => checked.lu_every()?,
+                DenseCheckKind::Modal { lu_points } => checked.modal_every(lu_points)?,
+            })
+        }
+    };
+    Ok(FrfResult {
+        scene: model.scene().clone(),
+        damping,
+        dim: model.dim(),
+        frequencies_hz: freqs,
+        receptance: h,
+        natural_hz,
+        structured_s,
+        dense,
+    })
 }
 
 /// The cost of `points` frequencies with `damping` (a modal basis of `basis_modes` modes,
@@ -286,7 +356,7 @@ fn check_cost(
     damping: &Damping,
     points: usize,
     basis_modes: usize,
-    mut announce: impl FnMut(&WorkEstimate),
+    announce: &mut dyn FnMut(&WorkEstimate),
 ) -> Result<(), StudyError> {
     let work = Work::Frf {
         damping,
@@ -311,77 +381,161 @@ fn marked(cfg: &FrfConfig, modes: &[Mode]) -> Vec<f64> {
         .collect()
 }
 
-/// The dense check asked for, on the assembled (K, M) that `matrices` gives.
-fn dense_check(
-    cfg: &FrfConfig,
-    matrices: impl FnOnce() -> Result<(DMatrix<f64>, DMatrix<f64>), String>,
-    dim: usize,
-    damping: &Damping,
-    freqs: &[f64],
-    h: &[Matrix6<Complex64>],
-) -> Result<Option<DenseCheck>, StudyError> {
-    let Some(kind) = cfg.dense else {
-        return Ok(None);
-    };
-    let param = match kind {
-        DenseCheckKind::Lu => Param::Dense,
-        DenseCheckKind::Modal { .. } => Param::DenseModal,
-    };
-    let (k, m) = matrices().map_err(|e| StudyError::Solve(format!("{}: {e}", param.name())))?;
-    Ok(Some(match kind {
-        DenseCheckKind::Lu => dense::lu_every(&k, &m, dim, damping, freqs, h)?,
-        DenseCheckKind::Modal { lu_points } => {
-            dense::modal_every(&k, &m, dim, damping, freqs, h, lu_points)?
-        }
-    }))
+/// Taut (chord) cables: the structured solver of the pose model.
+struct Taut {
+    /// The pose: Clarabel tensions at the scene's pose.
+    pose: PoseModel,
+    /// Its structured solver, loaded.
+    solver: ModalSolver,
 }
 
-/// Taut (chord) cables: the structured solver of the pose model.
-fn taut(
-    s: &Scene,
-    cfg: &FrfConfig,
-    damping: Damping,
-    freqs: Vec<f64>,
-    announce: impl FnMut(&WorkEstimate),
-) -> Result<FrfResult, StudyError> {
-    let pose = PoseModel::new(s).map_err(|e| StudyError::Solve(e.to_string()))?;
-    let dim = pose.dim();
-    let mut solver = ModalSolver::new(ModalParams::default());
-    pose.load(&mut solver);
-    let n_band = solver.count_below(hz_to_lambda(cfg.to_hz)) as usize;
-    let mut modes = vec![Mode::default(); n_band.min(MARK_MODES)];
-    let nm = solver
-        .modes(modes.len(), &mut modes)
-        .map_err(|e| StudyError::Solve(e.to_string()))?;
-    let natural_hz = marked(cfg, &modes[..nm]);
-    let cutoff_hz = MODAL_CUTOFF_RATIO * cfg.to_hz;
-    let basis_modes = match damping {
-        Damping::ModalRatio { .. } => solver.count_below(hz_to_lambda(cutoff_hz)) as usize,
-        _ => 0,
-    };
-    check_cost(&pose.scene, &damping, freqs.len(), basis_modes, announce)?;
-    let t0 = Instant::now();
-    let h = receptance(
-        &pose,
-        &mut solver,
-        &damping,
-        &freqs,
-        cutoff_hz,
-        cfg.progress,
-    )?;
-    let structured_s = t0.elapsed().as_secs_f64();
-    let get = || pose.dense().map_err(|e| e.to_string());
-    let dense = dense_check(cfg, get, dim, &damping, &freqs, &h)?;
-    Ok(FrfResult {
-        scene: pose.scene.clone(),
-        damping,
-        dim,
-        frequencies_hz: freqs,
-        receptance: h,
-        natural_hz,
-        structured_s,
-        dense,
-    })
+impl Taut {
+    fn new(s: &Scene) -> Result<Self, StudyError> {
+        let pose = PoseModel::new(s).map_err(|e| StudyError::Solve(e.to_string()))?;
+        let mut solver = ModalSolver::new(ModalParams::default());
+        pose.load(&mut solver);
+        Ok(Taut { pose, solver })
+    }
+}
+
+impl ResponseModel for Taut {
+    fn scene(&self) -> &Scene {
+        &self.pose.scene
+    }
+
+    fn dim(&self) -> usize {
+        self.pose.dim()
+    }
+
+    fn natural_hz(&mut self, cfg: &FrfConfig) -> Result<Vec<f64>, StudyError> {
+        let n_band = self.solver.count_below(hz_to_lambda(cfg.to_hz)) as usize;
+        let mut modes = vec![Mode::default(); n_band.min(MARK_MODES)];
+        let nm = self
+            .solver
+            .modes(modes.len(), &mut modes)
+            .map_err(|e| StudyError::Solve(e.to_string()))?;
+        Ok(marked(cfg, &modes[..nm]))
+    }
+
+    fn receptance(
+        &mut self,
+        cfg: &FrfConfig,
+        damping: &Damping,
+        freqs: &[f64],
+        announce: &mut dyn FnMut(&WorkEstimate),
+    ) -> Result<Vec<Matrix6<Complex64>>, StudyError> {
+        let cutoff_hz = MODAL_CUTOFF_RATIO * cfg.to_hz;
+        let basis_modes = match damping {
+            Damping::ModalRatio { .. } => self.solver.count_below(hz_to_lambda(cutoff_hz)) as usize,
+            _ => 0,
+        };
+        check_cost(
+            &self.pose.scene,
+            damping,
+            freqs.len(),
+            basis_modes,
+            announce,
+        )?;
+        receptance(
+            &self.pose,
+            &mut self.solver,
+            damping,
+            freqs,
+            cutoff_hz,
+            cfg.progress,
+        )
+    }
+
+    fn dense_matrices(&self) -> Result<(DMatrix<f64>, DMatrix<f64>), String> {
+        self.pose.dense().map_err(|e| e.to_string())
+    }
+}
+
+/// Sagging cables (FEM chains on the catenary): the estimator's sagged tension solve at
+/// the scene's pose, then the sagged structured solver's D at the complex λ of each
+/// frequency, or its shapes' superposition for modal damping.
+struct Sagged {
+    /// The estimator, updated at the scene's pose; its sagged structured solver (the count
+    /// and the receptance move its scratch, not its pose) is used in place: a copy would
+    /// double a model that may fill most of the memory budget before the budget is checked.
+    est: Estimator,
+    /// Degrees of freedom of its model.
+    total: usize,
+    /// 3 (point mass) or 6 (rigid body).
+    dim: usize,
+}
+
+impl Sagged {
+    fn new(s: &Scene) -> Result<Self, StudyError> {
+        if s.model.element == ElementKind::Continuous {
+            return Err(FrfError::SagContinuous.into());
+        }
+        let mut est = Estimator::new(s).map_err(|e| StudyError::Build(e.to_string()))?;
+        let pose = Pose::in_scene(s, s.ee_position_m);
+        let e = *est.update(&pose, Tmin::Scene);
+        if !e.status.is_ok() {
+            let why = e.error.map(|x| x.to_string()).unwrap_or_default();
+            return Err(StudyError::Solve(format!("sagged pose: {why}")));
+        }
+        let total = est.model_dof().unwrap_or(0);
+        let dim = est.sag_modal().ok_or_else(no_sagged_pose)?.dim();
+        Ok(Sagged { est, total, dim })
+    }
+}
+
+impl ResponseModel for Sagged {
+    fn scene(&self) -> &Scene {
+        self.est.scene()
+    }
+
+    fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// The modes below the band's top (the count's, as for taut cables; at most
+    /// [`SAG_MARK_MODES`], never more than the model has).
+    fn natural_hz(&mut self, cfg: &FrfConfig) -> Result<Vec<f64>, StudyError> {
+        let n_band = self
+            .est
+            .sag_modal_mut()
+            .ok_or_else(no_sagged_pose)?
+            .count_below(hz_to_lambda(cfg.to_hz)) as usize;
+        let mut modes = vec![Mode::default(); n_band.min(SAG_MARK_MODES).min(self.total)];
+        let nm = self
+            .est
+            .modes(modes.len(), &mut modes)
+            .map_err(|e| StudyError::Solve(e.to_string()))?;
+        Ok(marked(cfg, &modes[..nm]))
+    }
+
+    fn receptance(
+        &mut self,
+        cfg: &FrfConfig,
+        damping: &Damping,
+        freqs: &[f64],
+        announce: &mut dyn FnMut(&WorkEstimate),
+    ) -> Result<Vec<Matrix6<Complex64>>, StudyError> {
+        if let Damping::ModalRatio { zeta } = *damping {
+            let cutoff_hz = MODAL_CUTOFF_RATIO * cfg.to_hz;
+            return sagged_modal(&mut self.est, zeta, cutoff_hz, self.total, freqs);
+        }
+        check_cost(self.est.scene(), damping, freqs.len(), 0, announce)?;
+        let chunk = frf_chunk(self.est.scene(), damping);
+        let sag = self.est.sag_modal_mut().ok_or_else(no_sagged_pose)?;
+        let h = in_chunks(cfg.progress, freqs.len(), chunk, |r| {
+            sag.receptance_over(damping, &freqs[r])
+        })?;
+        Ok(h)
+    }
+
+    fn dense_matrices(&self) -> Result<(DMatrix<f64>, DMatrix<f64>), String> {
+        self.est.dense_matrices().map_err(|e| e.to_string())
+    }
+}
+
+/// The error of a sagged solver that has no pose loaded.
+fn no_sagged_pose() -> StudyError {
+    StudyError::Solve("no sagged pose loaded".into())
 }
 
 /// Modal damping with sag: modal superposition of the sagged structured shapes below
@@ -410,72 +564,4 @@ fn sagged_modal(
         .iter()
         .map(|&f| mb.receptance(zeta, 2.0 * std::f64::consts::PI * f))
         .collect())
-}
-
-/// Sagging cables (FEM chains on the catenary): the sagged tension solve at the scene's
-/// pose, then the sagged structured solver's D at the complex λ of each frequency, or its
-/// shapes' superposition for modal damping.
-fn sagged(
-    s: &Scene,
-    cfg: &FrfConfig,
-    damping: Damping,
-    freqs: Vec<f64>,
-    announce: impl FnMut(&WorkEstimate),
-) -> Result<FrfResult, StudyError> {
-    if s.model.element == ElementKind::Continuous {
-        return Err(FrfError::SagContinuous.into());
-    }
-    let mut est = Estimator::new(s).map_err(|e| StudyError::Build(e.to_string()))?;
-    let pose = Pose::in_scene(s, s.ee_position_m);
-    let e = *est.update(&pose, Tmin::Scene);
-    if !e.status.is_ok() {
-        let why = e.error.map(|x| x.to_string()).unwrap_or_default();
-        return Err(StudyError::Solve(format!("sagged pose: {why}")));
-    }
-    // The lowest modes, doubling the count until one lies above the band (the sagged
-    // solver has no count query here; the top of its spectrum is not needed), never more
-    // than the model has: asking for more failed where every mode lies below the cut-off.
-    let total = est.model_dof().unwrap_or(0);
-    let mut k = 16usize;
-    let (modes, nm) = loop {
-        let mut modes = vec![Mode::default(); k.min(total)];
-        let nm = est
-            .modes(modes.len(), &mut modes)
-            .map_err(|e| StudyError::Solve(e.to_string()))?;
-        let top = modes[..nm].last().map_or(0.0, |m| lambda_to_hz(m.lambda));
-        if top > cfg.to_hz || k >= SAG_MARK_MODES.min(total) {
-            break (modes, nm);
-        }
-        k *= 2;
-    };
-    let natural_hz = marked(cfg, &modes[..nm]);
-    let mut sag = est
-        .sag_modal()
-        .cloned()
-        .ok_or_else(|| StudyError::Solve("no sagged pose loaded".into()))?;
-    let dim = sag.dim();
-    let t0 = Instant::now();
-    let h = if let Damping::ModalRatio { zeta } = damping {
-        let cutoff_hz = MODAL_CUTOFF_RATIO * cfg.to_hz;
-        sagged_modal(&mut est, zeta, cutoff_hz, total, &freqs)?
-    } else {
-        check_cost(s, &damping, freqs.len(), 0, announce)?;
-        let chunk = frf_chunk(s, &damping);
-        in_chunks(cfg.progress, freqs.len(), chunk, |r| {
-            sag.receptance_over(&damping, &freqs[r])
-        })?
-    };
-    let structured_s = t0.elapsed().as_secs_f64();
-    let get = || est.dense_matrices().map_err(|e| e.to_string());
-    let dense = dense_check(cfg, get, dim, &damping, &freqs, &h)?;
-    Ok(FrfResult {
-        scene: est.scene().clone(),
-        damping,
-        dim,
-        frequencies_hz: freqs,
-        receptance: h,
-        natural_hz,
-        structured_s,
-        dense,
-    })
 }

@@ -8,8 +8,11 @@
 //! force linear between samples with the static flexibility interpolated between the two
 //! poses ([`ModalResponse::displacement_with`]), and installs the new basis, the state
 //! carried by the mass overlap of the whole shapes. The force at sample k is the inertial
-//! load of the quasi-static motion −M_ee [a_k; 0] plus the caller's `external_n(k)`; the
-//! caller sees the response at every sample (`on_sample`).
+//! load of the quasi-static motion −M_ee [a_k; 0] plus the caller's `external_n(k)`, taken
+//! by each mode through the basis's load shapes (the whole robot's quasi-static inertia,
+//! [`crate::modal::quasi_static`]; an external force therefore acts as that load would,
+//! exact for it only where the cables carry no mass); the caller sees the response at
+//! every sample (`on_sample`).
 
 use super::{pilot, solve_pose, updates, Accuracy, SampledPath, SimulateConfig, SimulateResult};
 use crate::estimator::{EeModalBasis, Estimator};
@@ -26,32 +29,53 @@ fn basis_at(
     t: f64,
     modes: usize,
 ) -> Result<EeModalBasis, StudyError> {
+    shapes_at(est, scene, p, t, modes)?.map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
+}
+
+/// [`basis_at`] with the shapes' own refusal kept apart (the inner error): a near-cluster
+/// the shape engine cannot resolve at this pose (not the memory budget, not the pose).
+fn shapes_at(
+    est: &mut Estimator,
+    scene: &Scene,
+    p: &Vector3<f64>,
+    t: f64,
+    modes: usize,
+) -> Result<Result<EeModalBasis, crate::estimator::BasisError>, StudyError> {
     solve_pose(est, scene, p, t)?;
-    est.ee_modal_basis(modes)
-        .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
+    match est.ee_modal_basis(modes) {
+        Err(crate::estimator::BasisError::Memory(over)) => Err(over.into()),
+        other => Ok(other),
+    }
+}
+
+/// Poses tried before an update pose whose shapes the engine cannot resolve is refused:
+/// the update moves back one sample at a time (within its interval).
+const UNRESOLVED_RETRIES: usize = 4;
+
+/// The mass overlap of `basis`'s whole shapes (rows) with `previous`'s (columns), when both
+/// have them ([`crate::modal::ModeShapes::mass_overlap`]).
+fn overlap_of(basis: &EeModalBasis, previous: &EeModalBasis) -> Option<Vec<f64>> {
+    match (&basis.shapes, &previous.shapes) {
+        (Some(new), Some(old)) => new.mass_overlap(old, &basis.ee_mass),
+        _ => None,
+    }
 }
 
 /// Install `basis` in `resp`, carrying the state across: the whole state by the mass
-/// overlap of the whole shapes when both bases have them, else the end-effector's.
+/// overlap with the previous basis's whole shapes (`overlap`) when both have them, else the
+/// end-effector's; the modes loaded by the whole robot's quasi-static inertia (the basis's
+/// load shapes).
 fn install(
     resp: &mut ModalResponse,
     basis: &EeModalBasis,
-    previous: Option<&EeModalBasis>,
+    overlap: Option<&[f64]>,
     damping: &Damping,
     t: f64,
 ) -> Result<(), StudyError> {
-    let overlap = match (&basis.shapes, previous.and_then(|b| b.shapes.as_ref())) {
-        (Some(new), Some(old)) => new.mass_overlap(old, &basis.ee_mass),
-        _ => None,
-    };
     match overlap {
-        Some(o) => resp.set_basis_projected(
-            &basis.lambda,
-            &basis.phi_ee,
-            damping,
-            &basis.flexibility,
-            &o,
-        ),
+        Some(o) => {
+            resp.set_basis_projected(&basis.lambda, &basis.phi_ee, damping, &basis.flexibility, o)
+        }
         None => resp.set_basis(
             &basis.lambda,
             &basis.phi_ee,
@@ -60,6 +84,7 @@ fn install(
             &basis.ee_mass,
         ),
     }
+    .and_then(|()| resp.set_load_shapes(&basis.load_ee, &basis.load_flexibility))
     .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
 }
 
@@ -79,10 +104,11 @@ impl<F: Fn(usize) -> Vector6<f64>> Loads<'_, F> {
     }
 }
 
-/// What the mode choice found: K, its truncation estimate relative to the peak, whether
-/// it met the tolerance, the peak, m.
+/// What the mode choice found: K, the pilot's largest basis, K's truncation estimate
+/// relative to the peak, whether it met the tolerance, the peak, m.
 struct ModesChosen {
     modes: usize,
+    pilot_modes: usize,
     estimate: f64,
     met: bool,
     peak_m: f64,
@@ -99,25 +125,66 @@ fn choose_modes<F: Fn(usize) -> Vector6<f64>>(
 ) -> Result<ModesChosen, StudyError> {
     let path = loads.path;
     let n = path.positions_m.len();
-    let all: Vec<Vector6<f64>> = (0..n).map(|k| loads.at(k)).collect();
     let mut samples = vec![0, n / 2, n - 1];
     samples.dedup_by(|a, b| path.positions_m[*a] == path.positions_m[*b]);
+    // Each pilot basis's memory checked before it is built (with the run's samples), and
+    // the pilot's progress in modes run.
+    let check = |pilot_modes: usize| {
+        crate::study::cost::estimate_cost(
+            scene,
+            &crate::study::cost::Work::Simulate {
+                samples: n,
+                update_every: cfg.update_every.unwrap_or(updates::FIRST_INTERVAL),
+                modes: cfg.modes.unwrap_or(0),
+                pilot_modes,
+            },
+        )
+        .check_memory()
+    };
+    let per_pose: usize = pilot::pilot_sizes(cfg.modes.unwrap_or(0)).iter().sum();
+    let bar = crate::study::progress::Progress::counting(
+        cfg.progress,
+        per_pose * samples.len(),
+        "pilot modes",
+    );
+    let growth = pilot::Growth {
+        check: &check,
+        bar: &bar,
+    };
+    let chosen = pilot_poses(est, scene, loads, cfg, &samples, Some(&growth));
+    bar.finish();
+    chosen
+}
+
+/// [`choose_modes`] at the path's `samples`, watched by `growth`.
+fn pilot_poses<F: Fn(usize) -> Vector6<f64>>(
+    est: &mut Estimator,
+    scene: &Scene,
+    loads: &Loads<'_, F>,
+    cfg: &SimulateConfig,
+    samples: &[usize],
+    growth: Option<&pilot::Growth<'_>>,
+) -> Result<ModesChosen, StudyError> {
+    let path = loads.path;
+    let n = path.positions_m.len();
+    let all: Vec<Vector6<f64>> = (0..n).map(|k| loads.at(k)).collect();
     let mut chosen = ModesChosen {
         modes: 0,
+        pilot_modes: 0,
         estimate: 0.0,
         met: true,
         peak_m: 0.0,
     };
-    for &k in &samples {
+    for &k in samples {
         let t = k as f64 * path.dt_s;
         solve_pose(est, scene, &path.positions_m[k], t)?;
+        let (damping, dt, tol) = (&scene.damping, path.dt_s, cfg.tolerance);
         let c = match cfg.modes {
-            None => pilot::choose(est, &scene.damping, &all, path.dt_s, cfg.tolerance)?,
-            Some(given) => {
-                pilot::assess(est, given, &scene.damping, &all, path.dt_s, cfg.tolerance)?
-            }
+            None => pilot::choose(est, damping, &all, dt, tol, growth)?,
+            Some(given) => pilot::assess(est, given, damping, &all, dt, tol, growth)?,
         };
         chosen.modes = chosen.modes.max(c.modes);
+        chosen.pilot_modes = chosen.pilot_modes.max(c.pilot_modes);
         chosen.estimate = chosen.estimate.max(c.estimate);
         chosen.met &= c.met;
         chosen.peak_m = chosen.peak_m.max(c.peak_m);
@@ -141,21 +208,21 @@ pub(super) fn run(
     let n = path.positions_m.len();
     let damping = scene.damping;
     // The end-effector's mass matrix is the scene's, the same at every pose.
-    let mut held = basis_at(est, scene, &path.positions_m[0], 0.0, 1)?;
     let loads = Loads {
         path,
-        ee_mass: held.ee_mass,
+        ee_mass: basis_at(est, scene, &path.positions_m[0], 0.0, 1)?.ee_mass,
         external_n,
     };
     let chosen = choose_modes(est, scene, &loads, cfg)?;
-    // The memory check before the run took the smallest pilot; with K now known, the run's
-    // own two bases and path are checked against the budget again before they are built.
+    // Each pilot basis was checked before it was built; with K now known, the run's own
+    // two bases and path are checked against the budget before they are built.
     crate::study::cost::estimate_cost(
         scene,
         &crate::study::cost::Work::Simulate {
             samples: n,
             update_every: cfg.update_every.unwrap_or(updates::FIRST_INTERVAL),
             modes: chosen.modes,
+            pilot_modes: 0,
         },
     )
     .check_memory()?;
@@ -165,6 +232,7 @@ pub(super) fn run(
         modes_estimate: chosen.estimate,
         modes_met: chosen.met,
         peak_m: chosen.peak_m,
+        pilot_modes: chosen.pilot_modes,
         updates_chosen: cfg.update_every.is_none(),
         interval_estimate: 0.0,
         interval_estimate_sum: 0.0,
@@ -182,21 +250,32 @@ pub(super) fn run(
     let mut interval = cfg
         .update_every
         .unwrap_or(updates::FIRST_INTERVAL.min(max_interval));
-    held = basis_at(est, scene, &path.positions_m[0], 0.0, modes)?;
+    let mut held = basis_at(est, scene, &path.positions_m[0], 0.0, modes)?;
     f1_seen(est, out);
     install(&mut resp, &held, None, &damping, 0.0)?;
     out.updates = 1;
     // The previous update's flexibility and how many samples before the held pose.
     let mut previous: Option<(Matrix6<f64>, usize)> = None;
     let mut k0 = 0usize;
-    let mut amplitude = vec![0.0; MAX_RESPONSE_MODES];
-    let mut phi2 = vec![0.0; MAX_RESPONSE_MODES];
-    let mut lambda0 = vec![0.0; MAX_RESPONSE_MODES];
+    let mut held_modes = vec![updates::HeldMode::default(); MAX_RESPONSE_MODES];
+    let mut free = vec![0.0; MAX_RESPONSE_MODES];
+    let mut forced = vec![0.0; MAX_RESPONSE_MODES];
+    let mut omega0 = vec![0.0; MAX_RESPONSE_MODES];
+    let mut omega1 = vec![0.0; MAX_RESPONSE_MODES];
     let mut f_prev = loads.at(0);
     let push = |out: &mut SimulateResult, k: usize, u: &Vector6<f64>| {
         out.t_s.push(k as f64 * path.dt_s);
         out.command_m.push(path.positions_m[k]);
         out.deviation_m.push(u.fixed_rows::<3>(0).into_owned());
+    };
+    // The load's rate over the step ending at sample k (the first step's at sample 0), N/s.
+    let rate = |k: usize| {
+        let (a, b) = if k == 0 {
+            (0, 1.min(n - 1))
+        } else {
+            (k - 1, k)
+        };
+        (loads.at(b) - loads.at(a)) / path.dt_s
     };
     push(out, 0, &resp.displacement(&f_prev));
     on_sample(0, &resp, &f_prev);
@@ -204,29 +283,85 @@ pub(super) fn run(
         // The next update's pose and basis; the interval shortened until its predicted
         // error is within the budget (when the interval is chosen).
         let nm = resp.modes();
-        resp.dynamic_amplitudes(&f_prev, &mut amplitude[..nm]);
-        for (j, (p, l)) in phi2.iter_mut().zip(lambda0.iter_mut()).enumerate().take(nm) {
-            *p = resp.phi(j).norm_squared();
-            *l = resp.lambda(j);
+        let rate0 = rate(k0);
+        resp.ringing_amplitudes(&f_prev, &rate0, &mut free[..nm], &mut forced[..nm]);
+        let rest_s = ((n - 1 - k0) as f64 * path.dt_s).min(updates::MAX_MEMORY_S);
+        for (j, m) in held_modes.iter_mut().enumerate().take(nm) {
+            let omega = resp.lambda(j).sqrt();
+            let zeta = damping.modal_ratio(omega);
+            *m = updates::HeldMode {
+                free_m: free[j],
+                forced_m: forced[j],
+                // |φ_j| |ψ_j|/ω³: what a change of the load's rate starts ringing.
+                start_m_s_per_n: resp.phi(j).norm() * resp.load_shape(j).norm() / omega.powi(3),
+                omega_rad_s: omega,
+                memory_s: if zeta > 0.0 {
+                    (1.0 / (zeta * omega)).min(rest_s)
+                } else {
+                    rest_s
+                },
+            };
+            omega0[j] = omega;
         }
-        let (k1, next, error) = loop {
-            let k1 = (k0 + interval).min(n - 1);
-            let t1 = k1 as f64 * path.dt_s;
-            let next = basis_at(est, scene, &path.positions_m[k1], t1, modes)?;
-            let u = k1 - k0;
-            let impulse: f64 = (k0 + 1..=k1).map(|k| loads.at(k).norm() * path.dt_s).sum();
-            let dynamic_m = updates::dynamic_error(
-                &amplitude[..nm],
-                &phi2[..nm],
-                &lambda0[..nm],
+        let (k1, next, overlap, error) = loop {
+            let planned = (k0 + interval).min(n - 1);
+            // A pose whose shapes the engine cannot resolve (a near-cluster on a sagging
+            // cable) is stepped over: the update moves a sample back or on, a few times at
+            // most ([`UNRESOLVED_RETRIES`]), the first refusal kept when none resolves.
+            let mut tried = 0usize;
+            let mut first_refusal = None;
+            let (k1, next) = loop {
+                let k1 = match tried {
+                    0 => Some(planned),
+                    i if i % 2 == 1 => planned.checked_sub(i.div_ceil(2)).filter(|&k| k > k0),
+                    i => Some(planned + i / 2).filter(|&k| k < n),
+                };
+                tried += 1;
+                let Some(k1) = k1 else {
+                    if tried <= UNRESOLVED_RETRIES {
+                        continue;
+                    }
+                    return Err(
+                        first_refusal.unwrap_or_else(|| StudyError::Build("no update pose".into()))
+                    );
+                };
+                let t1 = k1 as f64 * path.dt_s;
+                match shapes_at(est, scene, &path.positions_m[k1], t1, modes)? {
+                    Ok(b) => break (k1, b),
+                    Err(e) => {
+                        let refusal = StudyError::Build(format!("t = {t1:.4} s: {e}"));
+                        let unresolved = matches!(e, crate::estimator::BasisError::Shapes(_));
+                        if !unresolved || tried > UNRESOLVED_RETRIES {
+                            return Err(first_refusal.unwrap_or(refusal));
+                        }
+                        first_refusal.get_or_insert(refusal);
+                    }
+                }
+            };
+            let overlap = overlap_of(&next, &held);
+            updates::followed(
                 &next.lambda,
-                impulse,
+                overlap.as_deref(),
+                &omega0[..nm],
+                &mut omega1[..nm],
+            );
+            let u = k1 - k0;
+            let rate_change = (k0 + 1..=k1).fold(0.0f64, |m, k| m.max((rate(k) - rate0).norm()));
+            let dynamic_m = updates::dynamic_error(
+                &held_modes[..nm],
+                &omega1[..nm],
+                rate_change,
                 u as f64 * path.dt_s,
+                path.dt_s,
             );
             let d2 = match previous {
-                Some((fp, back)) => {
-                    updates::second_difference(&fp, &held.flexibility, &next.flexibility, back, u)
-                }
+                Some((fp, back)) => updates::second_difference(
+                    &fp,
+                    &held.load_flexibility,
+                    &next.load_flexibility,
+                    back,
+                    u,
+                ),
                 None => Matrix6::zeros(),
             };
             let static_m = updates::static_error(&d2, (k0 + 1..=k1).map(|k| loads.at(k)), u);
@@ -238,23 +373,24 @@ pub(super) fn run(
                 interval = updates::shortened(u, error.total_m(), budget);
                 continue;
             }
-            break (k1, next, error);
+            break (k1, next, overlap, error);
         };
         f1_seen(est, out);
         let u = k1 - k0;
+
         for k in k0 + 1..=k1 {
             let f = loads.at(k);
             resp.step(&f_prev, &f, path.dt_s);
             f_prev = f;
             let w = (k - k0) as f64 / u as f64;
-            let flex = held.flexibility * (1.0 - w) + next.flexibility * w;
+            let flex = held.load_flexibility * (1.0 - w) + next.load_flexibility * w;
             push(out, k, &resp.displacement_with(&f, &flex));
             on_sample(k, &resp, &f);
         }
         install(
             &mut resp,
             &next,
-            Some(&held),
+            overlap.as_deref(),
             &damping,
             k1 as f64 * path.dt_s,
         )?;
@@ -266,7 +402,7 @@ pub(super) fn run(
         };
         out.accuracy.interval_estimate = out.accuracy.interval_estimate.max(rel);
         out.accuracy.interval_estimate_sum += rel;
-        previous = Some((held.flexibility, u));
+        previous = Some((held.load_flexibility, u));
         held = next;
         k0 = k1;
         if cfg.update_every.is_none() {

@@ -13,6 +13,12 @@ fn refused(bodies: &str, cables: &str, opts: &ImportOptions, needles: &[&str]) {
         .expect_err("must be refused")
         .to_string();
     assert_eq!(e.lines().count(), 1, "one line: {e}");
+    // The library names its options by their fields, never by a command line's flags
+    // (`--` then a letter; the XML parser's "expected '-->'" is no flag).
+    let flag = e
+        .match_indices("--")
+        .any(|(i, _)| e[i + 2..].starts_with(|c: char| c.is_ascii_lowercase()));
+    assert!(!flag, "a flag named: {e}");
     for n in needles {
         assert!(e.contains(n), "`{n}` not in: {e}");
     }
@@ -104,7 +110,7 @@ fn what_caspr_lacks_must_come_from_the_options() {
         t_min_n: None,
         ..o.clone()
     };
-    let needles = ["c.xml", "`cable 1` … `cable 8`", "force_min ≤ 0", "--t-min"];
+    let needles = ["c.xml", "`cable 1` … `cable 8`", "force_min ≤ 0", "t_min_n"];
     refused(&b, &c, &slack, &needles);
     let rigid = ImportOptions {
         youngs_modulus_pa: None,
@@ -114,7 +120,7 @@ fn what_caspr_lacks_must_come_from_the_options() {
         "c.xml: ",
         "`cable 1` … `cable 8`",
         "cable_ideal",
-        "--youngs-modulus",
+        "youngs_modulus_pa",
     ];
     refused(&b, &c, &rigid, &needles);
     // Everything missing: every option named at once, in one line naming the file.
@@ -128,10 +134,10 @@ fn what_caspr_lacks_must_come_from_the_options() {
     let needles = [
         "c.xml: ",
         "needs 4 more options",
-        "--weight-per-length",
-        "--area",
-        "--youngs-modulus",
-        "--t-min",
+        "weight_per_length_n_m",
+        "area_m2",
+        "youngs_modulus_pa",
+        "t_min_n",
     ];
     refused(&b, &c, &none, &needles);
     let nan_area = ImportOptions {
@@ -261,6 +267,34 @@ fn cli_errors_are_one_line() {
     // force_min = 0 and no --t-min: refused, and no file written.
     let _ = std::fs::remove_file(&out);
     cli_refused(&ipanema_cli(&out, &[]), "--t-min");
+    assert!(!out.exists());
+    // The command line names its flags: every missing option at once, and the flag that
+    // picks a cable set where the file has no default.
+    let (b, c) = (data("ipanema1_bodies.xml"), data("ipanema1_cables.xml"));
+    let (b, c) = (b.to_str().unwrap(), c.to_str().unwrap());
+    let o = run(&["import", "caspr", b, c, "-o", out.to_str().unwrap()]);
+    cli_refused(&o, "needs 4 more options: --weight-per-length (N/m");
+    for flag in ["; --area (m²)", "; --youngs-modulus (Pa)", "; --t-min (N)"] {
+        assert!(stderr(&o).contains(flag), "`{flag}` not in {}", stderr(&o));
+    }
+    let no_default = Path::new(env!("CARGO_TARGET_TMPDIR")).join("no_default_cables.xml");
+    let text = read("ipanema1_cables.xml").replace(" default_cable_set=\"original\"", "");
+    std::fs::write(&no_default, text).unwrap();
+    let o = run(&[
+        "import",
+        "caspr",
+        b,
+        no_default.to_str().unwrap(),
+        "--weight-per-length",
+        "0.02",
+        "--area",
+        "1.767e-6",
+        "--t-min",
+        "10",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    cli_refused(&o, "pick one with --cable-set (original, springs)");
     assert!(!out.exists());
     // Unknown set: the error lists the available ones.
     let o = ipanema_cli(&out, &["--t-min", "10", "--cable-set", "x"]);
