@@ -262,32 +262,31 @@ pub trait Condensed: sealed::Sealed {
     fn is_loaded(&self) -> bool;
     /// The chain holding the largest share of the kinetic-energy norm of mode shape v at
     /// the last evaluation (at x, D' = `dd`): (share, its pole nearest x, whether above,
-    /// the pole's key); (0, NaN, false, `u32::MAX`) where the poles are not known.
-    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
-        let _ = (x, dd, v);
+    /// the pole's key); (0, NaN, false, `u32::MAX`) where the poles are not known. Where
+    /// each pole is found by a search (the sagged chains), the poles are searched at this
+    /// load only when the share reaches `search_share`; below it they are the last
+    /// search's values (an earlier load's: the poles move little between cycles).
+    fn coupling(
+        &self,
+        x: f64,
+        dd: &Matrix6<f64>,
+        v: &Vector6<f64>,
+        search_share: f64,
+    ) -> (f64, f64, bool, u32) {
+        let _ = (x, dd, v, search_share);
         (0.0, f64::NAN, false, u32::MAX)
     }
 
     /// The end-effector tracker runs with `Some(left)` evaluations left in the cycle's
     /// budget (`u32::MAX`: unlimited), or has stopped (None): a problem whose poles are
-    /// found by search (the sagged chains, by each chain's own count) shows them to the
-    /// searches only meanwhile (where they pay: the tracker's pole intervals), its pole
-    /// searches counted in [`Self::evaluations`] and stopped where the budget ends (a pole
-    /// not found then is NaN, and so is any pole interval it bounds: the searches that
-    /// need it fail as cut by the budget, and it is searched again in the next cycle from
-    /// where the last load's search left it); the other searches see the count alone.
-    /// Nothing for a problem whose poles are in closed form.
+    /// found by search (the sagged chains, each by its own count) shows the tracker a
+    /// mode's coupling to one chain and that chain's poles ([`Self::coupling`],
+    /// [`Self::keyed_pole`]) only meanwhile, its pole searches counted in
+    /// [`Self::evaluations`] and stopped where the budget ends (a pole not found then is
+    /// NaN, and the partner search that needs it waits). Nothing for a problem whose
+    /// poles are in closed form.
     fn follow_poles(&mut self, left: Option<u32>) {
         let _ = left;
-    }
-    /// The end-effector tracker's scans walk the pole intervals (two evaluations an
-    /// interval: the poles in closed form) rather than sweep the spectrum by the count.
-    /// Where each pole is found by a search (the sagged chains), the poles pay for the
-    /// local searches of a warm cycle (following, neighbours, partners: a few poles around
-    /// the watched modes, followed from the last load) but not for a scan over every pole
-    /// interval below the answer: false there, the scans sweep.
-    fn scan_by_intervals(&self) -> bool {
-        self.poles_known()
     }
 
     /// The end-effector participation of the mode with unit null vector v at a root where
@@ -391,12 +390,15 @@ impl<C: Condensed> Condensed for &mut C {
     fn follow_poles(&mut self, left: Option<u32>) {
         (**self).follow_poles(left)
     }
-    fn scan_by_intervals(&self) -> bool {
-        (**self).scan_by_intervals()
-    }
     #[inline]
-    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
-        (**self).coupling(x, dd, v)
+    fn coupling(
+        &self,
+        x: f64,
+        dd: &Matrix6<f64>,
+        v: &Vector6<f64>,
+        search_share: f64,
+    ) -> (f64, f64, bool, u32) {
+        (**self).coupling(x, dd, v, search_share)
     }
 }
 

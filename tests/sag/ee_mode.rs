@@ -200,14 +200,13 @@ struct Expect {
 /// (cycles 323 and 371); each is a window rescan of 17 and 26 cycles, not a sweep from
 /// zero: at most 2. Certified answers are checked against the dense sagged reference at a
 /// few cycles (λ 1e-9, participation 1e-6: module docs). The median counts the chains'
-/// pole searches too (one evaluation per chain evaluation of every chain: the watched
-/// modes' pole intervals, followed from the last cycle): measured 20, at most 24 (12
-/// before the pole searches, whose work was then a sweep's).
+/// pole searches of the partner searches too (one evaluation per evaluation of every
+/// chain).
 #[test]
 fn certified_along_the_circle_on_suspended_8() {
     let expect = Expect {
         fresh_permille: 950,
-        max_median: 24,
+        max_median: 12,
         max_uncertified: 2,
         p_tol: TRACKED_P_TOL,
     };
@@ -221,14 +220,13 @@ fn certified_along_the_circle_on_suspended_8() {
 /// rescan was a sweep from zero of ~150 cycles, and a sweep stuck on a mode next to a pole
 /// for hundreds of cycles: fresh answers on 234 of the first 1500 cycles, median 26
 /// evaluations (the whole budget). Now each rescan is a window of 9-26 cycles: measured
-/// fresh on 80 % (N = 10) and 75 % (N = 40) of the warm cycles, median 8-9 evaluations
-/// before the chains' pole searches were counted in them (now 25 of the budget's 32 at
-/// N = 10: the pole intervals of the watched modes); required: 70 %, median ≤ 28.
+/// fresh on 80 % (N = 10) and 75 % (N = 40) of the warm cycles, median 8-9 evaluations;
+/// required: 70 %, median ≤ 12.
 #[test]
 fn certified_along_the_circle_on_the_paper_robot_with_sag() {
     let expect = Expect {
         fresh_permille: 700,
-        max_median: 28,
+        max_median: 12,
         max_uncertified: 40,
         p_tol: TRACKED_P_TOL_CROSSING,
     };
@@ -345,12 +343,12 @@ fn certified_along_the_circle(s: &Scene, expect: &Expect) {
 /// answer's age over the ok cycles is at most 8 cycles (as for taut cables; a
 /// deterministic count of cycles, not a time), no cycle allocates, and every fresh answer
 /// (age 0) equals the dense sagged reference's end-effector mode of its pose (λ 1e-9;
-/// participation 1e-5, the tolerance next to an avoided crossing: the answers now come
-/// from the partner searches' crossings too, measured 1.2e-6 at cycle 1778). The sagged chains' poles, each found by its own
-/// chain's count and followed between cycles, give the tracker its pole intervals (its
-/// Newton following, avoided-crossing partners); before them the warm cycles lost the
-/// watched modes at every pole crossing and each rescan swept the spectrum: age p99 273
-/// cycles (max 300).
+/// participation 1e-5, the tolerance next to an avoided crossing: the answers come from
+/// the partner searches' crossings too). The sagged chains' poles, each found by its own
+/// chain's count and followed between cycles, give the tracker a strong mode's coupling
+/// to one chain and that chain's poles, so it searches the avoided-crossing partners
+/// across them; before, the participation moved to modes it did not watch, and each
+/// rescan swept the spectrum: age p99 273 cycles (max 300).
 #[test]
 fn ee_answer_age_p99_along_the_suspended_8_circle() {
     let s = &sagged_robots(10)[0];

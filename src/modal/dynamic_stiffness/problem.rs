@@ -101,7 +101,14 @@ impl Condensed for TautChains {
         true
     }
     #[inline]
-    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
+    /// The poles in closed form: `search_share` changes nothing.
+    fn coupling(
+        &self,
+        x: f64,
+        dd: &Matrix6<f64>,
+        v: &Vector6<f64>,
+        _search_share: f64,
+    ) -> (f64, f64, bool, u32) {
         self.s.coupling(&self.p, x, dd, v)
     }
 }

@@ -144,15 +144,8 @@ impl EeTracker {
     ) -> Result<Root, RescanReason> {
         self.search_partners(f);
         let mut answer = self.select_answer(f, thr)?;
-        // The neighbour search walks the pole intervals: only where they are known, and
-        // where a rescan walks them too. Where the rescans sweep the spectrum (sagged
-        // chains, `Condensed::scan_by_intervals`) the sweep's window starts below the
-        // lowest watched mode, and the weak neighbours these searches add pull it down:
-        // measured along the paper's spatial robot's circle with sag (N = 10), answer age
-        // p99 74 cycles with them, 20 without.
-        if f.view.scan_by_intervals()
-            && self.unwatched_bound_with(answer.lambda, true) > SEARCH_BOUND
-        {
+        // The neighbour search walks the closed-form poles: only where they are known.
+        if f.view.poles_known() && self.unwatched_bound_with(answer.lambda, true) > SEARCH_BOUND {
             self.search_neighbours(f);
             answer = self.select_answer(f, thr)?;
         }
@@ -204,7 +197,18 @@ impl EeTracker {
             self.members[i - 1].partner_share = m.share;
             searches += 1;
             self.counts.partner_searches += 1;
-            if let Some(t) = partner(f, m.pole, m.pole_up, pred) {
+            // The pole at this load, by its key (the coupling may give the value a search
+            // found at an earlier load: the sagged chains); the two-level estimate moves
+            // with it. Not found within the budget: this partner search is skipped (as one
+            // that found nothing; retrying it each cycle measured worse along suspended-8's
+            // circle at N = 40, where the sweeps need the budget).
+            let (c, j) = ((m.pole_key >> 16) as usize, (m.pole_key & 0xffff) as usize);
+            let pole = f.view.keyed_pole(c, j).unwrap_or(m.pole);
+            if !pole.is_finite() {
+                continue;
+            }
+            let pred = pred + (pole - m.pole);
+            if let Some(t) = partner(f, pole, m.pole_up, pred) {
                 let known = self.members[..self.n_members]
                     .iter()
                     .any(|x| x.index == t.index);

@@ -91,7 +91,7 @@ impl EeTracker {
         thr: f64,
     ) -> Option<Result<Option<Root>, ModalError>> {
         let reached = matches!(r, Ok(ref x) if x.ee_participation >= thr);
-        if window && !f.view.scan_by_intervals() {
+        if window && !f.view.poles_known() {
             // A window rescan where the count alone shows the poles: its answer stands
             // only once a warm cycle of what it watched certifies it at this cycle's pose
             // (the modes below the window were not read again); else scan from zero.
@@ -109,7 +109,7 @@ impl EeTracker {
             self.n_members = 0;
             return None;
         }
-        if resumed && reached && f.view.scan_by_intervals() {
+        if resumed && reached && f.view.poles_known() {
             // Found over several cycles: certify at this cycle's pose (a warm cycle of the
             // watched modes) before anything is reported.
             return None;
@@ -166,7 +166,7 @@ impl EeTracker {
         first: &Root,
         reason: RescanReason,
     ) {
-        if !f.view.scan_by_intervals() {
+        if !f.view.poles_known() {
             return self.start_sweep(f, first, reason);
         }
         let window = if reason != RescanReason::Cold && self.n_members > 0 {

@@ -187,7 +187,7 @@ impl EeTracker {
         // Where the poles are known the scan walks the pole intervals (two evaluations and
         // one Newton search per root); where the count alone shows them, it sweeps the
         // spectrum mode by mode.
-        let done = if f.view.scan_by_intervals() {
+        let done = if f.view.poles_known() {
             self.scan_intervals(f, &mut st, begin)
         } else {
             // The sweep sees the count alone (its brackets by the count, as its docs say).

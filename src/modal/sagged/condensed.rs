@@ -1,8 +1,10 @@
 //! [`SagChains`] as the structured solver sees it ([`Condensed`]): every evaluation counted,
-//! the poles seen only through the count, the sum rules with their matrix forms.
+//! the pole intervals seen only through the count (while the end-effector tracker runs, a
+//! mode's coupling to one chain and that chain's poles too, `pole_view`), the sum rules
+//! with their matrix forms.
 
 use super::problem::SagChains;
-use crate::modal::engine::{sealed, Condensed, DynEval, PoleCursor, SumMatrices, SumRules};
+use crate::modal::engine::{sealed, Condensed, DynEval, SumMatrices, SumRules};
 use nalgebra::{Matrix6, Vector6};
 use num_complex::Complex64;
 
@@ -44,17 +46,19 @@ impl Condensed for SagChains {
     fn total_modes(&self) -> usize {
         SagChains::total_modes(self)
     }
+    /// The count alone shows the poles to the searches (the followed poles are not proven
+    /// without a count pass over the chains, which costs an evaluation).
     #[inline]
-    fn pole_interval(&self, lambda: f64) -> Option<(f64, f64)> {
-        self.poles_shown().then(|| self.pole_interval_at(lambda))
+    fn pole_interval(&self, _lambda: f64) -> Option<(f64, f64)> {
+        None
     }
     #[inline]
     fn poles_known(&self) -> bool {
-        self.poles_shown()
+        false
     }
     #[inline]
     fn lowest_pole(&self) -> Option<f64> {
-        self.poles_shown().then(|| self.lowest())
+        None
     }
     #[inline]
     fn static_eval(&self) -> DynEval {
@@ -62,27 +66,23 @@ impl Condensed for SagChains {
     }
     #[inline]
     fn last_pole_interval(&self) -> Option<(f64, f64)> {
-        self.poles_shown().then(|| self.last_interval())
-    }
-    fn next_pole(&self, cursor: &mut PoleCursor, a: f64) -> (f64, usize, usize) {
-        if self.poles_shown() {
-            self.next_distinct(cursor, a)
-        } else {
-            (f64::INFINITY, 0, 0)
-        }
+        None
     }
     fn keyed_pole(&self, c: usize, j: usize) -> Option<f64> {
         (self.poles_shown() && c < self.n).then(|| self.chain_pole(c, j, f64::NAN))
     }
-    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
+    fn coupling(
+        &self,
+        x: f64,
+        dd: &Matrix6<f64>,
+        v: &Vector6<f64>,
+        search_share: f64,
+    ) -> (f64, f64, bool, u32) {
         if self.poles_shown() {
-            self.chain_coupling(x, dd, v)
+            self.chain_coupling(x, dd, v, search_share)
         } else {
             (0.0, f64::NAN, false, u32::MAX)
         }
-    }
-    fn scan_by_intervals(&self) -> bool {
-        false
     }
     fn follow_poles(&mut self, left: Option<u32>) {
         self.follow = left.is_some();
@@ -134,7 +134,7 @@ impl Condensed for SagChains {
 
 impl SagChains {
     /// A counted evaluation; while the poles are shown, each chain's count and S' are kept
-    /// (the pole interval there, the chains' shares of a mode).
+    /// (the chains' shares of a mode and the chains' poles next to it).
     #[inline]
     fn evaluate_recorded(&mut self, lambda: f64, derivative: bool) -> DynEval {
         if !self.poles_shown() {

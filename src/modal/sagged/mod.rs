@@ -37,8 +37,8 @@
 //!
 //! Files: `problem` (the loaded pose, D(λ)), `load` (setting it up), `condensed` (its view
 //! for the searches), `poles` (each chain's poles by its own count, followed between
-//! loads), `pole_view` (the pole intervals the tracker sees), `dense` (the assembled
-//! reference).
+//! loads), `pole_view` (a mode's coupling to one chain and that chain's poles, which the
+//! end-effector tracker's partner searches start from), `dense` (the assembled reference).
 
 mod condensed;
 mod dense;

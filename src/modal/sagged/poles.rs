@@ -36,7 +36,7 @@ const POLE_STEP: f64 = 1e-12;
 /// capped by the recurrence's pivot nudge (ε·the largest element stiffness) and its
 /// rounding, so g bottoms out at ~1e-17..1e-13 of its scale and Newton's last steps
 /// bounce at ~1e-12..3e-11 of λ (measured on the paper robot with sag); the searches
-/// that use the poles evaluate 1e-9 (relative) inside a pole interval, so a pole known to
+/// that use the poles start 1e-9 (relative) across a pole, so a pole known to
 /// 1e-10 is on the right side of every such point.
 const POLE_BRACKET: f64 = 1e-10;
 /// Chain evaluations one pole search takes at most (Newton, else bisection: ~60 halvings
@@ -50,9 +50,6 @@ const START_ABOVE: f64 = 1e-9;
 /// A search with no upper bracket and no start begins at this λ, rad²/s² (then doubles).
 const POLE_START: f64 = 1.0;
 
-/// Poles of different chains within this (relative) are one pole of D (as for taut).
-pub(super) const POLE_MERGE: f64 = 1e-12;
-
 /// The bits of a memo entry not computed yet.
 const MEMO_EMPTY: u64 = 0x7ff8_0000_0000_0000; // f64::NAN
 
@@ -61,8 +58,12 @@ const MEMO_EMPTY: u64 = 0x7ff8_0000_0000_0000; // f64::NAN
 pub(in crate::modal) struct SagPoles {
     /// Poles 1 ..= `per_chain` of each chain (f64 bits; NaN: not computed for this load).
     memo: Vec<AtomicU64>,
-    /// The same poles at the last load where they were computed (the searches' start).
+    /// The same poles at the last load where they were computed (the searches' start) ...
     hint: Vec<f64>,
+    /// ... and that load's number.
+    hint_load: Vec<u32>,
+    /// Loads so far (a wrapping counter).
+    load: u32,
     per_chain: usize,
     /// Chain evaluations spent on pole searches.
     chain_evaluations: AtomicU64,
@@ -77,6 +78,8 @@ impl Clone for SagPoles {
                 .map(|e| AtomicU64::new(e.load(Ordering::Relaxed)))
                 .collect(),
             hint: self.hint.clone(),
+            hint_load: self.hint_load.clone(),
+            load: self.load,
             per_chain: self.per_chain,
             chain_evaluations: AtomicU64::new(self.chain_evaluations.load(Ordering::Relaxed)),
         }
@@ -91,6 +94,8 @@ impl SagPoles {
                 .map(|_| AtomicU64::new(MEMO_EMPTY))
                 .collect(),
             hint: vec![f64::NAN; n_chains * per_chain],
+            hint_load: vec![0; n_chains * per_chain],
+            load: 0,
             per_chain,
             chain_evaluations: AtomicU64::new(0),
         }
@@ -98,13 +103,21 @@ impl SagPoles {
 
     /// A new load: every computed pole becomes the next search's start.
     pub(in crate::modal) fn clear(&mut self) {
-        for (e, h) in self.memo.iter_mut().zip(&mut self.hint) {
+        let load = self.load;
+        for ((e, h), at) in self
+            .memo
+            .iter_mut()
+            .zip(&mut self.hint)
+            .zip(&mut self.hint_load)
+        {
             let bits = *e.get_mut();
             if bits != MEMO_EMPTY {
                 *h = f64::from_bits(bits);
+                *at = load;
             }
             *e.get_mut() = MEMO_EMPTY;
         }
+        self.load = load.wrapping_add(1);
     }
 
     /// Pole j of chain i (which has `n_poles`) as this load's search found it (`hint`:
@@ -130,14 +143,15 @@ impl SagPoles {
     }
 
     /// Pole j of chain i (which has `n_poles`) as this load's search found it, else as the
-    /// last load's did (NaN: never searched); 0 for j = 0, ∞ past the chain's poles.
-    pub(in crate::modal) fn estimate(&self, i: usize, j: usize, n_poles: usize) -> f64 {
-        self.memo_at(i, j, n_poles, true)
-    }
-
-    /// Count `n` chain evaluations spent outside a search (a pole interval's counts).
-    pub(in crate::modal) fn spend(&self, n: u64) {
-        self.chain_evaluations.fetch_add(n, Ordering::Relaxed);
+    /// last load's that searched it did (NaN: never searched); 0 for j = 0, ∞ past the
+    /// chain's poles. With the loads since it was found (0: at this load).
+    pub(in crate::modal) fn estimate(&self, i: usize, j: usize, n_poles: usize) -> (f64, u32) {
+        let now = self.memo_at(i, j, n_poles, false);
+        if !now.is_nan() || j > self.per_chain {
+            return (now, 0);
+        }
+        let s = i * self.per_chain + j - 1;
+        (self.hint[s], self.load.wrapping_sub(self.hint_load[s]))
     }
 
     /// Chain evaluations spent on pole searches so far.

@@ -75,7 +75,7 @@ pub struct SagChains {
     pub(in crate::modal) poles: SagPoles,
     pub(in crate::modal) follow: bool,
     /// Each chain's blocked count and S' ([a, b, c] in plane, out of plane) at the last
-    /// counted evaluation (the pole interval there, the chains' shares of a mode).
+    /// counted evaluation (the chains' shares of a mode and the chains' poles next to it).
     pub(in crate::modal) last_below: Vec<u32>,
     pub(in crate::modal) last_ds: Vec<[f64; 4]>,
     pub(in crate::modal) last_lambda: f64,
