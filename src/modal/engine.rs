@@ -263,9 +263,10 @@ pub trait Condensed: sealed::Sealed {
     /// The chain holding the largest share of the kinetic-energy norm of mode shape v at
     /// the last evaluation (at x, D' = `dd`): (share, its pole nearest x, whether above,
     /// the pole's key); (0, NaN, false, `u32::MAX`) where the poles are not known. Where
-    /// each pole is found by a search (the sagged chains), the poles are searched at this
-    /// load only when the share reaches `search_share`; below it they are the last
-    /// search's values (an earlier load's: the poles move little between cycles).
+    /// each pole is found by a search (the sagged chains), the pole is given only where the
+    /// share reaches `search_share` (else NaN, key `u32::MAX`), and may be an earlier
+    /// load's value (the poles move little between cycles; [`Self::keyed_pole`] gives this
+    /// load's).
     fn coupling(
         &self,
         x: f64,

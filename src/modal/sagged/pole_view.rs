@@ -66,10 +66,10 @@ impl SagChains {
     /// The chain holding the largest share of the kinetic-energy norm vᵀ(−D'(x))v of mode
     /// shape v at the last counted evaluation (at x, D' = `dd`): (share, that chain's pole
     /// nearest x, whether above x, its key chain << 16 | number). The pole's identity is
-    /// the chain's count at x; its value is searched at this load where the share reaches
-    /// `search_share` (a partner search may start there) and the last search is more than
-    /// [`REFRESH_LOADS`] loads old, else it is the last search's (the poles move little
-    /// between cycles).
+    /// the chain's count at x; its value is the last search's (the poles move little
+    /// between cycles), searched at this load when that search is more than
+    /// [`REFRESH_LOADS`] loads old. Below `search_share` (no partner search starts from the
+    /// mode) no pole: (share, NaN, false, `u32::MAX`).
     pub(super) fn chain_coupling(
         &self,
         x: f64,
@@ -96,11 +96,15 @@ impl SagChains {
         let j = self.last_below[i] as usize;
         let poles = self.chains[i].blocked_modes();
         let share = best.0 / kin;
+        if share < search_share {
+            // No partner search starts from this mode: its pole is not needed.
+            return (share, f64::NAN, false, u32::MAX);
+        }
         // As the last search found it; searched at this load where that search is older
-        // than REFRESH_LOADS loads and the share may start a partner search (or never).
+        // than REFRESH_LOADS loads (or never).
         let pole = |k: usize| {
             let (v, age) = self.poles.estimate(i, k, poles);
-            if v.is_nan() || (share >= search_share && age > REFRESH_LOADS) {
+            if v.is_nan() || age > REFRESH_LOADS {
                 self.chain_pole(i, k, x)
             } else {
                 v
