@@ -130,6 +130,11 @@ pub(in crate::modal) fn pole_free(mu: f64, dmu: f64, x: f64, pa: f64, pb: f64) -
     (g, dg)
 }
 
+/// A mode's coupling to one chain ([`Condensed::coupling`]): (the chain's share of the
+/// mode's kinetic-energy norm, its pole nearest the mode in rad²/s², whether that pole is
+/// above, the pole's key chain << 16 | number).
+pub type Coupling = (f64, f64, bool, u32);
+
 /// [`Condensed::coupling`]'s answer for chain i holding `share` of a mode at x, where the
 /// chain's count is j (its poles j and j + 1 are `lo` and `hi`): (share, the pole nearer
 /// x, whether it is above x, its key i << 16 | number).
@@ -140,7 +145,7 @@ pub(in crate::modal) fn nearest_keyed_pole(
     j: usize,
     lo: f64,
     hi: f64,
-) -> (f64, f64, bool, u32) {
+) -> Coupling {
     let up = j == 0 || hi - x < x - lo;
     let jp = if up { j + 1 } else { j };
     (
@@ -264,17 +269,11 @@ pub trait Condensed: sealed::Sealed {
     /// the last evaluation (at x, D' = `dd`): (share, its pole nearest x, whether above,
     /// the pole's key); (0, NaN, false, `u32::MAX`) where the poles are not known. Where
     /// each pole is found by a search (the sagged chains), the pole is given only where the
-    /// share reaches `search_share` (else NaN, key `u32::MAX`), and may be an earlier
+    /// share reaches `share_min` (else NaN, key `u32::MAX`), and may be an earlier
     /// load's value (the poles move little between cycles; [`Self::keyed_pole`] gives this
     /// load's).
-    fn coupling(
-        &self,
-        x: f64,
-        dd: &Matrix6<f64>,
-        v: &Vector6<f64>,
-        search_share: f64,
-    ) -> (f64, f64, bool, u32) {
-        let _ = (x, dd, v, search_share);
+    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>, share_min: f64) -> Coupling {
+        let _ = (x, dd, v, share_min);
         (0.0, f64::NAN, false, u32::MAX)
     }
 
@@ -392,14 +391,8 @@ impl<C: Condensed> Condensed for &mut C {
         (**self).follow_poles(left)
     }
     #[inline]
-    fn coupling(
-        &self,
-        x: f64,
-        dd: &Matrix6<f64>,
-        v: &Vector6<f64>,
-        search_share: f64,
-    ) -> (f64, f64, bool, u32) {
-        (**self).coupling(x, dd, v, search_share)
+    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>, share_min: f64) -> Coupling {
+        (**self).coupling(x, dd, v, share_min)
     }
 }
 

@@ -4,7 +4,7 @@
 //! with their matrix forms.
 
 use super::problem::SagChains;
-use crate::modal::engine::{sealed, Condensed, DynEval, SumMatrices, SumRules};
+use crate::modal::engine::{sealed, Condensed, Coupling, DynEval, SumMatrices, SumRules};
 use nalgebra::{Matrix6, Vector6};
 use num_complex::Complex64;
 
@@ -71,15 +71,9 @@ impl Condensed for SagChains {
     fn keyed_pole(&self, c: usize, j: usize) -> Option<f64> {
         (self.poles_shown() && c < self.n).then(|| self.chain_pole(c, j, f64::NAN))
     }
-    fn coupling(
-        &self,
-        x: f64,
-        dd: &Matrix6<f64>,
-        v: &Vector6<f64>,
-        search_share: f64,
-    ) -> (f64, f64, bool, u32) {
+    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>, share_min: f64) -> Coupling {
         if self.poles_shown() {
-            self.chain_coupling(x, dd, v, search_share)
+            self.chain_coupling(x, dd, v, share_min)
         } else {
             (0.0, f64::NAN, false, u32::MAX)
         }

@@ -3,7 +3,7 @@
 //! from [`SagPoles`](super::poles::SagPoles), found by its chain's own count.
 
 use super::problem::SagChains;
-use crate::modal::engine::{nearest_keyed_pole, quad};
+use crate::modal::engine::{nearest_keyed_pole, quad, Coupling};
 use nalgebra::{Matrix6, Vector6};
 
 /// A pole a mode couples to is searched again once its last search is more than this many
@@ -68,15 +68,15 @@ impl SagChains {
     /// nearest x, whether above x, its key chain << 16 | number). The pole's identity is
     /// the chain's count at x; its value is the last search's (the poles move little
     /// between cycles), searched at this load when that search is more than
-    /// [`REFRESH_LOADS`] loads old. Below `search_share` (no partner search starts from the
+    /// [`REFRESH_LOADS`] loads old. Below `share_min` (no partner search starts from the
     /// mode) no pole: (share, NaN, false, `u32::MAX`).
     pub(super) fn chain_coupling(
         &self,
         x: f64,
         dd: &Matrix6<f64>,
         v: &Vector6<f64>,
-        search_share: f64,
-    ) -> (f64, f64, bool, u32) {
+        share_min: f64,
+    ) -> Coupling {
         let none = (0.0, f64::NAN, false, u32::MAX);
         let kin = -quad(dd, v, self.dim);
         if !(kin > 0.0) {
@@ -96,7 +96,7 @@ impl SagChains {
         let j = self.last_below[i] as usize;
         let poles = self.chains[i].blocked_modes();
         let share = best.0 / kin;
-        if share < search_share {
+        if share < share_min {
             // No partner search starts from this mode: its pole is not needed.
             return (share, f64::NAN, false, u32::MAX);
         }
