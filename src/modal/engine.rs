@@ -130,6 +130,32 @@ pub(in crate::modal) fn pole_free(mu: f64, dmu: f64, x: f64, pa: f64, pb: f64) -
     (g, dg)
 }
 
+/// A mode's coupling to one chain ([`Condensed::coupling`]): (the chain's share of the
+/// mode's kinetic-energy norm, its pole nearest the mode in rad²/s², whether that pole is
+/// above, the pole's key chain << 16 | number).
+pub type Coupling = (f64, f64, bool, u32);
+
+/// [`Condensed::coupling`]'s answer for chain i holding `share` of a mode at x, where the
+/// chain's count is j (its poles j and j + 1 are `lo` and `hi`): (share, the pole nearer
+/// x, whether it is above x, its key i << 16 | number).
+pub(in crate::modal) fn nearest_keyed_pole(
+    share: f64,
+    x: f64,
+    i: usize,
+    j: usize,
+    lo: f64,
+    hi: f64,
+) -> Coupling {
+    let up = j == 0 || hi - x < x - lo;
+    let jp = if up { j + 1 } else { j };
+    (
+        share,
+        if up { hi } else { lo },
+        up,
+        (i as u32) << 16 | jp as u32,
+    )
+}
+
 /// The first upper bracket of a search starts here when no better scale is known,
 /// rad²/s² (and a cold first root's Rayleigh guess is at least this).
 ///
@@ -241,10 +267,26 @@ pub trait Condensed: sealed::Sealed {
     fn is_loaded(&self) -> bool;
     /// The chain holding the largest share of the kinetic-energy norm of mode shape v at
     /// the last evaluation (at x, D' = `dd`): (share, its pole nearest x, whether above,
-    /// the pole's key); (0, NaN, false, `u32::MAX`) where the poles are not known.
-    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
-        let _ = (x, dd, v);
+    /// the pole's key); (0, NaN, false, `u32::MAX`) where the poles are not known. Where
+    /// each pole is found by a search (the sagged chains), the pole is given only where the
+    /// share reaches `share_min` (else NaN, key `u32::MAX`), and may be an earlier
+    /// load's value (the poles move little between cycles; [`Self::keyed_pole`] gives this
+    /// load's).
+    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>, share_min: f64) -> Coupling {
+        let _ = (x, dd, v, share_min);
         (0.0, f64::NAN, false, u32::MAX)
+    }
+
+    /// The end-effector tracker runs with `Some(left)` evaluations left in the cycle's
+    /// budget (`u32::MAX`: unlimited), or has stopped (None): a problem whose poles are
+    /// found by search (the sagged chains, each by its own count) shows the tracker a
+    /// mode's coupling to one chain and that chain's poles ([`Self::coupling`],
+    /// [`Self::keyed_pole`]) only meanwhile, its pole searches counted in
+    /// [`Self::evaluations`] and stopped where the budget ends (a pole not found then is
+    /// NaN, and the partner search that needs it waits). Nothing for a problem whose
+    /// poles are in closed form.
+    fn follow_poles(&mut self, left: Option<u32>) {
+        let _ = left;
     }
 
     /// The end-effector participation of the mode with unit null vector v at a root where
@@ -345,9 +387,12 @@ impl<C: Condensed> Condensed for &mut C {
     fn is_loaded(&self) -> bool {
         (**self).is_loaded()
     }
+    fn follow_poles(&mut self, left: Option<u32>) {
+        (**self).follow_poles(left)
+    }
     #[inline]
-    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
-        (**self).coupling(x, dd, v)
+    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>, share_min: f64) -> Coupling {
+        (**self).coupling(x, dd, v, share_min)
     }
 }
 

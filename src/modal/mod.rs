@@ -69,7 +69,8 @@
 //! ([`ModalSolver::modes`], [`Mode`], [`SpectrumParams`]). `solver`: [`ModalSolver`], which
 //! composes them. `mechanism`: a
 //! direction the static stiffness does not hold ([`free_direction`]). `sagged`: the sagged
-//! problem (chains on their catenaries, not uniform: poles seen only through the count) as
+//! problem (chains on their catenaries, not uniform: each chain's poles found by a search on
+//! its own count, shown to the end-effector tracker; the other searches use the count) as
 //! a [`Condensed`](engine) view for the same first root, tracker and spectrum search, and its
 //! dense reference ([`sagged::SagModalSolver`]). `response`: the end-effector's time response by
 //! modal superposition with the static correction ([`response::ModalResponse`]).

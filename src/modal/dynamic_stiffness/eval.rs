@@ -3,7 +3,7 @@
 
 use super::{LoadedChains, Plan, Slot, MAX_BATCHED};
 use crate::cable::{eval_continuous_batch, eval_discrete_batch, supported_from_parts, ChainEval};
-use crate::modal::engine::{quad, DynEval, MAX_CHAINS, SYM3};
+use crate::modal::engine::{nearest_keyed_pole, quad, Coupling, DynEval, MAX_CHAINS, SYM3};
 use nalgebra::{Matrix6, Vector6};
 
 /// What one evaluation of D(λ) writes: the chains' values at the last λ (and the batched
@@ -175,7 +175,7 @@ impl EvalScratch {
         x: f64,
         dd: &Matrix6<f64>,
         v: &Vector6<f64>,
-    ) -> (f64, f64, bool, u32) {
+    ) -> Coupling {
         let kin = -quad(dd, v, p.dim);
         if !(kin > 0.0) {
             return (0.0, f64::NAN, false, u32::MAX);
@@ -201,15 +201,7 @@ impl EvalScratch {
         }
         let i = best.1;
         let j = self.chain_eval[i].below as usize;
-        let lo = p.chain_pole(i, j);
-        let hi = p.chain_pole(i, j + 1);
-        let up = j == 0 || hi - x < x - lo;
-        let jp = if up { j + 1 } else { j };
-        (
-            best.0 / kin,
-            if up { hi } else { lo },
-            up,
-            (i as u32) << 16 | jp as u32,
-        )
+        let (lo, hi) = (p.chain_pole(i, j), p.chain_pole(i, j + 1));
+        nearest_keyed_pole(best.0 / kin, x, i, j, lo, hi)
     }
 }

@@ -2,7 +2,7 @@
 //! its evaluation buffers, as the structured solver sees it ([`Condensed`]).
 
 use super::{EvalScratch, LoadedChains};
-use crate::modal::engine::{sealed, Condensed, DynEval, PoleCursor, SumRules};
+use crate::modal::engine::{sealed, Condensed, Coupling, DynEval, PoleCursor, SumRules};
 use nalgebra::{Matrix6, Vector6};
 use num_complex::Complex64;
 
@@ -101,7 +101,8 @@ impl Condensed for TautChains {
         true
     }
     #[inline]
-    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>) -> (f64, f64, bool, u32) {
+    /// The poles in closed form: `share_min` changes nothing.
+    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>, _share_min: f64) -> Coupling {
         self.s.coupling(&self.p, x, dd, v)
     }
 }

@@ -197,7 +197,18 @@ impl EeTracker {
             self.members[i - 1].partner_share = m.share;
             searches += 1;
             self.counts.partner_searches += 1;
-            if let Some(t) = partner(f, m.pole, m.pole_up, pred) {
+            // The pole at this load, by its key (the coupling may give the value a search
+            // found at an earlier load: the sagged chains); the two-level estimate moves
+            // with it. Not found within the budget: this partner search is skipped (as one
+            // that found nothing; retrying it each cycle measured worse along suspended-8's
+            // circle at N = 40, where the sweeps need the budget).
+            let (c, j) = ((m.pole_key >> 16) as usize, (m.pole_key & 0xffff) as usize);
+            let pole = f.view.keyed_pole(c, j).unwrap_or(m.pole);
+            if !pole.is_finite() {
+                continue;
+            }
+            let pred = pred + (pole - m.pole);
+            if let Some(t) = partner(f, pole, m.pole_up, pred) {
                 let known = self.members[..self.n_members]
                     .iter()
                     .any(|x| x.index == t.index);

@@ -190,7 +190,11 @@ impl EeTracker {
         let done = if f.view.poles_known() {
             self.scan_intervals(f, &mut st, begin)
         } else {
-            self.scan_modes(f, &mut st, begin)
+            // The sweep sees the count alone (its brackets by the count, as its docs say).
+            f.view.follow_poles(None);
+            let d = self.scan_modes(f, &mut st, begin);
+            f.view.follow_poles(Some(f.left()));
+            d
         };
         st.spent = st.spent.saturating_add(f.evaluations() - begin);
         match done {

@@ -4,7 +4,7 @@
 
 use super::member::{Member, Tracked};
 use super::scan::inset;
-use super::{CHEAP_ACCEPT, NEIGHBOUR_INTERVALS, P_STRONG};
+use super::{CHEAP_ACCEPT, NEIGHBOUR_INTERVALS, P_PARTNER, P_STRONG};
 use crate::modal::engine::{pole_free, quad, Condensed, DynEval, EigD};
 use crate::modal::first_mode::{relative_residual, RootFinder};
 use crate::modal::Root;
@@ -220,7 +220,7 @@ pub(super) fn track_root<P: Condensed>(
             let kin = -quad(&e.dd, &v, e.dim);
             let phi = (kin > 0.0).then(|| v / kin.sqrt());
             let (share, pole, pole_up, pole_key) = if p >= P_STRONG {
-                f.view.coupling(x, &e.dd, &v)
+                f.view.coupling(x, &e.dd, &v, P_PARTNER)
             } else {
                 (0.0, f64::NAN, false, u32::MAX)
             };

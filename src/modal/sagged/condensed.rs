@@ -1,9 +1,11 @@
 //! [`SagChains`] as the structured solver sees it ([`Condensed`]): every evaluation counted,
-//! the poles seen only through the count, the sum rules with their matrix forms.
+//! the pole intervals seen only through the count (while the end-effector tracker runs, a
+//! mode's coupling to one chain and that chain's poles too, `pole_view`), the sum rules
+//! with their matrix forms.
 
 use super::problem::SagChains;
-use crate::modal::engine::{sealed, Condensed, DynEval, SumMatrices, SumRules};
-use nalgebra::Matrix6;
+use crate::modal::engine::{sealed, Condensed, Coupling, DynEval, SumMatrices, SumRules};
+use nalgebra::{Matrix6, Vector6};
 use num_complex::Complex64;
 
 /// How far below zero (relative to max|D(0)|/m_min) the sagged problem is evaluated for its
@@ -17,12 +19,12 @@ impl Condensed for SagChains {
     #[inline]
     fn eval(&mut self, lambda: f64) -> DynEval {
         self.evaluations = self.evaluations.wrapping_add(1);
-        self.evaluate_with(lambda, true)
+        self.evaluate_recorded(lambda, true)
     }
     #[inline]
     fn count_eval(&mut self, lambda: f64) -> DynEval {
         self.evaluations = self.evaluations.wrapping_add(1);
-        self.evaluate_with(lambda, false)
+        self.evaluate_recorded(lambda, false)
     }
     #[inline]
     fn zero_eval(&mut self) -> DynEval {
@@ -30,7 +32,7 @@ impl Condensed for SagChains {
     }
     #[inline]
     fn evaluations(&self) -> u32 {
-        self.evaluations
+        self.evaluations.wrapping_add(self.pole_evaluations())
     }
     #[inline]
     fn dim(&self) -> usize {
@@ -44,6 +46,8 @@ impl Condensed for SagChains {
     fn total_modes(&self) -> usize {
         SagChains::total_modes(self)
     }
+    /// The count alone shows the poles to the searches (the followed poles are not proven
+    /// without a count pass over the chains, which costs an evaluation).
     #[inline]
     fn pole_interval(&self, _lambda: f64) -> Option<(f64, f64)> {
         None
@@ -63,6 +67,24 @@ impl Condensed for SagChains {
     #[inline]
     fn last_pole_interval(&self) -> Option<(f64, f64)> {
         None
+    }
+    fn keyed_pole(&self, c: usize, j: usize) -> Option<f64> {
+        (self.poles_shown() && c < self.n).then(|| self.chain_pole(c, j, f64::NAN))
+    }
+    fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>, share_min: f64) -> Coupling {
+        if self.poles_shown() {
+            self.chain_coupling(x, dd, v, share_min)
+        } else {
+            (0.0, f64::NAN, false, u32::MAX)
+        }
+    }
+    fn follow_poles(&mut self, left: Option<u32>) {
+        self.follow = left.is_some();
+        let now = Condensed::evaluations(self);
+        self.pole_budget_end = match left {
+            Some(l) if l != u32::MAX => Some(now.wrapping_add(l)),
+            _ => None,
+        };
     }
     /// The traces and, with `evaluate`, the matrix forms: the plain one from one evaluation
     /// far below zero ([`SagChains::mass_limit_inverse`]), the weighted one's matrix D(0)⁻¹
@@ -105,6 +127,27 @@ impl Condensed for SagChains {
 }
 
 impl SagChains {
+    /// A counted evaluation; while the poles are shown, each chain's count and S' are kept
+    /// (the chains' shares of a mode and the chains' poles next to it).
+    #[inline]
+    fn evaluate_recorded(&mut self, lambda: f64, derivative: bool) -> DynEval {
+        if !self.poles_shown() {
+            return self.evaluate_with(lambda, derivative);
+        }
+        let (mut below, mut ds) = (
+            std::mem::take(&mut self.last_below),
+            std::mem::take(&mut self.last_ds),
+        );
+        let e = self.evaluate_into(lambda, derivative, |i, c| {
+            below[i] = c.below;
+            ds[i] = [c.ds_in[0], c.ds_in[1], c.ds_in[2], c.ds_out];
+        });
+        self.last_below = below;
+        self.last_ds = ds;
+        self.last_lambda = lambda;
+        e
+    }
+
     /// M_∞⁻¹ = Σ_k φ_k φ_kᵀ (the plain sum rule's matrix form; the identity outside the
     /// leading `dim` block), from one evaluation at σ = −[`FAR_BELOW`]·max|D(0)|/m_min
     /// (m_min the end-effector's smallest mass entry): −D(σ)/σ = M_∞ + (a stiffness)/|σ|,

@@ -36,11 +36,15 @@
 //! matrix forms the tracker's certificate bounds one direction by.
 //!
 //! Files: `problem` (the loaded pose, D(λ)), `load` (setting it up), `condensed` (its view
-//! for the searches), `dense` (the assembled reference).
+//! for the searches), `poles` (each chain's poles by its own count, followed between
+//! loads), `pole_view` (a mode's coupling to one chain and that chain's poles, which the
+//! end-effector tracker's partner searches start from), `dense` (the assembled reference).
 
 mod condensed;
 mod dense;
 mod load;
+mod pole_view;
+mod poles;
 mod problem;
 
 pub use dense::{assemble_sagged, sagged_assembled_dof, SagDenseCable};

@@ -1,16 +1,20 @@
 //! The loaded problem of one pose ([`SagChains`]: the sagged chains, how each attaches to
 //! the end-effector, its mass) and the evaluation of D(λ), D'(λ) and the blocked count.
 
+use super::poles::SagPoles;
 use super::{SagCableFrame, SagEndEffector, SagLoadError};
 use crate::cable::sagged::{SagBatch, SagChain, SagChainEval, SagContinuous, SagContinuousParams};
 use crate::kinematics::attach_map;
-use crate::modal::engine::{DynEval, SYM3};
-use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector3};
+use crate::modal::engine::{quad, DynEval, SYM3};
+use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector3, Vector6};
 use num_complex::Complex64;
 
 /// The mode count reported for continuous cables (infinitely many modes): large enough
 /// for any request, small enough that sums of counts do not overflow.
 pub(super) const CONTINUOUS_MODES: usize = u32::MAX as usize / 2;
+/// Poles memoized per chain beyond the FEM chain's own 3(N − 1): a hidden cable's lowest
+/// ones and the junction's (higher ones are searched each time they are asked for).
+const POLES_PER_SUPPORT: usize = 16;
 /// |h| must be 1 and h ⟂ up to this (relative): the basis is the caller's, rounding only.
 const BASIS_TOL: f64 = 1e-9;
 
@@ -66,6 +70,18 @@ pub struct SagChains {
     pub(in crate::modal) evaluations: u32,
     /// A pose is loaded (the chains set since have not been loaded yet: false).
     pub(in crate::modal) loaded: bool,
+    /// The chains' poles, found by their own counts and followed between loads
+    /// (`poles`); shown to the searches while `follow` is set.
+    pub(in crate::modal) poles: SagPoles,
+    pub(in crate::modal) follow: bool,
+    /// Each chain's blocked count and S' ([a, b, c] in plane, out of plane) at the last
+    /// counted evaluation (the chains' shares of a mode and the chains' poles next to it).
+    pub(in crate::modal) last_below: Vec<u32>,
+    pub(in crate::modal) last_ds: Vec<[f64; 4]>,
+    pub(in crate::modal) last_lambda: f64,
+    /// The value of the evaluation counter where the cycle's budget ends (None:
+    /// unlimited): no pole search goes past it.
+    pub(in crate::modal) pole_budget_end: Option<u32>,
 }
 
 impl SagChains {
@@ -114,6 +130,12 @@ impl SagChains {
             has_exit: false,
             evaluations: 0,
             loaded: false,
+            poles: SagPoles::new(n_cables, 3 * n_el_max + POLES_PER_SUPPORT),
+            follow: false,
+            last_below: vec![0; n_cables],
+            last_ds: vec![[0.0; 4]; n_cables],
+            last_lambda: f64::NAN,
+            pole_budget_end: None,
         }
     }
 
@@ -227,6 +249,25 @@ impl SagChains {
         }
     }
 
+    /// vᵀ D_i v for chain i's share D_i = Σ_q s_q P_q of D with `s` = [a, b, c, s_out] (its
+    /// S or S' in the cable's basis), over the leading `dim` block.
+    pub(super) fn chain_quad(&self, i: usize, s: &[f64; 4], v: &Vector6<f64>) -> f64 {
+        let mut w = 0.0;
+        for (q, &sq) in s.iter().enumerate() {
+            let pq = if self.dim == 6 {
+                quad(&self.proj[i].p6[q], v, 6)
+            } else {
+                let (p, x, y, z) = (&self.proj[i].p3[q], v[0], v[1], v[2]);
+                x * x * p[0]
+                    + y * y * p[1]
+                    + z * z * p[2]
+                    + 2.0 * (x * y * p[3] + x * z * p[4] + y * z * p[5])
+            };
+            w += sq * pq;
+        }
+        w
+    }
+
     /// Add cable i's end stiffness `e` to the accumulator.
     #[inline]
     fn add(&self, acc: &mut Acc, i: usize, e: &SagChainEval) {
@@ -252,12 +293,20 @@ impl SagChains {
         }
     }
 
-    /// D, D' and the blocked count from the chains' evaluations `ev(i)`.
+    /// D, D' and the blocked count from the chains' evaluations `ev(i)`, each passed to
+    /// `sink` as it is added.
     #[inline]
-    fn assemble(&self, lambda: f64, ev: impl Fn(usize) -> SagChainEval) -> DynEval {
+    fn assemble(
+        &self,
+        lambda: f64,
+        ev: impl Fn(usize) -> SagChainEval,
+        mut sink: impl FnMut(usize, &SagChainEval),
+    ) -> DynEval {
         let mut acc = self.start(lambda);
         for i in 0..self.n {
-            self.add(&mut acc, i, &ev(i));
+            let e = ev(i);
+            sink(i, &e);
+            self.add(&mut acc, i, &e);
         }
         acc.finish()
     }
@@ -266,6 +315,7 @@ impl SagChains {
     /// different element counts stay on the one-by-one path.
     /// Also caches each chain's static evaluation.
     pub(super) fn pack(&mut self) {
+        self.poles.clear();
         self.batched = !self.continuous && self.batch.pack(&self.chains[..self.n]);
         if self.continuous {
             return;
@@ -284,15 +334,27 @@ impl SagChains {
     /// counted evaluation is [`Condensed::eval`](crate::modal::Condensed::eval)); without
     /// `derivative` D' is not computed (it holds −M only): for evaluations that only count.
     pub(super) fn evaluate_with(&self, lambda: f64, derivative: bool) -> DynEval {
+        self.evaluate_into(lambda, derivative, |_, _| {})
+    }
+
+    /// [`Self::evaluate_with`], each chain's evaluation passed to `sink` (chain, S_i).
+    pub(super) fn evaluate_into(
+        &self,
+        lambda: f64,
+        derivative: bool,
+        mut sink: impl FnMut(usize, &SagChainEval),
+    ) -> DynEval {
         if self.continuous {
-            self.assemble(lambda, |i| self.cont[i].eval(lambda))
+            self.assemble(lambda, |i| self.cont[i].eval(lambda), sink)
         } else if self.batched {
             let mut acc = self.start(lambda);
-            self.batch
-                .eval_with(lambda, derivative, |i, e| self.add(&mut acc, i, e));
+            self.batch.eval_with(lambda, derivative, |i, e| {
+                sink(i, e);
+                self.add(&mut acc, i, e)
+            });
             acc.finish()
         } else {
-            self.assemble(lambda, |i| self.chains[i].eval(lambda))
+            self.assemble(lambda, |i| self.chains[i].eval(lambda), sink)
         }
     }
 
@@ -304,7 +366,7 @@ impl SagChains {
         if self.continuous {
             return self.evaluate_with(lambda, true);
         }
-        self.assemble(lambda, |i| self.chains[i].eval(lambda))
+        self.assemble(lambda, |i| self.chains[i].eval(lambda), |_, _| {})
     }
 
     /// D(λ) at a complex λ (the damped frequency response, `frf`), the FEM chains only:
@@ -395,9 +457,9 @@ impl SagChains {
     /// D(0) and D'(0) from the chains' cached static evaluations (no recurrence).
     pub(in crate::modal) fn static_eval(&self) -> DynEval {
         if self.continuous {
-            self.assemble(0.0, |i| self.cont_static[i])
+            self.assemble(0.0, |i| self.cont_static[i], |_, _| {})
         } else {
-            self.assemble(0.0, |i| self.static_fem[i])
+            self.assemble(0.0, |i| self.static_fem[i], |_, _| {})
         }
     }
 

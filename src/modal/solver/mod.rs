@@ -216,9 +216,12 @@ impl<P: Condensed> Solver<P> {
         self.require_loaded()?;
         let flex0 = self.first.flex0;
         let sums = self.problem.sum_rules(flex0, true);
+        self.problem.follow_poles(Some(u32::MAX));
         let (mut f, _, tracker) = self.parts();
         f.budget = u32::MAX;
-        tracker.ee_mode(&mut f, sums, first)
+        let r = tracker.ee_mode(&mut f, sums, first);
+        self.problem.follow_poles(None);
+        r
     }
 
     /// The end-effector mode, tracked from the last cycle when `warm`, within what is left
@@ -238,8 +241,11 @@ impl<P: Condensed> Solver<P> {
         let evaluate = first.ee_participation < thr && self.budget_left() > 0;
         let flex0 = self.first.flex0;
         let sums = self.problem.sum_rules(flex0, evaluate);
+        self.problem.follow_poles(Some(self.budget_left()));
         let (mut f, _, tracker) = self.parts();
-        tracker.ee_mode_tracked(&mut f, sums, first, warm)
+        let r = tracker.ee_mode_tracked(&mut f, sums, first, warm);
+        self.problem.follow_poles(None);
+        r
     }
 
     /// Forget the tracked end-effector mode (the next [`Self::ee_mode_tracked`] scans).
