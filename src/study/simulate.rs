@@ -18,8 +18,10 @@
 //! static correction of the modes left out (mode-acceleration method,
 //! [`ModalResponse`](crate::modal::response::ModalResponse)). On sagging cables the field is
 //! the path's instead (the nodes follow the sagged equilibrium with the winches' lengths
-//! re-solved at each pose, [`crate::estimator::sag_path_field_applies`]; its convective
-//! term ∂²x/∂p²[ṗ, ṗ] is left out). Left out: the rotational load −I·α − ω×Iω (the paths here
+//! re-solved at each pose, [`crate::estimator::sag_path_field_applies`]), and its convective
+//! term −M ∂²x/∂p²[ṗ, ṗ] (ṗ by central differences of the samples) loads the same modes
+//! through a second response ([`convective`]; the deviation's acceleration of
+//! [`simulate_forced`] is the first response's alone). Left out: the rotational load −I·α − ω×Iω (the paths here
 //! keep the orientation fixed: it is zero for them), gravity's change with the pose (it is
 //! in the quasi-static pose), and the winches' dynamics.
 //!
@@ -45,6 +47,7 @@ use nalgebra::{Vector3, Vector6};
 
 pub use path_spec::{simulate_shaped, PathSpec, ShapedRun};
 
+pub mod convective;
 pub mod path_spec;
 pub mod pilot;
 mod propagate;
@@ -209,6 +212,24 @@ impl SampledPath {
             let k = k.clamp(1, n - 2);
             (p[k + 1] - 2.0 * p[k] + p[k - 1]) / h2
         }
+    }
+
+    /// The velocity of sample k, m/s (central difference, the ends as
+    /// [`Self::acceleration`]'s).
+    pub fn velocity(&self, k: usize) -> Vector3<f64> {
+        let n = self.positions_m.len();
+        let p = &self.positions_m;
+        if n < 3 && !self.at_rest_ends {
+            return Vector3::zeros();
+        }
+        let k = if self.at_rest_ends {
+            k
+        } else {
+            k.clamp(1, n - 2)
+        };
+        let prev = if k == 0 { p[0] } else { p[k - 1] };
+        let next = if k + 1 >= n { p[n - 1] } else { p[k + 1] };
+        (next - prev) / (2.0 * self.dt_s)
     }
 
     /// Refuses non-finite positions and accelerations above `max_m_s2` (a jump).

@@ -253,6 +253,12 @@ pub(super) fn run(
     let mut held = basis_at(est, scene, &path.positions_m[0], 0.0, modes)?;
     f1_seen(est, out);
     install(&mut resp, &held, None, &damping, 0.0)?;
+    // The convective load of a sagging robot's path, on the same modes (`convective`).
+    let mut conv = super::convective::Convective::new();
+    let conv_at = |k: usize| super::convective::convective_force(&path.velocity(k));
+    let conv_err = |e| StudyError::Build(format!("convective load: {e}"));
+    conv.install(&held, None, &damping).map_err(conv_err)?;
+    let mut g_prev = conv_at(0);
     out.updates = 1;
     // The previous update's flexibility and how many samples before the held pose.
     let mut previous: Option<(Matrix6<f64>, usize)> = None;
@@ -277,7 +283,13 @@ pub(super) fn run(
         };
         (loads.at(b) - loads.at(a)) / path.dt_s
     };
-    push(out, 0, &resp.displacement(&f_prev));
+    let u0 = resp.displacement(&f_prev);
+    let c0 = conv.displacement_with(&g_prev, &held.convective_flexibility);
+    push(
+        out,
+        0,
+        &(u0 + Vector6::new(c0.x, c0.y, c0.z, 0.0, 0.0, 0.0)),
+    );
     on_sample(0, &resp, &f_prev);
     while k0 + 1 < n {
         // The next update's pose and basis; the interval shortened until its predicted
@@ -384,7 +396,13 @@ pub(super) fn run(
             f_prev = f;
             let w = (k - k0) as f64 / u as f64;
             let flex = held.load_flexibility * (1.0 - w) + next.load_flexibility * w;
-            push(out, k, &resp.displacement_with(&f, &flex));
+            let g = conv_at(k);
+            conv.step(&g_prev, &g, path.dt_s);
+            g_prev = g;
+            let cflex = held.convective_flexibility * (1.0 - w) + next.convective_flexibility * w;
+            let c = conv.displacement_with(&g, &cflex);
+            let u = resp.displacement_with(&f, &flex);
+            push(out, k, &(u + Vector6::new(c.x, c.y, c.z, 0.0, 0.0, 0.0)));
             on_sample(k, &resp, &f);
         }
         install(
@@ -394,6 +412,8 @@ pub(super) fn run(
             &damping,
             k1 as f64 * path.dt_s,
         )?;
+        conv.install(&next, overlap.as_deref(), &damping)
+            .map_err(conv_err)?;
         out.updates += 1;
         let rel = if peak_m > 0.0 {
             error.total_m() / peak_m
