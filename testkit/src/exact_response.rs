@@ -11,7 +11,7 @@ use crate::dense_fem::dense_eig;
 use cablevib::estimator::Estimator;
 use cablevib::modal::response::ModalResponse;
 use cablevib::scene::Damping;
-use cablevib::study::simulate::convective::{convective_force, Convective};
+use cablevib::study::simulate::added_load::{convective_force, AddedKind, AddedLoad};
 use cablevib::study::simulate::pilot;
 use cablevib::trajectory::moves::{Move, Profile};
 use nalgebra::{DMatrix, DVector, Matrix4, Matrix6, Vector3, Vector4, Vector6};
@@ -209,7 +209,7 @@ pub fn crate_response(
 
 /// [`crate_response`] (the whole robot's load) with a sagging robot's convective load of
 /// the path's velocities `velocities` (m/s, one per sample) added through the crate's
-/// second response (`study::simulate::convective`, as `simulate` adds it); panics where
+/// second response (`study::simulate::added_load`, as `simulate` adds it); panics where
 /// the basis has no second field.
 pub fn crate_response_convective(
     est: &mut Estimator,
@@ -238,14 +238,14 @@ fn crate_response_with(
     if whole {
         r.set_load_shapes(&b.load_ee, &b.load_flexibility).unwrap();
     }
-    let mut c = Convective::new();
+    let mut c = AddedLoad::new(AddedKind::Convective);
     if velocities.is_some() {
         c.install(&b, None, damping).unwrap();
         assert!(c.is_on(), "the basis has the convective load");
     }
     let g = |s: usize| velocities.map_or(Vector6::zeros(), |v| convective_force(&v[s]));
     let flex = b.convective_flexibility;
-    let at = |r: &ModalResponse, c: &Convective, s: usize| {
+    let at = |r: &ModalResponse, c: &AddedLoad, s: usize| {
         r.displacement(&loads[s]).fixed_rows::<3>(0).into_owned()
             + c.displacement_with(&g(s), &flex)
     };
