@@ -70,7 +70,9 @@ pub use modes::{
     SHAPE_BYTES_PER_NODE,
 };
 pub use params::{EstimatorParams, ParamsError, SagModelParams};
-pub use path_field::{sag_path_field_applies, PATH_FIELD_STEP};
+pub use path_field::{
+    convective_input, sag_path_field_applies, PathFields, PATH_FIELD_STEP, SECOND_FIELD_PAIRS,
+};
 pub use pose_model::{build_models, PoseModel};
 pub use reference::{
     reference_analysis, reference_analysis_at, structured_analysis, ReferenceAnalysis,

@@ -4,24 +4,33 @@
 //! keeps its loaded problem; only its evaluation counter moves).
 
 use super::{Estimator, EstimatorError, Status};
-use crate::modal::quasi_static::QuasiStaticLoad;
+use crate::modal::quasi_static::{ConvectiveLoad, QuasiStaticLoad};
 use crate::modal::{self, DenseModes, Mode, ShapeParams};
 use nalgebra::{DMatrix, Matrix6, Vector6};
 
 impl EeModalBasis {
     /// The basis of the structured engine's mode shapes (taut or sagging FEM cables) and
     /// the load of the influence field `field` on them (the end-effector's alone when
-    /// None).
+    /// None); `convective`: a sagging robot's second-derivative fields and their load.
     fn structured(
         dim: usize,
         shapes: modal::ModeShapes,
         field: Option<(QuasiStaticLoad, modal::ModeShapes)>,
+        convective: Option<(ConvectiveLoad, modal::ModeShapes)>,
         flexibility: Matrix6<f64>,
         ee_mass: Matrix6<f64>,
     ) -> Result<EeModalBasis, BasisError> {
         let (load, field) = match field {
             Some((load, field)) => (load, Some(field)),
             None => (QuasiStaticLoad::end_effector_only(&shapes, &ee_mass), None),
+        };
+        let (convective_load, convective_flexibility, second_field) = match convective {
+            Some((c, second)) => (
+                c.participation.clone(),
+                c.load_flexibility(&flexibility),
+                Some(second),
+            ),
+            None => (Vec::new(), Matrix6::zeros(), None),
         };
         EeModalBasis {
             dim,
@@ -32,6 +41,9 @@ impl EeModalBasis {
             structured: true,
             shapes: Some(shapes),
             field,
+            second_field,
+            convective_load,
+            convective_flexibility,
             load_ee: Vec::new(),
             load_flexibility: Matrix6::zeros(),
             quasi_static_mass_kg: Matrix6::zeros(),
@@ -240,6 +252,18 @@ pub struct EeModalBasis {
     /// field on sagging ones (`modal::quasi_static`); None where the load is the
     /// end-effector's alone or the shapes are the dense model's.
     pub field: Option<modal::ModeShapes>,
+    /// A sagging robot's second-derivative fields ∂²x/∂p_d∂p_e along its path (six entries
+    /// of `modes`: xx, yy, zz, xy, xz, yz; 1/m) where `field` is the path's; None elsewhere
+    /// (`estimator::path_field`).
+    pub second_field: Option<modal::ModeShapes>,
+    /// Each mode's convective load shape χ_k = (φ_kᵀ M C_i)_i (kg^½/m; module docs of
+    /// [`modal::quasi_static`]): under the response's force −w of the path's velocity
+    /// products w ([`super::convective_input`]), mode k's force is −χ_kᵀ w; empty without
+    /// `second_field`.
+    pub convective_load: Vec<Vector6<f64>>,
+    /// The end-effector's static answer per unit of that force, F S (m·s²/m²; zeros without
+    /// `second_field`).
+    pub convective_flexibility: Matrix6<f64>,
     /// Each mode's load shape ψ_k = M_ee⁻¹ L_k (1/√kg; zeros beyond `dim`): under the
     /// end-effector load f = −M_ee a of a path's acceleration a, mode k's force is ψ_kᵀ f =
     /// −L_kᵀ a, the quasi-static inertia of the whole robot, the cables' included
@@ -311,7 +335,7 @@ impl Estimator {
             let load = QuasiStaticLoad::from_shapes(&shapes, &field, &ee_mass)
                 .ok_or(BasisError::QuasiStatic(NODES_DIFFER))?;
             let field = Some((load, field));
-            return EeModalBasis::structured(dim, shapes, field, flexibility, ee_mass);
+            return EeModalBasis::structured(dim, shapes, field, None, flexibility, ee_mass);
         }
         if let Some((solver, h, up, geometry)) = self.cycle.sag_shapes_input() {
             if !solver.is_continuous() {
@@ -326,16 +350,31 @@ impl Estimator {
                     .influence_field(&h, &up, &geometry.arm_m, &params)
                     .map_err(BasisError::Shapes)?;
                 // The path's field (lengths re-solved along the path), not the fixed-length
-                // one; the end-effector's load alone where it is not covered (pulleys).
-                let field = match self.sag_path_field(&fixed)? {
-                    Some(path) => Some((
-                        QuasiStaticLoad::from_path_field(&shapes, &path, &fixed, &ee_mass)
-                            .ok_or(BasisError::QuasiStatic(NODES_DIFFER))?,
-                        path,
-                    )),
-                    None => None,
+                // one, and its convective load; the end-effector's load alone where it is
+                // not covered (pulleys).
+                let (field, convective) = match self.sag_path_fields(&fixed)? {
+                    Some(p) => (
+                        Some((
+                            QuasiStaticLoad::from_path_field(&shapes, &p.first, &fixed, &ee_mass)
+                                .ok_or(BasisError::QuasiStatic(NODES_DIFFER))?,
+                            p.first,
+                        )),
+                        Some((
+                            ConvectiveLoad::from_fields(&shapes, &p.second, &fixed, &ee_mass)
+                                .ok_or(BasisError::QuasiStatic(NODES_DIFFER))?,
+                            p.second,
+                        )),
+                    ),
+                    None => (None, None),
                 };
-                return EeModalBasis::structured(dim, shapes, field, flexibility, ee_mass);
+                return EeModalBasis::structured(
+                    dim,
+                    shapes,
+                    field,
+                    convective,
+                    flexibility,
+                    ee_mass,
+                );
             }
         }
         let (kk, mm) = self.dense_matrices()?;
@@ -352,6 +391,9 @@ impl Estimator {
             structured: false,
             shapes: None,
             field: None,
+            second_field: None,
+            convective_load: Vec::new(),
+            convective_flexibility: Matrix6::zeros(),
             load_ee: Vec::new(),
             load_flexibility: Matrix6::zeros(),
             quasi_static_mass_kg: Matrix6::zeros(),

@@ -55,6 +55,22 @@
 //! cables r_p = r_s and M_s = M_qs. Sagging robots whose cables run over pulleys are not
 //! covered by the path's field and take the end-effector's load alone
 //! ([`QuasiStaticLoad::end_effector_only`]).
+//!
+//! **The convective load.** Along a path p(t) the nodes x(p(t)) accelerate by
+//! r_p p̈ + ∂²x/∂p²[ṗ, ṗ]; the second term loads the robot by −M ∂²x/∂p²[ṗ, ṗ], a load
+//! quadratic in the path's velocity that no end-effector force carries. With the six
+//! second-derivative fields C_i = ∂²x/∂p_d∂p_e (pairs xx, yy, zz, xy, xz, yz; the
+//! end-effector's entries zero) and the velocity's products w = [ṗ_x², ṗ_y², ṗ_z², 2ṗ_xṗ_y,
+//! 2ṗ_xṗ_z, 2ṗ_yṗ_z] (so ∂²x/∂p²[ṗ, ṗ] = Σ_i C_i w_i), mode k's force is −χ_kᵀ w and the
+//! static answer F r_sᵀ(−M C w) = −F S w with
+//!
+//! ```text
+//!     χ_k,i = φ_kᵀ M C_i   (kg^½/m),   S_di = r_s,dᵀ M C_i   (kg/m)
+//! ```
+//!
+//! ([`ConvectiveLoad`]): a second load on the same modes, taken by a response whose force
+//! is −w with load shapes χ_k and load flexibility F S. On taut cables the field is linear
+//! in the pose along each chord to first order and the term is not formed.
 
 use super::ModeShapes;
 use nalgebra::{DMatrix, Matrix6, Vector6};
@@ -239,5 +255,55 @@ impl QuasiStaticLoad {
         ee_mass: &Matrix6<f64>,
     ) -> Option<Matrix6<f64>> {
         Some(flexibility * self.static_mass_kg * self.ee_mass_inverse(ee_mass)?)
+    }
+}
+
+/// The convective load of a sagging robot's path (module docs): each mode's participation
+/// in the six second-derivative fields and their static answer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConvectiveLoad {
+    /// χ_k = (φ_kᵀ M C_i)_i of each mode (kg^½/m; the six pairs xx, yy, zz, xy, xz, yz).
+    pub participation: Vec<Vector6<f64>>,
+    /// S = (r_s,dᵀ M C_i)_{d,i}, kg/m (kg in a rigid body's rotational rows; zeros beyond
+    /// `dim` rows).
+    pub static_kg_per_m: Matrix6<f64>,
+}
+
+impl ConvectiveLoad {
+    /// From the structured shapes of a pose, the second-derivative fields `second` (six
+    /// entries of its `modes`) and the fixed-length field `fixed` (the same node lists),
+    /// the end-effector's mass `ee_mass`. None when the node lists differ or `second` has
+    /// not six fields.
+    pub fn from_fields(
+        shapes: &ModeShapes,
+        second: &ModeShapes,
+        fixed: &ModeShapes,
+        ee_mass: &Matrix6<f64>,
+    ) -> Option<ConvectiveLoad> {
+        let pairs = second.modes.len();
+        if pairs != 6 || fixed.modes.len() != shapes.dim {
+            return None;
+        }
+        let l = shapes.mass_overlap(second, ee_mass)?;
+        let participation = (0..shapes.modes.len())
+            .map(|k| Vector6::from_column_slice(&l[k * pairs..(k + 1) * pairs]))
+            .collect();
+        let s = fixed.mass_overlap(second, ee_mass)?;
+        let mut static_kg_per_m = Matrix6::zeros();
+        for d in 0..shapes.dim {
+            for i in 0..pairs {
+                static_kg_per_m[(d, i)] = s[d * pairs + i];
+            }
+        }
+        Some(ConvectiveLoad {
+            participation,
+            static_kg_per_m,
+        })
+    }
+
+    /// The static answer per unit of the response's force −w: F S, m per (m²/s²), of the
+    /// static flexibility `flexibility` (module docs).
+    pub fn load_flexibility(&self, flexibility: &Matrix6<f64>) -> Matrix6<f64> {
+        flexibility * self.static_kg_per_m
     }
 }

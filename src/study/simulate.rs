@@ -18,8 +18,9 @@
 //! static correction of the modes left out (mode-acceleration method,
 //! [`ModalResponse`](crate::modal::response::ModalResponse)). On sagging cables the field is
 //! the path's instead (the nodes follow the sagged equilibrium with the winches' lengths
-//! re-solved at each pose, [`crate::estimator::sag_path_field_applies`]; its convective
-//! term ∂²x/∂p²[ṗ, ṗ] is left out). Left out: the rotational load −I·α − ω×Iω (the paths here
+//! re-solved at each pose, [`crate::estimator::sag_path_field_applies`]), and its convective
+//! term −M ∂²x/∂p²[ṗ, ṗ] (ṗ by central differences of the samples) loads the same modes
+//! through a response of its own on the same modes ([`added_load`]). Left out: the rotational load −I·α − ω×Iω (the paths here
 //! keep the orientation fixed: it is zero for them), gravity's change with the pose (it is
 //! in the quasi-static pose), and the winches' dynamics.
 //!
@@ -37,7 +38,7 @@
 use super::{Param, ParamError, ParamName, StudyError};
 use crate::estimator::{Estimator, EstimatorParams, Status, Tmin};
 use crate::kinematics::Pose;
-use crate::modal::response::{ModalResponse, MAX_RESPONSE_MODES};
+use crate::modal::response::MAX_RESPONSE_MODES;
 use crate::scene::{Damping, Scene};
 use crate::trajectory::shaping::{OnlineShaper, ShaperKind, DEFAULT_MIN_FREQUENCY_HZ};
 use crate::trajectory::{Samples, Trajectory};
@@ -45,6 +46,7 @@ use nalgebra::{Vector3, Vector6};
 
 pub use path_spec::{simulate_shaped, PathSpec, ShapedRun};
 
+pub mod added_load;
 pub mod path_spec;
 pub mod pilot;
 mod propagate;
@@ -209,6 +211,24 @@ impl SampledPath {
             let k = k.clamp(1, n - 2);
             (p[k + 1] - 2.0 * p[k] + p[k - 1]) / h2
         }
+    }
+
+    /// The velocity of sample k, m/s (central difference, the ends as
+    /// [`Self::acceleration`]'s).
+    pub fn velocity(&self, k: usize) -> Vector3<f64> {
+        let n = self.positions_m.len();
+        let p = &self.positions_m;
+        if n < 3 && !self.at_rest_ends {
+            return Vector3::zeros();
+        }
+        let k = if self.at_rest_ends {
+            k
+        } else {
+            k.clamp(1, n - 2)
+        };
+        let prev = if k == 0 { p[0] } else { p[k - 1] };
+        let next = if k + 1 >= n { p[n - 1] } else { p[k + 1] };
+        (next - prev) / (2.0 * self.dt_s)
     }
 
     /// Refuses non-finite positions and accelerations above `max_m_s2` (a jump).
@@ -423,7 +443,9 @@ pub struct ForcedResult {
 /// load (e.g. white noise standing for the disturbances a real robot feels, which keep its
 /// modes ringing); also the deviation's acceleration. The same loop as [`simulate`]
 /// (`propagate::run`: K and the update interval given or chosen for `cfg.tolerance`).
-/// `force_n` is called once per sample, in order, before the run (its values are held:
+/// The force acts on the end-effector: each mode takes φ_kᵀ P and the static answer F P
+/// ([`added_load`]), not the inertial load's shapes. `force_n` is called once per sample,
+/// in order, before the run (its values are held:
 /// 24 B per sample, within [`simulate`]'s memory budget per sample).
 pub fn simulate_forced(
     scene: &Scene,
@@ -445,7 +467,7 @@ pub fn simulate_forced(
             f.fixed_rows_mut::<3>(0).copy_from(&forces[k]);
             f
         },
-        |_, resp, f| acceleration_m_s2.push(resp.acceleration(f).fixed_rows::<3>(0).into_owned()),
+        |_, state| acceleration_m_s2.push(state.acceleration()),
     )?;
     Ok(ForcedResult {
         response,
@@ -497,7 +519,7 @@ fn run(
     cfg: &SimulateConfig,
 ) -> Result<SimulateResult, StudyError> {
     let path = settled_path(path, cfg)?;
-    run_settled(scene, &path, cfg, |_| Vector6::zeros(), |_, _, _| {})
+    run_settled(scene, &path, cfg, |_| Vector6::zeros(), |_, _| {})
 }
 
 /// [`run`] on the path as simulated ([`settled_path`]) with the external force
@@ -508,7 +530,7 @@ fn run_settled(
     path: &SampledPath,
     cfg: &SimulateConfig,
     external_n: impl Fn(usize) -> Vector6<f64>,
-    mut on_sample: impl FnMut(usize, &ModalResponse, &Vector6<f64>),
+    mut on_sample: impl FnMut(usize, &added_load::SampleState<'_>),
 ) -> Result<SimulateResult, StudyError> {
     let n = path.positions_m.len();
     // The memory of the whole run (two bases across an update, the path and its
@@ -533,8 +555,8 @@ fn run_settled(
         path,
         cfg,
         external_n,
-        |k, resp, f| {
-            on_sample(k, resp, f);
+        |k, state| {
+            on_sample(k, state);
             if k % PROGRESS_SAMPLES == 0 && k > 0 {
                 bar.advance(PROGRESS_SAMPLES);
             }

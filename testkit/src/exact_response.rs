@@ -11,6 +11,7 @@ use crate::dense_fem::dense_eig;
 use cablevib::estimator::Estimator;
 use cablevib::modal::response::ModalResponse;
 use cablevib::scene::Damping;
+use cablevib::study::simulate::added_load::{convective_force, AddedKind, AddedLoad};
 use cablevib::study::simulate::pilot;
 use cablevib::trajectory::moves::{Move, Profile};
 use nalgebra::{DMatrix, DVector, Matrix4, Matrix6, Vector3, Vector4, Vector6};
@@ -203,6 +204,33 @@ pub fn crate_response(
     dt: f64,
     whole: bool,
 ) -> (Vec<Vector3<f64>>, usize) {
+    crate_response_with(est, kk, damping, loads, None, dt, whole)
+}
+
+/// [`crate_response`] (the whole robot's load) with a sagging robot's convective load of
+/// the path's velocities `velocities` (m/s, one per sample) added through the crate's
+/// second response (`study::simulate::added_load`, as `simulate` adds it); panics where
+/// the basis has no second field.
+pub fn crate_response_convective(
+    est: &mut Estimator,
+    kk: usize,
+    damping: &Damping,
+    loads: &[Vector6<f64>],
+    velocities: &[Vector3<f64>],
+    dt: f64,
+) -> (Vec<Vector3<f64>>, usize) {
+    crate_response_with(est, kk, damping, loads, Some(velocities), dt, true)
+}
+
+fn crate_response_with(
+    est: &mut Estimator,
+    kk: usize,
+    damping: &Damping,
+    loads: &[Vector6<f64>],
+    velocities: Option<&[Vector3<f64>]>,
+    dt: f64,
+    whole: bool,
+) -> (Vec<Vector3<f64>>, usize) {
     let b = est.ee_modal_basis(kk).unwrap();
     let mut r = ModalResponse::new(b.dim);
     r.set_basis(&b.lambda, &b.phi_ee, damping, &b.flexibility, &b.ee_mass)
@@ -210,10 +238,22 @@ pub fn crate_response(
     if whole {
         r.set_load_shapes(&b.load_ee, &b.load_flexibility).unwrap();
     }
-    let mut out = vec![r.displacement(&loads[0]).fixed_rows::<3>(0).into_owned()];
+    let mut c = AddedLoad::new(AddedKind::Convective);
+    if velocities.is_some() {
+        c.install(&b, None, damping).unwrap();
+        assert!(c.is_on(), "the basis has the convective load");
+    }
+    let g = |s: usize| velocities.map_or(Vector6::zeros(), |v| convective_force(&v[s]));
+    let flex = b.convective_flexibility;
+    let at = |r: &ModalResponse, c: &AddedLoad, s: usize| {
+        r.displacement(&loads[s]).fixed_rows::<3>(0).into_owned()
+            + c.displacement_with(&g(s), &flex)
+    };
+    let mut out = vec![at(&r, &c, 0)];
     for s in 1..loads.len() {
         r.step(&loads[s - 1], &loads[s], dt);
-        out.push(r.displacement(&loads[s]).fixed_rows::<3>(0).into_owned());
+        c.step(&g(s - 1), &g(s), dt);
+        out.push(at(&r, &c, s));
     }
     (out, b.lambda.len())
 }

@@ -8,12 +8,14 @@
 //! force linear between samples with the static flexibility interpolated between the two
 //! poses ([`ModalResponse::displacement_with`]), and installs the new basis, the state
 //! carried by the mass overlap of the whole shapes. The force at sample k is the inertial
-//! load of the quasi-static motion −M_ee [a_k; 0] plus the caller's `external_n(k)`, taken
-//! by each mode through the basis's load shapes (the whole robot's quasi-static inertia,
-//! [`crate::modal::quasi_static`]; an external force therefore acts as that load would,
-//! exact for it only where the cables carry no mass); the caller sees the response at
+//! load of the quasi-static motion −M_ee [a_k; 0], taken by each mode through the basis's
+//! load shapes (the whole robot's quasi-static inertia, [`crate::modal::quasi_static`]);
+//! the convective load of a sagging robot's path and the caller's `external_n(k)` on the
+//! end-effector (through the end-effector's shapes φ and flexibility F) are responses of
+//! their own on the same modes, added ([`super::added_load`]); the caller sees the state at
 //! every sample (`on_sample`).
 
+use super::added_load::{AddedLoads, SampleState};
 use super::{pilot, solve_pose, updates, Accuracy, SampledPath, SimulateConfig, SimulateResult};
 use crate::estimator::{EeModalBasis, Estimator};
 use crate::modal::response::{ModalResponse, MAX_RESPONSE_MODES};
@@ -88,7 +90,8 @@ fn install(
     .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
 }
 
-/// The force at each sample: the inertial load −M_ee [a_k; 0] and the external force.
+/// The forces at each sample: the inertial load −M_ee [a_k; 0], the convective load's and
+/// the external force (`added_load`).
 struct Loads<'a, F: Fn(usize) -> Vector6<f64>> {
     path: &'a SampledPath,
     ee_mass: Matrix6<f64>,
@@ -96,11 +99,23 @@ struct Loads<'a, F: Fn(usize) -> Vector6<f64>> {
 }
 
 impl<F: Fn(usize) -> Vector6<f64>> Loads<'_, F> {
+    /// The inertial load's force.
     fn at(&self, k: usize) -> Vector6<f64> {
         let mut a6 = Vector6::zeros();
         a6.fixed_rows_mut::<3>(0)
             .copy_from(&self.path.acceleration(k));
-        (self.external_n)(k) - self.ee_mass * a6
+        -(self.ee_mass * a6)
+    }
+
+    /// The added loads' forces ([`AddedLoads::forces`]).
+    fn added(&self, k: usize) -> [Vector6<f64>; 2] {
+        AddedLoads::forces(&self.path.velocity(k), &(self.external_n)(k))
+    }
+
+    /// The inertial load and the external force, as the mode choice's pilot takes them
+    /// (through the load shapes: an estimate of the external force's share).
+    fn total(&self, k: usize) -> Vector6<f64> {
+        self.at(k) + (self.external_n)(k)
     }
 }
 
@@ -167,7 +182,7 @@ fn pilot_poses<F: Fn(usize) -> Vector6<f64>>(
 ) -> Result<ModesChosen, StudyError> {
     let path = loads.path;
     let n = path.positions_m.len();
-    let all: Vec<Vector6<f64>> = (0..n).map(|k| loads.at(k)).collect();
+    let all: Vec<Vector6<f64>> = (0..n).map(|k| loads.total(k)).collect();
     let mut chosen = ModesChosen {
         modes: 0,
         pilot_modes: 0,
@@ -194,15 +209,15 @@ fn pilot_poses<F: Fn(usize) -> Vector6<f64>>(
 
 /// The response along `path` (module docs) into `out` (its accuracy, samples, updates,
 /// modes, f1 range and structured flag); `est` is the scene's estimator. The force at
-/// sample k is the inertial load plus `external_n(k)` (N, and N·m on a rigid body);
-/// `on_sample(k, response, force)` is called after each sample's state is reached.
+/// sample k is the inertial load plus `external_n(k)` on the end-effector (N, and N·m on a
+/// rigid body); `on_sample(k, state)` is called after each sample's state is reached.
 pub(super) fn run(
     est: &mut Estimator,
     scene: &Scene,
     path: &SampledPath,
     cfg: &SimulateConfig,
     external_n: impl Fn(usize) -> Vector6<f64>,
-    mut on_sample: impl FnMut(usize, &ModalResponse, &Vector6<f64>),
+    mut on_sample: impl FnMut(usize, &SampleState<'_>),
     out: &mut SimulateResult,
 ) -> Result<(), StudyError> {
     let n = path.positions_m.len();
@@ -253,6 +268,11 @@ pub(super) fn run(
     let mut held = basis_at(est, scene, &path.positions_m[0], 0.0, modes)?;
     f1_seen(est, out);
     install(&mut resp, &held, None, &damping, 0.0)?;
+    // The convective load and the external force, each on the same modes (`added_load`).
+    let mut added = AddedLoads::new();
+    let added_err = |e| StudyError::Build(format!("the added loads: {e}"));
+    added.install(&held, None, &damping).map_err(added_err)?;
+    added.start(loads.added(0));
     out.updates = 1;
     // The previous update's flexibility and how many samples before the held pose.
     let mut previous: Option<(Matrix6<f64>, usize)> = None;
@@ -277,8 +297,9 @@ pub(super) fn run(
         };
         (loads.at(b) - loads.at(a)) / path.dt_s
     };
-    push(out, 0, &resp.displacement(&f_prev));
-    on_sample(0, &resp, &f_prev);
+    let u0 = resp.displacement(&f_prev) + added.displacement(&held, &held, 0.0);
+    push(out, 0, &u0);
+    on_sample(0, &added.state(&resp, &f_prev));
     while k0 + 1 < n {
         // The next update's pose and basis; the interval shortened until its predicted
         // error is within the budget (when the interval is chosen).
@@ -384,8 +405,10 @@ pub(super) fn run(
             f_prev = f;
             let w = (k - k0) as f64 / u as f64;
             let flex = held.load_flexibility * (1.0 - w) + next.load_flexibility * w;
-            push(out, k, &resp.displacement_with(&f, &flex));
-            on_sample(k, &resp, &f);
+            added.step(loads.added(k), path.dt_s);
+            let u = resp.displacement_with(&f, &flex) + added.displacement(&held, &next, w);
+            push(out, k, &u);
+            on_sample(k, &added.state(&resp, &f));
         }
         install(
             &mut resp,
@@ -394,6 +417,9 @@ pub(super) fn run(
             &damping,
             k1 as f64 * path.dt_s,
         )?;
+        added
+            .install(&next, overlap.as_deref(), &damping)
+            .map_err(added_err)?;
         out.updates += 1;
         let rel = if peak_m > 0.0 {
             error.total_m() / peak_m
