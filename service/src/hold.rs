@@ -632,11 +632,33 @@ mod tests {
         if std::env::var_os("CABLEVIB_BLESS").is_some_and(|v| v == "1") {
             std::fs::write(path, &text).unwrap();
         }
-        let stored = std::fs::read_to_string(path).unwrap_or_default();
+        let stored = match std::fs::read_to_string(path) {
+            Ok(s) => s,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
+            Err(e) => panic!("{path}: {e}"),
+        };
+        let first_difference = stored
+            .lines()
+            .zip(text.lines())
+            .position(|(a, b)| a != b)
+            .map(|i| {
+                let line = |s: &str| s.lines().nth(i).unwrap_or("").to_string();
+                format!(
+                    "line {}: stored {:?}, produced {:?}",
+                    i + 1,
+                    line(&stored),
+                    line(&text)
+                )
+            })
+            .unwrap_or_else(|| {
+                let (a, b) = (stored.lines().count(), text.lines().count());
+                format!("{a} lines stored, {b} produced")
+            });
         assert!(
             stored == text,
-            "{path} is not what F1Hold produces; rewrite it with CABLEVIB_BLESS=1 cargo test \
-             --release -p cablevib-service --lib hold (and check the Python mirror)"
+            "{path} is not what F1Hold produces ({first_difference}); rewrite it with \
+             CABLEVIB_BLESS=1 cargo test --release -p cablevib-service --lib hold (and check \
+             the Python mirror)"
         );
     }
 
