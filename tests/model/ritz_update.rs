@@ -49,17 +49,15 @@ fn update_agrees(p0: Vector3<f64>, p1: Vector3<f64>) -> bool {
     assert!(r.residual <= MAX_RESIDUAL, "{}", r.residual);
     let b = &r.basis;
     let kept = b.lambda.len();
-    assert!(kept >= K && kept < K + 8, "{kept}");
+    assert!((K..K + 8).contains(&kept), "{kept}");
     let (k, m) = dense_ref(&s, &p1, e.tensions(), 10, false);
     let (lam, u) = dense_eig(&k, &m);
-    for j in 0..kept {
-        let rel = (b.lambda[j] - lam[j]).abs() / lam[j];
+    for (j, (ours, dense)) in b.lambda.iter().zip(&lam).enumerate() {
+        let rel = (ours - dense).abs() / dense;
+        let rho = r.residual;
         assert!(
-            rel <= r.residual,
-            "mode {j}: λ {} vs dense {}: {rel:.2e} over ρ = {:.2e}",
-            b.lambda[j],
-            lam[j],
-            r.residual
+            rel <= rho,
+            "mode {j}: λ {ours} vs dense {dense}: {rel:.2e} over ρ = {rho:.2e}"
         );
     }
     let ours = modal_flexibility(

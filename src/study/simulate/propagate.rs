@@ -13,6 +13,12 @@
 //! [`crate::modal::quasi_static`]; an external force therefore acts as that load would,
 //! exact for it only where the cables carry no mass); the caller sees the response at
 //! every sample (`on_sample`).
+//!
+//! Each update's basis is made by Rayleigh–Ritz from the held one where the model has
+//! that update and every kept mode's residual is within
+//! [`updates::RITZ_RESIDUAL_PER_TOLERANCE`] of the tolerance
+//! ([`crate::estimator::RitzBasis`]), else by the structured shapes (with
+//! [`updates::ritz_guard`] guard modes above K for the next update's start block).
 
 use super::{pilot, solve_pose, updates, Accuracy, SampledPath, SimulateConfig, SimulateResult};
 use crate::estimator::{EeModalBasis, Estimator};
