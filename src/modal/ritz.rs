@@ -132,6 +132,54 @@ impl Envelope {
     }
 }
 
+impl Envelope {
+    /// Solve A X = B in place for every column of `b` (n × q) at once: the rows of the
+    /// factor applied to the q right-hand sides together, `work` n·q long.
+    pub fn solve_columns(&self, b: &mut DMatrix<f64>, work: &mut Vec<f64>) {
+        let (n, q) = b.shape();
+        work.clear();
+        work.resize(n * q, 0.0);
+        for (i, &o) in self.order.iter().enumerate() {
+            for c in 0..q {
+                work[i * q + c] = b[(o, c)];
+            }
+        }
+        for i in 0..n {
+            let row = &self.data[self.start[i]..self.start[i + 1]];
+            let (off, diag) = row.split_at(row.len() - 1);
+            let (done, rest) = work.split_at_mut(i * q);
+            let wi = &mut rest[..q];
+            for (k, l) in off.iter().enumerate() {
+                let wk = &done[(self.first[i] + k) * q..(self.first[i] + k + 1) * q];
+                for (x, y) in wi.iter_mut().zip(wk) {
+                    *x -= l * y;
+                }
+            }
+            let d = 1.0 / diag[0];
+            wi.iter_mut().for_each(|x| *x *= d);
+        }
+        for i in (0..n).rev() {
+            let row = &self.data[self.start[i]..self.start[i + 1]];
+            let (off, diag) = row.split_at(row.len() - 1);
+            let (before, rest) = work.split_at_mut(i * q);
+            let wi = &mut rest[..q];
+            let d = 1.0 / diag[0];
+            wi.iter_mut().for_each(|x| *x *= d);
+            for (k, l) in off.iter().enumerate() {
+                let at = (self.first[i] + k) * q;
+                for (x, y) in before[at..at + q].iter_mut().zip(wi.iter()) {
+                    *x -= l * y;
+                }
+            }
+        }
+        for (i, &o) in self.order.iter().enumerate() {
+            for c in 0..q {
+                b[(o, c)] = work[i * q + c];
+            }
+        }
+    }
+}
+
 /// A symmetric matrix's nonzeros by rows, for products.
 struct Sparse {
     start: Vec<usize>,
@@ -217,7 +265,7 @@ pub fn subspace_iteration(
     let ms = Sparse::new(m);
     let q = x.ncols();
     let checked = checked.min(q);
-    let mut work = vec![0.0; n];
+    let mut block = Vec::new();
     let mut mx = DMatrix::zeros(n, q);
     let mut out = Ritz {
         lambda: Vec::new(),
@@ -232,9 +280,7 @@ pub fn subspace_iteration(
     for sweep in 1..=sweeps {
         // Y = K⁻¹ M X, and M Y.
         let mut y = mx.clone();
-        for c in 0..q {
-            kf.solve(y.column_mut(c).as_mut_slice(), &mut work);
-        }
+        kf.solve_columns(&mut y, &mut block);
         let mut my = DMatrix::zeros(n, q);
         for c in 0..q {
             ms.mul(y.column(c).as_slice(), my.column_mut(c).as_mut_slice());
@@ -267,23 +313,14 @@ pub fn subspace_iteration(
         out.residual.clear();
         if sweep >= params.min_sweeps.min(sweeps) {
             let kphi = &mx * &w;
+            let r0 = DMatrix::from_fn(n, checked, |i, j| {
+                kphi[(i, j)] - out.lambda[j] * mphi[(i, j)]
+            });
+            let mut r = r0.clone();
+            mf.solve_columns(&mut r, &mut block);
             for j in 0..checked {
                 let lam = out.lambda[j];
-                let r0: Vec<f64> = kphi
-                    .column(j)
-                    .iter()
-                    .zip(mphi.column(j).iter())
-                    .map(|(a, b)| a - lam * b)
-                    .collect();
-                let mut r = r0.clone();
-                mf.solve(&mut r, &mut work);
-                let norm = r0
-                    .iter()
-                    .zip(&r)
-                    .map(|(a, b)| a * b)
-                    .sum::<f64>()
-                    .max(0.0)
-                    .sqrt();
+                let norm = r0.column(j).dot(&r.column(j)).max(0.0).sqrt();
                 out.residual
                     .push(if lam > 0.0 { norm / lam } else { f64::INFINITY });
             }
@@ -326,6 +363,12 @@ mod tests {
         let r = &a * nalgebra::DVector::from_column_slice(&x)
             - nalgebra::DVector::from_column_slice(&b);
         assert!(r.norm() < 1e-12, "{r}");
+        // All columns at once: the same.
+        let mut bb = DMatrix::from_fn(n, 2, |r, c| b[r] * (1.0 + c as f64));
+        f.solve_columns(&mut bb, &mut Vec::new());
+        for r in 0..n {
+            assert!((bb[(r, 0)] - x[r]).abs() < 1e-14 && (bb[(r, 1)] - 2.0 * x[r]).abs() < 1e-13);
+        }
         // Not positive definite: refused.
         let neg = -a;
         assert!(Envelope::factor(&neg, &order).is_none());
