@@ -21,6 +21,11 @@ use crate::modal::ritz::{subspace_iteration, RitzParams};
 use crate::modal::{ModeShape, ModeShapes, ShapeParams};
 use nalgebra::{DMatrix, Vector3, Vector6};
 
+/// Largest model the update is made for, DOF: its K and M are assembled densely (n² each,
+/// 2 × 18 MB at the bound) before their envelope is taken; beyond it the structured
+/// shapes, whose cost does not grow with the elements.
+pub const MAX_RITZ_DOF: usize = 1500;
+
 /// Most sweeps of one update (each costs one block solve and a small eigen-solve).
 pub const RITZ_SWEEPS: usize = 3;
 
@@ -45,8 +50,9 @@ pub struct RitzBasis {
 
 impl Estimator {
     /// Whether this model has the update of the module docs (taut FEM chains without a
-    /// hidden cable).
+    /// hidden cable, assembled within [`MAX_RITZ_DOF`] DOF).
     pub fn ritz_update_applies(&mut self) -> bool {
+        let (_, dim, _) = self.ee_mass_flexibility();
         self.cycle
             .taut_shapes_input()
             .is_some_and(|(_, models, _)| {
@@ -55,7 +61,7 @@ impl Estimator {
                         && m.chains[..m.n_chains]
                             .iter()
                             .all(|c| matches!(c.kind, ChainKind::Discrete { .. }))
-                })
+                }) && crate::modal::assembled_dof(models, dim).is_some_and(|n| n <= MAX_RITZ_DOF)
             })
     }
 

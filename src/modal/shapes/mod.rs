@@ -241,6 +241,14 @@ impl ModeShapes {
             return Some(self.mass_overlap_by_pairs(old, ee_mass));
         }
         let len = 6 + 3 * shape.0.iter().sum::<usize>() + shape.1.iter().sum::<usize>();
+        // The product holds both sets again (8 B a value): within its own small cap, else
+        // the pairs (which hold nothing more than the shapes: the memory budget's model).
+        let bytes = len
+            .saturating_mul(self.modes.len() + old.modes.len())
+            .saturating_mul(8);
+        if bytes > OVERLAP_PRODUCT_BYTES {
+            return Some(self.mass_overlap_by_pairs(old, ee_mass));
+        }
         let flat = |m: &ModeShape, times_mass: bool| {
             let mut v = Vec::with_capacity(len);
             let ee = if times_mass { ee_mass * m.ee } else { m.ee };
@@ -311,6 +319,10 @@ impl ModeShapes {
         out
     }
 }
+
+/// Largest copy of two shape sets [`ModeShapes::mass_overlap`] makes for its matrix
+/// product, bytes.
+const OVERLAP_PRODUCT_BYTES: usize = 64 << 20;
 
 /// Row j of 6/m times a chain's consistent mass applied to its nodes `v`: 2v_0 + v_1 at the
 /// first node, v_{j−1} + 4v_j + v_{j+1} inside, v_{L−1} + 2v_L at the last (none for a
