@@ -57,6 +57,7 @@ mod params;
 mod path_field;
 mod pose_model;
 mod reference;
+mod ritz_basis;
 mod sag_check;
 mod t_min;
 
@@ -77,6 +78,7 @@ pub use pose_model::{build_models, PoseModel};
 pub use reference::{
     reference_analysis, reference_analysis_at, structured_analysis, ReferenceAnalysis,
 };
+pub use ritz_basis::{RitzBasis, RITZ_SWEEPS};
 pub use sag_check::{cables_can_sag, sag_warning, sagged_reference, SagWarning};
 pub use t_min::Tmin;
 

@@ -12,7 +12,7 @@ impl EeModalBasis {
     /// The basis of the structured engine's mode shapes (taut or sagging FEM cables) and
     /// the load of the influence field `field` on them (the end-effector's alone when
     /// None); `convective`: a sagging robot's second-derivative fields and their load.
-    fn structured(
+    pub(super) fn structured(
         dim: usize,
         shapes: modal::ModeShapes,
         field: Option<(QuasiStaticLoad, modal::ModeShapes)>,
@@ -148,7 +148,7 @@ impl Estimator {
 }
 
 /// Why a field's products with the shapes failed.
-const NODES_DIFFER: &str = "the influence field's nodes are not the shapes'";
+pub(super) const NODES_DIFFER: &str = "the influence field's nodes are not the shapes'";
 
 /// Bytes of one node's displacement in a mode shape (a `Vector3<f64>`).
 pub const SHAPE_BYTES_PER_NODE: u64 = 24;
@@ -280,6 +280,20 @@ pub struct EeModalBasis {
 }
 
 impl Estimator {
+    /// The end-effector's mass matrix, its DOF and its static flexibility D(0)⁻¹ (the `dim`
+    /// block; NaN when singular) at the last cycle's pose.
+    pub(super) fn ee_mass_flexibility(&self) -> (Matrix6<f64>, usize, Matrix6<f64>) {
+        let (ee_mass, dim) = self.cycle.ee_mass();
+        let s = self.estimate.stiffness.k6;
+        let block = s.view((0, 0), (dim, dim)).into_owned();
+        let mut flexibility = Matrix6::repeat(f64::NAN);
+        if let Some(inv) = block.try_inverse() {
+            flexibility = Matrix6::zeros();
+            flexibility.view_mut((0, 0), (dim, dim)).copy_from(&inv);
+        }
+        (ee_mass, dim, flexibility)
+    }
+
     /// The first `k` modes (a cluster cut by `k` completed) of the pose of the last
     /// successful [`Estimator::update`], end-effector parts of their mass-normalised shapes,
     /// and the static flexibility. Taut cables: the structured engine's eigenvalues
@@ -296,14 +310,7 @@ impl Estimator {
                     .unwrap_or(EstimatorError::Modal(modal::ModalError::NotLoaded)),
             ));
         }
-        let (ee_mass, dim) = self.cycle.ee_mass();
-        let s = self.estimate.stiffness.k6;
-        let block = s.view((0, 0), (dim, dim)).into_owned();
-        let mut flexibility = Matrix6::repeat(f64::NAN);
-        if let Some(inv) = block.try_inverse() {
-            flexibility = Matrix6::zeros();
-            flexibility.view_mut((0, 0), (dim, dim)).copy_from(&inv);
-        }
+        let (ee_mass, dim, flexibility) = self.ee_mass_flexibility();
         let k = k.max(1);
         // The whole shapes (structured engines) or the dense model's n × n matrices: each
         // refused past the one memory budget before it allocates.

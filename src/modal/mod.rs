@@ -87,6 +87,7 @@ mod frf;
 mod mechanism;
 pub mod quasi_static;
 pub mod response;
+pub mod ritz;
 pub mod sagged;
 mod shapes;
 mod solver;

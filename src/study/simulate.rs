@@ -327,6 +327,12 @@ pub struct Accuracy {
     /// The sum of the intervals' predicted errors, relative to the pilot's peak (a bound
     /// when every interval's phase error adds up).
     pub interval_estimate_sum: f64,
+    /// Basis updates made by Rayleigh–Ritz from the previous basis ([`updates`]; the rest
+    /// by the structured shapes).
+    pub ritz_updates: usize,
+    /// The largest relative residual ρ of a mode of those updates
+    /// ([`crate::modal::ritz`]).
+    pub ritz_residual: f64,
 }
 
 /// Residual vibration after one stop.

@@ -19,6 +19,7 @@ mod proptest_model;
 mod pulleys;
 mod realtime_exact;
 mod realtime_vs_dense;
+mod ritz_update;
 mod sag_path_field;
 mod scene_fuzz;
 mod sum_rules;

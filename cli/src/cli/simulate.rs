@@ -341,7 +341,7 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
     for r in &runs {
         let acc = &r.result.accuracy;
         outln!(
-            "{}: accuracy: K = {} ({}; pilot of {} modes), truncation estimate {:.2e} of the peak ({:.5} mm){}; basis updates {} ({}), largest interval estimate {:.2e}, sum {:.2e}",
+            "{}: accuracy: K = {} ({}; pilot of {} modes), truncation estimate {:.2e} of the peak ({:.5} mm){}; basis updates {} ({}; {} by Rayleigh–Ritz, largest residual {:.1e}), largest interval estimate {:.2e}, sum {:.2e}",
             r.shaper.name(),
             r.result.modes,
             if acc.modes_chosen { "chosen" } else { "given" },
@@ -351,6 +351,8 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
             if acc.modes_met { "" } else { " — over the tolerance" },
             r.result.updates,
             if acc.updates_chosen { "chosen" } else { "given" },
+            acc.ritz_updates,
+            acc.ritz_residual,
             acc.interval_estimate,
             acc.interval_estimate_sum
         )?;

@@ -219,6 +219,86 @@ impl ModeShapes {
         if self.dim != old.dim || sizes(self) != sizes(old) {
             return None;
         }
+        // Each shape as one vector (end-effector, every cable's nodes, the hidden cables'),
+        // the old ones times M: the overlaps are one matrix product (the products of the
+        // element forms' sums, in another order).
+        let layout = |m: &ModeShape| {
+            (
+                m.cables.iter().map(Vec::len).collect::<Vec<_>>(),
+                m.hidden.iter().map(Vec::len).collect::<Vec<_>>(),
+            )
+        };
+        let Some(first) = self.modes.first().or(old.modes.first()) else {
+            return Some(Vec::new());
+        };
+        let shape = layout(first);
+        if !self
+            .modes
+            .iter()
+            .chain(&old.modes)
+            .all(|m| layout(m) == shape)
+        {
+            return Some(self.mass_overlap_by_pairs(old, ee_mass));
+        }
+        let len = 6 + 3 * shape.0.iter().sum::<usize>() + shape.1.iter().sum::<usize>();
+        // The product holds both sets again (8 B a value): within its own small cap, else
+        // the pairs (which hold nothing more than the shapes: the memory budget's model).
+        let bytes = len
+            .saturating_mul(self.modes.len() + old.modes.len())
+            .saturating_mul(8);
+        if bytes > OVERLAP_PRODUCT_BYTES {
+            return Some(self.mass_overlap_by_pairs(old, ee_mass));
+        }
+        let flat = |m: &ModeShape, times_mass: bool| {
+            let mut v = Vec::with_capacity(len);
+            let ee = if times_mass { ee_mass * m.ee } else { m.ee };
+            v.extend(ee.iter());
+            for (i, nodes) in m.cables.iter().enumerate() {
+                let mass = self.element_mass_kg.get(i).copied().unwrap_or(0.0) / 6.0;
+                for j in 0..nodes.len() {
+                    let x = if times_mass {
+                        consistent_row(nodes, j, |a, b| a + b, |a, c| a * c) * mass
+                    } else {
+                        nodes[j]
+                    };
+                    v.extend(x.iter());
+                }
+            }
+            for (i, nodes) in m.hidden.iter().enumerate() {
+                let mass = self.hidden_element_mass_kg.get(i).copied().unwrap_or(0.0) / 6.0;
+                for j in 0..nodes.len() {
+                    v.push(if times_mass {
+                        consistent_row(nodes, j, |a, b| a + b, |a, c| a * c) * mass
+                    } else {
+                        nodes[j]
+                    });
+                }
+            }
+            v
+        };
+        let mut a = nalgebra::DMatrix::zeros(len, self.modes.len());
+        for (c, m) in self.modes.iter().enumerate() {
+            a.column_mut(c).copy_from_slice(&flat(m, false));
+        }
+        let mut w = nalgebra::DMatrix::zeros(len, old.modes.len());
+        for (c, m) in old.modes.iter().enumerate() {
+            w.column_mut(c).copy_from_slice(&flat(m, true));
+        }
+        let o = a.transpose() * w;
+        let mut out = Vec::with_capacity(self.modes.len() * old.modes.len());
+        for j in 0..self.modes.len() {
+            out.extend(o.row(j).iter());
+        }
+        Some(out)
+    }
+
+    /// [`Self::mass_overlap`] pair by pair (shapes whose node lists differ from mode to
+    /// mode: a hidden cable's pair of different lengths is left out).
+    fn mass_overlap_by_pairs(
+        &self,
+        old: &ModeShapes,
+        ee_mass: &nalgebra::Matrix6<f64>,
+    ) -> Vec<f64> {
         let mut out = Vec::with_capacity(self.modes.len() * old.modes.len());
         for a in &self.modes {
             for b in &old.modes {
@@ -236,8 +316,35 @@ impl ModeShapes {
                 out.push(s);
             }
         }
-        Some(out)
+        out
     }
+}
+
+/// Largest copy of two shape sets [`ModeShapes::mass_overlap`] makes for its matrix
+/// product, bytes.
+const OVERLAP_PRODUCT_BYTES: usize = 64 << 20;
+
+/// Row j of 6/m times a chain's consistent mass applied to its nodes `v`: 2v_0 + v_1 at the
+/// first node, v_{j−1} + 4v_j + v_{j+1} inside, v_{L−1} + 2v_L at the last (none for a
+/// single node: no element).
+fn consistent_row<T: Copy>(
+    v: &[T],
+    j: usize,
+    add: impl Fn(T, T) -> T,
+    scale: impl Fn(T, f64) -> T,
+) -> T {
+    let n = v.len();
+    if n < 2 {
+        return scale(v[j], 0.0);
+    }
+    let mut x = scale(v[j], if j == 0 || j == n - 1 { 2.0 } else { 4.0 });
+    if j > 0 {
+        x = add(x, v[j - 1]);
+    }
+    if j + 1 < n {
+        x = add(x, v[j + 1]);
+    }
+    x
 }
 
 /// Σ over the elements of a scalar chain of 2a_j b_j + a_j b_{j+1} + a_{j+1} b_j +
@@ -328,5 +435,52 @@ impl ShapeParams {
             return Err(ShapeError::BadParams("max_bisections must be in 1..=10000"));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod overlap_tests {
+    use super::*;
+
+    /// The overlaps as one product equal the element forms summed pair by pair.
+    #[test]
+    fn mass_overlap_product_equals_the_pairs() {
+        let mut seed = 1u64;
+        let mut r = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let mut shapes = |n: usize| ModeShapes {
+            dim: 6,
+            fractions: vec![vec![0.0; 4], vec![0.0; 2], vec![0.0; 1]],
+            modes: (0..n)
+                .map(|_| ModeShape {
+                    lambda: 1.0,
+                    frequency_hz: 0.0,
+                    ee: Vector6::from_fn(|_, _| r()),
+                    cables: [4, 2, 1]
+                        .iter()
+                        .map(|&k| (0..k).map(|_| Vector3::new(r(), r(), r())).collect())
+                        .collect(),
+                    hidden: vec![(0..3).map(|_| r()).collect(), Vec::new(), vec![r()]],
+                    ee_participation: 0.0,
+                    cluster_start: 0,
+                    multiplicity: 1,
+                    null_residual: 0.0,
+                })
+                .collect(),
+            element_mass_kg: vec![0.3, 0.7, 1.1],
+            hidden_element_mass_kg: vec![0.2, 0.0, 0.5],
+        };
+        let (a, b) = (shapes(3), shapes(4));
+        let ee = nalgebra::Matrix6::from_fn(|i, j| if i == j { 2.0 + i as f64 } else { 0.1 });
+        let fast = a.mass_overlap(&b, &ee).unwrap();
+        let pairs = a.mass_overlap_by_pairs(&b, &ee);
+        assert_eq!(fast.len(), 12);
+        for (x, y) in fast.iter().zip(&pairs) {
+            assert!((x - y).abs() <= 1e-14 * (1.0 + y.abs()), "{x} vs {y}");
+        }
     }
 }

@@ -14,11 +14,18 @@
 //! end-effector (through the end-effector's shapes φ and flexibility F) are responses of
 //! their own on the same modes, added ([`super::added_load`]); the caller sees the state at
 //! every sample (`on_sample`).
+//!
+//! Each update's basis is made by Rayleigh–Ritz from the held one where the model has
+//! that update and every kept mode's residual is within
+//! [`updates::RITZ_RESIDUAL_PER_TOLERANCE`] of the tolerance
+//! ([`crate::estimator::RitzBasis`]), else by the structured shapes (with
+//! [`updates::ritz_guard`] guard modes above K for the next update's start block).
 
 use super::added_load::{AddedLoads, SampleState};
 use super::{pilot, solve_pose, updates, Accuracy, SampledPath, SimulateConfig, SimulateResult};
 use crate::estimator::{EeModalBasis, Estimator};
 use crate::modal::response::{ModalResponse, MAX_RESPONSE_MODES};
+use crate::modal::ModeShapes;
 use crate::scene::{Damping, Scene};
 use crate::study::StudyError;
 use nalgebra::{Matrix6, Vector3, Vector6};
@@ -30,23 +37,86 @@ fn basis_at(
     p: &Vector3<f64>,
     t: f64,
     modes: usize,
-) -> Result<EeModalBasis, StudyError> {
-    shapes_at(est, scene, p, t, modes)?.map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
+) -> Result<Update, StudyError> {
+    shapes_at(est, scene, p, t, modes, None, 0.0)?
+        .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
+}
+
+/// A basis update: the basis, the start block of the next Rayleigh–Ritz update (the kept
+/// modes and the guards above them), and the largest residual when Rayleigh–Ritz made it.
+struct Update {
+    basis: EeModalBasis,
+    space: Option<ModeShapes>,
+    ritz_residual: Option<f64>,
 }
 
 /// [`basis_at`] with the shapes' own refusal kept apart (the inner error): a near-cluster
 /// the shape engine cannot resolve at this pose (not the memory budget, not the pose).
+/// From the start block `space` by Rayleigh–Ritz when every kept mode's relative residual
+/// is within `max_residual` ([`updates`]), else the structured shapes of `modes` and
+/// [`updates::ritz_guard`] more (where the model has the Rayleigh–Ritz update).
 fn shapes_at(
     est: &mut Estimator,
     scene: &Scene,
     p: &Vector3<f64>,
     t: f64,
     modes: usize,
-) -> Result<Result<EeModalBasis, crate::estimator::BasisError>, StudyError> {
+    space: Option<&ModeShapes>,
+    max_residual: f64,
+) -> Result<Result<Update, crate::estimator::BasisError>, StudyError> {
     solve_pose(est, scene, p, t)?;
-    match est.ee_modal_basis(modes) {
+    if let Some(start) = space {
+        match est.ee_modal_basis_ritz(start, modes, max_residual) {
+            Ok(Some(r)) => {
+                return Ok(Ok(Update {
+                    basis: r.basis,
+                    space: Some(r.space),
+                    ritz_residual: Some(r.residual),
+                }))
+            }
+            Err(crate::estimator::BasisError::Memory(over)) => return Err(over.into()),
+            // Not met, or not made: the structured shapes.
+            _ => {}
+        }
+    }
+    let guard = if est.ritz_update_applies() {
+        updates::ritz_guard(modes)
+    } else {
+        0
+    };
+    match est.ee_modal_basis(modes + guard) {
         Err(crate::estimator::BasisError::Memory(over)) => Err(over.into()),
-        other => Ok(other),
+        Ok(b) => Ok(Ok(split_guard(b, modes, guard > 0))),
+        Err(e) => Ok(Err(e)),
+    }
+}
+
+/// The first `modes` of `basis` (a cluster cut completed) and, when `keep_space`, its
+/// whole shapes as the next Rayleigh–Ritz start block.
+fn split_guard(mut basis: EeModalBasis, modes: usize, keep_space: bool) -> Update {
+    let q = basis.lambda.len();
+    let mut kept = modes.clamp(1, q.max(1)).min(q);
+    let same = |b: &EeModalBasis, k: usize| match &b.shapes {
+        Some(s) => s.modes[k].cluster_start < k,
+        None => (b.lambda[k] - b.lambda[k - 1]).abs() <= 1e-9 * b.lambda[k],
+    };
+    while kept < q && same(&basis, kept) {
+        kept += 1;
+    }
+    let space = match &basis.shapes {
+        Some(s) if keep_space && kept < q => Some(s.clone()),
+        _ => None,
+    };
+    basis.lambda.truncate(kept);
+    basis.phi_ee.truncate(kept);
+    basis.load_ee.truncate(kept);
+    if let Some(s) = basis.shapes.as_mut() {
+        s.modes.truncate(kept);
+    }
+    Update {
+        basis,
+        space,
+        ritz_residual: None,
     }
 }
 
@@ -225,7 +295,9 @@ pub(super) fn run(
     // The end-effector's mass matrix is the scene's, the same at every pose.
     let loads = Loads {
         path,
-        ee_mass: basis_at(est, scene, &path.positions_m[0], 0.0, 1)?.ee_mass,
+        ee_mass: basis_at(est, scene, &path.positions_m[0], 0.0, 1)?
+            .basis
+            .ee_mass,
         external_n,
     };
     let chosen = choose_modes(est, scene, &loads, cfg)?;
@@ -251,7 +323,10 @@ pub(super) fn run(
         updates_chosen: cfg.update_every.is_none(),
         interval_estimate: 0.0,
         interval_estimate_sum: 0.0,
+        ritz_updates: 0,
+        ritz_residual: 0.0,
     };
+    let max_residual = updates::RITZ_RESIDUAL_PER_TOLERANCE * cfg.tolerance;
     let modes = chosen.modes;
     let peak_m = chosen.peak_m;
     let f1_seen = |est: &Estimator, out: &mut SimulateResult| {
@@ -265,7 +340,9 @@ pub(super) fn run(
     let mut interval = cfg
         .update_every
         .unwrap_or(updates::FIRST_INTERVAL.min(max_interval));
-    let mut held = basis_at(est, scene, &path.positions_m[0], 0.0, modes)?;
+    let first = basis_at(est, scene, &path.positions_m[0], 0.0, modes)?;
+    let mut held = first.basis;
+    let mut space = first.space;
     f1_seen(est, out);
     install(&mut resp, &held, None, &damping, 0.0)?;
     // The convective load and the external force, each on the same modes (`added_load`).
@@ -324,7 +401,7 @@ pub(super) fn run(
             };
             omega0[j] = omega;
         }
-        let (k1, next, overlap, error) = loop {
+        let (k1, next, overlap, error, next_space, ritz_residual) = loop {
             let planned = (k0 + interval).min(n - 1);
             // A pose whose shapes the engine cannot resolve (a near-cluster on a sagging
             // cable) is stepped over: the update moves a sample back or on, a few times at
@@ -347,7 +424,16 @@ pub(super) fn run(
                     );
                 };
                 let t1 = k1 as f64 * path.dt_s;
-                match shapes_at(est, scene, &path.positions_m[k1], t1, modes)? {
+                let start = space.as_ref();
+                match shapes_at(
+                    est,
+                    scene,
+                    &path.positions_m[k1],
+                    t1,
+                    modes,
+                    start,
+                    max_residual,
+                )? {
                     Ok(b) => break (k1, b),
                     Err(e) => {
                         let refusal = StudyError::Build(format!("t = {t1:.4} s: {e}"));
@@ -359,6 +445,11 @@ pub(super) fn run(
                     }
                 }
             };
+            let Update {
+                basis: next,
+                space: next_space,
+                ritz_residual,
+            } = next;
             let overlap = overlap_of(&next, &held);
             updates::followed(
                 &next.lambda,
@@ -394,8 +485,12 @@ pub(super) fn run(
                 interval = updates::shortened(u, error.total_m(), budget);
                 continue;
             }
-            break (k1, next, overlap, error);
+            break (k1, next, overlap, error, next_space, ritz_residual);
         };
+        if let Some(r) = ritz_residual {
+            out.accuracy.ritz_updates += 1;
+            out.accuracy.ritz_residual = out.accuracy.ritz_residual.max(r);
+        }
         f1_seen(est, out);
         let u = k1 - k0;
 
@@ -430,6 +525,7 @@ pub(super) fn run(
         out.accuracy.interval_estimate_sum += rel;
         previous = Some((held.load_flexibility, u));
         held = next;
+        space = next_space;
         k0 = k1;
         if cfg.update_every.is_none() {
             interval = updates::next_interval(u, error.total_m(), budget, max_interval);

@@ -1,0 +1,234 @@
+//! A pose's modal basis by Rayleigh–Ritz from a nearby pose's shapes
+//! ([`crate::modal::ritz`]): the cheap update of a time response along a path, where the
+//! structured shapes ([`Estimator::ee_modal_basis`]) cost a root search and a bordered
+//! solve per mode.
+//!
+//! The start block is the previous basis's whole shapes (K modes and the guard modes above
+//! them) in the dense assembly's DOF order ([`crate::modal::assemble`]: the end-effector,
+//! then each cable's interior nodes from the anchor); the Ritz vectors go back into shapes
+//! on the same nodes (the anchor still, the end node the end-effector's attachment
+//! G_i φ_ee), with the element masses of the new pose. The load of the whole robot's
+//! quasi-static inertia is formed as the structured basis forms it, from the new pose's
+//! influence field. Taut FEM chains without a hidden cable only; elsewhere (sagging
+//! cables, pulleys' hidden cables, continuous cables) there is no update and the caller
+//! takes the structured shapes.
+
+use super::{BasisError, EeModalBasis, Estimator, Status};
+use crate::cable::ChainKind;
+use crate::kinematics::attach_map;
+use crate::modal::quasi_static::QuasiStaticLoad;
+use crate::modal::ritz::{subspace_iteration, RitzParams};
+use crate::modal::{ModeShape, ModeShapes, ShapeParams};
+use nalgebra::{DMatrix, Vector3, Vector6};
+
+/// Largest model the update is made for, DOF: its K and M are assembled densely (n² each,
+/// 2 × 18 MB at the bound) before their envelope is taken; beyond it the structured
+/// shapes, whose cost does not grow with the elements.
+pub const MAX_RITZ_DOF: usize = 1500;
+
+/// Most sweeps of one update (each costs one block solve and a small eigen-solve).
+pub const RITZ_SWEEPS: usize = 3;
+
+/// Relative width within which Ritz values are one cluster (the structured engine's
+/// clusters are exact to rounding; a Ritz pair's λ is within ρ²λ of its limit).
+const CLUSTER_REL: f64 = 1e-9;
+
+/// What [`Estimator::ee_modal_basis_ritz`] made.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RitzBasis {
+    /// The basis of the first K modes (a cluster cut completed), as
+    /// [`Estimator::ee_modal_basis`] gives it.
+    pub basis: EeModalBasis,
+    /// Every Ritz vector (the kept modes and the guards above them): the next update's
+    /// start block.
+    pub space: ModeShapes,
+    /// The largest relative residual ρ of the kept modes ([`crate::modal::ritz`]).
+    pub residual: f64,
+    /// Sweeps made.
+    pub sweeps: usize,
+}
+
+impl Estimator {
+    /// Whether this model has the update of the module docs (taut FEM chains without a
+    /// hidden cable, assembled within [`MAX_RITZ_DOF`] DOF).
+    pub fn ritz_update_applies(&mut self) -> bool {
+        let (_, dim, _) = self.ee_mass_flexibility();
+        self.cycle
+            .taut_shapes_input()
+            .is_some_and(|(_, models, _)| {
+                models.iter().all(|m| {
+                    m.hidden.is_none()
+                        && m.chains[..m.n_chains]
+                            .iter()
+                            .all(|c| matches!(c.kind, ChainKind::Discrete { .. }))
+                }) && crate::modal::assembled_dof(models, dim).is_some_and(|n| n <= MAX_RITZ_DOF)
+            })
+    }
+
+    /// The first `k` modes (a cluster cut completed) at the last cycle's pose by subspace
+    /// iteration from `start` (module docs), accepted when every kept mode's relative
+    /// residual is within `max_residual` after at most [`RITZ_SWEEPS`] sweeps. `Ok(None)`
+    /// where the model has no such update (module docs), `start` is not this model's shapes
+    /// or holds no more than K modes, or the residual is not met.
+    pub fn ee_modal_basis_ritz(
+        &mut self,
+        start: &ModeShapes,
+        k: usize,
+        max_residual: f64,
+    ) -> Result<Option<RitzBasis>, BasisError> {
+        if self.estimate.status != Status::Ok || start.modes.len() <= k {
+            return Ok(None);
+        }
+        let (ee_mass, dim, flexibility) = self.ee_mass_flexibility();
+        if !self.ritz_update_applies() {
+            return Ok(None);
+        }
+        let Some((_, models, geometry)) = self.cycle.taut_shapes_input() else {
+            return Ok(None);
+        };
+        let arms = geometry.arm_m.clone();
+        let nodes: Vec<usize> = models.iter().map(|m| m.n_el + 1).collect();
+        let element_mass_kg: Vec<f64> = models.iter().map(|m| m.element_mass_kg).collect();
+        let same_nodes = start.dim == dim
+            && start.fractions.len() == nodes.len()
+            && start
+                .fractions
+                .iter()
+                .zip(&nodes)
+                .all(|(f, &n)| f.len() == n);
+        if !same_nodes {
+            return Ok(None);
+        }
+        let Ok((kk, mm)) = self.cycle.dense_matrices(&self.scene) else {
+            return Ok(None);
+        };
+        let n = kk.nrows();
+        if n != dim + nodes.iter().map(|&c| 3 * (c - 2)).sum::<usize>() {
+            return Ok(None);
+        }
+        // The start block in the assembly's DOF order.
+        let q = start.modes.len();
+        let mut x = DMatrix::zeros(n, q);
+        for (c, mode) in start.modes.iter().enumerate() {
+            for r in 0..dim {
+                x[(r, c)] = mode.ee[r];
+            }
+            let mut base = dim;
+            for (cable, &count) in mode.cables.iter().zip(&nodes) {
+                for j in 1..count - 1 {
+                    for a in 0..3 {
+                        x[(base + 3 * (j - 1) + a, c)] = cable[j][a];
+                    }
+                }
+                base += 3 * (count - 2);
+            }
+        }
+        // The kept modes: K, completed to the start's cluster end.
+        let mut kept = k.max(1);
+        while kept < q && start.modes[kept].cluster_start < kept {
+            kept += 1;
+        }
+        if kept >= q {
+            return Ok(None);
+        }
+        let params = RitzParams {
+            max_residual,
+            max_sweeps: RITZ_SWEEPS,
+            min_sweeps: 2,
+        };
+        let Ok(ritz) = subspace_iteration(&kk, &mm, dim, x, kept, &params) else {
+            return Ok(None);
+        };
+        let residual = ritz.max_residual();
+        if !(residual <= max_residual) {
+            return Ok(None);
+        }
+        let attach: Vec<_> = (0..nodes.len())
+            .map(|i| match arms.get(i) {
+                Some(arm) if dim == 6 => attach_map(arm),
+                _ => attach_map(&Vector3::zeros()),
+            })
+            .collect();
+        let mut space = ModeShapes {
+            dim,
+            fractions: start.fractions.clone(),
+            modes: Vec::with_capacity(q),
+            element_mass_kg,
+            hidden_element_mass_kg: vec![0.0; nodes.len()],
+        };
+        for c in 0..q {
+            let lambda = ritz.lambda[c];
+            let mut ee = Vector6::zeros();
+            for r in 0..dim {
+                ee[r] = ritz.vectors[(r, c)];
+            }
+            let mut base = dim;
+            let mut cables = Vec::with_capacity(nodes.len());
+            for (i, &count) in nodes.iter().enumerate() {
+                let mut cable = vec![Vector3::zeros(); count];
+                for (j, node) in cable.iter_mut().enumerate().take(count - 1).skip(1) {
+                    let at = base + 3 * (j - 1);
+                    *node = Vector3::new(
+                        ritz.vectors[(at, c)],
+                        ritz.vectors[(at + 1, c)],
+                        ritz.vectors[(at + 2, c)],
+                    );
+                }
+                cable[count - 1] = attach[i] * ee;
+                base += 3 * (count - 2);
+                cables.push(cable);
+            }
+            let cluster_start = match space.modes.last() {
+                Some(prev) if lambda - prev.lambda <= CLUSTER_REL * lambda => prev.cluster_start,
+                _ => c,
+            };
+            space.modes.push(ModeShape {
+                lambda,
+                frequency_hz: crate::modal::lambda_to_hz(lambda),
+                ee,
+                cables,
+                hidden: vec![Vec::new(); nodes.len()],
+                ee_participation: (ee.transpose() * ee_mass * ee)[(0, 0)],
+                cluster_start,
+                multiplicity: 1,
+                null_residual: ritz.residual.get(c).copied().unwrap_or(f64::NAN),
+            });
+        }
+        // Multiplicities from the clusters.
+        for c in 0..q {
+            let s = space.modes[c].cluster_start;
+            let end = (s..q)
+                .find(|&j| j > s && space.modes[j].cluster_start != s)
+                .unwrap_or(q);
+            space.modes[c].multiplicity = (end - s) as u32;
+        }
+        // A cluster the Ritz values join across the start's cut: no update.
+        if space.modes[kept].cluster_start < kept {
+            return Ok(None);
+        }
+        let mut shapes = space.clone();
+        shapes.modes.truncate(kept);
+        let field = self
+            .cycle
+            .taut_shapes_input()
+            .map(|(solver, models, geometry)| {
+                solver.influence_field(models, &geometry.arm_m, &ShapeParams::default())
+            });
+        let load = match field {
+            Some(Ok(field)) => QuasiStaticLoad::from_shapes(&shapes, &field, &ee_mass)
+                .map(|load| (load, field))
+                .ok_or(BasisError::QuasiStatic(super::modes::NODES_DIFFER))?,
+            Some(Err(e)) => return Err(BasisError::Shapes(e)),
+            None => return Ok(None),
+        };
+        // Taut chains only (the cheap update's scope): no convective load, which is a
+        // sagging robot's.
+        let basis = EeModalBasis::structured(dim, shapes, Some(load), None, flexibility, ee_mass)?;
+        Ok(Some(RitzBasis {
+            basis,
+            space,
+            residual,
+            sweeps: ritz.sweeps,
+        }))
+    }
+}
