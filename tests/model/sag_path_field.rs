@@ -25,7 +25,7 @@
 //! entry is checked). The reference response's prescribed motion carries it (the test's
 //! curvature along the straight move times |ṗ|², ṗ by central differences as `simulate`
 //! takes them); the crate's response adds it through its second response
-//! (`study::simulate::convective`), and without it the crate would miss the printed
+//! (`study::simulate::added_load`), and without it the crate would miss the printed
 //! "convective term" share of the peak.
 
 use cablevib::estimator::convective_input;

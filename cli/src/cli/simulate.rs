@@ -341,7 +341,7 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
     for r in &runs {
         let acc = &r.result.accuracy;
         outln!(
-            "{}: accuracy: K = {} ({}; pilot of {} modes), truncation estimate {:.2e} of the peak ({:.5} mm){}; basis updates {} ({}; {} by Rayleigh–Ritz, largest residual {:.1e}), largest interval estimate {:.2e}, sum {:.2e}",
+            "{}: accuracy: K = {} ({}; pilot of {} modes), truncation estimate {:.2e} of the peak ({:.5} mm){}; basis updates {} ({}{}), largest interval estimate {:.2e}, sum {:.2e}",
             r.shaper.name(),
             r.result.modes,
             if acc.modes_chosen { "chosen" } else { "given" },
@@ -351,8 +351,15 @@ pub fn run(a: &SimulateArgs) -> Result<(), CliError> {
             if acc.modes_met { "" } else { " — over the tolerance" },
             r.result.updates,
             if acc.updates_chosen { "chosen" } else { "given" },
-            acc.ritz_updates,
-            acc.ritz_residual,
+            // The residual of Rayleigh–Ritz updates only where there are some.
+            if acc.ritz_updates > 0 {
+                format!(
+                    "; {} by Rayleigh–Ritz, largest residual {:.1e}",
+                    acc.ritz_updates, acc.ritz_residual
+                )
+            } else {
+                "; none by Rayleigh–Ritz".to_string()
+            },
             acc.interval_estimate,
             acc.interval_estimate_sum
         )?;

@@ -15,6 +15,12 @@ pub(super) const CONTINUOUS_MODES: usize = u32::MAX as usize / 2;
 /// Poles memoized per chain beyond the FEM chain's own 3(N − 1): a hidden cable's lowest
 /// ones and the junction's (higher ones are searched each time they are asked for).
 const POLES_PER_SUPPORT: usize = 16;
+/// Poles memoized per chain at most, whatever the mesh: the tracker asks for the poles
+/// near the end-effector's mode, whose number below it is the cable's physics, not its
+/// mesh (higher ones are searched each time they are asked for). Why a cap: 3(N − 1) slots
+/// of 24 bytes per chain are 576 MB at 10⁶ elements on 8 cables, allocated before any
+/// memory budget is checked.
+const POLES_PER_CHAIN_MAX: usize = 256;
 /// |h| must be 1 and h ⟂ up to this (relative): the basis is the caller's, rounding only.
 const BASIS_TOL: f64 = 1e-9;
 
@@ -130,7 +136,10 @@ impl SagChains {
             has_exit: false,
             evaluations: 0,
             loaded: false,
-            poles: SagPoles::new(n_cables, 3 * n_el_max + POLES_PER_SUPPORT),
+            poles: SagPoles::new(
+                n_cables,
+                (3 * n_el_max + POLES_PER_SUPPORT).min(POLES_PER_CHAIN_MAX),
+            ),
             follow: false,
             last_below: vec![0; n_cables],
             last_ds: vec![[0.0; 4]; n_cables],
