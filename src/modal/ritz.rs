@@ -17,6 +17,12 @@
 //! at most ρ / g (Davis–Kahan). The caller accepts the update only when every kept mode has
 //! ρ ≤ [`RitzParams::max_residual`]; otherwise it falls back to the structured shapes.
 //!
+//! Before the first check ([`RitzParams::min_sweeps`]) a sweep only M-normalises the
+//! block's columns: the span after s sweeps is span((K⁻¹M)^s X) whether or not the Ritz
+//! pairs are formed between sweeps, and a start block near the modes keeps its columns far
+//! from parallel over a few sweeps; C = L⁻¹ K_r L⁻ᵀ and the Ritz vectors' coefficients
+//! L⁻ᵀ v are formed by triangular solves.
+//!
 //! **Cost.** K and M of a chain model are block-tridiagonal per cable with an arrowhead on
 //! the end-effector: ordered with the end-effector last their Cholesky factors have the
 //! chains' band and `dim` full rows ([`Envelope`]), O(n) to factor and to solve; a sweep
@@ -47,9 +53,11 @@ pub struct RitzParams {
     pub max_residual: f64,
     /// Most sweeps (1 ..= 8).
     pub max_sweeps: usize,
-    /// Sweeps made before the residuals are checked (≤ `max_sweeps`; the first sweeps
-    /// from a previous pose's shapes cannot meet a small bound and checking costs a solve
-    /// with M per mode).
+    /// The first sweep whose Ritz pairs are formed and checked (≤ `max_sweeps`; the first
+    /// sweeps from a previous pose's shapes cannot meet a small bound). The sweeps before
+    /// it only M-normalise the block's columns: the span after s sweeps is
+    /// span((K⁻¹M)^s X) with or without a Rayleigh–Ritz step between them, so the small
+    /// eigen-solve and the block products are made once, at the check.
     pub min_sweeps: usize,
 }
 
@@ -277,6 +285,7 @@ pub fn subspace_iteration(
         ms.mul(x.column(c).as_slice(), mx.column_mut(c).as_mut_slice());
     }
     let sweeps = params.max_sweeps.clamp(1, 8);
+    let first_check = params.min_sweeps.clamp(1, sweeps);
     for sweep in 1..=sweeps {
         // Y = K⁻¹ M X, and M Y.
         let mut y = mx.clone();
@@ -284,6 +293,24 @@ pub fn subspace_iteration(
         let mut my = DMatrix::zeros(n, q);
         for c in 0..q {
             ms.mul(y.column(c).as_slice(), my.column_mut(c).as_mut_slice());
+        }
+        if sweep < first_check {
+            // Before the first check only the span matters: span((K⁻¹M)^s X) is the same
+            // with or without a Rayleigh–Ritz step between the sweeps, so the columns are
+            // only M-normalised (the start block is near the modes: they stay far from
+            // parallel over the few sweeps before a check).
+            for c in 0..q {
+                let norm = y.column(c).dot(&my.column(c));
+                if !(norm > 0.0 && norm.is_finite()) {
+                    return Err(RitzError::NotPositive("the block's M"));
+                }
+                let scale = 1.0 / norm.sqrt();
+                y.column_mut(c).scale_mut(scale);
+                my.column_mut(c).scale_mut(scale);
+            }
+            out.sweeps = sweep;
+            mx = my;
+            continue;
         }
         // K_r = Yᵀ K Y = Yᵀ M X, M_r = Yᵀ M Y.
         let kr = y.transpose() * &mx;
@@ -293,44 +320,50 @@ pub fn subspace_iteration(
         let chol = mr
             .cholesky()
             .ok_or(RitzError::NotPositive("the block's M"))?;
-        // C = L⁻¹ K_r L⁻ᵀ.
-        let linv = chol
-            .l()
-            .solve_lower_triangular(&DMatrix::identity(q, q))
+        // C = L⁻¹ K_r L⁻ᵀ = L⁻¹ (L⁻¹ K_r)ᵀ (K_r symmetric), by triangular solves.
+        let l = chol.l();
+        let a = l
+            .solve_lower_triangular(&kr)
             .ok_or(RitzError::NotPositive("the block's M"))?;
-        let c = &linv * kr * linv.transpose();
+        let c = l
+            .solve_lower_triangular(&a.transpose())
+            .ok_or(RitzError::NotPositive("the block's M"))?;
         let c = (&c + c.transpose()) * 0.5;
         let eig = SymmetricEigen::new(c);
         let mut idx: Vec<usize> = (0..q).collect();
         idx.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
         let v = DMatrix::from_fn(q, q, |r, c| eig.eigenvectors[(r, idx[c])]);
-        let w = linv.transpose() * v;
+        // W = L⁻ᵀ V.
+        let w = l
+            .transpose()
+            .solve_upper_triangular(&v)
+            .ok_or(RitzError::NotPositive("the block's M"))?;
         out.lambda = idx.iter().map(|&i| eig.eigenvalues[i]).collect();
         out.vectors = &y * &w;
         out.sweeps = sweep;
-        // M Φ = M Y W; K Φ = K Y W = M X W.
-        let mphi = &my * &w;
+        // The checked pairs' residuals: M Φ = M Y W; K Φ = K Y W = M X W.
         out.residual.clear();
-        if sweep >= params.min_sweeps.min(sweeps) {
-            let kphi = &mx * &w;
-            let r0 = DMatrix::from_fn(n, checked, |i, j| {
-                kphi[(i, j)] - out.lambda[j] * mphi[(i, j)]
-            });
-            let mut r = r0.clone();
-            mf.solve_columns(&mut r, &mut block);
-            for j in 0..checked {
-                let lam = out.lambda[j];
-                let norm = r0.column(j).dot(&r.column(j)).max(0.0).sqrt();
-                out.residual
-                    .push(if lam > 0.0 { norm / lam } else { f64::INFINITY });
+        let wc = w.columns(0, checked);
+        let kphi = &mx * wc;
+        let mut r0 = &my * wc;
+        for j in 0..checked {
+            let lam = out.lambda[j];
+            for i in 0..n {
+                r0[(i, j)] = kphi[(i, j)] - lam * r0[(i, j)];
             }
-            if out.max_residual() <= params.max_residual {
-                break;
-            }
-        } else {
-            out.residual.resize(checked, f64::INFINITY);
         }
-        mx = mphi;
+        let mut r = r0.clone();
+        mf.solve_columns(&mut r, &mut block);
+        for j in 0..checked {
+            let lam = out.lambda[j];
+            let norm = r0.column(j).dot(&r.column(j)).max(0.0).sqrt();
+            out.residual
+                .push(if lam > 0.0 { norm / lam } else { f64::INFINITY });
+        }
+        if out.max_residual() <= params.max_residual {
+            break;
+        }
+        mx = &my * &w;
     }
     Ok(out)
 }
