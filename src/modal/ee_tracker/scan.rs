@@ -122,6 +122,13 @@ pub(super) struct ScanState {
     /// The scan sweeps the spectrum by the count (the poles seen through it alone, or a
     /// searched pole interval failed its count check) instead of walking pole intervals.
     by_count: bool,
+    /// A cold scan from zero with no cycle budget where the poles are not in closed form:
+    /// it answers as soon as it finds the answer (exact: every mode below was read) and
+    /// records past it only when the tracker is called again warm (`deferred` then), since
+    /// a study's next point is often cold again (a map's grid) and the recording would be
+    /// lost. Why: past the answer the recording costs as much as finding it did.
+    pub(super) defer: bool,
+    pub(super) deferred: bool,
     /// The sweep skipped a mode it could not isolate within [`STUCK_CYCLES`] cycles: its
     /// answer is not known to be the lowest until the sum rules certify it.
     pub(super) skipped: bool,
@@ -144,6 +151,8 @@ impl ScanState {
             .map_or(if searched { start } else { 0.0 }, |(a, _)| a);
         ScanState {
             by_count: !(p.poles_known() || searched),
+            defer: false,
+            deferred: false,
             a_fixed: a,
             a_key: None,
             next_pole: [1; MAX_CHAINS],
@@ -245,6 +254,15 @@ impl EeTracker {
                 self.scan = Some(st);
                 ScanStep::Paused
             }
+            Some(r) if st.defer && r.is_ok() && st.answer.is_some() => {
+                // Answered; the recording goes on at the next (warm) call, which then
+                // certifies at its pose as a scan found over several cycles.
+                st.defer = false;
+                st.deferred = true;
+                st.resumed = 1;
+                self.scan = Some(st);
+                ScanStep::Done(r)
+            }
             Some(r) => {
                 self.scan = None;
                 self.skipped = st.skipped;
@@ -262,8 +280,11 @@ impl EeTracker {
     ) -> Option<Result<Root, ModalError>> {
         let thr = f.params.ee_participation_min;
         let searched = !f.view.poles_known();
+        // Between searched poles an interval costs several evaluations, not two: as the
+        // sweep, the walk is bounded by its intervals (each by its two evaluations, its
+        // roots' searches and its poles' searches), not by the closed-form scan's total.
         while st.intervals < f.params.max_scan_intervals
-            && st.spent + (f.evaluations() - begin) <= f.params.max_scan_evaluations
+            && (searched || st.spent + (f.evaluations() - begin) <= f.params.max_scan_evaluations)
         {
             let a = st.a(&f.view);
             // A searched pole not found within the cycle's budget: go on next cycle.
@@ -397,6 +418,8 @@ impl EeTracker {
             }
             let had = st.answer.is_some();
             if self.take_root(st, r, thr) {
+                // A deferred recording goes on from the next root.
+                st.branch = branch + 1;
                 return IntervalEnd::Stop;
             }
             if !had && st.answer.is_some() {
@@ -412,7 +435,7 @@ impl EeTracker {
     fn take_root(&mut self, st: &mut ScanState, r: Root, thr: f64) -> bool {
         if st.answer.is_none() && r.ee_participation >= thr {
             st.answer = Some(r);
-            if !self.recording {
+            if !self.recording || st.defer {
                 return true;
             }
         }
@@ -538,6 +561,8 @@ impl EeTracker {
                 st.to_answer = st.spent + (s.problem().evaluations() - begin);
             }
         }
+        // Kept for a deferred recording (it goes on from here).
+        st.modes = s.state();
         if let Some(r) = st.answer {
             return Some(Ok(r));
         }
