@@ -404,7 +404,7 @@ fn ee_answer_age_p99_along_the_suspended_8_circle() {
 ///
 /// Cost: the evaluations of D of the paper robot with sag at N = 40, a cold start at its
 /// home pose (the first root, the poles' searches at one evaluation per n chain
-/// evaluations, the scan to the answer): measured 165; the sweep by the count took 1 394
+/// evaluations, the scan to the answer): measured 155; the sweep by the count took 1 394
 /// (699 to the answer, 28 modes at ~25 evaluations each, then the recording past it).
 /// Bounded by 450 (evaluation counts are deterministic: no timing). The grid's first
 /// suspended-8 pose failed when the walk was held to the closed-form scan's total of 1 500
