@@ -227,6 +227,13 @@ pub trait Condensed: sealed::Sealed {
     fn pole_interval(&self, lambda: f64) -> Option<(f64, f64)>;
     /// Whether [`Self::pole_interval`] knows the poles (else the count alone shows them).
     fn poles_known(&self) -> bool;
+    /// Where the count alone shows the poles to [`Self::pole_interval`]: whether each chain's
+    /// poles can be found one by one ([`Self::next_pole`], [`Self::keyed_pole`]: each by its
+    /// chain's own count, to ~1e-10 relative, within the cycle's budget), so that a scan can
+    /// walk the pole intervals, each checked pole-free by the blocked count at its ends.
+    fn poles_searched(&self) -> bool {
+        false
+    }
     /// The lowest pole of D, rad²/s² (∞: none), when the poles are known.
     fn lowest_pole(&self) -> Option<f64>;
     /// D(0) without a counted evaluation: from the chains' static end stiffness (D'(0) is
@@ -239,7 +246,9 @@ pub trait Condensed: sealed::Sealed {
     /// The next distinct pole above `a` over all chains, advancing each chain's pole cursor
     /// past `a` (and first moving it back to the first pole above `a`: the poles move
     /// between the cycles of a scan), with its identity (chain, number); (∞, 0, 0) where
-    /// the poles are seen only through the count (one interval holds the whole spectrum).
+    /// the poles are seen only through the count (one interval holds the whole spectrum);
+    /// where they are searched ([`Self::poles_searched`]), NaN when the cycle's budget ended
+    /// before it was found.
     fn next_pole(&self, cursor: &mut PoleCursor, a: f64) -> (f64, usize, usize) {
         let _ = (cursor, a);
         (f64::INFINITY, 0, 0)
@@ -352,6 +361,10 @@ impl<C: Condensed> Condensed for &mut C {
     #[inline]
     fn poles_known(&self) -> bool {
         (**self).poles_known()
+    }
+    #[inline]
+    fn poles_searched(&self) -> bool {
+        (**self).poles_searched()
     }
     #[inline]
     fn lowest_pole(&self) -> Option<f64> {

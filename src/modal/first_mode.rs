@@ -163,7 +163,7 @@ impl<P: Condensed> RootFinder<'_, P> {
     /// [`Self::branch_root_with`] on the search `s`, left where it stopped (bracket and
     /// next iterate) when the budget or [`ModalParams::max_evaluations`] (counted over all
     /// the calls on `s`) ends it. Where the problem's poles are seen only through the count
-    /// (`pole_hi` then ∞), an iterate with a pole below it is an upper bound of the root
+    /// (`pole_lo` then 0 and `pole_hi` ∞), an iterate with a pole below it is an upper bound of the root
     /// (the first pole interval's branches only), and a bracket collapsed onto such a pole
     /// is a mode there with the end-effector still (participation 0).
     pub(super) fn branch_root_in(
@@ -175,7 +175,9 @@ impl<P: Condensed> RootFinder<'_, P> {
         fast: bool,
     ) -> Result<Root, ModalError> {
         let start = self.evaluations();
-        let count_only = !self.view.poles_known();
+        // A bracket between two found poles (a scan over searched poles, its interval
+        // checked pole-free by the count) is no first pole interval.
+        let count_only = !self.view.poles_known() && pole_lo == 0.0 && !pole_hi.is_finite();
         let tol = self.params.rel_tol;
         // The one probe next to a bounding pole has been spent.
         let mut probed = false;

@@ -42,10 +42,10 @@ impl EeTracker {
                 self.counts.record(reason);
                 self.start_scan(f, first, reason);
             }
-            let Some((r, resumed, window)) = self.run_scan(f) else {
+            let Some((r, resumed, window, deferred)) = self.run_scan(f) else {
                 return Ok(None);
             };
-            if let Some(out) = self.scan_done(f, r, resumed, window, thr) {
+            if let Some(out) = self.scan_done(f, r, (resumed, window, deferred), thr) {
                 return out;
             }
         }
@@ -53,14 +53,16 @@ impl EeTracker {
     }
 
     /// Continue the scan in progress, recording what it finds; None when the budget ran out
-    /// (it goes on next cycle), else its result, whether it ran over earlier cycles, and
-    /// whether it started from a window.
+    /// (it goes on next cycle), else its result, whether it ran over earlier cycles, whether
+    /// it started from a window, and whether it is the recording of a scan that answered
+    /// at an earlier call (`ScanState::defer`).
     fn run_scan<P: Condensed>(
         &mut self,
         f: &mut RootFinder<'_, P>,
-    ) -> Option<(Result<Root, ModalError>, bool, bool)> {
+    ) -> Option<(Result<Root, ModalError>, bool, bool, bool)> {
         let resumed = self.scan.is_some_and(|s| s.resumed > 0);
         let window = self.scan.is_some_and(|s| s.window);
+        let deferred = self.scan.is_some_and(|s| s.deferred);
         // A sweep that skipped a mode needs the certificate, as a window does.
         self.recording = true;
         let step = self.scan_step(f);
@@ -75,19 +77,19 @@ impl EeTracker {
                 }
                 None
             }
-            ScanStep::Done(r) => Some((r, resumed, window || self.skipped)),
+            ScanStep::Done(r) => Some((r, resumed, window || self.skipped, deferred)),
         }
     }
 
     /// What a finished scan's result `r` comes to: Some(the cycle's outcome), or None for
     /// another phase (certify what a scan found over several cycles; scan from zero after a
-    /// window that did not certify).
+    /// window that did not certify). `how`: whether the scan ran over earlier cycles,
+    /// started from a window, and is a deferred recording (`run_scan`).
     fn scan_done<P: Condensed>(
         &mut self,
         f: &mut RootFinder<'_, P>,
         r: Result<Root, ModalError>,
-        resumed: bool,
-        window: bool,
+        (resumed, window, deferred): (bool, bool, bool),
         thr: f64,
     ) -> Option<Result<Option<Root>, ModalError>> {
         let reached = matches!(r, Ok(ref x) if x.ee_participation >= thr);
@@ -109,9 +111,10 @@ impl EeTracker {
             self.n_members = 0;
             return None;
         }
-        if resumed && reached && f.view.poles_known() {
-            // Found over several cycles: certify at this cycle's pose (a warm cycle of the
-            // watched modes) before anything is reported.
+        if resumed && reached && (f.view.poles_known() || deferred) {
+            // Found over several cycles (or answered at an earlier call, recorded past the
+            // answer now): certify at this cycle's pose (a warm cycle of the watched modes,
+            // else a rescan) before anything is reported.
             return None;
         }
         if let (true, true, Ok(ans)) = (resumed, reached, &r) {
@@ -246,7 +249,11 @@ impl EeTracker {
             if first.ee_participation >= P_ADD {
                 self.watch_first(f, first);
             }
-            self.scan = Some(ScanState::from_zero(&f.view, first.lambda));
+            let mut st = ScanState::from_zero(&f.view, first.lambda);
+            // A cold start with no cycle budget (a study's point): answer first, record
+            // past the answer if the next call is warm.
+            st.defer = reason == RescanReason::Cold && f.budget == u32::MAX;
+            self.scan = Some(st);
         }
     }
 

@@ -1,6 +1,20 @@
 //! The scan over the pole intervals of D in ascending order: every root in each interval,
 //! until one reaches the participation threshold (and, while recording, until the sum-rule
 //! bound is low enough).
+//!
+//! Where the poles are known in closed form (taut chains) the intervals are theirs. Where
+//! each chain's poles are found by its own count (sagged FEM chains,
+//! [`Condensed::poles_searched`]) the scan walks the intervals between the found poles, and
+//! the blocked count at an interval's two evaluation points proves it pole-free (equal at
+//! both); an interval that fails this check, or whose root search fails, hands the scan
+//! over to the sweep of the spectrum by the count from its lower end. Where the count alone
+//! shows the poles (continuous sagged chains) the scan is that sweep from the start.
+//!
+//! Why the searched poles (paper robot with sag, N = 40, a cold start at one pose): the
+//! sweep solves each of the 28 modes below the end-effector mode by bisecting on the count
+//! until its bracket is pole-free, ~25 evaluations a mode (700 to the answer); between
+//! found poles a mode costs its interval's two end evaluations and a few Newton steps, and
+//! a pole a few evaluations of one chain (an eighth of D's on eight cables).
 
 use super::member::Member;
 use super::{EeTracker, MAX_MEMBERS, P_ADD, SCAN_BOUND};
@@ -29,31 +43,66 @@ pub(super) fn inset(w: f64, x: f64) -> f64 {
 }
 
 /// The roots of the pole interval (a, b), evaluated at `lo` (a⁺) and `hi_eval` (b⁻): the
-/// blocked count there and the branches [na, nb) that have a root in it (two evaluations
-/// at most).
+/// blocked count at each end (0 at a = 0; at b = ∞, that at a⁺), the branches [na, nb)
+/// that have a root in it, and D's eigenvalues at each end (NaN where not evaluated; two
+/// evaluations at most).
 fn interval_branches<P: Condensed>(
     f: &mut RootFinder<'_, P>,
     a: f64,
     b: f64,
     lo: f64,
     hi_eval: f64,
-) -> (u32, usize, usize) {
-    let mut below = 0;
+) -> IntervalEnds {
+    let mut below = [0; 2];
+    let mut mu = [[f64::NAN; 6]; 2];
     let na = if a == 0.0 {
         0
     } else {
         let e = f.eval(lo);
-        below = e.below;
-        e.eig().negatives()
+        below[0] = e.below;
+        let eg = e.eig();
+        mu[0] = eg.values;
+        eg.negatives()
     };
+    below[1] = below[0];
     let nb = if b.is_finite() {
         let e = f.eval(hi_eval);
-        below = e.below;
-        e.eig().negatives()
+        below[1] = e.below;
+        let eg = e.eig();
+        mu[1] = eg.values;
+        eg.negatives()
     } else {
         f.view.dim()
     };
-    (below, na, nb)
+    IntervalEnds {
+        below,
+        branches: (na, nb),
+        mu,
+    }
+}
+
+/// What [`interval_branches`] read at the two ends of a pole interval.
+struct IntervalEnds {
+    below: [u32; 2],
+    branches: (usize, usize),
+    mu: [[f64; 6]; 2],
+}
+
+impl IntervalEnds {
+    /// A first iterate for branch k's root in (lo, hi) between the poles pa ≤ lo and
+    /// pb ≥ hi: the zero of the secant of the pole-free function μ_k(λ)(λ − pa)(pb − λ)
+    /// through the two ends (NaN where an end was not evaluated). Why: between searched
+    /// poles Newton from the interval's middle takes ~5 evaluations a root; from the secant
+    /// (the poles removed, nearly linear) one or two fewer.
+    fn secant(&self, k: usize, (lo, hi): (f64, f64), (pa, pb): (f64, f64)) -> f64 {
+        let g = |x: f64, mu: f64| mu * (x - pa) * (pb - x);
+        let (g0, g1) = (g(lo, self.mu[0][k]), g(hi, self.mu[1][k]));
+        if g0 > 0.0 && g1 < 0.0 {
+            lo + (hi - lo) * g0 / (g0 - g1)
+        } else {
+            f64::NAN
+        }
+    }
 }
 
 /// A scan in progress: where it stands, what it found. Plain data (no allocation); a scan
@@ -104,6 +153,16 @@ pub(super) struct ScanState {
     last: f64,
     /// Cycles the sweep's current mode has been cut in by the budget.
     cut_cycles: u32,
+    /// The scan sweeps the spectrum by the count (the poles seen through it alone, or a
+    /// searched pole interval failed its count check) instead of walking pole intervals.
+    by_count: bool,
+    /// A cold scan from zero with no cycle budget where the poles are not in closed form:
+    /// it answers as soon as it finds the answer (exact: every mode below was read) and
+    /// records past it only when the tracker is called again warm (`deferred` then), since
+    /// a study's next point is often cold again (a map's grid) and the recording would be
+    /// lost. Why: past the answer the recording costs as much as finding it did.
+    pub(super) defer: bool,
+    pub(super) deferred: bool,
     /// The sweep skipped a mode it could not isolate within [`STUCK_CYCLES`] cycles: its
     /// answer is not known to be the lowest until the sum rules certify it.
     pub(super) skipped: bool,
@@ -119,8 +178,15 @@ impl ScanState {
         limit: f64,
         window: bool,
     ) -> Self {
-        let a = p.pole_interval(start).map_or(0.0, |(a, _)| a);
+        let searched = !p.poles_known() && p.poles_searched();
+        // Searched poles: the first interval is (start, the next pole above it).
+        let a = p
+            .pole_interval(start)
+            .map_or(if searched { start } else { 0.0 }, |(a, _)| a);
         ScanState {
+            by_count: !(p.poles_known() || searched),
+            defer: false,
+            deferred: false,
             a_fixed: a,
             a_key: None,
             next_pole: [1; MAX_CHAINS],
@@ -150,6 +216,18 @@ impl ScanState {
     /// A scan from zero, skipping the known first root at `first` (rad²/s²).
     pub(super) fn from_zero<P: Condensed>(p: &P, first: f64) -> Self {
         Self::new(p, 0.0, first, f64::INFINITY, false)
+    }
+
+    /// Past the answer, recording where the poles are not in closed form (`now`: the
+    /// evaluations of this cycle's share so far): the recording stops once it has cost what
+    /// finding the answer did (a mode costs tens of evaluations in the sweep, several
+    /// between searched poles, not two as between closed-form poles) and has reached
+    /// `record_to`.
+    fn past_answer(&self, now: u32) -> bool {
+        let spent = self.spent + now;
+        self.answer.is_some()
+            && spent - self.to_answer > self.to_answer
+            && self.last >= self.record_to
     }
 
     /// The lower end of the current interval on the loaded problem, rad²/s².
@@ -184,23 +262,40 @@ impl EeTracker {
             return ScanStep::Done(Err(ModalError::NoEeMode(0)));
         };
         let begin = f.evaluations();
-        // Where the poles are known the scan walks the pole intervals (two evaluations and
-        // one Newton search per root); where the count alone shows them, it sweeps the
-        // spectrum mode by mode.
-        let done = if f.view.poles_known() {
-            self.scan_intervals(f, &mut st, begin)
-        } else {
+        if st.spent == 0 && !f.view.poles_known() && f.budget != u32::MAX {
+            // Within a cycle's budget the sweep: the poles a walk needs are searched again
+            // at each cycle's load, by single-chain evaluations that cost more than their
+            // share of a lockstep evaluation of D.
+            st.by_count = true;
+        }
+        // Where the poles are known or searched the scan walks the pole intervals (two
+        // evaluations and one Newton search per root); where the count alone shows them
+        // (or a searched interval failed its count check), it sweeps the spectrum mode by
+        // mode.
+        let mut done = None;
+        if !st.by_count {
+            done = self.scan_intervals(f, &mut st, begin);
+        }
+        if st.by_count && done.is_none() && !f.exhausted() {
             // The sweep sees the count alone (its brackets by the count, as its docs say).
             f.view.follow_poles(None);
-            let d = self.scan_modes(f, &mut st, begin);
+            done = self.scan_modes(f, &mut st, begin);
             f.view.follow_poles(Some(f.left()));
-            d
-        };
+        }
         st.spent = st.spent.saturating_add(f.evaluations() - begin);
         match done {
             None => {
                 self.scan = Some(st);
                 ScanStep::Paused
+            }
+            Some(r) if st.defer && r.is_ok() && st.answer.is_some() => {
+                // Answered; the recording goes on at the next (warm) call, which then
+                // certifies at its pose as a scan found over several cycles.
+                st.defer = false;
+                st.deferred = true;
+                st.resumed = 1;
+                self.scan = Some(st);
+                ScanStep::Done(r)
             }
             Some(r) => {
                 self.scan = None;
@@ -218,18 +313,38 @@ impl EeTracker {
         begin: u32,
     ) -> Option<Result<Root, ModalError>> {
         let thr = f.params.ee_participation_min;
+        let searched = !f.view.poles_known();
+        // Between searched poles an interval costs several evaluations, not two: as the
+        // sweep, the walk is bounded by its intervals (each by its two evaluations, its
+        // roots' searches and its poles' searches), not by the closed-form scan's total.
         while st.intervals < f.params.max_scan_intervals
-            && st.spent + (f.evaluations() - begin) <= f.params.max_scan_evaluations
+            && (searched || st.spent + (f.evaluations() - begin) <= f.params.max_scan_evaluations)
         {
             let a = st.a(&f.view);
+            // A searched pole not found within the cycle's budget: go on next cycle.
+            if a.is_nan() {
+                return None;
+            }
             let (b, bc, bj) = f.view.next_pole(&mut st.next_pole, a);
+            if b.is_nan() {
+                return None;
+            }
             if a > st.limit {
                 break;
             }
-            match self.scan_interval(f, st, a, b, thr) {
+            if searched && st.past_answer(f.evaluations() - begin) {
+                break;
+            }
+            match self.scan_interval(f, st, (a, b), thr, begin) {
                 IntervalEnd::Paused => return None,
                 IntervalEnd::Stop => break,
                 IntervalEnd::Failed(e) => return Some(Err(e)),
+                IntervalEnd::Sweep => {
+                    // Sweep on by the count from this interval's lower end.
+                    st.by_count = true;
+                    st.start = a;
+                    return None;
+                }
                 IntervalEnd::Next => {}
             }
             if !b.is_finite() {
@@ -250,15 +365,17 @@ impl EeTracker {
                 .ok_or(ModalError::NoEeMode(f.params.max_scan_intervals)),
         )
     }
-    /// The roots of one pole interval (a, b) from branch `st.branch` on.
+    /// The roots of one pole interval (a, b) from branch `st.branch` on (`begin`: the
+    /// evaluation counter where this cycle's share of the scan began).
     fn scan_interval<P: Condensed>(
         &mut self,
         f: &mut RootFinder<'_, P>,
         st: &mut ScanState,
-        a: f64,
-        b: f64,
+        (a, b): (f64, f64),
         thr: f64,
+        begin: u32,
     ) -> IntervalEnd {
+        let searched = !f.view.poles_known();
         // Evaluation points just inside (a, b): never past the middle of a narrow interval
         // (nearly coincident poles of different chains).
         let lo = if a == 0.0 { 0.0 } else { a + inset(b - a, a) };
@@ -274,17 +391,33 @@ impl EeTracker {
             return IntervalEnd::Paused;
         }
         // Blocked count of the interval (index of its lowest root).
-        let (below, na, nb) = interval_branches(f, a, b, lo, hi_eval);
+        let ends = interval_branches(f, a, b, lo, hi_eval);
+        let (belows, (na, nb)) = (ends.below, ends.branches);
+        let below = belows[1];
+        if searched && belows[0] != belows[1] {
+            // A pole inside: the searched poles missed one (or one moved past its end).
+            return IntervalEnd::Sweep;
+        }
         for branch in na.max(st.branch)..nb {
             let resumed = branch == st.branch && st.guess > lo && st.guess < hi_eval;
+            let secant = if searched && !resumed {
+                ends.secant(branch, (lo, hi_eval), (a, b))
+            } else {
+                f64::NAN
+            };
             let guess = if resumed {
                 st.guess
+            } else if secant > lo && secant < hi_eval {
+                secant
             } else if hi_eval.is_finite() {
                 0.5 * (lo + hi_eval)
             } else {
                 2.0 * lo.max(st.skip_to).max(1.0)
             };
-            let r = f.branch_root_with(branch, lo, hi_eval, 0.0, b, guess, true);
+            // Between searched poles (known to ~1e-10) both are removed from Newton's
+            // function; the closed-form scan removes the one above (bit for bit as before).
+            let pa = if searched { a } else { 0.0 };
+            let r = f.branch_root_with(branch, lo, hi_eval, pa, b, guess, true);
             if f.exhausted() {
                 if let Err(ModalError::NoConvergence { lo: l, hi: h, .. }) = r {
                     st.branch = branch;
@@ -301,23 +434,38 @@ impl EeTracker {
                 Ok(r) => r,
                 // Collecting past the answer: keep what was found.
                 Err(_) if st.answer.is_some() => return IntervalEnd::Stop,
+                Err(_) if searched => return IntervalEnd::Sweep,
                 Err(e) => return IntervalEnd::Failed(e),
             };
             if r.lambda <= st.skip_to * (1.0 + SKIP_TOL) {
                 continue;
             }
+            st.last = r.lambda;
             if self.recording && r.ee_participation >= P_ADD {
+                // Searched poles: watched as the sweep watches its modes (by index; the
+                // warm cycles see no pole intervals).
+                let (br, ma, mb) = if searched {
+                    (0, 0.0, f64::INFINITY)
+                } else {
+                    (branch, a, b)
+                };
                 self.insert_member(Member::new(
                     r.lambda,
                     r.ee_participation,
                     below + branch as u32,
-                    branch,
-                    a,
-                    b,
+                    br,
+                    ma,
+                    mb,
                 ));
             }
+            let had = st.answer.is_some();
             if self.take_root(st, r, thr) {
+                // A deferred recording goes on from the next root.
+                st.branch = branch + 1;
                 return IntervalEnd::Stop;
+            }
+            if !had && st.answer.is_some() {
+                st.to_answer = st.spent + (f.evaluations() - begin);
             }
         }
         IntervalEnd::Next
@@ -329,7 +477,7 @@ impl EeTracker {
     fn take_root(&mut self, st: &mut ScanState, r: Root, thr: f64) -> bool {
         if st.answer.is_none() && r.ee_participation >= thr {
             st.answer = Some(r);
-            if !self.recording {
+            if !self.recording || st.defer {
                 return true;
             }
         }
@@ -386,12 +534,7 @@ impl EeTracker {
         }
         let total = s.problem().total_modes();
         while st.next < total && (st.intervals as usize) < max_modes {
-            let spent = st.spent + (s.problem().evaluations() - begin);
-            if st.answer.is_some() && spent - st.to_answer > st.to_answer && st.last >= st.record_to
-            {
-                // Past the answer a mode costs tens of evaluations here, not two as between
-                // known poles: the recording stops once it has cost what finding the answer
-                // did.
+            if st.past_answer(s.problem().evaluations() - begin) {
                 break;
             }
             let i = st.next;
@@ -460,6 +603,8 @@ impl EeTracker {
                 st.to_answer = st.spent + (s.problem().evaluations() - begin);
             }
         }
+        // Kept for a deferred recording (it goes on from here).
+        st.modes = s.state();
         if let Some(r) = st.answer {
             return Some(Ok(r));
         }
@@ -477,4 +622,7 @@ enum IntervalEnd {
     Paused,
     /// A root search failed before any answer.
     Failed(ModalError),
+    /// Searched poles: the interval failed its count check (or its root search failed);
+    /// the scan sweeps on by the count from its lower end.
+    Sweep,
 }

@@ -4,7 +4,9 @@
 //! with their matrix forms.
 
 use super::problem::SagChains;
-use crate::modal::engine::{sealed, Condensed, Coupling, DynEval, SumMatrices, SumRules};
+use crate::modal::engine::{
+    sealed, Condensed, Coupling, DynEval, PoleCursor, SumMatrices, SumRules,
+};
 use nalgebra::{Matrix6, Vector6};
 use num_complex::Complex64;
 
@@ -67,6 +69,15 @@ impl Condensed for SagChains {
     #[inline]
     fn last_pole_interval(&self) -> Option<(f64, f64)> {
         None
+    }
+    /// While the end-effector tracker runs, on FEM chains: each chain's poles by its own
+    /// count (`pole_view`).
+    #[inline]
+    fn poles_searched(&self) -> bool {
+        self.poles_shown()
+    }
+    fn next_pole(&self, cursor: &mut PoleCursor, a: f64) -> (f64, usize, usize) {
+        self.chain_next_pole(cursor, a)
     }
     fn keyed_pole(&self, c: usize, j: usize) -> Option<f64> {
         (self.poles_shown() && c < self.n).then(|| self.chain_pole(c, j, f64::NAN))

@@ -3,7 +3,7 @@
 //! from [`SagPoles`](super::poles::SagPoles), found by its chain's own count.
 
 use super::problem::SagChains;
-use crate::modal::engine::{nearest_keyed_pole, quad, Coupling};
+use crate::modal::engine::{nearest_keyed_pole, quad, Coupling, PoleCursor};
 use nalgebra::{Matrix6, Vector6};
 
 /// A pole a mode couples to is searched again once its last search is more than this many
@@ -18,6 +18,11 @@ use nalgebra::{Matrix6, Vector6};
 /// nearer one: p99 14. Every 8 loads: p99 0 there, the other circles within ±1 cycle of the
 /// count-only tracker's ages.
 const REFRESH_LOADS: u32 = 8;
+/// Poles of different chains closer than this (relative) are one pole of a scan over the
+/// pole intervals. Why: each pole is found to 1e-10 (relative, `poles::POLE_BRACKET`), so
+/// two equal poles (mirror-image cables) may come out that far apart; the scan evaluates
+/// D 1e-9 (relative) inside each interval (`ee_tracker::scan`), past every pole merged.
+const SCAN_POLE_MERGE: f64 = 5e-10;
 
 /// The chains' poles as the searches see them (`condensed`: while `follow` is set).
 impl SagChains {
@@ -39,6 +44,46 @@ impl SagChains {
             .get(i, j, chain.blocked_modes(), near, allowance, |x| {
                 chain.eval(x)
             })
+    }
+
+    /// The next distinct pole above `a` over all chains (the scan over the pole intervals,
+    /// [`Condensed::next_pole`](crate::modal::Condensed::next_pole)): each chain's cursor
+    /// moved to its first pole above `a` (back first: the poles move between the cycles of
+    /// a scan), poles of different chains within [`SCAN_POLE_MERGE`] (relative) of each
+    /// other taken as one. (NaN, chain, number) when the cycle's budget ends before a pole
+    /// it needs is found (the cursors then stand where they got).
+    pub(super) fn chain_next_pole(&self, cursor: &mut PoleCursor, a: f64) -> (f64, usize, usize) {
+        if !self.poles_shown() {
+            return (f64::INFINITY, 0, 0);
+        }
+        let top = a * (1.0 + SCAN_POLE_MERGE);
+        let mut b = (f64::INFINITY, 0, 0);
+        for (i, next) in cursor.iter_mut().enumerate().take(self.n) {
+            let mut j = (*next).max(1);
+            while j > 1 {
+                let p = self.chain_pole(i, j - 1, a);
+                if p.is_nan() {
+                    return (f64::NAN, i, j - 1);
+                }
+                if p <= top {
+                    break;
+                }
+                j -= 1;
+            }
+            let mut pole = self.chain_pole(i, j, a);
+            while pole <= top {
+                j += 1;
+                pole = self.chain_pole(i, j, a);
+            }
+            *next = j;
+            if pole.is_nan() {
+                return (f64::NAN, i, j);
+            }
+            if pole < b.0 {
+                b = (pole, i, j);
+            }
+        }
+        b
     }
 
     /// Chain evaluations left before the cycle's budget ends (`u32::MAX`: unlimited).
