@@ -266,9 +266,6 @@ impl CableSide for SagModel {
     /// ([`SagContinuousParams`]) holds its accuracy only up to the cables' first few
     /// half-waves, and the end-effector mode of a sagging robot lies above tens of them.
     fn ee_mode(&mut self, r1: &Root, warm: bool) -> Result<Option<(f64, f64)>, ModalError> {
-        if self.modal.is_continuous() {
-            return Ok(Some((f64::NAN, f64::NAN)));
-        }
         Ok(self
             .modal
             .ee_mode_tracked(r1, warm)?
