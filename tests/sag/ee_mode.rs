@@ -11,9 +11,8 @@
 //! absolute: a ratio of mode-shape norms, which both solvers read to ~(λ error)·(its
 //! conditioning); measured at most 8e-10.
 //!
-//! Continuous cables have no dense reference (no finite assembly) and the sagged
-//! continuous mesh rule holds 1e-9 only up to a few half-waves per cable, below these
-//! end-effector modes: the estimator reports their end-effector mode as unknown (NaN).
+//! Continuous cables have no dense reference (no finite assembly): their end-effector mode
+//! is held against the extrapolated FEM in ee_mode_continuous.rs.
 use cablevib::alloc_count::thread_allocations;
 use cablevib::estimator::{Estimator, Tmin};
 use cablevib::modal::{hz_to_lambda, Mode, CYCLE_EVALUATIONS};

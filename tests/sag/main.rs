@@ -9,6 +9,7 @@ cablevib_testkit::count_allocations!();
 
 mod continuous;
 mod ee_mode;
+mod ee_mode_continuous;
 mod fem_alloc;
 mod fem_dense;
 mod fem_physics;
