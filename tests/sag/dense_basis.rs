@@ -6,7 +6,8 @@
 //! suspended-8 with sag, fem × 10 (219 DOF), at its centre and off-centre poses: the first
 //! K_s modes the structured basis holds (a basis small enough that the dense solve does not
 //! pay, so it is the structured engine's) against the first K_s of the dense 147-mode
-//! basis (the K `simulate` chooses on its S-curve).
+//! basis (the K `simulate` chooses on its S-curve). Measured (K_s = 40): λ within 5.3e-10,
+//! the sums within 1.6e-9, M-orthonormal within 7.3e-15, the span within 4.4e-15.
 
 use cablevib::estimator::{dense_sag_pays, EeModalBasis, Estimator, Tmin};
 use cablevib::kinematics::Pose;
@@ -51,6 +52,7 @@ fn check_pose(p: Vector3<f64>) {
     assert_eq!(d.lambda.len(), 147, "147 ends a separated cluster");
     // Eigenvalues: the dense solve's absolute error is ~ε λ_max (λ_max/λ_1 ≈ 1e7 here):
     // 1e-8 relative on the lowest.
+    let mut worst_lambda = 0.0f64;
     for j in 0..ks {
         let r = (d.lambda[j] - s.lambda[j]).abs() / s.lambda[j];
         assert!(
@@ -59,6 +61,7 @@ fn check_pose(p: Vector3<f64>) {
             d.lambda[j],
             s.lambda[j]
         );
+        worst_lambda = worst_lambda.max(r);
     }
     // The end-effector's modal flexibility, the whole robot's load (load shapes) and the
     // convective load of the first K_s modes: the same sums (the shapes' accuracy is
@@ -83,9 +86,11 @@ fn check_pose(p: Vector3<f64>) {
             modal_sum(&s, phi, chi, ks),
         ),
     ];
+    let mut worst_sum = 0.0f64;
     for (what, dense, structured) in &sums {
         let r = rel(dense, structured);
         assert!(r <= 1e-6, "{p:?} {what}: {r:.2e}");
+        worst_sum = worst_sum.max(r);
     }
     // The quasi-static parts are the pose's, not the modes': identical fields.
     assert!(rel(&d.load_flexibility, &s.load_flexibility) <= 1e-12);
@@ -105,13 +110,19 @@ fn check_pose(p: Vector3<f64>) {
         "{p:?}: dense shapes' mass overlap off the identity by {off:.2e}"
     );
     let cross = ds.mass_overlap(ss, &d.ee_mass).unwrap();
+    let mut worst_span = 0.0f64;
     for j in 0..ks {
         let norm2: f64 = (0..q).map(|i| cross[i * ks + j].powi(2)).sum();
         assert!(
             (norm2 - 1.0).abs() <= 1e-8,
             "{p:?}: structured shape {j} in the dense span by {norm2}"
         );
+        worst_span = worst_span.max((norm2 - 1.0).abs());
     }
+    eprintln!(
+        "{p:?}: K_s = {ks}: λ {worst_lambda:.1e}, sums {worst_sum:.1e}, \
+         M-orthonormal {off:.1e}, span {worst_span:.1e}"
+    );
 }
 
 #[test]
