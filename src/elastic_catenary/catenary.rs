@@ -51,29 +51,40 @@ fn log1p_ratio(u: f64) -> f64 {
 /// The catenary part of x between the anchor and s (x minus the elastic H s/EA), m:
 /// (H/w)[asinh(V/H) − asinh(V_a/H)] without cancellation. `ta`, `t` are T(0), T(s).
 fn x_catenary(h: f64, va: f64, v: f64, ta: f64, t: f64, w: f64, s: f64) -> f64 {
-    if h == 0.0 {
-        // Vertical cable: no horizontal extent (the H → 0 limit of every branch).
-        return 0.0;
-    }
-    if va < 0.0 && v > 0.0 {
-        // Low point inside: two positive asinh terms, and w s > |V_a| + V > 0.
-        return (h / w) * ((v / h).asinh() + (-va / h).asinh());
-    }
-    let q = branch_q(va, v, ta, t);
-    h * s * q * log1p_ratio(w * s * q)
+    x_catenary_parts(h, va, v, ta, t, w, s)[0]
 }
 
-/// [asinh(V_e/H) − asinh(V_a/H)]/w over the whole cable, m/N (x_catenary/H; finite at
-/// H = 0 unless the low point is inside, where it is +∞).
-pub(super) fn x_catenary_over_h(c: &Catenary) -> f64 {
-    let (h, va, w, s) = (c.h_n, c.v_anchor_n, c.w_n_m, c.l0_m);
-    let v = c.v_end_n();
-    let (ta, t) = (super::hypot_fast(h, va), super::hypot_fast(h, v));
+/// The catenary part of x between the anchor and s (as [`x_catenary`], m) and the same
+/// divided by H, [asinh(V/H) − asinh(V_a/H)]/w, m/N (finite at H = 0 unless the low point
+/// is inside, where it is +∞), from one logarithm (or one pair of asinh). `ta`, `t` are
+/// T(0), T(s).
+fn x_catenary_parts(h: f64, va: f64, v: f64, ta: f64, t: f64, w: f64, s: f64) -> [f64; 2] {
     if va < 0.0 && v > 0.0 {
-        return ((v / h).asinh() + (-va / h).asinh()) / w;
+        // Low point inside: two positive asinh terms, and w s > |V_a| + V > 0.
+        let sum = (v / h).asinh() + (-va / h).asinh();
+        // Vertical cable: no horizontal extent (the H → 0 limit of every branch).
+        let x = if h == 0.0 { 0.0 } else { (h / w) * sum };
+        return [x, sum / w];
     }
     let q = branch_q(va, v, ta, t);
-    s * q * log1p_ratio(w * s * q)
+    let ratio = log1p_ratio(w * s * q);
+    let x = if h == 0.0 { 0.0 } else { h * s * q * ratio };
+    [x, s * q * ratio]
+}
+
+/// The end point (x, z), m, the anchor and end tensions T_a, T_e, N, and
+/// [asinh(V_e/H) − asinh(V_a/H)]/w, m/N, of catenary `c`, sharing the tensions and the
+/// logarithm: bit for bit [`Catenary::end_point_m`], [`Catenary::tension_anchor_n`],
+/// [`Catenary::tension_end_n`] and the x-part over H of the flexibility.
+pub(super) fn end_parts(c: &Catenary) -> ([f64; 2], [f64; 2], f64) {
+    let (h, va, w, s) = (c.h_n, c.v_anchor_n, c.w_n_m, c.l0_m);
+    let v = c.v_at_n(s);
+    let ta = super::hypot_fast(h, va);
+    let t = super::hypot_fast(h, v);
+    let [xc, over_h] = x_catenary_parts(h, va, v, ta, t, w, s);
+    let x = h * s / c.ea_n + xc;
+    let z = 0.5 * s * (va + v) / c.ea_n + z_catenary(va, v, ta, t, s);
+    ([x, z], [ta, t], over_h)
 }
 
 /// q of the module docs for like-signed V_a, V (x_catenary = H s q log1p(w s q)/(w s q)).

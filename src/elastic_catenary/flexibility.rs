@@ -18,15 +18,27 @@
 //! few ulps of L0/T, which matters only beside L0/EA when the cable is nearly horizontal
 //! and EA/T ≳ 1e8 (relative error ~ ε EA/T in ∂X/∂H).
 
-use super::catenary::x_catenary_over_h;
+use super::catenary::end_parts;
 use super::Catenary;
+
+/// What a Newton step on a catenary's end point needs, from one evaluation of its closed
+/// forms ([`Catenary::end_state`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EndState {
+    /// The end point (x, z), m ([`Catenary::end_point_m`]).
+    pub point_m: [f64; 2],
+    /// The flexibility ∂(X, Z)/∂(H, V_e) as [xx, xz, zz], m/N ([`Catenary::flexibility_m_n`]).
+    pub flexibility_m_n: [f64; 3],
+    /// ∂(X, Z)/∂L0 ([`Catenary::end_point_dl0`]).
+    pub dl0: [f64; 2],
+}
 
 impl Catenary {
     /// D = [V_e/T_e − V_a/T_a]/w, m/N (see the file docs); L0 H²/T³ in the limit w → 0.
-    fn d_term(&self) -> f64 {
+    /// `ta`, `te`: the end tensions T_a, T_e, N.
+    fn d_term(&self, ta: f64, te: f64) -> f64 {
         let (h, w, l0) = (self.h_n, self.w_n_m, self.l0_m);
         let (va, ve) = (self.v_anchor_n, self.v_end_n());
-        let (ta, te) = (self.tension_anchor_n(), self.tension_end_n());
         if va < 0.0 && ve > 0.0 {
             return (ve * ta - va * te) / (w * ta * te);
         }
@@ -41,20 +53,34 @@ impl Catenary {
     /// The end point's flexibility ∂(X, Z)/∂(H, V_e) at fixed L0 as [xx, xz, zz], m/N
     /// (symmetric). Infinite or NaN entries when an end tension is 0 (a slack end).
     pub fn flexibility_m_n(&self) -> [f64; 3] {
-        let (h, l0, ea) = (self.h_n, self.l0_m, self.ea_n);
-        let (ta, te) = (self.tension_anchor_n(), self.tension_end_n());
-        let a = x_catenary_over_h(self);
-        let d = self.d_term();
-        let xz = -h * l0 * (self.v_anchor_n + self.v_end_n()) / (ta * te * (ta + te));
-        [l0 / ea + (a - d), xz, l0 / ea + d]
+        self.end_state().flexibility_m_n
     }
 
     /// ∂(X, Z)/∂L0 at fixed end force, dimensionless: the stretched anchor tangent
     /// (1 + T_a/EA)(H, V_a)/T_a.
     pub fn end_point_dl0(&self) -> [f64; 2] {
-        let ta = self.tension_anchor_n();
+        self.dl0_at(self.tension_anchor_n())
+    }
+
+    /// [`Self::end_point_dl0`] with the anchor tension `ta`, N.
+    fn dl0_at(&self, ta: f64) -> [f64; 2] {
         let k = (1.0 + ta / self.ea_n) / ta;
         [k * self.h_n, k * self.v_anchor_n]
+    }
+
+    /// The end point, its flexibility and its derivative along L0 together: each bit for
+    /// bit its own method's, at the cost of one end point (the tensions and the logarithm
+    /// of the x-form are shared; a Newton step on the end point needs all three).
+    pub fn end_state(&self) -> EndState {
+        let (h, l0, ea) = (self.h_n, self.l0_m, self.ea_n);
+        let (point_m, [ta, te], a) = end_parts(self);
+        let d = self.d_term(ta, te);
+        let xz = -h * l0 * (self.v_anchor_n + self.v_end_n()) / (ta * te * (ta + te));
+        EndState {
+            point_m,
+            flexibility_m_n: [l0 / ea + (a - d), xz, l0 / ea + d],
+            dl0: self.dl0_at(ta),
+        }
     }
 
     /// The cable's static stiffness at its end, K = F⁻¹ as [xx, xz, zz], N/m, in (h, up)
@@ -81,18 +107,22 @@ mod tests {
         }
     }
 
+    /// (H, V_a, w) of catenaries with the low point before, inside and after the cable, a
+    /// nearly weightless one and a very slack one (`cat`'s L0 and EA).
+    const BRANCHES: [(f64, f64, f64); 5] = [
+        (40.0, 10.0, 20.0),
+        (40.0, -30.0, 20.0),
+        (40.0, -90.0, 20.0),
+        (40.0, 25.0, 1e-6),
+        (3.0, -200.0, 50.0),
+    ];
+
     /// Central differences of the closed-form end point (step 1e-4 of the force, error
     /// O(h²) ≈ 1e-8 relative plus rounding ε X/h ≈ 1e-11) agree with the analytic
     /// flexibility and length derivative to 1e-7 relative, on every branch.
     #[test]
     fn flexibility_equals_finite_differences() {
-        for &(h, va, w) in &[
-            (40.0, 10.0, 20.0),
-            (40.0, -30.0, 20.0),
-            (40.0, -90.0, 20.0),
-            (40.0, 25.0, 1e-6),
-            (3.0, -200.0, 50.0),
-        ] {
+        for &(h, va, w) in &BRANCHES {
             let c = cat(h, va, w);
             let f = c.flexibility_m_n();
             let scale = f[0].abs().max(f[2].abs());
@@ -132,6 +162,24 @@ mod tests {
                     "dl0 {j}: {g:?}"
                 );
             }
+        }
+    }
+
+    /// The shared evaluation of a Newton step is bit for bit the separate closed forms on
+    /// every branch (low point before, inside, after; weightless; vertical, H = 0): the end
+    /// point against the point at s = L0 (its own code path), ∂/∂L0 against its formula
+    /// from the anchor tension, and the flexibility against the finite differences above.
+    #[test]
+    fn end_state_is_the_separate_forms_bit_for_bit() {
+        let more = [(40.0, 25.0, 0.0), (0.0, 25.0, 20.0), (0.0, -80.0, 20.0)];
+        for &(h, va, w) in BRANCHES.iter().chain(&more) {
+            let c = cat(h, va, w);
+            let e = c.end_state();
+            assert_eq!(e.point_m, c.point_at_m(c.l0_m), "{h} {va} {w}");
+            let ta = c.tension_anchor_n();
+            let k = (1.0 + ta / c.ea_n) / ta;
+            assert_eq!(e.dl0, [k * h, k * va], "{h} {va} {w}");
+            assert_eq!(e.flexibility_m_n, c.flexibility_m_n());
         }
     }
 

@@ -68,6 +68,7 @@ mod solve;
 
 pub use catenary::Catenary;
 pub use elements::CatenaryElements;
+pub use flexibility::EndState;
 
 /// √(a² + b²) by one square root where a² + b² neither overflows nor leaves the normal
 /// range (every force and length of a cable), else the library's `hypot`: within ~1 ulp

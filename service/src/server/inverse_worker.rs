@@ -84,6 +84,9 @@ struct Mailbox {
     jobs: [Option<InverseJob>; SLOTS],
     /// Each slot's last finished answer.
     answers: [Option<InverseAnswer>; SLOTS],
+    /// Searches finished since the worker started (the fairness test counts turns by it,
+    /// not by wall time).
+    searches: u64,
 }
 
 /// The worker thread and its mailbox.
@@ -138,6 +141,12 @@ impl InverseWorker {
             }
         }
         self.answers.get(slot).copied().flatten()
+    }
+
+    /// Searches the worker has finished (waits for the mailbox: tests only).
+    #[cfg(test)]
+    pub fn searches_done(&self) -> u64 {
+        self.mailbox.lock().map(|m| m.searches).unwrap_or(0)
     }
 
     /// Forget slot `slot`'s job and answer (its client is gone; a new one takes the slot).
@@ -198,6 +207,7 @@ fn worker_loop(est: &mut Estimator, mailbox: &Mutex<Mailbox>, stop: &AtomicBool)
                 cycle: j.cycle,
                 t_min_n: t,
             });
+            m.searches += 1;
         }
         std::thread::sleep((worked * REST_PER_WORK).min(MAX_REST));
     }

@@ -177,10 +177,11 @@ impl CableChord {
     fn eval(&self, t: f64, phi: f64, l0: f64) -> Eval {
         let (h, ve) = (t * phi.cos().max(0.0), t * phi.sin());
         let cat = self.catenary(h, ve, l0);
-        let p = cat.end_point_m();
+        let end = cat.end_state();
+        let p = end.point_m;
         let r = [p[0] - self.span_m, p[1] - self.rise_m];
-        let [fxx, fxz, fzz] = cat.flexibility_m_n();
-        let dl = cat.end_point_dl0();
+        let [fxx, fxz, fzz] = end.flexibility_m_n;
+        let dl = end.dl0;
         let j = [[-fxx * ve + fxz * h, dl[0]], [-fxz * ve + fzz * h, dl[1]]];
         let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
         let res = r[0].abs().max(r[1].abs());
