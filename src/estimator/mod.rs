@@ -48,6 +48,8 @@
 //! [`resolve_auto`] picks the model of `element = "auto"` scenes. Both allocate.
 
 mod auto;
+mod dense_sag_basis;
+mod dof_shapes;
 mod error;
 mod estimate;
 mod forward;
@@ -62,6 +64,7 @@ mod sag_check;
 mod t_min;
 
 pub use auto::{resolve_auto, AutoChoice};
+pub use dense_sag_basis::{dense_sag_pays, DENSE_DOF3_PER_MODE, MAX_DENSE_SAG_DOF};
 pub use error::{BuildError, EstimatorError, ReferenceError, RejectedInput, TminQueryError};
 pub use estimate::{EeMode, Estimate, Status, Stiffness};
 pub use forward::{EndEffector, BEHIND_EXIT_COMPLIANCE_FLOOR};

@@ -240,10 +240,12 @@ pub struct EeModalBasis {
     /// The end-effector's own mass matrix (kg, kg·m²).
     pub ee_mass: Matrix6<f64>,
     /// Whether the shapes came from the structured engine (taut or sagging FEM cables) or
-    /// the dense model.
+    /// a dense solve (the dense model; sagging FEM chains where K is a large share of the
+    /// DOF, `dense_sag_basis`).
     pub structured: bool,
-    /// The whole shapes (every cable's nodes) when they came from the structured engine:
-    /// what carries a time response's state across poses
+    /// The whole shapes (every cable's nodes) when they came from the structured engine,
+    /// a Rayleigh–Ritz update or the dense solve of sagging FEM chains: what carries a
+    /// time response's state across poses
     /// ([`modal::ModeShapes::mass_overlap`]).
     pub shapes: Option<modal::ModeShapes>,
     /// The influence field the load was formed with, in the shapes' node lists (one entry
@@ -300,7 +302,8 @@ impl Estimator {
     /// ([`crate::modal::ModalSolver::modes`]) and shapes
     /// ([`crate::modal::ModalSolver::mode_shapes`]); sagging cables (FEM chains): the
     /// sagged engine's clusters and shapes
-    /// ([`crate::modal::SagModalSolver::mode_shapes`]); otherwise the dense model.
+    /// ([`crate::modal::SagModalSolver::mode_shapes`]), or one dense solve of their model
+    /// where K is a large share of its DOF ([`dense_sag_pays`](super::dense_sag_pays)); otherwise the dense model.
     /// Offline: allocates.
     pub fn ee_modal_basis(&mut self, k: usize) -> Result<EeModalBasis, BasisError> {
         if self.estimate.status != Status::Ok {
@@ -344,15 +347,24 @@ impl Estimator {
             let field = Some((load, field));
             return EeModalBasis::structured(dim, shapes, field, None, flexibility, ee_mass);
         }
+        // Sagged FEM chains: one dense solve where it is cheaper than the structured
+        // shapes (`dense_sag_basis`).
+        let dense = self.sag_dense_shapes(k)?;
         if let Some((solver, h, up, geometry)) = self.cycle.sag_shapes_input() {
             if !solver.is_continuous() {
                 let params = ShapeParams::default();
-                let clusters = solver
-                    .eigen_clusters(k, &params)
-                    .map_err(BasisError::Shapes)?;
-                let shapes = solver
-                    .mode_shapes(&h, &up, &geometry.arm_m, &clusters, &params)
-                    .map_err(BasisError::Shapes)?;
+                let structured = dense.is_none();
+                let shapes = match dense {
+                    Some(shapes) => shapes,
+                    None => {
+                        let clusters = solver
+                            .eigen_clusters(k, &params)
+                            .map_err(BasisError::Shapes)?;
+                        solver
+                            .mode_shapes(&h, &up, &geometry.arm_m, &clusters, &params)
+                            .map_err(BasisError::Shapes)?
+                    }
+                };
                 let fixed = solver
                     .influence_field(&h, &up, &geometry.arm_m, &params)
                     .map_err(BasisError::Shapes)?;
@@ -374,14 +386,10 @@ impl Estimator {
                     ),
                     None => (None, None),
                 };
-                return EeModalBasis::structured(
-                    dim,
-                    shapes,
-                    field,
-                    convective,
-                    flexibility,
-                    ee_mass,
-                );
+                let mut basis =
+                    EeModalBasis::structured(dim, shapes, field, convective, flexibility, ee_mass)?;
+                basis.structured = structured;
+                return Ok(basis);
             }
         }
         let (kk, mm) = self.dense_matrices()?;
@@ -409,7 +417,38 @@ impl Estimator {
     }
 }
 
-/// The lowest `k` eigenpairs of K u = λ M u (dense), the first `dim` entries of each
+/// Every eigenpair of K u = λ M u (dense; [`modal::standard_form`]): the eigenvalues
+/// ascending and the mass-normalised eigenvectors on demand.
+pub(super) struct DenseSolve {
+    /// Every λ, ascending, rad²/s².
+    pub(super) lambda: Vec<f64>,
+    form: modal::standard_form::StandardForm,
+    /// The eigenvectors of the standard form, in the order of `lambda`.
+    y: DMatrix<f64>,
+}
+
+impl DenseSolve {
+    /// Solve the pencil (K, M).
+    pub(super) fn new(k: &DMatrix<f64>, m: &DMatrix<f64>) -> Result<DenseSolve, EstimatorError> {
+        let form = modal::standard_form::StandardForm::new(k, m)?;
+        let eig = nalgebra::SymmetricEigen::new(form.c.clone());
+        let mut idx: Vec<usize> = (0..eig.eigenvalues.len()).collect();
+        idx.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+        Ok(DenseSolve {
+            lambda: idx.iter().map(|&i| eig.eigenvalues[i]).collect(),
+            form,
+            y: eig.eigenvectors.select_columns(&idx),
+        })
+    }
+
+    /// The first `count` mass-normalised eigenvectors u (columns).
+    pub(super) fn vectors(&self, count: usize) -> DMatrix<f64> {
+        let count = count.min(self.lambda.len());
+        self.form.vectors(&self.y.columns(0, count).into_owned())
+    }
+}
+
+/// The lowest `count` eigenpairs of K u = λ M u (dense), the first `dim` entries of each
 /// mass-normalised u, and the u (columns).
 #[allow(clippy::type_complexity)]
 fn dense_ee_shapes(
@@ -418,31 +457,17 @@ fn dense_ee_shapes(
     dim: usize,
     count: usize,
 ) -> Result<(Vec<f64>, Vec<Vector6<f64>>, DMatrix<f64>), EstimatorError> {
-    let not_definite = EstimatorError::Modal(modal::ModalError::MassNotDefinite);
-    let chol = m.clone().cholesky().ok_or(not_definite)?;
-    let l = chol.l();
-    let linv_k = l.solve_lower_triangular(k).ok_or(not_definite)?;
-    let c = l
-        .solve_lower_triangular(&linv_k.transpose())
-        .ok_or(not_definite)?;
-    let c = (&c + c.transpose()) * 0.5;
-    let eig = nalgebra::SymmetricEigen::new(c);
-    let mut idx: Vec<usize> = (0..eig.eigenvalues.len()).collect();
-    idx.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
-    let u = l
-        .transpose()
-        .solve_upper_triangular(&eig.eigenvectors)
-        .ok_or(not_definite)?;
-    let mut lambda = Vec::new();
-    let mut phi = Vec::new();
-    let kept: Vec<usize> = idx.iter().copied().take(count).collect();
-    for &i in &kept {
-        lambda.push(eig.eigenvalues[i]);
-        let mut p = Vector6::zeros();
-        for r in 0..dim {
-            p[r] = u[(r, i)];
-        }
-        phi.push(p);
-    }
-    Ok((lambda, phi, u.select_columns(&kept)))
+    let solve = DenseSolve::new(k, m)?;
+    let u = solve.vectors(count);
+    let lambda = solve.lambda[..u.ncols()].to_vec();
+    let phi = (0..u.ncols())
+        .map(|c| {
+            let mut p = Vector6::zeros();
+            for r in 0..dim {
+                p[r] = u[(r, c)];
+            }
+            p
+        })
+        .collect();
+    Ok((lambda, phi, u))
 }

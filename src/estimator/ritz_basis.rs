@@ -13,13 +13,13 @@
 //! cables, pulleys' hidden cables, continuous cables) there is no update and the caller
 //! takes the structured shapes.
 
+use super::dof_shapes::DofLayout;
 use super::{BasisError, EeModalBasis, Estimator, Status};
 use crate::cable::ChainKind;
-use crate::kinematics::attach_map;
 use crate::modal::quasi_static::QuasiStaticLoad;
 use crate::modal::ritz::{subspace_iteration, RitzParams};
-use crate::modal::{ModeShape, ModeShapes, ShapeParams};
-use nalgebra::{DMatrix, Vector3, Vector6};
+use crate::modal::{ModeShapes, ShapeParams};
+use nalgebra::DMatrix;
 
 /// Largest model the update is made for, DOF: its K and M are assembled densely (n² each,
 /// 2 × 18 MB at the bound) before their envelope is taken; beyond it the structured
@@ -28,10 +28,6 @@ pub const MAX_RITZ_DOF: usize = 1500;
 
 /// Most sweeps of one update (each costs one block solve and a small eigen-solve).
 pub const RITZ_SWEEPS: usize = 3;
-
-/// Relative width within which Ritz values are one cluster (the structured engine's
-/// clusters are exact to rounding; a Ritz pair's λ is within ρ²λ of its limit).
-const CLUSTER_REL: f64 = 1e-9;
 
 /// What [`Estimator::ee_modal_basis_ritz`] made.
 #[derive(Debug, Clone, PartialEq)]
@@ -143,65 +139,19 @@ impl Estimator {
         if !(residual <= max_residual) {
             return Ok(None);
         }
-        let attach: Vec<_> = (0..nodes.len())
-            .map(|i| match arms.get(i) {
-                Some(arm) if dim == 6 => attach_map(arm),
-                _ => attach_map(&Vector3::zeros()),
-            })
-            .collect();
-        let mut space = ModeShapes {
+        let layout = DofLayout {
             dim,
-            fractions: start.fractions.clone(),
-            modes: Vec::with_capacity(q),
-            element_mass_kg,
-            hidden_element_mass_kg: vec![0.0; nodes.len()],
+            fractions: &start.fractions,
+            element_mass_kg: &element_mass_kg,
+            arm_m: &arms,
         };
-        for c in 0..q {
-            let lambda = ritz.lambda[c];
-            let mut ee = Vector6::zeros();
-            for r in 0..dim {
-                ee[r] = ritz.vectors[(r, c)];
-            }
-            let mut base = dim;
-            let mut cables = Vec::with_capacity(nodes.len());
-            for (i, &count) in nodes.iter().enumerate() {
-                let mut cable = vec![Vector3::zeros(); count];
-                for (j, node) in cable.iter_mut().enumerate().take(count - 1).skip(1) {
-                    let at = base + 3 * (j - 1);
-                    *node = Vector3::new(
-                        ritz.vectors[(at, c)],
-                        ritz.vectors[(at + 1, c)],
-                        ritz.vectors[(at + 2, c)],
-                    );
-                }
-                cable[count - 1] = attach[i] * ee;
-                base += 3 * (count - 2);
-                cables.push(cable);
-            }
-            let cluster_start = match space.modes.last() {
-                Some(prev) if lambda - prev.lambda <= CLUSTER_REL * lambda => prev.cluster_start,
-                _ => c,
-            };
-            space.modes.push(ModeShape {
-                lambda,
-                frequency_hz: crate::modal::lambda_to_hz(lambda),
-                ee,
-                cables,
-                hidden: vec![Vec::new(); nodes.len()],
-                ee_participation: (ee.transpose() * ee_mass * ee)[(0, 0)],
-                cluster_start,
-                multiplicity: 1,
-                null_residual: ritz.residual.get(c).copied().unwrap_or(f64::NAN),
-            });
-        }
-        // Multiplicities from the clusters.
-        for c in 0..q {
-            let s = space.modes[c].cluster_start;
-            let end = (s..q)
-                .find(|&j| j > s && space.modes[j].cluster_start != s)
-                .unwrap_or(q);
-            space.modes[c].multiplicity = (end - s) as u32;
-        }
+        let space = layout.shapes(
+            &ritz.lambda[..q],
+            &ritz.vectors,
+            &ritz.residual,
+            &ee_mass,
+            0.0,
+        );
         // A cluster the Ritz values join across the start's cut: no update.
         if space.modes[kept].cluster_start < kept {
             return Ok(None);

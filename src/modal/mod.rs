@@ -92,6 +92,7 @@ pub mod sagged;
 mod shapes;
 mod solver;
 mod spectrum;
+pub mod standard_form;
 
 pub use dense::{
     assemble, assemble_rigid, assembled_dof, check_dense_budget, condense_static,

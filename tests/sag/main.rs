@@ -8,6 +8,7 @@
 cablevib_testkit::count_allocations!();
 
 mod continuous;
+mod dense_basis;
 mod ee_mode;
 mod ee_mode_continuous;
 mod fem_alloc;
