@@ -15,7 +15,7 @@
 //! search the cycle's budget cut ([`Pending`]), continued by the next call.
 
 use super::engine::{
-    pole_free, quad, Condensed, DynEval, BRACKET_GROWTH, BRACKET_MIN, COLLAPSE_ULPS,
+    pole_free, quad, Condensed, DynEval, EigD, BRACKET_GROWTH, BRACKET_MIN, COLLAPSE_ULPS,
 };
 use super::{ModalError, ModalParams, Root};
 use nalgebra::{Matrix6, Vector6};
@@ -157,7 +157,23 @@ impl<P: Condensed> RootFinder<'_, P> {
         fast: bool,
     ) -> Result<Root, ModalError> {
         let mut s = Bracket::from_guess(lo, hi, guess);
-        self.branch_root_in(branch, &mut s, pole_lo, pole_hi, fast)
+        self.branch_root_in(branch, &mut s, pole_lo, pole_hi, fast, None)
+    }
+
+    /// [`Self::branch_root_with`] (`fast`) between two poles a count showed
+    /// (`pole_lo` = 0 or `pole_hi` = ∞: that pole is not removed from Newton's function;
+    /// the bracket is never a count-only first interval), which also accepts a weak root
+    /// early: `weak` = (s, p_max), see [`weak_root`].
+    pub(super) fn branch_root_between(
+        &mut self,
+        branch: usize,
+        (lo, hi): (f64, f64),
+        (pole_lo, pole_hi): (f64, f64),
+        guess: f64,
+        weak: (f64, f64),
+    ) -> Result<Root, ModalError> {
+        let mut s = Bracket::from_guess(lo, hi, guess);
+        self.branch_root_in(branch, &mut s, pole_lo, pole_hi, true, Some(weak))
     }
 
     /// [`Self::branch_root_with`] on the search `s`, left where it stopped (bracket and
@@ -173,11 +189,15 @@ impl<P: Condensed> RootFinder<'_, P> {
         pole_lo: f64,
         pole_hi: f64,
         fast: bool,
+        weak: Option<(f64, f64)>,
     ) -> Result<Root, ModalError> {
         let start = self.evaluations();
+        let (lo0, hi0) = (s.lo, s.hi);
         // A bracket between two found poles (a scan over searched poles, its interval
         // checked pole-free by the count) is no first pole interval.
-        let count_only = !self.view.poles_known() && pole_lo == 0.0 && !pole_hi.is_finite();
+        // `weak`: the bracket lies between two poles a count showed.
+        let count_only =
+            weak.is_none() && !self.view.poles_known() && pole_lo == 0.0 && !pole_hi.is_finite();
         let tol = self.params.rel_tol;
         // The one probe next to a bounding pole has been spent.
         let mut probed = false;
@@ -237,6 +257,20 @@ impl<P: Condensed> RootFinder<'_, P> {
             };
             let done =
                 mu == 0.0 || collapsed || (xn.is_finite() && step <= accept.max(tol) * x.abs());
+            if let (false, Some((ws, p_max))) = (done, weak) {
+                let inside = xn > lo && xn < hi;
+                if inside && weak_root(&e, &eg, branch, (x, xn), (lo0, hi0), ws) {
+                    let p = self.participation(&e.dd, &v);
+                    if p <= p_max {
+                        return Ok(Root {
+                            lambda: xn,
+                            ee_participation: p,
+                            evaluations: self.evaluations() - start,
+                            residual: relative_residual(mu, x, &e.dd),
+                        });
+                    }
+                }
+            }
             if done {
                 let lambda = if mu == 0.0 || !(xn > lo && xn < hi) && collapsed {
                     x
@@ -341,7 +375,7 @@ impl<P: Condensed> RootFinder<'_, P> {
             };
             (Bracket::from_guess(0.0, hi, guess), warm.is_some())
         };
-        let r = self.branch_root_in(0, &mut s, 0.0, lp, fast);
+        let r = self.branch_root_in(0, &mut s, 0.0, lp, fast, None);
         if let Err(ModalError::NoConvergence { .. }) = r {
             if self.exhausted() && s.spent < self.params.max_evaluations {
                 state.pending = Some(self.pending(s, fast));
@@ -435,4 +469,36 @@ impl Bracket {
             spent: 0,
         }
     }
+}
+
+/// Whether the Newton update `xn` from the iterate `x` (evaluated: `e`, its eigen-pairs
+/// `eg`) of branch k in the interval (lo0, hi0) may be taken as that branch's root without
+/// another evaluation (a weak root, [`RootFinder::branch_root_between`]): the step, of the
+/// pole-free function and of μ_k itself, is below `ws` (relative), far from the interval's
+/// ends (≤ a tenth of the way to either: D' changes little over it), and no other
+/// eigenvalue of D can meet μ_k within the step (their gap exceeds twice the change their
+/// slopes allow: the sorted branch k stays the same eigenvalue to its root).
+fn weak_root(
+    e: &DynEval,
+    eg: &EigD,
+    k: usize,
+    (x, xn): (f64, f64),
+    (lo0, hi0): (f64, f64),
+    ws: f64,
+) -> bool {
+    let step = (xn - x).abs();
+    let mu = eg.values[k];
+    let dmu = quad(&e.dd, &eg.vectors[k], e.dim);
+    let raw = (mu / dmu).abs();
+    if !(step <= ws * x.abs() && raw <= ws * x.abs()) {
+        return false;
+    }
+    if !(step <= 0.1 * (x - lo0) && step <= 0.1 * (hi0 - x)) {
+        return false;
+    }
+    let reach = step.max(raw);
+    (0..eg.n).filter(|&j| j != k).all(|j| {
+        let dj = quad(&e.dd, &eg.vectors[j], e.dim);
+        (eg.values[j] - mu).abs() > 2.0 * (dj.abs() + dmu.abs()) * reach
+    })
 }

@@ -17,8 +17,8 @@
 //! a pole a few evaluations of one chain (an eighth of D's on eight cables).
 
 use super::member::Member;
-use super::{EeTracker, MAX_MEMBERS, P_ADD, SCAN_BOUND};
-use crate::modal::engine::{Condensed, PoleCursor, MAX_CHAINS};
+use super::{EeTracker, CHEAP_ACCEPT, MAX_MEMBERS, P_ADD, P_MARGIN, SCAN_BOUND};
+use crate::modal::engine::{quad, Condensed, DynEval, EigD, PoleCursor, MAX_CHAINS};
 use crate::modal::first_mode::RootFinder;
 use crate::modal::spectrum::{SpectrumSearch, SweepState};
 use crate::modal::{ModalError, Root, SpectrumParams};
@@ -35,6 +35,9 @@ pub(super) const WINDOW_EDGE: f64 = 1e-12;
 const INSET_REL: f64 = 1e-9;
 /// ... but never past this fraction of a narrow interval.
 const INSET_MAX_FRACTION: f64 = 0.25;
+/// An eigenvalue of D at δ from a pole with |μ'| δ ≥ this share of |μ| is the pole's
+/// (`blowing_up`; ≈ 1 for the pole's, ~δ/width ≪ 1 for the others).
+const BLOW_UP_SHARE: f64 = 0.5;
 
 /// Evaluation point inset from a pole at x into an interval of width w: never past a
 /// quarter of a narrow interval (nearly coincident poles of different chains).
@@ -55,6 +58,7 @@ fn interval_branches<P: Condensed>(
 ) -> IntervalEnds {
     let mut below = [0; 2];
     let mut mu = [[f64::NAN; 6]; 2];
+    let mut blows = [[false; 6]; 2];
     let na = if a == 0.0 {
         0
     } else {
@@ -62,6 +66,7 @@ fn interval_branches<P: Condensed>(
         below[0] = e.below;
         let eg = e.eig();
         mu[0] = eg.values;
+        blows[0] = blowing_up(&e, &eg, lo - a);
         eg.negatives()
     };
     below[1] = below[0];
@@ -70,6 +75,7 @@ fn interval_branches<P: Condensed>(
         below[1] = e.below;
         let eg = e.eig();
         mu[1] = eg.values;
+        blows[1] = blowing_up(&e, &eg, b - hi_eval);
         eg.negatives()
     } else {
         f.view.dim()
@@ -78,7 +84,20 @@ fn interval_branches<P: Condensed>(
         below,
         branches: (na, nb),
         mu,
+        blows,
     }
+}
+
+/// Which of D's eigenvalues μ_k at a point `delta` from a pole are that pole's (blow up
+/// there): μ_k ≈ ρ/δ has |μ_k'| δ ≈ |μ_k|, where an eigenvalue that stays finite has
+/// |μ_k'| δ ≪ |μ_k| (δ is 1e-9 of the pole, or a quarter of a narrow interval).
+fn blowing_up(e: &DynEval, eg: &EigD, delta: f64) -> [bool; 6] {
+    let mut out = [false; 6];
+    for (k, o) in out.iter_mut().enumerate().take(eg.n) {
+        let dmu = quad(&e.dd, &eg.vectors[k], e.dim);
+        *o = dmu.abs() * delta >= BLOW_UP_SHARE * eg.values[k].abs();
+    }
+    out
 }
 
 /// What [`interval_branches`] read at the two ends of a pole interval.
@@ -86,6 +105,8 @@ struct IntervalEnds {
     below: [u32; 2],
     branches: (usize, usize),
     mu: [[f64; 6]; 2],
+    /// Which eigenvalues blow up at each end's pole ([`blowing_up`]).
+    blows: [[bool; 6]; 2],
 }
 
 impl IntervalEnds {
@@ -95,7 +116,15 @@ impl IntervalEnds {
     /// poles Newton from the interval's middle takes ~5 evaluations a root; from the secant
     /// (the poles removed, nearly linear) one or two fewer.
     fn secant(&self, k: usize, (lo, hi): (f64, f64), (pa, pb): (f64, f64)) -> f64 {
-        let g = |x: f64, mu: f64| mu * (x - pa) * (pb - x);
+        // Only the poles branch k has: a branch that stays finite at an end (the eigenvalue
+        // blowing up there is another one) times the distance to that end's pole would be
+        // ~1e-9 of its size there, and the secant's zero would sit at that end.
+        let (ba, bb) = (self.blows[0][k], self.blows[1][k]);
+        let g = |x: f64, mu: f64| {
+            let fa = if ba { x - pa } else { 1.0 };
+            let fb = if bb { pb - x } else { 1.0 };
+            mu * fa * fb
+        };
         let (g0, g1) = (g(lo, self.mu[0][k]), g(hi, self.mu[1][k]));
         if g0 > 0.0 && g1 < 0.0 {
             lo + (hi - lo) * g0 / (g0 - g1)
@@ -414,10 +443,26 @@ impl EeTracker {
             } else {
                 2.0 * lo.max(st.skip_to).max(1.0)
             };
-            // Between searched poles (known to ~1e-10) both are removed from Newton's
-            // function; the closed-form scan removes the one above (bit for bit as before).
-            let pa = if searched { a } else { 0.0 };
-            let r = f.branch_root_with(branch, lo, hi_eval, pa, b, guess, true);
+            // The closed-form scan removes the pole above from Newton's function.
+            let r = if searched {
+                // Newton removes only the poles this branch blows up at (a factor (λ − a)
+                // on a branch finite at a would put a false zero at a).
+                let pa = if ends.blows[0][branch] { a } else { 0.0 };
+                let pb = if ends.blows[1][branch] {
+                    b
+                } else {
+                    f64::INFINITY
+                };
+                // A root whose participation is clearly below the threshold is read once
+                // its Newton step is below CHEAP_ACCEPT, where no other branch can cross it
+                // (`first_mode::weak_root`): its participation is then within ~1e-5·|dp/d
+                // ln λ| ≲ 2e-4 of the root's, far inside P_MARGIN. The answer, and a root
+                // near the threshold, are solved to full accuracy.
+                let weak = (CHEAP_ACCEPT, thr - P_MARGIN);
+                f.branch_root_between(branch, (lo, hi_eval), (pa, pb), guess, weak)
+            } else {
+                f.branch_root_with(branch, lo, hi_eval, 0.0, b, guess, true)
+            };
             if f.exhausted() {
                 if let Err(ModalError::NoConvergence { lo: l, hi: h, .. }) = r {
                     st.branch = branch;

@@ -80,7 +80,7 @@ impl Condensed for SagChains {
         self.chain_next_pole(cursor, a)
     }
     fn keyed_pole(&self, c: usize, j: usize) -> Option<f64> {
-        (self.poles_shown() && c < self.n).then(|| self.chain_pole(c, j, f64::NAN))
+        (self.poles_shown() && c < self.n).then(|| self.chain_pole(c, j, f64::NAN, false))
     }
     fn coupling(&self, x: f64, dd: &Matrix6<f64>, v: &Vector6<f64>, share_min: f64) -> Coupling {
         if self.poles_shown() {

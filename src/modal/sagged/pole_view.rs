@@ -37,11 +37,12 @@ impl SagChains {
     /// a search never done before starts at `near` (rad²/s², NaN: none), a λ next to it
     /// (where the chain's count was j or j − 1).
     /// NaN when the cycle's budget (`Condensed::follow_poles`) ends before it is found.
-    pub(super) fn chain_pole(&self, i: usize, j: usize, near: f64) -> f64 {
+    /// `scaled`: the last load's value scaled by pole j − 1's move since (`SagPoles::get`).
+    pub(super) fn chain_pole(&self, i: usize, j: usize, near: f64, scaled: bool) -> f64 {
         let chain = &self.chains[i];
         let allowance = self.pole_allowance();
         self.poles
-            .get(i, j, chain.blocked_modes(), near, allowance, |x| {
+            .get(i, j, chain.blocked_modes(), near, allowance, scaled, |x| {
                 chain.eval(x)
             })
     }
@@ -61,7 +62,7 @@ impl SagChains {
         for (i, next) in cursor.iter_mut().enumerate().take(self.n) {
             let mut j = (*next).max(1);
             while j > 1 {
-                let p = self.chain_pole(i, j - 1, a);
+                let p = self.chain_pole(i, j - 1, a, true);
                 if p.is_nan() {
                     return (f64::NAN, i, j - 1);
                 }
@@ -70,10 +71,10 @@ impl SagChains {
                 }
                 j -= 1;
             }
-            let mut pole = self.chain_pole(i, j, a);
+            let mut pole = self.chain_pole(i, j, a, true);
             while pole <= top {
                 j += 1;
-                pole = self.chain_pole(i, j, a);
+                pole = self.chain_pole(i, j, a, true);
             }
             *next = j;
             if pole.is_nan() {
@@ -150,7 +151,7 @@ impl SagChains {
         let pole = |k: usize| {
             let (v, age) = self.poles.estimate(i, k, poles);
             if v.is_nan() || age > REFRESH_LOADS {
-                self.chain_pole(i, k, x)
+                self.chain_pole(i, k, x, false)
             } else {
                 v
             }

@@ -32,6 +32,12 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// A pole search's Newton step below this (relative) ends it: the iterate is then within
 /// ~step² of the pole (quadratic convergence on a nearly linear g).
 const POLE_STEP: f64 = 1e-12;
+/// The scan's walk over the pole intervals (no cycle budget) accepts a pole search's
+/// Newton update once a step is below this (relative): g is nearly linear next to the pole
+/// (S ≈ r/(p − λ)), so the update is within ~step² (1e-16, relative) of it, well inside the
+/// 1e-10 the searches that use the poles need; the last steps to [`POLE_STEP`], which
+/// bounce in g's rounding, cost one to three chain evaluations more a pole.
+const WALK_POLE_STEP: f64 = 1e-8;
 /// ... or its count bracket narrower than this (relative). Why: next to a pole S is
 /// capped by the recurrence's pivot nudge (ε·the largest element stiffness) and its
 /// rounding, so g bottoms out at ~1e-17..1e-13 of its scale and Newton's last steps
@@ -162,6 +168,9 @@ impl SagPoles {
     /// Pole j (1-based; 0 gives 0) of chain i, which has `n_poles` poles (∞ past them),
     /// from its memo or by [`pole_search`] over `eval` (chain i's evaluation), bracketed by
     /// the chain's memoized neighbours, from the last load's value or else from `near`.
+    /// With `scaled`, the last load's value is scaled by the ratio of pole j − 1 at this
+    /// load to the same load's value of it ([`scaled_start`]).
+    #[allow(clippy::too_many_arguments)]
     pub(in crate::modal) fn get(
         &self,
         i: usize,
@@ -169,6 +178,7 @@ impl SagPoles {
         n_poles: usize,
         near: f64,
         allowance: u32,
+        scaled: bool,
         eval: impl Fn(f64) -> SagChainEval,
     ) -> f64 {
         let memo = |k: usize| self.memo_at(i, k, n_poles, false);
@@ -194,15 +204,39 @@ impl SagPoles {
                 break;
             }
         }
-        let hint = slot.map_or(f64::NAN, |s| self.hint[s]);
+        let mut hint = slot.map_or(f64::NAN, |s| self.hint[s]);
+        if let (true, Some(s)) = (scaled && j >= 2, slot) {
+            hint = scaled_start(
+                hint,
+                (memo(j - 1), self.hint[s - 1]),
+                self.hint_load[s] == self.hint_load[s - 1],
+            );
+        }
         let hint = if hint > lo && hint < hi { hint } else { near };
-        let (p, spent) = pole_search(&eval, j as u32, lo, hi, hint, allowance);
+        let accept = if scaled { WALK_POLE_STEP } else { POLE_STEP };
+        let (p, spent) = pole_search(&eval, j as u32, (lo, hi), hint, allowance, accept);
         self.chain_evaluations
             .fetch_add(u64::from(spent), Ordering::Relaxed);
         if let (Some(s), false) = (slot, p.is_nan()) {
             self.memo[s].store(p.to_bits(), Ordering::Relaxed);
         }
         p
+    }
+}
+
+/// The start of a pole's search from its value `then` at an earlier load, scaled by the
+/// ratio of the pole below it now and at that load (`below`: (now, then); `same_load`:
+/// both values are of one load): a chain's poles move together with its tension and
+/// length (a taut string's scale as T/(μL²)), so a study's next point (a map's grid step
+/// away) starts within ~1e-3 of the pole where the unscaled value is off by the step's
+/// whole change (10-30 % on the paper robot at 0.25 m). `then` itself where the ratio is
+/// not known.
+fn scaled_start(then: f64, below: (f64, f64), same_load: bool) -> f64 {
+    let (now_below, then_below) = below;
+    if same_load && now_below > 0.0 && then_below > 0.0 && now_below.is_finite() {
+        then * (now_below / then_below)
+    } else {
+        then
     }
 }
 
@@ -230,16 +264,17 @@ fn flexibility_branches(e: &SagChainEval) -> [Option<(f64, f64)>; 3] {
 }
 
 /// Pole j (1-based) of the chain evaluated by `eval`, searched in (lo, hi] (lo below it,
-/// hi at or above it; ∞ when unknown) from `start` (NaN: none), as the module docs say,
-/// with at most `allowance` chain evaluations. Returns the pole, rad²/s² (NaN: the
+/// hi at or above it; ∞ when unknown) from `start` (NaN: none), as the module docs say
+/// (a Newton step below `accept`, relative, ends it), with at most `allowance` chain
+/// evaluations. Returns the pole, rad²/s² (NaN: the
 /// allowance ran out first), and the chain evaluations spent.
 pub(super) fn pole_search(
     eval: &impl Fn(f64) -> SagChainEval,
     j: u32,
-    mut lo: f64,
-    mut hi: f64,
+    (mut lo, mut hi): (f64, f64),
     start: f64,
     allowance: u32,
+    accept: f64,
 ) -> (f64, u32) {
     let mid = |lo: f64, hi: f64| {
         if hi.is_finite() {
@@ -288,7 +323,7 @@ pub(super) fn pole_search(
             step *= 1.0 + WALK_PUSH;
         }
         let xn = x + step;
-        if adjacent && step.is_finite() && step.abs() <= POLE_STEP * x && xn >= lo && xn <= hi {
+        if adjacent && step.is_finite() && step.abs() <= accept * x && xn >= lo && xn <= hi {
             return (xn, it);
         }
         x = if xn > lo && xn < hi { xn } else { mid(lo, hi) };
