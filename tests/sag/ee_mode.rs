@@ -469,3 +469,74 @@ fn cold_answers_over_a_grid_match_the_dense_reference() {
         e.eigen_evaluations
     );
 }
+
+/// A map's rows: one estimator walks each row of cold points (a grid step apart, beyond
+/// the warm jump), as `map` does, so every point's pole searches start from the previous
+/// point's poles, scaled by the move of the pole below (`SagPoles::get`), and every scan
+/// walks the intervals between those poles with its secant starts and weak roots. Every
+/// answer against the dense reference (LAMBDA_TOL, P_TOL: module docs), on the three
+/// sagged robots at N = 10: 3 rows of 9 points each.
+///
+/// Cost: the evaluations of D (pole searches at one per n chain evaluations) over a row of
+/// the paper robot with sag at N = 40 (9 points 0.25 m apart, 7 feasible): measured 1 654;
+/// 1 953 before the secant start removed only the poles a branch has (it started each root
+/// next to the interval's lower pole: 6.3 evaluations a root, now 4.2), weak roots were
+/// read at a 1e-5 step, and the pole searches started scaled and stopped at a 1e-8 step
+/// (~7 chain evaluations a pole, now ~5). Bounded by 1 800 (deterministic counts, no
+/// timing), which the code before failed.
+#[test]
+fn map_rows_of_cold_answers_match_the_dense_reference() {
+    for (s, step_m) in sagged_robots(10).iter().zip([0.5, 10.0, 0.25]) {
+        let thr = Estimator::new(s)
+            .unwrap()
+            .params()
+            .modal
+            .ee_participation_min;
+        let (mut checked, mut worst_l, mut worst_p) = (0, 0.0f64, 0.0f64);
+        for row in -1..=1 {
+            let mut est = Estimator::new(s).unwrap();
+            for col in -4..=4 {
+                let mut pose = home(s);
+                pose.position_m.x += col as f64 * step_m;
+                pose.position_m.y += row as f64 * step_m;
+                let e = *est.update(&pose, Tmin::Scene);
+                if !e.is_ok() {
+                    continue;
+                }
+                let at = format!("{} ({col}, {row})", s.name);
+                assert!(e.cold_start, "{at}: not cold");
+                assert_eq!(ee_age(&e), Some(0), "{at}");
+                let (dl, dp, _) = dense_ee(&est, thr);
+                let err = (hz_to_lambda(ee_hz(&e)) - dl).abs() / dl;
+                let perr = (ee_p(&e) - dp).abs();
+                assert!(err <= LAMBDA_TOL, "{at}: λ err {err:.1e}");
+                assert!(perr <= P_TOL, "{at}: p {} vs dense {dp}", ee_p(&e));
+                checked += 1;
+                worst_l = worst_l.max(err);
+                worst_p = worst_p.max(perr);
+            }
+        }
+        eprintln!(
+            "{}: {checked} cold answers along rows, worst λ err {worst_l:.1e}, p err {worst_p:.1e}",
+            s.name
+        );
+        assert!(checked >= 9, "{}: {checked} feasible points", s.name);
+    }
+    // A map's row of the paper robot with sag at N = 40 (every point cold, 0.25 m apart).
+    let s = &sagged_robots(40)[2];
+    let mut est = Estimator::new(s).unwrap();
+    let (mut total, mut points) = (0, 0);
+    for col in -4..=4 {
+        let mut pose = home(s);
+        pose.position_m.x += 0.25 * col as f64;
+        let e = *est.update(&pose, Tmin::Scene);
+        if e.is_ok() {
+            assert_eq!(ee_age(&e), Some(0), "{} ({col}, 0)", s.name);
+            total += e.eigen_evaluations;
+            points += 1;
+        }
+    }
+    eprintln!("{} N 40: {total} evaluations over {points} points", s.name);
+    assert!(points >= 5, "{}: {points} feasible points", s.name);
+    assert!(total <= 1800, "{}: {total}", s.name);
+}
