@@ -15,6 +15,7 @@
 //! is held against the extrapolated FEM in ee_mode_continuous.rs.
 use cablevib::alloc_count::thread_allocations;
 use cablevib::estimator::{Estimator, Tmin};
+use cablevib::kinematics::Pose;
 use cablevib::modal::{hz_to_lambda, Mode, CYCLE_EVALUATIONS};
 use cablevib::scene::Scene;
 use cablevib::stats::percentile;
@@ -46,6 +47,34 @@ fn dense_ee(est: &Estimator, thr: f64) -> (f64, f64, usize) {
         .find(|&i| d.ee_participation[i] >= thr)
         .expect("a dense mode reaches the threshold");
     (d.lambda[i], d.ee_participation[i], i)
+}
+
+/// `est` updated at each of `poses` (named), every ok one a cold answer held against the
+/// dense reference: cold, fresh, λ within LAMBDA_TOL and p within P_TOL (module docs).
+/// Returns (ok poses, worst λ error, worst p error).
+fn cold_answers_against_dense(
+    est: &mut Estimator,
+    poses: impl IntoIterator<Item = (String, Pose)>,
+) -> (usize, f64, f64) {
+    let thr = est.params().modal.ee_participation_min;
+    let (mut checked, mut worst_l, mut worst_p) = (0, 0.0f64, 0.0f64);
+    for (at, pose) in poses {
+        let e = *est.update(&pose, Tmin::Scene);
+        if !e.is_ok() {
+            continue;
+        }
+        assert!(e.cold_start, "{at}: not cold");
+        assert_eq!(ee_age(&e), Some(0), "{at}");
+        let (dl, dp, _) = dense_ee(est, thr);
+        let err = (hz_to_lambda(ee_hz(&e)) - dl).abs() / dl;
+        let perr = (ee_p(&e) - dp).abs();
+        assert!(err <= LAMBDA_TOL, "{at}: λ err {err:.1e}");
+        assert!(perr <= P_TOL, "{at}: p {} vs dense {dp}", ee_p(&e));
+        checked += 1;
+        worst_l = worst_l.max(err);
+        worst_p = worst_p.max(perr);
+    }
+    (checked, worst_l, worst_p)
 }
 
 #[test]
@@ -412,40 +441,20 @@ fn ee_answer_age_p99_along_the_suspended_8_circle() {
 fn cold_answers_over_a_grid_match_the_dense_reference() {
     for s in sagged_robots(10) {
         let mut est = Estimator::new(&s).unwrap();
-        let thr = est.params().modal.ee_participation_min;
-        let (mut checked, mut worst) = (0, 0.0f64);
-        for (dx, dy) in [
+        let offsets = [
             (-0.25, -0.25),
             (0.0, -0.25),
             (0.25, 0.0),
             (0.0, 0.0),
             (-0.25, 0.25),
-        ] {
+        ];
+        let poses = offsets.map(|(dx, dy)| {
             let mut pose = home(&s);
             pose.position_m.x += dx;
             pose.position_m.y += dy;
-            let e = *est.update(&pose, Tmin::Scene);
-            if !e.is_ok() {
-                continue;
-            }
-            assert!(e.cold_start, "{} ({dx}, {dy}): not cold", s.name);
-            assert_eq!(ee_age(&e), Some(0), "{} ({dx}, {dy})", s.name);
-            let (dl, dp, _) = dense_ee(&est, thr);
-            let err = (hz_to_lambda(ee_hz(&e)) - dl).abs() / dl;
-            assert!(
-                err <= LAMBDA_TOL,
-                "{} ({dx}, {dy}): λ err {err:.1e}",
-                s.name
-            );
-            assert!(
-                (ee_p(&e) - dp).abs() <= P_TOL,
-                "{} ({dx}, {dy}): p {} vs dense {dp}",
-                s.name,
-                ee_p(&e)
-            );
-            checked += 1;
-            worst = worst.max(err);
-        }
+            (format!("{} ({dx}, {dy})", s.name), pose)
+        });
+        let (checked, worst, _) = cold_answers_against_dense(&mut est, poses);
         eprintln!(
             "{}: {checked} cold answers, worst λ err {worst:.1e}",
             s.name
@@ -487,34 +496,19 @@ fn cold_answers_over_a_grid_match_the_dense_reference() {
 #[test]
 fn map_rows_of_cold_answers_match_the_dense_reference() {
     for (s, step_m) in sagged_robots(10).iter().zip([0.5, 10.0, 0.25]) {
-        let thr = Estimator::new(s)
-            .unwrap()
-            .params()
-            .modal
-            .ee_participation_min;
         let (mut checked, mut worst_l, mut worst_p) = (0, 0.0f64, 0.0f64);
         for row in -1..=1 {
             let mut est = Estimator::new(s).unwrap();
-            for col in -4..=4 {
+            let poses = (-4..=4).map(|col| {
                 let mut pose = home(s);
                 pose.position_m.x += col as f64 * step_m;
                 pose.position_m.y += row as f64 * step_m;
-                let e = *est.update(&pose, Tmin::Scene);
-                if !e.is_ok() {
-                    continue;
-                }
-                let at = format!("{} ({col}, {row})", s.name);
-                assert!(e.cold_start, "{at}: not cold");
-                assert_eq!(ee_age(&e), Some(0), "{at}");
-                let (dl, dp, _) = dense_ee(&est, thr);
-                let err = (hz_to_lambda(ee_hz(&e)) - dl).abs() / dl;
-                let perr = (ee_p(&e) - dp).abs();
-                assert!(err <= LAMBDA_TOL, "{at}: λ err {err:.1e}");
-                assert!(perr <= P_TOL, "{at}: p {} vs dense {dp}", ee_p(&e));
-                checked += 1;
-                worst_l = worst_l.max(err);
-                worst_p = worst_p.max(perr);
-            }
+                (format!("{} ({col}, {row})", s.name), pose)
+            });
+            let (c, l, p) = cold_answers_against_dense(&mut est, poses);
+            checked += c;
+            worst_l = worst_l.max(l);
+            worst_p = worst_p.max(p);
         }
         eprintln!(
             "{}: {checked} cold answers along rows, worst λ err {worst_l:.1e}, p err {worst_p:.1e}",
