@@ -78,6 +78,7 @@ impl EeTracker {
                     let mut n = t.member(if jumped { f64::NAN } else { m.lambda });
                     if !jumped {
                         n.p_ref = m.p_ref;
+                        n.gap_ref = m.gap_ref;
                         n.searched = m.searched;
                         n.last_side = m.last_side;
                         n.partner_key = m.partner_key;
@@ -144,21 +145,37 @@ impl EeTracker {
     ) -> Result<Root, RescanReason> {
         self.search_partners(f);
         let mut answer = self.select_answer(f, thr)?;
+        let by_count = !f.view.poles_known() && f.budget != u32::MAX;
         // The neighbour search walks the closed-form poles: only where they are known.
         if f.view.poles_known() && self.unwatched_bound_with(answer.lambda, true) > SEARCH_BOUND {
             self.search_neighbours(f);
             answer = self.select_answer(f, thr)?;
         }
-        if self.unwatched_bound(answer.lambda) + CERT_MARGIN >= thr {
-            if self.members[..self.n_members].iter().all(|m| m.age == 0) {
-                return Err(RescanReason::Uncertified);
-            }
+        // The certificate's bound (computed once per change of the watched modes: each is
+        // three 6 × 6 symmetric eigen-solves).
+        let mut bound = self.unwatched_bound(answer.lambda);
+        if bound + CERT_MARGIN >= thr && self.members[..self.n_members].iter().any(|m| m.age > 0) {
             // Follow the rest too before giving up.
             self.follow_members(f, true);
             answer = self.select_answer(f, thr)?;
-            if self.unwatched_bound(answer.lambda) + CERT_MARGIN >= thr {
-                return Err(RescanReason::Uncertified);
+            bound = self.unwatched_bound(answer.lambda);
+        }
+        if by_count && bound + CERT_MARGIN >= thr {
+            // Where the count alone shows the poles and a cycle's budget holds: the bound
+            // split below the answer (the local form, `bound`) ...
+            if self
+                .split_bound(f, answer.lambda, thr - CERT_MARGIN)
+                .is_some_and(|b| b + CERT_MARGIN < thr)
+            {
+                return Ok(answer);
             }
+        }
+        if by_count {
+            // ... and the unwatched neighbours searched by the count (`gap`).
+            (answer, bound) = self.certify_by_gaps(f, thr, answer, bound)?;
+        }
+        if bound + CERT_MARGIN >= thr {
+            return Err(RescanReason::Uncertified);
         }
         Ok(answer)
     }
@@ -280,7 +297,8 @@ impl EeTracker {
             {
                 break;
             }
-            let Some(t) = neighbour(f, &from, up) else {
+            let found = neighbour(f, &from, up);
+            let Some(t) = found else {
                 break;
             };
             let mut n = t.member(f64::NAN);
@@ -296,7 +314,7 @@ impl EeTracker {
     /// The lowest watched mode with participation ≥ the threshold, solved to full accuracy
     /// (and so is any watched mode below it within [`P_MARGIN`] of the threshold);
     /// Err(NoneReached) when there is none, Err(Lost) when an exact solve fails.
-    fn select_answer<P: Condensed>(
+    pub(super) fn select_answer<P: Condensed>(
         &mut self,
         f: &mut RootFinder<'_, P>,
         thr: f64,

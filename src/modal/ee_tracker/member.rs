@@ -54,6 +54,9 @@ pub(super) struct Member {
     pub(super) p: f64,
     /// Participation when the mode's neighbours were last searched (NaN: never).
     pub(super) p_ref: f64,
+    /// Participation when its neighbours were last searched by the count (`gap`; at first
+    /// its participation when found).
+    pub(super) gap_ref: f64,
     /// When its neighbours were last searched (count of searches).
     pub(super) searched: u64,
     /// Side of the last neighbour search.
@@ -97,6 +100,7 @@ impl Member {
             prev2: f64::NAN,
             p,
             p_ref: p,
+            gap_ref: p,
             searched: 0,
             last_side: SearchSide::None,
             index,

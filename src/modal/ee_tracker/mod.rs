@@ -7,6 +7,7 @@
 //! - [`member`]: one watched mode, its predictor, the watch list;
 //! - [`scan`]: the scan over the pole intervals (cold start and rescans);
 //! - [`follow`]: one warm cycle (follow, partner and neighbour searches, certificate);
+//! - [`gap`]: the neighbour searches where the count alone shows the poles;
 //! - [`track`]: the Newton searches it uses (follow a root, a neighbour, a partner);
 //! - [`phases`]: one cycle's work within the budget (track, scan, continue, certify).
 //!
@@ -18,6 +19,7 @@
 
 mod bound;
 mod follow;
+mod gap;
 mod member;
 mod phases;
 mod scan;
@@ -176,6 +178,11 @@ pub(super) struct EeTracker {
     window_pending: bool,
     /// The last scan finished skipped a mode (`scan::ScanState::skipped`).
     skipped: bool,
+    /// Warm cycles running that searched neighbours by the count to certify and did not
+    /// (`gap`).
+    gap_cycles: u32,
+    /// A neighbour search by the count the budget cut (`gap`), continued next cycle.
+    gap_cut: Option<gap::GapCut>,
 }
 
 impl EeTracker {
@@ -192,6 +199,8 @@ impl EeTracker {
             scan: None,
             window_pending: false,
             skipped: false,
+            gap_cycles: 0,
+            gap_cut: None,
         }
     }
 
@@ -206,6 +215,8 @@ impl EeTracker {
         self.ee_skip = 0;
         self.scan = None;
         self.window_pending = false;
+        self.gap_cycles = 0;
+        self.gap_cut = None;
     }
 
     /// A scan is in progress (the end-effector answer is being worked on over the cycles).

@@ -33,6 +33,7 @@ impl EeTracker {
                             self.window_pending = false;
                             return Ok(Some(r));
                         }
+                        Err(RescanReason::Starved) => return Ok(None),
                         Err(_) if f.exhausted() => return Ok(None),
                         Err(why) => why,
                     }
@@ -104,6 +105,7 @@ impl EeTracker {
                         return Some(Ok(Some(a)));
                     }
                     // The budget ran out: the warm cycle is tried again next cycle.
+                    Err(RescanReason::Starved) => return Some(Ok(None)),
                     Err(_) if f.exhausted() => return Some(Ok(None)),
                     Err(_) => {}
                 }

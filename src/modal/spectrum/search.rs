@@ -25,6 +25,9 @@ const NOISY_CLUSTER_PROBE: f64 = 100.0;
 /// cluster's count probes, twice where they are widened, and the residue quotient's two
 /// evaluations), so that a cycle never exceeds its budget.
 const CLUSTER_RESERVE: u32 = 6;
+/// The same for [`SpectrumSearch::root_in`], which makes no cluster probes: the root's own
+/// evaluation and the caller's reading of the mode there (one evaluation, one spare).
+const ROOT_RESERVE: u32 = 3;
 /// A bracket left by a search the cycle's budget cut is widened by this (relative, on each
 /// side) before it is probed again in the next cycle: along the bench's circle a mode's λ
 /// moves by ~1e-4 (relative) per 1 ms cycle, so the narrowed bracket of the last cycle
@@ -116,6 +119,8 @@ pub(in crate::modal) struct SpectrumSearch<'a, P: Condensed> {
     /// `cycle_base`; `u32::MAX`: no cycle budget) ...
     cycle_base: u32,
     cycle_budget: u32,
+    /// Evaluations kept for the end of a mode (`CLUSTER_RESERVE`, or `ROOT_RESERVE`).
+    reserve: u32,
     /// ... and whether it cut the last search (not a failure: the bracket it left in the
     /// error is where to go on).
     pub(in crate::modal) cut: bool,
@@ -139,6 +144,7 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
             mode_start: 0,
             cycle_base: 0,
             cycle_budget: u32::MAX,
+            reserve: CLUSTER_RESERVE,
             cut: false,
         }
     }
@@ -227,15 +233,48 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
         self.mode_start = self.p.evaluations();
         // The pose may have moved since the bracket was narrowed: widen it a little.
         let (lo, hi) = (lo * (1.0 - RESUME_WIDEN), hi * (1.0 + RESUME_WIDEN));
+        let Some((a, b)) = self.bracket(i, lo, hi)? else {
+            return self.mode(i);
+        };
+        let found = self.solve(i, a, b)?;
+        self.new_cluster(i, found)
+    }
+
+    /// The root of mode `i` inside (lo, hi) (rad²/s²), by the count's bisection and Newton
+    /// as [`Self::mode`] but without the cluster's probes (the caller reads the mode at the
+    /// root); Ok(None) when (lo, hi) does not hold mode `i`, or the mode sits at a chain
+    /// pole (no end-effector motion there). Within a cycle's budget it keeps fewer
+    /// evaluations for the end than a mode's search (no cluster probes follow): meant for a
+    /// search of its own, not inside a sweep.
+    pub(in crate::modal) fn root_in(
+        &mut self,
+        i: usize,
+        lo: f64,
+        hi: f64,
+    ) -> Result<Option<f64>, ModalError> {
+        self.mode_start = self.p.evaluations();
+        self.reserve = ROOT_RESERVE;
+        let Some((a, b)) = self.bracket(i, lo, hi)? else {
+            return Ok(None);
+        };
+        Ok(match self.solve(i, a, b)? {
+            Found::Pole(_) => None,
+            Found::Branch { lambda, .. } => Some(lambda),
+        })
+    }
+
+    /// The count probes at `lo` and `hi` when they hold mode `i` (J(lo) ≤ i < J(hi)).
+    fn bracket(
+        &mut self,
+        i: usize,
+        lo: f64,
+        hi: f64,
+    ) -> Result<Option<(Probe, Probe)>, ModalError> {
         self.check_budget(lo, hi)?;
         let a = self.probe(lo);
         self.check_budget(lo, hi)?;
         let b = self.probe(hi);
-        if !(a.count as usize <= i && (b.count as usize) > i) {
-            return self.mode(i);
-        }
-        let found = self.solve(i, a, b)?;
-        self.new_cluster(i, found)
+        Ok((a.count as usize <= i && (b.count as usize) > i).then_some((a, b)))
     }
 
     /// Count probe at x.
@@ -250,7 +289,7 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
         let used = now.wrapping_sub(self.mode_start);
         let cycle_used = now.wrapping_sub(self.cycle_base);
         if self.cycle_budget != u32::MAX
-            && cycle_used.saturating_add(CLUSTER_RESERVE) >= self.cycle_budget
+            && cycle_used.saturating_add(self.reserve) >= self.cycle_budget
         {
             self.cut = true;
             return Err(ModalError::NoConvergence {
