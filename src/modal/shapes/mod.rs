@@ -215,8 +215,7 @@ impl ModeShapes {
         old: &ModeShapes,
         ee_mass: &nalgebra::Matrix6<f64>,
     ) -> Option<Vec<f64>> {
-        let sizes = |s: &ModeShapes| s.fractions.iter().map(|f| f.len()).collect::<Vec<_>>();
-        if self.dim != old.dim || sizes(self) != sizes(old) {
+        if !self.same_nodes(old) {
             return None;
         }
         // Each shape as one vector (end-effector, every cable's nodes, the hidden cables'),
@@ -308,6 +307,12 @@ impl ModeShapes {
         out
     }
 
+    /// Whether `old` has these shapes' dimension and node lists.
+    fn same_nodes(&self, old: &ModeShapes) -> bool {
+        let sizes = |s: &ModeShapes| s.fractions.iter().map(|f| f.len()).collect::<Vec<_>>();
+        self.dim == old.dim && sizes(self) == sizes(old)
+    }
+
     /// aᵀ M b with the mass M of these shapes' cables and `ee_mass` (a hidden cable's pair
     /// of different lengths left out).
     fn mass_form(&self, a: &ModeShape, b: &ModeShape, ee_mass: &nalgebra::Matrix6<f64>) -> f64 {
@@ -335,8 +340,7 @@ impl ModeShapes {
         old: &ModeShapes,
         ee_mass: &nalgebra::Matrix6<f64>,
     ) -> Option<Vec<f64>> {
-        let sizes = |s: &ModeShapes| s.fractions.iter().map(|f| f.len()).collect::<Vec<_>>();
-        if self.dim != old.dim || sizes(self) != sizes(old) {
+        if !self.same_nodes(old) {
             return None;
         }
         Some(

@@ -411,33 +411,37 @@ pub(super) fn run(
             };
             omega0[j] = omega;
         }
-        // The load's rate change and |F'' f| (F'' = `d2`) over the intervals of 1 ..= `cap`
-        // samples from the held pose.
-        let fill = |cap: usize, d2: &Matrix6<f64>, rc: &mut Vec<f64>, st: &mut Vec<f64>| {
-            rc.clear();
-            st.clear();
-            let (mut r, mut s) = (0.0f64, 0.0f64);
-            for k in k0 + 1..=(k0 + cap).min(n - 1) {
-                r = r.max((rate(k) - rate0).norm());
-                s = s.max((d2 * loads.at(k)).fixed_rows::<3>(0).norm());
-                rc.push(r);
-                st.push(s);
-            }
-        };
+        // The longest interval of at most `cap` samples from the held pose whose error
+        // predicted with the drifts a sample `drift` and F'' `d2` is within the plan
+        // ([`updates::longest_within`]), the load's rate change and |F'' f| over each
+        // length into `rc` and `st`.
+        let plan =
+            |cap: usize, d2: &Matrix6<f64>, drift: &[f64], rc: &mut Vec<f64>, st: &mut Vec<f64>| {
+                rc.clear();
+                st.clear();
+                let (mut r, mut s) = (0.0f64, 0.0f64);
+                for k in k0 + 1..=(k0 + cap).min(n - 1) {
+                    r = r.max((rate(k) - rate0).norm());
+                    s = s.max((d2 * loads.at(k)).fixed_rows::<3>(0).norm());
+                    rc.push(r);
+                    st.push(s);
+                }
+                if rc.is_empty() {
+                    return cap.max(1);
+                }
+                updates::longest_within(
+                    &held_modes[..nm],
+                    &drift[..nm],
+                    rc,
+                    st,
+                    path.dt_s,
+                    planned_m,
+                )
+            };
         // The interval planned from the held modes' amplitudes now and their drift over the
         // last interval (at most `interval`, the last one × MAX_GROWTH).
         if cfg.update_every.is_none() && drift_known {
-            fill(interval, &d2_last, &mut rate_changes, &mut statics);
-            if !rate_changes.is_empty() {
-                interval = updates::longest_within(
-                    &held_modes[..nm],
-                    &drift[..nm],
-                    &rate_changes,
-                    &statics,
-                    path.dt_s,
-                    planned_m,
-                );
-            }
+            interval = plan(interval, &d2_last, &drift, &mut rate_changes, &mut statics);
         }
         let (k1, next, overlap, error, next_space, ritz_residual) = loop {
             let planned = (k0 + interval).min(n - 1);
@@ -536,16 +540,8 @@ pub(super) fn run(
                 for j in 0..nm {
                     drift[j] = (omega1[j] - omega0[j]).abs() / u as f64;
                 }
-                fill(u - 1, &d2, &mut rate_changes, &mut statics);
-                interval = updates::longest_within(
-                    &held_modes[..nm],
-                    &drift[..nm],
-                    &rate_changes,
-                    &statics,
-                    path.dt_s,
-                    planned_m,
-                )
-                .clamp(1, u - 1);
+                interval =
+                    plan(u - 1, &d2, &drift, &mut rate_changes, &mut statics).clamp(1, u - 1);
                 continue;
             }
             d2_last = d2;

@@ -282,44 +282,37 @@ pub const FOLLOW_MIN: f64 = 0.5;
 /// without an overlap, or when less than [`FOLLOW_MIN`] of the shape's mass is in the next
 /// basis (the held frequency past the next basis's last mode).
 pub fn followed(lambda1: &[f64], overlap: Option<&[f64]>, omega0: &[f64], omega1: &mut [f64]) {
-    let held = omega0.len();
-    let o = overlap.filter(|o| o.len() == lambda1.len() * held);
-    follow(
-        lambda1,
-        o.map(|o| move |i, j| o[i * held + j]),
-        omega0,
-        omega1,
-    );
+    follow(lambda1, overlap, omega0, omega1, false);
 }
 
 /// The other way: each of the next basis's modes' angular frequency at the held pose, into
 /// `omega0` (rad/s, `omega1` the next basis's): the Rayleigh quotient of its shape under the
 /// held modes (`lambda0` their λ, `overlap` as in [`followed`]).
 pub fn followed_back(lambda0: &[f64], overlap: Option<&[f64]>, omega1: &[f64], omega0: &mut [f64]) {
-    let held = lambda0.len();
-    let o = overlap.filter(|o| o.len() == omega1.len() * held);
-    follow(
-        lambda0,
-        o.map(|o| move |j, i| o[i * held + j]),
-        omega1,
-        omega0,
-    );
+    follow(lambda0, overlap, omega1, omega0, true);
 }
 
-/// [`followed`] with the overlap of `lambda`'s mode i with mode j of `omega_from` `o(i, j)`.
+/// [`followed`] (`back` false: `lambda` the next basis's, the overlap's rows) and
+/// [`followed_back`] (`back`: `lambda` the held basis's, the overlap's columns): each mode
+/// of `omega_from` followed onto `lambda`'s modes.
 fn follow(
     lambda: &[f64],
-    o: Option<impl Fn(usize, usize) -> f64>,
+    overlap: Option<&[f64]>,
     omega_from: &[f64],
     omega_to: &mut [f64],
+    back: bool,
 ) {
+    let (n, m) = (lambda.len(), omega_from.len());
+    let o = overlap.filter(|o| o.len() == n * m);
+    // The overlap of `lambda`'s mode i with `omega_from`'s mode j.
+    let at = |o: &[f64], i: usize, j: usize| if back { o[j * n + i] } else { o[i * m + j] };
     for (j, w) in omega_to.iter_mut().enumerate().take(omega_from.len()) {
         let by_index = lambda.get(j).map_or(omega_from[j], |l| l.sqrt());
-        *w = match &o {
+        *w = match o {
             Some(o) => {
                 let (mut num, mut den) = (0.0, 0.0);
                 for (i, l) in lambda.iter().enumerate() {
-                    let x = o(i, j) * o(i, j);
+                    let x = at(o, i, j) * at(o, i, j);
                     num += x * l;
                     den += x;
                 }
