@@ -358,15 +358,18 @@ pub fn static_error(
 mod tests {
     use super::*;
 
+    /// A held mode of 10 rad/s, free amplitude 1 m and forced 0.5 m, no memory.
+    const MODE: HeldMode = HeldMode {
+        free_m: 1.0,
+        forced_m: 0.5,
+        start_m_s_per_n: 0.0,
+        omega_rad_s: 10.0,
+        memory_s: 0.0,
+    };
+
     #[test]
     fn intervals_grow_at_rest_and_shrink_with_error() {
-        let mode = HeldMode {
-            free_m: 1.0,
-            forced_m: 0.5,
-            start_m_s_per_n: 0.0,
-            omega_rad_s: 10.0,
-            memory_s: 0.0,
-        };
+        let mode = MODE;
         // At rest (no drift, no F'') the plan takes the longest interval offered; a drift
         // of 1 rad/s a sample at dt = 0.1 s leaves (0.05 u + 0.1) u (1 − 1/u) for u
         // samples: 2 samples within 0.21, 1 below it.
@@ -394,21 +397,11 @@ mod tests {
         let e = dynamic_error(&[long], &[11.0], 0.0, 0.1, 0.0);
         assert!((e - 0.5 / std::f64::consts::E).abs() < 1e-12, "{e}");
         // Followed through a crossing by the shape: held mode 0 is the next basis's mode 1.
-        let mut w1 = [0.0; 2];
-        followed(
-            &[4.0, 9.0],
-            Some(&[0.0, 1.0, 1.0, 0.0]),
-            &[2.5, 2.6],
-            &mut w1,
-        );
+        let (mut w1, swap) = ([0.0; 2], [0.0, 1.0, 1.0, 0.0]);
+        followed(&[4.0, 9.0], Some(&swap), &[2.5, 2.6], &mut w1);
         assert_eq!(w1, [3.0, 2.0]);
         // And back: the next basis's mode 1 is the held mode 0.
-        followed_back(
-            &[6.25, 6.76],
-            Some(&[0.0, 1.0, 1.0, 0.0]),
-            &[2.0, 3.0],
-            &mut w1,
-        );
+        followed_back(&[6.25, 6.76], Some(&swap), &[2.0, 3.0], &mut w1);
         assert_eq!(w1, [2.6, 2.5]);
         // A quadratic F(s) = s² I: F'' = 2 I whatever the spacing.
         let f = |s: f64| Matrix6::identity() * s * s;
@@ -422,13 +415,7 @@ mod tests {
     /// leaks its dynamic amplitude's half, × (1 − dt/T).
     #[test]
     fn the_mass_leaving_the_kept_basis_is_counted_against_the_shapes_own_norm() {
-        let mode = HeldMode {
-            free_m: 1.0,
-            forced_m: 0.5,
-            start_m_s_per_n: 0.0,
-            omega_rad_s: 10.0,
-            memory_s: 0.0,
-        };
+        let mode = MODE;
         let held = [mode, mode];
         // Two next modes (rows) by two held (columns): held 0 wholly inside at norm 0.98,
         // held 1 with half of its norm 1.02 inside.
