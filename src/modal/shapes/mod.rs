@@ -215,8 +215,7 @@ impl ModeShapes {
         old: &ModeShapes,
         ee_mass: &nalgebra::Matrix6<f64>,
     ) -> Option<Vec<f64>> {
-        let sizes = |s: &ModeShapes| s.fractions.iter().map(|f| f.len()).collect::<Vec<_>>();
-        if self.dim != old.dim || sizes(self) != sizes(old) {
+        if !self.same_nodes(old) {
             return None;
         }
         // Each shape as one vector (end-effector, every cable's nodes, the hidden cables'),
@@ -302,21 +301,54 @@ impl ModeShapes {
         let mut out = Vec::with_capacity(self.modes.len() * old.modes.len());
         for a in &self.modes {
             for b in &old.modes {
-                let mut s = (a.ee.transpose() * ee_mass * b.ee)[(0, 0)];
-                for (i, (ua, ub)) in a.cables.iter().zip(&b.cables).enumerate() {
-                    let m = self.element_mass_kg.get(i).copied().unwrap_or(0.0);
-                    s += bordered::element_mass_form(m, ua, ub);
-                }
-                for (i, (ha, hb)) in a.hidden.iter().zip(&b.hidden).enumerate() {
-                    if ha.len() == hb.len() {
-                        let m = self.hidden_element_mass_kg.get(i).copied().unwrap_or(0.0);
-                        s += m / 6.0 * scalar_mass_form(ha, hb);
-                    }
-                }
-                out.push(s);
+                out.push(self.mass_form(a, b, ee_mass));
             }
         }
         out
+    }
+
+    /// Whether `old` has these shapes' dimension and node lists.
+    fn same_nodes(&self, old: &ModeShapes) -> bool {
+        let sizes = |s: &ModeShapes| s.fractions.iter().map(|f| f.len()).collect::<Vec<_>>();
+        self.dim == old.dim && sizes(self) == sizes(old)
+    }
+
+    /// aᵀ M b with the mass M of these shapes' cables and `ee_mass` (a hidden cable's pair
+    /// of different lengths left out).
+    fn mass_form(&self, a: &ModeShape, b: &ModeShape, ee_mass: &nalgebra::Matrix6<f64>) -> f64 {
+        let mut s = (a.ee.transpose() * ee_mass * b.ee)[(0, 0)];
+        for (i, (ua, ub)) in a.cables.iter().zip(&b.cables).enumerate() {
+            let m = self.element_mass_kg.get(i).copied().unwrap_or(0.0);
+            s += bordered::element_mass_form(m, ua, ub);
+        }
+        for (i, (ha, hb)) in a.hidden.iter().zip(&b.hidden).enumerate() {
+            if ha.len() == hb.len() {
+                let m = self.hidden_element_mass_kg.get(i).copied().unwrap_or(0.0);
+                s += m / 6.0 * scalar_mass_form(ha, hb);
+            }
+        }
+        s
+    }
+
+    /// Each of `old`'s shapes' squared norm φᵀ M φ under these shapes' mass M (their
+    /// cables' element masses and `ee_mass`): 1 at `old`'s own pose for M-orthonormal
+    /// shapes; across a change of pose, the change of the cables' element masses (their
+    /// lengths) that [`Self::mass_overlap`]'s column sums of squares carry too. None when
+    /// the node lists differ.
+    pub fn mass_norms_of(
+        &self,
+        old: &ModeShapes,
+        ee_mass: &nalgebra::Matrix6<f64>,
+    ) -> Option<Vec<f64>> {
+        if !self.same_nodes(old) {
+            return None;
+        }
+        Some(
+            old.modes
+                .iter()
+                .map(|b| self.mass_form(b, b, ee_mass))
+                .collect(),
+        )
     }
 }
 
@@ -482,5 +514,24 @@ mod overlap_tests {
         for (x, y) in fast.iter().zip(&pairs) {
             assert!((x - y).abs() <= 1e-14 * (1.0 + y.abs()), "{x} vs {y}");
         }
+        // The norms under a's masses are the diagonal of b's overlap with itself under
+        // them (b's shapes on a's masses, through the product's own path).
+        let a = ModeShapes {
+            element_mass_kg: vec![0.5, 0.6, 1.3],
+            hidden_element_mass_kg: vec![0.1, 0.0, 0.7],
+            ..a
+        };
+        let norms = a.mass_norms_of(&b, &ee).unwrap();
+        let b_on_a = ModeShapes {
+            element_mass_kg: a.element_mass_kg.clone(),
+            hidden_element_mass_kg: a.hidden_element_mass_kg.clone(),
+            ..b.clone()
+        };
+        let own = b_on_a.mass_overlap(&b, &ee).unwrap();
+        for (j, n) in norms.iter().enumerate() {
+            let d = own[j * 4 + j];
+            assert!((n - d).abs() <= 1e-14 * d.abs().max(1.0), "{n} vs {d}");
+        }
+        assert_eq!(norms.len(), 4);
     }
 }

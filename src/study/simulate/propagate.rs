@@ -336,6 +336,7 @@ pub(super) fn run(
     let dim = if scene.rigid { 6 } else { 3 };
     let mut resp = ModalResponse::new(dim);
     let budget = updates::BUDGET_SHARE * cfg.tolerance * peak_m;
+    let planned_m = updates::PLAN_SHARE * budget;
     let max_interval = ((updates::MAX_INTERVAL_S / path.dt_s).round() as usize).max(1);
     let mut interval = cfg
         .update_every
@@ -360,6 +361,15 @@ pub(super) fn run(
     let mut omega0 = vec![0.0; MAX_RESPONSE_MODES];
     let mut omega1 = vec![0.0; MAX_RESPONSE_MODES];
     let mut f_prev = loads.at(0);
+    // Each held mode's frequency drift a sample (rad/s) over the last interval, once one
+    // was run; the last F''; the load's rate change and |F'' f| over the intervals a plan
+    // weighs ([`updates::longest_within`]).
+    let mut drift = vec![0.0; MAX_RESPONSE_MODES];
+    let mut drift_known = false;
+    let mut d2_last = Matrix6::zeros();
+    let mut rate_changes = Vec::new();
+    let mut statics = Vec::new();
+    let mut omega_back = vec![0.0; MAX_RESPONSE_MODES];
     let push = |out: &mut SimulateResult, k: usize, u: &Vector6<f64>| {
         out.t_s.push(k as f64 * path.dt_s);
         out.command_m.push(path.positions_m[k]);
@@ -400,6 +410,38 @@ pub(super) fn run(
                 },
             };
             omega0[j] = omega;
+        }
+        // The longest interval of at most `cap` samples from the held pose whose error
+        // predicted with the drifts a sample `drift` and F'' `d2` is within the plan
+        // ([`updates::longest_within`]), the load's rate change and |F'' f| over each
+        // length into `rc` and `st`.
+        let plan =
+            |cap: usize, d2: &Matrix6<f64>, drift: &[f64], rc: &mut Vec<f64>, st: &mut Vec<f64>| {
+                rc.clear();
+                st.clear();
+                let (mut r, mut s) = (0.0f64, 0.0f64);
+                for k in k0 + 1..=(k0 + cap).min(n - 1) {
+                    r = r.max((rate(k) - rate0).norm());
+                    s = s.max((d2 * loads.at(k)).fixed_rows::<3>(0).norm());
+                    rc.push(r);
+                    st.push(s);
+                }
+                if rc.is_empty() {
+                    return cap.max(1);
+                }
+                updates::longest_within(
+                    &held_modes[..nm],
+                    &drift[..nm],
+                    rc,
+                    st,
+                    path.dt_s,
+                    planned_m,
+                )
+            };
+        // The interval planned from the held modes' amplitudes now and their drift over the
+        // last interval (at most `interval`, the last one × MAX_GROWTH).
+        if cfg.update_every.is_none() && drift_known {
+            interval = plan(interval, &d2_last, &drift, &mut rate_changes, &mut statics);
         }
         let (k1, next, overlap, error, next_space, ritz_residual) = loop {
             let planned = (k0 + interval).min(n - 1);
@@ -477,14 +519,32 @@ pub(super) fn run(
                 None => Matrix6::zeros(),
             };
             let static_m = updates::static_error(&d2, (k0 + 1..=k1).map(|k| loads.at(k)), u);
+            let norms = match (&next.shapes, &held.shapes) {
+                (Some(a), Some(b)) => a.mass_norms_of(b, &next.ee_mass),
+                _ => None,
+            };
+            let leak_m = updates::leak_error(
+                &held_modes[..nm],
+                overlap.as_deref(),
+                norms.as_deref(),
+                u as f64 * path.dt_s,
+                path.dt_s,
+            );
             let error = updates::IntervalError {
                 dynamic_m,
                 static_m,
+                leak_m,
             };
             if cfg.update_every.is_none() && error.total_m() > budget && u > 1 {
-                interval = updates::shortened(u, error.total_m(), budget);
+                // Shortened by the drift this interval measured, with its F''.
+                for j in 0..nm {
+                    drift[j] = (omega1[j] - omega0[j]).abs() / u as f64;
+                }
+                interval =
+                    plan(u - 1, &d2, &drift, &mut rate_changes, &mut statics).clamp(1, u - 1);
                 continue;
             }
+            d2_last = d2;
             break (k1, next, overlap, error, next_space, ritz_residual);
         };
         if let Some(r) = ritz_residual {
@@ -505,6 +565,22 @@ pub(super) fn run(
             push(out, k, &u);
             on_sample(k, &added.state(&resp, &f));
         }
+        // Each new mode's drift a sample over this interval: its frequency at the held pose
+        // followed back by its shape.
+        let nn = next.lambda.len().min(MAX_RESPONSE_MODES);
+        for (w, l) in omega1.iter_mut().zip(&next.lambda).take(nn) {
+            *w = l.sqrt();
+        }
+        updates::followed_back(
+            &held.lambda,
+            overlap.as_deref(),
+            &omega1[..nn],
+            &mut omega_back[..nn],
+        );
+        for i in 0..nn {
+            drift[i] = (omega1[i] - omega_back[i]).abs() / u as f64;
+        }
+        drift_known = true;
         install(
             &mut resp,
             &next,
@@ -528,7 +604,7 @@ pub(super) fn run(
         space = next_space;
         k0 = k1;
         if cfg.update_every.is_none() {
-            interval = updates::next_interval(u, error.total_m(), budget, max_interval);
+            interval = (updates::MAX_GROWTH * u).min(max_interval);
         }
     }
     out.structured = held.structured;
