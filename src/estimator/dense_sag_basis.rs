@@ -95,9 +95,10 @@ impl Estimator {
         while kept < n && lambda[kept] - lambda[kept - 1] <= CLUSTER_REL * lambda[kept] + width {
             kept += 1;
         }
+        let vectors = solve.vectors(kept).map_err(BasisError::Estimator)?;
         Ok(Some(layout.shapes(
             &lambda[..kept],
-            &solve.vectors(kept),
+            &vectors,
             &[],
             &ee_mass,
             width,
