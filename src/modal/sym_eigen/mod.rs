@@ -388,20 +388,50 @@ fn orthonormalise(z: &mut DMatrix<f64>, b0: usize, b1: usize, cols: &[usize]) {
         return;
     }
     let block = DMatrix::from_fn(b1 - b0, k, |r, c| z[(b0 + r, cols[c])]);
-    let gram = block.transpose() * &block;
-    let Some(chol) = gram.cholesky() else {
-        return;
-    };
-    // Z R⁻¹ with R = Lᵀ: (R⁻¹ᵀ Zᵀ)ᵀ = (L⁻¹ Zᵀ)ᵀ.
-    let l = chol.l();
-    let Some(li) = l.solve_lower_triangular(&DMatrix::identity(k, k)) else {
-        return;
-    };
-    let q = block * li.transpose();
-    for (c, &col) in cols.iter().enumerate() {
-        for r in 0..b1 - b0 {
-            z[(b0 + r, col)] = q[(r, c)];
+    let mut l = block.transpose() * &block;
+    // L Lᵀ = ZᵀZ (left-looking, by columns), then L⁻¹ in place of the identity below it;
+    // Z R⁻¹ with R = Lᵀ is Z (L⁻¹)ᵀ.
+    let ls = l.as_mut_slice();
+    for j in 0..k {
+        for c in 0..j {
+            let ljc = ls[c * k + j];
+            if ljc != 0.0 {
+                let (left, right) = ls.split_at_mut(j * k);
+                right[j..k]
+                    .iter_mut()
+                    .zip(&left[c * k + j..(c + 1) * k])
+                    .for_each(|(x, y)| *x -= ljc * y);
+            }
         }
+        let pivot = ls[j * k + j];
+        if !(pivot > 0.0 && pivot.is_finite()) {
+            // Not numerically independent: leave the vectors as they are (not reached for
+            // the near-orthonormal columns inverse iteration gives).
+            return;
+        }
+        let scale = 1.0 / pivot.sqrt();
+        ls[j * k + j..(j + 1) * k]
+            .iter_mut()
+            .for_each(|x| *x *= scale);
+    }
+    let mut inverse = DMatrix::<f64>::zeros(k, k);
+    for c in 0..k {
+        let x = &mut inverse.as_mut_slice()[c * k..(c + 1) * k];
+        x[c] = 1.0;
+        for j in c..k {
+            let xj = x[j] / ls[j * k + j];
+            x[j] = xj;
+            if xj != 0.0 {
+                x[j + 1..]
+                    .iter_mut()
+                    .zip(&ls[j * k + j + 1..(j + 1) * k])
+                    .for_each(|(xi, lij)| *xi -= xj * lij);
+            }
+        }
+    }
+    let q = block * inverse.transpose();
+    for (c, &col) in cols.iter().enumerate() {
+        z.column_mut(col).as_mut_slice()[b0..b1].copy_from_slice(&q.column(c).as_slice()[..]);
     }
 }
 
