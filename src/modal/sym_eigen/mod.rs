@@ -431,7 +431,7 @@ fn orthonormalise(z: &mut DMatrix<f64>, b0: usize, b1: usize, cols: &[usize]) {
     }
     let q = block * inverse.transpose();
     for (c, &col) in cols.iter().enumerate() {
-        z.column_mut(col).as_mut_slice()[b0..b1].copy_from_slice(&q.column(c).as_slice()[..]);
+        z.column_mut(col).as_mut_slice()[b0..b1].copy_from_slice(q.column(c).as_slice());
     }
 }
 
