@@ -139,7 +139,7 @@ impl SymEigen {
                 j += 1;
             }
             self.block_vectors(b0, b1, &order[i..j], &mut z, &mut tri, &mut x, &mut rng)?;
-            orthonormalise(&mut z, b0, b1, &order[i..j]);
+            orthonormalise(&mut z, b0, b1, &order[i..j])?;
             i = j;
         }
         self.back_transform(&mut z);
@@ -382,10 +382,15 @@ fn reduce_body(
 
 /// Cholesky-QR of the columns `cols` of `z` on the rows [b0, b1) (module docs): nearly
 /// orthonormal columns made orthonormal, each mixed with the others by their small overlaps.
-fn orthonormalise(z: &mut DMatrix<f64>, b0: usize, b1: usize, cols: &[usize]) {
+fn orthonormalise(
+    z: &mut DMatrix<f64>,
+    b0: usize,
+    b1: usize,
+    cols: &[usize],
+) -> Result<(), SymEigenError> {
     let k = cols.len();
     if k < 2 {
-        return;
+        return Ok(());
     }
     let block = DMatrix::from_fn(b1 - b0, k, |r, c| z[(b0 + r, cols[c])]);
     let mut l = block.transpose() * &block;
@@ -405,9 +410,11 @@ fn orthonormalise(z: &mut DMatrix<f64>, b0: usize, b1: usize, cols: &[usize]) {
         }
         let pivot = ls[j * k + j];
         if !(pivot > 0.0 && pivot.is_finite()) {
-            // Not numerically independent: leave the vectors as they are (not reached for
-            // the near-orthonormal columns inverse iteration gives).
-            return;
+            // Not numerically independent (inverse iteration gives near-orthonormal columns:
+            // not met in the tests).
+            return Err(SymEigenError::NoConvergence(
+                "inverse iteration (dependent vectors)",
+            ));
         }
         let scale = 1.0 / pivot.sqrt();
         ls[j * k + j..(j + 1) * k]
@@ -433,6 +440,7 @@ fn orthonormalise(z: &mut DMatrix<f64>, b0: usize, b1: usize, cols: &[usize]) {
     for (c, &col) in cols.iter().enumerate() {
         z.column_mut(col).as_mut_slice()[b0..b1].copy_from_slice(q.column(c).as_slice());
     }
+    Ok(())
 }
 
 /// The reflector H = I − τ v vᵀ with H x = (β, 0, …): x is overwritten by v (v[0] = 1 left
@@ -595,8 +603,15 @@ struct TridiagonalLu {
     l: Vec<f64>,
     /// 1 where rows i and i + 1 were swapped, else 0 (a select by exact products: no branch).
     swap: Vec<f64>,
-    /// 1 / u0.
+    /// The forward step as carry ← α carry + β x_{i+1}: (1, −l) swapped, (−l, 1) not (the
+    /// products by ±1 exact: the same sums as the branches).
+    alpha: Vec<f64>,
+    beta: Vec<f64>,
+    /// 1 / u0, u1 / u0 and u2 / u0 (the back substitution's scaled rows: one product and
+    /// one difference on its chain per row).
     inv: Vec<f64>,
+    c1: Vec<f64>,
+    c2: Vec<f64>,
 }
 
 impl TridiagonalLu {
@@ -608,7 +623,11 @@ impl TridiagonalLu {
             u2: vec![0.0; n],
             l: vec![0.0; n],
             swap: vec![0.0; n],
+            alpha: vec![0.0; n],
+            beta: vec![0.0; n],
             inv: vec![0.0; n],
+            c1: vec![0.0; n],
+            c2: vec![0.0; n],
         }
     }
 
@@ -661,8 +680,14 @@ impl TridiagonalLu {
         if last.abs() < tiny {
             *last = tiny.copysign(*last);
         }
-        for (inv, u) in self.inv[..n].iter_mut().zip(&self.u0[..n]) {
-            *inv = 1.0 / u;
+        for i in 0..n {
+            let inv = 1.0 / self.u0[i];
+            self.inv[i] = inv;
+            self.c1[i] = self.u1[i] * inv;
+            self.c2[i] = self.u2[i] * inv;
+            let s = self.swap[i];
+            self.alpha[i] = s - (1.0 - s) * self.l[i];
+            self.beta[i] = (1.0 - s) - s * self.l[i];
         }
     }
 
@@ -676,19 +701,17 @@ impl TridiagonalLu {
         let n = x.len();
         let mut carry = x[0];
         for i in 0..n - 1 {
-            // (p, q) = (x_i, x_{i+1}) or swapped; the products by 0 and 1 are exact.
+            // (x_i, carry) = (carry, x_{i+1} − l carry), or swapped (x_{i+1}, carry − l x_{i+1}).
             let (s, b) = (self.swap[i], x[i + 1]);
-            let p = s * b + (1.0 - s) * carry;
-            let q = s * carry + (1.0 - s) * b;
-            x[i] = p;
-            carry = q - self.l[i] * p;
+            x[i] = s * b + (1.0 - s) * carry;
+            carry = self.alpha[i] * carry + self.beta[i] * b;
         }
         x[n - 1] = carry * self.inv[n - 1];
         if n >= 2 {
-            x[n - 2] = (x[n - 2] - self.u1[n - 2] * x[n - 1]) * self.inv[n - 2];
+            x[n - 2] = x[n - 2] * self.inv[n - 2] - self.c1[n - 2] * x[n - 1];
         }
         for i in (0..n.saturating_sub(2)).rev() {
-            x[i] = (x[i] - self.u1[i] * x[i + 1] - self.u2[i] * x[i + 2]) * self.inv[i];
+            x[i] = (x[i] * self.inv[i] - self.c2[i] * x[i + 2]) - self.c1[i] * x[i + 1];
         }
     }
 }
