@@ -25,7 +25,12 @@
 //!
 //! **Cost.** Against a full symmetric QR with vectors ((4/3) n³ for T, (4/3) n³ to form Q,
 //! ≈ 6 n³ for the rotations on Q), this is (4/3) n³ + 2 n² k + O(n k²) for the k lowest
-//! pairs. **Accuracy.** Backward stable like the QR: eigenvalues within a small multiple of
+//! pairs: on a 219 × 219 matrix with a sagging robot's graded, 8-fold clustered spectrum
+//! and k = 150, about 4.2 ms of CPU against nalgebra's 5.9 ms (measured side by side on
+//! the shared machine). Where every vector is wanted it does not pay (0.59 ms against
+//! 0.47 ms at n = k = 78). Each block's eigenvalues are found by QL from its end of
+//! smaller diagonal entry (LAPACK `dsteqr`'s choice of QL or QR), which keeps a graded
+//! block's small eigenvalues as accurate relative to themselves as the QR's. **Accuracy.** Backward stable like the QR: eigenvalues within a small multiple of
 //! ε‖A‖ of exact, residuals ‖A y − λ y‖ ≈ ε‖A‖, the vectors orthonormal to a small multiple
 //! of ε; the unit tests hold them to nalgebra's `SymmetricEigen` on random, graded and
 //! clustered matrices.
