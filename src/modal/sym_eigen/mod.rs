@@ -641,46 +641,40 @@ impl TridiagonalLu {
         let n = d.len();
         self.n = n;
         let tiny = if tiny > 0.0 { tiny } else { f64::MIN_POSITIVE };
-        // The current row i: (a at column i, c at i + 1, f at i + 2).
+        // The current row i: (a at column i, c at i + 1; nothing further right).
         let mut a = d[0] - mu;
         let mut c = if n > 1 { e[0] } else { 0.0 };
-        let mut f = 0.0;
-        for i in 0..n {
-            if i + 1 == n {
-                self.u0[i] = a;
-                self.u1[i] = 0.0;
-                self.u2[i] = 0.0;
-                self.swap[i] = 0.0;
-                self.l[i] = 0.0;
-                break;
-            }
-            // The next row: (b at column i, dn at i + 1, en at i + 2).
+        for i in 0..n - 1 {
+            // The next row: (b at column i, dn at i + 1, en at i + 2). The pivot row is the
+            // one of larger entry in column i, the other is eliminated by it.
             let b = e[i];
             let dn = d[i + 1] - mu;
             let en = if i + 2 < n { e[i + 1] } else { 0.0 };
-            if a.abs() >= b.abs() {
-                let a0 = if a.abs() < tiny { tiny.copysign(a) } else { a };
-                let l = b / a0;
-                self.u0[i] = a0;
-                self.u1[i] = c;
-                self.u2[i] = f;
-                self.swap[i] = 0.0;
-                self.l[i] = l;
-                a = dn - l * c;
-                c = en - l * f;
-                f = 0.0;
+            let swap = a.abs() < b.abs();
+            let (pivot, other) = if swap {
+                ([b, dn, en], [a, c, 0.0])
             } else {
-                let l = a / b;
-                self.u0[i] = b;
-                self.u1[i] = dn;
-                self.u2[i] = en;
-                self.swap[i] = 1.0;
-                self.l[i] = l;
-                a = c - l * dn;
-                c = f - l * en;
-                f = 0.0;
-            }
+                ([a, c, 0.0], [b, dn, en])
+            };
+            let p0 = if pivot[0].abs() < tiny {
+                tiny.copysign(pivot[0])
+            } else {
+                pivot[0]
+            };
+            let l = other[0] / p0;
+            self.u0[i] = p0;
+            self.u1[i] = pivot[1];
+            self.u2[i] = pivot[2];
+            self.swap[i] = if swap { 1.0 } else { 0.0 };
+            self.l[i] = l;
+            a = other[1] - l * pivot[1];
+            c = other[2] - l * pivot[2];
         }
+        self.u0[n - 1] = a;
+        self.u1[n - 1] = 0.0;
+        self.u2[n - 1] = 0.0;
+        self.swap[n - 1] = 0.0;
+        self.l[n - 1] = 0.0;
         let last = &mut self.u0[n - 1];
         if last.abs() < tiny {
             *last = tiny.copysign(*last);
