@@ -6,11 +6,14 @@
 //! bordered system: ~0.24 ms per mode on `suspended_8` (fem × 10, 219 DOF), ~35 ms for its
 //! 147-mode basis. The dense model ([`crate::modal::assemble_sagged`]: the same elements,
 //! assembled in world coordinates) gives every mode at once: M = LLᵀ, the eigenpairs of
-//! L⁻¹KL⁻ᵀ (symmetric QR), u = L⁻ᵀy (M-orthonormal), O(n³): ~15 ms at 219 DOF, measured.
+//! L⁻¹KL⁻ᵀ, u = L⁻ᵀy (M-orthonormal), O(n³): ~15 ms at 219 DOF with nalgebra's symmetric QR
+//! when the threshold below was measured; the lowest pairs by [`crate::modal::sym_eigen`]
+//! now take about 4 ms of it, so the threshold is conservative (it was kept: a lower one
+//! moves smaller bases onto the dense path, unmeasured).
 //! So the dense solve is taken when n³ ≤ [`DENSE_DOF3_PER_MODE`] · K and n ≤
 //! [`MAX_DENSE_SAG_DOF`]: on `suspended_8` at fem × 10 from K ≈ 63 modes on.
 //!
-//! **Accuracy.** The symmetric QR's eigenvalues are within a small multiple of ε‖L⁻¹KL⁻ᵀ‖
+//! **Accuracy.** The dense solve's eigenvalues are within a small multiple of ε‖L⁻¹KL⁻ᵀ‖
 //! = ε λ_max of exact (backward stable), so the low modes carry an absolute error
 //! ~ε λ_max: on `suspended_8` λ_max/λ_1 ≈ 10⁷, 10⁻⁹ of λ_1, a phase error of 10⁻⁸ rad
 //! over the 2.5 s of its S-curve. Eigenvalues closer than [`CLUSTER_WIDTH_EPS`] · ε λ_max
@@ -95,9 +98,10 @@ impl Estimator {
         while kept < n && lambda[kept] - lambda[kept - 1] <= CLUSTER_REL * lambda[kept] + width {
             kept += 1;
         }
+        let vectors = solve.vectors(kept).map_err(BasisError::Estimator)?;
         Ok(Some(layout.shapes(
             &lambda[..kept],
-            &solve.vectors(kept),
+            &vectors,
             &[],
             &ee_mass,
             width,

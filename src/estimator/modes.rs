@@ -417,34 +417,36 @@ impl Estimator {
     }
 }
 
-/// Every eigenpair of K u = λ M u (dense; [`modal::standard_form`]): the eigenvalues
-/// ascending and the mass-normalised eigenvectors on demand.
+/// Every eigenvalue of K u = λ M u (dense; [`modal::standard_form`], [`modal::sym_eigen`]):
+/// ascending, and the lowest mass-normalised eigenvectors on demand.
 pub(super) struct DenseSolve {
     /// Every λ, ascending, rad²/s².
     pub(super) lambda: Vec<f64>,
     form: modal::standard_form::StandardForm,
-    /// The eigenvectors of the standard form, in the order of `lambda`.
-    y: DMatrix<f64>,
+    /// The standard form's reduction and eigenvalues (vectors on demand).
+    eig: modal::sym_eigen::SymEigen,
 }
 
 impl DenseSolve {
-    /// Solve the pencil (K, M).
+    /// Solve the pencil (K, M) for its eigenvalues.
     pub(super) fn new(k: &DMatrix<f64>, m: &DMatrix<f64>) -> Result<DenseSolve, EstimatorError> {
-        let form = modal::standard_form::StandardForm::new(k, m)?;
-        let eig = nalgebra::SymmetricEigen::new(form.c.clone());
-        let mut idx: Vec<usize> = (0..eig.eigenvalues.len()).collect();
-        idx.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+        let mut form = modal::standard_form::StandardForm::new(k, m)?;
+        let c = std::mem::replace(&mut form.c, DMatrix::zeros(0, 0));
+        let eig = modal::sym_eigen::SymEigen::new(c).map_err(modal::ModalError::from)?;
         Ok(DenseSolve {
-            lambda: idx.iter().map(|&i| eig.eigenvalues[i]).collect(),
+            lambda: eig.values().to_vec(),
             form,
-            y: eig.eigenvectors.select_columns(&idx),
+            eig,
         })
     }
 
     /// The first `count` mass-normalised eigenvectors u (columns).
-    pub(super) fn vectors(&self, count: usize) -> DMatrix<f64> {
-        let count = count.min(self.lambda.len());
-        self.form.vectors(&self.y.columns(0, count).into_owned())
+    pub(super) fn vectors(&self, count: usize) -> Result<DMatrix<f64>, EstimatorError> {
+        let y = self
+            .eig
+            .lowest_vectors(count)
+            .map_err(modal::ModalError::from)?;
+        Ok(self.form.vectors(&y))
     }
 }
 
@@ -458,7 +460,7 @@ fn dense_ee_shapes(
     count: usize,
 ) -> Result<(Vec<f64>, Vec<Vector6<f64>>, DMatrix<f64>), EstimatorError> {
     let solve = DenseSolve::new(k, m)?;
-    let u = solve.vectors(count);
+    let u = solve.vectors(count)?;
     let lambda = solve.lambda[..u.ncols()].to_vec();
     let phi = (0..u.ncols())
         .map(|c| {

@@ -26,6 +26,10 @@ pub enum ModalError {
     /// The dense mass matrix is not positive definite (bad input).
     #[error("mass matrix is not positive definite")]
     MassNotDefinite,
+    /// A dense symmetric eigen-solve failed (a non-finite entry, or its bounded iteration
+    /// ran out).
+    #[error("dense eigen-solve: {0}")]
+    DenseEigen(#[from] super::sym_eigen::SymEigenError),
     /// The model cannot be assembled densely (continuous cables).
     #[error(
         "the continuous model has no finite assembly; use fem or catenary for the dense reference"

@@ -93,6 +93,7 @@ mod shapes;
 mod solver;
 mod spectrum;
 pub mod standard_form;
+pub mod sym_eigen;
 
 pub use dense::{
     assemble, assemble_rigid, assembled_dof, check_dense_budget, condense_static,

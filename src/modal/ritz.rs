@@ -109,6 +109,12 @@ impl Envelope {
         })
     }
 
+    /// Row `i` of the factor (in the factor's order): the column of its first stored entry
+    /// and the entries from there to the diagonal (the diagonal last).
+    pub fn row(&self, i: usize) -> (usize, &[f64]) {
+        (self.first[i], &self.data[self.start[i]..self.start[i + 1]])
+    }
+
     /// Solve A x = b in place (`b` in the original order), `work` of the same length.
     pub fn solve(&self, b: &mut [f64], work: &mut [f64]) {
         let n = self.order.len();
