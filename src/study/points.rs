@@ -142,6 +142,13 @@ pub fn valid(e: &Estimate, value: f64) -> f64 {
     }
 }
 
+/// Whether `e` is ok but carries no end-effector mode: none reached the participation
+/// threshold within the scan's bounds (`crate::modal::ModalParams::max_scan_intervals`),
+/// or the end-effector mode was not asked for. The CSVs' `ee_mode_hz` is NaN there.
+pub fn ee_mode_missing(e: &Estimate) -> bool {
+    e.is_ok() && e.ee_mode.is_none()
+}
+
 /// How many of `rows` have each status.
 pub fn status_histogram(rows: &[PointResult]) -> StatusHistogram {
     let mut h = StatusHistogram::default();

@@ -11,7 +11,8 @@
 //! ([`crate::trajectory::samples::MAX_LINE_BYTES`]).
 
 use super::points::{
-    check_modes, evaluate_jobs_with, evaluate_one, status_histogram, valid, PointResult, Workers,
+    check_modes, ee_mode_missing, evaluate_jobs_with, evaluate_one, status_histogram, valid,
+    PointResult, Workers,
 };
 use super::progress::Progress;
 use super::{build, estimator_params, Param, ParamError, StudyError};
@@ -111,6 +112,7 @@ impl TrajectoryStudy {
             f1_min_hz: ok.iter().copied().fold(f64::INFINITY, f64::min),
             f1_max_hz: ok.iter().copied().fold(f64::NEG_INFINITY, f64::max),
             counts: status_histogram(rows),
+            ee_mode_missing: rows.iter().filter(|r| ee_mode_missing(&r.estimate)).count(),
         }
     }
 }
@@ -124,6 +126,8 @@ pub struct CurveSummary {
     pub f1_max_hz: f64,
     /// How many poses have each status.
     pub counts: StatusHistogram,
+    /// How many ok poses have no end-effector mode ([`super::points::ee_mode_missing`]).
+    pub ee_mode_missing: usize,
 }
 
 /// Evaluate a trajectory for each T_min (one run per T_min, consecutive poses so the
@@ -283,6 +287,7 @@ where
                     c.f1_max_hz = c.f1_max_hz.max(f);
                 }
                 c.counts.record(r.estimate.status);
+                c.ee_mode_missing += usize::from(ee_mode_missing(&r.estimate));
             }
         }
         self.done += chunk.poses.len();
@@ -357,6 +362,7 @@ where
         f1_min_hz: f64::INFINITY,
         f1_max_hz: f64::NEG_INFINITY,
         counts: StatusHistogram::default(),
+        ee_mode_missing: 0,
     };
     let mut st = Stream {
         scene: s,

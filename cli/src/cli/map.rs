@@ -10,8 +10,9 @@ use crate::report::map::{map_csv, map_svg, value_names};
 use crate::report::with_ext;
 use crate::scene::Scene;
 use crate::study::map::{self as study, Interval, MapConfig, MapResult, Shard, Tilt};
-use crate::study::points::MAX_MODES;
+use crate::study::points::{ee_mode_missing, MAX_MODES};
 use cablevib::outln;
+use cablevib::status::StatusCode;
 use clap::{Args, ValueEnum};
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
@@ -240,7 +241,22 @@ pub fn run(a: &MapArgs) -> Result<(), CliError> {
     for v in std::iter::once(value).chain(a.show.iter().copied()) {
         print_range(&m, v)?;
     }
+    if !a.no_ee_mode {
+        let missing = m.points.iter().filter(|p| ee_mode_missing(&p.estimate));
+        print_ee_mode_missing(missing.count(), m.status_counts().count(StatusCode::Ok))?;
+    }
     outln!("  wrote {}", written.join(", "))?;
+    Ok(())
+}
+
+/// One line when `missing` of the `ok` estimates carry no end-effector mode (their
+/// `ee_mode_hz` is NaN): none reached the participation threshold within the scan's bounds.
+pub fn print_ee_mode_missing(missing: usize, ok: u64) -> Result<(), CliError> {
+    if missing > 0 {
+        outln!(
+            "  end-effector mode: none found within the scan's bounds at {missing} of {ok} ok points (ee_mode_hz NaN there)"
+        )?;
+    }
     Ok(())
 }
 

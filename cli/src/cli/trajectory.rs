@@ -10,6 +10,7 @@ use crate::report::trajectory::{trajectory_svg, TrajectoryCsv};
 use crate::study::trajectory::{self as study, PathSource, TrajectoryConfig};
 use crate::trajectory::CIRCLE_RADIUS_M;
 use cablevib::outln;
+use cablevib::status::StatusCode;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -122,6 +123,12 @@ pub fn run(a: &TrajectoryArgs) -> Result<(), CliError> {
                 c.f1_max_hz,
                 c.counts.summary()
             )?;
+            if !a.no_ee_mode {
+                super::map::print_ee_mode_missing(
+                    c.ee_mode_missing,
+                    c.counts.count(StatusCode::Ok),
+                )?;
+            }
         } else {
             outln!(
                 "  T_min {tm} N: no valid estimate  statuses: {}",

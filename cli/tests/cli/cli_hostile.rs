@@ -393,6 +393,71 @@ fn directions_of_any_scale_are_the_same_direction() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
+/// `map` and `trajectory` say how many ok points carry no end-effector mode (their
+/// `ee_mode_hz` is NaN) instead of leaving the NaN unexplained: on suspended-8 with sag at
+/// (−5, −3.4, 2) m no mode reaches the participation threshold within the scan's bounds,
+/// at (−4, −3.4, 2) m one does. Before, the summary said only "statuses: ok 2".
+#[test]
+fn map_counts_ok_points_without_an_end_effector_mode() {
+    let d = temp_dir("map-ee-missing");
+    let out = d.join("m");
+    let o = run(&[
+        "map",
+        "suspended-8",
+        "--sag",
+        "true",
+        "--x=-5,-4",
+        "--y=-3.4",
+        "--z=2",
+        "--step",
+        "1",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let text = std::fs::read_to_string(out.with_extension("csv")).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| header.iter().position(|c| *c == n).unwrap();
+    let (st, ee) = (col("status"), col("ee_mode_hz"));
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let ok = rows.iter().filter(|r| r[st] == "ok").count();
+    let missing = rows
+        .iter()
+        .filter(|r| r[st] == "ok" && r[ee] == "NaN")
+        .count();
+    assert_eq!((ok, missing), (2, 1), "{text}");
+    assert!(
+        stdout
+            .contains("end-effector mode: none found within the scan's bounds at 1 of 2 ok points"),
+        "{stdout}"
+    );
+    // Without the end-effector mode asked for, nothing is missing.
+    let o = run(&[
+        "map",
+        "suspended-8",
+        "--sag",
+        "true",
+        "--x=-5,-4",
+        "--y=-3.4",
+        "--z=2",
+        "--step",
+        "1",
+        "--no-ee-mode",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("end-effector mode:"));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 /// `map` keeps grid coordinates to full precision: a grid at x = −1e-12 m is computed and
 /// written at −1e-12 m (it was snapped to 0 in the grid, so both the CSV and the pose said
 /// 0). Floating-point noise (0.25 + 7 × 0.1) is still written as 0.95.
