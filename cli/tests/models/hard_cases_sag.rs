@@ -328,16 +328,20 @@ fn sample_box(s: &Scene) -> (Vector3<f64>, Vector3<f64>) {
     (a, b)
 }
 
-#[test]
-fn random_poses_are_ok_and_finite_or_a_status() {
+/// `poses` random poses per model (FEM N = 20 and continuous) on the heavy-cable paper
+/// robot and suspended-8 with sag, each a cold start of the offline estimator (its
+/// end-effector mode scanned without a cycle budget): every ok estimate is finite, every
+/// other one NaN with a status, and both occur at least max(3, poses/30) times per model.
+fn random_poses_check(poses: usize, elements: &[(ElementKind, usize)]) {
     let mut rng = Rng(13);
+    let floor = (poses / 30).max(3);
     for scene in [heavy_paper(), Scene::load("suspended-8").expect("scene")] {
-        for (el, n) in [(ElementKind::Fem, 20), (ElementKind::Continuous, 1)] {
+        for &(el, n) in elements {
             let s = scene.with_model(el, n);
             let mut est = Estimator::new(&s).expect("estimator");
             let (lo, hi) = sample_box(&s);
             let (mut ok, mut slack, mut other) = (0, 0, 0);
-            for _ in 0..300 {
+            for _ in 0..poses {
                 let p = Vector3::from_fn(|i, _| rng.range(lo[i], hi[i]));
                 let t_min = s.t_min_n * 2.0 * 10f64.powf(rng.range(-3.0, 0.0));
                 let e = *est.update(&Pose::at(p), Tmin::Uniform(t_min));
@@ -355,8 +359,30 @@ fn random_poses_are_ok_and_finite_or_a_status() {
                 "{} {el:?}: {ok} ok, {slack} cable_slack, {other} other",
                 s.name
             );
-            assert!(ok >= 10 && slack + other >= 10, "{ok} {slack} {other}");
+            assert!(
+                ok >= floor && slack + other >= floor,
+                "{ok} {slack} {other}"
+            );
         }
+    }
+}
+
+/// 300 FEM poses and 100 continuous ones per robot (a continuous cold start scans
+/// suspended-8's end-effector mode, the ~200th, at ~12 µs an evaluation: 300 of them took
+/// ~2 minutes, the whole quick suite's longest test); the slow sweep runs 300 continuous.
+#[test]
+fn random_poses_are_ok_and_finite_or_a_status() {
+    random_poses_check(300, &[(ElementKind::Fem, 20)]);
+    random_poses_check(100, &[(ElementKind::Continuous, 1)]);
+}
+
+mod slow {
+    use super::*;
+
+    #[test]
+    #[ignore = "slow reference sweep: 300 cold continuous poses per robot"]
+    fn random_continuous_poses_are_ok_and_finite_or_a_status() {
+        random_poses_check(300, &[(ElementKind::Continuous, 1)]);
     }
 }
 
