@@ -401,22 +401,23 @@ fn directions_of_any_scale_are_the_same_direction() {
 fn map_counts_ok_points_without_an_end_effector_mode() {
     let d = temp_dir("map-ee-missing");
     let out = d.join("m");
-    let o = run(&[
-        "map",
-        "suspended-8",
-        "--sag",
-        "true",
-        "--x=-5,-4",
-        "--y=-3.4",
-        "--z=2",
-        "--step",
-        "1",
-        "--quiet",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let stdout = String::from_utf8_lossy(&o.stdout);
+    let out_s = out.to_str().unwrap();
+    let map = |extra: &[&str]| {
+        let mut args = vec![
+            "map",
+            "suspended-8",
+            "--sag",
+            "true",
+            "--x=-5,-4",
+            "--y=-3.4",
+        ];
+        args.extend(["--z=2", "--step", "1", "--quiet", "--out", out_s]);
+        args.extend(extra);
+        let o = run(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let stdout = map(&[]);
     let text = std::fs::read_to_string(out.with_extension("csv")).unwrap();
     let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
     let col = |n: &str| header.iter().position(|c| *c == n).unwrap();
@@ -438,23 +439,7 @@ fn map_counts_ok_points_without_an_end_effector_mode() {
         "{stdout}"
     );
     // Without the end-effector mode asked for, nothing is missing.
-    let o = run(&[
-        "map",
-        "suspended-8",
-        "--sag",
-        "true",
-        "--x=-5,-4",
-        "--y=-3.4",
-        "--z=2",
-        "--step",
-        "1",
-        "--no-ee-mode",
-        "--quiet",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(!String::from_utf8_lossy(&o.stdout).contains("end-effector mode:"));
+    assert!(!map(&["--no-ee-mode"]).contains("end-effector mode:"));
     let _ = std::fs::remove_dir_all(&d);
 }
 
