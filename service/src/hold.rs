@@ -612,7 +612,7 @@ mod tests {
             .map(|s| s["action"].as_str().unwrap())
             .collect();
         assert_eq!(actions.len(), 7, "every action occurs: {actions:?}");
-        let doc = serde_json::json!({
+        let mut doc = serde_json::json!({
             "about": "F1Hold cases: service/src/hold.rs writes them, examples/python/hold_f1.py must reproduce them",
             "params": {
                 "required_hz": p.required_hz,
@@ -624,6 +624,9 @@ mod tests {
             },
             "steps": steps,
         });
+        // Keys in sorted order whatever serde_json's features: `cargo test --workspace` builds
+        // it with `preserve_order` (the Python crate's), which keeps insertion order instead.
+        doc.sort_all_objects();
         let text = serde_json::to_string_pretty(&doc).unwrap() + "\n";
         let path = concat!(
             env!("CARGO_MANIFEST_DIR"),
