@@ -268,8 +268,8 @@ impl EeTracker {
         // partner sits across it), then alternately.
         let up = match m.last_side {
             SearchSide::None => m.b - m.lambda < m.lambda - m.a,
-            SearchSide::Below => false,
-            SearchSide::Above => true,
+            SearchSide::Below => true,
+            SearchSide::Above => false,
         };
         self.members[k].last_side = if up {
             SearchSide::Above
