@@ -367,7 +367,7 @@ fn hostile_script(c: &mut Client, node: &Node<Ipc>, names: &ServiceNames) {
     // 3. Hostile within tolerance: one event per 20 poses (≥ 200 samples), the track stays
     // ok.
     let mut events = [0u32; 7];
-    for k in 0..400u64 {
+    for k in 0..300u64 {
         if k % 20 == 0 {
             let which = k / 20;
             events[(which % 7) as usize] += 1;
@@ -394,7 +394,7 @@ fn hostile_script(c: &mut Client, node: &Node<Ipc>, names: &ServiceNames) {
     assert_counts(c, &sensor, "a long gap");
 
     // 5. A flood over the service's queue: the oldest overwritten, counted lost.
-    let flood = 3000;
+    let flood = 1500;
     assert!(flood > 4 * VIBRATION_BUFFER as u64);
     let taken = sensor.expected.taken;
     sensor.clean(flood);
