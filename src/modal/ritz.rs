@@ -359,9 +359,12 @@ pub fn subspace_iteration(
             mx = my;
             continue;
         }
-        // K_r = Yᵀ K Y = Yᵀ M X, M_r = Yᵀ M Y (symmetric up to rounding).
-        let mut kr = y.tr_mul(&mx);
-        let mut mr = y.tr_mul(&my);
+        // K_r = Yᵀ K Y = Yᵀ M X, M_r = Yᵀ M Y (symmetric up to rounding); Yᵀ formed, so
+        // that the products are blocked matrix products (nalgebra's `tr_mul` takes a dot
+        // product per entry, measured 4 × slower at n = 219, q = 78).
+        let yt = y.transpose();
+        let mut kr = &yt * &mx;
+        let mut mr = &yt * &my;
         symmetrise(&mut kr);
         symmetrise(&mut mr);
         let chol = mr
@@ -378,7 +381,7 @@ pub fn subspace_iteration(
         idx.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
         let v = DMatrix::from_fn(q, q, |r, c| eig.eigenvectors[(r, idx[c])]);
         // W = L⁻ᵀ V.
-        let w = linv.tr_mul(&v);
+        let w = linv.transpose() * &v;
         out.lambda = idx.iter().map(|&i| eig.eigenvalues[i]).collect();
         out.vectors = &y * &w;
         out.sweeps = sweep;
