@@ -101,8 +101,8 @@ pub const RITZ_RESIDUAL_PER_TOLERANCE: f64 = 0.01;
 /// shrinks mode j's error by λ_j/λ_{K+guard+1}; measured on the paper robot's circle, K = 39:
 /// with 9, 24 and 40 guards 414, 716 and 918 of its 943 updates met the residual bound
 /// within 3 sweeps, the rest fell back to the structured shapes; within 5 sweeps, 778 of
-/// 779 with 39 guards; 20-26 guards within 10 sweeps were ~10 % faster, but 18-19 left 25
-/// updates to the structured shapes, so K is kept: docs/vibration.md, *Speed*).
+/// 779 with 39 guards; 20-26 guards within 10 sweeps were ~10 % faster, but with 18-19
+/// only 753-754 were, so K is kept: docs/vibration.md, *Speed*).
 pub fn ritz_guard(modes: usize) -> usize {
     modes.clamp(8, 48)
 }
