@@ -97,12 +97,16 @@ pub const MAX_GROWTH: usize = 2;
 /// near-degenerate pair split by 3 %.
 pub const RITZ_RESIDUAL_PER_TOLERANCE: f64 = 0.01;
 
-/// Guard modes above K kept in the Rayleigh–Ritz start block: K, 8 ..= 48 (each sweep
+/// Guard modes above K kept in the Rayleigh–Ritz start block: 2K/3, 8 ..= 48 (each sweep
 /// shrinks mode j's error by λ_j/λ_{K+guard+1}; measured on the paper robot's circle, K = 39:
-/// with 9, 24 and 40 guards 414, 716 and 918 of its 943 updates met the residual bound,
-/// the rest fell back to the structured shapes).
+/// with 9, 24 and 40 guards 414, 716 and 918 of its 943 updates met the residual bound
+/// within 3 sweeps, the rest fell back to the structured shapes; within 5 sweeps, 778 of
+/// 779 with 39 guards; within 10 sweeps checked from the fifth
+/// ([`crate::estimator::RITZ_FIRST_CHECK`]) 778 with 20-26 guards, ~6-10 % less CPU than 39
+/// guards, but 753-754 with 18-19: 2K/3 = 26 keeps away from that cliff;
+/// docs/vibration.md, *Speed*).
 pub fn ritz_guard(modes: usize) -> usize {
-    modes.clamp(8, 48)
+    (2 * modes / 3).clamp(8, 48)
 }
 
 /// The predicted error of one interval, m.
