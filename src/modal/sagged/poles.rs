@@ -188,8 +188,8 @@ impl SagPoles {
     /// Pole j (1-based; 0 gives 0) of chain i, which has `n_poles` poles (∞ past them),
     /// from its memo or by [`pole_search`] over `eval` (chain i's evaluation), bracketed by
     /// the chain's memoized neighbours, from the last load's value or else from `near`.
-    /// With `scale` (the chain's string scale at this load, 1/s², `SagChain::string_scale`;
-    /// NaN: not scaled), the last load's value is scaled by the ratio of the chain's string
+    /// With `scale` (the chain's string scale at this load, 1/s², `SagChain::string_scale`,
+    /// asked only where a search is needed; NaN: not scaled), the last load's value is scaled by the ratio of the chain's string
     /// scales now and at that load: a chain's poles move with its tension and length
     /// (a taut string's as T/(m L)), so a study's next point (a map's grid step away)
     /// starts within a few per cent of the pole where the unscaled value is off by the
@@ -202,15 +202,16 @@ impl SagPoles {
         n_poles: usize,
         near: f64,
         allowance: u32,
-        scale: f64,
+        scale: impl Fn() -> f64,
         eval: impl Fn(f64) -> SagChainEval,
     ) -> f64 {
-        let scaled = !scale.is_nan();
         let memo = |k: usize| self.memo_at(i, k, n_poles, false);
         let v = memo(j);
         if !v.is_nan() {
             return v;
         }
+        let scale = scale();
+        let scaled = !scale.is_nan();
         let slot = (j <= self.per_chain).then(|| i * self.per_chain + j - 1);
         // Bracket from the nearest memoized neighbours (a few on each side).
         let mut lo = 0.0;
