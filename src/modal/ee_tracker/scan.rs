@@ -337,7 +337,8 @@ impl ScanState {
     /// No mode above the ones solved can reach the threshold `thr`: by the plain sum rule
     /// (`bound`'s docs), every mode above holds at most Σ_k p_k over all modes (`total`)
     /// less what the solved ones hold, each of those within [`P_ROOT_ERR`]. Only for a
-    /// scan from zero that has read every mode below, with no answer yet. Why: where no
+    /// scan from zero without a cycle budget that has read every mode below, with no
+    /// answer yet. Why: where no
     /// mode reaches the threshold the walk would otherwise go on to the model's cap; on
     /// suspended-8 at N = 40 the plain rule's remainder drops below 0.5 near mode 300-470
     /// of 939.
@@ -382,6 +383,9 @@ impl EeTracker {
         let begin = f.evaluations();
         if st.max_intervals == 0 {
             st.max_intervals = ScanState::cap(f);
+            // The sum rule's stop only without a cycle budget (the real-time scans keep
+            // theirs).
+            st.p_exact &= f.budget == u32::MAX;
         }
         if st.spent == 0 && !f.view.poles_known() && f.budget != u32::MAX {
             // Within a cycle's budget the sweep: the poles a walk needs are searched again
