@@ -158,7 +158,12 @@ pub struct ModalParams {
     pub max_evaluations: u32,
     /// Relative step size at which Newton stops.
     pub rel_tol: f64,
-    /// Largest number of pole intervals scanned for the end-effector mode.
+    /// Largest number of pole intervals (or, where the count alone shows the poles, modes)
+    /// scanned for the end-effector mode. Without a cycle budget on sagged FEM chains (poles
+    /// searched) the scan may pass at least the model's count of modes (its dimension plus
+    /// the chains' blocked DOFs; ~940 on suspended-8 at 40 elements), which bounds its pole
+    /// intervals: the answer is found wherever it lies, and a scan from zero stops once the
+    /// plain sum rule leaves less than the threshold to the modes above.
     pub max_scan_intervals: u32,
     /// Largest number of D(λ) evaluations one end-effector scan may spend (over all the
     /// cycles it is continued in).

@@ -209,6 +209,17 @@ impl SagChain {
         self.l0_m
     }
 
+    /// The string scale T̄/(m L) of the chain, 1/s² (T̄ its elements' mean tension, N; m
+    /// its mass, kg; L its length along the chords, m): a taut string's eigenvalues are
+    /// (jπ)² times it, so a chain's blocked eigenvalues move roughly with it from one pose
+    /// to the next (a pole search's start). NaN when nothing is set.
+    pub fn string_scale(&self) -> f64 {
+        let n = self.axial_n.len() as f64;
+        let t = self.axial_n.iter().sum::<f64>() / n;
+        let l = self.chord_m.iter().sum::<f64>();
+        t / (self.mass_kg * n * l)
+    }
+
     /// Number of blocked (end held) eigenvalues: 3(N − 1) when the cable has mass, plus
     /// the hidden cable's and the junction's when the anchor is supported.
     pub fn blocked_modes(&self) -> usize {

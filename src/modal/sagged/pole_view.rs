@@ -41,8 +41,15 @@ impl SagChains {
     pub(super) fn chain_pole(&self, i: usize, j: usize, near: f64, scaled: bool) -> f64 {
         let chain = &self.chains[i];
         let allowance = self.pole_allowance();
+        let scale = || {
+            if scaled {
+                chain.string_scale()
+            } else {
+                f64::NAN
+            }
+        };
         self.poles
-            .get(i, j, chain.blocked_modes(), near, allowance, scaled, |x| {
+            .get(i, j, chain.blocked_modes(), near, allowance, scale, |x| {
                 chain.eval(x)
             })
     }

@@ -36,7 +36,9 @@ const POLE_STEP: f64 = 1e-12;
 /// Newton update once a step is below this (relative): g is nearly linear next to the pole
 /// (S ≈ r/(p − λ)), so the update is within ~step² (1e-16, relative) of it, well inside the
 /// 1e-10 the searches that use the poles need; the last steps to [`POLE_STEP`], which
-/// bounce in g's rounding, cost one to three chain evaluations more a pole.
+/// bounce in g's rounding, cost one to three chain evaluations more a pole. (1e-6 would
+/// save one chain evaluation on most poles from the string-scaled start, but lost the
+/// end-effector mode at one point of suspended-8's sagged map.)
 const WALK_POLE_STEP: f64 = 1e-8;
 /// ... or its count bracket narrower than this (relative). Why: next to a pole S is
 /// capped by the recurrence's pivot nudge (ε·the largest element stiffness) and its
@@ -66,8 +68,13 @@ pub(in crate::modal) struct SagPoles {
     memo: Vec<AtomicU64>,
     /// The same poles at the last load where they were computed (the searches' start) ...
     hint: Vec<f64>,
-    /// ... and that load's number.
+    /// ... and that load's number ...
     hint_load: Vec<u32>,
+    /// ... and the chain's string scale at that load (`SagChain::string_scale`, 1/s²;
+    /// NaN: not known), which this load's scale divides for the walk's starts ...
+    hint_scale: Vec<f64>,
+    /// ... kept with each pole computed at this load (f64 bits).
+    memo_scale: Vec<AtomicU64>,
     /// Loads so far (a wrapping counter).
     load: u32,
     per_chain: usize,
@@ -85,6 +92,12 @@ impl Clone for SagPoles {
                 .collect(),
             hint: self.hint.clone(),
             hint_load: self.hint_load.clone(),
+            hint_scale: self.hint_scale.clone(),
+            memo_scale: self
+                .memo_scale
+                .iter()
+                .map(|e| AtomicU64::new(e.load(Ordering::Relaxed)))
+                .collect(),
             load: self.load,
             per_chain: self.per_chain,
             chain_evaluations: AtomicU64::new(self.chain_evaluations.load(Ordering::Relaxed)),
@@ -101,6 +114,10 @@ impl SagPoles {
                 .collect(),
             hint: vec![f64::NAN; n_chains * per_chain],
             hint_load: vec![0; n_chains * per_chain],
+            hint_scale: vec![f64::NAN; n_chains * per_chain],
+            memo_scale: (0..n_chains * per_chain)
+                .map(|_| AtomicU64::new(MEMO_EMPTY))
+                .collect(),
             load: 0,
             per_chain,
             chain_evaluations: AtomicU64::new(0),
@@ -110,18 +127,21 @@ impl SagPoles {
     /// A new load: every computed pole becomes the next search's start.
     pub(in crate::modal) fn clear(&mut self) {
         let load = self.load;
-        for ((e, h), at) in self
+        for (((e, h), at), (sc, msc)) in self
             .memo
             .iter_mut()
             .zip(&mut self.hint)
             .zip(&mut self.hint_load)
+            .zip(self.hint_scale.iter_mut().zip(&mut self.memo_scale))
         {
             let bits = *e.get_mut();
             if bits != MEMO_EMPTY {
                 *h = f64::from_bits(bits);
                 *at = load;
+                *sc = f64::from_bits(*msc.get_mut());
             }
             *e.get_mut() = MEMO_EMPTY;
+            *msc.get_mut() = MEMO_EMPTY;
         }
         self.load = load.wrapping_add(1);
     }
@@ -168,8 +188,12 @@ impl SagPoles {
     /// Pole j (1-based; 0 gives 0) of chain i, which has `n_poles` poles (∞ past them),
     /// from its memo or by [`pole_search`] over `eval` (chain i's evaluation), bracketed by
     /// the chain's memoized neighbours, from the last load's value or else from `near`.
-    /// With `scaled`, the last load's value is scaled by the ratio of pole j − 1 at this
-    /// load to the same load's value of it ([`scaled_start`]).
+    /// With `scale` (the chain's string scale at this load, 1/s², `SagChain::string_scale`,
+    /// asked only where a search is needed; NaN: not scaled), the last load's value is scaled by the ratio of the chain's string
+    /// scales now and at that load: a chain's poles move with its tension and length
+    /// (a taut string's as T/(m L)), so a study's next point (a map's grid step away)
+    /// starts within a few per cent of the pole where the unscaled value is off by the
+    /// step's whole change (10-40 % on the paper robot at 0.25 m).
     #[allow(clippy::too_many_arguments)]
     pub(in crate::modal) fn get(
         &self,
@@ -178,7 +202,7 @@ impl SagPoles {
         n_poles: usize,
         near: f64,
         allowance: u32,
-        scaled: bool,
+        scale: impl Fn() -> f64,
         eval: impl Fn(f64) -> SagChainEval,
     ) -> f64 {
         let memo = |k: usize| self.memo_at(i, k, n_poles, false);
@@ -186,6 +210,8 @@ impl SagPoles {
         if !v.is_nan() {
             return v;
         }
+        let scale = scale();
+        let scaled = !scale.is_nan();
         let slot = (j <= self.per_chain).then(|| i * self.per_chain + j - 1);
         // Bracket from the nearest memoized neighbours (a few on each side).
         let mut lo = 0.0;
@@ -205,12 +231,11 @@ impl SagPoles {
             }
         }
         let mut hint = slot.map_or(f64::NAN, |s| self.hint[s]);
-        if let (true, Some(s)) = (scaled && j >= 2, slot) {
-            hint = scaled_start(
-                hint,
-                (memo(j - 1), self.hint[s - 1]),
-                self.hint_load[s] == self.hint_load[s - 1],
-            );
+        if let (true, Some(s)) = (scaled, slot) {
+            let ratio = scale / self.hint_scale[s];
+            if ratio.is_finite() && ratio > 0.0 {
+                hint *= ratio;
+            }
         }
         let hint = if hint > lo && hint < hi { hint } else { near };
         let accept = if scaled { WALK_POLE_STEP } else { POLE_STEP };
@@ -219,24 +244,9 @@ impl SagPoles {
             .fetch_add(u64::from(spent), Ordering::Relaxed);
         if let (Some(s), false) = (slot, p.is_nan()) {
             self.memo[s].store(p.to_bits(), Ordering::Relaxed);
+            self.memo_scale[s].store(scale.to_bits(), Ordering::Relaxed);
         }
         p
-    }
-}
-
-/// The start of a pole's search from its value `then` at an earlier load, scaled by the
-/// ratio of the pole below it now and at that load (`below`: (now, then); `same_load`:
-/// both values are of one load): a chain's poles move together with its tension and
-/// length (a taut string's scale as T/(μL²)), so a study's next point (a map's grid step
-/// away) starts within ~1e-3 of the pole where the unscaled value is off by the step's
-/// whole change (10-30 % on the paper robot at 0.25 m). `then` itself where the ratio is
-/// not known.
-fn scaled_start(then: f64, below: (f64, f64), same_load: bool) -> f64 {
-    let (now_below, then_below) = below;
-    if same_load && now_below > 0.0 && then_below > 0.0 && now_below.is_finite() {
-        then * (now_below / then_below)
-    } else {
-        then
     }
 }
 
