@@ -30,7 +30,7 @@ pub const MAX_RITZ_DOF: usize = 1500;
 /// eigen-solve too). Measured on the paper robot's circle (K = 39, 863 bases): at most 3
 /// sweeps left 34 bases to the structured shapes (about 13 ms each against ~2 ms for the
 /// update), at most 5 the first basis and one more (778 of 779 updates by Rayleigh–Ritz);
-/// with 2K/3 guard modes ([`crate::study::simulate::updates::ritz_guard`]) and the first
+/// with 2K/3 guard modes (the number `simulate`'s update policy passes) and the first
 /// check at the fifth sweep, at most 10 give the same 778.
 pub const RITZ_SWEEPS: usize = 10;
 
