@@ -30,7 +30,10 @@
 //! chains' band and `dim` full rows ([`Envelope`]), O(n) to factor and to solve; a sweep
 //! costs O(n q) for the solves and products and O(n q² + q³) for the small problem.
 
-use nalgebra::{DMatrix, SymmetricEigen};
+use nalgebra::{DMatrix, Dyn, SymmetricEigen};
+
+/// The most sweeps [`RitzParams::max_sweeps`] may ask for.
+pub const MAX_SWEEPS: usize = 16;
 
 /// Why an update was not made.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -53,7 +56,7 @@ pub enum RitzError {
 pub struct RitzParams {
     /// Largest relative residual ρ of a kept mode (module docs).
     pub max_residual: f64,
-    /// Most sweeps (1 ..= 8).
+    /// Most sweeps (1 ..= [`MAX_SWEEPS`]).
     pub max_sweeps: usize,
     /// The first sweep whose Ritz pairs are formed and checked (≤ `max_sweeps`; the first
     /// sweeps from a previous pose's shapes cannot meet a small bound). The sweeps before
@@ -160,10 +163,24 @@ impl Envelope {
                 work[i * q + c] = b[(o, c)];
             }
         }
+        self.solve_rows(work, q);
+        for (i, &o) in self.order.iter().enumerate() {
+            for c in 0..q {
+                b[(o, c)] = work[i * q + c];
+            }
+        }
+    }
+
+    /// Solve A X = B in place for `q` right-hand sides held by rows in the factor's order
+    /// (`x[i·q + c]` is row i of column c, `x` n·q long): each row of the factor is applied
+    /// to the q values of a row together.
+    pub fn solve_rows(&self, x: &mut [f64], q: usize) {
+        let n = self.order.len();
+        debug_assert_eq!(x.len(), n * q);
         for i in 0..n {
             let row = &self.data[self.start[i]..self.start[i + 1]];
             let (off, diag) = row.split_at(row.len() - 1);
-            let (done, rest) = work.split_at_mut(i * q);
+            let (done, rest) = x.split_at_mut(i * q);
             let wi = &mut rest[..q];
             for (k, l) in off.iter().enumerate() {
                 let wk = &done[(self.first[i] + k) * q..(self.first[i] + k + 1) * q];
@@ -177,7 +194,7 @@ impl Envelope {
         for i in (0..n).rev() {
             let row = &self.data[self.start[i]..self.start[i + 1]];
             let (off, diag) = row.split_at(row.len() - 1);
-            let (before, rest) = work.split_at_mut(i * q);
+            let (before, rest) = x.split_at_mut(i * q);
             let wi = &mut rest[..q];
             let d = 1.0 / diag[0];
             wi.iter_mut().for_each(|x| *x *= d);
@@ -188,15 +205,16 @@ impl Envelope {
                 }
             }
         }
-        for (i, &o) in self.order.iter().enumerate() {
-            for c in 0..q {
-                b[(o, c)] = work[i * q + c];
-            }
-        }
+    }
+
+    /// The factor's order: row i of the factor is row `order()[i]` of the matrix.
+    pub fn order(&self) -> &[usize] {
+        &self.order
     }
 }
 
-/// A symmetric matrix's nonzeros by rows, for products.
+/// A symmetric matrix's nonzeros by rows, in a given order of its rows and columns, for
+/// products with blocks held by rows.
 struct Sparse {
     start: Vec<usize>,
     cols: Vec<usize>,
@@ -204,18 +222,18 @@ struct Sparse {
 }
 
 impl Sparse {
-    fn new(a: &DMatrix<f64>) -> Sparse {
-        let n = a.nrows();
+    /// `a`'s nonzeros with its rows and columns taken in `order`.
+    fn new(a: &DMatrix<f64>, order: &[usize]) -> Sparse {
         let mut s = Sparse {
             start: vec![0],
             cols: Vec::new(),
             vals: Vec::new(),
         };
-        for r in 0..n {
-            for c in 0..n {
+        for &r in order {
+            for (j, &c) in order.iter().enumerate() {
                 let v = a[(r, c)];
                 if v != 0.0 {
-                    s.cols.push(c);
+                    s.cols.push(j);
                     s.vals.push(v);
                 }
             }
@@ -224,16 +242,44 @@ impl Sparse {
         s
     }
 
-    /// A x into `y`.
-    fn mul(&self, x: &[f64], y: &mut [f64]) {
-        for (r, yr) in y.iter_mut().enumerate() {
-            let mut s = 0.0;
+    /// A X into `y` for `q` columns held by rows (as [`Envelope::solve_rows`]).
+    fn mul_rows(&self, x: &[f64], y: &mut [f64], q: usize) {
+        for (r, yr) in y.chunks_exact_mut(q).enumerate() {
+            yr.fill(0.0);
             for i in self.start[r]..self.start[r + 1] {
-                s += self.vals[i] * x[self.cols[i]];
+                let v = self.vals[i];
+                let at = self.cols[i] * q;
+                for (a, b) in yr.iter_mut().zip(&x[at..at + q]) {
+                    *a += v * b;
+                }
             }
-            *yr = s;
         }
     }
+}
+
+/// An n × q block held by rows (`data[i·q + c]`) as a matrix view.
+fn by_rows(data: &[f64], n: usize, q: usize) -> nalgebra::DMatrixView<'_, f64, Dyn, Dyn> {
+    nalgebra::DMatrixView::from_slice_with_strides(data, n, q, q, 1)
+}
+
+/// The transpose (q × n) of an n × q block held by rows: the same numbers by columns.
+fn by_rows_transposed(data: &[f64], n: usize, q: usize) -> nalgebra::DMatrixView<'_, f64> {
+    nalgebra::DMatrixView::from_slice(data, q, n)
+}
+
+/// `y` (n × `w.ncols()`, held by rows) ← A W, A n × q held by rows.
+fn product_by_rows<S: nalgebra::Storage<f64, Dyn, Dyn>>(
+    a: &[f64],
+    n: usize,
+    q: usize,
+    w: &nalgebra::Matrix<f64, Dyn, Dyn, S>,
+    y: &mut Vec<f64>,
+) {
+    let cols = w.ncols();
+    y.clear();
+    y.resize(n * cols, 0.0);
+    let mut out = nalgebra::DMatrixViewMut::from_slice_with_strides_mut(y, n, cols, cols, 1);
+    out.gemm(1.0, &by_rows(a, n, q), w, 0.0);
 }
 
 /// `a` ← (a + aᵀ)/2, in place (square).
@@ -298,7 +344,9 @@ impl Ritz {
 /// The subspace iteration of the module docs on `k`, `m` (n × n, symmetric, positive
 /// definite; `dim` end-effector DOFs first, ordered last for the factors) from the start
 /// block `x` (n × q): sweeps until the first `checked` Ritz pairs have ρ ≤
-/// `params.max_residual` or `params.max_sweeps` are made.
+/// `params.max_residual` or `params.max_sweeps` are made. The blocks are held by rows in
+/// the factors' order between the sweeps, so that the envelope solves and the sparse
+/// products run along a row's q values and the block products take them as they lie.
 pub fn subspace_iteration(
     k: &DMatrix<f64>,
     m: &DMatrix<f64>,
@@ -317,54 +365,68 @@ pub fn subspace_iteration(
     let order: Vec<usize> = (dim.min(n)..n).chain(0..dim.min(n)).collect();
     let kf = Envelope::factor(k, &order).ok_or(RitzError::NotPositive("K"))?;
     let mf = Envelope::factor(m, &order).ok_or(RitzError::NotPositive("M"))?;
-    let ms = Sparse::new(m);
+    let ms = Sparse::new(m, &order);
     let q = x.ncols();
     let checked = checked.min(q);
-    let mut block = Vec::new();
-    let mut mx = DMatrix::zeros(n, q);
     let mut out = Ritz {
         lambda: Vec::new(),
         vectors: DMatrix::zeros(n, q),
         residual: Vec::new(),
         sweeps: 0,
     };
-    for c in 0..q {
-        ms.mul(x.column(c).as_slice(), mx.column_mut(c).as_mut_slice());
+    // X by rows in the factors' order, and M X.
+    let mut y = vec![0.0; n * q];
+    for (i, &o) in order.iter().enumerate() {
+        for (c, v) in y[i * q..(i + 1) * q].iter_mut().enumerate() {
+            *v = x[(o, c)];
+        }
     }
-    let sweeps = params.max_sweeps.clamp(1, 8);
+    let mut mx = vec![0.0; n * q];
+    ms.mul_rows(&y, &mut mx, q);
+    let mut my = vec![0.0; n * q];
+    let mut norms = vec![0.0; q];
+    let (mut kphi, mut mphi, mut r) = (Vec::new(), Vec::new(), Vec::new());
+    let sweeps = params.max_sweeps.clamp(1, MAX_SWEEPS);
     let first_check = params.min_sweeps.clamp(1, sweeps);
     for sweep in 1..=sweeps {
         // Y = K⁻¹ M X, and M Y.
-        let mut y = mx.clone();
-        kf.solve_columns(&mut y, &mut block);
-        let mut my = DMatrix::zeros(n, q);
-        for c in 0..q {
-            ms.mul(y.column(c).as_slice(), my.column_mut(c).as_mut_slice());
-        }
+        y.copy_from_slice(&mx);
+        kf.solve_rows(&mut y, q);
+        ms.mul_rows(&y, &mut my, q);
+        out.sweeps = sweep;
         if sweep < first_check {
             // Before the first check only the span matters: span((K⁻¹M)^s X) is the same
             // with or without a Rayleigh–Ritz step between the sweeps, so the columns are
             // only M-normalised (the start block is near the modes: they stay far from
-            // parallel over the few sweeps before a check).
-            for c in 0..q {
-                let norm = y.column(c).dot(&my.column(c));
-                if !(norm > 0.0 && norm.is_finite()) {
+            // parallel over the few sweeps before a check). Y itself is not kept: the next
+            // sweep starts from M Y.
+            norms.fill(0.0);
+            for (yr, mr) in y.chunks_exact(q).zip(my.chunks_exact(q)) {
+                for ((s, a), b) in norms.iter_mut().zip(yr).zip(mr) {
+                    *s += a * b;
+                }
+            }
+            for s in norms.iter_mut() {
+                if !(*s > 0.0 && s.is_finite()) {
                     return Err(RitzError::NotPositive("the block's M"));
                 }
-                let scale = 1.0 / norm.sqrt();
-                y.column_mut(c).scale_mut(scale);
-                my.column_mut(c).scale_mut(scale);
+                *s = 1.0 / s.sqrt();
             }
-            out.sweeps = sweep;
-            mx = my;
+            for mr in my.chunks_exact_mut(q) {
+                for (a, s) in mr.iter_mut().zip(&norms) {
+                    *a *= s;
+                }
+            }
+            std::mem::swap(&mut mx, &mut my);
             continue;
         }
-        // K_r = Yᵀ K Y = Yᵀ M X, M_r = Yᵀ M Y (symmetric up to rounding); Yᵀ formed, so
-        // that the products are blocked matrix products (nalgebra's `tr_mul` takes a dot
-        // product per entry, measured 4 × slower at n = 219, q = 78).
-        let yt = y.transpose();
-        let mut kr = &yt * &mx;
-        let mut mr = &yt * &my;
+        // K_r = Yᵀ K Y = Yᵀ M X, M_r = Yᵀ M Y (symmetric up to rounding), blocked matrix
+        // products on the blocks as they lie (Yᵀ by columns is Y by rows).
+        let yt = by_rows_transposed(&y, n, q);
+        let mut kr = DMatrix::zeros(q, q);
+        kr.gemm(1.0, &yt, &by_rows(&mx, n, q), 0.0);
+        let mut mr = DMatrix::zeros(q, q);
+        mr.gemm(1.0, &yt, &by_rows(&my, n, q), 0.0);
         symmetrise(&mut kr);
         symmetrise(&mut mr);
         let chol = mr
@@ -383,31 +445,47 @@ pub fn subspace_iteration(
         // W = L⁻ᵀ V.
         let w = linv.transpose() * &v;
         out.lambda = idx.iter().map(|&i| eig.eigenvalues[i]).collect();
-        out.vectors = &y * &w;
-        out.sweeps = sweep;
         // The checked pairs' residuals: M Φ = M Y W; K Φ = K Y W = M X W.
-        out.residual.clear();
         let wc = w.columns(0, checked);
-        let kphi = &mx * wc;
-        let mut r0 = &my * wc;
-        for j in 0..checked {
-            let lam = out.lambda[j];
-            for i in 0..n {
-                r0[(i, j)] = kphi[(i, j)] - lam * r0[(i, j)];
+        product_by_rows(&mx, n, q, &wc, &mut kphi);
+        product_by_rows(&my, n, q, &wc, &mut mphi);
+        for (kr, mr) in kphi
+            .chunks_exact_mut(checked)
+            .zip(mphi.chunks_exact(checked))
+        {
+            for ((a, b), lam) in kr.iter_mut().zip(mr).zip(&out.lambda) {
+                *a -= lam * b;
             }
         }
-        let mut r = r0.clone();
-        mf.solve_columns(&mut r, &mut block);
-        for j in 0..checked {
-            let lam = out.lambda[j];
-            let norm = r0.column(j).dot(&r.column(j)).max(0.0).sqrt();
-            out.residual
-                .push(if lam > 0.0 { norm / lam } else { f64::INFINITY });
+        r.clone_from(&kphi);
+        mf.solve_rows(&mut r, checked);
+        norms[..checked].fill(0.0);
+        for (r0, ri) in kphi.chunks_exact(checked).zip(r.chunks_exact(checked)) {
+            for ((s, a), b) in norms.iter_mut().zip(r0).zip(ri) {
+                *s += a * b;
+            }
         }
-        if out.max_residual() <= params.max_residual {
+        out.residual.clear();
+        out.residual
+            .extend(norms[..checked].iter().zip(&out.lambda).map(|(&s, &lam)| {
+                if lam > 0.0 {
+                    s.max(0.0).sqrt() / lam
+                } else {
+                    f64::INFINITY
+                }
+            }));
+        if out.max_residual() <= params.max_residual || sweep == sweeps {
+            // Φ = Y W, back in the assembly's order.
+            product_by_rows(&y, n, q, &w, &mut kphi);
+            for (i, &o) in order.iter().enumerate() {
+                for (c, v) in kphi[i * q..(i + 1) * q].iter().enumerate() {
+                    out.vectors[(o, c)] = *v;
+                }
+            }
             break;
         }
-        mx = &my * &w;
+        // The next sweep's M X = M Y W.
+        product_by_rows(&my, n, q, &w, &mut mx);
     }
     Ok(out)
 }
