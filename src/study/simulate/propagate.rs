@@ -25,6 +25,7 @@ use super::added_load::{AddedLoads, SampleState};
 use super::{pilot, solve_pose, updates, Accuracy, SampledPath, SimulateConfig, SimulateResult};
 use crate::estimator::{EeModalBasis, Estimator};
 use crate::modal::response::{ModalResponse, MAX_RESPONSE_MODES};
+use crate::modal::ritz::RitzSchedule;
 use crate::modal::ModeShapes;
 use crate::scene::{Damping, Scene};
 use crate::study::StudyError;
@@ -38,8 +39,17 @@ fn basis_at(
     t: f64,
     modes: usize,
 ) -> Result<Update, StudyError> {
-    shapes_at(est, scene, p, t, modes, None, 0.0)?
-        .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
+    shapes_at(
+        est,
+        scene,
+        p,
+        t,
+        modes,
+        None,
+        0.0,
+        &mut RitzSchedule::default(),
+    )?
+    .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
 }
 
 /// A basis update: the basis, the start block of the next Rayleigh–Ritz update (the kept
@@ -63,10 +73,11 @@ fn shapes_at(
     modes: usize,
     space: Option<&ModeShapes>,
     max_residual: f64,
+    schedule: &mut RitzSchedule,
 ) -> Result<Result<Update, crate::estimator::BasisError>, StudyError> {
     solve_pose(est, scene, p, t)?;
     if let Some(start) = space {
-        match est.ee_modal_basis_ritz(start, modes, max_residual) {
+        match est.ee_modal_basis_ritz(start, modes, max_residual, schedule) {
             Ok(Some(r)) => {
                 return Ok(Ok(Update {
                     basis: r.basis,
@@ -344,6 +355,8 @@ pub(super) fn run(
     let first = basis_at(est, scene, &path.positions_m[0], 0.0, modes)?;
     let mut held = first.basis;
     let mut space = first.space;
+    // When each Rayleigh–Ritz update is first checked, learned along the path.
+    let mut schedule = RitzSchedule::default();
     f1_seen(est, out);
     install(&mut resp, &held, None, &damping, 0.0)?;
     // The convective load and the external force, each on the same modes (`added_load`).
@@ -475,6 +488,7 @@ pub(super) fn run(
                     modes,
                     start,
                     max_residual,
+                    &mut schedule,
                 )? {
                     Ok(b) => break (k1, b),
                     Err(e) => {
