@@ -363,17 +363,20 @@ impl Sparse {
     }
 }
 
-/// An n × q block held by rows (`data[i·q + c]`) as a matrix view.
-fn by_rows(data: &[f64], n: usize, q: usize) -> nalgebra::DMatrixView<'_, f64, Dyn, Dyn> {
-    nalgebra::DMatrixView::from_slice_with_strides(data, n, q, q, 1)
-}
-
-/// The transpose (q × n) of an n × q block held by rows: the same numbers by columns.
+/// The transpose (q × n) of an n × q block held by rows (`data[i·q + c]`): the same
+/// numbers by columns. (The blocks are only ever viewed this way, contiguously: nalgebra's
+/// products on views with a row stride other than 1 wrote out of bounds at small sizes.)
 fn by_rows_transposed(data: &[f64], n: usize, q: usize) -> nalgebra::DMatrixView<'_, f64> {
     nalgebra::DMatrixView::from_slice(data, q, n)
 }
 
-/// `y` (n × `w.ncols()`, held by rows) ← A W, A n × q held by rows.
+/// Bᵀ C for two n × q blocks held by rows (q × q): (Bᵀ)·(Cᵀ)ᵀ, Cᵀ copied by columns.
+fn gram_by_rows(b: &[f64], c: &[f64], n: usize, q: usize) -> DMatrix<f64> {
+    by_rows_transposed(b, n, q) * by_rows_transposed(c, n, q).transpose()
+}
+
+/// `y` (n × `w.ncols()`, held by rows) ← A W, A n × q held by rows: yᵀ = Wᵀ Aᵀ, every
+/// operand by columns.
 fn product_by_rows<S: nalgebra::Storage<f64, Dyn, Dyn>>(
     a: &[f64],
     n: usize,
@@ -382,10 +385,11 @@ fn product_by_rows<S: nalgebra::Storage<f64, Dyn, Dyn>>(
     y: &mut Vec<f64>,
 ) {
     let cols = w.ncols();
-    y.clear();
+    // Every entry is written (β = 0: `y` is not read), so a buffer of the right size is
+    // taken as it is.
     y.resize(n * cols, 0.0);
-    let mut out = nalgebra::DMatrixViewMut::from_slice_with_strides_mut(y, n, cols, cols, 1);
-    out.gemm(1.0, &by_rows(a, n, q), w, 0.0);
+    let mut out = nalgebra::DMatrixViewMut::from_slice(y, cols, n);
+    out.gemm(1.0, &w.transpose(), &by_rows_transposed(a, n, q), 0.0);
 }
 
 /// `a` ← (a + aᵀ)/2, in place (square).
@@ -551,8 +555,7 @@ pub fn subspace_iteration(
             } else {
                 // M-orthonormalise the block (Cholesky-QR, X = Y L⁻ᵀ with L Lᵀ = Yᵀ M Y):
                 // the columns are kept apart at a third of a check's cost.
-                let mut mr = DMatrix::zeros(q, q);
-                mr.gemm(1.0, &by_rows_transposed(&y, n, q), &by_rows(&my, n, q), 0.0);
+                let mut mr = gram_by_rows(&y, &my, n, q);
                 symmetrise(&mut mr);
                 let linv = mr
                     .cholesky()
@@ -564,12 +567,9 @@ pub fn subspace_iteration(
             continue;
         }
         // K_r = Yᵀ K Y = Yᵀ M X, M_r = Yᵀ M Y (symmetric up to rounding), blocked matrix
-        // products on the blocks as they lie (Yᵀ by columns is Y by rows).
-        let yt = by_rows_transposed(&y, n, q);
-        let mut kr = DMatrix::zeros(q, q);
-        kr.gemm(1.0, &yt, &by_rows(&mx, n, q), 0.0);
-        let mut mr = DMatrix::zeros(q, q);
-        mr.gemm(1.0, &yt, &by_rows(&my, n, q), 0.0);
+        // products (Yᵀ by columns is Y by rows).
+        let mut kr = gram_by_rows(&y, &mx, n, q);
+        let mut mr = gram_by_rows(&y, &my, n, q);
         symmetrise(&mut kr);
         symmetrise(&mut mr);
         let chol = mr
@@ -803,5 +803,38 @@ mod tests {
         // Far below the bound: at the second sweep at the earliest.
         s.learn(&ritz(2, 1e-12, Some(0.1)), 1e-5);
         assert_eq!(s.first_check(), 2);
+    }
+
+    /// The products on blocks held by rows equal nalgebra's on the same matrices by
+    /// columns, small sizes (nalgebra's own loops) and large (matrixmultiply) alike.
+    #[test]
+    fn products_by_rows_equal_the_plain_products() {
+        for (n, q, cols) in [(5, 3, 2), (7, 1, 1), (40, 12, 9), (219, 52, 39)] {
+            let a = DMatrix::from_fn(n, q, |r, c| ((r * 31 + c * 17) % 13) as f64 - 6.0);
+            let w = DMatrix::from_fn(q, cols, |r, c| ((r * 7 + c * 5) % 11) as f64 - 5.0);
+            let rows: Vec<f64> = (0..n)
+                .flat_map(|r| (0..q).map(move |c| (r, c)))
+                .map(|(r, c)| a[(r, c)])
+                .collect();
+            let mut y = vec![1.0; 3];
+            product_by_rows(&rows, n, q, &w, &mut y);
+            let plain = &a * &w;
+            for r in 0..n {
+                for c in 0..cols {
+                    assert_eq!(
+                        y[r * cols + c],
+                        plain[(r, c)],
+                        "{n}x{q}x{cols} at ({r}, {c})"
+                    );
+                }
+            }
+            let b: Vec<f64> = rows.iter().map(|v| 0.5 * v + 1.0).collect();
+            let bm = a.map(|v| 0.5 * v + 1.0);
+            assert_eq!(
+                gram_by_rows(&rows, &b, n, q),
+                a.transpose() * &bm,
+                "{n}x{q}"
+            );
+        }
     }
 }
