@@ -39,17 +39,8 @@ fn basis_at(
     t: f64,
     modes: usize,
 ) -> Result<Update, StudyError> {
-    shapes_at(
-        est,
-        scene,
-        p,
-        t,
-        modes,
-        None,
-        0.0,
-        &mut RitzSchedule::default(),
-    )?
-    .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
+    shapes_at(est, scene, p, t, modes, None)?
+        .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
 }
 
 /// A basis update: the basis, the start block of the next Rayleigh–Ritz update (the kept
@@ -60,23 +51,35 @@ struct Update {
     ritz_residual: Option<f64>,
 }
 
+/// What a Rayleigh–Ritz update starts from: the held basis's whole shapes, the largest
+/// relative residual it may leave ([`updates`]) and the schedule of its checks, learned
+/// along the path.
+struct RitzStart<'a> {
+    space: &'a ModeShapes,
+    max_residual: f64,
+    schedule: &'a mut RitzSchedule,
+}
+
 /// [`basis_at`] with the shapes' own refusal kept apart (the inner error): a near-cluster
 /// the shape engine cannot resolve at this pose (not the memory budget, not the pose).
-/// From the start block `space` by Rayleigh–Ritz when every kept mode's relative residual
-/// is within `max_residual` ([`updates`]), else the structured shapes of `modes` and
-/// [`updates::ritz_guard`] more (where the model has the Rayleigh–Ritz update).
+/// By Rayleigh–Ritz from `ritz` when every kept mode's relative residual is within its
+/// bound, else the structured shapes of `modes` and [`updates::ritz_guard`] more (where
+/// the model has the Rayleigh–Ritz update).
 fn shapes_at(
     est: &mut Estimator,
     scene: &Scene,
     p: &Vector3<f64>,
     t: f64,
     modes: usize,
-    space: Option<&ModeShapes>,
-    max_residual: f64,
-    schedule: &mut RitzSchedule,
+    ritz: Option<RitzStart<'_>>,
 ) -> Result<Result<Update, crate::estimator::BasisError>, StudyError> {
     solve_pose(est, scene, p, t)?;
-    if let Some(start) = space {
+    if let Some(RitzStart {
+        space: start,
+        max_residual,
+        schedule,
+    }) = ritz
+    {
         match est.ee_modal_basis_ritz(start, modes, max_residual, schedule) {
             Ok(Some(r)) => {
                 return Ok(Ok(Update {
@@ -486,9 +489,11 @@ pub(super) fn run(
                     &path.positions_m[k1],
                     t1,
                     modes,
-                    start,
-                    max_residual,
-                    &mut schedule,
+                    start.map(|space| RitzStart {
+                        space,
+                        max_residual,
+                        schedule: &mut schedule,
+                    }),
                 )? {
                     Ok(b) => break (k1, b),
                     Err(e) => {
