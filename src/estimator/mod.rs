@@ -81,7 +81,7 @@ pub use pose_model::{build_models, PoseModel};
 pub use reference::{
     reference_analysis, reference_analysis_at, structured_analysis, ReferenceAnalysis,
 };
-pub use ritz_basis::{RitzBasis, RITZ_FIRST_CHECK, RITZ_SWEEPS};
+pub use ritz_basis::{RitzBasis, RITZ_SWEEPS};
 pub use sag_check::{cables_can_sag, sag_warning, sagged_reference, SagWarning};
 pub use t_min::Tmin;
 

@@ -17,7 +17,7 @@ use super::dof_shapes::DofLayout;
 use super::{BasisError, EeModalBasis, Estimator, Status};
 use crate::cable::ChainKind;
 use crate::modal::quasi_static::QuasiStaticLoad;
-use crate::modal::ritz::{subspace_iteration, RitzParams};
+use crate::modal::ritz::{subspace_iteration, RitzParams, RitzSchedule};
 use crate::modal::{ModeShapes, ShapeParams};
 use nalgebra::DMatrix;
 
@@ -26,20 +26,13 @@ use nalgebra::DMatrix;
 /// shapes, whose cost does not grow with the elements.
 pub const MAX_RITZ_DOF: usize = 1500;
 
-/// Most sweeps of one update (each costs one block solve; a sweep that is checked a small
-/// eigen-solve too). Measured on the paper robot's circle (K = 39, 863 bases): at most 3
-/// sweeps left 34 bases to the structured shapes (about 13 ms each against ~2 ms for the
-/// update), at most 5 the first basis and one more (778 of 779 updates by Rayleigh–Ritz);
-/// with 2K/3 guard modes (the number `simulate`'s update policy passes) and the first
-/// check at the fifth sweep, at most 10 give the same 778.
-pub const RITZ_SWEEPS: usize = 10;
-
-/// The first sweep whose Ritz pairs are formed and checked ([`RitzParams::min_sweeps`]).
-/// Measured on the paper robot's circle (K = 39, 863 bases, at most 5 sweeps): checked from
-/// the second sweep, 1 245 small eigen-solves (382 bases needed a third sweep); from the
-/// third, 939 and 2 665 sweeps instead of 2 108: a sweep costs a tenth of a check. With 2K/3
-/// guard modes (a smaller block, slower to converge) from the fifth.
-pub const RITZ_FIRST_CHECK: usize = 5;
+/// Most sweeps of one update (each costs one block solve; a checked sweep a small
+/// eigen-solve too; [`crate::modal::ritz::RitzSchedule`] says which are checked). Measured
+/// on the paper robot's circle (K = 39, K/3 = 13 guard modes, 863 bases): the slowest
+/// updates meet the bound at the 14th-15th sweep, where the contraction a sweep makes is
+/// slow while a mode crosses the top of the block; at most 16 leave one of the 779 updates
+/// to the structured shapes.
+pub const RITZ_SWEEPS: usize = 16;
 
 /// What [`Estimator::ee_modal_basis_ritz`] made.
 #[derive(Debug, Clone, PartialEq)]
@@ -77,12 +70,15 @@ impl Estimator {
     /// iteration from `start` (module docs), accepted when every kept mode's relative
     /// residual is within `max_residual` after at most [`RITZ_SWEEPS`] sweeps. `Ok(None)`
     /// where the model has no such update (module docs), `start` is not this model's shapes
-    /// or holds no more than K modes, or the residual is not met.
+    /// or holds no more than K modes, or the residual is not met. `schedule` says at which
+    /// sweep the iteration is first checked and learns from this update (the state a
+    /// sequence of updates carries, [`RitzSchedule`]).
     pub fn ee_modal_basis_ritz(
         &mut self,
         start: &ModeShapes,
         k: usize,
         max_residual: f64,
+        schedule: &mut RitzSchedule,
     ) -> Result<Option<RitzBasis>, BasisError> {
         if self.estimate.status != Status::Ok || start.modes.len() <= k {
             return Ok(None);
@@ -142,11 +138,13 @@ impl Estimator {
         let params = RitzParams {
             max_residual,
             max_sweeps: RITZ_SWEEPS,
-            min_sweeps: RITZ_FIRST_CHECK,
+            min_sweeps: schedule.first_check(),
+            rate: schedule.rate(),
         };
         let Ok(ritz) = subspace_iteration(&kk, &mm, dim, x, kept, &params) else {
             return Ok(None);
         };
+        schedule.learn(&ritz, max_residual);
         let residual = ritz.max_residual();
         if !(residual <= max_residual) {
             return Ok(None);

@@ -5,7 +5,7 @@ use super::RigidParts;
 use super::{lambda_to_hz, ModalError};
 use crate::cable::{CableModel, ChainKind};
 use crate::kinematics::attach_map;
-use nalgebra::{DMatrix, Matrix3, Matrix6, SymmetricEigen, Vector3};
+use nalgebra::{DMatrix, Matrix3, Matrix3x6, Matrix6, SymmetricEigen, Vector3};
 
 /// Assemble the global K (N/m) and M (kg) of the cable models and the end-effector point
 /// mass. DOF order: end-effector (0..3), then for each cable its interior nodes from the
@@ -108,47 +108,47 @@ fn assemble_general(
             }
         }
     }
-    let i3 = DMatrix::<f64>::identity(3, 3);
+    // A node's map onto the DOFs it is placed at, 3 × (used columns of 6): stack
+    // matrices, so that the element loop allocates nothing.
+    let i3 = Matrix3x6::from_fn(|r, c| if r == c { 1.0 } else { 0.0 });
     let mut base = ee_dim;
     for (ci, cm) in models.iter().enumerate() {
         let n = cm.n_el;
         // Map of the cable's end node onto the end-effector DOFs (3 × ee_dim).
-        let g: DMatrix<f64> = match rigid {
-            Some((_, arms, _)) => {
-                let g6 = attach_map(&arms[ci]);
-                DMatrix::from_fn(3, 6, |r, c| g6[(r, c)])
-            }
-            None => i3.clone(),
+        let g = match rigid {
+            Some((_, arms, _)) => attach_map(&arms[ci]),
+            None => i3,
         };
         let me = cm.element_mass_kg;
-        let kc = DMatrix::from_fn(3, 3, |r, c| cm.kc[(r, c)]);
+        let kc = cm.kc;
         let hidden = hidden_of(cm);
         // The junction's axial DOF, after the cable's interior nodes and the hidden ones.
         let junction = base + 3 * (n - 1) + hidden.map_or(0, |h| h.0.n_el - 1);
-        let axial = hidden.map(|h| DMatrix::from_fn(3, 1, |r, _| h.1[r]));
-        // Node j: 0 = anchor (fixed, or the junction), 1..n−1 interior, n = end-effector.
-        let place = |j: usize| -> Option<(usize, &DMatrix<f64>)> {
+        let axial = hidden.map(|h| Matrix3x6::from_fn(|r, c| if c == 0 { h.1[r] } else { 0.0 }));
+        // Node j: 0 = anchor (fixed, or the junction), 1..n−1 interior, n = end-effector:
+        // its first DOF, its map and the map's columns.
+        let place = |j: usize| -> Option<(usize, Matrix3x6<f64>, usize)> {
             if j == n {
-                Some((0, &g))
+                Some((0, g, ee_dim))
             } else if j == 0 {
-                axial.as_ref().map(|a| (junction, a))
+                axial.map(|a| (junction, a, 1))
             } else {
-                Some((base + 3 * (j - 1), &i3))
+                Some((base + 3 * (j - 1), i3, 3))
             }
         };
         for el in 0..n {
             let nodes = [el, el + 1];
             for (ia, &na) in nodes.iter().enumerate() {
                 for (ib, &nb) in nodes.iter().enumerate() {
-                    let (Some((ra, la)), Some((rb, lb))) = (place(na), place(nb)) else {
+                    let (Some((ra, la, ca)), Some((rb, lb, cb))) = (place(na), place(nb)) else {
                         continue;
                     };
                     let sign = if ia == ib { 1.0 } else { -1.0 };
                     let mcoef = if ia == ib { me / 3.0 } else { me / 6.0 };
-                    let kk = la.transpose() * (&kc * sign) * lb;
+                    let kk = la.transpose() * (kc * sign) * lb;
                     let mk = la.transpose() * lb * mcoef;
-                    for r in 0..kk.nrows() {
-                        for c in 0..kk.ncols() {
+                    for r in 0..ca {
+                        for c in 0..cb {
                             k[(ra + r, rb + c)] += kk[(r, c)];
                             mm[(ra + r, rb + c)] += mk[(r, c)];
                         }

@@ -17,20 +17,58 @@
 //! at most ρ / g (Davis–Kahan). The caller accepts the update only when every kept mode has
 //! ρ ≤ [`RitzParams::max_residual`]; otherwise it falls back to the structured shapes.
 //!
-//! Before the first check ([`RitzParams::min_sweeps`]) a sweep only M-normalises the
+//! **Which sweeps are checked.** A check (the block products, the small eigen-solve, the
+//! residuals) costs about as much as ten sweeps, so only some sweeps are checked: the first
+//! at [`RitzParams::min_sweeps`], which a caller making a sequence of updates predicts from
+//! the last one ([`RitzSchedule`]), and after a check that misses the bound the sweep where
+//! the contraction a sweep makes (measured between two checks, else
+//! [`RitzParams::rate`]) would meet it. A sweep that is not checked only M-normalises the
 //! block's columns: the span after s sweeps is span((K⁻¹M)^s X) whether or not the Ritz
-//! pairs are formed between sweeps, and a start block near the modes keeps its columns far
-//! from parallel over a few sweeps. L⁻¹ is formed once (q³/3, M_r's columns are M-normalised
-//! and nearly M-orthogonal, so L is well conditioned), and C = L⁻¹ K_r L⁻ᵀ and the Ritz
-//! vectors' coefficients L⁻ᵀ v by matrix products (where triangular solves with q right-hand
-//! sides took twice the time).
+//! pairs are formed between sweeps. Each sweep tilts a column towards the lowest modes by
+//! about λ_q/λ₁, so after [`MAX_UNCHECKED`] sweeps without a Rayleigh–Ritz step the block
+//! is M-orthonormalised (Cholesky-QR, X = Y L⁻ᵀ with LLᵀ = M_r) to keep its columns apart.
+//! L⁻¹ is formed once (q³/3; M_r's columns are M-normalised and, within a few sweeps of an
+//! orthonormal block, far from parallel, so L is well conditioned), and C = L⁻¹ K_r L⁻ᵀ and
+//! the Ritz vectors' coefficients L⁻ᵀ v by matrix products (where triangular solves with q
+//! right-hand sides took twice the time).
 //!
 //! **Cost.** K and M of a chain model are block-tridiagonal per cable with an arrowhead on
 //! the end-effector: ordered with the end-effector last their Cholesky factors have the
-//! chains' band and `dim` full rows ([`Envelope`]), O(n) to factor and to solve; a sweep
-//! costs O(n q) for the solves and products and O(n q² + q³) for the small problem.
+//! chains' band and `dim` rows whose envelope spans the chains but whose entries are zero
+//! except next to each chain's attachment ([`Envelope`]; the solves skip the zeros), O(n) to
+//! factor and to solve. The blocks are held by rows in the factors' order between sweeps,
+//! so that the solves and M's products run along a row's q values and the block products
+//! take them as they lie. A sweep costs O(n q); a check O(n q² + q³).
 
-use nalgebra::{DMatrix, SymmetricEigen};
+use nalgebra::{DMatrix, Dyn, SymmetricEigen};
+
+/// The most sweeps [`RitzParams::max_sweeps`] may ask for.
+pub const MAX_SWEEPS: usize = 16;
+
+/// The most sweeps made without a Rayleigh–Ritz step or an M-orthonormalisation between
+/// them (module docs). Each sweep multiplies a column's component along mode i by 1/λ_i, so
+/// a column starting near a high mode tilts towards the lowest ones by about λ_q/λ₁ a
+/// sweep: measured on the paper robot's circle (K = 39, 26 guard modes), 8 sweeps without
+/// either made the block's mass matrix lose its positive definiteness at 290 updates;
+/// M-orthonormalised every 4, at none.
+pub const MAX_UNCHECKED: usize = 4;
+
+/// The most a column may tilt towards the lowest mode between two M-orthonormal blocks
+/// (module docs): M_r's condition number then stays within its square, 10¹², whatever the
+/// start block, well inside what its Cholesky factor resolves.
+pub const MAX_TILT: f64 = 1e6;
+
+/// The sweeps made without an M-orthonormalisation for a block whose λ spread
+/// (λ_q/λ₁) is `spread`: the most whose tilt spread^s stays within [`MAX_TILT`], 1 ..=
+/// [`MAX_UNCHECKED`].
+fn unchecked_limit(spread: Option<f64>) -> usize {
+    match spread {
+        Some(s) if s > 1.0 && s.is_finite() => {
+            ((MAX_TILT.ln() / s.ln()).floor() as usize).clamp(1, MAX_UNCHECKED)
+        }
+        _ => 1,
+    }
+}
 
 /// Why an update was not made.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -53,7 +91,7 @@ pub enum RitzError {
 pub struct RitzParams {
     /// Largest relative residual ρ of a kept mode (module docs).
     pub max_residual: f64,
-    /// Most sweeps (1 ..= 8).
+    /// Most sweeps (1 ..= [`MAX_SWEEPS`]).
     pub max_sweeps: usize,
     /// The first sweep whose Ritz pairs are formed and checked (≤ `max_sweeps`; the first
     /// sweeps from a previous pose's shapes cannot meet a small bound). The sweeps before
@@ -61,6 +99,71 @@ pub struct RitzParams {
     /// span((K⁻¹M)^s X) with or without a Rayleigh–Ritz step between them, so the small
     /// eigen-solve and the block products are made once, at the check.
     pub min_sweeps: usize,
+    /// The contraction of ρ a sweep is expected to make until two checks measure it, in
+    /// (0, 1): after a check that misses the bound the next check is made where this
+    /// contraction would meet it (at most [`MAX_UNCHECKED`] + 1 sweeps on).
+    pub rate: f64,
+}
+
+/// When the next update of a sequence first checks its Ritz pairs ([`RitzParams::min_sweeps`]),
+/// learned from the last update: the state a caller carries from one update to the next.
+///
+/// A check costs about as much as ten sweeps (the block products and the small
+/// eigen-solve against one envelope solve and one sparse product), so the sweep an update
+/// meets the bound at is predicted rather than found by checking every sweep. After each
+/// sweep a mode's error shrinks by about the same ratio r (λ_j/λ_{q+1}), so an update that
+/// met the bound ρ_max with ρ at its check could have been checked
+/// ⌊ln(ρ_max/ρ)/ln(1/r)⌋ sweeps earlier; the next update, a pose change of about the same
+/// size away (an interval grows at most twofold from the last), is first checked there, one
+/// sweep later ([`RitzSchedule::MARGIN`]) against a larger change, at the second sweep at the
+/// earliest. r is the contraction measured between two consecutive checks (its last value;
+/// [`RitzSchedule::DEFAULT_RATE`] until one is measured), within [0.02, 0.95].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RitzSchedule {
+    first_check: usize,
+    rate: f64,
+}
+
+impl Default for RitzSchedule {
+    fn default() -> Self {
+        RitzSchedule {
+            first_check: Self::FIRST_CHECK,
+            rate: Self::DEFAULT_RATE,
+        }
+    }
+}
+
+impl RitzSchedule {
+    /// The first update's first check.
+    pub const FIRST_CHECK: usize = 5;
+    /// The contraction a sweep is assumed to make until one is measured.
+    pub const DEFAULT_RATE: f64 = 0.5;
+    /// Sweeps added to the prediction (module docs of the type).
+    pub const MARGIN: usize = 1;
+
+    /// The sweep the next update is first checked at.
+    pub fn first_check(&self) -> usize {
+        self.first_check
+    }
+
+    /// The contraction of ρ a sweep is expected to make.
+    pub fn rate(&self) -> f64 {
+        self.rate
+    }
+
+    /// Learn from an update made with bound `max_residual`.
+    pub fn learn(&mut self, ritz: &Ritz, max_residual: f64) {
+        if let Some(r) = ritz.rate.filter(|r| r.is_finite()) {
+            self.rate = r.clamp(0.02, 0.95);
+        }
+        let rho = ritz.max_residual();
+        let spare = if rho > 0.0 && rho <= max_residual {
+            ((max_residual / rho).ln() / (1.0 / self.rate).ln()).floor() as usize
+        } else {
+            0
+        };
+        self.first_check = (ritz.sweeps.saturating_sub(spare) + Self::MARGIN).clamp(2, MAX_SWEEPS);
+    }
 }
 
 /// The lower triangular Cholesky factor of a symmetric positive definite matrix in a given
@@ -75,21 +178,23 @@ pub struct Envelope {
 
 impl Envelope {
     /// The factor of `a` (symmetric) with its rows and columns taken in `order` (a
-    /// permutation of 0..n); None when `a` is not positive definite.
+    /// permutation of 0..n); None when `a` is not positive definite. Only the upper
+    /// triangle's columns are read (by columns, as `a` is stored).
     pub fn factor(a: &DMatrix<f64>, order: &[usize]) -> Option<Envelope> {
         let n = order.len();
         let mut first = vec![0usize; n];
         let mut start = vec![0usize; n + 1];
         for i in 0..n {
-            let row = order[i];
-            first[i] = (0..i).find(|&j| a[(row, order[j])] != 0.0).unwrap_or(i);
+            let col = a.column(order[i]);
+            first[i] = (0..i).find(|&j| col[order[j]] != 0.0).unwrap_or(i);
             start[i + 1] = start[i] + (i + 1 - first[i]);
         }
         let mut data = vec![0.0; start[n]];
         for i in 0..n {
+            let col = a.column(order[i]);
             for j in first[i]..=i {
                 let lo = first[i].max(first[j]);
-                let mut s = a[(order[i], order[j])];
+                let mut s = col[order[j]];
                 for k in lo..j {
                     s -= data[start[i] + k - first[i]] * data[start[j] + k - first[j]];
                 }
@@ -160,12 +265,28 @@ impl Envelope {
                 work[i * q + c] = b[(o, c)];
             }
         }
+        self.solve_rows(work, q);
+        for (i, &o) in self.order.iter().enumerate() {
+            for c in 0..q {
+                b[(o, c)] = work[i * q + c];
+            }
+        }
+    }
+
+    /// Solve A X = B in place for `q` right-hand sides held by rows in the factor's order
+    /// (`x[i·q + c]` is row i of column c, `x` n·q long): each row of the factor is applied
+    /// to the q values of a row together.
+    pub fn solve_rows(&self, x: &mut [f64], q: usize) {
+        let n = self.order.len();
+        debug_assert_eq!(x.len(), n * q);
         for i in 0..n {
             let row = &self.data[self.start[i]..self.start[i + 1]];
             let (off, diag) = row.split_at(row.len() - 1);
-            let (done, rest) = work.split_at_mut(i * q);
+            let (done, rest) = x.split_at_mut(i * q);
             let wi = &mut rest[..q];
-            for (k, l) in off.iter().enumerate() {
+            // An end-effector row's envelope is mostly exact zeros (a chain fills it only
+            // from its node next to the attachment): skipped.
+            for (k, l) in off.iter().enumerate().filter(|(_, l)| **l != 0.0) {
                 let wk = &done[(self.first[i] + k) * q..(self.first[i] + k + 1) * q];
                 for (x, y) in wi.iter_mut().zip(wk) {
                     *x -= l * y;
@@ -177,26 +298,27 @@ impl Envelope {
         for i in (0..n).rev() {
             let row = &self.data[self.start[i]..self.start[i + 1]];
             let (off, diag) = row.split_at(row.len() - 1);
-            let (before, rest) = work.split_at_mut(i * q);
+            let (before, rest) = x.split_at_mut(i * q);
             let wi = &mut rest[..q];
             let d = 1.0 / diag[0];
             wi.iter_mut().for_each(|x| *x *= d);
-            for (k, l) in off.iter().enumerate() {
+            for (k, l) in off.iter().enumerate().filter(|(_, l)| **l != 0.0) {
                 let at = (self.first[i] + k) * q;
                 for (x, y) in before[at..at + q].iter_mut().zip(wi.iter()) {
                     *x -= l * y;
                 }
             }
         }
-        for (i, &o) in self.order.iter().enumerate() {
-            for c in 0..q {
-                b[(o, c)] = work[i * q + c];
-            }
-        }
+    }
+
+    /// The factor's order: row i of the factor is row `order()[i]` of the matrix.
+    pub fn order(&self) -> &[usize] {
+        &self.order
     }
 }
 
-/// A symmetric matrix's nonzeros by rows, for products.
+/// A symmetric matrix's nonzeros by rows, in a given order of its rows and columns, for
+/// products with blocks held by rows.
 struct Sparse {
     start: Vec<usize>,
     cols: Vec<usize>,
@@ -204,18 +326,20 @@ struct Sparse {
 }
 
 impl Sparse {
-    fn new(a: &DMatrix<f64>) -> Sparse {
-        let n = a.nrows();
+    /// `a`'s nonzeros with its rows and columns taken in `order`.
+    fn new(a: &DMatrix<f64>, order: &[usize]) -> Sparse {
         let mut s = Sparse {
             start: vec![0],
             cols: Vec::new(),
             vals: Vec::new(),
         };
-        for r in 0..n {
-            for c in 0..n {
-                let v = a[(r, c)];
+        for &r in order {
+            // Row r of the symmetric `a` is its column r, read as it is stored.
+            let col = a.column(r);
+            for (j, &c) in order.iter().enumerate() {
+                let v = col[c];
                 if v != 0.0 {
-                    s.cols.push(c);
+                    s.cols.push(j);
                     s.vals.push(v);
                 }
             }
@@ -224,16 +348,48 @@ impl Sparse {
         s
     }
 
-    /// A x into `y`.
-    fn mul(&self, x: &[f64], y: &mut [f64]) {
-        for (r, yr) in y.iter_mut().enumerate() {
-            let mut s = 0.0;
+    /// A X into `y` for `q` columns held by rows (as [`Envelope::solve_rows`]).
+    fn mul_rows(&self, x: &[f64], y: &mut [f64], q: usize) {
+        for (r, yr) in y.chunks_exact_mut(q).enumerate() {
+            yr.fill(0.0);
             for i in self.start[r]..self.start[r + 1] {
-                s += self.vals[i] * x[self.cols[i]];
+                let v = self.vals[i];
+                let at = self.cols[i] * q;
+                for (a, b) in yr.iter_mut().zip(&x[at..at + q]) {
+                    *a += v * b;
+                }
             }
-            *yr = s;
         }
     }
+}
+
+/// The transpose (q × n) of an n × q block held by rows (`data[i·q + c]`): the same
+/// numbers by columns. (The blocks are only ever viewed this way, contiguously: nalgebra's
+/// products on views with a row stride other than 1 wrote out of bounds at small sizes.)
+fn by_rows_transposed(data: &[f64], n: usize, q: usize) -> nalgebra::DMatrixView<'_, f64> {
+    nalgebra::DMatrixView::from_slice(data, q, n)
+}
+
+/// Bᵀ C for two n × q blocks held by rows (q × q): (Bᵀ)·(Cᵀ)ᵀ, Cᵀ copied by columns.
+fn gram_by_rows(b: &[f64], c: &[f64], n: usize, q: usize) -> DMatrix<f64> {
+    by_rows_transposed(b, n, q) * by_rows_transposed(c, n, q).transpose()
+}
+
+/// `y` (n × `w.ncols()`, held by rows) ← A W, A n × q held by rows: yᵀ = Wᵀ Aᵀ, every
+/// operand by columns.
+fn product_by_rows<S: nalgebra::Storage<f64, Dyn, Dyn>>(
+    a: &[f64],
+    n: usize,
+    q: usize,
+    w: &nalgebra::Matrix<f64, Dyn, Dyn, S>,
+    y: &mut Vec<f64>,
+) {
+    let cols = w.ncols();
+    // Every entry is written (β = 0: `y` is not read), so a buffer of the right size is
+    // taken as it is.
+    y.resize(n * cols, 0.0);
+    let mut out = nalgebra::DMatrixViewMut::from_slice(y, cols, n);
+    out.gemm(1.0, &w.transpose(), &by_rows_transposed(a, n, q), 0.0);
 }
 
 /// `a` ← (a + aᵀ)/2, in place (square).
@@ -286,6 +442,9 @@ pub struct Ritz {
     pub residual: Vec<f64>,
     /// Sweeps made.
     pub sweeps: usize,
+    /// The contraction of ρ a sweep measured between the last two checks,
+    /// (ρ_last/ρ_before)^(1/sweeps between them), where two were made.
+    pub rate: Option<f64>,
 }
 
 impl Ritz {
@@ -298,7 +457,9 @@ impl Ritz {
 /// The subspace iteration of the module docs on `k`, `m` (n × n, symmetric, positive
 /// definite; `dim` end-effector DOFs first, ordered last for the factors) from the start
 /// block `x` (n × q): sweeps until the first `checked` Ritz pairs have ρ ≤
-/// `params.max_residual` or `params.max_sweeps` are made.
+/// `params.max_residual` or `params.max_sweeps` are made. The blocks are held by rows in
+/// the factors' order between the sweeps, so that the envelope solves and the sparse
+/// products run along a row's q values and the block products take them as they lie.
 pub fn subspace_iteration(
     k: &DMatrix<f64>,
     m: &DMatrix<f64>,
@@ -317,54 +478,98 @@ pub fn subspace_iteration(
     let order: Vec<usize> = (dim.min(n)..n).chain(0..dim.min(n)).collect();
     let kf = Envelope::factor(k, &order).ok_or(RitzError::NotPositive("K"))?;
     let mf = Envelope::factor(m, &order).ok_or(RitzError::NotPositive("M"))?;
-    let ms = Sparse::new(m);
+    let ms = Sparse::new(m, &order);
     let q = x.ncols();
     let checked = checked.min(q);
-    let mut block = Vec::new();
-    let mut mx = DMatrix::zeros(n, q);
     let mut out = Ritz {
         lambda: Vec::new(),
         vectors: DMatrix::zeros(n, q),
         residual: Vec::new(),
         sweeps: 0,
+        rate: None,
     };
-    for c in 0..q {
-        ms.mul(x.column(c).as_slice(), mx.column_mut(c).as_mut_slice());
+    let mut last_checked: Option<(usize, f64)> = None;
+    // X by rows in the factors' order, and M X.
+    let mut y = vec![0.0; n * q];
+    for (i, &o) in order.iter().enumerate() {
+        for (c, v) in y[i * q..(i + 1) * q].iter_mut().enumerate() {
+            *v = x[(o, c)];
+        }
     }
-    let sweeps = params.max_sweeps.clamp(1, 8);
-    let first_check = params.min_sweeps.clamp(1, sweeps);
+    let mut mx = vec![0.0; n * q];
+    ms.mul_rows(&y, &mut mx, q);
+    let mut my = vec![0.0; n * q];
+    let mut norms = vec![0.0; q];
+    let (mut kphi, mut mphi, mut r) = (Vec::new(), Vec::new(), Vec::new());
+    let sweeps = params.max_sweeps.clamp(1, MAX_SWEEPS);
+    let mut next_check = params.min_sweeps.clamp(1, sweeps);
+    // The last sweep whose block was M-orthonormalised (by a check or a Cholesky-QR).
+    let mut since_rr = 0;
+    // λ_q/λ₁ of the block (Ritz values, or before the first check the columns' Rayleigh
+    // quotients): how fast an unchecked sweep tilts the columns together.
+    let mut spread: Option<f64> = None;
     for sweep in 1..=sweeps {
         // Y = K⁻¹ M X, and M Y.
-        let mut y = mx.clone();
-        kf.solve_columns(&mut y, &mut block);
-        let mut my = DMatrix::zeros(n, q);
-        for c in 0..q {
-            ms.mul(y.column(c).as_slice(), my.column_mut(c).as_mut_slice());
-        }
-        if sweep < first_check {
+        y.copy_from_slice(&mx);
+        kf.solve_rows(&mut y, q);
+        ms.mul_rows(&y, &mut my, q);
+        out.sweeps = sweep;
+        if sweep < next_check && sweep < sweeps {
             // Before the first check only the span matters: span((K⁻¹M)^s X) is the same
             // with or without a Rayleigh–Ritz step between the sweeps, so the columns are
             // only M-normalised (the start block is near the modes: they stay far from
-            // parallel over the few sweeps before a check).
-            for c in 0..q {
-                let norm = y.column(c).dot(&my.column(c));
-                if !(norm > 0.0 && norm.is_finite()) {
+            // parallel over the few sweeps before a check). Y itself is not kept: the next
+            // sweep starts from M Y.
+            norms.fill(0.0);
+            for (yr, mr) in y.chunks_exact(q).zip(my.chunks_exact(q)) {
+                for ((s, a), b) in norms.iter_mut().zip(yr).zip(mr) {
+                    *s += a * b;
+                }
+            }
+            if spread.is_none() {
+                // The columns' Rayleigh quotients yᵀKy / yᵀMy (K Y = M X): the block's
+                // spread of λ before any Ritz value is known.
+                let mut lo = f64::INFINITY;
+                let mut hi = 0.0f64;
+                for (c, &ymy) in norms.iter().enumerate() {
+                    let yky: f64 = (0..n).map(|i| y[i * q + c] * mx[i * q + c]).sum();
+                    let rq = yky / ymy;
+                    lo = lo.min(rq);
+                    hi = hi.max(rq);
+                }
+                spread = Some(hi / lo);
+            }
+            for s in norms.iter_mut() {
+                if !(*s > 0.0 && s.is_finite()) {
                     return Err(RitzError::NotPositive("the block's M"));
                 }
-                let scale = 1.0 / norm.sqrt();
-                y.column_mut(c).scale_mut(scale);
-                my.column_mut(c).scale_mut(scale);
+                *s = 1.0 / s.sqrt();
             }
-            out.sweeps = sweep;
-            mx = my;
+            if sweep - since_rr < unchecked_limit(spread) {
+                for mr in my.chunks_exact_mut(q) {
+                    for (a, s) in mr.iter_mut().zip(&norms) {
+                        *a *= s;
+                    }
+                }
+                std::mem::swap(&mut mx, &mut my);
+            } else {
+                // M-orthonormalise the block (Cholesky-QR, X = Y L⁻ᵀ with L Lᵀ = Yᵀ M Y):
+                // the columns are kept apart at a third of a check's cost.
+                let mut mr = gram_by_rows(&y, &my, n, q);
+                symmetrise(&mut mr);
+                let linv = mr
+                    .cholesky()
+                    .and_then(|c| lower_inverse(c.l_dirty()))
+                    .ok_or(RitzError::NotPositive("the block's M"))?;
+                product_by_rows(&my, n, q, &linv.transpose(), &mut mx);
+                since_rr = sweep;
+            }
             continue;
         }
-        // K_r = Yᵀ K Y = Yᵀ M X, M_r = Yᵀ M Y (symmetric up to rounding); Yᵀ formed, so
-        // that the products are blocked matrix products (nalgebra's `tr_mul` takes a dot
-        // product per entry, measured 4 × slower at n = 219, q = 78).
-        let yt = y.transpose();
-        let mut kr = &yt * &mx;
-        let mut mr = &yt * &my;
+        // K_r = Yᵀ K Y = Yᵀ M X, M_r = Yᵀ M Y (symmetric up to rounding), blocked matrix
+        // products (Yᵀ by columns is Y by rows).
+        let mut kr = gram_by_rows(&y, &mx, n, q);
+        let mut mr = gram_by_rows(&y, &my, n, q);
         symmetrise(&mut kr);
         symmetrise(&mut mr);
         let chol = mr
@@ -383,31 +588,61 @@ pub fn subspace_iteration(
         // W = L⁻ᵀ V.
         let w = linv.transpose() * &v;
         out.lambda = idx.iter().map(|&i| eig.eigenvalues[i]).collect();
-        out.vectors = &y * &w;
-        out.sweeps = sweep;
+        if let (Some(&lo), Some(&hi)) = (out.lambda.first(), out.lambda.last()) {
+            spread = Some(hi / lo);
+        }
         // The checked pairs' residuals: M Φ = M Y W; K Φ = K Y W = M X W.
-        out.residual.clear();
         let wc = w.columns(0, checked);
-        let kphi = &mx * wc;
-        let mut r0 = &my * wc;
-        for j in 0..checked {
-            let lam = out.lambda[j];
-            for i in 0..n {
-                r0[(i, j)] = kphi[(i, j)] - lam * r0[(i, j)];
+        product_by_rows(&mx, n, q, &wc, &mut kphi);
+        product_by_rows(&my, n, q, &wc, &mut mphi);
+        for (kr, mr) in kphi
+            .chunks_exact_mut(checked)
+            .zip(mphi.chunks_exact(checked))
+        {
+            for ((a, b), lam) in kr.iter_mut().zip(mr).zip(&out.lambda) {
+                *a -= lam * b;
             }
         }
-        let mut r = r0.clone();
-        mf.solve_columns(&mut r, &mut block);
-        for j in 0..checked {
-            let lam = out.lambda[j];
-            let norm = r0.column(j).dot(&r.column(j)).max(0.0).sqrt();
-            out.residual
-                .push(if lam > 0.0 { norm / lam } else { f64::INFINITY });
+        r.clone_from(&kphi);
+        mf.solve_rows(&mut r, checked);
+        norms[..checked].fill(0.0);
+        for (r0, ri) in kphi.chunks_exact(checked).zip(r.chunks_exact(checked)) {
+            for ((s, a), b) in norms.iter_mut().zip(r0).zip(ri) {
+                *s += a * b;
+            }
         }
-        if out.max_residual() <= params.max_residual {
+        out.residual.clear();
+        out.residual
+            .extend(norms[..checked].iter().zip(&out.lambda).map(|(&s, &lam)| {
+                if lam > 0.0 {
+                    s.max(0.0).sqrt() / lam
+                } else {
+                    f64::INFINITY
+                }
+            }));
+        let rho = out.max_residual();
+        out.rate = last_checked
+            .filter(|&(_, r)| r > 0.0 && rho > 0.0)
+            .map(|(s, r)| (rho / r).powf(1.0 / (sweep - s) as f64));
+        last_checked = Some((sweep, rho));
+        if rho <= params.max_residual || sweep == sweeps {
+            // Φ = Y W, back in the assembly's order.
+            product_by_rows(&y, n, q, &w, &mut kphi);
+            for (i, &o) in order.iter().enumerate() {
+                for (c, v) in kphi[i * q..(i + 1) * q].iter().enumerate() {
+                    out.vectors[(o, c)] = *v;
+                }
+            }
             break;
         }
-        mx = &my * &w;
+        // The next check where the contraction (measured, else the caller's) meets the
+        // bound, at most MAX_UNCHECKED sweeps on.
+        let rate = out.rate.unwrap_or(params.rate).clamp(0.02, 0.95);
+        let jump = ((rho / params.max_residual).ln() / (1.0 / rate).ln()).ceil();
+        next_check = sweep + (jump as usize).max(1);
+        // The next sweep's M X = M Y W.
+        product_by_rows(&my, n, q, &w, &mut mx);
+        since_rr = sweep;
     }
     Ok(out)
 }
@@ -449,5 +684,157 @@ mod tests {
         // Not positive definite: refused.
         let neg = -a;
         assert!(Envelope::factor(&neg, &order).is_none());
+    }
+
+    /// A fixed-fixed string of `n` interior nodes (a chain's band) with one "end-effector"
+    /// DOF placed first and coupled to the last node: K (N/m) and its consistent M (kg).
+    fn string_with_mass(n: usize) -> (DMatrix<f64>, DMatrix<f64>) {
+        let dof = n + 1;
+        let (mut k, mut m) = (DMatrix::zeros(dof, dof), DMatrix::zeros(dof, dof));
+        // Nodes: 0 = anchor (fixed), 1..=n interior (DOF 1..=n), n + 1 = the end-effector.
+        let at = |j: usize| match j {
+            0 => None,
+            j if j == n + 1 => Some(0),
+            j => Some(j),
+        };
+        for el in 0..=n {
+            let stiff = 1.0e3 * (1.0 + 0.1 * (el % 3) as f64);
+            let mass = 0.05 * (1.0 + 0.05 * (el % 4) as f64);
+            for (a, b, sk, sm) in [
+                (el, el, stiff, mass / 3.0),
+                (el + 1, el + 1, stiff, mass / 3.0),
+                (el, el + 1, -stiff, mass / 6.0),
+                (el + 1, el, -stiff, mass / 6.0),
+            ] {
+                if let (Some(r), Some(c)) = (at(a), at(b)) {
+                    k[(r, c)] += sk;
+                    m[(r, c)] += sm;
+                }
+            }
+        }
+        m[(0, 0)] += 2.0;
+        (k, m)
+    }
+
+    /// The generalized eigenpairs of (K, M) by a dense solve (M = LLᵀ, L⁻¹KL⁻ᵀ's symmetric
+    /// eigen-solve): the reference, no subspace iteration.
+    fn dense_pairs(k: &DMatrix<f64>, m: &DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
+        let l = m.clone().cholesky().expect("M SPD").l();
+        let li = l.clone().try_inverse().expect("L invertible");
+        let c = &li * k * li.transpose();
+        let e = SymmetricEigen::new(0.5 * (&c + c.transpose()));
+        let mut idx: Vec<usize> = (0..e.eigenvalues.len()).collect();
+        idx.sort_by(|&a, &b| e.eigenvalues[a].total_cmp(&e.eigenvalues[b]));
+        let lam = idx.iter().map(|&i| e.eigenvalues[i]).collect();
+        let v = DMatrix::from_fn(c.nrows(), idx.len(), |r, j| e.eigenvectors[(r, idx[j])]);
+        (lam, li.transpose() * v)
+    }
+
+    /// Checked first at the 12th sweep (eleven sweeps with no Rayleigh–Ritz step), from the
+    /// modes of a stiffer string: the block is M-orthonormalised every [`MAX_UNCHECKED`]
+    /// sweeps, so its columns stay apart and the Ritz values meet the dense reference within
+    /// their own residual bound (Weinstein: |λ − λ_exact| ≤ ρλ). Without the
+    /// orthonormalisation the block's mass matrix lost its positive definiteness here
+    /// (λ_q/λ₁ ≈ 300 a sweep).
+    #[test]
+    fn a_late_first_check_keeps_the_block_apart_and_meets_the_dense_reference() {
+        let (k, m) = string_with_mass(60);
+        let (lam, _) = dense_pairs(&k, &m);
+        let (_, start) = dense_pairs(&(&k * 1.02), &m);
+        let q = 14;
+        let checked = 10;
+        let params = RitzParams {
+            max_residual: 1e-9,
+            max_sweeps: MAX_SWEEPS,
+            min_sweeps: 12,
+            rate: 0.5,
+        };
+        let x = start.columns(0, q).into_owned();
+        // The stiffer string's modes are this one's shapes exactly (K scaled): perturb the
+        // start so that there is something to converge.
+        let x = DMatrix::from_fn(x.nrows(), q, |r, c| {
+            x[(r, c)] * (1.0 + 0.01 * ((r * 7 + c) % 5) as f64)
+        });
+        let r = subspace_iteration(&k, &m, 1, x, checked, &params).expect("iteration");
+        assert!(r.sweeps >= 12, "checked at sweep {}", r.sweeps);
+        let rho = r.max_residual();
+        assert!(rho <= 1e-9, "ρ {rho:.2e}");
+        for j in 0..checked {
+            let rel = (r.lambda[j] - lam[j]).abs() / lam[j];
+            assert!(
+                rel <= rho.max(1e-13),
+                "mode {j}: {} vs {}: {rel:.2e}",
+                r.lambda[j],
+                lam[j]
+            );
+        }
+        // M-orthonormal Ritz vectors.
+        let g = r.vectors.transpose() * &m * &r.vectors;
+        let off = (g - DMatrix::identity(q, q)).amax();
+        assert!(off <= 1e-10, "Φᵀ M Φ off the identity by {off:.2e}");
+    }
+
+    /// The schedule's prediction: an update that met ρ_max = 1e-5 with ρ = 1e-7 at its
+    /// fifth sweep, contracting 10× a sweep, could have been checked two sweeps earlier;
+    /// the next is first checked there plus the margin. One that missed the bound keeps
+    /// its sweeps plus the margin; the first check never falls below the second sweep.
+    #[test]
+    fn the_schedule_predicts_the_first_check_from_the_last_update() {
+        let ritz = |sweeps, rho, rate| Ritz {
+            lambda: vec![1.0],
+            vectors: DMatrix::zeros(1, 1),
+            residual: vec![rho],
+            sweeps,
+            rate,
+        };
+        let mut s = RitzSchedule::default();
+        assert_eq!(s.first_check(), RitzSchedule::FIRST_CHECK);
+        s.learn(&ritz(5, 1e-7, Some(0.1)), 1e-5);
+        assert_eq!(s.first_check(), 5 - 2 + RitzSchedule::MARGIN);
+        assert_eq!(s.rate(), 0.1);
+        // No new rate measured: the last one is kept.
+        s.learn(&ritz(3, 9e-6, None), 1e-5);
+        assert_eq!(s.first_check(), 3 + RitzSchedule::MARGIN);
+        assert_eq!(s.rate(), 0.1);
+        // Missed (the structured shapes take over): its sweeps, plus the margin.
+        s.learn(&ritz(7, 2e-5, Some(0.9)), 1e-5);
+        assert_eq!(s.first_check(), 7 + RitzSchedule::MARGIN);
+        assert_eq!(s.rate(), 0.9);
+        // Far below the bound: at the second sweep at the earliest.
+        s.learn(&ritz(2, 1e-12, Some(0.1)), 1e-5);
+        assert_eq!(s.first_check(), 2);
+    }
+
+    /// The products on blocks held by rows equal nalgebra's on the same matrices by
+    /// columns, small sizes (nalgebra's own loops) and large (matrixmultiply) alike.
+    #[test]
+    fn products_by_rows_equal_the_plain_products() {
+        for (n, q, cols) in [(5, 3, 2), (7, 1, 1), (40, 12, 9), (219, 52, 39)] {
+            let a = DMatrix::from_fn(n, q, |r, c| ((r * 31 + c * 17) % 13) as f64 - 6.0);
+            let w = DMatrix::from_fn(q, cols, |r, c| ((r * 7 + c * 5) % 11) as f64 - 5.0);
+            let rows: Vec<f64> = (0..n)
+                .flat_map(|r| (0..q).map(move |c| (r, c)))
+                .map(|(r, c)| a[(r, c)])
+                .collect();
+            let mut y = vec![1.0; 3];
+            product_by_rows(&rows, n, q, &w, &mut y);
+            let plain = &a * &w;
+            for r in 0..n {
+                for c in 0..cols {
+                    assert_eq!(
+                        y[r * cols + c],
+                        plain[(r, c)],
+                        "{n}x{q}x{cols} at ({r}, {c})"
+                    );
+                }
+            }
+            let b: Vec<f64> = rows.iter().map(|v| 0.5 * v + 1.0).collect();
+            let bm = a.map(|v| 0.5 * v + 1.0);
+            assert_eq!(
+                gram_by_rows(&rows, &b, n, q),
+                a.transpose() * &bm,
+                "{n}x{q}"
+            );
+        }
     }
 }

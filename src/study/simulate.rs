@@ -379,10 +379,13 @@ pub struct SimulateResult {
     pub accuracy: Accuracy,
 }
 
-/// The estimator a simulation or shaping drives (the scene's participation threshold).
-fn estimator(scene: &Scene) -> Result<Estimator, StudyError> {
+/// The estimator a simulation or shaping drives (the scene's participation threshold);
+/// with `ee_mode` false it does not look for the end-effector mode at each pose (a time
+/// response takes its modes from the basis, not from the estimate).
+fn estimator(scene: &Scene, ee_mode: bool) -> Result<Estimator, StudyError> {
     let mut p = EstimatorParams::default();
     p.modal.ee_participation_min = scene.model.ee_participation_min;
+    p.ee_mode = ee_mode;
     Estimator::with_params(scene, p).map_err(|e| StudyError::Build(e.to_string()))
 }
 
@@ -542,7 +545,7 @@ fn run_settled(
     // The memory of the whole run (two bases across an update, the path and its
     // deviation), refused past the one budget before anything is computed.
     super::cost::estimate_cost(scene, &simulate_work(n, cfg)).check_memory()?;
-    let mut est = estimator(scene)?;
+    let mut est = estimator(scene, false)?;
     let mut out = SimulateResult {
         t_s: Vec::with_capacity(n),
         command_m: Vec::with_capacity(n),
@@ -674,7 +677,7 @@ pub fn shape(
     mode: ShapeMode,
 ) -> Result<ShapeResult, StudyError> {
     path.check(f64::INFINITY)?;
-    let mut est = estimator(scene)?;
+    let mut est = estimator(scene, true)?;
     let mut shaper =
         OnlineShaper::new(kind, path.dt_s, DEFAULT_MIN_FREQUENCY_HZ).map_err(StudyError::from)?;
     let damping: Damping = scene.damping;

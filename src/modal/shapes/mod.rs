@@ -275,14 +275,16 @@ impl ModeShapes {
             }
             v
         };
-        let mut a = nalgebra::DMatrix::zeros(len, self.modes.len());
-        for (c, m) in self.modes.iter().enumerate() {
-            a.column_mut(c).copy_from_slice(&flat(m, false));
-        }
-        let mut w = nalgebra::DMatrix::zeros(len, old.modes.len());
-        for (c, m) in old.modes.iter().enumerate() {
-            w.column_mut(c).copy_from_slice(&flat(m, true));
-        }
+        let a = nalgebra::DMatrix::from_iterator(
+            len,
+            self.modes.len(),
+            self.modes.iter().flat_map(|m| flat(m, false)),
+        );
+        let w = nalgebra::DMatrix::from_iterator(
+            len,
+            old.modes.len(),
+            old.modes.iter().flat_map(|m| flat(m, true)),
+        );
         let o = a.transpose() * w;
         let mut out = Vec::with_capacity(self.modes.len() * old.modes.len());
         for j in 0..self.modes.len() {

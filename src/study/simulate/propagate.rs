@@ -25,6 +25,7 @@ use super::added_load::{AddedLoads, SampleState};
 use super::{pilot, solve_pose, updates, Accuracy, SampledPath, SimulateConfig, SimulateResult};
 use crate::estimator::{EeModalBasis, Estimator};
 use crate::modal::response::{ModalResponse, MAX_RESPONSE_MODES};
+use crate::modal::ritz::RitzSchedule;
 use crate::modal::ModeShapes;
 use crate::scene::{Damping, Scene};
 use crate::study::StudyError;
@@ -38,7 +39,7 @@ fn basis_at(
     t: f64,
     modes: usize,
 ) -> Result<Update, StudyError> {
-    shapes_at(est, scene, p, t, modes, None, 0.0)?
+    shapes_at(est, scene, p, t, modes, None)?
         .map_err(|e| StudyError::Build(format!("t = {t:.4} s: {e}")))
 }
 
@@ -50,23 +51,36 @@ struct Update {
     ritz_residual: Option<f64>,
 }
 
+/// What a Rayleigh–Ritz update starts from: the held basis's whole shapes, the largest
+/// relative residual it may leave ([`updates`]) and the schedule of its checks, learned
+/// along the path.
+struct RitzStart<'a> {
+    space: &'a ModeShapes,
+    max_residual: f64,
+    schedule: &'a mut RitzSchedule,
+}
+
 /// [`basis_at`] with the shapes' own refusal kept apart (the inner error): a near-cluster
 /// the shape engine cannot resolve at this pose (not the memory budget, not the pose).
-/// From the start block `space` by Rayleigh–Ritz when every kept mode's relative residual
-/// is within `max_residual` ([`updates`]), else the structured shapes of `modes` and
-/// [`updates::ritz_guard`] more (where the model has the Rayleigh–Ritz update).
+/// By Rayleigh–Ritz from `ritz` when every kept mode's relative residual is within its
+/// bound, else the structured shapes of `modes` and [`updates::ritz_guard`] more (where
+/// the model has the Rayleigh–Ritz update).
 fn shapes_at(
     est: &mut Estimator,
     scene: &Scene,
     p: &Vector3<f64>,
     t: f64,
     modes: usize,
-    space: Option<&ModeShapes>,
-    max_residual: f64,
+    ritz: Option<RitzStart<'_>>,
 ) -> Result<Result<Update, crate::estimator::BasisError>, StudyError> {
     solve_pose(est, scene, p, t)?;
-    if let Some(start) = space {
-        match est.ee_modal_basis_ritz(start, modes, max_residual) {
+    if let Some(RitzStart {
+        space: start,
+        max_residual,
+        schedule,
+    }) = ritz
+    {
+        match est.ee_modal_basis_ritz(start, modes, max_residual, schedule) {
             Ok(Some(r)) => {
                 return Ok(Ok(Update {
                     basis: r.basis,
@@ -344,6 +358,8 @@ pub(super) fn run(
     let first = basis_at(est, scene, &path.positions_m[0], 0.0, modes)?;
     let mut held = first.basis;
     let mut space = first.space;
+    // When each Rayleigh–Ritz update is first checked, learned along the path.
+    let mut schedule = RitzSchedule::default();
     f1_seen(est, out);
     install(&mut resp, &held, None, &damping, 0.0)?;
     // The convective load and the external force, each on the same modes (`added_load`).
@@ -473,8 +489,11 @@ pub(super) fn run(
                     &path.positions_m[k1],
                     t1,
                     modes,
-                    start,
-                    max_residual,
+                    start.map(|space| RitzStart {
+                        space,
+                        max_residual,
+                        schedule: &mut schedule,
+                    }),
                 )? {
                     Ok(b) => break (k1, b),
                     Err(e) => {

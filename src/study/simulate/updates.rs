@@ -97,16 +97,19 @@ pub const MAX_GROWTH: usize = 2;
 /// near-degenerate pair split by 3 %.
 pub const RITZ_RESIDUAL_PER_TOLERANCE: f64 = 0.01;
 
-/// Guard modes above K kept in the Rayleigh–Ritz start block: 2K/3, 8 ..= 48 (each sweep
-/// shrinks mode j's error by λ_j/λ_{K+guard+1}; measured on the paper robot's circle, K = 39:
-/// with 9, 24 and 40 guards 414, 716 and 918 of its 943 updates met the residual bound
-/// within 3 sweeps, the rest fell back to the structured shapes; within 5 sweeps, 778 of
-/// 779 with 39 guards; within 10 sweeps checked from the fifth
-/// ([`crate::estimator::RITZ_FIRST_CHECK`]) 778 with 20-26 guards, ~6-10 % less CPU than 39
-/// guards, but 753-754 with 18-19: 2K/3 = 26 keeps away from that cliff;
-/// docs/vibration.md, *Speed*).
+/// Guard modes above K kept in the Rayleigh–Ritz start block: K/3, 8 ..= 48 (each sweep
+/// shrinks mode j's error by λ_j/λ_{K+guard+1}, and a check costs O(n q² + q³) with
+/// q = K + guard). Measured on the paper robot's circle (K = 39, 863 bases, first checks
+/// predicted by [`crate::modal::ritz::RitzSchedule`], at most 16 sweeps; CPU of the whole
+/// run, medians of three runs for 11, 13 and 15, one run for the others): 8, 11, 13, 15, 18
+/// and 26 guards took 1.21, 1.09, 1.05, 1.04, 1.23 and 1.22 s, 13-15 the least (more
+/// sweeps, each cheaper, and cheaper checks); 8 left 26 updates to the
+/// structured shapes, 13 one. (With K or 2K/3 guards a first check at the
+/// fifth sweep had been the best fixed choice; the 25 updates 18-19 guards then left to the
+/// structured shapes were those whose iteration needed more than the 8 sweeps the
+/// iteration then allowed, whatever its own bound said.)
 pub fn ritz_guard(modes: usize) -> usize {
-    (2 * modes / 3).clamp(8, 48)
+    (modes / 3).clamp(8, 48)
 }
 
 /// The predicted error of one interval, m.
