@@ -288,8 +288,9 @@ impl ModeShapes {
         };
         let a = fill(&self.modes, false);
         let w = fill(&old.modes, true);
-        // Oᵀ = Wᵀ A by columns is O row-major.
-        Some(w.tr_mul(&a).as_slice().to_vec())
+        // Oᵀ = Wᵀ A by columns is O row-major (Wᵀ copied, for a blocked product: `tr_mul`'s
+        // dot products took 6.6 % of the paper circle's CPU, the blocked product ~2 %).
+        Some((w.transpose() * a).data.into())
     }
 
     /// [`Self::mass_overlap`] pair by pair (shapes whose node lists differ from mode to
