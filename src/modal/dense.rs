@@ -16,7 +16,7 @@ pub fn assemble(
     models: &[CableModel],
     ee_mass_kg: f64,
 ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
-    assemble_general(models, ee_mass_kg, None)
+    assemble_general(models, ee_mass_kg, None, None)
 }
 
 /// Assemble for a rigid end-effector (6 DOF: translation, rotation): cable i's last node is
@@ -30,7 +30,55 @@ pub fn assemble_rigid(
     arms_m: &[Vector3<f64>],
     k_geo_rot: &Matrix3<f64>,
 ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
-    assemble_general(models, ee_mass_kg, Some((inertia_kg_m2, arms_m, k_geo_rot)))
+    assemble_general(
+        models,
+        ee_mass_kg,
+        Some((inertia_kg_m2, arms_m, k_geo_rot)),
+        None,
+    )
+}
+
+/// K and M of [`assemble`] / [`assemble_rigid`] with each cable's interior nodes in its own
+/// frame: the orthonormal eigenvectors R_c of its element block K_c (columns, world frame),
+/// so that K_c is the diagonal of its eigenvalues there, and the consistent mass, a
+/// multiple of the identity, is unchanged. A cable's interior DOFs are then placed by
+/// direction (its first direction's nodes from the anchor, then the second's, the third's)
+/// rather than by node: each direction is a scalar chain, K and M tridiagonal within it,
+/// coupled to the others only through the end-effector (and a pulley's junction). The
+/// model is [`assemble`]'s with K_c replaced by R_c diag(d) R_cᵀ (equal to K_c within
+/// rounding): a node's world displacement is R_c times its three values here
+/// ([`CableFrames`]).
+#[derive(Debug, Clone)]
+pub struct CableFrames {
+    /// K, N/m.
+    pub k: DMatrix<f64>,
+    /// M, kg.
+    pub m: DMatrix<f64>,
+    /// Each cable's frame R_c (orthonormal columns, world frame).
+    pub frames: Vec<Matrix3<f64>>,
+}
+
+impl CableFrames {
+    /// The DOF of cable `cable`'s interior node `node` (1 ..= n_el − 1) along its frame's
+    /// direction `axis` (0..3), where `base` is the cable's first interior DOF (as in
+    /// [`assemble`]: the end-effector's, then the cables' in turn) and `n_el` its elements.
+    pub fn dof(base: usize, n_el: usize, node: usize, axis: usize) -> usize {
+        base + axis * (n_el - 1) + node - 1
+    }
+}
+
+/// [`CableFrames`] of a point-mass end-effector (`rigid` None) or a rigid one.
+pub fn assemble_in_cable_frames(
+    models: &[CableModel],
+    ee_mass_kg: f64,
+    rigid: Option<RigidParts<'_>>,
+) -> Result<CableFrames, ModalError> {
+    let frames: Vec<Matrix3<f64>> = models
+        .iter()
+        .map(|cm| SymmetricEigen::new(0.5 * (cm.kc + cm.kc.transpose())).eigenvectors)
+        .collect();
+    let (k, m) = assemble_general(models, ee_mass_kg, rigid, Some(&frames))?;
+    Ok(CableFrames { k, m, frames })
 }
 
 /// Memory the dense reference may use, bytes: the one budget of the offline work
@@ -91,6 +139,7 @@ fn assemble_general(
     models: &[CableModel],
     ee_mass_kg: f64,
     rigid: Option<RigidParts<'_>>,
+    frames: Option<&[Matrix3<f64>]>,
 ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
     let ee_dim = if rigid.is_some() { 6 } else { 3 };
     let ndof = assembled_dof(models, ee_dim).ok_or(ModalError::NotAssemblable)?;
@@ -120,27 +169,45 @@ fn assemble_general(
             None => i3,
         };
         let me = cm.element_mass_kg;
-        let kc = cm.kc;
         let hidden = hidden_of(cm);
+        let axial = hidden.map(|h| Matrix3x6::from_fn(|r, c| if c == 0 { h.1[r] } else { 0.0 }));
+        // In the cable's frame R (CableFrames): K_c is diag(d) = Rᵀ K_c R with the rounding
+        // off its diagonal left out, the maps of the end node and the junction Rᵀ G, Rᵀ a,
+        // and a node's DOFs a direction's chain apart.
+        let (kc, g, axial, stride) = match frames {
+            Some(frames) => {
+                let r = frames[ci];
+                let d = r.transpose() * cm.kc * r;
+                (
+                    Matrix3::from_diagonal(&d.diagonal()),
+                    r.transpose() * g,
+                    axial.map(|a| r.transpose() * a),
+                    n - 1,
+                )
+            }
+            None => (cm.kc, g, axial, 1),
+        };
         // The junction's axial DOF, after the cable's interior nodes and the hidden ones.
         let junction = base + 3 * (n - 1) + hidden.map_or(0, |h| h.0.n_el - 1);
-        let axial = hidden.map(|h| Matrix3x6::from_fn(|r, c| if c == 0 { h.1[r] } else { 0.0 }));
         // Node j: 0 = anchor (fixed, or the junction), 1..n−1 interior, n = end-effector:
-        // its first DOF, its map and the map's columns.
-        let place = |j: usize| -> Option<(usize, Matrix3x6<f64>, usize)> {
+        // its first DOF, its map, the map's columns and the step between its DOFs.
+        let place = |j: usize| -> Option<(usize, Matrix3x6<f64>, usize, usize)> {
             if j == n {
-                Some((0, g, ee_dim))
+                Some((0, g, ee_dim, 1))
             } else if j == 0 {
-                axial.map(|a| (junction, a, 1))
+                axial.map(|a| (junction, a, 1, 1))
+            } else if stride == 1 {
+                Some((base + 3 * (j - 1), i3, 3, 1))
             } else {
-                Some((base + 3 * (j - 1), i3, 3))
+                Some((CableFrames::dof(base, n, j, 0), i3, 3, stride))
             }
         };
         for el in 0..n {
             let nodes = [el, el + 1];
             for (ia, &na) in nodes.iter().enumerate() {
                 for (ib, &nb) in nodes.iter().enumerate() {
-                    let (Some((ra, la, ca)), Some((rb, lb, cb))) = (place(na), place(nb)) else {
+                    let (Some((ra, la, ca, sa)), Some((rb, lb, cb, sb))) = (place(na), place(nb))
+                    else {
                         continue;
                     };
                     let sign = if ia == ib { 1.0 } else { -1.0 };
@@ -149,8 +216,8 @@ fn assemble_general(
                     let mk = la.transpose() * lb * mcoef;
                     for r in 0..ca {
                         for c in 0..cb {
-                            k[(ra + r, rb + c)] += kk[(r, c)];
-                            mm[(ra + r, rb + c)] += mk[(r, c)];
+                            k[(ra + r * sa, rb + c * sb)] += kk[(r, c)];
+                            mm[(ra + r * sa, rb + c * sb)] += mk[(r, c)];
                         }
                     }
                 }

@@ -184,9 +184,29 @@ impl Envelope {
         let n = order.len();
         let mut first = vec![0usize; n];
         let mut start = vec![0usize; n + 1];
+        // `order` as runs of consecutive indices (two for the end-effector moved last), so
+        // that each column's first nonzero is found along contiguous slices.
+        let mut runs: Vec<(usize, usize)> = Vec::new(); // (position in `order`, index)
+        for (j, &o) in order.iter().enumerate() {
+            match runs.last() {
+                Some(&(p, i)) if i + (j - p) == o => {}
+                _ => runs.push((j, o)),
+            }
+        }
         for i in 0..n {
             let col = a.column(order[i]);
-            first[i] = (0..i).find(|&j| col[order[j]] != 0.0).unwrap_or(i);
+            let col = col.as_slice();
+            first[i] = i;
+            for (r, &(p, o)) in runs.iter().enumerate() {
+                if p >= i {
+                    break;
+                }
+                let end = runs.get(r + 1).map_or(n, |&(e, _)| e).min(i);
+                if let Some(at) = first_nonzero(&col[o..o + (end - p)]) {
+                    first[i] = p + at;
+                    break;
+                }
+            }
             start[i + 1] = start[i] + (i + 1 - first[i]);
         }
         let mut data = vec![0.0; start[n]];
@@ -291,6 +311,23 @@ impl Envelope {
     }
 }
 
+/// The index of the first nonzero of `v`, eight values at a time (no branch per value).
+fn first_nonzero(v: &[f64]) -> Option<usize> {
+    let mut chunks = v.chunks_exact(8);
+    let mut at = 0;
+    for c in chunks.by_ref() {
+        if c.iter().fold(false, |any, &x| any | (x != 0.0)) {
+            return c.iter().position(|&x| x != 0.0).map(|k| at + k);
+        }
+        at += 8;
+    }
+    chunks
+        .remainder()
+        .iter()
+        .position(|&x| x != 0.0)
+        .map(|k| at + k)
+}
+
 /// A symmetric matrix's nonzeros by rows, in a given order of its rows and columns, for
 /// products with blocks held by rows.
 struct Sparse {
@@ -300,26 +337,53 @@ struct Sparse {
 }
 
 impl Sparse {
-    /// `a`'s nonzeros with its rows and columns taken in `order`.
-    fn new(a: &DMatrix<f64>, order: &[usize]) -> Sparse {
-        let mut s = Sparse {
-            start: vec![0],
-            cols: Vec::new(),
-            vals: Vec::new(),
-        };
-        for &r in order {
-            // Row r of the symmetric `a` is its column r, read as it is stored.
-            let col = a.column(r);
-            for (j, &c) in order.iter().enumerate() {
-                let v = col[c];
-                if v != 0.0 {
-                    s.cols.push(j);
-                    s.vals.push(v);
+    /// The nonzeros of `a` (symmetric) with its rows and columns taken in the order of its
+    /// factor `f` ([`Envelope::factor`] of `a`): only the factor's envelope is read (row i's
+    /// entries left of the diagonal from its first nonzero; right of it, by symmetry, the
+    /// rows whose envelope reaches column i), O(envelope) rather than O(n²).
+    fn new(a: &DMatrix<f64>, f: &Envelope) -> Sparse {
+        let order = &f.order;
+        let n = order.len();
+        // Entries per row: the lower envelope's nonzeros and their mirror images.
+        let mut count = vec![0usize; n];
+        for i in 0..n {
+            let col = a.column(order[i]);
+            for j in f.first[i]..=i {
+                if col[order[j]] != 0.0 {
+                    count[i] += 1;
+                    if j < i {
+                        count[j] += 1;
+                    }
                 }
             }
-            s.start.push(s.cols.len());
         }
-        s
+        let mut start = vec![0usize; n + 1];
+        for i in 0..n {
+            start[i + 1] = start[i] + count[i];
+        }
+        let mut cols = vec![0usize; start[n]];
+        let mut vals = vec![0.0; start[n]];
+        let mut next = start[..n].to_vec();
+        // Rows in ascending order fill each row's columns in ascending order: row i's lower
+        // entries (j ≤ i) come while i is visited, its upper ones (j > i) after, as the
+        // later rows j are visited.
+        for i in 0..n {
+            let col = a.column(order[i]);
+            for j in f.first[i]..=i {
+                let v = col[order[j]];
+                if v != 0.0 {
+                    cols[next[i]] = j;
+                    vals[next[i]] = v;
+                    next[i] += 1;
+                    if j < i {
+                        cols[next[j]] = i;
+                        vals[next[j]] = v;
+                        next[j] += 1;
+                    }
+                }
+            }
+        }
+        Sparse { start, cols, vals }
     }
 
     /// A X into `y` for `q` columns held by rows (as [`Envelope::solve_rows`]).
@@ -452,7 +516,7 @@ pub fn subspace_iteration(
     let order: Vec<usize> = (dim.min(n)..n).chain(0..dim.min(n)).collect();
     let kf = Envelope::factor(k, &order).ok_or(RitzError::NotPositive("K"))?;
     let mf = Envelope::factor(m, &order).ok_or(RitzError::NotPositive("M"))?;
-    let ms = Sparse::new(m, &order);
+    let ms = Sparse::new(m, &mf);
     let q = x.ncols();
     let checked = checked.min(q);
     let mut out = Ritz {
