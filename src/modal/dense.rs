@@ -395,3 +395,128 @@ pub fn dense_modes_ee(
         lambda_max,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cable::{CableModel, HiddenAxial};
+    use crate::scene::ElementKind;
+
+    /// Three taut FEM cables in different directions, the second on a hidden cable behind
+    /// its pulley, and a rigid end-effector's parts.
+    fn models() -> Vec<CableModel> {
+        let frame = Matrix3::identity();
+        let dirs = [
+            Vector3::new(0.3, -0.5, -0.8),
+            Vector3::new(-0.6, 0.2, -0.7),
+            Vector3::new(0.1, 0.9, -0.4),
+        ];
+        dirs.iter()
+            .enumerate()
+            .map(|(i, d)| {
+                let e = d.normalize();
+                let (t, ea, mu) = (300.0 + 50.0 * i as f64, 2.0e5, 0.05);
+                let mut m = CableModel::build(
+                    ElementKind::Fem,
+                    4 + i,
+                    &e,
+                    1.7,
+                    t,
+                    ea,
+                    mu,
+                    0.0,
+                    &frame,
+                    true,
+                )
+                .unwrap();
+                if i == 1 {
+                    let hidden = HiddenAxial {
+                        length_m: 0.8,
+                        ea_n: ea,
+                        mu_kg_m: mu,
+                    };
+                    m.support_on_hidden(ElementKind::Fem, &e, &hidden).unwrap();
+                }
+                m
+            })
+            .collect()
+    }
+
+    /// The cable-frame assembly is the world-frame one seen through each cable's rotation
+    /// and the direction-by-direction DOF order: the test builds that orthogonal change of
+    /// basis T itself (block-diagonal node rotations, then the permutation) and compares
+    /// Tᵀ K T and Tᵀ M T with `assemble_in_cable_frames` entry by entry (within 1e-13 of
+    /// the largest entry: the rotations' rounding), and the directions' chains are apart
+    /// (exact zeros between a cable's directions at its interior nodes).
+    #[test]
+    fn cable_frames_are_the_world_assembly_rotated_and_reordered() {
+        let models = models();
+        let inertia = Matrix3::from_diagonal(&Vector3::new(0.4, 0.5, 0.6));
+        let arms = [
+            Vector3::new(0.1, 0.05, 0.0),
+            Vector3::new(-0.1, 0.05, 0.02),
+            Vector3::new(0.0, -0.1, -0.03),
+        ];
+        let kgeo = Matrix3::new(3.0, 0.5, 0.0, 0.5, 2.0, 0.1, 0.0, 0.1, 1.0);
+        for rigid in [None, Some((&inertia, &arms[..], &kgeo))] {
+            let (k, m) = assemble_general(&models, 2.5, rigid, None).unwrap();
+            let a = assemble_in_cable_frames(&models, 2.5, rigid).unwrap();
+            let n = k.nrows();
+            assert_eq!(a.k.nrows(), n);
+            let dim = if rigid.is_some() { 6 } else { 3 };
+            // T: world DOF (row) of each cable-frame DOF (column).
+            let mut t = DMatrix::<f64>::zeros(n, n);
+            for i in 0..dim {
+                t[(i, i)] = 1.0;
+            }
+            let mut base = dim;
+            let mut interior = Vec::new();
+            for (cm, r) in models.iter().zip(&a.frames) {
+                let ne = cm.n_el;
+                for j in 1..ne {
+                    for ax in 0..3 {
+                        let col = CableFrames::dof(base, ne, j, ax);
+                        interior.push((base, ne, j, ax));
+                        for w in 0..3 {
+                            t[(base + 3 * (j - 1) + w, col)] = r[(w, ax)];
+                        }
+                    }
+                }
+                base += 3 * (ne - 1);
+                // The hidden cable's axial DOFs stay where they are.
+                if let Some((seg, _)) = hidden_of(cm) {
+                    for h in 0..seg.n_el {
+                        t[(base + h, base + h)] = 1.0;
+                    }
+                    base += seg.n_el;
+                }
+            }
+            assert_eq!(base, n);
+            let (kt, mt) = (t.transpose() * &k * &t, t.transpose() * &m * &t);
+            let (ks, ms) = (k.amax(), m.amax());
+            assert!(
+                (&kt - &a.k).amax() <= 1e-13 * ks,
+                "K: {}",
+                (&kt - &a.k).amax() / ks
+            );
+            assert!(
+                (&mt - &a.m).amax() <= 1e-13 * ms,
+                "M: {}",
+                (&mt - &a.m).amax() / ms
+            );
+            // Interior DOFs of one cable along different directions never couple.
+            for &(b1, ne1, j1, a1) in &interior {
+                for &(b2, ne2, j2, a2) in &interior {
+                    if b1 == b2 && a1 != a2 {
+                        let (r, c) = (
+                            CableFrames::dof(b1, ne1, j1, a1),
+                            CableFrames::dof(b2, ne2, j2, a2),
+                        );
+                        assert_eq!(a.k[(r, c)], 0.0, "K between directions at {r}, {c}");
+                        assert_eq!(a.m[(r, c)], 0.0, "M between directions at {r}, {c}");
+                    }
+                }
+            }
+        }
+    }
+}
