@@ -17,7 +17,7 @@ use super::dof_shapes::DofLayout;
 use super::{BasisError, EeModalBasis, Estimator, Status};
 use crate::cable::ChainKind;
 use crate::modal::quasi_static::QuasiStaticLoad;
-use crate::modal::ritz::{subspace_iteration, RitzParams, RitzSchedule};
+use crate::modal::ritz::{subspace_iteration, Pencil, RitzParams, RitzSchedule};
 use crate::modal::{CableFrames, ModeShapes, ShapeParams};
 use nalgebra::{DMatrix, Vector3};
 
@@ -108,12 +108,8 @@ impl Estimator {
         let Some(Ok(assembly)) = self.cycle.dense_in_cable_frames(&self.scene) else {
             return Ok(None);
         };
-        let CableFrames {
-            k: kk,
-            m: mm,
-            frames,
-        } = assembly;
-        let n = kk.nrows();
+        let CableFrames { entries, frames } = assembly;
+        let n = entries.dof;
         if n != dim + nodes.iter().map(|&c| 3 * (c - 2)).sum::<usize>() {
             return Ok(None);
         }
@@ -149,7 +145,10 @@ impl Estimator {
             min_sweeps: schedule.first_check(),
             rate: schedule.rate(),
         };
-        let Ok(mut ritz) = subspace_iteration(&kk, &mm, dim, x, kept, &params) else {
+        let Ok(pencil) = Pencil::from_entries(&entries, dim) else {
+            return Ok(None);
+        };
+        let Ok(mut ritz) = subspace_iteration(&pencil, x, kept, &params) else {
             return Ok(None);
         };
         // The Ritz vectors back in the world frame and the node-by-node DOF order, a column

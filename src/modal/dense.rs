@@ -16,7 +16,7 @@ pub fn assemble(
     models: &[CableModel],
     ee_mass_kg: f64,
 ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
-    assemble_general(models, ee_mass_kg, None, None)
+    assemble_dense(models, ee_mass_kg, None)
 }
 
 /// Assemble for a rigid end-effector (6 DOF: translation, rotation): cable i's last node is
@@ -30,12 +30,91 @@ pub fn assemble_rigid(
     arms_m: &[Vector3<f64>],
     k_geo_rot: &Matrix3<f64>,
 ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
+    assemble_dense(models, ee_mass_kg, Some((inertia_kg_m2, arms_m, k_geo_rot)))
+}
+
+/// Where an assembly's entries go: K (N/m) and M (kg) added into, entry by entry.
+pub trait Assembly {
+    /// Add `k` to K and `m` to M at row `r`, column `c`.
+    fn add(&mut self, r: usize, c: usize, k: f64, m: f64);
+}
+
+/// Dense K and M.
+pub struct DensePair<'a>(pub &'a mut DMatrix<f64>, pub &'a mut DMatrix<f64>);
+
+impl Assembly for DensePair<'_> {
+    fn add(&mut self, r: usize, c: usize, k: f64, m: f64) {
+        self.0[(r, c)] += k;
+        self.1[(r, c)] += m;
+    }
+}
+
+/// One addition to K (N/m) and M (kg) at row `row`, column `col`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Entry {
+    /// Row.
+    pub row: usize,
+    /// Column.
+    pub col: usize,
+    /// Added to K, N/m.
+    pub k: f64,
+    /// Added to M, kg.
+    pub m: f64,
+}
+
+/// The additions of an assembly as a list (an entry may come more than once: its sum is
+/// the matrix's entry), for a sparse consumer ([`crate::modal::ritz::Pencil`]): O(elements)
+/// memory where the dense matrices take O(DOF²).
+#[derive(Debug, Clone, Default)]
+pub struct Entries {
+    /// The matrices' size, DOF.
+    pub dof: usize,
+    /// The additions.
+    pub list: Vec<Entry>,
+}
+
+impl Assembly for Entries {
+    /// An addition of zero to both is not kept (it changes no sum; the blocks of a cable in
+    /// its own frame are mostly zeros).
+    fn add(&mut self, row: usize, col: usize, k: f64, m: f64) {
+        if k != 0.0 || m != 0.0 {
+            self.list.push(Entry { row, col, k, m });
+        }
+    }
+}
+
+impl Entries {
+    /// K and M as dense matrices (the sums of the entries).
+    pub fn to_dense(&self) -> (DMatrix<f64>, DMatrix<f64>) {
+        let mut k = DMatrix::zeros(self.dof, self.dof);
+        let mut m = DMatrix::zeros(self.dof, self.dof);
+        let mut pair = DensePair(&mut k, &mut m);
+        for e in &self.list {
+            pair.add(e.row, e.col, e.k, e.m);
+        }
+        (k, m)
+    }
+}
+
+/// [`assemble_general`] into dense matrices, within the dense budget.
+fn assemble_dense(
+    models: &[CableModel],
+    ee_mass_kg: f64,
+    rigid: Option<RigidParts<'_>>,
+) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
+    let ee_dim = if rigid.is_some() { 6 } else { 3 };
+    let ndof = assembled_dof(models, ee_dim).ok_or(ModalError::NotAssemblable)?;
+    check_dense_budget(ndof)?;
+    let mut k = DMatrix::<f64>::zeros(ndof, ndof);
+    let mut m = DMatrix::<f64>::zeros(ndof, ndof);
     assemble_general(
         models,
         ee_mass_kg,
-        Some((inertia_kg_m2, arms_m, k_geo_rot)),
+        rigid,
         None,
-    )
+        &mut DensePair(&mut k, &mut m),
+    );
+    Ok((k, m))
 }
 
 /// K and M of [`assemble`] / [`assemble_rigid`] with each cable's interior nodes in its own
@@ -47,13 +126,11 @@ pub fn assemble_rigid(
 /// coupled to the others only through the end-effector (and a pulley's junction). The
 /// model is [`assemble`]'s with K_c replaced by R_c diag(d) R_cᵀ (equal to K_c within
 /// rounding): a node's world displacement is R_c times its three values here
-/// ([`CableFrames`]).
+/// (`frames`).
 #[derive(Debug, Clone)]
 pub struct CableFrames {
-    /// K, N/m.
-    pub k: DMatrix<f64>,
-    /// M, kg.
-    pub m: DMatrix<f64>,
+    /// K (N/m) and M (kg), as the assembly's additions (O(elements), no dense matrix).
+    pub entries: Entries,
     /// Each cable's frame R_c (orthonormal columns, world frame).
     pub frames: Vec<Matrix3<f64>>,
 }
@@ -77,8 +154,14 @@ pub fn assemble_in_cable_frames(
         .iter()
         .map(|cm| SymmetricEigen::new(0.5 * (cm.kc + cm.kc.transpose())).eigenvectors)
         .collect();
-    let (k, m) = assemble_general(models, ee_mass_kg, rigid, Some(&frames))?;
-    Ok(CableFrames { k, m, frames })
+    let ee_dim = if rigid.is_some() { 6 } else { 3 };
+    let dof = assembled_dof(models, ee_dim).ok_or(ModalError::NotAssemblable)?;
+    let mut entries = Entries {
+        dof,
+        list: Vec::new(),
+    };
+    assemble_general(models, ee_mass_kg, rigid, Some(&frames), &mut entries);
+    Ok(CableFrames { entries, frames })
 }
 
 /// Memory the dense reference may use, bytes: the one budget of the offline work
@@ -135,25 +218,24 @@ pub fn assembled_dof(models: &[CableModel], ee_dim: usize) -> Option<usize> {
     Some(ee_dim + 3 * interior + hidden_dofs)
 }
 
-fn assemble_general(
+/// The assembly of [`assemble`] and [`assemble_rigid`] (the models assemblable:
+/// [`assembled_dof`] is Some), into `out`; with `frames`, each cable's interior nodes in
+/// its own frame ([`CableFrames`]).
+fn assemble_general<A: Assembly>(
     models: &[CableModel],
     ee_mass_kg: f64,
     rigid: Option<RigidParts<'_>>,
     frames: Option<&[Matrix3<f64>]>,
-) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
+    out: &mut A,
+) {
     let ee_dim = if rigid.is_some() { 6 } else { 3 };
-    let ndof = assembled_dof(models, ee_dim).ok_or(ModalError::NotAssemblable)?;
-    check_dense_budget(ndof)?;
-    let mut k = DMatrix::<f64>::zeros(ndof, ndof);
-    let mut mm = DMatrix::<f64>::zeros(ndof, ndof);
     for i in 0..3 {
-        mm[(i, i)] += ee_mass_kg;
+        out.add(i, i, 0.0, ee_mass_kg);
     }
     if let Some((inertia, _, kgeo)) = rigid {
         for r in 0..3 {
             for c in 0..3 {
-                mm[(3 + r, 3 + c)] += inertia[(r, c)];
-                k[(3 + r, 3 + c)] += kgeo[(r, c)];
+                out.add(3 + r, 3 + c, kgeo[(r, c)], inertia[(r, c)]);
             }
         }
     }
@@ -216,29 +298,26 @@ fn assemble_general(
                     let mk = la.transpose() * lb * mcoef;
                     for r in 0..ca {
                         for c in 0..cb {
-                            k[(ra + r * sa, rb + c * sb)] += kk[(r, c)];
-                            mm[(ra + r * sa, rb + c * sb)] += mk[(r, c)];
+                            out.add(ra + r * sa, rb + c * sb, kk[(r, c)], mk[(r, c)]);
                         }
                     }
                 }
             }
         }
         if let Some((seg, _)) = hidden {
-            add_hidden_axial(&mut k, &mut mm, base + 3 * (n - 1), &seg);
+            add_hidden_axial(out, base + 3 * (n - 1), &seg);
             base += seg.n_el;
         }
         base += 3 * (n - 1);
     }
-    Ok((k, mm))
 }
 
 /// Add a hidden cable's `seg.n_el` scalar axial elements, from the drum (node 0, fixed) to
 /// the junction (node `seg.n_el`), to K (N/m) and M (kg): node j ≥ 1 at row `first + j − 1`.
 /// Element: seg.k [1 −1; −1 1], (seg.m/6) [2 1; 1 2]. Both dense assemblies (taut and
 /// sagged) place their hidden cables with it.
-pub(super) fn add_hidden_axial(
-    k: &mut DMatrix<f64>,
-    m: &mut DMatrix<f64>,
+pub(super) fn add_hidden_axial<A: Assembly>(
+    out: &mut A,
     first: usize,
     seg: &crate::cable::Segment,
 ) {
@@ -250,8 +329,12 @@ pub(super) fn add_hidden_axial(
                     continue;
                 }
                 let same = ia == ib;
-                k[(at(na), at(nb))] += if same { seg.k } else { -seg.k };
-                m[(at(na), at(nb))] += seg.m / if same { 3.0 } else { 6.0 };
+                out.add(
+                    at(na),
+                    at(nb),
+                    if same { seg.k } else { -seg.k },
+                    seg.m / if same { 3.0 } else { 6.0 },
+                );
             }
         }
     }
@@ -459,10 +542,11 @@ mod tests {
         ];
         let kgeo = Matrix3::new(3.0, 0.5, 0.0, 0.5, 2.0, 0.1, 0.0, 0.1, 1.0);
         for rigid in [None, Some((&inertia, &arms[..], &kgeo))] {
-            let (k, m) = assemble_general(&models, 2.5, rigid, None).unwrap();
+            let (k, m) = assemble_dense(&models, 2.5, rigid).unwrap();
             let a = assemble_in_cable_frames(&models, 2.5, rigid).unwrap();
             let n = k.nrows();
-            assert_eq!(a.k.nrows(), n);
+            assert_eq!(a.entries.dof, n);
+            let (ak, am) = a.entries.to_dense();
             let dim = if rigid.is_some() { 6 } else { 3 };
             // T: world DOF (row) of each cable-frame DOF (column).
             let mut t = DMatrix::<f64>::zeros(n, n);
@@ -512,8 +596,8 @@ mod tests {
                             CableFrames::dof(b1, ne1, j1, a1),
                             CableFrames::dof(b2, ne2, j2, a2),
                         );
-                        assert_eq!(a.k[(r, c)], 0.0, "K between directions at {r}, {c}");
-                        assert_eq!(a.m[(r, c)], 0.0, "M between directions at {r}, {c}");
+                        assert_eq!(ak[(r, c)], 0.0, "K between directions at {r}, {c}");
+                        assert_eq!(am[(r, c)], 0.0, "M between directions at {r}, {c}");
                     }
                 }
             }

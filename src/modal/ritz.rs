@@ -178,43 +178,37 @@ pub struct Envelope {
 
 impl Envelope {
     /// The factor of `a` (symmetric) with its rows and columns taken in `order` (a
-    /// permutation of 0..n); None when `a` is not positive definite. Only the upper
-    /// triangle's columns are read (by columns, as `a` is stored).
+    /// permutation of 0..n); None when `a` is not positive definite.
     pub fn factor(a: &DMatrix<f64>, order: &[usize]) -> Option<Envelope> {
+        Self::from_rows(&Sparse::from_dense(a, order), order)
+    }
+
+    /// The factor of the symmetric matrix whose rows (in the order `order`, columns
+    /// ascending) `a` holds; None when it is not positive definite. Each row's entries left
+    /// of the diagonal are scattered into its envelope and factored there.
+    fn from_rows(a: &Sparse, order: &[usize]) -> Option<Envelope> {
         let n = order.len();
         let mut first = vec![0usize; n];
         let mut start = vec![0usize; n + 1];
-        // `order` as runs of consecutive indices (two for the end-effector moved last), so
-        // that each column's first nonzero is found along contiguous slices.
-        let mut runs: Vec<(usize, usize)> = Vec::new(); // (position in `order`, index)
-        for (j, &o) in order.iter().enumerate() {
-            match runs.last() {
-                Some(&(p, i)) if i + (j - p) == o => {}
-                _ => runs.push((j, o)),
-            }
-        }
         for i in 0..n {
-            let col = a.column(order[i]);
-            let col = col.as_slice();
-            first[i] = i;
-            for (r, &(p, o)) in runs.iter().enumerate() {
-                if p >= i {
-                    break;
-                }
-                let end = runs.get(r + 1).map_or(n, |&(e, _)| e).min(i);
-                if let Some(at) = first_nonzero(&col[o..o + (end - p)]) {
-                    first[i] = p + at;
-                    break;
-                }
-            }
+            let row = &a.cols[a.start[i]..a.start[i + 1]];
+            first[i] = row.first().map_or(i, |&j| j.min(i));
             start[i + 1] = start[i] + (i + 1 - first[i]);
         }
         let mut data = vec![0.0; start[n]];
         for i in 0..n {
-            let col = a.column(order[i]);
+            for e in a.start[i]..a.start[i + 1] {
+                let j = a.cols[e];
+                if j > i {
+                    break;
+                }
+                data[start[i] + j - first[i]] = a.vals[e];
+            }
+        }
+        for i in 0..n {
             for j in first[i]..=i {
                 let lo = first[i].max(first[j]);
-                let mut s = col[order[j]];
+                let mut s = data[start[i] + j - first[i]];
                 for k in lo..j {
                     s -= data[start[i] + k - first[i]] * data[start[j] + k - first[j]];
                 }
@@ -311,25 +305,9 @@ impl Envelope {
     }
 }
 
-/// The index of the first nonzero of `v`, eight values at a time (no branch per value).
-fn first_nonzero(v: &[f64]) -> Option<usize> {
-    let mut chunks = v.chunks_exact(8);
-    let mut at = 0;
-    for c in chunks.by_ref() {
-        if c.iter().fold(false, |any, &x| any | (x != 0.0)) {
-            return c.iter().position(|&x| x != 0.0).map(|k| at + k);
-        }
-        at += 8;
-    }
-    chunks
-        .remainder()
-        .iter()
-        .position(|&x| x != 0.0)
-        .map(|k| at + k)
-}
-
 /// A symmetric matrix's nonzeros by rows, in a given order of its rows and columns, for
 /// products with blocks held by rows.
+#[derive(Debug, Clone)]
 struct Sparse {
     start: Vec<usize>,
     cols: Vec<usize>,
@@ -337,53 +315,81 @@ struct Sparse {
 }
 
 impl Sparse {
-    /// The nonzeros of `a` (symmetric) with its rows and columns taken in the order of its
-    /// factor `f` ([`Envelope::factor`] of `a`): only the factor's envelope is read (row i's
-    /// entries left of the diagonal from its first nonzero; right of it, by symmetry, the
-    /// rows whose envelope reaches column i), O(envelope) rather than O(n²).
-    fn new(a: &DMatrix<f64>, f: &Envelope) -> Sparse {
-        let order = &f.order;
-        let n = order.len();
-        // Entries per row: the lower envelope's nonzeros and their mirror images.
-        let mut count = vec![0usize; n];
-        for i in 0..n {
-            let col = a.column(order[i]);
-            for j in f.first[i]..=i {
-                if col[order[j]] != 0.0 {
-                    count[i] += 1;
-                    if j < i {
-                        count[j] += 1;
-                    }
-                }
-            }
-        }
-        let mut start = vec![0usize; n + 1];
-        for i in 0..n {
-            start[i + 1] = start[i] + count[i];
-        }
-        let mut cols = vec![0usize; start[n]];
-        let mut vals = vec![0.0; start[n]];
-        let mut next = start[..n].to_vec();
-        // Rows in ascending order fill each row's columns in ascending order: row i's lower
-        // entries (j ≤ i) come while i is visited, its upper ones (j > i) after, as the
-        // later rows j are visited.
-        for i in 0..n {
-            let col = a.column(order[i]);
-            for j in f.first[i]..=i {
-                let v = col[order[j]];
+    /// `a`'s nonzeros with its rows and columns taken in `order` (every entry read).
+    fn from_dense(a: &DMatrix<f64>, order: &[usize]) -> Sparse {
+        let mut s = Sparse {
+            start: vec![0],
+            cols: Vec::new(),
+            vals: Vec::new(),
+        };
+        for &r in order {
+            // Row r of the symmetric `a` is its column r, read as it is stored.
+            let col = a.column(r);
+            for (j, &c) in order.iter().enumerate() {
+                let v = col[c];
                 if v != 0.0 {
-                    cols[next[i]] = j;
-                    vals[next[i]] = v;
-                    next[i] += 1;
-                    if j < i {
-                        cols[next[j]] = i;
-                        vals[next[j]] = v;
-                        next[j] += 1;
+                    s.cols.push(j);
+                    s.vals.push(v);
+                }
+            }
+            s.start.push(s.cols.len());
+        }
+        s
+    }
+
+    /// The sums of an assembly's additions `list` on `n` rows and columns, K's and M's, in
+    /// the order whose position of index i is `pos[i]`: bucketed by row, sorted by column
+    /// within a row and summed, the zero sums left out. O(additions).
+    fn pair_from_entries(
+        n: usize,
+        pos: &[usize],
+        list: &[crate::modal::Entry],
+    ) -> (Sparse, Sparse) {
+        let mut start = vec![0usize; n + 1];
+        for e in list {
+            start[pos[e.row] + 1] += 1;
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut next = start[..n].to_vec();
+        let mut adds = vec![(0usize, 0.0f64, 0.0f64); list.len()];
+        for e in list {
+            let r = pos[e.row];
+            adds[next[r]] = (pos[e.col], e.k, e.m);
+            next[r] += 1;
+        }
+        let empty = || Sparse {
+            start: Vec::with_capacity(n + 1),
+            cols: Vec::with_capacity(list.len()),
+            vals: Vec::with_capacity(list.len()),
+        };
+        let (mut k, mut m) = (empty(), empty());
+        k.start.push(0);
+        m.start.push(0);
+        for i in 0..n {
+            let row = &mut adds[start[i]..start[i + 1]];
+            row.sort_unstable_by_key(|&(c, _, _)| c);
+            let mut at = 0;
+            while at < row.len() {
+                let c = row[at].0;
+                let (mut vk, mut vm) = (0.0, 0.0);
+                while at < row.len() && row[at].0 == c {
+                    vk += row[at].1;
+                    vm += row[at].2;
+                    at += 1;
+                }
+                for (s, v) in [(&mut k, vk), (&mut m, vm)] {
+                    if v != 0.0 {
+                        s.cols.push(c);
+                        s.vals.push(v);
                     }
                 }
             }
+            k.start.push(k.cols.len());
+            m.start.push(m.cols.len());
         }
-        Sparse { start, cols, vals }
+        (k, m)
     }
 
     /// A X into `y` for `q` columns held by rows (as [`Envelope::solve_rows`]).
@@ -492,31 +498,87 @@ impl Ritz {
     }
 }
 
-/// The subspace iteration of the module docs on `k`, `m` (n × n, symmetric, positive
-/// definite; `dim` end-effector DOFs first, ordered last for the factors) from the start
-/// block `x` (n × q): sweeps until the first `checked` Ritz pairs have ρ ≤
-/// `params.max_residual` or `params.max_sweeps` are made. The blocks are held by rows in
-/// the factors' order between the sweeps, so that the envelope solves and the sparse
-/// products run along a row's q values and the block products take them as they lie.
+/// K and M (n × n, symmetric) of a model with `dim` end-effector DOFs first, as the rows of
+/// their nonzeros in the factors' order (the end-effector last): what
+/// [`subspace_iteration`] works on.
+#[derive(Debug, Clone)]
+pub struct Pencil {
+    order: Vec<usize>,
+    k: Sparse,
+    m: Sparse,
+}
+
+impl Pencil {
+    /// The factors' order of a model of `n` DOF with `dim` end-effector DOFs first.
+    fn order(n: usize, dim: usize) -> Vec<usize> {
+        (dim.min(n)..n).chain(0..dim.min(n)).collect()
+    }
+
+    /// From dense K (N/m) and M (kg) of the same size (every entry read: O(n²)).
+    pub fn from_dense(k: &DMatrix<f64>, m: &DMatrix<f64>, dim: usize) -> Result<Pencil, RitzError> {
+        let n = k.nrows();
+        if k.ncols() != n || m.nrows() != n || m.ncols() != n {
+            return Err(RitzError::Size {
+                rows: m.nrows(),
+                dof: n,
+            });
+        }
+        let order = Self::order(n, dim);
+        Ok(Pencil {
+            k: Sparse::from_dense(k, &order),
+            m: Sparse::from_dense(m, &order),
+            order,
+        })
+    }
+
+    /// From an assembly's additions ([`crate::modal::Entries`]): O(additions), no dense
+    /// matrix.
+    pub fn from_entries(entries: &crate::modal::Entries, dim: usize) -> Result<Pencil, RitzError> {
+        let n = entries.dof;
+        if let Some(e) = entries.list.iter().find(|e| e.row >= n || e.col >= n) {
+            return Err(RitzError::Size {
+                rows: e.row.max(e.col) + 1,
+                dof: n,
+            });
+        }
+        let order = Self::order(n, dim);
+        let mut pos = vec![0usize; n];
+        for (i, &o) in order.iter().enumerate() {
+            pos[o] = i;
+        }
+        let (k, m) = Sparse::pair_from_entries(n, &pos, &entries.list);
+        Ok(Pencil { order, k, m })
+    }
+
+    /// The model's DOF.
+    pub fn dof(&self) -> usize {
+        self.order.len()
+    }
+}
+
+/// The subspace iteration of the module docs on `pencil`'s K and M (positive definite)
+/// from the start block `x` (n × q, the assembly's DOF order): sweeps until the first
+/// `checked` Ritz pairs have ρ ≤ `params.max_residual` or `params.max_sweeps` are made.
+/// The blocks are held by rows in the factors' order between the sweeps, so that the
+/// envelope solves and the sparse products run along a row's q values and the block
+/// products take them as they lie.
 pub fn subspace_iteration(
-    k: &DMatrix<f64>,
-    m: &DMatrix<f64>,
-    dim: usize,
+    pencil: &Pencil,
     x: DMatrix<f64>,
     checked: usize,
     params: &RitzParams,
 ) -> Result<Ritz, RitzError> {
-    let n = k.nrows();
-    if x.nrows() != n || m.nrows() != n {
+    let n = pencil.dof();
+    if x.nrows() != n {
         return Err(RitzError::Size {
             rows: x.nrows(),
             dof: n,
         });
     }
-    let order: Vec<usize> = (dim.min(n)..n).chain(0..dim.min(n)).collect();
-    let kf = Envelope::factor(k, &order).ok_or(RitzError::NotPositive("K"))?;
-    let mf = Envelope::factor(m, &order).ok_or(RitzError::NotPositive("M"))?;
-    let ms = Sparse::new(m, &mf);
+    let order = &pencil.order;
+    let kf = Envelope::from_rows(&pencil.k, order).ok_or(RitzError::NotPositive("K"))?;
+    let mf = Envelope::from_rows(&pencil.m, order).ok_or(RitzError::NotPositive("M"))?;
+    let ms = &pencil.m;
     let q = x.ncols();
     let checked = checked.min(q);
     let mut out = Ritz {
@@ -763,7 +825,7 @@ mod tests {
             let r = &a * nalgebra::DVector::from_column_slice(&x)
                 - nalgebra::DVector::from_column_slice(&b);
             assert!(r.amax() < 1e-13, "{order:?}: residual {}", r.amax());
-            let s = Sparse::new(&a, &f);
+            let s = Sparse::from_dense(&a, order);
             let q = 3;
             let xs: Vec<f64> = (0..n * q).map(|i| (i as f64 * 0.61).cos()).collect();
             let mut y = vec![0.0; n * q];
@@ -850,7 +912,8 @@ mod tests {
         let x = DMatrix::from_fn(x.nrows(), q, |r, c| {
             x[(r, c)] * (1.0 + 0.01 * ((r * 7 + c) % 5) as f64)
         });
-        let r = subspace_iteration(&k, &m, 1, x, checked, &params).expect("iteration");
+        let pencil = Pencil::from_dense(&k, &m, 1).expect("square");
+        let r = subspace_iteration(&pencil, x, checked, &params).expect("iteration");
         assert!(r.sweeps >= 12, "checked at sweep {}", r.sweeps);
         let rho = r.max_residual();
         assert!(rho <= 1e-9, "ρ {rho:.2e}");

@@ -677,7 +677,7 @@ impl EndEffector {
         models: &[CableModel],
         arms_m: &[Vector3<f64>],
     ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
-        let (mut k, m) = if self.rigid {
+        let (mut k, mut m) = if self.rigid {
             modal::assemble_rigid(
                 models,
                 self.mass_kg,
@@ -688,7 +688,7 @@ impl EndEffector {
         } else {
             modal::assemble(models, self.mass_kg)?
         };
-        self.add_pulleys(&mut k);
+        self.add_pulleys(&mut modal::DensePair(&mut k, &mut m));
         Ok((k, m))
     }
 
@@ -703,17 +703,17 @@ impl EndEffector {
             .rigid
             .then_some((&self.inertia_kg_m2, arms_m, &self.k_geo_rot));
         let mut a = modal::assemble_in_cable_frames(models, self.mass_kg, rigid)?;
-        self.add_pulleys(&mut a.k);
+        self.add_pulleys(&mut a.entries);
         Ok(a)
     }
 
     /// The pulleys' term at the end-effector's DOFs, the first `dim` of an assembly.
-    fn add_pulleys(&self, k: &mut DMatrix<f64>) {
+    fn add_pulleys<A: modal::Assembly>(&self, out: &mut A) {
         if self.k_pulley != Matrix6::zeros() {
             let d = self.dim();
             for r in 0..d {
                 for c in 0..d {
-                    k[(r, c)] += self.k_pulley[(r, c)];
+                    out.add(r, c, self.k_pulley[(r, c)], 0.0);
                 }
             }
         }
