@@ -190,8 +190,14 @@ impl Estimator {
         if space.modes[kept].cluster_start < kept {
             return Ok(None);
         }
-        let mut shapes = space.clone();
-        shapes.modes.truncate(kept);
+        // The kept modes only (the guards' shapes are not copied).
+        let shapes = ModeShapes {
+            dim: space.dim,
+            fractions: space.fractions.clone(),
+            modes: space.modes[..kept].to_vec(),
+            element_mass_kg: space.element_mass_kg.clone(),
+            hidden_element_mass_kg: space.hidden_element_mass_kg.clone(),
+        };
         let field = self
             .cycle
             .taut_shapes_input()

@@ -395,8 +395,17 @@ impl Sparse {
     /// A X into `y` for `q` columns held by rows (as [`Envelope::solve_rows`]).
     fn mul_rows(&self, x: &[f64], y: &mut [f64], q: usize) {
         for (r, yr) in y.chunks_exact_mut(q).enumerate() {
-            yr.fill(0.0);
-            for i in self.start[r]..self.start[r + 1] {
+            let (lo, hi) = (self.start[r], self.start[r + 1]);
+            if lo == hi {
+                yr.fill(0.0);
+                continue;
+            }
+            // The first entry sets the row, the rest add to it.
+            let (v, at) = (self.vals[lo], self.cols[lo] * q);
+            for (a, b) in yr.iter_mut().zip(&x[at..at + q]) {
+                *a = v * b;
+            }
+            for i in lo + 1..hi {
                 let v = self.vals[i];
                 let at = self.cols[i] * q;
                 for (a, b) in yr.iter_mut().zip(&x[at..at + q]) {

@@ -250,11 +250,10 @@ impl ModeShapes {
         if bytes > OVERLAP_PRODUCT_BYTES {
             return Some(self.mass_overlap_by_pairs(old, ee_mass));
         }
-        // A shape written into its column `v` (of `len` values), times M or not.
-        let flat = |m: &ModeShape, times_mass: bool, v: &mut [f64]| {
+        // A shape appended to `v` as one column of `len` values, times M or not.
+        let flat = |m: &ModeShape, times_mass: bool, v: &mut Vec<f64>| {
             let ee = if times_mass { ee_mass * m.ee } else { m.ee };
-            v[..6].copy_from_slice(ee.as_slice());
-            let mut at = 6;
+            v.extend_from_slice(ee.as_slice());
             for (i, nodes) in m.cables.iter().enumerate() {
                 let mass = self.element_mass_kg.get(i).copied().unwrap_or(0.0) / 6.0;
                 for j in 0..nodes.len() {
@@ -263,28 +262,26 @@ impl ModeShapes {
                     } else {
                         nodes[j]
                     };
-                    v[at..at + 3].copy_from_slice(x.as_slice());
-                    at += 3;
+                    v.extend_from_slice(x.as_slice());
                 }
             }
             for (i, nodes) in m.hidden.iter().enumerate() {
                 let mass = self.hidden_element_mass_kg.get(i).copied().unwrap_or(0.0) / 6.0;
                 for j in 0..nodes.len() {
-                    v[at] = if times_mass {
+                    v.push(if times_mass {
                         consistent_row(nodes, j, |a, b| a + b, |a, c| a * c) * mass
                     } else {
                         nodes[j]
-                    };
-                    at += 1;
+                    });
                 }
             }
         };
         let fill = |modes: &[ModeShape], times_mass: bool| {
-            let mut a = nalgebra::DMatrix::<f64>::zeros(len, modes.len());
-            for (m, col) in modes.iter().zip(a.as_mut_slice().chunks_exact_mut(len)) {
-                flat(m, times_mass, col);
+            let mut data = Vec::with_capacity(len * modes.len());
+            for m in modes {
+                flat(m, times_mass, &mut data);
             }
-            a
+            nalgebra::DMatrix::from_vec(len, modes.len(), data)
         };
         let a = fill(&self.modes, false);
         let w = fill(&old.modes, true);
