@@ -579,14 +579,14 @@ mod tests {
             let (kt, mt) = (t.transpose() * &k * &t, t.transpose() * &m * &t);
             let (ks, ms) = (k.amax(), m.amax());
             assert!(
-                (&kt - &a.k).amax() <= 1e-13 * ks,
+                (&kt - &ak).amax() <= 1e-13 * ks,
                 "K: {}",
-                (&kt - &a.k).amax() / ks
+                (&kt - &ak).amax() / ks
             );
             assert!(
-                (&mt - &a.m).amax() <= 1e-13 * ms,
+                (&mt - &am).amax() <= 1e-13 * ms,
                 "M: {}",
-                (&mt - &a.m).amax() / ms
+                (&mt - &am).amax() / ms
             );
             // Interior DOFs of one cable along different directions never couple.
             for &(b1, ne1, j1, a1) in &interior {

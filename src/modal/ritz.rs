@@ -795,11 +795,11 @@ mod tests {
         assert!(Envelope::factor(&neg, &order).is_none());
     }
 
-    /// The envelope's first nonzeros (found along the order's runs, eight values at a time)
-    /// and M's sparse rows (read from the factor's envelope) on a matrix of 23 DOF with
-    /// bands, an arrowhead and rows beyond eight zeros deep, in three orders (the end-effector
-    /// last; reversed; interleaved, runs of one): the factor solves A x = b (residual against
-    /// the dense product) and the sparse product equals the dense one, entry by entry.
+    /// The sparse rows (from the dense matrix, and from an assembly's additions split,
+    /// scrambled and with zeros) and the envelope factored from them, on a matrix of 23 DOF
+    /// with bands and an arrowhead, in three orders (the end-effector last; reversed;
+    /// interleaved): the factor solves A x = b (residual against the dense product), the
+    /// sparse product equals the dense one, and both constructions give the same rows.
     #[test]
     fn envelope_and_sparse_rows_in_any_order_match_the_dense_matrix() {
         let n = 23;
@@ -835,6 +835,33 @@ mod tests {
                 - nalgebra::DVector::from_column_slice(&b);
             assert!(r.amax() < 1e-13, "{order:?}: residual {}", r.amax());
             let s = Sparse::from_dense(&a, order);
+            // The same rows from an assembly's additions: each entry split in two parts
+            // added in a scrambled order, zeros added too, M = 2 A alongside.
+            let mut list = Vec::new();
+            for idx in (0..n * n).map(|t| (t * 7 + 3) % (n * n)) {
+                let (r, c) = (idx % n, idx / n);
+                let v = a[(r, c)];
+                for part in [0.25 * v, 0.75 * v] {
+                    list.push(crate::modal::Entry {
+                        row: r,
+                        col: c,
+                        k: part,
+                        m: 2.0 * part,
+                    });
+                }
+            }
+            let mut pos = vec![0; n];
+            for (i, &o) in order.iter().enumerate() {
+                pos[o] = i;
+            }
+            let (sk, sm) = Sparse::pair_from_entries(n, &pos, &list);
+            assert_eq!((&sk.start, &sk.cols), (&s.start, &s.cols), "{order:?}");
+            assert_eq!((&sm.start, &sm.cols), (&s.start, &s.cols), "{order:?}");
+            for ((vk, vm), v) in sk.vals.iter().zip(&sm.vals).zip(&s.vals) {
+                assert!(
+                    (vk - v).abs() <= 1e-15 * v.abs() && (vm - 2.0 * v).abs() <= 2e-15 * v.abs()
+                );
+            }
             let q = 3;
             let xs: Vec<f64> = (0..n * q).map(|i| (i as f64 * 0.61).cos()).collect();
             let mut y = vec![0.0; n * q];
