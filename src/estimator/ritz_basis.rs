@@ -4,9 +4,11 @@
 //! solve per mode.
 //!
 //! The start block is the previous basis's whole shapes (K modes and the guard modes above
-//! them) in the dense assembly's DOF order ([`crate::modal::assemble`]: the end-effector,
-//! then each cable's interior nodes from the anchor); the Ritz vectors go back into shapes
-//! on the same nodes (the anchor still, the end node the end-effector's attachment
+//! them) in the DOF order of the assembly in cable frames
+//! ([`crate::modal::assemble_in_cable_frames`]: the end-effector, then each cable's interior
+//! nodes in the frame of its element block's eigenvectors, a direction at a time: every
+//! direction a scalar chain); the Ritz vectors are rotated back node by node and go into
+//! shapes on the same nodes (the anchor still, the end node the end-effector's attachment
 //! G_i φ_ee), with the element masses of the new pose. The load of the whole robot's
 //! quasi-static inertia is formed as the structured basis forms it, from the new pose's
 //! influence field. Taut FEM chains without a hidden cable only; elsewhere (sagging
@@ -21,8 +23,8 @@ use crate::modal::ritz::{subspace_iteration, Pencil, RitzParams, RitzSchedule};
 use crate::modal::{CableFrames, ModeShapes, ShapeParams};
 use nalgebra::{DMatrix, Vector3};
 
-/// Largest model the update is made for, DOF: its K and M are assembled densely (n² each,
-/// 2 × 18 MB at the bound) before their envelope is taken; beyond it the structured
+/// Largest model the update is made for, DOF: its sweeps cost O(n q) and its blocks take
+/// n × q values each (q the kept and guard modes, a few blocks); beyond it the structured
 /// shapes, whose cost does not grow with the elements.
 pub const MAX_RITZ_DOF: usize = 1500;
 

@@ -36,7 +36,11 @@
 //! the end-effector: ordered with the end-effector last their Cholesky factors have the
 //! chains' band and `dim` rows whose envelope spans the chains but whose entries are zero
 //! except next to each chain's attachment ([`Envelope`]; the solves skip the zeros), O(n) to
-//! factor and to solve. The blocks are held by rows in the factors' order between sweeps,
+//! factor and to solve. With each cable's nodes in its own frame
+//! ([`crate::modal::CableFrames`]) every direction is a scalar chain and a chain row of
+//! the factor holds one entry beside the diagonal. The problem comes as the rows of K's
+//! and M's nonzeros ([`Pencil`], from an assembly's additions without a dense matrix, or
+//! from dense matrices). The blocks are held by rows in the factors' order between sweeps,
 //! so that the solves and M's products run along a row's q values and the block products
 //! take them as they lie. A sweep costs O(n q); a check O(n q² + q³).
 
