@@ -642,11 +642,17 @@ pub fn subspace_iteration(
             if spread.is_none() {
                 // The columns' Rayleigh quotients yᵀKy / yᵀMy (K Y = M X): the block's
                 // spread of λ before any Ritz value is known.
+                // Summed along the rows as they lie (a column's values are q apart).
+                let mut yky = vec![0.0; q];
+                for (yr, xr) in y.chunks_exact(q).zip(mx.chunks_exact(q)) {
+                    for ((s, a), b) in yky.iter_mut().zip(yr).zip(xr) {
+                        *s += a * b;
+                    }
+                }
                 let mut lo = f64::INFINITY;
                 let mut hi = 0.0f64;
-                for (c, &ymy) in norms.iter().enumerate() {
-                    let yky: f64 = (0..n).map(|i| y[i * q + c] * mx[i * q + c]).sum();
-                    let rq = yky / ymy;
+                for (&k, &ymy) in yky.iter().zip(&norms) {
+                    let rq = k / ymy;
                     lo = lo.min(rq);
                     hi = hi.max(rq);
                 }
