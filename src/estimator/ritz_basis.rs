@@ -4,9 +4,11 @@
 //! solve per mode.
 //!
 //! The start block is the previous basis's whole shapes (K modes and the guard modes above
-//! them) in the dense assembly's DOF order ([`crate::modal::assemble`]: the end-effector,
-//! then each cable's interior nodes from the anchor); the Ritz vectors go back into shapes
-//! on the same nodes (the anchor still, the end node the end-effector's attachment
+//! them) in the DOF order of the assembly in cable frames
+//! ([`crate::modal::assemble_in_cable_frames`]: the end-effector, then each cable's interior
+//! nodes in the frame of its element block's eigenvectors, a direction at a time: every
+//! direction a scalar chain); the Ritz vectors are rotated back node by node and go into
+//! shapes on the same nodes (the anchor still, the end node the end-effector's attachment
 //! G_i φ_ee), with the element masses of the new pose. The load of the whole robot's
 //! quasi-static inertia is formed as the structured basis forms it, from the new pose's
 //! influence field. Taut FEM chains without a hidden cable only; elsewhere (sagging
@@ -17,12 +19,12 @@ use super::dof_shapes::DofLayout;
 use super::{BasisError, EeModalBasis, Estimator, Status};
 use crate::cable::ChainKind;
 use crate::modal::quasi_static::QuasiStaticLoad;
-use crate::modal::ritz::{subspace_iteration, RitzParams, RitzSchedule};
-use crate::modal::{ModeShapes, ShapeParams};
-use nalgebra::DMatrix;
+use crate::modal::ritz::{subspace_iteration, Pencil, RitzParams, RitzSchedule};
+use crate::modal::{CableFrames, ModeShapes, ShapeParams};
+use nalgebra::{DMatrix, Vector3};
 
-/// Largest model the update is made for, DOF: its K and M are assembled densely (n² each,
-/// 2 × 18 MB at the bound) before their envelope is taken; beyond it the structured
+/// Largest model the update is made for, DOF: its sweeps cost O(n q) and its blocks take
+/// n × q values each (q the kept and guard modes, a few blocks); beyond it the structured
 /// shapes, whose cost does not grow with the elements.
 pub const MAX_RITZ_DOF: usize = 1500;
 
@@ -103,14 +105,17 @@ impl Estimator {
         if !same_nodes {
             return Ok(None);
         }
-        let Ok((kk, mm)) = self.cycle.dense_matrices(&self.scene) else {
+        // K and M with each cable's nodes in its own frame: every direction a scalar chain,
+        // so that the factors' rows hold one entry beside the diagonal (module docs).
+        let Some(Ok(assembly)) = self.cycle.dense_in_cable_frames(&self.scene) else {
             return Ok(None);
         };
-        let n = kk.nrows();
+        let CableFrames { entries, frames } = assembly;
+        let n = entries.dof;
         if n != dim + nodes.iter().map(|&c| 3 * (c - 2)).sum::<usize>() {
             return Ok(None);
         }
-        // The start block in the assembly's DOF order.
+        // The start block in the assembly's DOF order, each node in its cable's frame.
         let q = start.modes.len();
         let mut x = DMatrix::zeros(n, q);
         for (c, mode) in start.modes.iter().enumerate() {
@@ -118,10 +123,11 @@ impl Estimator {
                 x[(r, c)] = mode.ee[r];
             }
             let mut base = dim;
-            for (cable, &count) in mode.cables.iter().zip(&nodes) {
+            for ((cable, &count), frame) in mode.cables.iter().zip(&nodes).zip(&frames) {
                 for j in 1..count - 1 {
+                    let local = frame.tr_mul(&cable[j]);
                     for a in 0..3 {
-                        x[(base + 3 * (j - 1) + a, c)] = cable[j][a];
+                        x[(CableFrames::dof(base, count - 1, j, a), c)] = local[a];
                     }
                 }
                 base += 3 * (count - 2);
@@ -141,9 +147,29 @@ impl Estimator {
             min_sweeps: schedule.first_check(),
             rate: schedule.rate(),
         };
-        let Ok(ritz) = subspace_iteration(&kk, &mm, dim, x, kept, &params) else {
+        let Ok(pencil) = Pencil::from_entries(&entries, dim) else {
             return Ok(None);
         };
+        let Ok(mut ritz) = subspace_iteration(&pencil, x, kept, &params) else {
+            return Ok(None);
+        };
+        // The Ritz vectors back in the world frame and the node-by-node DOF order, a column
+        // and a cable at a time.
+        let mut world = Vec::new();
+        for mut col in ritz.vectors.column_iter_mut() {
+            let mut base = dim;
+            for (&count, frame) in nodes.iter().zip(&frames) {
+                world.clear();
+                for j in 1..count - 1 {
+                    let at = |a: usize| col[CableFrames::dof(base, count - 1, j, a)];
+                    world.extend((frame * Vector3::new(at(0), at(1), at(2))).iter());
+                }
+                for (i, w) in world.iter().enumerate() {
+                    col[base + i] = *w;
+                }
+                base += 3 * (count - 2);
+            }
+        }
         schedule.learn(&ritz, max_residual);
         let residual = ritz.max_residual();
         if !(residual <= max_residual) {
@@ -166,8 +192,14 @@ impl Estimator {
         if space.modes[kept].cluster_start < kept {
             return Ok(None);
         }
-        let mut shapes = space.clone();
-        shapes.modes.truncate(kept);
+        // The kept modes only (the guards' shapes are not copied).
+        let shapes = ModeShapes {
+            dim: space.dim,
+            fractions: space.fractions.clone(),
+            modes: space.modes[..kept].to_vec(),
+            element_mass_kg: space.element_mass_kg.clone(),
+            hidden_element_mass_kg: space.hidden_element_mass_kg.clone(),
+        };
         let field = self
             .cycle
             .taut_shapes_input()

@@ -96,9 +96,9 @@ pub mod standard_form;
 pub mod sym_eigen;
 
 pub use dense::{
-    assemble, assemble_rigid, assembled_dof, check_dense_budget, condense_static,
-    dense_memory_bytes, dense_modes, dense_modes_ee, dense_relative_accuracy, DenseModes,
-    DENSE_MEMORY_BUDGET_BYTES,
+    assemble, assemble_in_cable_frames, assemble_rigid, assembled_dof, check_dense_budget,
+    condense_static, dense_memory_bytes, dense_modes, dense_modes_ee, dense_relative_accuracy,
+    Assembly, CableFrames, DenseModes, DensePair, Entries, Entry, DENSE_MEMORY_BUDGET_BYTES,
 };
 pub use dynamic_stiffness::TautChains;
 pub use ee_tracker::RescanCounts;

@@ -94,6 +94,9 @@ struct ModeCoef {
     /// row-major.
     prop: [f64; 4],
     h: f64,
+    /// 1/λ and 2ζ/(λω), s² and s³ (the particular solution's coefficients).
+    inv_lambda: f64,
+    shift_per_rate: f64,
 }
 
 /// The modal superposition's state and basis.
@@ -246,6 +249,8 @@ impl ModalResponse {
                 sign,
                 prop: [0.0; 4],
                 h: f64::NAN,
+                inv_lambda: 0.0,
+                shift_per_rate: 0.0,
             };
             rf -= phi * phi.transpose() / l;
         }
@@ -306,24 +311,27 @@ impl ModalResponse {
     /// N·m for a rigid body's moment). Exact for that force, in every damping regime.
     pub fn step(&mut self, f0: &Vector6<f64>, f1: &Vector6<f64>, h_s: f64) {
         self.force = *f1;
-        for j in 0..self.n {
-            let m = &mut self.modes[j];
+        let inv_h = 1.0 / h_s;
+        for (m, (q, v)) in self.modes[..self.n]
+            .iter_mut()
+            .zip(self.q.iter_mut().zip(self.v.iter_mut()))
+        {
             if m.h != h_s {
                 m.prop = propagator(m.omega, m.zeta, h_s);
                 m.h = h_s;
+                m.inv_lambda = 1.0 / m.lambda;
+                m.shift_per_rate = 2.0 * m.zeta / (m.lambda * m.omega);
             }
-            let m = &self.modes[j];
-            let w2 = m.lambda;
             let g0 = m.load.dot(f0);
             let g1 = m.load.dot(f1);
-            let b = (g1 - g0) / h_s;
+            let b = (g1 - g0) * inv_h;
             // particular solution q_p(τ) = (g0 + bτ)/ω² − 2ζb/ω³, q_p' = b/ω²
-            let shift = 2.0 * m.zeta * b / (w2 * m.omega);
-            let e0 = self.q[j] - (g0 / w2 - shift);
-            let de0 = self.v[j] - b / w2;
+            let shift = m.shift_per_rate * b;
+            let e0 = *q - (g0 * m.inv_lambda - shift);
+            let de0 = *v - b * m.inv_lambda;
             let [p11, p12, p21, p22] = m.prop;
-            self.q[j] = p11 * e0 + p12 * de0 + (g1 / w2 - shift);
-            self.v[j] = p21 * e0 + p22 * de0 + b / w2;
+            *q = p11 * e0 + p12 * de0 + (g1 * m.inv_lambda - shift);
+            *v = p21 * e0 + p22 * de0 + b * m.inv_lambda;
         }
     }
 

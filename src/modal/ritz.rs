@@ -36,7 +36,11 @@
 //! the end-effector: ordered with the end-effector last their Cholesky factors have the
 //! chains' band and `dim` rows whose envelope spans the chains but whose entries are zero
 //! except next to each chain's attachment ([`Envelope`]; the solves skip the zeros), O(n) to
-//! factor and to solve. The blocks are held by rows in the factors' order between sweeps,
+//! factor and to solve. With each cable's nodes in its own frame
+//! ([`crate::modal::CableFrames`]) every direction is a scalar chain and a chain row of
+//! the factor holds one entry beside the diagonal. The problem comes as the rows of K's
+//! and M's nonzeros ([`Pencil`], from an assembly's additions without a dense matrix, or
+//! from dense matrices). The blocks are held by rows in the factors' order between sweeps,
 //! so that the solves and M's products run along a row's q values and the block products
 //! take them as they lie. A sweep costs O(n q); a check O(n q² + q³).
 
@@ -178,23 +182,37 @@ pub struct Envelope {
 
 impl Envelope {
     /// The factor of `a` (symmetric) with its rows and columns taken in `order` (a
-    /// permutation of 0..n); None when `a` is not positive definite. Only the upper
-    /// triangle's columns are read (by columns, as `a` is stored).
+    /// permutation of 0..n); None when `a` is not positive definite.
     pub fn factor(a: &DMatrix<f64>, order: &[usize]) -> Option<Envelope> {
+        Self::from_rows(&Sparse::from_dense(a, order), order)
+    }
+
+    /// The factor of the symmetric matrix whose rows (in the order `order`, columns
+    /// ascending) `a` holds; None when it is not positive definite. Each row's entries left
+    /// of the diagonal are scattered into its envelope and factored there.
+    fn from_rows(a: &Sparse, order: &[usize]) -> Option<Envelope> {
         let n = order.len();
         let mut first = vec![0usize; n];
         let mut start = vec![0usize; n + 1];
         for i in 0..n {
-            let col = a.column(order[i]);
-            first[i] = (0..i).find(|&j| col[order[j]] != 0.0).unwrap_or(i);
+            let row = &a.cols[a.start[i]..a.start[i + 1]];
+            first[i] = row.first().map_or(i, |&j| j.min(i));
             start[i + 1] = start[i] + (i + 1 - first[i]);
         }
         let mut data = vec![0.0; start[n]];
         for i in 0..n {
-            let col = a.column(order[i]);
+            for e in a.start[i]..a.start[i + 1] {
+                let j = a.cols[e];
+                if j > i {
+                    break;
+                }
+                data[start[i] + j - first[i]] = a.vals[e];
+            }
+        }
+        for i in 0..n {
             for j in first[i]..=i {
                 let lo = first[i].max(first[j]);
-                let mut s = col[order[j]];
+                let mut s = data[start[i] + j - first[i]];
                 for k in lo..j {
                     s -= data[start[i] + k - first[i]] * data[start[j] + k - first[j]];
                 }
@@ -293,6 +311,7 @@ impl Envelope {
 
 /// A symmetric matrix's nonzeros by rows, in a given order of its rows and columns, for
 /// products with blocks held by rows.
+#[derive(Debug, Clone)]
 struct Sparse {
     start: Vec<usize>,
     cols: Vec<usize>,
@@ -300,8 +319,8 @@ struct Sparse {
 }
 
 impl Sparse {
-    /// `a`'s nonzeros with its rows and columns taken in `order`.
-    fn new(a: &DMatrix<f64>, order: &[usize]) -> Sparse {
+    /// `a`'s nonzeros with its rows and columns taken in `order` (every entry read).
+    fn from_dense(a: &DMatrix<f64>, order: &[usize]) -> Sparse {
         let mut s = Sparse {
             start: vec![0],
             cols: Vec::new(),
@@ -322,11 +341,75 @@ impl Sparse {
         s
     }
 
+    /// The sums of an assembly's additions `list` on `n` rows and columns, K's and M's, in
+    /// the order whose position of index i is `pos[i]`: bucketed by row, sorted by column
+    /// within a row and summed, the zero sums left out. O(additions).
+    fn pair_from_entries(
+        n: usize,
+        pos: &[usize],
+        list: &[crate::modal::Entry],
+    ) -> (Sparse, Sparse) {
+        let mut start = vec![0usize; n + 1];
+        for e in list {
+            start[pos[e.row] + 1] += 1;
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut next = start[..n].to_vec();
+        let mut adds = vec![(0usize, 0.0f64, 0.0f64); list.len()];
+        for e in list {
+            let r = pos[e.row];
+            adds[next[r]] = (pos[e.col], e.k, e.m);
+            next[r] += 1;
+        }
+        let empty = || Sparse {
+            start: Vec::with_capacity(n + 1),
+            cols: Vec::with_capacity(list.len()),
+            vals: Vec::with_capacity(list.len()),
+        };
+        let (mut k, mut m) = (empty(), empty());
+        k.start.push(0);
+        m.start.push(0);
+        for i in 0..n {
+            let row = &mut adds[start[i]..start[i + 1]];
+            row.sort_unstable_by_key(|&(c, _, _)| c);
+            let mut at = 0;
+            while at < row.len() {
+                let c = row[at].0;
+                let (mut vk, mut vm) = (0.0, 0.0);
+                while at < row.len() && row[at].0 == c {
+                    vk += row[at].1;
+                    vm += row[at].2;
+                    at += 1;
+                }
+                for (s, v) in [(&mut k, vk), (&mut m, vm)] {
+                    if v != 0.0 {
+                        s.cols.push(c);
+                        s.vals.push(v);
+                    }
+                }
+            }
+            k.start.push(k.cols.len());
+            m.start.push(m.cols.len());
+        }
+        (k, m)
+    }
+
     /// A X into `y` for `q` columns held by rows (as [`Envelope::solve_rows`]).
     fn mul_rows(&self, x: &[f64], y: &mut [f64], q: usize) {
         for (r, yr) in y.chunks_exact_mut(q).enumerate() {
-            yr.fill(0.0);
-            for i in self.start[r]..self.start[r + 1] {
+            let (lo, hi) = (self.start[r], self.start[r + 1]);
+            if lo == hi {
+                yr.fill(0.0);
+                continue;
+            }
+            // The first entry sets the row, the rest add to it.
+            let (v, at) = (self.vals[lo], self.cols[lo] * q);
+            for (a, b) in yr.iter_mut().zip(&x[at..at + q]) {
+                *a = v * b;
+            }
+            for i in lo + 1..hi {
                 let v = self.vals[i];
                 let at = self.cols[i] * q;
                 for (a, b) in yr.iter_mut().zip(&x[at..at + q]) {
@@ -428,31 +511,87 @@ impl Ritz {
     }
 }
 
-/// The subspace iteration of the module docs on `k`, `m` (n × n, symmetric, positive
-/// definite; `dim` end-effector DOFs first, ordered last for the factors) from the start
-/// block `x` (n × q): sweeps until the first `checked` Ritz pairs have ρ ≤
-/// `params.max_residual` or `params.max_sweeps` are made. The blocks are held by rows in
-/// the factors' order between the sweeps, so that the envelope solves and the sparse
-/// products run along a row's q values and the block products take them as they lie.
+/// K and M (n × n, symmetric) of a model with `dim` end-effector DOFs first, as the rows of
+/// their nonzeros in the factors' order (the end-effector last): what
+/// [`subspace_iteration`] works on.
+#[derive(Debug, Clone)]
+pub struct Pencil {
+    order: Vec<usize>,
+    k: Sparse,
+    m: Sparse,
+}
+
+impl Pencil {
+    /// The factors' order of a model of `n` DOF with `dim` end-effector DOFs first.
+    fn order(n: usize, dim: usize) -> Vec<usize> {
+        (dim.min(n)..n).chain(0..dim.min(n)).collect()
+    }
+
+    /// From dense K (N/m) and M (kg) of the same size (every entry read: O(n²)).
+    pub fn from_dense(k: &DMatrix<f64>, m: &DMatrix<f64>, dim: usize) -> Result<Pencil, RitzError> {
+        let n = k.nrows();
+        if k.ncols() != n || m.nrows() != n || m.ncols() != n {
+            return Err(RitzError::Size {
+                rows: m.nrows(),
+                dof: n,
+            });
+        }
+        let order = Self::order(n, dim);
+        Ok(Pencil {
+            k: Sparse::from_dense(k, &order),
+            m: Sparse::from_dense(m, &order),
+            order,
+        })
+    }
+
+    /// From an assembly's additions ([`crate::modal::Entries`]): O(additions), no dense
+    /// matrix.
+    pub fn from_entries(entries: &crate::modal::Entries, dim: usize) -> Result<Pencil, RitzError> {
+        let n = entries.dof;
+        if let Some(e) = entries.list.iter().find(|e| e.row >= n || e.col >= n) {
+            return Err(RitzError::Size {
+                rows: e.row.max(e.col) + 1,
+                dof: n,
+            });
+        }
+        let order = Self::order(n, dim);
+        let mut pos = vec![0usize; n];
+        for (i, &o) in order.iter().enumerate() {
+            pos[o] = i;
+        }
+        let (k, m) = Sparse::pair_from_entries(n, &pos, &entries.list);
+        Ok(Pencil { order, k, m })
+    }
+
+    /// The model's DOF.
+    pub fn dof(&self) -> usize {
+        self.order.len()
+    }
+}
+
+/// The subspace iteration of the module docs on `pencil`'s K and M (positive definite)
+/// from the start block `x` (n × q, the assembly's DOF order): sweeps until the first
+/// `checked` Ritz pairs have ρ ≤ `params.max_residual` or `params.max_sweeps` are made.
+/// The blocks are held by rows in the factors' order between the sweeps, so that the
+/// envelope solves and the sparse products run along a row's q values and the block
+/// products take them as they lie.
 pub fn subspace_iteration(
-    k: &DMatrix<f64>,
-    m: &DMatrix<f64>,
-    dim: usize,
+    pencil: &Pencil,
     x: DMatrix<f64>,
     checked: usize,
     params: &RitzParams,
 ) -> Result<Ritz, RitzError> {
-    let n = k.nrows();
-    if x.nrows() != n || m.nrows() != n {
+    let n = pencil.dof();
+    if x.nrows() != n {
         return Err(RitzError::Size {
             rows: x.nrows(),
             dof: n,
         });
     }
-    let order: Vec<usize> = (dim.min(n)..n).chain(0..dim.min(n)).collect();
-    let kf = Envelope::factor(k, &order).ok_or(RitzError::NotPositive("K"))?;
-    let mf = Envelope::factor(m, &order).ok_or(RitzError::NotPositive("M"))?;
-    let ms = Sparse::new(m, &order);
+    let order = &pencil.order;
+    let kf = Envelope::from_rows(&pencil.k, order).ok_or(RitzError::NotPositive("K"))?;
+    let mf = Envelope::from_rows(&pencil.m, order).ok_or(RitzError::NotPositive("M"))?;
+    let ms = &pencil.m;
     let q = x.ncols();
     let checked = checked.min(q);
     let mut out = Ritz {
@@ -503,11 +642,17 @@ pub fn subspace_iteration(
             if spread.is_none() {
                 // The columns' Rayleigh quotients yᵀKy / yᵀMy (K Y = M X): the block's
                 // spread of λ before any Ritz value is known.
+                // Summed along the rows as they lie (a column's values are q apart).
+                let mut yky = vec![0.0; q];
+                for (yr, xr) in y.chunks_exact(q).zip(mx.chunks_exact(q)) {
+                    for ((s, a), b) in yky.iter_mut().zip(yr).zip(xr) {
+                        *s += a * b;
+                    }
+                }
                 let mut lo = f64::INFINITY;
                 let mut hi = 0.0f64;
-                for (c, &ymy) in norms.iter().enumerate() {
-                    let yky: f64 = (0..n).map(|i| y[i * q + c] * mx[i * q + c]).sum();
-                    let rq = yky / ymy;
+                for (&k, &ymy) in yky.iter().zip(&norms) {
+                    let rq = k / ymy;
                     lo = lo.min(rq);
                     hi = hi.max(rq);
                 }
@@ -660,6 +805,90 @@ mod tests {
         assert!(Envelope::factor(&neg, &order).is_none());
     }
 
+    /// The sparse rows (from the dense matrix, and from an assembly's additions split,
+    /// scrambled and with zeros) and the envelope factored from them, on a matrix of 23 DOF
+    /// with bands and an arrowhead, in three orders (the end-effector last; reversed;
+    /// interleaved): the factor solves A x = b (residual against the dense product), the
+    /// sparse product equals the dense one, and both constructions give the same rows.
+    #[test]
+    fn envelope_and_sparse_rows_in_any_order_match_the_dense_matrix() {
+        let n = 23;
+        let mut a = DMatrix::<f64>::zeros(n, n);
+        for i in 0..n {
+            a[(i, i)] = 6.0 + i as f64 * 0.1;
+            for (d, v) in [(1, -1.0), (3, -0.5)] {
+                if i + d < n && i >= 2 {
+                    a[(i, i + d)] = v;
+                    a[(i + d, i)] = v;
+                }
+            }
+        }
+        for i in 2..n {
+            if i % 7 == 0 || i == n - 1 {
+                a[(0, i)] = -0.7;
+                a[(i, 0)] = -0.7;
+                a[(1, i)] = 0.4;
+                a[(i, 1)] = 0.4;
+            }
+        }
+        let orders: [Vec<usize>; 3] = [
+            (2..n).chain(0..2).collect(),
+            (0..n).rev().collect(),
+            (0..n).step_by(2).chain((1..n).step_by(2)).collect(),
+        ];
+        for order in &orders {
+            let f = Envelope::factor(&a, order).expect("SPD");
+            let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+            let (mut x, mut w) = (b.clone(), vec![0.0; n]);
+            f.solve(&mut x, &mut w);
+            let r = &a * nalgebra::DVector::from_column_slice(&x)
+                - nalgebra::DVector::from_column_slice(&b);
+            assert!(r.amax() < 1e-13, "{order:?}: residual {}", r.amax());
+            let s = Sparse::from_dense(&a, order);
+            // The same rows from an assembly's additions: each entry split in two parts
+            // added in a scrambled order, zeros added too, M = 2 A alongside.
+            let mut list = Vec::new();
+            for idx in (0..n * n).map(|t| (t * 7 + 3) % (n * n)) {
+                let (r, c) = (idx % n, idx / n);
+                let v = a[(r, c)];
+                for part in [0.25 * v, 0.75 * v] {
+                    list.push(crate::modal::Entry {
+                        row: r,
+                        col: c,
+                        k: part,
+                        m: 2.0 * part,
+                    });
+                }
+            }
+            let mut pos = vec![0; n];
+            for (i, &o) in order.iter().enumerate() {
+                pos[o] = i;
+            }
+            let (sk, sm) = Sparse::pair_from_entries(n, &pos, &list);
+            assert_eq!((&sk.start, &sk.cols), (&s.start, &s.cols), "{order:?}");
+            assert_eq!((&sm.start, &sm.cols), (&s.start, &s.cols), "{order:?}");
+            for ((vk, vm), v) in sk.vals.iter().zip(&sm.vals).zip(&s.vals) {
+                assert!(
+                    (vk - v).abs() <= 1e-15 * v.abs() && (vm - 2.0 * v).abs() <= 2e-15 * v.abs()
+                );
+            }
+            let q = 3;
+            let xs: Vec<f64> = (0..n * q).map(|i| (i as f64 * 0.61).cos()).collect();
+            let mut y = vec![0.0; n * q];
+            s.mul_rows(&xs, &mut y, q);
+            for (i, &oi) in order.iter().enumerate() {
+                for c in 0..q {
+                    let want: f64 = order
+                        .iter()
+                        .enumerate()
+                        .map(|(j, &oj)| a[(oi, oj)] * xs[j * q + c])
+                        .sum();
+                    assert!((y[i * q + c] - want).abs() < 1e-13, "{order:?}: row {i}");
+                }
+            }
+        }
+    }
+
     /// A fixed-fixed string of `n` interior nodes (a chain's band) with one "end-effector"
     /// DOF placed first and coupled to the last node: K (N/m) and its consistent M (kg).
     fn string_with_mass(n: usize) -> (DMatrix<f64>, DMatrix<f64>) {
@@ -729,7 +958,8 @@ mod tests {
         let x = DMatrix::from_fn(x.nrows(), q, |r, c| {
             x[(r, c)] * (1.0 + 0.01 * ((r * 7 + c) % 5) as f64)
         });
-        let r = subspace_iteration(&k, &m, 1, x, checked, &params).expect("iteration");
+        let pencil = Pencil::from_dense(&k, &m, 1).expect("square");
+        let r = subspace_iteration(&pencil, x, checked, &params).expect("iteration");
         assert!(r.sweeps >= 12, "checked at sweep {}", r.sweeps);
         let rho = r.max_residual();
         assert!(rho <= 1e-9, "ρ {rho:.2e}");

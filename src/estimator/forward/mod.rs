@@ -337,6 +337,18 @@ impl Forward {
         with_model!(&self.model, m => m.dense_matrices(scene, &self.geometry))
     }
 
+    /// [`Self::dense_matrices`] with each cable's interior nodes in its own frame
+    /// ([`modal::CableFrames`]); None for sagging cables.
+    pub(super) fn dense_in_cable_frames(
+        &self,
+        scene: &Scene,
+    ) -> Option<Result<modal::CableFrames, ModalError>> {
+        match &self.model {
+            Model::Taut(t) => Some(t.dense_in_cable_frames(scene, &self.geometry)),
+            Model::Sagged(_) => None,
+        }
+    }
+
     /// The degrees of freedom of the loaded model (None for continuous cables): the size
     /// of [`Self::dense_matrices`]' K and M, without assembling them.
     pub(super) fn assembled_dof(&self) -> Option<usize> {
@@ -665,7 +677,7 @@ impl EndEffector {
         models: &[CableModel],
         arms_m: &[Vector3<f64>],
     ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
-        let (mut k, m) = if self.rigid {
+        let (mut k, mut m) = if self.rigid {
             modal::assemble_rigid(
                 models,
                 self.mass_kg,
@@ -676,15 +688,34 @@ impl EndEffector {
         } else {
             modal::assemble(models, self.mass_kg)?
         };
-        // The pulleys' term at the end-effector's DOFs, the first `dim` of the assembly.
+        self.add_pulleys(&mut modal::DensePair(&mut k, &mut m));
+        Ok((k, m))
+    }
+
+    /// [`Self::assemble`] with each cable's interior nodes in its own frame
+    /// ([`modal::CableFrames`]).
+    pub fn assemble_in_cable_frames(
+        &self,
+        models: &[CableModel],
+        arms_m: &[Vector3<f64>],
+    ) -> Result<modal::CableFrames, ModalError> {
+        let rigid = self
+            .rigid
+            .then_some((&self.inertia_kg_m2, arms_m, &self.k_geo_rot));
+        let mut a = modal::assemble_in_cable_frames(models, self.mass_kg, rigid)?;
+        self.add_pulleys(&mut a.entries);
+        Ok(a)
+    }
+
+    /// The pulleys' term at the end-effector's DOFs, the first `dim` of an assembly.
+    fn add_pulleys<A: modal::Assembly>(&self, out: &mut A) {
         if self.k_pulley != Matrix6::zeros() {
             let d = self.dim();
             for r in 0..d {
                 for c in 0..d {
-                    k[(r, c)] += self.k_pulley[(r, c)];
+                    out.add(r, c, self.k_pulley[(r, c)], 0.0);
                 }
             }
         }
-        Ok((k, m))
     }
 }

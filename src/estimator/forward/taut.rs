@@ -37,6 +37,30 @@ impl TautModel {
             loaded_at: 0,
         }
     }
+
+    /// The end-effector of the dense assembly: the loaded constant stiffness (geometric and
+    /// pulleys' terms) as it is.
+    fn end_effector(&self, scene: &Scene) -> EndEffector {
+        let (m6, k6) = self.modal.ee_matrices();
+        EndEffector {
+            rigid: scene.rigid,
+            mass_kg: scene.ee_mass_kg,
+            inertia_kg_m2: m6.fixed_view::<3, 3>(3, 3).into_owned(),
+            k_geo_rot: Matrix3::zeros(),
+            k_pulley: k6,
+        }
+    }
+
+    /// The dense K and M with each cable's interior nodes in its own frame
+    /// ([`crate::modal::CableFrames`]).
+    pub(super) fn dense_in_cable_frames(
+        &self,
+        scene: &Scene,
+        g: &Geometry,
+    ) -> Result<crate::modal::CableFrames, ModalError> {
+        self.end_effector(scene)
+            .assemble_in_cable_frames(&self.models, &g.arm_m)
+    }
 }
 
 impl CableSide for TautModel {
@@ -137,15 +161,6 @@ impl CableSide for TautModel {
         scene: &Scene,
         g: &Geometry,
     ) -> Result<(DMatrix<f64>, DMatrix<f64>), ModalError> {
-        // The loaded constant stiffness (geometric and pulleys' terms) as it is.
-        let (m6, k6) = self.modal.ee_matrices();
-        let ee = EndEffector {
-            rigid: scene.rigid,
-            mass_kg: scene.ee_mass_kg,
-            inertia_kg_m2: m6.fixed_view::<3, 3>(3, 3).into_owned(),
-            k_geo_rot: Matrix3::zeros(),
-            k_pulley: k6,
-        };
-        ee.assemble(&self.models, &g.arm_m)
+        self.end_effector(scene).assemble(&self.models, &g.arm_m)
     }
 }

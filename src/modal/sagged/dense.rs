@@ -4,7 +4,7 @@
 
 use crate::cable::sagged::SagChain;
 use crate::kinematics::attach_map;
-use crate::modal::dense::add_hidden_axial;
+use crate::modal::dense::{add_hidden_axial, DensePair};
 use crate::modal::{check_dense_budget, ModalError};
 use nalgebra::{DMatrix, Matrix3, Matrix3x6, Matrix6, Vector3};
 
@@ -103,7 +103,11 @@ pub fn assemble_sagged(
             }
         }
         if let Some(sp) = support {
-            add_hidden_axial(&mut k, &mut m, base + 3 * n.saturating_sub(1), &sp.hidden);
+            add_hidden_axial(
+                &mut DensePair(&mut k, &mut m),
+                base + 3 * n.saturating_sub(1),
+                &sp.hidden,
+            );
         }
         base += 3 * n.saturating_sub(1) + hidden_dofs(cab.chain);
     }
