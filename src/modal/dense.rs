@@ -136,7 +136,7 @@ pub struct CableFrames {
 }
 
 impl CableFrames {
-    /// The DOF of cable `cable`'s interior node `node` (1 ..= n_el − 1) along its frame's
+    /// The DOF of a cable's interior node `node` (1 ..= n_el − 1) along its frame's
     /// direction `axis` (0..3), where `base` is the cable's first interior DOF (as in
     /// [`assemble`]: the end-effector's, then the cables' in turn) and `n_el` its elements.
     pub fn dof(base: usize, n_el: usize, node: usize, axis: usize) -> usize {
