@@ -246,7 +246,7 @@ impl Geometry {
     }
 
     /// The pulleys' own term of the static stiffness for tensions `t_n` (N), N/m, N/rad,
-    /// N·m/rad: Σ_i T_i (sin φ_i / a_i − 1/L_i) G_iᵀ n_i n_iᵀ G_i with G_i = [I, −[r_i]×]
+    /// N·m/rad: Σ_i T_i (sin φ_i / a_i − 1/L_i) G_iᵀ n_i n_iᵀ G_i with G_i = \[I, −\[r_i\]×\]
     /// (`dim` 3: the translational block only), to add to the stiffness of cables pinned at
     /// their exit points ([`pulley`] module docs). Zero without pulleys. No allocation.
     pub fn pulley_stiffness(&self, t_n: &[f64], dim: usize) -> Matrix6<f64> {

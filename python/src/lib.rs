@@ -10,7 +10,7 @@
 //! | `simulate(scene, ...)`, `shape(scene, ...)` | [`cablevib::study::simulate::simulate_shaped`], [`cablevib::study::simulate::shape`] (what `cablevib simulate` and `cablevib shape` write to their CSVs) |
 //! | `identify(t, channels, ...)` | [`cablevib::identify::identify`] (what `cablevib identify --json` prints per window, without the model) |
 //! | `Estimator(scene).update(...)` | [`cablevib::estimator::Estimator::update`] |
-//! | `Estimator.sweep(...)`, `sweep(scene, ...)` | [`cablevib::estimator::Estimator::update`] over many poses on worker threads ([`sweep`]) |
+//! | `Estimator.sweep(...)`, `sweep(scene, ...)` | [`cablevib::estimator::Estimator::update`] over many poses on worker threads (`sweep`) |
 //! | `Estimator.t_min_for_f1(...)` | [`cablevib::estimator::Estimator::t_min_for_f1`] |
 //! | `CablevibError` | every library error, with its `Display` text |
 //!

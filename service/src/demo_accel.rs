@@ -39,7 +39,7 @@ pub const SENSOR_NOISE_M_S2: f64 = 0.02;
 /// Damping ratio in every mode when the scene has none.
 pub const DEFAULT_ZETA: f64 = 0.01;
 /// Longest accelerometer record, s (it is computed before the demo starts, about 0.35 s per
-/// second of record on the paper robot: the mode basis is solved every [`UPDATE_EVERY`]
+/// second of record on the paper robot: the mode basis is solved every `UPDATE_EVERY`
 /// samples; 24 B per sample).
 pub const MAX_SECONDS: f64 = 60.0;
 /// Samples between two updates of the modes along the path (0.1 s: the end-effector mode of

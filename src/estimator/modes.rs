@@ -173,7 +173,7 @@ pub fn shape_nodes(scene: &crate::scene::Scene, continuous_samples: usize) -> u6
 }
 
 /// The memory a computation holding the shapes of `modes` modes of `scene` needs at its
-/// peak, bytes: ([`SHAPE_EXTRA_MODES`] + `modes`) × [`shape_nodes`] × `bytes_per_node_mode`
+/// peak, bytes: (`SHAPE_EXTRA_MODES` + `modes`) × [`shape_nodes`] × `bytes_per_node_mode`
 /// ([`SHAPE_BYTES_PER_NODE`] for one set of shapes; more when a caller holds two sets or
 /// their CSV text). Saturating.
 pub fn shapes_memory_bytes(

@@ -112,7 +112,7 @@ pub fn convective_input(v: &Vector3<f64>) -> [f64; 6] {
 /// Every cable's node list.
 type Nodes = Vec<Vec<Vector3<f64>>>;
 
-/// The fields of [`Estimator::sag_path_fields`].
+/// The fields of `Estimator::sag_path_fields`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PathFields {
     /// r_path = ∂x/∂p, one entry of `modes` per end-effector DOF.

@@ -53,7 +53,7 @@ pub struct RitzBasis {
 
 impl Estimator {
     /// Whether this model has the update of the module docs (taut FEM chains without a
-    /// hidden cable, assembled within [`MAX_RITZ_DOF`] DOF).
+    /// hidden cable, assembled within `MAX_RITZ_DOF` DOF).
     pub fn ritz_update_applies(&mut self) -> bool {
         let (_, dim, _) = self.ee_mass_flexibility();
         self.cycle

@@ -16,7 +16,7 @@
 //!
 //! **Impulse response.** The inverse DFT of H1 is the impulse response h_j (l × m per lag)
 //! times the window's lag correlation ρ(j) = Σ_n w_n w_{n+j} / Σ_n w_n²: for a white input,
-//! E[G_yu] = σ² Σ_j h_j c_w(j) e^{−iθj} and E[G_uu] = σ² c_w(0), so the ratio is the DFT of
+//! E\[G_yu\] = σ² Σ_j h_j c_w(j) e^{−iθj} and E\[G_uu\] = σ² c_w(0), so the ratio is the DFT of
 //! h_j ρ(j), j < N, exactly (no time aliasing, the segment being longer than the lags). The
 //! impulse response is h_j = IDFT(H1)_j / ρ(j); only the first lags (≤ N/4) are used, where
 //! ρ(j) ≥ 0.8 for the Hann window. For a coloured input the correction holds to the extent

@@ -22,7 +22,7 @@ pub struct TrackerParams {
     /// alone reach it in one bin with probability ~1e-9 (χ² with 6 degrees of freedom).
     pub min_peak_ratio: f64,
     /// Highest input sample rate, Hz, in [10, 100000]: sizes the ring (`window_s ×` this
-    /// samples, at most [`MAX_WINDOW_SAMPLES`]). Default 4000 Hz.
+    /// samples, at most `MAX_WINDOW_SAMPLES`). Default 4000 Hz.
     pub max_sample_rate_hz: f64,
     /// Time between two evaluations, in samples' time, s, in [0.001, 60]. Default 0.1 s.
     pub update_interval_s: f64,
@@ -68,7 +68,7 @@ pub enum ParamsError {
         /// Upper bound.
         hi: f64,
     },
-    /// `window_s × max_sample_rate_hz` over [`MAX_WINDOW_SAMPLES`].
+    /// `window_s × max_sample_rate_hz` over `MAX_WINDOW_SAMPLES`.
     #[error("window_s × max_sample_rate_hz = {samples} samples, more than {MAX_WINDOW_SAMPLES}")]
     WindowTooLong {
         /// The samples the window would hold.

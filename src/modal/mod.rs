@@ -71,8 +71,8 @@
 //! direction the static stiffness does not hold ([`free_direction`]). `sagged`: the sagged
 //! problem (chains on their catenaries, not uniform: each chain's poles found by a search on
 //! its own count, shown to the end-effector tracker; the other searches use the count) as
-//! a [`Condensed`](engine) view for the same first root, tracker and spectrum search, and its
-//! dense reference ([`sagged::SagModalSolver`]). `response`: the end-effector's time response by
+//! a [`Condensed`] view for the same first root, tracker and spectrum search, and its
+//! dense reference ([`SagModalSolver`]). `response`: the end-effector's time response by
 //! modal superposition with the static correction ([`response::ModalResponse`]).
 //! `quasi_static`: the inertial load of the quasi-static motion on the whole robot (its
 //! participation factors and quasi-static mass, [`quasi_static::QuasiStaticLoad`]).

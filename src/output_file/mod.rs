@@ -9,7 +9,7 @@
 //!   `NAME.PID.part` in the same directory (so the final rename stays on one file system),
 //!   and renamed over the target only by [`OutputFile::commit`], after its data reached the
 //!   disk (`fsync`). An error (the file dropped uncommitted), a panic, or SIGINT, SIGTERM,
-//!   SIGHUP or SIGPIPE with their default action ([`cleanup`]) removes the temporary file
+//!   SIGHUP or SIGPIPE with their default action (`cleanup`) removes the temporary file
 //!   and leaves a target that existed before untouched. SIGKILL (or a power cut) leaves the
 //!   temporary `NAME.PID.part` beside an untouched target.
 //! - [`write_whole`]: a whole file from bytes in memory, the same way.

@@ -283,7 +283,7 @@ pub fn in_chunks<T, E>(
     Ok(out)
 }
 
-/// Frequencies per step of a response's progress bar: about [`BAR_STEP_S`] of work each
+/// Frequencies per step of a response's progress bar: about `BAR_STEP_S` of work each
 /// by the estimate, 1 ..= 256.
 pub fn frf_chunk(scene: &Scene, damping: &Damping) -> usize {
     let one = Work::Frf {

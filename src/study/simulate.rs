@@ -443,7 +443,7 @@ pub struct ForcedResult {
     /// [`simulate`]'s result under the force.
     pub response: SimulateResult,
     /// The deviation's acceleration at each sample, m/s², from the modal state
-    /// ([`ModalResponse::acceleration`]: the K modes' q̈, not differences of the deviation).
+    /// ([`crate::modal::response::ModalResponse::acceleration`]: the K modes' q̈, not differences of the deviation).
     pub acceleration_m_s2: Vec<Vector3<f64>>,
 }
 

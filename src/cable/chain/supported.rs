@@ -249,7 +249,7 @@ fn union_kth(free: &Segment, hidden: &Segment, j: usize) -> f64 {
 /// The j-th (1-based) blocked eigenvalue of the supported chain, rad²/s² (∞ past the last,
 /// 0 for j = 0): the root of s + h between the (j−1)-th and j-th members of the union of the
 /// segments' blocked eigenvalues, by Newton's method kept inside the sign bracket (bounded:
-/// [`POLE_SEARCH_MAX_ITERATIONS`]).
+/// `POLE_SEARCH_MAX_ITERATIONS`).
 pub fn supported_pole(free: &Segment, hidden: &Segment, j: usize) -> f64 {
     supported_pole_near(free, hidden, j, f64::NAN)
 }

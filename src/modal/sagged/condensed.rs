@@ -98,7 +98,7 @@ impl Condensed for SagChains {
         };
     }
     /// The traces and, with `evaluate`, the matrix forms: the plain one from one evaluation
-    /// far below zero ([`SagChains::mass_limit_inverse`]), the weighted one's matrix D(0)⁻¹
+    /// far below zero (`SagChains::mass_limit_inverse`), the weighted one's matrix D(0)⁻¹
     /// from the chains' cached static evaluations. Without `evaluate` (or when that
     /// evaluation is not finite) the traces with an unknown total.
     fn sum_rules(&mut self, flex0: f64, evaluate: bool) -> SumRules {

@@ -20,7 +20,7 @@ pub struct SagDenseCable<'a> {
 }
 
 /// Assemble K (N/m) and M (kg) of the sagged cables and the end-effector: `m6`, `k6` its
-/// mass matrix and geometric stiffness ([`super::SagModalSolver::ee_matrices`]), `dim` 3
+/// mass matrix and geometric stiffness ([`crate::modal::Solver::ee_matrices`]), `dim` 3
 /// (point mass: node N of each cable is the end-effector's translation) or 6 (rigid: tied
 /// by G_i = [I, −\[r_i\]×]). DOF order: the end-effector (0..dim), then each cable's interior
 /// nodes from the anchor, then (a chain on a hidden cable, [`SagChain::set_support`]) the

@@ -66,7 +66,7 @@ pub struct SagCableFrame {
     pub end_force_n: Vector3<f64>,
 }
 
-/// One sagging cable of a pose, for [`SagModalSolver::load_catenaries`].
+/// One sagging cable of a pose, for `SagModalSolver::load_catenaries`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HangingCable {
     /// The static profile.
@@ -96,7 +96,7 @@ pub enum SagEndEffector {
     },
 }
 
-/// Errors of [`SagModalSolver::load`].
+/// Errors of `SagModalSolver::load`.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum SagLoadError {
     /// More cables than the solver was built for.

@@ -179,7 +179,7 @@ pub enum AnalyzeError {
 
 impl AnalyzeError {
     /// The message with each parameter called `name(param)` (the command line passes its
-    /// option names); equal to the `Display` text with [`Param::name`].
+    /// option names); equal to the `Display` text with each parameter's own name.
     pub fn render(&self, name: &dyn Fn(Param) -> &'static str) -> String {
         match self {
             AnalyzeError::Param(e) => e.render(name),

@@ -1,6 +1,6 @@
 //! The frequency response of one pose, the one orchestration behind `cablevib frf` and the
 //! Python `frf`: the receptance H(ω) at the end-effector over a band
-//! ([`crate::modal::frf`]: exact at a complex λ for loss-factor and Rayleigh damping, modal
+//! (`modal::frf`: exact at a complex λ for loss-factor and Rayleigh damping, modal
 //! superposition with static correction for modal damping), the natural frequencies the
 //! end-effector feels in the band, and on request the dense check of the same models
 //! ([`dense`]).

@@ -287,7 +287,7 @@ pub fn pilot(
 const PILOT_LIMIT: usize = MAX_RESPONSE_MODES - crate::modal::MAX_MULTIPLICITY as usize;
 
 /// The bases the pilot grows through at one pose when `at_least` modes must be kept: 24,
-/// 48, 96, … (the first at least `at_least`) up to [`PILOT_LIMIT`].
+/// 48, 96, … (the first at least `at_least`) up to `PILOT_LIMIT`.
 pub fn pilot_sizes(at_least: usize) -> Vec<usize> {
     let floor = at_least.clamp(1, PILOT_LIMIT);
     let mut asked = FIRST_PILOT.max(floor).min(PILOT_LIMIT);
