@@ -107,7 +107,7 @@ impl Estimator {
         }
         // K and M with each cable's nodes in its own frame: every direction a scalar chain,
         // so that the factors' rows hold one entry beside the diagonal (module docs).
-        let Some(Ok(assembly)) = self.cycle.dense_in_cable_frames(&self.scene) else {
+        let Some(Ok(assembly)) = self.cycle.assemble_in_cable_frames(&self.scene) else {
             return Ok(None);
         };
         let CableFrames { entries, frames } = assembly;

@@ -337,14 +337,14 @@ impl Forward {
         with_model!(&self.model, m => m.dense_matrices(scene, &self.geometry))
     }
 
-    /// [`Self::dense_matrices`] with each cable's interior nodes in its own frame
-    /// ([`modal::CableFrames`]); None for sagging cables.
-    pub(super) fn dense_in_cable_frames(
+    /// The model's K and M as an assembly's entries (no dense matrix), each cable's
+    /// interior nodes in its own frame ([`modal::CableFrames`]); None for sagging cables.
+    pub(super) fn assemble_in_cable_frames(
         &self,
         scene: &Scene,
     ) -> Option<Result<modal::CableFrames, ModalError>> {
         match &self.model {
-            Model::Taut(t) => Some(t.dense_in_cable_frames(scene, &self.geometry)),
+            Model::Taut(t) => Some(t.assemble_in_cable_frames(scene, &self.geometry)),
             Model::Sagged(_) => None,
         }
     }

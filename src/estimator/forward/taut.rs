@@ -51,9 +51,9 @@ impl TautModel {
         }
     }
 
-    /// The dense K and M with each cable's interior nodes in its own frame
+    /// K and M as an assembly's entries, each cable's interior nodes in its own frame
     /// ([`crate::modal::CableFrames`]).
-    pub(super) fn dense_in_cable_frames(
+    pub(super) fn assemble_in_cable_frames(
         &self,
         scene: &Scene,
         g: &Geometry,
