@@ -7,8 +7,10 @@
 //! rigid 6-DOF end-effector), with no tolerance involved.
 //!
 //! **Bracketing.** The bracket starts at the end of the previous cluster (0 for the first
-//! mode, where J(0) = 0 because D(0) is positive definite) and grows geometrically until
-//! J(hi) > k. It is narrowed by bisection on the count while it holds two or more distinct
+//! mode, where J(0) = 0 because D(0) is positive definite) and grows until J(hi) > k: from
+//! the distance between the last two clusters (at least 1e-3 of λ), doubled at each probe
+//! that does not reach mode k, at most doubling λ (geometrically before two clusters are
+//! known). It is narrowed by bisection on the count while it holds two or more distinct
 //! chain poles (blocked eigenvalues). With one pole P inside, the count is probed at
 //! P(1 ∓ η) (η = [`SpectrumParams::pole_probe`]): if the step of J happens between the two
 //! probes, λ_k = P — a mode with the end-effector still (identical cables give such modes:
@@ -20,7 +22,9 @@
 //! zero of the branch μ_{k−B}(λ) of D's sorted eigenvalues. Newton's method runs on
 //! g(λ) = μ(λ)(λ − P_lo)(P_hi − λ), the bounding poles removed as in the first-root solver,
 //! with μ' = vᵀD'v (v the unit eigenvector), safeguarded by the bracket (bisection whenever
-//! a step leaves it or fails to halve it), and stops when a step is below
+//! a step leaves it or is not below half the step before last, as Numerical Recipes'
+//! `rtsafe`: Newton converging from one side does not narrow the bracket, so its progress
+//! is read from its steps), and stops when a step is below
 //! [`SpectrumParams::rel_tol`] (1e-14 relative by default), or below 1e-10 and 100× below
 //! the previous Newton step (superlinear convergence seen: the next iterate is within
 //! ~step² of the root; rounding noise ends the iteration this way). D is then evaluated at

@@ -36,6 +36,10 @@ const RESUME_WIDEN: f64 = 1e-3;
 /// Relative step of the symmetric residue quotient at a pole (error O(h²) from the other
 /// modes, while the cluster's own spread there is below the pole probe, ≪ h).
 const RESIDUE_STEP: f64 = 1e-7;
+/// The smallest first step (relative) of a bracket grown from the last gap between
+/// clusters ([`SpectrumSearch::grow`]): two clusters a hair apart would otherwise start it
+/// so small that its doublings cost more than the bisection they save.
+const GROW_MIN_STEP: f64 = 1e-3;
 /// A bracket whose first pole (or lower end) is below this fraction of its upper end is
 /// bisected geometrically (√(lo·hi)); narrower ones at the midpoint.
 const WIDE_RANGE: f64 = 1e-6;
@@ -83,6 +87,9 @@ pub(in crate::modal) struct SweepState {
     cl: Cluster,
     /// A scale for the first bracket: the Rayleigh estimate μ₁(0)/(−μ₁'(0)), rad²/s².
     scale: f64,
+    /// The distance between the last two clusters found, rad²/s² (NaN before two): the
+    /// next mode's bracket grows from it.
+    gap: f64,
 }
 
 impl SweepState {
@@ -104,6 +111,7 @@ impl SweepState {
                 presolved: 0,
             },
             scale: f64::NAN,
+            gap: f64::NAN,
         }
     }
 }
@@ -310,8 +318,21 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
 
     /// From `lo` (J(lo) ≤ i) grow an upper bracket hi with J(hi) > i.
     fn grow(&mut self, i: usize, mut lo: Probe) -> Result<(Probe, Probe), ModalError> {
+        // From the last gap between clusters (at least GROW_MIN_STEP·λ), doubled at each
+        // probe that does not reach mode i, at most the geometric growth: the next mode is
+        // usually within a gap or two, and a bracket that narrow saves the count's
+        // bisection from λ to 2λ.
+        let mut step = if lo.x > 0.0 && self.st.gap > 0.0 {
+            self.st.gap.max(GROW_MIN_STEP * lo.x)
+        } else {
+            f64::NAN
+        };
         let mut x = if lo.x > 0.0 {
-            lo.x * BRACKET_GROWTH
+            if step.is_finite() {
+                lo.x + step.min((BRACKET_GROWTH - 1.0) * lo.x)
+            } else {
+                lo.x * BRACKET_GROWTH
+            }
         } else {
             (BRACKET_GROWTH * self.st.scale).max(BRACKET_MIN)
         };
@@ -322,7 +343,12 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
                 return Ok((lo, pr));
             }
             lo = pr;
-            x *= BRACKET_GROWTH;
+            if step.is_finite() {
+                step *= 2.0;
+                x = lo.x + step.min((BRACKET_GROWTH - 1.0) * lo.x);
+            } else {
+                x *= BRACKET_GROWTH;
+            }
         }
     }
 
@@ -423,7 +449,8 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
         }
         let mut x = 0.5 * (lo.x + hi.x);
         let mut prev_step = f64::INFINITY;
-        let mut width = [hi.x - lo.x; 2];
+        // The last two steps taken (Newton or bisection), for the safeguard.
+        let mut steps = [hi.x - lo.x; 2];
         loop {
             self.check_budget(lo.x, hi.x)?;
             let e = self.p.eval(x);
@@ -443,8 +470,11 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
                 || (prev_step.is_finite()
                     && step <= NOISE_STEP * x
                     && step <= SUPERLINEAR_RATIO * prev_step);
-            if mu == 0.0 || collapsed || (inside && converged) {
-                let lambda = if inside { xn } else { x };
+            // A converged step may land on a bracket's end: x itself is that end when μ
+            // there is a rounding's width from zero.
+            let within = xn >= lo.x && xn <= hi.x;
+            if mu == 0.0 || collapsed || (within && converged) {
+                let lambda = if within { xn } else { x };
                 // D' at the root itself: near a pole it changes by 2·step/distance, and the
                 // participation reads it (one more evaluation).
                 let eval = if lambda != x { self.p.eval(lambda) } else { e };
@@ -455,14 +485,17 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
                     branch,
                 });
             }
-            // Bisect when Newton leaves the bracket or two steps did not halve it.
-            let slow = hi.x - lo.x > 0.5 * width[0];
-            width = [width[1], hi.x - lo.x];
+            // Bisect when Newton leaves the bracket or its step is not below half the step
+            // before last (Numerical Recipes' rtsafe): the progress is read from Newton's
+            // own steps, since one converging from one side does not narrow the bracket.
+            let slow = step > 0.5 * steps[0];
             x = if inside && !slow {
                 prev_step = step;
+                steps = [steps[1], step];
                 xn
             } else {
                 prev_step = f64::INFINITY;
+                steps = [steps[1], 0.5 * (hi.x - lo.x)];
                 0.5 * (lo.x + hi.x)
             };
         }
@@ -517,6 +550,10 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
                 residue_participations(&m6, dim, lambda, h, &em, &ep)
             }
         };
+        let old = self.st.cl;
+        if old.mult > 0 && lambda > old.lambdas[0] {
+            self.st.gap = lambda - old.lambdas[0];
+        }
         self.st.cl = Cluster {
             lo,
             hi,
