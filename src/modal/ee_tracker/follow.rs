@@ -144,8 +144,13 @@ impl EeTracker {
         thr: f64,
     ) -> Result<Root, RescanReason> {
         self.search_partners(f);
-        let mut answer = self.select_answer(f, thr)?;
         let by_count = !f.view.poles_known() && f.budget != u32::MAX;
+        let mut answer = match self.select_answer(f, thr) {
+            // Where the count alone shows the poles: the neighbours searched by the count
+            // first (`gap`).
+            Err(RescanReason::NoneReached) if by_count => self.answer_by_gaps(f, thr)?,
+            r => r?,
+        };
         // The neighbour search walks the closed-form poles: only where they are known.
         if f.view.poles_known() && self.unwatched_bound_with(answer.lambda, true) > SEARCH_BOUND {
             self.search_neighbours(f);

@@ -98,6 +98,39 @@ impl EeTracker {
         Ok((answer, bound))
     }
 
+    /// A warm cycle where no watched mode reached the threshold: the participation they
+    /// lost went to their spectral neighbours (avoided crossings), so those are searched
+    /// (the mode that lost most first, at most [`GAP_SEARCHES`]) before the window rescan,
+    /// for at most [`GAP_CYCLES`] cycles running, as for an uncertified answer. The answer
+    /// found still needs the certificate. Err(NoneReached) when the searches did not find
+    /// it (the rescan follows); Err(Starved) when the budget cut a search (it goes on next
+    /// cycle).
+    pub(super) fn answer_by_gaps<P: Condensed>(
+        &mut self,
+        f: &mut RootFinder<'_, P>,
+        thr: f64,
+    ) -> Result<Root, RescanReason> {
+        if self.gap_cycles >= GAP_CYCLES {
+            self.gap_cycles = 0;
+            self.gap_cut = None;
+            return Err(RescanReason::NoneReached);
+        }
+        self.gap_cycles += 1;
+        for _ in 0..GAP_SEARCHES {
+            if !self.search_gap(f) {
+                break;
+            }
+            match self.select_answer(f, thr) {
+                Err(RescanReason::NoneReached) => {}
+                r => return r,
+            }
+            if self.gap_cut.is_some() || f.exhausted() {
+                return Err(RescanReason::Starved);
+            }
+        }
+        Err(RescanReason::NoneReached)
+    }
+
     /// One neighbour search (a cut one first); false when there is none to make.
     pub(super) fn search_gap<P: Condensed>(&mut self, f: &mut RootFinder<'_, P>) -> bool {
         if let Some(c) = self.gap_cut.take() {

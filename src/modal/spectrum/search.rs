@@ -23,8 +23,16 @@ use crate::modal::{lambda_to_hz, ModalError};
 const NOISY_CLUSTER_PROBE: f64 = 100.0;
 /// Evaluations a cycle budget keeps for the end of a mode after its search loops (the
 /// cluster's count probes, twice where they are widened, and the residue quotient's two
-/// evaluations), so that a cycle never exceeds its budget.
+/// evaluations), so that a cycle never exceeds its budget ...
 const CLUSTER_RESERVE: u32 = 6;
+/// ... and in its Newton phase, whose root is pole-free: D at the root and the cluster's
+/// two count probes. The rarer ends there (the probes widened, the residue quotient where
+/// the probes find a pole after all) check the budget themselves and cut the search. Why:
+/// a sweep spread over cycles is cut once a cycle, and what the reserve keeps is lost each
+/// time (with 6 on the paper robot's continuous sagged sweeps, a fifth of what a cycle
+/// leaves them). A mode at a pole is found by the count's bisection, whose reserve stays
+/// [`CLUSTER_RESERVE`]: cut at its residue, it would be bisected to the pole again.
+const NEWTON_RESERVE: u32 = 3;
 /// The same for [`SpectrumSearch::root_in`], which makes no cluster probes: the root's own
 /// evaluation and the caller's reading of the mode there (one evaluation, one spare).
 const ROOT_RESERVE: u32 = 3;
@@ -291,13 +299,33 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
         Probe { x, count, below }
     }
 
+    /// Cut the search (the budget error with the bracket (lo, hi)) unless `n` more
+    /// evaluations fit in the cycle's budget.
+    fn room_for(&mut self, n: u32, lo: f64, hi: f64) -> Result<(), ModalError> {
+        let now = self.p.evaluations();
+        let cycle_used = now.wrapping_sub(self.cycle_base);
+        if self.cycle_budget != u32::MAX && cycle_used.saturating_add(n) > self.cycle_budget {
+            self.cut = true;
+            return Err(ModalError::NoConvergence {
+                evaluations: now.wrapping_sub(self.mode_start),
+                lo,
+                hi,
+            });
+        }
+        Ok(())
+    }
+
     /// The budget error, or nothing.
     fn check_budget(&mut self, lo: f64, hi: f64) -> Result<(), ModalError> {
+        self.check_budget_keeping(self.reserve, lo, hi)
+    }
+
+    /// [`Self::check_budget`] keeping `reserve` evaluations for the end of the mode.
+    fn check_budget_keeping(&mut self, reserve: u32, lo: f64, hi: f64) -> Result<(), ModalError> {
         let now = self.p.evaluations();
         let used = now.wrapping_sub(self.mode_start);
         let cycle_used = now.wrapping_sub(self.cycle_base);
-        if self.cycle_budget != u32::MAX
-            && cycle_used.saturating_add(self.reserve) >= self.cycle_budget
+        if self.cycle_budget != u32::MAX && cycle_used.saturating_add(reserve) >= self.cycle_budget
         {
             self.cut = true;
             return Err(ModalError::NoConvergence {
@@ -451,8 +479,9 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
         let mut prev_step = f64::INFINITY;
         // The last two steps taken (Newton or bisection), for the safeguard.
         let mut steps = [hi.x - lo.x; 2];
+        let reserve = self.reserve.min(NEWTON_RESERVE);
         loop {
-            self.check_budget(lo.x, hi.x)?;
+            self.check_budget_keeping(reserve, lo.x, hi.x)?;
             let e = self.p.eval(x);
             let eg = e.eig();
             let mu = eg.values[branch];
@@ -517,6 +546,7 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
             // Count-only poles (sagged chains): next to a pole the chains' recurrence
             // carries more noise than the probe's width; probe once more, wider.
             let d = NOISY_CLUSTER_PROBE * d;
+            self.room_for(2, lambda * (1.0 - d), lambda * (1.0 + d))?;
             lo = self.probe(lambda * (1.0 - d));
             hi = self.probe(lambda * (1.0 + d));
         }
@@ -545,6 +575,7 @@ impl<'a, P: Condensed> SpectrumSearch<'a, P> {
             }
             _ => {
                 let h = RESIDUE_STEP;
+                self.room_for(2, lo.x, hi.x)?;
                 let em = self.p.eval(lambda * (1.0 - h));
                 let ep = self.p.eval(lambda * (1.0 + h));
                 residue_participations(&m6, dim, lambda, h, &em, &ep)
