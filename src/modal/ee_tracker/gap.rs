@@ -12,7 +12,9 @@
 //! few modes, then read by one step of `track::track_root` (its shape for the certificate,
 //! its index checked). A search the cycle's budget cuts keeps its narrowed bracket and goes
 //! on in the next cycle (widened by the pose's motion), so a search costs what it needs,
-//! not what one cycle leaves.
+//! not what one cycle leaves. The same searches run when no watched mode reaches the
+//! threshold (`EeTracker::answer_by_gaps`): the participation went to a neighbour there
+//! too.
 
 use super::member::SearchSide;
 use super::track::track_root;
