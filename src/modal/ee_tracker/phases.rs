@@ -26,6 +26,9 @@ impl EeTracker {
         thr: f64,
     ) -> Result<Option<Root>, ModalError> {
         for _ in 0..PHASES_PER_CYCLE {
+            if let Some(out) = self.certify_mid_sweep(f, thr) {
+                return out;
+            }
             if self.scan.is_none() {
                 let reason = if self.n_members > 0 {
                     match self.track_watched(f, thr) {
@@ -51,6 +54,29 @@ impl EeTracker {
             }
         }
         Ok(None)
+    }
+
+    /// A window sweep by the count that found its answer in an earlier cycle
+    /// (`ScanState::cert_next`): a warm cycle of the watched modes at this cycle's pose;
+    /// Some(its answer) when it certifies (the sweep is dropped), Some(Ok(None)) when the
+    /// budget ran out, None otherwise (the sweep goes on, recording past the answer).
+    fn certify_mid_sweep<P: Condensed>(
+        &mut self,
+        f: &mut RootFinder<'_, P>,
+        thr: f64,
+    ) -> Option<Result<Option<Root>, ModalError>> {
+        let s = self.scan.as_mut().filter(|s| s.cert_next)?;
+        s.cert_next = false;
+        match self.track_watched(f, thr) {
+            Ok(a) => {
+                self.scan = None;
+                self.window_pending = false;
+                Some(Ok(Some(a)))
+            }
+            Err(RescanReason::Starved) => Some(Ok(None)),
+            Err(_) if f.exhausted() => Some(Ok(None)),
+            Err(_) => None,
+        }
     }
 
     /// Continue the scan in progress, recording what it finds; None when the budget ran out

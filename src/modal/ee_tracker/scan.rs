@@ -246,6 +246,11 @@ pub(super) struct ScanState {
     /// The sweep skipped a mode it could not isolate within [`STUCK_CYCLES`] cycles: its
     /// answer is not known to be the lowest until the sum rules certify it.
     pub(super) skipped: bool,
+    /// A window sweep by the count that has found its answer stops there once: the next
+    /// cycle tries to certify it by a warm cycle of the watched modes before the sweep
+    /// records past it (`cert_next`; `cert_tried`: done once).
+    pub(super) cert_next: bool,
+    cert_tried: bool,
 }
 
 impl ScanState {
@@ -294,6 +299,8 @@ impl ScanState {
             last: 0.0,
             cut_cycles: 0,
             skipped: false,
+            cert_next: false,
+            cert_tried: false,
         }
     }
 
@@ -765,6 +772,15 @@ impl EeTracker {
             }
             if !had && st.answer.is_some() {
                 st.to_answer = st.spent + (s.problem().evaluations() - begin);
+                if st.window && self.recording && !st.cert_tried {
+                    // Try the certificate first, at the next cycle's pose with its whole
+                    // budget: the modes below the answer are read (the recording past it
+                    // costs as much again).
+                    st.cert_tried = true;
+                    st.cert_next = true;
+                    st.modes = s.state();
+                    return None;
+                }
             }
         }
         // Kept for a deferred recording (it goes on from here).
